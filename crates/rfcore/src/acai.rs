@@ -1,0 +1,454 @@
+//! The Available Control Authority Index (ACAI) of Du et al., Theorem 3, by hyperplane enumeration.
+//!
+//! The attainable set `Omega = { B f : f_min <= f <= f_max }` of an `n x m` effectiveness matrix is
+//! a zonotope. Each group of `n - 1` linearly independent columns spans a pair of parallel facets
+//! with unit normal `xi_j` (Du eq. (16)); the half-width of the zonotope along `xi_j` is
+//! `sum_k |xi_j . b_k| (f_max,k - f_min,k) / 2` (eq. (29), with a general box instead of [0, K]),
+//! and the offset of G from the centre `F_c = B (f_min + f_max) / 2` is `|xi_j . (F_c - G)|`
+//! (eq. (30)). `d_j` is their difference (eq. (14)) and the ACAI is eq. (13).
+//!
+//! The dimension `n` is free: `n = 4` is Du's thrust/roll/pitch/yaw; `n = 3` (thrust, roll, pitch)
+//! answers "can this vehicle hover if it gives up yaw and spins?".
+//!
+//! Two facts make the batch fast and exact:
+//! - `xi_j` is the generalised cross product of the group's columns (signed maximal minors), a
+//!   closed form with no SVD;
+//! - scaling a column by `eta_k > 0` scales that cross product by a positive factor, so the
+//!   *normalised* `xi_j` does not depend on the efficiencies. [`FacetNormals`] computes every
+//!   `xi_j` and every projection `xi_j . b_k` once per geometry; an evaluation for a new
+//!   efficiency vector is then `O(groups x m)` multiply-adds with no allocation.
+//!
+//! A group holding a rotor with `eta_k = 0` has rank `< n - 1` and spans no facet (Du Step 6), but
+//! its direction `xi_j` is still a valid supporting direction of Omega, so its `d_j` is an upper
+//! bound on the distance from an interior G to the boundary and never changes the result there.
+//! Keeping it makes the index continuous as `eta_k -> 0` (see "G outside Omega").
+//!
+//! # Tolerances
+//! - A column group is rank-deficient when `|cross product| <= RANK_RTOL * prod_k |b_k|` (the ratio
+//!   is the volume "sine" of the group, 1 for orthogonal columns, 0 for dependent ones).
+//! - A projection `xi_j . b_k` with `|.| <= RANK_RTOL * |b_k|` is exactly zero.
+//! - An ACAI with `|rho| <= ZERO_RTOL * scale`, where
+//!   `scale = sum_k |b_k| (f_max,k - f_min,k) / 2 + |G|` is the size of the problem, is returned as
+//!   exactly `0.0` (never `-0.0`): G is on the boundary to working precision.
+//! - If `rank B < n` the ACAI is undefined and returned as `f64::NEG_INFINITY` (Du uses -10^6).
+//!
+//! # G outside Omega (a decided paper gap): [`AcaiFormula`]
+//! For G inside Omega or on its boundary, `min_j d_j` is the distance of definition (9) and both
+//! formulas below agree. For G outside they differ:
+//! - [`AcaiFormula::Eq13`] (default, reproduces the paper's tables): Du's eq. (13) as printed,
+//!   `sign(min_j d_j) min_j |d_j|` over the full-rank groups. This is not the distance of (9): a
+//!   single `d_j` that happens to vanish makes it 0 although G is outside (Du Table III prints 0
+//!   for the PPNNPN hexacopter with rotor 5 or 6 failed, where hover is infeasible and the hover
+//!   wrench lies 0.2133 outside a facet), and it is not monotone in the efficiencies.
+//! - [`AcaiFormula::FacetMargin`]: `min_j d_j` over every nominal facet direction (including
+//!   groups with a failed rotor, whose directions still support Omega): minus the largest
+//!   violation of a facet inequality. A lower bound on the distance of (9), exact when the point
+//!   of Omega nearest to G lies inside a facet; continuous and non-decreasing in every `eta_i` when
+//!   every box contains zero (`f_min <= 0 <= f_max`).
+//!
+//! Verdicts never depend on the choice: they use the sign of the facet margin, which is the sign
+//! of `min_j d_j` in eq. (13).
+
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+use crate::combinations::{binomial, Combinations};
+use crate::error::{require_all_finite, Result, RfError};
+
+/// Relative tolerance for rank decisions (see the module documentation).
+pub const RANK_RTOL: f64 = 1e-9;
+/// Relative tolerance under which an ACAI is reported as exactly zero.
+pub const ZERO_RTOL: f64 = 1e-9;
+/// Largest `groups x m` table [`FacetNormals`] will build (about 400 MB of f64).
+pub const MAX_TABLE_ENTRIES: usize = 50_000_000;
+
+/// How the index is reported when G lies outside the attainable set (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AcaiFormula {
+    /// Du et al. eq. (13) exactly as printed (reproduces Tables II and III).
+    #[default]
+    Eq13,
+    /// `min_j d_j` over every facet direction: a monotone lower bound on the signed distance.
+    FacetMargin,
+}
+
+impl AcaiFormula {
+    /// Parses the names used by the Python API and the CLI: `"eq13"` and `"facet-margin"`.
+    pub fn parse(text: &str) -> Result<Self> {
+        match text {
+            "eq13" => Ok(AcaiFormula::Eq13),
+            "facet-margin" => Ok(AcaiFormula::FacetMargin),
+            other => Err(RfError::invalid(
+                "formula",
+                format!("must be \"eq13\" or \"facet-margin\", got {other:?}"),
+            )),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            AcaiFormula::Eq13 => "eq13",
+            AcaiFormula::FacetMargin => "facet-margin",
+        }
+    }
+}
+
+/// Both readings of one evaluation; equal whenever G is inside Omega or on its boundary.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AcaiValues {
+    /// Du eq. (13) as printed.
+    pub eq13: f64,
+    /// `min_j d_j` over every facet direction; its sign decides controllability.
+    pub facet_margin: f64,
+}
+
+impl AcaiValues {
+    pub fn get(self, formula: AcaiFormula) -> f64 {
+        match formula {
+            AcaiFormula::Eq13 => self.eq13,
+            AcaiFormula::FacetMargin => self.facet_margin,
+        }
+    }
+}
+
+/// Facet normals and projections of a nominal effectiveness matrix, reusable for any efficiencies,
+/// bounds and G.
+#[derive(Debug, Clone)]
+pub struct FacetNormals {
+    /// Virtual-control dimension n (rows of B).
+    n: usize,
+    /// Number of actuators m (columns of B).
+    m: usize,
+    /// Column indices of each full-rank group, `n - 1` per group.
+    groups: Vec<usize>,
+    /// Unit normals, `n` per group.
+    normals: Vec<f64>,
+    /// `xi_j . b_k`, `m` per group; exactly zero for the group's own columns.
+    projections: Vec<f64>,
+    /// `|b_k|`, for the zero tolerance.
+    column_norms: Vec<f64>,
+}
+
+impl FacetNormals {
+    /// Enumerates the column groups of `b` (n x m, efficiencies not applied).
+    pub fn new(b: &DMatrix<f64>) -> Result<Self> {
+        let (n, m) = b.shape();
+        if n == 0 || m == 0 {
+            return Err(RfError::shape(
+                "effectiveness_matrix",
+                "at least one row and one column",
+                format!("{n} x {m}"),
+            ));
+        }
+        require_all_finite("effectiveness_matrix", b.as_slice())?;
+        let group_count = binomial(m, n - 1);
+        if group_count.saturating_mul(m) > MAX_TABLE_ENTRIES {
+            return Err(RfError::invalid(
+                "effectiveness_matrix",
+                format!(
+                    "{m} columns in {n} dimensions give {group_count} facet groups, more than \
+                     this enumeration handles ({MAX_TABLE_ENTRIES} table entries)"
+                ),
+            ));
+        }
+        let column_norms: Vec<f64> = (0..m).map(|k| b.column(k).norm()).collect();
+        let mut out = FacetNormals {
+            n,
+            m,
+            groups: Vec::new(),
+            normals: Vec::new(),
+            projections: Vec::new(),
+            column_norms,
+        };
+        let mut minor = vec![0.0; (n - 1) * (n - 1)];
+        let mut xi = vec![0.0; n];
+        // With m < n - 1 there is no group at all, and every evaluation reports rank < n.
+        for group in Combinations::new(m, n - 1) {
+            generalized_cross_product(b, &group, &mut minor, &mut xi);
+            let volume: f64 = group.iter().map(|&k| out.column_norms[k]).product();
+            let norm = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !(norm > RANK_RTOL * volume) {
+                continue; // rank B_{1,j} < n - 1: no facet (Du Step 6)
+            }
+            xi.iter_mut().for_each(|v| *v /= norm);
+            for k in 0..m {
+                let p: f64 = if group.contains(&k) {
+                    0.0
+                } else {
+                    (0..n).map(|r| xi[r] * b[(r, k)]).sum()
+                };
+                let p = if p.abs() <= RANK_RTOL * out.column_norms[k] { 0.0 } else { p };
+                out.projections.push(p);
+            }
+            out.groups.extend_from_slice(&group);
+            out.normals.extend_from_slice(&xi);
+        }
+        Ok(out)
+    }
+
+    /// Virtual-control dimension n.
+    pub fn dimension(&self) -> usize {
+        self.n
+    }
+
+    /// Number of actuators m.
+    pub fn actuator_count(&self) -> usize {
+        self.m
+    }
+
+    /// Number of full-rank column groups kept (Du's `s_m` less the rank-deficient ones).
+    pub fn group_count(&self) -> usize {
+        self.normals.len() / self.n
+    }
+
+    /// Checks the bounds and hover wrench passed to [`FacetNormals::acai`].
+    pub fn check_bounds_and_g(&self, f_min: &[f64], f_max: &[f64], g: &[f64]) -> Result<()> {
+        for (field, v, len, what) in [
+            ("f_min", f_min, self.m, "one per actuator"),
+            ("f_max", f_max, self.m, "one per actuator"),
+            ("g_vec", g, self.n, "one per virtual-control axis"),
+        ] {
+            if v.len() != len {
+                return Err(RfError::shape(field, format!("{len} entries ({what})"), v.len().to_string()));
+            }
+            require_all_finite(field, v)?;
+        }
+        if let Some(k) = (0..self.m).find(|&k| f_min[k] > f_max[k]) {
+            return Err(RfError::invalid(
+                format!("f_min[{k}]"),
+                format!("must not exceed f_max[{k}] ({} > {})", f_min[k], f_max[k]),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The ACAI for efficiencies `eta` (each in [0, 1]), thrust box `[f_min, f_max]` and hover
+    /// wrench `g`, in both readings. Arguments must have passed
+    /// [`FacetNormals::check_bounds_and_g`] and [`crate::airframe::check_efficiency`]; this is the
+    /// allocation-free hot path.
+    pub fn evaluate(&self, eta: &[f64], f_min: &[f64], f_max: &[f64], g: &[f64]) -> AcaiValues {
+        let (n, m) = (self.n, self.m);
+        let mut full_rank = false;
+        // Over the groups without a failed rotor (Du's d_j), and over every group.
+        let mut min_d_working = f64::INFINITY;
+        let mut min_abs_d_working = f64::INFINITY;
+        let mut min_d_all = f64::INFINITY;
+        for (j, normal) in self.normals.chunks_exact(n).enumerate() {
+            let projections = &self.projections[j * m..(j + 1) * m];
+            let mut half_width = 0.0;
+            let mut centre = 0.0;
+            let mut leaves_hyperplane = false;
+            for k in 0..m {
+                let p = projections[k] * eta[k];
+                leaves_hyperplane |= p != 0.0;
+                half_width += p.abs() * (f_max[k] - f_min[k]);
+                centre += p * (f_max[k] + f_min[k]);
+            }
+            let g_along: f64 = normal.iter().zip(g).map(|(a, b)| a * b).sum();
+            let d = 0.5 * half_width - (0.5 * centre - g_along).abs();
+            min_d_all = min_d_all.min(d);
+            let group = &self.groups[j * (n - 1)..(j + 1) * (n - 1)];
+            if group.iter().all(|&k| eta[k] != 0.0) {
+                // rank B = n iff some group of n - 1 independent working columns has a column
+                // off its hyperplane.
+                full_rank |= leaves_hyperplane;
+                min_d_working = min_d_working.min(d);
+                min_abs_d_working = min_abs_d_working.min(d.abs());
+            }
+        }
+        if !full_rank {
+            return AcaiValues {
+                eq13: f64::NEG_INFINITY,
+                facet_margin: f64::NEG_INFINITY,
+            };
+        }
+        let eq13 = if min_d_working >= 0.0 { min_d_working } else { -min_abs_d_working };
+        let scale: f64 = (0..m)
+            .map(|k| self.column_norms[k] * eta[k] * 0.5 * (f_max[k] - f_min[k]))
+            .sum::<f64>()
+            + g.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let snap = |rho: f64| if rho.abs() <= ZERO_RTOL * scale { 0.0 } else { rho };
+        AcaiValues {
+            eq13: snap(eq13),
+            facet_margin: snap(min_d_all),
+        }
+    }
+
+    /// ACAI for each row of `etas` (row-major, `m` per row), in parallel. Every row is validated
+    /// first; the error names the first bad row and rotor.
+    pub fn acai_batch(
+        &self,
+        etas: &[f64],
+        f_min: &[f64],
+        f_max: &[f64],
+        g: &[f64],
+        formula: AcaiFormula,
+    ) -> Result<Vec<f64>> {
+        self.check_bounds_and_g(f_min, f_max, g)?;
+        let m = self.m;
+        if etas.len() % m != 0 {
+            return Err(RfError::shape(
+                "etas",
+                format!("a multiple of {m} values (N rows of one efficiency per rotor)"),
+                etas.len().to_string(),
+            ));
+        }
+        if let Some(i) = etas.iter().position(|e| !(e.is_finite() && (0.0..=1.0).contains(e))) {
+            return Err(RfError::invalid(
+                format!("etas[{}, {}] (rotor {})", i / m, i % m, i % m + 1),
+                format!("must be finite and lie in [0, 1], got {}", etas[i]),
+            ));
+        }
+        Ok(etas
+            .par_chunks_exact(m)
+            .with_min_len(256)
+            .map(|eta| self.evaluate(eta, f_min, f_max, g).get(formula))
+            .collect())
+    }
+}
+
+/// ACAI of an arbitrary effectiveness matrix `b` (n x m, efficiencies already applied), box
+/// `[f_min, f_max]` and required wrench `g` (length n).
+pub fn acai_from_matrix(
+    b: &DMatrix<f64>,
+    f_min: &[f64],
+    f_max: &[f64],
+    g: &[f64],
+    formula: AcaiFormula,
+) -> Result<f64> {
+    let normals = FacetNormals::new(b)?;
+    normals.check_bounds_and_g(f_min, f_max, g)?;
+    Ok(normals.evaluate(&vec![1.0; b.ncols()], f_min, f_max, g).get(formula))
+}
+
+/// Writes into `xi` the generalised cross product of the columns `group` (n - 1 of them) of `b`:
+/// `xi_r = (-1)^r det(B_group without row r)`, orthogonal to every column of the group, with norm
+/// the (n-1)-volume they span.
+fn generalized_cross_product(b: &DMatrix<f64>, group: &[usize], minor: &mut [f64], xi: &mut [f64]) {
+    let n = xi.len();
+    let d = n - 1;
+    for skip in 0..n {
+        let mut row_out = 0;
+        for r in (0..n).filter(|&r| r != skip) {
+            for (c, &k) in group.iter().enumerate() {
+                minor[row_out * d + c] = b[(r, k)];
+            }
+            row_out += 1;
+        }
+        let sign = if skip % 2 == 0 { 1.0 } else { -1.0 };
+        xi[skip] = sign * determinant(&mut minor[..d * d], d);
+    }
+}
+
+/// Determinant of a row-major `d x d` matrix: closed forms up to 3 x 3, partial-pivoting
+/// elimination beyond (the buffer is overwritten).
+fn determinant(a: &mut [f64], d: usize) -> f64 {
+    match d {
+        0 => 1.0,
+        1 => a[0],
+        2 => a[0] * a[3] - a[1] * a[2],
+        3 => {
+            a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
+                + a[2] * (a[3] * a[7] - a[4] * a[6])
+        }
+        _ => {
+            let mut det = 1.0;
+            for col in 0..d {
+                let pivot = (col..d)
+                    .max_by(|&x, &y| a[x * d + col].abs().total_cmp(&a[y * d + col].abs()))
+                    .unwrap_or(col);
+                if a[pivot * d + col] == 0.0 {
+                    return 0.0;
+                }
+                if pivot != col {
+                    for c in 0..d {
+                        a.swap(pivot * d + c, col * d + c);
+                    }
+                    det = -det;
+                }
+                let p = a[col * d + col];
+                det *= p;
+                for r in col + 1..d {
+                    let factor = a[r * d + col] / p;
+                    for c in col..d {
+                        a[r * d + c] -= factor * a[col * d + c];
+                    }
+                }
+            }
+            det
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cross_product_is_orthogonal_in_five_dimensions() {
+        let b = DMatrix::from_fn(5, 4, |r, c| ((r * 7 + c * 3) % 5) as f64 + 0.1 * (r as f64) - 0.3 * c as f64);
+        let mut minor = vec![0.0; 16];
+        let mut xi = vec![0.0; 5];
+        generalized_cross_product(&b, &[0, 1, 2, 3], &mut minor, &mut xi);
+        assert!(xi.iter().any(|v| v.abs() > 1e-6));
+        for c in 0..4 {
+            let dot: f64 = (0..5).map(|r| xi[r] * b[(r, c)]).sum();
+            assert!(dot.abs() < 1e-12, "column {c}: {dot}");
+        }
+    }
+
+    #[test]
+    fn box_in_one_dimension_is_distance_to_nearest_end() {
+        // n = 1: Omega = [sum f_min, sum f_max]; G = 3 in [0, 10] -> 3.
+        let b = DMatrix::from_row_slice(1, 2, &[1.0, 1.0]);
+        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[3.0], AcaiFormula::Eq13).unwrap(), 3.0);
+        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[12.0], AcaiFormula::Eq13).unwrap(), -2.0);
+        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[10.0], AcaiFormula::Eq13).unwrap(), 0.0);
+    }
+
+    #[test]
+    fn eq13_is_zero_where_a_direction_touches_but_margin_sees_the_gap() {
+        // Square [0, 1]^2 (identity) and G = (2, 0.5): G is 1 outside the side x = 1.
+        // Eq. (13) takes min |d_j| = |0.5 - 0| = 0.5 from the y direction: -0.5, not -1.
+        let b = DMatrix::identity(2, 2);
+        let g = [2.0, 0.5];
+        let eq13 = acai_from_matrix(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13).unwrap();
+        let margin = acai_from_matrix(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::FacetMargin).unwrap();
+        assert_eq!(eq13, -0.5);
+        assert_eq!(margin, -1.0);
+    }
+
+    #[test]
+    fn square_in_two_dimensions() {
+        // Identity 2 x 2 with box [-1, 2]^2 and G = (0, 0.5): nearest side x = -1 at distance 1.
+        let b = DMatrix::identity(2, 2);
+        let rho = acai_from_matrix(&b, &[-1.0, -1.0], &[2.0, 2.0], &[0.0, 0.5], AcaiFormula::FacetMargin).unwrap();
+        assert!((rho - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rank_deficient_is_negative_infinity() {
+        let b = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 2.0, 4.0, 6.0]);
+        let rho = acai_from_matrix(&b, &[0.0; 3], &[1.0; 3], &[1.0, 2.0], AcaiFormula::Eq13).unwrap();
+        assert_eq!(rho, f64::NEG_INFINITY);
+        let too_few = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
+        assert_eq!(acai_from_matrix(&too_few, &[0.0; 2], &[1.0; 2], &[0.0; 3], AcaiFormula::Eq13).unwrap(), f64::NEG_INFINITY);
+    }
+
+    #[test]
+    fn bad_bounds_are_rejected() {
+        let b = DMatrix::identity(2, 2);
+        let err = acai_from_matrix(&b, &[0.0, 3.0], &[1.0, 2.0], &[0.0, 0.0], AcaiFormula::Eq13).unwrap_err();
+        assert!(err.to_string().starts_with("f_min[1]"), "{err}");
+        let err = acai_from_matrix(&b, &[0.0, 0.0], &[1.0, 1.0], &[0.0], AcaiFormula::Eq13).unwrap_err();
+        assert!(err.to_string().starts_with("g_vec"), "{err}");
+    }
+
+    #[test]
+    fn determinant_by_elimination_matches_closed_form() {
+        let m = [2.0, -1.0, 0.5, 3.0, 1.0, 4.0, -2.0, 0.0, 1.5, 2.5, -1.0, 0.0, 1.0, 0.0, 2.0, 1.0];
+        let expected = DMatrix::from_row_slice(4, 4, &m).determinant();
+        let mut a = m;
+        assert!((determinant(&mut a, 4) - expected).abs() < 1e-12);
+    }
+}

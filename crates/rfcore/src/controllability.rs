@@ -1,0 +1,286 @@
+//! Du et al. Section IV.B: the step-by-step controllability test of the hover model (1).
+//!
+//! The hover model has state `[h, phi, theta, psi, v_h, p, q, r]`, `A = [[0, I], [0, 0]]` and
+//! `B = [0; J_f^-1]` with `J_f = diag(-m_a, J_x, J_y, J_z)`. With the yaw axis given up (a vehicle
+//! that spins, as in Lanzon's and Ke's controllers) the yaw angle, yaw rate and yaw torque drop out:
+//! state `[h, phi, theta, v_h, p, q]`, `J_f = diag(-m_a, J_x, J_y)`, virtual control `[T, L, M]`.
+//! The system is controllable iff rank C(A, B) = 2n and the ACAI is positive (Theorem 2).
+
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+use crate::acai::{AcaiFormula, FacetNormals, RANK_RTOL};
+use crate::airframe::{check_efficiency, Airframe};
+use crate::error::Result;
+
+/// Which virtual-control axes must remain controllable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ControlAxes {
+    /// Thrust, roll, pitch and yaw: Du's n = 4.
+    ThrustRollPitchYaw,
+    /// Thrust, roll and pitch only (yaw given up): n = 3.
+    ThrustRollPitch,
+}
+
+impl ControlAxes {
+    pub fn from_give_up_yaw(give_up_yaw: bool) -> Self {
+        if give_up_yaw {
+            ControlAxes::ThrustRollPitch
+        } else {
+            ControlAxes::ThrustRollPitchYaw
+        }
+    }
+
+    /// Rows of Du's 4 x m B_f that this choice keeps.
+    pub fn rows(self) -> &'static [usize] {
+        match self {
+            ControlAxes::ThrustRollPitchYaw => &[0, 1, 2, 3],
+            ControlAxes::ThrustRollPitch => &[0, 1, 2],
+        }
+    }
+
+    /// Virtual-control dimension n.
+    pub fn dimension(self) -> usize {
+        self.rows().len()
+    }
+}
+
+/// Why the test ended the way it did (Du Step 9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    Controllable,
+    /// Step 1 failed: rank C(A, B) < 2n.
+    ModelRankDeficient,
+    /// Step 2 failed: rank B_f < n, the ACAI is undefined (-inf).
+    EffectivenessRankDeficient,
+    /// ACAI = 0: the hover wrench G lies on the boundary of the attainable set.
+    HoverOnBoundary,
+    /// ACAI < 0: G lies outside the attainable set.
+    HoverOutside,
+}
+
+impl Verdict {
+    pub fn is_controllable(self) -> bool {
+        self == Verdict::Controllable
+    }
+
+    /// A short machine-readable reason.
+    pub fn code(self) -> &'static str {
+        match self {
+            Verdict::Controllable => "controllable",
+            Verdict::ModelRankDeficient => "uncontrollable: rank C(A, B) deficient",
+            Verdict::EffectivenessRankDeficient => "uncontrollable: rank B_f deficient",
+            Verdict::HoverOnBoundary => "uncontrollable: hover wrench on the boundary",
+            Verdict::HoverOutside => "uncontrollable: hover wrench outside the attainable set",
+        }
+    }
+}
+
+/// The outcome of the 9-step procedure for one efficiency vector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControllabilityReport {
+    pub axes: ControlAxes,
+    /// 2n: 8 with yaw, 6 without.
+    pub state_dimension: usize,
+    /// rank C(A, B) (Step 1).
+    pub controllability_rank: usize,
+    /// n: 4 with yaw, 3 without.
+    pub virtual_control_dimension: usize,
+    /// rank B_f with the efficiencies applied (Step 2).
+    pub effectiveness_rank: usize,
+    /// rho(G, dOmega) (Steps 3-8) in the requested formula; -inf when rank B_f < n.
+    pub acai: f64,
+    pub formula: AcaiFormula,
+    pub verdict: Verdict,
+}
+
+/// Everything about an airframe that does not depend on rotor efficiencies, built once and then
+/// evaluated for any number of efficiency vectors.
+#[derive(Debug, Clone)]
+pub struct ControllabilityAnalysis {
+    axes: ControlAxes,
+    nominal: DMatrix<f64>,
+    normals: FacetNormals,
+    controllability_rank: usize,
+    f_min: Vec<f64>,
+    f_max: Vec<f64>,
+    g: Vec<f64>,
+    default_eta: Vec<f64>,
+}
+
+impl ControllabilityAnalysis {
+    pub fn new(airframe: &Airframe, axes: ControlAxes) -> Result<Self> {
+        let full = airframe.nominal_effectiveness_matrix();
+        let rows = axes.rows();
+        let nominal = full.select_rows(rows.iter());
+        let normals = FacetNormals::new(&nominal)?;
+        let (a, b) = hover_model(airframe, axes);
+        let wrench = airframe.hover_wrench();
+        let f_min = airframe.min_thrust_n();
+        let f_max = airframe.max_thrust_n();
+        let g: Vec<f64> = rows.iter().map(|&r| wrench[r]).collect();
+        normals.check_bounds_and_g(&f_min, &f_max, &g)?;
+        Ok(ControllabilityAnalysis {
+            axes,
+            nominal,
+            normals,
+            controllability_rank: numerical_rank(&controllability_matrix(&a, &b)),
+            f_min,
+            f_max,
+            g,
+            default_eta: airframe.efficiency(),
+        })
+    }
+
+    pub fn axes(&self) -> ControlAxes {
+        self.axes
+    }
+
+    /// The airframe's own efficiencies, used when none are given.
+    pub fn default_efficiency(&self) -> &[f64] {
+        &self.default_eta
+    }
+
+    /// ACAI for one efficiency vector (validated).
+    pub fn acai(&self, eta: &[f64], formula: AcaiFormula) -> Result<f64> {
+        check_efficiency("eta", eta, self.nominal.ncols())?;
+        Ok(self.normals.evaluate(eta, &self.f_min, &self.f_max, &self.g).get(formula))
+    }
+
+    /// ACAI for N efficiency vectors (row-major N x m), in parallel.
+    pub fn acai_batch(&self, etas: &[f64], formula: AcaiFormula) -> Result<Vec<f64>> {
+        self.normals.acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula)
+    }
+
+    /// Du's Steps 1-9 for one efficiency vector; `formula` chooses how an ACAI with G outside
+    /// the attainable set is reported (the verdict does not depend on it).
+    pub fn report(&self, eta: &[f64], formula: AcaiFormula) -> Result<ControllabilityReport> {
+        check_efficiency("eta", eta, self.nominal.ncols())?;
+        let n = self.axes.dimension();
+        let mut scaled = self.nominal.clone();
+        for (k, &e) in eta.iter().enumerate() {
+            scaled.column_mut(k).scale_mut(e);
+        }
+        let effectiveness_rank = numerical_rank(&scaled);
+        let values = self.normals.evaluate(eta, &self.f_min, &self.f_max, &self.g);
+        let (acai, margin) = if effectiveness_rank < n {
+            (f64::NEG_INFINITY, f64::NEG_INFINITY)
+        } else {
+            (values.get(formula), values.facet_margin)
+        };
+        let verdict = if self.controllability_rank < 2 * n {
+            Verdict::ModelRankDeficient
+        } else if margin == f64::NEG_INFINITY {
+            Verdict::EffectivenessRankDeficient
+        } else if margin > 0.0 {
+            Verdict::Controllable
+        } else if margin == 0.0 {
+            Verdict::HoverOnBoundary
+        } else {
+            Verdict::HoverOutside
+        };
+        Ok(ControllabilityReport {
+            axes: self.axes,
+            state_dimension: 2 * n,
+            controllability_rank: self.controllability_rank,
+            virtual_control_dimension: n,
+            effectiveness_rank,
+            acai,
+            formula,
+            verdict,
+        })
+    }
+}
+
+/// Du's hover model (1) restricted to `axes`: `(A, B)` with A (2n x 2n) and B (2n x n).
+pub fn hover_model(airframe: &Airframe, axes: ControlAxes) -> (DMatrix<f64>, DMatrix<f64>) {
+    let n = axes.dimension();
+    let [jx, jy, jz] = airframe.inertia_kg_m2();
+    let j_f = [-airframe.mass_kg(), jx, jy, jz];
+    let mut a = DMatrix::zeros(2 * n, 2 * n);
+    let mut b = DMatrix::zeros(2 * n, n);
+    for (i, &row) in axes.rows().iter().enumerate() {
+        a[(i, n + i)] = 1.0;
+        b[(n + i, i)] = 1.0 / j_f[row];
+    }
+    (a, b)
+}
+
+/// C(A, B) = [B, AB, ..., A^(k-1) B] with k the state dimension.
+pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
+    let k = a.nrows();
+    let mut blocks = Vec::with_capacity(k);
+    let mut block = b.clone();
+    for _ in 0..k {
+        let next = a * &block;
+        blocks.push(block);
+        block = next;
+    }
+    DMatrix::from_columns(
+        &blocks.iter().flat_map(|blk| blk.column_iter().map(|c| c.into_owned())).collect::<Vec<_>>(),
+    )
+}
+
+/// Number of singular values above `RANK_RTOL` times the largest.
+pub fn numerical_rank(matrix: &DMatrix<f64>) -> usize {
+    let sv = matrix.clone().svd(false, false).singular_values;
+    let largest = sv.iter().cloned().fold(0.0, f64::max);
+    if largest == 0.0 {
+        return 0;
+    }
+    sv.iter().filter(|&&s| s > RANK_RTOL * largest).count()
+}
+
+/// One row of a failure table: a set of fully failed rotors (0-based) and the verdicts with and
+/// without the yaw axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailureCase {
+    pub failed: Vec<usize>,
+    pub with_yaw: ControllabilityReport,
+    pub without_yaw: ControllabilityReport,
+}
+
+/// Largest number of failure combinations [`failure_table`] enumerates.
+pub const MAX_FAILURE_CASES: usize = 10_000_000;
+
+/// Every combination of up to `max_failed` fully failed rotors (efficiency set to 0, the other
+/// rotors keeping the airframe's efficiencies), in order of the number failed, then lexicographic.
+pub fn failure_table(
+    airframe: &Airframe,
+    max_failed: usize,
+    formula: AcaiFormula,
+) -> Result<Vec<FailureCase>> {
+    use crate::combinations::{binomial, Combinations};
+    use crate::error::RfError;
+    let m = airframe.rotor_count();
+    if max_failed > m {
+        return Err(RfError::invalid(
+            "max_failed",
+            format!("must be between 0 and the number of rotors ({m}), got {max_failed}"),
+        ));
+    }
+    let total: usize = (0..=max_failed).map(|k| binomial(m, k)).fold(0, usize::saturating_add);
+    if total > MAX_FAILURE_CASES {
+        return Err(RfError::invalid(
+            "max_failed",
+            format!("{total} failure combinations exceed the limit of {MAX_FAILURE_CASES}"),
+        ));
+    }
+    let with_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
+    let without_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
+    let base = airframe.efficiency();
+    let sets: Vec<Vec<usize>> = (0..=max_failed).flat_map(|k| Combinations::new(m, k)).collect();
+    sets.into_par_iter()
+        .map(|failed| {
+            let mut eta = base.clone();
+            for &k in &failed {
+                eta[k] = 0.0;
+            }
+            Ok(FailureCase {
+                with_yaw: with_yaw.report(&eta, formula)?,
+                without_yaw: without_yaw.report(&eta, formula)?,
+                failed,
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,20 @@
+//! rfcore: the pure-Rust core of rotorfault.
+//!
+//! - [`airframe`]: multirotor geometry, thrust limits, efficiencies, TOML presets.
+//! - [`acai`]: the Available Control Authority Index (Du et al., Theorem 3) for any dimension.
+//! - [`controllability`]: Du's 9-step test procedure and failure tables.
+//!
+//! Units are SI throughout (N, m, kg, s, rad) and carried in names (`max_thrust_n`).
+
+pub mod acai;
+pub mod airframe;
+pub mod combinations;
+pub mod controllability;
+pub mod error;
+
+pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
+pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
+pub use controllability::{
+    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase, Verdict,
+};
+pub use error::{Result, RfError};

@@ -1,0 +1,44 @@
+"""rotorfault: multirotor rotor failures, from controllability to flight.
+
+Controllability under rotor degradation (Du et al., JGCD 2015)::
+
+    >>> import rotorfault as rf
+    >>> hexa = rf.Airframe.preset("hexa-ppnnpn")
+    >>> round(rf.acai(hexa), 4)
+    1.1295
+    >>> print(rf.failure_table(hexa, max_failed=1))  # doctest: +SKIP
+"""
+
+from ._rfcore import __version__
+from .airframe import Airframe
+from .controllability import (
+    RANK_RTOL,
+    ZERO_RTOL,
+    ControllabilityReport,
+    FailureCase,
+    FailureTable,
+    acai,
+    acai_batch,
+    acai_from_matrix,
+    controllability,
+    failure_table,
+)
+from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
+
+__all__ = [
+    "RANK_RTOL",
+    "ZERO_RTOL",
+    "Airframe",
+    "ControllabilityReport",
+    "EfficiencyScan",
+    "FailureCase",
+    "FailureTable",
+    "__version__",
+    "acai",
+    "acai_batch",
+    "acai_from_matrix",
+    "controllability",
+    "efficiency_scan",
+    "failure_table",
+    "plot_efficiency_scan",
+]

@@ -1,0 +1,57 @@
+"""Conversion of user input to the arrays the core reads.
+
+Types are checked here (``TypeError`` naming the field); value rules (finite, ranges, matching
+lengths) are checked once, in the Rust core, whose ``ValueError`` messages name the field too.
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+_NUMERIC_KINDS = "iuf"
+
+
+def float_array(field: str, value: Any, ndim: int) -> FloatArray:
+    """``value`` as a C-contiguous float64 array with ``ndim`` dimensions.
+
+    The user's object is never modified: the core only reads, and any conversion makes a copy.
+    """
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{field}: expected an array of numbers, got {type(value).__name__}")
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"{field}: expected an array of numbers ({exc})") from None
+    if array.dtype.kind not in _NUMERIC_KINDS:
+        raise TypeError(f"{field}: expected real numbers, got an array of dtype {array.dtype}")
+    if array.ndim != ndim:
+        raise ValueError(f"{field}: expected a {ndim}-D array, got shape {array.shape}")
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def real(field: str, value: Any) -> float:
+    """``value`` as a float; booleans and non-numbers are a ``TypeError``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{field}: expected a real number, got {type(value).__name__}")
+    return float(value)
+
+
+def flag(field: str, value: Any) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{field}: expected True or False, got {type(value).__name__}")
+    return bool(value)
+
+
+def count(field: str, value: Any) -> int:
+    """A non-negative integer (``ValueError`` if negative)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{field}: expected an integer, got {type(value).__name__}")
+    if value < 0:
+        raise ValueError(f"{field}: must be >= 0, got {value}")
+    return int(value)

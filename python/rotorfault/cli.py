@@ -1,0 +1,166 @@
+"""The ``rotorfault`` command line: presets, ACAI, failure tables, efficiency scans.
+
+Every user error (bad value, bad type, unreadable file) ends the command with a one-line
+``Error: ...`` message on stderr and exit status 1; click's own usage errors exit with 2.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+from .airframe import Airframe
+from .controllability import controllability, failure_table, format_acai
+from .scan import efficiency_scan
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+console = Console()
+
+
+def _user_errors(command: F) -> F:
+    """Turns the library's ValueError/TypeError/OSError into click's one-line error."""
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return command(*args, **kwargs)
+        except (ValueError, TypeError, OSError) as exc:
+            raise click.ClickException(str(exc)) from None
+
+    return wrapper  # type: ignore[return-value]
+
+
+def load_airframe(spec: str) -> Airframe:
+    """A preset name, or a path to a TOML file."""
+    if spec.endswith(".toml") or Path(spec).is_file():
+        return Airframe.from_toml(spec)
+    return Airframe.preset(spec)
+
+
+def parse_numbers(field: str, text: str) -> list[float]:
+    try:
+        return [float(part) for part in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{field}: expected comma-separated numbers, got {text!r}") from None
+
+
+def parse_rotors(field: str, text: str) -> list[int]:
+    try:
+        return [int(part) for part in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{field}: expected comma-separated rotor numbers, got {text!r}") from None
+
+
+formula_option = click.option(
+    "--formula",
+    type=click.Choice(["eq13", "facet-margin"]),
+    default="eq13",
+    show_default=True,
+    help="How an ACAI with hover outside the attainable set is reported (eq13: as Du prints it).",
+)
+
+airframe_option = click.option(
+    "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`) or a TOML file."
+)
+
+
+@click.group()
+@click.version_option(package_name="rotorfault")
+def cli() -> None:
+    """rotorfault: will this multirotor stay controllable when rotors degrade or fail?"""
+
+
+@cli.command()
+@_user_errors
+def airframes() -> None:
+    """List the preset airframes."""
+    table = Table(title="rotorfault presets")
+    for column in ("name", "rotors", "mass (kg)", "max thrust (N)", "description"):
+        table.add_column(column)
+    for name in Airframe.presets():
+        a = Airframe.preset(name)
+        table.add_row(name, str(a.rotor_count), f"{a.mass_kg:g}", f"{a.max_thrust_n.max():g}", a.description)
+    console.print(table)
+
+
+@cli.command()
+@airframe_option
+@click.option("--eta", help="Rotor efficiencies, comma-separated (default: the airframe's own).")
+@click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+@formula_option
+@_user_errors
+def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> None:
+    """Run Du's controllability test and print the ACAI."""
+    frame = load_airframe(airframe)
+    efficiencies = None if eta is None else parse_numbers("eta", eta)
+    report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)  # type: ignore[arg-type]
+    table = Table(title=f"{frame.name}: controllability", show_header=False)
+    table.add_column("quantity")
+    table.add_column("value")
+    table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.eta))
+    table.add_row("axes", "thrust, roll, pitch" if give_up_yaw else "thrust, roll, pitch, yaw")
+    table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
+    table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
+    table.add_row("ACAI", format_acai(report.acai))
+    style = "green" if report.controllable else "red"
+    table.add_row("verdict", f"[{style}]{report.verdict}[/{style}]")
+    console.print(table)
+
+
+@cli.command()
+@airframe_option
+@click.option("--max-failed", "-k", default=1, show_default=True, type=int, help="Largest number of failed rotors.")
+@formula_option
+@_user_errors
+def failures(airframe: str, max_failed: int, formula: str) -> None:
+    """Every combination of up to K failed rotors: rank, ACAI (with and without yaw), verdict."""
+    frame = load_airframe(airframe)
+    result = failure_table(frame, max_failed=max_failed, formula=formula)  # type: ignore[arg-type]
+    headers, rows = result.rows_for_display()
+    table = Table(title=f"{frame.name}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
+    for header in headers:
+        table.add_column(header, justify="left" if header == "failed" else "right")
+    for case, row in zip(result, rows):
+        style = "green" if case.controllable else ("yellow" if case.controllable_without_yaw else "red")
+        table.add_row(*row, style=style)
+    console.print(table)
+    survivable = sum(case.controllable for case in result)
+    spinning = sum(case.controllable_without_yaw and not case.controllable for case in result)
+    console.print(
+        f"{survivable} of {len(result)} cases controllable; {spinning} more only by giving up yaw "
+        "(green: controllable; yellow: only without yaw, i.e. thrust, roll and pitch; red: neither)."
+    )
+
+
+@cli.command()
+@airframe_option
+@click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
+@click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
+@click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (PNG).")
+@_user_errors
+def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None) -> None:
+    """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
+    frame = load_airframe(airframe)
+    result = efficiency_scan(frame, parse_rotors("rotors", rotors), step, give_up_yaw=give_up_yaw)
+    finite = result.acai[~(result.acai == -math.inf)]
+    console.print(
+        f"{frame.name}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
+        f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%); "
+        f"largest ACAI {finite.max() if finite.size else float('nan'):.4f}"
+    )
+    if plot_path is not None:
+        result.plot(plot_path)
+        console.print(f"plot written to {plot_path}")
+
+
+def main() -> None:
+    cli()

@@ -1,0 +1,280 @@
+"""Controllability under rotor degradation and failure (Du, Quan, Yang, Cai, JGCD 2015).
+
+The Available Control Authority Index (ACAI) is the radius of the largest ball centred at the
+hover wrench G = [m g, 0, 0, 0] inside the attainable set of thrust and torques (Du eq. (9)); the
+vehicle is controllable about hover iff rank C(A, B) is full and the ACAI is positive
+(Theorem 2). Units: the ACAI mixes N (thrust axis) and N m (torque axes), exactly as in the paper.
+
+Where G lies outside the attainable set the paper's eq. (13) is not the distance of its own
+definition (9) (Du Table III prints 0 for the PPNNPN hexacopter with rotor 5 failed, where hover is
+infeasible). ``formula="eq13"`` (the default) reproduces the paper; ``formula="facet-margin"``
+returns minus the largest violation of a facet inequality, a lower bound on the distance that is
+continuous and non-decreasing in every efficiency. Both agree whenever G is inside or on the
+boundary, and verdicts never depend on the choice (details: ``crates/rfcore/src/acai.rs``).
+
+``give_up_yaw=True`` asks the same question for thrust, roll and pitch only (n = 3): can the
+vehicle hover if it lets yaw go and spins, as the controllers of Lanzon et al. and Ke et al. do?
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, Literal, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _rfcore
+from ._convert import FloatArray, count, flag, float_array
+from .airframe import Airframe, require_airframe, rotor_labels
+
+#: Tolerances of the core (see ``crates/rfcore/src/acai.rs``): rank decisions are relative to
+#: column norms, and an ACAI within ZERO_RTOL x (problem size) of zero is returned as exactly 0.0.
+RANK_RTOL: float = _rfcore.RANK_RTOL
+ZERO_RTOL: float = _rfcore.ZERO_RTOL
+
+
+Formula = Literal["eq13", "facet-margin"]
+
+
+def _formula(value: Any) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"formula: expected 'eq13' or 'facet-margin', got {type(value).__name__}")
+    return value
+
+
+def _efficiency(airframe: Airframe, eta: Any) -> FloatArray:
+    return airframe.efficiency if eta is None else float_array("eta", eta, 1)
+
+
+def acai(
+    airframe: Airframe, eta: Any = None, give_up_yaw: bool = False, formula: Formula = "eq13"
+) -> float:
+    """ACAI of ``airframe`` with rotor efficiencies ``eta`` (default: the airframe's own), in
+    N / N m like the paper.
+
+    Positive: the distance from G to the boundary of the attainable set. ``0.0``: G on the
+    boundary (within ``ZERO_RTOL``) or, with ``formula="eq13"``, a degenerate outside case.
+    Negative: G outside. ``-inf``: rank B_f < n, the index is undefined.
+    """
+    airframe = require_airframe(airframe)
+    return _rfcore.acai(
+        airframe._core,
+        _efficiency(airframe, eta),
+        flag("give_up_yaw", give_up_yaw),
+        _formula(formula),
+    )
+
+
+def acai_batch(
+    airframe: Airframe, etas: Any, give_up_yaw: bool = False, formula: Formula = "eq13"
+) -> FloatArray:
+    """ACAI for every row of ``etas`` (N x m efficiencies), computed in parallel without the GIL."""
+    airframe = require_airframe(airframe)
+    return _rfcore.acai_batch(
+        airframe._core,
+        float_array("etas", etas, 2),
+        flag("give_up_yaw", give_up_yaw),
+        _formula(formula),
+    )
+
+
+def acai_from_matrix(
+    effectiveness_matrix: Any, f_min: Any, f_max: Any, g_vec: Any, formula: Formula = "eq13"
+) -> float:
+    """ACAI of any effectiveness matrix B (n x m, efficiencies applied), actuator box
+    ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1."""
+    return _rfcore.acai_from_matrix(
+        float_array("effectiveness_matrix", effectiveness_matrix, 2),
+        float_array("f_min", f_min, 1),
+        float_array("f_max", f_max, 1),
+        float_array("g_vec", g_vec, 1),
+        _formula(formula),
+    )
+
+
+@dataclass(frozen=True)
+class ControllabilityReport:
+    """Outcome of Du's 9-step test for one airframe and efficiency vector."""
+
+    airframe: str
+    eta: tuple[float, ...]
+    give_up_yaw: bool
+    #: 2n: 8 with yaw, 6 without.
+    state_dimension: int
+    #: rank of C(A, B) (Step 1).
+    controllability_rank: int
+    #: n: 4 with yaw, 3 without.
+    virtual_control_dimension: int
+    #: rank of B_f with efficiencies applied (Step 2).
+    effectiveness_rank: int
+    #: rho(G, dOmega) (Steps 3-8); -inf when rank B_f < n.
+    acai: float
+    #: "eq13" or "facet-margin": how ``acai`` reads when G is outside.
+    formula: str
+    #: Short reason: "controllable", "hover on boundary (ACAI = 0)", ...
+    verdict: str
+    controllable: bool
+
+    def __str__(self) -> str:
+        axes = "thrust, roll, pitch" if self.give_up_yaw else "thrust, roll, pitch, yaw"
+        acai = "undefined (-inf)" if math.isinf(self.acai) else f"{self.acai:.4f}"
+        eta = ", ".join(f"{e:g}" for e in self.eta)
+        return "\n".join(
+            [
+                f"{self.airframe}: eta = [{eta}], axes = {axes}",
+                f"  rank C(A, B) = {self.controllability_rank} of {self.state_dimension}",
+                f"  rank B_f     = {self.effectiveness_rank} of {self.virtual_control_dimension}",
+                f"  ACAI         = {acai}",
+                f"  verdict      = {self.verdict}",
+            ]
+        )
+
+
+def controllability(
+    airframe: Airframe, eta: Any = None, give_up_yaw: bool = False, formula: Formula = "eq13"
+) -> ControllabilityReport:
+    """Runs Du's Section IV.B procedure for ``airframe`` with efficiencies ``eta``."""
+    airframe = require_airframe(airframe)
+    efficiency = _efficiency(airframe, eta)
+    give_up_yaw = flag("give_up_yaw", give_up_yaw)
+    fields = _rfcore.controllability(airframe._core, efficiency, give_up_yaw, _formula(formula))
+    return ControllabilityReport(
+        airframe=airframe.name, eta=tuple(float(e) for e in efficiency), give_up_yaw=give_up_yaw, **fields
+    )
+
+
+@dataclass(frozen=True)
+class FailureCase:
+    """One row of a failure table: rotors (1-based) at efficiency 0 and the two verdicts."""
+
+    failed: tuple[int, ...]
+    controllability_rank: int
+    effectiveness_rank: int
+    acai: float
+    controllable: bool
+    verdict: str
+    effectiveness_rank_without_yaw: int
+    acai_without_yaw: float
+    controllable_without_yaw: bool
+    verdict_without_yaw: str
+
+
+_COLUMNS = (
+    "controllability_rank",
+    "effectiveness_rank",
+    "acai",
+    "controllable",
+    "effectiveness_rank_without_yaw",
+    "acai_without_yaw",
+    "controllable_without_yaw",
+)
+
+
+def format_acai(value: float) -> str:
+    return "undefined" if math.isinf(value) else f"{value:.4f}"
+
+
+class FailureTable(Sequence[FailureCase]):
+    """Every combination of up to ``max_failed`` failed rotors with rank, ACAI and verdict, with
+    and without the yaw axis. Prints as a table; converts with :meth:`to_dicts` and
+    :meth:`to_arrays`."""
+
+    def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase]) -> None:
+        self.airframe_name = airframe.name
+        self.rotor_count = airframe.rotor_count
+        self.max_failed = max_failed
+        self._cases = tuple(cases)
+
+    @overload
+    def __getitem__(self, index: int) -> FailureCase: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[FailureCase]: ...
+    def __getitem__(self, index: int | slice) -> FailureCase | Sequence[FailureCase]:
+        return self._cases[index]
+
+    def __len__(self) -> int:
+        return len(self._cases)
+
+    def __iter__(self) -> Iterator[FailureCase]:
+        return iter(self._cases)
+
+    def case(self, *failed: int) -> FailureCase:
+        """The row for exactly these failed rotors (1-based, any order)."""
+        key = tuple(sorted(failed))
+        for row in self._cases:
+            if row.failed == key:
+                return row
+        raise KeyError(f"no row for failed rotors {key} (max_failed={self.max_failed})")
+
+    def to_dicts(self) -> list[dict[str, Any]]:
+        return [asdict(row) for row in self._cases]
+
+    def to_arrays(self) -> dict[str, npt.NDArray[Any]]:
+        """Columns as numpy arrays; ``failed_mask`` is N x m (True where a rotor failed)."""
+        mask = np.zeros((len(self), self.rotor_count), dtype=bool)
+        for i, row in enumerate(self._cases):
+            mask[i, [r - 1 for r in row.failed]] = True
+        arrays: dict[str, npt.NDArray[Any]] = {"failed_mask": mask, "n_failed": mask.sum(axis=1)}
+        for column in _COLUMNS:
+            arrays[column] = np.array([getattr(row, column) for row in self._cases])
+        return arrays
+
+    def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
+        """Headers and formatted cells; "no-yaw" columns keep only thrust, roll and pitch."""
+        headers = ["failed", "rank C", "rank B_f", "ACAI", "ok", "ACAI no-yaw", "ok no-yaw"]
+        rows = [
+            [
+                rotor_labels(row.failed),
+                str(row.controllability_rank),
+                str(row.effectiveness_rank),
+                format_acai(row.acai),
+                "yes" if row.controllable else "no",
+                format_acai(row.acai_without_yaw),
+                "yes" if row.controllable_without_yaw else "no",
+            ]
+            for row in self._cases
+        ]
+        return headers, rows
+
+    def __str__(self) -> str:
+        headers, rows = self.rows_for_display()
+        widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
+        lines = [
+            f"{self.airframe_name}: up to {self.max_failed} failed rotor(s)",
+            "  ".join(h.ljust(w) for h, w in zip(headers, widths)),
+            "  ".join("-" * w for w in widths),
+        ]
+        lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in rows]
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"<FailureTable {self.airframe_name}: {len(self)} cases, max_failed={self.max_failed}>"
+
+
+def failure_table(
+    airframe: Airframe, max_failed: int = 1, formula: Formula = "eq13"
+) -> FailureTable:
+    """Every combination of up to ``max_failed`` fully failed rotors (the other rotors keep the
+    airframe's efficiencies), ordered by number failed, then lexicographically."""
+    airframe = require_airframe(airframe)
+    max_failed = count("max_failed", max_failed)
+    formula = _formula(formula)
+    cases = [
+        FailureCase(
+            failed=tuple(k + 1 for k in failed),
+            controllability_rank=full["controllability_rank"],
+            effectiveness_rank=full["effectiveness_rank"],
+            acai=full["acai"],
+            controllable=full["controllable"],
+            verdict=full["verdict"],
+            effectiveness_rank_without_yaw=no_yaw["effectiveness_rank"],
+            acai_without_yaw=no_yaw["acai"],
+            controllable_without_yaw=no_yaw["controllable"],
+            verdict_without_yaw=no_yaw["verdict"],
+        )
+        for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula)
+    ]
+    return FailureTable(airframe, max_failed, cases)

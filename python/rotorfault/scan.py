@@ -1,0 +1,147 @@
+"""Efficiency-grid scans: the controllable region of Du et al. Fig. 4.
+
+Some rotors' efficiencies sweep a regular grid over [0, 1] while the others keep the airframe's
+values; the ACAI is evaluated at every grid point by the parallel Rust batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ._convert import FloatArray, flag, real
+from .airframe import Airframe, require_airframe
+from .controllability import acai_batch
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+#: Points evaluated per batch call; bounds memory and drives the progress bar.
+CHUNK_POINTS = 1 << 20
+
+
+@dataclass(frozen=True)
+class EfficiencyScan:
+    """Result of :func:`efficiency_scan`."""
+
+    airframe: str
+    #: Swept rotors, 1-based.
+    rotors: tuple[int, ...]
+    #: Grid values shared by every swept rotor.
+    levels: FloatArray
+    #: N x len(rotors) efficiencies of the swept rotors at each point (last rotor fastest).
+    points: FloatArray
+    #: ACAI at each point.
+    acai: FloatArray
+    give_up_yaw: bool
+
+    @property
+    def controllable(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
+        return self.acai > 0.0
+
+    @property
+    def controllable_fraction(self) -> float:
+        return float(self.controllable.mean())
+
+    def plot(self, path: str | None = None) -> Figure:
+        """Du Fig. 4 style: the controllable points in 3-D and their projections."""
+        return plot_efficiency_scan(self, path)
+
+
+def efficiency_scan(
+    airframe: Airframe,
+    rotors: Sequence[int] = (1, 2, 5),
+    step: float = 0.04,
+    give_up_yaw: bool = False,
+    progress: bool | None = None,
+) -> EfficiencyScan:
+    """Sweeps the efficiencies of ``rotors`` (1-based) over ``0, step, ..., 1`` (Du Fig. 4 uses
+    rotors 1, 2, 5 of the PNPNPN hexacopter with step 0.04: 26^3 = 17,576 points).
+
+    ``progress`` shows a progress bar (default: only for scans over 10 million points).
+    """
+    airframe = require_airframe(airframe)
+    step = real("step", step)
+    give_up_yaw = flag("give_up_yaw", give_up_yaw)
+    if not 0.0 < step <= 1.0:
+        raise ValueError(f"step: must lie in (0, 1], got {step}")
+    swept = tuple(rotors)
+    if not swept:
+        raise ValueError("rotors: give at least one rotor to sweep")
+    for r in swept:
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)):
+            raise TypeError(f"rotors: expected 1-based rotor numbers, got {r!r}")
+        if not 1 <= r <= airframe.rotor_count:
+            raise ValueError(f"rotors: rotor numbers run from 1 to {airframe.rotor_count}, got {r}")
+    if len(set(swept)) != len(swept):
+        raise ValueError(f"rotors: each rotor may be swept once, got {swept}")
+    count = int(round(1.0 / step))
+    if not np.isclose(count * step, 1.0, rtol=0.0, atol=1e-9):
+        raise ValueError(f"step: must divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
+    levels = np.linspace(0.0, 1.0, count + 1)
+    total = len(levels) ** len(swept)
+    points = np.empty((total, len(swept)))
+    grids = np.meshgrid(*([levels] * len(swept)), indexing="ij")
+    for column, grid in enumerate(grids):
+        points[:, column] = grid.ravel()
+    base = airframe.efficiency
+    columns = [r - 1 for r in swept]
+    result = np.empty(total)
+    show = total > 10_000_000 if progress is None else bool(progress)
+    chunks = range(0, total, CHUNK_POINTS)
+    if show:
+        from rich.progress import track
+
+        chunks = track(chunks, description=f"ACAI over {total:,} points")  # type: ignore[assignment]
+    for start in chunks:
+        stop = min(start + CHUNK_POINTS, total)
+        etas = np.tile(base, (stop - start, 1))
+        etas[:, columns] = points[start:stop]
+        result[start:stop] = acai_batch(airframe, etas, give_up_yaw=give_up_yaw)
+    return EfficiencyScan(airframe.name, swept, levels, points, result, give_up_yaw)
+
+
+def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figure:
+    """3-D scatter of the controllable grid points (coloured by ACAI) and the three pairwise
+    projections, like Du Fig. 4. Needs exactly three swept rotors; saved to ``path`` if given."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if len(scan.rotors) != 3:
+        raise ValueError(f"scan: the Fig. 4 plot needs three swept rotors, got {len(scan.rotors)}")
+    ok = scan.controllable
+    labels = [f"$\\eta_{{{r}}}$" for r in scan.rotors]
+    fig = plt.figure(figsize=(11, 9))
+    ax3 = fig.add_subplot(2, 2, 1, projection="3d")
+    p = scan.points[ok]
+    sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=scan.acai[ok], s=4, cmap="viridis")
+    ax3.set_xlabel(labels[0])
+    ax3.set_ylabel(labels[1])
+    ax3.set_zlabel(labels[2])  # type: ignore[attr-defined]
+    ax3.set_title(f"{scan.airframe}: controllable ({100 * scan.controllable_fraction:.1f}% of grid)")
+    fig.colorbar(sc, ax=ax3, shrink=0.6, label="ACAI")
+    n = len(scan.levels)
+    best = scan.acai.reshape(n, n, n)
+    for slot, (a, b) in zip((2, 3, 4), ((0, 1), (0, 2), (1, 2))):
+        ax = fig.add_subplot(2, 2, slot)
+        other = 3 - a - b
+        projection = best.max(axis=other)
+        if (a, b) != tuple(sorted((a, b))):
+            projection = projection.T
+        image = np.where(projection > 0.0, projection, np.nan)
+        mesh = ax.pcolormesh(scan.levels, scan.levels, image.T, shading="nearest", cmap="viridis")
+        ax.set_xlabel(labels[a])
+        ax.set_ylabel(labels[b])
+        ax.set_title(f"best ACAI over {labels[other]} (blank: uncontrollable)")
+        ax.set_aspect("equal")
+        fig.colorbar(mesh, ax=ax, shrink=0.8)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
