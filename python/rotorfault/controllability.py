@@ -114,7 +114,7 @@ class ControllabilityReport:
     acai: float
     #: "eq13" or "facet-margin": how ``acai`` reads when G is outside.
     formula: str
-    #: Short reason: "controllable", "hover on boundary (ACAI = 0)", ...
+    #: "controllable" or "uncontrollable: <reason>" (Du Step 9).
     verdict: str
     controllable: bool
 
@@ -261,7 +261,7 @@ def failure_table(
     airframe's efficiencies), ordered by number failed, then lexicographically."""
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
-    formula = _formula(formula)
+    formula_name = _formula(formula)
     cases = [
         FailureCase(
             failed=tuple(k + 1 for k in failed),
@@ -275,6 +275,6 @@ def failure_table(
             controllable_without_yaw=no_yaw["controllable"],
             verdict_without_yaw=no_yaw["verdict"],
         )
-        for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula)
+        for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]
     return FailureTable(airframe, max_failed, cases)

@@ -123,7 +123,7 @@ def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figur
     sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=scan.acai[ok], s=4, cmap="viridis")
     ax3.set_xlabel(labels[0])
     ax3.set_ylabel(labels[1])
-    ax3.set_zlabel(labels[2])  # type: ignore[attr-defined]
+    ax3.set_zlabel(labels[2])
     ax3.set_title(f"{scan.airframe}: controllable ({100 * scan.controllable_fraction:.1f}% of grid)")
     fig.colorbar(sc, ax=ax3, shrink=0.6, label="ACAI")
     n = len(scan.levels)

@@ -53,7 +53,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::combinations::{binomial, Combinations};
-use crate::error::{require_all_finite, Result, RfError};
+use crate::error::{require_all_finite, require_finite, Result, RfError};
 
 /// Relative tolerance for rank decisions (see the module documentation).
 pub const RANK_RTOL: f64 = 1e-9;
@@ -140,7 +140,9 @@ impl FacetNormals {
                 format!("{n} x {m}"),
             ));
         }
-        require_all_finite("effectiveness_matrix", b.as_slice())?;
+        for ((r, c), &v) in b.iter().enumerate().map(|(i, v)| ((i % n, i / n), v)) {
+            require_finite(&format!("effectiveness_matrix[{r}, {c}]"), v)?;
+        }
         let group_count = binomial(m, n - 1);
         if group_count.saturating_mul(m) > MAX_TABLE_ENTRIES {
             return Err(RfError::invalid(

@@ -13,7 +13,7 @@
 use nalgebra::DMatrix;
 use serde::Deserialize;
 
-use crate::error::{require_all_finite, require_finite, require_len, Result, RfError};
+use crate::error::{require_finite, require_len, Result, RfError};
 
 /// Standard gravity used when an airframe does not give its own (m/s^2).
 pub const DEFAULT_GRAVITY_M_S2: f64 = 9.81;
@@ -349,14 +349,13 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
 /// Checks an efficiency vector: m entries, each finite and in [0, 1].
 pub fn check_efficiency(field: &str, eta: &[f64], m: usize) -> Result<()> {
     require_len(field, eta, m)?;
-    require_all_finite(field, eta)?;
-    match eta.iter().position(|e| !(0.0..=1.0).contains(e)) {
-        None => Ok(()),
-        Some(i) => Err(RfError::invalid(
-            rotor_field(field, i),
-            format!("must lie in [0, 1], got {}", eta[i]),
-        )),
+    for (i, &e) in eta.iter().enumerate() {
+        require_finite(&rotor_field(field, i), e)?;
+        if !(0.0..=1.0).contains(&e) {
+            return Err(RfError::invalid(rotor_field(field, i), format!("must lie in [0, 1], got {e}")));
+        }
     }
+    Ok(())
 }
 
 fn default_gravity() -> f64 {

@@ -1,0 +1,99 @@
+"""The command line: rich tables on success, one-line errors (exit 1, no traceback) on bad input."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from rotorfault.cli import cli
+
+
+def run(*args: str) -> tuple[int, str, str]:
+    result = CliRunner().invoke(cli, list(args), terminal_width=200)
+    return result.exit_code, result.stdout, result.stderr
+
+
+def test_airframes_lists_presets() -> None:
+    code, out, _ = run("airframes")
+    assert code == 0
+    for name in ("hexa-pnpnpn", "hexa-ppnnpn", "quad-x", "ke-quadcopter", "lanzon-quadrotor"):
+        assert name in out
+
+
+def test_failures_main_job() -> None:
+    code, out, _ = run("failures", "--airframe", "hexa-ppnnpn", "--max-failed", "2")
+    assert code == 0
+    for value in ("1.1295", "0.7221", "0.4510", "undefined"):
+        assert value in out
+    assert "8 of 22 cases controllable" in out
+
+
+def test_acai_with_eta_and_without_yaw() -> None:
+    code, out, _ = run("acai", "--airframe", "hexa-pnpnpn", "--eta", "0,1,1,1,1,1")
+    assert code == 0 and "0.0000" in out and "hover wrench on the boundary" in out
+    code, out, _ = run("acai", "-a", "hexa-pnpnpn", "--eta", "0,1,1,1,1,1", "--give-up-yaw")
+    assert code == 0 and "thrust, roll, pitch" in out and "controllable" in out
+
+
+def test_acai_accepts_a_toml_file(tmp_path: Path) -> None:
+    import rotorfault as rf
+
+    path = tmp_path / "frame.toml"
+    path.write_text((Path(rf.__file__).parent / "presets" / "hexa-ppnnpn.toml").read_text())
+    code, out, _ = run("acai", "--airframe", str(path))
+    assert code == 0 and "1.1295" in out
+
+
+def test_scan_writes_a_plot(tmp_path: Path) -> None:
+    png = tmp_path / "fig4.png"
+    code, out, _ = run("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2,5", "--step", "0.1", "--plot", str(png))
+    assert code == 0, out
+    assert "1,331 points" in out
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("acai", "--airframe", "hexa"), "preset: unknown airframe 'hexa'"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,1,2,1,1,1"), "eta[2] (rotor 3): must lie in [0, 1]"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,1"), "eta: expected 6 entries"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,x"), "eta: expected comma-separated numbers"),
+        (("acai", "--airframe", "nan.toml"), "nan.toml"),
+        (("failures", "--airframe", "quad-x", "--max-failed", "5"), "max_failed: must be between 0 and"),
+        (("failures", "--airframe", "quad-x", "--max-failed", "-1"), "max_failed: must be >= 0"),
+        (("scan", "--airframe", "quad-x", "--rotors", "1,9"), "rotors: rotor numbers run from 1 to 4"),
+        (("scan", "--airframe", "hexa-pnpnpn", "--step", "0.3"), "step: must divide 1 evenly"),
+    ],
+)
+def test_errors_are_one_line(args: tuple[str, ...], message: str) -> None:
+    code, out, err = run(*args)
+    assert code == 1
+    assert message in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err + out
+
+
+def test_bad_toml_file_is_one_line(tmp_path: Path) -> None:
+    path = tmp_path / "broken.toml"
+    path.write_text("name = 'x'\nmass_kg = 'heavy'\n")
+    code, _, err = run("acai", "--airframe", str(path))
+    assert code == 1 and "broken.toml" in err and len(err.strip().splitlines()) == 1
+
+
+def test_installed_console_script() -> None:
+    script = Path(sys.executable).parent / "rotorfault"
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "rotorfault"]
+    done = subprocess.run(
+        [*command, "failures", "--airframe", "hexa-ppnnpn", "--max-failed", "1"],
+        capture_output=True, text=True, check=False, timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "0.7221" in done.stdout
+    bad = subprocess.run([*command, "acai", "--airframe", "nope"], capture_output=True, text=True, check=False, timeout=120)
+    assert bad.returncode == 1 and "Traceback" not in bad.stderr
+    assert bad.stderr.strip().startswith("Error: preset: unknown airframe 'nope'")
