@@ -105,8 +105,10 @@ def efficiency_scan(
 
 
 def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figure:
-    """3-D scatter of the controllable grid points (coloured by ACAI) and the three pairwise
-    projections, like Du Fig. 4. Needs exactly three swept rotors; saved to ``path`` if given."""
+    """Du Fig. 4 style. Left: the surface of the controllable region (grid points that are
+    controllable but have an uncontrollable neighbour), coloured by height. Other panels: for
+    each pair of swept rotors, the lowest efficiency of the third rotor that keeps the vehicle
+    controllable (blank: none does). Needs exactly three swept rotors; saved to ``path`` if given."""
     import matplotlib
 
     if path is not None:
@@ -115,33 +117,38 @@ def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figur
 
     if len(scan.rotors) != 3:
         raise ValueError(f"scan: the Fig. 4 plot needs three swept rotors, got {len(scan.rotors)}")
-    ok = scan.controllable
+    n = len(scan.levels)
+    ok = scan.controllable.reshape(n, n, n)
+    padded = np.pad(ok, 1, constant_values=False)
+    interior = np.ones_like(ok)
+    for axis in range(3):
+        for shift in (-1, 1):
+            interior &= np.roll(padded, shift, axis=axis)[1:-1, 1:-1, 1:-1]
+    # Faces of the unit cube are part of the region's surface too.
+    surface = ok & ~interior
     labels = [f"$\\eta_{{{r}}}$" for r in scan.rotors]
-    fig = plt.figure(figsize=(11, 9))
+    fig = plt.figure(figsize=(12, 9.5))
     ax3 = fig.add_subplot(2, 2, 1, projection="3d")
-    p = scan.points[ok]
-    sc = ax3.scatter(p[:, 0], p[:, 1], p[:, 2], c=scan.acai[ok], s=4, cmap="viridis")
+    i, j, k = np.nonzero(surface)
+    levels = scan.levels
+    sc = ax3.scatter(levels[i], levels[j], levels[k], c=levels[k], s=3, cmap="viridis")
     ax3.set_xlabel(labels[0])
     ax3.set_ylabel(labels[1])
     ax3.set_zlabel(labels[2])
-    ax3.set_title(f"{scan.airframe}: controllable ({100 * scan.controllable_fraction:.1f}% of grid)")
-    fig.colorbar(sc, ax=ax3, shrink=0.6, label="ACAI")
-    n = len(scan.levels)
-    best = scan.acai.reshape(n, n, n)
+    ax3.set_title(f"{scan.airframe}: controllable region\n({100 * scan.controllable_fraction:.1f}% of the grid)")
+    fig.colorbar(sc, ax=ax3, shrink=0.6, pad=0.12, label=labels[2])
     for slot, (a, b) in zip((2, 3, 4), ((0, 1), (0, 2), (1, 2))):
         ax = fig.add_subplot(2, 2, slot)
         other = 3 - a - b
-        projection = best.max(axis=other)
-        if (a, b) != tuple(sorted((a, b))):
-            projection = projection.T
-        image = np.where(projection > 0.0, projection, np.nan)
-        mesh = ax.pcolormesh(scan.levels, scan.levels, image.T, shading="nearest", cmap="viridis")
+        along = np.moveaxis(ok, other, -1)  # axes (a, b, other)
+        lowest = np.where(along.any(axis=-1), levels[np.argmax(along, axis=-1)], np.nan)
+        mesh = ax.pcolormesh(levels, levels, lowest.T, shading="nearest", cmap="magma_r", vmin=0, vmax=1)
         ax.set_xlabel(labels[a])
         ax.set_ylabel(labels[b])
-        ax.set_title(f"best ACAI over {labels[other]} (blank: uncontrollable)")
+        ax.set_title(f"lowest {labels[other]} that keeps control (blank: none)")
         ax.set_aspect("equal")
-        fig.colorbar(mesh, ax=ax, shrink=0.8)
+        fig.colorbar(mesh, ax=ax, shrink=0.8, label=labels[other])
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=120)
+        fig.savefig(path, dpi=110)
     return fig
