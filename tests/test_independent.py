@@ -15,17 +15,21 @@ What each test proves:
 - ``test_inside_acai_equals_hull_distance``: on random full-rank airframes (4-8 rotors, random
   arm angles/lengths/spins/k_mu, boxes with zero, negative and positive f_min, efficiencies in
   [0.2, 1]) with G strictly inside, both formulas return the hull distance, with yaw (n = 4) and
-  without (n = 3, rows 0..2), for >= 100 inside cases per dimension; rank-deficient geometries
-  return -inf.
+  without (n = 3, rows 0..2), for >= 100 inside cases per dimension.
+  ``test_rank_deficient_*``: rank B < n (e.g. four rotors spinning the same way) gives -inf.
 - ``test_outside_facet_margin_equals_largest_hull_violation``: for G strictly outside (all
   efficiencies > 0), "facet-margin" = -(largest hull violation) and "eq13" lies in
   [-|facet-margin| - tol, 0].
+- ``test_failed_rotors_inside_exact_outside_bracketed``: with some efficiencies exactly 0, inside
+  values are still exact; outside, largest hull violation <= -facet-margin <= true distance
+  (bounded least squares, ``scipy.optimize.lsq_linear``): facet-margin is a lower bound.
 - ``test_acai_from_matrix_general_dimension``: random matrices with n = 1, 2, 3, 5 (the general-n
   path, n = 1 against the analytic interval) agree with the hull inside and outside.
 - ``test_du_ppnnpn_*`` / ``test_du_pnpnpn_*``: Du et al. (JGCD 2015) Tables II and III. PPNNPN
   with rotor 5 or 6 failed: hover is infeasible (linprog), G is 0.2133 outside a facet
-  (hull) = -facet-margin, while eq13 prints exactly 0.0 like the paper. PNPNPN with any one rotor
-  failed: hover is feasible but on the boundary; both formulas give exactly +0.0.
+  (hull) = -facet-margin = the true distance (bounded least squares), while eq13 prints exactly
+  0.0 like the paper. The positive Table III entries are hull distances. PNPNPN with any one
+  rotor failed: hover is feasible but on the boundary; both formulas give exactly +0.0.
 - ``test_batch_equals_single_calls``: ``acai_batch`` is bit-for-bit ``acai`` on hundreds of rows,
   including rows with failed rotors (eta = 0) and rank-deficient rows (-inf).
 
@@ -41,11 +45,12 @@ import functools
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 import pytest
-from scipy.optimize import linprog
+from scipy.optimize import linprog, lsq_linear
 from scipy.spatial import ConvexHull
 
 import rotorfault as rf
@@ -205,6 +210,53 @@ def test_rank_deficient_random_geometries_return_minus_inf(n: int) -> None:
         assert margin == -math.inf
 
 
+def true_distance(b: FloatArray, f_min: FloatArray, f_max: FloatArray, g: FloatArray) -> float:
+    """min |B f - G| over the box (bounded least squares): the distance from G to Omega.
+    Zero columns (failed rotors) contribute nothing and are dropped (BVLS can cycle on them)."""
+    keep = np.any(b != 0.0, axis=0)
+    b = b[:, keep]
+    result = lsq_linear(b, g, bounds=(f_min[keep], f_max[keep]), method="bvls", max_iter=1000)
+    assert result.success
+    return float(np.linalg.norm(b @ result.x - g))
+
+
+@pytest.mark.parametrize("n", [4, 3], ids=["with-yaw", "give-up-yaw"])
+def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
+    """With some efficiencies exactly 0 (failed rotors): inside, both formulas are still the hull
+    distance; outside, facet-margin uses supporting directions that are no longer facets, so it
+    is only bracketed: largest hull violation <= -facet-margin <= true distance (bounded least
+    squares), and |eq13| <= |facet-margin|."""
+    rng = np.random.default_rng(6)
+    inside = outside = 0
+    for _ in range(900):
+        airframe = random_airframe(rng)
+        eta = airframe.efficiency.copy()
+        eta[rng.random(eta.size) < 0.2] = 0.0
+        airframe = airframe.with_efficiency(eta)
+        b = airframe.effectiveness_matrix()[:n]
+        g = hover_wrench(airframe, n)
+        f_min, f_max = airframe.min_thrust_n, airframe.max_thrust_n
+        eq13 = rf.acai(airframe, give_up_yaw=n == 3)
+        margin = rf.acai(airframe, give_up_yaw=n == 3, formula="facet-margin")
+        if np.linalg.matrix_rank(b) < n:
+            assert eq13 == margin == -math.inf
+            continue
+        reference = hull_margin(b, f_min, f_max, g)
+        scale = problem_scale(b, f_min, f_max, g)
+        tol = REL_TOL * scale
+        if reference > STRICT * scale:
+            inside += 1
+            assert eq13 == pytest.approx(reference, rel=0, abs=tol)
+            assert margin == pytest.approx(reference, rel=0, abs=tol)
+        elif reference < -STRICT * scale:
+            outside += 1
+            assert -reference - tol <= -margin <= true_distance(b, f_min, f_max, g) + tol
+            assert eq13 <= 0.0
+            assert abs(eq13) <= abs(margin) + tol
+    assert inside >= MIN_CASES
+    assert outside >= MIN_CASES
+
+
 # --------------------------------------------------------------------------------------------
 # 3. acai_from_matrix in general dimension.
 # --------------------------------------------------------------------------------------------
@@ -265,7 +317,7 @@ def test_acai_from_matrix_rank_deficient_is_minus_inf() -> None:
 # --------------------------------------------------------------------------------------------
 
 
-def hover_lp(airframe: rf.Airframe) -> object:
+def hover_lp(airframe: rf.Airframe) -> Any:
     """Feasibility LP: B f = G, f_min <= f <= f_max, failed rotors (eta = 0) pinned to zero."""
     b = airframe.effectiveness_matrix()
     bounds = [
@@ -293,6 +345,10 @@ def test_du_ppnnpn_rotor_failed_hover_infeasible_but_eq13_prints_zero(rotor: int
     assert round(largest_violation, 4) == 0.2133
     margin = rf.acai(airframe, formula="facet-margin")
     assert margin == pytest.approx(-largest_violation, rel=0, abs=REL_TOL * scale)
+    # The nearest attainable wrench lies inside that facet: the violation is the distance.
+    b = airframe.effectiveness_matrix()
+    distance = true_distance(b, airframe.min_thrust_n, airframe.max_thrust_n, hover_wrench(airframe, 4))
+    assert distance == pytest.approx(largest_violation, rel=0, abs=REL_TOL * scale)
     eq13 = rf.acai(airframe)  # the default formula reproduces the paper's printed 0
     assert eq13 == 0.0
     assert is_positive_zero(eq13)

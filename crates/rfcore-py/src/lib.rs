@@ -96,7 +96,10 @@ impl PyAirframe {
     }
 
     fn with_efficiency(&self, eta: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
-        let inner = self.inner.with_efficiency(slice1("eta", &eta)?).map_err(to_py_err)?;
+        let inner = self
+            .inner
+            .with_efficiency(slice1("eta", &eta)?)
+            .map_err(to_py_err)?;
         Ok(PyAirframe { inner })
     }
 
@@ -138,15 +141,32 @@ impl PyAirframe {
     }
     #[getter]
     fn arm_angle_rad<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        read_only(py, self.inner.rotors().iter().map(|r| r.arm_angle_rad).collect())
+        read_only(
+            py,
+            self.inner
+                .rotors()
+                .iter()
+                .map(|r| r.arm_angle_rad)
+                .collect(),
+        )
     }
     #[getter]
     fn arm_length_m<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        read_only(py, self.inner.rotors().iter().map(|r| r.arm_length_m).collect())
+        read_only(
+            py,
+            self.inner.rotors().iter().map(|r| r.arm_length_m).collect(),
+        )
     }
     #[getter]
     fn spin_sign<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        read_only(py, self.inner.rotors().iter().map(|r| r.spin.yaw_sign()).collect())
+        read_only(
+            py,
+            self.inner
+                .rotors()
+                .iter()
+                .map(|r| r.spin.yaw_sign())
+                .collect(),
+        )
     }
     #[getter]
     fn max_thrust_n<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -166,11 +186,17 @@ fn analysis(airframe: &PyAirframe, give_up_yaw: bool) -> rfcore::Result<Controll
     ControllabilityAnalysis::new(&airframe.inner, ControlAxes::from_give_up_yaw(give_up_yaw))
 }
 
-fn report_dict<'py>(py: Python<'py>, report: &ControllabilityReport) -> PyResult<Bound<'py, PyDict>> {
+fn report_dict<'py>(
+    py: Python<'py>,
+    report: &ControllabilityReport,
+) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
     dict.set_item("state_dimension", report.state_dimension)?;
     dict.set_item("controllability_rank", report.controllability_rank)?;
-    dict.set_item("virtual_control_dimension", report.virtual_control_dimension)?;
+    dict.set_item(
+        "virtual_control_dimension",
+        report.virtual_control_dimension,
+    )?;
     dict.set_item("effectiveness_rank", report.effectiveness_rank)?;
     dict.set_item("acai", report.acai)?;
     dict.set_item("formula", report.formula.name())?;
@@ -211,7 +237,9 @@ fn acai_batch<'py>(
         )));
     }
     let flat = slice2("etas", &etas)?;
-    let values = detached(py, || analysis(airframe, give_up_yaw)?.acai_batch(flat, formula))?;
+    let values = detached(py, || {
+        analysis(airframe, give_up_yaw)?.acai_batch(flat, formula)
+    })?;
     Ok(values.into_pyarray(py))
 }
 
@@ -229,7 +257,11 @@ fn acai_from_matrix(
     let shape = effectiveness_matrix.shape();
     let (rows, cols) = (shape[0], shape[1]);
     let flat = slice2("effectiveness_matrix", &effectiveness_matrix)?;
-    let (f_min, f_max, g_vec) = (slice1("f_min", &f_min)?, slice1("f_max", &f_max)?, slice1("g_vec", &g_vec)?);
+    let (f_min, f_max, g_vec) = (
+        slice1("f_min", &f_min)?,
+        slice1("f_max", &f_max)?,
+        slice1("g_vec", &g_vec)?,
+    );
     detached(py, || {
         let b = nalgebra::DMatrix::from_row_slice(rows, cols, flat);
         rfcore::acai_from_matrix(&b, f_min, f_max, g_vec, formula)
@@ -251,19 +283,30 @@ fn controllability<'py>(
     report_dict(py, &report)
 }
 
-/// Every combination of up to `max_failed` failed rotors: (failed 0-based, with yaw, without yaw).
+/// One failure-table row: failed rotors (0-based), report with yaw, report without yaw.
+type FailureRow<'py> = (Vec<usize>, Bound<'py, PyDict>, Bound<'py, PyDict>);
+
+/// Every combination of up to `max_failed` failed rotors.
 #[pyfunction]
 fn failure_table<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     max_failed: usize,
     formula: &str,
-) -> PyResult<Vec<(Vec<usize>, Bound<'py, PyDict>, Bound<'py, PyDict>)>> {
+) -> PyResult<Vec<FailureRow<'py>>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let cases = detached(py, || core_failure_table(&airframe.inner, max_failed, formula))?;
+    let cases = detached(py, || {
+        core_failure_table(&airframe.inner, max_failed, formula)
+    })?;
     cases
         .iter()
-        .map(|case| Ok((case.failed.clone(), report_dict(py, &case.with_yaw)?, report_dict(py, &case.without_yaw)?)))
+        .map(|case| {
+            Ok((
+                case.failed.clone(),
+                report_dict(py, &case.with_yaw)?,
+                report_dict(py, &case.without_yaw)?,
+            ))
+        })
         .collect()
 }
 

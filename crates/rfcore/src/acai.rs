@@ -29,7 +29,9 @@
 //! - A projection `xi_j . b_k` with `|.| <= RANK_RTOL * |b_k|` is exactly zero.
 //! - An ACAI with `|rho| <= ZERO_RTOL * scale`, where
 //!   `scale = sum_k |b_k| (f_max,k - f_min,k) / 2 + |G|` is the size of the problem, is returned as
-//!   exactly `0.0` (never `-0.0`): G is on the boundary to working precision.
+//!   exactly `0.0` (never `-0.0`): G is on the boundary to working precision. `b_k` are the
+//!   nominal columns (efficiencies not applied), so the threshold does not move with `eta` and
+//!   snapping never breaks monotonicity in the efficiencies.
 //! - If `rank B < n` the ACAI is undefined and returned as `f64::NEG_INFINITY` (Du uses -10^6).
 //!
 //! # G outside Omega (a decided paper gap): [`AcaiFormula`]
@@ -169,7 +171,7 @@ impl FacetNormals {
             generalized_cross_product(b, &group, &mut minor, &mut xi);
             let volume: f64 = group.iter().map(|&k| out.column_norms[k]).product();
             let norm = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if !(norm > RANK_RTOL * volume) {
+            if norm <= RANK_RTOL * volume {
                 continue; // rank B_{1,j} < n - 1: no facet (Du Step 6)
             }
             xi.iter_mut().for_each(|v| *v /= norm);
@@ -179,7 +181,11 @@ impl FacetNormals {
                 } else {
                     (0..n).map(|r| xi[r] * b[(r, k)]).sum()
                 };
-                let p = if p.abs() <= RANK_RTOL * out.column_norms[k] { 0.0 } else { p };
+                let p = if p.abs() <= RANK_RTOL * out.column_norms[k] {
+                    0.0
+                } else {
+                    p
+                };
                 out.projections.push(p);
             }
             out.groups.extend_from_slice(&group);
@@ -211,7 +217,11 @@ impl FacetNormals {
             ("g_vec", g, self.n, "one per virtual-control axis"),
         ] {
             if v.len() != len {
-                return Err(RfError::shape(field, format!("{len} entries ({what})"), v.len().to_string()));
+                return Err(RfError::shape(
+                    field,
+                    format!("{len} entries ({what})"),
+                    v.len().to_string(),
+                ));
             }
             require_all_finite(field, v)?;
         }
@@ -264,12 +274,22 @@ impl FacetNormals {
                 facet_margin: f64::NEG_INFINITY,
             };
         }
-        let eq13 = if min_d_working >= 0.0 { min_d_working } else { -min_abs_d_working };
+        let eq13 = if min_d_working >= 0.0 {
+            min_d_working
+        } else {
+            -min_abs_d_working
+        };
         let scale: f64 = (0..m)
-            .map(|k| self.column_norms[k] * eta[k] * 0.5 * (f_max[k] - f_min[k]))
+            .map(|k| self.column_norms[k] * 0.5 * (f_max[k] - f_min[k]))
             .sum::<f64>()
             + g.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let snap = |rho: f64| if rho.abs() <= ZERO_RTOL * scale { 0.0 } else { rho };
+        let snap = |rho: f64| {
+            if rho.abs() <= ZERO_RTOL * scale {
+                0.0
+            } else {
+                rho
+            }
+        };
         AcaiValues {
             eq13: snap(eq13),
             facet_margin: snap(min_d_all),
@@ -295,7 +315,10 @@ impl FacetNormals {
                 etas.len().to_string(),
             ));
         }
-        if let Some(i) = etas.iter().position(|e| !(e.is_finite() && (0.0..=1.0).contains(e))) {
+        if let Some(i) = etas
+            .iter()
+            .position(|e| !(e.is_finite() && (0.0..=1.0).contains(e)))
+        {
             return Err(RfError::invalid(
                 format!("etas[{}, {}] (rotor {})", i / m, i % m, i % m + 1),
                 format!("must be finite and lie in [0, 1], got {}", etas[i]),
@@ -320,7 +343,9 @@ pub fn acai_from_matrix(
 ) -> Result<f64> {
     let normals = FacetNormals::new(b)?;
     normals.check_bounds_and_g(f_min, f_max, g)?;
-    Ok(normals.evaluate(&vec![1.0; b.ncols()], f_min, f_max, g).get(formula))
+    Ok(normals
+        .evaluate(&vec![1.0; b.ncols()], f_min, f_max, g)
+        .get(formula))
 }
 
 /// Writes into `xi` the generalised cross product of the columns `group` (n - 1 of them) of `b`:
@@ -329,16 +354,14 @@ pub fn acai_from_matrix(
 fn generalized_cross_product(b: &DMatrix<f64>, group: &[usize], minor: &mut [f64], xi: &mut [f64]) {
     let n = xi.len();
     let d = n - 1;
-    for skip in 0..n {
-        let mut row_out = 0;
-        for r in (0..n).filter(|&r| r != skip) {
+    for (skip, component) in xi.iter_mut().enumerate() {
+        for (row_out, r) in (0..n).filter(|&r| r != skip).enumerate() {
             for (c, &k) in group.iter().enumerate() {
                 minor[row_out * d + c] = b[(r, k)];
             }
-            row_out += 1;
         }
         let sign = if skip % 2 == 0 { 1.0 } else { -1.0 };
-        xi[skip] = sign * determinant(&mut minor[..d * d], d);
+        *component = sign * determinant(&mut minor[..d * d], d);
     }
 }
 
@@ -388,7 +411,9 @@ mod tests {
 
     #[test]
     fn cross_product_is_orthogonal_in_five_dimensions() {
-        let b = DMatrix::from_fn(5, 4, |r, c| ((r * 7 + c * 3) % 5) as f64 + 0.1 * (r as f64) - 0.3 * c as f64);
+        let b = DMatrix::from_fn(5, 4, |r, c| {
+            ((r * 7 + c * 3) % 5) as f64 + 0.1 * (r as f64) - 0.3 * c as f64
+        });
         let mut minor = vec![0.0; 16];
         let mut xi = vec![0.0; 5];
         generalized_cross_product(&b, &[0, 1, 2, 3], &mut minor, &mut xi);
@@ -403,9 +428,18 @@ mod tests {
     fn box_in_one_dimension_is_distance_to_nearest_end() {
         // n = 1: Omega = [sum f_min, sum f_max]; G = 3 in [0, 10] -> 3.
         let b = DMatrix::from_row_slice(1, 2, &[1.0, 1.0]);
-        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[3.0], AcaiFormula::Eq13).unwrap(), 3.0);
-        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[12.0], AcaiFormula::Eq13).unwrap(), -2.0);
-        assert_eq!(acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[10.0], AcaiFormula::Eq13).unwrap(), 0.0);
+        assert_eq!(
+            acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[3.0], AcaiFormula::Eq13).unwrap(),
+            3.0
+        );
+        assert_eq!(
+            acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[12.0], AcaiFormula::Eq13).unwrap(),
+            -2.0
+        );
+        assert_eq!(
+            acai_from_matrix(&b, &[0.0, 0.0], &[5.0, 5.0], &[10.0], AcaiFormula::Eq13).unwrap(),
+            0.0
+        );
     }
 
     #[test]
@@ -415,7 +449,8 @@ mod tests {
         let b = DMatrix::identity(2, 2);
         let g = [2.0, 0.5];
         let eq13 = acai_from_matrix(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13).unwrap();
-        let margin = acai_from_matrix(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::FacetMargin).unwrap();
+        let margin =
+            acai_from_matrix(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::FacetMargin).unwrap();
         assert_eq!(eq13, -0.5);
         assert_eq!(margin, -1.0);
     }
@@ -424,31 +459,46 @@ mod tests {
     fn square_in_two_dimensions() {
         // Identity 2 x 2 with box [-1, 2]^2 and G = (0, 0.5): nearest side x = -1 at distance 1.
         let b = DMatrix::identity(2, 2);
-        let rho = acai_from_matrix(&b, &[-1.0, -1.0], &[2.0, 2.0], &[0.0, 0.5], AcaiFormula::FacetMargin).unwrap();
+        let rho = acai_from_matrix(
+            &b,
+            &[-1.0, -1.0],
+            &[2.0, 2.0],
+            &[0.0, 0.5],
+            AcaiFormula::FacetMargin,
+        )
+        .unwrap();
         assert!((rho - 1.0).abs() < 1e-15);
     }
 
     #[test]
     fn rank_deficient_is_negative_infinity() {
         let b = DMatrix::from_row_slice(2, 3, &[1.0, 2.0, 3.0, 2.0, 4.0, 6.0]);
-        let rho = acai_from_matrix(&b, &[0.0; 3], &[1.0; 3], &[1.0, 2.0], AcaiFormula::Eq13).unwrap();
+        let rho =
+            acai_from_matrix(&b, &[0.0; 3], &[1.0; 3], &[1.0, 2.0], AcaiFormula::Eq13).unwrap();
         assert_eq!(rho, f64::NEG_INFINITY);
         let too_few = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
-        assert_eq!(acai_from_matrix(&too_few, &[0.0; 2], &[1.0; 2], &[0.0; 3], AcaiFormula::Eq13).unwrap(), f64::NEG_INFINITY);
+        assert_eq!(
+            acai_from_matrix(&too_few, &[0.0; 2], &[1.0; 2], &[0.0; 3], AcaiFormula::Eq13).unwrap(),
+            f64::NEG_INFINITY
+        );
     }
 
     #[test]
     fn bad_bounds_are_rejected() {
         let b = DMatrix::identity(2, 2);
-        let err = acai_from_matrix(&b, &[0.0, 3.0], &[1.0, 2.0], &[0.0, 0.0], AcaiFormula::Eq13).unwrap_err();
+        let err = acai_from_matrix(&b, &[0.0, 3.0], &[1.0, 2.0], &[0.0, 0.0], AcaiFormula::Eq13)
+            .unwrap_err();
         assert!(err.to_string().starts_with("f_min[1]"), "{err}");
-        let err = acai_from_matrix(&b, &[0.0, 0.0], &[1.0, 1.0], &[0.0], AcaiFormula::Eq13).unwrap_err();
+        let err =
+            acai_from_matrix(&b, &[0.0, 0.0], &[1.0, 1.0], &[0.0], AcaiFormula::Eq13).unwrap_err();
         assert!(err.to_string().starts_with("g_vec"), "{err}");
     }
 
     #[test]
     fn determinant_by_elimination_matches_closed_form() {
-        let m = [2.0, -1.0, 0.5, 3.0, 1.0, 4.0, -2.0, 0.0, 1.5, 2.5, -1.0, 0.0, 1.0, 0.0, 2.0, 1.0];
+        let m = [
+            2.0, -1.0, 0.5, 3.0, 1.0, 4.0, -2.0, 0.0, 1.5, 2.5, -1.0, 0.0, 1.0, 0.0, 2.0, 1.0,
+        ];
         let expected = DMatrix::from_row_slice(4, 4, &m).determinant();
         let mut a = m;
         assert!((determinant(&mut a, 4) - expected).abs() < 1e-12);

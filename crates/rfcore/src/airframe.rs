@@ -52,7 +52,9 @@ impl SpinDirection {
     pub fn parse(field: &str, text: &str) -> Result<Self> {
         match text.trim().to_ascii_lowercase().as_str() {
             "cw" | "clockwise" => Ok(SpinDirection::Clockwise),
-            "ccw" | "acw" | "anticlockwise" | "counterclockwise" => Ok(SpinDirection::Anticlockwise),
+            "ccw" | "acw" | "anticlockwise" | "counterclockwise" => {
+                Ok(SpinDirection::Anticlockwise)
+            }
             _ => Err(RfError::invalid(
                 field,
                 format!("must be \"cw\" (clockwise) or \"ccw\" (anticlockwise), got {text:?}"),
@@ -116,7 +118,10 @@ impl Airframe {
         }
         require_finite("mass_kg", mass_kg)?;
         if mass_kg <= 0.0 {
-            return Err(RfError::invalid("mass_kg", format!("must be > 0, got {mass_kg}")));
+            return Err(RfError::invalid(
+                "mass_kg",
+                format!("must be > 0, got {mass_kg}"),
+            ));
         }
         for (axis, value) in ["Jx", "Jy", "Jz"].iter().zip(inertia_kg_m2) {
             let field = format!("inertia_kg_m2 ({axis})");
@@ -129,12 +134,17 @@ impl Airframe {
         if drag_torque_ratio_m < 0.0 {
             return Err(RfError::invalid(
                 "drag_torque_ratio_m",
-                format!("must be >= 0 (the spin direction carries the sign), got {drag_torque_ratio_m}"),
+                format!(
+                    "must be >= 0 (the spin direction carries the sign), got {drag_torque_ratio_m}"
+                ),
             ));
         }
         require_finite("gravity_m_s2", gravity_m_s2)?;
         if gravity_m_s2 < 0.0 {
-            return Err(RfError::invalid("gravity_m_s2", format!("must be >= 0, got {gravity_m_s2}")));
+            return Err(RfError::invalid(
+                "gravity_m_s2",
+                format!("must be >= 0, got {gravity_m_s2}"),
+            ));
         }
         Ok(Airframe {
             name: name.into(),
@@ -165,7 +175,10 @@ impl Airframe {
     ) -> Result<Self> {
         let m = arm_angle_rad.len();
         if m == 0 {
-            return Err(RfError::invalid("arm_angle_rad", "at least one rotor is required"));
+            return Err(RfError::invalid(
+                "arm_angle_rad",
+                "at least one rotor is required",
+            ));
         }
         require_len("arm_length_m", arm_length_m, m)?;
         require_len("spin", spin_sign, m)?;
@@ -207,8 +220,8 @@ impl Airframe {
             origin: origin.to_string(),
             message,
         };
-        let raw: AirframeToml =
-            toml::from_str(text).map_err(|e| parse_error(e.to_string().trim().replace('\n', " ")))?;
+        let raw: AirframeToml = toml::from_str(text)
+            .map_err(|e| parse_error(e.to_string().trim().replace('\n', " ")))?;
         let mut rotors = Vec::with_capacity(raw.rotor.len());
         for (i, r) in raw.rotor.iter().enumerate() {
             let where_ = format!("[[rotor]] number {}", i + 1);
@@ -327,7 +340,10 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
     let field = rotor_field("arm_length_m", i);
     require_finite(&field, r.arm_length_m)?;
     if r.arm_length_m < 0.0 {
-        return Err(RfError::invalid(field, format!("must be >= 0, got {}", r.arm_length_m)));
+        return Err(RfError::invalid(
+            field,
+            format!("must be >= 0, got {}", r.arm_length_m),
+        ));
     }
     require_finite(&rotor_field("max_thrust_n", i), r.max_thrust_n)?;
     let field = rotor_field("min_thrust_n", i);
@@ -335,13 +351,19 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
     if r.min_thrust_n > r.max_thrust_n {
         return Err(RfError::invalid(
             field,
-            format!("must not exceed max_thrust_n ({} > {})", r.min_thrust_n, r.max_thrust_n),
+            format!(
+                "must not exceed max_thrust_n ({} > {})",
+                r.min_thrust_n, r.max_thrust_n
+            ),
         ));
     }
     let field = rotor_field("efficiency", i);
     require_finite(&field, r.efficiency)?;
     if !(0.0..=1.0).contains(&r.efficiency) {
-        return Err(RfError::invalid(field, format!("must lie in [0, 1], got {}", r.efficiency)));
+        return Err(RfError::invalid(
+            field,
+            format!("must lie in [0, 1], got {}", r.efficiency),
+        ));
     }
     Ok(())
 }
@@ -352,7 +374,10 @@ pub fn check_efficiency(field: &str, eta: &[f64], m: usize) -> Result<()> {
     for (i, &e) in eta.iter().enumerate() {
         require_finite(&rotor_field(field, i), e)?;
         if !(0.0..=1.0).contains(&e) {
-            return Err(RfError::invalid(rotor_field(field, i), format!("must lie in [0, 1], got {e}")));
+            return Err(RfError::invalid(
+                rotor_field(field, i),
+                format!("must lie in [0, 1], got {e}"),
+            ));
         }
     }
     Ok(())
@@ -432,23 +457,51 @@ mod tests {
     #[test]
     fn bad_fields_are_named() {
         let err = Airframe::from_columns(
-            "q", &[0.0], &[0.2], &[1.0], &[1.0], &[2.0], &[1.0], 1.0, &[1.0; 3], 0.1, 9.81,
+            "q",
+            &[0.0],
+            &[0.2],
+            &[1.0],
+            &[1.0],
+            &[2.0],
+            &[1.0],
+            1.0,
+            &[1.0; 3],
+            0.1,
+            9.81,
         )
         .unwrap_err();
-        assert!(err.to_string().starts_with("min_thrust_n[0] (rotor 1)"), "{err}");
+        assert!(
+            err.to_string().starts_with("min_thrust_n[0] (rotor 1)"),
+            "{err}"
+        );
         let err = Airframe::from_columns(
-            "q", &[0.0], &[0.2], &[0.5], &[1.0], &[0.0], &[1.0], 1.0, &[1.0; 3], 0.1, 9.81,
+            "q",
+            &[0.0],
+            &[0.2],
+            &[0.5],
+            &[1.0],
+            &[0.0],
+            &[1.0],
+            1.0,
+            &[1.0; 3],
+            0.1,
+            9.81,
         )
         .unwrap_err();
         assert!(err.to_string().starts_with("spin[0]"), "{err}");
-        let err = quad().with_efficiency(&[1.0, f64::NAN, 1.0, 1.0]).unwrap_err();
+        let err = quad()
+            .with_efficiency(&[1.0, f64::NAN, 1.0, 1.0])
+            .unwrap_err();
         assert!(err.to_string().contains("efficiency[1]"), "{err}");
     }
 
     #[test]
     fn toml_errors_name_the_field() {
         let err = Airframe::from_toml_str("name = \"x\"\n", "x.toml").unwrap_err();
-        assert!(err.to_string().contains("x.toml") && err.to_string().contains("mass_kg"), "{err}");
+        assert!(
+            err.to_string().contains("x.toml") && err.to_string().contains("mass_kg"),
+            "{err}"
+        );
         let text = r#"
 name = "x"
 mass_kg = 1.0

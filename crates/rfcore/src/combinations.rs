@@ -71,20 +71,30 @@ mod tests {
     fn du_example_m4_matches_s1() {
         // Du Section IV.A prints S_1 for m = 4: {123, 124, 134, 234} (1-based).
         let rows: Vec<Vec<usize>> = Combinations::new(4, 3).collect();
-        assert_eq!(rows, vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 2, 3], vec![1, 2, 3]]);
+        assert_eq!(
+            rows,
+            vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 2, 3], vec![1, 2, 3]]
+        );
     }
 
     #[test]
     fn counts_match_binomial() {
         for n in 0..9 {
             for k in 0..=n + 1 {
-                assert_eq!(Combinations::new(n, k).count(), binomial(n, k), "n={n} k={k}");
+                assert_eq!(
+                    Combinations::new(n, k).count(),
+                    binomial(n, k),
+                    "n={n} k={k}"
+                );
             }
         }
     }
 
     #[test]
     fn empty_subset_is_one_combination() {
-        assert_eq!(Combinations::new(3, 0).collect::<Vec<_>>(), vec![Vec::<usize>::new()]);
+        assert_eq!(
+            Combinations::new(3, 0).collect::<Vec<_>>(),
+            vec![Vec::<usize>::new()]
+        );
     }
 }

@@ -144,12 +144,16 @@ impl ControllabilityAnalysis {
     /// ACAI for one efficiency vector (validated).
     pub fn acai(&self, eta: &[f64], formula: AcaiFormula) -> Result<f64> {
         check_efficiency("eta", eta, self.nominal.ncols())?;
-        Ok(self.normals.evaluate(eta, &self.f_min, &self.f_max, &self.g).get(formula))
+        Ok(self
+            .normals
+            .evaluate(eta, &self.f_min, &self.f_max, &self.g)
+            .get(formula))
     }
 
     /// ACAI for N efficiency vectors (row-major N x m), in parallel.
     pub fn acai_batch(&self, etas: &[f64], formula: AcaiFormula) -> Result<Vec<f64>> {
-        self.normals.acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula)
+        self.normals
+            .acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula)
     }
 
     /// Du's Steps 1-9 for one efficiency vector; `formula` chooses how an ACAI with G outside
@@ -162,7 +166,9 @@ impl ControllabilityAnalysis {
             scaled.column_mut(k).scale_mut(e);
         }
         let effectiveness_rank = numerical_rank(&scaled);
-        let values = self.normals.evaluate(eta, &self.f_min, &self.f_max, &self.g);
+        let values = self
+            .normals
+            .evaluate(eta, &self.f_min, &self.f_max, &self.g);
         let (acai, margin) = if effectiveness_rank < n {
             (f64::NEG_INFINITY, f64::NEG_INFINITY)
         } else {
@@ -217,7 +223,10 @@ pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64
         block = next;
     }
     DMatrix::from_columns(
-        &blocks.iter().flat_map(|blk| blk.column_iter().map(|c| c.into_owned())).collect::<Vec<_>>(),
+        &blocks
+            .iter()
+            .flat_map(|blk| blk.column_iter().map(|c| c.into_owned()))
+            .collect::<Vec<_>>(),
     )
 }
 
@@ -259,7 +268,9 @@ pub fn failure_table(
             format!("must be between 0 and the number of rotors ({m}), got {max_failed}"),
         ));
     }
-    let total: usize = (0..=max_failed).map(|k| binomial(m, k)).fold(0, usize::saturating_add);
+    let total: usize = (0..=max_failed)
+        .map(|k| binomial(m, k))
+        .fold(0, usize::saturating_add);
     if total > MAX_FAILURE_CASES {
         return Err(RfError::invalid(
             "max_failed",
@@ -269,7 +280,9 @@ pub fn failure_table(
     let with_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
     let without_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
     let base = airframe.efficiency();
-    let sets: Vec<Vec<usize>> = (0..=max_failed).flat_map(|k| Combinations::new(m, k)).collect();
+    let sets: Vec<Vec<usize>> = (0..=max_failed)
+        .flat_map(|k| Combinations::new(m, k))
+        .collect();
     sets.into_par_iter()
         .map(|failed| {
             let mut eta = base.clone();

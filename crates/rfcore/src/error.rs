@@ -49,7 +49,10 @@ pub(crate) fn require_finite(field: &str, value: f64) -> Result<()> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(RfError::invalid(field, format!("must be finite, got {value}")))
+        Err(RfError::invalid(
+            field,
+            format!("must be finite, got {value}"),
+        ))
     }
 }
 

@@ -15,6 +15,7 @@ pub mod error;
 pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
 pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
 pub use controllability::{
-    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase, Verdict,
+    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase,
+    Verdict,
 };
 pub use error::{Result, RfError};
