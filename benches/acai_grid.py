@@ -1,6 +1,6 @@
 """ACAI throughput on Du et al.'s Fig. 4 grid: rotorfault (Rust) vs two NumPy implementations.
 
-Run:  python benches/acai_grid.py            (about half a minute on a 2-core machine)
+Run:  python benches/acai_grid.py            (about 20 s on a 2-core machine)
 
 Grid: PNPNPN hexacopter (preset ``hexa-pnpnpn``), eta1, eta2, eta5 in {0, 0.04, ..., 1}, the other
 rotors at 1: 26^3 = 17,576 efficiency vectors (Du, Quan, Yang, Cai, JGCD 2015, Fig. 4).
@@ -53,6 +53,7 @@ RTOL = rf.RANK_RTOL
 TARGET_RUST_EVALS_PER_S = 2_000_000
 TARGET_RATIO_VS_B = 50.0
 LARGE_N = 1_000_000
+ROUNDS = 8
 
 
 # -- problem data ---------------------------------------------------------------------------------
@@ -149,22 +150,26 @@ def acai_numpy_precomputed(etas: np.ndarray, bbar: np.ndarray, k_max: np.ndarray
 # -- harness --------------------------------------------------------------------------------------
 
 
-def median_time(fn: Callable[[], object], repeats: int, warmup: int = 1) -> float:
-    for _ in range(warmup):
-        fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
-def repeats_for(fn: Callable[[], object], budget_s: float, lo: int, hi: int) -> int:
+def time_once(fn: Callable[[], object]) -> float:
     t0 = time.perf_counter()
     fn()
-    once = max(time.perf_counter() - t0, 1e-9)
-    return int(min(hi, max(lo, budget_s / once)))
+    return time.perf_counter() - t0
+
+
+def interleaved_times(
+    fns: dict[str, Callable[[], object]], rounds: int, budget_per_round_s: float
+) -> dict[str, list[float]]:
+    """Times every function in ``rounds`` interleaved rounds (a, b, c, a, b, c, ...), so that
+    background load, turbo or thermal drift hit all variants alike. In each round a function runs
+    as many times as fit in its share of ``budget_per_round_s`` (at least once). One warm-up call
+    each first."""
+    per_call = {key: time_once(fn) for key, fn in fns.items()}  # warm-up + calibration
+    calls = {key: max(1, int(budget_per_round_s / len(fns) / max(t, 1e-9))) for key, t in per_call.items()}
+    samples: dict[str, list[float]] = {key: [] for key in fns}
+    for _ in range(rounds):
+        for key, fn in fns.items():
+            samples[key].extend(time_once(fn) for _ in range(calls[key]))
+    return samples
 
 
 def check(name: str, got: np.ndarray, ref: np.ndarray) -> float:
@@ -203,13 +208,14 @@ def main() -> None:
     worst_b = check("(b) NumPy per-point SVD", acai_numpy_per_point(etas, bbar, k_max, g), rust)
     worst_c = check("(c) NumPy precomputed xi_j", acai_numpy_precomputed(etas, bbar, k_max, g), rust)
 
-    cores_os = os.cpu_count()
+    cores_os = os.cpu_count() or 1
     cores_avail = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else cores_os
     env = {k: os.environ[k] for k in sorted(os.environ) if k.startswith(("OPENBLAS", "OMP_", "RAYON", "MKL_"))}
     print(f"machine: {platform.machine()} {platform.processor() or ''}".rstrip()
           + f", os.cpu_count() = {cores_os}, usable cores = {cores_avail}")
     print(f"python {platform.python_version()}, numpy {np.__version__}, rotorfault {rf.__version__}")
     print(f"thread/BLAS env (left as-is): {env or 'none set'}")
+    load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print()
     controllable = np.count_nonzero(rust > 0.0)
     print(
@@ -222,31 +228,35 @@ def main() -> None:
           f"(limit {ATOL:g}; -inf patterns identical)")
     print()
 
-    # -- timing -----------------------------------------------------------------------------------
-    variants: list[tuple[str, str, Callable[[], object], int]] = []
-    f_a = lambda: rf.acai_batch(airframe, etas)  # noqa: E731
-    f_b = lambda: acai_numpy_per_point(etas, bbar, k_max, g)  # noqa: E731
-    f_c = lambda: acai_numpy_precomputed(etas, bbar, k_max, g)  # noqa: E731
-    variants.append(("(a) rotorfault.acai_batch (Rust, rayon)", "a", f_a, repeats_for(f_a, 2.0, 20, 500)))
-    variants.append(("(b) NumPy, per-point batched SVD (paper)", "b", f_b, repeats_for(f_b, 8.0, 5, 15)))
-    variants.append(("(c) NumPy, xi_j precomputed (Rust's alg.)", "c", f_c, repeats_for(f_c, 2.0, 20, 300)))
-    results = {}
-    for label, key, fn, reps in variants:
-        t = median_time(fn, reps)
-        results[key] = (label, t, reps)
-
-    t_rust = results["a"][1]
-    print(f"{'variant':44s} {'median time':>12s} {'evals/s':>14s} {'Rust/variant':>13s} {'repeats':>8s}")
-    for key in "abc":
-        label, t, reps = results[key]
-        print(f"{label:44s} {t * 1e3:9.3f} ms {n / t:14,.0f} {t / t_rust:12.1f}x {reps:8d}")
+    # -- timing ---------------------------------------------------------------------------------
+    labels = {
+        "a": "(a) rotorfault.acai_batch (Rust, rayon)",
+        "b": "(b) NumPy, per-point batched SVD (paper)",
+        "c": "(c) NumPy, xi_j precomputed (Rust's alg.)",
+    }
+    samples = interleaved_times(
+        {
+            "a": lambda: rf.acai_batch(airframe, etas),
+            "b": lambda: acai_numpy_per_point(etas, bbar, k_max, g),
+            "c": lambda: acai_numpy_precomputed(etas, bbar, k_max, g),
+        },
+        rounds=ROUNDS,
+        budget_per_round_s=1.5,
+    )
+    median = {key: statistics.median(ts) for key, ts in samples.items()}
+    t_rust = median["a"]
+    print(f"timing: {ROUNDS} interleaved rounds, time.perf_counter; evals/s and ratios from the median")
+    print(f"{'variant':44s} {'median':>11s} {'min':>11s} {'evals/s':>12s} {'Rust/variant':>13s} {'runs':>5s}")
+    for key, label in labels.items():
+        t, ts = median[key], samples[key]
+        print(f"{label:44s} {t * 1e3:8.3f} ms {min(ts) * 1e3:8.3f} ms {n / t:12,.0f} {t / t_rust:12.1f}x {len(ts):5d}")
     print()
     rust_rate = n / t_rust
-    ratio_b = results["b"][1] / t_rust
-    ratio_c = results["c"][1] / t_rust
+    ratio_b = median["b"] / t_rust
+    ratio_c = median["c"] / t_rust
     print(f"target: Rust >= {TARGET_RUST_EVALS_PER_S:,} evals/s: {rust_rate:,.0f} -> {verdict(rust_rate >= TARGET_RUST_EVALS_PER_S)}")
     print(f"target: Rust >= {TARGET_RATIO_VS_B:g}x NumPy (b): {ratio_b:.1f}x -> {verdict(ratio_b >= TARGET_RATIO_VS_B)}")
-    print(f"split:  algorithm (b)/(c) = {results['b'][1] / results['c'][1]:.1f}x, "
+    print(f"split:  algorithm (b)/(c) = {median['b'] / median['c']:.1f}x, "
           f"language + {cores_avail} threads (c)/(a) = {ratio_c:.1f}x")
     print()
 
@@ -257,12 +267,16 @@ def main() -> None:
     big[failed_rows, rng.integers(0, 6, failed_rows.size)] = 0.0
     big_rust = rf.acai_batch(airframe, big)
     check("(c) on the random batch", acai_numpy_precomputed(big[:50_000], bbar, k_max, g), big_rust[:50_000])
-    f_big = lambda: rf.acai_batch(airframe, big)  # noqa: E731
-    reps = repeats_for(f_big, 3.0, 5, 50)
-    t_big = median_time(f_big, reps)
+    big_times = interleaved_times({"big": lambda: rf.acai_batch(airframe, big)}, rounds=1, budget_per_round_s=3.0)
+    t_big, reps = statistics.median(big_times["big"]), len(big_times["big"])
     print(f"Rust at scale: {LARGE_N:,} random efficiency vectors (10% with one failed rotor): "
           f"median {t_big * 1e3:.1f} ms over {reps} runs = {LARGE_N / t_big:,.0f} evals/s "
           f"({t_big / LARGE_N * 1e9 * cores_avail:.0f} ns per evaluation per core)")
+    load_after = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print()
+    print(f"1-min load average: {load_before:.2f} before timing, {load_after:.2f} after "
+          f"(this script alone keeps 1 to {cores_avail} cores busy; a load well above {cores_avail} means "
+          f"other work shared the CPUs and the figures are pessimistic)")
 
 
 if __name__ == "__main__":

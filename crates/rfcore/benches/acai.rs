@@ -24,7 +24,10 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rfcore::{AcaiFormula, Airframe, ControlAxes, ControllabilityAnalysis, FacetNormals};
 
 fn preset(name: &str) -> Airframe {
-    let path = format!("{}/../../python/rotorfault/presets/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../../python/rotorfault/presets/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("reading {path}: {e}"));
     Airframe::from_toml_str(&text, &path).unwrap_or_else(|e| panic!("parsing {path}: {e}"))
 }
@@ -53,7 +56,10 @@ fn bench_acai(c: &mut Criterion) {
 
     // Sanity checks before timing: Du Table II gives 1.4861 for the healthy PNPNPN hexacopter.
     let healthy = hexa_analysis.acai(&[1.0; 6], AcaiFormula::Eq13).unwrap();
-    assert!((healthy - 1.4861).abs() < 5e-4, "healthy hexa-pnpnpn ACAI = {healthy}");
+    assert!(
+        (healthy - 1.4861).abs() < 5e-4,
+        "healthy hexa-pnpnpn ACAI = {healthy}"
+    );
     let grid = fig4_grid();
     let rows = grid.len() / 6;
     assert_eq!(rows, 17_576);
@@ -73,13 +79,21 @@ fn bench_acai(c: &mut Criterion) {
     let eta_hexa = [0.8, 0.6, 1.0, 1.0, 0.9, 1.0];
     group.throughput(Throughput::Elements(1));
     group.bench_function("single/hexa-pnpnpn", |b| {
-        b.iter(|| hexa_analysis.acai(black_box(&eta_hexa), black_box(AcaiFormula::Eq13)).unwrap())
+        b.iter(|| {
+            hexa_analysis
+                .acai(black_box(&eta_hexa), black_box(AcaiFormula::Eq13))
+                .unwrap()
+        })
     });
 
     // (d) The same for the octocopter.
     let eta_octo = [0.8, 0.6, 1.0, 1.0, 0.9, 1.0, 0.7, 1.0];
     group.bench_function("single/octo-x", |b| {
-        b.iter(|| octo_analysis.acai(black_box(&eta_octo), black_box(AcaiFormula::Eq13)).unwrap())
+        b.iter(|| {
+            octo_analysis
+                .acai(black_box(&eta_octo), black_box(AcaiFormula::Eq13))
+                .unwrap()
+        })
     });
 
     // The hot path without validation, for reference.
@@ -90,16 +104,31 @@ fn bench_acai(c: &mut Criterion) {
         let (normals, f_min, f_max, g) = hot_path(airframe);
         let checked = analysis.acai(eta, AcaiFormula::Eq13).unwrap();
         let unchecked = normals.evaluate(eta, &f_min, &f_max, &g).eq13;
-        assert_eq!(checked.to_bits(), unchecked.to_bits(), "{label}: {checked} vs {unchecked}");
+        assert_eq!(
+            checked.to_bits(),
+            unchecked.to_bits(),
+            "{label}: {checked} vs {unchecked}"
+        );
         group.bench_function(format!("evaluate_unchecked/{label}"), |b| {
-            b.iter(|| normals.evaluate(black_box(eta), black_box(&f_min), black_box(&f_max), black_box(&g)))
+            b.iter(|| {
+                normals.evaluate(
+                    black_box(eta),
+                    black_box(&f_min),
+                    black_box(&f_max),
+                    black_box(&g),
+                )
+            })
         });
     }
 
     // (c) The Fig. 4 grid in one parallel batch (the analysis is built outside the loop).
     group.throughput(Throughput::Elements(rows as u64));
     group.bench_function("batch/fig4-grid", |b| {
-        b.iter(|| hexa_analysis.acai_batch(black_box(&grid), black_box(AcaiFormula::Eq13)).unwrap())
+        b.iter(|| {
+            hexa_analysis
+                .acai_batch(black_box(&grid), black_box(AcaiFormula::Eq13))
+                .unwrap()
+        })
     });
 
     group.finish();
@@ -107,8 +136,14 @@ fn bench_acai(c: &mut Criterion) {
 
 /// `FacetNormals` and the box / hover wrench for Du's four axes, as `ControllabilityAnalysis` builds them.
 fn hot_path(airframe: &Airframe) -> (FacetNormals, Vec<f64>, Vec<f64>, Vec<f64>) {
-    let normals = FacetNormals::new(&airframe.nominal_effectiveness_matrix()).expect("facet normals");
-    (normals, airframe.min_thrust_n(), airframe.max_thrust_n(), airframe.hover_wrench().to_vec())
+    let normals =
+        FacetNormals::new(&airframe.nominal_effectiveness_matrix()).expect("facet normals");
+    (
+        normals,
+        airframe.min_thrust_n(),
+        airframe.max_thrust_n(),
+        airframe.hover_wrench().to_vec(),
+    )
 }
 
 criterion_group!(benches, bench_acai);

@@ -127,6 +127,8 @@ pub struct FacetNormals {
     normals: Vec<f64>,
     /// `xi_j . b_k`, `m` per group; exactly zero for the group's own columns.
     projections: Vec<f64>,
+    /// `|xi_j . b_k|`, the same layout (the half-width weights of eq. (29)).
+    abs_projections: Vec<f64>,
     /// `|b_k|`, for the zero tolerance.
     column_norms: Vec<f64>,
 }
@@ -162,6 +164,7 @@ impl FacetNormals {
             groups: Vec::new(),
             normals: Vec::new(),
             projections: Vec::new(),
+            abs_projections: Vec::new(),
             column_norms,
         };
         let mut minor = vec![0.0; (n - 1) * (n - 1)];
@@ -187,6 +190,7 @@ impl FacetNormals {
                     p
                 };
                 out.projections.push(p);
+                out.abs_projections.push(p.abs());
             }
             out.groups.extend_from_slice(&group);
             out.normals.extend_from_slice(&xi);
@@ -240,30 +244,41 @@ impl FacetNormals {
     /// allocation-free hot path.
     pub fn evaluate(&self, eta: &[f64], f_min: &[f64], f_max: &[f64], g: &[f64]) -> AcaiValues {
         let (n, m) = (self.n, self.m);
+        // Half-width and centre of each efficiency-scaled thrust interval, once per evaluation so
+        // the per-group work is two plain dot products. Small airframes stay on the stack.
+        let mut stack = [0.0; 2 * STACK_ROTORS];
+        let mut heap = Vec::new();
+        let scratch: &mut [f64] = if m <= STACK_ROTORS {
+            &mut stack[..2 * m]
+        } else {
+            heap.resize(2 * m, 0.0);
+            &mut heap
+        };
+        let (half_range, centre_thrust) = scratch.split_at_mut(m);
+        for k in 0..m {
+            half_range[k] = 0.5 * eta[k] * (f_max[k] - f_min[k]);
+            centre_thrust[k] = 0.5 * eta[k] * (f_max[k] + f_min[k]);
+        }
         let mut full_rank = false;
         // Over the groups without a failed rotor (Du's d_j), and over every group.
         let mut min_d_working = f64::INFINITY;
         let mut min_abs_d_working = f64::INFINITY;
         let mut min_d_all = f64::INFINITY;
-        for (j, normal) in self.normals.chunks_exact(n).enumerate() {
-            let projections = &self.projections[j * m..(j + 1) * m];
-            let mut half_width = 0.0;
-            let mut centre = 0.0;
-            let mut leaves_hyperplane = false;
-            for k in 0..m {
-                let p = projections[k] * eta[k];
-                leaves_hyperplane |= p != 0.0;
-                half_width += p.abs() * (f_max[k] - f_min[k]);
-                centre += p * (f_max[k] + f_min[k]);
-            }
-            let g_along: f64 = normal.iter().zip(g).map(|(a, b)| a * b).sum();
-            let d = 0.5 * half_width - (0.5 * centre - g_along).abs();
+        let rows = self
+            .normals
+            .chunks_exact(n)
+            .zip(self.projections.chunks_exact(m))
+            .zip(self.abs_projections.chunks_exact(m));
+        for (j, ((normal, projections), abs_projections)) in rows.enumerate() {
+            let half_width = dot(abs_projections, half_range);
+            let centre = dot(projections, centre_thrust);
+            let d = half_width - (centre - dot(normal, g)).abs();
             min_d_all = min_d_all.min(d);
             let group = &self.groups[j * (n - 1)..(j + 1) * (n - 1)];
             if group.iter().all(|&k| eta[k] != 0.0) {
-                // rank B = n iff some group of n - 1 independent working columns has a column
-                // off its hyperplane.
-                full_rank |= leaves_hyperplane;
+                // rank B = n iff some group of n - 1 independent working columns has a working
+                // column off its hyperplane; settled by the first such group, so checked once.
+                full_rank = full_rank || projections.iter().zip(eta).any(|(p, e)| p * e != 0.0);
                 min_d_working = min_d_working.min(d);
                 min_abs_d_working = min_abs_d_working.min(d.abs());
             }
@@ -330,6 +345,13 @@ impl FacetNormals {
             .map(|eta| self.evaluate(eta, f_min, f_max, g).get(formula))
             .collect())
     }
+}
+
+/// Airframes with at most this many rotors evaluate without touching the heap.
+const STACK_ROTORS: usize = 32;
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// ACAI of an arbitrary effectiveness matrix `b` (n x m, efficiencies already applied), box

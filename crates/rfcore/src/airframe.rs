@@ -371,16 +371,18 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
 /// Checks an efficiency vector: m entries, each finite and in [0, 1].
 pub fn check_efficiency(field: &str, eta: &[f64], m: usize) -> Result<()> {
     require_len(field, eta, m)?;
-    for (i, &e) in eta.iter().enumerate() {
-        require_finite(&rotor_field(field, i), e)?;
-        if !(0.0..=1.0).contains(&e) {
-            return Err(RfError::invalid(
-                rotor_field(field, i),
-                format!("must lie in [0, 1], got {e}"),
-            ));
-        }
+    // The hot path builds no strings: a message is made only for the first bad entry.
+    match eta.iter().position(|e| !(0.0..=1.0).contains(e)) {
+        None => Ok(()),
+        Some(i) if !eta[i].is_finite() => Err(RfError::invalid(
+            rotor_field(field, i),
+            format!("must be finite, got {}", eta[i]),
+        )),
+        Some(i) => Err(RfError::invalid(
+            rotor_field(field, i),
+            format!("must lie in [0, 1], got {}", eta[i]),
+        )),
     }
-    Ok(())
 }
 
 fn default_gravity() -> f64 {

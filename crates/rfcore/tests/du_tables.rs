@@ -5,17 +5,25 @@ use std::path::PathBuf;
 use rfcore::{failure_table, AcaiFormula, Airframe, ControlAxes, ControllabilityAnalysis, Verdict};
 
 fn preset(name: &str) -> Airframe {
-    let path: PathBuf = [env!("CARGO_MANIFEST_DIR"), "..", "..", "python", "rotorfault", "presets"]
-        .iter()
-        .collect::<PathBuf>()
-        .join(format!("{name}.toml"));
+    let path: PathBuf = [
+        env!("CARGO_MANIFEST_DIR"),
+        "..",
+        "..",
+        "python",
+        "rotorfault",
+        "presets",
+    ]
+    .iter()
+    .collect::<PathBuf>()
+    .join(format!("{name}.toml"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     Airframe::from_toml_str(&text, &path.display().to_string()).unwrap()
 }
 
 fn single_failure_acai(name: &str, formula: AcaiFormula) -> (f64, Vec<f64>) {
     let airframe = preset(name);
-    let analysis = ControllabilityAnalysis::new(&airframe, ControlAxes::ThrustRollPitchYaw).unwrap();
+    let analysis =
+        ControllabilityAnalysis::new(&airframe, ControlAxes::ThrustRollPitchYaw).unwrap();
     let healthy = analysis.acai(&[1.0; 6], formula).unwrap();
     let failed = (0..6)
         .map(|k| {
@@ -36,7 +44,11 @@ fn du_table_ii_pnpnpn() {
     assert!((healthy - 1.4861).abs() < TABLE_TOL, "{healthy}");
     for (k, rho) in failed.iter().enumerate() {
         // Exactly zero, not -0.0 and not a rounding residue.
-        assert!(*rho == 0.0 && rho.is_sign_positive(), "rotor {} failed: {rho}", k + 1);
+        assert!(
+            *rho == 0.0 && rho.is_sign_positive(),
+            "rotor {} failed: {rho}",
+            k + 1
+        );
     }
 }
 
@@ -46,7 +58,11 @@ fn du_table_iii_ppnnpn() {
     assert!((healthy - 1.1295).abs() < TABLE_TOL, "{healthy}");
     let expected = [0.7221, 0.4510, 0.4510, 0.7221, 0.0, 0.0];
     for (k, (rho, want)) in failed.iter().zip(expected).enumerate() {
-        assert!((rho - want).abs() < TABLE_TOL, "rotor {} failed: {rho} vs {want}", k + 1);
+        assert!(
+            (rho - want).abs() < TABLE_TOL,
+            "rotor {} failed: {rho} vs {want}",
+            k + 1
+        );
     }
     assert_eq!(failed[4], 0.0);
     assert_eq!(failed[5], 0.0);
@@ -71,17 +87,24 @@ fn facet_margin_agrees_inside_and_sees_the_gap_outside() {
 #[test]
 fn procedure_reports_ranks_and_verdicts() {
     let airframe = preset("hexa-ppnnpn");
-    let analysis = ControllabilityAnalysis::new(&airframe, ControlAxes::ThrustRollPitchYaw).unwrap();
-    let report = analysis.report(&[1.0, 1.0, 1.0, 1.0, 0.0, 1.0], AcaiFormula::Eq13).unwrap();
+    let analysis =
+        ControllabilityAnalysis::new(&airframe, ControlAxes::ThrustRollPitchYaw).unwrap();
+    let report = analysis
+        .report(&[1.0, 1.0, 1.0, 1.0, 0.0, 1.0], AcaiFormula::Eq13)
+        .unwrap();
     assert_eq!(report.controllability_rank, 8);
     assert_eq!(report.effectiveness_rank, 4);
     // Table III prints 0 (eq. (13)), but hover is infeasible: G is outside, not on the boundary.
     assert_eq!(report.acai, 0.0);
     assert_eq!(report.verdict, Verdict::HoverOutside);
-    let report = analysis.report(&[0.0, 1.0, 1.0, 1.0, 1.0, 1.0], AcaiFormula::Eq13).unwrap();
+    let report = analysis
+        .report(&[0.0, 1.0, 1.0, 1.0, 1.0, 1.0], AcaiFormula::Eq13)
+        .unwrap();
     assert_eq!(report.verdict, Verdict::Controllable);
     // Three rotors left cannot span four axes.
-    let report = analysis.report(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], AcaiFormula::Eq13).unwrap();
+    let report = analysis
+        .report(&[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], AcaiFormula::Eq13)
+        .unwrap();
     assert_eq!(report.effectiveness_rank, 3);
     assert_eq!(report.acai, f64::NEG_INFINITY);
     assert_eq!(report.verdict, Verdict::EffectivenessRankDeficient);
@@ -101,7 +124,16 @@ fn failure_table_counts_and_matches_single_evaluations() {
 
 #[test]
 fn every_preset_parses() {
-    let dir: PathBuf = [env!("CARGO_MANIFEST_DIR"), "..", "..", "python", "rotorfault", "presets"].iter().collect();
+    let dir: PathBuf = [
+        env!("CARGO_MANIFEST_DIR"),
+        "..",
+        "..",
+        "python",
+        "rotorfault",
+        "presets",
+    ]
+    .iter()
+    .collect();
     let mut count = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
