@@ -4,8 +4,9 @@ use std::path::PathBuf;
 
 use rfcore::{failure_table, AcaiFormula, Airframe, ControlAxes, ControllabilityAnalysis, Verdict};
 
-fn preset(name: &str) -> Airframe {
-    let path: PathBuf = [
+/// The one preset directory, shipped in the wheel and read here too.
+fn presets_dir() -> PathBuf {
+    [
         env!("CARGO_MANIFEST_DIR"),
         "..",
         "..",
@@ -14,8 +15,11 @@ fn preset(name: &str) -> Airframe {
         "presets",
     ]
     .iter()
-    .collect::<PathBuf>()
-    .join(format!("{name}.toml"));
+    .collect()
+}
+
+fn preset(name: &str) -> Airframe {
+    let path = presets_dir().join(format!("{name}.toml"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     Airframe::from_toml_str(&text, &path.display().to_string()).unwrap()
 }
@@ -124,18 +128,8 @@ fn failure_table_counts_and_matches_single_evaluations() {
 
 #[test]
 fn every_preset_parses() {
-    let dir: PathBuf = [
-        env!("CARGO_MANIFEST_DIR"),
-        "..",
-        "..",
-        "python",
-        "rotorfault",
-        "presets",
-    ]
-    .iter()
-    .collect();
     let mut count = 0;
-    for entry in std::fs::read_dir(&dir).unwrap() {
+    for entry in std::fs::read_dir(presets_dir()).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
             let name = path.file_stem().unwrap().to_string_lossy().to_string();
