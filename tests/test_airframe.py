@@ -142,5 +142,20 @@ efficiency = 0.5
     assert a.arm_angle_rad[0] == pytest.approx(math.pi / 2, abs=1e-16)
 
 
+def test_to_toml_pickle_and_equality_are_exact() -> None:
+    import pickle
+
+    for name in rf.Airframe.presets():
+        preset = rf.Airframe.preset(name).with_efficiency(
+            np.linspace(0.0, 1.0, rf.Airframe.preset(name).rotor_count)
+        )
+        again = rf.Airframe.from_toml_str(preset.to_toml())
+        assert again == preset
+        assert pickle.loads(pickle.dumps(preset)) == preset
+        np.testing.assert_array_equal(again.effectiveness_matrix(), preset.effectiveness_matrix())
+    assert rf.Airframe.preset("quad-x") != rf.Airframe.preset("quad-plus")
+    assert rf.Airframe.preset("quad-x") != "quad-x"
+
+
 def test_repr() -> None:
     assert repr(rf.Airframe.preset("quad-x")) == "Airframe('quad-x', 4 rotors, 1.535 kg)"

@@ -103,6 +103,50 @@ def test_analysis_arguments(ppnnpn: rf.Airframe) -> None:
         ppnnpn.with_failed_rotors([0])
 
 
+def test_overflowing_numbers_are_value_errors(ppnnpn: rf.Airframe) -> None:
+    with pytest.raises(ValueError, match=r"mass_kg: must be finite"):
+        rf.Airframe(**{**GOOD, "mass_kg": 10**400})
+    with pytest.raises(ValueError, match=r"max_failed: must be at most"):
+        rf.failure_table(ppnnpn, max_failed=2**70)
+    with pytest.raises(ValueError, match=r"f_min, f_max, g_vec: too large"):
+        rf.acai_from_matrix(np.eye(2), [-1e308, -1e308], [1e308, 1e308], [0, 0])
+    # Large but representable magnitudes are computed, not rounded to zero.
+    assert rf.acai_from_matrix(np.eye(2) * 1e300, [0, 0], [1, 1], [0.5e300, 0.5e300]) == pytest.approx(0.5e300, rel=1e-12)
+
+
+def test_huge_problems_are_refused_quickly() -> None:
+    with pytest.raises(ValueError, match=r"effectiveness_matrix: at most 12 rows"):
+        rf.acai_from_matrix(np.ones((200_000, 1)), [0.0], [1.0], np.zeros(200_000))
+    with pytest.raises(ValueError, match=r"effectiveness_matrix: .* facet groups, more than"):
+        rf.acai_from_matrix(np.ones((12, 40)), np.zeros(40), np.ones(40), np.zeros(12))
+    with pytest.raises(ValueError, match=r"step, rotors: .* grid points exceed"):
+        rf.efficiency_scan(rf.Airframe.preset("hexa-pnpnpn"), rotors=(1, 2, 3, 4), step=0.001)
+
+
+def test_report_and_acai_agree_near_degeneracy() -> None:
+    """The rank of B_f in the report and the -inf of the ACAI come from one test."""
+    for k_mu in (5e-10, 1e-9, 2e-9, 1e-8):
+        hexa = rf.Airframe.preset("hexa-pnpnpn")
+        a = rf.Airframe(hexa.arm_angle_rad, hexa.arm_length_m, hexa.spin_sign, hexa.max_thrust_n,
+                        hexa.mass_kg, hexa.inertia_kg_m2, k_mu, gravity_m_s2=hexa.gravity_m_s2)
+        report = rf.controllability(a)
+        assert report.acai == rf.acai(a)
+        assert (report.effectiveness_rank == 4) == (report.acai != -np.inf)
+    big = rf.Airframe(**{**GOOD, "arm_length_m": [1e300] * 4})
+    assert rf.controllability(big).acai == rf.acai(big)
+
+
+def test_rotor_lists_name_the_field(ppnnpn: rf.Airframe, tmp_path: Path) -> None:
+    with pytest.raises(TypeError, match=r"rotors: expected a sequence of 1-based rotor numbers"):
+        ppnnpn.with_failed_rotors(3)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"rotors: expected a sequence"):
+        rf.efficiency_scan(ppnnpn, rotors=3)  # type: ignore[arg-type]
+    latin1 = tmp_path / "latin1.toml"
+    latin1.write_bytes('name = "h\xe9xa"\n'.encode("latin-1"))
+    with pytest.raises(ValueError, match=r"latin1.toml: not UTF-8 text"):
+        rf.Airframe.from_toml(latin1)
+
+
 def test_matrix_entry_point() -> None:
     b = np.eye(2)
     with pytest.raises(ValueError, match=r"f_min\[1\]: must not exceed f_max\[1\]"):

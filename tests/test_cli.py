@@ -78,6 +78,32 @@ def test_errors_are_one_line(args: tuple[str, ...], message: str) -> None:
     assert "Traceback" not in err + out
 
 
+def test_markup_in_a_name_is_printed_literally(tmp_path: Path) -> None:
+    import rotorfault as rf
+
+    text = (Path(rf.__file__).parent / "presets" / "quad-x.toml").read_text()
+    path = tmp_path / "odd.toml"
+    path.write_text(text.replace('name = "quad-x"', 'name = "[/bold] [red]odd"'))
+    for command in ("acai", "failures"):
+        code, out, err = run(command, "--airframe", str(path))
+        assert code == 0, err
+        assert "[/bold] [red]odd" in out
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("failures", "-a", "hexa-ppnnpn", "-k", "99999999999999999999999"), "max_failed: must be at most"),
+        (("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2", "--plot", "x.png"), "needs three swept rotors"),
+        (("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2,3,4", "--step", "0.001"), "grid points exceed"),
+    ],
+)
+def test_more_errors_are_one_line(args: tuple[str, ...], message: str) -> None:
+    code, out, err = run(*args)
+    assert code == 1 and message in err and "Traceback" not in err + out
+    assert len(err.strip().splitlines()) == 1
+
+
 def test_bad_toml_file_is_one_line(tmp_path: Path) -> None:
     path = tmp_path / "broken.toml"
     path.write_text("name = 'x'\nmass_kg = 'heavy'\n")

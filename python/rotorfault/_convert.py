@@ -7,6 +7,8 @@ lengths) are checked once, in the Rust core, whose ``ValueError`` messages name 
 from __future__ import annotations
 
 import numbers
+import sys
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -39,7 +41,10 @@ def real(field: str, value: Any) -> float:
     """``value`` as a float; booleans and non-numbers are a ``TypeError``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{field}: expected a real number, got {type(value).__name__}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:
+        raise ValueError(f"{field}: must be finite, got a number too large for a float") from None
 
 
 def flag(field: str, value: Any) -> bool:
@@ -52,6 +57,24 @@ def count(field: str, value: Any) -> int:
     """A non-negative integer (``ValueError`` if negative)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{field}: expected an integer, got {type(value).__name__}")
-    if value < 0:
-        raise ValueError(f"{field}: must be >= 0, got {value}")
-    return int(value)
+    number = int(value)
+    if number < 0:
+        raise ValueError(f"{field}: must be >= 0, got {number}")
+    if number > sys.maxsize:
+        raise ValueError(f"{field}: must be at most {sys.maxsize}, got {number}")
+    return number
+
+
+def rotor_numbers(field: str, value: Any, rotor_count: int) -> tuple[int, ...]:
+    """1-based rotor numbers, each in 1..rotor_count."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+        raise TypeError(f"{field}: expected a sequence of 1-based rotor numbers, got {type(value).__name__}")
+    rotors = []
+    for item in value:
+        if isinstance(item, bool) or not isinstance(item, numbers.Integral):
+            raise TypeError(f"{field}: expected 1-based rotor numbers, got {item!r}")
+        rotor = int(item)
+        if not 1 <= rotor <= rotor_count:
+            raise ValueError(f"{field}: rotor numbers run from 1 to {rotor_count}, got {rotor}")
+        rotors.append(rotor)
+    return tuple(rotors)

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from . import _rfcore
-from ._convert import FloatArray, float_array, real
+from ._convert import FloatArray, float_array, real, rotor_numbers
 
 _SPIN_WORDS = {
     "cw": -1.0,
@@ -141,7 +141,10 @@ class Airframe:
         """Reads an airframe TOML file (schema: ``rotorfault/presets/README.md``)."""
         if not isinstance(path, (str, PathLike)):
             raise TypeError(f"path: expected a file path, got {type(path).__name__}")
-        text = Path(path).read_text(encoding="utf-8")
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
         return cls._wrap(_rfcore.Airframe.from_toml_str(text, str(path)))
 
     @classmethod
@@ -160,13 +163,13 @@ class Airframe:
     def with_failed_rotors(self, rotors: Iterable[int]) -> Airframe:
         """A copy with the given rotors (1-based, as in the papers) at efficiency 0."""
         eta = self.efficiency.copy()
-        for rotor in rotors:
-            if isinstance(rotor, bool) or not isinstance(rotor, (int, np.integer)):
-                raise TypeError(f"rotors: expected 1-based rotor numbers, got {rotor!r}")
-            if not 1 <= rotor <= self.rotor_count:
-                raise ValueError(f"rotors: rotor numbers run from 1 to {self.rotor_count}, got {rotor}")
+        for rotor in rotor_numbers("rotors", rotors, self.rotor_count):
             eta[rotor - 1] = 0.0
         return self.with_efficiency(eta)
+
+    def to_toml(self) -> str:
+        """The airframe as TOML in the preset schema; :meth:`from_toml_str` reads it back exactly."""
+        return self._core.to_toml_str()
 
     def effectiveness_matrix(self) -> FloatArray:
         """B_f of Du eq. (5), 4 x m: rows thrust (N/N), roll and pitch (m), yaw (m); columns
@@ -240,6 +243,17 @@ class Airframe:
 
     def __repr__(self) -> str:
         return f"Airframe({self.name!r}, {self.rotor_count} rotors, {self.mass_kg:g} kg)"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Airframe):
+            return NotImplemented
+        return self.to_toml() == other.to_toml()
+
+    __hash__ = None  # type: ignore[assignment]  # equal airframes may differ in identity only
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Pickle (for multiprocessing and Dask) through the exact TOML round trip.
+        return (Airframe.from_toml_str, (self.to_toml(), f"pickled airframe {self.name!r}"))
 
 
 def require_airframe(value: Any) -> Airframe:

@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 
 import click
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .airframe import Airframe
@@ -32,8 +33,10 @@ def _user_errors(command: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return command(*args, **kwargs)
-        except (ValueError, TypeError, OSError) as exc:
+        except (ValueError, TypeError, OSError, OverflowError) as exc:
             raise click.ClickException(str(exc)) from None
+        except MemoryError:
+            raise click.ClickException("out of memory: ask for a smaller problem") from None
 
     return wrapper  # type: ignore[return-value]
 
@@ -87,7 +90,7 @@ def airframes() -> None:
         table.add_column(column)
     for name in Airframe.presets():
         a = Airframe.preset(name)
-        table.add_row(name, str(a.rotor_count), f"{a.mass_kg:g}", f"{a.max_thrust_n.max():g}", a.description)
+        table.add_row(name, str(a.rotor_count), f"{a.mass_kg:g}", f"{a.max_thrust_n.max():g}", escape(a.description))
     console.print(table)
 
 
@@ -102,7 +105,7 @@ def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> Non
     frame = load_airframe(airframe)
     efficiencies = None if eta is None else parse_numbers("eta", eta)
     report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)  # type: ignore[arg-type]
-    table = Table(title=f"{frame.name}: controllability", show_header=False)
+    table = Table(title=f"{escape(frame.name)}: controllability", show_header=False)
     table.add_column("quantity")
     table.add_column("value")
     table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.eta))
@@ -125,7 +128,7 @@ def failures(airframe: str, max_failed: int, formula: str) -> None:
     frame = load_airframe(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)  # type: ignore[arg-type]
     headers, rows = result.rows_for_display()
-    table = Table(title=f"{frame.name}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
+    table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
     for header in headers:
         table.add_column(header, justify="left" if header == "failed" else "right")
     for case, row in zip(result, rows):
@@ -150,10 +153,13 @@ def failures(airframe: str, max_failed: int, formula: str) -> None:
 def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
     frame = load_airframe(airframe)
-    result = efficiency_scan(frame, parse_rotors("rotors", rotors), step, give_up_yaw=give_up_yaw)
+    swept = parse_rotors("rotors", rotors)
+    if plot_path is not None and len(swept) != 3:
+        raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")
+    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw)
     finite = result.acai[~(result.acai == -math.inf)]
     console.print(
-        f"{frame.name}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
+        f"{escape(frame.name)}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
         f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%); "
         f"largest ACAI {finite.max() if finite.size else float('nan'):.4f}"
     )

@@ -71,7 +71,10 @@ def acai(
 def acai_batch(
     airframe: Airframe, etas: Any, give_up_yaw: bool = False, formula: Formula = "eq13"
 ) -> FloatArray:
-    """ACAI for every row of ``etas`` (N x m efficiencies), computed in parallel without the GIL."""
+    """ACAI for every row of ``etas`` (N x m efficiencies), computed in parallel without the GIL.
+
+    A float64 C-contiguous ``etas`` is read in place (no copy) while other Python threads run:
+    do not modify it from another thread during the call."""
     airframe = require_airframe(airframe)
     return _rfcore.acai_batch(
         airframe._core,

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._convert import FloatArray, flag, real
+from ._convert import FloatArray, flag, real, rotor_numbers
 from .airframe import Airframe, require_airframe
 from .controllability import acai_batch
 
@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
 #: Points evaluated per batch call; bounds memory and drives the progress bar.
 CHUNK_POINTS = 1 << 20
+#: Largest grid a scan holds in memory (points, ACAI and efficiencies: about 4 GB for 3 rotors).
+MAX_SCAN_POINTS = 100_000_000
 
 
 @dataclass(frozen=True)
@@ -68,14 +70,9 @@ def efficiency_scan(
     give_up_yaw = flag("give_up_yaw", give_up_yaw)
     if not 0.0 < step <= 1.0:
         raise ValueError(f"step: must lie in (0, 1], got {step}")
-    swept = tuple(rotors)
+    swept = rotor_numbers("rotors", rotors, airframe.rotor_count)
     if not swept:
         raise ValueError("rotors: give at least one rotor to sweep")
-    for r in swept:
-        if isinstance(r, bool) or not isinstance(r, (int, np.integer)):
-            raise TypeError(f"rotors: expected 1-based rotor numbers, got {r!r}")
-        if not 1 <= r <= airframe.rotor_count:
-            raise ValueError(f"rotors: rotor numbers run from 1 to {airframe.rotor_count}, got {r}")
     if len(set(swept)) != len(swept):
         raise ValueError(f"rotors: each rotor may be swept once, got {swept}")
     count = int(round(1.0 / step))
@@ -83,6 +80,11 @@ def efficiency_scan(
         raise ValueError(f"step: must divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
     levels = np.linspace(0.0, 1.0, count + 1)
     total = len(levels) ** len(swept)
+    if total > MAX_SCAN_POINTS:
+        raise ValueError(
+            f"step, rotors: {len(levels)}^{len(swept)} = {total:,} grid points exceed the in-memory "
+            f"limit of {MAX_SCAN_POINTS:,}; use a coarser step or fewer rotors"
+        )
     points = np.empty((total, len(swept)))
     grids = np.meshgrid(*([levels] * len(swept)), indexing="ij")
     for column, grid in enumerate(grids):

@@ -103,6 +103,11 @@ impl PyAirframe {
         Ok(PyAirframe { inner })
     }
 
+    /// The airframe as TOML text in the preset schema (exact round trip).
+    fn to_toml_str(&self) -> String {
+        self.inner.to_toml_string()
+    }
+
     /// B_f (4 x m) with efficiencies applied.
     fn effectiveness_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let b = self.inner.effectiveness_matrix();

@@ -24,8 +24,9 @@
 //! Keeping it makes the index continuous as `eta_k -> 0` (see "G outside Omega").
 //!
 //! # Tolerances
-//! - A column group is rank-deficient when `|cross product| <= RANK_RTOL * prod_k |b_k|` (the ratio
-//!   is the volume "sine" of the group, 1 for orthogonal columns, 0 for dependent ones).
+//! - A column group is rank-deficient when the cross product of its *unit* columns has norm
+//!   `<= RANK_RTOL` (that norm is the volume "sine" of the group, 1 for orthogonal columns, 0 for
+//!   dependent ones). `rank B_f` is decided by the same groups, so the ACAI and the report agree.
 //! - A projection `xi_j . b_k` with `|.| <= RANK_RTOL * |b_k|` is exactly zero.
 //! - An ACAI with `|rho| <= ZERO_RTOL * scale`, where
 //!   `scale = sum_k |b_k| (f_max,k - f_min,k) / 2 + |G|` is the size of the problem, is returned as
@@ -61,8 +62,10 @@ use crate::error::{require_all_finite, require_finite, Result, RfError};
 pub const RANK_RTOL: f64 = 1e-9;
 /// Relative tolerance under which an ACAI is reported as exactly zero.
 pub const ZERO_RTOL: f64 = 1e-9;
-/// Largest `groups x m` table [`FacetNormals`] will build (about 400 MB of f64).
-pub const MAX_TABLE_ENTRIES: usize = 50_000_000;
+/// Largest `groups x m` table [`FacetNormals`] will build (two f64 tables: about 400 MB).
+pub const MAX_TABLE_ENTRIES: usize = 25_000_000;
+/// Largest virtual-control dimension n (rows of B); physical problems have n <= 6.
+pub const MAX_DIMENSION: usize = 12;
 
 /// How the index is reported when G lies outside the attainable set (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -144,6 +147,14 @@ impl FacetNormals {
                 format!("{n} x {m}"),
             ));
         }
+        if n > MAX_DIMENSION {
+            return Err(RfError::invalid(
+                "effectiveness_matrix",
+                format!(
+                    "at most {MAX_DIMENSION} rows (virtual-control axes) are supported, got {n}"
+                ),
+            ));
+        }
         for ((r, c), &v) in b.iter().enumerate().map(|(i, v)| ((i % n, i / n), v)) {
             require_finite(&format!("effectiveness_matrix[{r}, {c}]"), v)?;
         }
@@ -157,7 +168,21 @@ impl FacetNormals {
                 ),
             ));
         }
-        let column_norms: Vec<f64> = (0..m).map(|k| b.column(k).norm()).collect();
+        let column_norms: Vec<f64> = (0..m).map(|k| scaled_norm(b.column(k).iter())).collect();
+        if let Some(k) = column_norms.iter().position(|v| !v.is_finite()) {
+            return Err(RfError::invalid(
+                format!("effectiveness_matrix[:, {k}]"),
+                "too large: the column's norm overflows double precision",
+            ));
+        }
+        // Unit columns: the cross product of a group then measures the group's "sine" directly
+        // and cannot overflow or underflow, whatever the units of the rows.
+        let mut unit = b.clone();
+        for (k, &norm) in column_norms.iter().enumerate() {
+            if norm > 0.0 {
+                unit.column_mut(k).unscale_mut(norm);
+            }
+        }
         let mut out = FacetNormals {
             n,
             m,
@@ -171,10 +196,12 @@ impl FacetNormals {
         let mut xi = vec![0.0; n];
         // With m < n - 1 there is no group at all, and every evaluation reports rank < n.
         for group in Combinations::new(m, n - 1) {
-            generalized_cross_product(b, &group, &mut minor, &mut xi);
-            let volume: f64 = group.iter().map(|&k| out.column_norms[k]).product();
+            if group.iter().any(|&k| out.column_norms[k] == 0.0) {
+                continue; // a zero column: rank B_{1,j} < n - 1
+            }
+            generalized_cross_product(&unit, &group, &mut minor, &mut xi);
             let norm = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm <= RANK_RTOL * volume {
+            if norm <= RANK_RTOL {
                 continue; // rank B_{1,j} < n - 1: no facet (Du Step 6)
             }
             xi.iter_mut().for_each(|v| *v /= norm);
@@ -233,6 +260,17 @@ impl FacetNormals {
             return Err(RfError::invalid(
                 format!("f_min[{k}]"),
                 format!("must not exceed f_max[{k}] ({} > {})", f_min[k], f_max[k]),
+            ));
+        }
+        // Bounds every sum the evaluation forms, so no overflow can turn into inf or NaN there.
+        let size: f64 = (0..self.m)
+            .map(|k| self.column_norms[k] * (f_min[k].abs() + f_max[k].abs()))
+            .sum::<f64>()
+            + g.iter().map(|v| v.abs()).sum::<f64>();
+        if !size.is_finite() {
+            return Err(RfError::invalid(
+                "f_min, f_max, g_vec",
+                "too large: sum_k |b_k| (|f_min,k| + |f_max,k|) + |G| overflows double precision",
             ));
         }
         Ok(())
@@ -297,7 +335,7 @@ impl FacetNormals {
         let scale: f64 = (0..m)
             .map(|k| self.column_norms[k] * 0.5 * (f_max[k] - f_min[k]))
             .sum::<f64>()
-            + g.iter().map(|v| v * v).sum::<f64>().sqrt();
+            + scaled_norm(g.iter());
         let snap = |rho: f64| {
             if rho.abs() <= ZERO_RTOL * scale {
                 0.0
@@ -323,7 +361,7 @@ impl FacetNormals {
     ) -> Result<Vec<f64>> {
         self.check_bounds_and_g(f_min, f_max, g)?;
         let m = self.m;
-        if etas.len() % m != 0 {
+        if !etas.len().is_multiple_of(m) {
             return Err(RfError::shape(
                 "etas",
                 format!("a multiple of {m} values (N rows of one efficiency per rotor)"),
@@ -349,6 +387,15 @@ impl FacetNormals {
 
 /// Airframes with at most this many rotors evaluate without touching the heap.
 const STACK_ROTORS: usize = 32;
+
+/// Euclidean norm without intermediate overflow or underflow (entries of 1e300 are fine).
+fn scaled_norm<'a>(values: impl Iterator<Item = &'a f64> + Clone) -> f64 {
+    let largest = values.clone().fold(0.0_f64, |acc, v| acc.max(v.abs()));
+    if largest == 0.0 {
+        return 0.0;
+    }
+    largest * values.map(|v| (v / largest).powi(2)).sum::<f64>().sqrt()
+}
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
@@ -514,6 +561,37 @@ mod tests {
         let err =
             acai_from_matrix(&b, &[0.0, 0.0], &[1.0, 1.0], &[0.0], AcaiFormula::Eq13).unwrap_err();
         assert!(err.to_string().starts_with("g_vec"), "{err}");
+    }
+
+    #[test]
+    fn huge_magnitudes_are_rejected_or_exact_never_rounded_to_zero() {
+        let b = DMatrix::identity(2, 2);
+        let err = acai_from_matrix(&b, &[-1e308; 2], &[1e308; 2], &[0.0; 2], AcaiFormula::Eq13)
+            .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("f_min, f_max, g_vec: too large"),
+            "{err}"
+        );
+        // Large but representable: the square [0, 1e300]^2 seen from its centre.
+        let big = DMatrix::identity(2, 2) * 1e300;
+        let rho =
+            acai_from_matrix(&big, &[0.0; 2], &[1.0; 2], &[0.5e300; 2], AcaiFormula::Eq13).unwrap();
+        assert!((rho / 0.5e300 - 1.0).abs() < 1e-12, "{rho}");
+        let column = DMatrix::from_row_slice(2, 1, &[1.5e308, 1.5e308]);
+        let err = FacetNormals::new(&column).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("effectiveness_matrix[:, 0]: too large"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn dimension_is_bounded_before_any_allocation() {
+        let tall = DMatrix::from_element(200_000, 1, 1.0);
+        let err = FacetNormals::new(&tall).unwrap_err();
+        assert!(err.to_string().contains("at most 12 rows"), "{err}");
     }
 
     #[test]

@@ -325,6 +325,35 @@ impl Airframe {
         })
     }
 
+    /// The airframe in the TOML schema of the presets. Floats are written in shortest round-trip
+    /// form, so [`Airframe::from_toml_str`] gives back an equal airframe.
+    pub fn to_toml_string(&self) -> String {
+        let quoted = |text: &str| toml::Value::String(text.to_string()).to_string();
+        let [jx, jy, jz] = self.inertia_kg_m2;
+        let mut out = format!("name = {}\n", quoted(&self.name));
+        if !self.description.is_empty() {
+            out += &format!("description = {}\n", quoted(&self.description));
+        }
+        out += &format!(
+            "mass_kg = {:?}\ngravity_m_s2 = {:?}\ninertia_kg_m2 = [{jx:?}, {jy:?}, {jz:?}]\n\
+             drag_torque_ratio_m = {:?}\n",
+            self.mass_kg, self.gravity_m_s2, self.drag_torque_ratio_m
+        );
+        for r in &self.rotors {
+            out += &format!(
+                "\n[[rotor]]\narm_angle_rad = {:?}\narm_length_m = {:?}\nspin = \"{}\"\n\
+                 max_thrust_n = {:?}\nmin_thrust_n = {:?}\nefficiency = {:?}\n",
+                r.arm_angle_rad,
+                r.arm_length_m,
+                r.spin.short_name(),
+                r.max_thrust_n,
+                r.min_thrust_n,
+                r.efficiency
+            );
+        }
+        out
+    }
+
     /// B_f of Du eq. (5): the nominal matrix with column i scaled by eta_i.
     pub fn effectiveness_matrix(&self) -> DMatrix<f64> {
         let mut b = self.nominal_effectiveness_matrix();
@@ -495,6 +524,20 @@ mod tests {
             .with_efficiency(&[1.0, f64::NAN, 1.0, 1.0])
             .unwrap_err();
         assert!(err.to_string().contains("efficiency[1]"), "{err}");
+    }
+
+    #[test]
+    fn toml_round_trip_is_exact() {
+        let mut a = quad().with_efficiency(&[1.0, 0.3, 1e-300, 0.0]).unwrap();
+        a.description = "a \"quoted\" name\nwith a newline".to_string();
+        a.rotors[1].max_thrust_n = 1e300;
+        a.rotors[2].min_thrust_n = -0.1;
+        let text = a.to_toml_string();
+        assert_eq!(
+            Airframe::from_toml_str(&text, "round trip").unwrap(),
+            a,
+            "{text}"
+        );
     }
 
     #[test]

@@ -161,19 +161,21 @@ impl ControllabilityAnalysis {
     pub fn report(&self, eta: &[f64], formula: AcaiFormula) -> Result<ControllabilityReport> {
         check_efficiency("eta", eta, self.nominal.ncols())?;
         let n = self.axes.dimension();
-        let mut scaled = self.nominal.clone();
-        for (k, &e) in eta.iter().enumerate() {
-            scaled.column_mut(k).scale_mut(e);
-        }
-        let effectiveness_rank = numerical_rank(&scaled);
         let values = self
             .normals
             .evaluate(eta, &self.f_min, &self.f_max, &self.g);
-        let (acai, margin) = if effectiveness_rank < n {
-            (f64::NEG_INFINITY, f64::NEG_INFINITY)
+        // Step 2 uses the same column-group test as the ACAI, so the report cannot contradict
+        // itself; the SVD only says how deficient a deficient B_f is.
+        let effectiveness_rank = if values.facet_margin == f64::NEG_INFINITY {
+            let mut scaled = self.nominal.clone();
+            for (k, &e) in eta.iter().enumerate() {
+                scaled.column_mut(k).scale_mut(e);
+            }
+            numerical_rank(&scaled).min(n - 1)
         } else {
-            (values.get(formula), values.facet_margin)
+            n
         };
+        let (acai, margin) = (values.get(formula), values.facet_margin);
         let verdict = if self.controllability_rank < 2 * n {
             Verdict::ModelRankDeficient
         } else if margin == f64::NEG_INFINITY {
@@ -249,8 +251,9 @@ pub struct FailureCase {
     pub without_yaw: ControllabilityReport,
 }
 
-/// Largest number of failure combinations [`failure_table`] enumerates.
-pub const MAX_FAILURE_CASES: usize = 10_000_000;
+/// Largest number of failure combinations [`failure_table`] enumerates (each becomes a Python
+/// object; a 16-rotor vehicle with up to 6 failures has 14,893).
+pub const MAX_FAILURE_CASES: usize = 100_000;
 
 /// Every combination of up to `max_failed` fully failed rotors (efficiency set to 0, the other
 /// rotors keeping the airframe's efficiencies), in order of the number failed, then lexicographic.

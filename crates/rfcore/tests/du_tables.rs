@@ -135,6 +135,8 @@ fn every_preset_parses() {
             let name = path.file_stem().unwrap().to_string_lossy().to_string();
             let airframe = preset(&name);
             assert_eq!(airframe.name(), name, "file name and name field agree");
+            let again = Airframe::from_toml_str(&airframe.to_toml_string(), "round trip").unwrap();
+            assert_eq!(again, airframe, "{name} survives a TOML round trip");
             count += 1;
         }
     }
