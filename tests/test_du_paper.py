@@ -78,6 +78,9 @@ def test_failure_table_single_failures_reproduce_tables(ppnnpn: rf.Airframe) -> 
     acai = table.to_arrays()["acai"]
     np.testing.assert_allclose(acai, [1.1295, 0.7221, 0.4510, 0.4510, 0.7221, 0.0, 0.0], atol=TABLE_TOL)
     assert [row.controllable for row in table] == [True, True, True, True, True, False, False]
+    text = str(table)
+    assert text.count("0.0000*") == 2 and "eq. (13) prints 0 here" in text
+    assert "0.0000*" not in str(rf.failure_table(rf.Airframe.preset("hexa-pnpnpn"), max_failed=1))
 
 
 def test_fig4_region(pnpnpn: rf.Airframe) -> None:

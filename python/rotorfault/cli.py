@@ -18,7 +18,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .airframe import Airframe
-from .controllability import controllability, failure_table, format_acai
+from .controllability import EQ13_ZERO_NOTE, controllability, failure_table, format_acai
 from .scan import efficiency_scan
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -112,10 +112,12 @@ def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> Non
     table.add_row("axes", "thrust, roll, pitch" if give_up_yaw else "thrust, roll, pitch, yaw")
     table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
     table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
-    table.add_row("ACAI", format_acai(report.acai))
+    table.add_row("ACAI", format_acai(report.acai, report.verdict))
     style = "green" if report.controllable else "red"
     table.add_row("verdict", f"[{style}]{report.verdict}[/{style}]")
     console.print(table)
+    if format_acai(report.acai, report.verdict).endswith("*"):
+        console.print(escape(EQ13_ZERO_NOTE))
 
 
 @cli.command()
@@ -135,6 +137,8 @@ def failures(airframe: str, max_failed: int, formula: str) -> None:
         style = "green" if case.controllable else ("yellow" if case.controllable_without_yaw else "red")
         table.add_row(*row, style=style)
     console.print(table)
+    if any(cell.endswith("*") for row in rows for cell in row):
+        console.print(escape(EQ13_ZERO_NOTE))
     survivable = sum(case.controllable for case in result)
     spinning = sum(case.controllable_without_yaw and not case.controllable for case in result)
     console.print(

@@ -176,8 +176,18 @@ _COLUMNS = (
 )
 
 
-def format_acai(value: float) -> str:
-    return "undefined" if math.isinf(value) else f"{value:.4f}"
+#: Verdict text for a hover wrench outside the attainable set.
+OUTSIDE = "uncontrollable: hover wrench outside the attainable set"
+#: Footnote for an eq. (13) value of 0 whose hover wrench is in fact outside.
+EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formula facet-margin shows the gap)"
+
+
+def format_acai(value: float, verdict: str = "") -> str:
+    """4 decimals like the paper; "undefined" for -inf; a star where eq. (13) prints 0 but the
+    hover wrench lies outside the attainable set."""
+    if math.isinf(value):
+        return "undefined"
+    return f"{value:.4f}*" if value == 0.0 and verdict == OUTSIDE else f"{value:.4f}"
 
 
 class FailureTable(Sequence[FailureCase]):
@@ -233,9 +243,9 @@ class FailureTable(Sequence[FailureCase]):
                 rotor_labels(row.failed),
                 str(row.controllability_rank),
                 str(row.effectiveness_rank),
-                format_acai(row.acai),
+                format_acai(row.acai, row.verdict),
                 "yes" if row.controllable else "no",
-                format_acai(row.acai_without_yaw),
+                format_acai(row.acai_without_yaw, row.verdict_without_yaw),
                 "yes" if row.controllable_without_yaw else "no",
             ]
             for row in self._cases
@@ -251,6 +261,8 @@ class FailureTable(Sequence[FailureCase]):
             "  ".join("-" * w for w in widths),
         ]
         lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in rows]
+        if any(cell.endswith("*") for row in rows for cell in row):
+            lines.append(EQ13_ZERO_NOTE)
         return "\n".join(lines)
 
     def __repr__(self) -> str:
