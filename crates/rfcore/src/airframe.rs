@@ -487,38 +487,29 @@ mod tests {
 
     #[test]
     fn bad_fields_are_named() {
-        let err = Airframe::from_columns(
-            "q",
-            &[0.0],
-            &[0.2],
-            &[1.0],
-            &[1.0],
-            &[2.0],
-            &[1.0],
-            1.0,
-            &[1.0; 3],
-            0.1,
-            9.81,
-        )
-        .unwrap_err();
+        // One rotor with the given spin sign and minimum thrust (maximum 1 N).
+        let single = |spin: f64, min_thrust: f64| {
+            Airframe::from_columns(
+                "q",
+                &[0.0],
+                &[0.2],
+                &[spin],
+                &[1.0],
+                &[min_thrust],
+                &[1.0],
+                1.0,
+                &[1.0; 3],
+                0.1,
+                9.81,
+            )
+            .unwrap_err()
+        };
+        let err = single(1.0, 2.0);
         assert!(
             err.to_string().starts_with("min_thrust_n[0] (rotor 1)"),
             "{err}"
         );
-        let err = Airframe::from_columns(
-            "q",
-            &[0.0],
-            &[0.2],
-            &[0.5],
-            &[1.0],
-            &[0.0],
-            &[1.0],
-            1.0,
-            &[1.0; 3],
-            0.1,
-            9.81,
-        )
-        .unwrap_err();
+        let err = single(0.5, 0.0);
         assert!(err.to_string().starts_with("spin[0]"), "{err}");
         let err = quad()
             .with_efficiency(&[1.0, f64::NAN, 1.0, 1.0])
