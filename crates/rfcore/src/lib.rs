@@ -3,6 +3,7 @@
 //! - [`airframe`]: multirotor geometry, thrust limits, efficiencies, TOML presets.
 //! - [`acai`]: the Available Control Authority Index (Du et al., Theorem 3) for any dimension.
 //! - [`controllability`]: Du's 9-step test procedure and failure tables.
+//! - [`rigid_body`]: 6-DOF Newton-Euler dynamics and the RK4 step (the simulator's bottom layer).
 //!
 //! Units are SI throughout (N, m, kg, s, rad) and carried in names (`max_thrust_n`).
 
@@ -11,6 +12,7 @@ pub mod airframe;
 pub mod combinations;
 pub mod controllability;
 pub mod error;
+pub mod rigid_body;
 
 pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
 pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
