@@ -8,11 +8,13 @@
 //! Units are SI throughout (N, m, kg, s, rad) and carried in names (`max_thrust_n`).
 
 pub mod acai;
+pub mod actuator;
 pub mod airframe;
 pub mod combinations;
 pub mod controllability;
 pub mod error;
 pub mod rigid_body;
+pub mod vehicle;
 
 pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
 pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};

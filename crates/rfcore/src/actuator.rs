@@ -1,0 +1,425 @@
+//! Rotor actuator models: what a rotor actually produces for what it is commanded.
+//!
+//! Two models sit behind one interface ([`Actuators`]): fixed-pitch rotors commanded in thrust
+//! (Ke, Lanzon, Du) and variable-pitch propellers commanded in speed and blade pitch (Wang et al.
+//! eq. (3)). Adding a model means adding a variant; the simulator only sees [`RotorOutput`]s.
+//!
+//! # Discretisation (stated once, used everywhere)
+//! Actuator states advance once per integrator substep with the command held constant over it
+//! (zero-order hold), in this order:
+//! 1. the command is saturated to the channel's bounds (a rotor cannot be asked for more than it
+//!    can give);
+//! 2. the first-order lag `tau x' = u - x` is solved exactly over the substep:
+//!    `x+ = u + (x - u) exp(-dt / tau)` (`tau = 0` means no lag);
+//! 3. the change is clipped to the rate limit `|x+ - x| <= rate dt` (Lanzon's 50 N/s).
+//!
+//! The rigid body then sees the new outputs held constant through its RK4 substep.
+//!
+//! # Health
+//! `health_i` in [0, 1] (Du's eta, Ke's lambda) scales everything rotor i produces: thrust,
+//! reaction torque and spin (a failed rotor produces nothing). The actuator state itself is not
+//! touched, so a controller that keeps commanding a dead rotor sees no effect, as in reality.
+
+use crate::airframe::Airframe;
+use crate::error::{require_finite, Result, RfError};
+
+/// What rotor i produces right now, after health is applied.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RotorOutput {
+    /// Thrust along body -z (up), N (negative for a reversed variable-pitch propeller).
+    pub thrust_n: f64,
+    /// Reaction (drag) torque about body z (FRD), N m, signed by the spin direction.
+    pub reaction_torque_nm: f64,
+    /// Rotor angular velocity along body z (FRD), rad/s; feeds the gyroscopic moment.
+    pub spin_rad_s: f64,
+}
+
+/// First-order lag and rate limit shared by every channel of a model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lag {
+    /// Time constant, s (0: the state follows the command at once).
+    pub time_constant_s: f64,
+    /// Largest rate of change, channel units per second (`f64::INFINITY`: none).
+    pub rate_limit_per_s: f64,
+}
+
+impl Lag {
+    pub fn none() -> Self {
+        Lag {
+            time_constant_s: 0.0,
+            rate_limit_per_s: f64::INFINITY,
+        }
+    }
+
+    fn check(&self, prefix: &str) -> Result<()> {
+        let field = format!("{prefix}time_constant_s");
+        require_finite(&field, self.time_constant_s)?;
+        if self.time_constant_s < 0.0 {
+            return Err(RfError::invalid(
+                field,
+                format!("must be >= 0, got {}", self.time_constant_s),
+            ));
+        }
+        let field = format!("{prefix}rate_limit_per_s");
+        if self.rate_limit_per_s.is_nan() || self.rate_limit_per_s <= 0.0 {
+            return Err(RfError::invalid(
+                field,
+                format!(
+                    "must be > 0 (infinity for none), got {}",
+                    self.rate_limit_per_s
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// One substep of saturation, exact lag and rate limit (module docs).
+    fn advance(&self, state: f64, command: f64, lower: f64, upper: f64, dt_s: f64) -> f64 {
+        let target = command.clamp(lower, upper);
+        let lagged = if self.time_constant_s > 0.0 {
+            target + (state - target) * (-dt_s / self.time_constant_s).exp()
+        } else {
+            target
+        };
+        let step = self.rate_limit_per_s * dt_s;
+        state + (lagged - state).clamp(-step, step)
+    }
+}
+
+/// Fixed-pitch rotors commanded in thrust (N), bounds and spin from the airframe.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FixedPitch {
+    min_thrust_n: Vec<f64>,
+    max_thrust_n: Vec<f64>,
+    /// `w_i k_mu`: reaction torque per newton of thrust, signed (m).
+    torque_per_thrust_m: Vec<f64>,
+    /// `w_i`, for the spin direction.
+    yaw_sign: Vec<f64>,
+    /// Thrust coefficient `k_f` in `f = k_f omega^2` (N s^2); 0 when rotor speed is not modelled.
+    thrust_coefficient_n_s2: f64,
+    lag: Lag,
+    thrust_n: Vec<f64>,
+}
+
+impl FixedPitch {
+    pub fn new(airframe: &Airframe, lag: Lag, thrust_coefficient_n_s2: f64) -> Result<Self> {
+        lag.check("actuator.")?;
+        require_finite("actuator.thrust_coefficient_n_s2", thrust_coefficient_n_s2)?;
+        if thrust_coefficient_n_s2 < 0.0 {
+            return Err(RfError::invalid(
+                "actuator.thrust_coefficient_n_s2",
+                format!(
+                    "must be >= 0 (0: rotor speed not modelled), got {thrust_coefficient_n_s2}"
+                ),
+            ));
+        }
+        let k_mu = airframe.drag_torque_ratio_m();
+        let yaw_sign: Vec<f64> = airframe
+            .rotors()
+            .iter()
+            .map(|r| r.spin.yaw_sign())
+            .collect();
+        Ok(FixedPitch {
+            min_thrust_n: airframe.min_thrust_n(),
+            max_thrust_n: airframe.max_thrust_n(),
+            torque_per_thrust_m: yaw_sign.iter().map(|w| w * k_mu).collect(),
+            yaw_sign,
+            thrust_coefficient_n_s2,
+            lag,
+            thrust_n: vec![0.0; airframe.rotor_count()],
+        })
+    }
+}
+
+/// Variable-pitch propellers (Wang et al. eq. (3)): commands are rotor speed `omega` and blade
+/// pitch `alpha` per rotor (interleaved: `[omega_1, alpha_1, omega_2, ...]`), in the units the
+/// coefficients use (Wang prints speeds up to 10,000). Thrust `k1 omega^2 alpha`, reaction torque
+/// `k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha`, signed by the spin direction.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VariablePitch {
+    pub coefficients: [f64; 4],
+    pub speed_bounds: (f64, f64),
+    pub pitch_bounds: (f64, f64),
+    /// Factor from the speed unit to rad/s for the gyroscopic moment (0: not modelled).
+    pub speed_to_rad_s: f64,
+    yaw_sign: Vec<f64>,
+    lag: Lag,
+    /// `[omega_1, alpha_1, omega_2, alpha_2, ...]`.
+    state: Vec<f64>,
+}
+
+impl VariablePitch {
+    pub fn new(
+        airframe: &Airframe,
+        coefficients: [f64; 4],
+        speed_bounds: (f64, f64),
+        pitch_bounds: (f64, f64),
+        speed_to_rad_s: f64,
+        lag: Lag,
+    ) -> Result<Self> {
+        lag.check("actuator.")?;
+        for (i, &k) in coefficients.iter().enumerate() {
+            require_finite(&format!("actuator.k{}", i + 1), k)?;
+        }
+        for (field, (lo, hi)) in [
+            ("actuator.speed_bounds", speed_bounds),
+            ("actuator.pitch_bounds", pitch_bounds),
+        ] {
+            require_finite(field, lo)?;
+            require_finite(field, hi)?;
+            if lo > hi {
+                return Err(RfError::invalid(
+                    field,
+                    format!("lower bound {lo} exceeds upper bound {hi}"),
+                ));
+            }
+        }
+        if speed_bounds.0 < 0.0 {
+            return Err(RfError::invalid(
+                "actuator.speed_bounds",
+                "rotor speed cannot be negative",
+            ));
+        }
+        require_finite("actuator.speed_to_rad_s", speed_to_rad_s)?;
+        Ok(VariablePitch {
+            coefficients,
+            speed_bounds,
+            pitch_bounds,
+            speed_to_rad_s,
+            yaw_sign: airframe
+                .rotors()
+                .iter()
+                .map(|r| r.spin.yaw_sign())
+                .collect(),
+            lag,
+            state: vec![0.0; 2 * airframe.rotor_count()],
+        })
+    }
+}
+
+/// The actuator models the simulator knows.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Actuators {
+    FixedPitch(FixedPitch),
+    VariablePitch(VariablePitch),
+}
+
+impl Actuators {
+    pub fn rotor_count(&self) -> usize {
+        match self {
+            Actuators::FixedPitch(a) => a.thrust_n.len(),
+            Actuators::VariablePitch(a) => a.yaw_sign.len(),
+        }
+    }
+
+    /// Commands per rotor: 1 (thrust) or 2 (speed, pitch).
+    pub fn channels(&self) -> usize {
+        match self {
+            Actuators::FixedPitch(_) => 1,
+            Actuators::VariablePitch(_) => 2,
+        }
+    }
+
+    /// Sets the actuator state to the saturated commands, as if held forever (trimmed start).
+    pub fn settle(&mut self, commands: &[f64]) {
+        match self {
+            Actuators::FixedPitch(a) => {
+                for (i, x) in a.thrust_n.iter_mut().enumerate() {
+                    *x = commands[i].clamp(a.min_thrust_n[i], a.max_thrust_n[i]);
+                }
+            }
+            Actuators::VariablePitch(a) => {
+                for (i, x) in a.state.iter_mut().enumerate() {
+                    let (lo, hi) = if i % 2 == 0 {
+                        a.speed_bounds
+                    } else {
+                        a.pitch_bounds
+                    };
+                    *x = commands[i].clamp(lo, hi);
+                }
+            }
+        }
+    }
+
+    /// Advances every channel by one substep under `commands` (`channels() * rotor_count()`).
+    pub fn advance(&mut self, commands: &[f64], dt_s: f64) {
+        match self {
+            Actuators::FixedPitch(a) => {
+                for (i, x) in a.thrust_n.iter_mut().enumerate() {
+                    *x = a
+                        .lag
+                        .advance(*x, commands[i], a.min_thrust_n[i], a.max_thrust_n[i], dt_s);
+                }
+            }
+            Actuators::VariablePitch(a) => {
+                for (i, x) in a.state.iter_mut().enumerate() {
+                    let (lo, hi) = if i % 2 == 0 {
+                        a.speed_bounds
+                    } else {
+                        a.pitch_bounds
+                    };
+                    *x = a.lag.advance(*x, commands[i], lo, hi, dt_s);
+                }
+            }
+        }
+    }
+
+    /// What rotor `i` produces with health `health` (module docs).
+    pub fn output(&self, i: usize, health: f64) -> RotorOutput {
+        match self {
+            Actuators::FixedPitch(a) => {
+                let thrust = health * a.thrust_n[i];
+                let spin = if a.thrust_coefficient_n_s2 > 0.0 {
+                    (thrust.max(0.0) / a.thrust_coefficient_n_s2).sqrt()
+                } else {
+                    0.0
+                };
+                RotorOutput {
+                    thrust_n: thrust,
+                    reaction_torque_nm: a.torque_per_thrust_m[i] * thrust,
+                    // Anticlockwise seen from above (w = +1) spins about body -z (FRD).
+                    spin_rad_s: -a.yaw_sign[i] * spin,
+                }
+            }
+            Actuators::VariablePitch(a) => {
+                let [k1, k2, k3, k4] = a.coefficients;
+                let (omega, alpha) = (a.state[2 * i], a.state[2 * i + 1]);
+                let w2 = omega * omega;
+                RotorOutput {
+                    thrust_n: health * k1 * w2 * alpha,
+                    reaction_torque_nm: health
+                        * a.yaw_sign[i]
+                        * (k2 * w2 + k3 * w2 * alpha * alpha + k4 * omega * alpha),
+                    spin_rad_s: -a.yaw_sign[i] * health * omega * a.speed_to_rad_s,
+                }
+            }
+        }
+    }
+
+    /// The internal state (thrusts, or interleaved speeds and pitches), for recording.
+    pub fn state(&self) -> &[f64] {
+        match self {
+            Actuators::FixedPitch(a) => &a.thrust_n,
+            Actuators::VariablePitch(a) => &a.state,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> Airframe {
+        Airframe::from_columns(
+            "q",
+            &[0.785, 2.356, 3.927, 5.498],
+            &[0.2; 4],
+            &[-1.0, 1.0, -1.0, 1.0],
+            &[8.0; 4],
+            &[0.0; 4],
+            &[1.0; 4],
+            1.0,
+            &[0.01, 0.01, 0.02],
+            0.02,
+            9.81,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn lag_is_the_exact_first_order_response() {
+        let lag = Lag {
+            time_constant_s: 0.025,
+            rate_limit_per_s: f64::INFINITY,
+        };
+        let mut rotors = Actuators::FixedPitch(FixedPitch::new(&quad(), lag, 0.0).unwrap());
+        let dt = 1e-3;
+        for _ in 0..25 {
+            rotors.advance(&[4.0; 4], dt);
+        }
+        // After one time constant: 4 (1 - e^-1), whatever the step (exact discretisation).
+        let expected = 4.0 * (1.0 - (-1.0f64).exp());
+        assert!(
+            (rotors.state()[0] - expected).abs() < 1e-12,
+            "{}",
+            rotors.state()[0]
+        );
+    }
+
+    #[test]
+    fn saturation_and_rate_limit() {
+        let lag = Lag {
+            time_constant_s: 0.0,
+            rate_limit_per_s: 50.0,
+        };
+        let mut rotors = Actuators::FixedPitch(FixedPitch::new(&quad(), lag, 0.0).unwrap());
+        rotors.advance(&[100.0, -5.0, 0.01, 3.0], 0.01);
+        // 50 N/s over 10 ms: at most 0.5 N of change; the negative command saturates at 0.
+        assert_eq!(rotors.state(), &[0.5, 0.0, 0.01, 0.5]);
+        for _ in 0..100 {
+            rotors.advance(&[100.0, -5.0, 0.01, 3.0], 0.01);
+        }
+        assert_eq!(rotors.state(), &[8.0, 0.0, 0.01, 3.0]);
+    }
+
+    #[test]
+    fn health_scales_thrust_torque_and_spin() {
+        let mut rotors =
+            Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 1e-5).unwrap());
+        rotors.settle(&[4.0; 4]);
+        let healthy = rotors.output(1, 1.0);
+        assert_eq!(healthy.thrust_n, 4.0);
+        assert!((healthy.reaction_torque_nm - 0.08).abs() < 1e-15); // ccw: +k_mu f
+        assert!((healthy.spin_rad_s + (4.0f64 / 1e-5).sqrt()).abs() < 1e-9);
+        let half = rotors.output(1, 0.5);
+        assert_eq!(half.thrust_n, 2.0);
+        let failed = rotors.output(1, 0.0);
+        assert!(
+            failed.thrust_n == 0.0 && failed.reaction_torque_nm == 0.0 && failed.spin_rad_s == 0.0
+        );
+    }
+
+    #[test]
+    fn variable_pitch_follows_wang_eq3_and_can_push_down() {
+        let k = [2e-8, 1e-9, 3e-10, 1e-6];
+        let mut rotors = Actuators::VariablePitch(
+            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.0, Lag::none()).unwrap(),
+        );
+        rotors.settle(&[9000.0, 0.2, 9000.0, -0.2, 12_000.0, 0.5, 0.0, 0.0]);
+        let (w, a) = (9000.0f64, 0.2f64);
+        let out = rotors.output(0, 1.0);
+        assert!((out.thrust_n - k[0] * w * w * a).abs() < 1e-12);
+        let torque = k[1] * w * w + k[2] * w * w * a * a + k[3] * w * a;
+        assert!((out.reaction_torque_nm + torque).abs() < 1e-12); // rotor 1 clockwise
+        assert!(rotors.output(1, 1.0).thrust_n < 0.0);
+        assert_eq!(&rotors.state()[4..6], &[10_000.0, 0.3]); // saturated
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let bad = Lag {
+            time_constant_s: -1.0,
+            rate_limit_per_s: 1.0,
+        };
+        let err = FixedPitch::new(&quad(), bad, 0.0).unwrap_err();
+        assert!(
+            err.to_string().starts_with("actuator.time_constant_s"),
+            "{err}"
+        );
+        let bad = Lag {
+            time_constant_s: 0.0,
+            rate_limit_per_s: 0.0,
+        };
+        let err = FixedPitch::new(&quad(), bad, 0.0).unwrap_err();
+        assert!(
+            err.to_string().starts_with("actuator.rate_limit_per_s"),
+            "{err}"
+        );
+        let err = VariablePitch::new(&quad(), [1.0; 4], (0.0, 1.0), (0.5, -0.5), 0.0, Lag::none())
+            .unwrap_err();
+        assert!(
+            err.to_string().starts_with("actuator.pitch_bounds"),
+            "{err}"
+        );
+    }
+}

@@ -1,0 +1,243 @@
+//! Forces and torques on a multirotor: rotor thrust and reaction torque, gravity, translational
+//! drag (linear, Stokes as in Lanzon et al., plus optional quadratic), rotational drag, the
+//! propeller gyroscopic moment (Lanzon et al. eq. (5)) and wind.
+//!
+//! Frames as in [`crate::rigid_body`]: world NED, body FRD. Rotor i sits at
+//! `(r_i cos phi_i, r_i sin phi_i, 0)` in the body frame and pushes along body -z, which gives the
+//! roll and pitch torques of Du et al. eq. (5). Drag acts on the air-relative velocity
+//! `v - wind(t)`.
+
+use nalgebra::Vector3;
+
+use crate::actuator::RotorOutput;
+use crate::airframe::Airframe;
+use crate::error::{require_finite, Result, RfError};
+use crate::rigid_body::{RigidBody, RigidBodyState, Wrench};
+
+/// Aerodynamic and rotor-inertia parameters the papers leave to the user (Lanzon Table 1 gives
+/// none of them; see the README's decisions). All default to zero.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Aerodynamics {
+    /// `k_t`: force `-k_t (v - wind)`, N s/m.
+    pub linear_drag_n_s_m: f64,
+    /// Force `-c |v - wind| (v - wind)`, N s^2/m^2.
+    pub quadratic_drag_n_s2_m2: f64,
+    /// `k_r`: torque `-k_r omega`, N m s (sets a spinning vehicle's yaw rate).
+    pub rotational_drag_n_m_s: f64,
+    /// `I_R`: rotor and propeller inertia about its axis, kg m^2 (gyroscopic moment).
+    pub rotor_inertia_kg_m2: f64,
+}
+
+impl Aerodynamics {
+    pub fn check(&self) -> Result<()> {
+        for (field, value) in [
+            ("drag.linear_drag_n_s_m", self.linear_drag_n_s_m),
+            ("drag.quadratic_drag_n_s2_m2", self.quadratic_drag_n_s2_m2),
+            ("drag.rotational_drag_n_m_s", self.rotational_drag_n_m_s),
+            ("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
+        ] {
+            require_finite(field, value)?;
+            if value < 0.0 {
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be >= 0, got {value}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The rigid body, rotor positions and aerodynamics of one airframe.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vehicle {
+    body: RigidBody,
+    /// Body-frame (x, y) of each rotor, m.
+    rotor_xy_m: Vec<(f64, f64)>,
+    aero: Aerodynamics,
+    gravity_m_s2: f64,
+}
+
+impl Vehicle {
+    pub fn new(airframe: &Airframe, aero: Aerodynamics) -> Result<Self> {
+        aero.check()?;
+        Ok(Vehicle {
+            body: RigidBody::principal(airframe.mass_kg(), airframe.inertia_kg_m2())?,
+            rotor_xy_m: airframe
+                .rotors()
+                .iter()
+                .map(|r| {
+                    (
+                        r.arm_length_m * r.arm_angle_rad.cos(),
+                        r.arm_length_m * r.arm_angle_rad.sin(),
+                    )
+                })
+                .collect(),
+            aero,
+            gravity_m_s2: airframe.gravity_m_s2(),
+        })
+    }
+
+    pub fn body(&self) -> &RigidBody {
+        &self.body
+    }
+
+    pub fn rotor_count(&self) -> usize {
+        self.rotor_xy_m.len()
+    }
+
+    /// Total force (world) and torque (body) for the current rotor outputs and wind (world, m/s).
+    pub fn wrench(
+        &self,
+        state: &RigidBodyState,
+        rotors: &[RotorOutput],
+        wind_m_s: &Vector3<f64>,
+    ) -> Wrench {
+        let mut thrust = 0.0;
+        let mut torque = Vector3::zeros();
+        let mut rotor_spin = 0.0;
+        for (out, &(x, y)) in rotors.iter().zip(&self.rotor_xy_m) {
+            thrust += out.thrust_n;
+            // r x F with F = (0, 0, -f): (-y f, x f, 0).
+            torque.x -= y * out.thrust_n;
+            torque.y += x * out.thrust_n;
+            torque.z += out.reaction_torque_nm;
+            rotor_spin += out.spin_rad_s;
+        }
+        let omega = state.omega_rad_s;
+        let a = &self.aero;
+        // Rotors carry angular momentum I_R sum(spin) e3 (body); the body feels -omega x h.
+        torque -= omega.cross(&Vector3::new(0.0, 0.0, a.rotor_inertia_kg_m2 * rotor_spin));
+        torque -= a.rotational_drag_n_m_s * omega;
+        let air = state.velocity_m_s - wind_m_s;
+        let drag = -(a.linear_drag_n_s_m + a.quadratic_drag_n_s2_m2 * air.norm()) * air;
+        let weight = Vector3::new(0.0, 0.0, self.body.mass_kg() * self.gravity_m_s2);
+        Wrench {
+            force_world_n: weight + drag + state.attitude * Vector3::new(0.0, 0.0, -thrust),
+            torque_body_nm: torque,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    fn lanzon() -> Airframe {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../python/rotorfault/presets/lanzon-quadrotor.toml"
+        ))
+        .unwrap();
+        Airframe::from_toml_str(&text, "lanzon").unwrap()
+    }
+
+    fn thrusts(f: [f64; 4], k_mu: f64, w: [f64; 4]) -> Vec<RotorOutput> {
+        (0..4)
+            .map(|i| RotorOutput {
+                thrust_n: f[i],
+                reaction_torque_nm: w[i] * k_mu * f[i],
+                spin_rad_s: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn torques_match_the_effectiveness_matrix() {
+        let airframe = lanzon();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let f = [1.0, 2.0, 3.0, 4.5];
+        let w = [-1.0, 1.0, -1.0, 1.0];
+        let wrench = vehicle.wrench(
+            &RigidBodyState::at_rest(),
+            &thrusts(f, 2.4e-3, w),
+            &Vector3::zeros(),
+        );
+        let b = airframe.effectiveness_matrix();
+        let expected = &b * nalgebra::DVector::from_column_slice(&f);
+        assert!((wrench.torque_body_nm.x - expected[1]).abs() < 1e-15);
+        assert!((wrench.torque_body_nm.y - expected[2]).abs() < 1e-15);
+        assert!((wrench.torque_body_nm.z - expected[3]).abs() < 1e-15);
+        // Level: thrust up (-z), weight down (+z).
+        assert!((wrench.force_world_n.z - (0.5 * 9.81 - expected[0])).abs() < 1e-13);
+    }
+
+    #[test]
+    fn thrust_turns_with_the_body_and_drag_opposes_air_velocity() {
+        let airframe = lanzon();
+        let aero = Aerodynamics {
+            linear_drag_n_s_m: 0.1,
+            quadratic_drag_n_s2_m2: 0.05,
+            rotational_drag_n_m_s: 0.01,
+            ..Aerodynamics::default()
+        };
+        let vehicle = Vehicle::new(&airframe, aero).unwrap();
+        let state = RigidBodyState {
+            velocity_m_s: Vector3::new(3.0, 0.0, 0.0),
+            attitude: UnitQuaternion::from_euler_angles(0.0, 0.3, 0.0),
+            omega_rad_s: Vector3::new(0.0, 0.0, 2.0),
+            ..RigidBodyState::at_rest()
+        };
+        let wind = Vector3::new(1.0, 0.0, 0.0);
+        let wrench = vehicle.wrench(&state, &thrusts([1.0; 4], 0.0, [0.0; 4]), &wind);
+        // Nose up 0.3 rad: the 4 N of thrust lean backwards, (-4 sin 0.3, 0, -4 cos 0.3) in NED.
+        let thrust_world = state.attitude * Vector3::new(0.0, 0.0, -4.0);
+        let air = 2.0; // 3 m/s ground speed against 1 m/s tailwind
+        let drag_x = -(0.1 + 0.05 * air) * air;
+        let expected = thrust_world + Vector3::new(drag_x, 0.0, 0.5 * 9.81);
+        assert!((wrench.force_world_n - expected).norm() < 1e-14);
+        assert!(
+            thrust_world.x < 0.0,
+            "nose-up pitch tilts thrust backwards in NED"
+        );
+        assert!((wrench.torque_body_nm.z + 0.02).abs() < 1e-15);
+    }
+
+    #[test]
+    fn gyroscopic_moment_follows_lanzon_eq5() {
+        let airframe = lanzon();
+        let aero = Aerodynamics {
+            rotor_inertia_kg_m2: 3e-5,
+            ..Aerodynamics::default()
+        };
+        let vehicle = Vehicle::new(&airframe, aero).unwrap();
+        let spins = [400.0, -380.0, 410.0, -390.0];
+        let rotors: Vec<RotorOutput> = spins
+            .iter()
+            .map(|&s| RotorOutput {
+                spin_rad_s: s,
+                ..RotorOutput::default()
+            })
+            .collect();
+        let omega = Vector3::new(0.5, -0.2, 3.0);
+        let state = RigidBodyState {
+            omega_rad_s: omega,
+            ..RigidBodyState::at_rest()
+        };
+        let wrench = vehicle.wrench(&state, &rotors, &Vector3::zeros());
+        // Lanzon eq. (5), in his z-up body frame (x forward, y left): m_g = I_R (Omega x e3)
+        // (w1 + w3 - w2 - w4) with speed magnitudes w_i (M1, M3 clockwise, spinning +z in FRD).
+        let omega_up = Vector3::new(omega.x, -omega.y, -omega.z);
+        let magnitudes = spins.map(f64::abs);
+        let m_g = 3e-5
+            * omega_up.cross(&Vector3::z())
+            * (magnitudes[0] + magnitudes[2] - magnitudes[1] - magnitudes[3]);
+        let expected = Vector3::new(m_g.x, -m_g.y, -m_g.z); // back to FRD
+        assert!((wrench.torque_body_nm - expected).norm() < 1e-15);
+        assert_eq!(wrench.torque_body_nm.z, 0.0);
+    }
+
+    #[test]
+    fn negative_coefficients_are_rejected() {
+        let aero = Aerodynamics {
+            rotational_drag_n_m_s: -1.0,
+            ..Aerodynamics::default()
+        };
+        let err = Vehicle::new(&lanzon(), aero).unwrap_err();
+        assert!(
+            err.to_string().starts_with("drag.rotational_drag_n_m_s"),
+            "{err}"
+        );
+    }
+}
