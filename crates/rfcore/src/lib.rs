@@ -12,8 +12,10 @@ pub mod actuator;
 pub mod airframe;
 pub mod combinations;
 pub mod controllability;
+pub mod controller;
 pub mod error;
 pub mod rigid_body;
+pub mod simulation;
 pub mod vehicle;
 
 pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};

@@ -1,0 +1,579 @@
+//! The closed loop: controller at its own rate (zero-order hold), actuators and rigid body
+//! integrated with `substeps` RK4 steps per control period, rotor faults on a schedule the
+//! controller never sees, and divergence detection that ends a run with an event instead of a
+//! panic or a hang.
+//!
+//! Per control step k (t = k dt): record the state, check divergence, let the controller compute
+//! commands from the measured state, then `substeps` times: apply the faults due by then, advance
+//! the actuators (see [`crate::actuator`]) and take one RK4 step of the rigid body with the rotor
+//! outputs held.
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::actuator::{Actuators, RotorOutput};
+use crate::controller::Controller;
+use crate::error::{require_finite, Result, RfError};
+use crate::rigid_body::RigidBodyState;
+use crate::vehicle::Vehicle;
+
+/// Rotor `rotor` (0-based) has efficiency `efficiency` from `time_s` on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RotorFault {
+    pub rotor: usize,
+    pub time_s: f64,
+    pub efficiency: f64,
+}
+
+/// Limits past which a run is declared diverged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DivergenceLimits {
+    /// Largest angle between body z and world z (down), rad.
+    pub max_tilt_rad: f64,
+    /// Largest drop below the starting altitude, m.
+    pub max_altitude_loss_m: f64,
+    /// Largest speed, m/s.
+    pub max_speed_m_s: f64,
+    /// Largest body rate magnitude, rad/s.
+    pub max_rate_rad_s: f64,
+}
+
+impl Default for DivergenceLimits {
+    fn default() -> Self {
+        DivergenceLimits {
+            max_tilt_rad: std::f64::consts::FRAC_PI_2,
+            max_altitude_loss_m: 100.0,
+            max_speed_m_s: 100.0,
+            max_rate_rad_s: 200.0,
+        }
+    }
+}
+
+/// Why a run ended early.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DivergenceReason {
+    NonFinite,
+    Tilt,
+    AltitudeLoss,
+    Speed,
+    BodyRate,
+}
+
+impl DivergenceReason {
+    pub fn describe(self) -> &'static str {
+        match self {
+            DivergenceReason::NonFinite => "state became non-finite",
+            DivergenceReason::Tilt => "tilt beyond the limit",
+            DivergenceReason::AltitudeLoss => "altitude loss beyond the limit",
+            DivergenceReason::Speed => "speed beyond the limit",
+            DivergenceReason::BodyRate => "body rate beyond the limit",
+        }
+    }
+}
+
+/// A run that ended early: when, why, and the state at that moment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Divergence {
+    pub time_s: f64,
+    pub reason: DivergenceReason,
+    pub state: RigidBodyState,
+}
+
+/// Timing, limits and wind of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulationConfig {
+    /// Control period, s (e.g. 1/400).
+    pub control_dt_s: f64,
+    /// RK4 steps per control period.
+    pub substeps: usize,
+    pub duration_s: f64,
+    pub limits: DivergenceLimits,
+    /// Constant wind, world NED, m/s.
+    pub wind_m_s: Vector3<f64>,
+    /// Optional wind profile added to the constant: piecewise-linear through `(time_s, wind)`
+    /// points, held constant outside them.
+    pub wind_profile: Vec<(f64, Vector3<f64>)>,
+}
+
+impl SimulationConfig {
+    pub fn check(&self) -> Result<()> {
+        require_finite("dt", self.control_dt_s)?;
+        if self.control_dt_s <= 0.0 {
+            return Err(RfError::invalid(
+                "dt",
+                format!("must be > 0, got {}", self.control_dt_s),
+            ));
+        }
+        if self.substeps == 0 {
+            return Err(RfError::invalid("substeps", "must be >= 1"));
+        }
+        require_finite("t_final", self.duration_s)?;
+        if self.duration_s < 0.0 {
+            return Err(RfError::invalid(
+                "t_final",
+                format!("must be >= 0, got {}", self.duration_s),
+            ));
+        }
+        let steps = (self.duration_s / self.control_dt_s).round();
+        if steps > 1e8 {
+            return Err(RfError::invalid(
+                "t_final",
+                format!("{steps} control steps exceed the limit of 1e8"),
+            ));
+        }
+        let l = &self.limits;
+        for (field, v) in [
+            ("limits.max_tilt_rad", l.max_tilt_rad),
+            ("limits.max_altitude_loss_m", l.max_altitude_loss_m),
+            ("limits.max_speed_m_s", l.max_speed_m_s),
+            ("limits.max_rate_rad_s", l.max_rate_rad_s),
+        ] {
+            if v.is_nan() || v <= 0.0 {
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be > 0 (infinity for none), got {v}"),
+                ));
+            }
+        }
+        for (i, w) in self.wind_m_s.iter().enumerate() {
+            require_finite(&format!("wind[{i}]"), *w)?;
+        }
+        for (k, (t, w)) in self.wind_profile.iter().enumerate() {
+            require_finite(&format!("wind_profile[{k}].time_s"), *t)?;
+            if w.iter().any(|v| !v.is_finite()) {
+                return Err(RfError::invalid(
+                    format!("wind_profile[{k}]"),
+                    "must be finite",
+                ));
+            }
+            if k > 0 && *t <= self.wind_profile[k - 1].0 {
+                return Err(RfError::invalid(
+                    format!("wind_profile[{k}].time_s"),
+                    "times must be strictly increasing",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of control steps in the run.
+    pub fn steps(&self) -> usize {
+        (self.duration_s / self.control_dt_s).round() as usize
+    }
+
+    /// Wind at time `t_s` (world, m/s).
+    pub fn wind_at(&self, t_s: f64) -> Vector3<f64> {
+        let p = &self.wind_profile;
+        let extra = match p.iter().position(|(t, _)| *t > t_s) {
+            _ if p.is_empty() => Vector3::zeros(),
+            Some(0) => p[0].1,
+            None => p[p.len() - 1].1,
+            Some(k) => {
+                let ((t0, w0), (t1, w1)) = (p[k - 1], p[k]);
+                w0 + (w1 - w0) * ((t_s - t0) / (t1 - t0))
+            }
+        };
+        self.wind_m_s + extra
+    }
+}
+
+/// Everything recorded at the control rate. Arrays are row-major, one row per control step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    pub t_s: Vec<f64>,
+    pub states: Vec<RigidBodyState>,
+    /// Commands applied from this step on (`command_count` per row).
+    pub commands: Vec<f64>,
+    /// Thrust each rotor produces at this step, after health (m per row), N.
+    pub thrust_n: Vec<f64>,
+    /// Health of each rotor at this step (m per row).
+    pub health: Vec<f64>,
+    pub divergence: Option<Divergence>,
+}
+
+fn check_faults(faults: &[RotorFault], rotor_count: usize) -> Result<()> {
+    for (k, f) in faults.iter().enumerate() {
+        if f.rotor >= rotor_count {
+            return Err(RfError::invalid(
+                format!("faults[{k}].rotor"),
+                format!(
+                    "rotor numbers run from 1 to {rotor_count}, got {}",
+                    f.rotor + 1
+                ),
+            ));
+        }
+        require_finite(&format!("faults[{k}].time"), f.time_s)?;
+        require_finite(&format!("faults[{k}].efficiency"), f.efficiency)?;
+        if !(0.0..=1.0).contains(&f.efficiency) {
+            return Err(RfError::invalid(
+                format!("faults[{k}].efficiency"),
+                format!("must lie in [0, 1], got {}", f.efficiency),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn divergence(
+    state: &RigidBodyState,
+    start_altitude_m: f64,
+    limits: &DivergenceLimits,
+) -> Option<DivergenceReason> {
+    if !state.is_finite() {
+        return Some(DivergenceReason::NonFinite);
+    }
+    // Tilt: angle between body z and world z; n3z = cos(tilt).
+    if state.primary_axis().z.clamp(-1.0, 1.0).acos() > limits.max_tilt_rad {
+        return Some(DivergenceReason::Tilt);
+    }
+    if start_altitude_m - (-state.position_m.z) > limits.max_altitude_loss_m {
+        return Some(DivergenceReason::AltitudeLoss);
+    }
+    if state.velocity_m_s.norm() > limits.max_speed_m_s {
+        return Some(DivergenceReason::Speed);
+    }
+    if state.omega_rad_s.norm() > limits.max_rate_rad_s {
+        return Some(DivergenceReason::BodyRate);
+    }
+    None
+}
+
+/// One closed-loop run. `actuators` is the initial actuator state (settle it to the trim first
+/// for a trimmed start); `health` the initial rotor health. Faults may come in any order.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(
+    vehicle: &Vehicle,
+    mut actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_health: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+) -> Result<Trajectory> {
+    config.check()?;
+    let m = vehicle.rotor_count();
+    if actuators.rotor_count() != m {
+        return Err(RfError::shape(
+            "actuator",
+            format!("{m} rotors"),
+            actuators.rotor_count().to_string(),
+        ));
+    }
+    let count = actuators.channels() * m;
+    if controller.command_count() != count {
+        return Err(RfError::shape(
+            "controller",
+            format!(
+                "{count} commands ({} per rotor x {m} rotors)",
+                actuators.channels()
+            ),
+            controller.command_count().to_string(),
+        ));
+    }
+    crate::airframe::check_efficiency("health", initial_health, m)?;
+    check_faults(faults, m)?;
+    if !x0.is_finite() {
+        return Err(RfError::invalid("x0", "must be finite"));
+    }
+    let mut faults = faults.to_vec();
+    faults.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let mut next_fault = 0;
+
+    let steps = config.steps();
+    let h = config.control_dt_s / config.substeps as f64;
+    let mut trajectory = Trajectory {
+        t_s: Vec::with_capacity(steps + 1),
+        states: Vec::with_capacity(steps + 1),
+        commands: Vec::with_capacity((steps + 1) * count),
+        thrust_n: Vec::with_capacity((steps + 1) * m),
+        health: Vec::with_capacity((steps + 1) * m),
+        divergence: None,
+    };
+    controller.reset();
+    let mut health = initial_health.to_vec();
+    let mut outputs = vec![RotorOutput::default(); m];
+    let mut command = vec![0.0; count];
+    let mut state = x0;
+    let start_altitude = -x0.position_m.z;
+    let body = vehicle.body();
+    for k in 0..=steps {
+        let t = k as f64 * config.control_dt_s;
+        while next_fault < faults.len() && faults[next_fault].time_s <= t {
+            health[faults[next_fault].rotor] = faults[next_fault].efficiency;
+            next_fault += 1;
+        }
+        trajectory.t_s.push(t);
+        trajectory.states.push(state);
+        trajectory.health.extend_from_slice(&health);
+        trajectory
+            .thrust_n
+            .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
+        if let Some(reason) = divergence(&state, start_altitude, &config.limits) {
+            trajectory
+                .commands
+                .extend(std::iter::repeat_n(f64::NAN, count));
+            trajectory.divergence = Some(Divergence {
+                time_s: t,
+                reason,
+                state,
+            });
+            break;
+        }
+        controller.command(t, &state, &mut command);
+        trajectory.commands.extend_from_slice(&command);
+        if k == steps {
+            break;
+        }
+        for s in 0..config.substeps {
+            let t_sub = t + s as f64 * h;
+            while next_fault < faults.len() && faults[next_fault].time_s <= t_sub {
+                health[faults[next_fault].rotor] = faults[next_fault].efficiency;
+                next_fault += 1;
+            }
+            actuators.advance(&command, h);
+            for (i, out) in outputs.iter_mut().enumerate() {
+                *out = actuators.output(i, health[i]);
+            }
+            state = body.rk4_step(t_sub, &state, h, |tau, x| {
+                vehicle.wrench(x, &outputs, &config.wind_at(tau))
+            });
+        }
+    }
+    Ok(trajectory)
+}
+
+/// One run of a batch: its own controller, initial state and faults.
+pub struct BatchRun {
+    pub controller: Box<dyn Controller>,
+    pub x0: RigidBodyState,
+    pub faults: Vec<RotorFault>,
+}
+
+/// Many runs in parallel (rayon); results in input order.
+pub fn simulate_batch(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    initial_health: &[f64],
+    runs: Vec<BatchRun>,
+    config: &SimulationConfig,
+) -> Result<Vec<Trajectory>> {
+    runs.into_par_iter()
+        .map(|mut run| {
+            simulate(
+                vehicle,
+                actuators.clone(),
+                run.controller.as_mut(),
+                initial_health,
+                &run.faults,
+                run.x0,
+                config,
+            )
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::actuator::{FixedPitch, Lag};
+    use crate::airframe::Airframe;
+    use crate::controller::{OpenLoop, ZeroCommand};
+    use crate::vehicle::Aerodynamics;
+    use nalgebra::DMatrix;
+
+    fn quad_x() -> Airframe {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../python/rotorfault/presets/quad-x.toml"
+        ))
+        .unwrap();
+        Airframe::from_toml_str(&text, "quad-x").unwrap()
+    }
+
+    fn config(duration_s: f64) -> SimulationConfig {
+        SimulationConfig {
+            control_dt_s: 0.0025,
+            substeps: 2,
+            duration_s,
+            limits: DivergenceLimits::default(),
+            wind_m_s: Vector3::zeros(),
+            wind_profile: Vec::new(),
+        }
+    }
+
+    fn hover_schedule(airframe: &Airframe) -> OpenLoop {
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        OpenLoop::new(vec![0.0], DMatrix::from_element(1, 4, f)).unwrap()
+    }
+
+    #[test]
+    fn trimmed_hover_stays_put() {
+        let airframe = quad_x();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let mut actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let mut controller = hover_schedule(&airframe);
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        actuators.settle(&[f; 4]);
+        let x0 = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -10.0),
+            ..RigidBodyState::at_rest()
+        };
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            x0,
+            &config(10.0),
+        )
+        .unwrap();
+        assert_eq!(run.t_s.len(), 4001);
+        let end = run.states.last().unwrap();
+        assert!(
+            (end.position_m - x0.position_m).norm() < 1e-9,
+            "{}",
+            end.position_m
+        );
+        assert!(end.omega_rad_s.norm() < 1e-12);
+        assert!(run.divergence.is_none());
+    }
+
+    #[test]
+    fn no_thrust_is_free_fall_until_the_altitude_limit() {
+        let airframe = quad_x();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let mut controller = ZeroCommand { count: 4 };
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            RigidBodyState::at_rest(),
+            &config(2.0),
+        )
+        .unwrap();
+        let end = run.states.last().unwrap();
+        let g = airframe.gravity_m_s2();
+        assert!((end.position_m.z - 0.5 * g * 4.0).abs() < 1e-9);
+        let mut short = config(10.0);
+        short.limits.max_altitude_loss_m = 20.0;
+        let actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            RigidBodyState::at_rest(),
+            &short,
+        )
+        .unwrap();
+        let event = run.divergence.unwrap();
+        assert_eq!(event.reason, DivergenceReason::AltitudeLoss);
+        // 20 m of free fall take sqrt(40 / g) s; detected at the next control step.
+        let expected = (40.0 / g).sqrt();
+        assert!(
+            event.time_s >= expected && event.time_s < expected + 0.0025 + 1e-12,
+            "{}",
+            event.time_s
+        );
+    }
+
+    #[test]
+    fn open_loop_rotor_failure_tumbles_and_is_reported() {
+        let airframe = quad_x();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        let mut actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        actuators.settle(&[f; 4]);
+        let mut controller = hover_schedule(&airframe);
+        let fault = RotorFault {
+            rotor: 0,
+            time_s: 1.0,
+            efficiency: 0.0,
+        };
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[fault],
+            RigidBodyState::at_rest(),
+            &config(10.0),
+        )
+        .unwrap();
+        let event = run
+            .divergence
+            .expect("a vehicle that loses a rotor in open loop tumbles");
+        assert_eq!(event.reason, DivergenceReason::Tilt);
+        assert!(event.time_s > 1.0 && event.time_s < 3.0, "{}", event.time_s);
+        // Health is recorded: 1 before the fault, 0 after.
+        let row = |t: f64| (t / 0.0025).round() as usize * 4;
+        assert_eq!(run.health[row(0.5)], 1.0);
+        assert_eq!(run.health[row(1.2)], 0.0);
+        assert_eq!(run.thrust_n[row(1.2)], 0.0);
+        assert!(run.commands.len() == run.t_s.len() * 4);
+    }
+
+    #[test]
+    fn wind_profile_is_piecewise_linear() {
+        let mut c = config(1.0);
+        c.wind_m_s = Vector3::new(1.0, 0.0, 0.0);
+        c.wind_profile = vec![(1.0, Vector3::zeros()), (2.0, Vector3::new(0.0, 4.0, 0.0))];
+        assert_eq!(c.wind_at(0.0), Vector3::new(1.0, 0.0, 0.0));
+        assert_eq!(c.wind_at(1.5), Vector3::new(1.0, 2.0, 0.0));
+        assert_eq!(c.wind_at(5.0), Vector3::new(1.0, 4.0, 0.0));
+    }
+
+    #[test]
+    fn bad_configuration_is_named() {
+        let airframe = quad_x();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let mut controller = ZeroCommand { count: 4 };
+        let x0 = RigidBodyState::at_rest();
+        let run =
+            |cfg: &SimulationConfig, faults: &[RotorFault], controller: &mut dyn Controller| {
+                simulate(
+                    &vehicle,
+                    actuators.clone(),
+                    controller,
+                    &[1.0; 4],
+                    faults,
+                    x0,
+                    cfg,
+                )
+                .unwrap_err()
+                .to_string()
+            };
+        let mut c = config(1.0);
+        c.control_dt_s = 0.0;
+        assert!(run(&c, &[], &mut controller).starts_with("dt: must be > 0"));
+        let mut c = config(1.0);
+        c.substeps = 0;
+        assert!(run(&c, &[], &mut controller).starts_with("substeps"));
+        let fault = RotorFault {
+            rotor: 4,
+            time_s: 1.0,
+            efficiency: 0.0,
+        };
+        assert!(run(&config(1.0), &[fault], &mut controller)
+            .starts_with("faults[0].rotor: rotor numbers run from 1 to 4, got 5"));
+        let fault = RotorFault {
+            rotor: 0,
+            time_s: 1.0,
+            efficiency: 1.5,
+        };
+        assert!(run(&config(1.0), &[fault], &mut controller).starts_with("faults[0].efficiency"));
+        let mut wrong = ZeroCommand { count: 3 };
+        assert!(run(&config(1.0), &[], &mut wrong).starts_with("controller: expected 4 commands"));
+    }
+}
