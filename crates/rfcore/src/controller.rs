@@ -7,10 +7,12 @@
 //! `x = [p (3, world NED, m), v (3, world, m/s), roll, pitch, yaw (rad, Z-Y-X), p, q, r (rad/s)]`;
 //! yaw errors are wrapped to (-pi, pi].
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, UnitQuaternion, Vector3};
 
+use crate::actuator::{Actuators, RotorOutput};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::rigid_body::RigidBodyState;
+use crate::vehicle::Vehicle;
 
 /// Length of the full state vector of [`state_vector`].
 pub const STATE_DIM: usize = 12;
@@ -21,6 +23,51 @@ pub fn state_vector(state: &RigidBodyState) -> [f64; STATE_DIM] {
     let (p, v, w) = (state.position_m, state.velocity_m_s, state.omega_rad_s);
     [
         p.x, p.y, p.z, v.x, v.y, v.z, roll, pitch, yaw, w.x, w.y, w.z,
+    ]
+}
+
+/// The state whose [`state_vector`] is `x` (attitude from the Z-Y-X Euler angles).
+pub fn state_from_vector(x: &[f64; STATE_DIM]) -> RigidBodyState {
+    RigidBodyState {
+        position_m: Vector3::new(x[0], x[1], x[2]),
+        velocity_m_s: Vector3::new(x[3], x[4], x[5]),
+        attitude: UnitQuaternion::from_euler_angles(x[6], x[7], x[8]),
+        omega_rad_s: Vector3::new(x[9], x[10], x[11]),
+    }
+}
+
+/// Time derivative of the 12-element state vector (Euler-angle kinematics) for the rotor
+/// outputs the actuators give right now: the model that linearisation for control design uses.
+pub fn state_vector_derivative(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    health: &[f64],
+    x: &[f64; STATE_DIM],
+    wind_m_s: &Vector3<f64>,
+) -> [f64; STATE_DIM] {
+    let state = state_from_vector(x);
+    let outputs: Vec<RotorOutput> = (0..vehicle.rotor_count())
+        .map(|i| actuators.output(i, health[i]))
+        .collect();
+    let d = vehicle
+        .body()
+        .derivative(&state, &vehicle.wrench(&state, &outputs, wind_m_s));
+    let (roll, pitch) = (x[6], x[7]);
+    let (p, q, r) = (x[9], x[10], x[11]);
+    let (sr, cr, tp, cp) = (roll.sin(), roll.cos(), pitch.tan(), pitch.cos());
+    [
+        d.position.x,
+        d.position.y,
+        d.position.z,
+        d.velocity.x,
+        d.velocity.y,
+        d.velocity.z,
+        p + (q * sr + r * cr) * tp,
+        q * cr - r * sr,
+        (q * sr + r * cr) / cp,
+        d.omega.x,
+        d.omega.y,
+        d.omega.z,
     ]
 }
 
@@ -49,7 +96,8 @@ pub trait Controller: Send {
     /// Number of commands it writes (rotors x channels).
     fn command_count(&self) -> usize;
     /// Writes the commands for the measured state into `out` (length [`Controller::command_count`]).
-    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]);
+    /// An error (only controllers that call out, such as a Python callable, can fail) ends the run.
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()>;
     /// Back to the initial internal state (called at the start of every run).
     fn reset(&mut self) {}
 }
@@ -64,8 +112,9 @@ impl Controller for ZeroCommand {
     fn command_count(&self) -> usize {
         self.count
     }
-    fn command(&mut self, _t_s: f64, _measured: &RigidBodyState, out: &mut [f64]) {
+    fn command(&mut self, _t_s: f64, _measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         out.fill(0.0);
+        Ok(())
     }
 }
 
@@ -106,7 +155,7 @@ impl Controller for OpenLoop {
     fn command_count(&self) -> usize {
         self.commands.ncols()
     }
-    fn command(&mut self, t_s: f64, _measured: &RigidBodyState, out: &mut [f64]) {
+    fn command(&mut self, t_s: f64, _measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         let row = self
             .times_s
             .partition_point(|&s| s <= t_s)
@@ -114,6 +163,7 @@ impl Controller for OpenLoop {
         for (c, o) in out.iter_mut().enumerate() {
             *o = self.commands[(row, c)];
         }
+        Ok(())
     }
 }
 
@@ -161,12 +211,13 @@ impl Controller for LinearFeedback {
     fn command_count(&self) -> usize {
         self.u_trim.len()
     }
-    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) {
+    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         let e = state_error(&state_vector(measured), &self.x_trim);
         for (i, o) in out.iter_mut().enumerate() {
             let feedback: f64 = (0..STATE_DIM).map(|j| self.gain[(i, j)] * e[j]).sum();
             *o = self.u_trim[i] - feedback;
         }
+        Ok(())
     }
 }
 
@@ -227,11 +278,12 @@ impl Controller for DiscreteLti {
     fn command_count(&self) -> usize {
         self.u_trim.len()
     }
-    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) {
+    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         let e = DVector::from_column_slice(&state_error(&state_vector(measured), &self.x_trim));
         let u = &self.u_trim + &self.c * &self.xi + &self.d * &e;
         out.copy_from_slice(u.as_slice());
         self.xi = &self.a * &self.xi + &self.b * &e;
+        Ok(())
     }
     fn reset(&mut self) {
         self.xi.fill(0.0);
@@ -241,7 +293,6 @@ impl Controller for DiscreteLti {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{UnitQuaternion, Vector3};
 
     #[test]
     fn yaw_error_is_wrapped() {
@@ -252,6 +303,50 @@ mod tests {
         let mut trim = [0.0; STATE_DIM];
         trim[8] = -3.1;
         assert!((state_error(&x, &trim)[8] - (6.2 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn state_vector_round_trips_and_euler_rates_match_the_quaternion() {
+        use crate::actuator::{FixedPitch, Lag};
+        use crate::airframe::Airframe;
+        use crate::vehicle::Aerodynamics;
+        let x = [
+            1.0, -2.0, -3.0, 0.5, 0.1, -0.2, 0.1, -0.2, 0.7, 0.3, -0.4, 1.1,
+        ];
+        let back = state_vector(&state_from_vector(&x));
+        for i in 0..STATE_DIM {
+            assert!((back[i] - x[i]).abs() < 1e-14, "{i}");
+        }
+        // Euler rates from the kinematics agree with a finite difference of the quaternion flow.
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../python/rotorfault/presets/quad-x.toml"
+        ))
+        .unwrap();
+        let airframe = Airframe::from_toml_str(&text, "quad-x").unwrap();
+        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let mut actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        actuators.settle(&[4.0, 3.0, 4.5, 3.5]);
+        let dx = state_vector_derivative(&vehicle, &actuators, &[1.0; 4], &x, &Vector3::zeros());
+        let h = 1e-6;
+        let state = state_from_vector(&x);
+        let outputs: Vec<RotorOutput> = (0..4).map(|i| actuators.output(i, 1.0)).collect();
+        let next = vehicle.body().rk4_step(0.0, &state, h, |_, s| {
+            vehicle.wrench(s, &outputs, &Vector3::zeros())
+        });
+        let prev = vehicle.body().rk4_step(0.0, &state, -h, |_, s| {
+            vehicle.wrench(s, &outputs, &Vector3::zeros())
+        });
+        let (xn, xp) = (state_vector(&next), state_vector(&prev));
+        for i in 0..STATE_DIM {
+            let numeric = (xn[i] - xp[i]) / (2.0 * h);
+            assert!(
+                (numeric - dx[i]).abs() < 1e-6 * (1.0 + dx[i].abs()),
+                "{i}: {numeric} vs {}",
+                dx[i]
+            );
+        }
     }
 
     #[test]
@@ -269,7 +364,7 @@ mod tests {
             (1.0, [3.0, 4.0]),
             (9.0, [3.0, 4.0]),
         ] {
-            c.command(t, &s, &mut out);
+            c.command(t, &s, &mut out).unwrap();
             assert_eq!(out, expected, "t = {t}");
         }
         assert!(OpenLoop::new(vec![1.0, 1.0], DMatrix::zeros(2, 1)).is_err());
@@ -299,8 +394,8 @@ mod tests {
             omega_rad_s: Vector3::new(0.1, 0.2, -0.3),
         };
         let (mut a, mut b) = ([0.0; 4], [0.0; 4]);
-        lqr.command(0.0, &state, &mut a);
-        lti.command(0.0, &state, &mut b);
+        lqr.command(0.0, &state, &mut a).unwrap();
+        lti.command(0.0, &state, &mut b).unwrap();
         for i in 0..4 {
             assert!((a[i] - b[i]).abs() < 1e-14);
         }
@@ -326,11 +421,11 @@ mod tests {
         };
         let mut out = [0.0];
         for expected in [0.0, 2.0, 4.0] {
-            lti.command(0.0, &state, &mut out);
+            lti.command(0.0, &state, &mut out).unwrap();
             assert_eq!(out[0], expected);
         }
         lti.reset();
-        lti.command(0.0, &state, &mut out);
+        lti.command(0.0, &state, &mut out).unwrap();
         assert_eq!(out[0], 0.0);
         let err = DiscreteLti::new(
             DMatrix::identity(2, 2),

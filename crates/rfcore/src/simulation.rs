@@ -319,7 +319,7 @@ pub fn simulate(
             });
             break;
         }
-        controller.command(t, &state, &mut command);
+        controller.command(t, &state, &mut command)?;
         trajectory.commands.extend_from_slice(&command);
         if k == steps {
             break;
