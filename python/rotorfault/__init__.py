@@ -23,9 +23,41 @@ from .controllability import (
     controllability,
     failure_table,
 )
+from .controllers import LTI, LinearFeedback, OpenLoop
+from .linear import hover_trim, linearize, lqr_hover
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
+from .simulation import (
+    BatchResult,
+    DivergenceLimits,
+    Drag,
+    Event,
+    FixedPitchActuator,
+    RotorFault,
+    Simulator,
+    State,
+    Trajectory,
+    VariablePitchActuator,
+    simulate_batch,
+)
 
 __all__ = [
+    "LTI",
+    "BatchResult",
+    "DivergenceLimits",
+    "Drag",
+    "Event",
+    "FixedPitchActuator",
+    "LinearFeedback",
+    "OpenLoop",
+    "RotorFault",
+    "Simulator",
+    "State",
+    "Trajectory",
+    "VariablePitchActuator",
+    "hover_trim",
+    "linearize",
+    "lqr_hover",
+    "simulate_batch",
     "RANK_RTOL",
     "ZERO_RTOL",
     "Airframe",

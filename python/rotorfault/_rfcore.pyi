@@ -71,3 +71,68 @@ def controllability(
 def failure_table(
     airframe: Airframe, max_failed: int, formula: str
 ) -> list[tuple[list[int], dict[str, Any], dict[str, Any]]]: ...
+
+@final
+class FixedPitchActuator:
+    def __new__(
+        cls, time_constant_s: float, rate_limit_per_s: float, thrust_coefficient_n_s2: float
+    ) -> FixedPitchActuator: ...
+
+@final
+class VariablePitchActuator:
+    def __new__(
+        cls,
+        coefficients: tuple[float, float, float, float],
+        speed_bounds: tuple[float, float],
+        pitch_bounds: tuple[float, float],
+        speed_to_rad_s: float,
+        time_constant_s: float,
+        rate_limit_per_s: float,
+    ) -> VariablePitchActuator: ...
+
+@final
+class OpenLoop:
+    def __new__(cls, times_s: _F64, commands: _F64) -> OpenLoop: ...
+
+@final
+class LinearFeedback:
+    def __new__(cls, x_trim: _F64, u_trim: _F64, gain: _F64) -> LinearFeedback: ...
+
+@final
+class DiscreteLti:
+    def __new__(cls, a: _F64, b: _F64, c: _F64, d: _F64, x_trim: _F64, u_trim: _F64) -> DiscreteLti: ...
+
+_Actuator = FixedPitchActuator | VariablePitchActuator
+_Config = tuple[float, int, float, list[float], list[float], list[tuple[float, tuple[float, float, float]]]]
+
+def simulate(
+    airframe: Airframe,
+    actuator: _Actuator,
+    aero: list[float],
+    controller: Any,
+    x0: list[float],
+    fault_list: list[tuple[int, float, float]],
+    health: _F64,
+    settle: _F64 | None,
+    config_args: _Config,
+) -> dict[str, Any]: ...
+def simulate_batch(
+    airframe: Airframe,
+    actuator: _Actuator,
+    aero: list[float],
+    controllers: list[Any],
+    x0s: list[list[float]],
+    fault_lists: list[list[tuple[int, float, float]]],
+    health: _F64,
+    settle: _F64 | None,
+    config_args: _Config,
+) -> list[dict[str, Any]]: ...
+def state_derivative(
+    airframe: Airframe,
+    actuator: _Actuator,
+    aero: list[float],
+    x: list[float],
+    command: _F64,
+    health: _F64,
+    wind: list[float],
+) -> _F64: ...

@@ -16,12 +16,14 @@ use rfcore::{
     ControllabilityAnalysis, ControllabilityReport, RfError,
 };
 
-fn to_py_err(error: RfError) -> PyErr {
+mod simulation;
+
+pub(crate) fn to_py_err(error: RfError) -> PyErr {
     PyValueError::new_err(error.to_string())
 }
 
 /// Runs `work` with the GIL released and converts core errors: the one helper every heavy call uses.
-fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+pub(crate) fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send,
     F: FnOnce() -> rfcore::Result<T> + Send,
@@ -30,7 +32,7 @@ where
 }
 
 /// Borrows a contiguous 1-D array as a slice, naming the field if it is not contiguous.
-fn slice1<'a>(field: &str, array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
+pub(crate) fn slice1<'a>(field: &str, array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
     array
         .as_slice()
         .map_err(|_| PyValueError::new_err(format!("{field}: must be a contiguous array")))
@@ -50,8 +52,8 @@ fn read_only<'py>(py: Python<'py>, values: Vec<f64>) -> Bound<'py, PyArray1<f64>
 
 /// A validated multirotor airframe (the Rust side of `rotorfault.Airframe`).
 #[pyclass(name = "Airframe", module = "rotorfault._rfcore", frozen)]
-struct PyAirframe {
-    inner: Airframe,
+pub(crate) struct PyAirframe {
+    pub(crate) inner: Airframe,
 }
 
 #[pymethods]
@@ -318,6 +320,14 @@ fn failure_table<'py>(
 #[pymodule]
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<PyAirframe>()?;
+    module.add_class::<simulation::PyFixedPitch>()?;
+    module.add_class::<simulation::PyVariablePitch>()?;
+    module.add_class::<simulation::PyOpenLoop>()?;
+    module.add_class::<simulation::PyLinearFeedback>()?;
+    module.add_class::<simulation::PyDiscreteLti>()?;
+    module.add_function(wrap_pyfunction!(simulation::simulate, module)?)?;
+    module.add_function(wrap_pyfunction!(simulation::simulate_batch, module)?)?;
+    module.add_function(wrap_pyfunction!(simulation::state_derivative, module)?)?;
     module.add_function(wrap_pyfunction!(acai, module)?)?;
     module.add_function(wrap_pyfunction!(acai_batch, module)?)?;
     module.add_function(wrap_pyfunction!(acai_from_matrix, module)?)?;

@@ -1,0 +1,497 @@
+"""The flight simulator: a Rust 6-DOF rigid body integrated with RK4, rotor actuators with lag,
+saturation, rate limits and faults, drag and wind, closed by a controller at its own rate.
+
+Frames: world NED (north, east, down; altitude is ``-position[2]``), body FRD. Rotor numbers in
+faults are 1-based like the papers; arrays are ordered rotor 1..m.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import _rfcore
+from ._convert import FloatArray, count, float_array, real
+from .airframe import Airframe, require_airframe
+from .controllers import core_controller, trim_command
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+def _vector3(field_name: str, value: Any) -> tuple[float, float, float]:
+    v = float_array(field_name, value, 1)
+    if v.shape != (3,):
+        raise ValueError(f"{field_name}: expected 3 entries, got {v.shape[0]}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{field_name}: must be finite")
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+class State:
+    """A vehicle state: ``position`` (m, world NED), ``velocity`` (m/s, world), attitude as a unit
+    ``quaternion`` (w, x, y, z; body to world) or ``euler`` (roll, pitch, yaw, rad, Z-Y-X), and
+    ``omega`` (body rates, rad/s). Omitted fields are zero / level."""
+
+    __slots__ = ("position", "velocity", "quaternion", "omega")
+
+    def __init__(
+        self,
+        position: Any = (0.0, 0.0, 0.0),
+        velocity: Any = (0.0, 0.0, 0.0),
+        quaternion: Any = None,
+        euler: Any = None,
+        omega: Any = (0.0, 0.0, 0.0),
+    ) -> None:
+        self.position = _vector3("position", position)
+        self.velocity = _vector3("velocity", velocity)
+        self.omega = _vector3("omega", omega)
+        if quaternion is not None and euler is not None:
+            raise ValueError("quaternion, euler: give at most one attitude")
+        if euler is not None:
+            roll, pitch, yaw = _vector3("euler", euler)
+            cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+            cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+            cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+            q = (
+                cr * cp * cy + sr * sp * sy,
+                sr * cp * cy - cr * sp * sy,
+                cr * sp * cy + sr * cp * sy,
+                cr * cp * sy - sr * sp * cy,
+            )
+        elif quaternion is not None:
+            arr = float_array("quaternion", quaternion, 1)
+            if arr.shape != (4,) or not np.all(np.isfinite(arr)):
+                raise ValueError("quaternion: expected 4 finite entries (w, x, y, z)")
+            norm = float(np.linalg.norm(arr))
+            if abs(norm - 1.0) > 1e-6:
+                raise ValueError(f"quaternion: must have unit norm (within 1e-6), got norm {norm}")
+            q = tuple(float(v) / norm for v in arr)  # type: ignore[assignment]
+        else:
+            q = (1.0, 0.0, 0.0, 0.0)
+        self.quaternion: tuple[float, float, float, float] = q
+
+    @classmethod
+    def from_vector(cls, x: Any) -> State:
+        """From the 12-element state vector ``[p, v, roll, pitch, yaw, omega]``."""
+        v = float_array("x", x, 1)
+        if v.shape != (12,):
+            raise ValueError(f"x: expected 12 entries, got {v.shape[0]}")
+        return cls(position=v[0:3], velocity=v[3:6], euler=v[6:9], omega=v[9:12])
+
+    def vector(self) -> FloatArray:
+        """The 12-element state vector the controllers use."""
+        w, x, y, z = self.quaternion
+        roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return np.array([*self.position, *self.velocity, roll, pitch, yaw, *self.omega])
+
+    def _packed(self) -> list[float]:
+        return [*self.position, *self.velocity, *self.quaternion, *self.omega]
+
+    def __repr__(self) -> str:
+        return f"State(position={self.position}, velocity={self.velocity}, quaternion={self.quaternion}, omega={self.omega})"
+
+
+@dataclass(frozen=True)
+class RotorFault:
+    """Rotor ``rotor`` (1-based) has efficiency ``efficiency`` (0 failed, 1 healthy) from ``time``
+    (s) on. The controller never sees it."""
+
+    rotor: int
+    time: float
+    efficiency: float = 0.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.rotor, bool) or not isinstance(self.rotor, (int, np.integer)):
+            raise TypeError(f"rotor: expected a 1-based rotor number, got {self.rotor!r}")
+        if self.rotor < 1:
+            raise ValueError(f"rotor: rotor numbers start at 1, got {self.rotor}")
+        real("time", self.time)
+        real("efficiency", self.efficiency)
+
+    def _packed(self) -> tuple[int, float, float]:
+        return (int(self.rotor) - 1, float(self.time), float(self.efficiency))
+
+
+@dataclass(frozen=True)
+class Drag:
+    """Aerodynamic damping and rotor inertia (the papers give none; all default to 0)."""
+
+    #: ``k_t``: force ``-k_t (v - wind)``, N s/m (Lanzon's Stokes drag).
+    linear_n_s_m: float = 0.0
+    #: force ``-c |v - wind| (v - wind)``, N s^2/m^2.
+    quadratic_n_s2_m2: float = 0.0
+    #: ``k_r``: torque ``-k_r omega``, N m s (sets a spinning vehicle's yaw rate).
+    rotational_n_m_s: float = 0.0
+    #: ``I_R``: rotor inertia about its axis, kg m^2 (gyroscopic moment, Lanzon eq. (5)).
+    rotor_inertia_kg_m2: float = 0.0
+
+    def _packed(self) -> list[float]:
+        return [
+            real("drag.linear_n_s_m", self.linear_n_s_m),
+            real("drag.quadratic_n_s2_m2", self.quadratic_n_s2_m2),
+            real("drag.rotational_n_m_s", self.rotational_n_m_s),
+            real("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
+        ]
+
+
+@dataclass(frozen=True)
+class FixedPitchActuator:
+    """Rotors commanded in thrust (N): first-order lag ``time_constant_s`` (Ke Table III: 0.025),
+    rate limit (Lanzon: 50 N/s), thrust saturation from the airframe; ``thrust_coefficient_n_s2``
+    (``f = k_f omega^2``) gives rotor speed for the gyroscopic moment (0: not modelled)."""
+
+    time_constant_s: float = 0.0
+    rate_limit_n_s: float = math.inf
+    thrust_coefficient_n_s2: float = 0.0
+
+    def _core(self) -> Any:
+        return _rfcore.FixedPitchActuator(
+            real("actuator.time_constant_s", self.time_constant_s),
+            real("actuator.rate_limit_n_s", self.rate_limit_n_s),
+            real("actuator.thrust_coefficient_n_s2", self.thrust_coefficient_n_s2),
+        )
+
+
+@dataclass(frozen=True)
+class VariablePitchActuator:
+    """Variable-pitch propellers (Wang et al. eq. (3)), commanded per rotor in speed and pitch
+    (interleaved ``[omega_1, alpha_1, omega_2, ...]``): thrust ``k1 omega^2 alpha``, torque
+    ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``. Wang models speed and pitch control as a
+    first-order lag with a 10 Hz cut-off: ``time_constant_s = 1 / (2 pi 10)`` by default."""
+
+    k: tuple[float, float, float, float]
+    speed_bounds: tuple[float, float]
+    pitch_bounds: tuple[float, float]
+    speed_to_rad_s: float = 0.0
+    time_constant_s: float = 1.0 / (2.0 * math.pi * 10.0)
+    rate_limit_per_s: float = math.inf
+
+    def _core(self) -> Any:
+        k = float_array("actuator.k", self.k, 1)
+        if k.shape != (4,):
+            raise ValueError(f"actuator.k: expected 4 coefficients (k1..k4), got {k.shape[0]}")
+        speed = float_array("actuator.speed_bounds", self.speed_bounds, 1)
+        pitch = float_array("actuator.pitch_bounds", self.pitch_bounds, 1)
+        if speed.shape != (2,) or pitch.shape != (2,):
+            raise ValueError("actuator.speed_bounds, actuator.pitch_bounds: expected (lower, upper)")
+        return _rfcore.VariablePitchActuator(
+            (float(k[0]), float(k[1]), float(k[2]), float(k[3])),
+            (float(speed[0]), float(speed[1])),
+            (float(pitch[0]), float(pitch[1])),
+            real("actuator.speed_to_rad_s", self.speed_to_rad_s),
+            real("actuator.time_constant_s", self.time_constant_s),
+            real("actuator.rate_limit_per_s", self.rate_limit_per_s),
+        )
+
+
+@dataclass(frozen=True)
+class DivergenceLimits:
+    """A run ends with an event when it passes one of these (``math.inf``: no limit)."""
+
+    max_tilt_rad: float = math.pi / 2
+    max_altitude_loss_m: float = 100.0
+    max_speed_m_s: float = 100.0
+    max_rate_rad_s: float = 200.0
+
+    def _packed(self) -> list[float]:
+        return [
+            real("limits.max_tilt_rad", self.max_tilt_rad),
+            real("limits.max_altitude_loss_m", self.max_altitude_loss_m),
+            real("limits.max_speed_m_s", self.max_speed_m_s),
+            real("limits.max_rate_rad_s", self.max_rate_rad_s),
+        ]
+
+
+@dataclass(frozen=True)
+class Event:
+    """Why and when a run ended early, with the state (12-vector) at that moment."""
+
+    time: float
+    kind: str
+    description: str
+    state: FloatArray
+
+    def __str__(self) -> str:
+        return f"diverged at t = {self.time:.4f} s: {self.description}"
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A run sampled at the control rate. Arrays have one row per control step."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    quaternion: FloatArray
+    euler: FloatArray
+    omega: FloatArray
+    #: Body z in the world frame (Ke's n3).
+    primary_axis: FloatArray
+    rotor_command: FloatArray
+    rotor_thrust: FloatArray
+    health: FloatArray
+    events: list[Event] = field(default_factory=list)
+    faults: tuple[RotorFault, ...] = ()
+
+    @property
+    def diverged(self) -> bool:
+        return bool(self.events)
+
+    @classmethod
+    def _from_core(cls, raw: dict[str, Any], faults: tuple[RotorFault, ...]) -> Trajectory:
+        events = []
+        if raw["divergence"] is not None:
+            d = raw["divergence"]
+            events.append(Event(d["time"], d["reason"], d["description"], np.asarray(d["state"])))
+        return cls(
+            t=raw["t"],
+            position=raw["position"],
+            velocity=raw["velocity"],
+            quaternion=raw["quaternion"],
+            euler=raw["euler"],
+            omega=raw["omega"],
+            primary_axis=raw["primary_axis"],
+            rotor_command=raw["command"],
+            rotor_thrust=raw["thrust"],
+            health=raw["health"],
+            events=events,
+            faults=faults,
+        )
+
+    def plot(self, path: str | None = None) -> Figure:
+        """Position, attitude, body rates and rotor thrusts against time, with fault and
+        divergence markers; saved to ``path`` if given."""
+        import matplotlib
+
+        if path is not None:
+            matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(4, 1, figsize=(10, 11), sharex=True)
+        panels = [
+            (self.position * np.array([1, 1, -1]), ["north", "east", "altitude"], "position (m)"),
+            (np.degrees(self.euler), ["roll", "pitch", "yaw"], "attitude (deg)"),
+            (self.omega, ["p", "q", "r"], "body rate (rad/s)"),
+            (self.rotor_thrust, [f"rotor {i + 1}" for i in range(self.rotor_thrust.shape[1])], "thrust (N)"),
+        ]
+        for ax, (data, labels, ylabel) in zip(axes, panels):
+            for column, label in zip(data.T, labels):
+                ax.plot(self.t, column, label=label)
+            ax.set_ylabel(ylabel)
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="upper right", fontsize=8, ncol=len(labels))
+            for fault in self.faults:
+                ax.axvline(fault.time, color="red", linestyle="--", alpha=0.6)
+            for event in self.events:
+                ax.axvline(event.time, color="black", linestyle=":", alpha=0.8)
+        axes[-1].set_xlabel("time (s)")
+        title = "rotorfault simulation"
+        if self.faults:
+            title += ": " + ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in self.faults)
+        if self.events:
+            title += f"\n{self.events[0]}"
+        axes[0].set_title(title)
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, dpi=110)
+        return fig
+
+
+def _faults(faults: Iterable[RotorFault] | None) -> tuple[RotorFault, ...]:
+    if faults is None:
+        return ()
+    items = tuple(faults)
+    for f in items:
+        if not isinstance(f, RotorFault):
+            raise TypeError(f"faults: expected rotorfault.RotorFault items, got {type(f).__name__}")
+    return items
+
+
+class Simulator:
+    """One airframe with its actuators, drag and wind, ready to fly controllers through faults.
+
+    ``dt`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
+    ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
+    ``(time_s, (n, e, d))`` points added to it, interpolated linearly.
+    """
+
+    def __init__(
+        self,
+        airframe: Airframe,
+        dt: float = 1.0 / 400.0,
+        substeps: int = 4,
+        drag: Drag | None = None,
+        wind: Any = (0.0, 0.0, 0.0),
+        wind_profile: Sequence[tuple[float, Any]] | None = None,
+        actuator: FixedPitchActuator | VariablePitchActuator | None = None,
+        limits: DivergenceLimits | None = None,
+    ) -> None:
+        self.airframe = require_airframe(airframe)
+        self.dt = real("dt", dt)
+        if not self.dt > 0 or not math.isfinite(self.dt):
+            raise ValueError(f"dt: must be > 0 and finite, got {self.dt}")
+        self.substeps = count("substeps", substeps)
+        if self.substeps == 0:
+            raise ValueError("substeps: must be >= 1")
+        self.drag = Drag() if drag is None else drag
+        if not isinstance(self.drag, Drag):
+            raise TypeError(f"drag: expected rotorfault.Drag, got {type(drag).__name__}")
+        self.wind = _vector3("wind", wind)
+        self.wind_profile = [
+            (real(f"wind_profile[{k}].time", t), _vector3(f"wind_profile[{k}]", w))
+            for k, (t, w) in enumerate(wind_profile or [])
+        ]
+        self.actuator = FixedPitchActuator() if actuator is None else actuator
+        if not isinstance(self.actuator, (FixedPitchActuator, VariablePitchActuator)):
+            raise TypeError(f"actuator: expected FixedPitchActuator or VariablePitchActuator, got {type(actuator).__name__}")
+        self.limits = DivergenceLimits() if limits is None else limits
+        # Fail early on bad parameters (the core validates them).
+        self._actuator_core = self.actuator._core()
+        _rfcore.state_derivative(
+            self.airframe._core, self._actuator_core, self.drag._packed(), [0.0] * 12,
+            np.zeros(self.command_count), np.ones(self.airframe.rotor_count), list(self.wind),
+        )
+
+    @property
+    def command_count(self) -> int:
+        """Commands per control step: one per rotor (thrust) or two (speed, pitch)."""
+        per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
+        return per_rotor * self.airframe.rotor_count
+
+    def _config(self, t_final: float) -> tuple[Any, ...]:
+        t_final = real("t_final", t_final)
+        return (self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile)
+
+    def _start(self, controller: Any, initial_command: Any) -> FloatArray | None:
+        if initial_command is not None:
+            return float_array("initial_command", initial_command, 1)
+        return trim_command(controller)
+
+    def run(
+        self,
+        x0: State | None = None,
+        t_final: float = 10.0,
+        controller: Any = None,
+        faults: Iterable[RotorFault] | None = None,
+        initial_command: Any = None,
+    ) -> Trajectory:
+        """Flies from ``x0`` for ``t_final`` seconds. The actuators start settled at
+        ``initial_command`` (default: the controller's trim command if it has one, else zero).
+        Health starts at the airframe's efficiencies; ``faults`` change it on schedule."""
+        x0 = State() if x0 is None else x0
+        if not isinstance(x0, State):
+            raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
+        fault_list = _faults(faults)
+        raw = _rfcore.simulate(
+            self.airframe._core,
+            self._actuator_core,
+            self.drag._packed(),
+            core_controller(controller, self.dt),
+            x0._packed(),
+            [f._packed() for f in fault_list],
+            self.airframe.efficiency,
+            self._start(controller, initial_command),
+            self._config(t_final),
+        )
+        return Trajectory._from_core(raw, fault_list)
+
+    def state_derivative(self, x: Any, command: Any, health: Any = None) -> FloatArray:
+        """d/dt of the 12-element state vector with the actuators settled at ``command``."""
+        return _rfcore.state_derivative(
+            self.airframe._core,
+            self._actuator_core,
+            self.drag._packed(),
+            list(float_array("x", x, 1)),
+            float_array("command", command, 1),
+            self.airframe.efficiency if health is None else float_array("health", health, 1),
+            list(self.wind),
+        )
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Runs stacked along axis 0; rows after a run diverged are NaN."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    euler: FloatArray
+    omega: FloatArray
+    rotor_thrust: FloatArray
+    health: FloatArray
+    diverged: np.ndarray[Any, np.dtype[np.bool_]]
+    divergence_time: FloatArray
+    trajectories: list[Trajectory]
+
+
+def simulate_batch(
+    simulator: Simulator,
+    x0s: Sequence[State],
+    t_final: float,
+    controllers: Any = None,
+    faults: Sequence[Iterable[RotorFault] | None] | None = None,
+    initial_command: Any = None,
+) -> BatchResult:
+    """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
+    every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
+    cannot run in a batch (they would serialise on the GIL)."""
+    if not isinstance(simulator, Simulator):
+        raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
+    states = list(x0s)
+    n = len(states)
+    for s in states:
+        if not isinstance(s, State):
+            raise TypeError(f"x0s: expected rotorfault.State items, got {type(s).__name__}")
+    per_run = list(controllers) if isinstance(controllers, (list, tuple)) else [controllers] * n
+    fault_lists = [_faults(f) for f in (faults if faults is not None else [None] * n)]
+    if len(per_run) != n or len(fault_lists) != n:
+        raise ValueError(f"controllers, faults: expected one entry per run ({n})")
+    cores = []
+    for c in per_run:
+        core = core_controller(c, simulator.dt)
+        if core is not None and not isinstance(core, (_rfcore.OpenLoop, _rfcore.LinearFeedback, _rfcore.DiscreteLti)):
+            raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
+        cores.append(core)
+    # One actuator start for the whole batch: initial_command, else the first controller's trim.
+    start = simulator._start(per_run[0] if per_run else None, initial_command)
+    raws = _rfcore.simulate_batch(
+        simulator.airframe._core,
+        simulator._actuator_core,
+        simulator.drag._packed(),
+        cores,
+        [s._packed() for s in states],
+        [[f._packed() for f in fl] for fl in fault_lists],
+        simulator.airframe.efficiency,
+        start,
+        simulator._config(t_final),
+    )
+    trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
+    steps = max((len(tr.t) for tr in trajectories), default=0)
+
+    def stack(name: str) -> FloatArray:
+        arrays = [getattr(tr, name) for tr in trajectories]
+        shape = (n, steps, *arrays[0].shape[1:]) if arrays else (0, steps)
+        out = np.full(shape, np.nan)
+        for i, a in enumerate(arrays):
+            out[i, : len(a)] = a
+        return out
+
+    return BatchResult(
+        t=np.arange(steps, dtype=np.float64) * simulator.dt,
+        position=stack("position"),
+        velocity=stack("velocity"),
+        euler=stack("euler"),
+        omega=stack("omega"),
+        rotor_thrust=stack("rotor_thrust"),
+        health=stack("health"),
+        diverged=np.array([tr.diverged for tr in trajectories], dtype=bool),
+        divergence_time=np.array([tr.events[0].time if tr.events else np.nan for tr in trajectories]),
+        trajectories=trajectories,
+    )

@@ -1,0 +1,235 @@
+"""The flight simulator from Python: hover, free fall, rotor failure under LQR, every actuator
+effect in isolation, controllers (built-in, LTI, Python callable), batches, bad input.
+Closed forms are checked to 1e-9 unless stated."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rotorfault as rf
+
+G = 9.80  # the Du presets' gravity
+
+
+@pytest.fixture(scope="module")
+def quad() -> rf.Airframe:
+    return rf.Airframe.preset("quad-x")
+
+
+@pytest.fixture(scope="module")
+def sim(quad: rf.Airframe) -> rf.Simulator:
+    return rf.Simulator(quad, dt=1 / 400, substeps=2)
+
+
+@pytest.fixture(scope="module")
+def lqr(sim: rf.Simulator) -> rf.LinearFeedback:
+    return rf.lqr_hover(sim, position=(0, 0, -10))
+
+
+def test_trimmed_hover_stays_put(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    start = rf.State(position=(0, 0, -10))
+    for controller in (lqr, rf.OpenLoop.constant(lqr.u_trim)):
+        tr = sim.run(start, 10.0, controller=controller)
+        assert not tr.diverged
+        assert np.abs(tr.position - [0, 0, -10]).max() < 1e-9
+        # Open loop, the trim's rounding torque (~1e-16 N m) is integrated twice: ~1e-12 rad.
+        assert np.abs(tr.euler).max() < 1e-10
+    np.testing.assert_allclose(lqr.u_trim, np.full(4, 1.535 * G / 4), rtol=1e-12)
+
+
+def test_lqr_recovers_from_a_perturbation(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    tr = sim.run(rf.State(position=(0.5, -0.3, -9.0), euler=(0.1, -0.1, 0.3), omega=(0.2, 0, 0)), 10.0, controller=lqr)
+    assert not tr.diverged
+    assert np.linalg.norm(tr.position[-1] - [0, 0, -10]) < 0.01
+    assert np.abs(tr.euler[-1]).max() < 1e-3
+
+
+def test_free_fall_matches_the_closed_form(sim: rf.Simulator) -> None:
+    tr = sim.run(rf.State(position=(0, 0, -100), velocity=(1.0, 0, -3.0)), 2.0)
+    t = tr.t
+    np.testing.assert_allclose(tr.position[:, 2], -100 - 3.0 * t + 0.5 * G * t**2, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(tr.position[:, 0], t, rtol=0, atol=1e-12)
+    assert np.all(tr.rotor_thrust == 0.0)
+
+
+def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    """The problem rotorfault exists for: a hovering quad-x loses rotor 1 at 1 s, the hover LQR
+    cannot hold it, and the run ends with an event saying when and why."""
+    tr = sim.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
+    assert tr.diverged
+    event = tr.events[0]
+    assert event.kind == "tilt" and 1.0 < event.time < 10.0
+    assert "tilt" in str(event) and event.state.shape == (12,)
+    assert tr.t[-1] == pytest.approx(event.time)
+    before, after = np.searchsorted(tr.t, [0.5, 1.5])
+    np.testing.assert_array_equal(tr.health[before], [1, 1, 1, 1])
+    np.testing.assert_array_equal(tr.health[after], [0, 1, 1, 1])
+    assert tr.rotor_thrust[after, 0] == 0.0
+    assert np.all(np.isnan(tr.rotor_command[-1]))  # no command after the divergence
+
+
+def test_partial_fault_scales_thrust_only(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    tr = sim.run(rf.State(position=(0, 0, -10)), 0.5, controller=rf.OpenLoop.constant(lqr.u_trim),
+                 faults=[rf.RotorFault(rotor=3, time=0.25, efficiency=0.5)])
+    i = np.searchsorted(tr.t, 0.3)
+    assert tr.rotor_thrust[i, 2] == pytest.approx(0.5 * lqr.u_trim[2], rel=1e-15)
+    assert tr.rotor_command[i, 2] == lqr.u_trim[2]  # the controller's command is unchanged
+
+
+def test_saturation_lag_and_rate_limit_in_isolation(quad: rf.Airframe) -> None:
+    start = rf.State(position=(0, 0, -1000))
+    # Saturation: asking 100 N gives max_thrust_n.
+    sim = rf.Simulator(quad, limits=rf.DivergenceLimits(max_speed_m_s=math.inf, max_altitude_loss_m=math.inf))
+    tr = sim.run(start, 0.1, controller=rf.OpenLoop.constant([100.0] * 4), initial_command=[0.0] * 4)
+    assert np.all(tr.rotor_thrust[1:] == 6.125)
+    # First-order lag: one time constant after a step, 1 - 1/e of the step (exact discretisation).
+    lagged = rf.Simulator(quad, actuator=rf.FixedPitchActuator(time_constant_s=0.025))
+    tr = lagged.run(start, 0.1, controller=rf.OpenLoop.constant([4.0] * 4), initial_command=[0.0] * 4)
+    i = np.searchsorted(tr.t, 0.025)
+    assert tr.rotor_thrust[i, 0] == pytest.approx(4.0 * (1 - math.exp(-1)), abs=1e-12)
+    # Rate limit: 50 N/s ramps 0 -> 4 N in 80 ms.
+    limited = rf.Simulator(quad, actuator=rf.FixedPitchActuator(rate_limit_n_s=50.0))
+    tr = limited.run(start, 0.2, controller=rf.OpenLoop.constant([4.0] * 4), initial_command=[0.0] * 4)
+    i = np.searchsorted(tr.t, 0.04)
+    assert tr.rotor_thrust[i, 0] == pytest.approx(2.0, abs=1e-12)
+    assert tr.rotor_thrust[-1, 0] == 4.0
+
+
+def test_wind_with_linear_drag_sets_the_terminal_velocity(quad: rf.Airframe) -> None:
+    wind = (3.0, -2.0, 0.0)
+    sim = rf.Simulator(quad, drag=rf.Drag(linear_n_s_m=1.0), wind=wind)
+    hover = np.full(4, 1.535 * G / 4)
+    tr = sim.run(rf.State(position=(0, 0, -10)), 20.0, controller=rf.OpenLoop.constant(hover))
+    # m dv/dt = -k_t (v - wind): v -> wind with time constant m / k_t = 1.535 s.
+    expected = np.array(wind) * (1 - math.exp(-20.0 / 1.535))
+    np.testing.assert_allclose(tr.velocity[-1], expected, atol=1e-9)
+
+
+def test_lti_and_callable_controllers_fly_like_linear_feedback(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    start = rf.State(position=(0.3, 0, -9.5), euler=(0.05, 0, 0))
+    reference = sim.run(start, 2.0, controller=lqr)
+    k = lqr.gain
+    static = rf.LTI(np.zeros((0, 0)), np.zeros((0, 12)), np.zeros((4, 0)), -k, lqr.x_trim, lqr.u_trim)
+    np.testing.assert_allclose(sim.run(start, 2.0, controller=static).position, reference.position, atol=1e-12)
+
+    def law(t: float, x: np.ndarray) -> np.ndarray:
+        e = x - lqr.x_trim
+        e[8] = (e[8] + np.pi) % (2 * np.pi) - np.pi
+        return lqr.u_trim - k @ e
+
+    np.testing.assert_allclose(sim.run(start, 2.0, controller=law).position, reference.position, atol=1e-9)
+
+
+def test_continuous_lti_with_integral_action_removes_a_bias(quad: rf.Airframe) -> None:
+    """An altitude integrator (continuous, discretised at the control rate) on top of LQR
+    removes the steady error that a 10 % weaker hover trim leaves."""
+    sim = rf.Simulator(quad, dt=1 / 400, substeps=2)
+    lqr = rf.lqr_hover(sim, position=(0, 0, -10))
+    weak = lqr.u_trim * 0.9
+    biased = sim.run(rf.State(position=(0, 0, -10)), 20.0, controller=rf.LinearFeedback(lqr.gain, lqr.x_trim, weak))
+    assert abs(biased.position[-1, 2] + 10) > 1.0  # LQR alone: a 2 m steady sag
+    b = np.zeros((1, 12))
+    b[0, 2] = 1.0  # integrate the down-position error
+    # More thrust while below the target (positive down error); a gentle gain, since the hover
+    # LQR leaves little altitude damping to spare.
+    c = 0.03 * np.ones((4, 1))
+    pi = rf.LTI(np.zeros((1, 1)), b, c, -lqr.gain, lqr.x_trim, weak)
+    fixed = sim.run(rf.State(position=(0, 0, -10)), 60.0, controller=pi)
+    assert np.abs(fixed.position[-4000:, 2] + 10).max() < 1e-5  # the last 10 s
+
+
+def test_python_controller_errors_propagate(sim: rf.Simulator) -> None:
+    def broken(t: float, x: np.ndarray) -> list[float]:
+        if t > 0.1:
+            raise ZeroDivisionError("controller bug")
+        return [3.0] * 4
+
+    with pytest.raises(ZeroDivisionError, match="controller bug"):
+        sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=broken)
+    with pytest.raises(ValueError, match="must return 4 finite commands"):
+        sim.run(rf.State(), 1.0, controller=lambda t, x: [1.0, 2.0])
+
+
+def test_batch_matches_single_runs(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    starts = [rf.State(position=(0.1 * i, 0, -10), euler=(0.02 * i, 0, 0)) for i in range(6)]
+    faults = [[], [rf.RotorFault(rotor=2, time=0.5)], [], [rf.RotorFault(rotor=1, time=0.2, efficiency=0.7)], [], []]
+    batch = rf.simulate_batch(sim, starts, 8.0, controllers=lqr, faults=faults)
+    assert batch.position.shape == (6, 3201, 3)
+    for i, (s, f) in enumerate(zip(starts, faults)):
+        single = sim.run(s, 8.0, controller=lqr, faults=f)
+        n = len(single.t)
+        np.testing.assert_array_equal(batch.position[i, :n], single.position)
+        assert batch.diverged[i] == single.diverged
+    assert batch.diverged[1] and np.isnan(batch.position[1, -1]).all()
+    assert not batch.diverged[0] and np.isnan(batch.divergence_time[0])
+    with pytest.raises(TypeError, match="Python callables cannot run in a batch"):
+        rf.simulate_batch(sim, starts[:1], 1.0, controllers=lambda t, x: [0.0] * 4)
+
+
+def test_variable_pitch_hover_and_reverse_thrust(quad: rf.Airframe) -> None:
+    k = (5e-7, 1e-10, 3e-11, 1e-7)
+    actuator = rf.VariablePitchActuator(k=k, speed_bounds=(0, 10_000), pitch_bounds=(-0.3, 0.3))
+    sim = rf.Simulator(quad, actuator=actuator)
+    assert sim.command_count == 8
+    alpha = 0.2
+    omega = math.sqrt(1.535 * G / 4 / (k[0] * alpha))
+    hover = np.array([omega, alpha] * 4)
+    tr = sim.run(rf.State(position=(0, 0, -10)), 5.0, controller=rf.OpenLoop.constant(hover), initial_command=hover)
+    assert np.abs(tr.position - [0, 0, -10]).max() < 1e-9
+    np.testing.assert_allclose(tr.rotor_thrust[-1], 1.535 * G / 4, rtol=1e-12)
+    down = sim.run(rf.State(position=(0, 0, -10)), 0.5, controller=rf.OpenLoop.constant([omega, -alpha] * 4), initial_command=hover)
+    assert np.all(down.rotor_thrust[-1] < 0) and down.velocity[-1, 2] > 0.5 * G * 0.5
+
+
+def test_linearisation_has_the_hover_structure(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    a, b = rf.linearize(sim, lqr.x_trim, lqr.u_trim)
+    # NED/FRD at hover: pitching up tilts thrust backwards, rolling right tilts it east.
+    assert a[3, 7] == pytest.approx(-G, rel=1e-6)
+    assert a[4, 6] == pytest.approx(G, rel=1e-6)
+    assert a[0, 3] == pytest.approx(1.0) and a[6, 9] == pytest.approx(1.0) and a[8, 11] == pytest.approx(1.0)
+    # Thrust input: each newton accelerates the vehicle upwards by 1/m.
+    np.testing.assert_allclose(b[5], -1 / 1.535, rtol=1e-6)
+    bf = sim.airframe.effectiveness_matrix()
+    np.testing.assert_allclose(b[9], bf[1] / 0.0411, rtol=1e-6, atol=1e-9)
+
+
+def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    tr = sim.run(rf.State(position=(0, 0, -10)), 3.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
+    fig = tr.plot(str(tmp_path / "run.png"))
+    assert (tmp_path / "run.png").stat().st_size > 20_000
+    plt.close(fig)
+
+
+@pytest.mark.parametrize(
+    ("make", "error", "message"),
+    [
+        (lambda q: rf.Simulator(q, dt=0.0), ValueError, "dt: must be > 0"),
+        (lambda q: rf.Simulator(q, dt=float("nan")), ValueError, "dt: must be > 0"),
+        (lambda q: rf.Simulator(q, substeps=0), ValueError, "substeps: must be >= 1"),
+        (lambda q: rf.Simulator(q, drag=rf.Drag(linear_n_s_m=float("nan"))), ValueError, "drag.linear_drag_n_s_m: must be finite"),
+        (lambda q: rf.Simulator(q, drag=rf.Drag(rotational_n_m_s=-1.0)), ValueError, "drag.rotational_drag_n_m_s: must be >= 0"),
+        (lambda q: rf.Simulator(q, wind=(0, float("inf"), 0)), ValueError, "wind: must be finite"),
+        (lambda q: rf.Simulator(q, actuator=rf.FixedPitchActuator(time_constant_s=-1)), ValueError, "actuator.time_constant_s"),
+        (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=5, time=1.0)]), ValueError, r"faults\[0\].rotor: rotor numbers run from 1 to 4, got 5"),
+        (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=1, time=1.0, efficiency=1.5)]), ValueError, r"faults\[0\].efficiency: must lie in \[0, 1\]"),
+        (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=1, time=float("nan"))]), ValueError, r"faults\[0\].time: must be finite"),
+        (lambda q: rf.RotorFault(rotor=0, time=1.0), ValueError, "rotor: rotor numbers start at 1"),
+        (lambda q: rf.State(position=(0, float("nan"), 0)), ValueError, "position: must be finite"),
+        (lambda q: rf.State(quaternion=(2, 0, 0, 0)), ValueError, "quaternion: must have unit norm"),
+        (lambda q: rf.Simulator(q).run(rf.State(), float("nan")), ValueError, "t_final: must be finite"),
+        (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller="lqr"), TypeError, "controller: expected"),
+        (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller=rf.OpenLoop.constant([1.0] * 3)), ValueError, "controller: expected 4 commands"),
+        (lambda q: rf.OpenLoop([1.0, 0.5], [[1.0] * 4] * 2), ValueError, r"times_s\[1\]: times must be strictly increasing"),
+        (lambda q: rf.LinearFeedback(np.zeros((4, 11)), np.zeros(12), np.zeros(4)), ValueError, "gain: expected 4 x 12"),
+        (lambda q: rf.Simulator(q).run((0, 0, 0), 1.0), TypeError, "x0: expected rotorfault.State"),
+    ],
+)
+def test_bad_input(quad: rf.Airframe, make, error: type[Exception], message: str) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(error, match=message):
+        make(quad)
