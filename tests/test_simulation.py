@@ -99,6 +99,33 @@ def test_saturation_lag_and_rate_limit_in_isolation(quad: rf.Airframe) -> None:
     assert tr.rotor_thrust[-1, 0] == 4.0
 
 
+def test_sensor_noise_has_the_requested_snr_and_is_reproducible(quad: rf.Airframe) -> None:
+    start = rf.State(position=(10.0, 20.0, -1000.0), velocity=(1.0, 2.0, -3.0))
+    sim = rf.Simulator(quad, noise=rf.Noise(snr_db=15.0, seed=3), limits=rf.DivergenceLimits(max_altitude_loss_m=math.inf))
+    tr = sim.run(start, 2.0)
+    truth = np.array([rf.State(position=p, velocity=v).vector()[:6] for p, v in zip(tr.position, tr.velocity)])
+    ratio = (tr.measured[:, :6] - truth) / np.abs(truth)
+    # 10^(-15/20) = 0.1778; 801 x 6 samples give a standard error of about 1 % on the std.
+    assert ratio.std() == pytest.approx(10 ** (-15 / 20), rel=0.05)
+    assert abs(ratio.mean()) < 0.02
+    # Noise reaches the controller only: with no controller the flight is the noiseless one.
+    np.testing.assert_array_equal(tr.position, rf.Simulator(quad, limits=sim.limits).run(start, 2.0).position)
+    np.testing.assert_array_equal(sim.run(start, 2.0).measured, tr.measured)
+    other = rf.Simulator(quad, noise=rf.Noise(snr_db=15.0, seed=4), limits=sim.limits).run(start, 2.0)
+    assert not np.array_equal(other.measured, tr.measured)
+    floor = rf.Simulator(quad, noise=rf.Noise(std=(0.1, 0.2, 0.01, 0.05), seed=1), limits=sim.limits).run(start, 2.0)
+    error = floor.measured - np.array([rf.State(position=p, velocity=v, quaternion=q, omega=w).vector()
+                                       for p, v, q, w in zip(floor.position, floor.velocity, floor.quaternion, floor.omega)])
+    np.testing.assert_allclose(error.std(axis=0), np.repeat([0.1, 0.2, 0.01, 0.05], 3), rtol=0.12)
+
+
+def test_noisy_lqr_hover_stays_close(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    noisy = rf.Simulator(sim.airframe, dt=sim.dt, substeps=sim.substeps, noise=rf.Noise(std=(0.02, 0.02, 0.002, 0.01), seed=0))
+    tr = noisy.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr)
+    assert not tr.diverged
+    assert np.abs(tr.position - [0, 0, -10]).max() < 0.2
+
+
 def test_wind_with_linear_drag_sets_the_terminal_velocity(quad: rf.Airframe) -> None:
     wind = (3.0, -2.0, 0.0)
     sim = rf.Simulator(quad, drag=rf.Drag(linear_n_s_m=1.0), wind=wind)
@@ -215,6 +242,10 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
         (lambda q: rf.Simulator(q, drag=rf.Drag(linear_n_s_m=float("nan"))), ValueError, "drag.linear_drag_n_s_m: must be finite"),
         (lambda q: rf.Simulator(q, drag=rf.Drag(rotational_n_m_s=-1.0)), ValueError, "drag.rotational_drag_n_m_s: must be >= 0"),
         (lambda q: rf.Simulator(q, wind=(0, float("inf"), 0)), ValueError, "wind: must be finite"),
+        (lambda q: rf.Simulator(q, noise=rf.Noise(std=(1.0, -1.0, 0.0, 0.0))), ValueError, r"noise.std\[3\]: must be finite and >= 0"),
+        (lambda q: rf.Simulator(q, noise=rf.Noise(std=(1.0, 2.0))), ValueError, "noise.std: expected 4 or 12 entries"),
+        (lambda q: rf.Simulator(q, noise=rf.Noise(snr_db=float("nan"))), ValueError, "noise.snr_db"),
+        (lambda q: rf.Simulator(q, noise=rf.Noise(seed=-1)), ValueError, "noise.seed: must be >= 0"),
         (lambda q: rf.Simulator(q, actuator=rf.FixedPitchActuator(time_constant_s=-1)), ValueError, "actuator.time_constant_s"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=5, time=1.0)]), ValueError, r"faults\[0\].rotor: rotor numbers run from 1 to 4, got 5"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=1, time=1.0, efficiency=1.5)]), ValueError, r"faults\[0\].efficiency: must lie in \[0, 1\]"),

@@ -103,7 +103,15 @@ class DiscreteLti:
     def __new__(cls, a: _F64, b: _F64, c: _F64, d: _F64, x_trim: _F64, u_trim: _F64) -> DiscreteLti: ...
 
 _Actuator = FixedPitchActuator | VariablePitchActuator
-_Config = tuple[float, int, float, list[float], list[float], list[tuple[float, tuple[float, float, float]]]]
+_Config = tuple[
+    float,
+    int,
+    float,
+    list[float],
+    list[float],
+    list[tuple[float, tuple[float, float, float]]],
+    tuple[float, list[float], int] | None,
+]
 
 def simulate(
     airframe: Airframe,

@@ -210,6 +210,36 @@ class DivergenceLimits:
 
 
 @dataclass(frozen=True)
+class Noise:
+    """Additive Gaussian sensor noise on the 12 measured state components (position, velocity,
+    Euler angles, body rates), standard deviation ``10^(-snr_db / 20) |x_i| + std_i``.
+
+    ``snr_db`` is a per-sample signal-to-noise ratio (Wang et al.'s scenarios use 15 dB; they do
+    not say how signal power is measured, and per sample is the causal reading). ``std`` adds an
+    absolute floor: 12 values, or 4 (position m, velocity m/s, angle rad, rate rad/s). Seeded and
+    reproducible on every platform; in a batch, run ``i`` uses ``seed + i``."""
+
+    snr_db: float | None = None
+    std: Any = None
+    seed: int = 0
+
+    def _packed(self) -> tuple[float, list[float], int]:
+        relative = 0.0 if self.snr_db is None else 10.0 ** (-real("noise.snr_db", self.snr_db) / 20.0)
+        if self.std is None:
+            absolute = np.zeros(12)
+        else:
+            absolute = float_array("noise.std", self.std, 1)
+            if absolute.shape == (4,):
+                absolute = np.repeat(absolute, 3)
+            if absolute.shape != (12,):
+                raise ValueError(f"noise.std: expected 4 or 12 entries, got {absolute.shape[0]}")
+        seed = count("noise.seed", self.seed)
+        if seed >= 2**64:
+            raise ValueError("noise.seed: must be below 2**64")
+        return (relative, [float(v) for v in absolute], seed)
+
+
+@dataclass(frozen=True)
 class Event:
     """Why and when a run ended early, with the state (12-vector) at that moment."""
 
@@ -237,6 +267,8 @@ class Trajectory:
     rotor_command: FloatArray
     rotor_thrust: FloatArray
     health: FloatArray
+    #: What the controller saw: the 12-element state vector with sensor noise.
+    measured: FloatArray
     events: list[Event] = field(default_factory=list)
     faults: tuple[RotorFault, ...] = ()
 
@@ -261,6 +293,7 @@ class Trajectory:
             rotor_command=raw["command"],
             rotor_thrust=raw["thrust"],
             health=raw["health"],
+            measured=raw["measured"],
             events=events,
             faults=faults,
         )
@@ -332,6 +365,7 @@ class Simulator:
         wind_profile: Sequence[tuple[float, Any]] | None = None,
         actuator: FixedPitchActuator | VariablePitchActuator | None = None,
         limits: DivergenceLimits | None = None,
+        noise: Noise | None = None,
     ) -> None:
         self.airframe = require_airframe(airframe)
         self.dt = real("dt", dt)
@@ -352,11 +386,14 @@ class Simulator:
         if not isinstance(self.actuator, (FixedPitchActuator, VariablePitchActuator)):
             raise TypeError(f"actuator: expected FixedPitchActuator or VariablePitchActuator, got {type(actuator).__name__}")
         self.limits = DivergenceLimits() if limits is None else limits
-        # Fail early on bad parameters (the core validates them).
+        if noise is not None and not isinstance(noise, Noise):
+            raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
+        self.noise = noise
+        # Fail early on bad parameters: the core validates them in a zero-length run.
         self._actuator_core = self.actuator._core()
-        _rfcore.state_derivative(
-            self.airframe._core, self._actuator_core, self.drag._packed(), [0.0] * 12,
-            np.zeros(self.command_count), np.ones(self.airframe.rotor_count), list(self.wind),
+        _rfcore.simulate(
+            self.airframe._core, self._actuator_core, self.drag._packed(), None, State()._packed(), [],
+            self.airframe.efficiency, None, self._config(0.0),
         )
 
     @property
@@ -367,7 +404,8 @@ class Simulator:
 
     def _config(self, t_final: float) -> tuple[Any, ...]:
         t_final = real("t_final", t_final)
-        return (self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile)
+        noise = None if self.noise is None else self.noise._packed()
+        return (self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile, noise)
 
     def _start(self, controller: Any, initial_command: Any) -> FloatArray | None:
         if initial_command is not None:

@@ -15,7 +15,7 @@ use rfcore::controller::{
 use rfcore::rigid_body::RigidBodyState;
 use rfcore::simulation::{
     simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
-    RotorFault, SimulationConfig, Trajectory,
+    RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::vehicle::{Aerodynamics, Vehicle};
 use rfcore::RfError;
@@ -248,12 +248,25 @@ fn boxed(controller: Option<&ControllerArg<'_>>, count: usize) -> Box<dyn Contro
     }
 }
 
-/// Timing, limits and wind, in the order the Python layer passes them.
-type ConfigArgs = (f64, usize, f64, [f64; 4], [f64; 3], Vec<(f64, [f64; 3])>);
+/// Timing, limits, wind and noise, in the order the Python layer passes them.
+type ConfigArgs = (
+    f64,
+    usize,
+    f64,
+    [f64; 4],
+    [f64; 3],
+    Vec<(f64, [f64; 3])>,
+    Option<(f64, [f64; STATE_DIM], u64)>,
+);
 
 fn config(args: ConfigArgs) -> SimulationConfig {
-    let (dt, substeps, t_final, limits, wind, profile) = args;
+    let (dt, substeps, t_final, limits, wind, profile, noise) = args;
     SimulationConfig {
+        noise: noise.map(|(relative_std, absolute_std, seed)| SensorNoise {
+            relative_std,
+            absolute_std,
+            seed,
+        }),
         control_dt_s: dt,
         substeps,
         duration_s: t_final,
@@ -324,6 +337,7 @@ fn trajectory_dict<'py>(py: Python<'py>, run: Trajectory) -> PyResult<Bound<'py,
         ("command", run.commands),
         ("thrust", run.thrust_n),
         ("health", run.health),
+        ("measured", run.measured),
     ] {
         let cols = values.len().checked_div(n).unwrap_or(0);
         dict.set_item(name, values.into_pyarray(py).reshape([n, cols])?)?;

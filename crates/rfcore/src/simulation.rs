@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::actuator::{Actuators, RotorOutput};
-use crate::controller::Controller;
+use crate::controller::{state_from_vector, state_vector, Controller, STATE_DIM};
 use crate::error::{require_finite, Result, RfError};
 use crate::rigid_body::RigidBodyState;
 use crate::vehicle::Vehicle;
@@ -93,9 +93,105 @@ pub struct SimulationConfig {
     /// Optional wind profile added to the constant: piecewise-linear through `(time_s, wind)`
     /// points, held constant outside them.
     pub wind_profile: Vec<(f64, Vector3<f64>)>,
+    /// Sensor noise on what the controller sees (`None`: the true state).
+    pub noise: Option<SensorNoise>,
+}
+
+/// Additive Gaussian noise on each of the 12 measured state components (position, velocity,
+/// Euler angles, body rates; see [`crate::controller::state_vector`]), with standard deviation
+/// `relative_std |x_i| + absolute_std[i]`.
+///
+/// `relative_std = 10^(-SNR / 20)` is a per-sample signal-to-noise ratio (Wang et al. add noise
+/// "with the signal-to-noise ratio as 15 dB ... to all the feedback states" without saying how the
+/// signal power is measured; per sample is the causal reading, decided here and documented).
+/// Deterministic for a given `seed` on every platform (SplitMix64 and Box-Muller).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorNoise {
+    pub relative_std: f64,
+    pub absolute_std: [f64; STATE_DIM],
+    pub seed: u64,
+}
+
+impl SensorNoise {
+    /// Relative noise at `snr_db` decibels.
+    pub fn from_snr_db(snr_db: f64, seed: u64) -> Self {
+        SensorNoise {
+            relative_std: 10f64.powf(-snr_db / 20.0),
+            absolute_std: [0.0; STATE_DIM],
+            seed,
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        if !(self.relative_std.is_finite() && self.relative_std >= 0.0) {
+            return Err(RfError::invalid(
+                "noise.snr_db",
+                "must give a finite, non-negative noise level",
+            ));
+        }
+        for (i, &v) in self.absolute_std.iter().enumerate() {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(RfError::invalid(
+                    format!("noise.std[{i}]"),
+                    format!("must be finite and >= 0, got {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Standard normal samples from SplitMix64 through Box-Muller.
+struct Gaussian {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl Gaussian {
+    fn new(seed: u64) -> Self {
+        Gaussian {
+            state: seed,
+            spare: None,
+        }
+    }
+
+    fn uniform(&mut self) -> f64 {
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        // 53 random bits in (0, 1]: never 0, so the logarithm below is finite.
+        ((z >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+    }
+
+    fn sample(&mut self) -> f64 {
+        if let Some(s) = self.spare.take() {
+            return s;
+        }
+        let (u1, u2) = (self.uniform(), self.uniform());
+        let radius = (-2.0 * u1.ln()).sqrt();
+        let angle = 2.0 * std::f64::consts::PI * u2;
+        self.spare = Some(radius * angle.sin());
+        radius * angle.cos()
+    }
 }
 
 impl SimulationConfig {
+    /// A run of `duration_s` at control period `control_dt_s` with `substeps` RK4 steps per
+    /// period, default limits, no wind, no noise.
+    pub fn new(control_dt_s: f64, substeps: usize, duration_s: f64) -> Self {
+        SimulationConfig {
+            control_dt_s,
+            substeps,
+            duration_s,
+            limits: DivergenceLimits::default(),
+            wind_m_s: Vector3::zeros(),
+            wind_profile: Vec::new(),
+            noise: None,
+        }
+    }
+
     pub fn check(&self) -> Result<()> {
         require_finite("dt", self.control_dt_s)?;
         if self.control_dt_s <= 0.0 {
@@ -137,6 +233,9 @@ impl SimulationConfig {
         }
         for (i, w) in self.wind_m_s.iter().enumerate() {
             require_finite(&format!("wind[{i}]"), *w)?;
+        }
+        if let Some(noise) = &self.noise {
+            noise.check()?;
         }
         for (k, (t, w)) in self.wind_profile.iter().enumerate() {
             require_finite(&format!("wind_profile[{k}].time_s"), *t)?;
@@ -188,6 +287,8 @@ pub struct Trajectory {
     pub thrust_n: Vec<f64>,
     /// Health of each rotor at this step (m per row).
     pub health: Vec<f64>,
+    /// What the controller saw: the 12-element state vector, with sensor noise (12 per row).
+    pub measured: Vec<f64>,
     pub divergence: Option<Divergence>,
 }
 
@@ -287,6 +388,7 @@ pub fn simulate(
         commands: Vec::with_capacity((steps + 1) * count),
         thrust_n: Vec::with_capacity((steps + 1) * m),
         health: Vec::with_capacity((steps + 1) * m),
+        measured: Vec::with_capacity((steps + 1) * STATE_DIM),
         divergence: None,
     };
     controller.reset();
@@ -296,6 +398,7 @@ pub fn simulate(
     let mut state = x0;
     let start_altitude = -x0.position_m.z;
     let body = vehicle.body();
+    let mut gaussian = config.noise.map(|n| Gaussian::new(n.seed));
     for k in 0..=steps {
         let t = k as f64 * config.control_dt_s;
         while next_fault < faults.len() && faults[next_fault].time_s <= t {
@@ -312,6 +415,9 @@ pub fn simulate(
             trajectory
                 .commands
                 .extend(std::iter::repeat_n(f64::NAN, count));
+            trajectory
+                .measured
+                .extend(std::iter::repeat_n(f64::NAN, STATE_DIM));
             trajectory.divergence = Some(Divergence {
                 time_s: t,
                 reason,
@@ -319,7 +425,19 @@ pub fn simulate(
             });
             break;
         }
-        controller.command(t, &state, &mut command)?;
+        let measured = match (&config.noise, gaussian.as_mut()) {
+            (Some(noise), Some(gaussian)) => {
+                let mut x = state_vector(&state);
+                for (i, v) in x.iter_mut().enumerate() {
+                    *v +=
+                        (noise.relative_std * v.abs() + noise.absolute_std[i]) * gaussian.sample();
+                }
+                state_from_vector(&x)
+            }
+            _ => state,
+        };
+        trajectory.measured.extend(state_vector(&measured));
+        controller.command(t, &measured, &mut command)?;
         trajectory.commands.extend_from_slice(&command);
         if k == steps {
             break;
@@ -349,7 +467,8 @@ pub struct BatchRun {
     pub faults: Vec<RotorFault>,
 }
 
-/// Many runs in parallel (rayon); results in input order.
+/// Many runs in parallel (rayon); results in input order. With sensor noise, run `i` uses seed
+/// `seed + i`, so runs are independent and the batch is reproducible.
 pub fn simulate_batch(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -358,7 +477,12 @@ pub fn simulate_batch(
     config: &SimulationConfig,
 ) -> Result<Vec<Trajectory>> {
     runs.into_par_iter()
-        .map(|mut run| {
+        .enumerate()
+        .map(|(i, mut run)| {
+            let mut own = config.clone();
+            if let Some(noise) = own.noise.as_mut() {
+                noise.seed = noise.seed.wrapping_add(i as u64);
+            }
             simulate(
                 vehicle,
                 actuators.clone(),
@@ -366,7 +490,7 @@ pub fn simulate_batch(
                 initial_health,
                 &run.faults,
                 run.x0,
-                config,
+                &own,
             )
         })
         .collect()
@@ -391,14 +515,7 @@ mod tests {
     }
 
     fn config(duration_s: f64) -> SimulationConfig {
-        SimulationConfig {
-            control_dt_s: 0.0025,
-            substeps: 2,
-            duration_s,
-            limits: DivergenceLimits::default(),
-            wind_m_s: Vector3::zeros(),
-            wind_profile: Vec::new(),
-        }
+        SimulationConfig::new(0.0025, 2, duration_s)
     }
 
     fn hover_schedule(airframe: &Airframe) -> OpenLoop {
@@ -519,7 +636,21 @@ mod tests {
         assert_eq!(run.health[row(0.5)], 1.0);
         assert_eq!(run.health[row(1.2)], 0.0);
         assert_eq!(run.thrust_n[row(1.2)], 0.0);
-        assert!(run.commands.len() == run.t_s.len() * 4);
+        assert_eq!(run.commands.len(), run.t_s.len() * 4);
+        assert_eq!(run.measured.len(), run.t_s.len() * STATE_DIM);
+    }
+
+    #[test]
+    fn gaussian_samples_have_unit_variance_and_are_reproducible() {
+        let mut g = Gaussian::new(7);
+        let samples: Vec<f64> = (0..200_000).map(|_| g.sample()).collect();
+        let mean = samples.iter().sum::<f64>() / samples.len() as f64;
+        let var = samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / samples.len() as f64;
+        // Standard errors: 1/sqrt(n) = 0.0022 for the mean, sqrt(2/n) = 0.0032 for the variance.
+        assert!(mean.abs() < 0.01, "{mean}");
+        assert!((var - 1.0).abs() < 0.015, "{var}");
+        let mut again = Gaussian::new(7);
+        assert!(samples[..10].iter().all(|&x| x == again.sample()));
     }
 
     #[test]
