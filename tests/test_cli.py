@@ -125,3 +125,47 @@ def test_installed_console_script() -> None:
     bad = subprocess.run([*command, "acai", "--airframe", "nope"], capture_output=True, text=True, check=False, timeout=120)
     assert bad.returncode == 1 and "Traceback" not in bad.stderr
     assert bad.stderr.strip().startswith("Error: preset: unknown airframe 'nope'")
+
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "quad-x-rotor-failure.toml"
+
+
+def test_simulate_example_scenario(tmp_path: Path) -> None:
+    png = tmp_path / "run.png"
+    code, out, err = run("simulate", str(EXAMPLE), "--plot", str(png))
+    assert code == 0, err
+    assert "diverged at t =" in out and "tilt beyond the limit" in out
+    assert png.stat().st_size > 20_000
+
+
+def test_simulate_hover_scenario_with_everything(tmp_path: Path) -> None:
+    path = tmp_path / "hover.toml"
+    path.write_text(
+        'airframe = "quad-x"\nduration_s = 3.0\n[initial]\nposition_m = [0.0, 0.0, -5.0]\n'
+        '[controller]\nkind = "lqr-hover"\n[drag]\nlinear_n_s_m = 0.1\n[wind]\nvelocity_m_s = [1.0, 0.0, 0.0]\n'
+        "[noise]\nstd = [0.01, 0.01, 0.001, 0.001]\nseed = 2\n"
+    )
+    code, out, err = run("simulate", str(path))
+    assert code == 0, err
+    assert "no divergence" in out
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('airframe = "quad-x"\ncolour = 1\n', "unknown key(s) colour"),
+        ('airframe = "quad-x"\n[controller]\nkind = "pid"\n', "controller.kind: must be one of"),
+        ('airframe = "quad-x"\n[[fault]]\nrotor = 5\ntime_s = 1.0\n', "faults[0].rotor: rotor numbers run from 1 to 4, got 5"),
+        ('airframe = "quad-x"\n[drag]\nlinear = 1.0\n', "drag: unknown key(s) linear"),
+        ('airframe = "quad-x"\ndt_s = -1.0\n', "dt: must be > 0"),
+        ("airframe = [", "scenario.toml: "),
+        ("duration_s = 1.0\n", "airframe: required"),
+    ],
+)
+def test_simulate_bad_scenarios_are_one_line(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "scenario.toml"
+    path.write_text(text)
+    code, out, err = run("simulate", str(path))
+    assert code == 1, out
+    assert message in err and "Traceback" not in err + out
+    assert len(err.strip().splitlines()) == 1

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import click
+import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
@@ -169,6 +170,34 @@ def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: 
     )
     if plot_path is not None:
         result.plot(plot_path)
+        console.print(f"plot written to {plot_path}")
+
+
+@cli.command()
+@click.argument("scenario_file", type=click.Path(dir_okay=False))
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write the time-history figure (PNG).")
+@_user_errors
+def simulate(scenario_file: str, plot_path: str | None) -> None:
+    """Fly a scenario file (airframe, controller, faults, wind, noise, duration)."""
+    from .scenario import load_scenario
+
+    scenario = load_scenario(scenario_file)
+    run = scenario.run()
+    altitude = -run.position[:, 2]
+    tilt = np.degrees(np.arccos(np.clip(run.primary_axis[:, 2], -1.0, 1.0)))
+    table = Table(title=f"{escape(scenario.name)}: {escape(scenario.simulator.airframe.name)}, {scenario.controller_kind}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("simulated", f"{run.t[-1]:.3f} s of {scenario.duration_s:g} s")
+    table.add_row("faults", ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in run.faults) or "none")
+    table.add_row("final position (N, E, alt)", ", ".join(f"{v:.3f}" for v in (*run.position[-1, :2], altitude[-1])))
+    table.add_row("max altitude loss", f"{max(0.0, altitude[0] - altitude.min()):.3f} m")
+    table.add_row("max horizontal excursion", f"{np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max():.3f} m")
+    table.add_row("max tilt", f"{tilt.max():.1f} deg")
+    table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
+    console.print(table)
+    if plot_path is not None:
+        run.plot(plot_path)
         console.print(f"plot written to {plot_path}")
 
 

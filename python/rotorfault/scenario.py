@@ -1,0 +1,151 @@
+"""Scenario files for ``rotorfault simulate``: one TOML file names an airframe, a controller,
+faults, wind, noise and the duration. Unknown keys are errors, so a typo never silently becomes
+a default. Schema (every table optional except the top-level ``airframe``)::
+
+    airframe = "quad-x"          # a preset name, or an airframe TOML path (relative to this file)
+    duration_s = 10.0
+    dt_s = 0.0025                # control period
+    substeps = 4                 # RK4 steps per control period
+
+    [initial]                    # world NED; altitude is -position_m[2]
+    position_m = [0, 0, -10]
+    velocity_m_s = [0, 0, 0]
+    euler_rad = [0, 0, 0]
+    omega_rad_s = [0, 0, 0]
+
+    [controller]
+    kind = "lqr-hover"           # "none", "open-loop-hover" or "lqr-hover" (holds the initial position)
+
+    [actuator]                   # fixed-pitch rotors
+    time_constant_s = 0.025
+    rate_limit_n_s = 50.0
+
+    [drag]                       # fields of rotorfault.Drag
+    linear_n_s_m = 0.0
+
+    [wind]
+    velocity_m_s = [0, 0, 0]
+
+    [noise]                      # fields of rotorfault.Noise
+    snr_db = 15.0
+    seed = 0
+
+    [[fault]]                    # any number
+    rotor = 1                    # 1-based
+    time_s = 1.0
+    efficiency = 0.0
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ._convert import real
+from .airframe import Airframe
+from .controllers import OpenLoop
+from .linear import hover_trim, lqr_hover
+from .simulation import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
+
+_TOP = {"airframe", "duration_s", "dt_s", "substeps", "initial", "controller", "actuator", "drag", "wind", "noise", "fault"}
+_TABLES: dict[str, set[str]] = {
+    "initial": {"position_m", "velocity_m_s", "euler_rad", "omega_rad_s"},
+    "controller": {"kind"},
+    "actuator": {"time_constant_s", "rate_limit_n_s", "thrust_coefficient_n_s2"},
+    "drag": {"linear_n_s_m", "quadratic_n_s2_m2", "rotational_n_m_s", "rotor_inertia_kg_m2"},
+    "wind": {"velocity_m_s"},
+    "noise": {"snr_db", "std", "seed"},
+    "fault": {"rotor", "time_s", "efficiency"},
+}
+CONTROLLERS = ("none", "open-loop-hover", "lqr-hover")
+
+
+def _table(data: dict[str, Any], name: str) -> dict[str, Any]:
+    value = data.get(name, {})
+    if not isinstance(value, dict):
+        raise ValueError(f"{name}: expected a table")
+    unknown = set(value) - _TABLES[name]
+    if unknown:
+        raise ValueError(f"{name}: unknown key(s) {', '.join(sorted(unknown))}; allowed: {', '.join(sorted(_TABLES[name]))}")
+    return value
+
+
+@dataclass
+class Scenario:
+    """A parsed scenario: the simulator, start state, controller kind and faults."""
+
+    name: str
+    simulator: Simulator
+    initial: State
+    controller_kind: str
+    faults: list[RotorFault]
+    duration_s: float
+
+    def run(self) -> Trajectory:
+        controller: Any = None
+        target = self.initial.position
+        if self.controller_kind == "lqr-hover":
+            controller = lqr_hover(self.simulator, position=target)
+        elif self.controller_kind == "open-loop-hover":
+            controller = OpenLoop.constant(hover_trim(self.simulator, position=target)[1])
+        return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Reads and validates a scenario file (errors name the key and the file)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    try:
+        return _parse(data, path)
+    except (ValueError, TypeError) as exc:
+        raise type(exc)(f"{path}: {exc}") from None
+
+
+def _parse(data: dict[str, Any], path: Path) -> Scenario:
+    unknown = set(data) - _TOP
+    if unknown:
+        raise ValueError(f"unknown key(s) {', '.join(sorted(unknown))}; allowed: {', '.join(sorted(_TOP))}")
+    if "airframe" not in data or not isinstance(data["airframe"], str):
+        raise ValueError("airframe: required, a preset name or an airframe TOML path")
+    spec = data["airframe"]
+    airframe = Airframe.from_toml(path.parent / spec) if spec.endswith(".toml") else Airframe.preset(spec)
+    initial = _table(data, "initial")
+    state = State(
+        position=initial.get("position_m", (0.0, 0.0, 0.0)),
+        velocity=initial.get("velocity_m_s", (0.0, 0.0, 0.0)),
+        euler=initial.get("euler_rad", (0.0, 0.0, 0.0)),
+        omega=initial.get("omega_rad_s", (0.0, 0.0, 0.0)),
+    )
+    kind = _table(data, "controller").get("kind", "lqr-hover")
+    if kind not in CONTROLLERS:
+        raise ValueError(f"controller.kind: must be one of {', '.join(CONTROLLERS)}, got {kind!r}")
+    actuator = _table(data, "actuator")
+    noise = data.get("noise")
+    faults_raw = data.get("fault", [])
+    if not isinstance(faults_raw, list):
+        raise ValueError("fault: expected an array of tables ([[fault]])")
+    faults = []
+    for k, f in enumerate(faults_raw):
+        if not isinstance(f, dict) or set(f) - _TABLES["fault"] or "rotor" not in f or "time_s" not in f:
+            raise ValueError(f"fault[{k}]: needs rotor and time_s (and optional efficiency), nothing else")
+        faults.append(RotorFault(rotor=f["rotor"], time=f["time_s"], efficiency=f.get("efficiency", 0.0)))
+    simulator = Simulator(
+        airframe,
+        dt=data.get("dt_s", 1.0 / 400.0),
+        substeps=data.get("substeps", 4),
+        drag=Drag(**_table(data, "drag")),
+        wind=_table(data, "wind").get("velocity_m_s", (0.0, 0.0, 0.0)),
+        actuator=FixedPitchActuator(
+            time_constant_s=actuator.get("time_constant_s", 0.0),
+            rate_limit_n_s=actuator.get("rate_limit_n_s", math.inf),
+            thrust_coefficient_n_s2=actuator.get("thrust_coefficient_n_s2", 0.0),
+        ),
+        noise=None if noise is None else Noise(**_table(data, "noise")),
+    )
+    return Scenario(path.stem, simulator, state, kind, faults, real("duration_s", data.get("duration_s", 10.0)))
