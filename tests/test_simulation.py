@@ -48,6 +48,20 @@ def test_lqr_recovers_from_a_perturbation(sim: rf.Simulator, lqr: rf.LinearFeedb
     assert np.abs(tr.euler[-1]).max() < 1e-3
 
 
+def test_rotation_and_primary_axis_agree(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    tr = sim.run(rf.State(position=(0, 0, -10), euler=(0.3, -0.2, 1.0), omega=(1, 2, 3)), 0.5, controller=lqr)
+    r = tr.rotation
+    np.testing.assert_allclose(r[:, :, 2], tr.primary_axis, atol=1e-12)
+    np.testing.assert_allclose(np.einsum("nij,nkj->nik", r, r), np.broadcast_to(np.eye(3), r.shape), atol=1e-12)
+    # Z-Y-X Euler angles rebuild the same matrix.
+    roll, pitch, yaw = tr.euler[0]
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    expected = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                         [-sp, cp * sr, cp * cr]])
+    np.testing.assert_allclose(r[0], expected, atol=1e-12)
+
+
 def test_free_fall_matches_the_closed_form(sim: rf.Simulator) -> None:
     tr = sim.run(rf.State(position=(0, 0, -100), velocity=(1.0, 0, -3.0)), 2.0)
     t = tr.t

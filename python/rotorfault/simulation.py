@@ -276,6 +276,19 @@ class Trajectory:
     def diverged(self) -> bool:
         return bool(self.events)
 
+    @property
+    def rotation(self) -> FloatArray:
+        """Rotation matrices body -> world (N x 3 x 3) from the quaternions."""
+        w, x, y, z = self.quaternion.T
+        return np.stack(
+            [
+                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+            ],
+            axis=1,
+        )
+
     @classmethod
     def _from_core(cls, raw: dict[str, Any], faults: tuple[RotorFault, ...]) -> Trajectory:
         events = []
