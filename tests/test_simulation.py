@@ -84,6 +84,8 @@ def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: 
     np.testing.assert_array_equal(tr.health[after], [0, 1, 1, 1])
     assert tr.rotor_thrust[after, 0] == 0.0
     assert np.all(np.isnan(tr.rotor_command[-1]))  # no command after the divergence
+    assert np.all(np.isnan(tr.measured[-1])) and tr.measured.shape == (len(tr.t), 12)
+    np.testing.assert_allclose(tr.measured[0], rf.State(position=(0, 0, -10)).vector(), atol=1e-15)
 
 
 def test_partial_fault_scales_thrust_only(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:

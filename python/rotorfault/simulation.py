@@ -295,6 +295,12 @@ class Trajectory:
         if raw["divergence"] is not None:
             d = raw["divergence"]
             events.append(Event(d["time"], d["reason"], d["description"], np.asarray(d["state"])))
+        measured = raw["measured"]
+        if measured.shape[1] == 0:
+            # No sensor noise: the controller saw the true state (the core does not copy it).
+            measured = np.hstack([raw["position"], raw["velocity"], raw["euler"], raw["omega"]])
+            if events:
+                measured[-1] = np.nan  # no command was computed at the divergence
         return cls(
             t=raw["t"],
             position=raw["position"],
@@ -306,7 +312,7 @@ class Trajectory:
             rotor_command=raw["command"],
             rotor_thrust=raw["thrust"],
             health=raw["health"],
-            measured=raw["measured"],
+            measured=measured,
             events=events,
             faults=faults,
         )

@@ -24,6 +24,8 @@ use crate::error::{require_finite, Result, RfError};
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigidBody {
     mass_kg: f64,
+    /// 1 / mass: a multiplication in every derivative instead of a division.
+    inverse_mass: f64,
     inertia_kg_m2: Matrix3<f64>,
     inertia_inverse: Matrix3<f64>,
 }
@@ -57,6 +59,7 @@ impl RigidBody {
             .ok_or_else(|| RfError::invalid("inertia_kg_m2", "must be invertible"))?;
         Ok(RigidBody {
             mass_kg,
+            inverse_mass: 1.0 / mass_kg,
             inertia_kg_m2,
             inertia_inverse,
         })
@@ -81,7 +84,7 @@ impl RigidBody {
         let j_omega = self.inertia_kg_m2 * omega;
         StateDerivative {
             position: state.velocity_m_s,
-            velocity: wrench.force_world_n / self.mass_kg,
+            velocity: wrench.force_world_n * self.inverse_mass,
             attitude: state.attitude.quaternion() * Quaternion::from_imag(omega) * 0.5,
             omega: self.inertia_inverse * (wrench.torque_body_nm - omega.cross(&j_omega)),
         }

@@ -287,7 +287,8 @@ pub struct Trajectory {
     pub thrust_n: Vec<f64>,
     /// Health of each rotor at this step (m per row).
     pub health: Vec<f64>,
-    /// What the controller saw: the 12-element state vector, with sensor noise (12 per row).
+    /// What the controller saw with sensor noise: the 12-element state vector (12 per row);
+    /// empty without noise (the controller then saw exactly `states`).
     pub measured: Vec<f64>,
     pub divergence: Option<Divergence>,
 }
@@ -388,7 +389,11 @@ pub fn simulate(
         commands: Vec::with_capacity((steps + 1) * count),
         thrust_n: Vec::with_capacity((steps + 1) * m),
         health: Vec::with_capacity((steps + 1) * m),
-        measured: Vec::with_capacity((steps + 1) * STATE_DIM),
+        measured: Vec::with_capacity(if config.noise.is_some() {
+            (steps + 1) * STATE_DIM
+        } else {
+            0
+        }),
         divergence: None,
     };
     controller.reset();
@@ -415,9 +420,11 @@ pub fn simulate(
             trajectory
                 .commands
                 .extend(std::iter::repeat_n(f64::NAN, count));
-            trajectory
-                .measured
-                .extend(std::iter::repeat_n(f64::NAN, STATE_DIM));
+            if config.noise.is_some() {
+                trajectory
+                    .measured
+                    .extend(std::iter::repeat_n(f64::NAN, STATE_DIM));
+            }
             trajectory.divergence = Some(Divergence {
                 time_s: t,
                 reason,
@@ -425,6 +432,8 @@ pub fn simulate(
             });
             break;
         }
+        // Measurements are recorded only when they differ from the true state (with noise);
+        // without noise the Python layer rebuilds them from the recorded state.
         let measured = match (&config.noise, gaussian.as_mut()) {
             (Some(noise), Some(gaussian)) => {
                 let mut x = state_vector(&state);
@@ -432,11 +441,11 @@ pub fn simulate(
                     *v +=
                         (noise.relative_std * v.abs() + noise.absolute_std[i]) * gaussian.sample();
                 }
+                trajectory.measured.extend(x);
                 state_from_vector(&x)
             }
             _ => state,
         };
-        trajectory.measured.extend(state_vector(&measured));
         controller.command(t, &measured, &mut command)?;
         trajectory.commands.extend_from_slice(&command);
         if k == steps {
@@ -637,7 +646,10 @@ mod tests {
         assert_eq!(run.health[row(1.2)], 0.0);
         assert_eq!(run.thrust_n[row(1.2)], 0.0);
         assert_eq!(run.commands.len(), run.t_s.len() * 4);
-        assert_eq!(run.measured.len(), run.t_s.len() * STATE_DIM);
+        assert!(
+            run.measured.is_empty(),
+            "no noise, no separate measurements"
+        );
     }
 
     #[test]

@@ -93,30 +93,63 @@ impl Vehicle {
         rotors: &[RotorOutput],
         wind_m_s: &Vector3<f64>,
     ) -> Wrench {
-        let mut thrust = 0.0;
-        let mut torque = Vector3::zeros();
-        let mut rotor_spin = 0.0;
+        self.wrench_from(state, &self.rotor_totals(rotors), wind_m_s)
+    }
+
+    /// Sums the rotors' contributions once; they are held through a substep while RK4 evaluates
+    /// the wrench four times (see [`Vehicle::wrench_from`]).
+    pub fn rotor_totals(&self, rotors: &[RotorOutput]) -> RotorTotals {
+        let mut totals = RotorTotals::default();
         for (out, &(x, y)) in rotors.iter().zip(&self.rotor_xy_m) {
-            thrust += out.thrust_n;
+            totals.thrust_n += out.thrust_n;
             // r x F with F = (0, 0, -f): (-y f, x f, 0).
-            torque.x -= y * out.thrust_n;
-            torque.y += x * out.thrust_n;
-            torque.z += out.reaction_torque_nm;
-            rotor_spin += out.spin_rad_s;
+            totals.torque_body_nm.x -= y * out.thrust_n;
+            totals.torque_body_nm.y += x * out.thrust_n;
+            totals.torque_body_nm.z += out.reaction_torque_nm;
+            totals.spin_rad_s += out.spin_rad_s;
         }
+        totals
+    }
+
+    /// The wrench for summed rotor contributions; the state-dependent terms are evaluated here.
+    pub fn wrench_from(
+        &self,
+        state: &RigidBodyState,
+        rotors: &RotorTotals,
+        wind_m_s: &Vector3<f64>,
+    ) -> Wrench {
         let omega = state.omega_rad_s;
         let a = &self.aero;
-        // Rotors carry angular momentum I_R sum(spin) e3 (body); the body feels -omega x h.
-        torque -= omega.cross(&Vector3::new(0.0, 0.0, a.rotor_inertia_kg_m2 * rotor_spin));
-        torque -= a.rotational_drag_n_m_s * omega;
+        let mut torque = rotors.torque_body_nm - a.rotational_drag_n_m_s * omega;
+        if a.rotor_inertia_kg_m2 != 0.0 {
+            // Rotors carry angular momentum I_R sum(spin) e3 (body); the body feels -omega x h.
+            torque -= omega.cross(&Vector3::new(
+                0.0,
+                0.0,
+                a.rotor_inertia_kg_m2 * rotors.spin_rad_s,
+            ));
+        }
         let air = state.velocity_m_s - wind_m_s;
-        let drag = -(a.linear_drag_n_s_m + a.quadratic_drag_n_s2_m2 * air.norm()) * air;
+        let mut drag_coefficient = a.linear_drag_n_s_m;
+        if a.quadratic_drag_n_s2_m2 != 0.0 {
+            drag_coefficient += a.quadratic_drag_n_s2_m2 * air.norm();
+        }
         let weight = Vector3::new(0.0, 0.0, self.body.mass_kg() * self.gravity_m_s2);
         Wrench {
-            force_world_n: weight + drag + state.attitude * Vector3::new(0.0, 0.0, -thrust),
+            force_world_n: weight - drag_coefficient * air
+                + state.attitude * Vector3::new(0.0, 0.0, -rotors.thrust_n),
             torque_body_nm: torque,
         }
     }
+}
+
+/// The rotors' summed contribution: total thrust (N, along body -z), torque about the centre of
+/// mass (body, N m) and net spin along body z (rad/s, for the gyroscopic moment).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RotorTotals {
+    pub thrust_n: f64,
+    pub torque_body_nm: Vector3<f64>,
+    pub spin_rad_s: f64,
 }
 
 #[cfg(test)]

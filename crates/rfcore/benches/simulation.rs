@@ -1,0 +1,234 @@
+//! Criterion benchmarks of the flight simulator (quad-x preset, no drag, no actuator lag).
+//!
+//! Run from the workspace root with `cargo bench --bench simulation` (add
+//! `-- --warm-up-time 1 --measurement-time 3` for a quick run). The Python-side batch and the
+//! comparison with RotorPy live in `benches/simulation_rotorpy.py`.
+//!
+//! Throughput is `Throughput::Elements(n)` with n = the number of RK4 substeps (one
+//! `RigidBody::rk4_step`, i.e. four wrench + derivative evaluations), so criterion's
+//! "elem/s" reads as RK4 steps per second:
+//!
+//! - `simulation/rk4_step/quad-x-hover`: one `RigidBody::rk4_step` with the vehicle wrench
+//!   (`Vehicle::wrench`, quad-x hover thrusts held), n = 1;
+//! - `simulation/flight_10s/linear_feedback`: one `simulate` call, 10 s at 400 Hz control with 4
+//!   RK4 substeps per control period (4,000 control steps, n = 16,000 RK4 steps), a hand-built
+//!   `LinearFeedback` (diagonal PD through the pseudo-inverse of the effectiveness matrix),
+//!   starting from a small velocity / attitude perturbation about the hover point. Includes
+//!   everything `simulate` does per step: trajectory recording, divergence checks, the 4,001
+//!   controller calls (Euler angles + a 4 x 12 gain product), the actuator update per substep;
+//! - `simulation/flight_10s/open_loop`: the same flight with `OpenLoop` holding the hover thrusts
+//!   from the trim point (n = 16,000).
+//!
+//! Note: `cargo bench -- <criterion flags>` also passes the flags to the library's unit-test
+//! harness, which rejects them; use `cargo bench --bench simulation -- <flags>` for that.
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+use rfcore::actuator::{Actuators, FixedPitch, Lag, RotorOutput};
+use rfcore::controller::{LinearFeedback, OpenLoop, STATE_DIM};
+use rfcore::rigid_body::RigidBodyState;
+use rfcore::simulation::{simulate, SimulationConfig};
+use rfcore::vehicle::{Aerodynamics, Vehicle};
+use rfcore::Airframe;
+
+const CONTROL_DT_S: f64 = 1.0 / 400.0;
+const SUBSTEPS: usize = 4;
+const DURATION_S: f64 = 10.0;
+
+fn quad_x() -> Airframe {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../python/rotorfault/presets/quad-x.toml"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("reading {path}: {e}"));
+    Airframe::from_toml_str(&text, "quad-x").unwrap_or_else(|e| panic!("parsing {path}: {e}"))
+}
+
+fn config() -> SimulationConfig {
+    SimulationConfig::new(CONTROL_DT_S, SUBSTEPS, DURATION_S)
+}
+
+/// A hover gain by hand: the desired wrench change is a diagonal PD on the state error
+/// (altitude; roll / pitch / yaw, with the horizontal position loop closed through the attitude
+/// set-point, roll <- east, pitch <- -north, as thrust tilts in NED/FRD), mapped to rotor thrusts
+/// by the pseudo-inverse of the 4 x m effectiveness matrix (rows T, L, M, N).
+/// Returns K (m x 12) for `u = u_trim - K (x - x_trim)`.
+fn hover_gain(airframe: &Airframe) -> DMatrix<f64> {
+    let m = airframe.mass_kg();
+    let g = airframe.gravity_m_s2();
+    let [jx, jy, jz] = airframe.inertia_kg_m2();
+    // Altitude: omega_n = 4 rad/s, zeta = 0.9; attitude: omega_n = 20 rad/s; position (outer): 2 rad/s.
+    let (kp_z, kd_z) = (16.0, 7.2);
+    let (kp_att, kd_att) = (400.0, 36.0);
+    let (kp_yaw, kd_yaw) = (100.0, 18.0);
+    let (kp_xy, kd_xy) = (4.0, 3.6);
+    // Wrench change dw = -G e (e = x - x_trim), columns in the order of `state_vector`:
+    // [n, e, d, vn, ve, vd, roll, pitch, yaw, p, q, r].
+    let mut gw = DMatrix::<f64>::zeros(4, STATE_DIM);
+    // Thrust (up): more when below the target (d error > 0) or sinking (vd > 0).
+    gw[(0, 2)] = -m * kp_z;
+    gw[(0, 5)] = -m * kd_z;
+    // Roll torque: L = Jx (kp (roll_d - roll) - kd p), roll_d = -(kp_xy e_e + kd_xy e_ve) / g.
+    gw[(1, 1)] = jx * kp_att * kp_xy / g;
+    gw[(1, 4)] = jx * kp_att * kd_xy / g;
+    gw[(1, 6)] = jx * kp_att;
+    gw[(1, 9)] = jx * kd_att;
+    // Pitch torque: M = Jy (kp (pitch_d - pitch) - kd q), pitch_d = +(kp_xy e_n + kd_xy e_vn) / g.
+    gw[(2, 0)] = -jy * kp_att * kp_xy / g;
+    gw[(2, 3)] = -jy * kp_att * kd_xy / g;
+    gw[(2, 7)] = jy * kp_att;
+    gw[(2, 10)] = jy * kd_att;
+    // Yaw torque.
+    gw[(3, 8)] = jz * kp_yaw;
+    gw[(3, 11)] = jz * kd_yaw;
+    let pinv = airframe
+        .effectiveness_matrix()
+        .pseudo_inverse(1e-12)
+        .expect("pseudo-inverse of the effectiveness matrix");
+    // u = u_trim + pinv dw = u_trim - (pinv G) e.
+    pinv * gw
+}
+
+fn bench_simulation(c: &mut Criterion) {
+    let airframe = quad_x();
+    let rotors = airframe.rotor_count();
+    let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).expect("vehicle");
+    let hover_thrust = airframe.mass_kg() * airframe.gravity_m_s2() / rotors as f64;
+    let u_trim = vec![hover_thrust; rotors];
+    let mut actuators = Actuators::FixedPitch(
+        FixedPitch::new(&airframe, Lag::none(), 0.0).expect("fixed-pitch actuators"),
+    );
+    actuators.settle(&u_trim);
+    let target = Vector3::new(0.0, 0.0, -10.0);
+    let hover = RigidBodyState {
+        position_m: target,
+        ..RigidBodyState::at_rest()
+    };
+    let config = config();
+    let health = vec![1.0; rotors];
+    let rk4_per_flight = (config.steps() * SUBSTEPS) as u64;
+    assert_eq!(rk4_per_flight, 16_000);
+
+    // -- one RK4 step with the vehicle wrench ---------------------------------------------------
+    let outputs: Vec<RotorOutput> = (0..rotors).map(|i| actuators.output(i, 1.0)).collect();
+    let wind = Vector3::zeros();
+    let h = CONTROL_DT_S / SUBSTEPS as f64;
+    let body = vehicle.body();
+    // Sanity: the hover thrusts balance the weight exactly (the state does not move).
+    let after = body.rk4_step(0.0, &hover, h, |_, x| vehicle.wrench(x, &outputs, &wind));
+    assert!((after.position_m - target).norm() < 1e-12 && after.velocity_m_s.norm() < 1e-12);
+    // Time it from a generic (moving, tilted, rotating) state so nothing is trivially zero.
+    let moving = RigidBodyState {
+        position_m: target,
+        velocity_m_s: Vector3::new(0.3, -0.2, 0.1),
+        attitude: UnitQuaternion::from_euler_angles(0.05, -0.03, 0.2),
+        omega_rad_s: Vector3::new(0.1, 0.05, -0.02),
+    };
+
+    let mut group = c.benchmark_group("simulation");
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("rk4_step/quad-x-hover", |b| {
+        b.iter(|| {
+            body.rk4_step(0.0, black_box(&moving), black_box(h), |_, x| {
+                vehicle.wrench(x, black_box(&outputs), &wind)
+            })
+        })
+    });
+
+    // -- closed loop: LinearFeedback ------------------------------------------------------------
+    let mut x_trim = [0.0; STATE_DIM];
+    x_trim[2] = target.z;
+    let feedback = LinearFeedback::new(&x_trim, &u_trim, hover_gain(&airframe)).expect("gain");
+    // A perturbed start about the hover point: 0.5 m/s north, 0.3 m/s up, 3 deg roll, 5 deg yaw.
+    let perturbed = RigidBodyState {
+        velocity_m_s: Vector3::new(0.5, 0.0, -0.3),
+        attitude: UnitQuaternion::from_euler_angles(0.05, 0.0, 0.09),
+        ..hover
+    };
+    // Validate before timing: it hovers, no divergence, ends within 1 cm of the start (= target).
+    let run = simulate(
+        &vehicle,
+        actuators.clone(),
+        &mut feedback.clone(),
+        &health,
+        &[],
+        perturbed,
+        &config,
+    )
+    .expect("closed-loop flight");
+    assert!(run.divergence.is_none(), "{:?}", run.divergence);
+    assert_eq!(run.states.len(), config.steps() + 1);
+    let end = run.states.last().unwrap();
+    let miss = (end.position_m - perturbed.position_m).norm();
+    assert!(miss < 0.01, "closed loop ends {miss} m from the start");
+    let peak = run
+        .states
+        .iter()
+        .map(|s| (s.position_m - target).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        peak > 0.01,
+        "the perturbation should move the vehicle ({peak} m)"
+    );
+
+    group.throughput(Throughput::Elements(rk4_per_flight));
+    group.bench_function("flight_10s/linear_feedback", |b| {
+        b.iter(|| {
+            let mut controller = feedback.clone();
+            simulate(
+                &vehicle,
+                actuators.clone(),
+                &mut controller,
+                &health,
+                &[],
+                black_box(perturbed),
+                &config,
+            )
+            .unwrap()
+        })
+    });
+
+    // -- open loop: hover thrusts held ----------------------------------------------------------
+    let open_loop = OpenLoop::new(vec![0.0], DMatrix::from_row_slice(1, rotors, &u_trim))
+        .expect("open-loop schedule");
+    let run = simulate(
+        &vehicle,
+        actuators.clone(),
+        &mut open_loop.clone(),
+        &health,
+        &[],
+        hover,
+        &config,
+    )
+    .expect("open-loop flight");
+    assert!(run.divergence.is_none());
+    let end = run.states.last().unwrap();
+    assert!(
+        (end.position_m - target).norm() < 0.01,
+        "{}",
+        end.position_m
+    );
+
+    group.bench_function("flight_10s/open_loop", |b| {
+        b.iter(|| {
+            let mut controller = open_loop.clone();
+            simulate(
+                &vehicle,
+                actuators.clone(),
+                &mut controller,
+                &health,
+                &[],
+                black_box(hover),
+                &config,
+            )
+            .unwrap()
+        })
+    });
+
+    group.finish();
+}
+
+criterion_group!(benches, bench_simulation);
+criterion_main!(benches);
