@@ -267,14 +267,25 @@ class Trajectory:
     rotor_command: FloatArray
     rotor_thrust: FloatArray
     health: FloatArray
-    #: What the controller saw: the 12-element state vector with sensor noise.
-    measured: FloatArray
+    #: Sensor readings as recorded by the core (empty without noise); see :attr:`measured`.
+    recorded_measurements: FloatArray
     events: list[Event] = field(default_factory=list)
     faults: tuple[RotorFault, ...] = ()
 
     @property
     def diverged(self) -> bool:
         return bool(self.events)
+
+    @property
+    def measured(self) -> FloatArray:
+        """What the controller saw: the 12-element state vector per step (with sensor noise;
+        without noise the true state, built on demand). The divergence row is NaN."""
+        if self.recorded_measurements.shape[1] > 0:
+            return self.recorded_measurements
+        measured = np.hstack([self.position, self.velocity, self.euler, self.omega])
+        if self.events:
+            measured[-1] = np.nan  # no command was computed at the divergence
+        return measured
 
     @property
     def rotation(self) -> FloatArray:
@@ -295,12 +306,6 @@ class Trajectory:
         if raw["divergence"] is not None:
             d = raw["divergence"]
             events.append(Event(d["time"], d["reason"], d["description"], np.asarray(d["state"])))
-        measured = raw["measured"]
-        if measured.shape[1] == 0:
-            # No sensor noise: the controller saw the true state (the core does not copy it).
-            measured = np.hstack([raw["position"], raw["velocity"], raw["euler"], raw["omega"]])
-            if events:
-                measured[-1] = np.nan  # no command was computed at the divergence
         return cls(
             t=raw["t"],
             position=raw["position"],
@@ -312,7 +317,7 @@ class Trajectory:
             rotor_command=raw["command"],
             rotor_thrust=raw["thrust"],
             health=raw["health"],
-            measured=measured,
+            recorded_measurements=raw["measured"],
             events=events,
             faults=faults,
         )
