@@ -357,6 +357,24 @@ fn trajectory_dict<'py>(py: Python<'py>, run: Trajectory) -> PyResult<Bound<'py,
     Ok(dict)
 }
 
+/// The vehicle, its actuators (settled at `settle` when given) and the command count.
+fn vehicle_and_actuators(
+    airframe: &PyAirframe,
+    actuator: &ActuatorArg<'_>,
+    aero: [f64; 4],
+    settle: Option<&PyReadonlyArray1<'_, f64>>,
+) -> PyResult<(Vehicle, Actuators, usize)> {
+    let mut actuators = build_actuators(airframe, actuator).map_err(to_py_err)?;
+    let vehicle = Vehicle::new(&airframe.inner, aerodynamics(aero)).map_err(to_py_err)?;
+    if let Some(settle) = settle {
+        actuators
+            .settle(slice1("initial_command", settle)?)
+            .map_err(to_py_err)?;
+    }
+    let count = actuators.channels() * airframe.inner.rotor_count();
+    Ok((vehicle, actuators, count))
+}
+
 /// One closed-loop run.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
@@ -372,19 +390,8 @@ pub fn simulate<'py>(
     settle: Option<PyReadonlyArray1<'py, f64>>,
     config_args: ConfigArgs,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut actuators = build_actuators(airframe, &actuator).map_err(to_py_err)?;
-    let vehicle = Vehicle::new(&airframe.inner, aerodynamics(aero)).map_err(to_py_err)?;
-    let count = actuators.channels() * airframe.inner.rotor_count();
-    if let Some(settle) = &settle {
-        let values = slice1("initial_command", settle)?;
-        if values.len() != count {
-            return Err(PyValueError::new_err(format!(
-                "initial_command: expected {count} entries, got {}",
-                values.len()
-            )));
-        }
-        actuators.settle(values);
-    }
+    let (vehicle, actuators, count) =
+        vehicle_and_actuators(airframe, &actuator, aero, settle.as_ref())?;
     let health = slice1("health", &health)?.to_vec();
     let config = config(config_args);
     let faults = faults(&fault_list);
@@ -466,19 +473,8 @@ pub fn simulate_batch<'py>(
     settle: Option<PyReadonlyArray1<'py, f64>>,
     config_args: ConfigArgs,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let mut actuators = build_actuators(airframe, &actuator).map_err(to_py_err)?;
-    let vehicle = Vehicle::new(&airframe.inner, aerodynamics(aero)).map_err(to_py_err)?;
-    let count = actuators.channels() * airframe.inner.rotor_count();
-    if let Some(settle) = &settle {
-        let values = slice1("initial_command", settle)?;
-        if values.len() != count {
-            return Err(PyValueError::new_err(format!(
-                "initial_command: expected {count} entries, got {}",
-                values.len()
-            )));
-        }
-        actuators.settle(values);
-    }
+    let (vehicle, actuators, count) =
+        vehicle_and_actuators(airframe, &actuator, aero, settle.as_ref())?;
     if controllers.len() != x0s.len() || fault_lists.len() != x0s.len() {
         return Err(PyValueError::new_err(
             "runs: controllers, initial states and fault lists must have one entry per run",
@@ -519,20 +515,13 @@ pub fn state_derivative<'py>(
     health: PyReadonlyArray1<'py, f64>,
     wind: [f64; 3],
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let mut actuators = build_actuators(airframe, &actuator).map_err(to_py_err)?;
-    let vehicle = Vehicle::new(&airframe.inner, aerodynamics(aero)).map_err(to_py_err)?;
-    let command = slice1("command", &command)?;
-    let count = actuators.channels() * airframe.inner.rotor_count();
-    if command.len() != count {
-        return Err(PyValueError::new_err(format!(
-            "command: expected {count} entries, got {}",
-            command.len()
-        )));
-    }
+    let (vehicle, mut actuators, _) = vehicle_and_actuators(airframe, &actuator, aero, None)?;
+    actuators
+        .settle(slice1("command", &command)?)
+        .map_err(to_py_err)?;
     let health = slice1("health", &health)?;
     rfcore::airframe::check_efficiency("health", health, airframe.inner.rotor_count())
         .map_err(to_py_err)?;
-    actuators.settle(command);
     let dx = state_vector_derivative(&vehicle, &actuators, health, &x, &Vector3::from(wind));
     Ok(dx.to_vec().into_pyarray(py))
 }

@@ -100,7 +100,7 @@ fn bench_simulation(c: &mut Criterion) {
     let mut actuators = Actuators::FixedPitch(
         FixedPitch::new(&airframe, Lag::none(), 0.0).expect("fixed-pitch actuators"),
     );
-    actuators.settle(&u_trim);
+    actuators.settle(&u_trim).unwrap();
     let target = Vector3::new(0.0, 0.0, -10.0);
     let hover = RigidBodyState {
         position_m: target,

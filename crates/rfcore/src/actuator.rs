@@ -221,7 +221,16 @@ impl Actuators {
     }
 
     /// Sets the actuator state to the saturated commands, as if held forever (trimmed start).
-    pub fn settle(&mut self, commands: &[f64]) {
+    /// `commands` must hold `channels() * rotor_count()` values.
+    pub fn settle(&mut self, commands: &[f64]) -> Result<()> {
+        let count = self.channels() * self.rotor_count();
+        if commands.len() != count {
+            return Err(RfError::shape(
+                "initial_command",
+                format!("{count} entries ({} per rotor)", self.channels()),
+                commands.len().to_string(),
+            ));
+        }
         match self {
             Actuators::FixedPitch(a) => {
                 for (i, x) in a.thrust_n.iter_mut().enumerate() {
@@ -239,6 +248,7 @@ impl Actuators {
                 }
             }
         }
+        Ok(())
     }
 
     /// Advances every channel by one substep under `commands` (`channels() * rotor_count()`).
@@ -366,7 +376,7 @@ mod tests {
     fn health_scales_thrust_torque_and_spin() {
         let mut rotors =
             Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 1e-5).unwrap());
-        rotors.settle(&[4.0; 4]);
+        rotors.settle(&[4.0; 4]).unwrap();
         let healthy = rotors.output(1, 1.0);
         assert_eq!(healthy.thrust_n, 4.0);
         assert!((healthy.reaction_torque_nm - 0.08).abs() < 1e-15); // ccw: +k_mu f
@@ -385,7 +395,14 @@ mod tests {
         let mut rotors = Actuators::VariablePitch(
             VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.0, Lag::none()).unwrap(),
         );
-        rotors.settle(&[9000.0, 0.2, 9000.0, -0.2, 12_000.0, 0.5, 0.0, 0.0]);
+        rotors
+            .settle(&[9000.0, 0.2, 9000.0, -0.2, 12_000.0, 0.5, 0.0, 0.0])
+            .unwrap();
+        assert!(rotors
+            .settle(&[1.0; 4])
+            .unwrap_err()
+            .to_string()
+            .starts_with("initial_command: expected 8 entries"));
         let (w, a) = (9000.0f64, 0.2f64);
         let out = rotors.output(0, 1.0);
         assert!((out.thrust_n - k[0] * w * w * a).abs() < 1e-12);

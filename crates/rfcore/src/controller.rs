@@ -327,7 +327,7 @@ mod tests {
         let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
         let mut actuators =
             Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
-        actuators.settle(&[4.0, 3.0, 4.5, 3.5]);
+        actuators.settle(&[4.0, 3.0, 4.5, 3.5]).unwrap();
         let dx = state_vector_derivative(&vehicle, &actuators, &[1.0; 4], &x, &Vector3::zeros());
         let h = 1e-6;
         let state = state_from_vector(&x);

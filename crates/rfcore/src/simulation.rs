@@ -540,7 +540,7 @@ mod tests {
             Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
         let mut controller = hover_schedule(&airframe);
         let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
-        actuators.settle(&[f; 4]);
+        actuators.settle(&[f; 4]).unwrap();
         let x0 = RigidBodyState {
             position_m: Vector3::new(0.0, 0.0, -10.0),
             ..RigidBodyState::at_rest()
@@ -618,7 +618,7 @@ mod tests {
         let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
         let mut actuators =
             Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
-        actuators.settle(&[f; 4]);
+        actuators.settle(&[f; 4]).unwrap();
         let mut controller = hover_schedule(&airframe);
         let fault = RotorFault {
             rotor: 0,
