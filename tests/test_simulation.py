@@ -197,6 +197,66 @@ def test_python_controller_errors_propagate(sim: rf.Simulator) -> None:
         sim.run(rf.State(), 1.0, controller=lambda t, x: [1.0, 2.0])
 
 
+def test_batch_runs_start_at_their_own_trim_with_lagging_actuators(quad: rf.Airframe, lqr: rf.LinearFeedback) -> None:
+    sim = rf.Simulator(quad, dt=1 / 400, substeps=2, actuator=rf.FixedPitchActuator(time_constant_s=0.025, rate_limit_n_s=50.0))
+    controllers = [None, lqr, rf.OpenLoop.constant(lqr.u_trim * 0.5)]
+    starts = [rf.State(position=(0, 0, -10))] * 3
+    batch = rf.simulate_batch(sim, starts, 2.0, controllers=controllers)
+    for i, c in enumerate(controllers):
+        np.testing.assert_array_equal(batch.trajectories[i].position, sim.run(starts[i], 2.0, controller=c).position)
+    np.testing.assert_allclose(batch.rotor_thrust[1, 0], lqr.u_trim)  # trimmed start, not zero
+
+
+def test_open_loop_hover_with_lag_stays_put(quad: rf.Airframe, lqr: rf.LinearFeedback) -> None:
+    sim = rf.Simulator(quad, actuator=rf.FixedPitchActuator(time_constant_s=0.025, rate_limit_n_s=50.0))
+    tr = sim.run(rf.State(position=(0, 0, -10)), 5.0, controller=rf.OpenLoop.constant(lqr.u_trim))
+    assert np.abs(tr.position - [0, 0, -10]).max() < 1e-9
+
+
+def test_changing_the_actuator_takes_effect(quad: rf.Airframe) -> None:
+    sim = rf.Simulator(quad)
+    hover = rf.OpenLoop([0.0, 0.01], [[0.0] * 4, [4.0] * 4])
+    fast = sim.run(rf.State(position=(0, 0, -10)), 0.05, controller=hover)
+    sim.actuator = rf.FixedPitchActuator(time_constant_s=0.05)
+    slow = sim.run(rf.State(position=(0, 0, -10)), 0.05, controller=hover)
+    assert fast.rotor_thrust[-1, 0] == 4.0 and slow.rotor_thrust[-1, 0] < 3.0
+
+
+def test_continuous_lti_is_discretised_by_zero_order_hold(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
+    """An integrator of a constant error: ZOH gives xi_k = k dt e exactly (Euler would too, but
+    a Tustin or matched discretisation of the same A, B would not start at xi_1 = dt e with
+    C = 1)."""
+    x_trim = lqr.x_trim.copy()
+    x_trim[0] = -1.0  # the vehicle sits 1 m north of the target: e_north = 1, constant
+    b = np.zeros((1, 12))
+    b[0, 0] = 1.0
+    lti = rf.LTI(np.zeros((1, 1)), b, np.ones((4, 1)), np.zeros((4, 12)), x_trim, lqr.u_trim)
+    tr = sim.run(rf.State(position=(0, 0, -10)), 0.1, controller=lti)
+    k = np.arange(len(tr.t))
+    np.testing.assert_allclose(tr.rotor_command[:, 0], lqr.u_trim[0] + k * sim.dt, rtol=0, atol=1e-12)
+
+
+def test_non_finite_commands_and_inputs(sim: rf.Simulator) -> None:
+    with pytest.raises(ValueError, match=r"initial_command\[0\]: must be finite"):
+        sim.run(rf.State(), 1.0, initial_command=[float("nan")] * 4)
+    with pytest.raises(TypeError, match="controller: must return a sequence of 4 numbers"):
+        sim.run(rf.State(), 1.0, controller=lambda t, x: None)
+    with pytest.raises(ValueError, match=r"x\[3\]: must be finite"):
+        sim.state_derivative([0, 0, 0, float("nan")] + [0] * 8, [3.0] * 4)
+    with pytest.raises(ValueError, match="t_final, dt: .* control steps exceed"):
+        sim.run(rf.State(), 1e6)
+    with pytest.raises(ValueError, match="substeps: .* RK4 steps per run"):
+        rf.Simulator(sim.airframe, substeps=10**9).run(rf.State(), 1.0)
+
+
+def test_a_controller_producing_nan_ends_the_run_with_an_event(sim: rf.Simulator) -> None:
+    a = np.array([[1e300]])  # the discrete state overflows to inf within two steps
+    b = np.ones((1, 12))
+    lti = rf.LTI(a, b, np.ones((4, 1)), np.zeros((4, 12)), np.full(12, -1.0), [3.0] * 4, dt=sim.dt)
+    tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lti)
+    assert tr.diverged and tr.events[0].kind == "non_finite_command"
+
+
 def test_batch_matches_single_runs(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
     starts = [rf.State(position=(0.1 * i, 0, -10), euler=(0.02 * i, 0, 0)) for i in range(6)]
     faults = [[], [rf.RotorFault(rotor=2, time=0.5)], [], [rf.RotorFault(rotor=1, time=0.2, efficiency=0.7)], [], []]
@@ -255,8 +315,8 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
         (lambda q: rf.Simulator(q, dt=0.0), ValueError, "dt: must be > 0"),
         (lambda q: rf.Simulator(q, dt=float("nan")), ValueError, "dt: must be > 0"),
         (lambda q: rf.Simulator(q, substeps=0), ValueError, "substeps: must be >= 1"),
-        (lambda q: rf.Simulator(q, drag=rf.Drag(linear_n_s_m=float("nan"))), ValueError, "drag.linear_drag_n_s_m: must be finite"),
-        (lambda q: rf.Simulator(q, drag=rf.Drag(rotational_n_m_s=-1.0)), ValueError, "drag.rotational_drag_n_m_s: must be >= 0"),
+        (lambda q: rf.Simulator(q, drag=rf.Drag(linear_n_s_m=float("nan"))), ValueError, "drag.linear_n_s_m: must be finite"),
+        (lambda q: rf.Simulator(q, drag=rf.Drag(rotational_n_m_s=-1.0)), ValueError, "drag.rotational_n_m_s: must be >= 0"),
         (lambda q: rf.Simulator(q, wind=(0, float("inf"), 0)), ValueError, "wind: must be finite"),
         (lambda q: rf.Simulator(q, noise=rf.Noise(std=(1.0, -1.0, 0.0, 0.0))), ValueError, r"noise.std\[3\]: must be finite and >= 0"),
         (lambda q: rf.Simulator(q, noise=rf.Noise(std=(1.0, 2.0))), ValueError, "noise.std: expected 4 or 12 entries"),
@@ -266,13 +326,13 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=5, time=1.0)]), ValueError, r"faults\[0\].rotor: rotor numbers run from 1 to 4, got 5"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=1, time=1.0, efficiency=1.5)]), ValueError, r"faults\[0\].efficiency: must lie in \[0, 1\]"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, faults=[rf.RotorFault(rotor=1, time=float("nan"))]), ValueError, r"faults\[0\].time: must be finite"),
-        (lambda q: rf.RotorFault(rotor=0, time=1.0), ValueError, "rotor: rotor numbers start at 1"),
+        (lambda q: rf.RotorFault(rotor=0, time=1.0), ValueError, "rotor: rotor numbers run from 1"),
         (lambda q: rf.State(position=(0, float("nan"), 0)), ValueError, "position: must be finite"),
         (lambda q: rf.State(quaternion=(2, 0, 0, 0)), ValueError, "quaternion: must have unit norm"),
         (lambda q: rf.Simulator(q).run(rf.State(), float("nan")), ValueError, "t_final: must be finite"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller="lqr"), TypeError, "controller: expected"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller=rf.OpenLoop.constant([1.0] * 3)), ValueError, "controller: expected 4 commands"),
-        (lambda q: rf.OpenLoop([1.0, 0.5], [[1.0] * 4] * 2), ValueError, r"times_s\[1\]: times must be strictly increasing"),
+        (lambda q: rf.OpenLoop([1.0, 0.5], [[1.0] * 4] * 2), ValueError, r"times\[1\]: times must be strictly increasing"),
         (lambda q: rf.LinearFeedback(np.zeros((4, 11)), np.zeros(12), np.zeros(4)), ValueError, "gain: expected 4 x 12"),
         (lambda q: rf.Simulator(q).run((0, 0, 0), 1.0), TypeError, "x0: expected rotorfault.State"),
     ],

@@ -132,7 +132,7 @@ def simulate_batch(
     x0s: list[list[float]],
     fault_lists: list[list[tuple[int, float, float]]],
     health: _F64,
-    settle: _F64 | None,
+    settles: list[list[float] | None],
     config_args: _Config,
 ) -> list[dict[str, Any]]: ...
 def state_derivative(

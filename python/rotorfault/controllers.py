@@ -10,6 +10,7 @@ Z-Y-X), p, q, r (rad/s, body FRD)]``; yaw errors are wrapped to (-pi, pi].
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -26,9 +27,15 @@ class OpenLoop:
     from ``times[k]`` until the next time; the first row also before ``times[0]``."""
 
     def __init__(self, times: Any, commands: Any) -> None:
-        self.times = float_array("times", times, 1)
-        self.commands = float_array("commands", commands, 2)
+        self.times = _frozen("times", times, 1)
+        self.commands = _frozen("commands", commands, 2)
         self._core = _rfcore.OpenLoop(self.times, self.commands)
+
+    @property
+    def u_trim(self) -> FloatArray:
+        """The first scheduled command: where the actuators start by default."""
+        first: FloatArray = self.commands[0]
+        return first
 
     @classmethod
     def constant(cls, command: Any) -> OpenLoop:
@@ -44,9 +51,9 @@ class LinearFeedback:
     :func:`rotorfault.linear.lqr_hover`)."""
 
     def __init__(self, gain: Any, x_trim: Any, u_trim: Any) -> None:
-        self.gain = float_array("gain", gain, 2)
-        self.x_trim = float_array("x_trim", x_trim, 1)
-        self.u_trim = float_array("u_trim", u_trim, 1)
+        self.gain = _frozen("gain", gain, 2)
+        self.x_trim = _frozen("x_trim", x_trim, 1)
+        self.u_trim = _frozen("u_trim", u_trim, 1)
         self._core = _rfcore.LinearFeedback(self.x_trim, self.u_trim, self.gain)
 
     def core(self, dt: float) -> Any:
@@ -60,13 +67,15 @@ class LTI:
     otherwise they are discrete at period ``dt``, which must equal the simulator's."""
 
     def __init__(self, A: Any, B: Any, C: Any, D: Any, x_trim: Any, u_trim: Any, dt: float | None = None) -> None:
-        self.A = float_array("A_K", A, 2)
-        self.B = float_array("B_K", B, 2)
-        self.C = float_array("C_K", C, 2)
-        self.D = float_array("D_K", D, 2)
-        self.x_trim = float_array("x_trim", x_trim, 1)
-        self.u_trim = float_array("u_trim", u_trim, 1)
+        self.A = _frozen("A_K", A, 2)
+        self.B = _frozen("B_K", B, 2)
+        self.C = _frozen("C_K", C, 2)
+        self.D = _frozen("D_K", D, 2)
+        self.x_trim = _frozen("x_trim", x_trim, 1)
+        self.u_trim = _frozen("u_trim", u_trim, 1)
         self.dt = None if dt is None else real("dt", dt)
+        if self.dt is not None and not (math.isfinite(self.dt) and self.dt > 0):
+            raise ValueError(f"dt: must be > 0 and finite (or None for a continuous controller), got {self.dt}")
         # Validate shapes now (the core checks them), with the matrices as given.
         _rfcore.DiscreteLti(self.A, self.B, self.C, self.D, self.x_trim, self.u_trim)
 
@@ -81,6 +90,14 @@ class LTI:
             a, b, c, d, _ = cont2discrete((self.A, self.B, self.C, self.D), dt, method="zoh")
         a, b, c, d = (np.ascontiguousarray(m, dtype=np.float64) for m in (a, b, c, d))
         return _rfcore.DiscreteLti(a, b, c, d, self.x_trim, self.u_trim)
+
+
+def _frozen(field: str, value: Any, ndim: int) -> FloatArray:
+    """A private read-only copy: later changes to the caller's array cannot desynchronise the
+    controller from what it reports."""
+    array = np.array(float_array(field, value, ndim), dtype=np.float64, copy=True)
+    array.setflags(write=False)
+    return array
 
 
 def core_controller(controller: Any, dt: float) -> Any:

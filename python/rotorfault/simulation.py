@@ -110,8 +110,8 @@ class RotorFault:
     def __post_init__(self) -> None:
         if isinstance(self.rotor, bool) or not isinstance(self.rotor, (int, np.integer)):
             raise TypeError(f"rotor: expected a 1-based rotor number, got {self.rotor!r}")
-        if self.rotor < 1:
-            raise ValueError(f"rotor: rotor numbers start at 1, got {self.rotor}")
+        if not 1 <= self.rotor <= 2**31:
+            raise ValueError(f"rotor: rotor numbers run from 1 to the airframe's rotor count, got {self.rotor}")
         real("time", self.time)
         real("efficiency", self.efficiency)
 
@@ -413,10 +413,10 @@ class Simulator:
         if noise is not None and not isinstance(noise, Noise):
             raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
         self.noise = noise
-        # Fail early on bad parameters: the core validates them in a zero-length run.
-        self._actuator_core = self.actuator._core()
+        # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
+        # rebuilds the core objects from these attributes, so changing one later takes effect.)
         _rfcore.simulate(
-            self.airframe._core, self._actuator_core, self.drag._packed(), None, State()._packed(), [],
+            self.airframe._core, self.actuator._core(), self.drag._packed(), None, State()._packed(), [],
             self.airframe.efficiency, None, self._config(0.0),
         )
 
@@ -434,7 +434,9 @@ class Simulator:
     def _start(self, controller: Any, initial_command: Any) -> FloatArray | None:
         if initial_command is not None:
             return float_array("initial_command", initial_command, 1)
-        return trim_command(controller)
+        trim = trim_command(controller)
+        # A trim of the wrong length is the controller's error; the core reports it as such.
+        return trim if trim is not None and trim.shape == (self.command_count,) else None
 
     def run(
         self,
@@ -453,7 +455,7 @@ class Simulator:
         fault_list = _faults(faults)
         raw = _rfcore.simulate(
             self.airframe._core,
-            self._actuator_core,
+            self.actuator._core(),
             self.drag._packed(),
             core_controller(controller, self.dt),
             x0._packed(),
@@ -468,7 +470,7 @@ class Simulator:
         """d/dt of the 12-element state vector with the actuators settled at ``command``."""
         return _rfcore.state_derivative(
             self.airframe._core,
-            self._actuator_core,
+            self.actuator._core(),
             self.drag._packed(),
             list(float_array("x", x, 1)),
             float_array("command", command, 1),
@@ -521,17 +523,20 @@ def simulate_batch(
         if core is not None and not isinstance(core, (_rfcore.OpenLoop, _rfcore.LinearFeedback, _rfcore.DiscreteLti)):
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
         cores.append(core)
-    # One actuator start for the whole batch: initial_command, else the first controller's trim.
-    start = simulator._start(per_run[0] if per_run else None, initial_command)
+    # Each run's actuators start at initial_command, else at its own controller's trim.
+    starts = []
+    for c in per_run:
+        start = simulator._start(c, initial_command)
+        starts.append(None if start is None else [float(v) for v in start])
     raws = _rfcore.simulate_batch(
         simulator.airframe._core,
-        simulator._actuator_core,
+        simulator.actuator._core(),
         simulator.drag._packed(),
         cores,
         [s._packed() for s in states],
         [[f._packed() for f in fl] for fl in fault_lists],
         simulator.airframe.efficiency,
-        start,
+        starts,
         simulator._config(t_final),
     )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]

@@ -225,8 +225,19 @@ impl Controller for CallableController {
                 ),
             )),
             Err(err) => {
-                self.error = Some(err);
-                Err(RfError::invalid("controller", "the Python controller raised an exception"))
+                // A wrong return type is the controller's contract, not its own exception.
+                let wrong_type = Python::attach(|py| err.is_instance_of::<pyo3::exceptions::PyTypeError>(py));
+                self.error = Some(if wrong_type {
+                    let error = pyo3::exceptions::PyTypeError::new_err(format!(
+                        "controller: must return a sequence of {} numbers at t = {t_s}",
+                        out.len()
+                    ));
+                    Python::attach(|py| error.set_cause(py, Some(err)));
+                    error
+                } else {
+                    err
+                });
+                Err(RfError::invalid("controller", "the Python controller failed"))
             }
         }
     }
@@ -348,7 +359,7 @@ fn trajectory_dict<'py>(py: Python<'py>, run: Trajectory) -> PyResult<Bound<'py,
         Some(d) => {
             let event = PyDict::new(py);
             event.set_item("time", d.time_s)?;
-            event.set_item("reason", format!("{:?}", d.reason).to_lowercase())?;
+            event.set_item("reason", d.reason.name())?;
             event.set_item("description", d.reason.describe())?;
             event.set_item("state", state_vector(&d.state).to_vec())?;
             dict.set_item("divergence", event)?;
@@ -470,14 +481,16 @@ pub fn simulate_batch<'py>(
     x0s: Vec<[f64; 13]>,
     fault_lists: Vec<Vec<(usize, f64, f64)>>,
     health: PyReadonlyArray1<'py, f64>,
-    settle: Option<PyReadonlyArray1<'py, f64>>,
+    settles: Vec<Option<Vec<f64>>>,
     config_args: ConfigArgs,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let (vehicle, actuators, count) =
-        vehicle_and_actuators(airframe, &actuator, aero, settle.as_ref())?;
-    if controllers.len() != x0s.len() || fault_lists.len() != x0s.len() {
+    let (vehicle, actuators, count) = vehicle_and_actuators(airframe, &actuator, aero, None)?;
+    if controllers.len() != x0s.len()
+        || fault_lists.len() != x0s.len()
+        || settles.len() != x0s.len()
+    {
         return Err(PyValueError::new_err(
-            "runs: controllers, initial states and fault lists must have one entry per run",
+            "runs: controllers, initial states, fault lists and initial commands must have one entry per run",
         ));
     }
     let health = slice1("health", &health)?.to_vec();
@@ -486,8 +499,10 @@ pub fn simulate_batch<'py>(
         .iter()
         .zip(&x0s)
         .zip(&fault_lists)
-        .map(|((c, x0), f)| BatchRun {
+        .zip(settles)
+        .map(|(((c, x0), f), settle)| BatchRun {
             controller: boxed(c.as_ref(), count),
+            initial_command: settle,
             x0: initial_state(*x0),
             faults: faults(f),
         })
@@ -516,6 +531,12 @@ pub fn state_derivative<'py>(
     wind: [f64; 3],
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (vehicle, mut actuators, _) = vehicle_and_actuators(airframe, &actuator, aero, None)?;
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(PyValueError::new_err(format!(
+            "x[{i}]: must be finite, got {}",
+            x[i]
+        )));
+    }
     actuators
         .settle(slice1("command", &command)?)
         .map_err(to_py_err)?;

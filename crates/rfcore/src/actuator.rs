@@ -51,7 +51,8 @@ impl Lag {
         }
     }
 
-    fn check(&self, prefix: &str) -> Result<()> {
+    /// `rate_field` names the rate limit as the caller's API does (its unit differs by model).
+    fn check(&self, prefix: &str, rate_field: &str) -> Result<()> {
         let field = format!("{prefix}time_constant_s");
         require_finite(&field, self.time_constant_s)?;
         if self.time_constant_s < 0.0 {
@@ -60,7 +61,7 @@ impl Lag {
                 format!("must be >= 0, got {}", self.time_constant_s),
             ));
         }
-        let field = format!("{prefix}rate_limit_per_s");
+        let field = format!("{prefix}{rate_field}");
         if self.rate_limit_per_s.is_nan() || self.rate_limit_per_s <= 0.0 {
             return Err(RfError::invalid(
                 field,
@@ -103,7 +104,7 @@ pub struct FixedPitch {
 
 impl FixedPitch {
     pub fn new(airframe: &Airframe, lag: Lag, thrust_coefficient_n_s2: f64) -> Result<Self> {
-        lag.check("actuator.")?;
+        lag.check("actuator.", "rate_limit_n_s")?;
         require_finite("actuator.thrust_coefficient_n_s2", thrust_coefficient_n_s2)?;
         if thrust_coefficient_n_s2 < 0.0 {
             return Err(RfError::invalid(
@@ -157,7 +158,7 @@ impl VariablePitch {
         speed_to_rad_s: f64,
         lag: Lag,
     ) -> Result<Self> {
-        lag.check("actuator.")?;
+        lag.check("actuator.", "rate_limit_per_s")?;
         for (i, &k) in coefficients.iter().enumerate() {
             require_finite(&format!("actuator.k{}", i + 1), k)?;
         }
@@ -231,6 +232,7 @@ impl Actuators {
                 commands.len().to_string(),
             ));
         }
+        crate::error::require_all_finite("initial_command", commands)?;
         match self {
             Actuators::FixedPitch(a) => {
                 for (i, x) in a.thrust_n.iter_mut().enumerate() {
@@ -429,7 +431,7 @@ mod tests {
         };
         let err = FixedPitch::new(&quad(), bad, 0.0).unwrap_err();
         assert!(
-            err.to_string().starts_with("actuator.rate_limit_per_s"),
+            err.to_string().starts_with("actuator.rate_limit_n_s"),
             "{err}"
         );
         let err = VariablePitch::new(&quad(), [1.0; 4], (0.0, 1.0), (0.5, -0.5), 0.0, Lag::none())

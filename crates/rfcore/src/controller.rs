@@ -71,6 +71,17 @@ pub fn state_vector_derivative(
     ]
 }
 
+/// Rejects a non-finite matrix entry, naming it `field[row, col]`.
+fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()> {
+    match m.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(RfError::invalid(
+            format!("{field}[{}, {}]", i % m.nrows(), i / m.nrows()),
+            format!("must be finite, got {}", m.as_slice()[i]),
+        )),
+    }
+}
+
 /// `x - x_trim` with the yaw difference wrapped to (-pi, pi].
 pub fn state_error(x: &[f64; STATE_DIM], trim: &[f64; STATE_DIM]) -> [f64; STATE_DIM] {
     let mut e = [0.0; STATE_DIM];
@@ -131,7 +142,7 @@ impl OpenLoop {
     pub fn new(times_s: Vec<f64>, commands: DMatrix<f64>) -> Result<Self> {
         if times_s.is_empty() || times_s.len() != commands.nrows() {
             return Err(RfError::shape(
-                "schedule.times_s",
+                "times",
                 format!(
                     "one time per command row ({} rows), at least one",
                     commands.nrows()
@@ -139,11 +150,11 @@ impl OpenLoop {
                 times_s.len().to_string(),
             ));
         }
-        require_all_finite("schedule.times_s", &times_s)?;
-        require_all_finite("schedule.commands", commands.as_slice())?;
+        require_all_finite("times", &times_s)?;
+        require_finite_matrix("commands", &commands)?;
         if let Some(k) = times_s.windows(2).position(|w| w[1] <= w[0]) {
             return Err(RfError::invalid(
-                format!("schedule.times_s[{}]", k + 1),
+                format!("times[{}]", k + 1),
                 "times must be strictly increasing",
             ));
         }
@@ -180,7 +191,7 @@ impl LinearFeedback {
     pub fn new(x_trim: &[f64], u_trim: &[f64], gain: DMatrix<f64>) -> Result<Self> {
         let x_trim = trim_state(x_trim)?;
         require_all_finite("u_trim", u_trim)?;
-        require_all_finite("gain", gain.as_slice())?;
+        require_finite_matrix("gain", &gain)?;
         if gain.shape() != (u_trim.len(), STATE_DIM) {
             return Err(RfError::shape(
                 "gain",
@@ -260,7 +271,7 @@ impl DiscreteLti {
                     format!("{} x {}", m.nrows(), m.ncols()),
                 ));
             }
-            require_all_finite(field, m.as_slice())?;
+            require_finite_matrix(field, m)?;
         }
         Ok(DiscreteLti {
             xi: DVector::zeros(n),

@@ -158,6 +158,9 @@ impl RigidBodyState {
 
     /// Roll, pitch, yaw (rad) of the aerospace Z-Y-X sequence.
     pub fn euler_rad(&self) -> [f64; 3] {
+        if !self.attitude.coords.iter().all(|v| v.is_finite()) {
+            return [f64::NAN; 3];
+        }
         let (roll, pitch, yaw) = self.attitude.euler_angles();
         [roll, pitch, yaw]
     }

@@ -17,6 +17,11 @@ use crate::error::{require_finite, Result, RfError};
 use crate::rigid_body::RigidBodyState;
 use crate::vehicle::Vehicle;
 
+/// Most control steps one run records (about 2 GB of trajectory).
+pub const MAX_CONTROL_STEPS: usize = 10_000_000;
+/// Most RK4 steps one run takes (a few minutes on one core).
+pub const MAX_RK4_STEPS: usize = 1_000_000_000;
+
 /// Rotor `rotor` (0-based) has efficiency `efficiency` from `time_s` on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RotorFault {
@@ -53,6 +58,8 @@ impl Default for DivergenceLimits {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DivergenceReason {
     NonFinite,
+    /// The controller produced a non-finite command.
+    NonFiniteCommand,
     Tilt,
     AltitudeLoss,
     Speed,
@@ -60,9 +67,22 @@ pub enum DivergenceReason {
 }
 
 impl DivergenceReason {
+    /// A short identifier (`"tilt"`, `"non_finite_command"`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            DivergenceReason::NonFinite => "non_finite_state",
+            DivergenceReason::NonFiniteCommand => "non_finite_command",
+            DivergenceReason::Tilt => "tilt",
+            DivergenceReason::AltitudeLoss => "altitude_loss",
+            DivergenceReason::Speed => "speed",
+            DivergenceReason::BodyRate => "body_rate",
+        }
+    }
+
     pub fn describe(self) -> &'static str {
         match self {
             DivergenceReason::NonFinite => "state became non-finite",
+            DivergenceReason::NonFiniteCommand => "the controller produced a non-finite command",
             DivergenceReason::Tilt => "tilt beyond the limit",
             DivergenceReason::AltitudeLoss => "altitude loss beyond the limit",
             DivergenceReason::Speed => "speed beyond the limit",
@@ -210,11 +230,24 @@ impl SimulationConfig {
                 format!("must be >= 0, got {}", self.duration_s),
             ));
         }
+        // Bound memory (every control step is recorded) and work (no run takes hours).
         let steps = (self.duration_s / self.control_dt_s).round();
-        if steps > 1e8 {
+        if steps > MAX_CONTROL_STEPS as f64 {
             return Err(RfError::invalid(
-                "t_final",
-                format!("{steps} control steps exceed the limit of 1e8"),
+                "t_final, dt",
+                format!(
+                    "t_final / dt = {steps} control steps exceed the limit of {MAX_CONTROL_STEPS} \
+                     (every step is recorded): shorten the run or lengthen dt"
+                ),
+            ));
+        }
+        if steps * self.substeps as f64 > MAX_RK4_STEPS as f64 {
+            return Err(RfError::invalid(
+                "substeps",
+                format!(
+                    "{steps} control steps x {} substeps exceed the limit of {MAX_RK4_STEPS} RK4 steps per run",
+                    self.substeps
+                ),
             ));
         }
         let l = &self.limits;
@@ -238,7 +271,7 @@ impl SimulationConfig {
             noise.check()?;
         }
         for (k, (t, w)) in self.wind_profile.iter().enumerate() {
-            require_finite(&format!("wind_profile[{k}].time_s"), *t)?;
+            require_finite(&format!("wind_profile[{k}].time"), *t)?;
             if w.iter().any(|v| !v.is_finite()) {
                 return Err(RfError::invalid(
                     format!("wind_profile[{k}]"),
@@ -247,7 +280,7 @@ impl SimulationConfig {
             }
             if k > 0 && *t <= self.wind_profile[k - 1].0 {
                 return Err(RfError::invalid(
-                    format!("wind_profile[{k}].time_s"),
+                    format!("wind_profile[{k}].time"),
                     "times must be strictly increasing",
                 ));
             }
@@ -448,6 +481,14 @@ pub fn simulate(
         };
         controller.command(t, &measured, &mut command)?;
         trajectory.commands.extend_from_slice(&command);
+        if command.iter().any(|c| !c.is_finite()) {
+            trajectory.divergence = Some(Divergence {
+                time_s: t,
+                reason: DivergenceReason::NonFiniteCommand,
+                state,
+            });
+            break;
+        }
         if k == steps {
             break;
         }
@@ -472,6 +513,8 @@ pub fn simulate(
 /// One run of a batch: its own controller, initial state and faults.
 pub struct BatchRun {
     pub controller: Box<dyn Controller>,
+    /// Actuator start for this run (settled), or `None` to keep the batch's actuator state.
+    pub initial_command: Option<Vec<f64>>,
     pub x0: RigidBodyState,
     pub faults: Vec<RotorFault>,
 }
@@ -492,9 +535,13 @@ pub fn simulate_batch(
             if let Some(noise) = own.noise.as_mut() {
                 noise.seed = noise.seed.wrapping_add(i as u64);
             }
+            let mut actuators = actuators.clone();
+            if let Some(command) = &run.initial_command {
+                actuators.settle(command)?;
+            }
             simulate(
                 vehicle,
-                actuators.clone(),
+                actuators,
                 run.controller.as_mut(),
                 initial_health,
                 &run.faults,

@@ -31,9 +31,9 @@ pub struct Aerodynamics {
 impl Aerodynamics {
     pub fn check(&self) -> Result<()> {
         for (field, value) in [
-            ("drag.linear_drag_n_s_m", self.linear_drag_n_s_m),
-            ("drag.quadratic_drag_n_s2_m2", self.quadratic_drag_n_s2_m2),
-            ("drag.rotational_drag_n_m_s", self.rotational_drag_n_m_s),
+            ("drag.linear_n_s_m", self.linear_drag_n_s_m),
+            ("drag.quadratic_n_s2_m2", self.quadratic_drag_n_s2_m2),
+            ("drag.rotational_n_m_s", self.rotational_drag_n_m_s),
             ("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
         ] {
             require_finite(field, value)?;
@@ -269,7 +269,7 @@ mod tests {
         };
         let err = Vehicle::new(&lanzon(), aero).unwrap_err();
         assert!(
-            err.to_string().starts_with("drag.rotational_drag_n_m_s"),
+            err.to_string().starts_with("drag.rotational_n_m_s"),
             "{err}"
         );
     }
