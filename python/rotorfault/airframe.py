@@ -148,6 +148,17 @@ class Airframe:
         return cls._wrap(_rfcore.Airframe.from_toml_str(text, str(path)))
 
     @classmethod
+    def load(cls, spec: str, relative_to: str | PathLike[str] | None = None) -> Airframe:
+        """A preset name, or a path to an airframe TOML file (a ``.toml`` name or an existing
+        file; relative paths resolve against ``relative_to`` when given)."""
+        if not isinstance(spec, str):
+            raise TypeError(f"airframe: expected a preset name or a TOML path, got {type(spec).__name__}")
+        path = Path(spec) if relative_to is None else Path(relative_to) / spec
+        if spec.endswith(".toml") or path.is_file():
+            return cls.from_toml(path)
+        return cls.preset(spec)
+
+    @classmethod
     def from_toml_str(cls, text: str, origin: str = "<string>") -> Airframe:
         """Parses an airframe from TOML text; ``origin`` labels error messages."""
         if not isinstance(text, str):

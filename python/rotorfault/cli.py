@@ -9,7 +9,6 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any, TypeVar
 
 import click
@@ -40,13 +39,6 @@ def _user_errors(command: F) -> F:
             raise click.ClickException("out of memory: ask for a smaller problem") from None
 
     return wrapper  # type: ignore[return-value]
-
-
-def load_airframe(spec: str) -> Airframe:
-    """A preset name, or a path to a TOML file."""
-    if spec.endswith(".toml") or Path(spec).is_file():
-        return Airframe.from_toml(spec)
-    return Airframe.preset(spec)
 
 
 def parse_numbers(field: str, text: str) -> list[float]:
@@ -103,7 +95,7 @@ def airframes() -> None:
 @_user_errors
 def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> None:
     """Run Du's controllability test and print the ACAI."""
-    frame = load_airframe(airframe)
+    frame = Airframe.load(airframe)
     efficiencies = None if eta is None else parse_numbers("eta", eta)
     report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)  # type: ignore[arg-type]
     table = Table(title=f"{escape(frame.name)}: controllability", show_header=False)
@@ -128,7 +120,7 @@ def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> Non
 @_user_errors
 def failures(airframe: str, max_failed: int, formula: str) -> None:
     """Every combination of up to K failed rotors: rank, ACAI (with and without yaw), verdict."""
-    frame = load_airframe(airframe)
+    frame = Airframe.load(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)  # type: ignore[arg-type]
     headers, rows = result.rows_for_display()
     table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
@@ -157,7 +149,7 @@ def failures(airframe: str, max_failed: int, formula: str) -> None:
 @_user_errors
 def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
-    frame = load_airframe(airframe)
+    frame = Airframe.load(airframe)
     swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
         raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")

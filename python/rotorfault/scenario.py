@@ -113,8 +113,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         raise ValueError(f"unknown key(s) {', '.join(sorted(unknown))}; allowed: {', '.join(sorted(_TOP))}")
     if "airframe" not in data or not isinstance(data["airframe"], str):
         raise ValueError("airframe: required, a preset name or an airframe TOML path")
-    spec = data["airframe"]
-    airframe = Airframe.from_toml(path.parent / spec) if spec.endswith(".toml") else Airframe.preset(spec)
+    airframe = Airframe.load(data["airframe"], relative_to=path.parent)
     initial = _table(data, "initial")
     state = State(
         position=initial.get("position_m", (0.0, 0.0, 0.0)),

@@ -139,8 +139,9 @@ impl FixedPitch {
 #[derive(Debug, Clone, PartialEq)]
 pub struct VariablePitch {
     pub coefficients: [f64; 4],
-    pub speed_bounds: (f64, f64),
-    pub pitch_bounds: (f64, f64),
+    /// Per-channel bounds, interleaved like the state: speed bounds, then pitch bounds, per rotor.
+    lower: Vec<f64>,
+    upper: Vec<f64>,
     /// Factor from the speed unit to rad/s for the gyroscopic moment (0: not modelled).
     pub speed_to_rad_s: f64,
     yaw_sign: Vec<f64>,
@@ -182,10 +183,27 @@ impl VariablePitch {
             ));
         }
         require_finite("actuator.speed_to_rad_s", speed_to_rad_s)?;
+        let m = airframe.rotor_count();
         Ok(VariablePitch {
             coefficients,
-            speed_bounds,
-            pitch_bounds,
+            lower: (0..2 * m)
+                .map(|k| {
+                    if k % 2 == 0 {
+                        speed_bounds.0
+                    } else {
+                        pitch_bounds.0
+                    }
+                })
+                .collect(),
+            upper: (0..2 * m)
+                .map(|k| {
+                    if k % 2 == 0 {
+                        speed_bounds.1
+                    } else {
+                        pitch_bounds.1
+                    }
+                })
+                .collect(),
             speed_to_rad_s,
             yaw_sign: airframe
                 .rotors()
@@ -233,46 +251,27 @@ impl Actuators {
             ));
         }
         crate::error::require_all_finite("initial_command", commands)?;
-        match self {
-            Actuators::FixedPitch(a) => {
-                for (i, x) in a.thrust_n.iter_mut().enumerate() {
-                    *x = commands[i].clamp(a.min_thrust_n[i], a.max_thrust_n[i]);
-                }
-            }
-            Actuators::VariablePitch(a) => {
-                for (i, x) in a.state.iter_mut().enumerate() {
-                    let (lo, hi) = if i % 2 == 0 {
-                        a.speed_bounds
-                    } else {
-                        a.pitch_bounds
-                    };
-                    *x = commands[i].clamp(lo, hi);
-                }
-            }
+        let (state, _, lower, upper) = self.channels_mut();
+        for (k, x) in state.iter_mut().enumerate() {
+            *x = commands[k].clamp(lower[k], upper[k]);
         }
         Ok(())
     }
 
     /// Advances every channel by one substep under `commands` (`channels() * rotor_count()`).
     pub fn advance(&mut self, commands: &[f64], dt_s: f64) {
+        let (state, lag, lower, upper) = self.channels_mut();
+        for (k, x) in state.iter_mut().enumerate() {
+            *x = lag.advance(*x, commands[k], lower[k], upper[k], dt_s);
+        }
+    }
+
+    /// Every channel's state, the model's lag and the per-channel bounds: the one place that
+    /// knows how a model lays out its channels.
+    fn channels_mut(&mut self) -> (&mut [f64], Lag, &[f64], &[f64]) {
         match self {
-            Actuators::FixedPitch(a) => {
-                for (i, x) in a.thrust_n.iter_mut().enumerate() {
-                    *x = a
-                        .lag
-                        .advance(*x, commands[i], a.min_thrust_n[i], a.max_thrust_n[i], dt_s);
-                }
-            }
-            Actuators::VariablePitch(a) => {
-                for (i, x) in a.state.iter_mut().enumerate() {
-                    let (lo, hi) = if i % 2 == 0 {
-                        a.speed_bounds
-                    } else {
-                        a.pitch_bounds
-                    };
-                    *x = a.lag.advance(*x, commands[i], lo, hi, dt_s);
-                }
-            }
+            Actuators::FixedPitch(a) => (&mut a.thrust_n, a.lag, &a.min_thrust_n, &a.max_thrust_n),
+            Actuators::VariablePitch(a) => (&mut a.state, a.lag, &a.lower, &a.upper),
         }
     }
 

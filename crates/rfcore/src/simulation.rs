@@ -570,6 +570,15 @@ mod tests {
         Airframe::from_toml_str(&text, "quad-x").unwrap()
     }
 
+    fn still_air(airframe: &Airframe) -> Vehicle {
+        Vehicle::new(airframe, Aerodynamics::default()).unwrap()
+    }
+
+    /// Fixed-pitch rotors with no lag or rate limit.
+    fn instant_rotors(airframe: &Airframe) -> Actuators {
+        Actuators::FixedPitch(FixedPitch::new(airframe, Lag::none(), 0.0).unwrap())
+    }
+
     fn config(duration_s: f64) -> SimulationConfig {
         SimulationConfig::new(0.0025, 2, duration_s)
     }
@@ -582,9 +591,8 @@ mod tests {
     #[test]
     fn trimmed_hover_stays_put() {
         let airframe = quad_x();
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
-        let mut actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let vehicle = still_air(&airframe);
+        let mut actuators = instant_rotors(&airframe);
         let mut controller = hover_schedule(&airframe);
         let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
         actuators.settle(&[f; 4]).unwrap();
@@ -616,9 +624,8 @@ mod tests {
     #[test]
     fn no_thrust_is_free_fall_until_the_altitude_limit() {
         let airframe = quad_x();
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
-        let actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let vehicle = still_air(&airframe);
+        let actuators = instant_rotors(&airframe);
         let mut controller = ZeroCommand { count: 4 };
         let run = simulate(
             &vehicle,
@@ -635,8 +642,7 @@ mod tests {
         assert!((end.position_m.z - 0.5 * g * 4.0).abs() < 1e-9);
         let mut short = config(10.0);
         short.limits.max_altitude_loss_m = 20.0;
-        let actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let actuators = instant_rotors(&airframe);
         let run = simulate(
             &vehicle,
             actuators,
@@ -661,10 +667,9 @@ mod tests {
     #[test]
     fn open_loop_rotor_failure_tumbles_and_is_reported() {
         let airframe = quad_x();
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let vehicle = still_air(&airframe);
         let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
-        let mut actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let mut actuators = instant_rotors(&airframe);
         actuators.settle(&[f; 4]).unwrap();
         let mut controller = hover_schedule(&airframe);
         let fault = RotorFault {
@@ -725,9 +730,8 @@ mod tests {
     #[test]
     fn bad_configuration_is_named() {
         let airframe = quad_x();
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
-        let actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let vehicle = still_air(&airframe);
+        let actuators = instant_rotors(&airframe);
         let mut controller = ZeroCommand { count: 4 };
         let x0 = RigidBodyState::at_rest();
         let run =
