@@ -23,8 +23,17 @@ from .controllability import (
     controllability,
     failure_table,
 )
-from .controllers import LTI, LinearFeedback, OpenLoop
-from .linear import hover_trim, linearize, lqr_hover
+from .allocation import (
+    Allocation,
+    Allocator,
+    DirectionalLimit,
+    HoverMargin,
+    allocate,
+    hover_thrust_margin,
+    max_virtual_control,
+)
+from .controllers import LTI, Allocated, LinearFeedback, OpenLoop
+from .linear import hover_trim, linearize, lqr_hover, lqr_hover_allocated
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
 from .simulation import (
     BatchResult,
@@ -43,6 +52,15 @@ from .simulation import (
 
 __all__ = [
     "LTI",
+    "Allocated",
+    "Allocation",
+    "Allocator",
+    "DirectionalLimit",
+    "HoverMargin",
+    "allocate",
+    "hover_thrust_margin",
+    "max_virtual_control",
+    "lqr_hover_allocated",
     "BatchResult",
     "DivergenceLimits",
     "Drag",

@@ -144,3 +144,36 @@ def state_derivative(
     health: _F64,
     wind: list[float],
 ) -> _F64: ...
+
+@final
+class AllocationProblem:
+    def __new__(
+        cls,
+        matrix_: _F64,
+        weights: _F64,
+        lower: _F64,
+        upper: _F64,
+        regularization: float,
+        preferred: _F64,
+    ) -> AllocationProblem: ...
+    def objective(self, virtual_control: _F64, commands: _F64) -> tuple[float, float]: ...
+
+@final
+class Allocated:
+    def __new__(cls, law: OpenLoop | LinearFeedback | DiscreteLti, problem: AllocationProblem) -> Allocated: ...
+
+def allocate(
+    problem: AllocationProblem,
+    controls: _F64,
+    method_name: str,
+    priorities: list[list[int]] | None,
+    tolerance: float,
+    max_iterations: int,
+) -> tuple[_F64, _F64, list[str], list[int]]: ...
+def time_allocations(problem: AllocationProblem, controls: _F64, method_name: str, repeats: int) -> _F64: ...
+def max_along_direction(
+    matrix_: _F64, lower: _F64, upper: _F64, direction: _F64, base: _F64, tolerance: float
+) -> tuple[float, _F64, str] | None: ...
+def hover_thrust_margin(
+    airframe: Airframe, give_up_yaw: bool, tolerance: float
+) -> tuple[float, float, float, _F64 | None, str]: ...

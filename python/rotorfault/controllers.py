@@ -92,6 +92,40 @@ class LTI:
         return _rfcore.DiscreteLti(a, b, c, d, self.x_trim, self.u_trim)
 
 
+class Allocated:
+    """A virtual-control law followed by constrained allocation, all in Rust: ``law``
+    (:class:`LinearFeedback`, :class:`LTI` or :class:`OpenLoop`) writes the virtual control
+    (``allocator.virtual_dimension`` entries, e.g. thrust N and roll/pitch/yaw torques N m), and
+    the active-set solver of ``allocator`` (a :class:`rotorfault.allocation.Allocator`) turns it
+    into rotor thrusts within their bounds, warm-started from the previous control step.
+
+    The allocator's matrix is what the controller believes; the simulator's rotor health is what
+    happens. Pass an allocator built from a degraded airframe to model a known fault."""
+
+    def __init__(self, law: Any, allocator: Any) -> None:
+        from .allocation import Allocator
+
+        if not isinstance(law, (OpenLoop, LinearFeedback, LTI)):
+            raise TypeError(f"law: expected LinearFeedback, LTI or OpenLoop, got {type(law).__name__}")
+        if not isinstance(allocator, Allocator):
+            raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
+        self.law = law
+        self.allocator = allocator
+        self.core(1.0)  # checks that the law writes one entry per row of the allocation matrix
+
+    @property
+    def u_trim(self) -> FloatArray | None:
+        """The rotor commands for the law's trim virtual control: where the actuators start."""
+        trim = trim_command(self.law)
+        if trim is None:
+            return None
+        commands: FloatArray = self.allocator.allocate(trim).commands
+        return commands
+
+    def core(self, dt: float) -> Any:
+        return _rfcore.Allocated(self.law.core(dt), self.allocator._core)
+
+
 def _frozen(field: str, value: Any, ndim: int) -> FloatArray:
     """A private read-only copy: later changes to the caller's array cannot desynchronise the
     controller from what it reports."""
@@ -104,12 +138,12 @@ def core_controller(controller: Any, dt: float) -> Any:
     """The object the Rust loop runs for ``controller`` (``None``: all rotors at zero)."""
     if controller is None:
         return None
-    if isinstance(controller, (OpenLoop, LinearFeedback, LTI)):
+    if isinstance(controller, (OpenLoop, LinearFeedback, LTI, Allocated)):
         return controller.core(dt)
     if callable(controller):
         return controller
     raise TypeError(
-        "controller: expected OpenLoop, LinearFeedback, LTI, a callable f(t, x) or None, "
+        "controller: expected OpenLoop, LinearFeedback, LTI, Allocated, a callable f(t, x) or None, "
         f"got {type(controller).__name__}"
     )
 

@@ -7,13 +7,16 @@ flies: frames, drag, rotor geometry, health.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._convert import FloatArray, float_array, real
-from .controllers import LinearFeedback
+from .controllers import Allocated, LinearFeedback
 from .simulation import FixedPitchActuator, Simulator
+
+if TYPE_CHECKING:
+    from .allocation import Allocator
 
 STATE_DIM = 12
 
@@ -92,3 +95,46 @@ def lqr_hover(
         r = np.eye(b.shape[1]) / per_rotor**2
     gain, _, _ = control.lqr(a, b, float_array("q", q, 2), float_array("r", r, 2))
     return LinearFeedback(np.asarray(gain), x_trim, u_trim)
+
+
+def lqr_hover_allocated(
+    simulator: Simulator,
+    allocator: Allocator,
+    q: Any = None,
+    r: Any = None,
+    position: Any = (0.0, 0.0, 0.0),
+    yaw: float = 0.0,
+) -> Allocated:
+    """An LQR hover controller on the virtual control, followed by constrained allocation.
+
+    The design model is the linearisation of :func:`lqr_hover` with the rotor thrusts replaced by
+    ``T = P v`` (``P`` the allocator's weighted pseudo-inverse, which the constrained allocation
+    equals while no bound is active), so ``B_v = B P``. ``r`` (rotor units, default as
+    :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. Returns an
+    :class:`~rotorfault.controllers.Allocated` that runs entirely in Rust."""
+    import control
+
+    from .allocation import Allocator
+
+    if not isinstance(allocator, Allocator):
+        raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
+    x_trim, u_trim = hover_trim(simulator, position, yaw)
+    if allocator.actuator_count != u_trim.shape[0]:
+        raise ValueError(
+            f"allocator: has {allocator.actuator_count} actuators, the simulator's airframe {u_trim.shape[0]}"
+        )
+    a, b = linearize(simulator, x_trim, u_trim)
+    n = allocator.virtual_dimension
+    offset = allocator.allocate(np.zeros(n), method="pinv").commands
+    p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
+    if q is None:
+        scale = np.array([1.0] * 3 + [1.0] * 3 + [0.1] * 3 + [1.0] * 3)
+        q = np.diag(1.0 / scale**2)
+    if r is None:
+        per_rotor = 0.1 * simulator.airframe.hover_thrust_n / simulator.airframe.rotor_count
+        r = np.eye(b.shape[1]) / per_rotor**2
+    r_rotor = float_array("r", r, 2)
+    r_virtual = p.T @ r_rotor @ p
+    gain, _, _ = control.lqr(a, b @ p, float_array("q", q, 2), 0.5 * (r_virtual + r_virtual.T))
+    v_trim = allocator.matrix @ u_trim
+    return Allocated(LinearFeedback(np.asarray(gain), x_trim, v_trim), allocator)

@@ -16,6 +16,7 @@ use rfcore::{
     ControllabilityAnalysis, ControllabilityReport, RfError,
 };
 
+mod allocation;
 mod simulation;
 
 pub(crate) fn to_py_err(error: RfError) -> PyErr {
@@ -38,7 +39,7 @@ pub(crate) fn slice1<'a>(field: &str, array: &'a PyReadonlyArray1<'_, f64>) -> P
         .map_err(|_| PyValueError::new_err(format!("{field}: must be a contiguous array")))
 }
 
-fn slice2<'a>(field: &str, array: &'a PyReadonlyArray2<'_, f64>) -> PyResult<&'a [f64]> {
+pub(crate) fn slice2<'a>(field: &str, array: &'a PyReadonlyArray2<'_, f64>) -> PyResult<&'a [f64]> {
     array
         .as_slice()
         .map_err(|_| PyValueError::new_err(format!("{field}: must be a C-contiguous array")))
@@ -325,6 +326,12 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<simulation::PyOpenLoop>()?;
     module.add_class::<simulation::PyLinearFeedback>()?;
     module.add_class::<simulation::PyDiscreteLti>()?;
+    module.add_class::<allocation::PyAllocationProblem>()?;
+    module.add_class::<allocation::PyAllocated>()?;
+    module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
+    module.add_function(wrap_pyfunction!(allocation::time_allocations, module)?)?;
+    module.add_function(wrap_pyfunction!(allocation::max_along_direction, module)?)?;
+    module.add_function(wrap_pyfunction!(allocation::hover_thrust_margin, module)?)?;
     module.add_function(wrap_pyfunction!(simulation::simulate, module)?)?;
     module.add_function(wrap_pyfunction!(simulation::simulate_batch, module)?)?;
     module.add_function(wrap_pyfunction!(simulation::state_derivative, module)?)?;

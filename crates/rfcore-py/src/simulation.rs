@@ -20,9 +20,10 @@ use rfcore::simulation::{
 use rfcore::vehicle::{Aerodynamics, Vehicle};
 use rfcore::RfError;
 
+use crate::allocation::PyAllocated;
 use crate::{detached, slice1, to_py_err, PyAirframe};
 
-fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
+pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
     let view = array.as_array();
     let (rows, cols) = view.dim();
     let flat: Vec<f64> = view.iter().copied().collect();
@@ -114,7 +115,7 @@ fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> rfcore::Res
 /// A piecewise-constant command schedule.
 #[pyclass(name = "OpenLoop", module = "rotorfault._rfcore", frozen)]
 pub struct PyOpenLoop {
-    inner: OpenLoop,
+    pub(crate) inner: OpenLoop,
 }
 
 #[pymethods]
@@ -136,7 +137,7 @@ impl PyOpenLoop {
 /// `u = u_trim - K (x - x_trim)`.
 #[pyclass(name = "LinearFeedback", module = "rotorfault._rfcore", frozen)]
 pub struct PyLinearFeedback {
-    inner: LinearFeedback,
+    pub(crate) inner: LinearFeedback,
 }
 
 #[pymethods]
@@ -160,7 +161,7 @@ impl PyLinearFeedback {
 /// A discrete LTI controller driven by the state error.
 #[pyclass(name = "DiscreteLti", module = "rotorfault._rfcore", frozen)]
 pub struct PyDiscreteLti {
-    inner: DiscreteLti,
+    pub(crate) inner: DiscreteLti,
 }
 
 #[pymethods]
@@ -248,15 +249,17 @@ pub enum ControllerArg<'py> {
     OpenLoop(PyRef<'py, PyOpenLoop>),
     LinearFeedback(PyRef<'py, PyLinearFeedback>),
     Lti(PyRef<'py, PyDiscreteLti>),
+    Allocated(PyRef<'py, PyAllocated>),
 }
 
-fn boxed(controller: Option<&ControllerArg<'_>>, count: usize) -> Box<dyn Controller> {
-    match controller {
+fn boxed(controller: Option<&ControllerArg<'_>>, count: usize) -> PyResult<Box<dyn Controller>> {
+    Ok(match controller {
         None => Box::new(ZeroCommand { count }),
         Some(ControllerArg::OpenLoop(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::LinearFeedback(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
-    }
+        Some(ControllerArg::Allocated(c)) => c.controller().map_err(to_py_err)?,
+    })
 }
 
 /// Timing, limits, wind and noise, in the order the Python layer passes them.
@@ -438,7 +441,7 @@ pub fn simulate<'py>(
                     c.get_type().name().map(|n| n.to_string()).unwrap_or_default()
                 ))
                 })?;
-            let mut boxed = boxed(Some(&spec), count);
+            let mut boxed = boxed(Some(&spec), count)?;
             detached(py, || {
                 core_simulate(
                     &vehicle,
@@ -452,7 +455,7 @@ pub fn simulate<'py>(
             })?
         }
         None => {
-            let mut boxed = boxed(None, count);
+            let mut boxed = boxed(None, count)?;
             detached(py, || {
                 core_simulate(
                     &vehicle,
@@ -500,13 +503,15 @@ pub fn simulate_batch<'py>(
         .zip(&x0s)
         .zip(&fault_lists)
         .zip(settles)
-        .map(|(((c, x0), f), settle)| BatchRun {
-            controller: boxed(c.as_ref(), count),
-            initial_command: settle,
-            x0: initial_state(*x0),
-            faults: faults(f),
+        .map(|(((c, x0), f), settle)| {
+            Ok(BatchRun {
+                controller: boxed(c.as_ref(), count)?,
+                initial_command: settle,
+                x0: initial_state(*x0),
+                faults: faults(f),
+            })
         })
-        .collect();
+        .collect::<PyResult<_>>()?;
     let results = detached(py, || {
         core_batch(&vehicle, &actuators, &health, runs, &config)
     })?;

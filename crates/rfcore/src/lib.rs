@@ -3,13 +3,18 @@
 //! - [`airframe`]: multirotor geometry, thrust limits, efficiencies, TOML presets.
 //! - [`acai`]: the Available Control Authority Index (Du et al., Theorem 3) for any dimension.
 //! - [`controllability`]: Du's 9-step test procedure and failure tables.
+//! - [`allocation`], [`active_set`], [`clarabel_qp`]: constrained control allocation (Ke eq. (33)),
+//!   exact and fast, with Clarabel as the reference and for attainable-set queries.
 //! - [`rigid_body`]: 6-DOF Newton-Euler dynamics and the RK4 step (the simulator's bottom layer).
 //!
 //! Units are SI throughout (N, m, kg, s, rad) and carried in names (`max_thrust_n`).
 
 pub mod acai;
+pub mod active_set;
 pub mod actuator;
 pub mod airframe;
+pub mod allocation;
+pub mod clarabel_qp;
 pub mod combinations;
 pub mod controllability;
 pub mod controller;

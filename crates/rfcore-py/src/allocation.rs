@@ -1,0 +1,273 @@
+//! Bindings for control allocation: the problem type, batch allocation, attainable-set queries
+//! and the allocating controller. Translation only.
+
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use rfcore::active_set::ActiveSetSolver;
+use rfcore::allocation::{allocate_many, time_each, AllocationProblem, Method};
+use rfcore::clarabel_qp::{
+    hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
+    ClarabelSettings,
+};
+use rfcore::controller::{Allocated, Controller, DiscreteLti, LinearFeedback, OpenLoop};
+use rfcore::ControlAxes;
+
+use crate::simulation::{matrix, PyDiscreteLti, PyLinearFeedback, PyOpenLoop};
+use crate::{detached, slice1, to_py_err, PyAirframe};
+
+/// A validated allocation problem (matrix, weights, bounds, regularisation).
+#[pyclass(name = "AllocationProblem", module = "rotorfault._rfcore", frozen)]
+pub struct PyAllocationProblem {
+    pub(crate) inner: AllocationProblem,
+}
+
+#[pymethods]
+impl PyAllocationProblem {
+    #[new]
+    fn new(
+        matrix_: PyReadonlyArray2<'_, f64>,
+        weights: PyReadonlyArray1<'_, f64>,
+        lower: PyReadonlyArray1<'_, f64>,
+        upper: PyReadonlyArray1<'_, f64>,
+        regularization: f64,
+        preferred: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let preferred = slice1("preferred", &preferred)?;
+        let inner = AllocationProblem::new(
+            matrix("matrix", &matrix_)?,
+            slice1("weights", &weights)?,
+            slice1("lower", &lower)?,
+            slice1("upper", &upper)?,
+        )
+        .and_then(|p| p.with_regularization(regularization, preferred))
+        .map_err(to_py_err)?;
+        Ok(PyAllocationProblem { inner })
+    }
+
+    /// Objective and KKT residual of given commands (for checking any solver's answer).
+    fn objective(
+        &self,
+        virtual_control: PyReadonlyArray1<'_, f64>,
+        commands: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<(f64, f64)> {
+        let u_c = slice1("virtual_control", &virtual_control)?;
+        let t = slice1("commands", &commands)?;
+        self.inner.check_virtual_control(u_c).map_err(to_py_err)?;
+        if t.len() != self.inner.actuator_count() {
+            return Err(PyValueError::new_err(format!(
+                "commands: expected {} entries (one per actuator), got {}",
+                self.inner.actuator_count(),
+                t.len()
+            )));
+        }
+        Ok((
+            self.inner.objective(u_c, t),
+            self.inner.kkt_residual(u_c, t),
+        ))
+    }
+}
+
+fn method(
+    name: &str,
+    priorities: Option<Vec<Vec<usize>>>,
+    tolerance: f64,
+    max_iterations: u32,
+) -> PyResult<Method> {
+    let settings = || -> PyResult<ClarabelSettings> {
+        ClarabelSettings::default()
+            .tolerance(tolerance)
+            .and_then(|s| s.max_iterations(max_iterations))
+            .map_err(to_py_err)
+    };
+    match (name, priorities) {
+        ("active-set", None) => Ok(Method::ActiveSet),
+        ("pinv", None) => Ok(Method::Pinv),
+        ("clarabel", None) => Ok(Method::Clarabel(settings()?)),
+        ("clarabel", Some(groups)) => Ok(Method::Prioritized(groups, settings()?)),
+        ("active-set" | "pinv", Some(_)) => Err(PyValueError::new_err(
+            "priorities: only method=\"clarabel\" solves prioritised allocations",
+        )),
+        (other, _) => Err(PyValueError::new_err(format!(
+            "method: expected \"active-set\", \"clarabel\" or \"pinv\", got {other:?}"
+        ))),
+    }
+}
+
+type AllocationArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<&'static str>,
+    Vec<usize>,
+);
+
+/// Allocates every row of `controls` (N x n): commands (N x m), achieved (N x n), statuses,
+/// iterations.
+#[pyfunction]
+#[pyo3(signature = (problem, controls, method_name, priorities, tolerance, max_iterations))]
+pub fn allocate<'py>(
+    py: Python<'py>,
+    problem: &PyAllocationProblem,
+    controls: PyReadonlyArray2<'py, f64>,
+    method_name: &str,
+    priorities: Option<Vec<Vec<usize>>>,
+    tolerance: f64,
+    max_iterations: u32,
+) -> PyResult<AllocationArrays<'py>> {
+    let method = method(method_name, priorities, tolerance, max_iterations)?;
+    let flat = crate::slice2("virtual_control", &controls)?;
+    let rows = controls.shape()[0];
+    let problem = &problem.inner;
+    let results = detached(py, || allocate_many(problem, &method, flat))?;
+    let (m, n) = (problem.actuator_count(), problem.virtual_dimension());
+    let commands: Vec<f64> = results
+        .iter()
+        .flat_map(|a| a.commands.iter().copied())
+        .collect();
+    let achieved: Vec<f64> = results
+        .iter()
+        .flat_map(|a| a.achieved.iter().copied())
+        .collect();
+    let to_2d = |values: Vec<f64>, cols: usize| {
+        numpy::ndarray::Array2::from_shape_vec((rows, cols), values)
+            .map(|a| a.into_pyarray(py))
+            .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
+    };
+    Ok((
+        to_2d(commands, m)?,
+        to_2d(achieved, n)?,
+        results.iter().map(|a| a.status.name()).collect(),
+        results.iter().map(|a| a.iterations).collect(),
+    ))
+}
+
+/// Benchmark support: mean seconds per solve for each row of `controls` (cold starts, one thread).
+#[pyfunction]
+pub fn time_allocations<'py>(
+    py: Python<'py>,
+    problem: &PyAllocationProblem,
+    controls: PyReadonlyArray2<'py, f64>,
+    method_name: &str,
+    repeats: usize,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let method = method(
+        method_name,
+        None,
+        ClarabelSettings::default().tolerance,
+        ClarabelSettings::default().max_iterations,
+    )?;
+    let flat = crate::slice2("virtual_control", &controls)?;
+    let problem = &problem.inner;
+    let times = detached(py, || time_each(problem, &method, flat, repeats))?;
+    Ok(times.into_pyarray(py))
+}
+
+type DirectionalLimitTuple<'py> = (f64, Bound<'py, PyArray1<f64>>, &'static str);
+type HoverMarginTuple<'py> = (
+    f64,
+    f64,
+    f64,
+    Option<Bound<'py, PyArray1<f64>>>,
+    &'static str,
+);
+
+/// Largest scale along `direction` from `base`: None when `base` is unattainable, else
+/// (scale, commands, status).
+#[pyfunction]
+pub fn max_along_direction<'py>(
+    py: Python<'py>,
+    matrix_: PyReadonlyArray2<'py, f64>,
+    lower: PyReadonlyArray1<'py, f64>,
+    upper: PyReadonlyArray1<'py, f64>,
+    direction: PyReadonlyArray1<'py, f64>,
+    base: PyReadonlyArray1<'py, f64>,
+    tolerance: f64,
+) -> PyResult<Option<DirectionalLimitTuple<'py>>> {
+    let settings = ClarabelSettings::default()
+        .tolerance(tolerance)
+        .map_err(to_py_err)?;
+    let m = matrix("matrix", &matrix_)?;
+    let (lo, hi) = (slice1("lower", &lower)?, slice1("upper", &upper)?);
+    let (d, b) = (slice1("direction", &direction)?, slice1("base", &base)?);
+    let limit = detached(py, || core_max_along(&m, lo, hi, d, b, &settings))?;
+    Ok(limit.map(|l| (l.scale, l.commands.into_pyarray(py), l.status.name())))
+}
+
+/// (max_thrust_n, weight_n, margin_n, commands or None, status) of an airframe.
+#[pyfunction]
+pub fn hover_thrust_margin<'py>(
+    py: Python<'py>,
+    airframe: &PyAirframe,
+    give_up_yaw: bool,
+    tolerance: f64,
+) -> PyResult<HoverMarginTuple<'py>> {
+    let settings = ClarabelSettings::default()
+        .tolerance(tolerance)
+        .map_err(to_py_err)?;
+    let axes = ControlAxes::from_give_up_yaw(give_up_yaw);
+    let airframe = &airframe.inner;
+    let h = detached(py, || core_hover_margin(airframe, axes, &settings))?;
+    let commands = (!h.commands.is_empty()).then(|| h.commands.into_pyarray(py));
+    Ok((
+        h.max_thrust_n,
+        h.weight_n,
+        h.margin_n,
+        commands,
+        h.status.name(),
+    ))
+}
+
+/// The law an allocating controller runs before allocation.
+#[derive(Clone)]
+enum Law {
+    OpenLoop(OpenLoop),
+    LinearFeedback(LinearFeedback),
+    Lti(DiscreteLti),
+}
+
+#[derive(FromPyObject)]
+pub enum LawArg<'py> {
+    OpenLoop(PyRef<'py, PyOpenLoop>),
+    LinearFeedback(PyRef<'py, PyLinearFeedback>),
+    Lti(PyRef<'py, PyDiscreteLti>),
+}
+
+/// A virtual-control law followed by active-set allocation.
+#[pyclass(name = "Allocated", module = "rotorfault._rfcore", frozen)]
+pub struct PyAllocated {
+    law: Law,
+    solver: ActiveSetSolver,
+}
+
+impl PyAllocated {
+    /// A fresh controller for one run.
+    pub(crate) fn controller(&self) -> rfcore::Result<Box<dyn Controller>> {
+        let law: Box<dyn Controller> = match &self.law {
+            Law::OpenLoop(c) => Box::new(c.clone()),
+            Law::LinearFeedback(c) => Box::new(c.clone()),
+            Law::Lti(c) => Box::new(c.clone()),
+        };
+        Ok(Box::new(Allocated::new(law, self.solver.clone())?))
+    }
+}
+
+#[pymethods]
+impl PyAllocated {
+    #[new]
+    fn new(law: LawArg<'_>, problem: &PyAllocationProblem) -> PyResult<Self> {
+        let law = match law {
+            LawArg::OpenLoop(c) => Law::OpenLoop(c.inner.clone()),
+            LawArg::LinearFeedback(c) => Law::LinearFeedback(c.inner.clone()),
+            LawArg::Lti(c) => Law::Lti(c.inner.clone()),
+        };
+        let out = PyAllocated {
+            law,
+            solver: ActiveSetSolver::new(&problem.inner),
+        };
+        out.controller().map_err(to_py_err)?; // checks the law's output count
+        Ok(out)
+    }
+}

@@ -1,0 +1,597 @@
+//! Control allocation: the rotor commands `T` (m actuators) that produce a desired virtual control
+//! `u_c` (n components, e.g. thrust and three torques) as well as the rotors allow.
+//!
+//! One problem type, [`AllocationProblem`], serves every method:
+//!
+//! ```text
+//! minimise  1/2 (u_c - M T)^T W (u_c - M T) + gamma/2 |T - T_pref|^2
+//! subject   T_min <= T <= T_max
+//! ```
+//!
+//! with `M` the n x m effectiveness matrix, `W = diag(weights)` (weights >= 0; a zero weight drops
+//! that axis, as Ke et al. eq. (35) does with the yaw weight) and an optional regularisation
+//! `gamma` toward preferred commands. Ke et al. eq. (33) is this problem with `gamma = 0`.
+//!
+//! Methods:
+//! - [`crate::active_set::ActiveSetSolver`]: exact, allocation-free, warm-startable; the hot path.
+//! - [`crate::clarabel_qp`]: the same problem (and prioritised and attainable-set variants) through
+//!   the Clarabel interior-point solver: the reference.
+//! - [`weighted_pseudo_inverse`]: the unconstrained solution (Ke eqs. (34)/(35)); bounds ignored.
+//!
+//! # Which solution, when there are many
+//! With more rotors than weighted axes (a hexacopter, or a zero yaw weight) the minimisers form a
+//! set. Every method here returns, among them, the one closest to `T_pref` (zero unless set): for
+//! the pseudo-inverse exactly `T_pref + A^+ (b - A T_pref)`, i.e. `M^+ u_c` of Ke eq. (34) when
+//! `T_pref = 0`; the active-set solver applies the same rule on its final free set, so both agree
+//! whenever no bound is active. Directions whose weighted gain is below [`RANK_RTOL`] (relative, on
+//! the squared gain) of the largest are treated as exactly uncontrollable.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+use crate::active_set::{ActiveSet, ActiveSetSolver};
+use crate::clarabel_qp::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
+use crate::error::{require_all_finite, require_finite, Result, RfError};
+
+/// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
+pub const MAX_ACTUATORS: usize = 12;
+/// Most virtual-control components a problem may have.
+pub const MAX_VIRTUAL: usize = 12;
+/// Relative threshold on the squared gain (curvature) below which a direction counts as zero.
+pub const RANK_RTOL: f64 = 1e-11;
+
+/// A box-constrained weighted least-squares allocation problem (module docs). Validated on
+/// construction; every field is read-only afterwards.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AllocationProblem {
+    matrix: DMatrix<f64>,
+    weights: Vec<f64>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    regularization: f64,
+    preferred: Vec<f64>,
+}
+
+impl AllocationProblem {
+    /// `matrix` is n x m (1 <= n <= [`MAX_VIRTUAL`], 1 <= m <= [`MAX_ACTUATORS`]); `weights` has n
+    /// entries >= 0; `lower`/`upper` have m entries with `lower <= upper`. All finite.
+    pub fn new(
+        matrix: DMatrix<f64>,
+        weights: &[f64],
+        lower: &[f64],
+        upper: &[f64],
+    ) -> Result<Self> {
+        let (n, m) = matrix.shape();
+        if n == 0 || n > MAX_VIRTUAL {
+            return Err(RfError::shape(
+                "matrix",
+                format!("1 to {MAX_VIRTUAL} rows (virtual-control components)"),
+                n.to_string(),
+            ));
+        }
+        if m == 0 || m > MAX_ACTUATORS {
+            return Err(RfError::shape(
+                "matrix",
+                format!("1 to {MAX_ACTUATORS} columns (actuators)"),
+                m.to_string(),
+            ));
+        }
+        if let Some(i) = matrix.iter().position(|v| !v.is_finite()) {
+            return Err(RfError::invalid(
+                format!("matrix[{}, {}]", i % n, i / n),
+                format!("must be finite, got {}", matrix.as_slice()[i]),
+            ));
+        }
+        check_len("weights", weights, n, "one per virtual-control component")?;
+        require_all_finite("weights", weights)?;
+        if let Some(i) = weights.iter().position(|&w| w < 0.0) {
+            return Err(RfError::invalid(
+                format!("weights[{i}]"),
+                format!("must be >= 0, got {}", weights[i]),
+            ));
+        }
+        let mut problem = AllocationProblem {
+            matrix,
+            weights: weights.to_vec(),
+            lower: Vec::new(),
+            upper: Vec::new(),
+            regularization: 0.0,
+            preferred: vec![0.0; m],
+        };
+        problem.set_bounds(lower, upper)?;
+        Ok(problem)
+    }
+
+    /// Replaces the bounds (validated as in [`AllocationProblem::new`]).
+    pub fn set_bounds(&mut self, lower: &[f64], upper: &[f64]) -> Result<()> {
+        let m = self.actuator_count();
+        check_len("lower", lower, m, "one per actuator")?;
+        check_len("upper", upper, m, "one per actuator")?;
+        require_all_finite("lower", lower)?;
+        require_all_finite("upper", upper)?;
+        if let Some(i) = (0..m).find(|&i| lower[i] > upper[i]) {
+            return Err(RfError::invalid(
+                format!("lower[{i}]"),
+                format!("must not exceed upper[{i}] ({} > {})", lower[i], upper[i]),
+            ));
+        }
+        self.lower = lower.to_vec();
+        self.upper = upper.to_vec();
+        Ok(())
+    }
+
+    /// Adds `gamma/2 |T - preferred|^2` to the objective (`gamma >= 0`, finite).
+    pub fn with_regularization(mut self, gamma: f64, preferred: &[f64]) -> Result<Self> {
+        require_finite("regularization", gamma)?;
+        if gamma < 0.0 {
+            return Err(RfError::invalid(
+                "regularization",
+                format!("must be >= 0, got {gamma}"),
+            ));
+        }
+        check_len(
+            "preferred",
+            preferred,
+            self.actuator_count(),
+            "one per actuator",
+        )?;
+        require_all_finite("preferred", preferred)?;
+        self.regularization = gamma;
+        self.preferred = preferred.to_vec();
+        Ok(self)
+    }
+
+    /// The bounds tightened by a rate limit: each command may move at most `max_change[i]` from
+    /// `previous[i]` (e.g. rate x control period). The result always keeps `lower <= upper`: a
+    /// previous command outside the bounds is pulled to the nearest bound.
+    pub fn rate_limited(&self, previous: &[f64], max_change: &[f64]) -> Result<Self> {
+        let m = self.actuator_count();
+        check_len("previous", previous, m, "one per actuator")?;
+        check_len("max_change", max_change, m, "one per actuator")?;
+        require_all_finite("previous", previous)?;
+        if let Some(i) = max_change.iter().position(|d| d.is_nan() || *d < 0.0) {
+            return Err(RfError::invalid(
+                format!("max_change[{i}]"),
+                format!("must be >= 0 (infinity for none), got {}", max_change[i]),
+            ));
+        }
+        let mut out = self.clone();
+        for i in 0..m {
+            let (lo, hi) = (self.lower[i], self.upper[i]);
+            out.lower[i] = (previous[i] - max_change[i]).clamp(lo, hi);
+            out.upper[i] = (previous[i] + max_change[i]).clamp(lo, hi);
+        }
+        Ok(out)
+    }
+
+    pub fn matrix(&self) -> &DMatrix<f64> {
+        &self.matrix
+    }
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+    pub fn lower(&self) -> &[f64] {
+        &self.lower
+    }
+    pub fn upper(&self) -> &[f64] {
+        &self.upper
+    }
+    pub fn regularization(&self) -> f64 {
+        self.regularization
+    }
+    pub fn preferred(&self) -> &[f64] {
+        &self.preferred
+    }
+    /// m, the number of actuators (columns of M).
+    pub fn actuator_count(&self) -> usize {
+        self.matrix.ncols()
+    }
+    /// n, the number of virtual-control components (rows of M).
+    pub fn virtual_dimension(&self) -> usize {
+        self.matrix.nrows()
+    }
+
+    /// Checks a virtual control: n finite entries.
+    pub fn check_virtual_control(&self, u_c: &[f64]) -> Result<()> {
+        check_len(
+            "virtual_control",
+            u_c,
+            self.virtual_dimension(),
+            "one per virtual-control component",
+        )?;
+        require_all_finite("virtual_control", u_c)
+    }
+
+    /// `M T`.
+    pub fn achieved(&self, commands: &[f64]) -> Vec<f64> {
+        (0..self.virtual_dimension())
+            .map(|r| {
+                (0..self.actuator_count())
+                    .map(|c| self.matrix[(r, c)] * commands[c])
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// The objective of the module docs at `commands`.
+    pub fn objective(&self, u_c: &[f64], commands: &[f64]) -> f64 {
+        let achieved = self.achieved(commands);
+        let tracking: f64 = (0..self.virtual_dimension())
+            .map(|r| self.weights[r] * (u_c[r] - achieved[r]).powi(2))
+            .sum();
+        let regularization: f64 = commands
+            .iter()
+            .zip(&self.preferred)
+            .map(|(t, p)| (t - p).powi(2))
+            .sum();
+        0.5 * tracking + 0.5 * self.regularization * regularization
+    }
+
+    /// The objective's gradient with respect to the commands, `H T - c` (see [`Self::hessian`]).
+    pub fn gradient(&self, u_c: &[f64], commands: &[f64]) -> Vec<f64> {
+        let achieved = self.achieved(commands);
+        (0..self.actuator_count())
+            .map(|c| {
+                let tracking: f64 = (0..self.virtual_dimension())
+                    .map(|r| self.matrix[(r, c)] * self.weights[r] * (achieved[r] - u_c[r]))
+                    .sum();
+                tracking + self.regularization * (commands[c] - self.preferred[c])
+            })
+            .collect()
+    }
+
+    /// `H = M^T W M + gamma I`, the objective's (constant) Hessian.
+    pub fn hessian(&self) -> DMatrix<f64> {
+        let m = self.actuator_count();
+        DMatrix::from_fn(m, m, |i, j| {
+            let curvature: f64 = (0..self.virtual_dimension())
+                .map(|r| self.matrix[(r, i)] * self.weights[r] * self.matrix[(r, j)])
+                .sum();
+            curvature + if i == j { self.regularization } else { 0.0 }
+        })
+    }
+
+    /// The KKT (first-order optimality) residual of `commands`: the largest entry of
+    /// `|T - clamp(T - g / s, lower, upper)|` with `g` the gradient and `s` the largest entry of
+    /// the Hessian, plus any bound violation. In command units (N for thrust); zero exactly at a
+    /// solution. The scaling by `s` makes it invariant to the scale of the weights.
+    pub fn kkt_residual(&self, u_c: &[f64], commands: &[f64]) -> f64 {
+        let gradient = self.gradient(u_c, commands);
+        let scale = self.hessian().amax();
+        let scale = if scale > 0.0 { scale } else { 1.0 };
+        (0..self.actuator_count())
+            .map(|i| {
+                let (lo, hi, t) = (self.lower[i], self.upper[i], commands[i]);
+                let projected = (t - gradient[i] / scale).clamp(lo, hi);
+                let violation = (lo - t).max(t - hi).max(0.0);
+                (t - projected).abs().max(violation)
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+fn check_len(field: &str, values: &[f64], expected: usize, what: &str) -> Result<()> {
+    if values.len() == expected {
+        Ok(())
+    } else {
+        Err(RfError::shape(
+            field,
+            format!("{expected} entries ({what})"),
+            values.len().to_string(),
+        ))
+    }
+}
+
+/// How an allocation ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum AllocationStatus {
+    /// Solved to the solver's tolerance.
+    Optimal,
+    /// Clarabel finished at reduced accuracy.
+    AlmostOptimal,
+    /// The active-set solver hit its iteration bound; the commands are feasible and no worse than
+    /// where it started, but not proven optimal.
+    IterationLimit,
+    /// The unconstrained pseudo-inverse: bounds were not applied.
+    Unconstrained,
+    /// Clarabel stopped without a solution (iteration limit, numerical trouble, infeasible
+    /// equality constraints); the commands are its last iterate.
+    Failed,
+}
+
+impl AllocationStatus {
+    /// A short stable name (`"optimal"`, `"iteration-limit"`, ...), as Python reports it.
+    pub fn name(self) -> &'static str {
+        match self {
+            AllocationStatus::Optimal => "optimal",
+            AllocationStatus::AlmostOptimal => "almost-optimal",
+            AllocationStatus::IterationLimit => "iteration-limit",
+            AllocationStatus::Unconstrained => "unconstrained",
+            AllocationStatus::Failed => "failed",
+        }
+    }
+}
+
+/// The result of one allocation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Allocation {
+    /// Rotor commands T (m).
+    pub commands: Vec<f64>,
+    /// The virtual control they produce, `M T` (n).
+    pub achieved: Vec<f64>,
+    pub status: AllocationStatus,
+    /// Solver iterations (0 for the pseudo-inverse).
+    pub iterations: usize,
+}
+
+/// The unconstrained solution as a matrix `P` and offset `o`: `T = P u_c + o`, with
+/// `P = A^+ W^(1/2)`, `A = W^(1/2) M` (Ke eq. (34); eq. (35) when a weight is zero), extended by the
+/// regularisation and the closest-to-preferred rule of the module docs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WeightedPseudoInverse {
+    gain: DMatrix<f64>,
+    offset: Vec<f64>,
+}
+
+/// Builds the [`WeightedPseudoInverse`] of a problem (bounds are ignored).
+pub fn weighted_pseudo_inverse(problem: &AllocationProblem) -> WeightedPseudoInverse {
+    let (n, m) = problem.matrix.shape();
+    let gamma = problem.regularization;
+    let root_w: Vec<f64> = problem.weights.iter().map(|w| w.sqrt()).collect();
+    // Stack [W^(1/2) M; sqrt(gamma) I] so the regularisation is part of one least-squares problem.
+    let extra = if gamma > 0.0 { m } else { 0 };
+    let mut a = DMatrix::zeros(n + extra, m);
+    for r in 0..n {
+        for c in 0..m {
+            a[(r, c)] = root_w[r] * problem.matrix[(r, c)];
+        }
+    }
+    for c in 0..extra {
+        a[(n + c, c)] = gamma.sqrt();
+    }
+    let pinv = pseudo_inverse(&a);
+    // T = T_pref + A^+ (b - A T_pref), b = [W^(1/2) u_c; sqrt(gamma) T_pref].
+    let gain = DMatrix::from_fn(m, n, |c, r| pinv[(c, r)] * root_w[r]);
+    let pref = &problem.preferred;
+    let a_pref: Vec<f64> = (0..n + extra)
+        .map(|r| (0..m).map(|c| a[(r, c)] * pref[c]).sum())
+        .collect();
+    let offset = (0..m)
+        .map(|c| {
+            let correction: f64 = (0..n + extra)
+                .map(|r| {
+                    let b_pref = if r >= n {
+                        gamma.sqrt() * pref[r - n]
+                    } else {
+                        0.0
+                    };
+                    pinv[(c, r)] * (b_pref - a_pref[r])
+                })
+                .sum();
+            pref[c] + correction
+        })
+        .collect();
+    WeightedPseudoInverse { gain, offset }
+}
+
+/// Moore-Penrose inverse by SVD, dropping singular values whose square is below [`RANK_RTOL`] of
+/// the largest square (the active-set solver's rank rule).
+fn pseudo_inverse(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let svd = a.clone().svd(true, true);
+    let sigma_max = svd.singular_values.max();
+    let cutoff = sigma_max * RANK_RTOL.sqrt();
+    let (rows, cols) = a.shape();
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return DMatrix::zeros(cols, rows);
+    };
+    let mut out = DMatrix::zeros(cols, rows);
+    for (k, &s) in svd.singular_values.iter().enumerate() {
+        if s > cutoff && s > 0.0 {
+            out += (v_t.row(k).transpose() * u.column(k).transpose()) / s;
+        }
+    }
+    out
+}
+
+impl WeightedPseudoInverse {
+    /// `P` (m x n).
+    pub fn gain(&self) -> &DMatrix<f64> {
+        &self.gain
+    }
+    /// `o` (m): zero unless a preferred command is set.
+    pub fn offset(&self) -> &[f64] {
+        &self.offset
+    }
+
+    /// `T = P u_c + o` written into `commands` (lengths checked by the caller's problem).
+    pub fn apply(&self, u_c: &[f64], commands: &mut [f64]) {
+        for (c, out) in commands.iter_mut().enumerate() {
+            *out = self.offset[c]
+                + (0..self.gain.ncols())
+                    .map(|r| self.gain[(c, r)] * u_c[r])
+                    .sum::<f64>();
+        }
+    }
+}
+
+/// The unconstrained allocation of one virtual control (status [`AllocationStatus::Unconstrained`]).
+pub fn allocate_pinv(problem: &AllocationProblem, u_c: &[f64]) -> Result<Allocation> {
+    problem.check_virtual_control(u_c)?;
+    let mut commands = vec![0.0; problem.actuator_count()];
+    weighted_pseudo_inverse(problem).apply(u_c, &mut commands);
+    Ok(Allocation {
+        achieved: problem.achieved(&commands),
+        commands,
+        status: AllocationStatus::Unconstrained,
+        iterations: 0,
+    })
+}
+
+/// Which solver an allocation uses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Method {
+    /// [`ActiveSetSolver`]: exact, the default.
+    ActiveSet,
+    /// [`crate::clarabel_qp::allocate_clarabel`]: the interior-point reference.
+    Clarabel(ClarabelSettings),
+    /// [`crate::clarabel_qp::allocate_prioritized`]: groups of rows, most important first.
+    Prioritized(Vec<Vec<usize>>, ClarabelSettings),
+    /// [`weighted_pseudo_inverse`]: unconstrained.
+    Pinv,
+}
+
+/// Allocations of many virtual controls (rows of `controls`, N x n row-major) for one problem,
+/// in parallel. Validates every row first, so an error names the row and nothing is computed.
+pub fn allocate_many(
+    problem: &AllocationProblem,
+    method: &Method,
+    controls: &[f64],
+) -> Result<Vec<Allocation>> {
+    let n = problem.virtual_dimension();
+    if !controls.len().is_multiple_of(n) {
+        return Err(RfError::shape(
+            "virtual_control",
+            format!("rows of {n} entries"),
+            format!("{} values", controls.len()),
+        ));
+    }
+    if let Some(i) = controls.iter().position(|v| !v.is_finite()) {
+        return Err(RfError::invalid(
+            format!("virtual_control[{}, {}]", i / n, i % n),
+            format!("must be finite, got {}", controls[i]),
+        ));
+    }
+    match method {
+        Method::ActiveSet => {
+            let solver = ActiveSetSolver::new(problem);
+            controls
+                .par_chunks(n)
+                .map(|u_c| solver.allocate(u_c))
+                .collect()
+        }
+        Method::Pinv => {
+            let pinv = weighted_pseudo_inverse(problem);
+            Ok(controls
+                .chunks(n)
+                .map(|u_c| {
+                    let mut commands = vec![0.0; problem.actuator_count()];
+                    pinv.apply(u_c, &mut commands);
+                    Allocation {
+                        achieved: problem.achieved(&commands),
+                        commands,
+                        status: AllocationStatus::Unconstrained,
+                        iterations: 0,
+                    }
+                })
+                .collect())
+        }
+        Method::Clarabel(settings) => controls
+            .par_chunks(n)
+            .map(|u_c| allocate_clarabel(problem, u_c, settings))
+            .collect(),
+        Method::Prioritized(groups, settings) => controls
+            .par_chunks(n)
+            .map(|u_c| allocate_prioritized(problem, u_c, groups, settings))
+            .collect(),
+    }
+}
+
+/// Benchmark support: the mean wall time of one solve, per virtual control (rows of `controls`),
+/// each solved `repeats` times in a row on one thread (cold-started). Seconds.
+pub fn time_each(
+    problem: &AllocationProblem,
+    method: &Method,
+    controls: &[f64],
+    repeats: usize,
+) -> Result<Vec<f64>> {
+    if repeats == 0 {
+        return Err(RfError::invalid("repeats", "must be >= 1, got 0"));
+    }
+    allocate_many(problem, &Method::Pinv, controls)?; // validates the rows
+    let n = problem.virtual_dimension();
+    let solver = ActiveSetSolver::new(problem);
+    let pinv = weighted_pseudo_inverse(problem);
+    let mut commands = vec![0.0; problem.actuator_count()];
+    let mut times = Vec::with_capacity(controls.len() / n);
+    for u_c in controls.chunks(n) {
+        let start = Instant::now();
+        for _ in 0..repeats {
+            match method {
+                Method::ActiveSet => {
+                    let mut active = ActiveSet::cold(problem.actuator_count());
+                    black_box(solver.solve_unchecked(black_box(u_c), &mut active, &mut commands));
+                }
+                Method::Pinv => pinv.apply(black_box(u_c), &mut commands),
+                Method::Clarabel(settings) => {
+                    black_box(allocate_clarabel(problem, black_box(u_c), settings)?);
+                }
+                Method::Prioritized(groups, settings) => {
+                    black_box(allocate_prioritized(
+                        problem,
+                        black_box(u_c),
+                        groups,
+                        settings,
+                    )?);
+                }
+            }
+        }
+        times.push(start.elapsed().as_secs_f64() / repeats as f64);
+    }
+    Ok(times)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> AllocationProblem {
+        let l = 0.125;
+        let c = 0.0166;
+        let m = DMatrix::from_row_slice(
+            4,
+            4,
+            &[1.0, 1.0, 1.0, 1.0, -l, l, l, -l, l, -l, l, -l, c, c, -c, -c],
+        );
+        AllocationProblem::new(m, &[1.0; 4], &[0.0; 4], &[8.5; 4]).unwrap()
+    }
+
+    #[test]
+    fn pinv_inverts_a_square_matrix() {
+        let p = quad();
+        let u = [7.0, 0.1, -0.05, 0.01];
+        let a = allocate_pinv(&p, &u).unwrap();
+        for (x, y) in a.achieved.iter().zip(u) {
+            assert!((x - y).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn bad_input_names_the_field() {
+        let p = quad();
+        let err = AllocationProblem::new(
+            p.matrix().clone(),
+            &[1.0, -1.0, 1.0, 1.0],
+            &[0.0; 4],
+            &[1.0; 4],
+        )
+        .unwrap_err();
+        assert!(err.to_string().starts_with("weights[1]"), "{err}");
+        let err = AllocationProblem::new(p.matrix().clone(), &[1.0; 4], &[2.0; 4], &[1.0; 4])
+            .unwrap_err();
+        assert!(err.to_string().starts_with("lower[0]"), "{err}");
+        let err = allocate_pinv(&p, &[1.0, f64::NAN, 0.0, 0.0]).unwrap_err();
+        assert!(err.to_string().starts_with("virtual_control[1]"), "{err}");
+    }
+
+    #[test]
+    fn rate_limit_tightens_and_keeps_order() {
+        let p = quad()
+            .rate_limited(&[1.0, 9.0, -1.0, 4.0], &[0.5; 4])
+            .unwrap();
+        assert_eq!(p.lower(), &[0.5, 8.5, 0.0, 3.5]);
+        assert_eq!(p.upper(), &[1.5, 8.5, 0.0, 4.5]);
+    }
+}

@@ -1,0 +1,384 @@
+//! The active-set allocator against Clarabel on 10,000 random problems, plus its KKT conditions,
+//! warm starts and the unconstrained limits of Ke et al. eqs. (34)/(35).
+
+use nalgebra::DMatrix;
+use rfcore::active_set::{ActiveSet, ActiveSetSolver, BoundState};
+use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
+use rfcore::clarabel_qp::{allocate_clarabel, ClarabelSettings};
+
+/// SplitMix64: a dependency-free, reproducible generator.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+struct Case {
+    problem: AllocationProblem,
+    u_c: Vec<f64>,
+}
+
+/// Random problems per the issue: m = 4..8, n = 3..6 (4 with Ke's weights), full and deficient
+/// rank, log-uniform or Ke's weights, random (sometimes degenerate) bounds, attainable and
+/// unattainable virtual controls, a quarter with regularisation.
+fn random_case(rng: &mut Rng) -> Case {
+    let m = 4 + rng.below(5);
+    let ke_weights = rng.below(4) == 0;
+    let n = if ke_weights { 4 } else { 3 + rng.below(4) };
+    let deficient = rng.below(3) == 0;
+    let matrix = if deficient {
+        let rank = 1 + rng.below(n.min(m) - 1);
+        let a = DMatrix::from_fn(n, rank, |_, _| rng.uniform(-1.0, 1.0));
+        let b = DMatrix::from_fn(rank, m, |_, _| rng.uniform(-1.0, 1.0));
+        a * b
+    } else {
+        DMatrix::from_fn(n, m, |_, _| rng.uniform(-1.0, 1.0))
+    };
+    let weights: Vec<f64> = if ke_weights {
+        vec![20.0, 20.0, 1.0, 0.01]
+    } else {
+        (0..n).map(|_| 10f64.powf(rng.uniform(-2.0, 2.0))).collect()
+    };
+    let lower: Vec<f64> = (0..m).map(|_| rng.uniform(-2.0, 1.0)).collect();
+    let upper: Vec<f64> = lower
+        .iter()
+        .map(|&lo| {
+            if rng.below(20) == 0 {
+                lo
+            } else {
+                lo + rng.uniform(0.1, 5.0)
+            }
+        })
+        .collect();
+    let inside: Vec<f64> = (0..m).map(|i| rng.uniform(lower[i], upper[i])).collect();
+    let mut u_c: Vec<f64> = (0..n)
+        .map(|r| (0..m).map(|c| matrix[(r, c)] * inside[c]).sum())
+        .collect();
+    if rng.below(2) == 0 {
+        // Unattainable: stretch and perturb an attainable point.
+        for u in u_c.iter_mut() {
+            *u = 3.0 * *u + rng.uniform(-2.0, 2.0);
+        }
+    }
+    let mut problem = AllocationProblem::new(matrix, &weights, &lower, &upper).unwrap();
+    if rng.below(4) == 0 {
+        let preferred: Vec<f64> = (0..m).map(|_| rng.uniform(-1.0, 2.0)).collect();
+        problem = problem
+            .with_regularization(10f64.powf(rng.uniform(-4.0, -1.0)), &preferred)
+            .unwrap();
+    }
+    Case { problem, u_c }
+}
+
+/// The objective's natural scale: its value at the bounded point nearest zero.
+fn objective_scale(case: &Case) -> f64 {
+    let p = &case.problem;
+    let origin: Vec<f64> = (0..p.actuator_count())
+        .map(|i| 0.0f64.clamp(p.lower()[i], p.upper()[i]))
+        .collect();
+    p.objective(&case.u_c, &origin).max(f64::MIN_POSITIVE)
+}
+
+/// True when the solution is unique and well-posed: the Hessian restricted to the strictly free
+/// variables has curvature at least 1e-3 of its largest entry, and every bound held has a clearly
+/// positive multiplier (then any other minimiser would have to move a held variable against a
+/// positive gradient). The conditioning requirement is about the reference, not the solver: an
+/// interior-point answer accurate to `delta` in the objective is only accurate to about
+/// `sqrt(2 delta / curvature)` in T, so nearly flat directions cannot be compared to 1e-6.
+fn unique(problem: &AllocationProblem, u_c: &[f64], t: &[f64]) -> bool {
+    let h = problem.hessian();
+    let g = problem.gradient(u_c, t);
+    let scale = h.amax();
+    let span = |i: usize| problem.upper()[i] - problem.lower()[i];
+    let mut free = Vec::new();
+    for i in 0..t.len() {
+        let at_lower = t[i] - problem.lower()[i] <= 1e-7 * span(i).max(1.0);
+        let at_upper = problem.upper()[i] - t[i] <= 1e-7 * span(i).max(1.0);
+        if span(i) == 0.0 {
+            continue;
+        }
+        if at_lower && g[i] <= 1e-3 * scale {
+            return false;
+        }
+        if at_upper && g[i] >= -1e-3 * scale {
+            return false;
+        }
+        if !at_lower && !at_upper {
+            free.push(i);
+        }
+    }
+    if free.is_empty() {
+        return true;
+    }
+    let sub = DMatrix::from_fn(free.len(), free.len(), |a, b| h[(free[a], free[b])]);
+    sub.symmetric_eigenvalues().min() > 1e-3 * scale
+}
+
+#[test]
+fn active_set_matches_clarabel_on_10000_random_problems() {
+    let mut rng = Rng(20261122);
+    let settings = ClarabelSettings::default().tolerance(1e-12).unwrap();
+    let (mut compared, mut optimal_clarabel) = (0, 0);
+    let mut worst = (0.0f64, 0.0f64, 0.0f64, f64::NEG_INFINITY);
+    for trial in 0..10_000 {
+        let case = random_case(&mut rng);
+        let p = &case.problem;
+        let exact = ActiveSetSolver::new(p).allocate(&case.u_c).unwrap();
+        assert_eq!(exact.status, AllocationStatus::Optimal, "trial {trial}");
+        let bound_scale = p
+            .lower()
+            .iter()
+            .chain(p.upper())
+            .fold(0.0f64, |a, b| a.max(b.abs()));
+        let kkt = p.kkt_residual(&case.u_c, &exact.commands);
+        assert!(
+            kkt <= 1e-9 * bound_scale,
+            "trial {trial}: KKT residual {kkt}"
+        );
+        worst.0 = worst.0.max(kkt / bound_scale);
+
+        let reference = allocate_clarabel(p, &case.u_c, &settings).unwrap();
+        if reference.status != AllocationStatus::Optimal {
+            continue;
+        }
+        optimal_clarabel += 1;
+        let f_exact = p.objective(&case.u_c, &exact.commands);
+        let f_ref = p.objective(&case.u_c, &reference.commands);
+        let scale = f_ref.max(objective_scale(&case));
+        let gap = (f_exact - f_ref) / scale;
+        assert!(
+            gap.abs() <= 1e-9,
+            "trial {trial}: objective {f_exact} vs clarabel {f_ref}"
+        );
+        // The exact solver is never worse than the interior-point reference beyond rounding.
+        assert!(
+            gap <= 1e-12,
+            "trial {trial}: objective {f_exact} above clarabel's {f_ref}"
+        );
+        worst.1 = worst.1.max(gap.abs());
+        worst.3 = worst.3.max(gap);
+        if unique(p, &case.u_c, &exact.commands) {
+            compared += 1;
+            for (a, b) in exact.commands.iter().zip(&reference.commands) {
+                assert!(
+                    (a - b).abs() <= 1e-6,
+                    "trial {trial}: T {a} vs clarabel {b}"
+                );
+                worst.2 = worst.2.max((a - b).abs());
+            }
+        }
+    }
+    eprintln!(
+        "clarabel optimal on {optimal_clarabel}; T compared on {compared} unique solutions; \
+         worst KKT/bound {:.1e}, objective gap {:.1e} (largest excess over clarabel {:.1e}), \
+         |dT| {:.1e}",
+        worst.0, worst.1, worst.3, worst.2
+    );
+    assert!(
+        optimal_clarabel >= 9_900,
+        "clarabel solved only {optimal_clarabel}"
+    );
+    assert!(
+        compared >= 3_000,
+        "only {compared} unique solutions compared"
+    );
+}
+
+#[test]
+fn warm_start_from_the_optimal_active_set_needs_one_iteration() {
+    let mut rng = Rng(7);
+    for _ in 0..500 {
+        let case = random_case(&mut rng);
+        let solver = ActiveSetSolver::new(&case.problem);
+        let m = case.problem.actuator_count();
+        let mut active = ActiveSet::cold(m);
+        let mut cold = vec![0.0; m];
+        solver.solve(&case.u_c, &mut active, &mut cold).unwrap();
+        let mut warm = vec![0.0; m];
+        let report = solver.solve(&case.u_c, &mut active, &mut warm).unwrap();
+        assert_eq!(report.status, AllocationStatus::Optimal);
+        assert_eq!(report.iterations, 1);
+        let f_cold = case.problem.objective(&case.u_c, &cold);
+        let f_warm = case.problem.objective(&case.u_c, &warm);
+        assert!((f_cold - f_warm).abs() <= 1e-12 * objective_scale(&case).max(f_cold));
+    }
+}
+
+#[test]
+fn a_stale_warm_start_still_reaches_the_optimum() {
+    let mut rng = Rng(11);
+    for _ in 0..500 {
+        let case = random_case(&mut rng);
+        let m = case.problem.actuator_count();
+        let solver = ActiveSetSolver::new(&case.problem);
+        let mut active = ActiveSet::cold(m);
+        let mut scratch = vec![0.0; m];
+        // An unrelated active set: every variable held at its upper bound.
+        let upper_everywhere: Vec<f64> = case.problem.upper().to_vec();
+        let mut stale = ActiveSet::cold(m);
+        let stale_solver = ActiveSetSolver::new(&case.problem);
+        let target: Vec<f64> = case.problem.achieved(&upper_everywhere);
+        stale_solver
+            .solve(&target, &mut stale, &mut scratch)
+            .unwrap();
+        let report = solver.solve(&case.u_c, &mut stale, &mut scratch).unwrap();
+        assert_eq!(report.status, AllocationStatus::Optimal);
+        let cold = solver.allocate(&case.u_c).unwrap();
+        let (fs, fc) = (
+            case.problem.objective(&case.u_c, &scratch),
+            case.problem.objective(&case.u_c, &cold.commands),
+        );
+        assert!((fs - fc).abs() <= 1e-11 * objective_scale(&case).max(fc));
+        let _ = &mut active;
+    }
+}
+
+fn ke_matrix() -> DMatrix<f64> {
+    // Ke et al. eq. (1) with the corrected yaw row (papers' README) and Table III values.
+    let (l, c) = (0.125, 0.0166);
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    DMatrix::from_row_slice(
+        4,
+        4,
+        &[
+            1.0,
+            1.0,
+            1.0,
+            1.0,
+            -l * s,
+            l * s,
+            l * s,
+            -l * s,
+            l * s,
+            -l * s,
+            l * s,
+            -l * s,
+            c,
+            c,
+            -c,
+            -c,
+        ],
+    )
+}
+
+#[test]
+fn ke_eq34_equal_weights_give_the_moore_penrose_solution() {
+    let m = ke_matrix();
+    let problem = AllocationProblem::new(m.clone(), &[1.0; 4], &[0.0; 4], &[8.5; 4]).unwrap();
+    let u_c = [7.0, 0.05, -0.08, 0.01];
+    let exact = ActiveSetSolver::new(&problem).allocate(&u_c).unwrap();
+    let pinv = m.clone().pseudo_inverse(1e-14).unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
+    assert!(
+        exact.commands.iter().all(|&t| t > 0.0 && t < 8.5),
+        "no bound active"
+    );
+    for i in 0..4 {
+        assert!(
+            (exact.commands[i] - pinv[(i, 0)]).abs() <= 1e-12,
+            "{:?} vs {pinv}",
+            exact.commands
+        );
+    }
+    // Any equal weights give the same answer (Remark 7).
+    let scaled = AllocationProblem::new(m, &[37.0; 4], &[0.0; 4], &[8.5; 4]).unwrap();
+    let again = ActiveSetSolver::new(&scaled).allocate(&u_c).unwrap();
+    for i in 0..4 {
+        assert!((again.commands[i] - exact.commands[i]).abs() <= 1e-12);
+    }
+}
+
+#[test]
+fn ke_eq35_zero_yaw_weight_gives_the_pseudo_inverse_of_e1_m() {
+    let m = ke_matrix();
+    let e1m = m.rows(0, 3).into_owned();
+    for &weights in &[
+        [20.0, 20.0, 20.0, 0.0],
+        [1.0, 20.0, 20.0, 0.0],
+        [3.0, 1.0, 7.0, 0.0],
+    ] {
+        let problem = AllocationProblem::new(m.clone(), &weights, &[0.0; 4], &[8.5; 4]).unwrap();
+        let u_c = [7.0, 0.05, -0.08, 0.3]; // the yaw entry is ignored with weight 0
+        let expected = e1m.clone().pseudo_inverse(1e-14).unwrap()
+            * DMatrix::from_column_slice(3, 1, &u_c[..3]);
+        for method in ["active-set", "pinv"] {
+            let got = if method == "pinv" {
+                allocate_pinv(&problem, &u_c).unwrap()
+            } else {
+                ActiveSetSolver::new(&problem).allocate(&u_c).unwrap()
+            };
+            assert!(got.commands.iter().all(|&t| t > 0.0 && t < 8.5));
+            for i in 0..4 {
+                assert!(
+                    (got.commands[i] - expected[(i, 0)]).abs() <= 1e-12,
+                    "{method} {weights:?}: {:?} vs {expected}",
+                    got.commands
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn ke_small_yaw_weight_sacrifices_yaw_first_when_rotors_saturate() {
+    // Ke Section III.E: w_p = w_q >> w_f >> w_r. With an unattainable yaw demand, roll and pitch
+    // are met ever more exactly as w_r shrinks (towards eq. (35)), and yaw takes the shortfall.
+    let m = ke_matrix();
+    let u_c = [7.0, 0.05, -0.08, 0.5];
+    let mut previous = f64::INFINITY;
+    for w_r in [1.0, 1e-1, 1e-2, 1e-3] {
+        let problem =
+            AllocationProblem::new(m.clone(), &[1.0, 20.0, 20.0, w_r], &[0.0; 4], &[8.5; 4])
+                .unwrap();
+        let got = ActiveSetSolver::new(&problem).allocate(&u_c).unwrap();
+        let roll_pitch_error = (got.achieved[1] - u_c[1])
+            .abs()
+            .max((got.achieved[2] - u_c[2]).abs());
+        assert!(
+            roll_pitch_error < previous,
+            "w_r {w_r}: {roll_pitch_error} after {previous}"
+        );
+        assert!(got.achieved[3] < u_c[3], "yaw is the axis that gives");
+        previous = roll_pitch_error;
+    }
+    assert!(previous < 1e-4);
+}
+
+#[test]
+#[allow(clippy::needless_range_loop)]
+fn fixed_variables_are_held_and_iteration_bound_reports() {
+    let m = ke_matrix();
+    let problem =
+        AllocationProblem::new(m, &[1.0; 4], &[0.0, 2.0, 0.0, 0.0], &[8.5, 2.0, 8.5, 8.5]).unwrap();
+    let got = ActiveSetSolver::new(&problem)
+        .allocate(&[30.0, 0.5, 0.5, 0.1])
+        .unwrap();
+    assert_eq!(got.commands[1], 2.0);
+    let limited = ActiveSetSolver::new(&problem)
+        .with_max_iterations(1)
+        .unwrap();
+    let mut active = ActiveSet::cold(4);
+    let mut t = [0.0; 4];
+    let report = limited
+        .solve(&[30.0, 0.5, 0.5, 0.1], &mut active, &mut t)
+        .unwrap();
+    assert_eq!(report.status, AllocationStatus::IterationLimit);
+    for i in 0..4 {
+        assert!(t[i] >= problem.lower()[i] && t[i] <= problem.upper()[i]);
+    }
+    assert!(
+        active.states().contains(&BoundState::Upper)
+            || active.states().contains(&BoundState::Lower)
+    );
+}

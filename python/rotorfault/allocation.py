@@ -1,0 +1,402 @@
+"""Constrained control allocation: rotor commands for a desired virtual control.
+
+The problem (Ke et al. eq. (33), generalised)::
+
+    minimise  1/2 (u_c - M T)^T W (u_c - M T) + gamma/2 |T - T_pref|^2
+    subject   T_min <= T <= T_max
+
+``M`` is an airframe's effectiveness matrix (rows thrust N, roll, pitch, yaw torque N m; see
+:meth:`rotorfault.Airframe.effectiveness_matrix`) or any n x m matrix, ``W = diag(weights)``.
+
+Methods (one problem type, one answer type):
+
+- ``"active-set"`` (default): exact, about a microsecond, in Rust; what runs in closed loops.
+- ``"clarabel"``: the Clarabel interior-point solver, the reference; also solves prioritised
+  allocations (``priorities=[[0, 1, 2], [3]]``: thrust and roll/pitch first, yaw with the rest).
+- ``"pinv"``: the unconstrained weighted pseudo-inverse (Ke eqs. (34)/(35)); bounds ignored.
+
+When several command vectors are optimal (more rotors than weighted axes, or a zero weight), every
+method returns the one closest to ``preferred`` (zero by default): for ``"pinv"`` that is exactly
+``M^+ u_c`` (eq. (34)) or ``(E_1 M)^+ u_c1`` with a zero yaw weight (eq. (35)).
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from . import _rfcore
+from ._convert import FloatArray, flag, float_array, real
+from .airframe import Airframe
+
+METHODS = ("active-set", "clarabel", "pinv")
+#: Clarabel's default tolerance here: objectives agree with the exact solver to about 1e-10.
+CLARABEL_TOLERANCE = 1e-10
+
+
+@dataclass(frozen=True)
+class Allocation:
+    """The result of :func:`allocate`. For one virtual control ``commands`` is (m,), ``achieved``
+    (n,) and ``status`` a string; for N of them (N, m), (N, n) and a tuple of N strings.
+
+    ``status``: ``"optimal"``, ``"almost-optimal"`` (clarabel at reduced accuracy),
+    ``"iteration-limit"`` (active-set; commands feasible but not proven optimal),
+    ``"unconstrained"`` (pinv) or ``"failed"`` (clarabel found no solution)."""
+
+    commands: FloatArray
+    achieved: FloatArray
+    virtual_control: FloatArray
+    status: str | tuple[str, ...]
+    iterations: int | tuple[int, ...]
+
+    @property
+    def attained(self) -> bool | np.ndarray[Any, np.dtype[np.bool_]]:
+        """Whether the rotors produce the virtual control exactly (to 1e-9 of its size)."""
+        scale = np.maximum(np.max(np.abs(self.virtual_control), axis=-1), 1e-300)
+        ok = np.max(np.abs(self.achieved - self.virtual_control), axis=-1) <= 1e-9 * scale
+        return bool(ok) if np.ndim(ok) == 0 else ok
+
+    @property
+    def residual(self) -> FloatArray:
+        """``u_c - M T``: what the rotors could not give."""
+        out: FloatArray = self.virtual_control - self.achieved
+        return out
+
+
+class Allocator:
+    """A validated allocation problem, reusable across calls and by
+    :class:`rotorfault.controllers.Allocated`.
+
+    ``target``: an :class:`~rotorfault.Airframe` (its effectiveness matrix, efficiencies applied,
+    and thrust bounds) or an n x m matrix (then ``bounds`` is required). ``weights``: n entries
+    >= 0 (default all 1). ``bounds``: ``(lower, upper)``, each a number or m entries.
+    ``give_up_yaw``: with an airframe, drop the yaw row (n = 3)."""
+
+    def __init__(
+        self,
+        target: Airframe | Any,
+        weights: Any = None,
+        bounds: Any = None,
+        regularization: float = 0.0,
+        preferred: Any = None,
+        give_up_yaw: bool = False,
+    ) -> None:
+        drop_yaw = flag("give_up_yaw", give_up_yaw)
+        if isinstance(target, Airframe):
+            matrix = target.effectiveness_matrix()
+            if drop_yaw:
+                matrix = matrix[:3]
+            default_bounds: tuple[FloatArray, FloatArray] | None = (target.min_thrust_n, target.max_thrust_n)
+        else:
+            if drop_yaw:
+                raise ValueError("give_up_yaw: only applies to an Airframe (drop the row from the matrix yourself)")
+            matrix = float_array("matrix", target, 2)
+            default_bounds = None
+        n, m = matrix.shape
+        if bounds is None:
+            if default_bounds is None:
+                raise ValueError("bounds: required with a matrix, as (lower, upper)")
+            lower, upper = default_bounds
+        else:
+            lower, upper = _bounds(bounds, m)
+        w = np.ones(n) if weights is None else float_array("weights", weights, 1)
+        pref = np.zeros(m) if preferred is None else float_array("preferred", preferred, 1)
+        gamma = real("regularization", regularization)
+        self._core = _rfcore.AllocationProblem(matrix, w, lower, upper, gamma, pref)
+        self.matrix = _frozen(matrix)
+        self.weights = _frozen(w)
+        self.lower = _frozen(lower)
+        self.upper = _frozen(upper)
+        self.regularization = gamma
+        self.preferred = _frozen(pref)
+
+    @property
+    def actuator_count(self) -> int:
+        return int(self.matrix.shape[1])
+
+    @property
+    def virtual_dimension(self) -> int:
+        return int(self.matrix.shape[0])
+
+    def allocate(
+        self,
+        virtual_control: Any,
+        method: str = "active-set",
+        priorities: Any = None,
+        tolerance: float = CLARABEL_TOLERANCE,
+        max_iterations: int = 200,
+    ) -> Allocation:
+        """Allocates one virtual control (n,) or a batch (N, n), in parallel without the GIL."""
+        if not isinstance(method, str):
+            raise TypeError(f"method: expected a string, got {type(method).__name__}")
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, got {method!r}")
+        if isinstance(virtual_control, (str, bytes)):
+            raise TypeError(f"virtual_control: expected an array of numbers, got {type(virtual_control).__name__}")
+        try:
+            ndim = np.ndim(virtual_control)
+        except ValueError as exc:
+            raise TypeError(f"virtual_control: expected an array of numbers ({exc})") from None
+        if ndim not in (1, 2):
+            raise ValueError(f"virtual_control: expected shape (n,) or (N, n), got {ndim} dimensions")
+        given = float_array("virtual_control", virtual_control, ndim)
+        rows = given.reshape(-1, given.shape[-1])
+        if rows.shape[1] != self.virtual_dimension:
+            raise ValueError(
+                f"virtual_control: expected {self.virtual_dimension} entries per row "
+                f"(rows of the allocation matrix), got {rows.shape[1]}"
+            )
+        groups = None if priorities is None else _priorities(priorities)
+        iterations_limit = _positive_int("max_iterations", max_iterations)
+        tol = real("tolerance", tolerance)
+        commands, achieved, status, iterations = _rfcore.allocate(
+            self._core, np.ascontiguousarray(rows), method, groups, tol, iterations_limit
+        )
+        if ndim == 1:
+            return Allocation(commands[0], achieved[0], rows[0], status[0], iterations[0])
+        return Allocation(commands, achieved, rows, tuple(status), tuple(iterations))
+
+    def objective(self, virtual_control: Any, commands: Any) -> tuple[float, float]:
+        """``(objective, kkt_residual)`` of any commands: the residual (command units) is zero
+        exactly at an optimum, whichever solver produced it."""
+        u = float_array("virtual_control", virtual_control, 1)
+        t = float_array("commands", commands, 1)
+        value, kkt = self._core.objective(u, t)
+        return float(value), float(kkt)
+
+    def time_per_solve(self, virtual_controls: Any, method: str = "active-set", repeats: int = 100) -> FloatArray:
+        """Benchmark support: mean seconds per cold-started solve, per row of ``virtual_controls``,
+        measured in Rust on one thread (``repeats`` solves each)."""
+        rows = float_array("virtual_controls", virtual_controls, 2)
+        if method not in ("active-set", "clarabel", "pinv"):
+            raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, got {method!r}")
+        times: FloatArray = _rfcore.time_allocations(self._core, rows, method, _positive_int("repeats", repeats))
+        return times
+
+
+def allocate(
+    target: Airframe | Any,
+    virtual_control: Any,
+    weights: Any = None,
+    bounds: Any = None,
+    method: str = "active-set",
+    regularization: float = 0.0,
+    preferred: Any = None,
+    priorities: Any = None,
+    give_up_yaw: bool = False,
+) -> Allocation:
+    """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
+    the arguments and the module docs for the methods::
+
+        >>> import rotorfault as rf
+        >>> ke = rf.Airframe.preset("ke-quadcopter")
+        >>> a = rf.allocate(ke, [7.0, 0.0, 0.0, 0.0])
+        >>> a.commands.round(4).tolist(), a.status
+        ([1.75, 1.75, 1.75, 1.75], 'optimal')
+    """
+    allocator = Allocator(target, weights, bounds, regularization, preferred, give_up_yaw)
+    return allocator.allocate(virtual_control, method=method, priorities=priorities)
+
+
+@dataclass(frozen=True)
+class DirectionalLimit:
+    """The largest ``scale`` with ``base + scale * direction`` attainable, and commands that
+    attain it (:func:`max_virtual_control`)."""
+
+    scale: float
+    commands: FloatArray
+    status: str
+
+
+def max_virtual_control(
+    target: Airframe | Any,
+    direction: Any,
+    bounds: Any = None,
+    base: Any = None,
+    give_up_yaw: bool = False,
+    tolerance: float = CLARABEL_TOLERANCE,
+) -> DirectionalLimit | None:
+    """The attainable set along a direction: the largest ``s`` such that some bounded commands
+    produce ``base + s * direction`` (``base`` zero by default). ``None`` when ``base`` itself is
+    unattainable. Solved as a linear program by Clarabel."""
+    allocator = Allocator(target, bounds=bounds, give_up_yaw=give_up_yaw)
+    n = allocator.virtual_dimension
+    d = float_array("direction", direction, 1)
+    b = np.zeros(n) if base is None else float_array("base", base, 1)
+    result = _rfcore.max_along_direction(
+        allocator.matrix, allocator.lower, allocator.upper, d, b, real("tolerance", tolerance)
+    )
+    if result is None:
+        return None
+    scale, commands, status = result
+    return DirectionalLimit(float(scale), commands, status)
+
+
+@dataclass(frozen=True)
+class HoverMargin:
+    """:func:`hover_thrust_margin`: the largest total thrust with the controlled torques at zero,
+    the weight, and their difference (negative: cannot hover in balance). ``commands`` attain the
+    maximum; ``None`` (and ``-inf`` thrust) when zero torque is unattainable at any thrust."""
+
+    max_thrust_n: float
+    weight_n: float
+    margin_n: float
+    commands: FloatArray | None
+    status: str
+
+    @property
+    def thrust_to_weight(self) -> float:
+        return self.max_thrust_n / self.weight_n
+
+
+def hover_thrust_margin(
+    airframe: Airframe, health: Any = None, give_up_yaw: bool = False, tolerance: float = CLARABEL_TOLERANCE
+) -> HoverMargin:
+    """How much balanced thrust an airframe has left, with rotor ``health`` (efficiencies, default
+    the airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning
+    vehicle, Ke / Lanzon)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    frame = airframe if health is None else airframe.with_efficiency(health)
+    max_thrust, weight, margin, commands, status = _rfcore.hover_thrust_margin(
+        frame._core, flag("give_up_yaw", give_up_yaw), real("tolerance", tolerance)
+    )
+    return HoverMargin(float(max_thrust), float(weight), float(margin), commands, status)
+
+
+AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "yaw torque N (N m)")
+
+
+def attainable_slice(
+    airframe: Airframe,
+    axes: tuple[int, int] = (1, 2),
+    health: Any = None,
+    give_up_yaw: bool = False,
+    directions: int = 90,
+) -> FloatArray | None:
+    """The boundary of a 2-D slice of the attainable virtual-control set through hover: in the
+    plane of ``axes`` (indices into thrust, roll, pitch, yaw), from the hover wrench ``[m g, 0, 0,
+    0]``, the farthest attainable point along ``directions`` evenly spaced directions (one LP
+    each). Returns a (directions, 2) array of boundary points, or ``None`` when hover itself is
+    unattainable (:func:`hover_thrust_margin` negative). With ``give_up_yaw`` the yaw torque is
+    free (and ``axes`` may not include 3)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    frame = airframe if health is None else airframe.with_efficiency(health)
+    n = 3 if flag("give_up_yaw", give_up_yaw) else 4
+    if (
+        not isinstance(axes, tuple)
+        or len(axes) != 2
+        or not all(isinstance(a, int) and not isinstance(a, bool) for a in axes)
+    ):
+        raise TypeError("axes: expected a pair of axis indices, e.g. (1, 2) for roll and pitch")
+    if not all(0 <= a < n for a in axes) or axes[0] == axes[1]:
+        raise ValueError(f"axes: two different indices in 0..{n - 1}, got {axes}")
+    count = directions if isinstance(directions, int) and not isinstance(directions, bool) else None
+    if count is None:
+        raise TypeError(f"directions: expected an integer, got {type(directions).__name__}")
+    if not 3 <= count <= 100_000:
+        raise ValueError(f"directions: must be between 3 and 100000, got {count}")
+    base = np.zeros(n)
+    base[0] = frame.hover_thrust_n
+    points = np.empty((count, 2))
+    for k, angle in enumerate(np.linspace(0.0, 2 * np.pi, count, endpoint=False)):
+        d = np.zeros(n)
+        d[axes[0]], d[axes[1]] = np.cos(angle), np.sin(angle)
+        limit = max_virtual_control(frame, d, base=base, give_up_yaw=give_up_yaw)
+        if limit is None:
+            return None
+        points[k] = base[list(axes)] + limit.scale * d[list(axes)]
+    return points
+
+
+def plot_attainable_slices(
+    airframe: Airframe,
+    cases: dict[str, Any] | None = None,
+    axes: tuple[int, int] = (1, 2),
+    give_up_yaw: bool = False,
+    path: str | None = None,
+) -> Any:
+    """Overlays :func:`attainable_slice` for several rotor-health cases (``{label: health}``,
+    default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
+    ``path`` if given. A case whose hover is unattainable is listed in the legend as such."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if cases is None:
+        cases = {"healthy": None}
+        for rotor in range(airframe.rotor_count):
+            health = np.ones(airframe.rotor_count)
+            health[rotor] = 0.0
+            cases[f"rotor {rotor + 1} failed"] = health
+    fig, ax = plt.subplots(figsize=(9.5, 6.5))
+    for label, health in cases.items():
+        points = attainable_slice(airframe, axes, health, give_up_yaw)
+        if points is None:
+            ax.plot([], [], " ", label=f"{label}: hover unattainable")
+            continue
+        closed = np.vstack([points, points[:1]])
+        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if health is None else 1.2)
+    ax.plot([0], [0], "k+", ms=12, label="hover (zero torque)")
+    ax.set_xlabel(AXIS_LABELS[axes[0]])
+    ax.set_ylabel(AXIS_LABELS[axes[1]])
+    held = "yaw free" if give_up_yaw else "other torques held at 0"
+    ax.set_title(f"{airframe.name}: attainable set at hover thrust ({held})")
+    ax.axhline(0, color="0.8", lw=0.8)
+    ax.axvline(0, color="0.8", lw=0.8)
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    ax.set_aspect("equal", adjustable="datalim")
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
+
+
+def _frozen(array: FloatArray) -> FloatArray:
+    out = np.array(array, dtype=np.float64, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+def _bounds(bounds: Any, m: int) -> tuple[FloatArray, FloatArray]:
+    if isinstance(bounds, (str, bytes)) or not hasattr(bounds, "__len__") or len(bounds) != 2:
+        raise TypeError("bounds: expected a pair (lower, upper), each a number or one value per actuator")
+    out = []
+    for name, value in zip(("lower", "upper"), bounds):
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            out.append(np.full(m, float(value)))
+        else:
+            out.append(float_array(f"bounds.{name}", value, 1))
+    return out[0], out[1]
+
+
+def _priorities(priorities: Any) -> list[list[int]]:
+    if isinstance(priorities, (str, bytes)) or not hasattr(priorities, "__iter__"):
+        raise TypeError("priorities: expected a list of groups of row indices, e.g. [[0, 1, 2], [3]]")
+    groups = []
+    for k, group in enumerate(priorities):
+        if isinstance(group, (str, bytes)) or not hasattr(group, "__iter__"):
+            raise TypeError(f"priorities[{k}]: expected a list of row indices, got {type(group).__name__}")
+        rows = []
+        for r in group:
+            if isinstance(r, bool) or not isinstance(r, numbers.Integral):
+                raise TypeError(f"priorities[{k}]: expected integer row indices, got {r!r}")
+            if r < 0:
+                raise ValueError(f"priorities[{k}]: row indices must be >= 0, got {r}")
+            rows.append(int(r))
+        groups.append(rows)
+    return groups
+
+
+def _positive_int(field: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{field}: expected an integer, got {type(value).__name__}")
+    if not 1 <= int(value) <= 2**32 - 1:
+        raise ValueError(f"{field}: must be between 1 and {2**32 - 1}, got {value}")
+    return int(value)
