@@ -394,3 +394,63 @@ def test_attainable_slice_shrinks_with_a_failure_and_vanishes_when_hover_is_lost
         attainable_slice(frame, axes=(1, 1))
     with pytest.raises(ValueError, match="^axes"):
         attainable_slice(frame, axes=(1, 3), give_up_yaw=True)
+
+
+# --- regressions from the review of the first version ---------------------------------------
+
+
+def test_warm_started_controller_gives_the_cold_answer() -> None:
+    """A rotor held at a bound with a zero multiplier used to stay there under warm starts."""
+    frame = rf.Airframe.preset("hexa-ppnnpn").with_failed_rotors([1])
+    allocator = Allocator(frame)
+    hover = [frame.hover_thrust_n, 0, 0, 0]
+    law = rf.OpenLoop([0, 0.01], [[15.04, 1.96, 1.42, -1.06], hover])
+    tr = rf.Simulator(frame).run(rf.State(), 0.02, controller=rf.Allocated(law, allocator))
+    np.testing.assert_allclose(tr.rotor_command[-1], allocator.allocate(hover).commands, atol=1e-12)
+
+
+def test_allocated_accepts_a_discrete_lti() -> None:
+    quad = rf.Airframe.preset("quad-x")
+    law = rf.LTI(np.zeros((1, 1)), np.zeros((1, 12)), np.zeros((4, 1)), np.zeros((4, 12)), np.zeros(12), [quad.hover_thrust_n, 0, 0, 0], dt=1 / 400)
+    tr = rf.Simulator(quad).run(rf.State(), 0.1, controller=rf.Allocated(law, Allocator(quad)))
+    np.testing.assert_allclose(tr.rotor_command[-1], quad.hover_thrust_n / 4, rtol=1e-12)
+
+
+def test_lqr_hover_allocated_rejects_what_it_cannot_design_for() -> None:
+    quad = rf.Airframe.preset("quad-x")
+    sim = rf.Simulator(quad)
+    with pytest.raises(ValueError, match="^allocator:"):
+        rf.lqr_hover_allocated(sim, Allocator(quad, give_up_yaw=True))
+    with pytest.raises(ValueError, match="^allocator.weights"):
+        rf.lqr_hover_allocated(sim, Allocator(quad, weights=[1, 1, 1, 0]))
+    with pytest.raises(ValueError, match="^allocator.regularization"):
+        rf.lqr_hover_allocated(sim, Allocator(quad, regularization=0.1))
+
+
+def test_prioritised_allocation_survives_pinned_commands() -> None:
+    quad = rf.Airframe.preset("quad-x")
+    got = Allocator(quad).allocate([25.69185773, -0.36281204, 1.31643175, -1.44105278], method="clarabel", priorities=[[0], [1, 2], [3]])
+    assert got.status == "optimal"
+
+
+def test_objective_and_attainable_set_edge_cases(ke: rf.Airframe) -> None:
+    from rotorfault.allocation import attainable_slice
+
+    with pytest.raises(ValueError, match=r"^commands\[0\]"):
+        Allocator(ke).objective([7, 0, 0, 0], [np.nan, 1, 1, 1])
+    quad = rf.Airframe.preset("quad-x")
+    # Half a rotor lost: hover with zero torque is out of reach, so no slice through it.
+    assert rf.hover_thrust_margin(quad, health=[0.5, 1, 1, 1]).margin_n < 0
+    assert attainable_slice(quad, axes=(0, 1), health=[0.5, 1, 1, 1]) is None
+    assert attainable_slice(quad, axes=(np.int64(1), 2), directions=np.int64(8)) is not None
+    behind = rf.max_virtual_control(ke, [1, 0, 0, 0], base=[-1, 0, 0, 0])
+    assert behind is not None and behind.scale == pytest.approx(35.0, rel=1e-8)
+
+
+def test_more_bad_input(ke: rf.Airframe) -> None:
+    with pytest.raises(ValueError, match="^virtual_control"):
+        rf.allocate(ke, [])
+    with pytest.raises(TypeError, match="^bounds"):
+        rf.allocate([[1.0, 1.0]], [1.0], bounds={0: 1, 1: 2})
+    with pytest.raises(ValueError, match="^priorities"):
+        rf.allocate(ke, [7.0, 0, 0, 0], method="clarabel", priorities=[[2**70]])

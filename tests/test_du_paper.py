@@ -102,32 +102,6 @@ def test_fig4_region(pnpnpn: rf.Airframe) -> None:
     assert rf.acai(pnpnpn, eta) == scan.acai[i]
 
 
-# Ke et al. Table II: eigenvalues of N = (E1 M) Lambda (E1 M)^+ (printed to 4 decimals). E1 M is
-# the first three rows of the ke-quadcopter preset's effectiveness matrix, so this checks the
-# preset's geometry (angles, numbering, arm length) against a second paper's numbers.
-KE_TABLE_II = [
-    ((0.5, 1, 1, 1), (1, 0.625, 1)),
-    ((0, 1, 1, 1), (1, 0.25, 1)),
-    ((0, 0.7, 0.6, 0.8), (0.1718, 0.644, 0.7592)),
-    ((0, 0.1, 0.1, 0.1), (0.1, 0.025, 0.1)),
-    ((0, 1, 0, 1), (1, 0, 0.5)),
-    ((0, 0.5, 0, 0.5), (0.5, 0, 0.25)),
-    ((1, 0, 1, 0), (0.5, 0, 1)),
-    ((0, 0, 1, 1), (1, 0, 0.5)),
-    ((1, 1, 0, 0), (1, 0, 0.5)),
-    ((0, 0, 0, 1), (0.75, 0, 0)),
-    ((0, 0, 1, 0), (0.75, 0, 0)),
-]
-
-
-@pytest.mark.parametrize(("health", "eigenvalues"), KE_TABLE_II)
-def test_ke_preset_geometry_reproduces_ke_table_ii(health: tuple[float, ...], eigenvalues: tuple[float, ...]) -> None:
-    e1m = rf.Airframe.preset("ke-quadcopter").effectiveness_matrix()[:3]
-    n = e1m @ np.diag(health) @ np.linalg.pinv(e1m)
-    got = np.sort(np.linalg.eigvals(n).real)
-    np.testing.assert_allclose(got, np.sort(eigenvalues), atol=0.5e-4)
-
-
 def test_ke_preset_yaw_row_is_the_corrected_one() -> None:
     """Ke's printed yaw row c[1, -1, 1, -1] makes M rank 3; the preset uses c[1, 1, -1, -1]."""
     m = rf.Airframe.preset("ke-quadcopter").effectiveness_matrix()

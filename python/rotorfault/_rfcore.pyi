@@ -177,3 +177,34 @@ def max_along_direction(
 def hover_thrust_margin(
     airframe: Airframe, give_up_yaw: bool, tolerance: float
 ) -> tuple[float, float, float, _F64 | None, str]: ...
+
+@final
+class UniformPassiveFtc:
+    def __new__(
+        cls,
+        airframe: Airframe,
+        law: str,
+        setpoints: list[tuple[float, tuple[float, float, float]]],
+        dt: float,
+        k_p: float,
+        k_v: float,
+        k_vz: float,
+        accel_limit_m_s2: float,
+        k_n3: float,
+        k_omega: float,
+        k_r: float,
+        k_cp: float,
+        epsilon_s: float,
+        k_rotor: float,
+        k_rotor_z: float,
+        weights: list[float],
+        k_iz: float,
+    ) -> UniformPassiveFtc: ...
+
+def ftc_preset_from_toml(text: str, origin: str) -> dict[str, Any]: ...
+def replay(
+    controller: OpenLoop | LinearFeedback | DiscreteLti | Allocated | UniformPassiveFtc,
+    times: _F64,
+    states: _F64,
+    command_count: int,
+) -> _F64: ...

@@ -21,6 +21,15 @@ from ._convert import FloatArray, float_array, real
 
 STATE_DIM = 12
 
+#: The Rust controller objects :func:`core_controller` can return (all can run in a batch).
+CORE_TYPES: tuple[type, ...] = (
+    _rfcore.OpenLoop,
+    _rfcore.LinearFeedback,
+    _rfcore.DiscreteLti,
+    _rfcore.Allocated,
+    _rfcore.UniformPassiveFtc,
+)
+
 
 class OpenLoop:
     """A piecewise-constant command schedule: ``commands[k]`` (one per actuator channel) holds
@@ -111,7 +120,13 @@ class Allocated:
             raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
         self.law = law
         self.allocator = allocator
-        self.core(1.0)  # checks that the law writes one entry per row of the allocation matrix
+        # The law's trim has one entry per output: it must match the allocation's rows. (Building
+        # the core here would need the simulator's period, which a discrete LTI insists on.)
+        outputs = np.asarray(law.u_trim).shape[0]
+        if outputs != allocator.virtual_dimension:
+            raise ValueError(
+                f"law: writes {outputs} outputs, the allocation matrix has {allocator.virtual_dimension} rows"
+            )
 
     @property
     def u_trim(self) -> FloatArray | None:
@@ -126,6 +141,83 @@ class Allocated:
         return _rfcore.Allocated(self.law.core(dt), self.allocator._core)
 
 
+class UniformPassiveFTC:
+    """Ke et al.'s uniform passive fault-tolerant controller, run in Rust at the simulator's
+    control rate (Ke: 400 Hz). One controller, one set of gains, fault-free and through one, two
+    and three rotor failures; it never reads rotor health (see :mod:`rotorfault.ftc`).
+
+    ``gains``: a :class:`rotorfault.ftc.KeGains` or a controller preset name (``"ke-hil"``,
+    default; ``"ke-experiment"``). ``law``: ``"feedforward"`` (default, the documented remedy for
+    the steady deficit of eq. (18)), ``"literal"`` (eq. (18) as printed), ``"full-compensation"``
+    (Remark 5, eq. (29)) or ``"baseline"`` (conventional: desired virtual control straight into
+    the pseudo-inverse, no estimation, no QP). ``setpoints``: ``[(time_s, (north, east, down))]``
+    held from their time on, or give one ``position``."""
+
+    LAWS = ("feedforward", "literal", "full-compensation", "baseline")
+
+    def __init__(
+        self,
+        airframe: Any,
+        gains: Any = "ke-hil",
+        law: str = "feedforward",
+        position: Any = (0.0, 0.0, 0.0),
+        setpoints: Any = None,
+    ) -> None:
+        from .airframe import require_airframe
+        from .ftc import KeGains, preset
+
+        self.airframe = require_airframe(airframe)
+        if isinstance(gains, str):
+            gains = preset(gains).gains
+        if not isinstance(gains, KeGains):
+            raise TypeError(f"gains: expected rotorfault.ftc.KeGains or a preset name, got {type(gains).__name__}")
+        if not isinstance(law, str):
+            raise TypeError(f"law: expected a string, got {type(law).__name__}")
+        if law not in self.LAWS:
+            raise ValueError(f"law: expected one of {', '.join(map(repr, self.LAWS))}, got {law!r}")
+        self.gains = gains
+        self.law = law
+        if setpoints is None:
+            setpoints = [(0.0, position)]
+        if isinstance(setpoints, (str, bytes)) or not hasattr(setpoints, "__iter__"):
+            raise TypeError("setpoints: expected a sequence of (time_s, (north, east, down))")
+        parsed = []
+        for k, item in enumerate(setpoints):
+            if not hasattr(item, "__len__") or len(item) != 2:
+                raise TypeError(f"setpoints[{k}]: expected (time_s, (north, east, down))")
+            point = float_array(f"setpoints[{k}].position", item[1], 1)
+            if point.shape != (3,):
+                raise ValueError(f"setpoints[{k}].position: expected 3 entries (north, east, down), got {point.shape[0]}")
+            parsed.append((real(f"setpoints[{k}].time", item[0]), (float(point[0]), float(point[1]), float(point[2]))))
+        self.setpoints = tuple(parsed)
+        self.core(1.0 / 400.0)  # validates gains, airframe and setpoints now
+
+    @property
+    def u_trim(self) -> FloatArray:
+        """Hover thrusts on the nominal matrix: where the actuators start."""
+        from .allocation import Allocator
+
+        nominal = self.airframe.with_efficiency(np.ones(self.airframe.rotor_count))
+        hover = np.array([nominal.hover_thrust_n, 0.0, 0.0, 0.0])
+        commands: FloatArray = Allocator(nominal, weights=self.gains.weights).allocate(hover).commands
+        return commands
+
+    def core(self, dt: float) -> Any:
+        return _rfcore.UniformPassiveFtc(
+            self.airframe._core, self.law, list(self.setpoints), float(dt), **self.gains._packed()
+        )
+
+    def replay(self, times: Any, states: Any, dt: float = 1.0 / 400.0) -> FloatArray:
+        """The commands this controller (from its reset state) gives for a recorded history:
+        ``times`` (N), ``states`` (N x 13: position, velocity, quaternion w x y z, body rates),
+        e.g. ``np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])``. No rotor health
+        enters: the passivity check."""
+        t = float_array("times", times, 1)
+        x = float_array("states", states, 2)
+        out: FloatArray = _rfcore.replay(self.core(dt), t, x, 4)
+        return out
+
+
 def _frozen(field: str, value: Any, ndim: int) -> FloatArray:
     """A private read-only copy: later changes to the caller's array cannot desynchronise the
     controller from what it reports."""
@@ -138,12 +230,13 @@ def core_controller(controller: Any, dt: float) -> Any:
     """The object the Rust loop runs for ``controller`` (``None``: all rotors at zero)."""
     if controller is None:
         return None
-    if isinstance(controller, (OpenLoop, LinearFeedback, LTI, Allocated)):
+    if isinstance(controller, (OpenLoop, LinearFeedback, LTI, Allocated, UniformPassiveFTC)):
         return controller.core(dt)
     if callable(controller):
         return controller
     raise TypeError(
-        "controller: expected OpenLoop, LinearFeedback, LTI, Allocated, a callable f(t, x) or None, "
+        "controller: expected OpenLoop, LinearFeedback, LTI, Allocated, UniformPassiveFTC, a callable f(t, x) "
+        "or None, "
         f"got {type(controller).__name__}"
     )
 

@@ -118,6 +118,15 @@ def lqr_hover_allocated(
 
     if not isinstance(allocator, Allocator):
         raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
+    if allocator.virtual_dimension != 4:
+        raise ValueError(
+            "allocator: LQR on the virtual control needs thrust, roll, pitch and yaw rows (a vehicle "
+            "that gives up yaw spins, which a hover linearisation cannot describe)"
+        )
+    if np.any(allocator.weights == 0):
+        raise ValueError("allocator.weights: LQR on the virtual control needs every weight > 0")
+    if allocator.regularization != 0:
+        raise ValueError("allocator.regularization: must be 0 here (the trim would not map back to itself)")
     x_trim, u_trim = hover_trim(simulator, position, yaw)
     if allocator.actuator_count != u_trim.shape[0]:
         raise ValueError(

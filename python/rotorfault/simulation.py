@@ -17,7 +17,7 @@ import numpy as np
 from . import _rfcore
 from ._convert import FloatArray, count, float_array, real
 from .airframe import Airframe, require_airframe
-from .controllers import core_controller, trim_command
+from .controllers import CORE_TYPES, core_controller, trim_command
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -426,10 +426,13 @@ class Simulator:
         per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
         return per_rotor * self.airframe.rotor_count
 
-    def _config(self, t_final: float) -> tuple[Any, ...]:
+    def _config(self, t_final: float, record_every: int = 1) -> tuple[Any, ...]:
         t_final = real("t_final", t_final)
+        every = count("record_every", record_every)
         noise = None if self.noise is None else self.noise._packed()
-        return (self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile, noise)
+        return (
+            self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile, noise, every,
+        )
 
     def _start(self, controller: Any, initial_command: Any) -> FloatArray | None:
         if initial_command is not None:
@@ -445,10 +448,12 @@ class Simulator:
         controller: Any = None,
         faults: Iterable[RotorFault] | None = None,
         initial_command: Any = None,
+        record_every: int = 1,
     ) -> Trajectory:
         """Flies from ``x0`` for ``t_final`` seconds. The actuators start settled at
         ``initial_command`` (default: the controller's trim command if it has one, else zero).
-        Health starts at the airframe's efficiencies; ``faults`` change it on schedule."""
+        Health starts at the airframe's efficiencies; ``faults`` change it on schedule.
+        ``record_every`` keeps every n-th control step (plus the last and any divergence)."""
         x0 = State() if x0 is None else x0
         if not isinstance(x0, State):
             raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
@@ -462,7 +467,7 @@ class Simulator:
             [f._packed() for f in fault_list],
             self.airframe.efficiency,
             self._start(controller, initial_command),
-            self._config(t_final),
+            self._config(t_final, record_every),
         )
         return Trajectory._from_core(raw, fault_list)
 
@@ -502,10 +507,13 @@ def simulate_batch(
     controllers: Any = None,
     faults: Sequence[Iterable[RotorFault] | None] | None = None,
     initial_command: Any = None,
+    record_every: int = 1,
 ) -> BatchResult:
     """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
     every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
-    cannot run in a batch (they would serialise on the GIL)."""
+    cannot run in a batch (they would serialise on the GIL). ``record_every`` thins what is
+    recorded (every n-th control step, plus the last and any divergence): large batches need it
+    to keep memory bounded."""
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     states = list(x0s)
@@ -520,7 +528,7 @@ def simulate_batch(
     cores = []
     for c in per_run:
         core = core_controller(c, simulator.dt)
-        if core is not None and not isinstance(core, (_rfcore.OpenLoop, _rfcore.LinearFeedback, _rfcore.DiscreteLti)):
+        if core is not None and not isinstance(core, CORE_TYPES):
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
         cores.append(core)
     # Each run's actuators start at initial_command, else at its own controller's trim.
@@ -537,7 +545,7 @@ def simulate_batch(
         [[f._packed() for f in fl] for fl in fault_lists],
         simulator.airframe.efficiency,
         starts,
-        simulator._config(t_final),
+        simulator._config(t_final, record_every),
     )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
     steps = max((len(tr.t) for tr in trajectories), default=0)

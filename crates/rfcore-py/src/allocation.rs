@@ -57,6 +57,12 @@ impl PyAllocationProblem {
         let u_c = slice1("virtual_control", &virtual_control)?;
         let t = slice1("commands", &commands)?;
         self.inner.check_virtual_control(u_c).map_err(to_py_err)?;
+        if let Some(i) = t.iter().position(|v| !v.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "commands[{i}]: must be finite, got {}",
+                t[i]
+            )));
+        }
         if t.len() != self.inner.actuator_count() {
             return Err(PyValueError::new_err(format!(
                 "commands: expected {} entries (one per actuator), got {}",

@@ -17,6 +17,7 @@ use rfcore::{
 };
 
 mod allocation;
+mod ftc;
 mod simulation;
 
 pub(crate) fn to_py_err(error: RfError) -> PyErr {
@@ -328,6 +329,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<simulation::PyDiscreteLti>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<allocation::PyAllocated>()?;
+    module.add_class::<ftc::PyUniformPassiveFtc>()?;
+    module.add_function(wrap_pyfunction!(ftc::ftc_preset_from_toml, module)?)?;
+    module.add_function(wrap_pyfunction!(ftc::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::time_allocations, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::max_along_direction, module)?)?;

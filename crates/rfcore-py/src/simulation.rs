@@ -21,6 +21,7 @@ use rfcore::vehicle::{Aerodynamics, Vehicle};
 use rfcore::RfError;
 
 use crate::allocation::PyAllocated;
+use crate::ftc::PyUniformPassiveFtc;
 use crate::{detached, slice1, to_py_err, PyAirframe};
 
 pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
@@ -250,15 +251,20 @@ pub enum ControllerArg<'py> {
     LinearFeedback(PyRef<'py, PyLinearFeedback>),
     Lti(PyRef<'py, PyDiscreteLti>),
     Allocated(PyRef<'py, PyAllocated>),
+    Ftc(PyRef<'py, PyUniformPassiveFtc>),
 }
 
-fn boxed(controller: Option<&ControllerArg<'_>>, count: usize) -> PyResult<Box<dyn Controller>> {
+pub(crate) fn boxed(
+    controller: Option<&ControllerArg<'_>>,
+    count: usize,
+) -> PyResult<Box<dyn Controller>> {
     Ok(match controller {
         None => Box::new(ZeroCommand { count }),
         Some(ControllerArg::OpenLoop(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::LinearFeedback(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Allocated(c)) => c.controller().map_err(to_py_err)?,
+        Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
     })
 }
 
@@ -271,11 +277,13 @@ type ConfigArgs = (
     [f64; 3],
     Vec<(f64, [f64; 3])>,
     Option<(f64, [f64; STATE_DIM], u64)>,
+    usize,
 );
 
 fn config(args: ConfigArgs) -> SimulationConfig {
-    let (dt, substeps, t_final, limits, wind, profile, noise) = args;
+    let (dt, substeps, t_final, limits, wind, profile, noise, record_every) = args;
     SimulationConfig {
+        record_every,
         noise: noise.map(|(relative_std, absolute_std, seed)| SensorNoise {
             relative_std,
             absolute_std,

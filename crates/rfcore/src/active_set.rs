@@ -28,10 +28,16 @@ use crate::allocation::{
 use crate::error::{Result, RfError};
 
 const N: usize = MAX_ACTUATORS;
+/// Side of the fixed-size work arrays of [`solve_psd_closest`].
+pub(crate) const WORK: usize = N;
 
 /// Multipliers above `-MULTIPLIER_RTOL * scale` count as non-negative (scale: the size of the
-/// gradient's terms), so rounding cannot make the solver release and re-add a bound forever.
-const MULTIPLIER_RTOL: f64 = 1e-13;
+/// terms the gradient entry sums, so huge bounds or commands do not blunt the test), so rounding
+/// cannot make the solver release and re-add a bound forever.
+const MULTIPLIER_RTOL: f64 = 1e-12;
+/// A held bound whose multiplier is below this (relative, like [`MULTIPLIER_RTOL`]) is degenerate:
+/// it is released once more at the end so the tie rule (closest to `T_pref`) decides.
+const DEGENERATE_RTOL: f64 = 1e-9;
 
 /// Where each variable is held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -221,12 +227,10 @@ impl ActiveSetSolver {
         let m = self.m;
         active.len = m;
         let mut c = [0.0; N];
-        let mut c_scale: f64 = 0.0;
         for (i, ci) in c.iter_mut().enumerate().take(m) {
             let row = &self.weighted_transpose[i * MAX_VIRTUAL..i * MAX_VIRTUAL + self.n];
             *ci =
                 self.regularization_pull[i] + row.iter().zip(u_c).map(|(a, u)| a * u).sum::<f64>();
-            c_scale = c_scale.max(ci.abs());
         }
         let mut t = [0.0; N];
         let cold = active.states[..m].iter().all(|s| *s == BoundState::Free);
@@ -255,22 +259,18 @@ impl ActiveSetSolver {
                 BoundState::Free => self.preferred[i].clamp(lo, hi),
             };
         }
-        let bound_scale = (0..m)
-            .map(|i| self.lower[i].abs().max(self.upper[i].abs()))
-            .fold(0.0, f64::max);
-        let multiplier_tolerance =
-            MULTIPLIER_RTOL * (c_scale + self.hessian_scale * bound_scale).max(f64::MIN_POSITIVE);
 
         let mut iterations = 0;
         let mut status = AllocationStatus::IterationLimit;
         let mut need_step = true;
+        let mut polished = false;
         'outer: loop {
             if need_step {
                 if iterations == self.max_iterations {
                     break 'outer;
                 }
                 iterations += 1;
-                match self.step(u_c, &c, &mut t, active, multiplier_tolerance) {
+                match self.step(u_c, &c, &mut t, active) {
                     Step::Blocked((j, state)) => {
                         active.states[j] = state;
                         continue 'outer;
@@ -280,19 +280,40 @@ impl ActiveSetSolver {
                 }
             }
             // The point minimises over the free set: check the held variables' multipliers.
-            let mut worst = (multiplier_tolerance, usize::MAX);
+            let mut worst = (0.0, usize::MAX);
             for i in 0..m {
                 let state = active.states[i];
                 if state == BoundState::Free || self.lower[i] == self.upper[i] {
                     continue;
                 }
-                let g = self.gradient_entry(i, &t, &c);
+                let (g, scale) = self.gradient_and_scale(i, &t, &c);
                 let violation = if state == BoundState::Lower { -g } else { g };
-                if violation > worst.0 {
+                if violation > MULTIPLIER_RTOL * scale && violation > worst.0 {
                     worst = (violation, i);
                 }
             }
             if worst.1 == usize::MAX {
+                // Bounds held with a zero multiplier (another optimum leaves them): release them
+                // once and step again, so the answer is the optimum closest to T_pref whatever
+                // the warm start; a bound the step runs back into is held again.
+                let mut released = false;
+                if !polished {
+                    for i in 0..m {
+                        let state = active.states[i];
+                        if state != BoundState::Free && self.lower[i] != self.upper[i] {
+                            let (g, scale) = self.gradient_and_scale(i, &t, &c);
+                            if g.abs() <= DEGENERATE_RTOL * scale {
+                                active.states[i] = BoundState::Free;
+                                released = true;
+                            }
+                        }
+                    }
+                    polished = true;
+                }
+                if released {
+                    need_step = true;
+                    continue 'outer;
+                }
                 status = AllocationStatus::Optimal;
                 break 'outer;
             }
@@ -303,20 +324,26 @@ impl ActiveSetSolver {
         SolveReport { status, iterations }
     }
 
+    /// `g_i` and the size of the terms it sums (`sum_j |H_ij T_j| + |c_i|`), the scale its
+    /// rounding error is relative to.
+    fn gradient_and_scale(&self, i: usize, t: &[f64; N], c: &[f64; N]) -> (f64, f64) {
+        let row = &self.hessian[i * N..i * N + self.m];
+        let mut g = -c[i];
+        let mut scale = c[i].abs();
+        for (h, x) in row.iter().zip(t) {
+            g += h * x;
+            scale += (h * x).abs();
+        }
+        (g, scale.max(f64::MIN_POSITIVE))
+    }
+
     fn gradient_entry(&self, i: usize, t: &[f64; N], c: &[f64; N]) -> f64 {
         let row = &self.hessian[i * N..i * N + self.m];
         row.iter().zip(t).map(|(h, x)| h * x).sum::<f64>() - c[i]
     }
 
     /// One free-set step (steps 1-2 of the module docs).
-    fn step(
-        &self,
-        u_c: &[f64],
-        c: &[f64; N],
-        t: &mut [f64; N],
-        active: &ActiveSet,
-        tolerance: f64,
-    ) -> Step {
+    fn step(&self, u_c: &[f64], c: &[f64; N], t: &mut [f64; N], active: &ActiveSet) -> Step {
         let mut free = [0usize; N];
         let mut k = 0;
         for i in 0..self.m {
@@ -361,15 +388,18 @@ impl ActiveSetSolver {
             return Step::Blocked(blocking);
         }
         // A direction whose curvature fell below the rank threshold can still carry gradient
-        // (an actuator a million times weaker than the rest): along it the objective is all but
-        // linear, so descend along the leftover gradient with an exact line search.
+        // (an actuator more than ~3e5 times weaker than the rest): along it the objective is all
+        // but linear, so descend along the leftover gradient with an exact line search. This
+        // converges, but can zig-zag with the regular directions; such problems may end at the
+        // iteration bound (documented).
         let mut residual = [0.0; N];
-        let mut largest: f64 = 0.0;
+        let mut significant = false;
         for a in 0..k {
-            residual[a] = -self.gradient_entry(free[a], t, c);
-            largest = largest.max(residual[a].abs());
+            let (g, scale) = self.gradient_and_scale(free[a], t, c);
+            residual[a] = -g;
+            significant |= g.abs() > MULTIPLIER_RTOL * scale;
         }
-        if largest <= tolerance {
+        if !significant {
             return Step::Full;
         }
         let mut slope = 0.0;
@@ -538,7 +568,7 @@ fn cholesky_solve(
 /// Pivoted Cholesky `P^T S P = [L11; L21] [L11; L21]^T` of rank `r`; the basic solution puts zero
 /// on the dependent variables, and the null space is spanned by `[-X; I]`, `X = L11^-T L21^T`,
 /// so the closest solution follows from the `(k - r)`-square system `(I + X^T X) z = ...`.
-fn solve_psd_closest(
+pub(crate) fn solve_psd_closest(
     s: &mut [f64; N * N],
     r: &[f64; N],
     target: &[f64; N],

@@ -377,20 +377,31 @@ pub fn weighted_pseudo_inverse(problem: &AllocationProblem) -> WeightedPseudoInv
     WeightedPseudoInverse { gain, offset }
 }
 
-/// Moore-Penrose inverse by SVD, dropping singular values whose square is below [`RANK_RTOL`] of
-/// the largest square (the active-set solver's rank rule).
+/// Moore-Penrose inverse: column r of `A^+` is the minimum-norm least-squares solution for the
+/// unit vector `e_r`, i.e. the solution of `A^T A x = A^T e_r` closest to zero, computed by the
+/// active-set solver's own pivoted-Cholesky routine with the same rank rule ([`RANK_RTOL`] on
+/// the curvature). (nalgebra 0.34's SVD returned wrong factors for some rank-deficient matrices;
+/// this also keeps one rank rule across methods.)
 fn pseudo_inverse(a: &DMatrix<f64>) -> DMatrix<f64> {
-    let svd = a.clone().svd(true, true);
-    let sigma_max = svd.singular_values.max();
-    let cutoff = sigma_max * RANK_RTOL.sqrt();
+    use crate::active_set::{solve_psd_closest, WORK};
     let (rows, cols) = a.shape();
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return DMatrix::zeros(cols, rows);
-    };
+    let h = a.transpose() * a;
+    let max_diagonal = (0..cols).map(|i| h[(i, i)]).fold(0.0, f64::max);
+    let tolerance = RANK_RTOL * max_diagonal;
     let mut out = DMatrix::zeros(cols, rows);
-    for (k, &s) in svd.singular_values.iter().enumerate() {
-        if s > cutoff && s > 0.0 {
-            out += (v_t.row(k).transpose() * u.column(k).transpose()) / s;
+    for r in 0..rows {
+        let mut system = [0.0; WORK * WORK];
+        let mut rhs = [0.0; WORK];
+        for i in 0..cols {
+            for j in 0..cols {
+                system[i * WORK + j] = h[(i, j)];
+            }
+            rhs[i] = a[(r, i)];
+        }
+        let mut x = [0.0; WORK];
+        solve_psd_closest(&mut system, &rhs, &[0.0; WORK], cols, tolerance, &mut x);
+        for i in 0..cols {
+            out[(i, r)] = x[i];
         }
     }
     out
@@ -565,6 +576,28 @@ mod tests {
         let a = allocate_pinv(&p, &u).unwrap();
         for (x, y) in a.achieved.iter().zip(u) {
             assert!((x - y).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn pinv_of_a_rank_deficient_matrix_is_the_minimum_norm_solution() {
+        // Review finding: nalgebra 0.34's SVD got this rank-2 matrix wrong (u missed by 0.034).
+        let m = DMatrix::from_row_slice(
+            4,
+            3,
+            &[
+                -0.5, -0.5, 1.2, -0.6, -0.6, -0.2, 0.9, 0.9, 1.1, -1.1, -1.1, 0.9,
+            ],
+        );
+        let t_true = [0.6, 0.6, 0.2];
+        let u: Vec<f64> = (0..4)
+            .map(|r| (0..3).map(|c| m[(r, c)] * t_true[c]).sum())
+            .collect();
+        let p = AllocationProblem::new(m, &[1.0; 4], &[-1e3; 3], &[1e3; 3]).unwrap();
+        let got = allocate_pinv(&p, &u).unwrap();
+        // Columns 1 and 2 are equal: the minimum-norm split of 1.2 is 0.6 / 0.6.
+        for (g, e) in got.commands.iter().zip(t_true) {
+            assert!((g - e).abs() < 1e-12, "{:?}", got.commands);
         }
     }
 

@@ -18,6 +18,10 @@ use crate::allocation::{Allocation, AllocationProblem, AllocationStatus};
 use crate::controllability::ControlAxes;
 use crate::error::{require_all_finite, Result, RfError};
 
+/// How far a later priority stage may move what an earlier group achieved, relative to the
+/// largest value that row can take.
+pub const PRIORITY_BAND: f64 = 1e-9;
+
 /// Clarabel's tolerances and iteration bound, with builder-style setters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClarabelSettings {
@@ -209,7 +213,7 @@ pub fn allocate_clarabel(
 /// Prioritised allocation: `priorities` lists groups of virtual-control rows, most important
 /// first (e.g. `[[0, 1, 2], [3]]`: thrust and roll/pitch, then yaw with what is left). Stage k
 /// minimises the weighted residual of group k subject to the box and to every earlier group
-/// keeping exactly what its stage achieved. Rows in no group are ignored. The problem's
+/// keeping what its stage achieved (to [`PRIORITY_BAND`]). Rows in no group are ignored. The problem's
 /// regularisation applies to the last stage.
 pub fn allocate_prioritized(
     problem: &AllocationProblem,
@@ -265,17 +269,27 @@ pub fn allocate_prioritized(
         let is_last = k + 1 == priorities.len();
         let stage = stage_problem(is_last)?;
         let mut program = qp_program(&stage, u_c, group);
-        program.equalities = fixed.clone();
+        program.inequalities.extend(fixed.iter().cloned());
         let solution = program.solve(settings)?;
         iterations += solution.iterations;
         let allocation = finish(problem, solution, iterations);
         if allocation.status == AllocationStatus::Failed {
             return Ok(allocation);
         }
-        // Later stages keep what this group achieved with the (box-feasible) commands.
+        // Later stages keep what this group achieved with the (box-feasible) commands, to a
+        // band of PRIORITY_BAND relative: exact equalities are degenerate next to active bounds
+        // and made Clarabel fail (review finding).
         for &r in group {
             let row: Vec<f64> = (0..m).map(|c| problem.matrix()[(r, c)]).collect();
-            fixed.push((row, allocation.achieved[r]));
+            let scale: f64 = row
+                .iter()
+                .zip(problem.lower().iter().zip(problem.upper()))
+                .map(|(a, (lo, hi))| a.abs() * lo.abs().max(hi.abs()))
+                .sum();
+            let band = PRIORITY_BAND * scale.max(f64::MIN_POSITIVE);
+            let negated: Vec<f64> = row.iter().map(|v| -v).collect();
+            fixed.push((row, allocation.achieved[r] + band));
+            fixed.push((negated, -(allocation.achieved[r] - band)));
         }
         last = Some(allocation);
     }
@@ -292,8 +306,9 @@ pub struct DirectionalLimit {
     pub status: AllocationStatus,
 }
 
-/// Largest `s` such that `M T = base + s direction` for some `lower <= T <= upper`; `None` when
-/// even `base` (s = 0 and every other s) is unattainable. `direction` must not be zero.
+/// Largest `s` such that `M T = base + s direction` for some `lower <= T <= upper`; `None` when no
+/// point of that line is attainable. `s` is negative when `base` itself is unattainable but
+/// points behind it are. `direction` must not be zero.
 pub fn max_along_direction(
     matrix: &DMatrix<f64>,
     lower: &[f64],

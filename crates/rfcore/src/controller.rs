@@ -354,6 +354,32 @@ impl Controller for Allocated {
     }
 }
 
+/// Runs a controller (from its reset state) on a recorded measured-state history: row k of the
+/// result is what it commands at `times_s[k]` for `states[k]`. Nothing but the measurements reaches
+/// it, so a controller that passes the same history through twice commands the same thing: the
+/// check that a "passive" controller really sees no fault information.
+pub fn replay(
+    controller: &mut dyn Controller,
+    times_s: &[f64],
+    states: &[RigidBodyState],
+) -> Result<Vec<f64>> {
+    if times_s.len() != states.len() {
+        return Err(RfError::shape(
+            "states",
+            format!("one per time ({})", times_s.len()),
+            states.len().to_string(),
+        ));
+    }
+    require_all_finite("times", times_s)?;
+    let count = controller.command_count();
+    let mut out = vec![0.0; count * times_s.len()];
+    controller.reset();
+    for (k, (t, state)) in times_s.iter().zip(states).enumerate() {
+        controller.command(*t, state, &mut out[k * count..(k + 1) * count])?;
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -115,6 +115,9 @@ pub struct SimulationConfig {
     pub wind_profile: Vec<(f64, Vector3<f64>)>,
     /// Sensor noise on what the controller sees (`None`: the true state).
     pub noise: Option<SensorNoise>,
+    /// Record every this many control steps (1: all). The first and last steps and a divergence
+    /// are always recorded; large batches use it to keep memory bounded.
+    pub record_every: usize,
 }
 
 /// Additive Gaussian noise on each of the 12 measured state components (position, velocity,
@@ -209,6 +212,7 @@ impl SimulationConfig {
             wind_m_s: Vector3::zeros(),
             wind_profile: Vec::new(),
             noise: None,
+            record_every: 1,
         }
     }
 
@@ -219,6 +223,9 @@ impl SimulationConfig {
                 "dt",
                 format!("must be > 0, got {}", self.control_dt_s),
             ));
+        }
+        if self.record_every == 0 {
+            return Err(RfError::invalid("record_every", "must be >= 1"));
         }
         if self.substeps == 0 {
             return Err(RfError::invalid("substeps", "must be >= 1"));
@@ -416,14 +423,16 @@ pub fn simulate(
 
     let steps = config.steps();
     let h = config.control_dt_s / config.substeps as f64;
+    let every = config.record_every;
+    let rows = steps / every + 2;
     let mut trajectory = Trajectory {
-        t_s: Vec::with_capacity(steps + 1),
-        states: Vec::with_capacity(steps + 1),
-        commands: Vec::with_capacity((steps + 1) * count),
-        thrust_n: Vec::with_capacity((steps + 1) * m),
-        health: Vec::with_capacity((steps + 1) * m),
+        t_s: Vec::with_capacity(rows),
+        states: Vec::with_capacity(rows),
+        commands: Vec::with_capacity(rows * count),
+        thrust_n: Vec::with_capacity(rows * m),
+        health: Vec::with_capacity(rows * m),
         measured: Vec::with_capacity(if config.noise.is_some() {
-            (steps + 1) * STATE_DIM
+            rows * STATE_DIM
         } else {
             0
         }),
@@ -437,19 +446,24 @@ pub fn simulate(
     let start_altitude = -x0.position_m.z;
     let body = vehicle.body();
     let mut gaussian = config.noise.map(|n| Gaussian::new(n.seed));
+    let mut measured_vector = [0.0; STATE_DIM];
     for k in 0..=steps {
         let t = k as f64 * config.control_dt_s;
         while next_fault < faults.len() && faults[next_fault].time_s <= t {
             health[faults[next_fault].rotor] = faults[next_fault].efficiency;
             next_fault += 1;
         }
-        trajectory.t_s.push(t);
-        trajectory.states.push(state);
-        trajectory.health.extend_from_slice(&health);
-        trajectory
-            .thrust_n
-            .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
-        if let Some(reason) = divergence(&state, start_altitude, &config.limits) {
+        let diverged = divergence(&state, start_altitude, &config.limits);
+        let record = k % every == 0 || k == steps || diverged.is_some();
+        if record {
+            trajectory.t_s.push(t);
+            trajectory.states.push(state);
+            trajectory.health.extend_from_slice(&health);
+            trajectory
+                .thrust_n
+                .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
+        }
+        if let Some(reason) = diverged {
             trajectory
                 .commands
                 .extend(std::iter::repeat_n(f64::NAN, count));
@@ -469,19 +483,36 @@ pub fn simulate(
         // without noise the Python layer rebuilds them from the recorded state.
         let measured = match (&config.noise, gaussian.as_mut()) {
             (Some(noise), Some(gaussian)) => {
-                let mut x = state_vector(&state);
-                for (i, v) in x.iter_mut().enumerate() {
+                measured_vector = state_vector(&state);
+                for (i, v) in measured_vector.iter_mut().enumerate() {
                     *v +=
                         (noise.relative_std * v.abs() + noise.absolute_std[i]) * gaussian.sample();
                 }
-                trajectory.measured.extend(x);
-                state_from_vector(&x)
+                state_from_vector(&measured_vector)
             }
             _ => state,
         };
+        if record && config.noise.is_some() {
+            trajectory.measured.extend(measured_vector);
+        }
         controller.command(t, &measured, &mut command)?;
-        trajectory.commands.extend_from_slice(&command);
-        if command.iter().any(|c| !c.is_finite()) {
+        let finite = command.iter().all(|c| c.is_finite());
+        if record || !finite {
+            if !record {
+                // A non-finite command ends the run: record the step it happened at.
+                trajectory.t_s.push(t);
+                trajectory.states.push(state);
+                trajectory.health.extend_from_slice(&health);
+                trajectory
+                    .thrust_n
+                    .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
+                if config.noise.is_some() {
+                    trajectory.measured.extend(measured_vector);
+                }
+            }
+            trajectory.commands.extend_from_slice(&command);
+        }
+        if !finite {
             trajectory.divergence = Some(Divergence {
                 time_s: t,
                 reason: DivergenceReason::NonFiniteCommand,

@@ -197,8 +197,12 @@ fn active_set_matches_clarabel_on_10000_random_problems() {
 }
 
 #[test]
-fn warm_start_from_the_optimal_active_set_needs_one_iteration() {
+fn warm_start_from_the_previous_active_set_is_nearly_free() {
+    // Re-solving from the active set a solve returns takes one iteration unless a bound is held
+    // with a zero multiplier (degenerate): those are released once more at the end (the tie
+    // rule), which costs a step.
     let mut rng = Rng(7);
+    let (mut one, mut most) = (0, 0);
     for _ in 0..500 {
         let case = random_case(&mut rng);
         let solver = ActiveSetSolver::new(&case.problem);
@@ -209,11 +213,16 @@ fn warm_start_from_the_optimal_active_set_needs_one_iteration() {
         let mut warm = vec![0.0; m];
         let report = solver.solve(&case.u_c, &mut active, &mut warm).unwrap();
         assert_eq!(report.status, AllocationStatus::Optimal);
-        assert_eq!(report.iterations, 1);
+        one += usize::from(report.iterations == 1);
+        most = most.max(report.iterations);
         let f_cold = case.problem.objective(&case.u_c, &cold);
         let f_warm = case.problem.objective(&case.u_c, &warm);
         assert!((f_cold - f_warm).abs() <= 1e-12 * objective_scale(&case).max(f_cold));
     }
+    eprintln!("warm re-solve: {one}/500 in one iteration, at most {most}");
+    // Measured: 351 of 500 in one iteration, at most 8.
+    assert!(one >= 300, "{one}");
+    assert!(most <= 10, "{most}");
 }
 
 #[test]
@@ -380,5 +389,47 @@ fn fixed_variables_are_held_and_iteration_bound_reports() {
     assert!(
         active.states().contains(&BoundState::Upper)
             || active.states().contains(&BoundState::Lower)
+    );
+}
+
+#[test]
+fn a_huge_bound_does_not_blunt_the_optimality_test() {
+    // Review finding: the multiplier tolerance used to grow with the largest bound, so a 1e12
+    // "no limit" bound left a wrongly held bound in place and reported it optimal.
+    let m = DMatrix::from_row_slice(2, 2, &[0.6, -1.0, 0.3, -2.7]);
+    for big in [1e6, 1e12, 1e300] {
+        let p = AllocationProblem::new(m.clone(), &[1.0, 1.0], &[0.0, 0.0], &[1.0, big]).unwrap();
+        let got = ActiveSetSolver::new(&p).allocate(&[-0.3, 1.8]).unwrap();
+        assert_eq!(got.status, AllocationStatus::Optimal);
+        assert!(
+            (got.commands[0] - 0.8).abs() < 1e-12,
+            "{big}: {:?}",
+            got.commands
+        );
+        assert!(got.commands[1].abs() < 1e-12);
+    }
+}
+
+#[test]
+fn degenerate_bounds_are_not_carried_into_the_next_solve() {
+    // Review finding: a rotor held at a bound with a zero multiplier stayed there for good under
+    // warm starts. Here u_c is reachable with rotor 1 at zero or not; the cold answer (closest to
+    // zero) must be reproduced after a warm start from a solve that pinned rotor 1.
+    let m = DMatrix::from_row_slice(1, 2, &[1.0, 1.0]);
+    let p = AllocationProblem::new(m, &[1.0], &[0.0, 0.0], &[10.0, 10.0]).unwrap();
+    let solver = ActiveSetSolver::new(&p);
+    let mut active = ActiveSet::cold(2);
+    let mut t = [0.0; 2];
+    // A demand that drives rotor 1 to its lower bound is impossible here, so pin it by hand.
+    active = {
+        let mut a = active;
+        solver.solve(&[-1.0], &mut a, &mut t).unwrap(); // both at 0, multipliers positive
+        a
+    };
+    assert!(active.states().iter().all(|s| *s == BoundState::Lower));
+    solver.solve(&[3.0], &mut active, &mut t).unwrap();
+    assert!(
+        (t[0] - 1.5).abs() < 1e-12 && (t[1] - 1.5).abs() < 1e-12,
+        "{t:?}"
     );
 }

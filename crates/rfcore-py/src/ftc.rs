@@ -1,0 +1,170 @@
+//! Bindings for Ke et al.'s uniform passive FTC: the controller, its preset files, replay.
+//! Translation only.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use rfcore::controller::replay as core_replay;
+use rfcore::ftc::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
+use rfcore::rigid_body::RigidBodyState;
+
+use crate::simulation::{boxed, ControllerArg};
+use crate::{detached, slice1, to_py_err, PyAirframe};
+
+/// The uniform passive fault-tolerant controller (Ke et al.).
+#[pyclass(name = "UniformPassiveFtc", module = "rotorfault._rfcore", frozen)]
+pub struct PyUniformPassiveFtc {
+    pub(crate) inner: UniformPassiveFtc,
+}
+
+#[pymethods]
+impl PyUniformPassiveFtc {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (airframe, law, setpoints, dt, k_p, k_v, k_vz, accel_limit_m_s2, k_n3, k_omega, k_r, k_cp, epsilon_s, k_rotor, k_rotor_z, weights, k_iz))]
+    fn new(
+        airframe: &PyAirframe,
+        law: &str,
+        setpoints: Vec<(f64, [f64; 3])>,
+        dt: f64,
+        k_p: f64,
+        k_v: f64,
+        k_vz: f64,
+        accel_limit_m_s2: f64,
+        k_n3: f64,
+        k_omega: f64,
+        k_r: f64,
+        k_cp: f64,
+        epsilon_s: f64,
+        k_rotor: f64,
+        k_rotor_z: f64,
+        weights: [f64; 4],
+        k_iz: f64,
+    ) -> PyResult<Self> {
+        let gains = KeGains {
+            k_p,
+            k_v,
+            k_vz,
+            accel_limit_m_s2,
+            k_n3,
+            k_omega,
+            k_r,
+            k_cp,
+            epsilon_s,
+            k_rotor,
+            k_rotor_z,
+            weights,
+            k_iz,
+        };
+        let law = CommandLaw::parse(law).map_err(to_py_err)?;
+        let inner = UniformPassiveFtc::new(&airframe.inner, gains, law, setpoints, dt)
+            .map_err(to_py_err)?;
+        Ok(PyUniformPassiveFtc { inner })
+    }
+}
+
+/// A controller preset file as a dict (gains and vehicle values as nested dicts).
+#[pyfunction]
+pub fn ftc_preset_from_toml<'py>(
+    py: Python<'py>,
+    text: &str,
+    origin: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let preset = FtcPreset::from_toml_str(text, origin).map_err(to_py_err)?;
+    let out = PyDict::new(py);
+    out.set_item("name", preset.name)?;
+    out.set_item("description", preset.description)?;
+    out.set_item("source", preset.source)?;
+    out.set_item("airframe", preset.airframe)?;
+    let g = preset.gains;
+    let gains = PyDict::new(py);
+    for (key, value) in [
+        ("k_p", g.k_p),
+        ("k_v", g.k_v),
+        ("k_vz", g.k_vz),
+        ("accel_limit_m_s2", g.accel_limit_m_s2),
+        ("k_n3", g.k_n3),
+        ("k_omega", g.k_omega),
+        ("k_r", g.k_r),
+        ("k_cp", g.k_cp),
+        ("epsilon_s", g.epsilon_s),
+        ("k_rotor", g.k_rotor),
+        ("k_rotor_z", g.k_rotor_z),
+        ("k_iz", g.k_iz),
+    ] {
+        gains.set_item(key, value)?;
+    }
+    gains.set_item("weights", g.weights.to_vec())?;
+    out.set_item("gains", gains)?;
+    let vehicle = PyDict::new(py);
+    vehicle.set_item(
+        "rotor_time_constant_s",
+        preset.vehicle.rotor_time_constant_s,
+    )?;
+    vehicle.set_item(
+        "rotational_drag_n_m_s",
+        preset.vehicle.rotational_drag_n_m_s,
+    )?;
+    vehicle.set_item("linear_drag_n_s_m", preset.vehicle.linear_drag_n_s_m)?;
+    out.set_item("vehicle", vehicle)?;
+    Ok(out)
+}
+
+/// Commands of a controller replayed on `states` (N x 13: position, velocity, quaternion w x y z,
+/// body rates) at `times` (N): an N x command_count array.
+#[pyfunction]
+pub fn replay<'py>(
+    py: Python<'py>,
+    controller: ControllerArg<'py>,
+    times: PyReadonlyArray1<'py, f64>,
+    states: PyReadonlyArray2<'py, f64>,
+    command_count: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let times = slice1("times", &times)?.to_vec();
+    let view = states.as_array();
+    if view.ncols() != 13 {
+        return Err(PyValueError::new_err(format!(
+            "states: expected 13 columns (position, velocity, quaternion w x y z, rates), got {}",
+            view.ncols()
+        )));
+    }
+    let mut parsed = Vec::with_capacity(view.nrows());
+    for (k, r) in view.rows().into_iter().enumerate() {
+        if let Some(j) = r.iter().position(|v| !v.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "states[{k}, {j}]: must be finite, got {}",
+                r[j]
+            )));
+        }
+        let q = Quaternion::new(r[6], r[7], r[8], r[9]);
+        let norm = q.norm();
+        if norm < 1e-6 {
+            return Err(PyValueError::new_err(format!(
+                "states[{k}]: the quaternion (columns 6-9) must not be zero"
+            )));
+        }
+        // A recorded (unit to rounding) quaternion is used exactly as given, so a flight
+        // replays bit for bit; anything else is normalised.
+        let attitude = if (norm - 1.0).abs() <= 1e-12 {
+            UnitQuaternion::new_unchecked(q)
+        } else {
+            UnitQuaternion::from_quaternion(q)
+        };
+        parsed.push(RigidBodyState {
+            position_m: Vector3::new(r[0], r[1], r[2]),
+            velocity_m_s: Vector3::new(r[3], r[4], r[5]),
+            attitude,
+            omega_rad_s: Vector3::new(r[10], r[11], r[12]),
+        });
+    }
+    let mut controller = boxed(Some(&controller), command_count)?;
+    let rows = times.len();
+    let count = controller.command_count();
+    let flat = detached(py, || core_replay(controller.as_mut(), &times, &parsed))?;
+    numpy::ndarray::Array2::from_shape_vec((rows, count), flat)
+        .map(|a| a.into_pyarray(py))
+        .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
+}

@@ -1,0 +1,396 @@
+"""Uniform passive fault-tolerant control of a quadcopter (Ke, Cai, Quan; IEEE TIE).
+
+One controller and one set of gains fly the vehicle fault-free and through one, two and three
+rotor failures, without fault detection or switching: the controller never sees rotor health. The
+controller itself runs in Rust (:class:`rotorfault.controllers.UniformPassiveFTC`); this module
+holds its gain presets, the stability analysis of Ke's Section III-D (the N matrix, Table II),
+the named scenarios of Sections II-B and IV-B, the metrics of Section V and the report behind
+``rotorfault ftc-report``.
+
+Decisions on the paper's gaps (also in the README):
+
+- the control command (18) as printed leaves a steady virtual-control deficit
+  (``u_1 = k/(k+1) u_d1`` without a fault, eq. (43)); the default ``law="feedforward"`` adds the
+  filtered desired virtual control, which removes the deficit, keeps the partial compensation of
+  a fault and leaves the stability matrix ``I + k_rotor N`` of (25) unchanged. ``law="literal"``
+  is (18) as printed, ``"full-compensation"`` Remark 5's (29), ``"baseline"`` a conventional
+  cascade into the pseudo-inverse;
+- Ke gives no aerodynamic rotational damping, which sets the spin rate: the presets carry a linear
+  damping ``rotational_drag_n_m_s`` chosen so the steady spins land in the range of Ke's
+  experiments;
+- failures are applied one after the other from hover: the first rotor, then the next once the
+  spin has built up (Remark 3: simultaneous failures from r = 0 are not recoverable).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _rfcore
+from ._convert import FloatArray, float_array, real
+from .airframe import Airframe
+from .simulation import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Simulator, State, Trajectory
+
+#: Rows of the virtual control Ke's N matrix uses: thrust, roll, pitch (E_1).
+E1_ROWS = (0, 1, 2)
+
+
+@dataclass(frozen=True)
+class KeGains:
+    """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4. Validated in Rust when a
+    controller is built: ``epsilon_s``, ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``,
+    ``accel_limit_m_s2`` > 0, ``k_vz`` and ``k_omega`` > 0.5 (Theorem 1)."""
+
+    k_p: float = 0.3
+    k_v: float = 0.1
+    k_vz: float = 1.0
+    accel_limit_m_s2: float = 0.15
+    k_n3: float = 3.0
+    k_omega: float = 14.0
+    k_r: float = 4.2
+    k_cp: float = 0.6
+    epsilon_s: float = 0.06
+    k_rotor: float = 2.0
+    k_rotor_z: float = 0.1
+    weights: tuple[float, float, float, float] = (1.0, 20.0, 20.0, 0.01)
+    #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper.
+    k_iz: float = 0.0
+
+    def _packed(self) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "weights":
+                w = float_array("gains.weights", value, 1)
+                if w.shape != (4,):
+                    raise ValueError(f"gains.weights: expected 4 entries (w_f, w_p, w_q, w_r), got {w.shape[0]}")
+                out["weights"] = [float(v) for v in w]
+            else:
+                out[f.name] = real(f"gains.{f.name}", value)
+        return out
+
+
+@dataclass(frozen=True)
+class FtcPreset:
+    """A controller preset file (``presets/ftc/*.toml``): gains and the vehicle values that go with
+    them (rotor lag from Ke Table III, the rotational damping Ke does not give)."""
+
+    name: str
+    description: str
+    source: str
+    airframe_name: str
+    gains: KeGains
+    rotor_time_constant_s: float
+    rotational_drag_n_m_s: float
+    linear_drag_n_s_m: float
+
+    @property
+    def airframe(self) -> Airframe:
+        return Airframe.preset(self.airframe_name)
+
+    def simulator(self, dt: float = 1 / 400, substeps: int = 4, limits: DivergenceLimits | None = None) -> Simulator:
+        """The preset's vehicle at Ke's 400 Hz control rate: rotor lag and rotational damping."""
+        return Simulator(
+            self.airframe,
+            dt=dt,
+            substeps=substeps,
+            actuator=FixedPitchActuator(time_constant_s=self.rotor_time_constant_s),
+            drag=Drag(rotational_n_m_s=self.rotational_drag_n_m_s, linear_n_s_m=self.linear_drag_n_s_m),
+            limits=limits,
+        )
+
+
+def _ftc_dir() -> Path:
+    return Path(str(resources.files("rotorfault") / "presets" / "ftc"))
+
+
+def presets() -> list[str]:
+    """Names of the shipped controller presets (``ke-hil``, ``ke-experiment``)."""
+    return sorted(p.stem for p in _ftc_dir().glob("*.toml"))
+
+
+def preset(name: str = "ke-hil") -> FtcPreset:
+    """A shipped controller preset by name."""
+    if not isinstance(name, str):
+        raise TypeError(f"preset: expected a preset name (str), got {type(name).__name__}")
+    if name not in presets():
+        raise ValueError(f"preset: unknown controller preset {name!r}; available: {', '.join(presets())}")
+    raw = _rfcore.ftc_preset_from_toml((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
+    gains = dict(raw["gains"])
+    gains["weights"] = tuple(gains["weights"])
+    return FtcPreset(
+        raw["name"],
+        raw["description"],
+        raw["source"],
+        raw["airframe"],
+        KeGains(**gains),
+        raw["vehicle"]["rotor_time_constant_s"],
+        raw["vehicle"]["rotational_drag_n_m_s"],
+        raw["vehicle"]["linear_drag_n_s_m"],
+    )
+
+
+# -- Section III-D: stability analysis --------------------------------------------------------
+
+
+def n_matrix(airframe: Airframe, health: Any) -> FloatArray:
+    """Ke's ``N = (E_1 M) Lambda (E_1 M)^+`` (3 x 3) with ``M`` the airframe's nominal
+    effectiveness matrix and ``Lambda = diag(health)``: how the rotors turn a commanded
+    thrust/roll/pitch into what the vehicle receives under pseudo-inverse allocation (24)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    lam = float_array("health", health, 1)
+    nominal = airframe.with_efficiency(np.ones(airframe.rotor_count))
+    frame = nominal.with_efficiency(lam)  # validates health: one per rotor, in [0, 1]
+    e1m = nominal.effectiveness_matrix()[list(E1_ROWS)]
+    e1m_lambda = frame.effectiveness_matrix()[list(E1_ROWS)]
+    out: FloatArray = e1m_lambda @ np.linalg.pinv(e1m)
+    return out
+
+
+ComplexArray = npt.NDArray[np.complex128]
+
+
+def n_eigenvalues(airframe: Airframe, health: Any) -> ComplexArray:
+    """Eigenvalues of :func:`n_matrix` (Table II), sorted by real part then imaginary part."""
+    values = np.linalg.eigvals(n_matrix(airframe, health)).astype(np.complex128)
+    order = np.lexsort((values.imag, values.real))
+    out: ComplexArray = values[order]
+    return out
+
+
+@dataclass(frozen=True)
+class StabilityCheck:
+    """Ke's linear checks for one health matrix: ``thrust_feedback`` is (25),
+    ``Re eig(I + k_rotor N) > 0`` (the uniform controller); ``full_compensation`` is (32),
+    ``Re eig(N) > 0`` (Remark 5's controller, which fails with two or three failures)."""
+
+    health: tuple[float, ...]
+    eigenvalues: ComplexArray
+    k_rotor: float
+    thrust_feedback: bool
+    full_compensation: bool
+
+
+def stability_check(airframe: Airframe, health: Any, k_rotor: float = 2.0) -> StabilityCheck:
+    k = real("k_rotor", k_rotor)
+    if not (math.isfinite(k) and k > 0):
+        raise ValueError(f"k_rotor: must be > 0 and finite, got {k}")
+    eig = n_eigenvalues(airframe, health)
+    tol = 1e-12
+    return StabilityCheck(
+        tuple(float(v) for v in float_array("health", health, 1)),
+        eig,
+        k,
+        bool(np.all((1.0 + k * eig).real > tol)),
+        bool(np.all(eig.real > tol)),
+    )
+
+
+# -- scenarios ----------------------------------------------------------------------------------
+
+HOVER = (0.0, 0.0, -10.0)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named flight: faults applied in order from hover, setpoints (time, NED position)."""
+
+    name: str
+    description: str
+    health: tuple[float, ...]
+    faults: tuple[RotorFault, ...]
+    t_final: float = 40.0
+    setpoints: tuple[tuple[float, tuple[float, float, float]], ...] = ((0.0, HOVER),)
+    #: What Ke predicts: True (stabilised), False (Fig. 7: not stabilisable).
+    ke_stabilizable: bool = True
+
+
+def _sequential(health: tuple[float, ...], order: tuple[int, ...], first_s: float = 2.0, gap_s: float = 8.0) -> tuple[RotorFault, ...]:
+    return tuple(RotorFault(rotor, first_s + k * gap_s, health[rotor - 1]) for k, rotor in enumerate(order))
+
+
+def scenarios() -> list[Scenario]:
+    """Ke Section II-B's health matrices as sequential faults from hover, position tracking after a
+    failure, and both orders of two adjacent failures (Figs. 7 and 9).
+
+    Ke's numbering (Fig. 2, PX4 quad-X): rotors 1 and 2 sit on one diagonal, 3 and 4 on the other,
+    so ``diag(0, 0, 1, 1)`` is two *opposite* failures and ``diag(0, 1, 0, 1)`` two *adjacent*."""
+    return [
+        Scenario("fault-free", "diag(1, 1, 1, 1): hover, no fault", (1, 1, 1, 1), (), 20.0),
+        Scenario("partial-0.5", "diag(0.5, 1, 1, 1): rotor 1 at half efficiency", (0.5, 1, 1, 1), _sequential((0.5, 1, 1, 1), (1,))),
+        Scenario("one-failure", "diag(0, 1, 1, 1): rotor 1 fails", (0, 1, 1, 1), _sequential((0, 1, 1, 1), (1,))),
+        Scenario(
+            "one-failure-partial-rest",
+            "diag(0, 0.7, 0.6, 0.8): rotor 1 fails, then the others degrade",
+            (0, 0.7, 0.6, 0.8),
+            (RotorFault(1, 2.0, 0.0), RotorFault(2, 10.0, 0.7), RotorFault(3, 10.0, 0.6), RotorFault(4, 10.0, 0.8)),
+        ),
+        Scenario("two-opposite", "diag(0, 0, 1, 1): rotor 1 fails, then the opposite rotor 2", (0, 0, 1, 1), _sequential((0, 0, 1, 1), (1, 2))),
+        Scenario(
+            "two-adjacent-front",
+            "diag(0, 1, 0, 1): rotor 1 (front right) fails, then rotor 3 (front left); the rear pair "
+            "is left (Ke Fig. 7: not stabilisable)",
+            (0, 1, 0, 1),
+            _sequential((0, 1, 0, 1), (1, 3)),
+            ke_stabilizable=False,
+        ),
+        Scenario(
+            "two-adjacent-front-reversed",
+            "diag(0, 1, 0, 1) in the other order: rotor 3 first, then rotor 1 (the mirror image: "
+            "the same outcome with the spin reversed)",
+            (0, 1, 0, 1),
+            _sequential((0, 1, 0, 1), (3, 1)),
+            ke_stabilizable=False,
+        ),
+        Scenario(
+            "two-adjacent-side",
+            "diag(0, 1, 1, 0): rotor 1 (front right) fails, then rotor 4 (rear right); the left pair "
+            "is left (Ke Fig. 9: stabilisable)",
+            (0, 1, 1, 0),
+            _sequential((0, 1, 1, 0), (1, 4)),
+        ),
+        Scenario("three-failures", "diag(0, 0, 0, 1): rotors 1, 2, 3 fail one after another", (0, 0, 0, 1), _sequential((0, 0, 0, 1), (1, 2, 3)), 50.0),
+        Scenario(
+            "tracking-one-failure",
+            "rotor 1 fails in hover, then the setpoint moves 10 m north (position control, Fig. 17)",
+            (0, 1, 1, 1),
+            (RotorFault(1, 2.0, 0.0),),
+            60.0,
+            ((0.0, HOVER), (15.0, (10.0, 0.0, -10.0))),
+        ),
+    ]
+
+
+def scenario(name: str) -> Scenario:
+    for s in scenarios():
+        if s.name == name:
+            return s
+    raise ValueError(f"scenario: unknown {name!r}; available: {', '.join(s.name for s in scenarios())}")
+
+
+# -- metrics (Section V) -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FlightMetrics:
+    """What Ke reports per flight, over the final ``window_s`` seconds ("steady"):
+
+    ``r_rad_s`` mean body yaw rate; ``n3z`` mean vertical component of the primary axis (Fig. 14);
+    ``rotation_axis`` the mean of ``R_eb^T [0, 0, 1]`` in body axes (Section V-B);
+    ``max_altitude_loss_m`` the largest drop below the start; ``max_horizontal_error_m`` and
+    ``final_horizontal_error_m`` against the setpoint; ``settle_time_s`` from the last fault (or
+    setpoint change) until the position error stays within 1 m horizontally and 0.5 m vertically
+    (``nan`` if it never does); ``outcome`` "stabilized" or the divergence reason."""
+
+    outcome: str
+    r_rad_s: float
+    n3z: float
+    rotation_axis: tuple[float, float, float]
+    max_altitude_loss_m: float
+    max_horizontal_error_m: float
+    final_horizontal_error_m: float
+    final_altitude_error_m: float
+    settle_time_s: float
+
+
+def flight_metrics(trajectory: Trajectory, scenario_: Scenario, window_s: float = 5.0) -> FlightMetrics:
+    t = trajectory.t
+    setpoint = _setpoint_track(scenario_, t)
+    error = trajectory.position - setpoint
+    horizontal = np.hypot(error[:, 0], error[:, 1])
+    vertical = np.abs(error[:, 2])
+    last = t >= t[-1] - window_s
+    r = float(np.mean(trajectory.omega[last, 2]))
+    n3z = float(np.mean(trajectory.primary_axis[last, 2]))
+    # R_eb^T e_z: the world vertical seen from the body (the rotation axis of a steady spin).
+    axis = np.einsum("nji,j->ni", trajectory.rotation[last], np.array([0.0, 0.0, 1.0])).mean(axis=0)
+    axis = axis / np.linalg.norm(axis)
+    start_alt = -trajectory.position[0, 2]
+    events = [trajectory.t[0]] + [f.time for f in scenario_.faults] + [s for s, _ in scenario_.setpoints]
+    last_event = max(e for e in events if e <= t[-1])
+    outside = (horizontal > 1.0) | (vertical > 0.5)
+    after = t >= last_event
+    idx = np.nonzero(outside & after)[0]
+    if trajectory.diverged:
+        settle = math.nan
+    elif idx.size == 0:
+        settle = 0.0
+    elif idx[-1] == len(t) - 1:
+        settle = math.nan
+    else:
+        settle = float(t[idx[-1] + 1] - last_event)
+    return FlightMetrics(
+        trajectory.events[0].kind if trajectory.diverged else "stabilized",
+        r,
+        n3z,
+        (float(axis[0]), float(axis[1]), float(axis[2])),
+        float(np.max(start_alt - (-trajectory.position[:, 2]))),
+        float(np.max(horizontal)),
+        float(horizontal[-1]),
+        float(vertical[-1]),
+        settle,
+    )
+
+
+def _setpoint_track(scenario_: Scenario, t: FloatArray) -> FloatArray:
+    times = np.array([s for s, _ in scenario_.setpoints])
+    points = np.array([p for _, p in scenario_.setpoints])
+    k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1)
+    out: FloatArray = points[k]
+    return out
+
+
+@dataclass
+class ScenarioRun:
+    scenario: Scenario
+    law: str
+    trajectory: Trajectory
+    metrics: FlightMetrics = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.metrics = flight_metrics(self.trajectory, self.scenario)
+
+
+def run_scenario(
+    scenario_: Scenario | str,
+    law: str = "feedforward",
+    controller_preset: FtcPreset | str = "ke-hil",
+    record_every: int = 4,
+) -> ScenarioRun:
+    """Flies one scenario with the uniform passive FTC (or ``law="baseline"``)."""
+    from .controllers import UniformPassiveFTC
+
+    sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
+    pre = preset(controller_preset) if isinstance(controller_preset, str) else controller_preset
+    sim = pre.simulator()
+    controller = UniformPassiveFTC(pre.airframe, gains=pre.gains, law=law, setpoints=sc.setpoints)
+    start = State(position=sc.setpoints[0][1])
+    trajectory = sim.run(start, sc.t_final, controller=controller, faults=sc.faults, record_every=record_every)
+    return ScenarioRun(sc, law, trajectory)
+
+
+__all__ = [
+    "FlightMetrics",
+    "FtcPreset",
+    "KeGains",
+    "Scenario",
+    "ScenarioRun",
+    "StabilityCheck",
+    "flight_metrics",
+    "n_eigenvalues",
+    "n_matrix",
+    "preset",
+    "presets",
+    "run_scenario",
+    "scenario",
+    "scenarios",
+    "stability_check",
+]
