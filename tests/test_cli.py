@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from rotorfault import ftc as rf_ftc
 from rotorfault.cli import cli
 
 
@@ -169,3 +170,22 @@ def test_simulate_bad_scenarios_are_one_line(tmp_path: Path, text: str, message:
     assert code == 1, out
     assert message in err and "Traceback" not in err + out
     assert len(err.strip().splitlines()) == 1
+
+
+def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
+    result = CliRunner().invoke(cli, ["ftc-report", "--out", str(tmp_path), "--laws", "feedforward,baseline"])
+    assert result.exit_code == 0, result.output
+    report = (tmp_path / "ftc-report.md").read_text()
+    assert "| one-failure | feedforward | yes | stabilized |" in report
+    assert "| one-failure | baseline | yes | tilt |" in report
+    assert "| two-adjacent-front | feedforward | no | tilt |" in report
+    rows = (tmp_path / "ftc-report.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * len(rf_ftc.scenarios())
+    assert (tmp_path / "primary-axis.png").stat().st_size > 10_000
+    assert (tmp_path / "one-failure.png").exists()
+
+
+def test_ftc_report_bad_law_is_a_one_line_error(tmp_path: Path) -> None:
+    result = CliRunner().invoke(cli, ["ftc-report", "--out", str(tmp_path), "--laws", "magic", "--no-figures"])
+    assert result.exit_code == 1
+    assert "law:" in result.output

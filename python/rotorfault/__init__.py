@@ -32,7 +32,8 @@ from .allocation import (
     hover_thrust_margin,
     max_virtual_control,
 )
-from .controllers import LTI, Allocated, LinearFeedback, OpenLoop
+from . import ftc
+from .controllers import LTI, Allocated, LinearFeedback, OpenLoop, UniformPassiveFTC
 from .linear import hover_trim, linearize, lqr_hover, lqr_hover_allocated
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
 from .simulation import (
@@ -52,6 +53,8 @@ from .simulation import (
 
 __all__ = [
     "LTI",
+    "UniformPassiveFTC",
+    "ftc",
     "Allocated",
     "Allocation",
     "Allocator",

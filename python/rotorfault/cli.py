@@ -1,4 +1,5 @@
-"""The ``rotorfault`` command line: presets, ACAI, failure tables, efficiency scans.
+"""The ``rotorfault`` command line: presets, ACAI, failure tables, efficiency scans, flights and
+the uniform-passive-FTC report.
 
 Every user error (bad value, bad type, unreadable file) ends the command with a one-line
 ``Error: ...`` message on stderr and exit status 1; click's own usage errors exit with 2.
@@ -191,6 +192,43 @@ def simulate(scenario_file: str, plot_path: str | None) -> None:
     if plot_path is not None:
         run.plot(plot_path)
         console.print(f"plot written to {plot_path}")
+
+
+@cli.command("ftc-report")
+@click.option("--out", "out_dir", default="ftc-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table and figures.")
+@click.option("--preset", "preset_name", default="ke-hil", show_default=True, help="Controller preset (gains and vehicle).")
+@click.option("--laws", default="feedforward,literal,baseline", show_default=True, help="Command laws to compare (comma-separated).")
+@click.option("--no-figures", is_flag=True, help="Only the table (Markdown and CSV).")
+@_user_errors
+def ftc_report(out_dir: str, preset_name: str, laws: str, no_figures: bool) -> None:
+    """Fly every uniform-passive-FTC scenario (Ke et al.) and write a table and figures."""
+    from rich.progress import Progress
+
+    from . import ftc
+
+    chosen_laws = [law.strip() for law in laws.split(",") if law.strip()]
+    controller_preset = ftc.preset(preset_name)
+    scenarios = ftc.scenarios()
+    runs = []
+    with Progress(console=console, transient=True) as progress:
+        task = progress.add_task("flying scenarios", total=len(scenarios) * len(chosen_laws))
+        for law in chosen_laws:
+            for sc in scenarios:
+                runs.append(ftc.run_scenario(sc, law=law, controller_preset=controller_preset))
+                progress.advance(task)
+    table = Table(title=f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights")
+    for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "max horiz. (m)", "final alt. err. (m)"):
+        table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
+    for row in ftc.report_rows(runs):
+        colour = "green" if row["outcome"] == "stabilized" else "red"
+        table.add_row(
+            row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", f"[{colour}]{row['outcome']}[/{colour}]",
+            f"{row['r_rad_s']:.1f}", f"{row['n3z']:.3f}", f"{row['max_altitude_loss_m']:.2f}",
+            f"{row['max_horizontal_error_m']:.2f}", f"{row['final_altitude_error_m']:.2f}",
+        )
+    console.print(table)
+    path = ftc.write_report(runs, out_dir, figures=not no_figures)
+    console.print(f"report written to {escape(str(path))}")
 
 
 def main() -> None:

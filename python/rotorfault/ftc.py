@@ -377,7 +377,155 @@ def run_scenario(
     return ScenarioRun(sc, law, trajectory)
 
 
+# -- report (rotorfault ftc-report) --------------------------------------------------------------
+
+
+def plot_primary_axis(runs: list[ScenarioRun], path: str | None = None, tail_s: float = 10.0) -> Any:
+    """Ke Fig. 16 style: the path of the primary axis ``n3`` (body z in the world) on the unit
+    sphere for each run (the last ``tail_s`` seconds bold), seen from below the vehicle's
+    downward axis. Returns the matplotlib figure, saved to ``path`` if given."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    count = len(runs)
+    cols = min(count, 4)
+    rows_ = -(-count // cols)
+    fig = plt.figure(figsize=(4.2 * cols, 4.2 * rows_))
+    u, v = np.mgrid[0 : 2 * np.pi : 30j, 0 : np.pi / 2 : 12j]
+    for k, run in enumerate(runs):
+        ax = fig.add_subplot(rows_, cols, k + 1, projection="3d")
+        ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.4)
+        n3 = run.trajectory.primary_axis
+        t = run.trajectory.t
+        late = t >= t[-1] - tail_s
+        ax.plot(n3[:, 0], n3[:, 1], n3[:, 2], color="tab:orange", lw=0.6)
+        ax.plot(n3[late, 0], n3[late, 1], n3[late, 2], color="tab:red", lw=1.4)
+        ax.scatter([n3[0, 0]], [n3[0, 1]], [n3[0, 2]], color="tab:blue", s=20)
+        ax.set_xlim(-1, 1)
+        ax.set_ylim(-1, 1)
+        ax.set_zlim(0, 1)
+        ax.set_box_aspect((1, 1, 0.5))
+        m = run.metrics
+        ax.set_title(f"{run.scenario.name} ({run.law})\n{m.outcome}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}", fontsize=8)
+        ax.set_xlabel("n3x", fontsize=7)
+        ax.set_ylabel("n3y", fontsize=7)
+        ax.set_zlabel("n3z", fontsize=7)
+        ax.tick_params(labelsize=6)
+    fig.suptitle("primary axis n3 on the unit sphere (blue: start, red: last 10 s)")
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
+
+
+REPORT_LAWS = ("feedforward", "literal", "baseline")
+
+
+def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
+    rows = []
+    for run in runs:
+        m = run.metrics
+        rows.append(
+            {
+                "scenario": run.scenario.name,
+                "law": run.law,
+                "health": " ".join(f"{h:g}" for h in run.scenario.health),
+                "ke_stabilizable": run.scenario.ke_stabilizable,
+                "outcome": m.outcome,
+                "end_s": float(run.trajectory.t[-1]),
+                "r_rad_s": m.r_rad_s,
+                "n3z": m.n3z,
+                "rotation_axis": " ".join(f"{v:+.3f}" for v in m.rotation_axis),
+                "max_altitude_loss_m": m.max_altitude_loss_m,
+                "max_horizontal_error_m": m.max_horizontal_error_m,
+                "final_horizontal_error_m": m.final_horizontal_error_m,
+                "final_altitude_error_m": m.final_altitude_error_m,
+                "settle_time_s": m.settle_time_s,
+            }
+        )
+    return rows
+
+
+def write_report(runs: list[ScenarioRun], out_dir: str | Path, figures: bool = True) -> Path:
+    """Writes ``ftc-report.md`` and ``ftc-report.csv`` (one row per run), and with ``figures``
+    the time history of every run of the first law (``<scenario>.png``) and the primary-axis
+    paths (``primary-axis.png``). Returns the Markdown file's path."""
+    import csv
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = report_rows(runs)
+    with open(out / "ftc-report.csv", "w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    lines = [
+        "# Uniform passive FTC (Ke et al.): scenario report",
+        "",
+        "Steady values are means over the last 5 s; settle time counts from the last fault or",
+        "setpoint change until the error stays within 1 m horizontally and 0.5 m vertically.",
+        "",
+        "| scenario | law | Ke: stabilisable | outcome | end (s) | r (rad/s) | n3z | rotation axis (body) "
+        "| max alt. loss (m) | max horiz. (m) | final horiz. (m) | final alt. err. (m) | settle (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['scenario']} | {r['law']} | {'yes' if r['ke_stabilizable'] else 'no'} | {r['outcome']} "
+            f"| {r['end_s']:.1f} | {r['r_rad_s']:.1f} | {r['n3z']:.3f} | {r['rotation_axis']} "
+            f"| {r['max_altitude_loss_m']:.2f} | {r['max_horizontal_error_m']:.2f} "
+            f"| {r['final_horizontal_error_m']:.2f} | {r['final_altitude_error_m']:.2f} | {r['settle_time_s']:.1f} |"
+        )
+    lines += ["", "Stability checks of Section III-D (Table II health matrices, k_rotor = 2):", ""]
+    lines += ["| health | eig(N) | Re eig(I + k N) > 0 (25) | Re eig(N) > 0 (32) |", "|---|---|---|---|"]
+    frame = Airframe.preset("ke-quadcopter")
+    for health in TABLE_II_HEALTH:
+        check = stability_check(frame, health)
+        eig = ", ".join(f"{v.real:.4f}" for v in check.eigenvalues)
+        lines.append(f"| diag({', '.join(f'{h:g}' for h in health)}) | {eig} | {check.thrust_feedback} | {check.full_compensation} |")
+    if figures:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        first_law = runs[0].law
+        chosen = [run for run in runs if run.law == first_law]
+        for run in chosen:
+            fig = run.trajectory.plot(str(out / f"{run.scenario.name}.png"))
+            plt.close(fig)
+        fig = plot_primary_axis(chosen, str(out / "primary-axis.png"))
+        plt.close(fig)
+        lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario."]
+    path = out / "ftc-report.md"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+#: The health matrices of Ke Table II.
+TABLE_II_HEALTH = (
+    (0.5, 1, 1, 1),
+    (0, 1, 1, 1),
+    (0, 0.7, 0.6, 0.8),
+    (0, 0.1, 0.1, 0.1),
+    (0, 1, 0, 1),
+    (0, 0.5, 0, 0.5),
+    (1, 0, 1, 0),
+    (0, 0, 1, 1),
+    (1, 1, 0, 0),
+    (0, 0, 0, 1),
+    (0, 0, 1, 0),
+)
+
+
 __all__ = [
+    "TABLE_II_HEALTH",
+    "plot_primary_axis",
+    "report_rows",
+    "write_report",
     "FlightMetrics",
     "FtcPreset",
     "KeGains",

@@ -230,6 +230,11 @@ impl CommandLaw {
     }
 }
 
+/// One step of `1 / (eps s + 1)` (module docs), `a = exp(-dt / eps)`.
+fn low_pass(state: &mut f64, input: f64, a: f64) {
+    *state = a * *state + (1.0 - a) * input;
+}
+
 /// The filter states (module docs), reset at the start of every run.
 #[derive(Debug, Clone, Default)]
 struct Filters {
@@ -490,7 +495,7 @@ impl Controller for UniformPassiveFtc {
             self.filters.mt = self.produced(&first);
         }
         let a = (-self.dt_s / self.gains.epsilon_s).exp();
-        let lpf = |y: &mut f64, x: f64| *y = a * *y + (1.0 - a) * x;
+        let lpf = |y: &mut f64, x: f64| low_pass(y, x, a);
         let produced = self.produced(&self.filters.previous);
         let f = &mut self.filters;
         let mut derivative = [0.0; 3];
@@ -543,5 +548,94 @@ impl Controller for UniformPassiveFtc {
     fn reset(&mut self) {
         self.filters = Filters::default();
         self.active = ActiveSet::cold(4);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    fn ke() -> Airframe {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../python/rotorfault/presets/ke-quadcopter.toml"
+        );
+        let text = std::fs::read_to_string(path).unwrap();
+        Airframe::from_toml_str(&text, "ke-quadcopter").unwrap()
+    }
+
+    #[test]
+    fn low_pass_matches_the_continuous_step_response_at_the_samples() {
+        // Input held at 1 from t = 0: the continuous filter gives 1 - exp(-t / eps); the
+        // discretisation is exact at every sample (step invariance).
+        let (dt, eps) = (1.0 / 400.0, 0.06);
+        let a = f64::exp(-dt / eps);
+        let mut y = 0.0;
+        for k in 1..=400 {
+            low_pass(&mut y, 1.0, a);
+            let exact = 1.0 - f64::exp(-(k as f64) * dt / eps);
+            assert!((y - exact).abs() < 1e-14, "{k}: {y} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn hover_at_the_setpoint_commands_the_hover_thrusts() {
+        let airframe = ke();
+        let weight = airframe.mass_kg() * airframe.gravity_m_s2();
+        for law in [
+            CommandLaw::Feedforward,
+            CommandLaw::FullCompensation,
+            CommandLaw::Baseline,
+        ] {
+            let mut c = UniformPassiveFtc::new(
+                &airframe,
+                KeGains::hil(),
+                law,
+                vec![(0.0, [0.0, 0.0, -10.0])],
+                1.0 / 400.0,
+            )
+            .unwrap();
+            let hover = RigidBodyState {
+                position_m: Vector3::new(0.0, 0.0, -10.0),
+                velocity_m_s: Vector3::zeros(),
+                attitude: UnitQuaternion::identity(),
+                omega_rad_s: Vector3::zeros(),
+            };
+            let mut out = [0.0; 4];
+            for k in 0..10 {
+                c.command(k as f64 / 400.0, &hover, &mut out).unwrap();
+                // 1e-10 N: the QP's normal equations carry w_r c^2 = 2.8e-6 next to w_f = 1,
+                // which costs about five of the sixteen digits.
+                for t in out {
+                    assert!((t - weight / 4.0).abs() < 1e-10, "{law:?}: {out:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_gains_and_airframes_are_rejected() {
+        let airframe = ke();
+        let mut gains = KeGains::hil();
+        gains.epsilon_s = 0.0;
+        let err = UniformPassiveFtc::new(
+            &airframe,
+            gains,
+            CommandLaw::default(),
+            vec![(0.0, [0.0; 3])],
+            0.0025,
+        )
+        .unwrap_err();
+        assert!(err.to_string().starts_with("epsilon_s"), "{err}");
+        let err = UniformPassiveFtc::new(
+            &airframe,
+            KeGains::hil(),
+            CommandLaw::default(),
+            vec![],
+            0.0025,
+        )
+        .unwrap_err();
+        assert!(err.to_string().starts_with("setpoints"), "{err}");
     }
 }

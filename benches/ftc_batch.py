@@ -1,0 +1,112 @@
+"""Closed-loop fault scenarios per second: Ke's uniform passive FTC in a rotorfault batch.
+
+Run:  pip install ".[bench]" && python benches/ftc_batch.py      (about a minute)
+
+The batch: 1,000 runs of 30 s each of the ke-quadcopter with the ``ke-hil`` controller preset
+(Table IV gains, QP allocation through the active-set solver every step, rotor lag, rotational and
+translational drag), 400 Hz control with 4 RK4 substeps (12 million control steps, 48 million RK4
+steps). Each run draws one of the stabilisable fault patterns of Ke Section II-B (one rotor, one
+plus partial faults, two opposite, two adjacent side pair, three), random first-failure time in
+[1, 5] s, the next failures 6-10 s later, and a random start within 1 m of the setpoint.
+Recording is thinned to 1 Hz (``record_every=400``) so memory stays bounded.
+
+Reported: control steps per second end to end from Python (argument conversion, the parallel
+batch with the GIL released, the stacked result), the same for one run on one thread, and in the
+same run RotorPy 3 flying its SE3 hover controller (no rotor faults: it has none) as the peer
+baseline, when RotorPy is installed (``.[bench]``).
+
+Target (issue 5): at least 500,000 closed-loop control steps per second on the 2-core machine.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+import rotorfault as rf
+from rotorfault import ftc
+
+RUNS = 1000
+T_FINAL_S = 30.0
+TARGET_STEPS_PER_S = 500_000
+PATTERNS = (
+    ("one", ((1, 0.0),)),
+    ("one+partial", ((1, 0.0), (2, 0.7), (3, 0.6), (4, 0.8))),
+    ("two-opposite", ((1, 0.0), (2, 0.0))),
+    ("two-adjacent-side", ((1, 0.0), (4, 0.0))),
+    ("three", ((1, 0.0), (2, 0.0), (3, 0.0))),
+)
+
+
+def batch_inputs(rng: np.random.Generator) -> tuple[list[rf.State], list[list[rf.RotorFault]], list[str]]:
+    starts, faults, names = [], [], []
+    for _ in range(RUNS):
+        name, pattern = PATTERNS[int(rng.integers(len(PATTERNS)))]
+        t = float(rng.uniform(1.0, 5.0))
+        run_faults = []
+        for k, (rotor, efficiency) in enumerate(pattern):
+            if k > 0 and not (name == "one+partial" and k > 1):
+                t += float(rng.uniform(6.0, 10.0))
+            run_faults.append(rf.RotorFault(rotor, t, efficiency))
+        starts.append(rf.State(position=(0, 0, -10) + rng.uniform(-1, 1, size=3)))
+        faults.append(run_faults)
+        names.append(name)
+    return starts, faults, names
+
+
+def rotorpy_steps_per_s() -> float | None:
+    if importlib.util.find_spec("rotorpy") is None:
+        return None
+    path = Path(__file__).with_name("simulation_rotorpy.py")
+    spec = importlib.util.spec_from_file_location("simulation_rotorpy", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    fly, _ = module.rotorpy_setup()
+    wall, steps, _, _ = fly()
+    return float(steps / wall)
+
+
+def main() -> None:
+    print(f"rotorfault {rf.__version__}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs")
+    preset = ftc.preset("ke-hil")
+    sim = preset.simulator()
+    rng = np.random.default_rng(5)
+    starts, faults, names = batch_inputs(rng)
+    controller = rf.controllers.UniformPassiveFTC(preset.airframe, gains=preset.gains, position=(0, 0, -10))
+    steps_per_run = round(T_FINAL_S / sim.dt)
+
+    # One run on one thread.
+    t0 = time.perf_counter()
+    single = sim.run(starts[0], T_FINAL_S, controller=controller, faults=faults[0], record_every=400)
+    single_s = time.perf_counter() - t0
+    assert not single.diverged
+
+    t0 = time.perf_counter()
+    batch = rf.simulate_batch(sim, starts, T_FINAL_S, controllers=controller, faults=faults, record_every=400)
+    batch_s = time.perf_counter() - t0
+    diverged = [names[i] for i in np.nonzero(batch.diverged)[0]]
+    total_steps = RUNS * steps_per_run
+    rate = total_steps / batch_s
+    final_r = np.abs(batch.omega[:, -1, 2])
+    print(f"\nbatch: {RUNS} runs x {T_FINAL_S:.0f} s at {1 / sim.dt:.0f} Hz, {sim.substeps} RK4 substeps: "
+          f"{total_steps / 1e6:.0f} M control steps in {batch_s:.2f} s")
+    print(f"  {rate:,.0f} closed-loop control steps/s  (target {TARGET_STEPS_PER_S:,}: "
+          f"{'met' if rate >= TARGET_STEPS_PER_S else 'NOT met'})")
+    print(f"  one run, one thread: {steps_per_run / single_s:,.0f} steps/s")
+    print(f"  runs lost: {len(diverged)} of {RUNS} {sorted(set(diverged))}; final |r| median "
+          f"{np.median(final_r[np.isfinite(final_r)]):.1f} rad/s")
+    peer = rotorpy_steps_per_s()
+    if peer is None:
+        print("  RotorPy not installed (pip install '.[bench]'): no peer baseline")
+    else:
+        print(f"  RotorPy 3 SE3 hover (no faults), same run: {peer:,.0f} steps/s -> rotorfault is {rate / peer:,.0f}x")
+
+
+if __name__ == "__main__":
+    main()
