@@ -454,3 +454,16 @@ def test_more_bad_input(ke: rf.Airframe) -> None:
         rf.allocate([[1.0, 1.0]], [1.0], bounds={0: 1, 1: 2})
     with pytest.raises(ValueError, match="^priorities"):
         rf.allocate(ke, [7.0, 0, 0, 0], method="clarabel", priorities=[[2**70]])
+
+
+def test_rate_limit_folds_into_the_bounds(ke: rf.Airframe) -> None:
+    """Lanzon's rate limit (11): each thrust within 50 N/s x 2.5 ms of the previous command."""
+    allocator = Allocator(ke, weights=KE_WEIGHTS)
+    previous = np.array([1.0, 8.5, 0.05, 4.0])
+    limited = allocator.rate_limited(previous, 50.0 * 0.0025)
+    np.testing.assert_allclose(limited.lower, [0.875, 8.375, 0.0, 3.875], atol=1e-15)
+    np.testing.assert_allclose(limited.upper, [1.125, 8.5, 0.175, 4.125], atol=1e-15)
+    got = limited.allocate([30.0, 1.0, 0.0, 0.0])
+    assert np.all(np.abs(got.commands - previous) <= 0.125 + 1e-12)
+    with pytest.raises(ValueError, match=r"^max_change\[0\]"):
+        allocator.rate_limited(previous, [-1.0, 0, 0, 0])

@@ -170,6 +170,20 @@ class Allocator:
             return Allocation(commands[0], achieved[0], rows[0], status[0], iterations[0])
         return Allocation(commands, achieved, rows, tuple(status), tuple(iterations))
 
+    def rate_limited(self, previous: Any, max_change: Any) -> Allocator:
+        """A copy whose bounds also keep each command within ``max_change`` (a number or one per
+        actuator, e.g. rate x control period) of ``previous``: Lanzon's rate limit (11) folded into
+        the box. A previous command outside the bounds is pulled to the nearest bound, so the
+        result is always a valid box."""
+        prev = float_array("previous", previous, 1)
+        delta = (
+            np.full(self.actuator_count, real("max_change", max_change))
+            if isinstance(max_change, numbers.Real) and not isinstance(max_change, bool)
+            else float_array("max_change", max_change, 1)
+        )
+        lower, upper = self._core.rate_limited_bounds(prev, delta)
+        return Allocator(self.matrix, self.weights, (lower, upper), self.regularization, self.preferred)
+
     def objective(self, virtual_control: Any, commands: Any) -> tuple[float, float]:
         """``(objective, kkt_residual)`` of any commands: the residual (command units) is zero
         exactly at an optimum, whichever solver produced it."""

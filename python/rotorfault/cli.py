@@ -197,7 +197,10 @@ def simulate(scenario_file: str, plot_path: str | None) -> None:
 @cli.command("ftc-report")
 @click.option("--out", "out_dir", default="ftc-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table and figures.")
 @click.option("--preset", "preset_name", default="ke-hil", show_default=True, help="Controller preset (gains and vehicle).")
-@click.option("--laws", default="feedforward,literal,baseline", show_default=True, help="Command laws to compare (comma-separated).")
+@click.option(
+    "--laws", default="feedforward,literal,full-compensation,baseline", show_default=True,
+    help="Command laws to compare (comma-separated).",
+)
 @click.option("--no-figures", is_flag=True, help="Only the table (Markdown and CSV).")
 @_user_errors
 def ftc_report(out_dir: str, preset_name: str, laws: str, no_figures: bool) -> None:

@@ -421,9 +421,6 @@ def plot_primary_axis(runs: list[ScenarioRun], path: str | None = None, tail_s: 
     return fig
 
 
-REPORT_LAWS = ("feedforward", "literal", "baseline")
-
-
 def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
     rows = []
     for run in runs:

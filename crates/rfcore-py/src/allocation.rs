@@ -48,6 +48,26 @@ impl PyAllocationProblem {
         Ok(PyAllocationProblem { inner })
     }
 
+    /// The bounds after folding in a rate limit (see `AllocationProblem::rate_limited`).
+    fn rate_limited_bounds<'py>(
+        &self,
+        py: Python<'py>,
+        previous: PyReadonlyArray1<'py, f64>,
+        max_change: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        let limited = self
+            .inner
+            .rate_limited(
+                slice1("previous", &previous)?,
+                slice1("max_change", &max_change)?,
+            )
+            .map_err(to_py_err)?;
+        Ok((
+            limited.lower().to_vec().into_pyarray(py),
+            limited.upper().to_vec().into_pyarray(py),
+        ))
+    }
+
     /// Objective and KKT residual of given commands (for checking any solver's answer).
     fn objective(
         &self,
