@@ -19,6 +19,8 @@ use rfcore::ControlAxes;
 use crate::simulation::{matrix, PyDiscreteLti, PyLinearFeedback, PyOpenLoop};
 use crate::{detached, slice1, to_py_err, PyAirframe};
 
+type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 /// A validated allocation problem (matrix, weights, bounds, regularisation).
 #[pyclass(name = "AllocationProblem", module = "rotorfault._rfcore", frozen)]
 pub struct PyAllocationProblem {
@@ -54,7 +56,7 @@ impl PyAllocationProblem {
         py: Python<'py>,
         previous: PyReadonlyArray1<'py, f64>,
         max_change: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    ) -> PyResult<BoundsPair<'py>> {
         let limited = self
             .inner
             .rate_limited(
