@@ -176,7 +176,8 @@ def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["ftc-report", "--out", str(tmp_path), "--laws", "feedforward,baseline"])
     assert result.exit_code == 0, result.output
     report = (tmp_path / "ftc-report.md").read_text()
-    assert "| one-failure | feedforward | yes | stabilized |" in report
+    assert "| one-failure | feedforward | yes | off station |" in report
+    assert "| fault-free | feedforward | yes | holds position |" in report
     assert "| one-failure | baseline | yes | tilt |" in report
     assert "| two-adjacent-front | feedforward | no | tilt |" in report
     rows = (tmp_path / "ftc-report.csv").read_text().splitlines()

@@ -102,11 +102,15 @@ def test_fig4_region(pnpnpn: rf.Airframe) -> None:
     assert rf.acai(pnpnpn, eta) == scan.acai[i]
 
 
-def test_ke_preset_yaw_row_is_the_corrected_one() -> None:
-    """Ke's printed yaw row c[1, -1, 1, -1] makes M rank 3; the preset uses c[1, 1, -1, -1]."""
+def test_ke_preset_layout_makes_the_printed_yaw_row_right() -> None:
+    """Ke's printed yaw row c[1, -1, 1, -1] with the rotor layout of Figs. 8, 16, 17 (1 front
+    right, then clockwise): M has rank 4. (With Remark 2's printed angles it would have rank 3.)"""
     m = rf.Airframe.preset("ke-quadcopter").effectiveness_matrix()
-    np.testing.assert_allclose(m[3], 0.0166 * np.array([1, 1, -1, -1]), atol=1e-15)
+    np.testing.assert_allclose(m[3], 0.0166 * np.array([1, -1, 1, -1]), atol=1e-15)
     assert np.linalg.matrix_rank(m) == 4
+    s = 0.125 / np.sqrt(2)
+    np.testing.assert_allclose(m[1], [-s, -s, s, s], atol=1e-15)  # roll: right rotors 1, 2
+    np.testing.assert_allclose(m[2], [s, -s, -s, s], atol=1e-15)  # pitch: front rotors 1, 4
 
 
 def test_lanzon_preset_matches_lanzon_eq2() -> None:

@@ -2,30 +2,35 @@
 deficit of the printed law (eq. (43)), the scenarios of Sections II-B and IV-B flown in the
 simulator, passivity, and bad gains.
 
-Measured with the ``ke-hil`` preset (Table IV HIL gains, rotor lag 0.025 s, rotational damping
-2.8e-3 N m s and translational drag 0.3 N s/m, which the paper does not give); the bounds below
-are set from those measurements (numbers in the README):
+Measured with the ``ke-hil`` preset (Table IV HIL gains plus the remedy's altitude integral, rotor
+lag 0.025 s, rotational damping 2.8e-3 N m s and translational drag 0.3 N s/m, which the paper does
+not give); the bounds below are set from those measurements (numbers in the README):
 
-- one failed rotor: steady spin 19.6 rad/s (Ke's experiment: about 23), the largest horizontal
-  excursion 15.4 m (Ke reports under 10 m outdoors: the first second after the failure, before the
-  spin builds up, tips the vehicle to n3z = 0.45 and the Table IV acceleration limit of 0.15 m/s^2
-  brakes slowly), the largest altitude loss 7.7 m during that second, then back within 0.3 m;
-- two opposite / two adjacent (side pair) / three failures: spin 42.0 / 30.5 / 42.1 rad/s (Ke: 42,
-  38, 42), altitude back within 5 m;
-- the front (or rear) adjacent pair: the spin collapses and the vehicle tips over (Ke Fig. 7),
-  in either order.
+- one failed rotor: steady spin 19.6 rad/s (Ke's experiment: about 23); the largest horizontal
+  excursion 15.4 m (Ke reports under 10 m outdoors): in the half second after the failure, before
+  the spin builds up, the vehicle tips to n3z = 0.45 and picks up about 6 m/s, which Table IV's
+  soft outer loop (k_v = 0.1 1/s, 0.15 m/s^2 acceleration limit) brakes slowly; the largest
+  altitude loss 7.7 m, reached about 5 s after the failure, then back within 0.3 m;
+- two adjacent (Ke's right pair) / two opposite / three failures: spin 30.5 / 42.0 / 42.1 rad/s
+  (Ke: 38, 42, 42), altitude back within 5 m;
+- the front (or rear) adjacent pair: the spin collapses and the vehicle tips over (Ke Fig. 7), in
+  either order;
+- after a failure the vehicle drifts back at a few cm/s: it realises only part of the small tilt
+  Table IV's outer loop asks for, so it ends "off station"; with a stiffer outer loop
+  (a = 1 m/s^2, k_v = 0.5 1/s) the same controller tracks a moved setpoint to 0.1 m.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import rotorfault as rf
-from rotorfault import ftc
+from rotorfault import _rfcore, ftc
 
 # Ke Table II: eigenvalues of N = (E1 M) Lambda (E1 M)^+ (printed to 4 decimals). E1 M is the first
 # three rows of the ke-quadcopter preset's nominal matrix: this checks the preset's geometry
@@ -89,29 +94,62 @@ def test_fault_free_hover_holds_position(runs: dict[str, ftc.ScenarioRun]) -> No
     assert np.abs(off.position[-1] - [0, 0, -10]).max() < 0.02
 
 
-@pytest.mark.parametrize("name", ["partial-0.5", "one-failure", "one-failure-partial-rest", "two-opposite", "two-adjacent-side", "three-failures", "tracking-one-failure"])
+STABILISABLE = [
+    "partial-0.5",
+    "one-failure",
+    "one-failure-partial-rest",
+    "two-adjacent",
+    "two-adjacent-reversed",
+    "two-opposite",
+    "three-failures",
+    "tracking-one-failure",
+]
+
+
+@pytest.mark.parametrize("name", STABILISABLE)
 def test_stabilisable_scenarios_are_stabilised(runs: dict[str, ftc.ScenarioRun], name: str) -> None:
+    """Every health matrix Ke lists in Section II-B, failures applied one after another."""
     run = runs[name]
     tr, m = run.trajectory, run.metrics
-    assert m.outcome == "stabilized", tr.events
+    assert run.scenario.ke_stabilizable
+    assert not tr.diverged, tr.events
     assert tr.primary_axis[:, 2].min() > 0.3, "n3z stays positive (Remark 3)"
-    assert m.max_horizontal_error_m < 20.0
-    assert m.max_altitude_loss_m < 10.0
+    assert m.spin_settle_s is not None and m.spin_settle_s < 25.0, "a steady spin (or hover) is reached"
+    assert m.max_horizontal_error_m < 20.0  # measured at most 18.3 m (see module docs)
+    assert m.max_altitude_loss_m < 10.0  # measured 7.7 m
     assert m.final_altitude_error_m < (1.0 if name != "three-failures" else 5.0)
 
 
 def test_one_failure_targets(runs: dict[str, ftc.ScenarioRun]) -> None:
     m = runs["one-failure"].metrics
-    assert 15.0 < abs(m.r_rad_s) < 25.0  # Ke: about 23 rad/s
+    assert m.r_rad_s is not None and 15.0 < abs(m.r_rad_s) < 25.0  # Ke: about 23 rad/s
     assert m.max_horizontal_error_m < 16.0  # measured 15.4 (Ke: under 10 m), see module docs
     assert m.final_altitude_error_m < 0.5
-    tracking = runs["tracking-one-failure"].metrics
-    assert tracking.final_horizontal_error_m < 6.0  # still closing in on the moved setpoint
+    assert m.outcome == "off station"  # Table IV's outer loop brings it back at a few cm/s
+
+
+def test_tracking_after_a_failure_needs_a_stiffer_outer_loop(runs: dict[str, ftc.ScenarioRun]) -> None:
+    """The setpoint moves 10 m east at 20 s, across the drift the failure caused. Table IV's
+    outer loop moves the spinning vehicle east by only ~1.4 m in 60 s; with a = 1 m/s^2 and
+    k_v = 0.5 1/s the same controller arrives (measured 0.11 m off, 11 m largest excursion)."""
+    soft = runs["tracking-one-failure"].trajectory
+    k = np.searchsorted(soft.t, 20.0)
+    assert 0.5 < soft.position[-1, 1] - soft.position[k, 1] < 3.0
+    pre = ftc.preset()
+    stiff = dataclasses.replace(pre.gains, accel_limit_m_s2=1.0, k_v=0.5)
+    run = ftc.run_scenario("tracking-one-failure", controller_preset=dataclasses.replace(pre, gains=stiff))
+    assert run.metrics.outcome == "holds position"
+    assert run.metrics.final_horizontal_error_m < 0.5
+    assert run.metrics.max_horizontal_error_m < 12.0
 
 
 def test_more_failures_spin_faster(runs: dict[str, ftc.ScenarioRun]) -> None:
-    r = {name: abs(runs[name].metrics.r_rad_s) for name in ("one-failure", "two-adjacent-side", "two-opposite", "three-failures")}
-    assert r["one-failure"] < r["two-adjacent-side"] < r["two-opposite"]
+    r = {}
+    for name in ("one-failure", "two-adjacent", "two-opposite", "three-failures"):
+        value = runs[name].metrics.r_rad_s
+        assert value is not None
+        r[name] = abs(value)
+    assert r["one-failure"] < r["two-adjacent"] < r["two-opposite"]
     assert 35.0 < r["two-opposite"] < 50.0 and 35.0 < r["three-failures"] < 50.0  # Ke: about 42
     assert abs(r["three-failures"] - r["two-opposite"]) < 1.0  # same thrust, same reaction torque
 
@@ -122,14 +160,17 @@ def test_fig7_adjacent_pair_is_not_stabilisable(runs: dict[str, ftc.ScenarioRun]
     tr = run.trajectory
     assert not run.scenario.ke_stabilizable
     assert run.metrics.outcome == "tilt"
+    assert run.metrics.r_rad_s is None  # no steady state to report
     second = run.scenario.faults[-1].time
     r_at_second = abs(tr.omega[np.searchsorted(tr.t, second), 2])
     assert abs(tr.omega[-1, 2]) < r_at_second, "the spin collapses"
 
 
-def test_the_two_orders_are_mirror_images(runs: dict[str, ftc.ScenarioRun]) -> None:
-    a = runs["two-adjacent-front"].trajectory
-    b = runs["two-adjacent-front-reversed"].trajectory
+@pytest.mark.parametrize("pair", ["two-adjacent", "two-adjacent-front"])
+def test_the_two_orders_are_mirror_images(runs: dict[str, ftc.ScenarioRun], pair: str) -> None:
+    """Which adjacent pair fails decides (Figs. 7 and 9), not the order: the orders mirror."""
+    a = runs[pair].trajectory
+    b = runs[f"{pair}-reversed"].trajectory
     assert a.t[-1] == b.t[-1]
     np.testing.assert_allclose(a.omega[:, 2], -b.omega[:, 2], atol=1e-6)
 
@@ -137,7 +178,7 @@ def test_the_two_orders_are_mirror_images(runs: dict[str, ftc.ScenarioRun]) -> N
 def test_baseline_controller_loses_the_vehicle_after_one_failure() -> None:
     run = ftc.run_scenario("one-failure", law="baseline")
     assert run.trajectory.diverged
-    assert run.trajectory.events[0].time < 4.0
+    assert run.trajectory.events[0].time < 2.5  # 0.4 s after the failure
     hover = ftc.run_scenario("fault-free", law="baseline")
     assert not hover.trajectory.diverged
 
@@ -163,10 +204,15 @@ def test_passive_controller_commands_depend_only_on_what_it_measures(runs: dict[
     pre = ftc.preset()
     for name in ("one-failure", "two-opposite", "fault-free"):
         run = ftc.run_scenario(name, record_every=1)
+        assert run.scenario.faults or name == "fault-free"
         tr = run.trajectory
         c = rf.controllers.UniformPassiveFTC(KE, gains=pre.gains, setpoints=run.scenario.setpoints)
         states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])
         np.testing.assert_array_equal(c.replay(tr.t, states), tr.rotor_command)
+    # A thinned recording cannot be replayed faithfully: refused.
+    thin = ftc.run_scenario("one-failure", record_every=4).trajectory
+    with pytest.raises(ValueError, match="^times"):
+        c.replay(thin.t, np.hstack([thin.position, thin.velocity, thin.quaternion, thin.omega]))
 
 
 def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
@@ -177,6 +223,7 @@ def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
     n3z = 0.44."""
     lost = ftc.run_scenario("one-failure", controller_preset="ke-experiment")
     assert lost.metrics.outcome == "tilt"
+    assert lost.trajectory.events[0].time < 2.6
     pre = ftc.preset("ke-experiment")
     sim = pre.simulator(limits=rf.DivergenceLimits(max_tilt_rad=3.2))
     c = rf.controllers.UniformPassiveFTC(KE, gains=pre.gains, position=(0, 0, -10))
@@ -221,3 +268,12 @@ def test_bad_arguments() -> None:
         ftc.stability_check(KE, [1, 1, 1, 1], k_rotor=0.0)
     with pytest.raises(ValueError, match="^efficiency"):
         ftc.n_matrix(KE, [1, 1, 1])
+    text = (Path(ftc.__file__).parent / "presets" / "ftc" / "ke-hil.toml").read_text()
+    with pytest.raises(ValueError, match="^vehicle.linear_drag_n_s_m"):
+        _rfcore.ftc_preset_from_toml(text.replace("linear_drag_n_s_m = 0.3", "linear_drag_n_s_m = -0.3"), "bad")
+    with pytest.raises(ValueError, match="unknown field"):
+        _rfcore.ftc_preset_from_toml(text + "\n[extra]\nx = 1\n", "bad")
+    with pytest.raises(TypeError, match="^controller_preset"):
+        ftc.run_scenario("one-failure", controller_preset=3)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="^record_every"):
+        ftc.run_scenario("one-failure", record_every=0)

@@ -220,14 +220,14 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, no_figures: bool) -> N
                 runs.append(ftc.run_scenario(sc, law=law, controller_preset=controller_preset))
                 progress.advance(task)
     table = Table(title=f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights")
-    for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "max horiz. (m)", "final alt. err. (m)"):
+    for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "max horiz. (m)", "final horiz. (m)"):
         table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
     for row in ftc.report_rows(runs):
-        colour = "green" if row["outcome"] == "stabilized" else "red"
+        colour = {"holds position": "green", "off station": "yellow"}.get(row["outcome"], "red")
         table.add_row(
             row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", f"[{colour}]{row['outcome']}[/{colour}]",
-            f"{row['r_rad_s']:.1f}", f"{row['n3z']:.3f}", f"{row['max_altitude_loss_m']:.2f}",
-            f"{row['max_horizontal_error_m']:.2f}", f"{row['final_altitude_error_m']:.2f}",
+            "" if row["r_rad_s"] is None else f"{row['r_rad_s']:.1f}", "" if row["n3z"] is None else f"{row['n3z']:.3f}",
+            f"{row['max_altitude_loss_m']:.2f}", f"{row['max_horizontal_error_m']:.2f}", f"{row['final_horizontal_error_m']:.2f}",
         )
     console.print(table)
     path = ftc.write_report(runs, out_dir, figures=not no_figures)

@@ -214,7 +214,12 @@ class UniformPassiveFTC:
         enters: the passivity check."""
         t = float_array("times", times, 1)
         x = float_array("states", states, 2)
-        out: FloatArray = _rfcore.replay(self.core(dt), t, x, 4)
+        period = real("dt", dt)
+        # The filters assume one call per control period: a thinned recording (record_every > 1)
+        # would replay with the wrong dynamics.
+        if t.size > 1 and np.abs(np.diff(t) - period).max() > 1e-9 * max(period, 1.0):
+            raise ValueError(f"times: must be spaced by the control period dt = {period} s (record with record_every=1)")
+        out: FloatArray = _rfcore.replay(self.core(period), t, x, 4)
         return out
 
 

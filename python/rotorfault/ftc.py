@@ -44,7 +44,8 @@ E1_ROWS = (0, 1, 2)
 
 @dataclass(frozen=True)
 class KeGains:
-    """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4. Validated in Rust when a
+    """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4 and the remedy's altitude
+    integral ``k_iz`` (not in the paper; equal to the ``ke-hil`` preset). Validated in Rust when a
     controller is built: ``epsilon_s``, ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``,
     ``accel_limit_m_s2`` > 0, ``k_vz`` and ``k_omega`` > 0.5 (Theorem 1)."""
 
@@ -60,8 +61,9 @@ class KeGains:
     k_rotor: float = 2.0
     k_rotor_z: float = 0.1
     weights: tuple[float, float, float, float] = (1.0, 20.0, 20.0, 0.01)
-    #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper.
-    k_iz: float = 0.0
+    #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper (the
+    #: ``ke-hil`` preset's value).
+    k_iz: float = 0.1
 
     def _packed(self) -> dict[str, Any]:
         out: dict[str, Any] = {}
@@ -219,10 +221,12 @@ def _sequential(health: tuple[float, ...], order: tuple[int, ...], first_s: floa
 
 def scenarios() -> list[Scenario]:
     """Ke Section II-B's health matrices as sequential faults from hover, position tracking after a
-    failure, and both orders of two adjacent failures (Figs. 7 and 9).
+    failure, and both adjacent pairs (Figs. 7 and 9) in both orders.
 
-    Ke's numbering (Fig. 2, PX4 quad-X): rotors 1 and 2 sit on one diagonal, 3 and 4 on the other,
-    so ``diag(0, 0, 1, 1)`` is two *opposite* failures and ``diag(0, 1, 0, 1)`` two *adjacent*."""
+    Ke's numbering (the preset's): 1 front right, 2 rear right, 3 rear left, 4 front left, rotors
+    1 and 3 anticlockwise. So ``diag(0, 0, 1, 1)`` is two *adjacent* failures (the right pair, Ke's
+    experiment; the left pair remains) and ``diag(0, 1, 0, 1)`` two *opposite*. The front (or rear)
+    pair failing, ``diag(0, 1, 1, 0)``, is Fig. 7's case: not stabilisable."""
     return [
         Scenario("fault-free", "diag(1, 1, 1, 1): hover, no fault", (1, 1, 1, 1), (), 20.0),
         Scenario("partial-0.5", "diag(0.5, 1, 1, 1): rotor 1 at half efficiency", (0.5, 1, 1, 1), _sequential((0.5, 1, 1, 1), (1,))),
@@ -233,38 +237,44 @@ def scenarios() -> list[Scenario]:
             (0, 0.7, 0.6, 0.8),
             (RotorFault(1, 2.0, 0.0), RotorFault(2, 10.0, 0.7), RotorFault(3, 10.0, 0.6), RotorFault(4, 10.0, 0.8)),
         ),
-        Scenario("two-opposite", "diag(0, 0, 1, 1): rotor 1 fails, then the opposite rotor 2", (0, 0, 1, 1), _sequential((0, 0, 1, 1), (1, 2))),
+        Scenario(
+            "two-adjacent",
+            "diag(0, 0, 1, 1): rotor 1 (front right) fails, then rotor 2 (rear right); the left pair remains "
+            "(Ke's experiment, Fig. 9: stabilisable)",
+            (0, 0, 1, 1),
+            _sequential((0, 0, 1, 1), (1, 2)),
+        ),
+        Scenario(
+            "two-adjacent-reversed",
+            "diag(0, 0, 1, 1) in the other order: rotor 2 first, then rotor 1 (the mirror image)",
+            (0, 0, 1, 1),
+            _sequential((0, 0, 1, 1), (2, 1)),
+        ),
+        Scenario("two-opposite", "diag(0, 1, 0, 1): rotor 1 fails, then the opposite rotor 3", (0, 1, 0, 1), _sequential((0, 1, 0, 1), (1, 3))),
         Scenario(
             "two-adjacent-front",
-            "diag(0, 1, 0, 1): rotor 1 (front right) fails, then rotor 3 (front left); the rear pair "
-            "is left (Ke Fig. 7: not stabilisable)",
-            (0, 1, 0, 1),
-            _sequential((0, 1, 0, 1), (1, 3)),
+            "diag(0, 1, 1, 0): rotor 1 (front right) fails, then rotor 4 (front left); the rear pair "
+            "remains (Ke Fig. 7: not stabilisable)",
+            (0, 1, 1, 0),
+            _sequential((0, 1, 1, 0), (1, 4)),
             ke_stabilizable=False,
         ),
         Scenario(
             "two-adjacent-front-reversed",
-            "diag(0, 1, 0, 1) in the other order: rotor 3 first, then rotor 1 (the mirror image: "
-            "the same outcome with the spin reversed)",
-            (0, 1, 0, 1),
-            _sequential((0, 1, 0, 1), (3, 1)),
-            ke_stabilizable=False,
-        ),
-        Scenario(
-            "two-adjacent-side",
-            "diag(0, 1, 1, 0): rotor 1 (front right) fails, then rotor 4 (rear right); the left pair "
-            "is left (Ke Fig. 9: stabilisable)",
+            "diag(0, 1, 1, 0) in the other order: rotor 4 first, then rotor 1 (the mirror image)",
             (0, 1, 1, 0),
-            _sequential((0, 1, 1, 0), (1, 4)),
+            _sequential((0, 1, 1, 0), (4, 1)),
+            ke_stabilizable=False,
         ),
         Scenario("three-failures", "diag(0, 0, 0, 1): rotors 1, 2, 3 fail one after another", (0, 0, 0, 1), _sequential((0, 0, 0, 1), (1, 2, 3)), 50.0),
         Scenario(
             "tracking-one-failure",
-            "rotor 1 fails in hover, then the setpoint moves 10 m north (position control, Fig. 17)",
+            "rotor 1 fails in hover; at 20 s the setpoint moves 10 m east, across the drift the failure "
+            "caused (position control, Fig. 17)",
             (0, 1, 1, 1),
             (RotorFault(1, 2.0, 0.0),),
-            60.0,
-            ((0.0, HOVER), (15.0, (10.0, 0.0, -10.0))),
+            80.0,
+            ((0.0, HOVER), (20.0, (0.0, 10.0, -10.0))),
         ),
     ]
 
@@ -279,26 +289,35 @@ def scenario(name: str) -> Scenario:
 # -- metrics (Section V) -----------------------------------------------------------------------
 
 
+#: Position band for "holds position": horizontal and vertical error at the end of the run, m.
+HOLD_BAND_M = (2.0, 1.0)
+
+
 @dataclass(frozen=True)
 class FlightMetrics:
-    """What Ke reports per flight, over the final ``window_s`` seconds ("steady"):
+    """What Ke reports per flight. "Steady" values are means over the final ``window_s`` seconds
+    and are ``None`` for a run that diverged (there is no steady state to report):
 
-    ``r_rad_s`` mean body yaw rate; ``n3z`` mean vertical component of the primary axis (Fig. 14);
-    ``rotation_axis`` the mean of ``R_eb^T [0, 0, 1]`` in body axes (Section V-B);
-    ``max_altitude_loss_m`` the largest drop below the start; ``max_horizontal_error_m`` and
-    ``final_horizontal_error_m`` against the setpoint; ``settle_time_s`` from the last fault (or
-    setpoint change) until the position error stays within 1 m horizontally and 0.5 m vertically
-    (``nan`` if it never does); ``outcome`` "stabilized" or the divergence reason."""
+    - ``outcome``: ``"holds position"`` (no divergence, final error within :data:`HOLD_BAND_M`,
+      2 m horizontally and 1 m vertically), ``"off station"`` (no divergence, outside the band)
+      or the divergence reason (``"tilt"``, ...);
+    - ``r_rad_s`` mean body yaw rate; ``n3z`` mean vertical component of the primary axis
+      ``n3 = R_eb b_3`` (Fig. 14); ``rotation_axis`` the mean of ``R_eb^T [0, 0, 1]``, the world
+      vertical in body axes (Section V-B: the axis a steady spin turns about);
+    - ``spin_settle_s``: time from the last fault until ``r`` stays within 5 % (or 0.2 rad/s) and
+      ``n3z`` within 0.02 of their steady values (Ke's "enter into a steady state");
+    - ``max_altitude_loss_m`` the largest drop below the start; ``max_horizontal_error_m``,
+      ``final_horizontal_error_m`` and ``final_altitude_error_m`` against the setpoint."""
 
     outcome: str
-    r_rad_s: float
-    n3z: float
-    rotation_axis: tuple[float, float, float]
+    r_rad_s: float | None
+    n3z: float | None
+    rotation_axis: tuple[float, float, float] | None
+    spin_settle_s: float | None
     max_altitude_loss_m: float
     max_horizontal_error_m: float
     final_horizontal_error_m: float
     final_altitude_error_m: float
-    settle_time_s: float
 
 
 def flight_metrics(trajectory: Trajectory, scenario_: Scenario, window_s: float = 5.0) -> FlightMetrics:
@@ -307,36 +326,35 @@ def flight_metrics(trajectory: Trajectory, scenario_: Scenario, window_s: float 
     error = trajectory.position - setpoint
     horizontal = np.hypot(error[:, 0], error[:, 1])
     vertical = np.abs(error[:, 2])
+    start_alt = -trajectory.position[0, 2]
+    position_errors = (
+        float(np.max(start_alt - (-trajectory.position[:, 2]))),
+        float(np.max(horizontal)),
+        float(horizontal[-1]),
+        float(vertical[-1]),
+    )
+    if trajectory.diverged:
+        return FlightMetrics(trajectory.events[0].kind, None, None, None, None, *position_errors)
     last = t >= t[-1] - window_s
     r = float(np.mean(trajectory.omega[last, 2]))
     n3z = float(np.mean(trajectory.primary_axis[last, 2]))
     # R_eb^T e_z: the world vertical seen from the body (the rotation axis of a steady spin).
     axis = np.einsum("nji,j->ni", trajectory.rotation[last], np.array([0.0, 0.0, 1.0])).mean(axis=0)
     axis = axis / np.linalg.norm(axis)
-    start_alt = -trajectory.position[0, 2]
-    events = [trajectory.t[0]] + [f.time for f in scenario_.faults] + [s for s, _ in scenario_.setpoints]
-    last_event = max(e for e in events if e <= t[-1])
-    outside = (horizontal > 1.0) | (vertical > 0.5)
-    after = t >= last_event
-    idx = np.nonzero(outside & after)[0]
-    if trajectory.diverged:
-        settle = math.nan
-    elif idx.size == 0:
-        settle = 0.0
-    elif idx[-1] == len(t) - 1:
-        settle = math.nan
-    else:
-        settle = float(t[idx[-1] + 1] - last_event)
+    last_fault = max([0.0] + [f.time for f in scenario_.faults])
+    unsettled = (np.abs(trajectory.omega[:, 2] - r) > max(0.05 * abs(r), 0.2)) | (
+        np.abs(trajectory.primary_axis[:, 2] - n3z) > 0.02
+    )
+    idx = np.nonzero(unsettled & (t >= last_fault))[0]
+    settle = 0.0 if idx.size == 0 else float(t[min(idx[-1] + 1, len(t) - 1)] - last_fault)
+    held = position_errors[2] <= HOLD_BAND_M[0] and position_errors[3] <= HOLD_BAND_M[1]
     return FlightMetrics(
-        trajectory.events[0].kind if trajectory.diverged else "stabilized",
+        "holds position" if held else "off station",
         r,
         n3z,
         (float(axis[0]), float(axis[1]), float(axis[2])),
-        float(np.max(start_alt - (-trajectory.position[:, 2]))),
-        float(np.max(horizontal)),
-        float(horizontal[-1]),
-        float(vertical[-1]),
         settle,
+        *position_errors,
     )
 
 
@@ -368,6 +386,10 @@ def run_scenario(
     """Flies one scenario with the uniform passive FTC (or ``law="baseline"``)."""
     from .controllers import UniformPassiveFTC
 
+    if not isinstance(scenario_, (str, Scenario)):
+        raise TypeError(f"scenario: expected a Scenario or a scenario name, got {type(scenario_).__name__}")
+    if not isinstance(controller_preset, (str, FtcPreset)):
+        raise TypeError(f"controller_preset: expected an FtcPreset or a preset name, got {type(controller_preset).__name__}")
     sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
     pre = preset(controller_preset) if isinstance(controller_preset, str) else controller_preset
     sim = pre.simulator()
@@ -404,12 +426,14 @@ def plot_primary_axis(runs: list[ScenarioRun], path: str | None = None, tail_s: 
         ax.plot(n3[:, 0], n3[:, 1], n3[:, 2], color="tab:orange", lw=0.6)
         ax.plot(n3[late, 0], n3[late, 1], n3[late, 2], color="tab:red", lw=1.4)
         ax.scatter([n3[0, 0]], [n3[0, 1]], [n3[0, 2]], color="tab:blue", s=20)
+        below = bool(np.nanmin(n3[:, 2]) < 0)
         ax.set_xlim(-1, 1)
         ax.set_ylim(-1, 1)
-        ax.set_zlim(0, 1)
-        ax.set_box_aspect((1, 1, 0.5))
+        ax.set_zlim(-1 if below else 0, 1)
+        ax.set_box_aspect((1, 1, 1 if below else 0.5))
         m = run.metrics
-        ax.set_title(f"{run.scenario.name} ({run.law})\n{m.outcome}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}", fontsize=8)
+        steady = "" if m.r_rad_s is None or m.n3z is None else f", r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
+        ax.set_title(f"{run.scenario.name} ({run.law})\n{m.outcome}{steady}", fontsize=8)
         ax.set_xlabel("n3x", fontsize=7)
         ax.set_ylabel("n3y", fontsize=7)
         ax.set_zlabel("n3z", fontsize=7)
@@ -435,12 +459,12 @@ def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
                 "end_s": float(run.trajectory.t[-1]),
                 "r_rad_s": m.r_rad_s,
                 "n3z": m.n3z,
-                "rotation_axis": " ".join(f"{v:+.3f}" for v in m.rotation_axis),
+                "rotation_axis": "" if m.rotation_axis is None else " ".join(f"{v:+.3f}" for v in m.rotation_axis),
+                "spin_settle_s": m.spin_settle_s,
                 "max_altitude_loss_m": m.max_altitude_loss_m,
                 "max_horizontal_error_m": m.max_horizontal_error_m,
                 "final_horizontal_error_m": m.final_horizontal_error_m,
                 "final_altitude_error_m": m.final_altitude_error_m,
-                "settle_time_s": m.settle_time_s,
             }
         )
     return rows
@@ -462,19 +486,24 @@ def write_report(runs: list[ScenarioRun], out_dir: str | Path, figures: bool = T
     lines = [
         "# Uniform passive FTC (Ke et al.): scenario report",
         "",
-        "Steady values are means over the last 5 s; settle time counts from the last fault or",
-        "setpoint change until the error stays within 1 m horizontally and 0.5 m vertically.",
+        "Steady values (r, n3z, rotation axis) are means over the last 5 s, blank for runs that",
+        "diverged; spin settle counts from the last fault until r and n3z stay near those values.",
+        "Outcome: 'holds position' ends within 2 m horizontally and 1 m vertically of the setpoint.",
         "",
         "| scenario | law | Ke: stabilisable | outcome | end (s) | r (rad/s) | n3z | rotation axis (body) "
-        "| max alt. loss (m) | max horiz. (m) | final horiz. (m) | final alt. err. (m) | settle (s) |",
+        "| spin settle (s) | max alt. loss (m) | max horiz. (m) | final horiz. (m) | final alt. err. (m) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+
+    def number(value: float | None, digits: int) -> str:
+        return "" if value is None else f"{value:.{digits}f}"
+
     for r in rows:
         lines.append(
             f"| {r['scenario']} | {r['law']} | {'yes' if r['ke_stabilizable'] else 'no'} | {r['outcome']} "
-            f"| {r['end_s']:.1f} | {r['r_rad_s']:.1f} | {r['n3z']:.3f} | {r['rotation_axis']} "
-            f"| {r['max_altitude_loss_m']:.2f} | {r['max_horizontal_error_m']:.2f} "
-            f"| {r['final_horizontal_error_m']:.2f} | {r['final_altitude_error_m']:.2f} | {r['settle_time_s']:.1f} |"
+            f"| {r['end_s']:.1f} | {number(r['r_rad_s'], 1)} | {number(r['n3z'], 3)} | {r['rotation_axis']} "
+            f"| {number(r['spin_settle_s'], 1)} | {r['max_altitude_loss_m']:.2f} | {r['max_horizontal_error_m']:.2f} "
+            f"| {r['final_horizontal_error_m']:.2f} | {r['final_altitude_error_m']:.2f} |"
         )
     lines += ["", "Stability checks of Section III-D (Table II health matrices, k_rotor = 2):", ""]
     lines += ["| health | eig(N) | Re eig(I + k N) > 0 (25) | Re eig(N) > 0 (32) |", "|---|---|---|---|"]

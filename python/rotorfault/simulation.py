@@ -429,6 +429,8 @@ class Simulator:
     def _config(self, t_final: float, record_every: int = 1) -> tuple[Any, ...]:
         t_final = real("t_final", t_final)
         every = count("record_every", record_every)
+        if every < 1:
+            raise ValueError(f"record_every: must be >= 1, got {every}")
         noise = None if self.noise is None else self.noise._packed()
         return (
             self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile, noise, every,

@@ -56,6 +56,18 @@ pub(crate) fn require_finite(field: &str, value: f64) -> Result<()> {
     }
 }
 
+/// Rejects NaN, infinities and negative values, naming the field.
+pub(crate) fn require_non_negative(field: &str, value: f64) -> Result<()> {
+    require_finite(field, value)?;
+    if value < 0.0 {
+        return Err(RfError::invalid(
+            field,
+            format!("must be >= 0, got {value}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Rejects non-finite entries of a slice, naming the first offending index.
 pub(crate) fn require_all_finite(field: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|v| !v.is_finite()) {

@@ -48,7 +48,7 @@ use crate::active_set::{ActiveSet, ActiveSetSolver};
 use crate::airframe::Airframe;
 use crate::allocation::{weighted_pseudo_inverse, AllocationProblem, WeightedPseudoInverse};
 use crate::controller::Controller;
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_finite, require_non_negative, Result, RfError};
 use crate::rigid_body::RigidBodyState;
 
 /// Floor on `n3z` in `B_2^-1` (keeps the command finite when the vehicle tips past 87 degrees).
@@ -92,7 +92,8 @@ pub struct KeGains {
 }
 
 impl KeGains {
-    /// Table IV, HIL column.
+    /// Table IV, HIL column, with the remedy's altitude integral `k_iz = 0.1` (the `ke-hil`
+    /// preset).
     pub fn hil() -> Self {
         KeGains {
             k_p: 0.3,
@@ -107,7 +108,7 @@ impl KeGains {
             k_rotor: 2.0,
             k_rotor_z: 0.1,
             weights: [1.0, 20.0, 20.0, 0.01],
-            k_iz: 0.0,
+            k_iz: 0.1,
         }
     }
 
@@ -195,6 +196,14 @@ impl FtcPreset {
             message: e.to_string(),
         })?;
         preset.gains.check()?;
+        let v = &preset.vehicle;
+        for (field, value) in [
+            ("vehicle.rotor_time_constant_s", v.rotor_time_constant_s),
+            ("vehicle.rotational_drag_n_m_s", v.rotational_drag_n_m_s),
+            ("vehicle.linear_drag_n_s_m", v.linear_drag_n_s_m),
+        ] {
+            require_non_negative(field, value)?;
+        }
         Ok(preset)
     }
 }
@@ -457,6 +466,14 @@ impl Controller for UniformPassiveFtc {
     }
 
     fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        // A non-finite sample would poison every filter for good: refuse it (the simulator stops
+        // at a non-finite state before calling the controller).
+        if !measured.is_finite() || !t_s.is_finite() {
+            return Err(RfError::invalid(
+                "measured",
+                format!("the state at t = {t_s} s must be finite"),
+            ));
+        }
         let (u_d, x2, a2x2, b2_inverse) = self.desired(t_s, measured);
         if self.law == CommandLaw::Feedforward && self.gains.k_iz > 0.0 {
             // Forward Euler over the control period, after use (the integral lags one step).
@@ -611,6 +628,36 @@ mod tests {
                     assert!((t - weight / 4.0).abs() < 1e-10, "{law:?}: {out:?}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_measurement_is_an_error_not_a_poisoned_filter() {
+        let airframe = ke();
+        let mut c = UniformPassiveFtc::new(
+            &airframe,
+            KeGains::hil(),
+            CommandLaw::default(),
+            vec![(0.0, [0.0, 0.0, -10.0])],
+            0.0025,
+        )
+        .unwrap();
+        let mut state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -10.0),
+            velocity_m_s: Vector3::zeros(),
+            attitude: UnitQuaternion::identity(),
+            omega_rad_s: Vector3::zeros(),
+        };
+        let mut out = [0.0; 4];
+        c.command(0.0, &state, &mut out).unwrap();
+        let good = out;
+        state.velocity_m_s.x = f64::NAN;
+        let err = c.command(0.0025, &state, &mut out).unwrap_err();
+        assert!(err.to_string().starts_with("measured"), "{err}");
+        state.velocity_m_s.x = 0.0;
+        c.command(0.005, &state, &mut out).unwrap();
+        for (a, b) in out.iter().zip(good) {
+            assert!((a - b).abs() < 1e-10);
         }
     }
 

@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 
 use crate::actuator::RotorOutput;
 use crate::airframe::Airframe;
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_non_negative, Result};
 use crate::rigid_body::{RigidBody, RigidBodyState, Wrench};
 
 /// Aerodynamic and rotor-inertia parameters the papers leave to the user (Lanzon Table 1 gives
@@ -36,13 +36,7 @@ impl Aerodynamics {
             ("drag.rotational_n_m_s", self.rotational_drag_n_m_s),
             ("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
         ] {
-            require_finite(field, value)?;
-            if value < 0.0 {
-                return Err(RfError::invalid(
-                    field,
-                    format!("must be >= 0, got {value}"),
-                ));
-            }
+            require_non_negative(field, value)?;
         }
         Ok(())
     }

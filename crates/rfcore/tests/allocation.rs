@@ -255,7 +255,8 @@ fn a_stale_warm_start_still_reaches_the_optimum() {
 }
 
 fn ke_matrix() -> DMatrix<f64> {
-    // Ke et al. eq. (1) with the corrected yaw row (papers' README) and Table III values.
+    // A Ke-like M (eq. (2), Table III values) in one rank-4 reading: Remark 2's angles with a yaw
+    // row that matches them. These tests only need a Ke-like matrix, not the preset's numbering.
     let (l, c) = (0.125, 0.0166);
     let s = std::f64::consts::FRAC_1_SQRT_2;
     DMatrix::from_row_slice(
