@@ -37,6 +37,14 @@ def float_array(field: str, value: Any, ndim: int) -> FloatArray:
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
+def frozen_array(field: str, value: Any, ndim: int) -> FloatArray:
+    """A private read-only float64 copy of ``value``: later changes to the caller's array cannot
+    desynchronise an object from what it reports."""
+    array = np.array(float_array(field, value, ndim), dtype=np.float64, copy=True)
+    array.setflags(write=False)
+    return array
+
+
 def real(field: str, value: Any) -> float:
     """``value`` as a float; booleans and non-numbers are a ``TypeError``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):

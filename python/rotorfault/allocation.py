@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from . import _rfcore
-from ._convert import FloatArray, flag, float_array, real
+from ._convert import FloatArray, count, flag, float_array, frozen_array, real
 from .airframe import Airframe
 
 METHODS = ("active-set", "clarabel", "pinv")
@@ -115,12 +115,12 @@ class Allocator:
         pref = np.zeros(m) if preferred is None else float_array("preferred", preferred, 1)
         gamma = real("regularization", regularization)
         self._core = _rfcore.AllocationProblem(matrix, w, lower, upper, gamma, pref)
-        self.matrix = _frozen(matrix)
-        self.weights = _frozen(w)
-        self.lower = _frozen(lower)
-        self.upper = _frozen(upper)
+        self.matrix = frozen_array("matrix", matrix, 2)
+        self.weights = frozen_array("weights", w, 1)
+        self.lower = frozen_array("bounds.lower", lower, 1)
+        self.upper = frozen_array("bounds.upper", upper, 1)
         self.regularization = gamma
-        self.preferred = _frozen(pref)
+        self.preferred = frozen_array("preferred", pref, 1)
 
     @property
     def actuator_count(self) -> int:
@@ -387,12 +387,6 @@ def plot_attainable_slices(
     return fig
 
 
-def _frozen(array: FloatArray) -> FloatArray:
-    out = np.array(array, dtype=np.float64, copy=True)
-    out.setflags(write=False)
-    return out
-
-
 def _bounds(bounds: Any, m: int) -> tuple[FloatArray, FloatArray]:
     if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
         raise TypeError("bounds: expected a pair (lower, upper), each a number or one value per actuator")
@@ -425,8 +419,7 @@ def _priorities(priorities: Any) -> list[list[int]]:
 
 
 def _positive_int(field: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise TypeError(f"{field}: expected an integer, got {type(value).__name__}")
-    if not 1 <= int(value) <= 2**32 - 1:
-        raise ValueError(f"{field}: must be between 1 and {2**32 - 1}, got {value}")
-    return int(value)
+    number = count(field, value)
+    if not 1 <= number <= 2**32 - 1:
+        raise ValueError(f"{field}: must be between 1 and {2**32 - 1}, got {number}")
+    return number

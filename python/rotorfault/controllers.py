@@ -17,7 +17,7 @@ import numpy as np
 from scipy.signal import cont2discrete  # type: ignore[import-untyped]
 
 from . import _rfcore
-from ._convert import FloatArray, float_array, real
+from ._convert import FloatArray, float_array, frozen_array, real
 
 STATE_DIM = 12
 
@@ -36,8 +36,8 @@ class OpenLoop:
     from ``times[k]`` until the next time; the first row also before ``times[0]``."""
 
     def __init__(self, times: Any, commands: Any) -> None:
-        self.times = _frozen("times", times, 1)
-        self.commands = _frozen("commands", commands, 2)
+        self.times = frozen_array("times", times, 1)
+        self.commands = frozen_array("commands", commands, 2)
         self._core = _rfcore.OpenLoop(self.times, self.commands)
 
     @property
@@ -60,9 +60,9 @@ class LinearFeedback:
     :func:`rotorfault.linear.lqr_hover`)."""
 
     def __init__(self, gain: Any, x_trim: Any, u_trim: Any) -> None:
-        self.gain = _frozen("gain", gain, 2)
-        self.x_trim = _frozen("x_trim", x_trim, 1)
-        self.u_trim = _frozen("u_trim", u_trim, 1)
+        self.gain = frozen_array("gain", gain, 2)
+        self.x_trim = frozen_array("x_trim", x_trim, 1)
+        self.u_trim = frozen_array("u_trim", u_trim, 1)
         self._core = _rfcore.LinearFeedback(self.x_trim, self.u_trim, self.gain)
 
     def core(self, dt: float) -> Any:
@@ -76,12 +76,12 @@ class LTI:
     otherwise they are discrete at period ``dt``, which must equal the simulator's."""
 
     def __init__(self, A: Any, B: Any, C: Any, D: Any, x_trim: Any, u_trim: Any, dt: float | None = None) -> None:
-        self.A = _frozen("A_K", A, 2)
-        self.B = _frozen("B_K", B, 2)
-        self.C = _frozen("C_K", C, 2)
-        self.D = _frozen("D_K", D, 2)
-        self.x_trim = _frozen("x_trim", x_trim, 1)
-        self.u_trim = _frozen("u_trim", u_trim, 1)
+        self.A = frozen_array("A_K", A, 2)
+        self.B = frozen_array("B_K", B, 2)
+        self.C = frozen_array("C_K", C, 2)
+        self.D = frozen_array("D_K", D, 2)
+        self.x_trim = frozen_array("x_trim", x_trim, 1)
+        self.u_trim = frozen_array("u_trim", u_trim, 1)
         self.dt = None if dt is None else real("dt", dt)
         if self.dt is not None and not (math.isfinite(self.dt) and self.dt > 0):
             raise ValueError(f"dt: must be > 0 and finite (or None for a continuous controller), got {self.dt}")
@@ -221,14 +221,6 @@ class UniformPassiveFTC:
             raise ValueError(f"times: must be spaced by the control period dt = {period} s (record with record_every=1)")
         out: FloatArray = _rfcore.replay(self.core(period), t, x, 4)
         return out
-
-
-def _frozen(field: str, value: Any, ndim: int) -> FloatArray:
-    """A private read-only copy: later changes to the caller's array cannot desynchronise the
-    controller from what it reports."""
-    array = np.array(float_array(field, value, ndim), dtype=np.float64, copy=True)
-    array.setflags(write=False)
-    return array
 
 
 def core_controller(controller: Any, dt: float) -> Any:

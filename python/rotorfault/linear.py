@@ -87,13 +87,8 @@ def lqr_hover(
 
     x_trim, u_trim = hover_trim(simulator, position, yaw)
     a, b = linearize(simulator, x_trim, u_trim)
-    if q is None:
-        scale = np.array([1.0] * 3 + [1.0] * 3 + [0.1] * 3 + [1.0] * 3)
-        q = np.diag(1.0 / scale**2)
-    if r is None:
-        per_rotor = 0.1 * simulator.airframe.hover_thrust_n / simulator.airframe.rotor_count
-        r = np.eye(b.shape[1]) / per_rotor**2
-    gain, _, _ = control.lqr(a, b, float_array("q", q, 2), float_array("r", r, 2))
+    q_state, r_rotor = _bryson_weights(simulator, q, r)
+    gain, _, _ = control.lqr(a, b, q_state, r_rotor)
     return LinearFeedback(np.asarray(gain), x_trim, u_trim)
 
 
@@ -136,14 +131,20 @@ def lqr_hover_allocated(
     n = allocator.virtual_dimension
     offset = allocator.allocate(np.zeros(n), method="pinv").commands
     p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
+    q_state, r_rotor = _bryson_weights(simulator, q, r)
+    r_virtual = p.T @ r_rotor @ p
+    gain, _, _ = control.lqr(a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
+    v_trim = allocator.matrix @ u_trim
+    return Allocated(LinearFeedback(np.asarray(gain), x_trim, v_trim), allocator)
+
+
+def _bryson_weights(simulator: Simulator, q: Any, r: Any) -> tuple[FloatArray, FloatArray]:
+    """``q`` and ``r`` (rotor units) as given, or Bryson's rule: 1 m position, 1 m/s velocity,
+    0.1 rad attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor."""
     if q is None:
         scale = np.array([1.0] * 3 + [1.0] * 3 + [0.1] * 3 + [1.0] * 3)
         q = np.diag(1.0 / scale**2)
     if r is None:
         per_rotor = 0.1 * simulator.airframe.hover_thrust_n / simulator.airframe.rotor_count
-        r = np.eye(b.shape[1]) / per_rotor**2
-    r_rotor = float_array("r", r, 2)
-    r_virtual = p.T @ r_rotor @ p
-    gain, _, _ = control.lqr(a, b @ p, float_array("q", q, 2), 0.5 * (r_virtual + r_virtual.T))
-    v_trim = allocator.matrix @ u_trim
-    return Allocated(LinearFeedback(np.asarray(gain), x_trim, v_trim), allocator)
+        r = np.eye(simulator.command_count) / per_rotor**2
+    return float_array("q", q, 2), float_array("r", r, 2)

@@ -4,7 +4,7 @@
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
 use rfcore::active_set::ActiveSetSolver;
@@ -13,10 +13,10 @@ use rfcore::clarabel_qp::{
     hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
     ClarabelSettings,
 };
-use rfcore::controller::{Allocated, Controller, DiscreteLti, LinearFeedback, OpenLoop};
+use rfcore::controller::{Allocated, Controller};
 use rfcore::ControlAxes;
 
-use crate::simulation::{matrix, PyDiscreteLti, PyLinearFeedback, PyOpenLoop};
+use crate::simulation::{boxed, matrix, ControllerArg};
 use crate::{detached, slice1, to_py_err, PyAirframe};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
@@ -248,54 +248,48 @@ pub fn hover_thrust_margin<'py>(
     ))
 }
 
-/// The law an allocating controller runs before allocation.
-#[derive(Clone)]
-enum Law {
-    OpenLoop(OpenLoop),
-    LinearFeedback(LinearFeedback),
-    Lti(DiscreteLti),
-}
-
-#[derive(FromPyObject)]
-pub enum LawArg<'py> {
-    OpenLoop(PyRef<'py, PyOpenLoop>),
-    LinearFeedback(PyRef<'py, PyLinearFeedback>),
-    Lti(PyRef<'py, PyDiscreteLti>),
-}
-
-/// A virtual-control law followed by active-set allocation.
+/// A virtual-control law followed by active-set allocation. The law is kept as the Python
+/// object and turned into a fresh core controller per run by the one `boxed` conversion.
 #[pyclass(name = "Allocated", module = "rotorfault._rfcore", frozen)]
 pub struct PyAllocated {
-    law: Law,
+    law: Py<PyAny>,
     solver: ActiveSetSolver,
 }
 
 impl PyAllocated {
     /// A fresh controller for one run.
-    pub(crate) fn controller(&self) -> rfcore::Result<Box<dyn Controller>> {
-        let law: Box<dyn Controller> = match &self.law {
-            Law::OpenLoop(c) => Box::new(c.clone()),
-            Law::LinearFeedback(c) => Box::new(c.clone()),
-            Law::Lti(c) => Box::new(c.clone()),
-        };
-        Ok(Box::new(Allocated::new(law, self.solver.clone())?))
+    pub(crate) fn controller(&self, py: Python<'_>) -> PyResult<Box<dyn Controller>> {
+        let law: ControllerArg = self.law.bind(py).extract()?;
+        let law = boxed(Some(&law), 0)?;
+        Ok(Box::new(
+            Allocated::new(law, self.solver.clone()).map_err(to_py_err)?,
+        ))
     }
 }
 
 #[pymethods]
 impl PyAllocated {
     #[new]
-    fn new(law: LawArg<'_>, problem: &PyAllocationProblem) -> PyResult<Self> {
-        let law = match law {
-            LawArg::OpenLoop(c) => Law::OpenLoop(c.inner.clone()),
-            LawArg::LinearFeedback(c) => Law::LinearFeedback(c.inner.clone()),
-            LawArg::Lti(c) => Law::Lti(c.inner.clone()),
-        };
+    fn new(law: Bound<'_, PyAny>, problem: &PyAllocationProblem) -> PyResult<Self> {
+        let kind: Option<ControllerArg> = law.extract().ok();
+        if !matches!(
+            kind,
+            Some(
+                ControllerArg::OpenLoop(_)
+                    | ControllerArg::LinearFeedback(_)
+                    | ControllerArg::Lti(_)
+            )
+        ) {
+            return Err(PyTypeError::new_err(
+                "law: expected OpenLoop, LinearFeedback or DiscreteLti (a virtual-control law)",
+            ));
+        }
+        let py = law.py();
         let out = PyAllocated {
-            law,
+            law: law.unbind(),
             solver: ActiveSetSolver::new(&problem.inner),
         };
-        out.controller().map_err(to_py_err)?; // checks the law's output count
+        out.controller(py)?; // checks the law's output count
         Ok(out)
     }
 }

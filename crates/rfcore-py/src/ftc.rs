@@ -1,7 +1,7 @@
 //! Bindings for Ke et al.'s uniform passive FTC: the controller, its preset files, replay.
 //! Translation only.
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Quaternion;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -9,9 +9,8 @@ use pyo3::types::PyDict;
 
 use rfcore::controller::replay as core_replay;
 use rfcore::ftc::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
-use rfcore::rigid_body::RigidBodyState;
 
-use crate::simulation::{boxed, ControllerArg};
+use crate::simulation::{boxed, packed_state, ControllerArg};
 use crate::{detached, slice1, to_py_err, PyAirframe};
 
 /// The uniform passive fault-tolerant controller (Ke et al.).
@@ -139,26 +138,13 @@ pub fn replay<'py>(
                 r[j]
             )));
         }
-        let q = Quaternion::new(r[6], r[7], r[8], r[9]);
-        let norm = q.norm();
-        if norm < 1e-6 {
+        let packed: [f64; 13] = std::array::from_fn(|j| r[j]);
+        if Quaternion::new(r[6], r[7], r[8], r[9]).norm() < 1e-6 {
             return Err(PyValueError::new_err(format!(
                 "states[{k}]: the quaternion (columns 6-9) must not be zero"
             )));
         }
-        // A recorded (unit to rounding) quaternion is used exactly as given, so a flight
-        // replays bit for bit; anything else is normalised.
-        let attitude = if (norm - 1.0).abs() <= 1e-12 {
-            UnitQuaternion::new_unchecked(q)
-        } else {
-            UnitQuaternion::from_quaternion(q)
-        };
-        parsed.push(RigidBodyState {
-            position_m: Vector3::new(r[0], r[1], r[2]),
-            velocity_m_s: Vector3::new(r[3], r[4], r[5]),
-            attitude,
-            omega_rad_s: Vector3::new(r[10], r[11], r[12]),
-        });
+        parsed.push(packed_state(&packed));
     }
     let mut controller = boxed(Some(&controller), command_count)?;
     let rows = times.len();

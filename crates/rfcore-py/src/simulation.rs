@@ -263,7 +263,7 @@ pub(crate) fn boxed(
         Some(ControllerArg::OpenLoop(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::LinearFeedback(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Allocated(c)) => c.controller().map_err(to_py_err)?,
+        Some(ControllerArg::Allocated(c)) => c.controller(c.py())?,
         Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
     })
 }
@@ -316,12 +316,21 @@ fn aerodynamics(aero: [f64; 4]) -> Aerodynamics {
 }
 
 /// x0 as `[p (3), v (3), q (w, x, y, z), omega (3)]`.
-fn initial_state(x0: [f64; 13]) -> RigidBodyState {
+/// A state from 13 packed numbers: position, velocity, quaternion (w, x, y, z), body rates. A
+/// quaternion that is unit to rounding is used exactly as given (so a recorded flight replays bit
+/// for bit); any other is normalised.
+pub(crate) fn packed_state(x: &[f64; 13]) -> RigidBodyState {
+    let q = Quaternion::new(x[6], x[7], x[8], x[9]);
+    let attitude = if (q.norm() - 1.0).abs() <= 1e-12 {
+        UnitQuaternion::new_unchecked(q)
+    } else {
+        UnitQuaternion::new_normalize(q)
+    };
     RigidBodyState {
-        position_m: Vector3::new(x0[0], x0[1], x0[2]),
-        velocity_m_s: Vector3::new(x0[3], x0[4], x0[5]),
-        attitude: UnitQuaternion::new_normalize(Quaternion::new(x0[6], x0[7], x0[8], x0[9])),
-        omega_rad_s: Vector3::new(x0[10], x0[11], x0[12]),
+        position_m: Vector3::new(x[0], x[1], x[2]),
+        velocity_m_s: Vector3::new(x[3], x[4], x[5]),
+        attitude,
+        omega_rad_s: Vector3::new(x[10], x[11], x[12]),
     }
 }
 
@@ -417,7 +426,7 @@ pub fn simulate<'py>(
     let health = slice1("health", &health)?.to_vec();
     let config = config(config_args);
     let faults = faults(&fault_list);
-    let x0 = initial_state(x0);
+    let x0 = packed_state(&x0);
     let run = match controller {
         Some(c) if c.is_callable() && c.extract::<ControllerArg>().is_err() => {
             let mut callable = CallableController {
@@ -441,29 +450,18 @@ pub fn simulate<'py>(
             }
             result?
         }
-        Some(c) => {
-            let spec: ControllerArg =
-                c.extract().map_err(|_| {
-                    pyo3::exceptions::PyTypeError::new_err(format!(
-                    "controller: expected a rotorfault controller or a callable f(t, x), got {}",
-                    c.get_type().name().map(|n| n.to_string()).unwrap_or_default()
-                ))
-                })?;
-            let mut boxed = boxed(Some(&spec), count)?;
-            detached(py, || {
-                core_simulate(
-                    &vehicle,
-                    actuators,
-                    boxed.as_mut(),
-                    &health,
-                    &faults,
-                    x0,
-                    &config,
-                )
-            })?
-        }
-        None => {
-            let mut boxed = boxed(None, count)?;
+        other => {
+            let spec: Option<ControllerArg> = other
+                .map(|c| {
+                    c.extract().map_err(|_| {
+                        pyo3::exceptions::PyTypeError::new_err(format!(
+                            "controller: expected a rotorfault controller or a callable f(t, x), got {}",
+                            c.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+                        ))
+                    })
+                })
+                .transpose()?;
+            let mut boxed = boxed(spec.as_ref(), count)?;
             detached(py, || {
                 core_simulate(
                     &vehicle,
@@ -515,7 +513,7 @@ pub fn simulate_batch<'py>(
             Ok(BatchRun {
                 controller: boxed(c.as_ref(), count)?,
                 initial_command: settle,
-                x0: initial_state(*x0),
+                x0: packed_state(x0),
                 faults: faults(f),
             })
         })

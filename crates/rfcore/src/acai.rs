@@ -56,7 +56,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::combinations::{binomial, Combinations};
-use crate::error::{require_all_finite, require_finite, Result, RfError};
+use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Relative tolerance for rank decisions (see the module documentation).
 pub const RANK_RTOL: f64 = 1e-9;
@@ -247,13 +247,7 @@ impl FacetNormals {
             ("f_max", f_max, self.m, "one per actuator"),
             ("g_vec", g, self.n, "one per virtual-control axis"),
         ] {
-            if v.len() != len {
-                return Err(RfError::shape(
-                    field,
-                    format!("{len} entries ({what})"),
-                    v.len().to_string(),
-                ));
-            }
+            require_entries(field, v, len, what)?;
             require_all_finite(field, v)?;
         }
         if let Some(k) = (0..self.m).find(|&k| f_min[k] > f_max[k]) {

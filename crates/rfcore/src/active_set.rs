@@ -91,7 +91,6 @@ pub struct ActiveSetSolver {
     pinv_gain: [f64; N * MAX_VIRTUAL],
     pinv_offset: [f64; N],
     pivot_tolerance: f64,
-    hessian_scale: f64,
     max_iterations: usize,
 }
 
@@ -122,7 +121,6 @@ impl ActiveSetSolver {
             pinv_gain: [0.0; N * MAX_VIRTUAL],
             pinv_offset: [0.0; N],
             pivot_tolerance: 0.0,
-            hessian_scale: 0.0,
             max_iterations: 4 * m + 20,
         };
         let h = problem.hessian();
@@ -152,7 +150,6 @@ impl ActiveSetSolver {
         }
         let max_diagonal = (0..m).map(|i| h[(i, i)]).fold(0.0, f64::max);
         solver.pivot_tolerance = RANK_RTOL * max_diagonal;
-        solver.hessian_scale = h.amax();
         solver.load_bounds();
         solver
     }
@@ -525,6 +522,17 @@ fn cholesky_solve(
     tolerance: f64,
     p: &mut [f64; N],
 ) -> bool {
+    if !cholesky_factor(s, k, tolerance) {
+        return false;
+    }
+    cholesky_substitute(s, r, k);
+    p[..k].copy_from_slice(&r[..k]);
+    true
+}
+
+/// Overwrites the lower triangle of `s` (`k x k`, stride [`N`]) with its Cholesky factor `L`;
+/// false at the first pivot at or below `tolerance`.
+fn cholesky_factor(s: &mut [f64; N * N], k: usize, tolerance: f64) -> bool {
     for j in 0..k {
         let mut d = s[j * N + j];
         for l in 0..j {
@@ -543,22 +551,25 @@ fn cholesky_solve(
             s[i * N + j] = v / d;
         }
     }
+    true
+}
+
+/// Solves `L L^T x = b` in place for the `k x k` lower-triangular `L` in `l` (stride [`N`]).
+fn cholesky_substitute(l: &[f64; N * N], b: &mut [f64; N], k: usize) {
     for i in 0..k {
-        let mut v = r[i];
+        let mut v = b[i];
         for j in 0..i {
-            v -= s[i * N + j] * r[j];
+            v -= l[i * N + j] * b[j];
         }
-        r[i] = v / s[i * N + i];
+        b[i] = v / l[i * N + i];
     }
     for i in (0..k).rev() {
-        let mut v = r[i];
+        let mut v = b[i];
         for j in i + 1..k {
-            v -= s[j * N + i] * r[j];
+            v -= l[j * N + i] * b[j];
         }
-        r[i] = v / s[i * N + i];
+        b[i] = v / l[i * N + i];
     }
-    p[..k].copy_from_slice(&r[..k]);
-    true
 }
 
 /// Solves `S p = r` for a symmetric positive semidefinite `k x k` system (row stride [`N`],
@@ -617,20 +628,10 @@ pub(crate) fn solve_psd_closest(
 
     // Basic solution in permuted coordinates: L11 L11^T y = r_1.
     let mut y = [0.0; N];
-    for i in 0..rank {
-        let mut v = r[perm[i]];
-        for j in 0..i {
-            v -= s[i * N + j] * y[j];
-        }
-        y[i] = v / s[i * N + i];
+    for (i, yi) in y.iter_mut().enumerate().take(rank) {
+        *yi = r[perm[i]];
     }
-    for i in (0..rank).rev() {
-        let mut v = y[i];
-        for j in i + 1..rank {
-            v -= s[j * N + i] * y[j];
-        }
-        y[i] = v / s[i * N + i];
-    }
+    cholesky_substitute(s, &mut y, rank);
     let mut permuted = [0.0; N];
     permuted[..rank].copy_from_slice(&y[..rank]);
 
@@ -648,7 +649,7 @@ pub(crate) fn solve_psd_closest(
                 x[i * N + c] = v / s[i * N + i];
             }
         }
-        // (I + X^T X) z = -X^T (target_1 - y) + target_2, by an unpivoted Cholesky (SPD).
+        // (I + X^T X) z = -X^T (target_1 - y) + target_2.
         let mut g = [0.0; N * N];
         let mut b = [0.0; N];
         for a in 0..nullity {
@@ -661,36 +662,10 @@ pub(crate) fn solve_psd_closest(
                 .sum();
             b[a] = target[perm[rank + a]] - pull;
         }
-        for j in 0..nullity {
-            let mut d = g[j * N + j];
-            for l in 0..j {
-                d -= g[j * N + l] * g[j * N + l];
-            }
-            let d = d.sqrt();
-            g[j * N + j] = d;
-            for i in j + 1..nullity {
-                let mut v = g[i * N + j];
-                for l in 0..j {
-                    v -= g[i * N + l] * g[j * N + l];
-                }
-                g[i * N + j] = v / d;
-            }
-        }
-        let mut z = [0.0; N];
-        for i in 0..nullity {
-            let mut v = b[i];
-            for j in 0..i {
-                v -= g[i * N + j] * z[j];
-            }
-            z[i] = v / g[i * N + i];
-        }
-        for i in (0..nullity).rev() {
-            let mut v = z[i];
-            for j in i + 1..nullity {
-                v -= g[j * N + i] * z[j];
-            }
-            z[i] = v / g[i * N + i];
-        }
+        // I + X^T X >= I: every pivot is at least 1.
+        cholesky_factor(&mut g, nullity, 0.0);
+        let mut z = b;
+        cholesky_substitute(&g, &mut z, nullity);
         for i in 0..rank {
             let shift: f64 = (0..nullity).map(|c| x[i * N + c] * z[c]).sum();
             permuted[i] -= shift;

@@ -34,7 +34,7 @@ use rayon::prelude::*;
 
 use crate::active_set::{ActiveSet, ActiveSetSolver};
 use crate::clarabel_qp::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
-use crate::error::{require_all_finite, require_finite, Result, RfError};
+use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
 pub const MAX_ACTUATORS: usize = 12;
@@ -85,7 +85,7 @@ impl AllocationProblem {
                 format!("must be finite, got {}", matrix.as_slice()[i]),
             ));
         }
-        check_len("weights", weights, n, "one per virtual-control component")?;
+        require_entries("weights", weights, n, "one per virtual-control component")?;
         require_all_finite("weights", weights)?;
         if let Some(i) = weights.iter().position(|&w| w < 0.0) {
             return Err(RfError::invalid(
@@ -108,8 +108,8 @@ impl AllocationProblem {
     /// Replaces the bounds (validated as in [`AllocationProblem::new`]).
     pub fn set_bounds(&mut self, lower: &[f64], upper: &[f64]) -> Result<()> {
         let m = self.actuator_count();
-        check_len("lower", lower, m, "one per actuator")?;
-        check_len("upper", upper, m, "one per actuator")?;
+        require_entries("lower", lower, m, "one per actuator")?;
+        require_entries("upper", upper, m, "one per actuator")?;
         require_all_finite("lower", lower)?;
         require_all_finite("upper", upper)?;
         if let Some(i) = (0..m).find(|&i| lower[i] > upper[i]) {
@@ -132,7 +132,7 @@ impl AllocationProblem {
                 format!("must be >= 0, got {gamma}"),
             ));
         }
-        check_len(
+        require_entries(
             "preferred",
             preferred,
             self.actuator_count(),
@@ -149,8 +149,8 @@ impl AllocationProblem {
     /// previous command outside the bounds is pulled to the nearest bound.
     pub fn rate_limited(&self, previous: &[f64], max_change: &[f64]) -> Result<Self> {
         let m = self.actuator_count();
-        check_len("previous", previous, m, "one per actuator")?;
-        check_len("max_change", max_change, m, "one per actuator")?;
+        require_entries("previous", previous, m, "one per actuator")?;
+        require_entries("max_change", max_change, m, "one per actuator")?;
         require_all_finite("previous", previous)?;
         if let Some(i) = max_change.iter().position(|d| d.is_nan() || *d < 0.0) {
             return Err(RfError::invalid(
@@ -196,7 +196,7 @@ impl AllocationProblem {
 
     /// Checks a virtual control: n finite entries.
     pub fn check_virtual_control(&self, u_c: &[f64]) -> Result<()> {
-        check_len(
+        require_entries(
             "virtual_control",
             u_c,
             self.virtual_dimension(),
@@ -270,18 +270,6 @@ impl AllocationProblem {
                 (t - projected).abs().max(violation)
             })
             .fold(0.0, f64::max)
-    }
-}
-
-fn check_len(field: &str, values: &[f64], expected: usize, what: &str) -> Result<()> {
-    if values.len() == expected {
-        Ok(())
-    } else {
-        Err(RfError::shape(
-            field,
-            format!("{expected} entries ({what})"),
-            values.len().to_string(),
-        ))
     }
 }
 
@@ -417,6 +405,18 @@ impl WeightedPseudoInverse {
         &self.offset
     }
 
+    /// The unconstrained [`Allocation`] of `u_c` for `problem` (the one this was built from).
+    fn allocation(&self, problem: &AllocationProblem, u_c: &[f64]) -> Allocation {
+        let mut commands = vec![0.0; problem.actuator_count()];
+        self.apply(u_c, &mut commands);
+        Allocation {
+            achieved: problem.achieved(&commands),
+            commands,
+            status: AllocationStatus::Unconstrained,
+            iterations: 0,
+        }
+    }
+
     /// `T = P u_c + o` written into `commands` (lengths checked by the caller's problem).
     pub fn apply(&self, u_c: &[f64], commands: &mut [f64]) {
         for (c, out) in commands.iter_mut().enumerate() {
@@ -431,14 +431,7 @@ impl WeightedPseudoInverse {
 /// The unconstrained allocation of one virtual control (status [`AllocationStatus::Unconstrained`]).
 pub fn allocate_pinv(problem: &AllocationProblem, u_c: &[f64]) -> Result<Allocation> {
     problem.check_virtual_control(u_c)?;
-    let mut commands = vec![0.0; problem.actuator_count()];
-    weighted_pseudo_inverse(problem).apply(u_c, &mut commands);
-    Ok(Allocation {
-        achieved: problem.achieved(&commands),
-        commands,
-        status: AllocationStatus::Unconstrained,
-        iterations: 0,
-    })
+    Ok(weighted_pseudo_inverse(problem).allocation(problem, u_c))
 }
 
 /// Which solver an allocation uses.
@@ -454,13 +447,8 @@ pub enum Method {
     Pinv,
 }
 
-/// Allocations of many virtual controls (rows of `controls`, N x n row-major) for one problem,
-/// in parallel. Validates every row first, so an error names the row and nothing is computed.
-pub fn allocate_many(
-    problem: &AllocationProblem,
-    method: &Method,
-    controls: &[f64],
-) -> Result<Vec<Allocation>> {
+/// Checks N x n row-major virtual controls: whole rows, finite entries (named `[row, col]`).
+fn check_rows(problem: &AllocationProblem, controls: &[f64]) -> Result<()> {
     let n = problem.virtual_dimension();
     if !controls.len().is_multiple_of(n) {
         return Err(RfError::shape(
@@ -469,12 +457,24 @@ pub fn allocate_many(
             format!("{} values", controls.len()),
         ));
     }
-    if let Some(i) = controls.iter().position(|v| !v.is_finite()) {
-        return Err(RfError::invalid(
+    match controls.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(RfError::invalid(
             format!("virtual_control[{}, {}]", i / n, i % n),
             format!("must be finite, got {}", controls[i]),
-        ));
+        )),
     }
+}
+
+/// Allocations of many virtual controls (rows of `controls`, N x n row-major) for one problem,
+/// in parallel. Validates every row first, so an error names the row and nothing is computed.
+pub fn allocate_many(
+    problem: &AllocationProblem,
+    method: &Method,
+    controls: &[f64],
+) -> Result<Vec<Allocation>> {
+    check_rows(problem, controls)?;
+    let n = problem.virtual_dimension();
     match method {
         Method::ActiveSet => {
             let solver = ActiveSetSolver::new(problem);
@@ -487,16 +487,7 @@ pub fn allocate_many(
             let pinv = weighted_pseudo_inverse(problem);
             Ok(controls
                 .chunks(n)
-                .map(|u_c| {
-                    let mut commands = vec![0.0; problem.actuator_count()];
-                    pinv.apply(u_c, &mut commands);
-                    Allocation {
-                        achieved: problem.achieved(&commands),
-                        commands,
-                        status: AllocationStatus::Unconstrained,
-                        iterations: 0,
-                    }
-                })
+                .map(|u_c| pinv.allocation(problem, u_c))
                 .collect())
         }
         Method::Clarabel(settings) => controls
@@ -521,7 +512,7 @@ pub fn time_each(
     if repeats == 0 {
         return Err(RfError::invalid("repeats", "must be >= 1, got 0"));
     }
-    allocate_many(problem, &Method::Pinv, controls)?; // validates the rows
+    check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
     let solver = ActiveSetSolver::new(problem);
     let pinv = weighted_pseudo_inverse(problem);

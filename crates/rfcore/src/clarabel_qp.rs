@@ -16,7 +16,7 @@ use nalgebra::DMatrix;
 use crate::airframe::Airframe;
 use crate::allocation::{Allocation, AllocationProblem, AllocationStatus};
 use crate::controllability::ControlAxes;
-use crate::error::{require_all_finite, Result, RfError};
+use crate::error::{require_all_finite, require_entries, Result, RfError};
 
 /// How far a later priority stage may move what an earlier group achieved, relative to the
 /// largest value that row can take.
@@ -150,6 +150,14 @@ impl Program {
     }
 }
 
+/// Interior-point iterates sit a hair inside or outside the box: the commands clamped into it.
+fn clamped(x: &[f64], lower: &[f64], upper: &[f64]) -> Vec<f64> {
+    x.iter()
+        .zip(lower.iter().zip(upper))
+        .map(|(t, (lo, hi))| t.clamp(*lo, *hi))
+        .collect()
+}
+
 fn status_of(status: SolverStatus) -> AllocationStatus {
     match status {
         SolverStatus::Solved => AllocationStatus::Optimal,
@@ -182,13 +190,7 @@ fn qp_program(problem: &AllocationProblem, u_c: &[f64], rows: &[usize]) -> Progr
 }
 
 fn finish(problem: &AllocationProblem, solution: ProgramSolution, iterations: usize) -> Allocation {
-    // Interior-point iterates sit a hair inside or outside the box: report bounded commands.
-    let commands: Vec<f64> = solution
-        .x
-        .iter()
-        .zip(problem.lower().iter().zip(problem.upper()))
-        .map(|(t, (lo, hi))| t.clamp(*lo, *hi))
-        .collect();
+    let commands = clamped(&solution.x, problem.lower(), problem.upper());
     Allocation {
         achieved: problem.achieved(&commands),
         commands,
@@ -321,13 +323,7 @@ pub fn max_along_direction(
     // Validates the matrix and bounds exactly as an allocation would.
     let problem = AllocationProblem::new(matrix.clone(), &vec![1.0; n], lower, upper)?;
     for (field, v) in [("direction", direction), ("base", base)] {
-        if v.len() != n {
-            return Err(RfError::shape(
-                field,
-                format!("{n} entries (one per virtual-control component)"),
-                v.len().to_string(),
-            ));
-        }
+        require_entries(field, v, n, "one per virtual-control component")?;
         require_all_finite(field, v)?;
     }
     if direction.iter().all(|&d| d == 0.0) {
@@ -347,11 +343,7 @@ pub fn max_along_direction(
         SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => Ok(None),
         status => Ok(Some(DirectionalLimit {
             scale: solution.x[m],
-            commands: solution.x[..m]
-                .iter()
-                .zip(lower.iter().zip(upper))
-                .map(|(t, (lo, hi))| t.clamp(*lo, *hi))
-                .collect(),
+            commands: clamped(&solution.x[..m], lower, upper),
             status: status_of(status),
         })),
     }

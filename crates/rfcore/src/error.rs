@@ -80,13 +80,23 @@ pub(crate) fn require_all_finite(field: &str, values: &[f64]) -> Result<()> {
 }
 
 pub(crate) fn require_len(field: &str, values: &[f64], expected: usize) -> Result<()> {
+    require_entries(field, values, expected, "one per rotor")
+}
+
+/// Rejects a slice whose length is not `expected`; `what` says what each entry is for.
+pub(crate) fn require_entries(
+    field: &str,
+    values: &[f64],
+    expected: usize,
+    what: &str,
+) -> Result<()> {
     if values.len() == expected {
         Ok(())
     } else {
         Err(RfError::shape(
             field,
-            format!("{expected} entries (one per rotor)"),
-            format!("{}", values.len()),
+            format!("{expected} entries ({what})"),
+            values.len().to_string(),
         ))
     }
 }

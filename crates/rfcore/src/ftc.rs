@@ -272,8 +272,6 @@ pub struct UniformPassiveFtc {
     gravity_m_s2: f64,
     /// Nominal effectiveness (health never used), 4 x 4 row-major.
     matrix: [[f64; 4]; 4],
-    lower: [f64; 4],
-    upper: [f64; 4],
     setpoints: Vec<(f64, Vector3<f64>)>,
     solver: ActiveSetSolver,
     pinv: WeightedPseudoInverse,
@@ -342,10 +340,6 @@ impl UniformPassiveFtc {
                 *v = nominal[(r, c)];
             }
         }
-        let mut lower = [0.0; 4];
-        let mut upper = [0.0; 4];
-        lower.copy_from_slice(&airframe.min_thrust_n());
-        upper.copy_from_slice(&airframe.max_thrust_n());
         Ok(UniformPassiveFtc {
             gains,
             law,
@@ -354,8 +348,6 @@ impl UniformPassiveFtc {
             inertia_kg_m2: airframe.inertia_kg_m2(),
             gravity_m_s2: airframe.gravity_m_s2(),
             matrix,
-            lower,
-            upper,
             setpoints: setpoints
                 .into_iter()
                 .map(|(t, p)| (t, Vector3::from(p)))
@@ -377,7 +369,11 @@ impl UniformPassiveFtc {
 
     /// The desired virtual control `u_d = [f_d, tau_p,d, tau_q,d, tau_r,d]` ((8)-(9), (28),
     /// (15)) and the pieces the estimator needs (`x_2`, `A_2 x_2`, `B_2^-1` diagonal).
-    fn desired(&self, t_s: f64, s: &RigidBodyState) -> ([f64; 4], [f64; 3], [f64; 3], [f64; 3]) {
+    fn desired(
+        &self,
+        setpoint: &Vector3<f64>,
+        s: &RigidBodyState,
+    ) -> ([f64; 4], [f64; 3], [f64; 3], [f64; 3]) {
         let g = &self.gains;
         let [jx, jy, jz] = self.inertia_kg_m2;
         let rot: Matrix3<f64> = s.attitude.to_rotation_matrix().into_inner();
@@ -386,7 +382,7 @@ impl UniformPassiveFtc {
         let (p, q, r) = (s.omega_rad_s.x, s.omega_rad_s.y, s.omega_rad_s.z);
 
         // (8)-(9), plus the remedy's altitude integral
-        let mut v_d = g.k_p * (self.setpoint(t_s) - s.position_m);
+        let mut v_d = g.k_p * (setpoint - s.position_m);
         if self.law == CommandLaw::Feedforward {
             v_d.z += self.filters.altitude_integral;
         }
@@ -474,19 +470,23 @@ impl Controller for UniformPassiveFtc {
                 format!("the state at t = {t_s} s must be finite"),
             ));
         }
-        let (u_d, x2, a2x2, b2_inverse) = self.desired(t_s, measured);
+        let setpoint = self.setpoint(t_s);
+        let (u_d, x2, a2x2, b2_inverse) = self.desired(&setpoint, measured);
         if self.law == CommandLaw::Feedforward && self.gains.k_iz > 0.0 {
             // Forward Euler over the control period, after use (the integral lags one step).
-            let e_z = self.setpoint(t_s).z - measured.position_m.z;
+            let e_z = setpoint.z - measured.position_m.z;
             self.filters.altitude_integral = (self.filters.altitude_integral
                 + self.gains.k_iz * e_z * self.dt_s)
                 .clamp(-ALTITUDE_INTEGRAL_LIMIT_M_S, ALTITUDE_INTEGRAL_LIMIT_M_S);
         }
         if self.law == CommandLaw::Baseline {
-            let mut t = [0.0; 4];
-            self.pinv.apply(&u_d, &mut t);
-            for i in 0..4 {
-                out[i] = t[i].clamp(self.lower[i], self.upper[i]);
+            let problem = self.solver.problem();
+            self.pinv.apply(&u_d, &mut out[..4]);
+            for (t, (lo, hi)) in out[..4]
+                .iter_mut()
+                .zip(problem.lower().iter().zip(problem.upper()))
+            {
+                *t = t.clamp(*lo, *hi);
             }
             return Ok(());
         }

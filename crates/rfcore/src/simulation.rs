@@ -333,6 +333,28 @@ pub struct Trajectory {
     pub divergence: Option<Divergence>,
 }
 
+impl Trajectory {
+    /// Records one control step's time, state, health, rotor thrusts and (with sensor noise)
+    /// measurement row; the caller adds the commands.
+    fn push_step(
+        &mut self,
+        t_s: f64,
+        state: &RigidBodyState,
+        health: &[f64],
+        actuators: &Actuators,
+        measured: Option<&[f64; STATE_DIM]>,
+    ) {
+        self.t_s.push(t_s);
+        self.states.push(*state);
+        self.health.extend_from_slice(health);
+        self.thrust_n
+            .extend((0..health.len()).map(|i| actuators.output(i, health[i]).thrust_n));
+        if let Some(row) = measured {
+            self.measured.extend_from_slice(row);
+        }
+    }
+}
+
 fn check_faults(faults: &[RotorFault], rotor_count: usize) -> Result<()> {
     for (k, f) in faults.iter().enumerate() {
         if f.rotor >= rotor_count {
@@ -453,25 +475,18 @@ pub fn simulate(
             health[faults[next_fault].rotor] = faults[next_fault].efficiency;
             next_fault += 1;
         }
-        let diverged = divergence(&state, start_altitude, &config.limits);
-        let record = k % every == 0 || k == steps || diverged.is_some();
-        if record {
-            trajectory.t_s.push(t);
-            trajectory.states.push(state);
-            trajectory.health.extend_from_slice(&health);
-            trajectory
-                .thrust_n
-                .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
-        }
-        if let Some(reason) = diverged {
+        if let Some(reason) = divergence(&state, start_altitude, &config.limits) {
+            let nan_row = [f64::NAN; STATE_DIM];
+            trajectory.push_step(
+                t,
+                &state,
+                &health,
+                &actuators,
+                config.noise.map(|_| &nan_row),
+            );
             trajectory
                 .commands
                 .extend(std::iter::repeat_n(f64::NAN, count));
-            if config.noise.is_some() {
-                trajectory
-                    .measured
-                    .extend(std::iter::repeat_n(f64::NAN, STATE_DIM));
-            }
             trajectory.divergence = Some(Divergence {
                 time_s: t,
                 reason,
@@ -492,24 +507,12 @@ pub fn simulate(
             }
             _ => state,
         };
-        if record && config.noise.is_some() {
-            trajectory.measured.extend(measured_vector);
-        }
         controller.command(t, &measured, &mut command)?;
         let finite = command.iter().all(|c| c.is_finite());
-        if record || !finite {
-            if !record {
-                // A non-finite command ends the run: record the step it happened at.
-                trajectory.t_s.push(t);
-                trajectory.states.push(state);
-                trajectory.health.extend_from_slice(&health);
-                trajectory
-                    .thrust_n
-                    .extend((0..m).map(|i| actuators.output(i, health[i]).thrust_n));
-                if config.noise.is_some() {
-                    trajectory.measured.extend(measured_vector);
-                }
-            }
+        // Every `every`-th step, the last one, and a step whose command ends the run.
+        if k % every == 0 || k == steps || !finite {
+            let row = config.noise.map(|_| &measured_vector);
+            trajectory.push_step(t, &state, &health, &actuators, row);
             trajectory.commands.extend_from_slice(&command);
         }
         if !finite {
