@@ -1,23 +1,21 @@
-//! Bindings for control allocation: the problem type, batch allocation, attainable-set queries
-//! and the allocating controller. Translation only.
+//! Bindings for control allocation: the problem type, batch allocation and attainable-set
+//! queries. Translation only.
 
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use rfcore::active_set::ActiveSetSolver;
-use rfcore::allocation::{allocate_many, time_each, AllocationProblem, Method};
-use rfcore::clarabel_qp::{
+use rfcore::allocation::clarabel::{
     hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
     ClarabelSettings,
 };
-use rfcore::controller::{Allocated, Controller};
-use rfcore::ControlAxes;
+use rfcore::allocation::{allocate_many, time_each, AllocationProblem, Method};
+use rfcore::analysis::ControlAxes;
 
-use crate::simulation::{boxed, matrix, ControllerArg};
-use crate::{detached, slice1, to_py_err, PyAirframe};
+use crate::airframe::PyAirframe;
+use crate::convert::{detached, matrix, slice1, slice2, to_py_err};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
@@ -78,24 +76,7 @@ impl PyAllocationProblem {
     ) -> PyResult<(f64, f64)> {
         let u_c = slice1("virtual_control", &virtual_control)?;
         let t = slice1("commands", &commands)?;
-        self.inner.check_virtual_control(u_c).map_err(to_py_err)?;
-        if let Some(i) = t.iter().position(|v| !v.is_finite()) {
-            return Err(PyValueError::new_err(format!(
-                "commands[{i}]: must be finite, got {}",
-                t[i]
-            )));
-        }
-        if t.len() != self.inner.actuator_count() {
-            return Err(PyValueError::new_err(format!(
-                "commands: expected {} entries (one per actuator), got {}",
-                self.inner.actuator_count(),
-                t.len()
-            )));
-        }
-        Ok((
-            self.inner.objective(u_c, t),
-            self.inner.kkt_residual(u_c, t),
-        ))
+        self.inner.evaluate(u_c, t).map_err(to_py_err)
     }
 }
 
@@ -105,24 +86,11 @@ fn method(
     tolerance: f64,
     max_iterations: u32,
 ) -> PyResult<Method> {
-    let settings = || -> PyResult<ClarabelSettings> {
-        ClarabelSettings::default()
-            .tolerance(tolerance)
-            .and_then(|s| s.max_iterations(max_iterations))
-            .map_err(to_py_err)
-    };
-    match (name, priorities) {
-        ("active-set", None) => Ok(Method::ActiveSet),
-        ("pinv", None) => Ok(Method::Pinv),
-        ("clarabel", None) => Ok(Method::Clarabel(settings()?)),
-        ("clarabel", Some(groups)) => Ok(Method::Prioritized(groups, settings()?)),
-        ("active-set" | "pinv", Some(_)) => Err(PyValueError::new_err(
-            "priorities: only method=\"clarabel\" solves prioritised allocations",
-        )),
-        (other, _) => Err(PyValueError::new_err(format!(
-            "method: expected \"active-set\", \"clarabel\" or \"pinv\", got {other:?}"
-        ))),
-    }
+    let settings = ClarabelSettings::default()
+        .tolerance(tolerance)
+        .and_then(|s| s.max_iterations(max_iterations))
+        .map_err(to_py_err)?;
+    Method::parse(name, priorities, settings).map_err(to_py_err)
 }
 
 type AllocationArrays<'py> = (
@@ -146,7 +114,7 @@ pub fn allocate<'py>(
     max_iterations: u32,
 ) -> PyResult<AllocationArrays<'py>> {
     let method = method(method_name, priorities, tolerance, max_iterations)?;
-    let flat = crate::slice2("virtual_control", &controls)?;
+    let flat = slice2("virtual_control", &controls)?;
     let rows = controls.shape()[0];
     let problem = &problem.inner;
     let results = detached(py, || allocate_many(problem, &method, flat))?;
@@ -187,7 +155,7 @@ pub fn time_allocations<'py>(
         ClarabelSettings::default().tolerance,
         ClarabelSettings::default().max_iterations,
     )?;
-    let flat = crate::slice2("virtual_control", &controls)?;
+    let flat = slice2("virtual_control", &controls)?;
     let problem = &problem.inner;
     let times = detached(py, || time_each(problem, &method, flat, repeats))?;
     Ok(times.into_pyarray(py))
@@ -248,48 +216,3 @@ pub fn hover_thrust_margin<'py>(
     ))
 }
 
-/// A virtual-control law followed by active-set allocation. The law is kept as the Python
-/// object and turned into a fresh core controller per run by the one `boxed` conversion.
-#[pyclass(name = "Allocated", module = "rotorfault._rfcore", frozen)]
-pub struct PyAllocated {
-    law: Py<PyAny>,
-    solver: ActiveSetSolver,
-}
-
-impl PyAllocated {
-    /// A fresh controller for one run.
-    pub(crate) fn controller(&self, py: Python<'_>) -> PyResult<Box<dyn Controller>> {
-        let law: ControllerArg = self.law.bind(py).extract()?;
-        let law = boxed(Some(&law), 0)?;
-        Ok(Box::new(
-            Allocated::new(law, self.solver.clone()).map_err(to_py_err)?,
-        ))
-    }
-}
-
-#[pymethods]
-impl PyAllocated {
-    #[new]
-    fn new(law: Bound<'_, PyAny>, problem: &PyAllocationProblem) -> PyResult<Self> {
-        let kind: Option<ControllerArg> = law.extract().ok();
-        if !matches!(
-            kind,
-            Some(
-                ControllerArg::OpenLoop(_)
-                    | ControllerArg::LinearFeedback(_)
-                    | ControllerArg::Lti(_)
-            )
-        ) {
-            return Err(PyTypeError::new_err(
-                "law: expected OpenLoop, LinearFeedback or DiscreteLti (a virtual-control law)",
-            ));
-        }
-        let py = law.py();
-        let out = PyAllocated {
-            law: law.unbind(),
-            solver: ActiveSetSolver::new(&problem.inner),
-        };
-        out.controller(py)?; // checks the law's output count
-        Ok(out)
-    }
-}

@@ -21,16 +21,9 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use rfcore::{AcaiFormula, Airframe, ControlAxes, ControllabilityAnalysis, FacetNormals};
+use rfcore::Airframe;
+use rfcore::analysis::{AcaiFormula, ControlAxes, ControllabilityAnalysis, FacetNormals};
 
-fn preset(name: &str) -> Airframe {
-    let path = format!(
-        "{}/../../python/rotorfault/presets/{name}.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("reading {path}: {e}"));
-    Airframe::from_toml_str(&text, &path).unwrap_or_else(|e| panic!("parsing {path}: {e}"))
-}
 
 /// Du's Fig. 4 grid: eta1, eta2, eta5 (1-based) in {0, 0.04, ..., 1}, the other rotors at 1.
 /// Row-major, 6 per row, 26^3 rows.
@@ -48,8 +41,8 @@ fn fig4_grid() -> Vec<f64> {
 }
 
 fn bench_acai(c: &mut Criterion) {
-    let hexa = preset("hexa-pnpnpn");
-    let octo = preset("octo-x");
+    let hexa = rfcore::fixtures::preset("hexa-pnpnpn");
+    let octo = rfcore::fixtures::preset("octo-x");
     let axes = ControlAxes::ThrustRollPitchYaw;
     let hexa_analysis = ControllabilityAnalysis::new(&hexa, axes).expect("hexa analysis");
     let octo_analysis = ControllabilityAnalysis::new(&octo, axes).expect("octo analysis");

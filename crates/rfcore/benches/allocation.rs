@@ -17,21 +17,13 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use rfcore::active_set::{ActiveSet, ActiveSetSolver};
+use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::AllocationProblem;
-use rfcore::clarabel_qp::{allocate_clarabel, ClarabelSettings};
 use rfcore::Airframe;
+use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 
 const PROBLEMS: usize = 256;
 
-fn preset(name: &str) -> Airframe {
-    let path = format!(
-        "{}/../../python/rotorfault/presets/{name}.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(&path).expect("preset file");
-    Airframe::from_toml_str(&text, &path).expect("valid preset")
-}
 
 fn problem(airframe: &Airframe) -> AllocationProblem {
     AllocationProblem::new(
@@ -66,7 +58,7 @@ fn bench_allocation(c: &mut Criterion) {
     let mut group = c.benchmark_group("allocation");
     group.throughput(Throughput::Elements(PROBLEMS as u64));
     for name in ["quad-x", "hexa-pnpnpn", "octo-x"] {
-        let airframe = preset(name);
+        let airframe = rfcore::fixtures::preset(name);
         let m = airframe.rotor_count();
         let problem = problem(&airframe);
         let controls = virtual_controls(&airframe);

@@ -26,11 +26,12 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::{DMatrix, UnitQuaternion, Vector3};
-use rfcore::actuator::{Actuators, FixedPitch, Lag, RotorOutput};
-use rfcore::controller::{LinearFeedback, OpenLoop, STATE_DIM};
-use rfcore::rigid_body::RigidBodyState;
-use rfcore::simulation::{simulate, SimulationConfig};
-use rfcore::vehicle::{Aerodynamics, Vehicle};
+use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, RotorOutput};
+use rfcore::control::{LinearFeedback, OpenLoop};
+use rfcore::state::STATE_DIM;
+use rfcore::state::RigidBodyState;
+use rfcore::flight::simulation::{simulate, SimulationConfig};
+use rfcore::flight::vehicle::{Aerodynamics, Vehicle};
 use rfcore::Airframe;
 
 const CONTROL_DT_S: f64 = 1.0 / 400.0;
@@ -38,12 +39,7 @@ const SUBSTEPS: usize = 4;
 const DURATION_S: f64 = 10.0;
 
 fn quad_x() -> Airframe {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../python/rotorfault/presets/quad-x.toml"
-    );
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("reading {path}: {e}"));
-    Airframe::from_toml_str(&text, "quad-x").unwrap_or_else(|e| panic!("parsing {path}: {e}"))
+    rfcore::fixtures::preset("quad-x")
 }
 
 fn config() -> SimulationConfig {

@@ -1,33 +1,27 @@
-//! rfcore: the pure-Rust core of rotorfault.
+//! rfcore: the pure-Rust core of rotorfault, in rooms by concept.
 //!
-//! - [`airframe`]: multirotor geometry, thrust limits, efficiencies, TOML presets.
-//! - [`acai`]: the Available Control Authority Index (Du et al., Theorem 3) for any dimension.
-//! - [`controllability`]: Du's 9-step test procedure and failure tables.
-//! - [`allocation`], [`active_set`], [`clarabel_qp`]: constrained control allocation (Ke eq. (33)),
-//!   exact and fast, with Clarabel as the reference and for attainable-set queries.
-//! - [`rigid_body`]: 6-DOF Newton-Euler dynamics and the RK4 step (the simulator's bottom layer).
+//! - [`airframe`], [`state`], [`error`]: the shared vocabulary (geometry and thrust limits, the
+//!   vehicle state, errors that name the field and the rule).
+//! - [`analysis`]: controllability and the Available Control Authority Index (Du et al.).
+//! - [`allocation`]: constrained control allocation (Ke eq. (33)): the exact active set, Clarabel
+//!   as the reference, the weighted pseudo-inverse.
+//! - [`control`]: the [`control::Controller`] trait and the built-in controllers (linear laws,
+//!   allocated laws, one file per paper's controller).
+//! - [`flight`]: rigid body + RK4, actuators, vehicle forces, the closed-loop simulation.
 //!
-//! Units are SI throughout (N, m, kg, s, rad) and carried in names (`max_thrust_n`).
+//! Dependencies run one way (checked by `tests/architecture.rs`): `analysis` uses only
+//! `airframe`; `allocation` uses neither `flight` nor `control`; `control` uses `allocation`,
+//! never `flight`; `flight` may use all of them. Units are SI throughout and carried in names.
 
-pub mod acai;
-pub mod active_set;
-pub mod actuator;
 pub mod airframe;
 pub mod allocation;
-pub mod clarabel_qp;
-pub mod combinations;
-pub mod controllability;
-pub mod controller;
+pub mod analysis;
+pub mod control;
 pub mod error;
-pub mod ftc;
-pub mod rigid_body;
-pub mod simulation;
-pub mod vehicle;
+pub mod flight;
+#[doc(hidden)]
+pub mod fixtures;
+pub mod state;
 
-pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
 pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
-pub use controllability::{
-    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase,
-    Verdict,
-};
 pub use error::{Result, RfError};

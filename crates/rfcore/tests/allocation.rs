@@ -2,9 +2,9 @@
 //! warm starts and the unconstrained limits of Ke et al. eqs. (34)/(35).
 
 use nalgebra::DMatrix;
-use rfcore::active_set::{ActiveSet, ActiveSetSolver, BoundState};
+use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
 use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
-use rfcore::clarabel_qp::{allocate_clarabel, ClarabelSettings};
+use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 
 /// SplitMix64: a dependency-free, reproducible generator.
 struct Rng(u64);

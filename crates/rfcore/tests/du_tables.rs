@@ -1,28 +1,8 @@
 //! Du et al. Tables II and III from the shipped presets (the same TOML files Python reads).
 
-use std::path::PathBuf;
-
-use rfcore::{failure_table, AcaiFormula, Airframe, ControlAxes, ControllabilityAnalysis, Verdict};
-
-/// The one preset directory, shipped in the wheel and read here too.
-fn presets_dir() -> PathBuf {
-    [
-        env!("CARGO_MANIFEST_DIR"),
-        "..",
-        "..",
-        "python",
-        "rotorfault",
-        "presets",
-    ]
-    .iter()
-    .collect()
-}
-
-fn preset(name: &str) -> Airframe {
-    let path = presets_dir().join(format!("{name}.toml"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    Airframe::from_toml_str(&text, &path.display().to_string()).unwrap()
-}
+use rfcore::analysis::{failure_table, AcaiFormula, ControlAxes, ControllabilityAnalysis, Verdict};
+use rfcore::fixtures::{preset, presets_dir};
+use rfcore::Airframe;
 
 fn single_failure_acai(name: &str, formula: AcaiFormula) -> (f64, Vec<f64>) {
     let airframe = preset(name);

@@ -9,10 +9,11 @@
 
 use nalgebra::Vector3;
 
-use crate::actuator::RotorOutput;
+use crate::flight::actuator::RotorOutput;
 use crate::airframe::Airframe;
 use crate::error::{require_non_negative, Result};
-use crate::rigid_body::{RigidBody, RigidBodyState, Wrench};
+use crate::flight::rigid_body::{RigidBody, Wrench};
+use crate::state::RigidBodyState;
 
 /// Aerodynamic and rotor-inertia parameters the papers leave to the user (Lanzon Table 1 gives
 /// none of them; see the README's decisions). All default to zero.
@@ -152,12 +153,7 @@ mod tests {
     use nalgebra::UnitQuaternion;
 
     fn lanzon() -> Airframe {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../python/rotorfault/presets/lanzon-quadrotor.toml"
-        ))
-        .unwrap();
-        Airframe::from_toml_str(&text, "lanzon").unwrap()
+        crate::fixtures::preset("lanzon-quadrotor")
     }
 
     fn thrusts(f: [f64; 4], k_mu: f64, w: [f64; 4]) -> Vec<RotorOutput> {

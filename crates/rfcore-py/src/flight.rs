@@ -1,38 +1,24 @@
-//! Bindings for the simulator: actuator and controller specifications as Python classes, one
-//! `simulate` call per run and a parallel `simulate_batch`. Translation only.
+//! Bindings for the simulator: actuator specifications, one `simulate` call per run, a parallel
+//! `simulate_batch` and the state derivative for linearisation. Translation only.
 
-use nalgebra::{DMatrix, Quaternion, UnitQuaternion, Vector3};
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use nalgebra::Vector3;
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use rfcore::actuator::{Actuators, FixedPitch, Lag, VariablePitch};
-use rfcore::controller::{
-    state_vector, state_vector_derivative, Controller, DiscreteLti, LinearFeedback, OpenLoop,
-    ZeroCommand, STATE_DIM,
-};
-use rfcore::rigid_body::RigidBodyState;
-use rfcore::simulation::{
+use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch};
+use rfcore::flight::model::state_vector_derivative;
+use rfcore::flight::simulation::{
     simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
-use rfcore::vehicle::{Aerodynamics, Vehicle};
-use rfcore::RfError;
+use rfcore::flight::vehicle::{Aerodynamics, Vehicle};
+use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
 
-use crate::allocation::PyAllocated;
-use crate::ftc::PyUniformPassiveFtc;
-use crate::{detached, slice1, to_py_err, PyAirframe};
-
-pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
-    let view = array.as_array();
-    let (rows, cols) = view.dim();
-    let flat: Vec<f64> = view.iter().copied().collect();
-    if flat.len() != rows * cols {
-        return Err(PyValueError::new_err(format!("{field}: malformed array")));
-    }
-    Ok(DMatrix::from_row_slice(rows, cols, &flat))
-}
+use crate::airframe::PyAirframe;
+use crate::control::{boxed, CallableController, ControllerArg};
+use crate::convert::{detached, slice1, to_py_err};
 
 /// Fixed-pitch rotors: first-order lag, rate limit, thrust coefficient for rotor speed.
 #[pyclass(name = "FixedPitchActuator", module = "rotorfault._rfcore", frozen)]
@@ -113,161 +99,6 @@ fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> rfcore::Res
     })
 }
 
-/// A piecewise-constant command schedule.
-#[pyclass(name = "OpenLoop", module = "rotorfault._rfcore", frozen)]
-pub struct PyOpenLoop {
-    pub(crate) inner: OpenLoop,
-}
-
-#[pymethods]
-impl PyOpenLoop {
-    #[new]
-    fn new(
-        times_s: PyReadonlyArray1<'_, f64>,
-        commands: PyReadonlyArray2<'_, f64>,
-    ) -> PyResult<Self> {
-        let inner = OpenLoop::new(
-            slice1("times", &times_s)?.to_vec(),
-            matrix("commands", &commands)?,
-        )
-        .map_err(to_py_err)?;
-        Ok(PyOpenLoop { inner })
-    }
-}
-
-/// `u = u_trim - K (x - x_trim)`.
-#[pyclass(name = "LinearFeedback", module = "rotorfault._rfcore", frozen)]
-pub struct PyLinearFeedback {
-    pub(crate) inner: LinearFeedback,
-}
-
-#[pymethods]
-impl PyLinearFeedback {
-    #[new]
-    fn new(
-        x_trim: PyReadonlyArray1<'_, f64>,
-        u_trim: PyReadonlyArray1<'_, f64>,
-        gain: PyReadonlyArray2<'_, f64>,
-    ) -> PyResult<Self> {
-        let inner = LinearFeedback::new(
-            slice1("x_trim", &x_trim)?,
-            slice1("u_trim", &u_trim)?,
-            matrix("gain", &gain)?,
-        )
-        .map_err(to_py_err)?;
-        Ok(PyLinearFeedback { inner })
-    }
-}
-
-/// A discrete LTI controller driven by the state error.
-#[pyclass(name = "DiscreteLti", module = "rotorfault._rfcore", frozen)]
-pub struct PyDiscreteLti {
-    pub(crate) inner: DiscreteLti,
-}
-
-#[pymethods]
-impl PyDiscreteLti {
-    #[new]
-    fn new(
-        a: PyReadonlyArray2<'_, f64>,
-        b: PyReadonlyArray2<'_, f64>,
-        c: PyReadonlyArray2<'_, f64>,
-        d: PyReadonlyArray2<'_, f64>,
-        x_trim: PyReadonlyArray1<'_, f64>,
-        u_trim: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<Self> {
-        let inner = DiscreteLti::new(
-            matrix("A_K", &a)?,
-            matrix("B_K", &b)?,
-            matrix("C_K", &c)?,
-            matrix("D_K", &d)?,
-            slice1("x_trim", &x_trim)?,
-            slice1("u_trim", &u_trim)?,
-        )
-        .map_err(to_py_err)?;
-        Ok(PyDiscreteLti { inner })
-    }
-}
-
-/// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
-struct CallableController {
-    function: Py<PyAny>,
-    count: usize,
-    error: Option<PyErr>,
-}
-
-impl Controller for CallableController {
-    fn command_count(&self) -> usize {
-        self.count
-    }
-
-    fn command(
-        &mut self,
-        t_s: f64,
-        measured: &RigidBodyState,
-        out: &mut [f64],
-    ) -> rfcore::Result<()> {
-        let result = Python::attach(|py| -> PyResult<Vec<f64>> {
-            let x = state_vector(measured).to_vec().into_pyarray(py);
-            self.function
-                .bind(py)
-                .call1((t_s, x))?
-                .extract::<Vec<f64>>()
-        });
-        match result {
-            Ok(values) if values.len() == out.len() && values.iter().all(|v| v.is_finite()) => {
-                out.copy_from_slice(&values);
-                Ok(())
-            }
-            Ok(values) => Err(RfError::invalid(
-                "controller",
-                format!(
-                    "the Python controller must return {} finite commands, got {values:?} at t = {t_s}",
-                    out.len()
-                ),
-            )),
-            Err(err) => {
-                // A wrong return type is the controller's contract, not its own exception.
-                let wrong_type = Python::attach(|py| err.is_instance_of::<pyo3::exceptions::PyTypeError>(py));
-                self.error = Some(if wrong_type {
-                    let error = pyo3::exceptions::PyTypeError::new_err(format!(
-                        "controller: must return a sequence of {} numbers at t = {t_s}",
-                        out.len()
-                    ));
-                    Python::attach(|py| error.set_cause(py, Some(err)));
-                    error
-                } else {
-                    err
-                });
-                Err(RfError::invalid("controller", "the Python controller failed"))
-            }
-        }
-    }
-}
-
-#[derive(FromPyObject)]
-pub enum ControllerArg<'py> {
-    OpenLoop(PyRef<'py, PyOpenLoop>),
-    LinearFeedback(PyRef<'py, PyLinearFeedback>),
-    Lti(PyRef<'py, PyDiscreteLti>),
-    Allocated(PyRef<'py, PyAllocated>),
-    Ftc(PyRef<'py, PyUniformPassiveFtc>),
-}
-
-pub(crate) fn boxed(
-    controller: Option<&ControllerArg<'_>>,
-    count: usize,
-) -> PyResult<Box<dyn Controller>> {
-    Ok(match controller {
-        None => Box::new(ZeroCommand { count }),
-        Some(ControllerArg::OpenLoop(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::LinearFeedback(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Allocated(c)) => c.controller(c.py())?,
-        Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
-    })
-}
-
 /// Timing, limits, wind and noise, in the order the Python layer passes them.
 type ConfigArgs = (
     f64,
@@ -312,25 +143,6 @@ fn aerodynamics(aero: [f64; 4]) -> Aerodynamics {
         quadratic_drag_n_s2_m2: aero[1],
         rotational_drag_n_m_s: aero[2],
         rotor_inertia_kg_m2: aero[3],
-    }
-}
-
-/// x0 as `[p (3), v (3), q (w, x, y, z), omega (3)]`.
-/// A state from 13 packed numbers: position, velocity, quaternion (w, x, y, z), body rates. A
-/// quaternion that is unit to rounding is used exactly as given (so a recorded flight replays bit
-/// for bit); any other is normalised.
-pub(crate) fn packed_state(x: &[f64; 13]) -> RigidBodyState {
-    let q = Quaternion::new(x[6], x[7], x[8], x[9]);
-    let attitude = if (q.norm() - 1.0).abs() <= 1e-12 {
-        UnitQuaternion::new_unchecked(q)
-    } else {
-        UnitQuaternion::new_normalize(q)
-    };
-    RigidBodyState {
-        position_m: Vector3::new(x[0], x[1], x[2]),
-        velocity_m_s: Vector3::new(x[3], x[4], x[5]),
-        attitude,
-        omega_rad_s: Vector3::new(x[10], x[11], x[12]),
     }
 }
 
@@ -426,7 +238,7 @@ pub fn simulate<'py>(
     let health = slice1("health", &health)?.to_vec();
     let config = config(config_args);
     let faults = faults(&fault_list);
-    let x0 = packed_state(&x0);
+    let x0 = RigidBodyState::from_packed(&x0);
     let run = match controller {
         Some(c) if c.is_callable() && c.extract::<ControllerArg>().is_err() => {
             let mut callable = CallableController {
@@ -513,7 +325,7 @@ pub fn simulate_batch<'py>(
             Ok(BatchRun {
                 controller: boxed(c.as_ref(), count)?,
                 initial_command: settle,
-                x0: packed_state(x0),
+                x0: RigidBodyState::from_packed(x0),
                 faults: faults(f),
             })
         })

@@ -9,7 +9,7 @@
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use crate::acai::{AcaiFormula, FacetNormals, RANK_RTOL};
+use crate::analysis::acai::{AcaiFormula, FacetNormals, RANK_RTOL};
 use crate::airframe::{check_efficiency, Airframe};
 use crate::error::Result;
 
@@ -262,7 +262,7 @@ pub fn failure_table(
     max_failed: usize,
     formula: AcaiFormula,
 ) -> Result<Vec<FailureCase>> {
-    use crate::combinations::{binomial, Combinations};
+    use crate::analysis::combinations::{binomial, Combinations};
     use crate::error::RfError;
     let m = airframe.rotor_count();
     if max_failed > m {

@@ -1,17 +1,12 @@
-//! Bindings for Ke et al.'s uniform passive FTC: the controller, its preset files, replay.
-//! Translation only.
+//! Bindings for Ke et al.'s uniform passive FTC: the controller and its preset files.
 
-use nalgebra::Quaternion;
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use rfcore::controller::replay as core_replay;
-use rfcore::ftc::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
+use rfcore::control::ke::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
 
-use crate::simulation::{boxed, packed_state, ControllerArg};
-use crate::{detached, slice1, to_py_err, PyAirframe};
+use crate::airframe::PyAirframe;
+use crate::convert::to_py_err;
 
 /// The uniform passive fault-tolerant controller (Ke et al.).
 #[pyclass(name = "UniformPassiveFtc", module = "rotorfault._rfcore", frozen)]
@@ -112,45 +107,3 @@ pub fn ftc_preset_from_toml<'py>(
     Ok(out)
 }
 
-/// Commands of a controller replayed on `states` (N x 13: position, velocity, quaternion w x y z,
-/// body rates) at `times` (N): an N x command_count array.
-#[pyfunction]
-pub fn replay<'py>(
-    py: Python<'py>,
-    controller: ControllerArg<'py>,
-    times: PyReadonlyArray1<'py, f64>,
-    states: PyReadonlyArray2<'py, f64>,
-    command_count: usize,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let times = slice1("times", &times)?.to_vec();
-    let view = states.as_array();
-    if view.ncols() != 13 {
-        return Err(PyValueError::new_err(format!(
-            "states: expected 13 columns (position, velocity, quaternion w x y z, rates), got {}",
-            view.ncols()
-        )));
-    }
-    let mut parsed = Vec::with_capacity(view.nrows());
-    for (k, r) in view.rows().into_iter().enumerate() {
-        if let Some(j) = r.iter().position(|v| !v.is_finite()) {
-            return Err(PyValueError::new_err(format!(
-                "states[{k}, {j}]: must be finite, got {}",
-                r[j]
-            )));
-        }
-        let packed: [f64; 13] = std::array::from_fn(|j| r[j]);
-        if Quaternion::new(r[6], r[7], r[8], r[9]).norm() < 1e-6 {
-            return Err(PyValueError::new_err(format!(
-                "states[{k}]: the quaternion (columns 6-9) must not be zero"
-            )));
-        }
-        parsed.push(packed_state(&packed));
-    }
-    let mut controller = boxed(Some(&controller), command_count)?;
-    let rows = times.len();
-    let count = controller.command_count();
-    let flat = detached(py, || core_replay(controller.as_mut(), &times, &parsed))?;
-    numpy::ndarray::Array2::from_shape_vec((rows, count), flat)
-        .map(|a| a.into_pyarray(py))
-        .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
-}

@@ -55,7 +55,7 @@
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use crate::combinations::{binomial, Combinations};
+use crate::analysis::combinations::{binomial, Combinations};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Relative tolerance for rank decisions (see the module documentation).

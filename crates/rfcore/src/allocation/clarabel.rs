@@ -15,7 +15,7 @@ use nalgebra::DMatrix;
 
 use crate::airframe::Airframe;
 use crate::allocation::{Allocation, AllocationProblem, AllocationStatus};
-use crate::controllability::ControlAxes;
+use crate::analysis::controllability::ControlAxes;
 use crate::error::{require_all_finite, require_entries, Result, RfError};
 
 /// How far a later priority stage may move what an earlier group achieved, relative to the

@@ -5,17 +5,18 @@
 //!
 //! Per control step k (t = k dt): record the state, check divergence, let the controller compute
 //! commands from the measured state, then `substeps` times: apply the faults due by then, advance
-//! the actuators (see [`crate::actuator`]) and take one RK4 step of the rigid body with the rotor
+//! the actuators (see [`crate::flight::actuator`]) and take one RK4 step of the rigid body with the rotor
 //! outputs held.
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::actuator::{Actuators, RotorOutput};
-use crate::controller::{state_from_vector, state_vector, Controller, STATE_DIM};
+use crate::flight::actuator::{Actuators, RotorOutput};
+use crate::control::Controller;
+use crate::state::{state_from_vector, state_vector, STATE_DIM};
 use crate::error::{require_finite, Result, RfError};
-use crate::rigid_body::RigidBodyState;
-use crate::vehicle::Vehicle;
+use crate::state::RigidBodyState;
+use crate::flight::vehicle::Vehicle;
 
 /// Most control steps one run records (about 2 GB of trajectory).
 pub const MAX_CONTROL_STEPS: usize = 10_000_000;
@@ -121,7 +122,7 @@ pub struct SimulationConfig {
 }
 
 /// Additive Gaussian noise on each of the 12 measured state components (position, velocity,
-/// Euler angles, body rates; see [`crate::controller::state_vector`]), with standard deviation
+/// Euler angles, body rates; see [`crate::state::state_vector`]), with standard deviation
 /// `relative_std |x_i| + absolute_std[i]`.
 ///
 /// `relative_std = 10^(-SNR / 20)` is a per-sample signal-to-noise ratio (Wang et al. add noise
@@ -589,19 +590,14 @@ pub fn simulate_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::actuator::{FixedPitch, Lag};
+    use crate::flight::actuator::{FixedPitch, Lag};
     use crate::airframe::Airframe;
-    use crate::controller::{OpenLoop, ZeroCommand};
-    use crate::vehicle::Aerodynamics;
+    use crate::control::{OpenLoop, ZeroCommand};
+    use crate::flight::vehicle::Aerodynamics;
     use nalgebra::DMatrix;
 
     fn quad_x() -> Airframe {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../python/rotorfault/presets/quad-x.toml"
-        ))
-        .unwrap();
-        Airframe::from_toml_str(&text, "quad-x").unwrap()
+        crate::fixtures::preset("quad-x")
     }
 
     fn still_air(airframe: &Airframe) -> Vehicle {

@@ -13,8 +13,8 @@
 //! `gamma` toward preferred commands. Ke et al. eq. (33) is this problem with `gamma = 0`.
 //!
 //! Methods:
-//! - [`crate::active_set::ActiveSetSolver`]: exact, allocation-free, warm-startable; the hot path.
-//! - [`crate::clarabel_qp`]: the same problem (and prioritised and attainable-set variants) through
+//! - [`crate::allocation::active_set::ActiveSetSolver`]: exact, allocation-free, warm-startable; the hot path.
+//! - [`crate::allocation::clarabel`]: the same problem (and prioritised and attainable-set variants) through
 //!   the Clarabel interior-point solver: the reference.
 //! - [`weighted_pseudo_inverse`]: the unconstrained solution (Ke eqs. (34)/(35)); bounds ignored.
 //!
@@ -32,8 +32,11 @@ use std::time::Instant;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use crate::active_set::{ActiveSet, ActiveSetSolver};
-use crate::clarabel_qp::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
+pub mod active_set;
+pub mod clarabel;
+
+use active_set::{ActiveSet, ActiveSetSolver};
+use clarabel::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
@@ -217,6 +220,15 @@ impl AllocationProblem {
     }
 
     /// The objective of the module docs at `commands`.
+    /// Objective and KKT residual of any solver's `commands` for `u_c`, after checking both
+    /// (finite, one entry per axis / per actuator): how a user verifies an answer.
+    pub fn evaluate(&self, u_c: &[f64], commands: &[f64]) -> Result<(f64, f64)> {
+        self.check_virtual_control(u_c)?;
+        require_entries("commands", commands, self.actuator_count(), "one per actuator")?;
+        require_all_finite("commands", commands)?;
+        Ok((self.objective(u_c, commands), self.kkt_residual(u_c, commands)))
+    }
+
     pub fn objective(&self, u_c: &[f64], commands: &[f64]) -> f64 {
         let achieved = self.achieved(commands);
         let tracking: f64 = (0..self.virtual_dimension())
@@ -371,7 +383,7 @@ pub fn weighted_pseudo_inverse(problem: &AllocationProblem) -> WeightedPseudoInv
 /// the curvature). (nalgebra 0.34's SVD returned wrong factors for some rank-deficient matrices;
 /// this also keeps one rank rule across methods.)
 fn pseudo_inverse(a: &DMatrix<f64>) -> DMatrix<f64> {
-    use crate::active_set::{solve_psd_closest, WORK};
+    use crate::allocation::active_set::{solve_psd_closest, WORK};
     let (rows, cols) = a.shape();
     let h = a.transpose() * a;
     let max_diagonal = (0..cols).map(|i| h[(i, i)]).fold(0.0, f64::max);
@@ -439,12 +451,37 @@ pub fn allocate_pinv(problem: &AllocationProblem, u_c: &[f64]) -> Result<Allocat
 pub enum Method {
     /// [`ActiveSetSolver`]: exact, the default.
     ActiveSet,
-    /// [`crate::clarabel_qp::allocate_clarabel`]: the interior-point reference.
+    /// [`crate::allocation::clarabel::allocate_clarabel`]: the interior-point reference.
     Clarabel(ClarabelSettings),
-    /// [`crate::clarabel_qp::allocate_prioritized`]: groups of rows, most important first.
+    /// [`crate::allocation::clarabel::allocate_prioritized`]: groups of rows, most important first.
     Prioritized(Vec<Vec<usize>>, ClarabelSettings),
     /// [`weighted_pseudo_inverse`]: unconstrained.
     Pinv,
+}
+
+impl Method {
+    /// The method named `name` (`"active-set"`, `"clarabel"`, `"pinv"`), with `priorities`
+    /// (groups of rows, most important first; Clarabel only) and Clarabel's `settings`.
+    pub fn parse(
+        name: &str,
+        priorities: Option<Vec<Vec<usize>>>,
+        settings: ClarabelSettings,
+    ) -> Result<Self> {
+        match (name, priorities) {
+            ("active-set", None) => Ok(Method::ActiveSet),
+            ("pinv", None) => Ok(Method::Pinv),
+            ("clarabel", None) => Ok(Method::Clarabel(settings)),
+            ("clarabel", Some(groups)) => Ok(Method::Prioritized(groups, settings)),
+            ("active-set" | "pinv", Some(_)) => Err(RfError::invalid(
+                "priorities",
+                "only method=\"clarabel\" solves prioritised allocations",
+            )),
+            (other, _) => Err(RfError::invalid(
+                "method",
+                format!("expected \"active-set\", \"clarabel\" or \"pinv\", got {other:?}"),
+            )),
+        }
+    }
 }
 
 /// Checks N x n row-major virtual controls: whole rows, finite entries (named `[row, col]`).

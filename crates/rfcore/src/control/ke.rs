@@ -44,12 +44,12 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
-use crate::active_set::{ActiveSet, ActiveSetSolver};
+use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use crate::airframe::Airframe;
 use crate::allocation::{weighted_pseudo_inverse, AllocationProblem, WeightedPseudoInverse};
-use crate::controller::Controller;
+use crate::control::Controller;
 use crate::error::{require_finite, require_non_negative, Result, RfError};
-use crate::rigid_body::RigidBodyState;
+use crate::state::RigidBodyState;
 
 /// Floor on `n3z` in `B_2^-1` (keeps the command finite when the vehicle tips past 87 degrees).
 pub const MIN_N3Z: f64 = 0.05;
@@ -574,12 +574,7 @@ mod tests {
     use nalgebra::UnitQuaternion;
 
     fn ke() -> Airframe {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../python/rotorfault/presets/ke-quadcopter.toml"
-        );
-        let text = std::fs::read_to_string(path).unwrap();
-        Airframe::from_toml_str(&text, "ke-quadcopter").unwrap()
+        crate::fixtures::preset("ke-quadcopter")
     }
 
     #[test]

@@ -19,6 +19,7 @@
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 use crate::error::{require_finite, Result, RfError};
+use crate::state::RigidBodyState;
 
 /// Mass and inertia of a rigid body.
 #[derive(Debug, Clone, PartialEq)]
@@ -103,11 +104,11 @@ impl RigidBody {
         F: FnMut(f64, &RigidBodyState) -> Wrench,
     {
         let k1 = self.derivative(state, &wrench_at(t_s, state));
-        let s2 = state.advanced(&k1, 0.5 * dt_s);
+        let s2 = advanced(state, &k1, 0.5 * dt_s);
         let k2 = self.derivative(&s2, &wrench_at(t_s + 0.5 * dt_s, &s2));
-        let s3 = state.advanced(&k2, 0.5 * dt_s);
+        let s3 = advanced(state, &k2, 0.5 * dt_s);
         let k3 = self.derivative(&s3, &wrench_at(t_s + 0.5 * dt_s, &s3));
-        let s4 = state.advanced(&k3, dt_s);
+        let s4 = advanced(state, &k3, dt_s);
         let k4 = self.derivative(&s4, &wrench_at(t_s + dt_s, &s4));
         let sixth = dt_s / 6.0;
         let attitude = state.attitude.quaternion()
@@ -136,60 +137,6 @@ impl RigidBody {
     }
 }
 
-/// Position and velocity (world NED), attitude (body to world) and body rates.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidBodyState {
-    pub position_m: Vector3<f64>,
-    pub velocity_m_s: Vector3<f64>,
-    pub attitude: UnitQuaternion<f64>,
-    pub omega_rad_s: Vector3<f64>,
-}
-
-impl RigidBodyState {
-    /// At rest at the origin, level.
-    pub fn at_rest() -> Self {
-        RigidBodyState {
-            position_m: Vector3::zeros(),
-            velocity_m_s: Vector3::zeros(),
-            attitude: UnitQuaternion::identity(),
-            omega_rad_s: Vector3::zeros(),
-        }
-    }
-
-    /// Roll, pitch, yaw (rad) of the aerospace Z-Y-X sequence.
-    pub fn euler_rad(&self) -> [f64; 3] {
-        if !self.attitude.coords.iter().all(|v| v.is_finite()) {
-            return [f64::NAN; 3];
-        }
-        let (roll, pitch, yaw) = self.attitude.euler_angles();
-        [roll, pitch, yaw]
-    }
-
-    /// The primary axis n3 of Ke et al.: body z expressed in the world frame.
-    pub fn primary_axis(&self) -> Vector3<f64> {
-        self.attitude * Vector3::z()
-    }
-
-    /// `true` when every component is finite.
-    pub fn is_finite(&self) -> bool {
-        self.position_m.iter().all(|v| v.is_finite())
-            && self.velocity_m_s.iter().all(|v| v.is_finite())
-            && self.attitude.coords.iter().all(|v| v.is_finite())
-            && self.omega_rad_s.iter().all(|v| v.is_finite())
-    }
-
-    /// `self + h * derivative`, the intermediate states of RK4 (quaternion not renormalised: the
-    /// derivative is evaluated on the raw 4-vector, which is what makes the scheme RK4).
-    fn advanced(&self, d: &StateDerivative, h: f64) -> Self {
-        RigidBodyState {
-            position_m: self.position_m + d.position * h,
-            velocity_m_s: self.velocity_m_s + d.velocity * h,
-            attitude: UnitQuaternion::new_unchecked(self.attitude.quaternion() + d.attitude * h),
-            omega_rad_s: self.omega_rad_s + d.omega * h,
-        }
-    }
-}
-
 /// Total force (world frame, N) and torque about the centre of mass (body frame, N m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Wrench {
@@ -213,6 +160,17 @@ pub struct StateDerivative {
     pub velocity: Vector3<f64>,
     pub attitude: Quaternion<f64>,
     pub omega: Vector3<f64>,
+}
+
+/// `state + h * derivative`, the intermediate states of RK4 (quaternion not renormalised: the
+/// derivative is evaluated on the raw 4-vector, which is what makes the scheme RK4).
+fn advanced(state: &RigidBodyState, d: &StateDerivative, h: f64) -> RigidBodyState {
+    RigidBodyState {
+        position_m: state.position_m + d.position * h,
+        velocity_m_s: state.velocity_m_s + d.velocity * h,
+        attitude: UnitQuaternion::new_unchecked(state.attitude.quaternion() + d.attitude * h),
+        omega_rad_s: state.omega_rad_s + d.omega * h,
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,13 @@
+//! Controllability analysis (Du et al., JGCD 2015): the Available Control Authority Index
+//! ([`acai`]), the 9-step test procedure and failure tables ([`controllability`]), and the
+//! failure combinations they enumerate ([`combinations`]). Depends only on [`crate::airframe`].
+
+pub mod acai;
+pub mod combinations;
+pub mod controllability;
+
+pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
+pub use controllability::{
+    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase,
+    Verdict,
+};

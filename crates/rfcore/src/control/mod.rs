@@ -1,0 +1,90 @@
+//! Controllers the simulator runs at its control rate (zero-order hold between updates).
+//!
+//! Design in Python, run in Rust: gains and controller matrices are computed in Python
+//! (python-control, H-infinity synthesis) and handed to these built-ins, which run without the GIL.
+//! A controller sees a time and a measured [`RigidBodyState`], never the simulator: this room
+//! depends on `state` and `allocation`, not on `flight`.
+//!
+//! - [`linear`]: open loop, state feedback and discrete LTI laws on the state vector of
+//!   [`crate::state::state_vector`].
+//! - [`allocated`]: a virtual-control law followed by constrained allocation.
+//! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
+
+use nalgebra::DMatrix;
+
+use crate::error::{require_all_finite, Result, RfError};
+use crate::state::RigidBodyState;
+
+pub mod allocated;
+pub mod ke;
+pub mod linear;
+
+pub use allocated::Allocated;
+pub use linear::{DiscreteLti, LinearFeedback, OpenLoop};
+
+/// Rejects a non-finite matrix entry, naming it `field[row, col]`.
+pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()> {
+    match m.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(RfError::invalid(
+            format!("{field}[{}, {}]", i % m.nrows(), i / m.nrows()),
+            format!("must be finite, got {}", m.as_slice()[i]),
+        )),
+    }
+}
+
+
+/// A controller: from the measured state at time `t_s`, the actuator commands.
+pub trait Controller: Send {
+    /// Number of commands it writes (rotors x channels).
+    fn command_count(&self) -> usize;
+    /// Writes the commands for the measured state into `out` (length [`Controller::command_count`]).
+    /// An error (only controllers that call out, such as a Python callable, can fail) ends the run.
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()>;
+    /// Back to the initial internal state (called at the start of every run).
+    fn reset(&mut self) {}
+}
+
+/// Every rotor commanded to zero (`controller=None` in Python).
+#[derive(Debug, Clone)]
+pub struct ZeroCommand {
+    pub count: usize,
+}
+
+impl Controller for ZeroCommand {
+    fn command_count(&self) -> usize {
+        self.count
+    }
+    fn command(&mut self, _t_s: f64, _measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        out.fill(0.0);
+        Ok(())
+    }
+}
+
+
+/// Runs a controller (from its reset state) on a recorded measured-state history: row k of the
+/// result is what it commands at `times_s[k]` for `states[k]`. Nothing but the measurements reaches
+/// it, so a controller that passes the same history through twice commands the same thing: the
+/// check that a "passive" controller really sees no fault information.
+pub fn replay(
+    controller: &mut dyn Controller,
+    times_s: &[f64],
+    states: &[RigidBodyState],
+) -> Result<Vec<f64>> {
+    if times_s.len() != states.len() {
+        return Err(RfError::shape(
+            "states",
+            format!("one per time ({})", times_s.len()),
+            states.len().to_string(),
+        ));
+    }
+    require_all_finite("times", times_s)?;
+    let count = controller.command_count();
+    let mut out = vec![0.0; count * times_s.len()];
+    controller.reset();
+    for (k, (t, state)) in times_s.iter().zip(states).enumerate() {
+        controller.command(*t, state, &mut out[k * count..(k + 1) * count])?;
+    }
+    Ok(out)
+}
+

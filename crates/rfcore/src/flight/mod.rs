@@ -1,0 +1,15 @@
+//! The flight simulator: one 6-DOF core with pluggable actuator models.
+//!
+//! - [`rigid_body`]: Newton-Euler dynamics with the full inertia tensor and the RK4 step.
+//! - [`actuator`]: fixed-pitch and variable-pitch rotors (lag, rate limit, saturation, efficiency).
+//! - [`vehicle`]: rotor forces and torques, drag, gyroscopic moment, wind.
+//! - [`model`]: the model as an ODE in the 12-element state vector, for linearisation.
+//! - [`simulation`]: the closed loop with a controller, rotor faults, noise and divergence events.
+//!
+//! The simulator runs any [`crate::control::Controller`]; controllers never see this room.
+
+pub mod actuator;
+pub mod model;
+pub mod rigid_body;
+pub mod simulation;
+pub mod vehicle;
