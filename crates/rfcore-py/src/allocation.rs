@@ -11,7 +11,7 @@ use rfcore::allocation::clarabel::{
     hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
     ClarabelSettings,
 };
-use rfcore::allocation::{allocate_many, time_each, AllocationProblem, Method};
+use rfcore::allocation::{allocate_many, time_each, Allocation, AllocationProblem, Method};
 use rfcore::analysis::ControlAxes;
 
 use crate::airframe::PyAirframe;
@@ -93,12 +93,48 @@ fn method(
     Method::parse(name, priorities, settings).map_err(to_py_err)
 }
 
-type AllocationArrays<'py> = (
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<f64>>,
-    Vec<&'static str>,
-    Vec<usize>,
-);
+/// Allocations of N virtual controls: commands (N x m), achieved (N x n), statuses, iterations.
+#[pyclass(name = "AllocationBatch", module = "rotorfault._rfcore", frozen)]
+pub struct PyAllocationBatch {
+    rows: usize,
+    results: Vec<Allocation>,
+    actuators: usize,
+    axes: usize,
+}
+
+impl PyAllocationBatch {
+    fn matrix<'py>(
+        &self,
+        py: Python<'py>,
+        cols: usize,
+        row: impl Fn(&Allocation) -> &[f64],
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let values: Vec<f64> = self.results.iter().flat_map(|a| row(a).iter().copied()).collect();
+        numpy::ndarray::Array2::from_shape_vec((self.rows, cols), values)
+            .map(|a| a.into_pyarray(py))
+            .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
+    }
+}
+
+#[pymethods]
+impl PyAllocationBatch {
+    #[getter]
+    fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.matrix(py, self.actuators, |a| &a.commands)
+    }
+    #[getter]
+    fn achieved<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.matrix(py, self.axes, |a| &a.achieved)
+    }
+    #[getter]
+    fn statuses(&self) -> Vec<&'static str> {
+        self.results.iter().map(|a| a.status.name()).collect()
+    }
+    #[getter]
+    fn iterations(&self) -> Vec<usize> {
+        self.results.iter().map(|a| a.iterations).collect()
+    }
+}
 
 /// Allocates every row of `controls` (N x n): commands (N x m), achieved (N x n), statuses,
 /// iterations.
@@ -112,32 +148,18 @@ pub fn allocate<'py>(
     priorities: Option<Vec<Vec<usize>>>,
     tolerance: f64,
     max_iterations: u32,
-) -> PyResult<AllocationArrays<'py>> {
+) -> PyResult<PyAllocationBatch> {
     let method = method(method_name, priorities, tolerance, max_iterations)?;
     let flat = slice2("virtual_control", &controls)?;
     let rows = controls.shape()[0];
     let problem = &problem.inner;
     let results = detached(py, || allocate_many(problem, &method, flat))?;
-    let (m, n) = (problem.actuator_count(), problem.virtual_dimension());
-    let commands: Vec<f64> = results
-        .iter()
-        .flat_map(|a| a.commands.iter().copied())
-        .collect();
-    let achieved: Vec<f64> = results
-        .iter()
-        .flat_map(|a| a.achieved.iter().copied())
-        .collect();
-    let to_2d = |values: Vec<f64>, cols: usize| {
-        numpy::ndarray::Array2::from_shape_vec((rows, cols), values)
-            .map(|a| a.into_pyarray(py))
-            .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
-    };
-    Ok((
-        to_2d(commands, m)?,
-        to_2d(achieved, n)?,
-        results.iter().map(|a| a.status.name()).collect(),
-        results.iter().map(|a| a.iterations).collect(),
-    ))
+    Ok(PyAllocationBatch {
+        rows,
+        results,
+        actuators: problem.actuator_count(),
+        axes: problem.virtual_dimension(),
+    })
 }
 
 /// Benchmark support: mean seconds per solve for each row of `controls` (cold starts, one thread).
@@ -161,17 +183,25 @@ pub fn time_allocations<'py>(
     Ok(times.into_pyarray(py))
 }
 
-type DirectionalLimitTuple<'py> = (f64, Bound<'py, PyArray1<f64>>, &'static str);
-type HoverMarginTuple<'py> = (
-    f64,
-    f64,
-    f64,
-    Option<Bound<'py, PyArray1<f64>>>,
-    &'static str,
-);
+/// The largest scale along a direction and the commands that reach it.
+#[pyclass(name = "DirectionalLimit", module = "rotorfault._rfcore", frozen, get_all)]
+pub struct PyDirectionalLimit {
+    scale: f64,
+    commands: Vec<f64>,
+    status: &'static str,
+}
 
-/// Largest scale along `direction` from `base`: None when `base` is unattainable, else
-/// (scale, commands, status).
+/// The largest total thrust with zero torques, against the weight.
+#[pyclass(name = "HoverMargin", module = "rotorfault._rfcore", frozen, get_all)]
+pub struct PyHoverMargin {
+    max_thrust_n: f64,
+    weight_n: f64,
+    margin_n: f64,
+    commands: Option<Vec<f64>>,
+    status: &'static str,
+}
+
+/// Largest scale along `direction` from `base`: None when `base` is unattainable.
 #[pyfunction]
 pub fn max_along_direction<'py>(
     py: Python<'py>,
@@ -181,7 +211,7 @@ pub fn max_along_direction<'py>(
     direction: PyReadonlyArray1<'py, f64>,
     base: PyReadonlyArray1<'py, f64>,
     tolerance: f64,
-) -> PyResult<Option<DirectionalLimitTuple<'py>>> {
+) -> PyResult<Option<PyDirectionalLimit>> {
     let settings = ClarabelSettings::default()
         .tolerance(tolerance)
         .map_err(to_py_err)?;
@@ -189,30 +219,33 @@ pub fn max_along_direction<'py>(
     let (lo, hi) = (slice1("lower", &lower)?, slice1("upper", &upper)?);
     let (d, b) = (slice1("direction", &direction)?, slice1("base", &base)?);
     let limit = detached(py, || core_max_along(&m, lo, hi, d, b, &settings))?;
-    Ok(limit.map(|l| (l.scale, l.commands.into_pyarray(py), l.status.name())))
+    Ok(limit.map(|l| PyDirectionalLimit {
+        scale: l.scale,
+        commands: l.commands,
+        status: l.status.name(),
+    }))
 }
 
-/// (max_thrust_n, weight_n, margin_n, commands or None, status) of an airframe.
+/// The hover thrust margin of an airframe.
 #[pyfunction]
 pub fn hover_thrust_margin<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     give_up_yaw: bool,
     tolerance: f64,
-) -> PyResult<HoverMarginTuple<'py>> {
+) -> PyResult<PyHoverMargin> {
     let settings = ClarabelSettings::default()
         .tolerance(tolerance)
         .map_err(to_py_err)?;
     let axes = ControlAxes::from_give_up_yaw(give_up_yaw);
     let airframe = &airframe.inner;
     let h = detached(py, || core_hover_margin(airframe, axes, &settings))?;
-    let commands = (!h.commands.is_empty()).then(|| h.commands.into_pyarray(py));
-    Ok((
-        h.max_thrust_n,
-        h.weight_n,
-        h.margin_n,
-        commands,
-        h.status.name(),
-    ))
+    Ok(PyHoverMargin {
+        max_thrust_n: h.max_thrust_n,
+        weight_n: h.weight_n,
+        margin_n: h.margin_n,
+        commands: (!h.commands.is_empty()).then_some(h.commands),
+        status: h.status.name(),
+    })
 }
 

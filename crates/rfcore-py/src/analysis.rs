@@ -4,7 +4,6 @@
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use rfcore::analysis::{
     failure_table as core_failure_table, AcaiFormula, ControlAxes, ControllabilityAnalysis,
@@ -18,23 +17,50 @@ fn analysis(airframe: &PyAirframe, give_up_yaw: bool) -> rfcore::Result<Controll
     ControllabilityAnalysis::new(&airframe.inner, ControlAxes::from_give_up_yaw(give_up_yaw))
 }
 
-fn report_dict<'py>(
-    py: Python<'py>,
-    report: &ControllabilityReport,
-) -> PyResult<Bound<'py, PyDict>> {
-    let dict = PyDict::new(py);
-    dict.set_item("state_dimension", report.state_dimension)?;
-    dict.set_item("controllability_rank", report.controllability_rank)?;
-    dict.set_item(
-        "virtual_control_dimension",
-        report.virtual_control_dimension,
-    )?;
-    dict.set_item("effectiveness_rank", report.effectiveness_rank)?;
-    dict.set_item("acai", report.acai)?;
-    dict.set_item("formula", report.formula.name())?;
-    dict.set_item("verdict", report.verdict.code())?;
-    dict.set_item("controllable", report.verdict.is_controllable())?;
-    Ok(dict)
+/// One controllability report (Du's procedure) as a named result.
+#[pyclass(name = "ControllabilityReport", module = "rotorfault._rfcore", frozen)]
+pub struct PyControllabilityReport {
+    inner: ControllabilityReport,
+}
+
+#[pymethods]
+impl PyControllabilityReport {
+    #[getter]
+    fn state_dimension(&self) -> usize {
+        self.inner.state_dimension
+    }
+    #[getter]
+    fn controllability_rank(&self) -> usize {
+        self.inner.controllability_rank
+    }
+    #[getter]
+    fn virtual_control_dimension(&self) -> usize {
+        self.inner.virtual_control_dimension
+    }
+    #[getter]
+    fn effectiveness_rank(&self) -> usize {
+        self.inner.effectiveness_rank
+    }
+    #[getter]
+    fn acai(&self) -> f64 {
+        self.inner.acai
+    }
+    #[getter]
+    fn formula(&self) -> &'static str {
+        self.inner.formula.name()
+    }
+    #[getter]
+    fn verdict(&self) -> &'static str {
+        self.inner.verdict.code()
+    }
+    #[getter]
+    fn controllable(&self) -> bool {
+        self.inner.verdict.is_controllable()
+    }
+}
+
+fn report(report: ControllabilityReport) -> PyControllabilityReport {
+    PyControllabilityReport { inner: report }
 }
 
 /// ACAI of `airframe` with efficiencies `eta` (Du Theorem 3).
@@ -100,7 +126,7 @@ pub(crate) fn acai_from_matrix(
     })
 }
 
-/// Du's 9-step procedure; returns the report as a dict.
+/// Du's 9-step procedure.
 #[pyfunction]
 pub(crate) fn controllability<'py>(
     py: Python<'py>,
@@ -108,15 +134,15 @@ pub(crate) fn controllability<'py>(
     eta: PyReadonlyArray1<'py, f64>,
     give_up_yaw: bool,
     formula: &str,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyControllabilityReport> {
     let eta = slice1("eta", &eta)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let report = detached(py, || analysis(airframe, give_up_yaw)?.report(eta, formula))?;
-    report_dict(py, &report)
+    let result = detached(py, || analysis(airframe, give_up_yaw)?.report(eta, formula))?;
+    Ok(report(result))
 }
 
 /// One failure-table row: failed rotors (0-based), report with yaw, report without yaw.
-type FailureRow<'py> = (Vec<usize>, Bound<'py, PyDict>, Bound<'py, PyDict>);
+type FailureRow = (Vec<usize>, PyControllabilityReport, PyControllabilityReport);
 
 /// Every combination of up to `max_failed` failed rotors.
 #[pyfunction]
@@ -125,20 +151,14 @@ pub(crate) fn failure_table<'py>(
     airframe: &PyAirframe,
     max_failed: usize,
     formula: &str,
-) -> PyResult<Vec<FailureRow<'py>>> {
+) -> PyResult<Vec<FailureRow>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     let cases = detached(py, || {
         core_failure_table(&airframe.inner, max_failed, formula)
     })?;
-    cases
-        .iter()
-        .map(|case| {
-            Ok((
-                case.failed.clone(),
-                report_dict(py, &case.with_yaw)?,
-                report_dict(py, &case.without_yaw)?,
-            ))
-        })
-        .collect()
+    Ok(cases
+        .into_iter()
+        .map(|case| (case.failed, report(case.with_yaw), report(case.without_yaw)))
+        .collect())
 }
 

@@ -2,10 +2,9 @@
 //! `simulate_batch` and the state derivative for linearisation. Translation only.
 
 use nalgebra::Vector3;
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch};
 use rfcore::flight::model::state_vector_derivative;
@@ -99,50 +98,197 @@ fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> rfcore::Res
     })
 }
 
-/// Timing, limits, wind and noise, in the order the Python layer passes them.
-type ConfigArgs = (
-    f64,
-    usize,
-    f64,
-    [f64; 4],
-    [f64; 3],
-    Vec<(f64, [f64; 3])>,
-    Option<(f64, [f64; STATE_DIM], u64)>,
-    usize,
-);
+/// Drag and rotor inertia (`rotorfault.Drag`); defaults and rules are the core's.
+#[pyclass(name = "Drag", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
+pub struct PyDrag {
+    pub(crate) inner: Aerodynamics,
+}
 
-fn config(args: ConfigArgs) -> SimulationConfig {
-    let (dt, substeps, t_final, limits, wind, profile, noise, record_every) = args;
-    SimulationConfig {
-        record_every,
-        noise: noise.map(|(relative_std, absolute_std, seed)| SensorNoise {
-            relative_std,
-            absolute_std,
-            seed,
-        }),
-        control_dt_s: dt,
-        substeps,
-        duration_s: t_final,
-        limits: DivergenceLimits {
-            max_tilt_rad: limits[0],
-            max_altitude_loss_m: limits[1],
-            max_speed_m_s: limits[2],
-            max_rate_rad_s: limits[3],
-        },
-        wind_m_s: Vector3::from(wind),
-        wind_profile: profile
-            .into_iter()
-            .map(|(t, w)| (t, Vector3::from(w)))
-            .collect(),
+#[pymethods]
+impl PyDrag {
+    #[new]
+    #[pyo3(signature = (*, linear_n_s_m=None, quadratic_n_s2_m2=None, rotational_n_m_s=None, rotor_inertia_kg_m2=None))]
+    fn new(
+        linear_n_s_m: Option<f64>,
+        quadratic_n_s2_m2: Option<f64>,
+        rotational_n_m_s: Option<f64>,
+        rotor_inertia_kg_m2: Option<f64>,
+    ) -> PyResult<Self> {
+        let d = Aerodynamics::default();
+        let inner = Aerodynamics {
+            linear_drag_n_s_m: linear_n_s_m.unwrap_or(d.linear_drag_n_s_m),
+            quadratic_drag_n_s2_m2: quadratic_n_s2_m2.unwrap_or(d.quadratic_drag_n_s2_m2),
+            rotational_drag_n_m_s: rotational_n_m_s.unwrap_or(d.rotational_drag_n_m_s),
+            rotor_inertia_kg_m2: rotor_inertia_kg_m2.unwrap_or(d.rotor_inertia_kg_m2),
+        };
+        inner.check().map_err(to_py_err)?;
+        Ok(PyDrag { inner })
+    }
+    #[getter]
+    fn linear_n_s_m(&self) -> f64 {
+        self.inner.linear_drag_n_s_m
+    }
+    #[getter]
+    fn quadratic_n_s2_m2(&self) -> f64 {
+        self.inner.quadratic_drag_n_s2_m2
+    }
+    #[getter]
+    fn rotational_n_m_s(&self) -> f64 {
+        self.inner.rotational_drag_n_m_s
+    }
+    #[getter]
+    fn rotor_inertia_kg_m2(&self) -> f64 {
+        self.inner.rotor_inertia_kg_m2
     }
 }
 
-fn aerodynamics(aero: [f64; 4]) -> Aerodynamics {
-    Aerodynamics {
-        linear_drag_n_s_m: aero[0],
-        quadratic_drag_n_s2_m2: aero[1],
-        rotational_drag_n_m_s: aero[2],
-        rotor_inertia_kg_m2: aero[3],
+/// Limits past which a run is declared diverged (`rotorfault.DivergenceLimits`).
+#[pyclass(name = "DivergenceLimits", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
+pub struct PyDivergenceLimits {
+    pub(crate) inner: DivergenceLimits,
+}
+
+#[pymethods]
+impl PyDivergenceLimits {
+    #[new]
+    #[pyo3(signature = (*, max_tilt_rad=None, max_altitude_loss_m=None, max_speed_m_s=None, max_rate_rad_s=None))]
+    fn new(
+        max_tilt_rad: Option<f64>,
+        max_altitude_loss_m: Option<f64>,
+        max_speed_m_s: Option<f64>,
+        max_rate_rad_s: Option<f64>,
+    ) -> Self {
+        let d = DivergenceLimits::default();
+        PyDivergenceLimits {
+            inner: DivergenceLimits {
+                max_tilt_rad: max_tilt_rad.unwrap_or(d.max_tilt_rad),
+                max_altitude_loss_m: max_altitude_loss_m.unwrap_or(d.max_altitude_loss_m),
+                max_speed_m_s: max_speed_m_s.unwrap_or(d.max_speed_m_s),
+                max_rate_rad_s: max_rate_rad_s.unwrap_or(d.max_rate_rad_s),
+            },
+        }
+    }
+    #[getter]
+    fn max_tilt_rad(&self) -> f64 {
+        self.inner.max_tilt_rad
+    }
+    #[getter]
+    fn max_altitude_loss_m(&self) -> f64 {
+        self.inner.max_altitude_loss_m
+    }
+    #[getter]
+    fn max_speed_m_s(&self) -> f64 {
+        self.inner.max_speed_m_s
+    }
+    #[getter]
+    fn max_rate_rad_s(&self) -> f64 {
+        self.inner.max_rate_rad_s
+    }
+}
+
+/// Sensor noise: standard deviation `relative_std |x_i| + absolute_std[i]` on the 12 measured
+/// state components, seeded.
+#[pyclass(name = "SensorNoise", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
+pub struct PySensorNoise {
+    pub(crate) inner: SensorNoise,
+}
+
+#[pymethods]
+impl PySensorNoise {
+    #[new]
+    #[pyo3(signature = (*, relative_std, absolute_std, seed))]
+    fn new(relative_std: f64, absolute_std: [f64; STATE_DIM], seed: u64) -> Self {
+        PySensorNoise {
+            inner: SensorNoise {
+                relative_std,
+                absolute_std,
+                seed,
+            },
+        }
+    }
+    #[getter]
+    fn relative_std(&self) -> f64 {
+        self.inner.relative_std
+    }
+    #[getter]
+    fn absolute_std(&self) -> [f64; STATE_DIM] {
+        self.inner.absolute_std
+    }
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+}
+
+/// Timing, limits, wind, noise and recording of a run; defaults are the core's
+/// (`SimulationConfig::default`), the rules its `check`.
+#[pyclass(name = "SimulationConfig", module = "rotorfault._rfcore", frozen)]
+pub struct PySimulationConfig {
+    pub(crate) inner: SimulationConfig,
+}
+
+#[pymethods]
+impl PySimulationConfig {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
+    fn new(
+        dt_s: Option<f64>,
+        substeps: Option<usize>,
+        duration_s: Option<f64>,
+        limits: Option<PyRef<'_, PyDivergenceLimits>>,
+        wind_m_s: Option<[f64; 3]>,
+        wind_profile: Option<Vec<(f64, [f64; 3])>>,
+        noise: Option<PyRef<'_, PySensorNoise>>,
+        record_every: Option<usize>,
+    ) -> PyResult<Self> {
+        let d = SimulationConfig::default();
+        let inner = SimulationConfig {
+            control_dt_s: dt_s.unwrap_or(d.control_dt_s),
+            substeps: substeps.unwrap_or(d.substeps),
+            duration_s: duration_s.unwrap_or(d.duration_s),
+            limits: limits.map_or(d.limits, |l| l.inner),
+            wind_m_s: wind_m_s.map_or(d.wind_m_s, Vector3::from),
+            wind_profile: wind_profile.map_or(d.wind_profile, |points| {
+                points
+                    .into_iter()
+                    .map(|(t, w)| (t, Vector3::from(w)))
+                    .collect()
+            }),
+            noise: noise.map(|n| n.inner).or(d.noise),
+            record_every: record_every.unwrap_or(d.record_every),
+        };
+        inner.check().map_err(to_py_err)?;
+        Ok(PySimulationConfig { inner })
+    }
+    #[getter]
+    fn dt_s(&self) -> f64 {
+        self.inner.control_dt_s
+    }
+    #[getter]
+    fn substeps(&self) -> usize {
+        self.inner.substeps
+    }
+    #[getter]
+    fn duration_s(&self) -> f64 {
+        self.inner.duration_s
+    }
+    #[getter]
+    fn record_every(&self) -> usize {
+        self.inner.record_every
+    }
+    #[getter]
+    fn limits(&self) -> PyDivergenceLimits {
+        PyDivergenceLimits {
+            inner: self.inner.limits,
+        }
+    }
+    #[getter]
+    fn wind_m_s(&self) -> [f64; 3] {
+        self.inner.wind_m_s.into()
     }
 }
 
@@ -156,59 +302,107 @@ fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {
         .collect()
 }
 
-fn trajectory_dict<'py>(py: Python<'py>, run: Trajectory) -> PyResult<Bound<'py, PyDict>> {
-    let n = run.t_s.len();
-    let dict = PyDict::new(py);
-    let mut columns: [Vec<f64>; 6] = Default::default();
-    for s in &run.states {
-        columns[0].extend(s.position_m.iter());
-        columns[1].extend(s.velocity_m_s.iter());
-        let q = s.attitude.quaternion();
-        columns[2].extend([q.w, q.i, q.j, q.k]);
-        columns[3].extend(s.euler_rad());
-        columns[4].extend(s.omega_rad_s.iter());
-        columns[5].extend(s.primary_axis().iter());
-    }
-    let [position, velocity, quaternion, euler, omega, n3] = columns;
-    for (name, values) in [
-        ("position", position),
-        ("velocity", velocity),
-        ("quaternion", quaternion),
-        ("euler", euler),
-        ("omega", omega),
-        ("primary_axis", n3),
-        ("command", run.commands),
-        ("thrust", run.thrust_n),
-        ("health", run.health),
-        ("measured", run.measured),
-    ] {
+/// Why and when a run ended early, with the 12-element state vector at that moment.
+#[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen, get_all)]
+pub struct PyDivergence {
+    time_s: f64,
+    reason: &'static str,
+    description: &'static str,
+    state: [f64; STATE_DIM],
+}
+
+/// A recorded run: one row per recorded control step; arrays are built on access.
+#[pyclass(name = "Trajectory", module = "rotorfault._rfcore", frozen)]
+pub struct PyTrajectory {
+    run: Trajectory,
+}
+
+type Array2<'py> = PyResult<Bound<'py, PyArray2<f64>>>;
+
+impl PyTrajectory {
+    fn rows<'py>(&self, py: Python<'py>, values: Vec<f64>) -> Array2<'py> {
+        let n = self.run.t_s.len();
         let cols = values.len().checked_div(n).unwrap_or(0);
-        dict.set_item(name, values.into_pyarray(py).reshape([n, cols])?)?;
+        Ok(values.into_pyarray(py).reshape([n, cols])?)
     }
-    dict.set_item("t", run.t_s.into_pyarray(py))?;
-    match run.divergence {
-        None => dict.set_item("divergence", py.None())?,
-        Some(d) => {
-            let event = PyDict::new(py);
-            event.set_item("time", d.time_s)?;
-            event.set_item("reason", d.reason.name())?;
-            event.set_item("description", d.reason.describe())?;
-            event.set_item("state", state_vector(&d.state).to_vec())?;
-            dict.set_item("divergence", event)?;
-        }
+
+    fn per_state<const N: usize>(&self, f: impl Fn(&RigidBodyState) -> [f64; N]) -> Vec<f64> {
+        self.run.states.iter().flat_map(f).collect()
     }
-    Ok(dict)
+}
+
+#[pymethods]
+impl PyTrajectory {
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.run.t_s.clone().into_pyarray(py)
+    }
+    #[getter]
+    fn position<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.per_state(|s| s.position_m.into()))
+    }
+    #[getter]
+    fn velocity<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.per_state(|s| s.velocity_m_s.into()))
+    }
+    #[getter]
+    fn quaternion<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(
+            py,
+            self.per_state(|s| {
+                let q = s.attitude.quaternion();
+                [q.w, q.i, q.j, q.k]
+            }),
+        )
+    }
+    #[getter]
+    fn euler<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.per_state(|s| s.euler_rad()))
+    }
+    #[getter]
+    fn omega<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.per_state(|s| s.omega_rad_s.into()))
+    }
+    #[getter]
+    fn primary_axis<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.per_state(|s| s.primary_axis().into()))
+    }
+    #[getter]
+    fn command<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.run.commands.clone())
+    }
+    #[getter]
+    fn thrust<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.run.thrust_n.clone())
+    }
+    #[getter]
+    fn efficiency<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.run.health.clone())
+    }
+    #[getter]
+    fn measured<'py>(&self, py: Python<'py>) -> Array2<'py> {
+        self.rows(py, self.run.measured.clone())
+    }
+    #[getter]
+    fn divergence(&self) -> Option<PyDivergence> {
+        self.run.divergence.map(|d| PyDivergence {
+            time_s: d.time_s,
+            reason: d.reason.name(),
+            description: d.reason.describe(),
+            state: state_vector(&d.state),
+        })
+    }
 }
 
 /// The vehicle, its actuators (settled at `settle` when given) and the command count.
 fn vehicle_and_actuators(
     airframe: &PyAirframe,
     actuator: &ActuatorArg<'_>,
-    aero: [f64; 4],
+    drag: &PyDrag,
     settle: Option<&PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<(Vehicle, Actuators, usize)> {
     let mut actuators = build_actuators(airframe, actuator).map_err(to_py_err)?;
-    let vehicle = Vehicle::new(&airframe.inner, aerodynamics(aero)).map_err(to_py_err)?;
+    let vehicle = Vehicle::new(&airframe.inner, drag.inner).map_err(to_py_err)?;
     if let Some(settle) = settle {
         actuators
             .settle(slice1("initial_command", settle)?)
@@ -225,18 +419,18 @@ pub fn simulate<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     actuator: ActuatorArg<'py>,
-    aero: [f64; 4],
+    drag: PyRef<'py, PyDrag>,
     controller: Option<Bound<'py, PyAny>>,
     x0: [f64; 13],
     fault_list: Vec<(usize, f64, f64)>,
     health: PyReadonlyArray1<'py, f64>,
     settle: Option<PyReadonlyArray1<'py, f64>>,
-    config_args: ConfigArgs,
-) -> PyResult<Bound<'py, PyDict>> {
+    config: PyRef<'py, PySimulationConfig>,
+) -> PyResult<PyTrajectory> {
     let (vehicle, actuators, count) =
-        vehicle_and_actuators(airframe, &actuator, aero, settle.as_ref())?;
+        vehicle_and_actuators(airframe, &actuator, &drag, settle.as_ref())?;
     let health = slice1("health", &health)?.to_vec();
-    let config = config(config_args);
+    let config = &config.inner;
     let faults = faults(&fault_list);
     let x0 = RigidBodyState::from_packed(&x0);
     let run = match controller {
@@ -254,7 +448,7 @@ pub fn simulate<'py>(
                     &health,
                     &faults,
                     x0,
-                    &config,
+                    config,
                 )
             });
             if let Some(err) = callable.error.take() {
@@ -282,12 +476,12 @@ pub fn simulate<'py>(
                     &health,
                     &faults,
                     x0,
-                    &config,
+                    config,
                 )
             })?
         }
     };
-    trajectory_dict(py, run)
+    Ok(PyTrajectory { run })
 }
 
 /// Many runs in parallel; each item of `controllers`, `x0s` and `fault_lists` is one run.
@@ -297,15 +491,15 @@ pub fn simulate_batch<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     actuator: ActuatorArg<'py>,
-    aero: [f64; 4],
+    drag: PyRef<'py, PyDrag>,
     controllers: Vec<Option<ControllerArg<'py>>>,
     x0s: Vec<[f64; 13]>,
     fault_lists: Vec<Vec<(usize, f64, f64)>>,
     health: PyReadonlyArray1<'py, f64>,
     settles: Vec<Option<Vec<f64>>>,
-    config_args: ConfigArgs,
-) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let (vehicle, actuators, count) = vehicle_and_actuators(airframe, &actuator, aero, None)?;
+    config: PyRef<'py, PySimulationConfig>,
+) -> PyResult<Vec<PyTrajectory>> {
+    let (vehicle, actuators, count) = vehicle_and_actuators(airframe, &actuator, &drag, None)?;
     if controllers.len() != x0s.len()
         || fault_lists.len() != x0s.len()
         || settles.len() != x0s.len()
@@ -315,7 +509,7 @@ pub fn simulate_batch<'py>(
         ));
     }
     let health = slice1("health", &health)?.to_vec();
-    let config = config(config_args);
+    let config = &config.inner;
     let runs: Vec<BatchRun> = controllers
         .iter()
         .zip(&x0s)
@@ -331,12 +525,12 @@ pub fn simulate_batch<'py>(
         })
         .collect::<PyResult<_>>()?;
     let results = detached(py, || {
-        core_batch(&vehicle, &actuators, &health, runs, &config)
+        core_batch(&vehicle, &actuators, &health, runs, config)
     })?;
-    results
+    Ok(results
         .into_iter()
-        .map(|run| trajectory_dict(py, run))
-        .collect()
+        .map(|run| PyTrajectory { run })
+        .collect())
 }
 
 /// d/dt of the 12-element state vector with the actuators settled at `command` (no lag): the
@@ -347,13 +541,13 @@ pub fn state_derivative<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     actuator: ActuatorArg<'py>,
-    aero: [f64; 4],
+    drag: PyRef<'py, PyDrag>,
     x: [f64; STATE_DIM],
     command: PyReadonlyArray1<'py, f64>,
     health: PyReadonlyArray1<'py, f64>,
     wind: [f64; 3],
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let (vehicle, mut actuators, _) = vehicle_and_actuators(airframe, &actuator, aero, None)?;
+    let (vehicle, mut actuators, _) = vehicle_and_actuators(airframe, &actuator, &drag, None)?;
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
         return Err(PyValueError::new_err(format!(
             "x[{i}]: must be finite, got {}",

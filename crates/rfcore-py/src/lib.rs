@@ -16,15 +16,26 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<airframe::PyAirframe>()?;
+    module.add_class::<analysis::PyControllabilityReport>()?;
+    module.add_class::<allocation::PyAllocationBatch>()?;
+    module.add_class::<allocation::PyDirectionalLimit>()?;
+    module.add_class::<allocation::PyHoverMargin>()?;
     module.add_class::<flight::PyFixedPitch>()?;
+    module.add_class::<flight::PyDrag>()?;
+    module.add_class::<flight::PyDivergenceLimits>()?;
+    module.add_class::<flight::PySensorNoise>()?;
+    module.add_class::<flight::PySimulationConfig>()?;
+    module.add_class::<flight::PyTrajectory>()?;
+    module.add_class::<flight::PyDivergence>()?;
+    module.add_class::<control::ke::PyKeGains>()?;
+    module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;
     module.add_class::<control::linear::PyOpenLoop>()?;
     module.add_class::<control::linear::PyLinearFeedback>()?;
-    module.add_class::<control::linear::PyDiscreteLti>()?;
+    module.add_class::<control::linear::PyLti>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<control::PyAllocated>()?;
     module.add_class::<control::ke::PyUniformPassiveFtc>()?;
-    module.add_function(wrap_pyfunction!(control::ke::ftc_preset_from_toml, module)?)?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::time_allocations, module)?)?;

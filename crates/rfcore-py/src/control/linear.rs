@@ -3,7 +3,7 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::control::linear::{DiscreteLti, LinearFeedback, OpenLoop};
+use rfcore::control::linear::{Lti, LinearFeedback, OpenLoop};
 
 use crate::convert::{matrix, slice1, to_py_err};
 
@@ -54,13 +54,13 @@ impl PyLinearFeedback {
 }
 
 /// A discrete LTI controller driven by the state error.
-#[pyclass(name = "DiscreteLti", module = "rotorfault._rfcore", frozen)]
-pub struct PyDiscreteLti {
-    pub(crate) inner: DiscreteLti,
+#[pyclass(name = "Lti", module = "rotorfault._rfcore", frozen)]
+pub struct PyLti {
+    pub(crate) inner: Lti,
 }
 
 #[pymethods]
-impl PyDiscreteLti {
+impl PyLti {
     #[new]
     fn new(
         a: PyReadonlyArray2<'_, f64>,
@@ -70,7 +70,7 @@ impl PyDiscreteLti {
         x_trim: PyReadonlyArray1<'_, f64>,
         u_trim: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Self> {
-        let inner = DiscreteLti::new(
+        let inner = Lti::new(
             matrix("A_K", &a)?,
             matrix("B_K", &b)?,
             matrix("C_K", &c)?,
@@ -79,7 +79,7 @@ impl PyDiscreteLti {
             slice1("u_trim", &u_trim)?,
         )
         .map_err(to_py_err)?;
-        Ok(PyDiscreteLti { inner })
+        Ok(PyLti { inner })
     }
 }
 

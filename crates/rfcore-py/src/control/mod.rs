@@ -17,7 +17,7 @@ use rfcore::RfError;
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
-use linear::{PyDiscreteLti, PyLinearFeedback, PyOpenLoop};
+use linear::{PyLti, PyLinearFeedback, PyOpenLoop};
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
 pub(crate) struct CallableController {
@@ -79,7 +79,7 @@ impl Controller for CallableController {
 pub enum ControllerArg<'py> {
     OpenLoop(PyRef<'py, PyOpenLoop>),
     LinearFeedback(PyRef<'py, PyLinearFeedback>),
-    Lti(PyRef<'py, PyDiscreteLti>),
+    Lti(PyRef<'py, PyLti>),
     Allocated(PyRef<'py, PyAllocated>),
     Ftc(PyRef<'py, PyUniformPassiveFtc>),
 }
@@ -131,7 +131,7 @@ impl PyAllocated {
             )
         ) {
             return Err(PyTypeError::new_err(
-                "law: expected OpenLoop, LinearFeedback or DiscreteLti (a virtual-control law)",
+                "law: expected OpenLoop, LinearFeedback or Lti (a virtual-control law)",
             ));
         }
         let py = law.py();

@@ -91,10 +91,10 @@ pub struct KeGains {
     pub k_iz: f64,
 }
 
-impl KeGains {
-    /// Table IV, HIL column, with the remedy's altitude integral `k_iz = 0.1` (the `ke-hil`
-    /// preset).
-    pub fn hil() -> Self {
+/// Table IV, HIL column, with the remedy's altitude integral `k_iz = 0.1`: the `ke-hil` preset
+/// (a test ties the two) and the Python `KeGains` defaults (read from here).
+impl Default for KeGains {
+    fn default() -> Self {
         KeGains {
             k_p: 0.3,
             k_v: 0.1,
@@ -111,7 +111,9 @@ impl KeGains {
             k_iz: 0.1,
         }
     }
+}
 
+impl KeGains {
     /// Rejects gains the design excludes, naming the gain and the rule.
     pub fn check(&self) -> Result<()> {
         let positive = [
@@ -367,13 +369,8 @@ impl UniformPassiveFtc {
         self.setpoints[k].1
     }
 
-    /// The desired virtual control `u_d = [f_d, tau_p,d, tau_q,d, tau_r,d]` ((8)-(9), (28),
-    /// (15)) and the pieces the estimator needs (`x_2`, `A_2 x_2`, `B_2^-1` diagonal).
-    fn desired(
-        &self,
-        setpoint: &Vector3<f64>,
-        s: &RigidBodyState,
-    ) -> ([f64; 4], [f64; 3], [f64; 3], [f64; 3]) {
+    /// The desired virtual control ((8)-(9), (28), (15)) and the pieces the estimator needs.
+    fn desired(&self, setpoint: &Vector3<f64>, s: &RigidBodyState) -> Desired {
         let g = &self.gains;
         let [jx, jy, jz] = self.inertia_kg_m2;
         let rot: Matrix3<f64> = s.attitude.to_rotation_matrix().into_inner();
@@ -434,8 +431,8 @@ impl UniformPassiveFtc {
         let b2_inverse = [-self.mass_kg / n3.z.max(MIN_N3Z), jx, jy];
         // (15) with r_d = 0
         let tau_r_d = -jz * g.k_r * r;
-        (
-            [
+        Desired {
+            u_d: [
                 b2_inverse[0] * inner[0],
                 b2_inverse[1] * inner[1],
                 b2_inverse[2] * inner[2],
@@ -444,7 +441,7 @@ impl UniformPassiveFtc {
             x2,
             a2x2,
             b2_inverse,
-        )
+        }
     }
 
     fn produced(&self, t: &[f64; 4]) -> [f64; 4] {
@@ -454,6 +451,18 @@ impl UniformPassiveFtc {
         }
         out
     }
+}
+
+/// What [`UniformPassiveFtc::desired`] computes in one control step.
+struct Desired {
+    /// The desired virtual control `u_d = [f_d, tau_p,d, tau_q,d, tau_r,d]`.
+    u_d: [f64; 4],
+    /// `x_2 = [v_z, p, q]`.
+    x2: [f64; 3],
+    /// `A_2 x_2`.
+    a2x2: [f64; 3],
+    /// The diagonal of `B_2^-1` (with the current `n3z`, floored).
+    b2_inverse: [f64; 3],
 }
 
 impl Controller for UniformPassiveFtc {
@@ -471,7 +480,12 @@ impl Controller for UniformPassiveFtc {
             ));
         }
         let setpoint = self.setpoint(t_s);
-        let (u_d, x2, a2x2, b2_inverse) = self.desired(&setpoint, measured);
+        let Desired {
+            u_d,
+            x2,
+            a2x2,
+            b2_inverse,
+        } = self.desired(&setpoint, measured);
         if self.law == CommandLaw::Feedforward && self.gains.k_iz > 0.0 {
             // Forward Euler over the control period, after use (the integral lags one step).
             let e_z = setpoint.z - measured.position_m.z;
@@ -602,7 +616,7 @@ mod tests {
         ] {
             let mut c = UniformPassiveFtc::new(
                 &airframe,
-                KeGains::hil(),
+                KeGains::default(),
                 law,
                 vec![(0.0, [0.0, 0.0, -10.0])],
                 1.0 / 400.0,
@@ -631,7 +645,7 @@ mod tests {
         let airframe = ke();
         let mut c = UniformPassiveFtc::new(
             &airframe,
-            KeGains::hil(),
+            KeGains::default(),
             CommandLaw::default(),
             vec![(0.0, [0.0, 0.0, -10.0])],
             0.0025,
@@ -659,7 +673,7 @@ mod tests {
     #[test]
     fn bad_gains_and_airframes_are_rejected() {
         let airframe = ke();
-        let mut gains = KeGains::hil();
+        let mut gains = KeGains::default();
         gains.epsilon_s = 0.0;
         let err = UniformPassiveFtc::new(
             &airframe,
@@ -672,12 +686,20 @@ mod tests {
         assert!(err.to_string().starts_with("epsilon_s"), "{err}");
         let err = UniformPassiveFtc::new(
             &airframe,
-            KeGains::hil(),
+            KeGains::default(),
             CommandLaw::default(),
             vec![],
             0.0025,
         )
         .unwrap_err();
         assert!(err.to_string().starts_with("setpoints"), "{err}");
+    }
+
+    #[test]
+    fn the_ke_hil_preset_holds_the_default_gains() {
+        let preset =
+            FtcPreset::from_toml_str(&crate::fixtures::preset_text("ftc/ke-hil.toml"), "ke-hil")
+                .unwrap();
+        assert_eq!(preset.gains, KeGains::default());
     }
 }

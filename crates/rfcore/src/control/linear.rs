@@ -114,7 +114,7 @@ impl Controller for LinearFeedback {
 /// `e = x - x_trim`: `xi+ = A xi + B e`, `u = u_trim + C xi + D e`. Continuous designs are
 /// discretised in Python (zero-order hold at the control period) before they get here.
 #[derive(Debug, Clone)]
-pub struct DiscreteLti {
+pub struct Lti {
     a: DMatrix<f64>,
     b: DMatrix<f64>,
     c: DMatrix<f64>,
@@ -124,7 +124,7 @@ pub struct DiscreteLti {
     xi: DVector<f64>,
 }
 
-impl DiscreteLti {
+impl Lti {
     pub fn new(
         a: DMatrix<f64>,
         b: DMatrix<f64>,
@@ -151,7 +151,7 @@ impl DiscreteLti {
             }
             require_finite_matrix(field, m)?;
         }
-        Ok(DiscreteLti {
+        Ok(Lti {
             xi: DVector::zeros(n),
             a,
             b,
@@ -163,7 +163,7 @@ impl DiscreteLti {
     }
 }
 
-impl Controller for DiscreteLti {
+impl Controller for Lti {
     fn command_count(&self) -> usize {
         self.u_trim.len()
     }
@@ -214,7 +214,7 @@ mod tests {
         let x_trim = [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0];
         let u_trim = [2.0; 4];
         let mut lqr = LinearFeedback::new(&x_trim, &u_trim, gain.clone()).unwrap();
-        let mut lti = DiscreteLti::new(
+        let mut lti = Lti::new(
             DMatrix::zeros(0, 0),
             DMatrix::zeros(0, STATE_DIM),
             DMatrix::zeros(4, 0),
@@ -242,7 +242,7 @@ mod tests {
         // An integrator of the x-position error: xi+ = xi + e_x, u = xi.
         let mut b = DMatrix::zeros(1, STATE_DIM);
         b[(0, 0)] = 1.0;
-        let mut lti = DiscreteLti::new(
+        let mut lti = Lti::new(
             DMatrix::identity(1, 1),
             b,
             DMatrix::identity(1, 1),
@@ -263,7 +263,7 @@ mod tests {
         lti.reset();
         lti.command(0.0, &state, &mut out).unwrap();
         assert_eq!(out[0], 0.0);
-        let err = DiscreteLti::new(
+        let err = Lti::new(
             DMatrix::identity(2, 2),
             DMatrix::zeros(1, STATE_DIM),
             DMatrix::zeros(1, 2),

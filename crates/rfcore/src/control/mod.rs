@@ -20,7 +20,7 @@ pub mod ke;
 pub mod linear;
 
 pub use allocated::Allocated;
-pub use linear::{DiscreteLti, LinearFeedback, OpenLoop};
+pub use linear::{Lti, LinearFeedback, OpenLoop};
 
 /// Rejects a non-finite matrix entry, naming it `field[row, col]`.
 pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()> {

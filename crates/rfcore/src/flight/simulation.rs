@@ -201,6 +201,13 @@ impl Gaussian {
     }
 }
 
+/// The Python `Simulator`'s defaults: Ke's 400 Hz control rate with 4 RK4 substeps, a 10 s run.
+impl Default for SimulationConfig {
+    fn default() -> Self {
+        SimulationConfig::new(1.0 / 400.0, 4, 10.0)
+    }
+}
+
 impl SimulationConfig {
     /// A run of `duration_s` at control period `control_dt_s` with `substeps` RK4 steps per
     /// period, default limits, no wind, no noise.
