@@ -1,5 +1,5 @@
 """The flight simulator from Python: hover, free fall, rotor failure under LQR, every actuator
-effect in isolation, controllers (built-in, LTI, Python callable), batches, bad input.
+effect in isolation, controllers (built-in, Lti, Python callable), batches, bad input.
 Closed forms are checked to 1e-9 unless stated."""
 
 from __future__ import annotations
