@@ -11,7 +11,7 @@ are active), the same set for every solver.
 Timed, per problem, on one thread, cold-started, setup included:
 
 (a) ``active-set``: rotorfault's exact solver (Rust), mean of 2,000 repeats per problem, timed
-    inside Rust (``Allocator.time_per_solve``) so no Python call overhead is counted;
+    inside Rust (``_timing.time_per_solve``) so no Python call overhead is counted;
 (b) ``clarabel (Rust)``: the same problem through the clarabel crate (rotorfault's reference
     path), mean of 20 repeats per problem, timed inside Rust;
 (c) ``clarabel (Python)``: the clarabel PyPI package building and solving the same QP from
@@ -36,6 +36,8 @@ from scipy import sparse  # type: ignore[import-untyped]
 
 import rotorfault as rf
 from rotorfault.allocation import Allocator
+
+from _timing import time_per_solve
 
 PRESETS = ("quad-x", "hexa-pnpnpn", "octo-x")
 WEIGHTS = np.array([1.0, 20.0, 20.0, 0.01])
@@ -81,8 +83,8 @@ def main() -> None:
             scale = max(f_ref, 0.5 * float(u_c @ (WEIGHTS * u_c)))
             assert f_exact <= f_ref + 1e-12 * scale and f_ref - f_exact <= 1e-9 * scale, (name, f_exact, f_ref)
 
-        active = allocator.time_per_solve(controls, "active-set", repeats=2000)
-        rust_clarabel = allocator.time_per_solve(controls, "clarabel", repeats=20)
+        active = time_per_solve(allocator, controls, "active-set", repeats=2000)
+        rust_clarabel = time_per_solve(allocator, controls, "clarabel", repeats=20)
         py_clarabel = np.empty(PROBLEMS)
         for i, u_c in enumerate(controls):
             start = time.perf_counter()

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import rotorfault as rf
-from rotorfault import ftc
+from rotorfault.control import ke
 
 RUNS = 1000
 T_FINAL_S = 30.0
@@ -74,12 +74,12 @@ def rotorpy_steps_per_s() -> float | None:
 
 def main() -> None:
     print(f"rotorfault {rf.__version__}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs")
-    preset = ftc.preset("ke-hil")
+    preset = ke.preset("ke-hil")
     sim = preset.simulator()
     rng = np.random.default_rng(5)
     starts, faults, names = batch_inputs(rng)
-    controller = rf.controllers.UniformPassiveFTC(preset.airframe, gains=preset.gains, position=(0, 0, -10))
-    steps_per_run = round(T_FINAL_S / sim.dt)
+    controller = rf.UniformPassiveFtc(preset.airframe, gains=preset.gains, position=(0, 0, -10))
+    steps_per_run = round(T_FINAL_S / sim.dt_s)
 
     # One run on one thread.
     t0 = time.perf_counter()
@@ -94,7 +94,7 @@ def main() -> None:
     total_steps = RUNS * steps_per_run
     rate = total_steps / batch_s
     final_r = np.abs(batch.omega[:, -1, 2])
-    print(f"\nbatch: {RUNS} runs x {T_FINAL_S:.0f} s at {1 / sim.dt:.0f} Hz, {sim.substeps} RK4 substeps: "
+    print(f"\nbatch: {RUNS} runs x {T_FINAL_S:.0f} s at {1 / sim.dt_s:.0f} Hz, {sim.substeps} RK4 substeps: "
           f"{total_steps / 1e6:.0f} M control steps in {batch_s:.2f} s")
     print(f"  {rate:,.0f} closed-loop control steps/s  (target {TARGET_STEPS_PER_S:,}: "
           f"{'met' if rate >= TARGET_STEPS_PER_S else 'NOT met'})")

@@ -246,7 +246,7 @@ def main() -> None:
     load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
 
     airframe = rf.Airframe.preset(PRESET)
-    sim = rf.Simulator(airframe, dt=DT, substeps=SUBSTEPS)
+    sim = rf.Simulator(airframe, dt_s=DT, substeps=SUBSTEPS)
     lqr = rf.lqr_hover(sim, position=TARGET)
     hold = rf.OpenLoop.constant(lqr.u_trim)
     rng = np.random.default_rng(SEED)

@@ -192,11 +192,11 @@ def test_hover_thrust_margin_analytic_cases(ke: rf.Airframe) -> None:
     assert healthy.thrust_to_weight == pytest.approx(34 / weight, rel=1e-9)
     # One rotor lost: with yaw held at zero only zero thrust balances (the remaining diagonal pair
     # spins the same way; the third rotor must then be off too) ...
-    failed = rf.hover_thrust_margin(ke, health=[1, 1, 0, 1])
+    failed = rf.hover_thrust_margin(ke, efficiency=[1, 1, 0, 1])
     assert failed.max_thrust_n == pytest.approx(0.0, abs=1e-7)
     assert failed.margin_n < 0
     # ... and with yaw given up (a spinning vehicle), the opposite pair at full thrust.
-    spinning = rf.hover_thrust_margin(ke, health=[1, 1, 0, 1], give_up_yaw=True)
+    spinning = rf.hover_thrust_margin(ke, efficiency=[1, 1, 0, 1], give_up_yaw=True)
     assert spinning.max_thrust_n == pytest.approx(2 * 8.5, rel=1e-9)
 
 
@@ -206,7 +206,7 @@ def test_hover_thrust_margin_matches_linprog_for_every_single_failure(name: str)
     for rotor in range(frame.rotor_count):
         health = np.ones(frame.rotor_count)
         health[rotor] = 0.0
-        got = rf.hover_thrust_margin(frame, health=health)
+        got = rf.hover_thrust_margin(frame, efficiency=health)
         m = frame.with_efficiency(health).effectiveness_matrix()
         expected = lp_max_along(m, frame.min_thrust_n, frame.max_thrust_n, np.array([1.0, 0, 0, 0]), np.zeros(4))
         assert got.max_thrust_n == pytest.approx(expected, rel=1e-8, abs=1e-8)
@@ -377,8 +377,8 @@ def test_attainable_slice_shrinks_with_a_failure_and_vanishes_when_hover_is_lost
     for rotor in range(6):
         health = np.ones(6)
         health[rotor] = 0.0
-        failed = attainable_slice(frame, health=health, directions=36)
-        margin = rf.hover_thrust_margin(frame, health=health).margin_n
+        failed = attainable_slice(frame, efficiency=health, directions=36)
+        margin = rf.hover_thrust_margin(frame, efficiency=health).margin_n
         # Du Table III: rotors 5 and 6 leave PPNNPN unable to hover with zero torque.
         assert (failed is None) == (rotor in (4, 5)) == (margin < 0)
         if failed is not None:
@@ -411,7 +411,7 @@ def test_warm_started_controller_gives_the_cold_answer() -> None:
 
 def test_allocated_accepts_a_discrete_lti() -> None:
     quad = rf.Airframe.preset("quad-x")
-    law = rf.LTI(np.zeros((1, 1)), np.zeros((1, 12)), np.zeros((4, 1)), np.zeros((4, 12)), np.zeros(12), [quad.hover_thrust_n, 0, 0, 0], dt=1 / 400)
+    law = rf.Lti(np.zeros((1, 1)), np.zeros((1, 12)), np.zeros((4, 1)), np.zeros((4, 12)), np.zeros(12), [quad.hover_thrust_n, 0, 0, 0], dt_s=1 / 400)
     tr = rf.Simulator(quad).run(rf.State(), 0.1, controller=rf.Allocated(law, Allocator(quad)))
     np.testing.assert_allclose(tr.rotor_command[-1], quad.hover_thrust_n / 4, rtol=1e-12)
 
@@ -440,8 +440,8 @@ def test_objective_and_attainable_set_edge_cases(ke: rf.Airframe) -> None:
         Allocator(ke).objective([7, 0, 0, 0], [np.nan, 1, 1, 1])
     quad = rf.Airframe.preset("quad-x")
     # Half a rotor lost: hover with zero torque is out of reach, so no slice through it.
-    assert rf.hover_thrust_margin(quad, health=[0.5, 1, 1, 1]).margin_n < 0
-    assert attainable_slice(quad, axes=(0, 1), health=[0.5, 1, 1, 1]) is None
+    assert rf.hover_thrust_margin(quad, efficiency=[0.5, 1, 1, 1]).margin_n < 0
+    assert attainable_slice(quad, axes=(0, 1), efficiency=[0.5, 1, 1, 1]) is None
     assert attainable_slice(quad, axes=(np.int64(1), 2), directions=np.int64(8)) is not None
     behind = rf.max_virtual_control(ke, [1, 0, 0, 0], base=[-1, 0, 0, 0])
     assert behind is not None and behind.scale == pytest.approx(35.0, rel=1e-8)

@@ -71,19 +71,19 @@ def test_constructor_types(override: dict[str, Any], message: str) -> None:
 
 
 def test_analysis_arguments(ppnnpn: rf.Airframe) -> None:
-    with pytest.raises(ValueError, match=r"eta: expected 6 entries"):
+    with pytest.raises(ValueError, match=r"efficiency: expected 6 entries"):
         rf.acai(ppnnpn, [1.0] * 5)
-    with pytest.raises(ValueError, match=r"eta\[0\] \(rotor 1\): must be finite"):
+    with pytest.raises(ValueError, match=r"efficiency\[0\] \(rotor 1\): must be finite"):
         rf.acai(ppnnpn, [np.nan] + [1.0] * 5)
-    with pytest.raises(ValueError, match=r"eta\[5\] \(rotor 6\): must lie in \[0, 1\]"):
+    with pytest.raises(ValueError, match=r"efficiency\[5\] \(rotor 6\): must lie in \[0, 1\]"):
         rf.controllability(ppnnpn, [1.0] * 5 + [2.0])
-    with pytest.raises(ValueError, match=r"etas: expected 6 columns"):
+    with pytest.raises(ValueError, match=r"efficiencies: expected 6 columns"):
         rf.acai_batch(ppnnpn, np.ones((3, 5)))
-    with pytest.raises(ValueError, match=r"etas\[2, 4\] \(rotor 5\): must be finite and lie in \[0, 1\]"):
+    with pytest.raises(ValueError, match=r"efficiencies\[2, 4\] \(rotor 5\): must be finite and lie in \[0, 1\]"):
         etas = np.ones((3, 6))
         etas[2, 4] = -0.5
         rf.acai_batch(ppnnpn, etas)
-    with pytest.raises(ValueError, match=r"etas: expected a 2-D array"):
+    with pytest.raises(ValueError, match=r"efficiencies: expected a 2-D array"):
         rf.acai_batch(ppnnpn, np.ones(6))
     with pytest.raises(ValueError, match=r"formula: must be \"eq13\" or \"facet-margin\""):
         rf.acai(ppnnpn, formula="exact")  # type: ignore[arg-type]

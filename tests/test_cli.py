@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from rotorfault import ftc as rf_ftc
+from rotorfault.papers import ke as ke_paper
 from rotorfault.cli import cli
 
 
@@ -35,10 +35,10 @@ def test_failures_main_job() -> None:
     assert "0.0000*" in out and "eq. (13) prints 0 here although hover is infeasible" in out
 
 
-def test_acai_with_eta_and_without_yaw() -> None:
-    code, out, _ = run("acai", "--airframe", "hexa-pnpnpn", "--eta", "0,1,1,1,1,1")
+def test_acai_with_efficiency_and_without_yaw() -> None:
+    code, out, _ = run("acai", "--airframe", "hexa-pnpnpn", "--efficiency", "0,1,1,1,1,1")
     assert code == 0 and "0.0000" in out and "hover wrench on the boundary" in out
-    code, out, _ = run("acai", "-a", "hexa-pnpnpn", "--eta", "0,1,1,1,1,1", "--give-up-yaw")
+    code, out, _ = run("acai", "-a", "hexa-pnpnpn", "--efficiency", "0,1,1,1,1,1", "--give-up-yaw")
     assert code == 0 and "thrust, roll, pitch" in out and "controllable" in out
 
 
@@ -63,9 +63,9 @@ def test_scan_writes_a_plot(tmp_path: Path) -> None:
     ("args", "message"),
     [
         (("acai", "--airframe", "hexa"), "preset: unknown airframe 'hexa'"),
-        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,1,2,1,1,1"), "eta[2] (rotor 3): must lie in [0, 1]"),
-        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,1"), "eta: expected 6 entries"),
-        (("acai", "--airframe", "hexa-ppnnpn", "--eta", "1,x"), "eta: expected comma-separated numbers"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--efficiency", "1,1,2,1,1,1"), "efficiency[2] (rotor 3): must lie in [0, 1]"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--efficiency", "1,1"), "efficiency: expected 6 entries"),
+        (("acai", "--airframe", "hexa-ppnnpn", "--efficiency", "1,x"), "efficiency: expected comma-separated numbers"),
         (("acai", "--airframe", "nan.toml"), "nan.toml"),
         (("failures", "--airframe", "quad-x", "--max-failed", "5"), "max_failed: must be between 0 and"),
         (("failures", "--airframe", "quad-x", "--max-failed", "-1"), "max_failed: must be >= 0"),
@@ -158,7 +158,7 @@ def test_simulate_hover_scenario_with_everything(tmp_path: Path) -> None:
         ('airframe = "quad-x"\n[controller]\nkind = "pid"\n', "controller.kind: must be one of"),
         ('airframe = "quad-x"\n[[fault]]\nrotor = 5\ntime_s = 1.0\n', "faults[0].rotor: rotor numbers run from 1 to 4, got 5"),
         ('airframe = "quad-x"\n[drag]\nlinear = 1.0\n', "drag: unknown key(s) linear"),
-        ('airframe = "quad-x"\ndt_s = -1.0\n', "dt: must be > 0"),
+        ('airframe = "quad-x"\ndt_s = -1.0\n', "dt_s: must be > 0"),
         ("airframe = [", "scenario.toml: "),
         ("duration_s = 1.0\n", "airframe: required"),
     ],
@@ -181,7 +181,7 @@ def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
     assert "| one-failure | baseline | yes | tilt |" in report
     assert "| two-adjacent-front | feedforward | no | tilt |" in report
     rows = (tmp_path / "ftc-report.csv").read_text().splitlines()
-    assert len(rows) == 1 + 2 * len(rf_ftc.scenarios())
+    assert len(rows) == 1 + 2 * len(ke_paper.scenarios())
     assert (tmp_path / "primary-axis.png").stat().st_size > 10_000
     assert (tmp_path / "one-failure.png").exists()
 

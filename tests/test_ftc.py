@@ -16,7 +16,7 @@ not give); the bounds below are set from those measurements (numbers in the READ
 - the front (or rear) adjacent pair: the spin collapses and the vehicle tips over (Ke Fig. 7), in
   either order;
 - after a failure the vehicle drifts back at a few cm/s: it realises only part of the small tilt
-  Table IV's outer loop asks for, so it ends "off station"; with a stiffer outer loop
+  Table IV's outer loop asks for, so it ends "off-station"; with a stiffer outer loop
   (a = 1 m/s^2, k_v = 0.5 1/s) the same controller tracks a moved setpoint to 0.1 m.
 """
 
@@ -30,7 +30,9 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
-from rotorfault import _rfcore, ftc
+from rotorfault import _rfcore
+from rotorfault.control import ke
+from rotorfault.papers import ke as ke_paper
 
 # Ke Table II: eigenvalues of N = (E1 M) Lambda (E1 M)^+ (printed to 4 decimals). E1 M is the first
 # three rows of the ke-quadcopter preset's nominal matrix: this checks the preset's geometry
@@ -51,45 +53,45 @@ KE_TABLE_II = [
 KE = rf.Airframe.preset("ke-quadcopter")
 
 
-@pytest.mark.parametrize(("health", "eigenvalues"), KE_TABLE_II)
-def test_table_ii_eigenvalues_of_n(health: tuple[float, ...], eigenvalues: tuple[float, ...]) -> None:
-    got = ftc.n_eigenvalues(KE, health)
+@pytest.mark.parametrize(("efficiency", "eigenvalues"), KE_TABLE_II)
+def test_table_ii_eigenvalues_of_n(efficiency: tuple[float, ...], eigenvalues: tuple[float, ...]) -> None:
+    got = ke.n_eigenvalues(KE, efficiency)
     np.testing.assert_allclose(np.abs(got.imag), 0.0, atol=1e-12)
     np.testing.assert_allclose(got.real, np.sort(eigenvalues), atol=0.5e-4)
 
 
-@pytest.mark.parametrize(("health", "eigenvalues"), KE_TABLE_II)
-def test_thrust_feedback_is_stable_and_full_compensation_is_not(health: tuple[float, ...], eigenvalues: tuple[float, ...]) -> None:
+@pytest.mark.parametrize(("efficiency", "eigenvalues"), KE_TABLE_II)
+def test_thrust_feedback_is_stable_and_full_compensation_is_not(efficiency: tuple[float, ...], eigenvalues: tuple[float, ...]) -> None:
     """(25): Re eig(I + k_rotor N) > 0 for every row (both Table IV k_rotor). (32): Re eig(N) > 0
     fails exactly for the two- and three-failure rows (a zero eigenvalue), Remark 5."""
     for k_rotor in (2.0, 1.3):
-        check = ftc.stability_check(KE, health, k_rotor)
+        check = ke.stability_check(KE, efficiency, k_rotor=k_rotor)
         assert check.thrust_feedback
-    failed = sum(1 for h in health if h == 0)
-    assert ftc.stability_check(KE, health).full_compensation == (failed <= 1)
+    failed = sum(1 for h in efficiency if h == 0)
+    assert ke.stability_check(KE, efficiency).full_compensation == (failed <= 1)
 
 
 def test_n_matrix_does_not_depend_on_the_airframes_own_efficiency() -> None:
     degraded = KE.with_efficiency([0.3, 1, 1, 1])
-    np.testing.assert_allclose(ftc.n_matrix(degraded, [1, 1, 1, 1]), np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(ke.n_matrix(degraded, [1, 1, 1, 1]), np.eye(3), atol=1e-12)
 
 
 # -- flights -------------------------------------------------------------------------------------
 
 
 @pytest.fixture(scope="module")
-def runs() -> dict[str, ftc.ScenarioRun]:
-    return {s.name: ftc.run_scenario(s) for s in ftc.scenarios()}
+def runs() -> dict[str, ke_paper.ScenarioRun]:
+    return {s.name: ke_paper.run_scenario(s) for s in ke_paper.scenarios()}
 
 
-def test_fault_free_hover_holds_position(runs: dict[str, ftc.ScenarioRun]) -> None:
+def test_fault_free_hover_holds_position(runs: dict[str, ke_paper.ScenarioRun]) -> None:
     tr = runs["fault-free"].trajectory
     assert not tr.diverged
     assert np.abs(tr.position - [0, 0, -10]).max() < 1e-9
     # From 0.5 m off in every axis, the same gains bring it back to within 2 cm in 60 s (the
     # Table IV position loop is slow: k_v = 0.1 1/s).
-    pre = ftc.preset()
-    c = rf.controllers.UniformPassiveFTC(KE, gains=pre.gains, position=(0, 0, -10))
+    pre = ke.preset()
+    c = rf.UniformPassiveFtc(KE, gains=pre.gains, position=(0, 0, -10))
     off = pre.simulator().run(rf.State(position=(0.5, -0.5, -9.5)), 60.0, controller=c)
     assert np.abs(off.position[-1] - [0, 0, -10]).max() < 0.02
 
@@ -107,8 +109,8 @@ STABILISABLE = [
 
 
 @pytest.mark.parametrize("name", STABILISABLE)
-def test_stabilisable_scenarios_are_stabilised(runs: dict[str, ftc.ScenarioRun], name: str) -> None:
-    """Every health matrix Ke lists in Section II-B, failures applied one after another."""
+def test_stabilisable_scenarios_are_stabilised(runs: dict[str, ke_paper.ScenarioRun], name: str) -> None:
+    """Every efficiency matrix Ke lists in Section II-B, failures applied one after another."""
     run = runs[name]
     tr, m = run.trajectory, run.metrics
     assert run.scenario.ke_stabilizable
@@ -120,30 +122,30 @@ def test_stabilisable_scenarios_are_stabilised(runs: dict[str, ftc.ScenarioRun],
     assert m.final_altitude_error_m < (1.0 if name != "three-failures" else 5.0)
 
 
-def test_one_failure_targets(runs: dict[str, ftc.ScenarioRun]) -> None:
+def test_one_failure_targets(runs: dict[str, ke_paper.ScenarioRun]) -> None:
     m = runs["one-failure"].metrics
     assert m.r_rad_s is not None and 15.0 < abs(m.r_rad_s) < 25.0  # Ke: about 23 rad/s
     assert m.max_horizontal_error_m < 16.0  # measured 15.4 (Ke: under 10 m), see module docs
     assert m.final_altitude_error_m < 0.5
-    assert m.outcome == "off station"  # Table IV's outer loop brings it back at a few cm/s
+    assert m.outcome == "off-station"  # Table IV's outer loop brings it back at a few cm/s
 
 
-def test_tracking_after_a_failure_needs_a_stiffer_outer_loop(runs: dict[str, ftc.ScenarioRun]) -> None:
+def test_tracking_after_a_failure_needs_a_stiffer_outer_loop(runs: dict[str, ke_paper.ScenarioRun]) -> None:
     """The setpoint moves 10 m east at 20 s, across the drift the failure caused. Table IV's
     outer loop moves the spinning vehicle east by only ~1.4 m in 60 s; with a = 1 m/s^2 and
     k_v = 0.5 1/s the same controller arrives (measured 0.11 m off, 11 m largest excursion)."""
     soft = runs["tracking-one-failure"].trajectory
     k = np.searchsorted(soft.t, 20.0)
     assert 0.5 < soft.position[-1, 1] - soft.position[k, 1] < 3.0
-    pre = ftc.preset()
+    pre = ke.preset()
     stiff = dataclasses.replace(pre.gains, accel_limit_m_s2=1.0, k_v=0.5)
-    run = ftc.run_scenario("tracking-one-failure", controller_preset=dataclasses.replace(pre, gains=stiff))
-    assert run.metrics.outcome == "holds position"
+    run = ke_paper.run_scenario("tracking-one-failure", controller_preset=dataclasses.replace(pre, gains=stiff))
+    assert run.metrics.outcome == "holds-position"
     assert run.metrics.final_horizontal_error_m < 0.5
     assert run.metrics.max_horizontal_error_m < 12.0
 
 
-def test_more_failures_spin_faster(runs: dict[str, ftc.ScenarioRun]) -> None:
+def test_more_failures_spin_faster(runs: dict[str, ke_paper.ScenarioRun]) -> None:
     r = {}
     for name in ("one-failure", "two-adjacent", "two-opposite", "three-failures"):
         value = runs[name].metrics.r_rad_s
@@ -155,7 +157,7 @@ def test_more_failures_spin_faster(runs: dict[str, ftc.ScenarioRun]) -> None:
 
 
 @pytest.mark.parametrize("name", ["two-adjacent-front", "two-adjacent-front-reversed"])
-def test_fig7_adjacent_pair_is_not_stabilisable(runs: dict[str, ftc.ScenarioRun], name: str) -> None:
+def test_fig7_adjacent_pair_is_not_stabilisable(runs: dict[str, ke_paper.ScenarioRun], name: str) -> None:
     run = runs[name]
     tr = run.trajectory
     assert not run.scenario.ke_stabilizable
@@ -167,7 +169,7 @@ def test_fig7_adjacent_pair_is_not_stabilisable(runs: dict[str, ftc.ScenarioRun]
 
 
 @pytest.mark.parametrize("pair", ["two-adjacent", "two-adjacent-front"])
-def test_the_two_orders_are_mirror_images(runs: dict[str, ftc.ScenarioRun], pair: str) -> None:
+def test_the_two_orders_are_mirror_images(runs: dict[str, ke_paper.ScenarioRun], pair: str) -> None:
     """Which adjacent pair fails decides (Figs. 7 and 9), not the order: the orders mirror."""
     a = runs[pair].trajectory
     b = runs[f"{pair}-reversed"].trajectory
@@ -176,10 +178,10 @@ def test_the_two_orders_are_mirror_images(runs: dict[str, ftc.ScenarioRun], pair
 
 
 def test_baseline_controller_loses_the_vehicle_after_one_failure() -> None:
-    run = ftc.run_scenario("one-failure", law="baseline")
+    run = ke_paper.run_scenario("one-failure", law="baseline")
     assert run.trajectory.diverged
     assert run.trajectory.events[0].time < 2.5  # 0.4 s after the failure
-    hover = ftc.run_scenario("fault-free", law="baseline")
+    hover = ke_paper.run_scenario("fault-free", law="baseline")
     assert not hover.trajectory.diverged
 
 
@@ -187,30 +189,30 @@ def test_printed_law_leaves_the_eq43_altitude_offset() -> None:
     """Eq. (43) with no fault: u_1 = k/(k+1) u_d1, so the position loop settles where
     k_vz k_p e_z = g / k_rotor: 9.81 / (1 * 0.3 * 2) = 16.35 m below the setpoint. The remedy has
     no offset."""
-    pre = ftc.preset()
+    pre = ke.preset()
     g = pre.gains
     expected = KE.gravity_m_s2 / (g.k_rotor * g.k_vz * g.k_p)
     sim = pre.simulator()
     for law, offset in (("literal", expected), ("feedforward", 0.0)):
-        c = rf.controllers.UniformPassiveFTC(KE, gains=g, law=law, position=(0, 0, -10))
+        c = rf.UniformPassiveFtc(KE, gains=g, law=law, position=(0, 0, -10))
         tr = sim.run(rf.State(position=(0, 0, -10)), 80.0, controller=c, record_every=40)
         assert not tr.diverged
         assert tr.position[-1, 2] - (-10.0) == pytest.approx(offset, abs=2e-3)
 
 
-def test_passive_controller_commands_depend_only_on_what_it_measures(runs: dict[str, ftc.ScenarioRun]) -> None:
+def test_passive_controller_commands_depend_only_on_what_it_measures(runs: dict[str, ke_paper.ScenarioRun]) -> None:
     """Replaying a flight's measured states through a fresh controller gives bit-for-bit the
-    commands it flew with, whatever health the simulator applied: no fault information enters."""
-    pre = ftc.preset()
+    commands it flew with, whatever efficiency the simulator applied: no fault information enters."""
+    pre = ke.preset()
     for name in ("one-failure", "two-opposite", "fault-free"):
-        run = ftc.run_scenario(name, record_every=1)
+        run = ke_paper.run_scenario(name, record_every=1)
         assert run.scenario.faults or name == "fault-free"
         tr = run.trajectory
-        c = rf.controllers.UniformPassiveFTC(KE, gains=pre.gains, setpoints=run.scenario.setpoints)
+        c = rf.UniformPassiveFtc(KE, gains=pre.gains, setpoints=run.scenario.setpoints)
         states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])
         np.testing.assert_array_equal(c.replay(tr.t, states), tr.rotor_command)
     # A thinned recording cannot be replayed faithfully: refused.
-    thin = ftc.run_scenario("one-failure", record_every=4).trajectory
+    thin = ke_paper.run_scenario("one-failure", record_every=4).trajectory
     with pytest.raises(ValueError, match="^times"):
         c.replay(thin.t, np.hstack([thin.position, thin.velocity, thin.quaternion, thin.omega]))
 
@@ -221,12 +223,12 @@ def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
     criterion (n3z > 0), which the default divergence limit applies, counts it as lost; with the
     limit lifted it recovers into the same steady spin. The HIL column never gets below
     n3z = 0.44."""
-    lost = ftc.run_scenario("one-failure", controller_preset="ke-experiment")
+    lost = ke_paper.run_scenario("one-failure", controller_preset="ke-experiment")
     assert lost.metrics.outcome == "tilt"
     assert lost.trajectory.events[0].time < 2.6
-    pre = ftc.preset("ke-experiment")
+    pre = ke.preset("ke-experiment")
     sim = pre.simulator(limits=rf.DivergenceLimits(max_tilt_rad=3.2))
-    c = rf.controllers.UniformPassiveFTC(KE, gains=pre.gains, position=(0, 0, -10))
+    c = rf.UniformPassiveFtc(KE, gains=pre.gains, position=(0, 0, -10))
     tr = sim.run(rf.State(position=(0, 0, -10)), 30.0, controller=c, faults=[rf.RotorFault(1, 2.0)], record_every=4)
     assert not tr.diverged
     assert -0.4 < tr.primary_axis[:, 2].min() < 0.0
@@ -248,32 +250,32 @@ def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
     ],
 )
 def test_bad_gains_raise_value_error(change: dict, field: str) -> None:
-    gains = dataclasses.replace(ftc.preset().gains, **change)
+    gains = dataclasses.replace(ke.preset().gains, **change)
     with pytest.raises(ValueError, match=f"^{field}"):
-        rf.controllers.UniformPassiveFTC(KE, gains=gains)
+        rf.UniformPassiveFtc(KE, gains=gains)
 
 
 def test_bad_arguments() -> None:
     with pytest.raises(ValueError, match="^airframe"):
-        rf.controllers.UniformPassiveFTC(rf.Airframe.preset("hexa-pnpnpn"))
+        rf.UniformPassiveFtc(rf.Airframe.preset("hexa-pnpnpn"))
     with pytest.raises(ValueError, match="^law"):
-        rf.controllers.UniformPassiveFTC(KE, law="adaptive")
+        rf.UniformPassiveFtc(KE, law="adaptive")
     with pytest.raises(TypeError, match="^gains"):
-        rf.controllers.UniformPassiveFTC(KE, gains={"k_p": 1.0})
+        rf.UniformPassiveFtc(KE, gains={"k_p": 1.0})
     with pytest.raises(ValueError, match=r"^setpoints\[1\].time"):
-        rf.controllers.UniformPassiveFTC(KE, setpoints=[(1.0, (0, 0, 0)), (0.5, (1, 0, 0))])
+        rf.UniformPassiveFtc(KE, setpoints=[(1.0, (0, 0, 0)), (0.5, (1, 0, 0))])
     with pytest.raises(ValueError, match="^preset"):
-        ftc.preset("ke-unknown")
+        ke.preset("ke-unknown")
     with pytest.raises(ValueError, match="^k_rotor"):
-        ftc.stability_check(KE, [1, 1, 1, 1], k_rotor=0.0)
+        ke.stability_check(KE, [1, 1, 1, 1], k_rotor=0.0)
     with pytest.raises(ValueError, match="^efficiency"):
-        ftc.n_matrix(KE, [1, 1, 1])
-    text = (Path(ftc.__file__).parent / "presets" / "ftc" / "ke-hil.toml").read_text()
+        ke.n_matrix(KE, [1, 1, 1])
+    text = (Path(rf.__file__).parent / "presets" / "ftc" / "ke-hil.toml").read_text()
     with pytest.raises(ValueError, match="^vehicle.linear_drag_n_s_m"):
         _rfcore.ftc_preset_from_toml(text.replace("linear_drag_n_s_m = 0.3", "linear_drag_n_s_m = -0.3"), "bad")
     with pytest.raises(ValueError, match="unknown field"):
         _rfcore.ftc_preset_from_toml(text + "\n[extra]\nx = 1\n", "bad")
     with pytest.raises(TypeError, match="^controller_preset"):
-        ftc.run_scenario("one-failure", controller_preset=3)  # type: ignore[arg-type]
+        ke_paper.run_scenario("one-failure", controller_preset=3)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="^record_every"):
-        ftc.run_scenario("one-failure", record_every=0)
+        ke_paper.run_scenario("one-failure", record_every=0)

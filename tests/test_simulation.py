@@ -1,5 +1,5 @@
 """The flight simulator from Python: hover, free fall, rotor failure under LQR, every actuator
-effect in isolation, controllers (built-in, LTI, Python callable), batches, bad input.
+effect in isolation, controllers (built-in, Lti, Python callable), batches, bad input.
 Closed forms are checked to 1e-9 unless stated."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def quad() -> rf.Airframe:
 
 @pytest.fixture(scope="module")
 def sim(quad: rf.Airframe) -> rf.Simulator:
-    return rf.Simulator(quad, dt=1 / 400, substeps=2)
+    return rf.Simulator(quad, dt_s=1 / 400, substeps=2)
 
 
 @pytest.fixture(scope="module")
@@ -80,8 +80,8 @@ def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: 
     assert "tilt" in str(event) and event.state.shape == (12,)
     assert tr.t[-1] == pytest.approx(event.time)
     before, after = np.searchsorted(tr.t, [0.5, 1.5])
-    np.testing.assert_array_equal(tr.health[before], [1, 1, 1, 1])
-    np.testing.assert_array_equal(tr.health[after], [0, 1, 1, 1])
+    np.testing.assert_array_equal(tr.efficiency[before], [1, 1, 1, 1])
+    np.testing.assert_array_equal(tr.efficiency[after], [0, 1, 1, 1])
     assert tr.rotor_thrust[after, 0] == 0.0
     assert np.all(np.isnan(tr.rotor_command[-1]))  # no command after the divergence
     assert np.all(np.isnan(tr.measured[-1])) and tr.measured.shape == (len(tr.t), 12)
@@ -136,7 +136,7 @@ def test_sensor_noise_has_the_requested_snr_and_is_reproducible(quad: rf.Airfram
 
 
 def test_noisy_lqr_hover_stays_close(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
-    noisy = rf.Simulator(sim.airframe, dt=sim.dt, substeps=sim.substeps, noise=rf.Noise(std=(0.02, 0.02, 0.002, 0.01), seed=0))
+    noisy = rf.Simulator(sim.airframe, dt_s=sim.dt_s, substeps=sim.substeps, noise=rf.Noise(std=(0.02, 0.02, 0.002, 0.01), seed=0))
     tr = noisy.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr)
     assert not tr.diverged
     assert np.abs(tr.position - [0, 0, -10]).max() < 0.2
@@ -156,7 +156,7 @@ def test_lti_and_callable_controllers_fly_like_linear_feedback(sim: rf.Simulator
     start = rf.State(position=(0.3, 0, -9.5), euler=(0.05, 0, 0))
     reference = sim.run(start, 2.0, controller=lqr)
     k = lqr.gain
-    static = rf.LTI(np.zeros((0, 0)), np.zeros((0, 12)), np.zeros((4, 0)), -k, lqr.x_trim, lqr.u_trim)
+    static = rf.Lti(np.zeros((0, 0)), np.zeros((0, 12)), np.zeros((4, 0)), -k, lqr.x_trim, lqr.u_trim)
     np.testing.assert_allclose(sim.run(start, 2.0, controller=static).position, reference.position, atol=1e-12)
 
     def law(t: float, x: np.ndarray) -> np.ndarray:
@@ -170,7 +170,7 @@ def test_lti_and_callable_controllers_fly_like_linear_feedback(sim: rf.Simulator
 def test_continuous_lti_with_integral_action_removes_a_bias(quad: rf.Airframe) -> None:
     """An altitude integrator (continuous, discretised at the control rate) on top of LQR
     removes the steady error that a 10 % weaker hover trim leaves."""
-    sim = rf.Simulator(quad, dt=1 / 400, substeps=2)
+    sim = rf.Simulator(quad, dt_s=1 / 400, substeps=2)
     lqr = rf.lqr_hover(sim, position=(0, 0, -10))
     weak = lqr.u_trim * 0.9
     biased = sim.run(rf.State(position=(0, 0, -10)), 20.0, controller=rf.LinearFeedback(lqr.gain, lqr.x_trim, weak))
@@ -180,7 +180,7 @@ def test_continuous_lti_with_integral_action_removes_a_bias(quad: rf.Airframe) -
     # More thrust while below the target (positive down error); a gentle gain, since the hover
     # LQR leaves little altitude damping to spare.
     c = 0.03 * np.ones((4, 1))
-    pi = rf.LTI(np.zeros((1, 1)), b, c, -lqr.gain, lqr.x_trim, weak)
+    pi = rf.Lti(np.zeros((1, 1)), b, c, -lqr.gain, lqr.x_trim, weak)
     fixed = sim.run(rf.State(position=(0, 0, -10)), 60.0, controller=pi)
     assert np.abs(fixed.position[-4000:, 2] + 10).max() < 1e-5  # the last 10 s
 
@@ -198,7 +198,7 @@ def test_python_controller_errors_propagate(sim: rf.Simulator) -> None:
 
 
 def test_batch_runs_start_at_their_own_trim_with_lagging_actuators(quad: rf.Airframe, lqr: rf.LinearFeedback) -> None:
-    sim = rf.Simulator(quad, dt=1 / 400, substeps=2, actuator=rf.FixedPitchActuator(time_constant_s=0.025, rate_limit_n_s=50.0))
+    sim = rf.Simulator(quad, dt_s=1 / 400, substeps=2, actuator=rf.FixedPitchActuator(time_constant_s=0.025, rate_limit_n_s=50.0))
     controllers = [None, lqr, rf.OpenLoop.constant(lqr.u_trim * 0.5)]
     starts = [rf.State(position=(0, 0, -10))] * 3
     batch = rf.simulate_batch(sim, starts, 2.0, controllers=controllers)
@@ -230,10 +230,10 @@ def test_continuous_lti_is_discretised_by_zero_order_hold(sim: rf.Simulator, lqr
     x_trim[0] = -1.0  # the vehicle sits 1 m north of the target: e_north = 1, constant
     b = np.zeros((1, 12))
     b[0, 0] = 1.0
-    lti = rf.LTI(np.zeros((1, 1)), b, np.ones((4, 1)), np.zeros((4, 12)), x_trim, lqr.u_trim)
+    lti = rf.Lti(np.zeros((1, 1)), b, np.ones((4, 1)), np.zeros((4, 12)), x_trim, lqr.u_trim)
     tr = sim.run(rf.State(position=(0, 0, -10)), 0.1, controller=lti)
     k = np.arange(len(tr.t))
-    np.testing.assert_allclose(tr.rotor_command[:, 0], lqr.u_trim[0] + k * sim.dt, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(tr.rotor_command[:, 0], lqr.u_trim[0] + k * sim.dt_s, rtol=0, atol=1e-12)
 
 
 def test_non_finite_commands_and_inputs(sim: rf.Simulator) -> None:
@@ -243,7 +243,7 @@ def test_non_finite_commands_and_inputs(sim: rf.Simulator) -> None:
         sim.run(rf.State(), 1.0, controller=lambda t, x: None)
     with pytest.raises(ValueError, match=r"x\[3\]: must be finite"):
         sim.state_derivative([0, 0, 0, float("nan")] + [0] * 8, [3.0] * 4)
-    with pytest.raises(ValueError, match="t_final, dt: .* control steps exceed"):
+    with pytest.raises(ValueError, match="duration_s, dt_s: .* control steps exceed"):
         sim.run(rf.State(), 1e6)
     with pytest.raises(ValueError, match="substeps: .* RK4 steps per run"):
         rf.Simulator(sim.airframe, substeps=10**9).run(rf.State(), 1.0)
@@ -252,9 +252,9 @@ def test_non_finite_commands_and_inputs(sim: rf.Simulator) -> None:
 def test_a_controller_producing_nan_ends_the_run_with_an_event(sim: rf.Simulator) -> None:
     a = np.array([[1e300]])  # the discrete state overflows to inf within two steps
     b = np.ones((1, 12))
-    lti = rf.LTI(a, b, np.ones((4, 1)), np.zeros((4, 12)), np.full(12, -1.0), [3.0] * 4, dt=sim.dt)
+    lti = rf.Lti(a, b, np.ones((4, 1)), np.zeros((4, 12)), np.full(12, -1.0), [3.0] * 4, dt_s=sim.dt_s)
     tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lti)
-    assert tr.diverged and tr.events[0].kind == "non_finite_command"
+    assert tr.diverged and tr.events[0].kind == "non-finite-command"
 
 
 def test_batch_matches_single_runs(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
@@ -312,8 +312,8 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
 @pytest.mark.parametrize(
     ("make", "error", "message"),
     [
-        (lambda q: rf.Simulator(q, dt=0.0), ValueError, "dt: must be > 0"),
-        (lambda q: rf.Simulator(q, dt=float("nan")), ValueError, "dt: must be > 0"),
+        (lambda q: rf.Simulator(q, dt_s=0.0), ValueError, "dt_s: must be > 0"),
+        (lambda q: rf.Simulator(q, dt_s=float("nan")), ValueError, "dt_s: must be > 0"),
         (lambda q: rf.Simulator(q, substeps=0), ValueError, "substeps: must be >= 1"),
         (lambda q: rf.Simulator(q, drag=rf.Drag(linear_n_s_m=float("nan"))), ValueError, "drag.linear_n_s_m: must be finite"),
         (lambda q: rf.Simulator(q, drag=rf.Drag(rotational_n_m_s=-1.0)), ValueError, "drag.rotational_n_m_s: must be >= 0"),
@@ -329,7 +329,7 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
         (lambda q: rf.RotorFault(rotor=0, time=1.0), ValueError, "rotor: rotor numbers run from 1"),
         (lambda q: rf.State(position=(0, float("nan"), 0)), ValueError, "position: must be finite"),
         (lambda q: rf.State(quaternion=(2, 0, 0, 0)), ValueError, "quaternion: must have unit norm"),
-        (lambda q: rf.Simulator(q).run(rf.State(), float("nan")), ValueError, "t_final: must be finite"),
+        (lambda q: rf.Simulator(q).run(rf.State(), float("nan")), ValueError, "duration_s: must be finite"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller="lqr"), TypeError, "controller: expected"),
         (lambda q: rf.Simulator(q).run(rf.State(), 1.0, controller=rf.OpenLoop.constant([1.0] * 3)), ValueError, "controller: expected 4 commands"),
         (lambda q: rf.OpenLoop([1.0, 0.5], [[1.0] * 4] * 2), ValueError, r"times\[1\]: times must be strictly increasing"),

@@ -32,9 +32,18 @@ from .allocation import (
     hover_thrust_margin,
     max_virtual_control,
 )
-from . import ftc
-from .controllers import LTI, Allocated, LinearFeedback, OpenLoop, UniformPassiveFTC
-from .linear import hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .control import (
+    Allocated,
+    Controller,
+    LinearFeedback,
+    Lti,
+    OpenLoop,
+    UniformPassiveFtc,
+    hover_trim,
+    linearize,
+    lqr_hover,
+    lqr_hover_allocated,
+)
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
 from .simulation import (
     BatchResult,
@@ -52,9 +61,9 @@ from .simulation import (
 )
 
 __all__ = [
-    "LTI",
-    "UniformPassiveFTC",
-    "ftc",
+    "Lti",
+    "UniformPassiveFtc",
+    "Controller",
     "Allocated",
     "Allocation",
     "Allocator",

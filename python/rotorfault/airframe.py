@@ -16,9 +16,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, float_array, real, rotor_numbers
+from ._convert import FloatArray, core_fields, float_array, real, rotor_numbers
+from ._typing import Spin
 
 _SPIN_WORDS = {
     "cw": -1.0,
@@ -71,7 +73,7 @@ class Airframe:
     inertia_kg_m2 : principal moments of inertia ``(Jx, Jy, Jz)``, kg m^2.
     drag_torque_ratio_m : reaction torque per unit thrust ``k_mu``, m (>= 0).
     min_thrust_n : minimum thrust of each rotor, N (default 0; negative for reversible rotors).
-    efficiency : rotor efficiencies ``eta_i`` in [0, 1] (default 1: healthy; 0: failed).
+    efficiency : rotor efficiencies (Du's ``eta_i``) in [0, 1] (default 1: healthy; 0: failed).
     gravity_m_s2 : gravitational acceleration, m/s^2 (default 9.81).
     name : a label used in reports.
     """
@@ -81,16 +83,16 @@ class Airframe:
 
     def __init__(
         self,
-        arm_angle_rad: Any,
-        arm_length_m: Any,
-        spin: Any,
-        max_thrust_n: Any,
+        arm_angle_rad: npt.ArrayLike,
+        arm_length_m: npt.ArrayLike,
+        spin: Sequence[Spin | str] | npt.ArrayLike,
+        max_thrust_n: npt.ArrayLike,
         mass_kg: float,
-        inertia_kg_m2: Any,
+        inertia_kg_m2: npt.ArrayLike,
         drag_torque_ratio_m: float,
         *,
-        min_thrust_n: Any = None,
-        efficiency: Any = None,
+        min_thrust_n: npt.ArrayLike | None = None,
+        efficiency: npt.ArrayLike | None = None,
         gravity_m_s2: float = _rfcore.DEFAULT_GRAVITY_M_S2,
         name: str = "custom",
     ) -> None:
@@ -167,16 +169,18 @@ class Airframe:
 
     # -- derived airframes ---------------------------------------------------------------------
 
-    def with_efficiency(self, eta: Any) -> Airframe:
-        """A copy with rotor efficiencies ``eta`` (one per rotor, each in [0, 1])."""
-        return self._wrap(self._core.with_efficiency(float_array("eta", eta, 1)))
+    def with_efficiency(self, efficiency: npt.ArrayLike) -> Airframe:
+        """A copy with rotor ``efficiency`` (Du's eta_i: one per rotor, each in [0, 1])."""
+        eff = float_array("efficiency", efficiency, 1)
+        with core_fields():
+            return self._wrap(self._core.with_efficiency(eff))
 
     def with_failed_rotors(self, rotors: Iterable[int]) -> Airframe:
         """A copy with the given rotors (1-based, as in the papers) at efficiency 0."""
-        eta = self.efficiency.copy()
+        efficiency = self.efficiency.copy()
         for rotor in rotor_numbers("rotors", rotors, self.rotor_count):
-            eta[rotor - 1] = 0.0
-        return self.with_efficiency(eta)
+            efficiency[rotor - 1] = 0.0
+        return self.with_efficiency(efficiency)
 
     def to_toml(self) -> str:
         """The airframe as TOML in the preset schema; :meth:`from_toml_str` reads it back exactly."""
@@ -210,7 +214,7 @@ class Airframe:
         return self._core.arm_length_m
 
     @property
-    def spin(self) -> tuple[str, ...]:
+    def spin(self) -> tuple[Spin, ...]:
         """``"cw"`` or ``"ccw"`` per rotor, seen from above."""
         return tuple("ccw" if w > 0 else "cw" for w in self._core.spin_sign)
 

@@ -32,16 +32,22 @@ as zero; problems with such rotors can end with ``"iteration-limit"``.
 from __future__ import annotations
 
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast, get_args
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _rfcore
 from ._convert import FloatArray, count, flag, float_array, frozen_array, real
+from ._typing import AllocationMethod, AllocationStatus
 from .airframe import Airframe
 
-METHODS = ("active-set", "clarabel", "pinv")
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+METHODS: tuple[AllocationMethod, ...] = get_args(AllocationMethod)
 #: Clarabel's default tolerance here: objectives agree with the exact solver to about 1e-10.
 CLARABEL_TOLERANCE = 1e-10
 
@@ -58,7 +64,7 @@ class Allocation:
     commands: FloatArray
     achieved: FloatArray
     virtual_control: FloatArray
-    status: str | tuple[str, ...]
+    status: AllocationStatus | tuple[AllocationStatus, ...]
     iterations: int | tuple[int, ...]
 
     @property
@@ -77,7 +83,7 @@ class Allocation:
 
 class Allocator:
     """A validated allocation problem, reusable across calls and by
-    :class:`rotorfault.controllers.Allocated`.
+    :class:`rotorfault.control.Allocated`.
 
     ``target``: an :class:`~rotorfault.Airframe` (its effectiveness matrix, efficiencies applied,
     and thrust bounds) or an n x m matrix (then ``bounds`` is required). ``weights``: n entries
@@ -86,11 +92,12 @@ class Allocator:
 
     def __init__(
         self,
-        target: Airframe | Any,
-        weights: Any = None,
-        bounds: Any = None,
+        target: Airframe | npt.ArrayLike,
+        *,
+        weights: npt.ArrayLike | None = None,
+        bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
         regularization: float = 0.0,
-        preferred: Any = None,
+        preferred: npt.ArrayLike | None = None,
         give_up_yaw: bool = False,
     ) -> None:
         drop_yaw = flag("give_up_yaw", give_up_yaw)
@@ -132,9 +139,10 @@ class Allocator:
 
     def allocate(
         self,
-        virtual_control: Any,
-        method: str = "active-set",
-        priorities: Any = None,
+        virtual_control: npt.ArrayLike,
+        *,
+        method: AllocationMethod = "active-set",
+        priorities: Sequence[Sequence[int]] | None = None,
         tolerance: float = CLARABEL_TOLERANCE,
         max_iterations: int = 200,
     ) -> Allocation:
@@ -166,11 +174,12 @@ class Allocator:
         commands, achieved, status, iterations = _rfcore.allocate(
             self._core, np.ascontiguousarray(rows), method, groups, tol, iterations_limit
         )
+        statuses = cast(list[AllocationStatus], status)
         if ndim == 1:
-            return Allocation(commands[0], achieved[0], rows[0], status[0], iterations[0])
-        return Allocation(commands, achieved, rows, tuple(status), tuple(iterations))
+            return Allocation(commands[0], achieved[0], rows[0], statuses[0], iterations[0])
+        return Allocation(commands, achieved, rows, tuple(statuses), tuple(iterations))
 
-    def rate_limited(self, previous: Any, max_change: Any) -> Allocator:
+    def rate_limited(self, previous: npt.ArrayLike, max_change: float | npt.ArrayLike) -> Allocator:
         """A copy whose bounds also keep each command within ``max_change`` (a number or one per
         actuator, e.g. rate x control period) of ``previous``: Lanzon's rate limit (11) folded into
         the box. A previous command outside the bounds is pulled to the nearest bound, so the
@@ -182,9 +191,12 @@ class Allocator:
             else float_array("max_change", max_change, 1)
         )
         lower, upper = self._core.rate_limited_bounds(prev, delta)
-        return Allocator(self.matrix, self.weights, (lower, upper), self.regularization, self.preferred)
+        return Allocator(
+            self.matrix, weights=self.weights, bounds=(lower, upper), regularization=self.regularization,
+            preferred=self.preferred,
+        )
 
-    def objective(self, virtual_control: Any, commands: Any) -> tuple[float, float]:
+    def objective(self, virtual_control: npt.ArrayLike, commands: npt.ArrayLike) -> tuple[float, float]:
         """``(objective, kkt_residual)`` of any commands: the residual (command units) is zero
         exactly at an optimum, whichever solver produced it."""
         u = float_array("virtual_control", virtual_control, 1)
@@ -192,25 +204,17 @@ class Allocator:
         value, kkt = self._core.objective(u, t)
         return float(value), float(kkt)
 
-    def time_per_solve(self, virtual_controls: Any, method: str = "active-set", repeats: int = 100) -> FloatArray:
-        """Benchmark support: mean seconds per cold-started solve, per row of ``virtual_controls``,
-        measured in Rust on one thread (``repeats`` solves each)."""
-        rows = float_array("virtual_controls", virtual_controls, 2)
-        if method not in ("active-set", "clarabel", "pinv"):
-            raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, got {method!r}")
-        times: FloatArray = _rfcore.time_allocations(self._core, rows, method, _positive_int("repeats", repeats))
-        return times
-
 
 def allocate(
-    target: Airframe | Any,
-    virtual_control: Any,
-    weights: Any = None,
-    bounds: Any = None,
-    method: str = "active-set",
+    target: Airframe | npt.ArrayLike,
+    virtual_control: npt.ArrayLike,
+    *,
+    weights: npt.ArrayLike | None = None,
+    bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+    method: AllocationMethod = "active-set",
     regularization: float = 0.0,
-    preferred: Any = None,
-    priorities: Any = None,
+    preferred: npt.ArrayLike | None = None,
+    priorities: Sequence[Sequence[int]] | None = None,
     give_up_yaw: bool = False,
 ) -> Allocation:
     """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
@@ -222,7 +226,10 @@ def allocate(
         >>> a.commands.round(4).tolist(), a.status
         ([1.75, 1.75, 1.75, 1.75], 'optimal')
     """
-    allocator = Allocator(target, weights, bounds, regularization, preferred, give_up_yaw)
+    allocator = Allocator(
+        target, weights=weights, bounds=bounds, regularization=regularization, preferred=preferred,
+        give_up_yaw=give_up_yaw,
+    )
     return allocator.allocate(virtual_control, method=method, priorities=priorities)
 
 
@@ -237,10 +244,11 @@ class DirectionalLimit:
 
 
 def max_virtual_control(
-    target: Airframe | Any,
-    direction: Any,
-    bounds: Any = None,
-    base: Any = None,
+    target: Airframe | npt.ArrayLike,
+    direction: npt.ArrayLike,
+    *,
+    bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+    base: npt.ArrayLike | None = None,
     give_up_yaw: bool = False,
     tolerance: float = CLARABEL_TOLERANCE,
 ) -> DirectionalLimit | None:
@@ -279,14 +287,18 @@ class HoverMargin:
 
 
 def hover_thrust_margin(
-    airframe: Airframe, health: Any = None, give_up_yaw: bool = False, tolerance: float = CLARABEL_TOLERANCE
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    tolerance: float = CLARABEL_TOLERANCE,
 ) -> HoverMargin:
-    """How much balanced thrust an airframe has left, with rotor ``health`` (efficiencies, default
-    the airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning
-    vehicle, Ke / Lanzon)."""
+    """How much balanced thrust an airframe has left, with rotor ``efficiency`` (default the
+    airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning vehicle,
+    Ke / Lanzon)."""
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
-    frame = airframe if health is None else airframe.with_efficiency(health)
+    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
     max_thrust, weight, margin, commands, status = _rfcore.hover_thrust_margin(
         frame._core, flag("give_up_yaw", give_up_yaw), real("tolerance", tolerance)
     )
@@ -299,7 +311,8 @@ AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "y
 def attainable_slice(
     airframe: Airframe,
     axes: tuple[int, int] = (1, 2),
-    health: Any = None,
+    efficiency: npt.ArrayLike | None = None,
+    *,
     give_up_yaw: bool = False,
     directions: int = 90,
 ) -> FloatArray | None:
@@ -311,7 +324,7 @@ def attainable_slice(
     free (and ``axes`` may not include 3)."""
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
-    frame = airframe if health is None else airframe.with_efficiency(health)
+    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
     n = 3 if flag("give_up_yaw", give_up_yaw) else 4
     if (
         not isinstance(axes, (tuple, list))
@@ -344,12 +357,13 @@ def attainable_slice(
 
 def plot_attainable_slices(
     airframe: Airframe,
-    cases: dict[str, Any] | None = None,
+    cases: dict[str, npt.ArrayLike | None] | None = None,
+    *,
     axes: tuple[int, int] = (1, 2),
     give_up_yaw: bool = False,
     path: str | None = None,
-) -> Any:
-    """Overlays :func:`attainable_slice` for several rotor-health cases (``{label: health}``,
+) -> Figure:
+    """Overlays :func:`attainable_slice` for several rotor-efficiency cases (``{label: efficiency}``,
     default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
     ``path`` if given. A case whose hover is unattainable is listed in the legend as such."""
     import matplotlib
@@ -361,17 +375,17 @@ def plot_attainable_slices(
     if cases is None:
         cases = {"healthy": None}
         for rotor in range(airframe.rotor_count):
-            health = np.ones(airframe.rotor_count)
-            health[rotor] = 0.0
-            cases[f"rotor {rotor + 1} failed"] = health
+            failed = np.ones(airframe.rotor_count)
+            failed[rotor] = 0.0
+            cases[f"rotor {rotor + 1} failed"] = failed
     fig, ax = plt.subplots(figsize=(9.5, 6.5))
-    for label, health in cases.items():
-        points = attainable_slice(airframe, axes, health, give_up_yaw)
+    for label, efficiency in cases.items():
+        points = attainable_slice(airframe, axes, efficiency, give_up_yaw=give_up_yaw)
         if points is None:
             ax.plot([], [], " ", label=f"{label}: hover unattainable")
             continue
         closed = np.vstack([points, points[:1]])
-        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if health is None else 1.2)
+        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if efficiency is None else 1.2)
     ax.plot([0], [0], "k+", ms=12, label="hover (zero torque)")
     ax.set_xlabel(AXIS_LABELS[axes[0]])
     ax.set_ylabel(AXIS_LABELS[axes[1]])

@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import click
 import numpy as np
@@ -18,6 +18,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from ._typing import AcaiFormula, KeLaw
 from .airframe import Airframe
 from .controllability import EQ13_ZERO_NOTE, controllability, failure_table, format_acai
 from .scan import efficiency_scan
@@ -90,19 +91,19 @@ def airframes() -> None:
 
 @cli.command()
 @airframe_option
-@click.option("--eta", help="Rotor efficiencies, comma-separated (default: the airframe's own).")
+@click.option("--efficiency", help="Rotor efficiencies, comma-separated (default: the airframe's own).")
 @click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
 @formula_option
 @_user_errors
-def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> None:
+def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: AcaiFormula) -> None:
     """Run Du's controllability test and print the ACAI."""
     frame = Airframe.load(airframe)
-    efficiencies = None if eta is None else parse_numbers("eta", eta)
-    report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)  # type: ignore[arg-type]
+    efficiencies = None if efficiency is None else parse_numbers("efficiency", efficiency)
+    report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)
     table = Table(title=f"{escape(frame.name)}: controllability", show_header=False)
     table.add_column("quantity")
     table.add_column("value")
-    table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.eta))
+    table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.efficiency))
     table.add_row("axes", "thrust, roll, pitch" if give_up_yaw else "thrust, roll, pitch, yaw")
     table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
     table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
@@ -119,10 +120,10 @@ def acai(airframe: str, eta: str | None, give_up_yaw: bool, formula: str) -> Non
 @click.option("--max-failed", "-k", default=1, show_default=True, type=int, help="Largest number of failed rotors.")
 @formula_option
 @_user_errors
-def failures(airframe: str, max_failed: int, formula: str) -> None:
+def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
     """Every combination of up to K failed rotors: rank, ACAI (with and without yaw), verdict."""
     frame = Airframe.load(airframe)
-    result = failure_table(frame, max_failed=max_failed, formula=formula)  # type: ignore[arg-type]
+    result = failure_table(frame, max_failed=max_failed, formula=formula)
     headers, rows = result.rows_for_display()
     table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
     for header in headers:
@@ -207,30 +208,32 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, no_figures: bool) -> N
     """Fly every uniform-passive-FTC scenario (Ke et al.) and write a table and figures."""
     from rich.progress import Progress
 
-    from . import ftc
+    from .control import ke
+    from .papers import ke as ke_paper
 
     chosen_laws = [law.strip() for law in laws.split(",") if law.strip()]
-    controller_preset = ftc.preset(preset_name)
-    scenarios = ftc.scenarios()
+    controller_preset = ke.preset(preset_name)
+    scenarios = ke_paper.scenarios()
     runs = []
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("flying scenarios", total=len(scenarios) * len(chosen_laws))
         for law in chosen_laws:
             for sc in scenarios:
-                runs.append(ftc.run_scenario(sc, law=law, controller_preset=controller_preset))
+                runs.append(ke_paper.run_scenario(sc, law=cast(KeLaw, law), controller_preset=controller_preset))
                 progress.advance(task)
     table = Table(title=f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights")
     for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "max horiz. (m)", "final horiz. (m)"):
         table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
-    for row in ftc.report_rows(runs):
-        colour = {"holds position": "green", "off station": "yellow"}.get(row["outcome"], "red")
+    for row in ke_paper.report_rows(runs):
+        colour = {"holds-position": "green", "off-station": "yellow"}.get(row["outcome"], "red")
         table.add_row(
-            row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", f"[{colour}]{row['outcome']}[/{colour}]",
+            row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no",
+            f"[{colour}]{row['outcome_label']}[/{colour}]",
             "" if row["r_rad_s"] is None else f"{row['r_rad_s']:.1f}", "" if row["n3z"] is None else f"{row['n3z']:.3f}",
             f"{row['max_altitude_loss_m']:.2f}", f"{row['max_horizontal_error_m']:.2f}", f"{row['final_horizontal_error_m']:.2f}",
         )
     console.print(table)
-    path = ftc.write_report(runs, out_dir, figures=not no_figures)
+    path = ke_paper.write_report(runs, out_dir, figures=not no_figures)
     console.print(f"report written to {escape(str(path))}")
 
 

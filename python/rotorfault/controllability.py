@@ -21,13 +21,14 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, Literal, overload
+from typing import Any, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, count, flag, float_array
+from ._convert import FloatArray, core_fields, count, flag, float_array
+from ._typing import AcaiFormula
 from .airframe import Airframe, require_airframe, rotor_labels
 
 #: Tolerances of the core (see ``crates/rfcore/src/acai.rs``): rank decisions are relative to
@@ -36,23 +37,24 @@ RANK_RTOL: float = _rfcore.RANK_RTOL
 ZERO_RTOL: float = _rfcore.ZERO_RTOL
 
 
-Formula = Literal["eq13", "facet-margin"]
-
-
 def _formula(value: Any) -> str:
     if not isinstance(value, str):
         raise TypeError(f"formula: expected 'eq13' or 'facet-margin', got {type(value).__name__}")
     return value
 
 
-def _efficiency(airframe: Airframe, eta: Any) -> FloatArray:
-    return airframe.efficiency if eta is None else float_array("eta", eta, 1)
+def _efficiency(airframe: Airframe, efficiency: npt.ArrayLike | None) -> FloatArray:
+    return airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
 
 
 def acai(
-    airframe: Airframe, eta: Any = None, give_up_yaw: bool = False, formula: Formula = "eq13"
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
 ) -> float:
-    """ACAI of ``airframe`` with rotor efficiencies ``eta`` (default: the airframe's own), in
+    """ACAI of ``airframe`` with rotor ``efficiency`` (Du's eta_i; default: the airframe's own), in
     N / N m like the paper.
 
     Positive: the distance from G to the boundary of the attainable set. ``0.0``: G on the
@@ -60,32 +62,33 @@ def acai(
     Negative: G outside. ``-inf``: rank B_f < n, the index is undefined.
     """
     airframe = require_airframe(airframe)
-    return _rfcore.acai(
-        airframe._core,
-        _efficiency(airframe, eta),
-        flag("give_up_yaw", give_up_yaw),
-        _formula(formula),
-    )
+    eff = _efficiency(airframe, efficiency)
+    drop_yaw = flag("give_up_yaw", give_up_yaw)
+    with core_fields():
+        return _rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula))
 
 
 def acai_batch(
-    airframe: Airframe, etas: Any, give_up_yaw: bool = False, formula: Formula = "eq13"
+    airframe: Airframe, efficiencies: npt.ArrayLike, *, give_up_yaw: bool = False, formula: AcaiFormula = "eq13"
 ) -> FloatArray:
-    """ACAI for every row of ``etas`` (N x m efficiencies), computed in parallel without the GIL.
+    """ACAI for every row of ``efficiencies`` (N x m), computed in parallel without the GIL.
 
-    A float64 C-contiguous ``etas`` is read in place (no copy) while other Python threads run:
+    A float64 C-contiguous ``efficiencies`` is read in place (no copy) while other Python threads run:
     do not modify it from another thread during the call."""
     airframe = require_airframe(airframe)
-    return _rfcore.acai_batch(
-        airframe._core,
-        float_array("etas", etas, 2),
-        flag("give_up_yaw", give_up_yaw),
-        _formula(formula),
-    )
+    rows = float_array("efficiencies", efficiencies, 2)
+    drop_yaw = flag("give_up_yaw", give_up_yaw)
+    with core_fields():
+        return _rfcore.acai_batch(airframe._core, rows, drop_yaw, _formula(formula))
 
 
 def acai_from_matrix(
-    effectiveness_matrix: Any, f_min: Any, f_max: Any, g_vec: Any, formula: Formula = "eq13"
+    effectiveness_matrix: npt.ArrayLike,
+    f_min: npt.ArrayLike,
+    f_max: npt.ArrayLike,
+    g_vec: npt.ArrayLike,
+    *,
+    formula: AcaiFormula = "eq13",
 ) -> float:
     """ACAI of any effectiveness matrix B (n x m, efficiencies applied), actuator box
     ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1."""
@@ -103,7 +106,7 @@ class ControllabilityReport:
     """Outcome of Du's 9-step test for one airframe and efficiency vector."""
 
     airframe: str
-    eta: tuple[float, ...]
+    efficiency: tuple[float, ...]
     give_up_yaw: bool
     #: 2n: 8 with yaw, 6 without.
     state_dimension: int
@@ -116,7 +119,7 @@ class ControllabilityReport:
     #: rho(G, dOmega) (Steps 3-8); -inf when rank B_f < n.
     acai: float
     #: "eq13" or "facet-margin": how ``acai`` reads when G is outside.
-    formula: str
+    formula: AcaiFormula
     #: "controllable" or "uncontrollable: <reason>" (Du Step 9).
     verdict: str
     controllable: bool
@@ -124,10 +127,10 @@ class ControllabilityReport:
     def __str__(self) -> str:
         axes = "thrust, roll, pitch" if self.give_up_yaw else "thrust, roll, pitch, yaw"
         acai = "undefined (-inf)" if math.isinf(self.acai) else f"{self.acai:.4f}"
-        eta = ", ".join(f"{e:g}" for e in self.eta)
+        efficiency = ", ".join(f"{e:g}" for e in self.efficiency)
         return "\n".join(
             [
-                f"{self.airframe}: eta = [{eta}], axes = {axes}",
+                f"{self.airframe}: efficiency = [{efficiency}], axes = {axes}",
                 f"  rank C(A, B) = {self.controllability_rank} of {self.state_dimension}",
                 f"  rank B_f     = {self.effectiveness_rank} of {self.virtual_control_dimension}",
                 f"  ACAI         = {acai}",
@@ -137,15 +140,21 @@ class ControllabilityReport:
 
 
 def controllability(
-    airframe: Airframe, eta: Any = None, give_up_yaw: bool = False, formula: Formula = "eq13"
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
 ) -> ControllabilityReport:
-    """Runs Du's Section IV.B procedure for ``airframe`` with efficiencies ``eta``."""
+    """Runs Du's Section IV.B procedure for ``airframe`` with rotor ``efficiency`` (default: the
+    airframe's own)."""
     airframe = require_airframe(airframe)
-    efficiency = _efficiency(airframe, eta)
+    eff = _efficiency(airframe, efficiency)
     give_up_yaw = flag("give_up_yaw", give_up_yaw)
-    fields = _rfcore.controllability(airframe._core, efficiency, give_up_yaw, _formula(formula))
+    with core_fields():
+        fields = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
     return ControllabilityReport(
-        airframe=airframe.name, eta=tuple(float(e) for e in efficiency), give_up_yaw=give_up_yaw, **fields
+        airframe=airframe.name, efficiency=tuple(float(e) for e in eff), give_up_yaw=give_up_yaw, **fields
     )
 
 
@@ -270,7 +279,7 @@ class FailureTable(Sequence[FailureCase]):
 
 
 def failure_table(
-    airframe: Airframe, max_failed: int = 1, formula: Formula = "eq13"
+    airframe: Airframe, *, max_failed: int = 1, formula: AcaiFormula = "eq13"
 ) -> FailureTable:
     """Every combination of up to ``max_failed`` fully failed rotors (the other rotors keep the
     airframe's efficiencies), ordered by number failed, then lexicographically."""

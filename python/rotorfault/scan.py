@@ -57,6 +57,7 @@ def efficiency_scan(
     airframe: Airframe,
     rotors: Sequence[int] = (1, 2, 5),
     step: float = 0.04,
+    *,
     give_up_yaw: bool = False,
     progress: bool | None = None,
 ) -> EfficiencyScan:
@@ -100,9 +101,9 @@ def efficiency_scan(
         chunks = track(chunks, description=f"ACAI over {total:,} points")  # type: ignore[assignment]
     for start in chunks:
         stop = min(start + CHUNK_POINTS, total)
-        etas = np.tile(base, (stop - start, 1))
-        etas[:, columns] = points[start:stop]
-        result[start:stop] = acai_batch(airframe, etas, give_up_yaw=give_up_yaw)
+        efficiencies = np.tile(base, (stop - start, 1))
+        efficiencies[:, columns] = points[start:stop]
+        result[start:stop] = acai_batch(airframe, efficiencies, give_up_yaw=give_up_yaw)
     return EfficiencyScan(airframe.name, swept, levels, points, result, give_up_yaw)
 
 

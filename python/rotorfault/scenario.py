@@ -42,12 +42,12 @@ import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast, get_args
 
 from ._convert import real
+from ._typing import ScenarioControllerKind
 from .airframe import Airframe
-from .controllers import OpenLoop
-from .linear import hover_trim, lqr_hover
+from .control import OpenLoop, hover_trim, lqr_hover
 from .simulation import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
 
 _TOP = {"airframe", "duration_s", "dt_s", "substeps", "initial", "controller", "actuator", "drag", "wind", "noise", "fault"}
@@ -60,7 +60,7 @@ _TABLES: dict[str, set[str]] = {
     "noise": {"snr_db", "std", "seed"},
     "fault": {"rotor", "time_s", "efficiency"},
 }
-CONTROLLERS = ("none", "open-loop-hover", "lqr-hover")
+CONTROLLERS: tuple[ScenarioControllerKind, ...] = get_args(ScenarioControllerKind)
 
 
 def _table(data: dict[str, Any], name: str) -> dict[str, Any]:
@@ -80,7 +80,7 @@ class Scenario:
     name: str
     simulator: Simulator
     initial: State
-    controller_kind: str
+    controller_kind: ScenarioControllerKind
     faults: list[RotorFault]
     duration_s: float
 
@@ -136,7 +136,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         faults.append(RotorFault(rotor=f["rotor"], time=f["time_s"], efficiency=f.get("efficiency", 0.0)))
     simulator = Simulator(
         airframe,
-        dt=data.get("dt_s", 1.0 / 400.0),
+        dt_s=data.get("dt_s", 1.0 / 400.0),
         substeps=data.get("substeps", 4),
         drag=Drag(**_table(data, "drag")),
         wind=_table(data, "wind").get("velocity_m_s", (0.0, 0.0, 0.0)),
@@ -147,4 +147,4 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         ),
         noise=None if noise is None else Noise(**_table(data, "noise")),
     )
-    return Scenario(path.stem, simulator, state, kind, faults, real("duration_s", data.get("duration_s", 10.0)))
+    return Scenario(path.stem, simulator, state, cast(ScenarioControllerKind, kind), faults, real("duration_s", data.get("duration_s", 10.0)))

@@ -8,19 +8,57 @@ faults are 1-based like the papers; arrays are ordered rotor 1..m.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, count, float_array, real
+from ._convert import FloatArray, core_fields, count, float_array, real
+from ._typing import Controller, CoreController, DivergenceKind
 from .airframe import Airframe, require_airframe
-from .controllers import CORE_TYPES, core_controller, trim_command
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+
+#: A controller the simulator flies: a built-in one (anything with ``core(dt_s)``, see
+#: :class:`rotorfault.control.Controller`), a Python callable ``f(t, x) -> commands`` (the slow
+#: path) or ``None`` (all rotors at zero).
+AnyController: TypeAlias = Controller | Callable[[float, FloatArray], npt.ArrayLike] | None
+
+#: The Rust controller objects :func:`core_controller` can return (all can run in a batch).
+CORE_TYPES: tuple[type, ...] = (
+    _rfcore.OpenLoop,
+    _rfcore.LinearFeedback,
+    _rfcore.DiscreteLti,
+    _rfcore.Allocated,
+    _rfcore.UniformPassiveFtc,
+)
+
+
+def core_controller(controller: AnyController, dt_s: float) -> CoreController | Callable[[float, FloatArray], npt.ArrayLike] | None:
+    """The object the Rust loop runs for ``controller`` (``None``: all rotors at zero): a built-in
+    controller's ``core(dt_s)``, or the callable itself."""
+    if controller is None:
+        return None
+    core = getattr(controller, "core", None)
+    if callable(core):
+        return cast(Controller, controller).core(dt_s)
+    if callable(controller):
+        return controller
+    raise TypeError(
+        "controller: expected OpenLoop, LinearFeedback, Lti, Allocated, UniformPassiveFtc (anything with "
+        f"core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
+    )
+
+
+def trim_command(controller: object) -> FloatArray | None:
+    """The trim command a controller holds, if any (the actuators start there)."""
+    u_trim = getattr(controller, "u_trim", None)
+    return None if u_trim is None else np.asarray(u_trim, dtype=np.float64)
 
 
 def _vector3(field_name: str, value: Any) -> tuple[float, float, float]:
@@ -41,11 +79,11 @@ class State:
 
     def __init__(
         self,
-        position: Any = (0.0, 0.0, 0.0),
-        velocity: Any = (0.0, 0.0, 0.0),
-        quaternion: Any = None,
-        euler: Any = None,
-        omega: Any = (0.0, 0.0, 0.0),
+        position: npt.ArrayLike = (0.0, 0.0, 0.0),
+        velocity: npt.ArrayLike = (0.0, 0.0, 0.0),
+        quaternion: npt.ArrayLike | None = None,
+        euler: npt.ArrayLike | None = None,
+        omega: npt.ArrayLike = (0.0, 0.0, 0.0),
     ) -> None:
         self.position = _vector3("position", position)
         self.velocity = _vector3("velocity", velocity)
@@ -76,7 +114,7 @@ class State:
         self.quaternion: tuple[float, float, float, float] = q
 
     @classmethod
-    def from_vector(cls, x: Any) -> State:
+    def from_vector(cls, x: npt.ArrayLike) -> State:
         """From the 12-element state vector ``[p, v, roll, pitch, yaw, omega]``."""
         v = float_array("x", x, 1)
         if v.shape != (12,):
@@ -220,7 +258,7 @@ class Noise:
     reproducible on every platform; in a batch, run ``i`` uses ``seed + i``."""
 
     snr_db: float | None = None
-    std: Any = None
+    std: npt.ArrayLike | None = None
     seed: int = 0
 
     def _packed(self) -> tuple[float, list[float], int]:
@@ -244,7 +282,9 @@ class Event:
     """Why and when a run ended early, with the state (12-vector) at that moment."""
 
     time: float
-    kind: str
+    #: A kebab-case code (``"tilt"``, ``"non-finite-state"``, ...); ``description`` is the
+    #: human-readable text.
+    kind: DivergenceKind
     description: str
     state: FloatArray
 
@@ -266,7 +306,8 @@ class Trajectory:
     primary_axis: FloatArray
     rotor_command: FloatArray
     rotor_thrust: FloatArray
-    health: FloatArray
+    #: Rotor efficiencies applied by the simulator at each step (faults included).
+    efficiency: FloatArray
     #: Sensor readings as recorded by the core (empty without noise); see :attr:`measured`.
     recorded_measurements: FloatArray
     events: list[Event] = field(default_factory=list)
@@ -305,7 +346,9 @@ class Trajectory:
         events = []
         if raw["divergence"] is not None:
             d = raw["divergence"]
-            events.append(Event(d["time"], d["reason"], d["description"], np.asarray(d["state"])))
+            # The core names reasons in snake_case: the one place they become kebab-case codes.
+            kind = cast(DivergenceKind, d["reason"].replace("_", "-"))
+            events.append(Event(d["time"], kind, d["description"], np.asarray(d["state"])))
         return cls(
             t=raw["t"],
             position=raw["position"],
@@ -316,7 +359,7 @@ class Trajectory:
             primary_axis=raw["primary_axis"],
             rotor_command=raw["command"],
             rotor_thrust=raw["thrust"],
-            health=raw["health"],
+            efficiency=raw["health"],
             recorded_measurements=raw["measured"],
             events=events,
             faults=faults,
@@ -374,7 +417,7 @@ def _faults(faults: Iterable[RotorFault] | None) -> tuple[RotorFault, ...]:
 class Simulator:
     """One airframe with its actuators, drag and wind, ready to fly controllers through faults.
 
-    ``dt`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
+    ``dt_s`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
     ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
     ``(time_s, (n, e, d))`` points added to it, interpolated linearly.
     """
@@ -382,19 +425,20 @@ class Simulator:
     def __init__(
         self,
         airframe: Airframe,
-        dt: float = 1.0 / 400.0,
+        *,
+        dt_s: float = 1.0 / 400.0,
         substeps: int = 4,
         drag: Drag | None = None,
-        wind: Any = (0.0, 0.0, 0.0),
-        wind_profile: Sequence[tuple[float, Any]] | None = None,
+        wind: npt.ArrayLike = (0.0, 0.0, 0.0),
+        wind_profile: Sequence[tuple[float, npt.ArrayLike]] | None = None,
         actuator: FixedPitchActuator | VariablePitchActuator | None = None,
         limits: DivergenceLimits | None = None,
         noise: Noise | None = None,
     ) -> None:
         self.airframe = require_airframe(airframe)
-        self.dt = real("dt", dt)
-        if not self.dt > 0 or not math.isfinite(self.dt):
-            raise ValueError(f"dt: must be > 0 and finite, got {self.dt}")
+        self.dt_s = real("dt_s", dt_s)
+        if not self.dt_s > 0 or not math.isfinite(self.dt_s):
+            raise ValueError(f"dt_s: must be > 0 and finite, got {self.dt_s}")
         self.substeps = count("substeps", substeps)
         if self.substeps == 0:
             raise ValueError("substeps: must be >= 1")
@@ -415,10 +459,11 @@ class Simulator:
         self.noise = noise
         # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
         # rebuilds the core objects from these attributes, so changing one later takes effect.)
-        _rfcore.simulate(
-            self.airframe._core, self.actuator._core(), self.drag._packed(), None, State()._packed(), [],
-            self.airframe.efficiency, None, self._config(0.0),
-        )
+        with core_fields():
+            _rfcore.simulate(
+                self.airframe._core, self.actuator._core(), self.drag._packed(), None, State()._packed(), [],
+                self.airframe.efficiency, None, self._config(0.0),
+            )
 
     @property
     def command_count(self) -> int:
@@ -426,17 +471,17 @@ class Simulator:
         per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
         return per_rotor * self.airframe.rotor_count
 
-    def _config(self, t_final: float, record_every: int = 1) -> tuple[Any, ...]:
-        t_final = real("t_final", t_final)
+    def _config(self, duration_s: float, record_every: int = 1) -> tuple[Any, ...]:
+        duration_s = real("duration_s", duration_s)
         every = count("record_every", record_every)
         if every < 1:
             raise ValueError(f"record_every: must be >= 1, got {every}")
         noise = None if self.noise is None else self.noise._packed()
         return (
-            self.dt, self.substeps, t_final, self.limits._packed(), list(self.wind), self.wind_profile, noise, every,
+            self.dt_s, self.substeps, duration_s, self.limits._packed(), list(self.wind), self.wind_profile, noise, every,
         )
 
-    def _start(self, controller: Any, initial_command: Any) -> FloatArray | None:
+    def _start(self, controller: AnyController, initial_command: npt.ArrayLike | None) -> FloatArray | None:
         if initial_command is not None:
             return float_array("initial_command", initial_command, 1)
         trim = trim_command(controller)
@@ -446,44 +491,52 @@ class Simulator:
     def run(
         self,
         x0: State | None = None,
-        t_final: float = 10.0,
-        controller: Any = None,
+        duration_s: float = 10.0,
+        *,
+        controller: AnyController = None,
         faults: Iterable[RotorFault] | None = None,
-        initial_command: Any = None,
+        initial_command: npt.ArrayLike | None = None,
         record_every: int = 1,
     ) -> Trajectory:
-        """Flies from ``x0`` for ``t_final`` seconds. The actuators start settled at
+        """Flies from ``x0`` for ``duration_s`` seconds. The actuators start settled at
         ``initial_command`` (default: the controller's trim command if it has one, else zero).
-        Health starts at the airframe's efficiencies; ``faults`` change it on schedule.
+        Rotor efficiency starts at the airframe's own; ``faults`` change it on schedule.
         ``record_every`` keeps every n-th control step (plus the last and any divergence)."""
         x0 = State() if x0 is None else x0
         if not isinstance(x0, State):
             raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
         fault_list = _faults(faults)
-        raw = _rfcore.simulate(
-            self.airframe._core,
-            self.actuator._core(),
-            self.drag._packed(),
-            core_controller(controller, self.dt),
-            x0._packed(),
-            [f._packed() for f in fault_list],
-            self.airframe.efficiency,
-            self._start(controller, initial_command),
-            self._config(t_final, record_every),
-        )
+        core = core_controller(controller, self.dt_s)
+        start = self._start(controller, initial_command)
+        config = self._config(duration_s, record_every)
+        with core_fields():
+            raw = _rfcore.simulate(
+                self.airframe._core,
+                self.actuator._core(),
+                self.drag._packed(),
+                core,
+                x0._packed(),
+                [f._packed() for f in fault_list],
+                self.airframe.efficiency,
+                start,
+                config,
+            )
         return Trajectory._from_core(raw, fault_list)
 
-    def state_derivative(self, x: Any, command: Any, health: Any = None) -> FloatArray:
-        """d/dt of the 12-element state vector with the actuators settled at ``command``."""
-        return _rfcore.state_derivative(
-            self.airframe._core,
-            self.actuator._core(),
-            self.drag._packed(),
-            list(float_array("x", x, 1)),
-            float_array("command", command, 1),
-            self.airframe.efficiency if health is None else float_array("health", health, 1),
-            list(self.wind),
-        )
+    def state_derivative(self, x: npt.ArrayLike, command: npt.ArrayLike, efficiency: npt.ArrayLike | None = None) -> FloatArray:
+        """d/dt of the 12-element state vector with the actuators settled at ``command`` and rotor
+        ``efficiency`` (default: the airframe's own)."""
+        eff = self.airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
+        with core_fields():
+            return _rfcore.state_derivative(
+                self.airframe._core,
+                self.actuator._core(),
+                self.drag._packed(),
+                list(float_array("x", x, 1)),
+                float_array("command", command, 1),
+                eff,
+                list(self.wind),
+            )
 
 
 @dataclass(frozen=True)
@@ -496,7 +549,7 @@ class BatchResult:
     euler: FloatArray
     omega: FloatArray
     rotor_thrust: FloatArray
-    health: FloatArray
+    efficiency: FloatArray
     diverged: np.ndarray[Any, np.dtype[np.bool_]]
     divergence_time: FloatArray
     trajectories: list[Trajectory]
@@ -505,10 +558,11 @@ class BatchResult:
 def simulate_batch(
     simulator: Simulator,
     x0s: Sequence[State],
-    t_final: float,
-    controllers: Any = None,
+    duration_s: float,
+    *,
+    controllers: AnyController | Sequence[AnyController] = None,
     faults: Sequence[Iterable[RotorFault] | None] | None = None,
-    initial_command: Any = None,
+    initial_command: npt.ArrayLike | None = None,
     record_every: int = 1,
 ) -> BatchResult:
     """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
@@ -523,13 +577,13 @@ def simulate_batch(
     for s in states:
         if not isinstance(s, State):
             raise TypeError(f"x0s: expected rotorfault.State items, got {type(s).__name__}")
-    per_run = list(controllers) if isinstance(controllers, (list, tuple)) else [controllers] * n
+    per_run: list[AnyController] = list(controllers) if isinstance(controllers, (list, tuple)) else [controllers] * n  # type: ignore[list-item]
     fault_lists = [_faults(f) for f in (faults if faults is not None else [None] * n)]
     if len(per_run) != n or len(fault_lists) != n:
         raise ValueError(f"controllers, faults: expected one entry per run ({n})")
     cores = []
     for c in per_run:
-        core = core_controller(c, simulator.dt)
+        core = core_controller(c, simulator.dt_s)
         if core is not None and not isinstance(core, CORE_TYPES):
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
         cores.append(core)
@@ -538,17 +592,19 @@ def simulate_batch(
     for c in per_run:
         start = simulator._start(c, initial_command)
         starts.append(None if start is None else [float(v) for v in start])
-    raws = _rfcore.simulate_batch(
-        simulator.airframe._core,
-        simulator.actuator._core(),
-        simulator.drag._packed(),
-        cores,
-        [s._packed() for s in states],
-        [[f._packed() for f in fl] for fl in fault_lists],
-        simulator.airframe.efficiency,
-        starts,
-        simulator._config(t_final, record_every),
-    )
+    config = simulator._config(duration_s, record_every)
+    with core_fields():
+        raws = _rfcore.simulate_batch(
+            simulator.airframe._core,
+            simulator.actuator._core(),
+            simulator.drag._packed(),
+            cores,
+            [s._packed() for s in states],
+            [[f._packed() for f in fl] for fl in fault_lists],
+            simulator.airframe.efficiency,
+            starts,
+            config,
+        )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
     steps = max((len(tr.t) for tr in trajectories), default=0)
 
@@ -561,13 +617,13 @@ def simulate_batch(
         return out
 
     return BatchResult(
-        t=np.arange(steps, dtype=np.float64) * simulator.dt,
+        t=np.arange(steps, dtype=np.float64) * simulator.dt_s,
         position=stack("position"),
         velocity=stack("velocity"),
         euler=stack("euler"),
         omega=stack("omega"),
         rotor_thrust=stack("rotor_thrust"),
-        health=stack("health"),
+        efficiency=stack("efficiency"),
         diverged=np.array([tr.diverged for tr in trajectories], dtype=bool),
         divergence_time=np.array([tr.events[0].time if tr.events else np.nan for tr in trajectories]),
         trajectories=trajectories,

@@ -2,28 +2,26 @@
 
 The linear model is the numerical Jacobian (central differences) of the simulator's own
 12-state dynamics (``Simulator.state_derivative``), so it matches exactly what the Rust loop
-flies: frames, drag, rotor geometry, health.
+flies: frames, drag, rotor geometry, rotor efficiency.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
 import numpy as np
+import numpy.typing as npt
 
-from ._convert import FloatArray, float_array, real
-from .controllers import Allocated, LinearFeedback
-from .simulation import FixedPitchActuator, Simulator
-
-if TYPE_CHECKING:
-    from .allocation import Allocator
-
-STATE_DIM = 12
+from .._convert import FloatArray, float_array, real
+from ..allocation import Allocator
+from ..simulation import FixedPitchActuator, Simulator
+from .allocated import Allocated
+from .linear import STATE_DIM, LinearFeedback
 
 
-def hover_trim(simulator: Simulator, position: Any = (0.0, 0.0, 0.0), yaw: float = 0.0) -> tuple[FloatArray, FloatArray]:
+def hover_trim(
+    simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0), yaw: float = 0.0
+) -> tuple[FloatArray, FloatArray]:
     """``(x_trim, u_trim)``: hover at ``position`` (world NED, m) with heading ``yaw`` (rad), rotor
-    thrusts the minimum-norm solution of ``B_f u = [m g, 0, 0, 0]`` with the airframe's health.
+    thrusts the minimum-norm solution of ``B_f u = [m g, 0, 0, 0]`` with the airframe's efficiency.
     Raises ``ValueError`` if that solution leaves the thrust bounds or does not balance."""
     if not isinstance(simulator, Simulator) or not isinstance(simulator.actuator, FixedPitchActuator):
         raise TypeError("simulator: hover_trim needs a Simulator with fixed-pitch rotors")
@@ -45,10 +43,16 @@ def hover_trim(simulator: Simulator, position: Any = (0.0, 0.0, 0.0), yaw: float
 
 
 def linearize(
-    simulator: Simulator, x_trim: Any, u_trim: Any, health: Any = None, step: float = 1e-6
+    simulator: Simulator,
+    x_trim: npt.ArrayLike,
+    u_trim: npt.ArrayLike,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    step: float = 1e-6,
 ) -> tuple[FloatArray, FloatArray]:
     """``(A, B)`` with ``dx/dt ~ A (x - x_trim) + B (u - u_trim)``, by central differences of
-    the simulator's dynamics (relative step ``step``)."""
+    the simulator's dynamics (relative step ``step``) with rotor ``efficiency`` (default: the
+    airframe's own)."""
     x0 = float_array("x_trim", x_trim, 1)
     u0 = float_array("u_trim", u_trim, 1)
     if x0.shape != (STATE_DIM,):
@@ -56,7 +60,7 @@ def linearize(
     h = real("step", step)
 
     def f(x: FloatArray, u: FloatArray) -> FloatArray:
-        return simulator.state_derivative(x, u, health)
+        return simulator.state_derivative(x, u, efficiency)
 
     a = np.empty((STATE_DIM, STATE_DIM))
     for j in range(STATE_DIM):
@@ -75,9 +79,10 @@ def linearize(
 
 def lqr_hover(
     simulator: Simulator,
-    q: Any = None,
-    r: Any = None,
-    position: Any = (0.0, 0.0, 0.0),
+    *,
+    q: npt.ArrayLike | None = None,
+    r: npt.ArrayLike | None = None,
+    position: npt.ArrayLike = (0.0, 0.0, 0.0),
     yaw: float = 0.0,
 ) -> LinearFeedback:
     """An LQR hover controller (python-control's ``lqr``) on the linearisation about
@@ -85,7 +90,7 @@ def lqr_hover(
     attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor."""
     import control  # type: ignore[import-untyped]
 
-    x_trim, u_trim = hover_trim(simulator, position, yaw)
+    x_trim, u_trim = hover_trim(simulator, position=position, yaw=yaw)
     a, b = linearize(simulator, x_trim, u_trim)
     q_state, r_rotor = _bryson_weights(simulator, q, r)
     gain, _, _ = control.lqr(a, b, q_state, r_rotor)
@@ -95,9 +100,10 @@ def lqr_hover(
 def lqr_hover_allocated(
     simulator: Simulator,
     allocator: Allocator,
-    q: Any = None,
-    r: Any = None,
-    position: Any = (0.0, 0.0, 0.0),
+    *,
+    q: npt.ArrayLike | None = None,
+    r: npt.ArrayLike | None = None,
+    position: npt.ArrayLike = (0.0, 0.0, 0.0),
     yaw: float = 0.0,
 ) -> Allocated:
     """An LQR hover controller on the virtual control, followed by constrained allocation.
@@ -106,10 +112,8 @@ def lqr_hover_allocated(
     ``T = P v`` (``P`` the allocator's weighted pseudo-inverse, which the constrained allocation
     equals while no bound is active), so ``B_v = B P``. ``r`` (rotor units, default as
     :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. Returns an
-    :class:`~rotorfault.controllers.Allocated` that runs entirely in Rust."""
+    :class:`~rotorfault.control.Allocated` that runs entirely in Rust."""
     import control
-
-    from .allocation import Allocator
 
     if not isinstance(allocator, Allocator):
         raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
@@ -122,7 +126,7 @@ def lqr_hover_allocated(
         raise ValueError("allocator.weights: LQR on the virtual control needs every weight > 0")
     if allocator.regularization != 0:
         raise ValueError("allocator.regularization: must be 0 here (the trim would not map back to itself)")
-    x_trim, u_trim = hover_trim(simulator, position, yaw)
+    x_trim, u_trim = hover_trim(simulator, position=position, yaw=yaw)
     if allocator.actuator_count != u_trim.shape[0]:
         raise ValueError(
             f"allocator: has {allocator.actuator_count} actuators, the simulator's airframe {u_trim.shape[0]}"
@@ -138,7 +142,9 @@ def lqr_hover_allocated(
     return Allocated(LinearFeedback(np.asarray(gain), x_trim, v_trim), allocator)
 
 
-def _bryson_weights(simulator: Simulator, q: Any, r: Any) -> tuple[FloatArray, FloatArray]:
+def _bryson_weights(
+    simulator: Simulator, q: npt.ArrayLike | None, r: npt.ArrayLike | None
+) -> tuple[FloatArray, FloatArray]:
     """``q`` and ``r`` (rotor units) as given, or Bryson's rule: 1 m position, 1 m/s velocity,
     0.1 rad attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor."""
     if q is None:
@@ -148,3 +154,6 @@ def _bryson_weights(simulator: Simulator, q: Any, r: Any) -> tuple[FloatArray, F
         per_rotor = 0.1 * simulator.airframe.hover_thrust_n / simulator.airframe.rotor_count
         r = np.eye(simulator.command_count) / per_rotor**2
     return float_array("q", q, 2), float_array("r", r, 2)
+
+
+__all__ = ["hover_trim", "linearize", "lqr_hover", "lqr_hover_allocated"]

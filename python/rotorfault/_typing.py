@@ -1,0 +1,59 @@
+"""The string options of the public API, as ``Literal`` types (one kebab-case style), and the
+:class:`Controller` protocol the simulator runs.
+
+This module depends only on the extension module, so every layer can use it.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, Protocol, TypeAlias
+
+from . import _rfcore
+
+#: How an ACAI reads when the hover wrench lies outside the attainable set (Du eq. (13) or the
+#: facet margin; see :mod:`rotorfault.controllability`).
+AcaiFormula: TypeAlias = Literal["eq13", "facet-margin"]
+#: Solver of :func:`rotorfault.allocate`.
+AllocationMethod: TypeAlias = Literal["active-set", "clarabel", "pinv"]
+#: Outcome of one allocation.
+AllocationStatus: TypeAlias = Literal["optimal", "almost-optimal", "iteration-limit", "unconstrained", "failed"]
+#: Rotor spin direction seen from above (``"clockwise"``, ``"anticlockwise"``, ``"acw"`` and
+#: ``"counterclockwise"`` are accepted as well).
+Spin: TypeAlias = Literal["cw", "ccw"]
+#: Command law of Ke's uniform passive FTC (:class:`rotorfault.control.UniformPassiveFtc`).
+KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
+#: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
+DivergenceKind: TypeAlias = Literal["non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"]
+#: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
+KeOutcome: TypeAlias = Literal[
+    "holds-position", "off-station", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"
+]
+#: Controller of a ``rotorfault simulate`` scenario file.
+ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
+
+#: The Rust controller objects the simulator's loop runs (all can run in a batch).
+CoreController: TypeAlias = (
+    _rfcore.OpenLoop | _rfcore.LinearFeedback | _rfcore.DiscreteLti | _rfcore.Allocated | _rfcore.UniformPassiveFtc
+)
+
+
+class Controller(Protocol):
+    """What :class:`rotorfault.Simulator` needs from a built-in controller: the Rust object that
+    runs it at control period ``dt_s``. A controller that also has a ``u_trim`` attribute (its
+    trim command) starts the actuators there. Re-exported as :class:`rotorfault.control.Controller`."""
+
+    def core(self, dt_s: float) -> CoreController: ...
+
+
+__all__ = [
+    "AcaiFormula",
+    "AllocationMethod",
+    "AllocationStatus",
+    "Controller",
+    "CoreController",
+    "DivergenceKind",
+    "KeLaw",
+    "KeOutcome",
+    "ScenarioControllerKind",
+    "Spin",
+]

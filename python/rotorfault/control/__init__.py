@@ -1,0 +1,38 @@
+"""Controllers for :class:`rotorfault.Simulator` and their design: design in Python, run in Rust.
+
+- :mod:`~rotorfault.control.linear`: :class:`OpenLoop`, :class:`LinearFeedback`, :class:`Lti`;
+- :mod:`~rotorfault.control.allocated`: :class:`Allocated` (a virtual-control law plus
+  constrained allocation);
+- :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
+  and the N-matrix stability analysis;
+- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design.
+
+Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
+:class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
+is the slow path.
+"""
+
+from __future__ import annotations
+
+from .._typing import Controller
+from . import ke, lqr
+from .allocated import Allocated
+from .ke import KeGains, UniformPassiveFtc
+from .linear import LinearFeedback, Lti, OpenLoop
+from .lqr import hover_trim, linearize, lqr_hover, lqr_hover_allocated
+
+__all__ = [
+    "Allocated",
+    "Controller",
+    "KeGains",
+    "LinearFeedback",
+    "Lti",
+    "OpenLoop",
+    "UniformPassiveFtc",
+    "hover_trim",
+    "ke",
+    "linearize",
+    "lqr",
+    "lqr_hover",
+    "lqr_hover_allocated",
+]

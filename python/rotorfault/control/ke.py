@@ -1,0 +1,296 @@
+"""Ke et al.'s uniform passive fault-tolerant controller and its design (Ke, Cai, Quan; IEEE TIE).
+
+One controller and one set of gains fly the vehicle fault-free and through one, two and three
+rotor failures, without fault detection or switching: the controller never sees rotor efficiency.
+The controller itself runs in Rust (:class:`UniformPassiveFtc`); this module holds it, its gain
+presets and the stability analysis of Ke's Section III-D (the N matrix, Table II). The scenarios,
+metrics and report of the paper's reproduction are in :mod:`rotorfault.papers.ke`.
+
+Decisions on the paper's gaps (also in the README):
+
+- the control command (18) as printed leaves a steady virtual-control deficit
+  (``u_1 = k/(k+1) u_d1`` without a fault, eq. (43)); the default ``law="feedforward"`` adds the
+  filtered desired virtual control, which removes the deficit, keeps the partial compensation of
+  a fault and leaves the stability matrix ``I + k_rotor N`` of (25) unchanged. ``law="literal"``
+  is (18) as printed, ``"full-compensation"`` Remark 5's (29), ``"baseline"`` a conventional
+  cascade into the pseudo-inverse;
+- Ke gives no aerodynamic rotational damping, which sets the spin rate: the presets carry a linear
+  damping ``rotational_drag_n_m_s`` chosen so the steady spins land in the range of Ke's
+  experiments.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any, get_args
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._convert import FloatArray, core_fields, float_array, real
+from .._typing import KeLaw
+from ..airframe import Airframe, require_airframe
+from ..allocation import Allocator
+from ..simulation import DivergenceLimits, Drag, FixedPitchActuator, Simulator
+
+#: Rows of the virtual control Ke's N matrix uses: thrust, roll, pitch (E_1).
+E1_ROWS = (0, 1, 2)
+
+
+@dataclass(frozen=True)
+class KeGains:
+    """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4 and the remedy's altitude
+    integral ``k_iz`` (not in the paper; equal to the ``ke-hil`` preset). Validated in Rust when a
+    controller is built: ``epsilon_s``, ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``,
+    ``accel_limit_m_s2`` > 0, ``k_vz`` and ``k_omega`` > 0.5 (Theorem 1)."""
+
+    k_p: float = 0.3
+    k_v: float = 0.1
+    k_vz: float = 1.0
+    accel_limit_m_s2: float = 0.15
+    k_n3: float = 3.0
+    k_omega: float = 14.0
+    k_r: float = 4.2
+    k_cp: float = 0.6
+    epsilon_s: float = 0.06
+    k_rotor: float = 2.0
+    k_rotor_z: float = 0.1
+    weights: tuple[float, float, float, float] = (1.0, 20.0, 20.0, 0.01)
+    #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper (the
+    #: ``ke-hil`` preset's value).
+    k_iz: float = 0.1
+
+    def _packed(self) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "weights":
+                w = float_array("gains.weights", value, 1)
+                if w.shape != (4,):
+                    raise ValueError(f"gains.weights: expected 4 entries (w_f, w_p, w_q, w_r), got {w.shape[0]}")
+                out["weights"] = [float(v) for v in w]
+            else:
+                out[f.name] = real(f"gains.{f.name}", value)
+        return out
+
+
+@dataclass(frozen=True)
+class FtcPreset:
+    """A controller preset file (``presets/ftc/*.toml``): gains and the vehicle values that go with
+    them (rotor lag from Ke Table III, the rotational damping Ke does not give)."""
+
+    name: str
+    description: str
+    source: str
+    airframe_name: str
+    gains: KeGains
+    rotor_time_constant_s: float
+    rotational_drag_n_m_s: float
+    linear_drag_n_s_m: float
+
+    @property
+    def airframe(self) -> Airframe:
+        return Airframe.preset(self.airframe_name)
+
+    def simulator(self, *, dt_s: float = 1 / 400, substeps: int = 4, limits: DivergenceLimits | None = None) -> Simulator:
+        """The preset's vehicle at Ke's 400 Hz control rate: rotor lag and rotational damping."""
+        return Simulator(
+            self.airframe,
+            dt_s=dt_s,
+            substeps=substeps,
+            actuator=FixedPitchActuator(time_constant_s=self.rotor_time_constant_s),
+            drag=Drag(rotational_n_m_s=self.rotational_drag_n_m_s, linear_n_s_m=self.linear_drag_n_s_m),
+            limits=limits,
+        )
+
+
+def _ftc_dir() -> Path:
+    return Path(str(resources.files("rotorfault") / "presets" / "ftc"))
+
+
+def presets() -> list[str]:
+    """Names of the shipped controller presets (``ke-hil``, ``ke-experiment``)."""
+    return sorted(p.stem for p in _ftc_dir().glob("*.toml"))
+
+
+def preset(name: str = "ke-hil") -> FtcPreset:
+    """A shipped controller preset by name."""
+    if not isinstance(name, str):
+        raise TypeError(f"preset: expected a preset name (str), got {type(name).__name__}")
+    if name not in presets():
+        raise ValueError(f"preset: unknown controller preset {name!r}; available: {', '.join(presets())}")
+    raw = _rfcore.ftc_preset_from_toml((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
+    gains = dict(raw["gains"])
+    gains["weights"] = tuple(gains["weights"])
+    return FtcPreset(
+        raw["name"],
+        raw["description"],
+        raw["source"],
+        raw["airframe"],
+        KeGains(**gains),
+        raw["vehicle"]["rotor_time_constant_s"],
+        raw["vehicle"]["rotational_drag_n_m_s"],
+        raw["vehicle"]["linear_drag_n_s_m"],
+    )
+
+
+# -- the controller ------------------------------------------------------------------------------
+
+Setpoint = tuple[float, npt.ArrayLike]
+
+
+class UniformPassiveFtc:
+    """Ke et al.'s uniform passive fault-tolerant controller, run in Rust at the simulator's
+    control rate (Ke: 400 Hz). One controller, one set of gains, fault-free and through one, two
+    and three rotor failures; it never reads rotor efficiency.
+
+    ``gains``: a :class:`KeGains` or a controller preset name (``"ke-hil"``, default;
+    ``"ke-experiment"``). ``law``: ``"feedforward"`` (default, the documented remedy for the
+    steady deficit of eq. (18)), ``"literal"`` (eq. (18) as printed), ``"full-compensation"``
+    (Remark 5, eq. (29)) or ``"baseline"`` (conventional: desired virtual control straight into
+    the pseudo-inverse, no estimation, no QP). ``setpoints``: ``[(time_s, (north, east, down))]``
+    held from their time on, or give one ``position``."""
+
+    LAWS: tuple[KeLaw, ...] = get_args(KeLaw)
+
+    def __init__(
+        self,
+        airframe: Airframe,
+        *,
+        gains: KeGains | str = "ke-hil",
+        law: KeLaw = "feedforward",
+        position: npt.ArrayLike = (0.0, 0.0, 0.0),
+        setpoints: Sequence[Setpoint] | None = None,
+    ) -> None:
+        self.airframe = require_airframe(airframe)
+        if isinstance(gains, str):
+            gains = preset(gains).gains
+        if not isinstance(gains, KeGains):
+            raise TypeError(f"gains: expected rotorfault.control.ke.KeGains or a preset name, got {type(gains).__name__}")
+        if not isinstance(law, str):
+            raise TypeError(f"law: expected a string, got {type(law).__name__}")
+        if law not in self.LAWS:
+            raise ValueError(f"law: expected one of {', '.join(map(repr, self.LAWS))}, got {law!r}")
+        self.gains = gains
+        self.law: KeLaw = law
+        if setpoints is None:
+            setpoints = [(0.0, position)]
+        if isinstance(setpoints, (str, bytes)) or not hasattr(setpoints, "__iter__"):
+            raise TypeError("setpoints: expected a sequence of (time_s, (north, east, down))")
+        parsed = []
+        for k, item in enumerate(setpoints):
+            if not hasattr(item, "__len__") or len(item) != 2:
+                raise TypeError(f"setpoints[{k}]: expected (time_s, (north, east, down))")
+            point = float_array(f"setpoints[{k}].position", item[1], 1)
+            if point.shape != (3,):
+                raise ValueError(f"setpoints[{k}].position: expected 3 entries (north, east, down), got {point.shape[0]}")
+            parsed.append((real(f"setpoints[{k}].time", item[0]), (float(point[0]), float(point[1]), float(point[2]))))
+        self.setpoints = tuple(parsed)
+        self.core(1.0 / 400.0)  # validates gains, airframe and setpoints now
+
+    @property
+    def u_trim(self) -> FloatArray:
+        """Hover thrusts on the nominal matrix: where the actuators start."""
+        nominal = self.airframe.with_efficiency(np.ones(self.airframe.rotor_count))
+        hover = np.array([nominal.hover_thrust_n, 0.0, 0.0, 0.0])
+        commands: FloatArray = Allocator(nominal, weights=self.gains.weights).allocate(hover).commands
+        return commands
+
+    def core(self, dt_s: float) -> _rfcore.UniformPassiveFtc:
+        with core_fields():
+            return _rfcore.UniformPassiveFtc(
+                self.airframe._core, self.law, list(self.setpoints), float(dt_s), **self.gains._packed()
+            )
+
+    def replay(self, times: npt.ArrayLike, states: npt.ArrayLike, *, dt_s: float = 1.0 / 400.0) -> FloatArray:
+        """The commands this controller (from its reset state) gives for a recorded history:
+        ``times`` (N), ``states`` (N x 13: position, velocity, quaternion w x y z, body rates),
+        e.g. ``np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])``. No rotor
+        efficiency enters: the passivity check."""
+        t = float_array("times", times, 1)
+        x = float_array("states", states, 2)
+        period = real("dt_s", dt_s)
+        # The filters assume one call per control period: a thinned recording (record_every > 1)
+        # would replay with the wrong dynamics.
+        if t.size > 1 and np.abs(np.diff(t) - period).max() > 1e-9 * max(period, 1.0):
+            raise ValueError(f"times: must be spaced by the control period dt_s = {period} s (record with record_every=1)")
+        out: FloatArray = _rfcore.replay(self.core(period), t, x, 4)
+        return out
+
+
+# -- Section III-D: stability analysis --------------------------------------------------------
+
+
+def n_matrix(airframe: Airframe, efficiency: npt.ArrayLike) -> FloatArray:
+    """Ke's ``N = (E_1 M) Lambda (E_1 M)^+`` (3 x 3) with ``M`` the airframe's nominal
+    effectiveness matrix and ``Lambda = diag(efficiency)`` (Ke's health matrix): how the rotors
+    turn a commanded thrust/roll/pitch into what the vehicle receives under pseudo-inverse
+    allocation (24)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    lam = float_array("efficiency", efficiency, 1)
+    nominal = airframe.with_efficiency(np.ones(airframe.rotor_count))
+    frame = nominal.with_efficiency(lam)  # validates efficiency: one per rotor, in [0, 1]
+    e1m = nominal.effectiveness_matrix()[list(E1_ROWS)]
+    e1m_lambda = frame.effectiveness_matrix()[list(E1_ROWS)]
+    out: FloatArray = e1m_lambda @ np.linalg.pinv(e1m)
+    return out
+
+
+ComplexArray = npt.NDArray[np.complex128]
+
+
+def n_eigenvalues(airframe: Airframe, efficiency: npt.ArrayLike) -> ComplexArray:
+    """Eigenvalues of :func:`n_matrix` (Table II), sorted by real part then imaginary part."""
+    values = np.linalg.eigvals(n_matrix(airframe, efficiency)).astype(np.complex128)
+    order = np.lexsort((values.imag, values.real))
+    out: ComplexArray = values[order]
+    return out
+
+
+@dataclass(frozen=True)
+class StabilityCheck:
+    """Ke's linear checks for one efficiency vector (Ke's health matrix, ``diag(efficiency)``):
+    ``thrust_feedback`` is (25), ``Re eig(I + k_rotor N) > 0`` (the uniform controller);
+    ``full_compensation`` is (32), ``Re eig(N) > 0`` (Remark 5's controller, which fails with two
+    or three failures)."""
+
+    efficiency: tuple[float, ...]
+    eigenvalues: ComplexArray
+    k_rotor: float
+    thrust_feedback: bool
+    full_compensation: bool
+
+
+def stability_check(airframe: Airframe, efficiency: npt.ArrayLike, *, k_rotor: float = 2.0) -> StabilityCheck:
+    k = real("k_rotor", k_rotor)
+    if not (math.isfinite(k) and k > 0):
+        raise ValueError(f"k_rotor: must be > 0 and finite, got {k}")
+    eig = n_eigenvalues(airframe, efficiency)
+    tol = 1e-12
+    return StabilityCheck(
+        tuple(float(v) for v in float_array("efficiency", efficiency, 1)),
+        eig,
+        k,
+        bool(np.all((1.0 + k * eig).real > tol)),
+        bool(np.all(eig.real > tol)),
+    )
+
+
+__all__ = [
+    "E1_ROWS",
+    "FtcPreset",
+    "KeGains",
+    "StabilityCheck",
+    "UniformPassiveFtc",
+    "n_eigenvalues",
+    "n_matrix",
+    "preset",
+    "presets",
+    "stability_check",
+]
