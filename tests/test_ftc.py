@@ -272,9 +272,9 @@ def test_bad_arguments() -> None:
         ke.n_matrix(KE, [1, 1, 1])
     text = (Path(rf.__file__).parent / "presets" / "ftc" / "ke-hil.toml").read_text()
     with pytest.raises(ValueError, match="^vehicle.linear_drag_n_s_m"):
-        _rfcore.ftc_preset_from_toml(text.replace("linear_drag_n_s_m = 0.3", "linear_drag_n_s_m = -0.3"), "bad")
+        _rfcore.FtcPreset.from_toml_str(text.replace("linear_drag_n_s_m = 0.3", "linear_drag_n_s_m = -0.3"), "bad")
     with pytest.raises(ValueError, match="unknown field"):
-        _rfcore.ftc_preset_from_toml(text + "\n[extra]\nx = 1\n", "bad")
+        _rfcore.FtcPreset.from_toml_str(text + "\n[extra]\nx = 1\n", "bad")
     with pytest.raises(TypeError, match="^controller_preset"):
         ke_paper.run_scenario("one-failure", controller_preset=3)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="^record_every"):

@@ -30,7 +30,7 @@ class Airframe:
     ) -> Airframe: ...
     @staticmethod
     def from_toml_str(text: str, origin: str) -> Airframe: ...
-    def with_efficiency(self, eta: _F64) -> Airframe: ...
+    def with_efficiency(self, efficiency: _F64) -> Airframe: ...
     def to_toml_str(self) -> str: ...
     def effectiveness_matrix(self) -> _F64: ...
     @property
@@ -60,17 +60,36 @@ class Airframe:
     @property
     def efficiency(self) -> _F64: ...
 
-def acai(airframe: Airframe, eta: _F64, give_up_yaw: bool, formula: str) -> float: ...
-def acai_batch(airframe: Airframe, etas: _F64, give_up_yaw: bool, formula: str) -> _F64: ...
+def acai(airframe: Airframe, efficiency: _F64, give_up_yaw: bool, formula: str) -> float: ...
+def acai_batch(airframe: Airframe, efficiencies: _F64, give_up_yaw: bool, formula: str) -> _F64: ...
 def acai_from_matrix(
     effectiveness_matrix: _F64, f_min: _F64, f_max: _F64, g_vec: _F64, formula: str
 ) -> float: ...
+@final
+class ControllabilityReport:
+    @property
+    def state_dimension(self) -> int: ...
+    @property
+    def controllability_rank(self) -> int: ...
+    @property
+    def virtual_control_dimension(self) -> int: ...
+    @property
+    def effectiveness_rank(self) -> int: ...
+    @property
+    def acai(self) -> float: ...
+    @property
+    def formula(self) -> str: ...
+    @property
+    def verdict(self) -> str: ...
+    @property
+    def controllable(self) -> bool: ...
+
 def controllability(
-    airframe: Airframe, eta: _F64, give_up_yaw: bool, formula: str
-) -> dict[str, Any]: ...
+    airframe: Airframe, efficiency: _F64, give_up_yaw: bool, formula: str
+) -> ControllabilityReport: ...
 def failure_table(
     airframe: Airframe, max_failed: int, formula: str
-) -> list[tuple[list[int], dict[str, Any], dict[str, Any]]]: ...
+) -> list[tuple[list[int], ControllabilityReport, ControllabilityReport]]: ...
 
 @final
 class FixedPitchActuator:
@@ -99,49 +118,155 @@ class LinearFeedback:
     def __new__(cls, x_trim: _F64, u_trim: _F64, gain: _F64) -> LinearFeedback: ...
 
 @final
-class DiscreteLti:
-    def __new__(cls, a: _F64, b: _F64, c: _F64, d: _F64, x_trim: _F64, u_trim: _F64) -> DiscreteLti: ...
+class Lti:
+    def __new__(cls, a: _F64, b: _F64, c: _F64, d: _F64, x_trim: _F64, u_trim: _F64) -> Lti: ...
 
 _Actuator = FixedPitchActuator | VariablePitchActuator
-_Config = tuple[
-    float,
-    int,
-    float,
-    list[float],
-    list[float],
-    list[tuple[float, tuple[float, float, float]]],
-    tuple[float, list[float], int] | None,
-]
+
+@final
+class Drag:
+    def __new__(
+        cls,
+        *,
+        linear_n_s_m: float | None = None,
+        quadratic_n_s2_m2: float | None = None,
+        rotational_n_m_s: float | None = None,
+        rotor_inertia_kg_m2: float | None = None,
+    ) -> Drag: ...
+    @property
+    def linear_n_s_m(self) -> float: ...
+    @property
+    def quadratic_n_s2_m2(self) -> float: ...
+    @property
+    def rotational_n_m_s(self) -> float: ...
+    @property
+    def rotor_inertia_kg_m2(self) -> float: ...
+
+@final
+class DivergenceLimits:
+    def __new__(
+        cls,
+        *,
+        max_tilt_rad: float | None = None,
+        max_altitude_loss_m: float | None = None,
+        max_speed_m_s: float | None = None,
+        max_rate_rad_s: float | None = None,
+    ) -> DivergenceLimits: ...
+    @property
+    def max_tilt_rad(self) -> float: ...
+    @property
+    def max_altitude_loss_m(self) -> float: ...
+    @property
+    def max_speed_m_s(self) -> float: ...
+    @property
+    def max_rate_rad_s(self) -> float: ...
+
+@final
+class SensorNoise:
+    def __new__(cls, *, relative_std: float, absolute_std: list[float], seed: int) -> SensorNoise: ...
+    @property
+    def relative_std(self) -> float: ...
+    @property
+    def absolute_std(self) -> list[float]: ...
+    @property
+    def seed(self) -> int: ...
+
+@final
+class SimulationConfig:
+    def __new__(
+        cls,
+        *,
+        dt_s: float | None = None,
+        substeps: int | None = None,
+        duration_s: float | None = None,
+        limits: DivergenceLimits | None = None,
+        wind_m_s: tuple[float, float, float] | None = None,
+        wind_profile: list[tuple[float, tuple[float, float, float]]] | None = None,
+        noise: SensorNoise | None = None,
+        record_every: int | None = None,
+    ) -> SimulationConfig: ...
+    @property
+    def dt_s(self) -> float: ...
+    @property
+    def substeps(self) -> int: ...
+    @property
+    def duration_s(self) -> float: ...
+    @property
+    def record_every(self) -> int: ...
+    @property
+    def limits(self) -> DivergenceLimits: ...
+    @property
+    def wind_m_s(self) -> list[float]: ...
+
+@final
+class Divergence:
+    @property
+    def time_s(self) -> float: ...
+    @property
+    def reason(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def state(self) -> list[float]: ...
+
+@final
+class Trajectory:
+    @property
+    def t(self) -> _F64: ...
+    @property
+    def position(self) -> _F64: ...
+    @property
+    def velocity(self) -> _F64: ...
+    @property
+    def quaternion(self) -> _F64: ...
+    @property
+    def euler(self) -> _F64: ...
+    @property
+    def omega(self) -> _F64: ...
+    @property
+    def primary_axis(self) -> _F64: ...
+    @property
+    def command(self) -> _F64: ...
+    @property
+    def thrust(self) -> _F64: ...
+    @property
+    def efficiency(self) -> _F64: ...
+    @property
+    def measured(self) -> _F64: ...
+    @property
+    def divergence(self) -> Divergence | None: ...
+
+_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc
 
 def simulate(
     airframe: Airframe,
     actuator: _Actuator,
-    aero: list[float],
+    drag: Drag,
     controller: Any,
     x0: list[float],
     fault_list: list[tuple[int, float, float]],
-    health: _F64,
+    efficiency: _F64,
     settle: _F64 | None,
-    config_args: _Config,
-) -> dict[str, Any]: ...
+    config: SimulationConfig,
+) -> Trajectory: ...
 def simulate_batch(
     airframe: Airframe,
     actuator: _Actuator,
-    aero: list[float],
-    controllers: list[Any],
+    drag: Drag,
+    controllers: list[_Controller | None],
     x0s: list[list[float]],
     fault_lists: list[list[tuple[int, float, float]]],
-    health: _F64,
+    efficiency: _F64,
     settles: list[list[float] | None],
-    config_args: _Config,
-) -> list[dict[str, Any]]: ...
+    config: SimulationConfig,
+) -> list[Trajectory]: ...
 def state_derivative(
     airframe: Airframe,
     actuator: _Actuator,
-    aero: list[float],
+    drag: Drag,
     x: list[float],
     command: _F64,
-    health: _F64,
+    efficiency: _F64,
     wind: list[float],
 ) -> _F64: ...
 
@@ -161,7 +286,18 @@ class AllocationProblem:
 
 @final
 class Allocated:
-    def __new__(cls, law: OpenLoop | LinearFeedback | DiscreteLti, problem: AllocationProblem) -> Allocated: ...
+    def __new__(cls, law: OpenLoop | LinearFeedback | Lti, problem: AllocationProblem) -> Allocated: ...
+
+@final
+class AllocationBatch:
+    @property
+    def commands(self) -> _F64: ...
+    @property
+    def achieved(self) -> _F64: ...
+    @property
+    def statuses(self) -> list[str]: ...
+    @property
+    def iterations(self) -> list[int]: ...
 
 def allocate(
     problem: AllocationProblem,
@@ -170,41 +306,116 @@ def allocate(
     priorities: list[list[int]] | None,
     tolerance: float,
     max_iterations: int,
-) -> tuple[_F64, _F64, list[str], list[int]]: ...
+) -> AllocationBatch: ...
 def time_allocations(problem: AllocationProblem, controls: _F64, method_name: str, repeats: int) -> _F64: ...
+@final
+class DirectionalLimit:
+    @property
+    def scale(self) -> float: ...
+    @property
+    def commands(self) -> list[float]: ...
+    @property
+    def status(self) -> str: ...
+
+@final
+class HoverMargin:
+    @property
+    def max_thrust_n(self) -> float: ...
+    @property
+    def weight_n(self) -> float: ...
+    @property
+    def margin_n(self) -> float: ...
+    @property
+    def commands(self) -> list[float] | None: ...
+    @property
+    def status(self) -> str: ...
+
 def max_along_direction(
     matrix_: _F64, lower: _F64, upper: _F64, direction: _F64, base: _F64, tolerance: float
-) -> tuple[float, _F64, str] | None: ...
-def hover_thrust_margin(
-    airframe: Airframe, give_up_yaw: bool, tolerance: float
-) -> tuple[float, float, float, _F64 | None, str]: ...
+) -> DirectionalLimit | None: ...
+def hover_thrust_margin(airframe: Airframe, give_up_yaw: bool, tolerance: float) -> HoverMargin: ...
+
+@final
+class KeGains:
+    def __new__(
+        cls,
+        *,
+        k_p: float | None = None,
+        k_v: float | None = None,
+        k_vz: float | None = None,
+        accel_limit_m_s2: float | None = None,
+        k_n3: float | None = None,
+        k_omega: float | None = None,
+        k_r: float | None = None,
+        k_cp: float | None = None,
+        epsilon_s: float | None = None,
+        k_rotor: float | None = None,
+        k_rotor_z: float | None = None,
+        k_iz: float | None = None,
+        weights: list[float] | None = None,
+    ) -> KeGains: ...
+    @property
+    def k_p(self) -> float: ...
+    @property
+    def k_v(self) -> float: ...
+    @property
+    def k_vz(self) -> float: ...
+    @property
+    def accel_limit_m_s2(self) -> float: ...
+    @property
+    def k_n3(self) -> float: ...
+    @property
+    def k_omega(self) -> float: ...
+    @property
+    def k_r(self) -> float: ...
+    @property
+    def k_cp(self) -> float: ...
+    @property
+    def epsilon_s(self) -> float: ...
+    @property
+    def k_rotor(self) -> float: ...
+    @property
+    def k_rotor_z(self) -> float: ...
+    @property
+    def k_iz(self) -> float: ...
+    @property
+    def weights(self) -> list[float]: ...
 
 @final
 class UniformPassiveFtc:
     def __new__(
         cls,
         airframe: Airframe,
+        *,
         law: str,
         setpoints: list[tuple[float, tuple[float, float, float]]],
-        dt: float,
-        k_p: float,
-        k_v: float,
-        k_vz: float,
-        accel_limit_m_s2: float,
-        k_n3: float,
-        k_omega: float,
-        k_r: float,
-        k_cp: float,
-        epsilon_s: float,
-        k_rotor: float,
-        k_rotor_z: float,
-        weights: list[float],
-        k_iz: float,
+        dt_s: float,
+        gains: KeGains,
     ) -> UniformPassiveFtc: ...
 
-def ftc_preset_from_toml(text: str, origin: str) -> dict[str, Any]: ...
+@final
+class FtcPreset:
+    @staticmethod
+    def from_toml_str(text: str, origin: str) -> FtcPreset: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def airframe(self) -> str: ...
+    @property
+    def gains(self) -> KeGains: ...
+    @property
+    def rotor_time_constant_s(self) -> float: ...
+    @property
+    def rotational_drag_n_m_s(self) -> float: ...
+    @property
+    def linear_drag_n_s_m(self) -> float: ...
+
 def replay(
-    controller: OpenLoop | LinearFeedback | DiscreteLti | Allocated | UniformPassiveFtc,
+    controller: _Controller,
     times: _F64,
     states: _F64,
     command_count: int,

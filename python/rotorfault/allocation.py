@@ -171,10 +171,9 @@ class Allocator:
         groups = None if priorities is None else _priorities(priorities)
         iterations_limit = _positive_int("max_iterations", max_iterations)
         tol = real("tolerance", tolerance)
-        commands, achieved, status, iterations = _rfcore.allocate(
-            self._core, np.ascontiguousarray(rows), method, groups, tol, iterations_limit
-        )
-        statuses = cast(list[AllocationStatus], status)
+        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups, tol, iterations_limit)
+        commands, achieved, iterations = batch.commands, batch.achieved, batch.iterations
+        statuses = cast(list[AllocationStatus], batch.statuses)
         if ndim == 1:
             return Allocation(commands[0], achieved[0], rows[0], statuses[0], iterations[0])
         return Allocation(commands, achieved, rows, tuple(statuses), tuple(iterations))
@@ -265,8 +264,7 @@ def max_virtual_control(
     )
     if result is None:
         return None
-    scale, commands, status = result
-    return DirectionalLimit(float(scale), commands, status)
+    return DirectionalLimit(result.scale, np.asarray(result.commands), result.status)
 
 
 @dataclass(frozen=True)
@@ -299,10 +297,9 @@ def hover_thrust_margin(
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
-    max_thrust, weight, margin, commands, status = _rfcore.hover_thrust_margin(
-        frame._core, flag("give_up_yaw", give_up_yaw), real("tolerance", tolerance)
-    )
-    return HoverMargin(float(max_thrust), float(weight), float(margin), commands, status)
+    h = _rfcore.hover_thrust_margin(frame._core, flag("give_up_yaw", give_up_yaw), real("tolerance", tolerance))
+    commands = None if h.commands is None else np.asarray(h.commands)
+    return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
 
 
 AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "yaw torque N (N m)")

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, overload
+from typing import Any, cast, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -152,9 +152,19 @@ def controllability(
     eff = _efficiency(airframe, efficiency)
     give_up_yaw = flag("give_up_yaw", give_up_yaw)
     with core_fields():
-        fields = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
+        core = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
     return ControllabilityReport(
-        airframe=airframe.name, efficiency=tuple(float(e) for e in eff), give_up_yaw=give_up_yaw, **fields
+        airframe=airframe.name,
+        efficiency=tuple(float(e) for e in eff),
+        give_up_yaw=give_up_yaw,
+        state_dimension=core.state_dimension,
+        controllability_rank=core.controllability_rank,
+        virtual_control_dimension=core.virtual_control_dimension,
+        effectiveness_rank=core.effectiveness_rank,
+        acai=core.acai,
+        formula=cast(AcaiFormula, core.formula),
+        verdict=core.verdict,
+        controllable=core.controllable,
     )
 
 
@@ -289,15 +299,15 @@ def failure_table(
     cases = [
         FailureCase(
             failed=tuple(k + 1 for k in failed),
-            controllability_rank=full["controllability_rank"],
-            effectiveness_rank=full["effectiveness_rank"],
-            acai=full["acai"],
-            controllable=full["controllable"],
-            verdict=full["verdict"],
-            effectiveness_rank_without_yaw=no_yaw["effectiveness_rank"],
-            acai_without_yaw=no_yaw["acai"],
-            controllable_without_yaw=no_yaw["controllable"],
-            verdict_without_yaw=no_yaw["verdict"],
+            controllability_rank=full.controllability_rank,
+            effectiveness_rank=full.effectiveness_rank,
+            acai=full.acai,
+            controllable=full.controllable,
+            verdict=full.verdict,
+            effectiveness_rank_without_yaw=no_yaw.effectiveness_rank,
+            acai_without_yaw=no_yaw.acai,
+            controllable_without_yaw=no_yaw.controllable,
+            verdict_without_yaw=no_yaw.verdict,
         )
         for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]

@@ -33,7 +33,7 @@ AnyController: TypeAlias = Controller | Callable[[float, FloatArray], npt.ArrayL
 CORE_TYPES: tuple[type, ...] = (
     _rfcore.OpenLoop,
     _rfcore.LinearFeedback,
-    _rfcore.DiscreteLti,
+    _rfcore.Lti,
     _rfcore.Allocated,
     _rfcore.UniformPassiveFtc,
 )
@@ -59,6 +59,12 @@ def trim_command(controller: object) -> FloatArray | None:
     """The trim command a controller holds, if any (the actuators start there)."""
     u_trim = getattr(controller, "u_trim", None)
     return None if u_trim is None else np.asarray(u_trim, dtype=np.float64)
+
+
+#: The core's defaults, read once: the one source of every default below.
+_DEFAULT_DRAG = _rfcore.Drag()
+_DEFAULT_LIMITS = _rfcore.DivergenceLimits()
+_DEFAULT_CONFIG = _rfcore.SimulationConfig()
 
 
 def _vector3(field_name: str, value: Any) -> tuple[float, float, float]:
@@ -162,21 +168,21 @@ class Drag:
     """Aerodynamic damping and rotor inertia (the papers give none; all default to 0)."""
 
     #: ``k_t``: force ``-k_t (v - wind)``, N s/m (Lanzon's Stokes drag).
-    linear_n_s_m: float = 0.0
+    linear_n_s_m: float = _DEFAULT_DRAG.linear_n_s_m
     #: force ``-c |v - wind| (v - wind)``, N s^2/m^2.
-    quadratic_n_s2_m2: float = 0.0
+    quadratic_n_s2_m2: float = _DEFAULT_DRAG.quadratic_n_s2_m2
     #: ``k_r``: torque ``-k_r omega``, N m s (sets a spinning vehicle's yaw rate).
-    rotational_n_m_s: float = 0.0
+    rotational_n_m_s: float = _DEFAULT_DRAG.rotational_n_m_s
     #: ``I_R``: rotor inertia about its axis, kg m^2 (gyroscopic moment, Lanzon eq. (5)).
-    rotor_inertia_kg_m2: float = 0.0
+    rotor_inertia_kg_m2: float = _DEFAULT_DRAG.rotor_inertia_kg_m2
 
-    def _packed(self) -> list[float]:
-        return [
-            real("drag.linear_n_s_m", self.linear_n_s_m),
-            real("drag.quadratic_n_s2_m2", self.quadratic_n_s2_m2),
-            real("drag.rotational_n_m_s", self.rotational_n_m_s),
-            real("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
-        ]
+    def _core(self) -> _rfcore.Drag:
+        return _rfcore.Drag(
+            linear_n_s_m=real("drag.linear_n_s_m", self.linear_n_s_m),
+            quadratic_n_s2_m2=real("drag.quadratic_n_s2_m2", self.quadratic_n_s2_m2),
+            rotational_n_m_s=real("drag.rotational_n_m_s", self.rotational_n_m_s),
+            rotor_inertia_kg_m2=real("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
+        )
 
 
 @dataclass(frozen=True)
@@ -233,18 +239,18 @@ class VariablePitchActuator:
 class DivergenceLimits:
     """A run ends with an event when it passes one of these (``math.inf``: no limit)."""
 
-    max_tilt_rad: float = math.pi / 2
-    max_altitude_loss_m: float = 100.0
-    max_speed_m_s: float = 100.0
-    max_rate_rad_s: float = 200.0
+    max_tilt_rad: float = _DEFAULT_LIMITS.max_tilt_rad
+    max_altitude_loss_m: float = _DEFAULT_LIMITS.max_altitude_loss_m
+    max_speed_m_s: float = _DEFAULT_LIMITS.max_speed_m_s
+    max_rate_rad_s: float = _DEFAULT_LIMITS.max_rate_rad_s
 
-    def _packed(self) -> list[float]:
-        return [
-            real("limits.max_tilt_rad", self.max_tilt_rad),
-            real("limits.max_altitude_loss_m", self.max_altitude_loss_m),
-            real("limits.max_speed_m_s", self.max_speed_m_s),
-            real("limits.max_rate_rad_s", self.max_rate_rad_s),
-        ]
+    def _core(self) -> _rfcore.DivergenceLimits:
+        return _rfcore.DivergenceLimits(
+            max_tilt_rad=real("limits.max_tilt_rad", self.max_tilt_rad),
+            max_altitude_loss_m=real("limits.max_altitude_loss_m", self.max_altitude_loss_m),
+            max_speed_m_s=real("limits.max_speed_m_s", self.max_speed_m_s),
+            max_rate_rad_s=real("limits.max_rate_rad_s", self.max_rate_rad_s),
+        )
 
 
 @dataclass(frozen=True)
@@ -261,7 +267,7 @@ class Noise:
     std: npt.ArrayLike | None = None
     seed: int = 0
 
-    def _packed(self) -> tuple[float, list[float], int]:
+    def _core(self) -> _rfcore.SensorNoise:
         relative = 0.0 if self.snr_db is None else 10.0 ** (-real("noise.snr_db", self.snr_db) / 20.0)
         if self.std is None:
             absolute = np.zeros(12)
@@ -274,7 +280,7 @@ class Noise:
         seed = count("noise.seed", self.seed)
         if seed >= 2**64:
             raise ValueError("noise.seed: must be below 2**64")
-        return (relative, [float(v) for v in absolute], seed)
+        return _rfcore.SensorNoise(relative_std=relative, absolute_std=[float(v) for v in absolute], seed=seed)
 
 
 @dataclass(frozen=True)
@@ -342,25 +348,25 @@ class Trajectory:
         )
 
     @classmethod
-    def _from_core(cls, raw: dict[str, Any], faults: tuple[RotorFault, ...]) -> Trajectory:
+    def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
         events = []
-        if raw["divergence"] is not None:
-            d = raw["divergence"]
+        d = raw.divergence
+        if d is not None:
             # The core names reasons in snake_case: the one place they become kebab-case codes.
-            kind = cast(DivergenceKind, d["reason"].replace("_", "-"))
-            events.append(Event(d["time"], kind, d["description"], np.asarray(d["state"])))
+            kind = cast(DivergenceKind, d.reason.replace("_", "-"))
+            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state)))
         return cls(
-            t=raw["t"],
-            position=raw["position"],
-            velocity=raw["velocity"],
-            quaternion=raw["quaternion"],
-            euler=raw["euler"],
-            omega=raw["omega"],
-            primary_axis=raw["primary_axis"],
-            rotor_command=raw["command"],
-            rotor_thrust=raw["thrust"],
-            efficiency=raw["health"],
-            recorded_measurements=raw["measured"],
+            t=raw.t,
+            position=raw.position,
+            velocity=raw.velocity,
+            quaternion=raw.quaternion,
+            euler=raw.euler,
+            omega=raw.omega,
+            primary_axis=raw.primary_axis,
+            rotor_command=raw.command,
+            rotor_thrust=raw.thrust,
+            efficiency=raw.efficiency,
+            recorded_measurements=raw.measured,
             events=events,
             faults=faults,
         )
@@ -426,8 +432,8 @@ class Simulator:
         self,
         airframe: Airframe,
         *,
-        dt_s: float = 1.0 / 400.0,
-        substeps: int = 4,
+        dt_s: float = _DEFAULT_CONFIG.dt_s,
+        substeps: int = _DEFAULT_CONFIG.substeps,
         drag: Drag | None = None,
         wind: npt.ArrayLike = (0.0, 0.0, 0.0),
         wind_profile: Sequence[tuple[float, npt.ArrayLike]] | None = None,
@@ -437,11 +443,7 @@ class Simulator:
     ) -> None:
         self.airframe = require_airframe(airframe)
         self.dt_s = real("dt_s", dt_s)
-        if not self.dt_s > 0 or not math.isfinite(self.dt_s):
-            raise ValueError(f"dt_s: must be > 0 and finite, got {self.dt_s}")
         self.substeps = count("substeps", substeps)
-        if self.substeps == 0:
-            raise ValueError("substeps: must be >= 1")
         self.drag = Drag() if drag is None else drag
         if not isinstance(self.drag, Drag):
             raise TypeError(f"drag: expected rotorfault.Drag, got {type(drag).__name__}")
@@ -461,7 +463,7 @@ class Simulator:
         # rebuilds the core objects from these attributes, so changing one later takes effect.)
         with core_fields():
             _rfcore.simulate(
-                self.airframe._core, self.actuator._core(), self.drag._packed(), None, State()._packed(), [],
+                self.airframe._core, self.actuator._core(), self.drag._core(), None, State()._packed(), [],
                 self.airframe.efficiency, None, self._config(0.0),
             )
 
@@ -471,15 +473,18 @@ class Simulator:
         per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
         return per_rotor * self.airframe.rotor_count
 
-    def _config(self, duration_s: float, record_every: int = 1) -> tuple[Any, ...]:
-        duration_s = real("duration_s", duration_s)
-        every = count("record_every", record_every)
-        if every < 1:
-            raise ValueError(f"record_every: must be >= 1, got {every}")
-        noise = None if self.noise is None else self.noise._packed()
-        return (
-            self.dt_s, self.substeps, duration_s, self.limits._packed(), list(self.wind), self.wind_profile, noise, every,
-        )
+    def _config(self, duration_s: float, record_every: int = 1) -> _rfcore.SimulationConfig:
+        with core_fields():
+            return _rfcore.SimulationConfig(
+                dt_s=self.dt_s,
+                substeps=self.substeps,
+                duration_s=real("duration_s", duration_s),
+                limits=self.limits._core(),
+                wind_m_s=self.wind,
+                wind_profile=self.wind_profile,
+                noise=None if self.noise is None else self.noise._core(),
+                record_every=count("record_every", record_every),
+            )
 
     def _start(self, controller: AnyController, initial_command: npt.ArrayLike | None) -> FloatArray | None:
         if initial_command is not None:
@@ -513,7 +518,7 @@ class Simulator:
             raw = _rfcore.simulate(
                 self.airframe._core,
                 self.actuator._core(),
-                self.drag._packed(),
+                self.drag._core(),
                 core,
                 x0._packed(),
                 [f._packed() for f in fault_list],
@@ -531,7 +536,7 @@ class Simulator:
             return _rfcore.state_derivative(
                 self.airframe._core,
                 self.actuator._core(),
-                self.drag._packed(),
+                self.drag._core(),
                 list(float_array("x", x, 1)),
                 float_array("command", command, 1),
                 eff,
@@ -581,12 +586,12 @@ def simulate_batch(
     fault_lists = [_faults(f) for f in (faults if faults is not None else [None] * n)]
     if len(per_run) != n or len(fault_lists) != n:
         raise ValueError(f"controllers, faults: expected one entry per run ({n})")
-    cores = []
+    cores: list[CoreController | None] = []
     for c in per_run:
         core = core_controller(c, simulator.dt_s)
         if core is not None and not isinstance(core, CORE_TYPES):
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
-        cores.append(core)
+        cores.append(cast(CoreController | None, core))
     # Each run's actuators start at initial_command, else at its own controller's trim.
     starts = []
     for c in per_run:
@@ -597,7 +602,7 @@ def simulate_batch(
         raws = _rfcore.simulate_batch(
             simulator.airframe._core,
             simulator.actuator._core(),
-            simulator.drag._packed(),
+            simulator.drag._core(),
             cores,
             [s._packed() for s in states],
             [[f._packed() for f in fl] for fl in fault_lists],

@@ -55,10 +55,10 @@ impl PyAirframe {
         Ok(PyAirframe { inner })
     }
 
-    fn with_efficiency(&self, eta: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+    fn with_efficiency(&self, efficiency: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
         let inner = self
             .inner
-            .with_efficiency(slice1("eta", &eta)?)
+            .with_efficiency(slice1("efficiency", &efficiency)?)
             .map_err(to_py_err)?;
         Ok(PyAirframe { inner })
     }

@@ -63,38 +63,38 @@ fn report(report: ControllabilityReport) -> PyControllabilityReport {
     PyControllabilityReport { inner: report }
 }
 
-/// ACAI of `airframe` with efficiencies `eta` (Du Theorem 3).
+/// ACAI of `airframe` with efficiencies `efficiency` (Du Theorem 3).
 #[pyfunction]
 pub(crate) fn acai(
     py: Python<'_>,
     airframe: &PyAirframe,
-    eta: PyReadonlyArray1<'_, f64>,
+    efficiency: PyReadonlyArray1<'_, f64>,
     give_up_yaw: bool,
     formula: &str,
 ) -> PyResult<f64> {
-    let eta = slice1("eta", &eta)?;
+    let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    detached(py, || analysis(airframe, give_up_yaw)?.acai(eta, formula))
+    detached(py, || analysis(airframe, give_up_yaw)?.acai(efficiency, formula))
 }
 
-/// ACAI for every row of `etas` (N x m), in parallel.
+/// ACAI for every row of `efficiencies` (N x m), in parallel.
 #[pyfunction]
 pub(crate) fn acai_batch<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
-    etas: PyReadonlyArray2<'py, f64>,
+    efficiencies: PyReadonlyArray2<'py, f64>,
     give_up_yaw: bool,
     formula: &str,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     let m = airframe.inner.rotor_count();
-    if etas.shape()[1] != m {
+    if efficiencies.shape()[1] != m {
         return Err(PyValueError::new_err(format!(
-            "etas: expected {m} columns (one efficiency per rotor), got {}",
-            etas.shape()[1]
+            "efficiencies: expected {m} columns (one efficiency per rotor), got {}",
+            efficiencies.shape()[1]
         )));
     }
-    let flat = slice2("etas", &etas)?;
+    let flat = slice2("efficiencies", &efficiencies)?;
     let values = detached(py, || {
         analysis(airframe, give_up_yaw)?.acai_batch(flat, formula)
     })?;
@@ -131,13 +131,13 @@ pub(crate) fn acai_from_matrix(
 pub(crate) fn controllability<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
-    eta: PyReadonlyArray1<'py, f64>,
+    efficiency: PyReadonlyArray1<'py, f64>,
     give_up_yaw: bool,
     formula: &str,
 ) -> PyResult<PyControllabilityReport> {
-    let eta = slice1("eta", &eta)?;
+    let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let result = detached(py, || analysis(airframe, give_up_yaw)?.report(eta, formula))?;
+    let result = detached(py, || analysis(airframe, give_up_yaw)?.report(efficiency, formula))?;
     Ok(report(result))
 }
 

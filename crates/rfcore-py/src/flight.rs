@@ -423,13 +423,13 @@ pub fn simulate<'py>(
     controller: Option<Bound<'py, PyAny>>,
     x0: [f64; 13],
     fault_list: Vec<(usize, f64, f64)>,
-    health: PyReadonlyArray1<'py, f64>,
+    efficiency: PyReadonlyArray1<'py, f64>,
     settle: Option<PyReadonlyArray1<'py, f64>>,
     config: PyRef<'py, PySimulationConfig>,
 ) -> PyResult<PyTrajectory> {
     let (vehicle, actuators, count) =
         vehicle_and_actuators(airframe, &actuator, &drag, settle.as_ref())?;
-    let health = slice1("health", &health)?.to_vec();
+    let efficiency = slice1("efficiency", &efficiency)?.to_vec();
     let config = &config.inner;
     let faults = faults(&fault_list);
     let x0 = RigidBodyState::from_packed(&x0);
@@ -445,7 +445,7 @@ pub fn simulate<'py>(
                     &vehicle,
                     actuators,
                     &mut callable,
-                    &health,
+                    &efficiency,
                     &faults,
                     x0,
                     config,
@@ -473,7 +473,7 @@ pub fn simulate<'py>(
                     &vehicle,
                     actuators,
                     boxed.as_mut(),
-                    &health,
+                    &efficiency,
                     &faults,
                     x0,
                     config,
@@ -495,7 +495,7 @@ pub fn simulate_batch<'py>(
     controllers: Vec<Option<ControllerArg<'py>>>,
     x0s: Vec<[f64; 13]>,
     fault_lists: Vec<Vec<(usize, f64, f64)>>,
-    health: PyReadonlyArray1<'py, f64>,
+    efficiency: PyReadonlyArray1<'py, f64>,
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
 ) -> PyResult<Vec<PyTrajectory>> {
@@ -508,7 +508,7 @@ pub fn simulate_batch<'py>(
             "runs: controllers, initial states, fault lists and initial commands must have one entry per run",
         ));
     }
-    let health = slice1("health", &health)?.to_vec();
+    let efficiency = slice1("efficiency", &efficiency)?.to_vec();
     let config = &config.inner;
     let runs: Vec<BatchRun> = controllers
         .iter()
@@ -525,7 +525,7 @@ pub fn simulate_batch<'py>(
         })
         .collect::<PyResult<_>>()?;
     let results = detached(py, || {
-        core_batch(&vehicle, &actuators, &health, runs, config)
+        core_batch(&vehicle, &actuators, &efficiency, runs, config)
     })?;
     Ok(results
         .into_iter()
@@ -544,7 +544,7 @@ pub fn state_derivative<'py>(
     drag: PyRef<'py, PyDrag>,
     x: [f64; STATE_DIM],
     command: PyReadonlyArray1<'py, f64>,
-    health: PyReadonlyArray1<'py, f64>,
+    efficiency: PyReadonlyArray1<'py, f64>,
     wind: [f64; 3],
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (vehicle, mut actuators, _) = vehicle_and_actuators(airframe, &actuator, &drag, None)?;
@@ -557,9 +557,9 @@ pub fn state_derivative<'py>(
     actuators
         .settle(slice1("command", &command)?)
         .map_err(to_py_err)?;
-    let health = slice1("health", &health)?;
-    rfcore::airframe::check_efficiency("health", health, airframe.inner.rotor_count())
+    let efficiency = slice1("efficiency", &efficiency)?;
+    rfcore::airframe::check_efficiency("efficiency", efficiency, airframe.inner.rotor_count())
         .map_err(to_py_err)?;
-    let dx = state_vector_derivative(&vehicle, &actuators, health, &x, &Vector3::from(wind));
+    let dx = state_vector_derivative(&vehicle, &actuators, efficiency, &x, &Vector3::from(wind));
     Ok(dx.to_vec().into_pyarray(py))
 }

@@ -42,6 +42,10 @@ from ..simulation import DivergenceLimits, Drag, FixedPitchActuator, Simulator
 E1_ROWS = (0, 1, 2)
 
 
+#: The core's default gains (Table IV HIL column, the ``ke-hil`` preset): the one source.
+_DEFAULT_GAINS = _rfcore.KeGains()
+
+
 @dataclass(frozen=True)
 class KeGains:
     """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4 and the remedy's altitude
@@ -49,34 +53,40 @@ class KeGains:
     controller is built: ``epsilon_s``, ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``,
     ``accel_limit_m_s2`` > 0, ``k_vz`` and ``k_omega`` > 0.5 (Theorem 1)."""
 
-    k_p: float = 0.3
-    k_v: float = 0.1
-    k_vz: float = 1.0
-    accel_limit_m_s2: float = 0.15
-    k_n3: float = 3.0
-    k_omega: float = 14.0
-    k_r: float = 4.2
-    k_cp: float = 0.6
-    epsilon_s: float = 0.06
-    k_rotor: float = 2.0
-    k_rotor_z: float = 0.1
-    weights: tuple[float, float, float, float] = (1.0, 20.0, 20.0, 0.01)
+    k_p: float = _DEFAULT_GAINS.k_p
+    k_v: float = _DEFAULT_GAINS.k_v
+    k_vz: float = _DEFAULT_GAINS.k_vz
+    accel_limit_m_s2: float = _DEFAULT_GAINS.accel_limit_m_s2
+    k_n3: float = _DEFAULT_GAINS.k_n3
+    k_omega: float = _DEFAULT_GAINS.k_omega
+    k_r: float = _DEFAULT_GAINS.k_r
+    k_cp: float = _DEFAULT_GAINS.k_cp
+    epsilon_s: float = _DEFAULT_GAINS.epsilon_s
+    k_rotor: float = _DEFAULT_GAINS.k_rotor
+    k_rotor_z: float = _DEFAULT_GAINS.k_rotor_z
+    weights: tuple[float, float, float, float] = tuple(_DEFAULT_GAINS.weights)  # type: ignore[assignment]
     #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper (the
     #: ``ke-hil`` preset's value).
-    k_iz: float = 0.1
+    k_iz: float = _DEFAULT_GAINS.k_iz
 
-    def _packed(self) -> dict[str, Any]:
-        out: dict[str, Any] = {}
+    @classmethod
+    def _from_core(cls, core: _rfcore.KeGains) -> KeGains:
+        values = {f.name: getattr(core, f.name) for f in fields(cls)}
+        values["weights"] = tuple(values["weights"])
+        return cls(**values)
+
+    def _core(self) -> _rfcore.KeGains:
+        values: dict[str, Any] = {}
         for f in fields(self):
             value = getattr(self, f.name)
             if f.name == "weights":
                 w = float_array("gains.weights", value, 1)
                 if w.shape != (4,):
                     raise ValueError(f"gains.weights: expected 4 entries (w_f, w_p, w_q, w_r), got {w.shape[0]}")
-                out["weights"] = [float(v) for v in w]
+                values["weights"] = [float(v) for v in w]
             else:
-                out[f.name] = real(f"gains.{f.name}", value)
-        return out
+                values[f.name] = real(f"gains.{f.name}", value)
+        return _rfcore.KeGains(**values)
 
 
 @dataclass(frozen=True)
@@ -97,12 +107,13 @@ class FtcPreset:
     def airframe(self) -> Airframe:
         return Airframe.preset(self.airframe_name)
 
-    def simulator(self, *, dt_s: float = 1 / 400, substeps: int = 4, limits: DivergenceLimits | None = None) -> Simulator:
-        """The preset's vehicle at Ke's 400 Hz control rate: rotor lag and rotational damping."""
+    def simulator(self, *, dt_s: float | None = None, substeps: int | None = None, limits: DivergenceLimits | None = None) -> Simulator:
+        """The preset's vehicle at Ke's 400 Hz control rate (the simulator's default; ``dt_s`` and
+        ``substeps`` override it): rotor lag and rotational damping."""
+        timing = {k: v for k, v in (("dt_s", dt_s), ("substeps", substeps)) if v is not None}
         return Simulator(
             self.airframe,
-            dt_s=dt_s,
-            substeps=substeps,
+            **timing,  # type: ignore[arg-type]
             actuator=FixedPitchActuator(time_constant_s=self.rotor_time_constant_s),
             drag=Drag(rotational_n_m_s=self.rotational_drag_n_m_s, linear_n_s_m=self.linear_drag_n_s_m),
             limits=limits,
@@ -124,18 +135,16 @@ def preset(name: str = "ke-hil") -> FtcPreset:
         raise TypeError(f"preset: expected a preset name (str), got {type(name).__name__}")
     if name not in presets():
         raise ValueError(f"preset: unknown controller preset {name!r}; available: {', '.join(presets())}")
-    raw = _rfcore.ftc_preset_from_toml((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
-    gains = dict(raw["gains"])
-    gains["weights"] = tuple(gains["weights"])
+    raw = _rfcore.FtcPreset.from_toml_str((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
     return FtcPreset(
-        raw["name"],
-        raw["description"],
-        raw["source"],
-        raw["airframe"],
-        KeGains(**gains),
-        raw["vehicle"]["rotor_time_constant_s"],
-        raw["vehicle"]["rotational_drag_n_m_s"],
-        raw["vehicle"]["linear_drag_n_s_m"],
+        raw.name,
+        raw.description,
+        raw.source,
+        raw.airframe,
+        KeGains._from_core(raw.gains),
+        raw.rotor_time_constant_s,
+        raw.rotational_drag_n_m_s,
+        raw.linear_drag_n_s_m,
     )
 
 
@@ -204,7 +213,11 @@ class UniformPassiveFtc:
     def core(self, dt_s: float) -> _rfcore.UniformPassiveFtc:
         with core_fields():
             return _rfcore.UniformPassiveFtc(
-                self.airframe._core, self.law, list(self.setpoints), float(dt_s), **self.gains._packed()
+                self.airframe._core,
+                law=self.law,
+                setpoints=list(self.setpoints),
+                dt_s=float(dt_s),
+                gains=self.gains._core(),
             )
 
     def replay(self, times: npt.ArrayLike, states: npt.ArrayLike, *, dt_s: float = 1.0 / 400.0) -> FloatArray:

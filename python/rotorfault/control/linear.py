@@ -87,9 +87,9 @@ class Lti:
         if self.dt_s is not None and not (math.isfinite(self.dt_s) and self.dt_s > 0):
             raise ValueError(f"dt_s: must be > 0 and finite (or None for a continuous controller), got {self.dt_s}")
         # Validate shapes now (the core checks them), with the matrices as given.
-        _rfcore.DiscreteLti(self.A, self.B, self.C, self.D, self.x_trim, self.u_trim)
+        _rfcore.Lti(self.A, self.B, self.C, self.D, self.x_trim, self.u_trim)
 
-    def core(self, dt_s: float) -> _rfcore.DiscreteLti:
+    def core(self, dt_s: float) -> _rfcore.Lti:
         if self.dt_s is not None:
             if abs(self.dt_s - dt_s) > 1e-12 * dt_s:
                 raise ValueError(f"controller.dt_s: the discrete controller runs at {self.dt_s} s, the simulator at {dt_s} s")
@@ -99,7 +99,7 @@ class Lti:
         else:
             a, b, c, d, _ = cont2discrete((self.A, self.B, self.C, self.D), dt_s, method="zoh")
         a, b, c, d = (np.ascontiguousarray(m, dtype=np.float64) for m in (a, b, c, d))
-        return _rfcore.DiscreteLti(a, b, c, d, self.x_trim, self.u_trim)
+        return _rfcore.Lti(a, b, c, d, self.x_trim, self.u_trim)
 
 
 __all__ = ["STATE_DIM", "LinearFeedback", "Lti", "OpenLoop"]

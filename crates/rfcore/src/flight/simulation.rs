@@ -225,11 +225,10 @@ impl SimulationConfig {
     }
 
     pub fn check(&self) -> Result<()> {
-        require_finite("dt", self.control_dt_s)?;
-        if self.control_dt_s <= 0.0 {
+        if !(self.control_dt_s.is_finite() && self.control_dt_s > 0.0) {
             return Err(RfError::invalid(
                 "dt",
-                format!("must be > 0, got {}", self.control_dt_s),
+                format!("must be > 0 and finite, got {}", self.control_dt_s),
             ));
         }
         if self.record_every == 0 {
