@@ -1,7 +1,7 @@
 """The Python package's import graph (grimp; function-local imports count): no import circles,
 and dependencies point one way, from the base to the command line::
 
-    _convert, _typing, airframe  <-  controllability, scan, allocation, simulation
+    _convert, _typing  <-  _progress, airframe  <-  controllability, scan, allocation, simulation
         <-  control  <-  papers  <-  cli
 
 (``scenario``, the ``rotorfault simulate`` file, may use ``control``; the package's
@@ -22,6 +22,7 @@ LAYERS = [
     ["control"],
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],
+    ["_progress"],
     ["_convert", "_typing"],
 ]
 

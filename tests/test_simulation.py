@@ -340,3 +340,21 @@ def test_plot_writes_png(sim: rf.Simulator, lqr: rf.LinearFeedback, tmp_path: Pa
 def test_bad_input(quad: rf.Airframe, make, error: type[Exception], message: str) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(error, match=message):
         make(quad)
+
+
+def test_batch_with_progress_flies_every_run_as_one_call_would(quad: rf.Airframe, lqr: rf.LinearFeedback, capsys: pytest.CaptureFixture[str]) -> None:
+    """``progress=True`` sends the runs in chunks and shows a bar on standard error; each run,
+    sensor noise included (run i uses seed + i), is bit-identical to the single call's."""
+    sim = rf.Simulator(quad, dt_s=1 / 400, substeps=2, noise=rf.Noise(snr_db=30.0, seed=7))
+    starts = [rf.State(position=(0.01 * i, 0.0, -10.0)) for i in range(40)]
+    faults = [[rf.RotorFault(rotor=1 + i % 4, time=0.3, efficiency=0.5)] if i % 3 == 0 else [] for i in range(40)]
+    whole = rf.simulate_batch(sim, starts, 0.6, controllers=lqr, faults=faults)
+    capsys.readouterr()
+    chunked = rf.simulate_batch(sim, starts, 0.6, controllers=lqr, faults=faults, progress=True)
+    err = capsys.readouterr().err
+    assert "40 runs" in err and "40/40" in err, err
+    for a, b in zip(whole.trajectories, chunked.trajectories):
+        np.testing.assert_array_equal(a.position, b.position)
+        np.testing.assert_array_equal(a.measured, b.measured)
+    with pytest.raises(TypeError, match="^progress"):
+        rf.simulate_batch(sim, starts[:2], 0.1, controllers=lqr, progress="yes")  # type: ignore[arg-type]

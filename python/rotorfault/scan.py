@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ._convert import FloatArray, flag, real, rotor_numbers
+from ._progress import chunks
 from .airframe import Airframe, require_airframe
 from .controllability import acai_batch
 
@@ -93,14 +94,8 @@ def efficiency_scan(
     base = airframe.efficiency
     columns = [r - 1 for r in swept]
     result = np.empty(total)
-    show = total > 10_000_000 if progress is None else bool(progress)
-    chunks = range(0, total, CHUNK_POINTS)
-    if show:
-        from rich.progress import track
-
-        chunks = track(chunks, description=f"ACAI over {total:,} points")  # type: ignore[assignment]
-    for start in chunks:
-        stop = min(start + CHUNK_POINTS, total)
+    pieces = chunks(total, CHUNK_POINTS, description=f"ACAI over {total:,} points", show=progress, default_show=total > 10_000_000)
+    for start, stop in pieces:
         efficiencies = np.tile(base, (stop - start, 1))
         efficiencies[:, columns] = points[start:stop]
         result[start:stop] = acai_batch(airframe, efficiencies, give_up_yaw=give_up_yaw)

@@ -8,6 +8,7 @@ faults are 1-based like the papers; arrays are ordered rotor 1..m.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeAlias, cast
@@ -18,6 +19,7 @@ import numpy.typing as npt
 from . import _rfcore
 from ._convert import FloatArray, core_fields, count, float_array, real
 from ._typing import Controller, CoreController, DivergenceKind
+from ._progress import chunks
 from .airframe import Airframe, require_airframe
 
 if TYPE_CHECKING:
@@ -267,7 +269,7 @@ class Noise:
     std: npt.ArrayLike | None = None
     seed: int = 0
 
-    def _core(self) -> _rfcore.SensorNoise:
+    def _core(self, seed_offset: int = 0) -> _rfcore.SensorNoise:
         relative = 0.0 if self.snr_db is None else 10.0 ** (-real("noise.snr_db", self.snr_db) / 20.0)
         if self.std is None:
             absolute = np.zeros(12)
@@ -278,9 +280,9 @@ class Noise:
             if absolute.shape != (12,):
                 raise ValueError(f"noise.std: expected 4 or 12 entries, got {absolute.shape[0]}")
         seed = count("noise.seed", self.seed)
-        if seed >= 2**64:
+        if seed + seed_offset >= 2**64:
             raise ValueError("noise.seed: must be below 2**64")
-        return _rfcore.SensorNoise(relative_std=relative, absolute_std=[float(v) for v in absolute], seed=seed)
+        return _rfcore.SensorNoise(relative_std=relative, absolute_std=[float(v) for v in absolute], seed=seed + seed_offset)
 
 
 @dataclass(frozen=True)
@@ -473,7 +475,9 @@ class Simulator:
         per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
         return per_rotor * self.airframe.rotor_count
 
-    def _config(self, duration_s: float, record_every: int = 1) -> _rfcore.SimulationConfig:
+    def _config(self, duration_s: float, record_every: int = 1, seed_offset: int = 0) -> _rfcore.SimulationConfig:
+        """The core's run settings; ``seed_offset`` shifts the noise seed (run ``i`` of a batch
+        uses ``seed + i``, so a batch sent in chunks flies every run exactly as one call would)."""
         with core_fields():
             return _rfcore.SimulationConfig(
                 dt_s=self.dt_s,
@@ -482,7 +486,7 @@ class Simulator:
                 limits=self.limits._core(),
                 wind_m_s=self.wind,
                 wind_profile=self.wind_profile,
-                noise=None if self.noise is None else self.noise._core(),
+                noise=None if self.noise is None else self.noise._core(seed_offset),
                 record_every=count("record_every", record_every),
             )
 
@@ -569,12 +573,14 @@ def simulate_batch(
     faults: Sequence[Iterable[RotorFault] | None] | None = None,
     initial_command: npt.ArrayLike | None = None,
     record_every: int = 1,
+    progress: bool | None = None,
 ) -> BatchResult:
     """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
     every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
     cannot run in a batch (they would serialise on the GIL). ``record_every`` thins what is
     recorded (every n-th control step, plus the last and any divergence): large batches need it
-    to keep memory bounded."""
+    to keep memory bounded. ``progress=True`` shows a progress bar (runs done, rate, ETA) on
+    standard error; the runs then go to the core in chunks, with identical results."""
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     states = list(x0s)
@@ -597,19 +603,26 @@ def simulate_batch(
     for c in per_run:
         start = simulator._start(c, initial_command)
         starts.append(None if start is None else [float(v) for v in start])
-    config = simulator._config(duration_s, record_every)
-    with core_fields():
-        raws = _rfcore.simulate_batch(
-            simulator.airframe._core,
-            simulator.actuator._core(),
-            simulator.drag._core(),
-            cores,
-            [s._packed() for s in states],
-            [[f._packed() for f in fl] for fl in fault_lists],
-            simulator.airframe.efficiency,
-            starts,
-            config,
-        )
+    simulator._config(duration_s, record_every)  # checks the settings before any run
+    actuator, drag = simulator.actuator._core(), simulator.drag._core()
+    packed_states = [s._packed() for s in states]
+    packed_faults = [[f._packed() for f in fl] for fl in fault_lists]
+    # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.
+    size = n if not progress else max(8 * (os.cpu_count() or 1), n // 100)
+    raws: list[_rfcore.Trajectory] = []
+    for first, last in chunks(n, size, description=f"{n:,} runs", show=progress):
+        with core_fields():
+            raws += _rfcore.simulate_batch(
+                simulator.airframe._core,
+                actuator,
+                drag,
+                cores[first:last],
+                packed_states[first:last],
+                packed_faults[first:last],
+                simulator.airframe.efficiency,
+                starts[first:last],
+                simulator._config(duration_s, record_every, seed_offset=first),
+            )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
     steps = max((len(tr.t) for tr in trajectories), default=0)
 
