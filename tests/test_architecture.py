@@ -104,3 +104,18 @@ def test_forbidden_dependencies(graph: grimp.ImportGraph, importer: str, importe
 def test_only_the_entry_points_import_cli(graph: grimp.ImportGraph) -> None:
     importers = {m for m in graph.find_modules_that_directly_import("rotorfault.cli")}
     assert importers <= {"rotorfault.__main__"}, importers
+
+
+def test_import_stays_light() -> None:
+    """``import rotorfault`` (and the CLI module) loads neither scipy, python-control nor
+    matplotlib: those cost about two seconds and only some calls need them (issue 15; the
+    timing itself is measured by benches/startup.py, not here)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, rotorfault, rotorfault.cli; "
+        "print(sorted(m for m in ('scipy', 'control', 'matplotlib') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]", done.stdout

@@ -14,7 +14,6 @@ import math
 
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import cont2discrete  # type: ignore[import-untyped]
 
 from .. import _rfcore
 from .._convert import FloatArray, float_array, frozen_array, real
@@ -97,6 +96,9 @@ class Lti:
         elif self.A.shape[0] == 0:
             a, b, c, d = self.A, self.B, self.C, self.D
         else:
+            # scipy.signal costs ~0.5 s to import: only continuous designs pay it.
+            from scipy.signal import cont2discrete  # type: ignore[import-untyped]
+
             a, b, c, d, _ = cont2discrete((self.A, self.B, self.C, self.D), dt_s, method="zoh")
         a, b, c, d = (np.ascontiguousarray(m, dtype=np.float64) for m in (a, b, c, d))
         return _rfcore.Lti(a, b, c, d, self.x_trim, self.u_trim)
