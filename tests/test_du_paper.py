@@ -141,3 +141,16 @@ def test_quadrotor_after_one_failure_only_spinning_is_left() -> None:
     assert rf.acai(hexa) == 0.0
     assert rf.acai(hexa, give_up_yaw=True) > 0.5
     assert rf.controllability(hexa, give_up_yaw=True).controllable
+
+
+def test_printed_numbers_pass_and_flag_the_eq13_zeros() -> None:
+    """papers.du.printed_numbers(): the rows the reproduce-all report shows, all within half a unit
+    of the fourth decimal; exactly the two PPNNPN cases where eq. (13) prints 0 for an infeasible
+    hover carry the note (Table II's zeros are on the boundary, not outside)."""
+    from rotorfault.papers import du
+
+    rows = du.printed_numbers()
+    assert len(rows) == 14
+    assert all(r.status == "pass" for r in rows), [r for r in rows if r.status != "pass"]
+    noted = [r.quantity for r in rows if r.note]
+    assert noted == ["ACAI, hexa-ppnnpn, rotor 5 failed", "ACAI, hexa-ppnnpn, rotor 6 failed"]

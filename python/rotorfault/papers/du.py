@@ -1,12 +1,54 @@
 """Du, Quan, Yang, Cai (JGCD 2015): controllability and the Available Control Authority Index.
 
-Du's reproduction needs nothing beyond the generic API: the ACAI, the 9-step test and failure
-tables are :mod:`rotorfault.controllability` (including the eq. (13) footnote that the failure
-table itself prints), the Fig. 4 efficiency grid is :mod:`rotorfault.scan`, and the paper's Tables
-I-III and Fig. 4 are checked number by number in ``tests/test_du_paper.py``. This module is the
-place for Du-specific scenarios and reports when they appear.
+The generic machinery is :mod:`rotorfault.controllability` (ACAI, the 9-step test, failure
+tables) and :mod:`rotorfault.scan` (the Fig. 4 efficiency grid). This module holds what is Du's
+own: the numbers Tables II and III print, each beside ours (:func:`printed_numbers`), which the
+tests and the reproduce-all report read.
 """
 
 from __future__ import annotations
 
-__all__: list[str] = []
+from ..airframe import Airframe
+from ..controllability import controllability
+from ._numbers import PaperNumber
+
+PAPER = "Du et al. (JGCD 2015)"
+#: Tables II and III print four decimals: agreement to half a unit in the last place.
+TABLE_TOL = 0.5e-4
+
+#: Table II, PNPNPN hexacopter (Table I parameters): no failure, then rotor 1..6 failed.
+TABLE_II = {"no failure": 1.4861, **{f"rotor {k} failed": 0.0 for k in range(1, 7)}}
+#: Table III, PPNNPN hexacopter.
+TABLE_III = {
+    "no failure": 1.1295,
+    "rotor 1 failed": 0.7221,
+    "rotor 2 failed": 0.4510,
+    "rotor 3 failed": 0.4510,
+    "rotor 4 failed": 0.7221,
+    "rotor 5 failed": 0.0,
+    "rotor 6 failed": 0.0,
+}
+_NOTE_EQ13 = (
+    "eq. (13) prints 0 although hover is infeasible: the hover wrench lies outside the attainable set "
+    "(see the README's decisions; formula='facet-margin' shows the gap)"
+)
+
+
+def _rows(preset: str, table: str, printed: dict[str, float]) -> list[PaperNumber]:
+    airframe = Airframe.preset(preset)
+    rows = []
+    for case, value in printed.items():
+        failed = [] if case == "no failure" else [int(case.split()[1])]
+        report = controllability(airframe.with_failed_rotors(failed) if failed else airframe)
+        margin = controllability(airframe.with_failed_rotors(failed) if failed else airframe, formula="facet-margin")
+        note = _NOTE_EQ13 if report.acai == 0.0 and margin.acai < 0.0 else ""
+        rows.append(PaperNumber(PAPER, table, f"ACAI, {preset}, {case}", value, report.acai, TABLE_TOL, note))
+    return rows
+
+
+def printed_numbers() -> list[PaperNumber]:
+    """Every ACAI Tables II and III print, beside ours (eq. (13), as the paper computes it)."""
+    return _rows("hexa-pnpnpn", "Table II", TABLE_II) + _rows("hexa-ppnnpn", "Table III", TABLE_III)
+
+
+__all__ = ["PAPER", "TABLE_II", "TABLE_III", "TABLE_TOL", "printed_numbers"]
