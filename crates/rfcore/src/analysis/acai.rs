@@ -793,6 +793,85 @@ mod tests {
     }
 
     #[test]
+    fn zero_snap_is_per_facet_and_unit_free() {
+        // Omega = [0, 1] x [0, 1e-12] (the second row in a tiny unit), G 1e-15 above the bottom
+        // side: 1e-3 of that side's extent, clearly inside. One size for the whole problem (~1)
+        // read it as "on the boundary"; along its own normal the size is ~1e-12.
+        let b = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 1e-12]);
+        let g = [0.5, 1e-15];
+        let result =
+            acai_from_matrix_with_hover(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13).unwrap();
+        assert_eq!(result.hover, HoverPoint::Inside);
+        assert!((result.acai / 1e-15 - 1.0).abs() < 1e-9, "{result:?}");
+        // The same problem with the second row in a unit 1e12 larger.
+        let unit = DMatrix::identity(2, 2);
+        let result = acai_from_matrix_with_hover(
+            &unit,
+            &[0.0; 2],
+            &[1.0; 2],
+            &[0.5, 1e-3],
+            AcaiFormula::Eq13,
+        )
+        .unwrap();
+        assert_eq!(result.hover, HoverPoint::Inside);
+        assert!((result.acai - 1e-3).abs() < 1e-15);
+        // On the side to rounding: exactly +0.0 and on the boundary, in either unit.
+        for (b, g) in [(b, [0.5, 0.0]), (unit, [0.5, 1e-3 * 1e-12])] {
+            let result =
+                acai_from_matrix_with_hover(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13)
+                    .unwrap();
+            assert_eq!(result.hover, HoverPoint::OnBoundary, "{g:?}");
+            assert!(result.acai == 0.0 && result.acai.is_sign_positive());
+        }
+    }
+
+    #[test]
+    fn row_equilibration_is_exact_and_undoes_units() {
+        let b = DMatrix::from_row_slice(2, 3, &[3.0, 4.0, 0.0, 1e-7, 0.0, 2e-7]);
+        let scale = equilibrating_row_scale(&b);
+        assert!(scale.iter().all(|s| s.log2().fract() == 0.0), "{scale:?}");
+        let mut other_units = b.clone();
+        other_units.row_mut(1).scale_mut(2f64.powi(40));
+        let again = equilibrating_row_scale(&other_units);
+        for r in 0..2 {
+            for k in 0..3 {
+                assert_eq!(b[(r, k)] * scale[r], other_units[(r, k)] * again[r]);
+            }
+        }
+        assert_eq!(equilibrating_row_scale(&DMatrix::zeros(1, 2)), vec![1.0]);
+    }
+
+    #[test]
+    fn hover_point_classifies_the_margin() {
+        assert_eq!(HoverPoint::from_facet_margin(0.1), HoverPoint::Inside);
+        assert_eq!(HoverPoint::from_facet_margin(0.0), HoverPoint::OnBoundary);
+        assert_eq!(HoverPoint::from_facet_margin(-0.0), HoverPoint::OnBoundary);
+        assert_eq!(HoverPoint::from_facet_margin(-1e-300), HoverPoint::Outside);
+        assert_eq!(
+            HoverPoint::from_facet_margin(f64::NEG_INFINITY),
+            HoverPoint::RankDeficient
+        );
+        let codes: Vec<(i8, &str, bool)> = [
+            HoverPoint::Inside,
+            HoverPoint::OnBoundary,
+            HoverPoint::Outside,
+            HoverPoint::RankDeficient,
+        ]
+        .iter()
+        .map(|h| (h.code(), h.name(), h.is_attainable()))
+        .collect();
+        assert_eq!(
+            codes,
+            vec![
+                (1, "inside", true),
+                (0, "boundary", true),
+                (-1, "outside", false),
+                (-2, "rank-deficient", false)
+            ]
+        );
+    }
+
+    #[test]
     fn bad_bounds_are_rejected() {
         let b = DMatrix::identity(2, 2);
         let err = acai_from_matrix(&b, &[0.0, 3.0], &[1.0, 2.0], &[0.0, 0.0], AcaiFormula::Eq13)
