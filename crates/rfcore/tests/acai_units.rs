@@ -163,7 +163,8 @@ fn reference_distances(
 
 /// Every verdict is invariant to rescaling any row, agrees with the LP, and every value equals
 /// today's formula (all facets kept) in the user's units. n = 3..6, m = n + 1..n + 2, rows
-/// rescaled by 10^-U(0, 8) (ratios up to 1e8), seeded.
+/// rescaled by 10^-U(0, 8) (ratios up to 1e8), seeded; G at random and G within 1e-5 (relative,
+/// along the ray from the centre) of the boundary, inside or outside.
 #[test]
 fn verdicts_are_unit_free_and_agree_with_an_lp() {
     let mut rng = Rng(0x5eed_0019);
@@ -175,15 +176,29 @@ fn verdicts_are_unit_free_and_agree_with_an_lp() {
         for case in 0..150 {
             let m = n + 1 + case % 2;
             let b = DMatrix::from_fn(n, m, |_, _| rng.uniform(-1.0, 1.0));
-            let (lo, hi) = (vec![0.0; m], vec![1.0; m]);
-            let u: Vec<f64> = (0..m).map(|_| rng.uniform(-0.25, 1.25)).collect();
+            // Boxes [0, 1], and every third case a box reaching below zero (reversible rotors).
+            let lo: Vec<f64> = (0..m)
+                .map(|_| {
+                    if case % 3 == 0 {
+                        -rng.uniform(0.0, 0.5)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let hi = vec![1.0; m];
+            let u: Vec<f64> = (0..m)
+                .map(|k| lo[k] + (hi[k] - lo[k]) * rng.uniform(-0.25, 1.25))
+                .collect();
             let g: Vec<f64> = (0..n)
                 .map(|r| (0..m).map(|k| b[(r, k)] * u[k]).sum())
                 .collect();
             // G itself, then G moved along the ray from the centre to within 1e-5 (relative) of
             // the boundary, on a random side.
             let gauge = lp_gauge(&b, &lo, &hi, &g).expect("the LP solves");
-            let centre: Vec<f64> = (0..n).map(|r| 0.5 * b.row(r).sum()).collect();
+            let centre: Vec<f64> = (0..n)
+                .map(|r| (0..m).map(|k| b[(r, k)] * 0.5 * (lo[k] + hi[k])).sum())
+                .collect();
             let side = if rng.uniform(0.0, 1.0) < 0.5 {
                 1.0 - 1e-5
             } else {
