@@ -23,18 +23,45 @@
 //! bound on the distance from an interior G to the boundary and never changes the result there.
 //! Keeping it makes the index continuous as `eta_k -> 0` (see "G outside Omega").
 //!
-//! # Tolerances
-//! - A column group is rank-deficient when the cross product of its *unit* columns has norm
-//!   `<= RANK_RTOL` (that norm is the volume "sine" of the group, 1 for orthogonal columns, 0 for
-//!   dependent ones). `rank B_f` is decided by the same groups, so the ACAI and the report agree.
-//! - A projection `xi_j . b_k` with `|.| <= RANK_RTOL * |b_k|` is exactly zero.
-//! - An ACAI with `|rho| <= ZERO_RTOL * scale`, where
-//!   `scale = sum_k |b_k| (f_max,k - f_min,k) / 2 + |G|` is the size of the problem, is returned as
-//!   exactly `0.0` (never `-0.0`): G is on the boundary to working precision. `b_k` are the
-//!   nominal columns (efficiencies not applied), so the threshold does not move with `eta` and
-//!   snapping never breaks monotonicity in the efficiencies.
-//! - If `rank B < n` the ACAI is undefined and returned as `f64::NEG_INFINITY` (Du uses -10^6).
-//!
+//! # Tolerances (one rank rule, free of units)
+//! Every decision below is invariant to the units of the rows (a positive scaling of any row of B
+//! and the same entry of G maps Omega and G linearly, so inside / on / outside and every rank stay
+//! what they are); only the reported values are in the user's units.
+//! - **Row equilibration.** Facets and ranks are decided on `E = D B`, where `D` scales each row
+//!   of the nominal B to unit Euclidean norm by a power of two ([`equilibrating_row_scale`]: exact,
+//!   and scaling a row of B by a power of two leaves E bit for bit unchanged). Without it, a
+//!   wrench of forces in N beside torques in N m, or a quadrotor with 1e-5 m arms, lost real
+//!   facets (G reported inside) or full rank (-inf).
+//! - A column group is rank-deficient when the cross product of its *unit* columns of E has norm
+//!   `<= RANK_RTOL = 1e-9` (the group's volume "sine", 1 for orthogonal columns, 0 for dependent
+//!   ones).
+//! - A column lies in a group's hyperplane (projection exactly zero) when the cosine between its
+//!   unit column of E and the group's normal in E is `<= RANK_RTOL`.
+//! - `rank B_f = n` iff some group of `n - 1` independent working columns has a working column off
+//!   its hyperplane; otherwise the ACAI is `-inf` and the report's `rank B_f` (Step 2) is the
+//!   [`scale_free_rank`] of B_f capped at `n - 1`, so the report and the ACAI cannot disagree.
+//!   `rank C(A, B)` (Step 1) is [`scale_free_rank`] too: rows and columns equilibrated by powers of
+//!   two, then singular values above `RANK_RTOL` times the largest (any J/m is read correctly).
+//! - **Distances in the user's units.** A group's normal `xi` in E maps to `D xi` in B (for any v,
+//!   `(D xi) . v = xi . (D v)`); `xi_j` is that vector normalised, so every `d_j` is exactly the
+//!   value of eq. (14) in the units of B and G (identical to computing the normal in B directly
+//!   whenever no facet is lost). A change of units of a row changes every `d_j` by a positive
+//!   factor of its own (so the values, not the signs, depend on units: a distance between a
+//!   force and a torque has no unit-free meaning).
+//! - **Zero.** A `d_j` with `|d_j| <= ZERO_RTOL = 1e-9` times the problem's size along its own
+//!   normal, `sum_k |xi_j . b_k| (|f_min,k| + |f_max,k|) / 2 + |xi_j . G|`, is exactly `0.0`
+//!   (never `-0.0`): G is on that facet's hyperplane to working precision. A change of units
+//!   scales `d_j` and this size by the same factor, so the snap is unit-free (one size for the
+//!   whole problem would read every facet along a small unit as "boundary"). `b_k` are the nominal
+//!   columns (efficiencies not applied), so the threshold does not move with `eta` and snapping
+//!   never breaks monotonicity in the efficiencies. The ACAI is then formed from the snapped
+//!   `d_j`.
+//! - **Where G lies** ([`HoverPoint`], returned with every value by the `*_with_hover`
+//!   functions): the sign of the facet margin formed from the snapped `d_j`: `> 0` inside, `0` on
+//!   the boundary, `< 0` outside, `-inf` rank deficient. The verdicts of
+//!   [`crate::analysis::ControllabilityReport`] use the same classification, whatever formula the
+//!   value is reported in.
+
 //! # G outside Omega (a decided paper gap): [`AcaiFormula`]
 //! For G inside Omega or on its boundary, `min_j d_j` is the distance of definition (9) and both
 //! formulas below agree. For G outside they differ:
@@ -116,6 +143,100 @@ impl AcaiValues {
     }
 }
 
+impl AcaiValues {
+    /// Where G lies, from the sign of the facet margin (the verdict's rule).
+    pub fn hover(self) -> HoverPoint {
+        HoverPoint::from_facet_margin(self.facet_margin)
+    }
+
+    /// The ACAI in `formula` together with where G lies.
+    pub fn result(self, formula: AcaiFormula) -> AcaiResult {
+        AcaiResult {
+            acai: self.get(formula),
+            hover: self.hover(),
+        }
+    }
+}
+
+/// Where the required wrench G lies relative to the attainable set Omega, decided by the sign of
+/// the facet margin with the tolerances of the module documentation (the rule every verdict
+/// uses). Eq. (13) can print 0 or a small negative number for G far outside: this says which.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum HoverPoint {
+    /// G is an interior point of Omega (ACAI > 0).
+    Inside,
+    /// G is on the boundary of Omega to working precision (facet margin exactly 0).
+    OnBoundary,
+    /// G is outside Omega: hover is infeasible, whatever eq. (13) prints.
+    Outside,
+    /// rank B < n: Omega has no interior and the ACAI is undefined (-inf).
+    RankDeficient,
+}
+
+impl HoverPoint {
+    /// The classification of a facet margin (`-inf` for rank B < n).
+    pub fn from_facet_margin(margin: f64) -> Self {
+        if margin == f64::NEG_INFINITY {
+            HoverPoint::RankDeficient
+        } else if margin > 0.0 {
+            HoverPoint::Inside
+        } else if margin == 0.0 {
+            HoverPoint::OnBoundary
+        } else {
+            HoverPoint::Outside
+        }
+    }
+
+    /// G can be produced: inside Omega or on its boundary.
+    pub fn is_attainable(self) -> bool {
+        matches!(self, HoverPoint::Inside | HoverPoint::OnBoundary)
+    }
+
+    /// G is outside Omega: the value of eq. (13) is not a distance (mark it in tables).
+    pub fn is_outside(self) -> bool {
+        self == HoverPoint::Outside
+    }
+
+    /// A short name: `"inside"`, `"boundary"`, `"outside"`, `"rank-deficient"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            HoverPoint::Inside => "inside",
+            HoverPoint::OnBoundary => "boundary",
+            HoverPoint::Outside => "outside",
+            HoverPoint::RankDeficient => "rank-deficient",
+        }
+    }
+
+    /// `1` inside, `0` on the boundary, `-1` outside, `-2` rank deficient (a compact column).
+    pub fn code(self) -> i8 {
+        match self {
+            HoverPoint::Inside => 1,
+            HoverPoint::OnBoundary => 0,
+            HoverPoint::Outside => -1,
+            HoverPoint::RankDeficient => -2,
+        }
+    }
+}
+
+/// One ACAI in the requested formula with where G lies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AcaiResult {
+    /// The ACAI in the requested formula.
+    pub acai: f64,
+    /// Where G lies (the facet margin's sign): `Outside` marks an eq. (13) value that is not a
+    /// distance, e.g. the 0 of Du Table III for PPNNPN with rotor 5 failed.
+    pub hover: HoverPoint,
+}
+
+/// A batch of ACAIs with where G lies for each row, as two columns.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct AcaiBatch {
+    /// The ACAI of each row in the requested formula.
+    pub acai: Vec<f64>,
+    /// Where G lies for each row.
+    pub hover: Vec<HoverPoint>,
+}
+
 /// Facet normals and projections of a nominal effectiveness matrix, reusable for any efficiencies,
 /// bounds and G.
 #[derive(Debug, Clone)]
@@ -175,10 +296,18 @@ impl FacetNormals {
                 "too large: the column's norm overflows double precision",
             ));
         }
-        // Unit columns: the cross product of a group then measures the group's "sine" directly
-        // and cannot overflow or underflow, whatever the units of the rows.
+        // Rank decisions are made on the row-equilibrated matrix `E = D B` (each row scaled by a
+        // power of two to unit norm, so exactly and with no rounding): a change of units of any
+        // row maps Omega linearly, keeps every facet, and leaves E (hence every decision)
+        // unchanged. Then unit columns: the cross product of a group measures its "sine".
+        let row_scale = equilibrating_row_scale(b);
         let mut unit = b.clone();
-        for (k, &norm) in column_norms.iter().enumerate() {
+        for (r, &s) in row_scale.iter().enumerate() {
+            unit.row_mut(r).scale_mut(s);
+        }
+        let equilibrated_norms: Vec<f64> =
+            (0..m).map(|k| scaled_norm(unit.column(k).iter())).collect();
+        for (k, &norm) in equilibrated_norms.iter().enumerate() {
             if norm > 0.0 {
                 unit.column_mut(k).unscale_mut(norm);
             }
@@ -194,33 +323,44 @@ impl FacetNormals {
         };
         let mut minor = vec![0.0; (n - 1) * (n - 1)];
         let mut xi = vec![0.0; n];
+        let mut normal = vec![0.0; n];
         // With m < n - 1 there is no group at all, and every evaluation reports rank < n.
         for group in Combinations::new(m, n - 1) {
-            if group.iter().any(|&k| out.column_norms[k] == 0.0) {
+            if group.iter().any(|&k| equilibrated_norms[k] == 0.0) {
                 continue; // a zero column: rank B_{1,j} < n - 1
             }
             generalized_cross_product(&unit, &group, &mut minor, &mut xi);
-            let norm = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let norm = scaled_norm(xi.iter());
             if norm <= RANK_RTOL {
                 continue; // rank B_{1,j} < n - 1: no facet (Du Step 6)
             }
             xi.iter_mut().for_each(|v| *v /= norm);
+            // xi is normal to the group in E's coordinates; D xi is normal to it in B's (for any
+            // v, (D xi) . v = xi . (D v)). Distances are reported along the unit normal of B's.
+            normal
+                .iter_mut()
+                .zip(xi.iter().zip(&row_scale))
+                .for_each(|(nu, (x, s))| *nu = x * s);
+            let normal_norm = scaled_norm(normal.iter());
+            normal.iter_mut().for_each(|v| *v /= normal_norm);
             for k in 0..m {
-                let p: f64 = if group.contains(&k) {
+                // The cosine between the equilibrated column and the group's normal decides
+                // whether the column lies in the group's hyperplane, by the same scale-free rule.
+                let cosine: f64 = if group.contains(&k) || equilibrated_norms[k] == 0.0 {
                     0.0
                 } else {
-                    (0..n).map(|r| xi[r] * b[(r, k)]).sum()
+                    (0..n).map(|r| xi[r] * unit[(r, k)]).sum()
                 };
-                let p = if p.abs() <= RANK_RTOL * out.column_norms[k] {
+                let p = if cosine.abs() <= RANK_RTOL {
                     0.0
                 } else {
-                    p
+                    cosine * (equilibrated_norms[k] / normal_norm)
                 };
                 out.projections.push(p);
                 out.abs_projections.push(p.abs());
             }
             out.groups.extend_from_slice(&group);
-            out.normals.extend_from_slice(&xi);
+            out.normals.extend_from_slice(&normal);
         }
         Ok(out)
     }
@@ -240,7 +380,7 @@ impl FacetNormals {
         self.normals.len() / self.n
     }
 
-    /// Checks the bounds and hover wrench passed to [`FacetNormals::acai`].
+    /// Checks the bounds and hover wrench passed to [`FacetNormals::evaluate`].
     pub fn check_bounds_and_g(&self, f_min: &[f64], f_max: &[f64], g: &[f64]) -> Result<()> {
         for (field, v, len, what) in [
             ("f_min", f_min, self.m, "one per actuator"),
@@ -291,6 +431,16 @@ impl FacetNormals {
             half_range[k] = 0.5 * eta[k] * (f_max[k] - f_min[k]);
             centre_thrust[k] = 0.5 * eta[k] * (f_max[k] + f_min[k]);
         }
+        // Each d_j counts as zero within ZERO_RTOL of the problem's size along its own normal,
+        // `sum_k |xi_j . b_k| (|f_min,k| + |f_max,k|) / 2 + |xi_j . G|` (nominal columns): a change
+        // of units scales d_j and that size by the same factor, so the decision is scale-free.
+        // That size never exceeds the same sum with |b_k| and |G|, so it is only formed for the
+        // rare d_j within ZERO_RTOL of the latter.
+        let coarse_zero = ZERO_RTOL
+            * ((0..m)
+                .map(|k| self.column_norms[k] * 0.5 * (f_min[k].abs() + f_max[k].abs()))
+                .sum::<f64>()
+                + scaled_norm(g.iter()));
         let mut full_rank = false;
         // Over the groups without a failed rotor (Du's d_j), and over every group.
         let mut min_d_working = f64::INFINITY;
@@ -304,13 +454,29 @@ impl FacetNormals {
         for (j, ((normal, projections), abs_projections)) in rows.enumerate() {
             let half_width = dot(abs_projections, half_range);
             let centre = dot(projections, centre_thrust);
-            let d = half_width - (centre - dot(normal, g)).abs();
+            let along_g = dot(normal, g);
+            let mut d = half_width - (centre - along_g).abs();
+            if d.abs() <= coarse_zero {
+                let size: f64 = abs_projections
+                    .iter()
+                    .zip(f_min.iter().zip(f_max))
+                    .map(|(p, (lo, hi))| p * 0.5 * (lo.abs() + hi.abs()))
+                    .sum::<f64>()
+                    + along_g.abs();
+                if d.abs() <= ZERO_RTOL * size {
+                    d = 0.0;
+                }
+            }
             min_d_all = min_d_all.min(d);
             let group = &self.groups[j * (n - 1)..(j + 1) * (n - 1)];
             if group.iter().all(|&k| eta[k] != 0.0) {
                 // rank B = n iff some group of n - 1 independent working columns has a working
                 // column off its hyperplane; settled by the first such group, so checked once.
-                full_rank = full_rank || projections.iter().zip(eta).any(|(p, e)| p * e != 0.0);
+                full_rank = full_rank
+                    || projections
+                        .iter()
+                        .zip(eta)
+                        .any(|(&p, &e)| p != 0.0 && e != 0.0);
                 min_d_working = min_d_working.min(d);
                 min_abs_d_working = min_abs_d_working.min(d.abs());
             }
@@ -321,25 +487,15 @@ impl FacetNormals {
                 facet_margin: f64::NEG_INFINITY,
             };
         }
+        // `0.0 - x` rather than `-x`: a snapped zero is +0.0, never -0.0.
         let eq13 = if min_d_working >= 0.0 {
             min_d_working
         } else {
-            -min_abs_d_working
-        };
-        let scale: f64 = (0..m)
-            .map(|k| self.column_norms[k] * 0.5 * (f_max[k] - f_min[k]))
-            .sum::<f64>()
-            + scaled_norm(g.iter());
-        let snap = |rho: f64| {
-            if rho.abs() <= ZERO_RTOL * scale {
-                0.0
-            } else {
-                rho
-            }
+            0.0 - min_abs_d_working
         };
         AcaiValues {
-            eq13: snap(eq13),
-            facet_margin: snap(min_d_all),
+            eq13,
+            facet_margin: min_d_all,
         }
     }
 
@@ -353,6 +509,36 @@ impl FacetNormals {
         g: &[f64],
         formula: AcaiFormula,
     ) -> Result<Vec<f64>> {
+        self.check_batch(etas, f_min, f_max, g)?;
+        Ok(etas
+            .par_chunks_exact(self.m)
+            .with_min_len(256)
+            .map(|eta| self.evaluate(eta, f_min, f_max, g).get(formula))
+            .collect())
+    }
+
+    /// [`FacetNormals::acai_batch`] with where G lies for each row.
+    pub fn acai_batch_with_hover(
+        &self,
+        etas: &[f64],
+        f_min: &[f64],
+        f_max: &[f64],
+        g: &[f64],
+        formula: AcaiFormula,
+    ) -> Result<AcaiBatch> {
+        self.check_batch(etas, f_min, f_max, g)?;
+        let (acai, hover) = etas
+            .par_chunks_exact(self.m)
+            .with_min_len(256)
+            .map(|eta| {
+                let values = self.evaluate(eta, f_min, f_max, g);
+                (values.get(formula), values.hover())
+            })
+            .unzip();
+        Ok(AcaiBatch { acai, hover })
+    }
+
+    fn check_batch(&self, etas: &[f64], f_min: &[f64], f_max: &[f64], g: &[f64]) -> Result<()> {
         self.check_bounds_and_g(f_min, f_max, g)?;
         let m = self.m;
         if !etas.len().is_multiple_of(m) {
@@ -371,11 +557,7 @@ impl FacetNormals {
                 format!("must be finite and lie in [0, 1], got {}", etas[i]),
             ));
         }
-        Ok(etas
-            .par_chunks_exact(m)
-            .with_min_len(256)
-            .map(|eta| self.evaluate(eta, f_min, f_max, g).get(formula))
-            .collect())
+        Ok(())
     }
 }
 
@@ -391,6 +573,59 @@ fn scaled_norm<'a>(values: impl Iterator<Item = &'a f64> + Clone) -> f64 {
     largest * values.map(|v| (v / largest).powi(2)).sum::<f64>().sqrt()
 }
 
+/// The power of two nearest to `1 / norm` (1 for a zero norm): multiplying by it is exact.
+fn inverse_power_of_two(norm: f64) -> f64 {
+    if norm > 0.0 && norm.is_finite() {
+        2.0_f64.powi(-(norm.log2().round() as i32).clamp(-1000, 1000))
+    } else {
+        1.0
+    }
+}
+
+/// Row factors `D` that bring every nonzero row of `b` to unit Euclidean norm within a factor
+/// of sqrt(2), as powers of two (so `D b` carries no rounding). Scaling a row of `b` by a power of
+/// two leaves `D b` bit for bit unchanged; by any other positive factor, to rounding.
+pub fn equilibrating_row_scale(b: &DMatrix<f64>) -> Vec<f64> {
+    (0..b.nrows())
+        .map(|r| inverse_power_of_two(scaled_norm(b.row(r).iter())))
+        .collect()
+}
+
+/// The rank of `matrix` by one rule for every rank test of this crate, free of units: rows and
+/// columns are equilibrated (alternately scaled by powers of two to unit norm, a few sweeps, so a
+/// change of units of any row or column is undone), then singular values above `RANK_RTOL` times
+/// the largest are counted. `rank(D1 M D2) = rank(M)` for positive diagonal `D1, D2`, so this
+/// decides the same question as a plain SVD, without reading a small unit as a zero.
+pub fn scale_free_rank(matrix: &DMatrix<f64>) -> usize {
+    let mut scaled = matrix.clone();
+    for _ in 0..8 {
+        let mut changed = false;
+        for r in 0..scaled.nrows() {
+            let s = inverse_power_of_two(scaled_norm(scaled.row(r).iter()));
+            if s != 1.0 {
+                scaled.row_mut(r).scale_mut(s);
+                changed = true;
+            }
+        }
+        for c in 0..scaled.ncols() {
+            let s = inverse_power_of_two(scaled_norm(scaled.column(c).iter()));
+            if s != 1.0 {
+                scaled.column_mut(c).scale_mut(s);
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    let sv = scaled.svd(false, false).singular_values;
+    let largest = sv.iter().cloned().fold(0.0, f64::max);
+    if largest == 0.0 {
+        return 0;
+    }
+    sv.iter().filter(|&&s| s > RANK_RTOL * largest).count()
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -404,11 +639,22 @@ pub fn acai_from_matrix(
     g: &[f64],
     formula: AcaiFormula,
 ) -> Result<f64> {
+    Ok(acai_from_matrix_with_hover(b, f_min, f_max, g, formula)?.acai)
+}
+
+/// [`acai_from_matrix`] with where G lies.
+pub fn acai_from_matrix_with_hover(
+    b: &DMatrix<f64>,
+    f_min: &[f64],
+    f_max: &[f64],
+    g: &[f64],
+    formula: AcaiFormula,
+) -> Result<AcaiResult> {
     let normals = FacetNormals::new(b)?;
     normals.check_bounds_and_g(f_min, f_max, g)?;
     Ok(normals
         .evaluate(&vec![1.0; b.ncols()], f_min, f_max, g)
-        .get(formula))
+        .result(formula))
 }
 
 /// Writes into `xi` the generalised cross product of the columns `group` (n - 1 of them) of `b`:
@@ -543,6 +789,85 @@ mod tests {
         assert_eq!(
             acai_from_matrix(&too_few, &[0.0; 2], &[1.0; 2], &[0.0; 3], AcaiFormula::Eq13).unwrap(),
             f64::NEG_INFINITY
+        );
+    }
+
+    #[test]
+    fn zero_snap_is_per_facet_and_unit_free() {
+        // Omega = [0, 1] x [0, 1e-12] (the second row in a tiny unit), G 1e-15 above the bottom
+        // side: 1e-3 of that side's extent, clearly inside. One size for the whole problem (~1)
+        // read it as "on the boundary"; along its own normal the size is ~1e-12.
+        let b = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 1e-12]);
+        let g = [0.5, 1e-15];
+        let result =
+            acai_from_matrix_with_hover(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13).unwrap();
+        assert_eq!(result.hover, HoverPoint::Inside);
+        assert!((result.acai / 1e-15 - 1.0).abs() < 1e-9, "{result:?}");
+        // The same problem with the second row in a unit 1e12 larger.
+        let unit = DMatrix::identity(2, 2);
+        let result = acai_from_matrix_with_hover(
+            &unit,
+            &[0.0; 2],
+            &[1.0; 2],
+            &[0.5, 1e-3],
+            AcaiFormula::Eq13,
+        )
+        .unwrap();
+        assert_eq!(result.hover, HoverPoint::Inside);
+        assert!((result.acai - 1e-3).abs() < 1e-15);
+        // On the side to rounding: exactly +0.0 and on the boundary, in either unit.
+        for (b, g) in [(b, [0.5, 0.0]), (unit, [0.5, 1e-3 * 1e-12])] {
+            let result =
+                acai_from_matrix_with_hover(&b, &[0.0; 2], &[1.0; 2], &g, AcaiFormula::Eq13)
+                    .unwrap();
+            assert_eq!(result.hover, HoverPoint::OnBoundary, "{g:?}");
+            assert!(result.acai == 0.0 && result.acai.is_sign_positive());
+        }
+    }
+
+    #[test]
+    fn row_equilibration_is_exact_and_undoes_units() {
+        let b = DMatrix::from_row_slice(2, 3, &[3.0, 4.0, 0.0, 1e-7, 0.0, 2e-7]);
+        let scale = equilibrating_row_scale(&b);
+        assert!(scale.iter().all(|s| s.log2().fract() == 0.0), "{scale:?}");
+        let mut other_units = b.clone();
+        other_units.row_mut(1).scale_mut(2f64.powi(40));
+        let again = equilibrating_row_scale(&other_units);
+        for r in 0..2 {
+            for k in 0..3 {
+                assert_eq!(b[(r, k)] * scale[r], other_units[(r, k)] * again[r]);
+            }
+        }
+        assert_eq!(equilibrating_row_scale(&DMatrix::zeros(1, 2)), vec![1.0]);
+    }
+
+    #[test]
+    fn hover_point_classifies_the_margin() {
+        assert_eq!(HoverPoint::from_facet_margin(0.1), HoverPoint::Inside);
+        assert_eq!(HoverPoint::from_facet_margin(0.0), HoverPoint::OnBoundary);
+        assert_eq!(HoverPoint::from_facet_margin(-0.0), HoverPoint::OnBoundary);
+        assert_eq!(HoverPoint::from_facet_margin(-1e-300), HoverPoint::Outside);
+        assert_eq!(
+            HoverPoint::from_facet_margin(f64::NEG_INFINITY),
+            HoverPoint::RankDeficient
+        );
+        let codes: Vec<(i8, &str, bool)> = [
+            HoverPoint::Inside,
+            HoverPoint::OnBoundary,
+            HoverPoint::Outside,
+            HoverPoint::RankDeficient,
+        ]
+        .iter()
+        .map(|h| (h.code(), h.name(), h.is_attainable()))
+        .collect();
+        assert_eq!(
+            codes,
+            vec![
+                (1, "inside", true),
+                (0, "boundary", true),
+                (-1, "outside", false),
+                (-2, "rank-deficient", false)
+            ]
         );
     }
 

@@ -9,8 +9,10 @@
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use crate::analysis::acai::{AcaiFormula, FacetNormals, RANK_RTOL};
 use crate::airframe::{check_efficiency, Airframe};
+use crate::analysis::acai::{
+    scale_free_rank, AcaiBatch, AcaiFormula, AcaiResult, FacetNormals, HoverPoint, RANK_RTOL,
+};
 use crate::error::Result;
 
 /// Which virtual-control axes must remain controllable.
@@ -91,6 +93,9 @@ pub struct ControllabilityReport {
     /// rho(G, dOmega) (Steps 3-8) in the requested formula; -inf when rank B_f < n.
     pub acai: f64,
     pub formula: AcaiFormula,
+    /// Where the hover wrench G lies (the facet margin's sign), also when rank C(A, B) is
+    /// deficient: `Outside` marks an `acai` that is not a distance.
+    pub hover: HoverPoint,
     pub verdict: Verdict,
 }
 
@@ -124,7 +129,7 @@ impl ControllabilityAnalysis {
             axes,
             nominal,
             normals,
-            controllability_rank: numerical_rank(&controllability_matrix(&a, &b)),
+            controllability_rank: scale_free_rank(&controllability_matrix(&a, &b)),
             f_min,
             f_max,
             g,
@@ -150,10 +155,26 @@ impl ControllabilityAnalysis {
             .get(formula))
     }
 
+    /// [`ControllabilityAnalysis::acai`] with where the hover wrench lies (inside, on the
+    /// boundary, outside, or rank B_f < n), by the verdict's rule.
+    pub fn acai_with_hover(&self, eta: &[f64], formula: AcaiFormula) -> Result<AcaiResult> {
+        check_efficiency("eta", eta, self.nominal.ncols())?;
+        Ok(self
+            .normals
+            .evaluate(eta, &self.f_min, &self.f_max, &self.g)
+            .result(formula))
+    }
+
     /// ACAI for N efficiency vectors (row-major N x m), in parallel.
     pub fn acai_batch(&self, etas: &[f64], formula: AcaiFormula) -> Result<Vec<f64>> {
         self.normals
             .acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula)
+    }
+
+    /// [`ControllabilityAnalysis::acai_batch`] with where the hover wrench lies for each row.
+    pub fn acai_batch_with_hover(&self, etas: &[f64], formula: AcaiFormula) -> Result<AcaiBatch> {
+        self.normals
+            .acai_batch_with_hover(etas, &self.f_min, &self.f_max, &self.g, formula)
     }
 
     /// Du's Steps 1-9 for one efficiency vector; `formula` chooses how an ACAI with G outside
@@ -165,13 +186,13 @@ impl ControllabilityAnalysis {
             .normals
             .evaluate(eta, &self.f_min, &self.f_max, &self.g);
         // Step 2 uses the same column-group test as the ACAI, so the report cannot contradict
-        // itself; the SVD only says how deficient a deficient B_f is.
+        // itself; the (scale-free) SVD only says how deficient a deficient B_f is.
         let effectiveness_rank = if values.facet_margin == f64::NEG_INFINITY {
             let mut scaled = self.nominal.clone();
             for (k, &e) in eta.iter().enumerate() {
                 scaled.column_mut(k).scale_mut(e);
             }
-            numerical_rank(&scaled).min(n - 1)
+            scale_free_rank(&scaled).min(n - 1)
         } else {
             n
         };
@@ -195,6 +216,7 @@ impl ControllabilityAnalysis {
             effectiveness_rank,
             acai,
             formula,
+            hover: values.hover(),
             verdict,
         })
     }
@@ -232,7 +254,8 @@ pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64
     )
 }
 
-/// Number of singular values above `RANK_RTOL` times the largest.
+/// Number of singular values above `RANK_RTOL` times the largest: a plain SVD rank that reads a
+/// small unit as a zero. The analysis uses [`scale_free_rank`] instead.
 pub fn numerical_rank(matrix: &DMatrix<f64>) -> usize {
     let sv = matrix.clone().svd(false, false).singular_values;
     let largest = sv.iter().cloned().fold(0.0, f64::max);

@@ -6,7 +6,10 @@ pub mod acai;
 pub mod combinations;
 pub mod controllability;
 
-pub use acai::{acai_from_matrix, AcaiFormula, AcaiValues, FacetNormals, RANK_RTOL, ZERO_RTOL};
+pub use acai::{
+    acai_from_matrix, acai_from_matrix_with_hover, equilibrating_row_scale, scale_free_rank,
+    AcaiBatch, AcaiFormula, AcaiResult, AcaiValues, FacetNormals, HoverPoint, RANK_RTOL, ZERO_RTOL,
+};
 pub use controllability::{
     failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase,
     Verdict,
