@@ -13,6 +13,9 @@ from . import _rfcore
 #: How an ACAI reads when the hover wrench lies outside the attainable set (Du eq. (13) or the
 #: facet margin; see :mod:`rotorfault.controllability`).
 AcaiFormula: TypeAlias = Literal["eq13", "facet-margin"]
+#: Where the hover wrench lies relative to the attainable set (a verdict every ACAI carries:
+#: with ``formula="eq13"`` an ACAI of 0 can come with ``"outside"``, where hover is infeasible).
+HoverPoint: TypeAlias = Literal["inside", "boundary", "outside", "rank-deficient"]
 #: Solver of :func:`rotorfault.allocate`.
 AllocationMethod: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Outcome of one allocation.
@@ -52,6 +55,7 @@ __all__ = [
     "Controller",
     "CoreController",
     "DivergenceKind",
+    "HoverPoint",
     "KeLaw",
     "KeOutcome",
     "ScenarioControllerKind",

@@ -107,11 +107,11 @@ def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: Acai
     table.add_row("axes", "thrust, roll, pitch" if give_up_yaw else "thrust, roll, pitch, yaw")
     table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
     table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
-    table.add_row("ACAI", format_acai(report.acai, report.verdict))
+    table.add_row("ACAI", format_acai(report.acai, report.hover))
     style = "green" if report.controllable else "red"
     table.add_row("verdict", f"[{style}]{report.verdict}[/{style}]")
     console.print(table)
-    if format_acai(report.acai, report.verdict).endswith("*"):
+    if format_acai(report.acai, report.hover).endswith("*"):
         console.print(escape(EQ13_ZERO_NOTE))
 
 
@@ -147,21 +147,26 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
 @click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
 @click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+@formula_option
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (PNG).")
 @_user_errors
-def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None) -> None:
+def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
     frame = Airframe.load(airframe)
     swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
         raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")
-    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw)
+    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw, formula=formula)
     finite = result.acai[~(result.acai == -math.inf)]
+    misleading = int(np.sum((result.acai >= 0.0) & (result.hover_code < 0)))
     console.print(
         f"{escape(frame.name)}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
-        f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%); "
+        f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%), "
+        f"hover feasible at {int(result.hover_feasible.sum()):,}; "
         f"largest ACAI {finite.max() if finite.size else float('nan'):.4f}"
     )
+    if misleading:
+        console.print(f"{misleading:,} points where {formula} reads >= 0 although the hover wrench lies outside (see hover_code)")
     if plot_path is not None:
         result.plot(plot_path)
         console.print(f"plot written to {plot_path}")

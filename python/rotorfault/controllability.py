@@ -21,14 +21,14 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass
-from typing import Any, cast, overload
+from typing import Any, Literal, cast, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
 from ._convert import FloatArray, core_fields, count, flag, float_array
-from ._typing import AcaiFormula
+from ._typing import AcaiFormula, HoverPoint
 from .airframe import Airframe, require_airframe, rotor_labels
 
 #: Tolerances of the core (see ``crates/rfcore/src/acai.rs``): rank decisions are relative to
@@ -43,6 +43,57 @@ def _formula(value: Any) -> str:
     return value
 
 
+#: ``HoverPoint`` of each code in :attr:`AcaiBatch.hover_code` (the core's compact column).
+HOVER_CODES: dict[int, HoverPoint] = {1: "inside", 0: "boundary", -1: "outside", -2: "rank-deficient"}
+
+
+class AcaiValue(float):
+    """An ACAI: a float (N / N m, as in the paper) that also says where the hover wrench lies.
+
+    ``hover`` is ``"inside"``, ``"boundary"``, ``"outside"`` or ``"rank-deficient"``. With
+    ``formula="eq13"`` a value of ``0.0`` can come with ``hover == "outside"`` (Du Table III's
+    PPNNPN with rotor 5 failed): hover is infeasible although the number reads like a boundary.
+    Such a value prints with a star (``0.0*``)."""
+
+    hover: HoverPoint
+
+    def __new__(cls, value: float, hover: HoverPoint) -> AcaiValue:
+        obj = super().__new__(cls, value)
+        obj.hover = hover
+        return obj
+
+    @property
+    def hover_feasible(self) -> bool:
+        """The hover wrench is attainable (inside or on the boundary)."""
+        return self.hover in ("inside", "boundary")
+
+    def __repr__(self) -> str:
+        text = float.__repr__(self)
+        return text + "*" if self.hover == "outside" and self >= 0.0 else text
+
+    __str__ = __repr__
+
+    def __reduce__(self) -> tuple[type[AcaiValue], tuple[float, HoverPoint]]:
+        return (AcaiValue, (float(self), self.hover))
+
+    @classmethod
+    def _from_core(cls, core: _rfcore.AcaiResult) -> AcaiValue:
+        return cls(core.acai, cast(HoverPoint, core.hover))
+
+
+@dataclass(frozen=True)
+class AcaiBatch:
+    """:func:`acai_batch` with ``with_hover=True``: the ACAIs and where the hover wrench lies for
+    each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient)."""
+
+    acai: FloatArray
+    hover_code: npt.NDArray[np.int8]
+
+    @property
+    def hover_feasible(self) -> npt.NDArray[np.bool_]:
+        return self.hover_code >= 0
+
+
 def _efficiency(airframe: Airframe, efficiency: npt.ArrayLike | None) -> FloatArray:
     return airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
 
@@ -53,25 +104,51 @@ def acai(
     *,
     give_up_yaw: bool = False,
     formula: AcaiFormula = "eq13",
-) -> float:
+) -> AcaiValue:
     """ACAI of ``airframe`` with rotor ``efficiency`` (Du's eta_i; default: the airframe's own), in
-    N / N m like the paper.
+    N / N m like the paper, as an :class:`AcaiValue` (a float with ``.hover``).
 
     Positive: the distance from G to the boundary of the attainable set. ``0.0``: G on the
-    boundary (within ``ZERO_RTOL``) or, with ``formula="eq13"``, a degenerate outside case.
-    Negative: G outside. ``-inf``: rank B_f < n, the index is undefined.
+    boundary (within ``ZERO_RTOL``) or, with ``formula="eq13"``, a degenerate outside case
+    (``.hover == "outside"``, printed ``0.0*``). Negative: G outside. ``-inf``: rank B_f < n, the
+    index is undefined.
     """
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
     drop_yaw = flag("give_up_yaw", give_up_yaw)
     with core_fields():
-        return _rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula))
+        return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula)))
 
 
+@overload
 def acai_batch(
-    airframe: Airframe, efficiencies: npt.ArrayLike, *, give_up_yaw: bool = False, formula: AcaiFormula = "eq13"
-) -> FloatArray:
-    """ACAI for every row of ``efficiencies`` (N x m), computed in parallel without the GIL.
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = ...,
+    formula: AcaiFormula = ...,
+    with_hover: Literal[False] = ...,
+) -> FloatArray: ...
+@overload
+def acai_batch(
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = ...,
+    formula: AcaiFormula = ...,
+    with_hover: Literal[True],
+) -> AcaiBatch: ...
+def acai_batch(
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
+    with_hover: bool = False,
+) -> FloatArray | AcaiBatch:
+    """ACAI for every row of ``efficiencies`` (N x m), computed in parallel without the GIL: the
+    bare values, or with ``with_hover=True`` an :class:`AcaiBatch` that also says where the hover
+    wrench lies for each row (needed to tell eq. (13)'s outside zeros from boundaries).
 
     A float64 C-contiguous ``efficiencies`` is read in place (no copy) while other Python threads run:
     do not modify it from another thread during the call."""
@@ -79,6 +156,9 @@ def acai_batch(
     rows = float_array("efficiencies", efficiencies, 2)
     drop_yaw = flag("give_up_yaw", give_up_yaw)
     with core_fields():
+        if flag("with_hover", with_hover):
+            core = _rfcore.acai_batch_with_hover(airframe._core, rows, drop_yaw, _formula(formula))
+            return AcaiBatch(core.acai, core.hover_code)
         return _rfcore.acai_batch(airframe._core, rows, drop_yaw, _formula(formula))
 
 
@@ -89,16 +169,18 @@ def acai_from_matrix(
     g_vec: npt.ArrayLike,
     *,
     formula: AcaiFormula = "eq13",
-) -> float:
+) -> AcaiValue:
     """ACAI of any effectiveness matrix B (n x m, efficiencies applied), actuator box
-    ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1."""
-    return _rfcore.acai_from_matrix(
+    ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1, with
+    where ``g_vec`` lies (``.hover``). Facets and rank are decided free of the rows' units."""
+    core = _rfcore.acai_from_matrix(
         float_array("effectiveness_matrix", effectiveness_matrix, 2),
         float_array("f_min", f_min, 1),
         float_array("f_max", f_max, 1),
         float_array("g_vec", g_vec, 1),
         _formula(formula),
     )
+    return AcaiValue._from_core(core)
 
 
 @dataclass(frozen=True)
@@ -123,10 +205,14 @@ class ControllabilityReport:
     #: "controllable" or "uncontrollable: <reason>" (Du Step 9).
     verdict: str
     controllable: bool
+    #: Where the hover wrench lies; ``"outside"`` with ``acai == 0`` marks eq. (13)'s misleading 0.
+    hover: HoverPoint = "inside"
 
     def __str__(self) -> str:
         axes = "thrust, roll, pitch" if self.give_up_yaw else "thrust, roll, pitch, yaw"
-        acai = "undefined (-inf)" if math.isinf(self.acai) else f"{self.acai:.4f}"
+        acai = "undefined (-inf)" if math.isinf(self.acai) else format_acai(self.acai, self.hover)
+        if acai.endswith("*"):
+            acai += " (eq. (13) prints 0 although the hover wrench lies outside the attainable set)"
         efficiency = ", ".join(f"{e:g}" for e in self.efficiency)
         return "\n".join(
             [
@@ -165,6 +251,7 @@ def controllability(
         formula=cast(AcaiFormula, core.formula),
         verdict=core.verdict,
         controllable=core.controllable,
+        hover=cast(HoverPoint, core.hover),
     )
 
 
@@ -182,6 +269,9 @@ class FailureCase:
     acai_without_yaw: float
     controllable_without_yaw: bool
     verdict_without_yaw: str
+    #: Where the hover wrench lies, with and without yaw (see :class:`AcaiValue`).
+    hover: HoverPoint = "inside"
+    hover_without_yaw: HoverPoint = "inside"
 
 
 _COLUMNS = (
@@ -192,21 +282,21 @@ _COLUMNS = (
     "effectiveness_rank_without_yaw",
     "acai_without_yaw",
     "controllable_without_yaw",
+    "hover",
+    "hover_without_yaw",
 )
 
 
-#: Verdict text for a hover wrench outside the attainable set.
-OUTSIDE = "uncontrollable: hover wrench outside the attainable set"
 #: Footnote for an eq. (13) value of 0 whose hover wrench is in fact outside.
 EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formula facet-margin shows the gap)"
 
 
-def format_acai(value: float, verdict: str = "") -> str:
-    """4 decimals like the paper; "undefined" for -inf; a star where eq. (13) prints 0 but the
-    hover wrench lies outside the attainable set."""
+def format_acai(value: float, hover: HoverPoint = "inside") -> str:
+    """4 decimals like the paper; "undefined" for -inf; a star where the number reads as
+    non-negative (eq. (13)'s 0) but the hover wrench lies outside the attainable set."""
     if math.isinf(value):
         return "undefined"
-    return f"{value:.4f}*" if value == 0.0 and verdict == OUTSIDE else f"{value:.4f}"
+    return f"{value:.4f}*" if value >= 0.0 and hover == "outside" else f"{value:.4f}"
 
 
 class FailureTable(Sequence[FailureCase]):
@@ -262,9 +352,9 @@ class FailureTable(Sequence[FailureCase]):
                 rotor_labels(row.failed),
                 str(row.controllability_rank),
                 str(row.effectiveness_rank),
-                format_acai(row.acai, row.verdict),
+                format_acai(row.acai, row.hover),
                 "yes" if row.controllable else "no",
-                format_acai(row.acai_without_yaw, row.verdict_without_yaw),
+                format_acai(row.acai_without_yaw, row.hover_without_yaw),
                 "yes" if row.controllable_without_yaw else "no",
             ]
             for row in self._cases
@@ -308,6 +398,8 @@ def failure_table(
             acai_without_yaw=no_yaw.acai,
             controllable_without_yaw=no_yaw.controllable,
             verdict_without_yaw=no_yaw.verdict,
+            hover=cast(HoverPoint, full.hover),
+            hover_without_yaw=cast(HoverPoint, no_yaw.hover),
         )
         for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]

@@ -7,13 +7,15 @@ values; the ACAI is evaluated at every grid point by the parallel Rust batch.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ._convert import FloatArray, flag, real, rotor_numbers
 from ._progress import chunks
+from ._typing import AcaiFormula
 from .airframe import Airframe, require_airframe
 from .controllability import acai_batch
 
@@ -37,13 +39,23 @@ class EfficiencyScan:
     levels: FloatArray
     #: N x len(rotors) efficiencies of the swept rotors at each point (last rotor fastest).
     points: FloatArray
-    #: ACAI at each point.
+    #: ACAI at each point (``formula``: how a point with the hover wrench outside reads).
     acai: FloatArray
     give_up_yaw: bool
+    #: Where the hover wrench lies at each point (:data:`rotorfault.controllability.HOVER_CODES`:
+    #: 1 inside, 0 boundary, -1 outside, -2 rank deficient): eq. (13) prints 0 for some outside
+    #: points, this column tells them from boundaries.
+    hover_code: npt.NDArray[np.int8] = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
+    formula: AcaiFormula = "eq13"
 
     @property
     def controllable(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
         return self.acai > 0.0
+
+    @property
+    def hover_feasible(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
+        """The hover wrench is attainable (inside or on the boundary) at each point."""
+        return self.hover_code >= 0
 
     @property
     def controllable_fraction(self) -> float:
@@ -60,6 +72,7 @@ def efficiency_scan(
     step: float = 0.04,
     *,
     give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
     progress: bool | None = None,
 ) -> EfficiencyScan:
     """Sweeps the efficiencies of ``rotors`` (1-based) over ``0, step, ..., 1`` (Du Fig. 4 uses
@@ -94,12 +107,15 @@ def efficiency_scan(
     base = airframe.efficiency
     columns = [r - 1 for r in swept]
     result = np.empty(total)
+    hover = np.empty(total, dtype=np.int8)
     pieces = chunks(total, CHUNK_POINTS, description=f"ACAI over {total:,} points", show=progress, default_show=total > 10_000_000)
     for start, stop in pieces:
         efficiencies = np.tile(base, (stop - start, 1))
         efficiencies[:, columns] = points[start:stop]
-        result[start:stop] = acai_batch(airframe, efficiencies, give_up_yaw=give_up_yaw)
-    return EfficiencyScan(airframe.name, swept, levels, points, result, give_up_yaw)
+        batch = acai_batch(airframe, efficiencies, give_up_yaw=give_up_yaw, formula=formula, with_hover=True)
+        result[start:stop] = batch.acai
+        hover[start:stop] = batch.hover_code
+    return EfficiencyScan(airframe.name, swept, levels, points, result, give_up_yaw, hover, formula)
 
 
 def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figure:

@@ -6,8 +6,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use rfcore::analysis::{
-    failure_table as core_failure_table, AcaiFormula, ControlAxes, ControllabilityAnalysis,
-    ControllabilityReport,
+    acai_from_matrix_with_hover, failure_table as core_failure_table, AcaiBatch, AcaiFormula,
+    AcaiResult, ControlAxes, ControllabilityAnalysis, ControllabilityReport,
 };
 
 use crate::airframe::PyAirframe;
@@ -57,13 +57,56 @@ impl PyControllabilityReport {
     fn controllable(&self) -> bool {
         self.inner.verdict.is_controllable()
     }
+    #[getter]
+    fn hover(&self) -> &'static str {
+        self.inner.hover.name()
+    }
 }
 
 fn report(report: ControllabilityReport) -> PyControllabilityReport {
     PyControllabilityReport { inner: report }
 }
 
-/// ACAI of `airframe` with efficiencies `efficiency` (Du Theorem 3).
+/// An ACAI with where the hover wrench lies (`inside`, `boundary`, `outside`, `rank-deficient`):
+/// an eq. (13) value is not a distance when the hover point is outside.
+#[pyclass(name = "AcaiResult", module = "rotorfault._rfcore", frozen)]
+pub struct PyAcaiResult {
+    inner: AcaiResult,
+}
+
+#[pymethods]
+impl PyAcaiResult {
+    #[getter]
+    fn acai(&self) -> f64 {
+        self.inner.acai
+    }
+    #[getter]
+    fn hover(&self) -> &'static str {
+        self.inner.hover.name()
+    }
+}
+
+/// A batch of ACAIs with the hover point of each row as a code (1 inside, 0 on the boundary,
+/// -1 outside, -2 rank deficient: `HoverPoint::code`).
+#[pyclass(name = "AcaiBatch", module = "rotorfault._rfcore", frozen)]
+pub struct PyAcaiBatch {
+    inner: AcaiBatch,
+}
+
+#[pymethods]
+impl PyAcaiBatch {
+    #[getter]
+    fn acai<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.acai.clone().into_pyarray(py)
+    }
+    #[getter]
+    fn hover_code<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i8>> {
+        let codes: Vec<i8> = self.inner.hover.iter().map(|h| h.code()).collect();
+        codes.into_pyarray(py)
+    }
+}
+
+/// ACAI of `airframe` with efficiencies `efficiency` (Du Theorem 3), with the hover point.
 #[pyfunction]
 pub(crate) fn acai(
     py: Python<'_>,
@@ -71,10 +114,42 @@ pub(crate) fn acai(
     efficiency: PyReadonlyArray1<'_, f64>,
     give_up_yaw: bool,
     formula: &str,
-) -> PyResult<f64> {
+) -> PyResult<PyAcaiResult> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    detached(py, || analysis(airframe, give_up_yaw)?.acai(efficiency, formula))
+    let inner = detached(py, || {
+        analysis(airframe, give_up_yaw)?.acai_with_hover(efficiency, formula)
+    })?;
+    Ok(PyAcaiResult { inner })
+}
+
+fn check_columns(airframe: &PyAirframe, efficiencies: &PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+    let m = airframe.inner.rotor_count();
+    if efficiencies.shape()[1] != m {
+        return Err(PyValueError::new_err(format!(
+            "efficiencies: expected {m} columns (one efficiency per rotor), got {}",
+            efficiencies.shape()[1]
+        )));
+    }
+    Ok(())
+}
+
+/// ACAI and hover point for every row of `efficiencies` (N x m), in parallel.
+#[pyfunction]
+pub(crate) fn acai_batch_with_hover(
+    py: Python<'_>,
+    airframe: &PyAirframe,
+    efficiencies: PyReadonlyArray2<'_, f64>,
+    give_up_yaw: bool,
+    formula: &str,
+) -> PyResult<PyAcaiBatch> {
+    let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
+    check_columns(airframe, &efficiencies)?;
+    let flat = slice2("efficiencies", &efficiencies)?;
+    let inner = detached(py, || {
+        analysis(airframe, give_up_yaw)?.acai_batch_with_hover(flat, formula)
+    })?;
+    Ok(PyAcaiBatch { inner })
 }
 
 /// ACAI for every row of `efficiencies` (N x m), in parallel.
@@ -87,13 +162,7 @@ pub(crate) fn acai_batch<'py>(
     formula: &str,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let m = airframe.inner.rotor_count();
-    if efficiencies.shape()[1] != m {
-        return Err(PyValueError::new_err(format!(
-            "efficiencies: expected {m} columns (one efficiency per rotor), got {}",
-            efficiencies.shape()[1]
-        )));
-    }
+    check_columns(airframe, &efficiencies)?;
     let flat = slice2("efficiencies", &efficiencies)?;
     let values = detached(py, || {
         analysis(airframe, give_up_yaw)?.acai_batch(flat, formula)
@@ -110,7 +179,7 @@ pub(crate) fn acai_from_matrix(
     f_max: PyReadonlyArray1<'_, f64>,
     g_vec: PyReadonlyArray1<'_, f64>,
     formula: &str,
-) -> PyResult<f64> {
+) -> PyResult<PyAcaiResult> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     let shape = effectiveness_matrix.shape();
     let (rows, cols) = (shape[0], shape[1]);
@@ -120,10 +189,11 @@ pub(crate) fn acai_from_matrix(
         slice1("f_max", &f_max)?,
         slice1("g_vec", &g_vec)?,
     );
-    detached(py, || {
+    let inner = detached(py, || {
         let b = nalgebra::DMatrix::from_row_slice(rows, cols, flat);
-        rfcore::analysis::acai_from_matrix(&b, f_min, f_max, g_vec, formula)
-    })
+        acai_from_matrix_with_hover(&b, f_min, f_max, g_vec, formula)
+    })?;
+    Ok(PyAcaiResult { inner })
 }
 
 /// Du's 9-step procedure.

@@ -17,6 +17,8 @@ use pyo3::prelude::*;
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<airframe::PyAirframe>()?;
     module.add_class::<analysis::PyControllabilityReport>()?;
+    module.add_class::<analysis::PyAcaiResult>()?;
+    module.add_class::<analysis::PyAcaiBatch>()?;
     module.add_class::<allocation::PyAllocationBatch>()?;
     module.add_class::<allocation::PyDirectionalLimit>()?;
     module.add_class::<allocation::PyHoverMargin>()?;
@@ -46,6 +48,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(flight::state_derivative, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai_batch, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::acai_batch_with_hover, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai_from_matrix, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::controllability, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::failure_table, module)?)?;
