@@ -177,6 +177,24 @@ def test_lqr_refuses_a_hover_it_cannot_hold(frame: object, message: str) -> None
         rf.lqr_hover_allocated(sim, rf.Allocator(sim.airframe), position=SETPOINT)
 
 
+def test_trim_moves_off_a_minimum_norm_solution_that_leaves_the_bounds() -> None:
+    frame = rf.Airframe.preset("hexa-pnpnpn").with_efficiency([0.486, 0.889, 0.934, 0.358, 0.572, 0.322])
+    b, wrench = frame.effectiveness_matrix(), [frame.hover_thrust_n, 0, 0, 0]
+    minimum_norm = np.linalg.lstsq(b, wrench, rcond=None)[0]
+    assert minimum_norm[4] > frame.max_thrust_n[4] + 1.0  # 7.48 N against 6.125 N
+    sim = rf.Simulator(frame)
+    trim = rf.hover_trim(sim)
+    # Independently: an interior hover exists (ACAI > 0), the trim balances exactly and keeps every
+    # rotor at least 1 % of its range off the bounds (the LP maximises that margin).
+    assert rf.acai(frame) > 0.04 and trim.saturated_rotors == ()
+    np.testing.assert_allclose(b @ trim.command, wrench, rtol=0, atol=1e-12)
+    margin = np.minimum(trim.command - frame.min_thrust_n, frame.max_thrust_n - trim.command) / frame.max_thrust_n
+    assert margin.min() > 0.01 and trim.residual < 1e-13
+    rf.lqr_hover(sim)  # designs
+    with pytest.raises(ValueError, match="allocator: its pseudo-inverse gives the hover thrusts .* use lqr_hover"):
+        rf.lqr_hover_allocated(sim, rf.Allocator(frame))
+
+
 # -- item 5: the Euler-angle singularity --------------------------------------------------------
 
 

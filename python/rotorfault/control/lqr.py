@@ -322,8 +322,15 @@ def lqr_hover_allocated(
     p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
     q_state, r_rotor = _bryson_weights(simulator, q, r)
     r_virtual = p.T @ r_rotor @ p
-    gain = _lqr_gain(simulator, a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
     v_trim = allocator.matrix @ trim.command
+    pinv_trim = offset + p @ v_trim
+    if np.max(np.abs(pinv_trim - trim.command)) > 1e-9 * max(1.0, float(np.max(np.abs(trim.command)))):
+        raise ValueError(
+            f"allocator: its pseudo-inverse gives the hover thrusts {pinv_trim}, not the trim {trim.command} "
+            "(the minimum-norm hover thrusts leave the bounds), so the design model B P does not hold at "
+            "the trim; use lqr_hover"
+        )
+    gain = _lqr_gain(simulator, a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
     return Allocated(LinearFeedback(gain, trim.state, v_trim), allocator)
 
 
