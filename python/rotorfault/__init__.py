@@ -35,6 +35,7 @@ from .allocation import (
 from .control import (
     Allocated,
     Controller,
+    HoverTrim,
     LinearFeedback,
     Lti,
     OpenLoop,
@@ -86,6 +87,7 @@ __all__ = [
     "State",
     "Trajectory",
     "VariablePitchActuator",
+    "HoverTrim",
     "hover_trim",
     "linearize",
     "lqr_hover",

@@ -90,7 +90,7 @@ class Scenario:
         if self.controller_kind == "lqr-hover":
             controller = lqr_hover(self.simulator, position=target)
         elif self.controller_kind == "open-loop-hover":
-            controller = OpenLoop.constant(hover_trim(self.simulator, position=target)[1])
+            controller = OpenLoop.constant(hover_trim(self.simulator, position=target).command)
         return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
 
 

@@ -533,8 +533,10 @@ class Simulator:
         return Trajectory._from_core(raw, fault_list)
 
     def state_derivative(self, x: npt.ArrayLike, command: npt.ArrayLike, efficiency: npt.ArrayLike | None = None) -> FloatArray:
-        """d/dt of the 12-element state vector with the actuators settled at ``command`` and rotor
-        ``efficiency`` (default: the airframe's own)."""
+        """d/dt of the 12-element state vector with the actuators settled at ``command`` (clamped to
+        its bounds, as the actuators do) and rotor ``efficiency`` (default: the airframe's own), in
+        the constant ``wind`` (``wind_profile`` is a time-varying disturbance and is left out): the
+        model :func:`rotorfault.control.lqr.hover_trim` balances and ``linearize`` differentiates."""
         eff = self.airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
         with core_fields():
             return _rfcore.state_derivative(

@@ -19,11 +19,12 @@ from . import ke, lqr
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
-from .lqr import hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
 
 __all__ = [
     "Allocated",
     "Controller",
+    "HoverTrim",
     "KeGains",
     "LinearFeedback",
     "Lti",

@@ -1,45 +1,189 @@
 """Trim, linearisation and LQR about hover: design in Python, run in Rust.
 
-The linear model is the numerical Jacobian (central differences) of the simulator's own
-12-state dynamics (``Simulator.state_derivative``), so it matches exactly what the Rust loop
-flies: frames, drag, rotor geometry, rotor efficiency.
+The trim is the equilibrium of the simulator's own dynamics (``Simulator.state_derivative``):
+drag of the constant ``wind`` included, so the hover attitude leans into the wind. The linear model
+is the numerical Jacobian of the same dynamics, so it matches what the Rust loop flies: frames,
+drag, rotor geometry, rotor efficiency.
+
+Rules (README, "Decisions"):
+
+- a hover trim whose thrusts must put a rotor on a thrust bound is returned with that rotor named
+  in :attr:`HoverTrim.saturated_rotors`; :func:`lqr_hover` refuses it (and any airframe whose ACAI is
+  <= 0), because a linear controller about a saturated trim loses the directions it would need;
+- :func:`linearize` never differentiates across a command bound: at a bound it takes the one-sided
+  difference pointing into the box;
+- :func:`linearize` refuses ``|pitch| > max_pitch_rad`` (default 80 degrees): the Euler rates divide
+  by ``cos(pitch)``, so the model's entries grow as ``1 / cos^2(pitch)`` and its range of validity
+  shrinks as ``cos(pitch)`` (beyond 80 degrees a 1-degree pitch change moves the yaw rate 11 % away
+  from the linear prediction).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray, float_array, real
+from .._convert import FloatArray, float_array, frozen_array, real
+from ..airframe import Airframe, rotor_labels
 from ..allocation import Allocator
-from ..simulation import FixedPitchActuator, Simulator
+from ..controllability import acai
+from ..simulation import FixedPitchActuator, Simulator, VariablePitchActuator
 from .allocated import Allocated
 from .linear import STATE_DIM, LinearFeedback
 
+#: A rotor whose hover thrust cannot be moved further than this fraction of its thrust range from
+#: a bound is on that bound (the same relative size as ``ZERO_RTOL`` for the ACAI).
+SATURATION_RTOL = 1e-9
 
-def hover_trim(
-    simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0), yaw: float = 0.0
-) -> tuple[FloatArray, FloatArray]:
-    """``(x_trim, u_trim)``: hover at ``position`` (world NED, m) with heading ``yaw`` (rad), rotor
-    thrusts the minimum-norm solution of ``B_f u = [m g, 0, 0, 0]`` with the airframe's efficiency.
-    Raises ``ValueError`` if that solution leaves the thrust bounds or does not balance."""
+#: Default largest ``|pitch|`` :func:`linearize` accepts, rad (80 degrees; see the module notes).
+MAX_PITCH_RAD = math.radians(80.0)
+
+#: The largest ``max_pitch_rad`` allowed: central differences of the Euler rates stay within 1e-8
+#: (relative) of the analytic derivatives up to 89 degrees, 8e-5 at 89.99 and 430 % at 89.9999.
+PITCH_LIMIT_CAP_RAD = math.radians(89.0)
+
+
+@dataclass(frozen=True)
+class HoverTrim:
+    """A hover equilibrium of a simulator.
+
+    ``state``: the 12-element state vector (position as asked, zero velocity and body rates,
+    the roll and pitch that lean the thrust into the wind, yaw as asked); ``command``: rotor
+    thrusts (N); ``residual``: ``||f(state, command)||`` of ``Simulator.state_derivative``, the
+    size of the acceleration the trim leaves unbalanced; ``saturated_rotors``: the 1-based rotors
+    that every hover solution puts on a thrust bound (empty when an interior trim exists)."""
+
+    state: FloatArray
+    command: FloatArray
+    residual: float
+    saturated_rotors: tuple[int, ...]
+
+    @property
+    def saturated(self) -> bool:
+        """Whether hover needs a rotor on a thrust bound."""
+        return bool(self.saturated_rotors)
+
+
+def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0), yaw: float = 0.0) -> HoverTrim:
+    """The hover equilibrium at ``position`` (world NED, m) with heading ``yaw`` (rad): zero
+    velocity and body rates, the attitude whose thrust balances gravity plus the drag of the
+    simulator's constant ``wind`` (a ``wind_profile`` is a disturbance, not part of the trim), and
+    rotor thrusts that give that total thrust with zero torque.
+
+    Thrusts: the minimum-norm solution of ``B_f u = [T, 0, 0, 0]`` (``B_f`` with the airframe's
+    efficiency; failed rotors at the in-bounds thrust closest to 0) when it lies strictly inside
+    the thrust bounds; otherwise the solution farthest from the bounds (an LP). When every solution
+    has a rotor on a bound, those rotors are named in ``saturated_rotors`` (and sit exactly on it).
+    Raises ``ValueError`` when no thrusts within the bounds balance the vehicle."""
     if not isinstance(simulator, Simulator) or not isinstance(simulator.actuator, FixedPitchActuator):
-        raise TypeError("simulator: hover_trim needs a Simulator with fixed-pitch rotors")
-    airframe = simulator.airframe
-    b = airframe.effectiveness_matrix()
-    g = np.array([airframe.hover_thrust_n, 0.0, 0.0, 0.0])
-    u, *_ = np.linalg.lstsq(b, g, rcond=None)
-    if np.linalg.norm(b @ u - g) > 1e-9 * airframe.hover_thrust_n:
-        raise ValueError(f"{airframe.name}: no thrusts balance the weight with zero torque (rank B_f < 4)")
-    if np.any(u < airframe.min_thrust_n - 1e-12) or np.any(u > airframe.max_thrust_n + 1e-12):
-        raise ValueError(f"{airframe.name}: the minimum-norm hover thrusts {u} leave the thrust bounds")
+        raise TypeError("simulator: hover_trim needs a rotorfault.Simulator with fixed-pitch rotors")
     pos = float_array("position", position, 1)
     if pos.shape != (3,):
-        raise ValueError("position: expected 3 entries")
-    x_trim = np.zeros(STATE_DIM)
-    x_trim[0:3] = pos
-    x_trim[8] = real("yaw", yaw)
-    return x_trim, u
+        raise ValueError(f"position: expected 3 entries, got {pos.shape[0]}")
+    if not np.all(np.isfinite(pos)):
+        raise ValueError("position: must be finite")
+    heading = real("yaw", yaw)
+    if not math.isfinite(heading):
+        raise ValueError(f"yaw: must be finite, got {heading}")
+    airframe = simulator.airframe
+    lower, upper = airframe.min_thrust_n, airframe.max_thrust_n
+    x = np.zeros(STATE_DIM)
+    x[0:3] = pos
+    x[8] = heading
+    # Gravity and drag at rest with every rotor's thrust switched off: the acceleration the
+    # thrust must cancel (drag does not depend on the attitude, only on v - wind).
+    m = airframe.rotor_count
+    passive = simulator.state_derivative(x, np.clip(np.zeros(m), lower, upper), np.zeros(m))[3:6]
+    if not passive[2] > 0:
+        raise ValueError(
+            f"wind: the drag of wind {simulator.wind} m/s outweighs gravity along the vertical "
+            f"(passive acceleration {passive} m/s^2): no upright hover"
+        )
+    thrust = airframe.mass_kg * float(np.linalg.norm(passive))
+    # Body z (down) in the world must point along the passive acceleration; undo the heading.
+    c, s = math.cos(heading), math.sin(heading)
+    axis = passive / np.linalg.norm(passive)
+    n, e, d = c * axis[0] + s * axis[1], -s * axis[0] + c * axis[1], axis[2]
+    x[6] = math.asin(max(-1.0, min(1.0, -e))) + 0.0  # roll (+ 0.0: no -0.0)
+    x[7] = math.atan2(n, d)  # pitch
+    command, saturated = _hover_thrusts(airframe, thrust)
+    residual = float(np.linalg.norm(simulator.state_derivative(x, command)))
+    return HoverTrim(frozen_array("state", x, 1), frozen_array("command", command, 1), residual, saturated)
+
+
+def _hover_thrusts(airframe: Airframe, thrust: float) -> tuple[FloatArray, tuple[int, ...]]:
+    """Rotor thrusts for ``B_f u = [thrust, 0, 0, 0]`` within the bounds, and the rotors every
+    solution puts on a bound (rules in :func:`hover_trim`)."""
+    from scipy.optimize import linprog  # type: ignore[import-untyped]
+
+    lower, upper = airframe.min_thrust_n, airframe.max_thrust_n
+    command = np.clip(np.zeros(airframe.rotor_count), lower, upper)
+    active = np.flatnonzero(airframe.efficiency > 0)
+    b = airframe.effectiveness_matrix()[:, active]
+    wrench = np.array([thrust, 0.0, 0.0, 0.0])
+    lo, hi = lower[active], upper[active]
+    span = hi - lo
+    u, *_ = np.linalg.lstsq(b, wrench, rcond=None)
+    if np.linalg.norm(b @ u - wrench) > 1e-9 * thrust:
+        raise ValueError(
+            f"{airframe.name}: no rotor thrusts give {thrust:.6g} N with zero torque (rank B_f < 4 "
+            "and the hover wrench outside its range)"
+        )
+    if np.min(np.minimum(u - lo, hi - u) / span) > SATURATION_RTOL:
+        command[active] = u
+        return command, ()
+    k = active.shape[0]
+    options = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
+
+    def farthest(weights: FloatArray, free_bounds: bool) -> tuple[float, FloatArray]:
+        # max t  s.t.  B u = w,  t span_i <= u_i - lo_i,  t span_i <= hi_i - u_i  (i weighted)
+        rows = np.flatnonzero(weights)
+        a_ub = np.zeros((2 * rows.shape[0], k + 1))
+        a_ub[: rows.shape[0], rows] = -np.eye(k)[rows][:, rows]
+        a_ub[rows.shape[0] :, rows] = np.eye(k)[rows][:, rows]
+        a_ub[:, k] = np.concatenate([span[rows], span[rows]])
+        b_ub = np.concatenate([-lo[rows], hi[rows]])
+        box = [(None, None)] * k if free_bounds else list(zip(lo, hi))
+        result = linprog(
+            np.eye(k + 1)[k] * -1.0, A_ub=a_ub, b_ub=b_ub, A_eq=np.hstack([b, np.zeros((4, 1))]), b_eq=wrench,
+            bounds=[*box, (None, 0.5)], method="highs", options=options,
+        )
+        if result.status != 0:
+            raise ValueError(f"{airframe.name}: the hover-thrust LP failed ({result.message})")
+        return -float(result.fun), np.asarray(result.x[:k], dtype=np.float64)
+
+    margin, u = farthest(np.ones(k), free_bounds=True)
+    if margin < -SATURATION_RTOL:
+        raise ValueError(
+            f"{airframe.name}: hover needs {thrust:.6g} N with zero torque, which no thrusts within the "
+            f"rotors' bounds give (the best solution is {-margin:.3g} of a rotor's thrust range beyond a bound)"
+        )
+    if margin <= SATURATION_RTOL:
+        # Which rotors can no solution move off their bound? One LP per rotor.
+        forced = np.array([farthest(np.eye(k)[i], free_bounds=False)[0] <= SATURATION_RTOL for i in range(k)])
+        if not np.all(forced):
+            margin, u = farthest((~forced).astype(np.float64), free_bounds=False)
+        near_lower = np.abs(u - lo) <= np.abs(hi - u)
+        u = np.where(forced, np.where(near_lower, lo, hi), u)
+        saturated = tuple(int(active[i]) + 1 for i in np.flatnonzero(forced))
+    else:
+        saturated = ()
+    command[active] = u
+    return command, saturated
+
+
+def _command_bounds(simulator: Simulator) -> tuple[FloatArray, FloatArray, list[str]]:
+    """Per-channel command bounds and a label for each channel (errors name the rotor)."""
+    m = simulator.airframe.rotor_count
+    actuator = simulator.actuator
+    if isinstance(actuator, VariablePitchActuator):
+        lo = np.tile([actuator.speed_bounds[0], actuator.pitch_bounds[0]], m).astype(np.float64)
+        hi = np.tile([actuator.speed_bounds[1], actuator.pitch_bounds[1]], m).astype(np.float64)
+        return lo, hi, [f"rotor {j // 2 + 1} {'pitch' if j % 2 else 'speed'}" for j in range(2 * m)]
+    return simulator.airframe.min_thrust_n, simulator.airframe.max_thrust_n, [f"rotor {j + 1}" for j in range(m)]
 
 
 def linearize(
@@ -49,15 +193,46 @@ def linearize(
     efficiency: npt.ArrayLike | None = None,
     *,
     step: float = 1e-6,
+    max_pitch_rad: float = MAX_PITCH_RAD,
 ) -> tuple[FloatArray, FloatArray]:
-    """``(A, B)`` with ``dx/dt ~ A (x - x_trim) + B (u - u_trim)``, by central differences of
-    the simulator's dynamics (relative step ``step``) with rotor ``efficiency`` (default: the
-    airframe's own)."""
+    """``(A, B)`` with ``dx/dt ~ A (x - x_trim) + B (u - u_trim)``, by central differences of the
+    simulator's dynamics (relative step ``step``) with rotor ``efficiency`` (default: the
+    airframe's own).
+
+    A command on one of its bounds is differentiated one-sidedly into the box (second order), never
+    across the clamp; a command outside its bounds is a ``ValueError``. ``|pitch|`` beyond
+    ``max_pitch_rad`` (default 80 degrees, at most 89) is a ``ValueError``: the Euler-angle model is
+    singular at 90 degrees (module notes)."""
+    if not isinstance(simulator, Simulator):
+        raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     x0 = float_array("x_trim", x_trim, 1)
     u0 = float_array("u_trim", u_trim, 1)
     if x0.shape != (STATE_DIM,):
         raise ValueError(f"x_trim: expected {STATE_DIM} entries, got {x0.shape[0]}")
+    if u0.shape != (simulator.command_count,):
+        raise ValueError(f"u_trim: expected {simulator.command_count} entries (one per command channel), got {u0.shape[0]}")
+    if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(u0))):
+        raise ValueError("x_trim, u_trim: must be finite")
     h = real("step", step)
+    if not (math.isfinite(h) and 0 < h <= 1e-2):
+        raise ValueError(f"step: must lie in (0, 0.01], got {h}")
+    limit = real("max_pitch_rad", max_pitch_rad)
+    if not 0 < limit <= PITCH_LIMIT_CAP_RAD:
+        raise ValueError(f"max_pitch_rad: must lie in (0, {PITCH_LIMIT_CAP_RAD:.6f}] (89 degrees), got {limit}")
+    if abs(x0[7]) > limit:
+        raise ValueError(
+            f"x_trim[7]: pitch {math.degrees(x0[7]):.4f} degrees is beyond the {math.degrees(limit):.4g}-degree "
+            "limit of the Euler-angle linearisation (the Euler rates divide by cos(pitch), singular at 90 degrees)"
+        )
+    lower, upper, labels = _command_bounds(simulator)
+    for j in range(u0.shape[0]):
+        slack = 1e-12 * max(1.0, abs(lower[j]), abs(upper[j]))
+        if not lower[j] - slack <= u0[j] <= upper[j] + slack:
+            raise ValueError(
+                f"u_trim[{j}]: {labels[j]}'s command {u0[j]} lies outside its bounds [{lower[j]}, {upper[j]}] "
+                "(the simulator clamps it: there is no derivative to take)"
+            )
+    u0 = np.clip(u0, lower, upper)
 
     def f(x: FloatArray, u: FloatArray) -> FloatArray:
         return simulator.state_derivative(x, u, efficiency)
@@ -69,11 +244,19 @@ def linearize(
         e[j] = d
         a[:, j] = (f(x0 + e, u0) - f(x0 - e, u0)) / (2 * d)
     b = np.empty((STATE_DIM, u0.shape[0]))
+    f0 = f(x0, u0)
     for j in range(u0.shape[0]):
         d = h * max(1.0, abs(u0[j]))
         e = np.zeros(u0.shape[0])
         e[j] = d
-        b[:, j] = (f(x0, u0 + e) - f(x0, u0 - e)) / (2 * d)
+        if u0[j] - d >= lower[j] and u0[j] + d <= upper[j]:
+            b[:, j] = (f(x0, u0 + e) - f(x0, u0 - e)) / (2 * d)
+        elif u0[j] + 2 * d <= upper[j]:
+            b[:, j] = (-3 * f0 + 4 * f(x0, u0 + e) - f(x0, u0 + 2 * e)) / (2 * d)
+        elif u0[j] - 2 * d >= lower[j]:
+            b[:, j] = (3 * f0 - 4 * f(x0, u0 - e) + f(x0, u0 - 2 * e)) / (2 * d)
+        else:
+            raise ValueError(f"u_trim[{j}]: {labels[j]}'s bounds [{lower[j]}, {upper[j]}] are narrower than the step")
     return a, b
 
 
@@ -87,14 +270,16 @@ def lqr_hover(
 ) -> LinearFeedback:
     """An LQR hover controller (python-control's ``lqr``) on the linearisation about
     :func:`hover_trim`. Default weights (Bryson's rule): 1 m position, 1 m/s velocity, 0.1 rad
-    attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor."""
-    import control  # type: ignore[import-untyped]
+    attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor.
 
-    x_trim, u_trim = hover_trim(simulator, position=position, yaw=yaw)
-    a, b = linearize(simulator, x_trim, u_trim)
+    Raises ``ValueError`` for a hover it cannot hold: an airframe whose ACAI is <= 0 (Du et al.:
+    no control authority around hover; ``-inf`` when ``rank B_f < 4``), a trim with a rotor on a
+    thrust bound, or a linear model that is not stabilisable."""
+    trim = hover_trim(simulator, position=position, yaw=yaw)
+    _require_holdable(simulator, trim)
+    a, b = linearize(simulator, trim.state, trim.command)
     q_state, r_rotor = _bryson_weights(simulator, q, r)
-    gain, _, _ = control.lqr(a, b, q_state, r_rotor)
-    return LinearFeedback(np.asarray(gain), x_trim, u_trim)
+    return LinearFeedback(_lqr_gain(simulator, a, b, q_state, r_rotor), trim.state, trim.command)
 
 
 def lqr_hover_allocated(
@@ -111,10 +296,9 @@ def lqr_hover_allocated(
     The design model is the linearisation of :func:`lqr_hover` with the rotor thrusts replaced by
     ``T = P v`` (``P`` the allocator's weighted pseudo-inverse, which the constrained allocation
     equals while no bound is active), so ``B_v = B P``. ``r`` (rotor units, default as
-    :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. Returns an
-    :class:`~rotorfault.control.Allocated` that runs entirely in Rust."""
-    import control
-
+    :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. Refuses what
+    :func:`lqr_hover` refuses. Returns an :class:`~rotorfault.control.Allocated` that runs entirely
+    in Rust."""
     if not isinstance(allocator, Allocator):
         raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
     if allocator.virtual_dimension != 4:
@@ -126,20 +310,65 @@ def lqr_hover_allocated(
         raise ValueError("allocator.weights: LQR on the virtual control needs every weight > 0")
     if allocator.regularization != 0:
         raise ValueError("allocator.regularization: must be 0 here (the trim would not map back to itself)")
-    x_trim, u_trim = hover_trim(simulator, position=position, yaw=yaw)
-    if allocator.actuator_count != u_trim.shape[0]:
+    trim = hover_trim(simulator, position=position, yaw=yaw)
+    if allocator.actuator_count != trim.command.shape[0]:
         raise ValueError(
-            f"allocator: has {allocator.actuator_count} actuators, the simulator's airframe {u_trim.shape[0]}"
+            f"allocator: has {allocator.actuator_count} actuators, the simulator's airframe {trim.command.shape[0]}"
         )
-    a, b = linearize(simulator, x_trim, u_trim)
+    _require_holdable(simulator, trim)
+    a, b = linearize(simulator, trim.state, trim.command)
     n = allocator.virtual_dimension
     offset = allocator.allocate(np.zeros(n), method="pinv").commands
     p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
     q_state, r_rotor = _bryson_weights(simulator, q, r)
     r_virtual = p.T @ r_rotor @ p
-    gain, _, _ = control.lqr(a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
-    v_trim = allocator.matrix @ u_trim
-    return Allocated(LinearFeedback(np.asarray(gain), x_trim, v_trim), allocator)
+    v_trim = allocator.matrix @ trim.command
+    pinv_trim = offset + p @ v_trim
+    if np.max(np.abs(pinv_trim - trim.command)) > 1e-9 * max(1.0, float(np.max(np.abs(trim.command)))):
+        raise ValueError(
+            f"allocator: its pseudo-inverse gives the hover thrusts {pinv_trim}, not the trim {trim.command} "
+            "(the minimum-norm hover thrusts leave the bounds), so the design model B P does not hold at "
+            "the trim; use lqr_hover"
+        )
+    gain = _lqr_gain(simulator, a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
+    return Allocated(LinearFeedback(gain, trim.state, v_trim), allocator)
+
+
+def _require_holdable(simulator: Simulator, trim: HoverTrim) -> None:
+    """``ValueError`` unless the airframe has control authority around hover (ACAI > 0) and the
+    trim leaves every rotor off its bounds."""
+    airframe = simulator.airframe
+    reasons = []
+    index = float(acai(airframe))
+    if not index > 0:
+        why = "rank B_f < 4: some axis has no control at all" if index == -math.inf else "no control authority margin around hover"
+        reasons.append(f"ACAI = {index:.6g} <= 0 ({why})")
+    if trim.saturated_rotors:
+        bounds = [
+            f"{trim.command[i - 1]:.6g} N" for i in trim.saturated_rotors
+        ]
+        reasons.append(
+            f"hover needs rotor(s) {rotor_labels(trim.saturated_rotors)} on a thrust bound ({', '.join(bounds)}), "
+            "where a linear controller cannot push both ways"
+        )
+    if reasons:
+        raise ValueError(
+            f"{airframe.name} (efficiency {list(map(float, airframe.efficiency))}): LQR cannot hold this hover: "
+            + "; ".join(reasons)
+        )
+
+
+def _lqr_gain(simulator: Simulator, a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
+    import control  # type: ignore[import-untyped]
+
+    try:
+        gain, _, _ = control.lqr(a, b, q, r)
+    except (np.linalg.LinAlgError, ArithmeticError, ValueError, control.ControlArgument) as error:
+        raise ValueError(
+            f"{simulator.airframe.name}: the hover linearisation is not stabilisable with these weights "
+            f"(LQR failed: {error})"
+        ) from error
+    return np.asarray(gain, dtype=np.float64)
 
 
 def _bryson_weights(
@@ -156,4 +385,13 @@ def _bryson_weights(
     return float_array("q", q, 2), float_array("r", r, 2)
 
 
-__all__ = ["hover_trim", "linearize", "lqr_hover", "lqr_hover_allocated"]
+__all__ = [
+    "MAX_PITCH_RAD",
+    "PITCH_LIMIT_CAP_RAD",
+    "SATURATION_RTOL",
+    "HoverTrim",
+    "hover_trim",
+    "linearize",
+    "lqr_hover",
+    "lqr_hover_allocated",
+]
