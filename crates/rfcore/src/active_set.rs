@@ -914,11 +914,120 @@ impl ActiveSetSolver {
     }
 }
 
+/// Squared norms at or inside these bounds are computed directly (sum of squares, no scaling):
+/// far from underflow and overflow even for the smallest entry that counts at [`RANK_TOL`].
+const SAFE_SQ_MIN: f64 = 1.2e-271; // 2^-900
+const SAFE_SQ_MAX: f64 = 8.5e270; // 2^900
+
+#[inline(always)]
+fn sum_sq(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum()
+}
+
 /// Householder QR with column pivoting of the `rows x k` column-major matrix `a` (leading
 /// dimension `ld`), the pivot being the column with the largest remaining norm relative to its
 /// own original norm; stops when that ratio is at most [`RANK_TOL`]. Returns the rank; `perm[j]`
 /// is the original column in position j; reflectors below the diagonal (unit leading entry).
+///
+/// Works on squared norms (no division or square root in the pivot search); a column whose
+/// squared norm is outside [`SAFE_SQ_MIN`, `SAFE_SQ_MAX`] sends the whole factorisation to the
+/// scaled (overflow- and underflow-free) version [`householder_qr_scaled`].
 fn householder_qr(
+    a: &mut [f64],
+    ld: usize,
+    rows: usize,
+    k: usize,
+    perm: &mut [usize],
+    tau: &mut [f64],
+) -> usize {
+    let mut inverse = [0.0; ROWS];
+    for j in 0..k {
+        let sq = sum_sq(&a[j * ld..j * ld + rows]);
+        if sq == 0.0 {
+            if a[j * ld..j * ld + rows].iter().any(|x| *x != 0.0) {
+                return householder_qr_scaled(a, ld, rows, k, perm, tau);
+            }
+            inverse[j] = 0.0;
+        } else if (SAFE_SQ_MIN..=SAFE_SQ_MAX).contains(&sq) {
+            inverse[j] = 1.0 / sq;
+        } else {
+            return householder_qr_scaled(a, ld, rows, k, perm, tau);
+        }
+        perm[j] = j;
+    }
+    let mut rank = 0;
+    for s in 0..rows.min(k) {
+        let mut best = RANK_TOL * RANK_TOL;
+        let mut best_sq = 0.0;
+        let mut q = usize::MAX;
+        for j in s..k {
+            let w = inverse[perm[j]];
+            if w == 0.0 {
+                continue;
+            }
+            let sq = sum_sq(&a[j * ld + s..j * ld + rows]);
+            let ratio = sq * w;
+            if ratio > best {
+                best = ratio;
+                best_sq = sq;
+                q = j;
+            }
+        }
+        if q == usize::MAX {
+            break;
+        }
+        if q != s {
+            let (left, right) = a.split_at_mut(q * ld);
+            left[s * ld..s * ld + rows].swap_with_slice(&mut right[..rows]);
+            perm.swap(s, q);
+        }
+        reflector(a, ld, rows, k, s, best_sq.sqrt(), tau);
+        rank += 1;
+    }
+    rank
+}
+
+/// Forms the reflector of column `s` (`alpha`: the norm of `a[s..rows, s]`, > 0) and applies it
+/// to columns `s + 1..k`.
+#[inline(always)]
+fn reflector(a: &mut [f64], ld: usize, rows: usize, k: usize, s: usize, alpha: f64, tau: &mut [f64]) {
+    let col = &mut a[s * ld + s..s * ld + rows];
+    let x0 = col[0];
+    let beta = if x0 >= 0.0 { -alpha } else { alpha };
+    let v0 = x0 - beta;
+    let inv = 1.0 / v0;
+    if inv.is_finite() {
+        for e in col[1..].iter_mut() {
+            *e *= inv;
+        }
+    } else {
+        for e in col[1..].iter_mut() {
+            *e /= v0;
+        }
+    }
+    let t = (beta - x0) / beta;
+    tau[s] = t;
+    col[0] = beta;
+    let (head, tail) = a.split_at_mut((s + 1) * ld);
+    let v = &head[s * ld + s + 1..s * ld + rows];
+    for j in 0..k - s - 1 {
+        let c = &mut tail[j * ld + s..j * ld + rows];
+        let mut dot = c[0];
+        for (x, y) in v.iter().zip(&c[1..]) {
+            dot += x * y;
+        }
+        dot *= t;
+        c[0] -= dot;
+        for (y, x) in c[1..].iter_mut().zip(v) {
+            *y -= dot * x;
+        }
+    }
+}
+
+/// [`householder_qr`] with every norm computed by the scaled [`norm`] (entries near underflow or
+/// overflow).
+#[cold]
+fn householder_qr_scaled(
     a: &mut [f64],
     ld: usize,
     rows: usize,
@@ -955,27 +1064,8 @@ fn householder_qr(
             }
             perm.swap(s, q);
         }
-        let col = &mut a[s * ld + s..s * ld + rows];
-        let alpha = norm(col);
-        let x0 = col[0];
-        let beta = if x0 >= 0.0 { -alpha } else { alpha };
-        let v0 = x0 - beta;
-        for e in col[1..].iter_mut() {
-            *e /= v0;
-        }
-        tau[s] = (beta - x0) / beta;
-        col[0] = beta;
-        for j in s + 1..k {
-            let mut dot = a[j * ld + s];
-            for r in s + 1..rows {
-                dot += a[s * ld + r] * a[j * ld + r];
-            }
-            dot *= tau[s];
-            a[j * ld + s] -= dot;
-            for r in s + 1..rows {
-                a[j * ld + r] -= dot * a[s * ld + r];
-            }
-        }
+        let alpha = norm(&a[s * ld + s..s * ld + rows]);
+        reflector(a, ld, rows, k, s, alpha, tau);
         rank += 1;
     }
     rank
