@@ -195,8 +195,8 @@ fn report_targets(_: &mut Criterion) {
     let mut rng = Rng(2026);
     println!("\n{RANDOM_PROBLEMS} random problems per airframe (half beyond the attainable set), per-solve time, cold start, median / p90 over problems");
     println!(
-        "{:<12} {:>2} {:>20} {:>22} {:>8} {:>9} {:>9}",
-        "airframe", "m", "active-set", "clarabel (Rust)", "ratio", "bounds", "fallback"
+        "{:<12} {:>2} {:>20} {:>22} {:>8} {:>9} {:>9} {:>6}",
+        "airframe", "m", "active-set", "clarabel (Rust)", "ratio", "bounds", "fallback", "iters"
     );
     let mut met = true;
     for name in ["quad-x", "hexa-pnpnpn", "octo-x"] {
@@ -205,26 +205,28 @@ fn report_targets(_: &mut Criterion) {
         let problem = problem(&airframe);
         let controls = random_controls(&airframe, &problem, &mut rng);
         let solver = ActiveSetSolver::new(&problem);
-        let (mut fallbacks, mut saturated) = (0, 0);
+        let (mut fallbacks, mut saturated, mut iterations) = (0, 0, 0);
         let mut commands = vec![0.0; m];
         for u in controls.chunks(4) {
             let mut active = ActiveSet::cold(m);
             let report = solver.solve_unchecked(u, &mut active, &mut commands);
             fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
+            iterations += report.iterations;
             saturated += usize::from(active.states().iter().any(|s| *s != rfcore::active_set::BoundState::Free));
         }
         let ours = median_p90(time_each(&problem, &Method::ActiveSet, &controls, 200).unwrap());
         let clarabel = Method::Clarabel(ClarabelSettings::default());
         let theirs = median_p90(time_each(&problem, &clarabel, &controls, 5).unwrap());
         println!(
-            "{name:<12} {m:>2} {:>8.0} / {:>6.0} ns {:>9.1} / {:>6.1} us {:>7.0}x {:>8.0}% {:>9}",
+            "{name:<12} {m:>2} {:>8.0} / {:>6.0} ns {:>9.1} / {:>6.1} us {:>7.0}x {:>8.0}% {:>9} {:>6.2}",
             ours.0 * 1e9,
             ours.1 * 1e9,
             theirs.0 * 1e6,
             theirs.1 * 1e6,
             theirs.0 / ours.0,
             100.0 * saturated as f64 / RANDOM_PROBLEMS as f64,
-            fallbacks
+            fallbacks,
+            iterations as f64 / RANDOM_PROBLEMS as f64
         );
         met &= ours.0 <= 1e-6 && theirs.0 / ours.0 >= 50.0;
     }

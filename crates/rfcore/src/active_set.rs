@@ -40,6 +40,10 @@ const N: usize = MAX_ACTUATORS;
 pub(crate) const WORK: usize = N;
 /// Rows of the stacked least-squares matrix: n weighted rows and m regularisation rows.
 const ROWS: usize = MAX_VIRTUAL + N;
+/// Work-array sizes (entries, at least `rows * m`): small problems (up to 8 x 8, e.g. 4 axes and
+/// up to 16 rotors without regularisation) and the largest.
+const SMALL_WORK: usize = 64;
+const BIG_WORK: usize = ROWS * N;
 
 /// A column whose part outside the span of the columns already factored is at most this fraction
 /// of its own norm is dependent (relative to the column, so the rotor's gain does not matter).
@@ -381,23 +385,44 @@ impl ActiveSetSolver {
                 solved_by: SolvedBy::ActiveSet,
             };
         }
+        if self.rows * m <= SMALL_WORK {
+            self.solve_from::<SMALL_WORK>(u_c, &b, active, commands)
+        } else {
+            self.solve_from::<BIG_WORK>(u_c, &b, active, commands)
+        }
+    }
+
+    /// [`Self::solve_unchecked`] once `b` is known, with work arrays of `W >= rows * m` entries.
+    fn solve_from<const W: usize>(
+        &self,
+        u_c: &[f64],
+        b: &[f64; ROWS],
+        active: &mut ActiveSet,
+        commands: &mut [f64],
+    ) -> SolveReport {
+        let m = self.m;
+        let b_norm = self.rhs_norm(b);
         let mut t = [0.0; N];
         let cold = active.states[..m].iter().all(|s| *s == BoundState::Free);
         let mut iterations = 0;
+        // Known minimiser of the current free set (and whether that set's columns are
+        // independent, so the minimiser is unique): skips phase 1's first step.
+        let mut at_minimiser = None;
         if cold {
             // Start from the clamped unconstrained solution, holding what the clamp cut.
             for i in 0..m {
                 t[i] = self.preferred[i].clamp(self.lower[i], self.upper[i]);
             }
             let mut r = [0.0; ROWS];
-            self.residual(&b, &t, &mut r);
+            self.residual(b, &t, &mut r);
             let mut free = [0usize; N];
             for (i, f) in free.iter_mut().enumerate().take(m) {
                 *f = i;
             }
             let mut d = [0.0; N];
-            self.lsq_step(&free[..m], &r, &mut d);
+            let rank = self.lsq_step::<W>(&free[..m], &r, &mut d);
             iterations += 1;
+            let mut inside = true;
             for i in 0..m {
                 let guess = t[i] + d[i];
                 active.states[i] = if guess <= self.lower[i] {
@@ -407,29 +432,50 @@ impl ActiveSetSolver {
                 } else {
                     BoundState::Free
                 };
+                inside &= active.states[i] == BoundState::Free;
+            }
+            if inside {
+                // The unconstrained minimiser is in the box (the common case): that is the step.
+                for i in 0..m {
+                    t[i] += d[i];
+                }
+                at_minimiser = Some(rank == m);
             }
         }
-        for i in 0..m {
-            let (lo, hi) = (self.lower[i], self.upper[i]);
-            if lo == hi {
-                active.states[i] = BoundState::Lower;
+        if at_minimiser.is_none() {
+            for i in 0..m {
+                let (lo, hi) = (self.lower[i], self.upper[i]);
+                if lo == hi {
+                    active.states[i] = BoundState::Lower;
+                }
+                t[i] = match active.states[i] {
+                    BoundState::Lower => lo,
+                    BoundState::Upper => hi,
+                    BoundState::Free => self.preferred[i].clamp(lo, hi),
+                };
             }
-            t[i] = match active.states[i] {
-                BoundState::Lower => lo,
-                BoundState::Upper => hi,
-                BoundState::Free => self.preferred[i].clamp(lo, hi),
-            };
         }
-        let (converged, used) = self.phase1(&b, &mut t, &mut active.states, self.max_iterations);
+        let (converged, used, unique) = self.phase1::<W>(
+            b,
+            b_norm,
+            &mut t,
+            &mut active.states,
+            self.max_iterations,
+            at_minimiser,
+        );
         iterations += used;
         let mut g = [0.0; N];
-        let mut certificate = self.certificate(&b, &t, &mut g);
-        if converged && self.root_gamma == 0.0 && certificate.holds() {
+        let mut certificate = self.certificate_with(b, b_norm, &t, &mut g);
+        if converged
+            && self.root_gamma == 0.0
+            && certificate.holds()
+            && !(unique && !self.degenerate_held(&active.states, &g))
+        {
             let before = t;
-            let used = self.phase2(&mut t, &mut active.states, &g);
+            let used = self.phase2::<W>(&mut t, &mut active.states, &g);
             iterations += used;
             let mut g2 = [0.0; N];
-            let after = self.certificate(&b, &t, &mut g2);
+            let after = self.certificate_with(b, b_norm, &t, &mut g2);
             if after.holds() {
                 certificate = after;
             } else {
@@ -454,7 +500,16 @@ impl ActiveSetSolver {
                 solved_by: SolvedBy::ActiveSet,
             };
         }
-        self.fallback(u_c, &b, active, commands, iterations, (t, certificate))
+        self.fallback(u_c, b, active, commands, iterations, (t, certificate))
+    }
+
+    /// True when a held variable (not fixed) has a (near-)zero multiplier: phase 2 may move it.
+    fn degenerate_held(&self, states: &[BoundState; N], g: &[f64; N]) -> bool {
+        (0..self.m).any(|i| {
+            states[i] != BoundState::Free
+                && self.lower[i] != self.upper[i]
+                && g[i].abs() <= DEGENERATE_TOL
+        })
     }
 
     /// Clarabel on the scaled problem, then phase 1 (and 2) from the active set it identifies.
@@ -539,12 +594,20 @@ impl ActiveSetSolver {
                 BoundState::Free => x[i],
             };
         }
-        let (_, mut iterations) = self.phase1(b, &mut t, &mut active.states, self.max_iterations);
+        let b_norm = self.rhs_norm(b);
+        let (_, mut iterations, _) = self.phase1::<BIG_WORK>(
+            b,
+            b_norm,
+            &mut t,
+            &mut active.states,
+            self.max_iterations,
+            None,
+        );
         let mut g = [0.0; N];
         let mut certificate = self.certificate(b, &t, &mut g);
         if self.root_gamma == 0.0 && certificate.holds() {
             let before = t;
-            iterations += self.phase2(&mut t, &mut active.states, &g);
+            iterations += self.phase2::<BIG_WORK>(&mut t, &mut active.states, &g);
             let after = self.certificate(b, &t, &mut g);
             if after.holds() {
                 certificate = after;
@@ -593,14 +656,46 @@ impl ActiveSetSolver {
         }
     }
 
-    /// The certificate at `t`; `g` receives the normalised gradient.
-    fn certificate(&self, b: &[f64; ROWS], t: &[f64; N], g: &mut [f64; N]) -> Certificate {
-        let mut r = [0.0; ROWS];
-        self.residual(b, t, &mut r);
-        let mut scale = norm(&b[..self.rows]);
+    /// `|b|`.
+    fn rhs_norm(&self, b: &[f64; ROWS]) -> f64 {
+        let sq = sum_sq(&b[..self.rows]);
+        if (SAFE_SQ_MIN..=SAFE_SQ_MAX).contains(&sq) {
+            sq.sqrt()
+        } else {
+            norm(&b[..self.rows])
+        }
+    }
+
+    /// The normalised gradient at `t` from its residual `r = b - A t` (`b_norm = |b|`).
+    fn gradient(&self, r: &[f64; ROWS], t: &[f64; N], b_norm: f64, g: &mut [f64; N]) {
+        let mut scale = b_norm;
         for c in 0..self.m {
             scale += self.column_norms[c] * t[c].abs();
         }
+        for i in 0..self.m {
+            let col = &self.a[i * ROWS..i * ROWS + self.rows];
+            let gi: f64 = -col.iter().zip(&r[..self.rows]).map(|(a, x)| a * x).sum::<f64>();
+            let s = self.column_norms[i] * scale;
+            g[i] = if s > 0.0 && s.is_finite() { gi / s } else { 0.0 };
+        }
+    }
+
+    /// The certificate at `t`; `g` receives the normalised gradient.
+    fn certificate(&self, b: &[f64; ROWS], t: &[f64; N], g: &mut [f64; N]) -> Certificate {
+        self.certificate_with(b, self.rhs_norm(b), t, g)
+    }
+
+    /// [`Self::certificate`] with `b_norm = |b|` known.
+    fn certificate_with(
+        &self,
+        b: &[f64; ROWS],
+        b_norm: f64,
+        t: &[f64; N],
+        g: &mut [f64; N],
+    ) -> Certificate {
+        let mut r = [0.0; ROWS];
+        self.residual(b, t, &mut r);
+        self.gradient(&r, t, b_norm, g);
         let mut out = Certificate {
             stationarity: 0.0,
             complementarity: 0.0,
@@ -608,10 +703,6 @@ impl ActiveSetSolver {
             tolerance: self.settings.tolerance,
         };
         for i in 0..self.m {
-            let col = &self.a[i * ROWS..i * ROWS + self.rows];
-            let gi: f64 = -col.iter().zip(&r).map(|(a, x)| a * x).sum::<f64>();
-            let s = self.column_norms[i] * scale;
-            g[i] = if s > 0.0 && s.is_finite() { gi / s } else { 0.0 };
             if !g[i].is_finite() || !t[i].is_finite() {
                 out.stationarity = f64::INFINITY;
                 continue;
@@ -636,20 +727,21 @@ impl ActiveSetSolver {
 
     /// The step `d = argmin |A_F d - r|` on the free columns (dependent ones get zero). Returns
     /// the numerical rank of `A_F`.
-    fn lsq_step(&self, free: &[usize], r: &[f64; ROWS], d: &mut [f64; N]) -> usize {
+    fn lsq_step<const W: usize>(&self, free: &[usize], r: &[f64; ROWS], d: &mut [f64; N]) -> usize {
         let k = free.len();
         let rows = self.rows;
-        let mut w = [0.0; ROWS * N];
+        // A_F packed column-major (leading dimension `rows`).
+        let mut w = [0.0; W];
         for (j, &i) in free.iter().enumerate() {
-            w[j * ROWS..j * ROWS + rows].copy_from_slice(&self.a[i * ROWS..i * ROWS + rows]);
+            w[j * rows..j * rows + rows].copy_from_slice(&self.a[i * ROWS..i * ROWS + rows]);
         }
         let mut perm = [0usize; N];
         let mut tau = [0.0; N];
-        let rank = householder_qr(&mut w, ROWS, rows, k, &mut perm, &mut tau);
+        let rank = householder_qr(&mut w, rows, rows, k, &mut perm, &mut tau);
         let mut y = [0.0; ROWS];
         y[..rows].copy_from_slice(&r[..rows]);
-        apply_qt(&w, ROWS, rows, rank, &tau, &mut y);
-        back_substitute(&w, ROWS, rank, &mut y);
+        apply_qt(&w, rows, rows, rank, &tau, &mut y);
+        back_substitute(&w, rows, rank, &mut y);
         for i in free {
             d[*i] = 0.0;
         }
@@ -659,75 +751,99 @@ impl ActiveSetSolver {
         rank
     }
 
-    /// Phase 1 from `t` and `states`; returns (converged, iterations).
-    fn phase1(
+    /// Phase 1 from `t` and `states`; returns (converged, iterations, unique): `unique` when the
+    /// final free set's columns were found independent (its minimiser is then the only one).
+    /// `at_minimiser`: `t` is already known to minimise over the free set (with that flag).
+    fn phase1<const W: usize>(
         &self,
         b: &[f64; ROWS],
+        b_norm: f64,
         t: &mut [f64; N],
         states: &mut [BoundState; N],
         budget: usize,
-    ) -> (bool, usize) {
+        at_minimiser: Option<bool>,
+    ) -> (bool, usize, bool) {
         let m = self.m;
         let mut iterations = 0;
         let mut excluded = [false; N];
         let mut last_released: Option<usize> = None;
+        let mut minimiser = at_minimiser.is_some();
+        let mut unique = at_minimiser.unwrap_or(false);
+        let mut r = [0.0; ROWS];
+        let mut r_valid = false;
         loop {
-            let mut free = [0usize; N];
-            let mut k = 0;
-            for i in 0..m {
-                if states[i] == BoundState::Free {
-                    free[k] = i;
-                    k += 1;
-                }
-            }
-            if k > 0 {
-                if iterations == budget {
-                    return (false, iterations);
-                }
-                iterations += 1;
-                let mut r = [0.0; ROWS];
+            if !r_valid {
                 self.residual(b, t, &mut r);
-                let mut d = [0.0; N];
-                self.lsq_step(&free[..k], &r, &mut d);
-                let (alpha, blocking) = self.ratio_test(&free[..k], &d, t);
-                match (blocking, last_released) {
-                    (Some((j, _)), Some(released)) if alpha == 0.0 && j == released => {
-                        // The released variable would leave the box at once: hold it again.
-                        excluded[j] = true;
-                        states[j] = if t[j] <= self.lower[j] {
-                            BoundState::Lower
-                        } else {
-                            BoundState::Upper
-                        };
-                        t[j] = if states[j] == BoundState::Lower {
-                            self.lower[j]
-                        } else {
-                            self.upper[j]
-                        };
+                r_valid = true;
+            }
+            if !minimiser {
+                let mut free = [0usize; N];
+                let mut k = 0;
+                for i in 0..m {
+                    if states[i] == BoundState::Free {
+                        free[k] = i;
+                        k += 1;
                     }
-                    _ => {
-                        for &i in &free[..k] {
-                            t[i] = (t[i] + alpha * d[i]).clamp(self.lower[i], self.upper[i]);
-                        }
-                        if alpha > 0.0 {
-                            excluded = [false; N];
-                        }
-                        last_released = None;
-                        if let Some((j, state)) = blocking {
-                            states[j] = state;
-                            t[j] = if state == BoundState::Lower {
+                }
+                if k > 0 {
+                    if iterations == budget {
+                        return (false, iterations, false);
+                    }
+                    iterations += 1;
+                    let mut d = [0.0; N];
+                    let rank = self.lsq_step::<W>(&free[..k], &r, &mut d);
+                    let (alpha, blocking) = self.ratio_test(&free[..k], &d, t);
+                    match (blocking, last_released) {
+                        (Some((j, _)), Some(released)) if alpha == 0.0 && j == released => {
+                            // The released variable would leave the box at once: hold it again
+                            // (back to the previous free set's minimiser).
+                            excluded[j] = true;
+                            states[j] = if t[j] <= self.lower[j] {
+                                BoundState::Lower
+                            } else {
+                                BoundState::Upper
+                            };
+                            let held = if states[j] == BoundState::Lower {
                                 self.lower[j]
                             } else {
                                 self.upper[j]
                             };
+                            if t[j] != held {
+                                t[j] = held;
+                                self.residual(b, t, &mut r);
+                            }
+                        }
+                        _ => {
+                            for &i in &free[..k] {
+                                t[i] = (t[i] + alpha * d[i]).clamp(self.lower[i], self.upper[i]);
+                            }
+                            if alpha > 0.0 {
+                                excluded = [false; N];
+                            }
+                            last_released = None;
+                            r_valid = false;
+                            if let Some((j, state)) = blocking {
+                                states[j] = state;
+                                t[j] = if state == BoundState::Lower {
+                                    self.lower[j]
+                                } else {
+                                    self.upper[j]
+                                };
+                            } else {
+                                minimiser = true;
+                                unique = rank == k;
+                            }
                             continue;
                         }
                     }
+                } else {
+                    unique = true;
                 }
             }
+            minimiser = false;
             // A free-set minimiser: release the held variable with the worst multiplier.
             let mut g = [0.0; N];
-            self.certificate(b, t, &mut g);
+            self.gradient(&r, t, b_norm, &mut g);
             let mut worst = (RELEASE_TOL, usize::MAX);
             for i in 0..m {
                 if states[i] == BoundState::Free || excluded[i] || self.lower[i] == self.upper[i] {
@@ -739,13 +855,14 @@ impl ActiveSetSolver {
                 }
             }
             if worst.1 == usize::MAX {
-                return (true, iterations);
+                return (true, iterations, unique);
             }
             if iterations == budget {
-                return (false, iterations);
+                return (false, iterations, false);
             }
             states[worst.1] = BoundState::Free;
             last_released = Some(worst.1);
+            unique = false;
         }
     }
 
@@ -777,7 +894,12 @@ impl ActiveSetSolver {
 
     /// Phase 2 (the tie rule): the optimum closest to `T_pref`, keeping `M_w T` (module docs).
     /// `g` is phase 1's normalised gradient. Returns the iterations used.
-    fn phase2(&self, t: &mut [f64; N], states: &mut [BoundState; N], g: &[f64; N]) -> usize {
+    fn phase2<const W: usize>(
+        &self,
+        t: &mut [f64; N],
+        states: &mut [BoundState; N],
+        g: &[f64; N],
+    ) -> usize {
         let m = self.m;
         let nc = self.constraint_rows;
         // Eligible: free, or held with a (near-)zero multiplier.
@@ -803,16 +925,16 @@ impl ActiveSetSolver {
                     k += 1;
                 }
             }
-            // C_F^T: k x nc, column-major with leading dimension N.
-            let mut w = [0.0; N * MAX_VIRTUAL];
+            // C_F^T: k x nc, packed column-major (leading dimension k).
+            let mut w = [0.0; W];
             for c in 0..nc {
                 for (j, &i) in free[..k].iter().enumerate() {
-                    w[c * N + j] = self.constraint[c * N + i];
+                    w[c * k + j] = self.constraint[c * N + i];
                 }
             }
             let mut perm = [0usize; MAX_VIRTUAL];
             let mut tau = [0.0; MAX_VIRTUAL];
-            let rank = householder_qr(&mut w, N, k, nc, &mut perm, &mut tau);
+            let rank = householder_qr(&mut w, k, k, nc, &mut perm, &mut tau);
             if first && rank == k && !any_held {
                 return iterations; // unique: nothing to choose
             }
@@ -828,9 +950,9 @@ impl ActiveSetSolver {
                 u[j] = self.preferred[i] - t[i];
                 size = size.max(t[i].abs()).max(self.preferred[i].abs());
             }
-            apply_qt(&w, N, k, rank, &tau, &mut u);
+            apply_qt(&w, k, k, rank, &tau, &mut u);
             u[..rank].fill(0.0);
-            apply_q(&w, N, k, rank, &tau, &mut u);
+            apply_q(&w, k, k, rank, &tau, &mut u);
             let mut d = [0.0; N];
             let mut moves = false;
             for (j, &i) in free[..k].iter().enumerate() {
@@ -882,8 +1004,8 @@ impl ActiveSetSolver {
             for (j, &i) in free[..k].iter().enumerate() {
                 v[j] = t[i] - self.preferred[i];
             }
-            apply_qt(&w, N, k, rank, &tau, &mut v);
-            back_substitute(&w, N, rank, &mut v);
+            apply_qt(&w, k, k, rank, &tau, &mut v);
+            back_substitute(&w, k, rank, &mut v);
             let mut nu = [0.0; MAX_VIRTUAL];
             for j in 0..rank {
                 nu[perm[j]] = v[j];
