@@ -405,8 +405,8 @@ impl ActiveSetSolver {
         let mut t = [0.0; N];
         let cold = active.states[..m].iter().all(|s| *s == BoundState::Free);
         let mut iterations = 0;
-        // Known minimiser of the current free set (and whether that set's columns are
-        // independent, so the minimiser is unique): skips phase 1's first step.
+        // Known minimiser of the current free set (and whether it is the closest to `T_pref`):
+        // skips phase 1's first step.
         let mut at_minimiser = None;
         if cold {
             // Start from the clamped unconstrained solution, holding what the clamp cut.
@@ -420,7 +420,7 @@ impl ActiveSetSolver {
                 *f = i;
             }
             let mut d = [0.0; N];
-            let rank = self.lsq_step::<W>(&free[..m], &r, &mut d);
+            let _ = self.lsq_step::<W>(&free[..m], &r, &t, &mut d);
             iterations += 1;
             let mut inside = true;
             for i in 0..m {
@@ -439,7 +439,7 @@ impl ActiveSetSolver {
                 for i in 0..m {
                     t[i] += d[i];
                 }
-                at_minimiser = Some(rank == m);
+                at_minimiser = Some(true);
             }
         }
         if at_minimiser.is_none() {
@@ -455,7 +455,10 @@ impl ActiveSetSolver {
                 };
             }
         }
-        let (converged, used, unique) = self.phase1::<W>(
+        // Phase 2 is needed only when phase 1's answer is not already the closest of the optima:
+        // it ended elsewhere than on a full step, or a held bound has a zero multiplier (so other
+        // optima may move it).
+        let (converged, used, closest) = self.phase1::<W>(
             b,
             b_norm,
             &mut t,
@@ -469,7 +472,7 @@ impl ActiveSetSolver {
         if converged
             && self.root_gamma == 0.0
             && certificate.holds()
-            && !(unique && !self.degenerate_held(&active.states, &g))
+            && !(closest && !self.degenerate_held(&active.states, &g))
         {
             let before = t;
             let used = self.phase2::<W>(&mut t, &mut active.states, &g);
@@ -725,9 +728,19 @@ impl ActiveSetSolver {
         out
     }
 
-    /// The step `d = argmin |A_F d - r|` on the free columns (dependent ones get zero). Returns
-    /// the numerical rank of `A_F`.
-    fn lsq_step<const W: usize>(&self, free: &[usize], r: &[f64; ROWS], d: &mut [f64; N]) -> usize {
+    /// The step `d = argmin |A_F d - r|` on the free columns; when `A_F` has dependent columns,
+    /// the one of those minimisers that lands closest to `T_pref` (`min |T_F + d - T_pref,F|`,
+    /// the tie rule on this free set), from a complete orthogonal decomposition: the pivoted QR
+    /// `A_F P = Q [R11 R12; 0 0]`, then `[R11 R12] = [T11 0] Z` by Householder reflectors from
+    /// the right (LAPACK's RZ), so `d = P Z^T [T11^-1 (Q^T r)_1; (Z P^T (T_pref - T)_F)_2]`.
+    /// Returns the numerical rank of `A_F`.
+    fn lsq_step<const W: usize>(
+        &self,
+        free: &[usize],
+        r: &[f64; ROWS],
+        t: &[f64; N],
+        d: &mut [f64; N],
+    ) -> usize {
         let k = free.len();
         let rows = self.rows;
         // A_F packed column-major (leading dimension `rows`).
@@ -741,19 +754,91 @@ impl ActiveSetSolver {
         let mut y = [0.0; ROWS];
         y[..rows].copy_from_slice(&r[..rows]);
         apply_qt(&w, rows, rows, rank, &tau, &mut y);
-        back_substitute(&w, rows, rank, &mut y);
-        for i in free {
-            d[*i] = 0.0;
+        if rank == k {
+            back_substitute(&w, rows, rank, &mut y);
+            for j in 0..k {
+                d[free[perm[j]]] = y[j];
+            }
+            return rank;
         }
-        for j in 0..rank {
-            d[free[perm[j]]] = y[j];
+        // RZ: row i of [R11 R12] (entries i and rank..k) reduced to T11's diagonal entry.
+        let (ld, nz) = (rows, k - rank);
+        let mut zv = [0.0; W];
+        let mut ztau = [0.0; N];
+        for i in (0..rank).rev() {
+            let x0 = w[i * ld + i];
+            let mut sq = x0 * x0;
+            for j in 0..nz {
+                let x = w[(rank + j) * ld + i];
+                sq += x * x;
+            }
+            let alpha = if (SAFE_SQ_MIN..=SAFE_SQ_MAX).contains(&sq) {
+                sq.sqrt()
+            } else {
+                let mut row = [0.0; N];
+                row[0] = x0;
+                for j in 0..nz {
+                    row[1 + j] = w[(rank + j) * ld + i];
+                }
+                norm(&row[..=nz])
+            };
+            let beta = if x0 >= 0.0 { -alpha } else { alpha };
+            let v0 = x0 - beta;
+            for j in 0..nz {
+                zv[i * nz + j] = w[(rank + j) * ld + i] / v0;
+            }
+            let tz = (beta - x0) / beta;
+            ztau[i] = tz;
+            w[i * ld + i] = beta;
+            let v = &zv[i * nz..i * nz + nz];
+            for l in 0..i {
+                let mut dot = w[i * ld + l];
+                for j in 0..nz {
+                    dot += v[j] * w[(rank + j) * ld + l];
+                }
+                dot *= tz;
+                w[i * ld + l] -= dot;
+                for j in 0..nz {
+                    w[(rank + j) * ld + l] -= dot * v[j];
+                }
+            }
+        }
+        let reflect_z = |i: usize, x: &mut [f64; N]| {
+            let v = &zv[i * nz..i * nz + nz];
+            let mut dot = x[i];
+            for j in 0..nz {
+                dot += v[j] * x[rank + j];
+            }
+            dot *= ztau[i];
+            x[i] -= dot;
+            for j in 0..nz {
+                x[rank + j] -= dot * v[j];
+            }
+        };
+        // x = Z P^T (T_pref - T)_F; its first `rank` entries replaced by the basic part.
+        let mut x = [0.0; N];
+        for j in 0..k {
+            let i = free[perm[j]];
+            x[j] = self.preferred[i] - t[i];
+        }
+        for i in (0..rank).rev() {
+            reflect_z(i, &mut x);
+        }
+        back_substitute(&w, ld, rank, &mut y);
+        x[..rank].copy_from_slice(&y[..rank]);
+        for i in 0..rank {
+            reflect_z(i, &mut x);
+        }
+        for j in 0..k {
+            d[free[perm[j]]] = x[j];
         }
         rank
     }
 
-    /// Phase 1 from `t` and `states`; returns (converged, iterations, unique): `unique` when the
-    /// final free set's columns were found independent (its minimiser is then the only one).
-    /// `at_minimiser`: `t` is already known to minimise over the free set (with that flag).
+    /// Phase 1 from `t` and `states`; returns (converged, iterations, closest): `closest` when the
+    /// answer is a full step of [`Self::lsq_step`], i.e. of the free-set minimisers (held
+    /// variables fixed) the one closest to `T_pref`. `at_minimiser`: `t` is already known to be
+    /// a free-set minimiser (and whether it is the closest one).
     fn phase1<const W: usize>(
         &self,
         b: &[f64; ROWS],
@@ -768,7 +853,7 @@ impl ActiveSetSolver {
         let mut excluded = [false; N];
         let mut last_released: Option<usize> = None;
         let mut minimiser = at_minimiser.is_some();
-        let mut unique = at_minimiser.unwrap_or(false);
+        let mut closest = at_minimiser.unwrap_or(false);
         let mut r = [0.0; ROWS];
         let mut r_valid = false;
         loop {
@@ -791,7 +876,7 @@ impl ActiveSetSolver {
                     }
                     iterations += 1;
                     let mut d = [0.0; N];
-                    let rank = self.lsq_step::<W>(&free[..k], &r, &mut d);
+                    let _ = self.lsq_step::<W>(&free[..k], &r, t, &mut d);
                     let (alpha, blocking) = self.ratio_test(&free[..k], &d, t);
                     match (blocking, last_released) {
                         (Some((j, _)), Some(released)) if alpha == 0.0 && j == released => {
@@ -831,13 +916,13 @@ impl ActiveSetSolver {
                                 };
                             } else {
                                 minimiser = true;
-                                unique = rank == k;
+                                closest = true;
                             }
                             continue;
                         }
                     }
                 } else {
-                    unique = true;
+                    closest = true;
                 }
             }
             minimiser = false;
@@ -855,14 +940,14 @@ impl ActiveSetSolver {
                 }
             }
             if worst.1 == usize::MAX {
-                return (true, iterations, unique);
+                return (true, iterations, closest);
             }
             if iterations == budget {
                 return (false, iterations, false);
             }
             states[worst.1] = BoundState::Free;
             last_released = Some(worst.1);
-            unique = false;
+            closest = false;
         }
     }
 
