@@ -1126,6 +1126,11 @@ impl ActiveSetSolver {
 const SAFE_SQ_MIN: f64 = 1.2e-271; // 2^-900
 const SAFE_SQ_MAX: f64 = 8.5e270; // 2^900
 
+/// Squared column norms inside these bounds let [`householder_qr`] compare ratios by products of
+/// two squared norms without overflow or underflow.
+const QR_SQ_MIN: f64 = 3.5e-136; // 2^-450
+const QR_SQ_MAX: f64 = 2.9e135; // 2^450
+
 #[inline(always)]
 fn sum_sq(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum()
@@ -1137,7 +1142,7 @@ fn sum_sq(v: &[f64]) -> f64 {
 /// is the original column in position j; reflectors below the diagonal (unit leading entry).
 ///
 /// Works on squared norms (no division or square root in the pivot search); a column whose
-/// squared norm is outside [`SAFE_SQ_MIN`, `SAFE_SQ_MAX`] sends the whole factorisation to the
+/// squared norm is outside [`QR_SQ_MIN`, `QR_SQ_MAX`] sends the whole factorisation to the
 /// scaled (overflow- and underflow-free) version [`householder_qr_scaled`].
 fn householder_qr(
     a: &mut [f64],
@@ -1147,36 +1152,36 @@ fn householder_qr(
     perm: &mut [usize],
     tau: &mut [f64],
 ) -> usize {
-    let mut inverse = [0.0; ROWS];
+    // Squared original norms (0: a zero column, never a pivot).
+    let mut original = [0.0; ROWS];
     for j in 0..k {
         let sq = sum_sq(&a[j * ld..j * ld + rows]);
         if sq == 0.0 {
             if a[j * ld..j * ld + rows].iter().any(|x| *x != 0.0) {
                 return householder_qr_scaled(a, ld, rows, k, perm, tau);
             }
-            inverse[j] = 0.0;
-        } else if (SAFE_SQ_MIN..=SAFE_SQ_MAX).contains(&sq) {
-            inverse[j] = 1.0 / sq;
-        } else {
+        } else if !(QR_SQ_MIN..=QR_SQ_MAX).contains(&sq) {
             return householder_qr_scaled(a, ld, rows, k, perm, tau);
         }
+        original[j] = sq;
         perm[j] = j;
     }
+    let threshold = RANK_TOL * RANK_TOL;
     let mut rank = 0;
     for s in 0..rows.min(k) {
-        let mut best = RANK_TOL * RANK_TOL;
-        let mut best_sq = 0.0;
+        // The largest remaining/original squared-norm ratio above the threshold, compared by
+        // cross-multiplication (no division).
+        let (mut best_sq, mut best_original) = (0.0, 1.0);
         let mut q = usize::MAX;
         for j in s..k {
-            let w = inverse[perm[j]];
-            if w == 0.0 {
+            let o = original[perm[j]];
+            if o == 0.0 {
                 continue;
             }
             let sq = sum_sq(&a[j * ld + s..j * ld + rows]);
-            let ratio = sq * w;
-            if ratio > best {
-                best = ratio;
+            if sq > threshold * o && sq * best_original > best_sq * o {
                 best_sq = sq;
+                best_original = o;
                 q = j;
             }
         }
