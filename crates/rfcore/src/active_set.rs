@@ -472,7 +472,7 @@ impl ActiveSetSolver {
         if converged
             && self.root_gamma == 0.0
             && certificate.holds()
-            && !(closest && !self.degenerate_held(&active.states, &g))
+            && (!closest || self.degenerate_held(&active.states, &g))
         {
             let before = t;
             let used = self.phase2::<W>(&mut t, &mut active.states, &g);
