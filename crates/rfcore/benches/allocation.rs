@@ -12,13 +12,23 @@
 //! - `allocation/active_set_cold/<m>`: every solve from an empty active set;
 //! - `allocation/active_set_warm/<m>`: the virtual controls as a slowly varying sequence, each
 //!   solve warm-started from the previous active set (the closed-loop case);
-//! - `allocation/clarabel/<m>`: the Clarabel reference (setup + solve, default settings).
+//! - `allocation/clarabel/<m>`: the Clarabel reference (setup + solve, default settings);
+//! - `allocation_ill/active_set_cold`: the ill-conditioned class (4 x m, m = 4..8, one
+//!   column scaled by 10^-k, k = 4..12, weights in [0.01, 30]), every solve from an empty active
+//!   set on its own prepared solver.
+//!
+//! Before the criterion groups, a table is printed (the targets, like
+//! `benches/allocation_clarabel.py`): per airframe, 500 random virtual controls (half attainable,
+//! half beyond), the median and 90th percentile over problems of the per-solve time (cold start,
+//! mean of 200 repeats per problem, [`time_each`]), the same for Clarabel (5 repeats), their
+//! ratio, and the fallback count; then the ill-conditioned class's median time and fallback rate.
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use nalgebra::DMatrix;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
-use rfcore::allocation::AllocationProblem;
+use rfcore::allocation::{time_each, AllocationProblem, Method, SolvedBy};
 use rfcore::Airframe;
 use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 
@@ -94,5 +104,167 @@ fn bench_allocation(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_allocation);
+/// SplitMix64 (as in the tests): reproducible, dependency-free.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+    fn normal(&mut self) -> f64 {
+        let u = self.uniform(1e-12, 1.0);
+        let v = self.uniform(0.0, 1.0);
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+const RANDOM_PROBLEMS: usize = 500;
+
+/// As `benches/allocation_clarabel.py`: half `M T` for a random T in the box, half twice such a
+/// point plus noise (beyond the attainable set), flattened row after row.
+fn random_controls(airframe: &Airframe, problem: &AllocationProblem, rng: &mut Rng) -> Vec<f64> {
+    let (lo, hi) = (airframe.min_thrust_n(), airframe.max_thrust_n());
+    let noise = [5.0, 0.5, 0.5, 0.05];
+    let mut out = Vec::with_capacity(4 * RANDOM_PROBLEMS);
+    for k in 0..RANDOM_PROBLEMS {
+        let t: Vec<f64> = (0..lo.len()).map(|i| rng.uniform(lo[i], hi[i])).collect();
+        let inside = problem.achieved(&t);
+        for r in 0..4 {
+            out.push(if k < RANDOM_PROBLEMS / 2 {
+                inside[r]
+            } else {
+                2.0 * inside[r] + rng.normal() * noise[r]
+            });
+        }
+    }
+    out
+}
+
+fn median_p90(mut times: Vec<f64>) -> (f64, f64) {
+    times.sort_by(f64::total_cmp);
+    let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.9))
+}
+
+/// The ill-conditioned class (as `ill_conditioned_columns_are_certified_and_exact`):
+/// `per_k` problems for each k = 4..12.
+fn ill_conditioned(per_k: usize) -> Vec<(AllocationProblem, Vec<f64>)> {
+    let mut rng = Rng(2020);
+    let mut out = Vec::new();
+    for k in 4..=12 {
+        for _ in 0..per_k {
+            let m = 4 + rng.below(5);
+            let mut matrix = DMatrix::from_fn(4, m, |_, _| rng.normal());
+            let weak = rng.below(m);
+            for r in 0..4 {
+                matrix[(r, weak)] *= 10f64.powi(-k);
+            }
+            let weights: Vec<f64> = (0..4).map(|_| rng.uniform(0.01, 30.0)).collect();
+            let upper: Vec<f64> = (0..m).map(|_| rng.uniform(1.0, 8.0)).collect();
+            let point: Vec<f64> = upper.iter().map(|&h| rng.uniform(-0.1, 1.1) * h).collect();
+            let u_c: Vec<f64> = (0..4)
+                .map(|r| (0..m).map(|c| matrix[(r, c)] * point[c]).sum())
+                .collect();
+            let p = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper).unwrap();
+            out.push((p, u_c));
+        }
+    }
+    out
+}
+
+/// The targets, printed once: medians over problems of per-solve times.
+fn report_targets(_: &mut Criterion) {
+    let mut rng = Rng(2026);
+    println!("\n{RANDOM_PROBLEMS} random problems per airframe (half beyond the attainable set), per-solve time, cold start, median / p90 over problems");
+    println!(
+        "{:<12} {:>2} {:>20} {:>22} {:>8} {:>9} {:>9} {:>6}",
+        "airframe", "m", "active-set", "clarabel (Rust)", "ratio", "bounds", "fallback", "iters"
+    );
+    let mut met = true;
+    for name in ["quad-x", "hexa-pnpnpn", "octo-x"] {
+        let airframe = rfcore::fixtures::preset(name);
+        let m = airframe.rotor_count();
+        let problem = problem(&airframe);
+        let controls = random_controls(&airframe, &problem, &mut rng);
+        let solver = ActiveSetSolver::new(&problem);
+        let (mut fallbacks, mut saturated, mut iterations) = (0, 0, 0);
+        let mut commands = vec![0.0; m];
+        for u in controls.chunks(4) {
+            let mut active = ActiveSet::cold(m);
+            let report = solver.solve_unchecked(u, &mut active, &mut commands);
+            fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
+            iterations += report.iterations;
+            saturated += usize::from(active.states().iter().any(|s| *s != rfcore::allocation::active_set::BoundState::Free));
+        }
+        let ours = median_p90(time_each(&problem, &Method::ActiveSet, &controls, 200).unwrap());
+        let clarabel = Method::Clarabel(ClarabelSettings::default());
+        let theirs = median_p90(time_each(&problem, &clarabel, &controls, 5).unwrap());
+        println!(
+            "{name:<12} {m:>2} {:>8.0} / {:>6.0} ns {:>9.1} / {:>6.1} us {:>7.0}x {:>8.0}% {:>9} {:>6.2}",
+            ours.0 * 1e9,
+            ours.1 * 1e9,
+            theirs.0 * 1e6,
+            theirs.1 * 1e6,
+            theirs.0 / ours.0,
+            100.0 * saturated as f64 / RANDOM_PROBLEMS as f64,
+            fallbacks,
+            iterations as f64 / RANDOM_PROBLEMS as f64
+        );
+        met &= ours.0 <= 1e-6 && theirs.0 / ours.0 >= 50.0;
+    }
+    println!("targets (median <= 1 us, >= 50x clarabel): {}", if met { "met" } else { "NOT met" });
+
+    let cases = ill_conditioned(100);
+    let mut times = Vec::with_capacity(cases.len());
+    let mut fallbacks = 0;
+    for (p, u) in &cases {
+        let solver = ActiveSetSolver::new(p);
+        let mut commands = vec![0.0; p.actuator_count()];
+        let mut active = ActiveSet::cold(p.actuator_count());
+        let report = solver.solve_unchecked(u, &mut active, &mut commands);
+        fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
+        times.push(time_each(p, &Method::ActiveSet, u, 50).unwrap()[0]);
+    }
+    let (median, p90) = median_p90(times);
+    println!(
+        "ill-conditioned class (k = 4..12, m = 4..8, {} problems): median {:.0} ns, p90 {:.0} ns per solve, fallback rate {:.1}% ({fallbacks})\n",
+        cases.len(),
+        median * 1e9,
+        p90 * 1e9,
+        100.0 * fallbacks as f64 / cases.len() as f64
+    );
+}
+
+fn bench_ill_conditioned(c: &mut Criterion) {
+    let cases = ill_conditioned(20);
+    let solvers: Vec<(ActiveSetSolver, &[f64])> = cases
+        .iter()
+        .map(|(p, u)| (ActiveSetSolver::new(p), u.as_slice()))
+        .collect();
+    let mut group = c.benchmark_group("allocation_ill");
+    group.throughput(Throughput::Elements(solvers.len() as u64));
+    let mut commands = vec![0.0; 8];
+    group.bench_function("active_set_cold", |b| {
+        b.iter(|| {
+            for (solver, u) in &solvers {
+                let m = solver.problem().actuator_count();
+                let mut active = ActiveSet::cold(m);
+                black_box(solver.solve_unchecked(black_box(u), &mut active, &mut commands[..m]));
+            }
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, report_targets, bench_allocation, bench_ill_conditioned);
 criterion_main!(benches);

@@ -14,7 +14,8 @@ use clarabel::solver::{
 use nalgebra::DMatrix;
 
 use crate::airframe::Airframe;
-use crate::allocation::{Allocation, AllocationProblem, AllocationStatus};
+use crate::allocation::active_set::ActiveSetSolver;
+use crate::allocation::{Allocation, AllocationProblem, AllocationStatus, SolvedBy};
 use crate::analysis::controllability::ControlAxes;
 use crate::error::{require_all_finite, require_entries, Result, RfError};
 
@@ -189,18 +190,52 @@ fn qp_program(problem: &AllocationProblem, u_c: &[f64], rows: &[usize]) -> Progr
     program
 }
 
-fn finish(problem: &AllocationProblem, solution: ProgramSolution, iterations: usize) -> Allocation {
+fn finish(
+    problem: &AllocationProblem,
+    u_c: &[f64],
+    solution: ProgramSolution,
+    iterations: usize,
+) -> Allocation {
     let commands = clamped(&solution.x, problem.lower(), problem.upper());
     Allocation {
         achieved: problem.achieved(&commands),
+        certificate: ActiveSetSolver::new(problem).certify(u_c, &commands),
         commands,
         status: status_of(solution.status),
         iterations,
+        solved_by: SolvedBy::Clarabel,
     }
 }
 
-/// The box-constrained weighted least-squares allocation (Ke eq. (33)) through Clarabel.
+/// The box-constrained weighted least-squares allocation (Ke eq. (33)) through Clarabel, polished:
+/// the active set Clarabel's answer identifies is re-solved exactly (the active-set solver's
+/// phases 1 and 2), so the commands are exact, not only the objective; when that polish does not
+/// certify, Clarabel's own (clamped) answer is returned with its status.
 pub fn allocate_clarabel(
+    problem: &AllocationProblem,
+    u_c: &[f64],
+    settings: &ClarabelSettings,
+) -> Result<Allocation> {
+    let raw = allocate_clarabel_unpolished(problem, u_c, settings)?;
+    let solver = ActiveSetSolver::new(problem);
+    if let Some((commands, report)) = solver.polish_commands(u_c, &raw.commands) {
+        if report.certificate.holds() {
+            return Ok(Allocation {
+                achieved: problem.achieved(&commands),
+                commands,
+                status: AllocationStatus::Optimal,
+                iterations: raw.iterations + report.iterations,
+                certificate: report.certificate,
+                solved_by: SolvedBy::Clarabel,
+            });
+        }
+    }
+    Ok(raw)
+}
+
+/// Clarabel's own answer, clamped into the box (accurate in the objective to its tolerance, not
+/// necessarily in the commands): the independent reference of the tests.
+pub fn allocate_clarabel_unpolished(
     problem: &AllocationProblem,
     u_c: &[f64],
     settings: &ClarabelSettings,
@@ -209,7 +244,7 @@ pub fn allocate_clarabel(
     let rows: Vec<usize> = (0..problem.virtual_dimension()).collect();
     let solution = qp_program(problem, u_c, &rows).solve(settings)?;
     let iterations = solution.iterations;
-    Ok(finish(problem, solution, iterations))
+    Ok(finish(problem, u_c, solution, iterations))
 }
 
 /// Prioritised allocation: `priorities` lists groups of virtual-control rows, most important
@@ -274,7 +309,7 @@ pub fn allocate_prioritized(
         program.inequalities.extend(fixed.iter().cloned());
         let solution = program.solve(settings)?;
         iterations += solution.iterations;
-        let allocation = finish(problem, solution, iterations);
+        let allocation = finish(problem, u_c, solution, iterations);
         if allocation.status == AllocationStatus::Failed {
             return Ok(allocation);
         }

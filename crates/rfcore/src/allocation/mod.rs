@@ -22,9 +22,11 @@
 //! With more rotors than weighted axes (a hexacopter, or a zero yaw weight) the minimisers form a
 //! set. Every method here returns, among them, the one closest to `T_pref` (zero unless set): for
 //! the pseudo-inverse exactly `T_pref + A^+ (b - A T_pref)`, i.e. `M^+ u_c` of Ke eq. (34) when
-//! `T_pref = 0`; the active-set solver applies the same rule on its final free set, so both agree
-//! whenever no bound is active. Directions whose weighted gain is below [`RANK_RTOL`] (relative, on
-//! the squared gain) of the largest are treated as exactly uncontrollable.
+//! `T_pref = 0` (directions whose weighted gain is below [`RANK_RTOL`] of the largest, on the
+//! squared gain, count as zero there); the active-set solver finds the closest optimum also when
+//! bounds are active (its phase 2), with no rank cut on the weights. Every active-set answer
+//! carries a [`Certificate`]; it is `Optimal` only when that holds, else the solver falls back to
+//! Clarabel ([`SolvedBy`]).
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -40,10 +42,12 @@ use clarabel::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
-pub const MAX_ACTUATORS: usize = 12;
+pub const MAX_ACTUATORS: usize = 16;
 /// Most virtual-control components a problem may have.
 pub const MAX_VIRTUAL: usize = 12;
-/// Relative threshold on the squared gain (curvature) below which a direction counts as zero.
+/// Relative threshold on the squared gain (curvature) below which a direction counts as zero in
+/// the unconstrained pseudo-inverse ([`weighted_pseudo_inverse`]); the active-set solver uses no
+/// such cut (see [`crate::allocation::active_set::RANK_TOL`]).
 pub const RANK_RTOL: f64 = 1e-11;
 
 /// A box-constrained weighted least-squares allocation problem (module docs). Validated on
@@ -292,8 +296,9 @@ pub enum AllocationStatus {
     Optimal,
     /// Clarabel finished at reduced accuracy.
     AlmostOptimal,
-    /// The active-set solver hit its iteration bound; the commands are feasible and no worse than
-    /// where it started, but not proven optimal.
+    /// The active-set solver could not certify its answer (iteration bound, or the certificate
+    /// above its tolerance) and neither could its fallback; the commands are feasible, not proven
+    /// optimal (see the allocation's certificate).
     IterationLimit,
     /// The unconstrained pseudo-inverse: bounds were not applied.
     Unconstrained,
@@ -315,6 +320,69 @@ impl AllocationStatus {
     }
 }
 
+/// Which method produced an allocation's commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SolvedBy {
+    /// The active-set solver on its own.
+    ActiveSet,
+    /// Clarabel (as the fallback of the active-set solver, or asked for), polished by the
+    /// active set from Clarabel's active set when that certifies.
+    Clarabel,
+    /// The unconstrained pseudo-inverse.
+    PseudoInverse,
+}
+
+impl SolvedBy {
+    /// `"active-set"`, `"clarabel"` or `"pinv"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolvedBy::ActiveSet => "active-set",
+            SolvedBy::Clarabel => "clarabel",
+            SolvedBy::PseudoInverse => "pinv",
+        }
+    }
+}
+
+/// The KKT residuals of an allocation, dimensionless, in the problem's own scaling: with
+/// `A = [W^(1/2) M; gamma^(1/2) I]` and `b` the matching right-hand side (after the internal
+/// power-of-two scaling), the gradient entry `g_i = a_i^T (A T - b)` is divided by
+/// `|a_i| (|b| + sum_j |a_j| |T_j|)` (a bound on the size of the terms it sums, so it is invariant
+/// to scaling the matrix, the virtual control, the weights or one actuator's gain).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Certificate {
+    /// Largest normalised gradient entry of a variable strictly inside its bounds.
+    pub stationarity: f64,
+    /// Largest wrong-signed normalised multiplier of a variable at a bound (the complementarity
+    /// conditions `min(T - lower, g) = 0`, `min(upper - T, -g) = 0`).
+    pub complementarity: f64,
+    /// Largest bound violation, relative to `max(upper - lower, |lower|, |upper|)`.
+    pub bound_violation: f64,
+    /// The tolerance the three are compared with.
+    pub tolerance: f64,
+}
+
+impl Certificate {
+    /// The largest of the three residuals.
+    pub fn worst(&self) -> f64 {
+        self.stationarity
+            .max(self.complementarity)
+            .max(self.bound_violation)
+    }
+    /// True when every residual is at most the tolerance (NaN never holds).
+    pub fn holds(&self) -> bool {
+        self.worst() <= self.tolerance
+    }
+    /// The certificate of no answer.
+    pub(crate) fn failed(tolerance: f64) -> Self {
+        Certificate {
+            stationarity: f64::INFINITY,
+            complementarity: f64::INFINITY,
+            bound_violation: f64::INFINITY,
+            tolerance,
+        }
+    }
+}
+
 /// The result of one allocation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Allocation {
@@ -325,6 +393,20 @@ pub struct Allocation {
     pub status: AllocationStatus,
     /// Solver iterations (0 for the pseudo-inverse).
     pub iterations: usize,
+    /// KKT residuals of `commands` (for the pseudo-inverse: of the unconstrained problem's
+    /// answer against the constrained problem, so usually not holding).
+    pub certificate: Certificate,
+    /// The method that produced `commands`.
+    pub solved_by: SolvedBy,
+}
+
+/// How many allocations of a batch were produced by the Clarabel fallback of the active-set
+/// method.
+pub fn fallback_count(results: &[Allocation]) -> usize {
+    results
+        .iter()
+        .filter(|a| a.solved_by == SolvedBy::Clarabel)
+        .count()
 }
 
 /// The unconstrained solution as a matrix `P` and offset `o`: `T = P u_c + o`, with
@@ -423,9 +505,11 @@ impl WeightedPseudoInverse {
         self.apply(u_c, &mut commands);
         Allocation {
             achieved: problem.achieved(&commands),
+            certificate: ActiveSetSolver::new(problem).certify(u_c, &commands),
             commands,
             status: AllocationStatus::Unconstrained,
             iterations: 0,
+            solved_by: SolvedBy::PseudoInverse,
         }
     }
 
