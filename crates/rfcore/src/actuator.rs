@@ -4,21 +4,27 @@
 //! (Ke, Lanzon, Du) and variable-pitch propellers commanded in speed and blade pitch (Wang et al.
 //! eq. (3)). Adding a model means adding a variant; the simulator only sees [`RotorOutput`]s.
 //!
-//! # Discretisation (stated once, used everywhere)
-//! Actuator states advance once per integrator substep with the command held constant over it
-//! (zero-order hold), in this order:
-//! 1. the command is saturated to the channel's bounds (a rotor cannot be asked for more than it
-//!    can give);
-//! 2. the first-order lag `tau x' = u - x` is solved exactly over the substep:
-//!    `x+ = u + (x - u) exp(-dt / tau)` (`tau = 0` means no lag);
-//! 3. the change is clipped to the rate limit `|x+ - x| <= rate dt` (Lanzon's 50 N/s).
+//! # Dynamics (stated once, used everywhere)
+//! Every channel `a` follows the continuous first-order lag with saturation and rate limit
 //!
-//! The rigid body then sees the new outputs held constant through its RK4 substep.
+//! `a' = clamp((sat(u) - a) / tau, -rate, rate)`
+//!
+//! (`sat`: the channel's bounds, a rotor cannot be asked for more than it can give; `tau = 0`
+//! means no lag: with an infinite rate the state follows the command at once, with a finite
+//! rate it slews at the rate limit, Lanzon's 50 N/s). The command is held between control steps
+//! (zero-order hold), and for a held command this ODE has a closed-form solution
+//! ([`Lag::response`]): a straight line at the rate limit while `|sat(u) - a| > rate tau`, then
+//! the exponential. The simulator evaluates that solution at every RK4 stage time, so the rigid
+//! body sees the actuator as it evolves *within* each substep (the coupled system is fourth order
+//! where smooth; the actuator part is exact, so it is stable at any step).
 //!
 //! # Health
-//! `health_i` in [0, 1] (Du's eta, Ke's lambda) scales everything rotor i produces: thrust,
-//! reaction torque and spin (a failed rotor produces nothing). The actuator state itself is not
-//! touched, so a controller that keeps commanding a dead rotor sees no effect, as in reality.
+//! `health_i` in [0, 1] (Du's eta, Ke's lambda) scales what rotor i produces (a failed rotor
+//! produces nothing). One rule for both models, written once in [`spin_factor`]: a rotor at
+//! efficiency `eta` delivers `eta` times the thrust and reaction torque *because it turns slower*,
+//! so its spin (the gyroscopic moment) is `sqrt(eta)` times the healthy spin. The actuator state
+//! itself is not touched, so a controller that keeps commanding a dead rotor sees no effect, as
+//! in reality.
 
 use crate::airframe::Airframe;
 use crate::error::{require_finite, Result, RfError};
@@ -74,17 +80,68 @@ impl Lag {
         Ok(())
     }
 
-    /// One substep of saturation, exact lag and rate limit (module docs).
-    fn advance(&self, state: f64, command: f64, lower: f64, upper: f64, dt_s: f64) -> f64 {
-        let target = command.clamp(lower, upper);
-        let lagged = if self.time_constant_s > 0.0 {
-            target + (state - target) * (-dt_s / self.time_constant_s).exp()
+    /// The channel state `elapsed_s` after `state` under the held, already saturated `target`:
+    /// the exact solution of `a' = clamp((target - a) / tau, -rate, rate)` (module docs). With
+    /// no lag and no rate limit the state is `target` for any `elapsed_s`, including 0 (the
+    /// value just after the command changed).
+    #[inline]
+    pub fn response(&self, state: f64, target: f64, elapsed_s: f64) -> f64 {
+        self.response_with_decay(state, target, elapsed_s, self.decay(elapsed_s))
+    }
+
+    /// `exp(-elapsed / tau)` (1 without lag): shared by every channel at one time.
+    #[inline]
+    fn decay(&self, elapsed_s: f64) -> f64 {
+        if self.time_constant_s > 0.0 {
+            (-elapsed_s / self.time_constant_s).exp()
+        } else {
+            1.0
+        }
+    }
+
+    #[inline]
+    fn response_with_decay(&self, state: f64, target: f64, elapsed_s: f64, decay: f64) -> f64 {
+        let gap = target - state;
+        let tau = self.time_constant_s;
+        let rate = self.rate_limit_per_s;
+        if elapsed_s == 0.0 && (tau > 0.0 || rate.is_finite()) {
+            return state; // continuous: exactly the current state
+        }
+        if tau > 0.0 {
+            // Rate-limited while |gap| / tau > rate: a line until the gap is rate tau, at
+            // s* = (|gap| - rate tau) / rate, then the exponential from there.
+            let slew = rate * tau;
+            if gap.abs() <= slew {
+                return target - gap * decay;
+            }
+            let s_star = (gap.abs() - slew) / rate;
+            if elapsed_s <= s_star {
+                state + gap.signum() * rate * elapsed_s
+            } else {
+                target - gap.signum() * slew * (-(elapsed_s - s_star) / tau).exp()
+            }
+        } else if rate.is_finite() {
+            let step = rate * elapsed_s;
+            state + gap.clamp(-step, step)
         } else {
             target
-        };
-        let step = self.rate_limit_per_s * dt_s;
-        state + (lagged - state).clamp(-step, step)
+        }
     }
+}
+
+/// The factor by which a rotor at efficiency `health` spins relative to a healthy rotor with the
+/// same command: `sqrt(health)`.
+///
+/// Decision (physics): a rotor's thrust and reaction torque both go as the square of its speed
+/// (`f = k_f Omega^2`, `q = k_m Omega^2`). The model scales both by `health` (Du's column
+/// scaling, including the yaw row), which is what a rotor turning at `sqrt(health)` times the
+/// speed produces: a weak motor, a sagging ESC or a failed one (health 0: stopped, no gyroscopic
+/// moment). The alternative, full speed with less thrust (a damaged blade), would leave a dead
+/// rotor spinning at full speed and would not scale the reaction torque like the thrust. Both
+/// actuator models use this one function.
+#[inline]
+pub fn spin_factor(health: f64) -> f64 {
+    health.max(0.0).sqrt()
 }
 
 /// Fixed-pitch rotors commanded in thrust (N), bounds and spin from the airframe.
@@ -258,11 +315,54 @@ impl Actuators {
         Ok(())
     }
 
-    /// Advances every channel by one substep under `commands` (`channels() * rotor_count()`).
+    /// Advances every channel by `dt_s` under `commands` (`channels() * rotor_count()`), held:
+    /// the exact solution of the lag ODE (module docs).
     pub fn advance(&mut self, commands: &[f64], dt_s: f64) {
         let (state, lag, lower, upper) = self.channels_mut();
+        let decay = lag.decay(dt_s);
         for (k, x) in state.iter_mut().enumerate() {
-            *x = lag.advance(*x, commands[k], lower[k], upper[k], dt_s);
+            let target = commands[k].clamp(lower[k], upper[k]);
+            *x = lag.response_with_decay(*x, target, dt_s, decay);
+        }
+    }
+
+    /// Writes into `out` every channel's state `elapsed_s` after the current state under the
+    /// saturated targets `targets` (see [`Actuators::saturate`]), without changing `self`.
+    #[inline]
+    pub fn response(&self, targets: &[f64], elapsed_s: f64, out: &mut [f64]) {
+        let (state, lag) = match self {
+            Actuators::FixedPitch(a) => (&a.thrust_n[..], a.lag),
+            Actuators::VariablePitch(a) => (&a.state[..], a.lag),
+        };
+        let decay = lag.decay(elapsed_s);
+        for ((o, &x), &target) in out.iter_mut().zip(state).zip(targets) {
+            *o = lag.response_with_decay(x, target, elapsed_s, decay);
+        }
+    }
+
+    /// The commands clipped to each channel's bounds: what the channels move towards.
+    pub fn saturate(&self, commands: &[f64], targets: &mut [f64]) {
+        let (lower, upper) = match self {
+            Actuators::FixedPitch(a) => (&a.min_thrust_n, &a.max_thrust_n),
+            Actuators::VariablePitch(a) => (&a.lower, &a.upper),
+        };
+        for (k, t) in targets.iter_mut().enumerate() {
+            *t = commands[k].clamp(lower[k], upper[k]);
+        }
+    }
+
+    /// Replaces the channel states (`channels() * rotor_count()` values, e.g. from
+    /// [`Actuators::response`]).
+    pub fn set_state(&mut self, states: &[f64]) {
+        let (state, _, _, _) = self.channels_mut();
+        state.copy_from_slice(states);
+    }
+
+    /// The lag's time constant, s (0: none).
+    pub fn time_constant_s(&self) -> f64 {
+        match self {
+            Actuators::FixedPitch(a) => a.lag.time_constant_s,
+            Actuators::VariablePitch(a) => a.lag.time_constant_s,
         }
     }
 
@@ -277,11 +377,19 @@ impl Actuators {
 
     /// What rotor `i` produces with health `health` (module docs).
     pub fn output(&self, i: usize, health: f64) -> RotorOutput {
+        self.output_at(self.state(), i, health)
+    }
+
+    /// What rotor `i` produces with health `health` when the channels are at `states` (laid out
+    /// like [`Actuators::state`]).
+    #[inline]
+    pub fn output_at(&self, states: &[f64], i: usize, health: f64) -> RotorOutput {
         match self {
             Actuators::FixedPitch(a) => {
-                let thrust = health * a.thrust_n[i];
+                let thrust = health * states[i];
+                // Spin of the healthy rotor at this command, then the one health rule.
                 let spin = if a.thrust_coefficient_n_s2 > 0.0 {
-                    (thrust.max(0.0) / a.thrust_coefficient_n_s2).sqrt()
+                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(health)
                 } else {
                     0.0
                 };
@@ -294,14 +402,14 @@ impl Actuators {
             }
             Actuators::VariablePitch(a) => {
                 let [k1, k2, k3, k4] = a.coefficients;
-                let (omega, alpha) = (a.state[2 * i], a.state[2 * i + 1]);
+                let (omega, alpha) = (states[2 * i], states[2 * i + 1]);
                 let w2 = omega * omega;
                 RotorOutput {
                     thrust_n: health * k1 * w2 * alpha,
                     reaction_torque_nm: health
                         * a.yaw_sign[i]
                         * (k2 * w2 + k3 * w2 * alpha * alpha + k4 * omega * alpha),
-                    spin_rad_s: -a.yaw_sign[i] * health * omega * a.speed_to_rad_s,
+                    spin_rad_s: -a.yaw_sign[i] * spin_factor(health) * omega * a.speed_to_rad_s,
                 }
             }
         }

@@ -19,6 +19,7 @@ pub mod combinations;
 pub mod controllability;
 pub mod controller;
 pub mod error;
+pub mod fault_schedule;
 pub mod ftc;
 pub mod rigid_body;
 pub mod simulation;
