@@ -358,6 +358,15 @@ impl Actuators {
         state.copy_from_slice(states);
     }
 
+    /// `true` when the channels follow the (saturated) command at once: no lag, no rate limit.
+    pub fn is_instant(&self) -> bool {
+        let lag = match self {
+            Actuators::FixedPitch(a) => a.lag,
+            Actuators::VariablePitch(a) => a.lag,
+        };
+        lag.time_constant_s == 0.0 && lag.rate_limit_per_s == f64::INFINITY
+    }
+
     /// The lag's time constant, s (0: none).
     pub fn time_constant_s(&self) -> f64 {
         match self {
@@ -547,5 +556,90 @@ mod tests {
             err.to_string().starts_with("actuator.pitch_bounds"),
             "{err}"
         );
+    }
+
+    /// RK4 on `a' = clamp((target - a) / tau, -rate, rate)` with tiny steps.
+    fn integrate_ode(lag: &Lag, mut a: f64, target: f64, t: f64) -> f64 {
+        let f = |a: f64| {
+            ((target - a) / lag.time_constant_s).clamp(-lag.rate_limit_per_s, lag.rate_limit_per_s)
+        };
+        let n = 200_000;
+        let h = t / n as f64;
+        for _ in 0..n {
+            let k1 = f(a);
+            let k2 = f(a + 0.5 * h * k1);
+            let k3 = f(a + 0.5 * h * k2);
+            let k4 = f(a + h * k3);
+            a += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        a
+    }
+
+    #[test]
+    fn rate_limited_lag_is_the_exact_solution_of_its_ode() {
+        let lag = Lag {
+            time_constant_s: 0.05,
+            rate_limit_per_s: 50.0,
+        };
+        // A 6 N step is rate-limited (6 / 0.05 = 120 N/s > 50) until the gap is 2.5 N, at 70 ms.
+        for (a0, target, t) in [
+            (0.0, 6.0, 0.03),
+            (0.0, 6.0, 0.2),
+            (6.0, 1.0, 0.15),
+            (2.0, 3.0, 0.1),
+        ] {
+            let exact = lag.response(a0, target, t);
+            let reference = integrate_ode(&lag, a0, target, t);
+            assert!(
+                (exact - reference).abs() < 1e-9,
+                "{a0} -> {target} at {t}: {exact} vs {reference}"
+            );
+        }
+        // Exact, so one long step equals many short ones (the old clip-after-lag did not).
+        let mut one = Actuators::FixedPitch(FixedPitch::new(&quad(), lag, 0.0).unwrap());
+        let mut many = one.clone();
+        one.advance(&[8.0, 0.0, 5.0, 1.0], 0.2);
+        for _ in 0..50 {
+            many.advance(&[8.0, 0.0, 5.0, 1.0], 0.004);
+        }
+        for (a, b) in one.state().iter().zip(many.state()) {
+            assert!(
+                (a - b).abs() < 1e-12,
+                "{:?} vs {:?}",
+                one.state(),
+                many.state()
+            );
+        }
+        // `response` does not move the actuator; the instant model jumps at once.
+        let mut out = [0.0; 4];
+        one.response(&[0.0; 4], 0.0, &mut out);
+        assert_eq!(&out, one.state());
+        let instant = Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 0.0).unwrap());
+        instant.response(&[1.0, 2.0, 3.0, 4.0], 0.0, &mut out);
+        assert_eq!(out, [1.0, 2.0, 3.0, 4.0]);
+        assert!(instant.is_instant() && !one.is_instant());
+    }
+
+    #[test]
+    fn health_scales_spin_by_its_square_root_in_both_models() {
+        // One rule: a rotor at efficiency 0.25 turns at half speed (thrust and torque x 0.25).
+        let mut fixed = Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 1e-5).unwrap());
+        fixed.settle(&[4.0; 4]).unwrap();
+        let k = [2e-8, 1e-9, 3e-10, 1e-6];
+        let mut variable = Actuators::VariablePitch(
+            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.1, Lag::none()).unwrap(),
+        );
+        variable.settle(&[[9000.0, 0.2]; 4].concat()).unwrap();
+        for rotors in [&fixed, &variable] {
+            let (healthy, weak) = (rotors.output(0, 1.0), rotors.output(0, 0.25));
+            assert!(healthy.spin_rad_s.abs() > 0.0);
+            assert!(
+                (weak.spin_rad_s - 0.5 * healthy.spin_rad_s).abs()
+                    < 1e-12 * healthy.spin_rad_s.abs()
+            );
+            assert!((weak.thrust_n - 0.25 * healthy.thrust_n).abs() < 1e-12);
+            assert_eq!(rotors.output(0, 0.0).spin_rad_s, 0.0);
+        }
+        assert_eq!(spin_factor(0.25), 0.5);
     }
 }

@@ -102,14 +102,22 @@ mod tests {
     #[test]
     fn faults_apply_in_time_order_and_split_intervals() {
         let mut s = FaultSchedule::new(
-            &[fault(1, 0.3, 0.0), fault(0, 0.2501, 0.5), fault(0, 0.3, 0.25)],
+            &[
+                fault(1, 0.3, 0.0),
+                fault(0, 0.2501, 0.5),
+                fault(0, 0.3, 0.25),
+            ],
             2,
         )
         .unwrap();
         let mut health = [1.0, 1.0];
         assert_eq!(s.next_time(), Some(0.2501));
         assert_eq!(s.interval_end(0.25, 0.30), 0.2501);
-        assert_eq!(s.interval_end(0.2501, 0.30), 0.30, "a fault at the start does not split");
+        assert_eq!(
+            s.interval_end(0.2501, 0.30),
+            0.30,
+            "a fault at the start does not split"
+        );
         assert!(!s.apply_due(0.25, &mut health));
         assert!(s.apply_due(0.2501, &mut health));
         assert_eq!(health, [0.5, 1.0]);
@@ -125,7 +133,8 @@ mod tests {
     #[test]
     fn bad_faults_are_named() {
         let err = |f: RotorFault| FaultSchedule::new(&[f], 4).unwrap_err().to_string();
-        assert!(err(fault(4, 1.0, 0.0)).starts_with("faults[0].rotor: rotor numbers run from 1 to 4, got 5"));
+        assert!(err(fault(4, 1.0, 0.0))
+            .starts_with("faults[0].rotor: rotor numbers run from 1 to 4, got 5"));
         assert!(err(fault(0, f64::NAN, 0.0)).starts_with("faults[0].time"));
         assert!(err(fault(0, 1.0, 1.5)).starts_with("faults[0].efficiency"));
     }

@@ -111,7 +111,12 @@ impl RigidBody {
     /// 2 at the end. Lets a caller evaluate time-dependent inputs (actuator states) once per
     /// node instead of once per stage.
     #[inline]
-    pub fn rk4_step_nodes<F>(&self, state: &RigidBodyState, dt_s: f64, mut wrench_at: F) -> RigidBodyState
+    pub fn rk4_step_nodes<F>(
+        &self,
+        state: &RigidBodyState,
+        dt_s: f64,
+        mut wrench_at: F,
+    ) -> RigidBodyState
     where
         F: FnMut(usize, &RigidBodyState) -> Wrench,
     {

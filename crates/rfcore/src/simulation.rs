@@ -15,9 +15,9 @@
 //! that time with the state there.
 //!
 //! # Step size
-//! RK4 resolves a motion of rate `lambda` only when `h |lambda|` is small: at `h |omega| = 0.5`
-//! a rotation loses about 1e-4 of its amplitude and 2.6e-4 rad of phase per step; near 2.8 it
-//! is unstable (a torque-free spin diverges). A run is refused when the substep `h = dt /
+//! RK4 resolves a motion of rate `lambda` only when `h |lambda|` is small: a rotation at
+//! `h |omega| = 0.25` loses 1.7e-6 of its amplitude and 8e-6 rad of phase per step (0.5: 1.1e-4
+//! and 2.4e-4; 1: 6e-3), and near 2.8 RK4 is unstable (a torque-free spin diverges). A run is refused when the substep `h = dt /
 //! substeps` times the fastest rate it knows of, `max(|omega_0|, 1 / time_constant)`, exceeds
 //! [`MAX_RATE_STEP`], and it ends with [`DivergenceReason::StepSize`] (a numerical cause, not the
 //! vehicle) when `h |omega|` grows past it during the run.
@@ -38,7 +38,7 @@ pub const MAX_CONTROL_STEPS: usize = 10_000_000;
 pub const MAX_RK4_STEPS: usize = 1_000_000_000;
 
 /// Largest `h max(|omega|, 1 / time_constant)` a run accepts (module docs, "Step size").
-pub const MAX_RATE_STEP: f64 = 0.5;
+pub const MAX_RATE_STEP: f64 = 0.25;
 
 /// Relative tolerance below which `duration / dt` counts as a whole number of control steps.
 const WHOLE_STEPS_RTOL: f64 = 1e-9;
@@ -638,11 +638,21 @@ pub fn simulate(
     let mut gaussian = config.noise.map(|n| Gaussian::new(n.seed));
     let mut measured_vector = [0.0; STATE_DIM];
     let nan_row = [f64::NAN; STATE_DIM];
+    let instant = actuators.is_instant();
+    let constant_wind = config.wind_profile.is_empty();
 
     schedule.apply_due(0.0, &mut health);
     if let Some(reason) = limits.reason(&state) {
-        trajectory.push_step(0.0, &state, &health, &actuators, config.noise.map(|_| &nan_row));
-        trajectory.commands.extend(std::iter::repeat_n(f64::NAN, count));
+        trajectory.push_step(
+            0.0,
+            &state,
+            &health,
+            &actuators,
+            config.noise.map(|_| &nan_row),
+        );
+        trajectory
+            .commands
+            .extend(std::iter::repeat_n(f64::NAN, count));
         trajectory.divergence = Some(Divergence {
             time_s: 0.0,
             reason,
@@ -687,6 +697,11 @@ pub fn simulate(
         let t_next = config.step_time(k + 1);
         let h = (t_next - t) / config.substeps as f64;
         actuators.saturate(&command, &mut targets);
+        // The channels do not move within this control step (they jump to the command or sit
+        // at it): one rotor evaluation serves every node of every substep.
+        let constant = instant || actuators.state() == &targets[..];
+        // Rotor totals at the start of the next interval, when known (same command, health).
+        let mut start_totals: Option<RotorTotals> = None;
         for s in 0..config.substeps {
             let mut a = t + s as f64 * h;
             let b = if s + 1 == config.substeps {
@@ -698,17 +713,36 @@ pub fn simulate(
                 // One RK4 step of body and actuators over [a, end], end = b or the next fault.
                 let end = schedule.interval_end(a, b);
                 let len = end - a;
-                let winds = [
-                    config.wind_at(a),
-                    config.wind_at(a + 0.5 * len),
-                    config.wind_at(end),
-                ];
-                let mut totals = [RotorTotals::default(); 3];
-                for (node, elapsed) in [0.0, 0.5 * len, len].into_iter().enumerate() {
-                    actuators.response(&targets, elapsed, &mut nodes[node]);
-                    totals[node] =
-                        rotor_totals(vehicle, &actuators, &nodes[node], &health, &mut outputs);
-                }
+                let winds = if constant_wind {
+                    [config.wind_m_s; 3]
+                } else {
+                    [
+                        config.wind_at(a),
+                        config.wind_at(a + 0.5 * len),
+                        config.wind_at(end),
+                    ]
+                };
+                let totals = if constant {
+                    let at_start = match start_totals {
+                        Some(t) => t,
+                        None => rotor_totals(vehicle, &actuators, &targets, &health, &mut outputs),
+                    };
+                    [at_start; 3]
+                } else {
+                    let mut totals = [RotorTotals::default(); 3];
+                    for (node, elapsed) in [0.0, 0.5 * len, len].into_iter().enumerate() {
+                        if node == 0 {
+                            if let Some(t) = start_totals {
+                                totals[0] = t;
+                                continue;
+                            }
+                        }
+                        actuators.response(&targets, elapsed, &mut nodes[node]);
+                        totals[node] =
+                            rotor_totals(vehicle, &actuators, &nodes[node], &health, &mut outputs);
+                    }
+                    totals
+                };
                 let next = body.rk4_step_nodes(&state, len, |node, x| {
                     vehicle.wrench_from(x, &totals[node], &winds[node])
                 });
@@ -751,9 +785,12 @@ pub fn simulate(
                     return Ok(trajectory);
                 }
                 state = next;
-                actuators.set_state(&nodes[2]);
+                actuators.set_state(if constant { &targets } else { &nodes[2] });
+                start_totals = Some(totals[2]);
                 a = end;
-                schedule.apply_due(a, &mut health);
+                if schedule.apply_due(a, &mut health) {
+                    start_totals = None;
+                }
             }
         }
     }
@@ -805,7 +842,7 @@ pub fn simulate_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::actuator::{FixedPitch, Lag};
+    use crate::actuator::{FixedPitch, Lag, VariablePitch};
     use crate::airframe::Airframe;
     use crate::controller::{OpenLoop, ZeroCommand};
     use crate::vehicle::Aerodynamics;
@@ -909,11 +946,7 @@ mod tests {
         // (issue #18: it used to be reported at the next control step, up to dt = 2.5 ms late;
         // the located time can be ~1e-15 s early by rounding).
         let expected = (40.0 / g).sqrt();
-        assert!(
-            (event.time_s - expected).abs() < 1e-12,
-            "{}",
-            event.time_s
-        );
+        assert!((event.time_s - expected).abs() < 1e-12, "{}", event.time_s);
         assert!((event.state.position_m.z - 20.0).abs() < 1e-9);
         assert_eq!(*run.t_s.last().unwrap(), event.time_s);
     }
@@ -1023,5 +1056,491 @@ mod tests {
         assert!(run(&config(1.0), &[fault], &mut controller).starts_with("faults[0].efficiency"));
         let mut wrong = ZeroCommand { count: 3 };
         assert!(run(&config(1.0), &[], &mut wrong).starts_with("controller: expected 4 commands"));
+    }
+
+    // ---- issue #18: answers that hold at any step size ----------------------------------------
+
+    fn lagged_rotors(airframe: &Airframe, tau: f64, rate: f64) -> Actuators {
+        let lag = Lag {
+            time_constant_s: tau,
+            rate_limit_per_s: rate,
+        };
+        Actuators::FixedPitch(FixedPitch::new(airframe, lag, 0.0).unwrap())
+    }
+
+    /// Position, velocity, attitude angle and body-rate differences, summed.
+    fn state_error(a: &RigidBodyState, b: &RigidBodyState) -> f64 {
+        (a.position_m - b.position_m).norm()
+            + (a.velocity_m_s - b.velocity_m_s).norm()
+            + a.attitude.angle_to(&b.attitude)
+            + (a.omega_rad_s - b.omega_rad_s).norm()
+    }
+
+    fn end_state(
+        vehicle: &Vehicle,
+        actuators: &Actuators,
+        controller: &mut dyn Controller,
+        faults: &[RotorFault],
+        x0: RigidBodyState,
+        cfg: &SimulationConfig,
+    ) -> RigidBodyState {
+        let run = simulate(
+            vehicle,
+            actuators.clone(),
+            controller,
+            &[1.0; 4],
+            faults,
+            x0,
+            cfg,
+        )
+        .unwrap();
+        assert!(run.divergence.is_none(), "{:?}", run.divergence);
+        *run.states.last().unwrap()
+    }
+
+    #[test]
+    fn simulation_ends_exactly_at_a_duration_that_is_not_a_multiple_of_dt() {
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let g = airframe.gravity_m_s2();
+        for (dt, expected) in [
+            (0.4, vec![0.0, 0.4, 0.8, 1.0]),
+            (0.3, vec![0.0, 0.3, 0.6, 0.9, 1.0]),
+            (0.25, vec![0.0, 0.25, 0.5, 0.75, 1.0]),
+        ] {
+            let mut controller = ZeroCommand { count: 4 };
+            let cfg = SimulationConfig::new(dt, 1, 1.0);
+            let run = simulate(
+                &vehicle,
+                instant_rotors(&airframe),
+                &mut controller,
+                &[1.0; 4],
+                &[],
+                RigidBodyState::at_rest(),
+                &cfg,
+            )
+            .unwrap();
+            assert_eq!(run.t_s.len(), expected.len(), "dt {dt}: {:?}", run.t_s);
+            for (t, e) in run.t_s.iter().zip(&expected) {
+                assert!((t - e).abs() < 1e-15, "dt {dt}: {:?}", run.t_s);
+            }
+            assert_eq!(*run.t_s.last().unwrap(), 1.0);
+            // Free fall is integrated exactly, including the shortened last step.
+            let end = run.states.last().unwrap();
+            assert!(
+                (end.position_m.z - 0.5 * g).abs() < 1e-12,
+                "dt {dt}: {}",
+                end.position_m.z
+            );
+            // Thinned: every second step, and the last one at its true time.
+            let mut thin = cfg.clone();
+            thin.record_every = 2;
+            let run = simulate(
+                &vehicle,
+                instant_rotors(&airframe),
+                &mut controller,
+                &[1.0; 4],
+                &[],
+                RigidBodyState::at_rest(),
+                &thin,
+            )
+            .unwrap();
+            let every_second: Vec<f64> = expected
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| k % 2 == 0 || *k == expected.len() - 1)
+                .map(|(_, t)| *t)
+                .collect();
+            assert_eq!(run.t_s.len(), every_second.len(), "{:?}", run.t_s);
+            assert_eq!(*run.t_s.last().unwrap(), 1.0);
+        }
+    }
+
+    /// Constant (partly saturating) thrust commands against a lagged actuator: the coupled
+    /// body + actuator system converges at fourth order.
+    fn convergence_ratios(actuators: &Actuators, command: &[f64], vehicle: &Vehicle) -> Vec<f64> {
+        let duration = 0.6;
+        let mut controller = OpenLoop::new(
+            vec![0.0],
+            DMatrix::from_row_slice(1, command.len(), command),
+        )
+        .unwrap();
+        let x0 = RigidBodyState {
+            omega_rad_s: Vector3::new(0.3, -0.2, 0.5),
+            ..RigidBodyState::at_rest()
+        };
+        let run = |n: usize, controller: &mut OpenLoop| {
+            end_state(
+                vehicle,
+                actuators,
+                controller,
+                &[],
+                x0,
+                &SimulationConfig::new(duration / n as f64, 1, duration),
+            )
+        };
+        let reference = run(4800, &mut controller);
+        let errors: Vec<f64> = [12, 24, 48]
+            .iter()
+            .map(|&n| state_error(&run(n, &mut controller), &reference))
+            .collect();
+        errors.windows(2).map(|e| e[0] / e[1]).collect()
+    }
+
+    #[test]
+    fn simulation_of_body_and_actuators_converges_at_fourth_order() {
+        let airframe = quad_x();
+        let vehicle = Vehicle::new(
+            &airframe,
+            Aerodynamics {
+                rotor_inertia_kg_m2: 5e-5,
+                linear_drag_n_s_m: 0.2,
+                ..Aerodynamics::default()
+            },
+        )
+        .unwrap();
+        // Fixed pitch, tau = 0.25 s (h / tau = 0.2 at the coarsest step); rotor 1 saturates.
+        let lag = Lag {
+            time_constant_s: 0.25,
+            rate_limit_per_s: f64::INFINITY,
+        };
+        let mut fixed = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 1.5e-5).unwrap());
+        fixed.settle(&[3.76; 4]).unwrap();
+        let ratios = convergence_ratios(&fixed, &[9.0, 3.0, 4.5, 2.5], &vehicle);
+        eprintln!("fixed pitch ratios {ratios:?}");
+        for r in &ratios {
+            assert!(
+                (13.0..19.0).contains(r),
+                "fixed pitch: error ratios {ratios:?}"
+            );
+        }
+        // Variable pitch (speed, pitch per rotor), the same lag; rotor 2's speed saturates.
+        let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        let k1 = hover / (5000.0f64.powi(2) * 0.2);
+        let mut variable = Actuators::VariablePitch(
+            VariablePitch::new(
+                &airframe,
+                [k1, 1e-9, 3e-9, 1e-6],
+                (0.0, 5300.0),
+                (-0.3, 0.3),
+                std::f64::consts::PI / 30.0,
+                lag,
+            )
+            .unwrap(),
+        );
+        variable
+            .settle(&[5000.0, 0.2, 5000.0, 0.2, 5000.0, 0.2, 5000.0, 0.2])
+            .unwrap();
+        let command = [5100.0, 0.21, 9000.0, 0.2, 4900.0, 0.2, 5000.0, 0.19];
+        let ratios = convergence_ratios(&variable, &command, &vehicle);
+        eprintln!("variable pitch ratios {ratios:?}");
+        for r in &ratios {
+            assert!(
+                (13.0..19.0).contains(r),
+                "variable pitch: error ratios {ratios:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn simulation_with_rate_limit_and_saturation_matches_a_fine_step_reference() {
+        // A 1.5 s open-loop manoeuvre through saturation and the rate limit at dt = 0.02 s and
+        // one substep (the audit's case: the old first-order coupling was 5e-2 m off).
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let rotors = lagged_rotors(&airframe, 0.08, 50.0);
+        let mut rotors_settled = rotors.clone();
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        rotors_settled.settle(&[f; 4]).unwrap();
+        // Yaw one way with the yawing pair saturated (7 N asked, 6.125 N given), then the other
+        // way (a 4.7 N step: 50 N/s rate-limited), then hover; a small roll asymmetry.
+        let b = airframe.effectiveness_matrix();
+        let mut rows = Vec::new();
+        for (sign, extra) in [(1.0, 0.1), (-1.0, 0.1), (0.0, 0.0)] {
+            for i in 0..4 {
+                let w = b[(3, i)].signum() * sign;
+                let roll = if i == 1 {
+                    extra
+                } else if i == 3 {
+                    -extra
+                } else {
+                    0.0
+                };
+                rows.push(
+                    if w > 0.0 {
+                        7.0
+                    } else if w < 0.0 {
+                        2.0 * f - 6.125
+                    } else {
+                        f
+                    } + roll,
+                );
+            }
+        }
+        let mut controller =
+            OpenLoop::new(vec![0.0, 0.5, 1.0], DMatrix::from_row_slice(3, 4, &rows)).unwrap();
+        let x0 = RigidBodyState::at_rest();
+        let coarse = end_state(
+            &vehicle,
+            &rotors_settled,
+            &mut controller,
+            &[],
+            x0,
+            &SimulationConfig::new(0.02, 1, 1.5),
+        );
+        let fine = end_state(
+            &vehicle,
+            &rotors_settled,
+            &mut controller,
+            &[],
+            x0,
+            &SimulationConfig::new(0.02, 40, 1.5),
+        );
+        let position = (coarse.position_m - fine.position_m).norm();
+        let angle = coarse.attitude.angle_to(&fine.attitude);
+        eprintln!(
+            "manoeuvre: {position:e} m, {angle:e} rad, yaw {}",
+            fine.euler_rad()[2]
+        );
+        assert!(
+            position < 2e-4 && angle < 5e-4,
+            "{position:e} m, {angle:e} rad"
+        );
+    }
+
+    #[test]
+    fn simulation_fault_acts_at_its_own_time_not_the_next_substep() {
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let g = airframe.gravity_m_s2();
+        let mut actuators = instant_rotors(&airframe);
+        let f = airframe.mass_kg() * g / 4.0;
+        actuators.settle(&[f; 4]).unwrap();
+        let mut controller = hover_schedule(&airframe);
+        // Every rotor at half efficiency from 0.2501 s: the vehicle then falls at g / 2.
+        let t_fault = 0.2501;
+        let faults: Vec<RotorFault> = (0..4)
+            .map(|rotor| RotorFault {
+                rotor,
+                time_s: t_fault,
+                efficiency: 0.5,
+            })
+            .collect();
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &faults,
+            RigidBodyState::at_rest(),
+            &SimulationConfig::new(0.05, 1, 0.5),
+        )
+        .unwrap();
+        for (k, t) in run.t_s.iter().enumerate() {
+            let falling = (t - t_fault).max(0.0);
+            let v = run.states[k].velocity_m_s.z;
+            assert!((v - 0.5 * g * falling).abs() < 1e-12, "t = {t}: v = {v}");
+            let z = run.states[k].position_m.z;
+            assert!(
+                (z - 0.25 * g * falling * falling).abs() < 1e-12,
+                "t = {t}: z = {z}"
+            );
+        }
+        // Health rows: full at 0.25 s, halved from the row after the fault (0.30 s).
+        assert_eq!(&run.health[5 * 4..6 * 4], &[1.0; 4]);
+        assert_eq!(&run.health[6 * 4..7 * 4], &[0.5; 4]);
+        assert_eq!(run.thrust_n[6 * 4], 0.5 * f);
+    }
+
+    #[test]
+    fn simulation_refuses_a_substep_too_long_for_the_spin_or_the_lag() {
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let mut controller = ZeroCommand { count: 4 };
+        let spinning = RigidBodyState {
+            omega_rad_s: Vector3::new(0.0, 0.0, 75.0),
+            ..RigidBodyState::at_rest()
+        };
+        let err = simulate(
+            &vehicle,
+            instant_rotors(&airframe),
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            spinning,
+            &SimulationConfig::new(0.05, 1, 3.0),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("substeps: the RK4 substep h = dt / substeps = 0.05 s"),
+            "{err}"
+        );
+        assert!(
+            err.contains("|omega_0| = 75 rad/s") && err.contains("substeps >= 15"),
+            "{err}"
+        );
+        // An actuator lag shorter than the substep.
+        let err = simulate(
+            &vehicle,
+            lagged_rotors(&airframe, 0.02, f64::INFINITY),
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            RigidBodyState::at_rest(),
+            &SimulationConfig::new(0.02, 1, 1.0),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("1 / time_constant = 50 1/s") && err.contains("substeps >= 4"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn simulation_torque_free_spin_keeps_its_wobble_at_an_accepted_step() {
+        // r = 42 rad/s with a 3 rad/s wobble: dt = 0.05 with one substep used to damp the wobble
+        // to 1.5e-4 rad/s in 3 s. The refused step names the fix; the accepted one conserves.
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let body = vehicle.body();
+        let mut controller = ZeroCommand { count: 4 };
+        let x0 = RigidBodyState {
+            omega_rad_s: Vector3::new(3.0, 0.0, 42.0),
+            ..RigidBodyState::at_rest()
+        };
+        let run = |substeps: usize, controller: &mut ZeroCommand| {
+            let mut cfg = SimulationConfig::new(0.05, substeps, 3.0);
+            cfg.limits.max_tilt_rad = f64::INFINITY;
+            simulate(
+                &vehicle,
+                instant_rotors(&airframe),
+                controller,
+                &[1.0; 4],
+                &[],
+                x0,
+                &cfg,
+            )
+        };
+        let err = run(1, &mut controller).unwrap_err().to_string();
+        assert!(err.contains("substeps >= 9"), "{err}");
+        let run = run(9, &mut controller).unwrap();
+        assert!(run.divergence.is_none(), "{:?}", run.divergence);
+        let end = run.states.last().unwrap();
+        let energy = body.rotational_energy_j(&x0);
+        let drift = (body.rotational_energy_j(end) - energy).abs() / energy;
+        let momentum = body.angular_momentum_world(&x0);
+        let moved = (body.angular_momentum_world(end) - momentum).norm() / momentum.norm();
+        assert!(
+            drift < 1e-5 && moved < 1e-4,
+            "energy {drift:e}, momentum {moved:e}"
+        );
+        // The wobble (transverse rate) stays of the size it started with, not damped away.
+        let wobble = end.omega_rad_s.xy().norm();
+        assert!(wobble > 2.0, "{wobble}");
+    }
+
+    /// Hover thrust plus `d` on the rotors that turn the vehicle to positive yaw, minus on the
+    /// others: a pure yaw torque `4 k_mu d`.
+    fn yaw_schedule(airframe: &Airframe, d: f64) -> OpenLoop {
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        let b = airframe.effectiveness_matrix();
+        let row: Vec<f64> = (0..4).map(|i| f + d * b[(3, i)].signum()).collect();
+        OpenLoop::new(vec![0.0], DMatrix::from_row_slice(1, 4, &row)).unwrap()
+    }
+
+    #[test]
+    fn simulation_ends_with_a_step_size_divergence_when_rates_outgrow_the_substep() {
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let mut actuators = instant_rotors(&airframe);
+        let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+        actuators.settle(&[f; 4]).unwrap();
+        let mut controller = yaw_schedule(&airframe, 1.0);
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            RigidBodyState::at_rest(),
+            &SimulationConfig::new(0.01, 1, 10.0),
+        )
+        .unwrap();
+        let event = run.divergence.expect("the spin-up outgrows h = 0.01 s");
+        assert_eq!(event.reason, DivergenceReason::StepSize);
+        assert_eq!(event.reason.name(), "step_size");
+        // r = (4 k_mu d / Jz) t reaches MAX_RATE_STEP / h = 25 rad/s at t = 25 Jz / (4 k_mu d).
+        let jz = airframe.inertia_kg_m2()[2];
+        let k_mu = airframe.drag_torque_ratio_m();
+        let expected = 25.0 * jz / (4.0 * k_mu);
+        assert!(
+            (event.time_s - expected).abs() < 1e-9,
+            "{} vs {expected}",
+            event.time_s
+        );
+        assert!((event.state.omega_rad_s.z - 25.0).abs() < 1e-7);
+    }
+
+    #[test]
+    fn simulation_locates_a_limit_crossing_within_the_substep() {
+        // Rolling at 2 rad/s from level (free fall, no torque): tilt = 2 t reaches 90 degrees at
+        // pi / 4 s. dt = 0.05 s used to report it at 0.80 s (at 91.7 degrees).
+        let airframe = quad_x();
+        let vehicle = still_air(&airframe);
+        let mut controller = ZeroCommand { count: 4 };
+        let x0 = RigidBodyState {
+            omega_rad_s: Vector3::new(2.0, 0.0, 0.0),
+            ..RigidBodyState::at_rest()
+        };
+        let mut cfg = SimulationConfig::new(0.05, 1, 2.0);
+        cfg.record_every = 4;
+        let run = simulate(
+            &vehicle,
+            instant_rotors(&airframe),
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            x0,
+            &cfg,
+        )
+        .unwrap();
+        let event = run.divergence.unwrap();
+        assert_eq!(event.reason, DivergenceReason::Tilt);
+        let quarter = std::f64::consts::FRAC_PI_4;
+        assert!((event.time_s - quarter).abs() < 1e-7, "{}", event.time_s);
+        let tilt = event.state.primary_axis().z.acos();
+        assert!((tilt - std::f64::consts::FRAC_PI_2).abs() < 2e-7, "{tilt}");
+        // Thinned recording: rows at 0, 0.2, 0.4, 0.6, then the crossing at its own time.
+        assert_eq!(run.t_s.len(), 5, "{:?}", run.t_s);
+        assert_eq!(*run.t_s.last().unwrap(), event.time_s);
+        assert_eq!(*run.states.last().unwrap(), event.state);
+        assert!(run.commands[4 * 4..].iter().all(|c| c.is_nan()));
+        // A body rate that grows through its limit inside a substep.
+        let mut cfg = SimulationConfig::new(0.05, 1, 60.0);
+        cfg.limits.max_rate_rad_s = 0.3;
+        let mut controller = yaw_schedule(&airframe, 0.01);
+        let mut actuators = instant_rotors(&airframe);
+        actuators.settle(&[3.76; 4]).unwrap();
+        let run = simulate(
+            &vehicle,
+            actuators,
+            &mut controller,
+            &[1.0; 4],
+            &[],
+            RigidBodyState::at_rest(),
+            &cfg,
+        )
+        .unwrap();
+        let event = run.divergence.unwrap();
+        assert_eq!(event.reason, DivergenceReason::BodyRate);
+        let expected =
+            0.3 * airframe.inertia_kg_m2()[2] / (4.0 * airframe.drag_torque_ratio_m() * 0.01);
+        assert!(
+            (event.time_s - expected).abs() < 1e-9,
+            "{} vs {expected}",
+            event.time_s
+        );
     }
 }
