@@ -330,11 +330,29 @@ impl Actuators {
     /// saturated targets `targets` (see [`Actuators::saturate`]), without changing `self`.
     #[inline]
     pub fn response(&self, targets: &[f64], elapsed_s: f64, out: &mut [f64]) {
+        self.response_with_decay(targets, elapsed_s, self.decay(elapsed_s), out);
+    }
+
+    /// `exp(-elapsed / time_constant)` (1 without lag), for [`Actuators::response_with_decay`]:
+    /// lets a caller that takes many equal steps compute it once.
+    #[inline]
+    pub fn decay(&self, elapsed_s: f64) -> f64 {
+        self.lag().decay(elapsed_s)
+    }
+
+    /// [`Actuators::response`] with `decay = self.decay(elapsed_s)` given.
+    #[inline]
+    pub fn response_with_decay(
+        &self,
+        targets: &[f64],
+        elapsed_s: f64,
+        decay: f64,
+        out: &mut [f64],
+    ) {
         let (state, lag) = match self {
             Actuators::FixedPitch(a) => (&a.thrust_n[..], a.lag),
             Actuators::VariablePitch(a) => (&a.state[..], a.lag),
         };
-        let decay = lag.decay(elapsed_s);
         for ((o, &x), &target) in out.iter_mut().zip(state).zip(targets) {
             *o = lag.response_with_decay(x, target, elapsed_s, decay);
         }
@@ -360,18 +378,20 @@ impl Actuators {
 
     /// `true` when the channels follow the (saturated) command at once: no lag, no rate limit.
     pub fn is_instant(&self) -> bool {
-        let lag = match self {
-            Actuators::FixedPitch(a) => a.lag,
-            Actuators::VariablePitch(a) => a.lag,
-        };
+        let lag = self.lag();
         lag.time_constant_s == 0.0 && lag.rate_limit_per_s == f64::INFINITY
     }
 
     /// The lag's time constant, s (0: none).
     pub fn time_constant_s(&self) -> f64 {
+        self.lag().time_constant_s
+    }
+
+    /// The lag and rate limit shared by every channel.
+    pub fn lag(&self) -> Lag {
         match self {
-            Actuators::FixedPitch(a) => a.lag.time_constant_s,
-            Actuators::VariablePitch(a) => a.lag.time_constant_s,
+            Actuators::FixedPitch(a) => a.lag,
+            Actuators::VariablePitch(a) => a.lag,
         }
     }
 
@@ -389,9 +409,41 @@ impl Actuators {
         self.output_at(self.state(), i, health)
     }
 
+    /// Calls `f` with what each rotor produces (rotor 1 first) with the channels at `states`
+    /// and health `health`: [`Actuators::output_at`] for every rotor, the model chosen once.
+    #[inline(always)]
+    pub fn for_each_output(&self, states: &[f64], health: &[f64], mut f: impl FnMut(RotorOutput)) {
+        match self {
+            Actuators::FixedPitch(a) => {
+                let rotors = states
+                    .iter()
+                    .zip(health)
+                    .zip(a.torque_per_thrust_m.iter().zip(&a.yaw_sign));
+                for ((&command, &eta), (&torque_per_thrust, &yaw_sign)) in rotors {
+                    let thrust = eta * command;
+                    let spin = if a.thrust_coefficient_n_s2 > 0.0 {
+                        (command.max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(eta)
+                    } else {
+                        0.0
+                    };
+                    f(RotorOutput {
+                        thrust_n: thrust,
+                        reaction_torque_nm: torque_per_thrust * thrust,
+                        spin_rad_s: -yaw_sign * spin,
+                    });
+                }
+            }
+            Actuators::VariablePitch(_) => {
+                for (i, &eta) in health.iter().enumerate() {
+                    f(self.output_at(states, i, eta));
+                }
+            }
+        }
+    }
+
     /// What rotor `i` produces with health `health` when the channels are at `states` (laid out
     /// like [`Actuators::state`]).
-    #[inline]
+    #[inline(always)]
     pub fn output_at(&self, states: &[f64], i: usize, health: f64) -> RotorOutput {
         match self {
             Actuators::FixedPitch(a) => {

@@ -79,6 +79,7 @@ impl RigidBody {
     }
 
     /// The time derivative of `state` under `wrench` (Newton-Euler).
+    #[inline]
     pub fn derivative(&self, state: &RigidBodyState, wrench: &Wrench) -> StateDerivative {
         let omega = state.omega_rad_s;
         let j_omega = self.inertia_kg_m2 * omega;
@@ -198,6 +199,7 @@ impl RigidBodyState {
 
     /// `self + h * derivative`, the intermediate states of RK4 (quaternion not renormalised: the
     /// derivative is evaluated on the raw 4-vector, which is what makes the scheme RK4).
+    #[inline]
     fn advanced(&self, d: &StateDerivative, h: f64) -> Self {
         RigidBodyState {
             position_m: self.position_m + d.position * h,

@@ -25,7 +25,7 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::actuator::{Actuators, RotorOutput};
+use crate::actuator::Actuators;
 use crate::controller::{state_from_vector, state_vector, Controller, STATE_DIM};
 use crate::error::{require_finite, Result, RfError};
 pub use crate::fault_schedule::{FaultSchedule, RotorFault};
@@ -534,12 +534,15 @@ fn rotor_totals(
     actuators: &Actuators,
     states: &[f64],
     health: &[f64],
-    outputs: &mut [RotorOutput],
 ) -> RotorTotals {
-    for (i, out) in outputs.iter_mut().enumerate() {
-        *out = actuators.output_at(states, i, health[i]);
-    }
-    vehicle.rotor_totals(outputs)
+    let mut totals = RotorTotals::default();
+    let mut xy = vehicle.rotor_xy_m().iter();
+    actuators.for_each_output(states, health, |out| {
+        if let Some(&at) = xy.next() {
+            totals.add(at, &out);
+        }
+    });
+    totals
 }
 
 /// The up-front step-size check (module docs).
@@ -627,7 +630,6 @@ pub fn simulate(
     };
     controller.reset();
     let mut health = initial_health.to_vec();
-    let mut outputs = vec![RotorOutput::default(); m];
     let mut command = vec![0.0; count];
     let mut targets = vec![0.0; count];
     // Channel states at the start, middle and end of an interval.
@@ -700,6 +702,10 @@ pub fn simulate(
         // The channels do not move within this control step (they jump to the command or sit
         // at it): one rotor evaluation serves every node of every substep.
         let constant = instant || actuators.state() == &targets[..];
+        // Lag decays over a half and a whole substep, shared by every substep not split by a
+        // fault.
+        let half_decay = actuators.decay(0.5 * h);
+        let decays = [1.0, half_decay, half_decay * half_decay];
         // Rotor totals at the start of the next interval, when known (same command, health).
         let mut start_totals: Option<RotorTotals> = None;
         for s in 0..config.substeps {
@@ -725,11 +731,12 @@ pub fn simulate(
                 let totals = if constant {
                     let at_start = match start_totals {
                         Some(t) => t,
-                        None => rotor_totals(vehicle, &actuators, &targets, &health, &mut outputs),
+                        None => rotor_totals(vehicle, &actuators, &targets, &health),
                     };
                     [at_start; 3]
                 } else {
                     let mut totals = [RotorTotals::default(); 3];
+                    let split = len != h;
                     for (node, elapsed) in [0.0, 0.5 * len, len].into_iter().enumerate() {
                         if node == 0 {
                             if let Some(t) = start_totals {
@@ -737,9 +744,13 @@ pub fn simulate(
                                 continue;
                             }
                         }
-                        actuators.response(&targets, elapsed, &mut nodes[node]);
-                        totals[node] =
-                            rotor_totals(vehicle, &actuators, &nodes[node], &health, &mut outputs);
+                        let decay = if split {
+                            actuators.decay(elapsed)
+                        } else {
+                            decays[node]
+                        };
+                        actuators.response_with_decay(&targets, elapsed, decay, &mut nodes[node]);
+                        totals[node] = rotor_totals(vehicle, &actuators, &nodes[node], &health);
                     }
                     totals
                 };
@@ -754,8 +765,7 @@ pub fn simulate(
                         let mut tot = [RotorTotals::default(); 3];
                         for (node, elapsed) in [0.0, 0.5 * l, l].into_iter().enumerate() {
                             actuators.response(&targets, elapsed, &mut channels);
-                            tot[node] =
-                                rotor_totals(vehicle, &actuators, &channels, &health, &mut outputs);
+                            tot[node] = rotor_totals(vehicle, &actuators, &channels, &health);
                         }
                         let w = [config.wind_at(a), config.wind_at(mid), config.wind_at(fin)];
                         body.rk4_step_nodes(&state, l, |node, x| {
