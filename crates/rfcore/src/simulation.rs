@@ -736,7 +736,8 @@ pub fn simulate(
                     [at_start; 3]
                 } else {
                     let mut totals = [RotorTotals::default(); 3];
-                    let split = len != h;
+                    // Shortened by a fault (not by rounding of the substep grid).
+                    let split = (len - h).abs() > 1e-9 * h;
                     for (node, elapsed) in [0.0, 0.5 * len, len].into_iter().enumerate() {
                         if node == 0 {
                             if let Some(t) = start_totals {
