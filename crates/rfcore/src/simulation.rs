@@ -43,7 +43,8 @@ pub const MAX_RATE_STEP: f64 = 0.25;
 /// Relative tolerance below which `duration / dt` counts as a whole number of control steps.
 const WHOLE_STEPS_RTOL: f64 = 1e-9;
 
-/// Limits past which a run is declared diverged.
+/// Limits past which a run is declared diverged, checked after every RK4 substep; a crossing
+/// is located within its substep (the event's time and state are at the crossing).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DivergenceLimits {
     /// Largest angle between body z and world z (down), rad.
@@ -127,6 +128,8 @@ pub struct SimulationConfig {
     pub control_dt_s: f64,
     /// RK4 steps per control period.
     pub substeps: usize,
+    /// The run ends exactly here: when it is not a whole number of control periods, the last
+    /// control step is shortened (and recorded at `duration_s`).
     pub duration_s: f64,
     pub limits: DivergenceLimits,
     /// Constant wind, world NED, m/s.
