@@ -1,4 +1,5 @@
-//! Criterion benchmarks of the flight simulator (quad-x preset, no drag, no actuator lag).
+//! Criterion benchmarks of the flight simulator (quad-x preset, no drag; no actuator lag except
+//! in `linear_feedback_lagged`).
 //!
 //! Run from the workspace root with `cargo bench --bench simulation` (add
 //! `-- --warm-up-time 1 --measurement-time 3` for a quick run). The Python-side batch and the
@@ -14,8 +15,12 @@
 //!   RK4 substeps per control period (4,000 control steps, n = 16,000 RK4 steps), a hand-built
 //!   `LinearFeedback` (diagonal PD through the pseudo-inverse of the effectiveness matrix),
 //!   starting from a small velocity / attitude perturbation about the hover point. Includes
-//!   everything `simulate` does per step: trajectory recording, divergence checks, the 4,001
-//!   controller calls (Euler angles + a 4 x 12 gain product), the actuator update per substep;
+//!   everything `simulate` does per step: trajectory recording, divergence checks after every
+//!   substep, the 4,001 controller calls (Euler angles + a 4 x 12 gain product), the actuator
+//!   response at the RK4 nodes (constant within a control step for these instant rotors);
+//! - `simulation/flight_10s/linear_feedback_lagged`: the same flight with a 25 ms rotor lag and
+//!   a 50 N/s rate limit (Ke's and Lanzon's values): the actuator response is evaluated at the
+//!   midpoint and end of every substep, the cost of integrating actuators and body together;
 //! - `simulation/flight_10s/open_loop`: the same flight with `OpenLoop` holding the hover thrusts
 //!   from the trim point (n = 16,000).
 //!
@@ -176,6 +181,48 @@ fn bench_simulation(c: &mut Criterion) {
             simulate(
                 &vehicle,
                 actuators.clone(),
+                &mut controller,
+                &health,
+                &[],
+                black_box(perturbed),
+                &config,
+            )
+            .unwrap()
+        })
+    });
+
+    // -- closed loop with rotor lag and rate limit -----------------------------------------------
+    let lag = Lag {
+        time_constant_s: 0.025,
+        rate_limit_per_s: 50.0,
+    };
+    let mut lagged = Actuators::FixedPitch(
+        FixedPitch::new(&airframe, lag, 0.0).expect("fixed-pitch actuators with lag"),
+    );
+    lagged.settle(&u_trim).unwrap();
+    let run = simulate(
+        &vehicle,
+        lagged.clone(),
+        &mut feedback.clone(),
+        &health,
+        &[],
+        perturbed,
+        &config,
+    )
+    .expect("closed-loop flight with rotor lag");
+    assert!(run.divergence.is_none(), "{:?}", run.divergence);
+    let end = run.states.last().unwrap();
+    let miss = (end.position_m - perturbed.position_m).norm();
+    assert!(
+        miss < 0.01,
+        "lagged closed loop ends {miss} m from the start"
+    );
+    group.bench_function("flight_10s/linear_feedback_lagged", |b| {
+        b.iter(|| {
+            let mut controller = feedback.clone();
+            simulate(
+                &vehicle,
+                lagged.clone(),
                 &mut controller,
                 &health,
                 &[],

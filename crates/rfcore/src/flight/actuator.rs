@@ -4,21 +4,27 @@
 //! (Ke, Lanzon, Du) and variable-pitch propellers commanded in speed and blade pitch (Wang et al.
 //! eq. (3)). Adding a model means adding a variant; the simulator only sees [`RotorOutput`]s.
 //!
-//! # Discretisation (stated once, used everywhere)
-//! Actuator states advance once per integrator substep with the command held constant over it
-//! (zero-order hold), in this order:
-//! 1. the command is saturated to the channel's bounds (a rotor cannot be asked for more than it
-//!    can give);
-//! 2. the first-order lag `tau x' = u - x` is solved exactly over the substep:
-//!    `x+ = u + (x - u) exp(-dt / tau)` (`tau = 0` means no lag);
-//! 3. the change is clipped to the rate limit `|x+ - x| <= rate dt` (Lanzon's 50 N/s).
+//! # Dynamics (stated once, used everywhere)
+//! Every channel `a` follows the continuous first-order lag with saturation and rate limit
 //!
-//! The rigid body then sees the new outputs held constant through its RK4 substep.
+//! `a' = clamp((sat(u) - a) / tau, -rate, rate)`
+//!
+//! (`sat`: the channel's bounds, a rotor cannot be asked for more than it can give; `tau = 0`
+//! means no lag: with an infinite rate the state follows the command at once, with a finite
+//! rate it slews at the rate limit, Lanzon's 50 N/s). The command is held between control steps
+//! (zero-order hold), and for a held command this ODE has a closed-form solution
+//! ([`Lag::response`]): a straight line at the rate limit while `|sat(u) - a| > rate tau`, then
+//! the exponential. The simulator evaluates that solution at every RK4 stage time, so the rigid
+//! body sees the actuator as it evolves *within* each substep (the coupled system is fourth order
+//! where smooth; the actuator part is exact, so it is stable at any step).
 //!
 //! # Health
-//! `health_i` in [0, 1] (Du's eta, Ke's lambda) scales everything rotor i produces: thrust,
-//! reaction torque and spin (a failed rotor produces nothing). The actuator state itself is not
-//! touched, so a controller that keeps commanding a dead rotor sees no effect, as in reality.
+//! `health_i` in [0, 1] (Du's eta, Ke's lambda) scales what rotor i produces (a failed rotor
+//! produces nothing). One rule for both models, written once in [`spin_factor`]: a rotor at
+//! efficiency `eta` delivers `eta` times the thrust and reaction torque *because it turns slower*,
+//! so its spin (the gyroscopic moment) is `sqrt(eta)` times the healthy spin. The actuator state
+//! itself is not touched, so a controller that keeps commanding a dead rotor sees no effect, as
+//! in reality.
 
 use crate::airframe::Airframe;
 use crate::error::{require_finite, Result, RfError};
@@ -74,17 +80,68 @@ impl Lag {
         Ok(())
     }
 
-    /// One substep of saturation, exact lag and rate limit (module docs).
-    fn advance(&self, state: f64, command: f64, lower: f64, upper: f64, dt_s: f64) -> f64 {
-        let target = command.clamp(lower, upper);
-        let lagged = if self.time_constant_s > 0.0 {
-            target + (state - target) * (-dt_s / self.time_constant_s).exp()
+    /// The channel state `elapsed_s` after `state` under the held, already saturated `target`:
+    /// the exact solution of `a' = clamp((target - a) / tau, -rate, rate)` (module docs). With
+    /// no lag and no rate limit the state is `target` for any `elapsed_s`, including 0 (the
+    /// value just after the command changed).
+    #[inline]
+    pub fn response(&self, state: f64, target: f64, elapsed_s: f64) -> f64 {
+        self.response_with_decay(state, target, elapsed_s, self.decay(elapsed_s))
+    }
+
+    /// `exp(-elapsed / tau)` (1 without lag): shared by every channel at one time.
+    #[inline]
+    fn decay(&self, elapsed_s: f64) -> f64 {
+        if self.time_constant_s > 0.0 {
+            (-elapsed_s / self.time_constant_s).exp()
+        } else {
+            1.0
+        }
+    }
+
+    #[inline]
+    fn response_with_decay(&self, state: f64, target: f64, elapsed_s: f64, decay: f64) -> f64 {
+        let gap = target - state;
+        let tau = self.time_constant_s;
+        let rate = self.rate_limit_per_s;
+        if elapsed_s == 0.0 && (tau > 0.0 || rate.is_finite()) {
+            return state; // continuous: exactly the current state
+        }
+        if tau > 0.0 {
+            // Rate-limited while |gap| / tau > rate: a line until the gap is rate tau, at
+            // s* = (|gap| - rate tau) / rate, then the exponential from there.
+            let slew = rate * tau;
+            if gap.abs() <= slew {
+                return target - gap * decay;
+            }
+            let s_star = (gap.abs() - slew) / rate;
+            if elapsed_s <= s_star {
+                state + gap.signum() * rate * elapsed_s
+            } else {
+                target - gap.signum() * slew * (-(elapsed_s - s_star) / tau).exp()
+            }
+        } else if rate.is_finite() {
+            let step = rate * elapsed_s;
+            state + gap.clamp(-step, step)
         } else {
             target
-        };
-        let step = self.rate_limit_per_s * dt_s;
-        state + (lagged - state).clamp(-step, step)
+        }
     }
+}
+
+/// The factor by which a rotor at efficiency `health` spins relative to a healthy rotor with the
+/// same command: `sqrt(health)`.
+///
+/// Decision (physics): a rotor's thrust and reaction torque both go as the square of its speed
+/// (`f = k_f Omega^2`, `q = k_m Omega^2`). The model scales both by `health` (Du's column
+/// scaling, including the yaw row), which is what a rotor turning at `sqrt(health)` times the
+/// speed produces: a weak motor, a sagging ESC or a failed one (health 0: stopped, no gyroscopic
+/// moment). The alternative, full speed with less thrust (a damaged blade), would leave a dead
+/// rotor spinning at full speed and would not scale the reaction torque like the thrust. Both
+/// actuator models use this one function.
+#[inline]
+pub fn spin_factor(health: f64) -> f64 {
+    health.max(0.0).sqrt()
 }
 
 /// Fixed-pitch rotors commanded in thrust (N), bounds and spin from the airframe.
@@ -258,11 +315,83 @@ impl Actuators {
         Ok(())
     }
 
-    /// Advances every channel by one substep under `commands` (`channels() * rotor_count()`).
+    /// Advances every channel by `dt_s` under `commands` (`channels() * rotor_count()`), held:
+    /// the exact solution of the lag ODE (module docs).
     pub fn advance(&mut self, commands: &[f64], dt_s: f64) {
         let (state, lag, lower, upper) = self.channels_mut();
+        let decay = lag.decay(dt_s);
         for (k, x) in state.iter_mut().enumerate() {
-            *x = lag.advance(*x, commands[k], lower[k], upper[k], dt_s);
+            let target = commands[k].clamp(lower[k], upper[k]);
+            *x = lag.response_with_decay(*x, target, dt_s, decay);
+        }
+    }
+
+    /// Writes into `out` every channel's state `elapsed_s` after the current state under the
+    /// saturated targets `targets` (see [`Actuators::saturate`]), without changing `self`.
+    #[inline]
+    pub fn response(&self, targets: &[f64], elapsed_s: f64, out: &mut [f64]) {
+        self.response_with_decay(targets, elapsed_s, self.decay(elapsed_s), out);
+    }
+
+    /// `exp(-elapsed / time_constant)` (1 without lag), for [`Actuators::response_with_decay`]:
+    /// lets a caller that takes many equal steps compute it once.
+    #[inline]
+    pub fn decay(&self, elapsed_s: f64) -> f64 {
+        self.lag().decay(elapsed_s)
+    }
+
+    /// [`Actuators::response`] with `decay = self.decay(elapsed_s)` given.
+    #[inline]
+    pub fn response_with_decay(
+        &self,
+        targets: &[f64],
+        elapsed_s: f64,
+        decay: f64,
+        out: &mut [f64],
+    ) {
+        let (state, lag) = match self {
+            Actuators::FixedPitch(a) => (&a.thrust_n[..], a.lag),
+            Actuators::VariablePitch(a) => (&a.state[..], a.lag),
+        };
+        for ((o, &x), &target) in out.iter_mut().zip(state).zip(targets) {
+            *o = lag.response_with_decay(x, target, elapsed_s, decay);
+        }
+    }
+
+    /// The commands clipped to each channel's bounds: what the channels move towards.
+    pub fn saturate(&self, commands: &[f64], targets: &mut [f64]) {
+        let (lower, upper) = match self {
+            Actuators::FixedPitch(a) => (&a.min_thrust_n, &a.max_thrust_n),
+            Actuators::VariablePitch(a) => (&a.lower, &a.upper),
+        };
+        for (k, t) in targets.iter_mut().enumerate() {
+            *t = commands[k].clamp(lower[k], upper[k]);
+        }
+    }
+
+    /// Replaces the channel states (`channels() * rotor_count()` values, e.g. from
+    /// [`Actuators::response`]).
+    pub fn set_state(&mut self, states: &[f64]) {
+        let (state, _, _, _) = self.channels_mut();
+        state.copy_from_slice(states);
+    }
+
+    /// `true` when the channels follow the (saturated) command at once: no lag, no rate limit.
+    pub fn is_instant(&self) -> bool {
+        let lag = self.lag();
+        lag.time_constant_s == 0.0 && lag.rate_limit_per_s == f64::INFINITY
+    }
+
+    /// The lag's time constant, s (0: none).
+    pub fn time_constant_s(&self) -> f64 {
+        self.lag().time_constant_s
+    }
+
+    /// The lag and rate limit shared by every channel.
+    pub fn lag(&self) -> Lag {
+        match self {
+            Actuators::FixedPitch(a) => a.lag,
+            Actuators::VariablePitch(a) => a.lag,
         }
     }
 
@@ -277,11 +406,51 @@ impl Actuators {
 
     /// What rotor `i` produces with health `health` (module docs).
     pub fn output(&self, i: usize, health: f64) -> RotorOutput {
+        self.output_at(self.state(), i, health)
+    }
+
+    /// Calls `f` with what each rotor produces (rotor 1 first) with the channels at `states`
+    /// and health `health`: [`Actuators::output_at`] for every rotor, the model chosen once.
+    #[inline(always)]
+    pub fn for_each_output(&self, states: &[f64], health: &[f64], mut f: impl FnMut(RotorOutput)) {
         match self {
             Actuators::FixedPitch(a) => {
-                let thrust = health * a.thrust_n[i];
+                let rotors = states
+                    .iter()
+                    .zip(health)
+                    .zip(a.torque_per_thrust_m.iter().zip(&a.yaw_sign));
+                for ((&command, &eta), (&torque_per_thrust, &yaw_sign)) in rotors {
+                    let thrust = eta * command;
+                    let spin = if a.thrust_coefficient_n_s2 > 0.0 {
+                        (command.max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(eta)
+                    } else {
+                        0.0
+                    };
+                    f(RotorOutput {
+                        thrust_n: thrust,
+                        reaction_torque_nm: torque_per_thrust * thrust,
+                        spin_rad_s: -yaw_sign * spin,
+                    });
+                }
+            }
+            Actuators::VariablePitch(_) => {
+                for (i, &eta) in health.iter().enumerate() {
+                    f(self.output_at(states, i, eta));
+                }
+            }
+        }
+    }
+
+    /// What rotor `i` produces with health `health` when the channels are at `states` (laid out
+    /// like [`Actuators::state`]).
+    #[inline(always)]
+    pub fn output_at(&self, states: &[f64], i: usize, health: f64) -> RotorOutput {
+        match self {
+            Actuators::FixedPitch(a) => {
+                let thrust = health * states[i];
+                // Spin of the healthy rotor at this command, then the one health rule.
                 let spin = if a.thrust_coefficient_n_s2 > 0.0 {
-                    (thrust.max(0.0) / a.thrust_coefficient_n_s2).sqrt()
+                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(health)
                 } else {
                     0.0
                 };
@@ -294,14 +463,14 @@ impl Actuators {
             }
             Actuators::VariablePitch(a) => {
                 let [k1, k2, k3, k4] = a.coefficients;
-                let (omega, alpha) = (a.state[2 * i], a.state[2 * i + 1]);
+                let (omega, alpha) = (states[2 * i], states[2 * i + 1]);
                 let w2 = omega * omega;
                 RotorOutput {
                     thrust_n: health * k1 * w2 * alpha,
                     reaction_torque_nm: health
                         * a.yaw_sign[i]
                         * (k2 * w2 + k3 * w2 * alpha * alpha + k4 * omega * alpha),
-                    spin_rad_s: -a.yaw_sign[i] * health * omega * a.speed_to_rad_s,
+                    spin_rad_s: -a.yaw_sign[i] * spin_factor(health) * omega * a.speed_to_rad_s,
                 }
             }
         }
@@ -439,5 +608,90 @@ mod tests {
             err.to_string().starts_with("actuator.pitch_bounds"),
             "{err}"
         );
+    }
+
+    /// RK4 on `a' = clamp((target - a) / tau, -rate, rate)` with tiny steps.
+    fn integrate_ode(lag: &Lag, mut a: f64, target: f64, t: f64) -> f64 {
+        let f = |a: f64| {
+            ((target - a) / lag.time_constant_s).clamp(-lag.rate_limit_per_s, lag.rate_limit_per_s)
+        };
+        let n = 200_000;
+        let h = t / n as f64;
+        for _ in 0..n {
+            let k1 = f(a);
+            let k2 = f(a + 0.5 * h * k1);
+            let k3 = f(a + 0.5 * h * k2);
+            let k4 = f(a + h * k3);
+            a += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        a
+    }
+
+    #[test]
+    fn rate_limited_lag_is_the_exact_solution_of_its_ode() {
+        let lag = Lag {
+            time_constant_s: 0.05,
+            rate_limit_per_s: 50.0,
+        };
+        // A 6 N step is rate-limited (6 / 0.05 = 120 N/s > 50) until the gap is 2.5 N, at 70 ms.
+        for (a0, target, t) in [
+            (0.0, 6.0, 0.03),
+            (0.0, 6.0, 0.2),
+            (6.0, 1.0, 0.15),
+            (2.0, 3.0, 0.1),
+        ] {
+            let exact = lag.response(a0, target, t);
+            let reference = integrate_ode(&lag, a0, target, t);
+            assert!(
+                (exact - reference).abs() < 1e-9,
+                "{a0} -> {target} at {t}: {exact} vs {reference}"
+            );
+        }
+        // Exact, so one long step equals many short ones (the old clip-after-lag did not).
+        let mut one = Actuators::FixedPitch(FixedPitch::new(&quad(), lag, 0.0).unwrap());
+        let mut many = one.clone();
+        one.advance(&[8.0, 0.0, 5.0, 1.0], 0.2);
+        for _ in 0..50 {
+            many.advance(&[8.0, 0.0, 5.0, 1.0], 0.004);
+        }
+        for (a, b) in one.state().iter().zip(many.state()) {
+            assert!(
+                (a - b).abs() < 1e-12,
+                "{:?} vs {:?}",
+                one.state(),
+                many.state()
+            );
+        }
+        // `response` does not move the actuator; the instant model jumps at once.
+        let mut out = [0.0; 4];
+        one.response(&[0.0; 4], 0.0, &mut out);
+        assert_eq!(&out, one.state());
+        let instant = Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 0.0).unwrap());
+        instant.response(&[1.0, 2.0, 3.0, 4.0], 0.0, &mut out);
+        assert_eq!(out, [1.0, 2.0, 3.0, 4.0]);
+        assert!(instant.is_instant() && !one.is_instant());
+    }
+
+    #[test]
+    fn health_scales_spin_by_its_square_root_in_both_models() {
+        // One rule: a rotor at efficiency 0.25 turns at half speed (thrust and torque x 0.25).
+        let mut fixed = Actuators::FixedPitch(FixedPitch::new(&quad(), Lag::none(), 1e-5).unwrap());
+        fixed.settle(&[4.0; 4]).unwrap();
+        let k = [2e-8, 1e-9, 3e-10, 1e-6];
+        let mut variable = Actuators::VariablePitch(
+            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.1, Lag::none()).unwrap(),
+        );
+        variable.settle(&[[9000.0, 0.2]; 4].concat()).unwrap();
+        for rotors in [&fixed, &variable] {
+            let (healthy, weak) = (rotors.output(0, 1.0), rotors.output(0, 0.25));
+            assert!(healthy.spin_rad_s.abs() > 0.0);
+            assert!(
+                (weak.spin_rad_s - 0.5 * healthy.spin_rad_s).abs()
+                    < 1e-12 * healthy.spin_rad_s.abs()
+            );
+            assert!((weak.thrust_n - 0.25 * healthy.thrust_n).abs() < 1e-12);
+            assert_eq!(rotors.output(0, 0.0).spin_rad_s, 0.0);
+        }
+        assert_eq!(spin_factor(0.25), 0.5);
     }
 }

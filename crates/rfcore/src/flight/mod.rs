@@ -9,6 +9,7 @@
 //! The simulator runs any [`crate::control::Controller`]; controllers never see this room.
 
 pub mod actuator;
+pub mod fault_schedule;
 pub mod model;
 pub mod rigid_body;
 pub mod simulation;

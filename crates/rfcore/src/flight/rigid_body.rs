@@ -80,6 +80,7 @@ impl RigidBody {
     }
 
     /// The time derivative of `state` under `wrench` (Newton-Euler).
+    #[inline]
     pub fn derivative(&self, state: &RigidBodyState, wrench: &Wrench) -> StateDerivative {
         let omega = state.omega_rad_s;
         let j_omega = self.inertia_kg_m2 * omega;
@@ -103,13 +104,31 @@ impl RigidBody {
     where
         F: FnMut(f64, &RigidBodyState) -> Wrench,
     {
-        let k1 = self.derivative(state, &wrench_at(t_s, state));
+        let times = [t_s, t_s + 0.5 * dt_s, t_s + dt_s];
+        self.rk4_step_nodes(state, dt_s, |node, x| wrench_at(times[node], x))
+    }
+
+    /// One classical RK4 step of length `dt_s` whose wrench is given per time node:
+    /// `wrench_at(node, state)` with node 0 at the start, 1 at the midpoint (stages 2 and 3),
+    /// 2 at the end. Lets a caller evaluate time-dependent inputs (actuator states) once per
+    /// node instead of once per stage.
+    #[inline]
+    pub fn rk4_step_nodes<F>(
+        &self,
+        state: &RigidBodyState,
+        dt_s: f64,
+        mut wrench_at: F,
+    ) -> RigidBodyState
+    where
+        F: FnMut(usize, &RigidBodyState) -> Wrench,
+    {
+        let k1 = self.derivative(state, &wrench_at(0, state));
         let s2 = advanced(state, &k1, 0.5 * dt_s);
-        let k2 = self.derivative(&s2, &wrench_at(t_s + 0.5 * dt_s, &s2));
+        let k2 = self.derivative(&s2, &wrench_at(1, &s2));
         let s3 = advanced(state, &k2, 0.5 * dt_s);
-        let k3 = self.derivative(&s3, &wrench_at(t_s + 0.5 * dt_s, &s3));
+        let k3 = self.derivative(&s3, &wrench_at(1, &s3));
         let s4 = advanced(state, &k3, dt_s);
-        let k4 = self.derivative(&s4, &wrench_at(t_s + dt_s, &s4));
+        let k4 = self.derivative(&s4, &wrench_at(2, &s4));
         let sixth = dt_s / 6.0;
         let attitude = state.attitude.quaternion()
             + (k1.attitude + k2.attitude * 2.0 + k3.attitude * 2.0 + k4.attitude) * sixth;
@@ -164,6 +183,7 @@ pub struct StateDerivative {
 
 /// `state + h * derivative`, the intermediate states of RK4 (quaternion not renormalised: the
 /// derivative is evaluated on the raw 4-vector, which is what makes the scheme RK4).
+#[inline]
 fn advanced(state: &RigidBodyState, d: &StateDerivative, h: f64) -> RigidBodyState {
     RigidBodyState {
         position_m: state.position_m + d.position * h,

@@ -2,7 +2,7 @@
 //! drag (linear, Stokes as in Lanzon et al., plus optional quadratic), rotational drag, the
 //! propeller gyroscopic moment (Lanzon et al. eq. (5)) and wind.
 //!
-//! Frames as in [`crate::rigid_body`]: world NED, body FRD. Rotor i sits at
+//! Frames as in [`crate::flight::rigid_body`]: world NED, body FRD. Rotor i sits at
 //! `(r_i cos phi_i, r_i sin phi_i, 0)` in the body frame and pushes along body -z, which gives the
 //! roll and pitch torques of Du et al. eq. (5). Drag acts on the air-relative velocity
 //! `v - wind(t)`.
@@ -93,20 +93,29 @@ impl Vehicle {
 
     /// Sums the rotors' contributions once; they are held through a substep while RK4 evaluates
     /// the wrench four times (see [`Vehicle::wrench_from`]).
+    #[inline]
     pub fn rotor_totals(&self, rotors: &[RotorOutput]) -> RotorTotals {
+        self.rotor_totals_from(rotors.iter().copied())
+    }
+
+    /// [`Vehicle::rotor_totals`] of rotor outputs as they are computed (rotor 1 first), without
+    /// storing them.
+    #[inline]
+    pub fn rotor_totals_from(&self, rotors: impl Iterator<Item = RotorOutput>) -> RotorTotals {
         let mut totals = RotorTotals::default();
-        for (out, &(x, y)) in rotors.iter().zip(&self.rotor_xy_m) {
-            totals.thrust_n += out.thrust_n;
-            // r x F with F = (0, 0, -f): (-y f, x f, 0).
-            totals.torque_body_nm.x -= y * out.thrust_n;
-            totals.torque_body_nm.y += x * out.thrust_n;
-            totals.torque_body_nm.z += out.reaction_torque_nm;
-            totals.spin_rad_s += out.spin_rad_s;
+        for (out, &xy) in rotors.zip(&self.rotor_xy_m) {
+            totals.add(xy, &out);
         }
         totals
     }
 
+    /// Body-frame (x, y) of each rotor, m.
+    pub fn rotor_xy_m(&self) -> &[(f64, f64)] {
+        &self.rotor_xy_m
+    }
+
     /// The wrench for summed rotor contributions; the state-dependent terms are evaluated here.
+    #[inline]
     pub fn wrench_from(
         &self,
         state: &RigidBodyState,
@@ -145,6 +154,19 @@ pub struct RotorTotals {
     pub thrust_n: f64,
     pub torque_body_nm: Vector3<f64>,
     pub spin_rad_s: f64,
+}
+
+impl RotorTotals {
+    /// Adds the output of a rotor at body-frame `(x, y)`.
+    #[inline(always)]
+    pub fn add(&mut self, (x, y): (f64, f64), out: &RotorOutput) {
+        self.thrust_n += out.thrust_n;
+        // r x F with F = (0, 0, -f): (-y f, x f, 0).
+        self.torque_body_nm.x -= y * out.thrust_n;
+        self.torque_body_nm.y += x * out.thrust_n;
+        self.torque_body_nm.z += out.reaction_torque_nm;
+        self.spin_rad_s += out.spin_rad_s;
+    }
 }
 
 #[cfg(test)]
