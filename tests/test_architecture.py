@@ -22,7 +22,7 @@ LAYERS = [
     ["control"],
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],
-    ["_convert", "_typing"],
+    ["_convert", "_typing", "_output"],
 ]
 
 
