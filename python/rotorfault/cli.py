@@ -206,8 +206,9 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
         console.print(f"plot written to {escape(plot_path)}")
 
 
-class _Terminated(Exception):
-    """SIGTERM, raised in the main thread so that partial outputs are cleaned up."""
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that partial outputs are cleaned up (a
+    BaseException, like KeyboardInterrupt, so no library's `except Exception` swallows it)."""
 
 
 def _raise_terminated(signum: int, frame: Any) -> None:
