@@ -23,7 +23,7 @@ LAYERS = [
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],
     ["_progress"],
-    ["_convert", "_typing"],
+    ["_convert", "_typing", "_output"],
 ]
 
 

@@ -156,7 +156,7 @@ def test_simulate_hover_scenario_with_everything(tmp_path: Path) -> None:
     [
         ('airframe = "quad-x"\ncolour = 1\n', "unknown key(s) colour"),
         ('airframe = "quad-x"\n[controller]\nkind = "pid"\n', "controller.kind: must be one of"),
-        ('airframe = "quad-x"\n[[fault]]\nrotor = 5\ntime_s = 1.0\n', "faults[0].rotor: rotor numbers run from 1 to 4, got 5"),
+        ('airframe = "quad-x"\n[[fault]]\nrotor = 5\ntime_s = 1.0\n', "fault[0].rotor: rotor numbers run from 1 to 4, got 5"),
         ('airframe = "quad-x"\n[drag]\nlinear = 1.0\n', "drag: unknown key(s) linear"),
         ('airframe = "quad-x"\ndt_s = -1.0\n', "dt_s: must be > 0"),
         ("airframe = [", "scenario.toml: "),

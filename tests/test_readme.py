@@ -20,3 +20,41 @@ def test_readme_python_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPa
         exec(compile(block, str(README), "exec"), {})
     assert (tmp_path / "fig4.png").stat().st_size > 10_000
     assert "hexa-pnpnpn" in capsys.readouterr().out
+
+
+#: The README's "this snippet gives X" claims: (text on the README line, a name the block defines,
+#: expression evaluated in that block's namespace, expected value, absolute tolerance). The
+#: tolerance is the last printed digit's half unit.
+CLAIMS = [
+    ("rf.acai(hexa)                                     # 1.4861 (Table II)", "hexa", "rf.acai(hexa)", 1.4861, 0.5e-4),
+    ("# 0.0: uncontrollable with any one rotor failed", "hexa", "rf.acai(hexa.with_failed_rotors([1]))", 0.0, 0.0),
+    ("# 1.2882 > 0: it can still hover spinning", "hexa", "rf.acai(hexa.with_failed_rotors([1]), give_up_yaw=True)", 1.2882, 0.5e-4),
+    ("# Du Fig. 4: 17,576 points", "scan", "len(scan.acai)", 17_576, 0),
+    ("kind='tilt'", "lqr", "run.events[0].kind == 'tilt'", True, 0),
+    ("# r = -41.2 rad/s: a steady spin of about 41 rad/s", "preset", "float(run.omega[-1, 2])", -41.2, 0.05),
+    ("# two opposite rotors (1 front right, 3 rear left)", "preset", "[f.rotor for f in run.faults]", [1, 3], 0),
+    ("Ke Table II (efficiency = diag of Ke's health matrix): 0, 0.5, 1", "preset",
+     "[round(float(v.real), 12) for v in ke.n_eigenvalues(preset.airframe, [0, 0, 1, 1])]", [0.0, 0.5, 1.0], 0),
+    ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
+]
+
+
+def test_readme_claims_hold(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 21 item 6: every README claim of the kind "this snippet gives X" that runs in
+    seconds is checked here, and the README still makes it (word for word)."""
+    text = README.read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    monkeypatch.chdir(tmp_path)
+    namespaces = []
+    for block in blocks:
+        namespace: dict[str, object] = {}
+        exec(compile(block, str(README), "exec"), namespace)
+        namespaces.append(namespace)
+    for line, defines, expression, expected, tolerance in CLAIMS:
+        assert line in text, f"README no longer says {line!r}"
+        namespace = next(ns for ns in namespaces if defines in ns)
+        value = eval(expression, namespace)  # noqa: S307 - the README's own code
+        if isinstance(expected, float):
+            assert abs(value - expected) <= tolerance, (expression, value)
+        else:
+            assert value == expected, (expression, value)

@@ -29,7 +29,7 @@ KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "basel
 DivergenceKind: TypeAlias = Literal["non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"]
 #: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
 KeOutcome: TypeAlias = Literal[
-    "holds-position", "off-station", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"
+    "holds-position", "circling", "off-station", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"
 ]
 #: Controller of a ``rotorfault simulate`` scenario file.
 ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]

@@ -362,12 +362,10 @@ def plot_attainable_slices(
 ) -> Figure:
     """Overlays :func:`attainable_slice` for several rotor-efficiency cases (``{label: efficiency}``,
     default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
-    ``path`` if given. A case whose hover is unattainable is listed in the legend as such."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    ``path`` (``.png``, ``.pdf`` or ``.svg``, written atomically) if given; the figure is not
+    registered with pyplot. A case whose hover is unattainable is listed in the legend as such.
+    Cases differ in line style and marker as well as colour (readable in greyscale)."""
+    from ._output import new_figure, save_figure
 
     if cases is None:
         cases = {"healthy": None}
@@ -375,14 +373,19 @@ def plot_attainable_slices(
             failed = np.ones(airframe.rotor_count)
             failed[rotor] = 0.0
             cases[f"rotor {rotor + 1} failed"] = failed
-    fig, ax = plt.subplots(figsize=(9.5, 6.5))
-    for label, efficiency in cases.items():
+    fig = new_figure(figsize=(9.5, 6.5), layout="constrained")
+    ax = fig.add_subplot(1, 1, 1)
+    styles = ["-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)), (0, (3, 1, 3, 3))]
+    markers = ["o", "s", "^", "v", "D", "P", "X", "*"]
+    for k, (label, efficiency) in enumerate(cases.items()):
         points = attainable_slice(airframe, axes, efficiency, give_up_yaw=give_up_yaw)
         if points is None:
             ax.plot([], [], " ", label=f"{label}: hover unattainable")
             continue
         closed = np.vstack([points, points[:1]])
-        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if efficiency is None else 1.2)
+        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if efficiency is None else 1.2,
+                linestyle=styles[k % len(styles)], marker=markers[k % len(markers)], markevery=max(1, len(closed) // 8),
+                markersize=5, color=f"C{k % 10}")
     ax.plot([0], [0], "k+", ms=12, label="hover (zero torque)")
     ax.set_xlabel(AXIS_LABELS[axes[0]])
     ax.set_ylabel(AXIS_LABELS[axes[1]])
@@ -390,11 +393,10 @@ def plot_attainable_slices(
     ax.set_title(f"{airframe.name}: attainable set at hover thrust ({held})")
     ax.axhline(0, color="0.8", lw=0.8)
     ax.axvline(0, color="0.8", lw=0.8)
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    ax.legend(fontsize=9, loc="center left", bbox_to_anchor=(1.02, 0.5))
     ax.set_aspect("equal", adjustable="datalim")
-    fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=120)
+        save_figure(fig, path)
     return fig
 
 

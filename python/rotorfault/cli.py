@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import functools
 import math
+import signal
+import sys
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
@@ -19,6 +21,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ._typing import AcaiFormula, KeLaw
+from ._output import check_output_file
 from .airframe import Airframe
 from .controllability import EQ13_ZERO_NOTE, controllability, failure_table, format_acai
 from .scan import efficiency_scan
@@ -36,7 +39,9 @@ def _user_errors(command: F) -> F:
         try:
             return command(*args, **kwargs)
         except (ValueError, TypeError, OSError, OverflowError) as exc:
-            raise click.ClickException(str(exc)) from None
+            raise click.ClickException(str(exc).replace("\n", " ")) from None
+        except RecursionError:
+            raise click.ClickException("input: nested too deeply to read (a TOML file of arrays or tables within tables?)") from None
         except MemoryError:
             raise click.ClickException("out of memory: ask for a smaller problem") from None
 
@@ -147,11 +152,20 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
 @click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
 @click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+<<<<<<< HEAD
 @formula_option
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (PNG).")
 @_user_errors
 def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None) -> None:
+=======
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (.png, .pdf or .svg).")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@_user_errors
+def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool) -> None:
+>>>>>>> issue21
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
     frame = Airframe.load(airframe)
     swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
@@ -174,12 +188,15 @@ def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: Ac
 
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write the time-history figure (PNG).")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write the time-history figure (.png, .pdf or .svg).")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @_user_errors
-def simulate(scenario_file: str, plot_path: str | None) -> None:
+def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
     """Fly a scenario file (airframe, controller, faults, wind, noise, duration)."""
     from .scenario import load_scenario
 
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
     scenario = load_scenario(scenario_file)
     run = scenario.run()
     altitude = -run.position[:, 2]
@@ -196,50 +213,134 @@ def simulate(scenario_file: str, plot_path: str | None) -> None:
     table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
     console.print(table)
     if plot_path is not None:
-        run.plot(plot_path)
-        console.print(f"plot written to {plot_path}")
+        run.plot(plot_path, title=scenario.title, setpoints=scenario.setpoints)
+        console.print(f"plot written to {escape(plot_path)}")
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that partial outputs are cleaned up (a
+    BaseException, like KeyboardInterrupt, so no library's `except Exception` swallows it)."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise _Terminated()
 
 
 @cli.command("ftc-report")
-@click.option("--out", "out_dir", default="ftc-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table and figures.")
+@click.option("--out", "out_dir", default="ftc-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table and figures (replaced as a whole).")
 @click.option("--preset", "preset_name", default="ke-hil", show_default=True, help="Controller preset (gains and vehicle).")
 @click.option(
     "--laws", default="feedforward,literal,full-compensation,baseline", show_default=True,
     help="Command laws to compare (comma-separated).",
 )
-@click.option("--no-figures", is_flag=True, help="Only the table (Markdown and CSV).")
+@click.option("--scenarios", "scenario_names", default=None, help="Only these scenarios (comma-separated names; default: all).")
+@click.option("--no-figures", is_flag=True, help="Only the table (Markdown and CSV); the report has no figures.")
+@click.option("--force", is_flag=True, help="Replace an existing report in --out.")
 @_user_errors
-def ftc_report(out_dir: str, preset_name: str, laws: str, no_figures: bool) -> None:
+def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | None, no_figures: bool, force: bool) -> None:
     """Fly every uniform-passive-FTC scenario (Ke et al.) and write a table and figures."""
-    from rich.progress import Progress
+    from typing import get_args
 
+    from ._output import check_output_directory
     from .control import ke
     from .papers import ke as ke_paper
 
     chosen_laws = [law.strip() for law in laws.split(",") if law.strip()]
-    controller_preset = ke.preset(preset_name)
+    if not chosen_laws:
+        raise ValueError(f"laws: give at least one of {', '.join(get_args(KeLaw))}")
+    for law in chosen_laws:
+        if law not in get_args(KeLaw):
+            raise ValueError(f"law: must be one of {', '.join(get_args(KeLaw))}, got {law!r}")
     scenarios = ke_paper.scenarios()
-    runs = []
-    with Progress(console=console, transient=True) as progress:
-        task = progress.add_task("flying scenarios", total=len(scenarios) * len(chosen_laws))
+    if scenario_names is not None:
+        names = [name.strip() for name in scenario_names.split(",") if name.strip()]
+        if not names:
+            raise ValueError("scenarios: give at least one scenario name")
+        scenarios = [ke_paper.scenario(name) for name in names]
+    check_output_directory("out", out_dir, force=force)
+    controller_preset = ke.preset(preset_name)
+    previous = signal.getsignal(signal.SIGTERM)
+    in_main = True
+    try:
+        signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread (an embedding application): leave SIGTERM alone
+        in_main = False
+    try:
+        runs = []
+        console.print(f"flying {len(scenarios) * len(chosen_laws)} runs", highlight=False)
         for law in chosen_laws:
             for sc in scenarios:
                 runs.append(ke_paper.run_scenario(sc, law=cast(KeLaw, law), controller_preset=controller_preset))
-                progress.advance(task)
-    table = Table(title=f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights")
-    for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "max horiz. (m)", "final horiz. (m)"):
-        table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
-    for row in ke_paper.report_rows(runs):
-        colour = {"holds-position": "green", "off-station": "yellow"}.get(row["outcome"], "red")
-        table.add_row(
-            row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no",
-            f"[{colour}]{row['outcome_label']}[/{colour}]",
-            "" if row["r_rad_s"] is None else f"{row['r_rad_s']:.1f}", "" if row["n3z"] is None else f"{row['n3z']:.3f}",
-            f"{row['max_altitude_loss_m']:.2f}", f"{row['max_horizontal_error_m']:.2f}", f"{row['final_horizontal_error_m']:.2f}",
-        )
-    console.print(table)
-    path = ke_paper.write_report(runs, out_dir, figures=not no_figures)
+        _print_ftc_table(runs, preset_name)
+        console.print(f"writing the report to {escape(out_dir)}", highlight=False)
+        command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault ftc-report"
+        path = ke_paper.write_report(runs, out_dir, figures=not no_figures, force=force, command=command)
+    except _Terminated:
+        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
+    except KeyboardInterrupt:
+        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
     console.print(f"report written to {escape(str(path))}")
+
+
+def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
+    """The report table on the terminal: one wide table when it fits, otherwise (below 120
+    columns) one narrow table per law with the columns that matter."""
+    from rich import box
+
+    from .papers import ke as ke_paper
+
+    rows = ke_paper.report_rows(runs)
+
+    def outcome(row: dict[str, Any]) -> str:
+        colour = {"holds-position": "green", "circling": "yellow", "off-station": "yellow"}.get(row["outcome"], "red")
+        return f"[{colour}]{escape(row['outcome_label'])}[/{colour}]"
+
+    def num(row: dict[str, Any], column: str, digits: int) -> str:
+        return escape(ke_paper.cell(row, column, digits))
+
+    def horizontal(row: dict[str, Any]) -> str:
+        if row["max_horizontal_error_m"] is None:
+            return num(row, "max_horizontal_error_m", 1)
+        return f"{row['max_horizontal_error_m']:.1f} / {row['final_horizontal_error_m']:.1f}"
+
+    title = f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights"
+    if console.width >= 120:
+        table = Table(title=title)
+        for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
+            table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
+        for row in rows:
+            table.add_row(
+                row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", outcome(row),
+                num(row, "r_rad_s", 1), num(row, "n3z", 3), num(row, "max_altitude_loss_m", 2), horizontal(row),
+            )
+        console.print(table)
+        return
+    console.print(title, highlight=False)
+    for law in dict.fromkeys(row["law"] for row in rows):
+        table = Table(
+            title=f"law {escape(law)}: r (rad/s), altitude loss and horizontal error (m); * Ke: not stabilisable",
+            box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1),
+        )
+        table.add_column("scenario", no_wrap=True)
+        table.add_column("outcome", no_wrap=True)
+        table.add_column("r", justify="right", no_wrap=True)
+        table.add_column("alt. loss", justify="right")
+        table.add_column("horiz. max/final", justify="right")
+        for row in rows:
+            if row["law"] != law:
+                continue
+            name = row["scenario"] + ("" if row["ke_stabilizable"] else "*")
+            if row["lost_at_s"] is not None:
+                lost = f"[red]{escape(row['outcome_label'])} at {row['lost_at_s']:.2f} s[/red]"
+                table.add_row(name, lost, "lost", "lost", "lost")
+                continue
+            r = "unsettled" if row["r_rad_s"] is None else num(row, "r_rad_s", 1)
+            h = f"{row['max_horizontal_error_m']:.1f}/{row['final_horizontal_error_m']:.1f}"
+            table.add_row(name, outcome(row), r, num(row, "max_altitude_loss_m", 1), h)
+        console.print(table)
 
 
 def main() -> None:

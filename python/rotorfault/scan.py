@@ -93,13 +93,14 @@ def efficiency_scan(
     count = int(round(1.0 / step))
     if not np.isclose(count * step, 1.0, rtol=0.0, atol=1e-9):
         raise ValueError(f"step: must divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
-    levels = np.linspace(0.0, 1.0, count + 1)
-    total = len(levels) ** len(swept)
+    # The size is checked on integers before anything is allocated.
+    total = (count + 1) ** len(swept)
     if total > MAX_SCAN_POINTS:
         raise ValueError(
-            f"step, rotors: {len(levels)}^{len(swept)} = {total:,} grid points exceed the in-memory "
+            f"step, rotors: {count + 1}^{len(swept)} = {total:,} grid points exceed the in-memory "
             f"limit of {MAX_SCAN_POINTS:,}; use a coarser step or fewer rotors"
         )
+    levels = np.linspace(0.0, 1.0, count + 1)
     points = np.empty((total, len(swept)))
     grids = np.meshgrid(*([levels] * len(swept)), indexing="ij")
     for column, grid in enumerate(grids):
@@ -120,14 +121,16 @@ def efficiency_scan(
 
 def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figure:
     """Du Fig. 4 style. Left: the surface of the controllable region (grid points that are
-    controllable but have an uncontrollable neighbour), coloured by height. Other panels: for
-    each pair of swept rotors, the lowest efficiency of the third rotor that keeps the vehicle
-    controllable (blank: none does). Needs exactly three swept rotors; saved to ``path`` if given."""
-    import matplotlib
+    controllable but have an uncontrollable neighbour), shaded by the third rotor's efficiency.
+    Other panels: for each pair of swept rotors, the lowest efficiency of the third rotor that
+    keeps the vehicle controllable, on a colour scale spanning the values that occur; hatched
+    grey where no efficiency of the third rotor does ("uncontrollable"), which the scale never
+    confuses with a small value. A scan without yaw says so in every title. Needs exactly three
+    swept rotors. Returns the figure (not registered with pyplot), saved to ``path`` (``.png``,
+    ``.pdf`` or ``.svg``, written atomically) if given."""
+    from matplotlib.patches import Patch
 
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ._output import new_figure, save_figure
 
     if len(scan.rotors) != 3:
         raise ValueError(f"scan: the Fig. 4 plot needs three swept rotors, got {len(scan.rotors)}")
@@ -141,28 +144,59 @@ def plot_efficiency_scan(scan: EfficiencyScan, path: str | None = None) -> Figur
     # Faces of the unit cube are part of the region's surface too.
     surface = ok & ~interior
     labels = [f"$\\eta_{{{r}}}$" for r in scan.rotors]
-    fig = plt.figure(figsize=(12, 9.5))
+    axes_text = "without yaw (thrust, roll, pitch)" if scan.give_up_yaw else "with yaw (thrust, roll, pitch, yaw)"
+    fig = new_figure(figsize=(12, 10), layout="constrained")
+    fig.suptitle(
+        f"{scan.airframe}: controllability {axes_text} as rotors {', '.join(map(str, scan.rotors))} degrade "
+        f"(grid step {scan.levels[1] - scan.levels[0]:g}, {len(scan.acai):,} points)",
+        fontsize=12,
+    )
     ax3 = fig.add_subplot(2, 2, 1, projection="3d")
     i, j, k = np.nonzero(surface)
     levels = scan.levels
-    sc = ax3.scatter(levels[i], levels[j], levels[k], c=levels[k], s=3, cmap="viridis")
+    if i.size:
+        sc = ax3.scatter(levels[i], levels[j], levels[k], c=levels[k], s=3, cmap="viridis", vmin=0, vmax=1)
+        fig.colorbar(sc, ax=ax3, shrink=0.6, pad=0.1, label=labels[2])
+    ax3.set_xlim(0, 1)
+    ax3.set_ylim(0, 1)
+    ax3.set_zlim(0, 1)
     ax3.set_xlabel(labels[0])
     ax3.set_ylabel(labels[1])
     ax3.set_zlabel(labels[2])
-    ax3.set_title(f"{scan.airframe}: controllable region\n({100 * scan.controllable_fraction:.1f}% of the grid)")
-    fig.colorbar(sc, ax=ax3, shrink=0.6, pad=0.12, label=labels[2])
-    for slot, (a, b) in zip((2, 3, 4), ((0, 1), (0, 2), (1, 2))):
+    ax3.tick_params(labelsize=9)
+    ax3.set_title(
+        f"surface of the controllable region\n({100 * scan.controllable_fraction:.1f}% of the grid"
+        f"{', without yaw' if scan.give_up_yaw else ''})",
+        fontsize=10,
+    )
+    lowest_all = []
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        other = 3 - a - b
+        along = np.moveaxis(ok, other, -1)
+        lowest_all.append(np.where(along.any(axis=-1), levels[np.argmax(along, axis=-1)], np.nan))
+    values = np.concatenate([x[np.isfinite(x)] for x in lowest_all])
+    vmin, vmax = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
+    if vmax - vmin < 1e-12:
+        vmin, vmax = vmin - 0.05, vmax + 0.05
+    for slot, (a, b), lowest in zip((2, 3, 4), ((0, 1), (0, 2), (1, 2)), lowest_all):
         ax = fig.add_subplot(2, 2, slot)
         other = 3 - a - b
-        along = np.moveaxis(ok, other, -1)  # axes (a, b, other)
-        lowest = np.where(along.any(axis=-1), levels[np.argmax(along, axis=-1)], np.nan)
-        mesh = ax.pcolormesh(levels, levels, lowest.T, shading="nearest", cmap="magma_r", vmin=0, vmax=1)
+        ax.set_facecolor("0.8")
+        ax.patch.set_hatch("///")
+        ax.patch.set_edgecolor("0.55")
+        mesh = ax.pcolormesh(levels, levels, lowest.T, shading="nearest", cmap="viridis", vmin=vmin, vmax=vmax)
         ax.set_xlabel(labels[a])
         ax.set_ylabel(labels[b])
-        ax.set_title(f"lowest {labels[other]} that keeps control (blank: none)")
+        ax.set_xlim(-0.5 * (levels[1] - levels[0]), 1 + 0.5 * (levels[1] - levels[0]))
+        ax.set_ylim(-0.5 * (levels[1] - levels[0]), 1 + 0.5 * (levels[1] - levels[0]))
+        ax.tick_params(labelsize=9)
+        ax.set_title(f"lowest {labels[other]} that keeps control{' without yaw' if scan.give_up_yaw else ''}", fontsize=10)
         ax.set_aspect("equal")
-        fig.colorbar(mesh, ax=ax, shrink=0.8, label=labels[other])
-    fig.tight_layout()
+        fig.colorbar(mesh, ax=ax, shrink=0.8, label=f"lowest {labels[other]}")
+        ax.legend(
+            handles=[Patch(facecolor="0.8", edgecolor="0.55", hatch="///", label="uncontrollable for every " + labels[other])],
+            loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=9, frameon=False,
+        )
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path)
     return fig

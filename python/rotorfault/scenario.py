@@ -38,8 +38,11 @@ a default. Schema (every table optional except the top-level ``airframe``)::
 
 from __future__ import annotations
 
+import contextlib
 import math
+import re
 import tomllib
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast, get_args
@@ -84,27 +87,86 @@ class Scenario:
     faults: list[RotorFault]
     duration_s: float
 
+    #: The file it was read from (prefixes error messages).
+    path: Path | None = None
+
+    @property
+    def setpoints(self) -> list[tuple[float, tuple[float, float, float]]] | None:
+        """The position the controller holds (``None``: no position controller)."""
+        return None if self.controller_kind == "none" else [(0.0, self.initial.position)]
+
+    @property
+    def title(self) -> str:
+        """What the run is, for figures: scenario, airframe, controller and setpoint."""
+        text = f"{self.name}: {self.simulator.airframe.name}, controller {self.controller_kind}"
+        if self.setpoints:
+            n, e, d = self.setpoints[0][1]
+            text += f", setpoint N {n:g}, E {e:g}, alt {-d:g} m"
+        return text
+
     def run(self) -> Trajectory:
+        """Flies the scenario; errors name the file and its keys."""
         controller: Any = None
         target = self.initial.position
+<<<<<<< HEAD
         if self.controller_kind == "lqr-hover":
             controller = lqr_hover(self.simulator, position=target)
         elif self.controller_kind == "open-loop-hover":
             controller = OpenLoop.constant(hover_trim(self.simulator, position=target).command)
         return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
+=======
+        try:
+            with _file_keys():
+                if self.controller_kind == "lqr-hover":
+                    controller = lqr_hover(self.simulator, position=target)
+                elif self.controller_kind == "open-loop-hover":
+                    controller = OpenLoop.constant(hover_trim(self.simulator, position=target)[1])
+                return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
+        except (ValueError, TypeError) as exc:
+            if self.path is None:
+                raise
+            raise type(exc)(f"{self.path}: {exc}") from None
+
+
+@contextlib.contextmanager
+def _file_keys() -> Iterator[None]:
+    """The simulator's field names as the file's keys (``faults[0].rotor`` is ``fault[0].rotor``
+    in the file, ``.time`` is ``.time_s``)."""
+    try:
+        yield
+    except (ValueError, TypeError) as exc:
+        text = re.sub(r"\bfaults\[(\d+)\]\.time\b", r"fault[\1].time_s", str(exc))
+        text = re.sub(r"\bfaults\[(\d+)\]", r"fault[\1]", text)
+        raise type(exc)(text) from None
+>>>>>>> issue21
 
 
 def load_scenario(path: str | Path) -> Scenario:
     """Reads and validates a scenario file (errors name the key and the file)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise ValueError(f"scenario_file: {str(path)!r} does not exist") from None
+    except OSError as exc:
+        raise ValueError(f"scenario_file: cannot read {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a scenario file is TOML") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: nested too deeply to read (a scenario file has at most two levels of tables)") from None
     try:
-        return _parse(data, path)
+        with _file_keys():
+            scenario = _parse(data, path)
     except (ValueError, TypeError) as exc:
         raise type(exc)(f"{path}: {exc}") from None
+    scenario.path = path
+    return scenario
 
 
 def _parse(data: dict[str, Any], path: Path) -> Scenario:
@@ -133,7 +195,8 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
     for k, f in enumerate(faults_raw):
         if not isinstance(f, dict) or set(f) - _TABLES["fault"] or "rotor" not in f or "time_s" not in f:
             raise ValueError(f"fault[{k}]: needs rotor and time_s (and optional efficiency), nothing else")
-        faults.append(RotorFault(rotor=f["rotor"], time=f["time_s"], efficiency=f.get("efficiency", 0.0)))
+        time_s = real(f"fault[{k}].time_s", f["time_s"])
+        faults.append(RotorFault(rotor=f["rotor"], time=time_s, efficiency=f.get("efficiency", 0.0)))
     simulator = Simulator(
         airframe,
         dt_s=data.get("dt_s", 1.0 / 400.0),
@@ -147,4 +210,10 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         ),
         noise=None if noise is None else Noise(**_table(data, "noise")),
     )
-    return Scenario(path.stem, simulator, state, cast(ScenarioControllerKind, kind), faults, real("duration_s", data.get("duration_s", 10.0)))
+    duration_s = real("duration_s", data.get("duration_s", 10.0))
+    if not duration_s >= simulator.dt_s:
+        raise ValueError(f"duration_s: must be at least one control period (dt_s = {simulator.dt_s:g} s), got {duration_s:g}")
+    for k, fault in enumerate(faults):
+        if not 0.0 <= fault.time < duration_s:
+            raise ValueError(f"fault[{k}].time_s: must lie in [0, duration_s) = [0, {duration_s:g}) s, got {fault.time:g}")
+    return Scenario(path.stem, simulator, state, cast(ScenarioControllerKind, kind), faults, duration_s)

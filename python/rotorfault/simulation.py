@@ -373,53 +373,118 @@ class Trajectory:
             faults=faults,
         )
 
-    def plot(self, path: str | None = None) -> Figure:
-        """Position, attitude, body rates and rotor thrusts against time, with fault and
-        divergence markers; saved to ``path`` if given."""
-        import matplotlib
+    def plot(
+        self,
+        path: str | None = None,
+        *,
+        title: str | None = None,
+        setpoints: Sequence[tuple[float, npt.ArrayLike]] | None = None,
+    ) -> Figure:
+        """Position (with the setpoint, if given as ``(time, NED position)`` steps), roll and
+        pitch, yaw unwrapped, body rates and rotor thrusts against time, with fault and loss
+        markers. ``title`` says what the run is (default: the faults); the faults and the loss,
+        if any, are always added. Returns the figure (not registered with pyplot), saved to
+        ``path`` (``.png``, ``.pdf`` or ``.svg``, written atomically) if given."""
+        from ._output import MIN_FONT_PT, new_figure, save_figure
 
-        if path is not None:
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, axes = plt.subplots(4, 1, figsize=(10, 11), sharex=True)
-        panels = [
-            (self.position * np.array([1, 1, -1]), ["north", "east", "altitude"], "position (m)"),
-            (np.degrees(self.euler), ["roll", "pitch", "yaw"], "attitude (deg)"),
-            (self.omega, ["p", "q", "r"], "body rate (rad/s)"),
-            (self.rotor_thrust, [f"rotor {i + 1}" for i in range(self.rotor_thrust.shape[1])], "thrust (N)"),
+        fig = new_figure(figsize=(10, 12.5), layout="constrained")
+        axes = fig.subplots(5, 1, sharex=True)
+        styles = ["-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)), (0, (3, 1, 3, 3))]
+        euler_deg = np.degrees(self.euler)
+        yaw = np.degrees(np.unwrap(self.euler[:, 2])) if len(self.t) else euler_deg[:, 2]
+        m = self.rotor_thrust.shape[1]
+        # (data, series names, axis label, smallest y span shown: round-off is not magnified)
+        panels: list[tuple[FloatArray, list[str], str, float]] = [
+            (self.position * np.array([1, 1, -1]), ["north", "east", "altitude"], "position (m)\n(altitude = -down)", 1.0),
+            (euler_deg[:, :2], ["roll", "pitch"], "roll, pitch (deg)", 2.0),
+            (yaw[:, None], ["yaw (unwrapped)"], "yaw (deg)", 2.0),
+            (self.omega, ["p (roll rate)", "q (pitch rate)", "r (yaw rate)"], "body rate (rad/s)", 0.2),
+            (self.rotor_thrust, [f"rotor {i + 1}" for i in range(m)], "rotor thrust (N)", 0.2),
         ]
-        for ax, (data, labels, ylabel) in zip(axes, panels):
-            for column, label in zip(data.T, labels):
-                ax.plot(self.t, column, label=label)
-            ax.set_ylabel(ylabel)
+        for k, (ax, (data, labels, ylabel, span)) in enumerate(zip(axes, panels)):
+            for j, (column, label) in enumerate(zip(data.T, labels)):
+                ax.plot(self.t, column, label=label, linestyle=styles[j % len(styles)], color=f"C{j}", lw=1.3)
+            if k == 0 and setpoints:
+                _plot_setpoints(ax, self.t, setpoints, styles)
+            _at_least_span(ax, data, span)
+            ax.set_ylabel(ylabel, fontsize=10)
             ax.grid(True, alpha=0.3)
-            ax.legend(loc="upper right", fontsize=8, ncol=len(labels))
+            ax.tick_params(labelsize=9)
             for fault in self.faults:
-                ax.axvline(fault.time, color="red", linestyle="--", alpha=0.6)
+                ax.axvline(fault.time, color="0.35", linestyle=(0, (4, 2)), lw=1.0, label=None)
             for event in self.events:
-                ax.axvline(event.time, color="black", linestyle=":", alpha=0.8)
-        axes[-1].set_xlabel("time (s)")
-        title = "rotorfault simulation"
+                ax.axvline(event.time, color="black", linestyle="-", lw=2.0, alpha=0.5)
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
+        axes[-1].set_xlabel("time (s)", fontsize=10)
+        lines = [title if title else "rotorfault simulation"]
         if self.faults:
-            title += ": " + ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in self.faults)
+            lines.append(
+                "faults (thin dashed lines): "
+                + ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in self.faults)
+            )
         if self.events:
-            title += f"\n{self.events[0]}"
-        axes[0].set_title(title)
-        fig.tight_layout()
+            e = self.events[0]
+            lines.append(f"lost at t = {e.time:.2f} s (thick line): {e.description}")
+        elif len(self.t):
+            lines.append(f"flown for {self.t[-1]:g} s, not lost")
+        import textwrap
+
+        fig.suptitle("\n".join(textwrap.fill(line, 110) for line in "\n".join(lines).splitlines()), fontsize=11)
         if path is not None:
-            fig.savefig(path, dpi=110)
+            save_figure(fig, path)
         return fig
 
 
-def _faults(faults: Iterable[RotorFault] | None) -> tuple[RotorFault, ...]:
+def _plot_setpoints(ax: Any, t: FloatArray, setpoints: Sequence[tuple[float, npt.ArrayLike]], styles: list[Any]) -> None:
+    """The setpoint of each position series as a thin step line in its colour, labelled once."""
+    if not len(t):
+        return
+    times = np.array([float(s) for s, _ in setpoints])
+    points = np.array([np.asarray(p, dtype=np.float64) for _, p in setpoints]) * np.array([1, 1, -1])
+    k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1)
+    every = max(1, len(t) // 12)
+    for j, (name, marker) in enumerate(zip(["north", "east", "altitude"], ["x", "+", "1"])):
+        # Staggered markers: equal setpoints (east 10 m, altitude 10 m) stay distinguishable.
+        ax.plot(t, points[k, j], color=f"C{j}", lw=0.7, linestyle=styles[j], alpha=0.8, marker=marker,
+                markevery=(j * every // 3, every), markersize=7, label=f"{name} setpoint")
+
+
+def _at_least_span(ax: Any, data: FloatArray, span: float) -> None:
+    """Shows at least ``span`` on the y axis, so round-off (1e-11 N, 1e-8 deg) around a constant
+    is drawn as the flat line it is, not autoscaled into apparent chatter."""
+    finite = data[np.isfinite(data)]
+    if finite.size == 0:
+        return
+    lo, hi = float(finite.min()), float(finite.max())
+    if hi - lo < span:
+        mid = 0.5 * (lo + hi)
+        ax.set_ylim(mid - 0.6 * span, mid + 0.6 * span)
+    ax.ticklabel_format(axis="y", useOffset=False)
+
+
+def _faults(faults: Iterable[RotorFault] | None, duration_s: float, field_name: str = "faults") -> tuple[RotorFault, ...]:
+    """The fault list, each fault inside the run: ``0 <= time < duration_s`` (a fault the run
+    would never apply is refused, not silently dropped)."""
     if faults is None:
         return ()
     items = tuple(faults)
-    for f in items:
+    for k, f in enumerate(items):
         if not isinstance(f, RotorFault):
-            raise TypeError(f"faults: expected rotorfault.RotorFault items, got {type(f).__name__}")
+            raise TypeError(f"{field_name}: expected rotorfault.RotorFault items, got {type(f).__name__}")
+        if math.isfinite(f.time) and not 0.0 <= f.time < duration_s:  # (the core reports non-finite times)
+            raise ValueError(
+                f"{field_name}[{k}].time: must lie in [0, duration_s) = [0, {duration_s:g}) s, the run's span, got {f.time:g}"
+            )
     return items
+
+
+def _check_duration(duration_s: Any, dt_s: float) -> float:
+    duration = real("duration_s", duration_s)
+    if not math.isfinite(duration):
+        raise ValueError(f"duration_s: must be finite, got {duration}")
+    if not duration >= dt_s:
+        raise ValueError(f"duration_s: must be at least one control period (dt_s = {dt_s:g} s), got {duration:g}")
+    return duration
 
 
 class Simulator:
@@ -514,7 +579,8 @@ class Simulator:
         x0 = State() if x0 is None else x0
         if not isinstance(x0, State):
             raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
-        fault_list = _faults(faults)
+        duration_s = _check_duration(duration_s, self.dt_s)
+        fault_list = _faults(faults, duration_s)
         core = core_controller(controller, self.dt_s)
         start = self._start(controller, initial_command)
         config = self._config(duration_s, record_every)
@@ -591,7 +657,8 @@ def simulate_batch(
         if not isinstance(s, State):
             raise TypeError(f"x0s: expected rotorfault.State items, got {type(s).__name__}")
     per_run: list[AnyController] = list(controllers) if isinstance(controllers, (list, tuple)) else [controllers] * n  # type: ignore[list-item]
-    fault_lists = [_faults(f) for f in (faults if faults is not None else [None] * n)]
+    duration_s = _check_duration(duration_s, simulator.dt_s)
+    fault_lists = [_faults(f, duration_s, f"faults[{i}]") for i, f in enumerate(faults if faults is not None else [None] * n)]
     if len(per_run) != n or len(fault_lists) != n:
         raise ValueError(f"controllers, faults: expected one entry per run ({n})")
     cores: list[CoreController | None] = []

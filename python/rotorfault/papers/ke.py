@@ -8,13 +8,14 @@ has built up (Remark 3: simultaneous failures from r = 0 are not recoverable).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._convert import FloatArray
+from .._convert import FloatArray, real
 from .._typing import KeLaw, KeOutcome
 from ..airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
@@ -126,48 +127,122 @@ def scenario(name: str) -> KeScenario:
 # -- metrics (Section V) -----------------------------------------------------------------------
 
 
-#: Position band for "holds position": horizontal and vertical error at the end of the run, m.
+#: "holds position": over the last ``window_s`` seconds the horizontal error stays within 2 m
+#: and the altitude error within 1 m of the setpoint (m).
 HOLD_BAND_M = (2.0, 1.0)
+#: ... and the speed stays below this (m/s): passing through the setpoint is not holding it.
+HOLD_SPEED_M_S = 0.5
+#: "circling": not holding, the mean horizontal speed over the window above
+#: :data:`HOLD_SPEED_M_S` and the direction of travel turning by at least this much (rad) within
+#: the window: a steady circle, or an oscillation (which reverses, a turn of pi).
+CIRCLING_TURN_RAD = math.pi / 2
+#: Length of the judging window at the end of a run (s): outcome, steady values, settling.
+WINDOW_S = 5.0
 
 
 @dataclass(frozen=True)
 class FlightMetrics:
-    """What Ke reports per flight. "Steady" values are means over the final ``window_s`` seconds
-    and are ``None`` for a run that diverged (there is no steady state to report):
+    """What Ke reports per flight, judged over the last ``window_s`` seconds of the run (not its
+    last sample). Outcome codes (:data:`OUTCOME_LABELS` gives the table text):
 
-    - ``outcome``: ``"holds-position"`` (no divergence, final error within :data:`HOLD_BAND_M`,
-      2 m horizontally and 1 m vertically), ``"off-station"`` (no divergence, outside the band)
-      or the divergence kind (``"tilt"``, ...); :attr:`outcome_label` is the text for tables;
-    - ``r_rad_s`` mean body yaw rate; ``n3z`` mean vertical component of the primary axis
-      ``n3 = R_eb b_3`` (Fig. 14); ``rotation_axis`` the mean of ``R_eb^T [0, 0, 1]``, the world
-      vertical in body axes (Section V-B: the axis a steady spin turns about);
-    - ``spin_settle_s``: time from the last fault until ``r`` stays within 5 % (or 0.2 rad/s) and
-      ``n3z`` within 0.02 of their steady values (Ke's "enter into a steady state");
-    - ``max_altitude_loss_m`` the largest drop below the start; ``max_horizontal_error_m``,
-      ``final_horizontal_error_m`` and ``final_altitude_error_m`` against the setpoint."""
+    - ``"holds-position"``: no divergence, and throughout the window the horizontal error is
+      within ``HOLD_BAND_M[0]`` (2 m), the altitude error within ``HOLD_BAND_M[1]`` (1 m) and
+      the speed below :data:`HOLD_SPEED_M_S` (0.5 m/s);
+    - ``"circling"``: no divergence, not holding, moving (mean horizontal speed above 0.5 m/s)
+      with the direction of travel turning by at least :data:`CIRCLING_TURN_RAD` (90 degrees)
+      within the window: a steady circle or oscillation around or near the setpoint;
+    - ``"off-station"``: no divergence, neither of the above (e.g. drifting back slowly, or
+      parked away from the setpoint);
+    - a divergence kind (``"tilt"``, ``"altitude-loss"``, ...): the vehicle was lost at
+      ``lost_at_s``.
+
+    Window values (``None`` for a lost run): ``window_horizontal_error_m`` and
+    ``window_altitude_error_m`` the largest errors, ``window_speed_m_s`` the largest speed,
+    ``window_mean_horizontal_speed_m_s``.
+
+    Steady values, ``None`` unless the run settled: ``r_rad_s`` mean body yaw rate; ``n3z``
+    mean vertical component of the primary axis ``n3 = R_eb b_3`` (Fig. 14); ``rotation_axis``
+    the mean of ``R_eb^T [0, 0, 1]``, the world vertical in body axes (Section V-B: the axis a
+    steady spin turns about). ``spin_settle_s``: time from the last fault that changed an
+    efficiency (or from the start) until ``r`` stays within 5 % (at least 0.2 rad/s) and ``n3z``
+    within 0.02 of those means to the end of the run; the run counts as settled only if that
+    happens no later than ``window_s`` before its end (Ke's "enter into a steady state").
+
+    Position values over the whole run (``None`` for a lost run, whose track stops at the loss:
+    tables show "lost at t"): ``max_altitude_loss_m`` the largest drop below the start,
+    ``max_horizontal_error_m``, ``final_horizontal_error_m``, ``final_altitude_error_m``
+    against the setpoint."""
 
     outcome: KeOutcome
     r_rad_s: float | None
     n3z: float | None
     rotation_axis: tuple[float, float, float] | None
     spin_settle_s: float | None
-    max_altitude_loss_m: float
-    max_horizontal_error_m: float
-    final_horizontal_error_m: float
-    final_altitude_error_m: float
+    max_altitude_loss_m: float | None
+    max_horizontal_error_m: float | None
+    final_horizontal_error_m: float | None
+    final_altitude_error_m: float | None
+    window_s: float = WINDOW_S
+    window_horizontal_error_m: float | None = None
+    window_altitude_error_m: float | None = None
+    window_speed_m_s: float | None = None
+    window_mean_horizontal_speed_m_s: float | None = None
+    lost_at_s: float | None = None
 
     @property
     def outcome_label(self) -> str:
-        """The outcome in words, for tables (``"holds position"``, ``"off station"``, ``"tilt"``)."""
+        """The outcome in words, for tables (``"holds position"``, ``"circling"``, ``"off
+        station"``, ``"tilt"``, ...)."""
         return OUTCOME_LABELS.get(self.outcome, self.outcome)
 
+    @property
+    def settled(self) -> bool:
+        return self.spin_settle_s is not None
 
-#: Table text of the outcomes that are not a divergence kind.
-OUTCOME_LABELS: dict[str, str] = {"holds-position": "holds position", "off-station": "off station"}
+
+#: Table text of the outcome codes.
+OUTCOME_LABELS: dict[str, str] = {
+    "holds-position": "holds position",
+    "circling": "circling",
+    "off-station": "off station",
+    "non-finite-state": "non-finite state",
+    "non-finite-command": "non-finite command",
+    "tilt": "tilt",
+    "altitude-loss": "altitude loss",
+    "speed": "speed",
+    "body-rate": "body rate",
+}
 
 
-def flight_metrics(trajectory: Trajectory, scenario_: KeScenario, *, window_s: float = 5.0) -> FlightMetrics:
+def effective_fault_times(trajectory: Trajectory) -> list[float]:
+    """Times of the trajectory's own faults that changed a rotor's efficiency within the run (a
+    no-op entry, which sets the efficiency a rotor already has, is not an event; nor is a fault
+    the run never reached because it ended first)."""
+    if not len(trajectory.t):
+        return []
+    current = np.array(trajectory.efficiency[0], dtype=np.float64)
+    times = []
+    for f in sorted(trajectory.faults, key=lambda f: f.time):
+        if f.time > trajectory.t[-1]:
+            break
+        if current[f.rotor - 1] != f.efficiency:
+            times.append(float(f.time))
+            current[f.rotor - 1] = f.efficiency
+    return times
+
+
+def flight_metrics(trajectory: Trajectory, scenario_: KeScenario, *, window_s: float = WINDOW_S) -> FlightMetrics:
+    """Scores ``trajectory`` against ``scenario_``'s setpoints. Fault times come from the
+    trajectory's own faults (what it was flown with), not from the scenario."""
+    window_s = real("window_s", window_s)
+    if not window_s > 0:
+        raise ValueError(f"window_s: must be > 0, got {window_s}")
     t = trajectory.t
+    if len(t) < 2:
+        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    if trajectory.diverged:
+        event = trajectory.events[0]
+        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time))
     setpoint = _setpoint_track(scenario_, t)
     error = trajectory.position - setpoint
     horizontal = np.hypot(error[:, 0], error[:, 1])
@@ -179,29 +254,56 @@ def flight_metrics(trajectory: Trajectory, scenario_: KeScenario, *, window_s: f
         float(horizontal[-1]),
         float(vertical[-1]),
     )
-    if trajectory.diverged:
-        return FlightMetrics(trajectory.events[0].kind, None, None, None, None, *position_errors)
     last = t >= t[-1] - window_s
+    speed = np.linalg.norm(trajectory.velocity, axis=1)
+    h_speed = np.hypot(trajectory.velocity[:, 0], trajectory.velocity[:, 1])
+    window = (
+        float(np.max(horizontal[last])),
+        float(np.max(vertical[last])),
+        float(np.max(speed[last])),
+        float(np.mean(h_speed[last])),
+    )
+    held = window[0] <= HOLD_BAND_M[0] and window[1] <= HOLD_BAND_M[1] and window[2] <= HOLD_SPEED_M_S
+    if held:
+        outcome: KeOutcome = "holds-position"
+    elif window[3] > HOLD_SPEED_M_S and _turn_rad(trajectory.velocity[last], HOLD_SPEED_M_S / 4) >= CIRCLING_TURN_RAD:
+        outcome = "circling"
+    else:
+        outcome = "off-station"
     r = float(np.mean(trajectory.omega[last, 2]))
     n3z = float(np.mean(trajectory.primary_axis[last, 2]))
     # R_eb^T e_z: the world vertical seen from the body (the rotation axis of a steady spin).
     axis = np.einsum("nji,j->ni", trajectory.rotation[last], np.array([0.0, 0.0, 1.0])).mean(axis=0)
     axis = axis / np.linalg.norm(axis)
-    last_fault = max([0.0] + [f.time for f in scenario_.faults])
+    last_fault = max([0.0, *effective_fault_times(trajectory)])
     unsettled = (np.abs(trajectory.omega[:, 2] - r) > max(0.05 * abs(r), 0.2)) | (
         np.abs(trajectory.primary_axis[:, 2] - n3z) > 0.02
     )
     idx = np.nonzero(unsettled & (t >= last_fault))[0]
-    settle = 0.0 if idx.size == 0 else float(t[min(idx[-1] + 1, len(t) - 1)] - last_fault)
-    held = position_errors[2] <= HOLD_BAND_M[0] and position_errors[3] <= HOLD_BAND_M[1]
+    settled_from = last_fault if idx.size == 0 else (float(t[idx[-1] + 1]) if idx[-1] + 1 < len(t) else math.inf)
+    if settled_from > t[-1] - window_s + 1e-9:
+        # Still moving at (or within the window before) the end: no settle time, no steady values.
+        return FlightMetrics(outcome, None, None, None, None, *position_errors, window_s, *window)
     return FlightMetrics(
-        "holds-position" if held else "off-station",
+        outcome,
         r,
         n3z,
         (float(axis[0]), float(axis[1]), float(axis[2])),
-        settle,
+        settled_from - last_fault,
         *position_errors,
+        window_s,
+        *window,
     )
+
+
+def _turn_rad(velocity: FloatArray, min_speed: float) -> float:
+    """How far the horizontal direction of travel turns (range of the unwrapped heading, rad),
+    over the samples moving faster than ``min_speed``; a reversal counts as pi."""
+    moving = np.hypot(velocity[:, 0], velocity[:, 1]) > min_speed
+    if moving.sum() < 2:
+        return 0.0
+    heading = np.unwrap(np.arctan2(velocity[moving, 1], velocity[moving, 0]))
+    return float(np.max(heading) - np.min(heading))
 
 
 def _setpoint_track(scenario_: KeScenario, t: FloatArray) -> FloatArray:
@@ -221,6 +323,25 @@ class ScenarioRun:
 
     def __post_init__(self) -> None:
         self.metrics = flight_metrics(self.trajectory, self.scenario)
+
+    @property
+    def title(self) -> str:
+        """What the run is: scenario, law and setpoint (for figures)."""
+        return f"{self.scenario.name}, law {self.law}: {self.scenario.description}\nsetpoint {_setpoint_text(self.scenario)}"
+
+    def plot(self, path: str | None = None) -> Figure:
+        """The time history (:meth:`rotorfault.Trajectory.plot`) titled with the scenario, law
+        and setpoint, the setpoint drawn; saved to ``path`` if given."""
+        return self.trajectory.plot(path, title=self.title, setpoints=self.scenario.setpoints)
+
+
+def _setpoint_text(scenario_: KeScenario) -> str:
+    def one(p: tuple[float, float, float]) -> str:
+        return f"N {p[0]:g}, E {p[1]:g}, alt {-p[2]:g} m"
+
+    first = one(scenario_.setpoints[0][1])
+    rest = "; ".join(f"from {t:g} s {one(p)}" for t, p in scenario_.setpoints[1:])
+    return first + (f"; {rest}" if rest else "")
 
 
 def run_scenario(
@@ -248,108 +369,203 @@ def run_scenario(
 
 
 def plot_primary_axis(runs: list[ScenarioRun], path: str | None = None, *, tail_s: float = 10.0) -> Figure:
-    """Ke Fig. 16 style: the path of the primary axis ``n3`` (body z in the world) on the unit
-    sphere for each run (the last ``tail_s`` seconds bold), seen from below the vehicle's
-    downward axis. Returns the matplotlib figure, saved to ``path`` if given."""
-    import matplotlib
+    """Ke Fig. 16 style: the path of the primary axis ``n3`` (body z in the world, NED) on the
+    unit sphere for each run, drawn with ``n3z`` (the world-down component: 1 is level) upward
+    and viewed obliquely from above that pole; the whole path thin and dashed, the last
+    ``tail_s`` seconds solid and bold, the start a circle, the loss (if any) a cross. Returns the
+    figure (not registered with pyplot), saved to ``path`` if given."""
+    from .._output import MIN_FONT_PT, new_figure, save_figure
 
-    if path is not None:
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    if not runs:
+        raise ValueError("runs: give at least one run to plot")
     count = len(runs)
     cols = min(count, 4)
     rows_ = -(-count // cols)
-    fig = plt.figure(figsize=(4.2 * cols, 4.2 * rows_))
-    u, v = np.mgrid[0 : 2 * np.pi : 30j, 0 : np.pi / 2 : 12j]
+    fig = new_figure(figsize=(4.4 * cols, 4.6 * rows_ + 0.9), layout="constrained")
+    u, v = np.mgrid[0 : 2 * np.pi : 30j, 0 : np.pi : 24j]
+    handles: dict[str, Any] = {}
     for k, run in enumerate(runs):
         ax = fig.add_subplot(rows_, cols, k + 1, projection="3d")
-        ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.4)
         n3 = run.trajectory.primary_axis
         t = run.trajectory.t
-        late = t >= t[-1] - tail_s
-        ax.plot(n3[:, 0], n3[:, 1], n3[:, 2], color="tab:orange", lw=0.6)
-        ax.plot(n3[late, 0], n3[late, 1], n3[late, 2], color="tab:red", lw=1.4)
-        ax.scatter([n3[0, 0]], [n3[0, 1]], [n3[0, 2]], color="tab:blue", s=20)
         below = bool(np.nanmin(n3[:, 2]) < 0)
+        uu, vv = (u, v) if below else (u[:, :13], v[:, :13])
+        ax.plot_wireframe(np.cos(uu) * np.sin(vv), np.sin(uu) * np.sin(vv), np.cos(vv), color="0.85", lw=0.4)
+        late = t >= t[-1] - tail_s
+        whole = ax.plot(n3[:, 0], n3[:, 1], n3[:, 2], color="0.45", lw=0.7, linestyle="--", label="whole flight")
+        tail = ax.plot(n3[late, 0], n3[late, 1], n3[late, 2], color="black", lw=1.8, label=f"last {tail_s:g} s")
+        start = ax.scatter([n3[0, 0]], [n3[0, 1]], [n3[0, 2]], color="black", marker="o", s=28, label="start")
+        handles.update({"whole flight": whole[0], f"last {tail_s:g} s": tail[0], "start": start})
+        if run.trajectory.diverged:
+            handles["lost"] = ax.scatter([n3[-1, 0]], [n3[-1, 1]], [n3[-1, 2]], color="black", marker="x", s=60, label="lost")
         ax.set_xlim(-1, 1)
         ax.set_ylim(-1, 1)
         ax.set_zlim(-1 if below else 0, 1)
-        ax.set_box_aspect((1, 1, 1 if below else 0.5))
+        ax.set_box_aspect((1, 1, 1 if below else 0.5), zoom=0.82)
+        ax.view_init(elev=30, azim=-60)
+        ax.set_xticks([-1, 0, 1])
+        ax.set_yticks([-1, 0, 1])
+        ax.set_zticks([-1, 0, 1] if below else [0, 0.5, 1])
         m = run.metrics
-        steady = "" if m.r_rad_s is None or m.n3z is None else f", r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
-        ax.set_title(f"{run.scenario.name} ({run.law})\n{m.outcome_label}{steady}", fontsize=8)
-        ax.set_xlabel("n3x", fontsize=7)
-        ax.set_ylabel("n3y", fontsize=7)
-        ax.set_zlabel("n3z", fontsize=7)
-        ax.tick_params(labelsize=6)
-    fig.suptitle("primary axis n3 on the unit sphere (blue: start, red: last 10 s)")
-    fig.tight_layout()
+        if m.lost_at_s is not None:
+            state = f"lost at {m.lost_at_s:.2f} s ({m.outcome_label})"
+        elif m.r_rad_s is not None and m.n3z is not None:
+            state = f"{m.outcome_label}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
+        else:
+            state = f"{m.outcome_label}, not settled"
+        ax.set_title(f"{run.scenario.name} ({run.law})\n{state}", fontsize=9)
+        for name, setter in (("n3x", ax.set_xlabel), ("n3y", ax.set_ylabel), ("n3z", ax.set_zlabel)):
+            setter(name, fontsize=9, labelpad=2)
+        ax.tick_params(labelsize=MIN_FONT_PT, pad=1)
+    fig.suptitle("primary axis n3 on the unit sphere (Ke Fig. 16 style; n3z = 1 is level)", fontsize=11)
+    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=9, frameon=False)
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path)
     return fig
 
 
+def _efficiency_text(values: Any) -> str:
+    return " ".join(f"{float(h):g}" for h in values)
+
+
 def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
+    """One record per run. ``efficiency`` is what the run reached (a lost run never had the
+    faults after its loss), ``planned_efficiency`` the scenario's; ``None``: not settled (steady
+    values) or lost (position values, see ``lost_at_s``)."""
     rows = []
     for run in runs:
         m = run.metrics
+        tr = run.trajectory
         rows.append(
             {
                 "scenario": run.scenario.name,
                 "law": run.law,
-                "efficiency": " ".join(f"{h:g}" for h in run.scenario.efficiency),
+                "efficiency": _efficiency_text(tr.efficiency[-1]),
+                "planned_efficiency": _efficiency_text(run.scenario.efficiency),
+                "faults_not_reached": "; ".join(
+                    f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in tr.faults if f.time > tr.t[-1]
+                ),
                 "ke_stabilizable": run.scenario.ke_stabilizable,
                 "outcome": m.outcome,
                 "outcome_label": m.outcome_label,
-                "end_s": float(run.trajectory.t[-1]),
+                "lost_at_s": m.lost_at_s,
+                "end_s": float(tr.t[-1]),
+                "window_s": m.window_s,
                 "r_rad_s": m.r_rad_s,
                 "n3z": m.n3z,
-                "rotation_axis": "" if m.rotation_axis is None else " ".join(f"{v:+.3f}" for v in m.rotation_axis),
+                "rotation_axis": None if m.rotation_axis is None else " ".join(f"{v:+.3f}" for v in m.rotation_axis),
                 "spin_settle_s": m.spin_settle_s,
                 "max_altitude_loss_m": m.max_altitude_loss_m,
                 "max_horizontal_error_m": m.max_horizontal_error_m,
                 "final_horizontal_error_m": m.final_horizontal_error_m,
                 "final_altitude_error_m": m.final_altitude_error_m,
+                "window_horizontal_error_m": m.window_horizontal_error_m,
+                "window_altitude_error_m": m.window_altitude_error_m,
+                "window_speed_m_s": m.window_speed_m_s,
             }
         )
     return rows
 
 
-def write_report(runs: list[ScenarioRun], out_dir: str | Path, *, figures: bool = True) -> Path:
-    """Writes ``ftc-report.md`` and ``ftc-report.csv`` (one row per run), and with ``figures``
-    the time history of every run of the first law (``<scenario>.png``) and the primary-axis
-    paths (``primary-axis.png``). Returns the Markdown file's path."""
-    import csv
+#: Columns that hold a steady value (blank -> "not settled") and a position value over the run
+#: (blank -> "lost at t").
+STEADY_COLUMNS = ("r_rad_s", "n3z", "rotation_axis", "spin_settle_s")
+POSITION_COLUMNS = (
+    "max_altitude_loss_m",
+    "max_horizontal_error_m",
+    "final_horizontal_error_m",
+    "final_altitude_error_m",
+    "window_horizontal_error_m",
+    "window_altitude_error_m",
+    "window_speed_m_s",
+)
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+
+def cell(row: dict[str, Any], column: str, digits: int = 3) -> str:
+    """A report cell as text: numbers with ``digits`` decimals; a missing value says why
+    (``"lost at 2.41 s"`` for a lost run, ``"not settled"`` for a steady value of a run that did
+    not settle)."""
+    value = row[column]
+    if value is None:
+        if row["lost_at_s"] is not None and (column in STEADY_COLUMNS or column in POSITION_COLUMNS):
+            return f"lost at {row['lost_at_s']:.2f} s"
+        if column in STEADY_COLUMNS:
+            return "not settled"
+        return ""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{round(value, digits) + 0.0:.{digits}f}"  # + 0.0: no "-0.0"
+    return str(value)
+
+
+def write_report(
+    runs: list[ScenarioRun],
+    out_dir: str | Path,
+    *,
+    figures: bool = True,
+    force: bool = False,
+    command: str | None = None,
+) -> Path:
+    """Writes the report directory ``out_dir``: ``ftc-report.md`` and ``ftc-report.csv`` (one
+    row per run), with ``figures`` the time history of every run of the first law
+    (``<scenario>.png``) and the primary-axis paths (``primary-axis.png``), and
+    ``manifest.json`` (the files, ``command``, the rotorfault version). The directory is built
+    beside ``out_dir`` and swapped in only when complete: an interrupted report leaves the
+    previous one as it was. An existing report is replaced only with ``force``; a non-empty
+    directory that is not a report never. Returns the Markdown file's path."""
+    import csv
+    import io
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .._output import check_output_directory, output_directory
+
+    out = check_output_directory("out_dir", out_dir, force=force)
+    if not runs:
+        raise ValueError("runs: nothing to report (give at least one law and scenario)")
     rows = report_rows(runs)
-    with open(out / "ftc-report.csv", "w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    try:
+        package_version = version("rotorfault")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        package_version = "unknown"
+    manifest = {
+        "generator": "rotorfault ftc-report (rotorfault.papers.ke.write_report)",
+        "command": command or "rotorfault.papers.ke.write_report",
+        "version": package_version,
+        "laws": sorted({run.law for run in runs}),
+        "scenarios": sorted({run.scenario.name for run in runs}),
+    }
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    for r in rows:
+        writer.writerow({column: cell(r, column, 6) for column in r})
     lines = [
         "# Uniform passive FTC (Ke et al.): scenario report",
         "",
-        "Steady values (r, n3z, rotation axis) are means over the last 5 s, blank for runs that",
-        "diverged; spin settle counts from the last fault until r and n3z stay near those values.",
-        "Outcome: 'holds position' ends within 2 m horizontally and 1 m vertically of the setpoint.",
+        f"Outcomes are judged over the last {runs[0].metrics.window_s:g} s of each run: 'holds position' keeps",
+        f"within {HOLD_BAND_M[0]:g} m horizontally and {HOLD_BAND_M[1]:g} m vertically of the setpoint and below "
+        f"{HOLD_SPEED_M_S:g} m/s throughout;",
+        f"'circling' moves faster than {HOLD_SPEED_M_S:g} m/s on average while its direction of travel turns by at "
+        f"least {math.degrees(CIRCLING_TURN_RAD):g} degrees",
+        "(a steady circle or oscillation); 'off station' is neither; a divergence kind ('tilt', ...) means the",
+        "vehicle was lost, and its position columns say when ('lost at t'): the track stops there.",
+        "Steady values (r, n3z, rotation axis) are means over the same window, reported only for runs that",
+        "settled: r within 5 % (0.2 rad/s) and n3z within 0.02 of them from the spin-settle time (counted from",
+        "the last fault that changed an efficiency) to the end, at least one window before the end.",
+        "'efficiency reached' is the rotor efficiency at the end of the run (a lost run never had the faults",
+        "planned after its loss).",
         "",
-        "| scenario | law | Ke: stabilisable | outcome | end (s) | r (rad/s) | n3z | rotation axis (body) "
+        "| scenario | law | Ke: stabilisable | outcome | efficiency reached | r (rad/s) | n3z | rotation axis (body) "
         "| spin settle (s) | max alt. loss (m) | max horiz. (m) | final horiz. (m) | final alt. err. (m) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-
-    def number(value: float | None, digits: int) -> str:
-        return "" if value is None else f"{value:.{digits}f}"
-
     for r in rows:
         lines.append(
-            f"| {r['scenario']} | {r['law']} | {'yes' if r['ke_stabilizable'] else 'no'} | {r['outcome_label']} "
-            f"| {r['end_s']:.1f} | {number(r['r_rad_s'], 1)} | {number(r['n3z'], 3)} | {r['rotation_axis']} "
-            f"| {number(r['spin_settle_s'], 1)} | {r['max_altitude_loss_m']:.2f} | {r['max_horizontal_error_m']:.2f} "
-            f"| {r['final_horizontal_error_m']:.2f} | {r['final_altitude_error_m']:.2f} |"
+            f"| {r['scenario']} | {r['law']} | {cell(r, 'ke_stabilizable')} | {r['outcome_label']} | {r['efficiency']} "
+            f"| {cell(r, 'r_rad_s', 1)} | {cell(r, 'n3z', 3)} | {cell(r, 'rotation_axis')} "
+            f"| {cell(r, 'spin_settle_s', 1)} | {cell(r, 'max_altitude_loss_m', 2)} | {cell(r, 'max_horizontal_error_m', 2)} "
+            f"| {cell(r, 'final_horizontal_error_m', 2)} | {cell(r, 'final_altitude_error_m', 2)} |"
         )
     lines += ["", "Stability checks of Section III-D (Table II health matrices, k_rotor = 2):", ""]
     lines += ["| diag(efficiency) | eig(N) | Re eig(I + k N) > 0 (25) | Re eig(N) > 0 (32) |", "|---|---|---|---|"]
@@ -360,23 +576,20 @@ def write_report(runs: list[ScenarioRun], out_dir: str | Path, *, figures: bool 
         lines.append(
             f"| diag({', '.join(f'{h:g}' for h in efficiency)}) | {eig} | {check.thrust_feedback} | {check.full_compensation} |"
         )
+    first_law = runs[0].law
     if figures:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        first_law = runs[0].law
-        chosen = [run for run in runs if run.law == first_law]
-        for run in chosen:
-            fig = run.trajectory.plot(str(out / f"{run.scenario.name}.png"))
-            plt.close(fig)
-        fig = plot_primary_axis(chosen, str(out / "primary-axis.png"))
-        plt.close(fig)
-        lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario."]
-    path = out / "ftc-report.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+        lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario (`<scenario>.png`)."]
+    else:
+        lines += ["", "No figures (written with --no-figures)."]
+    with output_directory(out, manifest) as tmp:
+        (tmp / "ftc-report.csv").write_text(buffer.getvalue(), encoding="utf-8")
+        (tmp / "ftc-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        if figures:
+            chosen = [run for run in runs if run.law == first_law]
+            for run in chosen:
+                run.plot(str(tmp / f"{run.scenario.name}.png"))
+            plot_primary_axis(chosen, str(tmp / "primary-axis.png"))
+    return out / "ftc-report.md"
 
 
 #: The health matrices of Ke Table II, as their diagonals (rotor efficiencies).
@@ -396,12 +609,19 @@ TABLE_II_EFFICIENCY = (
 
 
 __all__ = [
+    "CIRCLING_TURN_RAD",
     "HOLD_BAND_M",
+    "HOLD_SPEED_M_S",
     "OUTCOME_LABELS",
+    "POSITION_COLUMNS",
+    "STEADY_COLUMNS",
+    "WINDOW_S",
     "TABLE_II_EFFICIENCY",
     "FlightMetrics",
     "KeScenario",
     "ScenarioRun",
+    "cell",
+    "effective_fault_times",
     "flight_metrics",
     "plot_primary_axis",
     "report_rows",
