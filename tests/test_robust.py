@@ -93,14 +93,28 @@ def test_loop_shape_weight_makes_the_target_shape() -> None:
     c[0, 0] = c[1, 1] = c[2, 4] = 1
     g = ct.ss(a, b, c, 0)
     shape = robust.target_loop_shape(100.0)
-    w1 = robust.loop_shape_weight(g, shape, channel_gain=[1.0, 2.0, 0.5])
     w = np.logspace(-2, 4, 40)
     gr = np.asarray(g(1j * w)).reshape(3, 3, -1)
+    ls = np.asarray(shape(1j * w)).reshape(-1)
+    gains = np.diag([1.0, 2.0, 0.5])
+    # Exact inverse (margin 0: the plant's poles at +-0.5j are cancelled) ...
+    w1 = robust.loop_shape_weight(g, shape, channel_gain=[1.0, 2.0, 0.5], margin_rad_s=0.0)
     wr = np.asarray(w1(1j * w)).reshape(3, 3, -1)
     gw = np.einsum("ijk,jlk->ilk", gr, wr)
-    ls = np.asarray(shape(1j * w)).reshape(-1)
     for k in range(len(w)):
-        np.testing.assert_allclose(gw[:, :, k], np.diag([1.0, 2.0, 0.5]) * ls[k], rtol=1e-9, atol=1e-9 * abs(ls[k]))
+        np.testing.assert_allclose(gw[:, :, k], gains * ls[k], rtol=1e-9, atol=1e-9 * abs(ls[k]))
+    # ... which ncfsyn refuses (the cancelled undamped pair would stay in every closed loop).
+    with pytest.raises(ValueError, match="not stabilisable"):
+        ncfsyn(g, w1)
+    # The default: the inverse of G(s + 1), so G W1 = G(s) G(s + 1)^-1 L.
+    w1 = robust.loop_shape_weight(g, shape, channel_gain=[1.0, 2.0, 0.5])
+    wr = np.asarray(w1(1j * w)).reshape(3, 3, -1)
+    gs = np.asarray(g(1j * w + 1.0)).reshape(3, 3, -1)
+    for k in range(len(w)):
+        expected = gr[:, :, k] @ np.linalg.solve(gs[:, :, k], gains) * ls[k]
+        np.testing.assert_allclose(gr[:, :, k] @ wr[:, :, k], expected, rtol=1e-8, atol=1e-8 * np.max(np.abs(expected)))
+    result = ncfsyn(g, w1)
+    assert np.max(np.linalg.eigvals(robust.four_block(g, result.controller).A).real) < 0
     # Lanzon's shape: 60 dB at low frequency, about 0 dB at the crossover, -40 dB/decade far above.
     mag = np.abs(ls)
     assert 20 * np.log10(abs(complex(shape(1e-4j)))) == pytest.approx(60, abs=0.01)
@@ -122,5 +136,5 @@ def test_bad_input_names_the_field() -> None:
         robust.target_loop_shape(-1.0)
     with pytest.raises(ValueError, match="loop_shape: relative degree must be at least 2"):
         robust.loop_shape_weight(_plants()[4], ct.tf([1], [1, 1]) * 0 + ct.tf([1], [1, 1]))
-    with pytest.raises(ValueError, match="plant: no stabilising Riccati solution"):
+    with pytest.raises(ValueError, match="plant: the shaped plant W2 G W1 is not stabilisable"):
         ncfsyn(ct.ss([[1.0]], [[0.0]], [[1.0]], [[0.0]]), np.eye(1))

@@ -5,6 +5,8 @@
   constrained allocation);
 - :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
   and the N-matrix stability analysis;
+- :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
+  linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
   and the loop-shape weight.
@@ -17,9 +19,10 @@ is the slow path.
 from __future__ import annotations
 
 from .._typing import Controller
-from . import ke, lqr, robust
+from . import ke, lanzon, lqr, robust
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
+from .lanzon import LanzonController
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import hover_trim, linearize, lqr_hover, lqr_hover_allocated
 from .robust import NcfsynResult, ncfsyn
@@ -28,6 +31,7 @@ __all__ = [
     "Allocated",
     "Controller",
     "KeGains",
+    "LanzonController",
     "LinearFeedback",
     "NcfsynResult",
     "Lti",
@@ -35,6 +39,7 @@ __all__ = [
     "UniformPassiveFtc",
     "hover_trim",
     "ke",
+    "lanzon",
     "linearize",
     "lqr",
     "lqr_hover",

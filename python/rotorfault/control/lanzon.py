@@ -37,10 +37,10 @@ rotation of pi about x: ``phi = roll``, ``theta = -pitch``, ``psi = -yaw``, ``(p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
-import control as ct
+import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
 
@@ -56,6 +56,10 @@ SPIN_RATE_RAD_S = 2.7
 #: The failed rotor of the paper's design (1-based; Section III.A).
 FAILED_ROTOR = 2
 
+#: The core's defaults (Table 1, ``k_r = m g d / 2.7``, ``k_t = 0.1``; outer-loop gains): the one source.
+_DEFAULT_MODEL = _rfcore.LanzonModel()
+_DEFAULT_OUTER = _rfcore.LanzonOuterLoop()
+
 
 @dataclass(frozen=True)
 class LanzonVehicle:
@@ -67,14 +71,14 @@ class LanzonVehicle:
     (``f = k_f omega^2``: 5 N at 707 rad/s). ``inertia_zz_kg_m2`` defaults to Table 1's printed
     1.16e-3 (probably a misprint of 1.16e-2; both are flown in the report)."""
 
-    mass_kg: float = 0.5
-    gravity_m_s2: float = 9.81
-    inertia_xx_kg_m2: float = 5.9e-3
-    inertia_zz_kg_m2: float = 1.16e-3
-    arm_length_m: float = 0.255
-    drag_torque_ratio_m: float = 2.4e-3
-    rotational_drag_n_m_s: float = 0.5 * 9.81 * 2.4e-3 / SPIN_RATE_RAD_S
-    linear_drag_n_s_m: float = 0.1
+    mass_kg: float = _DEFAULT_MODEL.mass_kg
+    gravity_m_s2: float = _DEFAULT_MODEL.gravity_m_s2
+    inertia_xx_kg_m2: float = _DEFAULT_MODEL.inertia_xx_kg_m2
+    inertia_zz_kg_m2: float = _DEFAULT_MODEL.inertia_zz_kg_m2
+    arm_length_m: float = _DEFAULT_MODEL.arm_length_m
+    drag_torque_ratio_m: float = _DEFAULT_MODEL.drag_torque_ratio_m
+    rotational_drag_n_m_s: float = _DEFAULT_MODEL.rotational_drag_n_m_s
+    linear_drag_n_s_m: float = _DEFAULT_MODEL.linear_drag_n_s_m
     rotor_inertia_kg_m2: float = 3e-5
     thrust_coefficient_n_s2: float = 1e-5
     max_thrust_n: float = 5.0
@@ -138,13 +142,14 @@ class LanzonVehicle:
 
     def simulator(self, *, dt_s: float = 1e-3, substeps: int = 2, limits: bool = True, **kwargs: Any) -> Simulator:
         """The verification model (Section II.B): gyroscopic moment (5), Stokes drag, and with
-        ``limits`` the thrust saturation [0, f_max] and the rate limit (50 N/s); without, thrust
-        is still >= 0 but unbounded above and not rate limited."""
+        ``limits`` the thrust saturation [0, f_max] and the rate limit (50 N/s); without, no
+        actuator limit at all (thrust in [-1e6, 1e6] N, no rate limit): the model the design
+        assumes."""
         airframe = self.airframe()
         if not limits:
             airframe = Airframe(
                 arm_angle_rad=airframe.arm_angle_rad, arm_length_m=airframe.arm_length_m, spin=list(airframe.spin),
-                max_thrust_n=[1e6] * 4, mass_kg=self.mass_kg, inertia_kg_m2=airframe.inertia_kg_m2,
+                max_thrust_n=[1e6] * 4, min_thrust_n=[-1e6] * 4, mass_kg=self.mass_kg, inertia_kg_m2=airframe.inertia_kg_m2,
                 drag_torque_ratio_m=self.drag_torque_ratio_m, gravity_m_s2=self.gravity_m_s2, name="lanzon-quadrotor",
             )
         actuator = FixedPitchActuator(rate_limit_n_s=self.rate_limit_n_s if limits else math.inf,
@@ -179,7 +184,8 @@ class LanzonVehicle:
 
     def reduced_dynamics(self, x: npt.ArrayLike, u: npt.ArrayLike) -> FloatArray:
         """``x' = f(x) + G u`` (23a) in hat coordinates."""
-        return self.drift(x) + self.input_matrix() @ np.asarray(u, dtype=float)
+        out: FloatArray = self.drift(x) + self.input_matrix() @ np.asarray(u, dtype=np.float64)
+        return out
 
     def linearisation(self) -> tuple[FloatArray, FloatArray]:
         """``(A_r, B_r)`` of eq. (26), in closed form."""
@@ -217,7 +223,8 @@ class LanzonVehicle:
     def brunovsky(self, x: npt.ArrayLike) -> FloatArray:
         """``phi_c(x) = [phi, phi', theta, theta', r - r0]`` (outputs and their derivatives)."""
         f = self.drift(x)
-        return np.array([x[0], f[0], x[1], f[1], x[4]], dtype=float)  # type: ignore[index]
+        s = np.asarray(x, dtype=np.float64)
+        return np.array([s[0], f[0], s[1], f[1], s[4]], dtype=np.float64)
 
     def lie_terms(self, x: npt.ArrayLike) -> FloatArray:
         """``b(x) = [L_f^2 h1, L_f^2 h2, L_f h3]``: the output derivatives of order r at u = 0."""
@@ -247,7 +254,8 @@ class LanzonVehicle:
         a, _ = self.linearisation()
         t = self.transform_matrix()
         l_mat = (t @ a)[[1, 3, 4]]
-        return l_mat, np.linalg.inv(t), self.decoupling_matrix(np.zeros(5))
+        t_inv = np.asarray(np.linalg.inv(t), dtype=np.float64)
+        return l_mat, t_inv, self.decoupling_matrix(np.zeros(5))
 
     def transform(self, x: npt.ArrayLike) -> FloatArray:
         """``x_r = T^-1 phi_c(x)`` (21c, 21g)."""
@@ -259,8 +267,8 @@ class LanzonVehicle:
         ``x_r' = A_r x_r + B_r v`` exactly."""
         l_mat, t_inv, m0 = self.rfl_gains()
         m = self.decoupling_matrix(x)
-        alpha = np.linalg.solve(m, -self.lie_terms(x) + l_mat @ t_inv @ self.brunovsky(x))
-        beta = np.linalg.solve(m, m0)
+        alpha = np.asarray(np.linalg.solve(m, -self.lie_terms(x) + l_mat @ t_inv @ self.brunovsky(x)), dtype=np.float64)
+        beta = np.asarray(np.linalg.solve(m, m0), dtype=np.float64)
         return alpha, beta
 
     # -- frames ---------------------------------------------------------------------------------
@@ -282,3 +290,163 @@ class LanzonVehicle:
         uf, tq, tr = np.asarray(u, dtype=float)
         l, d = self.arm_length_m, self.drag_torque_ratio_m
         return np.array([(uf - 2 * tq / l + tr / d) / 4, 0.0, (uf + 2 * tq / l + tr / d) / 4, (2 * uf - 2 * tr / d) / 4])
+
+    def _core(self) -> _rfcore.LanzonModel:
+        return _rfcore.LanzonModel(
+            mass_kg=self.mass_kg, gravity_m_s2=self.gravity_m_s2, inertia_xx_kg_m2=self.inertia_xx_kg_m2,
+            inertia_zz_kg_m2=self.inertia_zz_kg_m2, arm_length_m=self.arm_length_m,
+            drag_torque_ratio_m=self.drag_torque_ratio_m, rotational_drag_n_m_s=self.rotational_drag_n_m_s,
+            linear_drag_n_s_m=self.linear_drag_n_s_m,
+        )
+
+
+@dataclass(frozen=True)
+class OuterLoopGains:
+    """The outer loop (28)-(31), which the paper leaves to "any simple standard linear control
+    technique": PD laws ``z~ = -k_p e - k_d e'`` on the horizontal position (``k_p_xy``, 1/s^2;
+    ``k_d_xy``, 1/s) and the altitude (``k_p_z``, ``k_d_z``), the roll/pitch set points limited to
+    ``max_tilt_rad`` and the vertical acceleration to ``max_vertical_accel_m_s2``. Validated in Rust."""
+
+    k_p_xy: float = _DEFAULT_OUTER.k_p_xy
+    k_d_xy: float = _DEFAULT_OUTER.k_d_xy
+    k_p_z: float = _DEFAULT_OUTER.k_p_z
+    k_d_z: float = _DEFAULT_OUTER.k_d_z
+    max_tilt_rad: float = _DEFAULT_OUTER.max_tilt_rad
+    max_vertical_accel_m_s2: float = _DEFAULT_OUTER.max_vertical_accel_m_s2
+
+    def _core(self) -> _rfcore.LanzonOuterLoop:
+        return _rfcore.LanzonOuterLoop(**{f.name: real(f"outer_loop.{f.name}", getattr(self, f.name)) for f in fields(self)})
+
+
+@dataclass(frozen=True)
+class LanzonDesign:
+    """An inner-loop design: the loop shape (``crossover_rad_s``, ``low_gain_db``,
+    ``rolloff_factor``, per-output ``channel_gain`` for phi, theta, r), the weight ``w1`` with
+    ``G W1 = diag(channel_gain_i L)``, and the :func:`~rotorfault.control.ncfsyn` result."""
+
+    vehicle: LanzonVehicle
+    crossover_rad_s: float
+    low_gain_db: float
+    rolloff_factor: float
+    channel_gain: tuple[float, float, float]
+    w1: ct.StateSpace
+    synthesis: NcfsynResult
+
+    @property
+    def gamma(self) -> float:
+        return self.synthesis.gamma
+
+    @property
+    def gamma_min(self) -> float:
+        return self.synthesis.gamma_min
+
+    @property
+    def stability_margin(self) -> float:
+        return self.synthesis.stability_margin
+
+    @property
+    def controller(self) -> ct.StateSpace:
+        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``."""
+        return self.synthesis.controller
+
+    def discretise(self, dt_s: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """``(A, B, C, D)`` of the controller discretised at ``dt_s`` (Tustin, which maps a stable
+        continuous controller to a stable discrete one at any period)."""
+        dt = real("dt_s", dt_s)
+        if not (dt > 0 and math.isfinite(dt)):
+            raise ValueError(f"dt_s: must be > 0, got {dt}")
+        k = ct.c2d(self.controller, dt, method="tustin")
+        return tuple(np.ascontiguousarray(np.asarray(m, dtype=np.float64)) for m in (k.A, k.B, k.C, k.D))  # type: ignore[return-value]
+
+    def plot_loop_shape(self, path: str | None = None) -> Any:
+        """Singular values of the RFL plant and of the shaped plant ``G W1`` (Lanzon Fig. 4)."""
+        from .robust import plot_singular_values
+
+        return plot_singular_values(self.vehicle.plant(), self.synthesis.shaped_plant, path,
+                                    title=f"loop shape: crossover {self.crossover_rad_s:g} rad/s, gamma = {self.gamma:.3f}")
+
+
+def design(
+    vehicle: LanzonVehicle | None = None,
+    *,
+    crossover_rad_s: float = 100.0,
+    low_gain_db: float = 60.0,
+    rolloff_factor: float = 10.0,
+    channel_gain: npt.ArrayLike = (1.0, 1.0, 1.0),
+    factor: float = 1.1,
+) -> LanzonDesign:
+    """H-infinity loop shaping of the RFL plant ``(A_r, B_r)``: Lanzon's loop shape (60 dB at low
+    frequency, -20 dB/decade through ``crossover_rad_s``, -40 dB/decade above ``rolloff_factor``
+    times it) realised by :func:`~rotorfault.control.robust.loop_shape_weight`, then
+    :func:`~rotorfault.control.ncfsyn` at ``factor * gamma_min``. The defaults are the paper's
+    design (100 rad/s crossover)."""
+    vehicle = LanzonVehicle() if vehicle is None else vehicle
+    if not isinstance(vehicle, LanzonVehicle):
+        raise TypeError(f"vehicle: expected a LanzonVehicle, got {type(vehicle).__name__}")
+    gains = float_array("channel_gain", channel_gain, 1)
+    if gains.shape != (3,):
+        raise ValueError(f"channel_gain: expected 3 entries (phi, theta, r), got {gains.shape[0]}")
+    shape = target_loop_shape(crossover_rad_s, low_gain_db=low_gain_db, rolloff_factor=rolloff_factor)
+    plant = vehicle.plant()
+    w1 = loop_shape_weight(plant, shape, channel_gain=gains)
+    synthesis = ncfsyn(plant, w1, factor=factor)
+    return LanzonDesign(vehicle=vehicle, crossover_rad_s=float(crossover_rad_s), low_gain_db=float(low_gain_db),
+                        rolloff_factor=float(rolloff_factor), channel_gain=tuple(float(g) for g in gains),  # type: ignore[arg-type]
+                        w1=w1, synthesis=synthesis)
+
+
+class LanzonController:
+    """Lanzon et al.'s controller, run in Rust: robust feedback linearisation, the discretised
+    loop-shaping controller of ``design`` and, with a ``position`` (world NED, m), the outer loop
+    (28)-(31) with the yaw-synchronised rotation; without one, the inner loop holds
+    ``attitude_reference`` ``[phi_d, theta_d, r_d]`` (paper frame; default level at the working
+    point's spin). Rotor 2 is the failed rotor (commanded 0)."""
+
+    def __init__(
+        self,
+        design: LanzonDesign,
+        *,
+        position: npt.ArrayLike | None = None,
+        attitude_reference: npt.ArrayLike | None = None,
+        outer_loop: OuterLoopGains | None = None,
+    ) -> None:
+        if not isinstance(design, LanzonDesign):
+            raise TypeError(f"design: expected a LanzonDesign (rotorfault.control.lanzon.design), got {type(design).__name__}")
+        if outer_loop is not None and not isinstance(outer_loop, OuterLoopGains):
+            raise TypeError(f"outer_loop: expected OuterLoopGains, got {type(outer_loop).__name__}")
+        self.design = design
+        self.outer_loop = OuterLoopGains() if outer_loop is None else outer_loop
+        self.position = None if position is None else tuple(float(v) for v in _three("position", position))
+        self.attitude_reference = None if attitude_reference is None else tuple(
+            float(v) for v in _three("attitude_reference", attitude_reference))
+        v = design.vehicle
+        hover = v.mass_kg * v.gravity_m_s2 / 2
+        #: The working point's rotor thrusts (the actuators start there).
+        self.u_trim = np.array([hover, 0.0, hover, 0.0])
+
+    def core(self, dt_s: float) -> _rfcore.LanzonController:
+        a, b, c, d = self.design.discretise(dt_s)
+        return _rfcore.LanzonController(
+            model=self.design.vehicle._core(), a_k=a, b_k=b, c_k=c, d_k=d,
+            attitude_reference=None if self.attitude_reference is None else list(self.attitude_reference),
+            position=None if self.position is None else list(self.position),
+            outer_loop=self.outer_loop._core() if self.position is not None else None,
+        )
+
+
+def _three(name: str, value: npt.ArrayLike) -> FloatArray:
+    arr = float_array(name, value, 1)
+    if arr.shape != (3,):
+        raise ValueError(f"{name}: expected 3 entries, got {arr.shape[0]}")
+    return arr
+
+
+__all__ = [
+    "FAILED_ROTOR",
+    "SPIN_RATE_RAD_S",
+    "LanzonController",
+    "LanzonDesign",
+    "LanzonVehicle",
+    "OuterLoopGains",
+    "design",
+]

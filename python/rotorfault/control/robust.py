@@ -29,10 +29,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-import control as ct
+import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg as sla
+import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .._convert import FloatArray, real
 
@@ -103,6 +103,73 @@ def ncf_gamma_min(plant: ct.StateSpace) -> float:
     return float(np.sqrt(1.0 + max(np.max(np.linalg.eigvals(x @ z).real), 0.0)))
 
 
+def _krylov_basis(a: FloatArray, b: FloatArray, rtol: float) -> FloatArray:
+    """Orthonormal basis of the controllable subspace of ``(A, B)`` by block Arnoldi (each new
+    direction orthogonalised twice against the basis; a direction counts when its norm exceeds
+    ``rtol`` times that of ``A`` applied to the basis)."""
+    n = a.shape[0]
+    scale = max(1.0, float(np.linalg.norm(a, 2)))
+    u, sv, _ = np.linalg.svd(b, full_matrices=False)
+    basis = u[:, sv > rtol * max(1.0, float(sv[0]) if sv.size else 1.0)]
+    new = basis
+    while new.shape[1] and basis.shape[1] < n:
+        w = a @ new
+        for _ in range(2):
+            w = w - basis @ (basis.T @ w)
+        u, sv, _ = np.linalg.svd(w, full_matrices=False)
+        keep = sv > rtol * scale
+        new = u[:, keep]
+        if new.shape[1]:
+            for _ in range(2):
+                new = new - basis @ (basis.T @ new)
+            new, _ = np.linalg.qr(new)
+            basis = np.hstack([basis, new])
+    return basis
+
+
+def _require_stabilisable_detectable(system: ct.StateSpace) -> None:
+    """PBH eigenvector test at every eigenvalue with a real part >= 0: no left eigenvector
+    orthogonal to ``B``, no right eigenvector in the kernel of ``C`` (relative to their norms, so
+    that large weight gains do not hide a cancellation)."""
+    a, b, c, _ = _matrices(system)
+    n = a.shape[0]
+    if n == 0:
+        return
+    scale = max(1.0, float(np.linalg.norm(a, 2)))
+    lams, right = np.linalg.eig(a)
+    _, left = np.linalg.eig(a.T)
+    lams_left = np.linalg.eigvals(a.T)
+    for k, lam in enumerate(lams):
+        if lam.real < -1e-9 * scale:
+            continue
+        vr = right[:, k] / np.linalg.norm(right[:, k])
+        j = int(np.argmin(np.abs(lams_left - lam)))
+        vl = left[:, j] / np.linalg.norm(left[:, j])
+        b_norm = max(float(np.linalg.norm(b, 2)), 1e-300)
+        c_norm = max(float(np.linalg.norm(c, 2)), 1e-300)
+        for name, value in (("stabilisable", float(np.linalg.norm(vl @ b)) / b_norm),
+                            ("detectable", float(np.linalg.norm(c @ vr)) / c_norm)):
+            if value <= 1e-9:
+                raise ValueError(
+                    f"plant: the shaped plant W2 G W1 is not {name}: the mode at {lam:.6g} cannot be "
+                    "stabilised (no stabilising Riccati solution; a weight may cancel it)"
+                )
+
+
+def minimal_realisation(system: ct.StateSpace, *, rtol: float = 1e-9) -> ct.StateSpace:
+    """A minimal realisation (controllable, then observable part) by orthogonal projection onto
+    Krylov subspaces; needs no slycot. Removes the modes a weight cancels in ``G W1``."""
+    a, b, c, d = _matrices(system)
+    if a.shape[0] == 0:
+        return system
+    t = _krylov_basis(a, b, rtol)
+    a, b, c = t.T @ a @ t, t.T @ b, c @ t
+    if a.shape[0]:
+        t = _krylov_basis(a.T, c.T, rtol)
+        a, b, c = t.T @ a @ t, t.T @ b, c @ t
+    return ct.ss(a, b, c, d)
+
+
 def ncfsyn(
     plant: Any,
     w1: Any,
@@ -125,7 +192,12 @@ def ncfsyn(
     for field, system in (("plant", g), ("w1", w1s), ("w2", w2s)):
         if not all(np.all(np.isfinite(m)) for m in _matrices(system)):
             raise ValueError(f"{field}: matrices must be finite")
-    gs = ct.series(w1s, g, w2s)
+    # The weights may cancel stable plant modes (an inverting W1 does): synthesise on a minimal
+    # realisation, after checking that no mode it drops is on or right of the imaginary axis
+    # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
+    full = ct.series(w1s, g, w2s)
+    _require_stabilisable_detectable(full)
+    gs = minimal_realisation(full)
     a, b, c, d = _matrices(gs)
     x, z = riccati_solutions(gs)
     gamma_min = float(np.sqrt(1.0 + max(np.max(np.linalg.eigvals(x @ z).real), 0.0)))
@@ -272,18 +344,31 @@ def loop_shape_weight(
     loop_shape: Any,
     *,
     channel_gain: npt.ArrayLike | None = None,
+    margin_rad_s: float = 1.0,
 ) -> ct.StateSpace:
-    """A pre-compensator ``W1`` with ``G W1 = diag(channel_gain_i * L(s))`` exactly, for a square
+    """A pre-compensator ``W1 = G_e(s)^-1 diag(channel_gain_i * L(s))`` for a square
     plant of full vector relative degree (``sum r_i = n``: no zero dynamics, the case of a robust
     feedback linearised plant). ``loop_shape`` is a scalar transfer function of relative degree at
     least ``max r_i`` (e.g. :func:`target_loop_shape`); ``channel_gain`` (default 1) de-weights or
     emphasises output channels.
+
+    ``G_e(s) = G(s + e)`` is the plant with its poles shifted left by ``e = max(0, margin_rad_s +
+    max Re(poles))``, so that the weight's zeros lie at least ``margin_rad_s`` left of the
+    imaginary axis: an exact inverse would cancel the plant's undamped or unstable modes (Lanzon's
+    plant has an undamped pair at the spin rate), leaving them in every closed loop. Hence
+    ``G W1 = G(s) G(s + e)^-1 diag(L)``: ``diag(L)`` well above the plant's poles, the plant's
+    own modes left for the synthesis to stabilise below.
 
     Construction: with full relative degree, ``x = T^-1 [y_i, y_i', ..., y_i^(r_i - 1)]`` and
     ``u = Dm^-1 (y^(r) - C_r x)`` (``C_r`` rows ``C_i A^r_i``): ``W1`` runs ``L`` per channel and
     feeds its output and derivatives (realised exactly from ``L``'s state) through that inverse."""
     g = _as_ss("plant", plant)
     a, _, c, _ = _matrices(g)
+    margin = real("margin_rad_s", margin_rad_s)
+    if not (margin >= 0 and np.isfinite(margin)):
+        raise ValueError(f"margin_rad_s: must be finite and >= 0, got {margin}")
+    shift = max(0.0, margin + float(np.max(np.linalg.eigvals(a).real))) if a.size else 0.0
+    a = a - shift * np.eye(a.shape[0])
     if g.ninputs != g.noutputs:
         raise ValueError(f"plant: must be square, got {g.noutputs} outputs x {g.ninputs} inputs")
     degrees, dm = relative_degrees(g)
@@ -381,6 +466,7 @@ __all__ = [
     "hinf_norm",
     "hinf_norm_below",
     "loop_shape_weight",
+    "minimal_realisation",
     "ncf_gamma_min",
     "ncfsyn",
     "plot_singular_values",
