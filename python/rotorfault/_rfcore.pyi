@@ -253,7 +253,7 @@ class Trajectory:
     @property
     def divergence(self) -> Divergence | None: ...
 
-_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc
+_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController
 
 def simulate(
     airframe: Airframe,
@@ -409,6 +409,77 @@ class UniformPassiveFtc:
         dt_s: float,
         gains: KeGains,
     ) -> UniformPassiveFtc: ...
+
+@final
+class LanzonModel:
+    def __new__(
+        cls,
+        *,
+        mass_kg: float | None = None,
+        gravity_m_s2: float | None = None,
+        inertia_xx_kg_m2: float | None = None,
+        inertia_zz_kg_m2: float | None = None,
+        arm_length_m: float | None = None,
+        drag_torque_ratio_m: float | None = None,
+        rotational_drag_n_m_s: float | None = None,
+        linear_drag_n_s_m: float | None = None,
+    ) -> LanzonModel: ...
+    @property
+    def mass_kg(self) -> float: ...
+    @property
+    def gravity_m_s2(self) -> float: ...
+    @property
+    def inertia_xx_kg_m2(self) -> float: ...
+    @property
+    def inertia_zz_kg_m2(self) -> float: ...
+    @property
+    def arm_length_m(self) -> float: ...
+    @property
+    def drag_torque_ratio_m(self) -> float: ...
+    @property
+    def rotational_drag_n_m_s(self) -> float: ...
+    @property
+    def linear_drag_n_s_m(self) -> float: ...
+
+@final
+class LanzonOuterLoop:
+    def __new__(
+        cls,
+        *,
+        k_p_xy: float | None = None,
+        k_d_xy: float | None = None,
+        k_p_z: float | None = None,
+        k_d_z: float | None = None,
+        max_tilt_rad: float | None = None,
+        max_vertical_accel_m_s2: float | None = None,
+    ) -> LanzonOuterLoop: ...
+    @property
+    def k_p_xy(self) -> float: ...
+    @property
+    def k_d_xy(self) -> float: ...
+    @property
+    def k_p_z(self) -> float: ...
+    @property
+    def k_d_z(self) -> float: ...
+    @property
+    def max_tilt_rad(self) -> float: ...
+    @property
+    def max_vertical_accel_m_s2(self) -> float: ...
+
+@final
+class LanzonController:
+    def __new__(
+        cls,
+        *,
+        model: LanzonModel,
+        a_k: npt.NDArray[np.float64],
+        b_k: npt.NDArray[np.float64],
+        c_k: npt.NDArray[np.float64],
+        d_k: npt.NDArray[np.float64],
+        attitude_reference: list[float] | None = None,
+        position: list[float] | None = None,
+        outer_loop: LanzonOuterLoop | None = None,
+    ) -> LanzonController: ...
 
 @final
 class FtcPreset:

@@ -36,7 +36,12 @@ ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hove
 
 #: The Rust controller objects the simulator's loop runs (all can run in a batch).
 CoreController: TypeAlias = (
-    _rfcore.OpenLoop | _rfcore.LinearFeedback | _rfcore.Lti | _rfcore.Allocated | _rfcore.UniformPassiveFtc
+    _rfcore.OpenLoop
+    | _rfcore.LinearFeedback
+    | _rfcore.Lti
+    | _rfcore.Allocated
+    | _rfcore.UniformPassiveFtc
+    | _rfcore.LanzonController
 )
 
 

@@ -38,6 +38,7 @@ CORE_TYPES: tuple[type, ...] = (
     _rfcore.Lti,
     _rfcore.Allocated,
     _rfcore.UniformPassiveFtc,
+    _rfcore.LanzonController,
 )
 
 
@@ -52,7 +53,7 @@ def core_controller(controller: AnyController, dt_s: float) -> CoreController | 
     if callable(controller):
         return controller
     raise TypeError(
-        "controller: expected OpenLoop, LinearFeedback, Lti, Allocated, UniformPassiveFtc (anything with "
+        "controller: expected OpenLoop, LinearFeedback, Lti, Allocated, UniformPassiveFtc, LanzonController (anything with "
         f"core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
     )
 

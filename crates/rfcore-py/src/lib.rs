@@ -38,6 +38,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<control::PyAllocated>()?;
     module.add_class::<control::ke::PyUniformPassiveFtc>()?;
+    module.add_class::<control::lanzon::PyLanzonModel>()?;
+    module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
+    module.add_class::<control::lanzon::PyLanzonController>()?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::time_allocations, module)?)?;

@@ -5,7 +5,11 @@
   constrained allocation);
 - :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
   and the N-matrix stability analysis;
-- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design.
+- :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
+  linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
+- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
+- :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
+  and the loop-shape weight.
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
@@ -15,25 +19,32 @@ is the slow path.
 from __future__ import annotations
 
 from .._typing import Controller
-from . import ke, lqr
+from . import ke, lanzon, lqr, robust
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
+from .lanzon import LanzonController
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .robust import NcfsynResult, ncfsyn
 
 __all__ = [
     "Allocated",
     "Controller",
     "HoverTrim",
     "KeGains",
+    "LanzonController",
     "LinearFeedback",
+    "NcfsynResult",
     "Lti",
     "OpenLoop",
     "UniformPassiveFtc",
     "hover_trim",
     "ke",
+    "lanzon",
     "linearize",
     "lqr",
     "lqr_hover",
     "lqr_hover_allocated",
+    "ncfsyn",
+    "robust",
 ]

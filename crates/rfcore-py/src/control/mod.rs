@@ -3,6 +3,7 @@
 //! controller and replay. Translation only.
 
 pub(crate) mod ke;
+pub(crate) mod lanzon;
 pub(crate) mod linear;
 
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -17,6 +18,7 @@ use rfcore::RfError;
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
+use lanzon::PyLanzonController;
 use linear::{PyLti, PyLinearFeedback, PyOpenLoop};
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
@@ -82,6 +84,7 @@ pub enum ControllerArg<'py> {
     Lti(PyRef<'py, PyLti>),
     Allocated(PyRef<'py, PyAllocated>),
     Ftc(PyRef<'py, PyUniformPassiveFtc>),
+    Lanzon(PyRef<'py, PyLanzonController>),
 }
 
 pub(crate) fn boxed(
@@ -95,6 +98,7 @@ pub(crate) fn boxed(
         Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Allocated(c)) => c.controller(c.py())?,
         Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
+        Some(ControllerArg::Lanzon(c)) => Box::new(c.inner.clone()),
     })
 }
 

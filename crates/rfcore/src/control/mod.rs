@@ -9,6 +9,8 @@
 //!   [`crate::state::state_vector`].
 //! - [`allocated`]: a virtual-control law followed by constrained allocation.
 //! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
+//! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
+//!   H-infinity loop shaping, yaw-synchronised outer loop).
 
 use nalgebra::DMatrix;
 
@@ -17,6 +19,7 @@ use crate::state::RigidBodyState;
 
 pub mod allocated;
 pub mod ke;
+pub mod lanzon;
 pub mod linear;
 
 pub use allocated::Allocated;

@@ -1,0 +1,111 @@
+//! Bindings for Lanzon et al.'s spinning-quadrotor controller: its model, its outer-loop gains
+//! and the controller (RFL + discretised loop-shaping controller + outer loop).
+
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+
+use rfcore::control::lanzon::{
+    DiscreteController, LanzonController, LanzonModel, LanzonOuterLoop, LanzonReference,
+};
+
+use crate::convert::{matrix, to_py_err};
+
+macro_rules! params_class {
+    ($py:ident, $pyname:literal, $core:ident, $($name:ident),*) => {
+        #[pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
+        #[derive(Clone)]
+        pub struct $py {
+            pub(crate) inner: $core,
+        }
+
+        #[pymethods]
+        impl $py {
+            #[new]
+            #[pyo3(signature = (*, $($name=None),*))]
+            fn new($($name: Option<f64>),*) -> PyResult<Self> {
+                let d = $core::default();
+                let inner = $core { $($name: $name.unwrap_or(d.$name)),* };
+                inner.check().map_err(to_py_err)?;
+                Ok($py { inner })
+            }
+            $(
+                #[getter]
+                fn $name(&self) -> f64 {
+                    self.inner.$name
+                }
+            )*
+        }
+    };
+}
+
+params_class!(
+    PyLanzonModel,
+    "LanzonModel",
+    LanzonModel,
+    mass_kg,
+    gravity_m_s2,
+    inertia_xx_kg_m2,
+    inertia_zz_kg_m2,
+    arm_length_m,
+    drag_torque_ratio_m,
+    rotational_drag_n_m_s,
+    linear_drag_n_s_m
+);
+
+params_class!(
+    PyLanzonOuterLoop,
+    "LanzonOuterLoop",
+    LanzonOuterLoop,
+    k_p_xy,
+    k_d_xy,
+    k_p_z,
+    k_d_z,
+    max_tilt_rad,
+    max_vertical_accel_m_s2
+);
+
+/// Lanzon et al.'s controller: `a_k`..`d_k` the discrete loop-shaping controller at the control
+/// period (3 errors in, 3 linear inputs out); `position` (world NED) closes the outer loop,
+/// otherwise `attitude_reference` `[phi_d, theta_d, r_d]` (paper frame) is held.
+#[pyclass(name = "LanzonController", module = "rotorfault._rfcore", frozen)]
+pub struct PyLanzonController {
+    pub(crate) inner: LanzonController,
+}
+
+#[pymethods]
+impl PyLanzonController {
+    #[new]
+    #[pyo3(signature = (*, model, a_k, b_k, c_k, d_k, attitude_reference=None, position=None, outer_loop=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        model: &PyLanzonModel,
+        a_k: PyReadonlyArray2<'_, f64>,
+        b_k: PyReadonlyArray2<'_, f64>,
+        c_k: PyReadonlyArray2<'_, f64>,
+        d_k: PyReadonlyArray2<'_, f64>,
+        attitude_reference: Option<[f64; 3]>,
+        position: Option<[f64; 3]>,
+        outer_loop: Option<&PyLanzonOuterLoop>,
+    ) -> PyResult<Self> {
+        let controller = DiscreteController {
+            a: matrix("A_K", &a_k)?,
+            b: matrix("B_K", &b_k)?,
+            c: matrix("C_K", &c_k)?,
+            d: matrix("D_K", &d_k)?,
+        };
+        let reference = match (position, attitude_reference) {
+            (Some(_), Some(_)) => return Err(pyo3::exceptions::PyValueError::new_err(
+                "position, attitude_reference: give one (the outer loop or fixed inner set points)",
+            )),
+            (Some(p), None) => LanzonReference::Position {
+                position_ned_m: p,
+                gains: outer_loop.map(|g| g.inner).unwrap_or_default(),
+            },
+            (None, r) => {
+                LanzonReference::Attitude(r.unwrap_or([0.0, 0.0, model.inner.spin_rate_rad_s()]))
+            }
+        };
+        let inner = LanzonController::new(model.inner, controller, reference).map_err(to_py_err)?;
+        Ok(PyLanzonController { inner })
+    }
+}
