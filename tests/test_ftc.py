@@ -173,7 +173,9 @@ def test_the_two_orders_are_mirror_images(runs: dict[str, ke_paper.ScenarioRun],
     """Which adjacent pair fails decides (Figs. 7 and 9), not the order: the orders mirror."""
     a = runs[pair].trajectory
     b = runs[f"{pair}-reversed"].trajectory
-    assert a.t[-1] == b.t[-1]
+    # Divergence times are located within the substep by bisection (issue 18): mirrored runs
+    # agree to rounding, no longer to the control step they were snapped to.
+    assert a.t[-1] == pytest.approx(b.t[-1], abs=1e-9)
     np.testing.assert_allclose(a.omega[:, 2], -b.omega[:, 2], atol=1e-6)
 
 

@@ -152,17 +152,13 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
 @click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
 @click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
-<<<<<<< HEAD
 @formula_option
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (PNG).")
-@_user_errors
-def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None) -> None:
-=======
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (.png, .pdf or .svg).")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @_user_errors
-def scan(airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool) -> None:
->>>>>>> issue21
+def scan(
+    airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool
+) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)

@@ -108,19 +108,12 @@ class Scenario:
         """Flies the scenario; errors name the file and its keys."""
         controller: Any = None
         target = self.initial.position
-<<<<<<< HEAD
-        if self.controller_kind == "lqr-hover":
-            controller = lqr_hover(self.simulator, position=target)
-        elif self.controller_kind == "open-loop-hover":
-            controller = OpenLoop.constant(hover_trim(self.simulator, position=target).command)
-        return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
-=======
         try:
             with _file_keys():
                 if self.controller_kind == "lqr-hover":
                     controller = lqr_hover(self.simulator, position=target)
                 elif self.controller_kind == "open-loop-hover":
-                    controller = OpenLoop.constant(hover_trim(self.simulator, position=target)[1])
+                    controller = OpenLoop.constant(hover_trim(self.simulator, position=target).command)
                 return self.simulator.run(self.initial, self.duration_s, controller=controller, faults=self.faults)
         except (ValueError, TypeError) as exc:
             if self.path is None:
@@ -138,7 +131,6 @@ def _file_keys() -> Iterator[None]:
         text = re.sub(r"\bfaults\[(\d+)\]\.time\b", r"fault[\1].time_s", str(exc))
         text = re.sub(r"\bfaults\[(\d+)\]", r"fault[\1]", text)
         raise type(exc)(text) from None
->>>>>>> issue21
 
 
 def load_scenario(path: str | Path) -> Scenario:

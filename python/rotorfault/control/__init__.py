@@ -18,14 +18,40 @@ is the slow path.
 
 from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .._typing import Controller
-from . import ke, lanzon, lqr, robust
+from . import ke, lqr
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
-from .lanzon import LanzonController
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
-from .robust import NcfsynResult, ncfsyn
+
+if TYPE_CHECKING:
+    from . import lanzon, robust
+    from .lanzon import LanzonController
+    from .robust import NcfsynResult, ncfsyn
+
+#: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
+#: ``import rotorfault`` stays light (tests/test_architecture.py).
+_LAZY = {
+    "lanzon": ("lanzon", None),
+    "robust": ("robust", None),
+    "LanzonController": ("lanzon", "LanzonController"),
+    "NcfsynResult": ("robust", "NcfsynResult"),
+    "ncfsyn": ("robust", "ncfsyn"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module_name, attribute = _LAZY[name]
+    module = importlib.import_module(f"{__name__}.{module_name}")
+    value = module if attribute is None else getattr(module, attribute)
+    globals()[name] = value
+    return value
 
 __all__ = [
     "Allocated",
