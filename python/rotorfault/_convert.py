@@ -7,10 +7,8 @@ lengths) are checked once, in the Rust core, whose ``ValueError`` messages name 
 from __future__ import annotations
 
 import numbers
-import re
 import sys
-from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -88,30 +86,3 @@ def rotor_numbers(field: str, value: Any, rotor_count: int) -> tuple[int, ...]:
             raise ValueError(f"{field}: rotor numbers run from 1 to {rotor_count}, got {rotor}")
         rotors.append(rotor)
     return tuple(rotors)
-
-
-#: Field names the Rust core still uses in its messages, and the Python API's one name for each
-#: (the only place they are translated).
-CORE_FIELD_NAMES = {
-    "eta": "efficiency",
-    "etas": "efficiencies",
-    "health": "efficiency",
-    "t_final": "duration_s",
-    "dt": "dt_s",
-}
-_CORE_FIELD = re.compile(r"\b(" + "|".join(CORE_FIELD_NAMES) + r")\b(?![.])")
-
-
-def renamed_fields(message: str) -> str:
-    """``message`` (``"field[, field]: rule"``) with the core's field names, where they appear as
-    words, in the Python API's names."""
-    return _CORE_FIELD.sub(lambda m: CORE_FIELD_NAMES[m.group(1)], message)
-
-
-@contextmanager
-def core_fields() -> Iterator[None]:
-    """Re-raises the core's ``ValueError`` with the Python API's field names."""
-    try:
-        yield
-    except ValueError as exc:
-        raise ValueError(renamed_fields(str(exc))) from None

@@ -26,10 +26,13 @@ Spin: TypeAlias = Literal["cw", "ccw"]
 #: Command law of Ke's uniform passive FTC (:class:`rotorfault.control.UniformPassiveFtc`).
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
 #: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
-DivergenceKind: TypeAlias = Literal["non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"]
+DivergenceKind: TypeAlias = Literal[
+    "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
+]
 #: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
 KeOutcome: TypeAlias = Literal[
-    "holds-position", "circling", "off-station", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate"
+    "holds-position", "circling", "off-station",
+    "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
 #: Controller of a ``rotorfault simulate`` scenario file.
 ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]

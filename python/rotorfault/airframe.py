@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, core_fields, float_array, real, rotor_numbers
+from ._convert import FloatArray, float_array, real, rotor_numbers
 from ._typing import Spin
 
 _SPIN_WORDS = {
@@ -172,8 +172,7 @@ class Airframe:
     def with_efficiency(self, efficiency: npt.ArrayLike) -> Airframe:
         """A copy with rotor ``efficiency`` (Du's eta_i: one per rotor, each in [0, 1])."""
         eff = float_array("efficiency", efficiency, 1)
-        with core_fields():
-            return self._wrap(self._core.with_efficiency(eff))
+        return self._wrap(self._core.with_efficiency(eff))
 
     def with_failed_rotors(self, rotors: Iterable[int]) -> Airframe:
         """A copy with the given rotors (1-based, as in the papers) at efficiency 0."""

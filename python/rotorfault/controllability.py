@@ -27,7 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, core_fields, count, flag, float_array
+from ._convert import FloatArray, count, flag, float_array
 from ._typing import AcaiFormula, HoverPoint
 from .airframe import Airframe, require_airframe, rotor_labels
 
@@ -116,8 +116,7 @@ def acai(
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
     drop_yaw = flag("give_up_yaw", give_up_yaw)
-    with core_fields():
-        return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula)))
+    return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula)))
 
 
 @overload
@@ -155,11 +154,10 @@ def acai_batch(
     airframe = require_airframe(airframe)
     rows = float_array("efficiencies", efficiencies, 2)
     drop_yaw = flag("give_up_yaw", give_up_yaw)
-    with core_fields():
-        if flag("with_hover", with_hover):
-            core = _rfcore.acai_batch_with_hover(airframe._core, rows, drop_yaw, _formula(formula))
-            return AcaiBatch(core.acai, core.hover_code)
-        return _rfcore.acai_batch(airframe._core, rows, drop_yaw, _formula(formula))
+    if flag("with_hover", with_hover):
+        core = _rfcore.acai_batch_with_hover(airframe._core, rows, drop_yaw, _formula(formula))
+        return AcaiBatch(core.acai, core.hover_code)
+    return _rfcore.acai_batch(airframe._core, rows, drop_yaw, _formula(formula))
 
 
 def acai_from_matrix(
@@ -237,8 +235,7 @@ def controllability(
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
     give_up_yaw = flag("give_up_yaw", give_up_yaw)
-    with core_fields():
-        core = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
+    core = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
     return ControllabilityReport(
         airframe=airframe.name,
         efficiency=tuple(float(e) for e in eff),

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, core_fields, count, float_array, real
+from ._convert import FloatArray, count, float_array, real
 from ._typing import Controller, CoreController, DivergenceKind
 from ._progress import chunks
 from .airframe import Airframe, require_airframe
@@ -355,8 +355,7 @@ class Trajectory:
         events = []
         d = raw.divergence
         if d is not None:
-            # The core names reasons in snake_case: the one place they become kebab-case codes.
-            kind = cast(DivergenceKind, d.reason.replace("_", "-"))
+            kind = cast(DivergenceKind, d.reason)
             events.append(Event(d.time_s, kind, d.description, np.asarray(d.state)))
         return cls(
             t=raw.t,
@@ -529,11 +528,10 @@ class Simulator:
         self.noise = noise
         # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
         # rebuilds the core objects from these attributes, so changing one later takes effect.)
-        with core_fields():
-            _rfcore.simulate(
-                self.airframe._core, self.actuator._core(), self.drag._core(), None, State()._packed(), [],
-                self.airframe.efficiency, None, self._config(0.0),
-            )
+        _rfcore.simulate(
+            self.airframe._core, self.actuator._core(), self.drag._core(), None, State()._packed(), [],
+            self.airframe.efficiency, None, self._config(0.0),
+        )
 
     @property
     def command_count(self) -> int:
@@ -544,17 +542,16 @@ class Simulator:
     def _config(self, duration_s: float, record_every: int = 1, seed_offset: int = 0) -> _rfcore.SimulationConfig:
         """The core's run settings; ``seed_offset`` shifts the noise seed (run ``i`` of a batch
         uses ``seed + i``, so a batch sent in chunks flies every run exactly as one call would)."""
-        with core_fields():
-            return _rfcore.SimulationConfig(
-                dt_s=self.dt_s,
-                substeps=self.substeps,
-                duration_s=real("duration_s", duration_s),
-                limits=self.limits._core(),
-                wind_m_s=self.wind,
-                wind_profile=self.wind_profile,
-                noise=None if self.noise is None else self.noise._core(seed_offset),
-                record_every=count("record_every", record_every),
-            )
+        return _rfcore.SimulationConfig(
+            dt_s=self.dt_s,
+            substeps=self.substeps,
+            duration_s=real("duration_s", duration_s),
+            limits=self.limits._core(),
+            wind_m_s=self.wind,
+            wind_profile=self.wind_profile,
+            noise=None if self.noise is None else self.noise._core(seed_offset),
+            record_every=count("record_every", record_every),
+        )
 
     def _start(self, controller: AnyController, initial_command: npt.ArrayLike | None) -> FloatArray | None:
         if initial_command is not None:
@@ -585,18 +582,17 @@ class Simulator:
         core = core_controller(controller, self.dt_s)
         start = self._start(controller, initial_command)
         config = self._config(duration_s, record_every)
-        with core_fields():
-            raw = _rfcore.simulate(
-                self.airframe._core,
-                self.actuator._core(),
-                self.drag._core(),
-                core,
-                x0._packed(),
-                [f._packed() for f in fault_list],
-                self.airframe.efficiency,
-                start,
-                config,
-            )
+        raw = _rfcore.simulate(
+            self.airframe._core,
+            self.actuator._core(),
+            self.drag._core(),
+            core,
+            x0._packed(),
+            [f._packed() for f in fault_list],
+            self.airframe.efficiency,
+            start,
+            config,
+        )
         return Trajectory._from_core(raw, fault_list)
 
     def state_derivative(self, x: npt.ArrayLike, command: npt.ArrayLike, efficiency: npt.ArrayLike | None = None) -> FloatArray:
@@ -605,16 +601,15 @@ class Simulator:
         the constant ``wind`` (``wind_profile`` is a time-varying disturbance and is left out): the
         model :func:`rotorfault.control.lqr.hover_trim` balances and ``linearize`` differentiates."""
         eff = self.airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
-        with core_fields():
-            return _rfcore.state_derivative(
-                self.airframe._core,
-                self.actuator._core(),
-                self.drag._core(),
-                list(float_array("x", x, 1)),
-                float_array("command", command, 1),
-                eff,
-                list(self.wind),
-            )
+        return _rfcore.state_derivative(
+            self.airframe._core,
+            self.actuator._core(),
+            self.drag._core(),
+            list(float_array("x", x, 1)),
+            float_array("command", command, 1),
+            eff,
+            list(self.wind),
+        )
 
 
 @dataclass(frozen=True)
@@ -681,18 +676,17 @@ def simulate_batch(
     size = n if not progress else max(8 * (os.cpu_count() or 1), n // 100)
     raws: list[_rfcore.Trajectory] = []
     for first, last in chunks(n, size, description=f"{n:,} runs", show=progress):
-        with core_fields():
-            raws += _rfcore.simulate_batch(
-                simulator.airframe._core,
-                actuator,
-                drag,
-                cores[first:last],
-                packed_states[first:last],
-                packed_faults[first:last],
-                simulator.airframe.efficiency,
-                starts[first:last],
-                simulator._config(duration_s, record_every, seed_offset=first),
-            )
+        raws += _rfcore.simulate_batch(
+            simulator.airframe._core,
+            actuator,
+            drag,
+            cores[first:last],
+            packed_states[first:last],
+            packed_faults[first:last],
+            simulator.airframe.efficiency,
+            starts[first:last],
+            simulator._config(duration_s, record_every, seed_offset=first),
+        )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
     steps = max((len(tr.t) for tr in trajectories), default=0)
 

@@ -12,7 +12,7 @@ use rfcore::flight::simulation::{
     simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
-use rfcore::flight::vehicle::{Aerodynamics, Vehicle};
+use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
@@ -102,7 +102,7 @@ fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> rfcore::Res
 #[pyclass(name = "Drag", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyDrag {
-    pub(crate) inner: Aerodynamics,
+    pub(crate) inner: Drag,
 }
 
 #[pymethods]
@@ -115,8 +115,8 @@ impl PyDrag {
         rotational_n_m_s: Option<f64>,
         rotor_inertia_kg_m2: Option<f64>,
     ) -> PyResult<Self> {
-        let d = Aerodynamics::default();
-        let inner = Aerodynamics {
+        let d = Drag::default();
+        let inner = Drag {
             linear_drag_n_s_m: linear_n_s_m.unwrap_or(d.linear_drag_n_s_m),
             quadratic_drag_n_s2_m2: quadratic_n_s2_m2.unwrap_or(d.quadratic_drag_n_s2_m2),
             rotational_drag_n_m_s: rotational_n_m_s.unwrap_or(d.rotational_drag_n_m_s),
@@ -247,7 +247,7 @@ impl PySimulationConfig {
     ) -> PyResult<Self> {
         let d = SimulationConfig::default();
         let inner = SimulationConfig {
-            control_dt_s: dt_s.unwrap_or(d.control_dt_s),
+            dt_s: dt_s.unwrap_or(d.dt_s),
             substeps: substeps.unwrap_or(d.substeps),
             duration_s: duration_s.unwrap_or(d.duration_s),
             limits: limits.map_or(d.limits, |l| l.inner),
@@ -266,7 +266,7 @@ impl PySimulationConfig {
     }
     #[getter]
     fn dt_s(&self) -> f64 {
-        self.inner.control_dt_s
+        self.inner.dt_s
     }
     #[getter]
     fn substeps(&self) -> usize {
@@ -377,7 +377,7 @@ impl PyTrajectory {
     }
     #[getter]
     fn efficiency<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.run.health.clone())
+        self.rows(py, self.run.efficiency.clone())
     }
     #[getter]
     fn measured<'py>(&self, py: Python<'py>) -> Array2<'py> {

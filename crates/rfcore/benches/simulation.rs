@@ -36,7 +36,7 @@ use rfcore::control::{LinearFeedback, OpenLoop};
 use rfcore::state::STATE_DIM;
 use rfcore::state::RigidBodyState;
 use rfcore::flight::simulation::{simulate, SimulationConfig};
-use rfcore::flight::vehicle::{Aerodynamics, Vehicle};
+use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::Airframe;
 
 const CONTROL_DT_S: f64 = 1.0 / 400.0;
@@ -95,7 +95,7 @@ fn hover_gain(airframe: &Airframe) -> DMatrix<f64> {
 fn bench_simulation(c: &mut Criterion) {
     let airframe = quad_x();
     let rotors = airframe.rotor_count();
-    let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).expect("vehicle");
+    let vehicle = Vehicle::new(&airframe, Drag::default()).expect("vehicle");
     let hover_thrust = airframe.mass_kg() * airframe.gravity_m_s2() / rotors as f64;
     let u_trim = vec![hover_thrust; rotors];
     let mut actuators = Actuators::FixedPitch(
@@ -108,7 +108,7 @@ fn bench_simulation(c: &mut Criterion) {
         ..RigidBodyState::at_rest()
     };
     let config = config();
-    let health = vec![1.0; rotors];
+    let efficiency = vec![1.0; rotors];
     let rk4_per_flight = (config.steps() * SUBSTEPS) as u64;
     assert_eq!(rk4_per_flight, 16_000);
 
@@ -153,7 +153,7 @@ fn bench_simulation(c: &mut Criterion) {
         &vehicle,
         actuators.clone(),
         &mut feedback.clone(),
-        &health,
+        &efficiency,
         &[],
         perturbed,
         &config,
@@ -182,7 +182,7 @@ fn bench_simulation(c: &mut Criterion) {
                 &vehicle,
                 actuators.clone(),
                 &mut controller,
-                &health,
+                &efficiency,
                 &[],
                 black_box(perturbed),
                 &config,
@@ -204,7 +204,7 @@ fn bench_simulation(c: &mut Criterion) {
         &vehicle,
         lagged.clone(),
         &mut feedback.clone(),
-        &health,
+        &efficiency,
         &[],
         perturbed,
         &config,
@@ -224,7 +224,7 @@ fn bench_simulation(c: &mut Criterion) {
                 &vehicle,
                 lagged.clone(),
                 &mut controller,
-                &health,
+                &efficiency,
                 &[],
                 black_box(perturbed),
                 &config,
@@ -240,7 +240,7 @@ fn bench_simulation(c: &mut Criterion) {
         &vehicle,
         actuators.clone(),
         &mut open_loop.clone(),
-        &health,
+        &efficiency,
         &[],
         hover,
         &config,
@@ -261,7 +261,7 @@ fn bench_simulation(c: &mut Criterion) {
                 &vehicle,
                 actuators.clone(),
                 &mut controller,
-                &health,
+                &efficiency,
                 &[],
                 black_box(hover),
                 &config,

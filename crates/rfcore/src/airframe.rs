@@ -1,4 +1,4 @@
-//! The multirotor airframe: rotor geometry, thrust limits, health, mass properties.
+//! The multirotor airframe: rotor geometry, thrust limits, efficiency, mass properties.
 //!
 //! # Frame convention (one for the whole project)
 //! Body frame FRD: x forward, y right, z down (Ke et al.'s body frame). Rotor i sits in the body

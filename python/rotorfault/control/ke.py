@@ -32,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, core_fields, float_array, real
+from .._convert import FloatArray, float_array, real
 from .._typing import KeLaw
 from ..airframe import Airframe, require_airframe
 from ..allocation import Allocator
@@ -211,14 +211,13 @@ class UniformPassiveFtc:
         return commands
 
     def core(self, dt_s: float) -> _rfcore.UniformPassiveFtc:
-        with core_fields():
-            return _rfcore.UniformPassiveFtc(
-                self.airframe._core,
-                law=self.law,
-                setpoints=list(self.setpoints),
-                dt_s=float(dt_s),
-                gains=self.gains._core(),
-            )
+        return _rfcore.UniformPassiveFtc(
+            self.airframe._core,
+            law=self.law,
+            setpoints=list(self.setpoints),
+            dt_s=float(dt_s),
+            gains=self.gains._core(),
+        )
 
     def replay(self, times: npt.ArrayLike, states: npt.ArrayLike, *, dt_s: float = 1.0 / 400.0) -> FloatArray:
         """The commands this controller (from its reset state) gives for a recorded history:

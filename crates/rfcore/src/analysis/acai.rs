@@ -543,7 +543,7 @@ impl FacetNormals {
         let m = self.m;
         if !etas.len().is_multiple_of(m) {
             return Err(RfError::shape(
-                "etas",
+                "efficiencies",
                 format!("a multiple of {m} values (N rows of one efficiency per rotor)"),
                 etas.len().to_string(),
             ));
@@ -553,7 +553,7 @@ impl FacetNormals {
             .position(|e| !(e.is_finite() && (0.0..=1.0).contains(e)))
         {
             return Err(RfError::invalid(
-                format!("etas[{}, {}] (rotor {})", i / m, i % m, i % m + 1),
+                format!("efficiencies[{}, {}] (rotor {})", i / m, i % m, i % m + 1),
                 format!("must be finite and lie in [0, 1], got {}", etas[i]),
             ));
         }

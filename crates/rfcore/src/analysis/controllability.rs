@@ -148,7 +148,7 @@ impl ControllabilityAnalysis {
 
     /// ACAI for one efficiency vector (validated).
     pub fn acai(&self, eta: &[f64], formula: AcaiFormula) -> Result<f64> {
-        check_efficiency("eta", eta, self.nominal.ncols())?;
+        check_efficiency("efficiency", eta, self.nominal.ncols())?;
         Ok(self
             .normals
             .evaluate(eta, &self.f_min, &self.f_max, &self.g)
@@ -158,7 +158,7 @@ impl ControllabilityAnalysis {
     /// [`ControllabilityAnalysis::acai`] with where the hover wrench lies (inside, on the
     /// boundary, outside, or rank B_f < n), by the verdict's rule.
     pub fn acai_with_hover(&self, eta: &[f64], formula: AcaiFormula) -> Result<AcaiResult> {
-        check_efficiency("eta", eta, self.nominal.ncols())?;
+        check_efficiency("efficiency", eta, self.nominal.ncols())?;
         Ok(self
             .normals
             .evaluate(eta, &self.f_min, &self.f_max, &self.g)
@@ -180,7 +180,7 @@ impl ControllabilityAnalysis {
     /// Du's Steps 1-9 for one efficiency vector; `formula` chooses how an ACAI with G outside
     /// the attainable set is reported (the verdict does not depend on it).
     pub fn report(&self, eta: &[f64], formula: AcaiFormula) -> Result<ControllabilityReport> {
-        check_efficiency("eta", eta, self.nominal.ncols())?;
+        check_efficiency("efficiency", eta, self.nominal.ncols())?;
         let n = self.axes.dimension();
         let values = self
             .normals

@@ -1,6 +1,6 @@
 //! Ke et al.'s uniform passive fault-tolerant controller (IEEE TIE, "uniform passive FTC of a
 //! quadcopter with one, two or three rotor failures"): one controller, one set of gains, no fault
-//! detection and no switching. It never reads rotor health: faults reach it only through the
+//! detection and no switching. It never reads rotor efficiency: faults reach it only through the
 //! motion it measures.
 //!
 //! Per control step (equation numbers are Ke's):
@@ -272,7 +272,7 @@ pub struct UniformPassiveFtc {
     mass_kg: f64,
     inertia_kg_m2: [f64; 3],
     gravity_m_s2: f64,
-    /// Nominal effectiveness (health never used), 4 x 4 row-major.
+    /// Nominal effectiveness (efficiency never used), 4 x 4 row-major.
     matrix: [[f64; 4]; 4],
     setpoints: Vec<(f64, Vector3<f64>)>,
     solver: ActiveSetSolver,
@@ -301,9 +301,9 @@ impl UniformPassiveFtc {
                 ),
             ));
         }
-        require_finite("dt", dt_s)?;
+        require_finite("dt_s", dt_s)?;
         if dt_s <= 0.0 {
-            return Err(RfError::invalid("dt", format!("must be > 0, got {dt_s}")));
+            return Err(RfError::invalid("dt_s", format!("must be > 0, got {dt_s}")));
         }
         if setpoints.is_empty() {
             return Err(RfError::invalid(

@@ -29,7 +29,7 @@
 use crate::airframe::Airframe;
 use crate::error::{require_finite, Result, RfError};
 
-/// What rotor i produces right now, after health is applied.
+/// What rotor i produces right now, after efficiency is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RotorOutput {
     /// Thrust along body -z (up), N (negative for a reversed variable-pitch propeller).
@@ -129,19 +129,19 @@ impl Lag {
     }
 }
 
-/// The factor by which a rotor at efficiency `health` spins relative to a healthy rotor with the
-/// same command: `sqrt(health)`.
+/// The factor by which a rotor at efficiency `efficiency` spins relative to a healthy rotor with the
+/// same command: `sqrt(efficiency)`.
 ///
 /// Decision (physics): a rotor's thrust and reaction torque both go as the square of its speed
-/// (`f = k_f Omega^2`, `q = k_m Omega^2`). The model scales both by `health` (Du's column
-/// scaling, including the yaw row), which is what a rotor turning at `sqrt(health)` times the
-/// speed produces: a weak motor, a sagging ESC or a failed one (health 0: stopped, no gyroscopic
+/// (`f = k_f Omega^2`, `q = k_m Omega^2`). The model scales both by `efficiency` (Du's column
+/// scaling, including the yaw row), which is what a rotor turning at `sqrt(efficiency)` times the
+/// speed produces: a weak motor, a sagging ESC or a failed one (efficiency 0: stopped, no gyroscopic
 /// moment). The alternative, full speed with less thrust (a damaged blade), would leave a dead
 /// rotor spinning at full speed and would not scale the reaction torque like the thrust. Both
 /// actuator models use this one function.
 #[inline]
-pub fn spin_factor(health: f64) -> f64 {
-    health.max(0.0).sqrt()
+pub fn spin_factor(efficiency: f64) -> f64 {
+    efficiency.max(0.0).sqrt()
 }
 
 /// Fixed-pitch rotors commanded in thrust (N), bounds and spin from the airframe.
@@ -404,20 +404,20 @@ impl Actuators {
         }
     }
 
-    /// What rotor `i` produces with health `health` (module docs).
-    pub fn output(&self, i: usize, health: f64) -> RotorOutput {
-        self.output_at(self.state(), i, health)
+    /// What rotor `i` produces with efficiency `efficiency` (module docs).
+    pub fn output(&self, i: usize, efficiency: f64) -> RotorOutput {
+        self.output_at(self.state(), i, efficiency)
     }
 
     /// Calls `f` with what each rotor produces (rotor 1 first) with the channels at `states`
-    /// and health `health`: [`Actuators::output_at`] for every rotor, the model chosen once.
+    /// and efficiency `efficiency`: [`Actuators::output_at`] for every rotor, the model chosen once.
     #[inline(always)]
-    pub fn for_each_output(&self, states: &[f64], health: &[f64], mut f: impl FnMut(RotorOutput)) {
+    pub fn for_each_output(&self, states: &[f64], efficiency: &[f64], mut f: impl FnMut(RotorOutput)) {
         match self {
             Actuators::FixedPitch(a) => {
                 let rotors = states
                     .iter()
-                    .zip(health)
+                    .zip(efficiency)
                     .zip(a.torque_per_thrust_m.iter().zip(&a.yaw_sign));
                 for ((&command, &eta), (&torque_per_thrust, &yaw_sign)) in rotors {
                     let thrust = eta * command;
@@ -434,23 +434,23 @@ impl Actuators {
                 }
             }
             Actuators::VariablePitch(_) => {
-                for (i, &eta) in health.iter().enumerate() {
+                for (i, &eta) in efficiency.iter().enumerate() {
                     f(self.output_at(states, i, eta));
                 }
             }
         }
     }
 
-    /// What rotor `i` produces with health `health` when the channels are at `states` (laid out
+    /// What rotor `i` produces with efficiency `efficiency` when the channels are at `states` (laid out
     /// like [`Actuators::state`]).
     #[inline(always)]
-    pub fn output_at(&self, states: &[f64], i: usize, health: f64) -> RotorOutput {
+    pub fn output_at(&self, states: &[f64], i: usize, efficiency: f64) -> RotorOutput {
         match self {
             Actuators::FixedPitch(a) => {
-                let thrust = health * states[i];
-                // Spin of the healthy rotor at this command, then the one health rule.
+                let thrust = efficiency * states[i];
+                // Spin of the healthy rotor at this command, then the one efficiency rule.
                 let spin = if a.thrust_coefficient_n_s2 > 0.0 {
-                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(health)
+                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(efficiency)
                 } else {
                     0.0
                 };
@@ -466,11 +466,11 @@ impl Actuators {
                 let (omega, alpha) = (states[2 * i], states[2 * i + 1]);
                 let w2 = omega * omega;
                 RotorOutput {
-                    thrust_n: health * k1 * w2 * alpha,
-                    reaction_torque_nm: health
+                    thrust_n: efficiency * k1 * w2 * alpha,
+                    reaction_torque_nm: efficiency
                         * a.yaw_sign[i]
                         * (k2 * w2 + k3 * w2 * alpha * alpha + k4 * omega * alpha),
-                    spin_rad_s: -a.yaw_sign[i] * spin_factor(health) * omega * a.speed_to_rad_s,
+                    spin_rad_s: -a.yaw_sign[i] * spin_factor(efficiency) * omega * a.speed_to_rad_s,
                 }
             }
         }

@@ -67,15 +67,15 @@ impl FaultSchedule {
         }
     }
 
-    /// Applies to `health` every pending fault with time `<= t_s`; `true` when any applied.
+    /// Applies to `efficiency` every pending fault with time `<= t_s`; `true` when any applied.
     #[inline]
-    pub fn apply_due(&mut self, t_s: f64, health: &mut [f64]) -> bool {
+    pub fn apply_due(&mut self, t_s: f64, efficiency: &mut [f64]) -> bool {
         let start = self.next;
         while let Some(f) = self.faults.get(self.next) {
             if f.time_s > t_s {
                 break;
             }
-            health[f.rotor] = f.efficiency;
+            efficiency[f.rotor] = f.efficiency;
             self.next += 1;
         }
         self.next != start
@@ -110,7 +110,7 @@ mod tests {
             2,
         )
         .unwrap();
-        let mut health = [1.0, 1.0];
+        let mut efficiency = [1.0, 1.0];
         assert_eq!(s.next_time(), Some(0.2501));
         assert_eq!(s.interval_end(0.25, 0.30), 0.2501);
         assert_eq!(
@@ -118,13 +118,13 @@ mod tests {
             0.30,
             "a fault at the start does not split"
         );
-        assert!(!s.apply_due(0.25, &mut health));
-        assert!(s.apply_due(0.2501, &mut health));
-        assert_eq!(health, [0.5, 1.0]);
+        assert!(!s.apply_due(0.25, &mut efficiency));
+        assert!(s.apply_due(0.2501, &mut efficiency));
+        assert_eq!(efficiency, [0.5, 1.0]);
         // A fault exactly at the end of an interval does not split it; it applies there.
         assert_eq!(s.interval_end(0.2501, 0.30), 0.30);
-        assert!(s.apply_due(0.30, &mut health));
-        assert_eq!(health, [0.25, 0.0]);
+        assert!(s.apply_due(0.30, &mut efficiency));
+        assert_eq!(efficiency, [0.25, 0.0]);
         assert_eq!(s.next_time(), None);
         s.rewind();
         assert_eq!(s.next_time(), Some(0.2501));

@@ -12,13 +12,13 @@ use crate::state::{state_from_vector, STATE_DIM};
 pub fn state_vector_derivative(
     vehicle: &Vehicle,
     actuators: &Actuators,
-    health: &[f64],
+    efficiency: &[f64],
     x: &[f64; STATE_DIM],
     wind_m_s: &Vector3<f64>,
 ) -> [f64; STATE_DIM] {
     let state = state_from_vector(x);
     let outputs: Vec<RotorOutput> = (0..vehicle.rotor_count())
-        .map(|i| actuators.output(i, health[i]))
+        .map(|i| actuators.output(i, efficiency[i]))
         .collect();
     let d = vehicle
         .body()
@@ -50,7 +50,7 @@ mod tests {
     #[test]
     fn state_vector_round_trips_and_euler_rates_match_the_quaternion() {
         use crate::flight::actuator::{FixedPitch, Lag};
-        use crate::flight::vehicle::Aerodynamics;
+        use crate::flight::vehicle::Drag;
         let x = [
             1.0, -2.0, -3.0, 0.5, 0.1, -0.2, 0.1, -0.2, 0.7, 0.3, -0.4, 1.1,
         ];
@@ -60,7 +60,7 @@ mod tests {
         }
         // Euler rates from the kinematics agree with a finite difference of the quaternion flow.
         let airframe = crate::fixtures::preset("quad-x");
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
         let mut actuators =
             Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
         actuators.settle(&[4.0, 3.0, 4.5, 3.5]).unwrap();

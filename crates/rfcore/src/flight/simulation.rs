@@ -84,16 +84,16 @@ pub enum DivergenceReason {
 }
 
 impl DivergenceReason {
-    /// A short identifier (`"tilt"`, `"non_finite_command"`, ...).
+    /// A short identifier (`"tilt"`, `"non-finite-command"`, ...).
     pub fn name(self) -> &'static str {
         match self {
-            DivergenceReason::NonFinite => "non_finite_state",
-            DivergenceReason::NonFiniteCommand => "non_finite_command",
+            DivergenceReason::NonFinite => "non-finite-state",
+            DivergenceReason::NonFiniteCommand => "non-finite-command",
             DivergenceReason::Tilt => "tilt",
-            DivergenceReason::AltitudeLoss => "altitude_loss",
+            DivergenceReason::AltitudeLoss => "altitude-loss",
             DivergenceReason::Speed => "speed",
-            DivergenceReason::BodyRate => "body_rate",
-            DivergenceReason::StepSize => "step_size",
+            DivergenceReason::BodyRate => "body-rate",
+            DivergenceReason::StepSize => "step-size",
         }
     }
 
@@ -125,7 +125,7 @@ pub struct Divergence {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimulationConfig {
     /// Control period, s (e.g. 1/400).
-    pub control_dt_s: f64,
+    pub dt_s: f64,
     /// RK4 steps per control period.
     pub substeps: usize,
     /// The run ends exactly here: when it is not a whole number of control periods, the last
@@ -232,11 +232,11 @@ impl Default for SimulationConfig {
 }
 
 impl SimulationConfig {
-    /// A run of `duration_s` at control period `control_dt_s` with `substeps` RK4 steps per
+    /// A run of `duration_s` at control period `dt_s` with `substeps` RK4 steps per
     /// period, default limits, no wind, no noise.
-    pub fn new(control_dt_s: f64, substeps: usize, duration_s: f64) -> Self {
+    pub fn new(dt_s: f64, substeps: usize, duration_s: f64) -> Self {
         SimulationConfig {
-            control_dt_s,
+            dt_s,
             substeps,
             duration_s,
             limits: DivergenceLimits::default(),
@@ -248,10 +248,10 @@ impl SimulationConfig {
     }
 
     pub fn check(&self) -> Result<()> {
-        if !(self.control_dt_s.is_finite() && self.control_dt_s > 0.0) {
+        if !(self.dt_s.is_finite() && self.dt_s > 0.0) {
             return Err(RfError::invalid(
-                "dt",
-                format!("must be > 0 and finite, got {}", self.control_dt_s),
+                "dt_s",
+                format!("must be > 0 and finite, got {}", self.dt_s),
             ));
         }
         if self.record_every == 0 {
@@ -260,10 +260,10 @@ impl SimulationConfig {
         if self.substeps == 0 {
             return Err(RfError::invalid("substeps", "must be >= 1"));
         }
-        require_finite("t_final", self.duration_s)?;
+        require_finite("duration_s", self.duration_s)?;
         if self.duration_s < 0.0 {
             return Err(RfError::invalid(
-                "t_final",
+                "duration_s",
                 format!("must be >= 0, got {}", self.duration_s),
             ));
         }
@@ -271,9 +271,9 @@ impl SimulationConfig {
         let steps = self.steps_f64();
         if steps > MAX_CONTROL_STEPS as f64 {
             return Err(RfError::invalid(
-                "t_final, dt",
+                "duration_s, dt_s",
                 format!(
-                    "t_final / dt = {steps} control steps exceed the limit of {MAX_CONTROL_STEPS} \
+                    "duration_s / dt_s = {steps} control steps exceed the limit of {MAX_CONTROL_STEPS} \
                      (every step is recorded): shorten the run or lengthen dt"
                 ),
             ));
@@ -332,7 +332,7 @@ impl SimulationConfig {
     }
 
     fn steps_f64(&self) -> f64 {
-        let ratio = self.duration_s / self.control_dt_s;
+        let ratio = self.duration_s / self.dt_s;
         let whole = ratio.round();
         if (ratio - whole).abs() <= WHOLE_STEPS_RTOL * whole.max(1.0) {
             whole
@@ -346,7 +346,7 @@ impl SimulationConfig {
         if k >= self.steps() {
             self.duration_s
         } else {
-            k as f64 * self.control_dt_s
+            k as f64 * self.dt_s
         }
     }
 
@@ -375,11 +375,11 @@ pub struct Trajectory {
     pub states: Vec<RigidBodyState>,
     /// Commands applied from this step on (`command_count` per row).
     pub commands: Vec<f64>,
-    /// Thrust each rotor produces at this step, after health (m per row), N.
+    /// Thrust each rotor produces at this step, after efficiency (m per row), N.
     pub thrust_n: Vec<f64>,
     /// Health of each rotor at this row's time (m per row): a fault between two rows acts from
     /// its own time and first shows in the row after it.
-    pub health: Vec<f64>,
+    pub efficiency: Vec<f64>,
     /// What the controller saw with sensor noise: the 12-element state vector (12 per row);
     /// empty without noise (the controller then saw exactly `states`).
     pub measured: Vec<f64>,
@@ -387,21 +387,21 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    /// Records one control step's time, state, health, rotor thrusts and (with sensor noise)
+    /// Records one control step's time, state, efficiency, rotor thrusts and (with sensor noise)
     /// measurement row; the caller adds the commands.
     fn push_step(
         &mut self,
         t_s: f64,
         state: &RigidBodyState,
-        health: &[f64],
+        efficiency: &[f64],
         actuators: &Actuators,
         measured: Option<&[f64; STATE_DIM]>,
     ) {
         self.t_s.push(t_s);
         self.states.push(*state);
-        self.health.extend_from_slice(health);
+        self.efficiency.extend_from_slice(efficiency);
         self.thrust_n
-            .extend((0..health.len()).map(|i| actuators.output(i, health[i]).thrust_n));
+            .extend((0..efficiency.len()).map(|i| actuators.output(i, efficiency[i]).thrust_n));
         if let Some(row) = measured {
             self.measured.extend_from_slice(row);
         }
@@ -542,11 +542,11 @@ fn rotor_totals(
     vehicle: &Vehicle,
     actuators: &Actuators,
     states: &[f64],
-    health: &[f64],
+    efficiency: &[f64],
 ) -> RotorTotals {
     let mut totals = RotorTotals::default();
     let mut xy = vehicle.rotor_xy_m().iter();
-    actuators.for_each_output(states, health, |out| {
+    actuators.for_each_output(states, efficiency, |out| {
         if let Some(&at) = xy.next() {
             totals.add(at, &out);
         }
@@ -560,14 +560,14 @@ fn check_step_size(
     actuators: &Actuators,
     x0: &RigidBodyState,
 ) -> Result<()> {
-    let h = config.control_dt_s / config.substeps as f64;
+    let h = config.dt_s / config.substeps as f64;
     let spin = x0.omega_rad_s.norm();
     let tau = actuators.time_constant_s();
     let lag_rate = if tau > 0.0 { 1.0 / tau } else { 0.0 };
     let fastest = spin.max(lag_rate);
     let product = h * fastest;
     if product > MAX_RATE_STEP {
-        let needed = (config.control_dt_s * fastest / MAX_RATE_STEP).ceil();
+        let needed = (config.dt_s * fastest / MAX_RATE_STEP).ceil();
         return Err(RfError::invalid(
             "substeps",
             format!(
@@ -582,13 +582,13 @@ fn check_step_size(
 }
 
 /// One closed-loop run. `actuators` is the initial actuator state (settle it to the trim first
-/// for a trimmed start); `health` the initial rotor health. Faults may come in any order.
+/// for a trimmed start); `efficiency` the initial rotor efficiency. Faults may come in any order.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     vehicle: &Vehicle,
     mut actuators: Actuators,
     controller: &mut dyn Controller,
-    initial_health: &[f64],
+    initial_efficiency: &[f64],
     faults: &[RotorFault],
     x0: RigidBodyState,
     config: &SimulationConfig,
@@ -613,7 +613,7 @@ pub fn simulate(
             controller.command_count().to_string(),
         ));
     }
-    crate::airframe::check_efficiency("health", initial_health, m)?;
+    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
     let mut schedule = FaultSchedule::new(faults, m)?;
     if !x0.is_finite() {
         return Err(RfError::invalid("x0", "must be finite"));
@@ -621,7 +621,7 @@ pub fn simulate(
     check_step_size(config, &actuators, &x0)?;
 
     let steps = config.steps();
-    let h_nominal = config.control_dt_s / config.substeps as f64;
+    let h_nominal = config.dt_s / config.substeps as f64;
     let every = config.record_every;
     let rows = steps / every + 3;
     let mut trajectory = Trajectory {
@@ -629,7 +629,7 @@ pub fn simulate(
         states: Vec::with_capacity(rows),
         commands: Vec::with_capacity(rows * count),
         thrust_n: Vec::with_capacity(rows * m),
-        health: Vec::with_capacity(rows * m),
+        efficiency: Vec::with_capacity(rows * m),
         measured: Vec::with_capacity(if config.noise.is_some() {
             rows * STATE_DIM
         } else {
@@ -638,7 +638,7 @@ pub fn simulate(
         divergence: None,
     };
     controller.reset();
-    let mut health = initial_health.to_vec();
+    let mut efficiency = initial_efficiency.to_vec();
     let mut command = vec![0.0; count];
     let mut targets = vec![0.0; count];
     // Channel states at the start, middle and end of an interval.
@@ -652,12 +652,12 @@ pub fn simulate(
     let instant = actuators.is_instant();
     let constant_wind = config.wind_profile.is_empty();
 
-    schedule.apply_due(0.0, &mut health);
+    schedule.apply_due(0.0, &mut efficiency);
     if let Some(reason) = limits.reason(&state) {
         trajectory.push_step(
             0.0,
             &state,
-            &health,
+            &efficiency,
             &actuators,
             config.noise.map(|_| &nan_row),
         );
@@ -691,7 +691,7 @@ pub fn simulate(
         // Every `every`-th step, the last one, and a step whose command ends the run.
         if k % every == 0 || k == steps || !finite {
             let row = config.noise.map(|_| &measured_vector);
-            trajectory.push_step(t, &state, &health, &actuators, row);
+            trajectory.push_step(t, &state, &efficiency, &actuators, row);
             trajectory.commands.extend_from_slice(&command);
         }
         if !finite {
@@ -715,7 +715,7 @@ pub fn simulate(
         // fault.
         let half_decay = actuators.decay(0.5 * h);
         let decays = [1.0, half_decay, half_decay * half_decay];
-        // Rotor totals at the start of the next interval, when known (same command, health).
+        // Rotor totals at the start of the next interval, when known (same command, efficiency).
         let mut start_totals: Option<RotorTotals> = None;
         for s in 0..config.substeps {
             let mut a = t + s as f64 * h;
@@ -740,7 +740,7 @@ pub fn simulate(
                 let totals = if constant {
                     let at_start = match start_totals {
                         Some(t) => t,
-                        None => rotor_totals(vehicle, &actuators, &targets, &health),
+                        None => rotor_totals(vehicle, &actuators, &targets, &efficiency),
                     };
                     [at_start; 3]
                 } else {
@@ -760,7 +760,7 @@ pub fn simulate(
                             decays[node]
                         };
                         actuators.response_with_decay(&targets, elapsed, decay, &mut nodes[node]);
-                        totals[node] = rotor_totals(vehicle, &actuators, &nodes[node], &health);
+                        totals[node] = rotor_totals(vehicle, &actuators, &nodes[node], &efficiency);
                     }
                     totals
                 };
@@ -775,7 +775,7 @@ pub fn simulate(
                         let mut tot = [RotorTotals::default(); 3];
                         for (node, elapsed) in [0.0, 0.5 * l, l].into_iter().enumerate() {
                             actuators.response(&targets, elapsed, &mut channels);
-                            tot[node] = rotor_totals(vehicle, &actuators, &channels, &health);
+                            tot[node] = rotor_totals(vehicle, &actuators, &channels, &efficiency);
                         }
                         let w = [config.wind_at(a), config.wind_at(mid), config.wind_at(fin)];
                         body.rk4_step_nodes(&state, l, |node, x| {
@@ -790,7 +790,7 @@ pub fn simulate(
                     trajectory.push_step(
                         time_s,
                         &at,
-                        &health,
+                        &efficiency,
                         &actuators,
                         config.noise.map(|_| &nan_row),
                     );
@@ -808,7 +808,7 @@ pub fn simulate(
                 actuators.set_state(if constant { &targets } else { &nodes[2] });
                 start_totals = Some(totals[2]);
                 a = end;
-                if schedule.apply_due(a, &mut health) {
+                if schedule.apply_due(a, &mut efficiency) {
                     start_totals = None;
                 }
             }
@@ -831,7 +831,7 @@ pub struct BatchRun {
 pub fn simulate_batch(
     vehicle: &Vehicle,
     actuators: &Actuators,
-    initial_health: &[f64],
+    initial_efficiency: &[f64],
     runs: Vec<BatchRun>,
     config: &SimulationConfig,
 ) -> Result<Vec<Trajectory>> {
@@ -850,7 +850,7 @@ pub fn simulate_batch(
                 vehicle,
                 actuators,
                 run.controller.as_mut(),
-                initial_health,
+                initial_efficiency,
                 &run.faults,
                 run.x0,
                 &own,
@@ -865,7 +865,7 @@ mod tests {
     use crate::flight::actuator::{FixedPitch, Lag, VariablePitch};
     use crate::airframe::Airframe;
     use crate::control::{OpenLoop, ZeroCommand};
-    use crate::flight::vehicle::Aerodynamics;
+    use crate::flight::vehicle::Drag;
     use nalgebra::DMatrix;
 
     fn quad_x() -> Airframe {
@@ -873,7 +873,7 @@ mod tests {
     }
 
     fn still_air(airframe: &Airframe) -> Vehicle {
-        Vehicle::new(airframe, Aerodynamics::default()).unwrap()
+        Vehicle::new(airframe, Drag::default()).unwrap()
     }
 
     /// Fixed-pitch rotors with no lag or rate limit.
@@ -996,8 +996,8 @@ mod tests {
         assert!(event.time_s > 1.0 && event.time_s < 3.0, "{}", event.time_s);
         // Health is recorded: 1 before the fault, 0 after.
         let row = |t: f64| (t / 0.0025).round() as usize * 4;
-        assert_eq!(run.health[row(0.5)], 1.0);
-        assert_eq!(run.health[row(1.2)], 0.0);
+        assert_eq!(run.efficiency[row(0.5)], 1.0);
+        assert_eq!(run.efficiency[row(1.2)], 0.0);
         assert_eq!(run.thrust_n[row(1.2)], 0.0);
         assert_eq!(run.commands.len(), run.t_s.len() * 4);
         assert!(
@@ -1051,8 +1051,8 @@ mod tests {
                 .to_string()
             };
         let mut c = config(1.0);
-        c.control_dt_s = 0.0;
-        assert!(run(&c, &[], &mut controller).starts_with("dt: must be > 0"));
+        c.dt_s = 0.0;
+        assert!(run(&c, &[], &mut controller).starts_with("dt_s: must be > 0"));
         let mut c = config(1.0);
         c.substeps = 0;
         assert!(run(&c, &[], &mut controller).starts_with("substeps"));
@@ -1207,10 +1207,10 @@ mod tests {
         let airframe = quad_x();
         let vehicle = Vehicle::new(
             &airframe,
-            Aerodynamics {
+            Drag {
                 rotor_inertia_kg_m2: 5e-5,
                 linear_drag_n_s_m: 0.2,
-                ..Aerodynamics::default()
+                ..Drag::default()
             },
         )
         .unwrap();
@@ -1362,8 +1362,8 @@ mod tests {
             );
         }
         // Health rows: full at 0.25 s, halved from the row after the fault (0.30 s).
-        assert_eq!(&run.health[5 * 4..6 * 4], &[1.0; 4]);
-        assert_eq!(&run.health[6 * 4..7 * 4], &[0.5; 4]);
+        assert_eq!(&run.efficiency[5 * 4..6 * 4], &[1.0; 4]);
+        assert_eq!(&run.efficiency[6 * 4..7 * 4], &[0.5; 4]);
         assert_eq!(run.thrust_n[6 * 4], 0.5 * f);
     }
 
@@ -1485,7 +1485,7 @@ mod tests {
         .unwrap();
         let event = run.divergence.expect("the spin-up outgrows h = 0.01 s");
         assert_eq!(event.reason, DivergenceReason::StepSize);
-        assert_eq!(event.reason.name(), "step_size");
+        assert_eq!(event.reason.name(), "step-size");
         // r = (4 k_mu d / Jz) t reaches MAX_RATE_STEP / h = 25 rad/s at t = 25 Jz / (4 k_mu d).
         let jz = airframe.inertia_kg_m2()[2];
         let k_mu = airframe.drag_torque_ratio_m();

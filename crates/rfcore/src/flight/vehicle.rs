@@ -18,7 +18,7 @@ use crate::state::RigidBodyState;
 /// Aerodynamic and rotor-inertia parameters the papers leave to the user (Lanzon Table 1 gives
 /// none of them; see the README's decisions). All default to zero.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Aerodynamics {
+pub struct Drag {
     /// `k_t`: force `-k_t (v - wind)`, N s/m.
     pub linear_drag_n_s_m: f64,
     /// Force `-c |v - wind| (v - wind)`, N s^2/m^2.
@@ -29,7 +29,7 @@ pub struct Aerodynamics {
     pub rotor_inertia_kg_m2: f64,
 }
 
-impl Aerodynamics {
+impl Drag {
     pub fn check(&self) -> Result<()> {
         for (field, value) in [
             ("drag.linear_n_s_m", self.linear_drag_n_s_m),
@@ -49,12 +49,12 @@ pub struct Vehicle {
     body: RigidBody,
     /// Body-frame (x, y) of each rotor, m.
     rotor_xy_m: Vec<(f64, f64)>,
-    aero: Aerodynamics,
+    aero: Drag,
     gravity_m_s2: f64,
 }
 
 impl Vehicle {
-    pub fn new(airframe: &Airframe, aero: Aerodynamics) -> Result<Self> {
+    pub fn new(airframe: &Airframe, aero: Drag) -> Result<Self> {
         aero.check()?;
         Ok(Vehicle {
             body: RigidBody::principal(airframe.mass_kg(), airframe.inertia_kg_m2())?,
@@ -191,7 +191,7 @@ mod tests {
     #[test]
     fn torques_match_the_effectiveness_matrix() {
         let airframe = lanzon();
-        let vehicle = Vehicle::new(&airframe, Aerodynamics::default()).unwrap();
+        let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
         let f = [1.0, 2.0, 3.0, 4.5];
         let w = [-1.0, 1.0, -1.0, 1.0];
         let wrench = vehicle.wrench(
@@ -211,11 +211,11 @@ mod tests {
     #[test]
     fn thrust_turns_with_the_body_and_drag_opposes_air_velocity() {
         let airframe = lanzon();
-        let aero = Aerodynamics {
+        let aero = Drag {
             linear_drag_n_s_m: 0.1,
             quadratic_drag_n_s2_m2: 0.05,
             rotational_drag_n_m_s: 0.01,
-            ..Aerodynamics::default()
+            ..Drag::default()
         };
         let vehicle = Vehicle::new(&airframe, aero).unwrap();
         let state = RigidBodyState {
@@ -242,9 +242,9 @@ mod tests {
     #[test]
     fn gyroscopic_moment_follows_lanzon_eq5() {
         let airframe = lanzon();
-        let aero = Aerodynamics {
+        let aero = Drag {
             rotor_inertia_kg_m2: 3e-5,
-            ..Aerodynamics::default()
+            ..Drag::default()
         };
         let vehicle = Vehicle::new(&airframe, aero).unwrap();
         let spins = [400.0, -380.0, 410.0, -390.0];
@@ -275,9 +275,9 @@ mod tests {
 
     #[test]
     fn negative_coefficients_are_rejected() {
-        let aero = Aerodynamics {
+        let aero = Drag {
             rotational_drag_n_m_s: -1.0,
-            ..Aerodynamics::default()
+            ..Drag::default()
         };
         let err = Vehicle::new(&lanzon(), aero).unwrap_err();
         assert!(
