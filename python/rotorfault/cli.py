@@ -314,7 +314,7 @@ def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, for
         if runs_per:
             mc_duration = 20.0 if quick else 60.0
             for controller in ("lanzon", "ke"):
-                results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=True))  # type: ignore[arg-type]
+                results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=True))
             for line in lanzon_paper.monte_carlo_table(results):
                 console.print(escape(line), highlight=False, soft_wrap=True)
         console.print(f"writing the report to {escape(out_dir)}", highlight=False)

@@ -369,6 +369,7 @@ def monte_carlo(
     designed = cs.design(nominal) if controller == "lanzon" else None
     x0 = sc.initial_state()
     assert sc.position is not None
+    setpoint = sc.position
 
     def one(i: int) -> tuple[str, float]:
         f = factors[i]
@@ -383,7 +384,7 @@ def monte_carlo(
             assert designed is not None
             ctrl = LanzonController(designed, position=sc.position, outer_loop=cs.outer_loop)
         else:
-            ctrl = UniformPassiveFtc(sim.airframe, gains="ke-hil", position=sc.position)
+            ctrl = UniformPassiveFtc(sim.airframe, gains="ke-hil", position=setpoint)
         batch = simulate_batch(sim, [x0], duration_s, controllers=[ctrl], faults=[[RotorFault(2, 0.0)]], record_every=20)
         tr = batch.trajectories[0]
         m = flight_metrics(tr, replace(_as_ke_scenario(sc), duration_s=duration_s))
@@ -614,10 +615,11 @@ def write_report(
     mc_writer = csv.writer(mc_buffer, lineterminator="\n")
     mc_writer.writerow(["controller", "run", "mass_factor", "inertia_xx_factor", "inertia_zz_factor",
                         "rotational_drag_factor", "rotor_inertia_factor", "outcome", "final_error_m"])
-    for r in mc:
-        for i in range(r.runs):
-            mc_writer.writerow([r.controller, i, *(f"{x:.6f}" for x in r.factors[i]), r.outcomes[i],
-                                "" if not math.isfinite(r.final_error_m[i]) else f"{r.final_error_m[i]:.6f}"])
+    for result in mc:
+        for i in range(result.runs):
+            err = float(result.final_error_m[i])
+            mc_writer.writerow([result.controller, i, *(f"{x:.6f}" for x in result.factors[i]), result.outcomes[i],
+                                f"{err:.6f}" if math.isfinite(err) else ""])
     lines = [
         "# Flying a quadrotor on three rotors (Lanzon et al.): report",
         "",
