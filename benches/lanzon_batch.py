@@ -130,7 +130,9 @@ def main() -> None:
     assert not single.diverged
 
     t0 = time.perf_counter()
-    slow = sim.run(starts[0], CALLBACK_S, controller=PythonLanzon(controller, sim.dt_s), faults=faults, record_every=100)
+    # A callback has no trim: start its actuators where the Rust controller's start (u_trim).
+    slow = sim.run(starts[0], CALLBACK_S, controller=PythonLanzon(controller, sim.dt_s), faults=faults, record_every=100,
+                   initial_command=controller.u_trim)
     callback_s = time.perf_counter() - t0
     callback_rate = round(CALLBACK_S / sim.dt_s) / callback_s
     drift = float(np.max(np.abs(slow.position[-1] - sim.run(starts[0], CALLBACK_S, controller=controller, faults=faults,
