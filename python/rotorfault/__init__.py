@@ -9,6 +9,8 @@ Controllability under rotor degradation (Du et al., JGCD 2015)::
     >>> print(rf.failure_table(hexa, max_failed=1))  # doctest: +SKIP
 """
 
+from typing import TYPE_CHECKING
+
 from ._rfcore import __version__
 from .airframe import Airframe
 from .controllability import (
@@ -61,7 +63,28 @@ from .simulation import (
     simulate_batch,
 )
 
+if TYPE_CHECKING:
+    from .control.lanzon import LanzonController
+    from .control.robust import ncfsyn
+
+#: Names whose modules import python-control and scipy: loaded on first use (via
+#: rotorfault.control), so ``import rotorfault`` stays light (tests/test_architecture.py).
+_LAZY_CONTROL = ("LanzonController", "ncfsyn")
+
+
+def __getattr__(name: str) -> object:
+    if name in _LAZY_CONTROL:
+        from . import control
+
+        value = getattr(control, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
+    "LanzonController",
+    "ncfsyn",
     "Lti",
     "UniformPassiveFtc",
     "Controller",

@@ -281,6 +281,56 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
     console.print(f"report written to {escape(str(path))}")
 
 
+@cli.command("lanzon-report")
+@click.option("--out", "out_dir", default="lanzon-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table, figures and CSV (replaced as a whole).")
+@click.option("--runs", "mc_runs", default=1000, show_default=True, type=int, help="Monte Carlo runs per controller (0: none).")
+@click.option("--quick", is_flag=True, help="20 s flights and 50 Monte Carlo runs per controller (a smoke test, not the paper's 60 s).")
+@click.option("--no-figures", is_flag=True, help="Only the tables (Markdown and CSV).")
+@click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@_user_errors
+def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, force: bool) -> None:
+    """Fly Lanzon et al.'s two flights three ways (paper's design without and with limits, ours),
+    for both I_zz values, run the Monte Carlo comparison with Ke's controller, and write a report."""
+    from ._output import check_output_directory
+    from .papers import lanzon as lanzon_paper
+
+    if mc_runs < 0:
+        raise ValueError(f"runs: must be >= 0, got {mc_runs}")
+    check_output_directory("out", out_dir, force=force)
+    duration = 20.0 if quick else None
+    runs_per = min(mc_runs, 50) if quick else mc_runs
+    previous = signal.getsignal(signal.SIGTERM)
+    in_main = True
+    try:
+        signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread
+        in_main = False
+    try:
+        console.print("flying scenarios A and B, cases (a), (b), (c), I_zz 1.16e-3 and 1.16e-2: 12 flights", highlight=False)
+        runs = lanzon_paper.three_way(duration_s=duration)
+        for line in lanzon_paper.three_way_table(runs):
+            console.print(escape(line), highlight=False, soft_wrap=True)
+        results = []
+        if runs_per:
+            mc_duration = 20.0 if quick else 60.0
+            for controller in ("lanzon", "ke"):
+                results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=True))
+            for line in lanzon_paper.monte_carlo_table(results):
+                console.print(escape(line), highlight=False, soft_wrap=True)
+        console.print(f"writing the report to {escape(out_dir)}", highlight=False)
+        command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault lanzon-report"
+        path = lanzon_paper.write_report(runs, out_dir, monte_carlo_results=results, figures=not no_figures, force=force,
+                                         command=command)
+    except _Terminated:
+        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
+    except KeyboardInterrupt:
+        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+    console.print(f"report written to {escape(str(path))}")
+
+
 def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
     """The report table on the terminal: one wide table when it fits, otherwise (below 120
     columns) one narrow table per law with the columns that matter."""

@@ -1,0 +1,700 @@
+"""Lanzon, Freddi and Longhi (JGCD 2014), reproduced: the paper's two 60 s flights (Scenario A,
+Table 2, inner loop only; Scenario B, Table 3, inner and outer loop to the setpoint) flown three
+ways, the Monte Carlo robustness study, and the report behind ``rotorfault lanzon-report``. The
+controller and its design are in :mod:`rotorfault.control.lanzon`.
+
+The three ways (:func:`design_cases`):
+
+- ``a``: the paper's design (about 100 rad/s crossover) on the model **without** actuator limits
+  (the model the design assumes; thrusts may go negative);
+- ``b``: the same design **with** the paper's own limits (thrust in [0, 5] N, 50 N/s);
+- ``c``: our design for the limits: 30 rad/s crossover, the same loop shape otherwise.
+
+Each is flown with Table 1's printed ``I_zz = 1.16e-3`` and with the probable ``1.16e-2``
+(:data:`IZZ_VALUES`): the gyroscopic moment of the rotors and the sign of ``I_xx - I_zz`` change
+what works.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .._convert import FloatArray, count, real
+from ..control.ke import UniformPassiveFtc
+from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
+from ..simulation import Noise, RotorFault, State, Trajectory, simulate_batch
+from .ke import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, KeScenario, flight_metrics
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+# -- scenarios ----------------------------------------------------------------------------------
+
+#: Table 1's printed yaw inertia and the probable intended value (kg m^2): both are flown.
+IZZ_PRINTED = 1.16e-3
+IZZ_PROBABLE = 1.16e-2
+IZZ_VALUES = (IZZ_PRINTED, IZZ_PROBABLE)
+#: Scenario B's setpoint (Section IV.B: x = y = 0, z = 1 m up), world NED.
+SETPOINT_NED = (0.0, 0.0, -1.0)
+#: "level" in Scenario A: tilt below this (deg) throughout the judging window.
+LEVEL_TILT_DEG = 1.0
+#: ... and the spin within this fraction of its set point (m g d / k_r).
+LEVEL_SPIN_FRACTION = 0.1
+
+
+@dataclass(frozen=True)
+class LanzonScenario:
+    """One of the paper's flights: the initial state in the paper's frame (12-vector (12):
+    ``[phi, theta, psi, p, q, r, x, y, z, x', y', z']``, z up) and, for the outer loop, the
+    position setpoint (world NED; ``None``: inner loop only)."""
+
+    name: str
+    description: str
+    paper_state: tuple[float, ...]
+    position: tuple[float, float, float] | None
+    duration_s: float = 60.0
+
+    def initial_state(self) -> State:
+        return State.from_vector(LanzonVehicle.simulator_state(self.paper_state))
+
+
+def scenarios() -> list[LanzonScenario]:
+    """Scenario A (Table 2) and Scenario B (Table 3)."""
+    q = math.pi / 4
+    return [
+        LanzonScenario("A", "inner loop only from Table 2 (roll -45 deg, pitch 45 deg)",
+                       (-q, q, q, -0.5, 0.5, 2.7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), None),
+        LanzonScenario("B", "inner and outer loop from Table 3 (x = y = z = 5 m) to x = y = 0, z = 1 m",
+                       (0.075, 0.025, 0.1, 0.03, 0.02, 2.7, 5.0, 5.0, 5.0, 0.0, 0.0, 0.0), SETPOINT_NED),
+    ]
+
+
+def scenario(name: str) -> LanzonScenario:
+    for s in scenarios():
+        if s.name == name:
+            return s
+    raise ValueError(f"scenario: unknown {name!r}; available: A, B")
+
+
+@dataclass(frozen=True)
+class DesignCase:
+    """One way of flying: the loop shape of :func:`~rotorfault.control.lanzon.design`, whether the
+    simulator has the paper's actuator limits, and the outer-loop gains."""
+
+    label: str
+    description: str
+    crossover_rad_s: float
+    limits: bool
+    channel_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    outer_loop: OuterLoopGains = field(default_factory=OuterLoopGains)
+
+    def design(self, vehicle: LanzonVehicle) -> LanzonDesign:
+        return design(vehicle, crossover_rad_s=self.crossover_rad_s, channel_gain=self.channel_gain)
+
+
+def design_cases() -> list[DesignCase]:
+    """(a) the paper's design without limits, (b) with the paper's limits, (c) ours with them."""
+    return [
+        DesignCase("a", "paper's design (100 rad/s), no actuator limits", 100.0, False),
+        DesignCase("b", "paper's design (100 rad/s), paper's limits", 100.0, True),
+        DesignCase("c", "our design (30 rad/s), paper's limits", 30.0, True),
+    ]
+
+
+def design_case(label: str) -> DesignCase:
+    for c in design_cases():
+        if c.label == label:
+            return c
+    raise ValueError(f"case: unknown {label!r}; available: a, b, c")
+
+
+# -- metrics ------------------------------------------------------------------------------------
+
+AttitudeOutcome = Literal["level", "not-level"]
+
+
+@dataclass(frozen=True)
+class AttitudeMetrics:
+    """What Scenario A asks (roll and pitch to zero, spin to ``m g d / k_r``), judged like Ke's
+    flights over the last ``window_s`` seconds: ``"level"`` when the tilt (angle between body and
+    world vertical) stays below :data:`LEVEL_TILT_DEG` and the spin within
+    :data:`LEVEL_SPIN_FRACTION` of its set point throughout the window, ``"not-level"`` otherwise,
+    or the divergence kind (``lost_at_s``). ``level_after_s``: from when the tilt stays below
+    :data:`LEVEL_TILT_DEG` to the end (``None``: not level at the end, or lost). Whole-run values:
+    ``max_altitude_loss_m`` the largest drop below the start; ``window_*`` the largest tilt and
+    the mean spin (paper frame, rad/s) over the window."""
+
+    outcome: str
+    level_after_s: float | None
+    final_tilt_deg: float | None
+    window_tilt_deg: float | None
+    window_spin_rad_s: float | None
+    max_altitude_loss_m: float | None
+    lost_at_s: float | None = None
+    window_s: float = WINDOW_S
+
+
+def tilt_deg(trajectory: Trajectory) -> FloatArray:
+    """The angle between the body z axis and the world vertical (deg)."""
+    out: FloatArray = np.degrees(np.arccos(np.clip(trajectory.primary_axis[:, 2], -1.0, 1.0)))
+    return out
+
+
+def attitude_metrics(trajectory: Trajectory, spin_setpoint_rad_s: float, *, window_s: float = WINDOW_S) -> AttitudeMetrics:
+    """Scores Scenario A's question on ``trajectory`` (see :class:`AttitudeMetrics`)."""
+    window_s = real("window_s", window_s)
+    if not window_s > 0:
+        raise ValueError(f"window_s: must be > 0, got {window_s}")
+    t = trajectory.t
+    if len(t) < 2:
+        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    if trajectory.diverged:
+        e = trajectory.events[0]
+        return AttitudeMetrics(e.kind, None, None, None, None, None, float(e.time), window_s)
+    tilt = tilt_deg(trajectory)
+    spin = -trajectory.omega[:, 2]  # paper frame r (z up)
+    last = t >= t[-1] - window_s
+    window_tilt = float(np.max(tilt[last]))
+    window_spin = float(np.mean(spin[last]))
+    level = window_tilt < LEVEL_TILT_DEG and bool(
+        np.all(np.abs(spin[last] - spin_setpoint_rad_s) <= LEVEL_SPIN_FRACTION * spin_setpoint_rad_s))
+    above = np.nonzero(tilt >= LEVEL_TILT_DEG)[0]
+    if above.size == 0:
+        level_after: float | None = 0.0
+    elif above[-1] + 1 < len(t):
+        level_after = float(t[above[-1] + 1])
+    else:
+        level_after = None
+    alt = -trajectory.position[:, 2]
+    return AttitudeMetrics("level" if level else "not-level", level_after, float(tilt[-1]), window_tilt, window_spin,
+                           float(np.max(alt[0] - alt)), None, window_s)
+
+
+OUTCOME_TEXT = {"level": "level", "not-level": "not level", "holds-position": "holds position",
+                "off-station": "off station", "circling": "circling"}
+
+
+def outcome_text(code: str, lost_at_s: float | None = None) -> str:
+    """An outcome code in words; a lost run says when (``"lost (tilt) at 1.52 s"``)."""
+    if lost_at_s is not None:
+        return f"lost ({code}) at {lost_at_s:.2f} s"
+    return OUTCOME_TEXT.get(code, code)
+
+
+# -- flights ------------------------------------------------------------------------------------
+
+
+@dataclass
+class LanzonRun:
+    """One flight: scenario, design case, vehicle, the design flown and the trajectory, with the
+    attitude metrics (both scenarios) and, for Scenario B, Ke's position metrics."""
+
+    scenario: LanzonScenario
+    case: DesignCase
+    vehicle: LanzonVehicle
+    design: LanzonDesign
+    trajectory: Trajectory
+    attitude: AttitudeMetrics = field(init=False)
+    position: FlightMetrics | None = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.attitude = attitude_metrics(self.trajectory, self.vehicle.spin_rate_rad_s)
+        self.position = None if self.scenario.position is None else flight_metrics(
+            self.trajectory, _as_ke_scenario(self.scenario))
+
+    @property
+    def outcome(self) -> str:
+        """Scenario A: the attitude outcome; B: the position outcome (Ke's verdicts)."""
+        return self.attitude.outcome if self.position is None else self.position.outcome
+
+    @property
+    def lost_at_s(self) -> float | None:
+        return self.attitude.lost_at_s
+
+    @property
+    def final_error_m(self) -> float | None:
+        """Scenario B: distance from the setpoint at the end (``None``: A, or lost)."""
+        if self.scenario.position is None or self.trajectory.diverged:
+            return None
+        return float(np.linalg.norm(self.trajectory.position[-1] - np.asarray(self.scenario.position)))
+
+    @property
+    def title(self) -> str:
+        return (f"Lanzon scenario {self.scenario.name}, case ({self.case.label}) {self.case.description}, "
+                f"I_zz = {self.vehicle.inertia_zz_kg_m2:g} kg m^2, gamma = {self.design.gamma:.3f}")
+
+    def plot(self, path: str | None = None) -> Figure:
+        """Lanzon Figs. 6-9 style: roll and pitch, spin, position (paper frame, z up) and rotor
+        thrusts against time. Saved to ``path`` if given."""
+        return plot_flight(self, path)
+
+
+def _as_ke_scenario(s: LanzonScenario) -> KeScenario:
+    assert s.position is not None
+    return KeScenario(f"lanzon-{s.name}", s.description, (1.0, 0.0, 1.0, 1.0), (), s.duration_s, ((0.0, s.position),))
+
+
+def fly(
+    scenario_: LanzonScenario | str,
+    case: DesignCase | str,
+    *,
+    vehicle: LanzonVehicle | None = None,
+    duration_s: float | None = None,
+    record_every: int = 10,
+    designed: LanzonDesign | None = None,
+) -> LanzonRun:
+    """Flies one scenario with one design case on ``vehicle`` (default: Table 1 with the printed
+    ``I_zz``), rotor 2 dead from the start. ``designed`` reuses a design of that case."""
+    sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
+    cs = design_case(case) if isinstance(case, str) else case
+    if not isinstance(sc, LanzonScenario):
+        raise TypeError(f"scenario: expected a LanzonScenario or 'A'/'B', got {type(scenario_).__name__}")
+    if not isinstance(cs, DesignCase):
+        raise TypeError(f"case: expected a DesignCase or 'a'/'b'/'c', got {type(case).__name__}")
+    v = LanzonVehicle() if vehicle is None else vehicle
+    d = cs.design(v) if designed is None else designed
+    controller = LanzonController(d, position=sc.position, outer_loop=cs.outer_loop)
+    duration = sc.duration_s if duration_s is None else real("duration_s", duration_s)
+    sim = v.simulator(limits=cs.limits)
+    trajectory = sim.run(sc.initial_state(), duration, controller=controller, faults=[RotorFault(2, 0.0)],
+                         record_every=record_every)
+    return LanzonRun(replace(sc, duration_s=duration), cs, v, d, trajectory)
+
+
+def three_way(
+    *, izz_values: tuple[float, ...] = IZZ_VALUES, duration_s: float | None = None, record_every: int = 10,
+    cases: list[DesignCase] | None = None,
+) -> list[LanzonRun]:
+    """Both scenarios, each design case, each ``I_zz``: the runs of the three-way table. The 12
+    flights go to two threads (the core releases the GIL)."""
+    jobs = []
+    for izz in izz_values:
+        v = LanzonVehicle(inertia_zz_kg_m2=real("izz", izz))
+        for cs in cases if cases is not None else design_cases():
+            d = cs.design(v)
+            for sc in scenarios():
+                jobs.append((sc, cs, v, d))
+    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        return list(pool.map(lambda j: fly(j[0], j[1], vehicle=j[2], designed=j[3], duration_s=duration_s,
+                                           record_every=record_every), jobs))
+
+
+# -- robustness (Monte Carlo) -------------------------------------------------------------------
+
+MonteCarloController = Literal["lanzon", "ke"]
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """A Monte Carlo batch: ``runs`` perturbed vehicles (mass, ``I_xx = I_yy``, ``I_zz``,
+    ``k_r``, ``I_R`` each scaled by a factor drawn uniformly from ``[1 - spread, 1 + spread]``)
+    with sensor noise at ``snr_db``, flown from Scenario B's start to its setpoint for
+    ``duration_s``. ``outcomes`` holds Ke's windowed verdict per run, ``final_error_m`` the
+    distance from the setpoint at the end (NaN: lost), ``factors`` the draws (runs x 5)."""
+
+    controller: str
+    runs: int
+    spread: float
+    snr_db: float | None
+    duration_s: float
+    inertia_zz_kg_m2: float
+    outcomes: tuple[str, ...]
+    final_error_m: FloatArray
+    factors: FloatArray
+
+    @property
+    def held_fraction(self) -> float:
+        """The fraction of runs that reach and hold the setpoint (``holds-position``)."""
+        return sum(o == "holds-position" for o in self.outcomes) / self.runs
+
+    @property
+    def lost_fraction(self) -> float:
+        return sum(o not in ("holds-position", "off-station", "circling") for o in self.outcomes) / self.runs
+
+    @property
+    def worst_final_error_m(self) -> float:
+        """The largest final distance from the setpoint among the runs not lost (inf: all lost)."""
+        finite = self.final_error_m[np.isfinite(self.final_error_m)]
+        return float(np.max(finite)) if finite.size else math.inf
+
+    @property
+    def median_final_error_m(self) -> float:
+        finite = self.final_error_m[np.isfinite(self.final_error_m)]
+        return float(np.median(finite)) if finite.size else math.inf
+
+    def counts(self) -> dict[str, int]:
+        out: dict[str, int] = {}
+        for o in self.outcomes:
+            out[o] = out.get(o, 0) + 1
+        return dict(sorted(out.items(), key=lambda kv: -kv[1]))
+
+
+def monte_carlo(
+    controller: MonteCarloController = "lanzon",
+    *,
+    runs: int = 1000,
+    spread: float = 0.2,
+    snr_db: float | None = 15.0,
+    duration_s: float = 60.0,
+    inertia_zz_kg_m2: float = IZZ_PRINTED,
+    case: DesignCase | str = "c",
+    seed: int = 0,
+    progress: bool | None = None,
+) -> MonteCarloResult:
+    """Robustness of ``controller`` with rotor 2 dead: ``"lanzon"`` (design ``case``, designed
+    once on the nominal vehicle) or ``"ke"`` (Ke's :class:`~rotorfault.UniformPassiveFtc`,
+    ``ke-hil`` gains, on the same vehicle with the same limits). Each run's vehicle differs, so
+    each goes to :func:`~rotorfault.simulate_batch` with its own simulator, two at a time on
+    threads (the core releases the GIL); run ``i`` uses noise seed ``seed + i``."""
+    if controller not in ("lanzon", "ke"):
+        raise ValueError(f"controller: expected 'lanzon' or 'ke', got {controller!r}")
+    n = count("runs", runs)
+    if n < 1:
+        raise ValueError(f"runs: must be >= 1, got {n}")
+    spread = real("spread", spread)
+    if not 0 <= spread < 1:
+        raise ValueError(f"spread: must lie in [0, 1), got {spread}")
+    nominal = LanzonVehicle(inertia_zz_kg_m2=real("inertia_zz_kg_m2", inertia_zz_kg_m2))
+    cs = design_case(case) if isinstance(case, str) else case
+    sc = scenario("B")
+    rng = np.random.default_rng(count("seed", seed))
+    factors = rng.uniform(1 - spread, 1 + spread, size=(n, 5))
+    designed = cs.design(nominal) if controller == "lanzon" else None
+    x0 = sc.initial_state()
+    assert sc.position is not None
+    setpoint = sc.position
+
+    def one(i: int) -> tuple[str, float]:
+        f = factors[i]
+        v = replace(nominal, mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
+                    inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
+                    rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
+                    rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
+        noise = None if snr_db is None else Noise(snr_db=snr_db, seed=seed + i)
+        sim = v.simulator(limits=cs.limits if controller == "lanzon" else True, noise=noise)
+        ctrl: Any
+        if controller == "lanzon":
+            assert designed is not None
+            ctrl = LanzonController(designed, position=sc.position, outer_loop=cs.outer_loop)
+        else:
+            ctrl = UniformPassiveFtc(sim.airframe, gains="ke-hil", position=setpoint)
+        batch = simulate_batch(sim, [x0], duration_s, controllers=[ctrl], faults=[[RotorFault(2, 0.0)]], record_every=20)
+        tr = batch.trajectories[0]
+        m = flight_metrics(tr, replace(_as_ke_scenario(sc), duration_s=duration_s))
+        err = math.nan if tr.diverged else float(np.linalg.norm(tr.position[-1] - np.asarray(sc.position)))
+        return m.outcome, err
+
+    from .._progress import chunks
+
+    results: list[tuple[str, float]] = []
+    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        for first, last in chunks(n, max(8, n // 50), description=f"{n:,} {controller} runs", show=progress):
+            results += list(pool.map(one, range(first, last)))
+    return MonteCarloResult(controller, n, spread, snr_db, float(duration_s), float(inertia_zz_kg_m2),
+                            tuple(o for o, _ in results), np.array([e for _, e in results]), factors)
+
+
+# -- figures ------------------------------------------------------------------------------------
+
+_STYLES: list[Any] = ["-", "--", ":", "-."]
+
+
+def plot_flight(run: LanzonRun, path: str | None = None) -> Figure:
+    """Lanzon Figs. 6-9 style for one run: roll and pitch, spin r, position (paper frame, z up,
+    with the setpoint) and rotor thrusts."""
+    from .._output import MIN_FONT_PT, new_figure, save_figure
+
+    tr = run.trajectory
+    paper = np.array([LanzonVehicle.paper_state(x) for x in np.column_stack(
+        [tr.position, tr.velocity, tr.euler, tr.omega])]) if len(tr.t) else np.zeros((0, 12))
+    fig = new_figure(figsize=(10, 10.5), layout="constrained")
+    axes = fig.subplots(4, 1, sharex=True)
+    panels: list[tuple[FloatArray, list[str], str]] = [
+        (np.degrees(paper[:, 0:2]), ["roll phi", "pitch theta"], "attitude (deg)"),
+        (paper[:, 3:6], ["p", "q", "r (spin)"], "body rates (rad/s)"),
+        (paper[:, 6:9], ["x", "y", "z (up)"], "position (m)"),
+        (tr.rotor_thrust, [f"rotor {i + 1}" + (" (failed)" if i == 1 else "") for i in range(4)], "rotor thrust (N)"),
+    ]
+    for k, (ax, (data, labels, ylabel)) in enumerate(zip(axes, panels)):
+        for j, (col, label) in enumerate(zip(data.T, labels)):
+            ax.plot(tr.t, col, label=label, linestyle=_STYLES[j % 4], color=f"C{j}", lw=1.2)
+        if k == 2 and run.scenario.position is not None:
+            sp = np.asarray(run.scenario.position) * np.array([1, -1, -1])
+            for j in range(3):
+                ax.axhline(sp[j], color=f"C{j}", lw=0.7, linestyle=_STYLES[j], alpha=0.7)
+        if k == 1:
+            ax.axhline(run.vehicle.spin_rate_rad_s, color="0.4", lw=0.7, linestyle=(0, (1, 2)), label="spin set point")
+        if k == 3 and run.case.limits:
+            for level in (0.0, run.vehicle.max_thrust_n):
+                ax.axhline(level, color="0.3", lw=0.7, linestyle=(0, (4, 2)))
+        ax.set_ylabel(ylabel, fontsize=10)
+        ax.grid(True, alpha=0.3)
+        ax.tick_params(labelsize=9)
+        for event in tr.events:
+            ax.axvline(event.time, color="black", lw=2.0, alpha=0.5)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
+    axes[-1].set_xlabel("time (s)", fontsize=10)
+    lost = run.lost_at_s
+    verdict = outcome_text(run.outcome, lost)
+    import textwrap
+
+    fig.suptitle(textwrap.fill(f"{run.title}: {verdict}", 110), fontsize=11)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+def plot_paths(runs: list[LanzonRun], path: str | None = None) -> Figure:
+    """Lanzon Fig. 8 style: the 3-D paths (paper frame, z up) of Scenario B runs, with the start
+    (circle), the setpoint (star) and any loss (cross)."""
+    from .._output import MIN_FONT_PT, new_figure, save_figure
+
+    if not runs:
+        raise ValueError("runs: give at least one run to plot")
+    fig = new_figure(figsize=(8, 7), layout="constrained")
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    for j, run in enumerate(runs):
+        p = run.trajectory.position * np.array([1, -1, -1])
+        label = f"({run.case.label}) I_zz {run.vehicle.inertia_zz_kg_m2:g}: {outcome_text(run.outcome, run.lost_at_s)}"
+        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=f"C{j}", linestyle=_STYLES[j % 4], lw=1.2, label=label)
+        ax.scatter([p[0, 0]], [p[0, 1]], [p[0, 2]], color="black", marker="o", s=25)
+        if run.trajectory.diverged:
+            ax.scatter([p[-1, 0]], [p[-1, 1]], [p[-1, 2]], color=f"C{j}", marker="x", s=60)
+    sp = runs[0].scenario.position
+    if sp is not None:
+        ax.scatter([sp[0]], [-sp[1]], [-sp[2]], color="black", marker="*", s=90, label="setpoint")
+    ax.set_xlabel("x (m)", fontsize=9)
+    ax.set_ylabel("y (m)", fontsize=9)
+    ax.set_zlabel("z, up (m)", fontsize=9)
+    ax.tick_params(labelsize=MIN_FONT_PT)
+    ax.legend(loc="upper left", fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
+    fig.suptitle("Lanzon scenario B: 3-D path from (5, 5, 5) m to the setpoint (0, 0, 1) m (circle: start)", fontsize=11)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+# -- report (rotorfault lanzon-report) -----------------------------------------------------------
+
+
+def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
+    """One record per run of the three-way table."""
+    rows = []
+    for run in runs:
+        a, p = run.attitude, run.position
+        rows.append({
+            "scenario": run.scenario.name,
+            "case": run.case.label,
+            "case_description": run.case.description,
+            "inertia_zz_kg_m2": run.vehicle.inertia_zz_kg_m2,
+            "crossover_rad_s": run.case.crossover_rad_s,
+            "limits": run.case.limits,
+            "gamma_min": run.design.gamma_min,
+            "gamma": run.design.gamma,
+            "outcome": run.outcome,
+            "outcome_text": outcome_text(run.outcome, run.lost_at_s),
+            "lost_at_s": run.lost_at_s,
+            "duration_s": run.scenario.duration_s,
+            "level_after_s": a.level_after_s,
+            "window_tilt_deg": a.window_tilt_deg,
+            "window_spin_rad_s": a.window_spin_rad_s,
+            "max_altitude_loss_m": a.max_altitude_loss_m,
+            "final_error_m": run.final_error_m,
+            "window_horizontal_error_m": None if p is None else p.window_horizontal_error_m,
+            "window_altitude_error_m": None if p is None else p.window_altitude_error_m,
+            "min_thrust_n": float(np.nanmin(run.trajectory.rotor_thrust[:, [0, 2, 3]])),
+            "max_thrust_n": float(np.nanmax(run.trajectory.rotor_thrust)),
+        })
+    return rows
+
+
+def _num(value: Any, digits: int) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return str(value)
+        return f"{round(value, digits) + 0.0:.{digits}f}"
+    return str(value)
+
+
+def three_way_table(runs: list[LanzonRun]) -> list[str]:
+    """The three-way table as Markdown lines: one row per ``I_zz`` and case, scenarios A and B side
+    by side (A: outcome, tilt below 1 deg after, altitude lost; B: outcome, final error)."""
+    by_key: dict[tuple[float, str], dict[str, LanzonRun]] = {}
+    for run in runs:
+        by_key.setdefault((run.vehicle.inertia_zz_kg_m2, run.case.label), {})[run.scenario.name] = run
+    lines = [
+        "| I_zz (kg m^2) | case | gamma | A: outcome | A: tilt < 1 deg after (s) | A: altitude lost (m) "
+        "| B: outcome | B: final error (m) | B: altitude lost (m) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for (izz, label), pair in by_key.items():
+        a, b = pair.get("A"), pair.get("B")
+        any_run = a or b
+        assert any_run is not None
+        cells = [f"{izz:g}", f"({label}) {any_run.case.description}", f"{any_run.design.gamma:.3f}"]
+        if a is not None:
+            cells += [outcome_text(a.outcome, a.lost_at_s), _num(a.attitude.level_after_s, 1),
+                      _num(a.attitude.max_altitude_loss_m, 1)]
+        else:
+            cells += ["-", "-", "-"]
+        if b is not None:
+            cells += [outcome_text(b.outcome, b.lost_at_s), _num(b.final_error_m, 3), _num(b.attitude.max_altitude_loss_m, 1)]
+        else:
+            cells += ["-", "-", "-"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def monte_carlo_table(results: list[MonteCarloResult]) -> list[str]:
+    """The robustness comparison as Markdown lines."""
+    lines = [
+        "| controller | runs | I_zz (kg m^2) | holds position | lost | median final error (m) | worst final error (m) | outcomes |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    names = {"lanzon": "Lanzon RFL + H-infinity, design (c)", "ke": "Ke uniform passive FTC (ke-hil)"}
+    for r in results:
+        outcomes = ", ".join(f"{outcome_text(k)} {v}" for k, v in r.counts().items())
+        lines.append(f"| {names.get(r.controller, r.controller)} | {r.runs} | {r.inertia_zz_kg_m2:g} | {100 * r.held_fraction:.1f} % "
+                     f"| {100 * r.lost_fraction:.1f} % | {_num(r.median_final_error_m, 3)} | {_num(r.worst_final_error_m, 3)} | {outcomes} |")
+    return lines
+
+
+def write_report(
+    runs: list[LanzonRun],
+    out_dir: str | Path,
+    *,
+    monte_carlo_results: list[MonteCarloResult] | None = None,
+    figures: bool = True,
+    force: bool = False,
+    command: str | None = None,
+) -> Path:
+    """Writes the report directory ``out_dir``: ``lanzon-report.md`` (the three-way table and
+    the Monte Carlo comparison), ``lanzon-report.csv`` (one row per flight), ``monte-carlo.csv``
+    (one row per Monte Carlo run), with ``figures`` one time history per flight
+    (``<scenario>-<case>-izz-<value>.png``), the Scenario B paths (``paths-3d.png``) and the loop
+    shapes of the paper's and our design (``loop-shape-<case>.png``); and ``manifest.json``.
+    Written beside ``out_dir`` and swapped in when complete; an existing report is replaced only
+    with ``force``."""
+    import csv
+    import io
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .._output import check_output_directory, output_directory
+
+    out = check_output_directory("out_dir", out_dir, force=force)
+    if not runs:
+        raise ValueError("runs: nothing to report (fly at least one scenario)")
+    rows = report_rows(runs)
+    try:
+        package_version = version("rotorfault")
+    except PackageNotFoundError:  # pragma: no cover
+        package_version = "unknown"
+    manifest = {
+        "generator": "rotorfault lanzon-report (rotorfault.papers.lanzon.write_report)",
+        "command": command or "rotorfault.papers.lanzon.write_report",
+        "version": package_version,
+    }
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    for r in rows:
+        writer.writerow({k: ("" if v is None else v) for k, v in r.items()})
+    mc = monte_carlo_results or []
+    mc_buffer = io.StringIO()
+    mc_writer = csv.writer(mc_buffer, lineterminator="\n")
+    mc_writer.writerow(["controller", "run", "mass_factor", "inertia_xx_factor", "inertia_zz_factor",
+                        "rotational_drag_factor", "rotor_inertia_factor", "outcome", "final_error_m"])
+    for result in mc:
+        for i in range(result.runs):
+            err = float(result.final_error_m[i])
+            mc_writer.writerow([result.controller, i, *(f"{x:.6f}" for x in result.factors[i]), result.outcomes[i],
+                                f"{err:.6f}" if math.isfinite(err) else ""])
+    lines = [
+        "# Flying a quadrotor on three rotors (Lanzon et al.): report",
+        "",
+        "Rotor 2 dead from the start. Scenario A (Table 2): inner loop only, from roll -45 deg, pitch 45 deg;",
+        f"'level' keeps the tilt below {LEVEL_TILT_DEG:g} deg and the spin within {100 * LEVEL_SPIN_FRACTION:g} % of "
+        f"m g d / k_r over the last {WINDOW_S:g} s.",
+        "Scenario B (Table 3): inner and outer loop from (5, 5, 5) m to (0, 0, 1) m (z up); 'holds position'",
+        f"keeps within {HOLD_BAND_M[0]:g} m horizontally, {HOLD_BAND_M[1]:g} m vertically and below "
+        f"{HOLD_SPEED_M_S:g} m/s over the last {WINDOW_S:g} s (Ke's verdicts).",
+        "Cases: (a) the paper's design (100 rad/s crossover) without actuator limits, (b) the same with the",
+        "paper's limits (thrust in [0, 5] N, 50 N/s), (c) our 30 rad/s design with the limits. I_zz: Table 1's",
+        f"printed {IZZ_PRINTED:g} and the probable {IZZ_PROBABLE:g} kg m^2.",
+        "",
+        *three_way_table(runs),
+    ]
+    if mc:
+        r0 = mc[0]
+        lines += [
+            "",
+            f"Robustness: {r0.runs} runs per controller, mass, I_xx = I_yy, I_zz, k_r and I_R each scaled by a",
+            f"factor uniform in [{1 - r0.spread:g}, {1 + r0.spread:g}], sensor noise "
+            f"{'none' if r0.snr_db is None else f'{r0.snr_db:g} dB SNR'}, Scenario B's start and setpoint, "
+            f"{r0.duration_s:g} s, the paper's limits.",
+            "",
+            *monte_carlo_table(mc),
+        ]
+    if figures:
+        lines += ["", "Figures: `<scenario>-<case>-izz-<I_zz>.png` (one per flight), `paths-3d.png`, "
+                  "`loop-shape-b.png` (the paper's design), `loop-shape-c.png` (ours)."]
+    with output_directory(out, manifest) as tmp:
+        (tmp / "lanzon-report.csv").write_text(buffer.getvalue(), encoding="utf-8")
+        (tmp / "lanzon-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        if mc:
+            (tmp / "monte-carlo.csv").write_text(mc_buffer.getvalue(), encoding="utf-8")
+        if figures:
+            for run in runs:
+                run.plot(str(tmp / f"{run.scenario.name}-{run.case.label}-izz-{run.vehicle.inertia_zz_kg_m2:g}.png"))
+            b_runs = [run for run in runs if run.scenario.name == "B"]
+            if b_runs:
+                plot_paths(b_runs, str(tmp / "paths-3d.png"))
+            seen: set[str] = set()
+            for run in runs:
+                if run.case.label in ("b", "c") and run.case.label not in seen:
+                    seen.add(run.case.label)
+                    fig = run.design.plot_loop_shape(str(tmp / f"loop-shape-{run.case.label}.png"))
+                    del fig
+    return out / "lanzon-report.md"
+
+
+__all__ = [
+    "IZZ_PRINTED",
+    "IZZ_PROBABLE",
+    "IZZ_VALUES",
+    "LEVEL_SPIN_FRACTION",
+    "LEVEL_TILT_DEG",
+    "SETPOINT_NED",
+    "AttitudeMetrics",
+    "DesignCase",
+    "LanzonRun",
+    "LanzonScenario",
+    "MonteCarloResult",
+    "attitude_metrics",
+    "design_case",
+    "design_cases",
+    "fly",
+    "monte_carlo",
+    "monte_carlo_table",
+    "outcome_text",
+    "plot_flight",
+    "plot_paths",
+    "report_rows",
+    "scenario",
+    "scenarios",
+    "three_way",
+    "three_way_table",
+    "tilt_deg",
+    "write_report",
+]
