@@ -178,3 +178,30 @@ def test_a_batch_too_large_for_memory_is_refused_up_front() -> None:
     from rotorfault.simulation import recording_bytes
 
     assert recording_bytes(sim, 10_000, 10.0, record_every=400) < 2**30
+
+
+def test_tuning_never_does_worse_than_table_iv_on_its_campaign() -> None:
+    from rotorfault.campaign import _objective, tune, tuning_campaign
+
+    c = tuning_campaign(runs=4, duration_s=13.0)
+    result = tune(c, maxiter=1, popsize=1)
+    assert result.candidates >= 10 and result.scenarios == 4
+    # Table IV is in the initial population (x0), so the best candidate is at least as good.
+    tuned = _objective(result.scores["tuning, tuned"], 4)
+    baseline = _objective(result.scores["tuning, Table IV"], 4)
+    assert tuned <= baseline + 1e-12, (tuned, baseline)
+    assert "validation, tuned" in result.table()
+
+
+def test_cli_campaign(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    path = tmp_path / "c.toml"
+    path.write_text("runs = 4\nduration_s = 8.0\nfailures = [[1], [2]]\n")
+    out = CliRunner().invoke(cli, ["campaign", str(path), "--no-progress", "--plot", str(tmp_path / "p.png")])
+    assert out.exit_code == 0, out.output
+    assert "Wilson" in out.output and (tmp_path / "p.png").exists()
+    bad = CliRunner().invoke(cli, ["campaign", str(path), "--plot", str(tmp_path / "p.png")])
+    assert bad.exit_code != 0
