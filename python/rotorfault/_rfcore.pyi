@@ -511,6 +511,7 @@ def replay(
 
 # -- per-run summaries (campaigns) --
 
+@final
 class VerdictCriteria:
     def __new__(
         cls,
@@ -532,6 +533,7 @@ class VerdictCriteria:
     @property
     def circling_turn_rad(self) -> float: ...
 
+@final
 class SummaryBatch:
     def __len__(self) -> int: ...
     @property
