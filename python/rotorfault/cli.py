@@ -391,3 +391,36 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
 
 def main() -> None:
     cli()
+
+
+@cli.command("campaign")
+@click.argument("campaign_file", type=click.Path(dir_okay=False), required=False)
+@click.option("--runs", type=int, help="Override the file's run count.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
+@click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
+@click.option("--quick", is_flag=True, help="With --tune: a small search (12 candidates x 24 scenarios, about a minute).")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar on standard error.")
+@_user_errors
+def campaign_command(campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, force: bool, progress: bool) -> None:
+    """Fly a fault campaign (a TOML file of rotorfault.campaign.Campaign fields; default: every
+    single failure of Ke's quadcopter) and report survival, worst cases and excursions."""
+    from dataclasses import replace
+
+    from .campaign import Campaign, run_campaign, tune, tuning_campaign
+
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
+    if tune_gains:
+        base = tuning_campaign(runs=24 if quick else 200)
+        result = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
+        console.print(escape(result.table()))
+        return
+    campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
+    if runs is not None:
+        campaign = replace(campaign, runs=runs)
+    result = run_campaign(campaign, progress=progress)
+    console.print(escape(result.table()))
+    if plot_path is not None:
+        result.plot(plot_path)
+        console.print(f"plot written to {escape(plot_path)}")

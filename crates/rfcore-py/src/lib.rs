@@ -10,6 +10,7 @@ mod analysis;
 mod control;
 mod convert;
 mod flight;
+mod summary;
 
 use pyo3::prelude::*;
 
@@ -49,6 +50,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(flight::simulate, module)?)?;
     module.add_function(wrap_pyfunction!(flight::simulate_batch, module)?)?;
     module.add_function(wrap_pyfunction!(flight::state_derivative, module)?)?;
+    module.add_class::<summary::PyVerdictCriteria>()?;
+    module.add_class::<summary::PySummaryBatch>()?;
+    module.add_function(wrap_pyfunction!(summary::simulate_summaries, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai_batch, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai_batch_with_hover, module)?)?;

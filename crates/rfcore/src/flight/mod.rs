@@ -5,6 +5,7 @@
 //! - [`vehicle`]: rotor forces and torques, drag, gyroscopic moment, wind.
 //! - [`model`]: the model as an ODE in the 12-element state vector, for linearisation.
 //! - [`simulation`]: the closed loop with a controller, rotor faults, noise and divergence events.
+//! - [`summary`]: per-run summaries scored while a run is flown (campaigns).
 //!
 //! The simulator runs any [`crate::control::Controller`]; controllers never see this room.
 
@@ -13,4 +14,5 @@ pub mod fault_schedule;
 pub mod model;
 pub mod rigid_body;
 pub mod simulation;
+pub mod summary;
 pub mod vehicle;

@@ -536,6 +536,22 @@ impl Limits {
     }
 }
 
+/// Sees every control step of a run as it is flown: the rows a `record_every = 1` trajectory
+/// would hold (time, true state, command, efficiency; the divergence row with NaN commands),
+/// whatever `record_every` is. Per-run summaries ([`crate::flight::summary`]) use it to score a
+/// run without storing it.
+pub trait StepObserver {
+    fn step(&mut self, t_s: f64, state: &RigidBodyState, command: &[f64], efficiency: &[f64]);
+}
+
+/// Observes nothing (plain [`simulate`]).
+struct NoObserver;
+
+impl StepObserver for NoObserver {
+    #[inline]
+    fn step(&mut self, _: f64, _: &RigidBodyState, _: &[f64], _: &[f64]) {}
+}
+
 /// The rotors' summed contribution with the channels at `states`.
 #[inline]
 fn rotor_totals(
@@ -592,6 +608,30 @@ pub fn simulate(
     faults: &[RotorFault],
     x0: RigidBodyState,
     config: &SimulationConfig,
+) -> Result<Trajectory> {
+    simulate_observed(
+        vehicle,
+        actuators,
+        controller,
+        initial_efficiency,
+        faults,
+        x0,
+        config,
+        &mut NoObserver,
+    )
+}
+
+/// [`simulate`], showing every control step to `observer` as it is flown.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_observed(
+    vehicle: &Vehicle,
+    mut actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+    observer: &mut dyn StepObserver,
 ) -> Result<Trajectory> {
     config.check()?;
     let m = vehicle.rotor_count();
@@ -664,6 +704,7 @@ pub fn simulate(
         trajectory
             .commands
             .extend(std::iter::repeat_n(f64::NAN, count));
+        observer.step(0.0, &state, &vec![f64::NAN; count], &efficiency);
         trajectory.divergence = Some(Divergence {
             time_s: 0.0,
             reason,
@@ -688,6 +729,7 @@ pub fn simulate(
         };
         controller.command(t, &measured, &mut command)?;
         let finite = command.iter().all(|c| c.is_finite());
+        observer.step(t, &state, &command, &efficiency);
         // Every `every`-th step, the last one, and a step whose command ends the run.
         if k % every == 0 || k == steps || !finite {
             let row = config.noise.map(|_| &measured_vector);
@@ -797,6 +839,7 @@ pub fn simulate(
                     trajectory
                         .commands
                         .extend(std::iter::repeat_n(f64::NAN, count));
+                    observer.step(time_s, &at, &vec![f64::NAN; count], &efficiency);
                     trajectory.divergence = Some(Divergence {
                         time_s,
                         reason,
