@@ -248,7 +248,8 @@ class Campaign:
                 bad = sorted(set(value) - gain_names)
                 if bad:
                     raise ValueError(f"gains.{bad[0]}: unknown Ke gain; known: {', '.join(sorted(gain_names))}")
-                value = replace(base, **{k: (tuple(v) if isinstance(v, list) else v) for k, v in value.items()})
+                changes: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
+                value = replace(base, **changes)
             elif isinstance(value, list):
                 value = tuple(value)
             values[key] = value
@@ -280,7 +281,10 @@ class Campaign:
         if not 0 <= index < self.runs:
             raise ValueError(f"index: must lie in [0, {self.runs}), got {index}")
         rng = np.random.default_rng((self.seed, index))
-        u = lambda pair: float(rng.uniform(pair[0], pair[1]))  # noqa: E731
+
+        def u(pair: tuple[float, float]) -> float:
+            return float(rng.uniform(pair[0], pair[1]))
+
         pattern = self.failures[int(rng.integers(len(self.failures)))]
         times = []
         t = u(self.fault_time_s)
@@ -294,7 +298,10 @@ class Campaign:
         gust_peak, gust_dir = u(self.gust_m_s), float(rng.uniform(0, 2 * math.pi))
         gust_start = float(rng.uniform(0, max(self.duration_s - self.gust_duration_s, 0.0)))
         m = _rotor_count(self.vehicle().airframe_name)
-        scale = lambda rel: float(rng.uniform(1 - rel, 1 + rel))  # noqa: E731
+
+        def scale(rel: float) -> float:
+            return float(rng.uniform(1 - rel, 1 + rel))
+
         return RunSpec(
             index=index,
             seed=self.seed,
@@ -451,7 +458,10 @@ def summarize(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M, *, up
     fault_times = effective_fault_times(trajectory)
     lost = trajectory.events[0].time if trajectory.events else math.nan
     nan = math.nan
-    none = lambda v: nan if v is None else float(v)  # noqa: E731
+
+    def none(v: float | None) -> float:
+        return nan if v is None else float(v)
+
     return {
         "outcome": metrics.outcome,
         "lost_at_s": lost,
@@ -643,7 +653,7 @@ class CampaignResult:
     def table(self) -> str:
         lines = ["survival (not lost), 95 % Wilson interval"]
         for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s"):
-            for r in self.survival(by):  # type: ignore[arg-type]
+            for r in self.survival(by):
                 lines.append(f"  {by:<19} {r.label:<16} {r.survived:>7}/{r.runs:<7} {100 * r.rate:6.2f} %  [{100 * r.low:6.2f}, {100 * r.high:6.2f}]")
         lines.append("worst runs (re-fly with campaign.refly(index)):")
         for row in self.worst(5):
@@ -769,7 +779,7 @@ def tune(
     excursion (lost runs penalised first) over ``campaign``'s runs, every candidate flown on the
     same runs (common random numbers); then Table IV and the tuned gains are both scored on a
     fresh campaign (``validation_seed``, default ``seed + 1``) they were not tuned on."""
-    from scipy.optimize import differential_evolution
+    from scipy.optimize import differential_evolution  # type: ignore[import-untyped]
 
     if not isinstance(campaign, Campaign):
         raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
@@ -784,8 +794,9 @@ def tune(
     baseline = campaign.gains or campaign.vehicle().gains
     names = list(space)
 
-    def gains_of(x: Sequence[float]) -> KeGains:
-        return replace(baseline, **{n: float(v) for n, v in zip(names, x)})
+    def gains_of(x: Sequence[float] | np.ndarray[Any, Any]) -> KeGains:
+        values: dict[str, Any] = {n: float(v) for n, v in zip(names, x)}
+        return replace(baseline, **values)
 
     def fly(c: Campaign) -> dict[str, np.ndarray[Any, Any]]:
         parts = [run_chunk(c, k) for k in range(c.chunk_count())]

@@ -413,8 +413,8 @@ def campaign_command(campaign_file: str | None, runs: int | None, plot_path: str
         check_output_file("plot", plot_path, force=force)
     if tune_gains:
         base = tuning_campaign(runs=24 if quick else 200)
-        result = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
-        console.print(escape(result.table()))
+        tuned = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
+        console.print(escape(tuned.table()))
         return
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
     if runs is not None:
