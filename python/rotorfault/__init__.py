@@ -45,6 +45,7 @@ from .control import (
     lqr_hover,
     lqr_hover_allocated,
 )
+from . import vpp
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
 from .simulation import (
     BatchResult,
@@ -62,6 +63,7 @@ from .simulation import (
 )
 
 __all__ = [
+    "vpp",
     "Lti",
     "UniformPassiveFtc",
     "Controller",
