@@ -18,7 +18,7 @@ PACKAGE = "rotorfault"
 #: Layers, highest first: a module may import from its own layer (no circles) and lower ones.
 LAYERS = [
     ["", "cli", "__main__"],
-    ["papers", "scenario", "campaign"],
+    ["papers", "scenario", "campaign", "vpp"],
     ["control"],
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],

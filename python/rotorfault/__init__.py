@@ -47,6 +47,7 @@ from .control import (
     lqr_hover,
     lqr_hover_allocated,
 )
+from . import vpp
 from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
 from .simulation import (
     BatchResult,
@@ -85,6 +86,7 @@ def __getattr__(name: str) -> object:
 __all__ = [
     "LanzonController",
     "ncfsyn",
+    "vpp",
     "Lti",
     "UniformPassiveFtc",
     "Controller",

@@ -68,6 +68,7 @@ def trim_command(controller: object) -> FloatArray | None:
 _DEFAULT_DRAG = _rfcore.Drag()
 _DEFAULT_LIMITS = _rfcore.DivergenceLimits()
 _DEFAULT_CONFIG = _rfcore.SimulationConfig()
+_DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
 
 
 def _vector3(field_name: str, value: Any) -> tuple[float, float, float]:
@@ -210,15 +211,22 @@ class FixedPitchActuator:
 class VariablePitchActuator:
     """Variable-pitch propellers (Wang et al. eq. (3)), commanded per rotor in speed and pitch
     (interleaved ``[omega_1, alpha_1, omega_2, ...]``): thrust ``k1 omega^2 alpha``, torque
-    ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``. Wang models speed and pitch control as a
-    first-order lag with a 10 Hz cut-off: ``time_constant_s = 1 / (2 pi 10)`` by default."""
+    ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``.
+
+    The speed and pitch channels have their own first-order lag and rate limit (a motor's speed
+    loop and a pitch servo are different hardware). Defaults (the core's): Wang's "first-order
+    transfer function ... cut-off frequency 10 Hz" for both, ``time_constant_s = 1 / (2 pi 10)``,
+    and no rate limit (the paper gives none). ``speed_rate_limit_per_s`` is in speed units per
+    second, ``pitch_rate_limit_rad_s`` in rad/s."""
 
     k: tuple[float, float, float, float]
     speed_bounds: tuple[float, float]
     pitch_bounds: tuple[float, float]
     speed_to_rad_s: float = 0.0
-    time_constant_s: float = 1.0 / (2.0 * math.pi * 10.0)
-    rate_limit_per_s: float = math.inf
+    speed_time_constant_s: float = _DEFAULT_VPP.speed_time_constant_s
+    speed_rate_limit_per_s: float = _DEFAULT_VPP.speed_rate_limit_per_s
+    pitch_time_constant_s: float = _DEFAULT_VPP.pitch_time_constant_s
+    pitch_rate_limit_rad_s: float = _DEFAULT_VPP.pitch_rate_limit_rad_s
 
     def _core(self) -> Any:
         k = float_array("actuator.k", self.k, 1)
@@ -233,8 +241,10 @@ class VariablePitchActuator:
             (float(speed[0]), float(speed[1])),
             (float(pitch[0]), float(pitch[1])),
             real("actuator.speed_to_rad_s", self.speed_to_rad_s),
-            real("actuator.time_constant_s", self.time_constant_s),
-            real("actuator.rate_limit_per_s", self.rate_limit_per_s),
+            speed_time_constant_s=real("actuator.speed_time_constant_s", self.speed_time_constant_s),
+            speed_rate_limit_per_s=real("actuator.speed_rate_limit_per_s", self.speed_rate_limit_per_s),
+            pitch_time_constant_s=real("actuator.pitch_time_constant_s", self.pitch_time_constant_s),
+            pitch_rate_limit_rad_s=real("actuator.pitch_rate_limit_rad_s", self.pitch_rate_limit_rad_s),
         )
 
 

@@ -146,4 +146,3 @@ impl PyAirframe {
         read_only(py, self.inner.efficiency())
     }
 }
-

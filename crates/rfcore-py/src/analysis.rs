@@ -207,7 +207,9 @@ pub(crate) fn controllability<'py>(
 ) -> PyResult<PyControllabilityReport> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let result = detached(py, || analysis(airframe, give_up_yaw)?.report(efficiency, formula))?;
+    let result = detached(py, || {
+        analysis(airframe, give_up_yaw)?.report(efficiency, formula)
+    })?;
     Ok(report(result))
 }
 
@@ -232,3 +234,15 @@ pub(crate) fn failure_table<'py>(
         .collect())
 }
 
+/// The crate's one rank rule, free of units (`rfcore::analysis::acai::scale_free_rank`): rows
+/// and columns equilibrated by powers of two, then singular values above `RANK_RTOL` times the
+/// largest counted. For a controllability matrix with speeds of 1e4 and pitches of 0.1 side by
+/// side, where a plain SVD threshold reads the small units as zeros.
+#[pyfunction]
+pub(crate) fn scale_free_rank(matrix: PyReadonlyArray2<'_, f64>) -> PyResult<usize> {
+    let m = crate::convert::matrix("matrix", &matrix)?;
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err(PyValueError::new_err("matrix: must be finite"));
+    }
+    Ok(rfcore::analysis::acai::scale_free_rank(&m))
+}

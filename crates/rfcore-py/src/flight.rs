@@ -6,7 +6,9 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch};
+use rfcore::flight::actuator::{
+    Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags, VariablePitchPreset,
+};
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
     simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
@@ -40,37 +42,136 @@ impl PyFixedPitch {
     }
 }
 
-/// Variable-pitch propellers (Wang et al. eq. (3)).
+/// Variable-pitch propellers (Wang et al. eq. (3)); the speed and pitch channels' lags default
+/// to the core's `VariablePitchLags::default()`.
 #[pyclass(name = "VariablePitchActuator", module = "rotorfault._rfcore", frozen)]
 pub struct PyVariablePitch {
     coefficients: [f64; 4],
     speed_bounds: (f64, f64),
     pitch_bounds: (f64, f64),
     speed_to_rad_s: f64,
-    lag: Lag,
+    lags: VariablePitchLags,
 }
 
 #[pymethods]
 impl PyVariablePitch {
     #[new]
+    #[pyo3(signature = (coefficients, speed_bounds, pitch_bounds, speed_to_rad_s, *, speed_time_constant_s=None, speed_rate_limit_per_s=None, pitch_time_constant_s=None, pitch_rate_limit_rad_s=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         coefficients: [f64; 4],
         speed_bounds: (f64, f64),
         pitch_bounds: (f64, f64),
         speed_to_rad_s: f64,
-        time_constant_s: f64,
-        rate_limit_per_s: f64,
-    ) -> Self {
-        PyVariablePitch {
+        speed_time_constant_s: Option<f64>,
+        speed_rate_limit_per_s: Option<f64>,
+        pitch_time_constant_s: Option<f64>,
+        pitch_rate_limit_rad_s: Option<f64>,
+    ) -> PyResult<Self> {
+        let d = VariablePitchLags::default();
+        let lags = VariablePitchLags {
+            speed: Lag {
+                time_constant_s: speed_time_constant_s.unwrap_or(d.speed.time_constant_s),
+                rate_limit_per_s: speed_rate_limit_per_s.unwrap_or(d.speed.rate_limit_per_s),
+            },
+            pitch: Lag {
+                time_constant_s: pitch_time_constant_s.unwrap_or(d.pitch.time_constant_s),
+                rate_limit_per_s: pitch_rate_limit_rad_s.unwrap_or(d.pitch.rate_limit_per_s),
+            },
+        };
+        lags.check().map_err(to_py_err)?;
+        Ok(PyVariablePitch {
             coefficients,
             speed_bounds,
             pitch_bounds,
             speed_to_rad_s,
-            lag: Lag {
-                time_constant_s,
-                rate_limit_per_s,
-            },
-        }
+            lags,
+        })
+    }
+    #[getter]
+    fn speed_time_constant_s(&self) -> f64 {
+        self.lags.speed.time_constant_s
+    }
+    #[getter]
+    fn speed_rate_limit_per_s(&self) -> f64 {
+        self.lags.speed.rate_limit_per_s
+    }
+    #[getter]
+    fn pitch_time_constant_s(&self) -> f64 {
+        self.lags.pitch.time_constant_s
+    }
+    #[getter]
+    fn pitch_rate_limit_rad_s(&self) -> f64 {
+        self.lags.pitch.rate_limit_per_s
+    }
+}
+
+/// A variable-pitch vehicle preset (`presets/vpp/*.toml`), parsed by the core.
+#[pyclass(name = "VariablePitchPreset", module = "rotorfault._rfcore", frozen)]
+pub struct PyVariablePitchPreset {
+    inner: VariablePitchPreset,
+}
+
+#[pymethods]
+impl PyVariablePitchPreset {
+    /// Parses a preset file; `origin` prefixes error messages.
+    #[staticmethod]
+    fn from_toml_str(text: &str, origin: &str) -> PyResult<Self> {
+        let inner = VariablePitchPreset::from_toml_str(text, origin).map_err(to_py_err)?;
+        Ok(PyVariablePitchPreset { inner })
+    }
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+    #[getter]
+    fn description(&self) -> &str {
+        &self.inner.description
+    }
+    #[getter]
+    fn source(&self) -> &str {
+        &self.inner.source
+    }
+    #[getter]
+    fn airframe(&self) -> &str {
+        &self.inner.airframe
+    }
+    #[getter]
+    fn coefficients(&self) -> (f64, f64, f64, f64) {
+        let [a, b, c, d] = self.inner.coefficients;
+        (a, b, c, d)
+    }
+    #[getter]
+    fn speed_bounds(&self) -> (f64, f64) {
+        self.inner.speed_bounds
+    }
+    #[getter]
+    fn pitch_bounds(&self) -> (f64, f64) {
+        self.inner.pitch_bounds
+    }
+    #[getter]
+    fn speed_to_rad_s(&self) -> f64 {
+        self.inner.speed_to_rad_s
+    }
+    #[getter]
+    fn speed_time_constant_s(&self) -> f64 {
+        self.inner.speed_time_constant_s
+    }
+    #[getter]
+    fn speed_rate_limit_per_s(&self) -> f64 {
+        self.inner.speed_rate_limit_per_s
+    }
+    #[getter]
+    fn pitch_time_constant_s(&self) -> f64 {
+        self.inner.pitch_time_constant_s
+    }
+    #[getter]
+    fn pitch_rate_limit_rad_s(&self) -> f64 {
+        self.inner.pitch_rate_limit_rad_s
+    }
+    #[getter]
+    fn linear_drag_n_s_m(&self) -> f64 {
+        self.inner.linear_drag_n_s_m
     }
 }
 
@@ -93,7 +194,7 @@ pub(crate) fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> 
             a.speed_bounds,
             a.pitch_bounds,
             a.speed_to_rad_s,
-            a.lag,
+            a.lags,
         )?),
     })
 }

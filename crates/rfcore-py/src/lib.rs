@@ -33,6 +33,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::ke::PyKeGains>()?;
     module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;
+    module.add_class::<flight::PyVariablePitchPreset>()?;
     module.add_class::<control::linear::PyOpenLoop>()?;
     module.add_class::<control::linear::PyLinearFeedback>()?;
     module.add_class::<control::linear::PyLti>()?;
@@ -44,6 +45,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::lanzon::PyLanzonController>()?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::scale_free_rank, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::time_allocations, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::max_along_direction, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::hover_thrust_margin, module)?)?;

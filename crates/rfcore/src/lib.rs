@@ -18,9 +18,9 @@ pub mod allocation;
 pub mod analysis;
 pub mod control;
 pub mod error;
-pub mod flight;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod flight;
 pub mod state;
 
 pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};

@@ -26,8 +26,10 @@
 //! itself is not touched, so a controller that keeps commanding a dead rotor sees no effect, as
 //! in reality.
 
+use serde::Deserialize;
+
 use crate::airframe::Airframe;
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_finite, require_non_negative, Result, RfError};
 
 /// What rotor i produces right now, after efficiency is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -40,7 +42,8 @@ pub struct RotorOutput {
     pub spin_rad_s: f64,
 }
 
-/// First-order lag and rate limit shared by every channel of a model.
+/// First-order lag and rate limit of one kind of channel (fixed pitch: thrust; variable pitch:
+/// speed and pitch each have their own, [`VariablePitchLags`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lag {
     /// Time constant, s (0: the state follows the command at once).
@@ -53,6 +56,14 @@ impl Lag {
     pub fn none() -> Self {
         Lag {
             time_constant_s: 0.0,
+            rate_limit_per_s: f64::INFINITY,
+        }
+    }
+
+    /// A first-order lag with cut-off `cutoff_hz` (`tau = 1 / (2 pi f_c)`), no rate limit.
+    pub fn cutoff_hz(cutoff_hz: f64) -> Self {
+        Lag {
+            time_constant_s: 1.0 / (2.0 * std::f64::consts::PI * cutoff_hz),
             rate_limit_per_s: f64::INFINITY,
         }
     }
@@ -129,6 +140,9 @@ impl Lag {
     }
 }
 
+/// `exp(-elapsed / tau)` per kind of channel ([`Actuators::decay`]).
+pub type Decay = [f64; 2];
+
 /// The factor by which a rotor at efficiency `efficiency` spins relative to a healthy rotor with the
 /// same command: `sqrt(efficiency)`.
 ///
@@ -189,6 +203,33 @@ impl FixedPitch {
     }
 }
 
+/// The speed and pitch channels' own lags (a motor's speed loop and a servo are different
+/// hardware). Default: Wang et al. Sec. 4.2, "a first-order transfer function ... cut-off
+/// frequency 10 Hz" for both, no rate limit (the paper gives none).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VariablePitchLags {
+    /// Rotor speed channel; rate limit in speed units per second.
+    pub speed: Lag,
+    /// Blade pitch channel; rate limit in rad/s.
+    pub pitch: Lag,
+}
+
+impl Default for VariablePitchLags {
+    fn default() -> Self {
+        VariablePitchLags {
+            speed: Lag::cutoff_hz(10.0),
+            pitch: Lag::cutoff_hz(10.0),
+        }
+    }
+}
+
+impl VariablePitchLags {
+    pub fn check(&self) -> Result<()> {
+        self.speed.check("actuator.speed_", "rate_limit_per_s")?;
+        self.pitch.check("actuator.pitch_", "rate_limit_rad_s")
+    }
+}
+
 /// Variable-pitch propellers (Wang et al. eq. (3)): commands are rotor speed `omega` and blade
 /// pitch `alpha` per rotor (interleaved: `[omega_1, alpha_1, omega_2, ...]`), in the units the
 /// coefficients use (Wang prints speeds up to 10,000). Thrust `k1 omega^2 alpha`, reaction torque
@@ -202,7 +243,8 @@ pub struct VariablePitch {
     /// Factor from the speed unit to rad/s for the gyroscopic moment (0: not modelled).
     pub speed_to_rad_s: f64,
     yaw_sign: Vec<f64>,
-    lag: Lag,
+    /// `[speed, pitch]` ([`VariablePitchLags`]), indexed by channel `k % 2`.
+    lags: [Lag; 2],
     /// `[omega_1, alpha_1, omega_2, alpha_2, ...]`.
     state: Vec<f64>,
 }
@@ -214,9 +256,9 @@ impl VariablePitch {
         speed_bounds: (f64, f64),
         pitch_bounds: (f64, f64),
         speed_to_rad_s: f64,
-        lag: Lag,
+        lags: VariablePitchLags,
     ) -> Result<Self> {
-        lag.check("actuator.", "rate_limit_per_s")?;
+        lags.check()?;
         for (i, &k) in coefficients.iter().enumerate() {
             require_finite(&format!("actuator.k{}", i + 1), k)?;
         }
@@ -267,9 +309,71 @@ impl VariablePitch {
                 .iter()
                 .map(|r| r.spin.yaw_sign())
                 .collect(),
-            lag,
+            lags: [lags.speed, lags.pitch],
             state: vec![0.0; 2 * airframe.rotor_count()],
         })
+    }
+}
+
+/// A variable-pitch vehicle preset (`presets/vpp/*.toml`): the airframe preset it flies, the
+/// propeller model (Wang et al. eq. (3)) with its bounds and the two channels' lags, and the
+/// drag the paper does not give. Read by Rust tests and Python through this one parser.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VariablePitchPreset {
+    pub name: String,
+    pub description: String,
+    pub source: String,
+    /// Name of the airframe preset (geometry, mass, inertia, the bidirectional thrust box).
+    pub airframe: String,
+    /// `k1..k4` of eq. (3), in the paper's speed unit.
+    pub coefficients: [f64; 4],
+    pub speed_bounds: (f64, f64),
+    pub pitch_bounds: (f64, f64),
+    /// Speed unit to rad/s for the gyroscopic moment (0: not modelled).
+    pub speed_to_rad_s: f64,
+    pub speed_time_constant_s: f64,
+    pub speed_rate_limit_per_s: f64,
+    pub pitch_time_constant_s: f64,
+    pub pitch_rate_limit_rad_s: f64,
+    /// Linear translational drag `d_x = d_y = d_z` of eq. (1), N s/m.
+    pub linear_drag_n_s_m: f64,
+}
+
+impl VariablePitchPreset {
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self> {
+        let preset: VariablePitchPreset = toml::from_str(text).map_err(|e| RfError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        preset.lags().check()?;
+        require_non_negative("linear_drag_n_s_m", preset.linear_drag_n_s_m)?;
+        Ok(preset)
+    }
+
+    pub fn lags(&self) -> VariablePitchLags {
+        VariablePitchLags {
+            speed: Lag {
+                time_constant_s: self.speed_time_constant_s,
+                rate_limit_per_s: self.speed_rate_limit_per_s,
+            },
+            pitch: Lag {
+                time_constant_s: self.pitch_time_constant_s,
+                rate_limit_per_s: self.pitch_rate_limit_rad_s,
+            },
+        }
+    }
+
+    /// The actuator model on `airframe` (the preset's own airframe preset).
+    pub fn actuator(&self, airframe: &Airframe) -> Result<VariablePitch> {
+        VariablePitch::new(
+            airframe,
+            self.coefficients,
+            self.speed_bounds,
+            self.pitch_bounds,
+            self.speed_to_rad_s,
+            self.lags(),
+        )
     }
 }
 
@@ -318,11 +422,13 @@ impl Actuators {
     /// Advances every channel by `dt_s` under `commands` (`channels() * rotor_count()`), held:
     /// the exact solution of the lag ODE (module docs).
     pub fn advance(&mut self, commands: &[f64], dt_s: f64) {
-        let (state, lag, lower, upper) = self.channels_mut();
-        let decay = lag.decay(dt_s);
+        let decay = self.decay(dt_s);
+        let (state, lags, lower, upper) = self.channels_mut();
+        let kinds = lags.len();
         for (k, x) in state.iter_mut().enumerate() {
             let target = commands[k].clamp(lower[k], upper[k]);
-            *x = lag.response_with_decay(*x, target, dt_s, decay);
+            let kind = k % kinds;
+            *x = lags[kind].response_with_decay(*x, target, dt_s, decay[kind]);
         }
     }
 
@@ -333,11 +439,16 @@ impl Actuators {
         self.response_with_decay(targets, elapsed_s, self.decay(elapsed_s), out);
     }
 
-    /// `exp(-elapsed / time_constant)` (1 without lag), for [`Actuators::response_with_decay`]:
-    /// lets a caller that takes many equal steps compute it once.
+    /// `exp(-elapsed / time_constant)` (1 without lag) per kind of channel (entry `k % channels()`
+    /// for channel `k`; fixed pitch uses entry 0), for [`Actuators::response_with_decay`]: lets a
+    /// caller that takes many equal steps compute it once.
     #[inline]
-    pub fn decay(&self, elapsed_s: f64) -> f64 {
-        self.lag().decay(elapsed_s)
+    pub fn decay(&self, elapsed_s: f64) -> Decay {
+        let lags = self.lags();
+        [
+            lags[0].decay(elapsed_s),
+            lags[lags.len() - 1].decay(elapsed_s),
+        ]
     }
 
     /// [`Actuators::response`] with `decay = self.decay(elapsed_s)` given.
@@ -346,15 +457,26 @@ impl Actuators {
         &self,
         targets: &[f64],
         elapsed_s: f64,
-        decay: f64,
+        decay: Decay,
         out: &mut [f64],
     ) {
-        let (state, lag) = match self {
-            Actuators::FixedPitch(a) => (&a.thrust_n[..], a.lag),
-            Actuators::VariablePitch(a) => (&a.state[..], a.lag),
-        };
-        for ((o, &x), &target) in out.iter_mut().zip(state).zip(targets) {
-            *o = lag.response_with_decay(x, target, elapsed_s, decay);
+        match self {
+            Actuators::FixedPitch(a) => {
+                for ((o, &x), &target) in out.iter_mut().zip(&a.thrust_n).zip(targets) {
+                    *o = a.lag.response_with_decay(x, target, elapsed_s, decay[0]);
+                }
+            }
+            Actuators::VariablePitch(a) => {
+                let [speed, pitch] = a.lags;
+                let pairs = out
+                    .chunks_exact_mut(2)
+                    .zip(a.state.chunks_exact(2))
+                    .zip(targets.chunks_exact(2));
+                for ((o, x), target) in pairs {
+                    o[0] = speed.response_with_decay(x[0], target[0], elapsed_s, decay[0]);
+                    o[1] = pitch.response_with_decay(x[1], target[1], elapsed_s, decay[1]);
+                }
+            }
         }
     }
 
@@ -378,29 +500,44 @@ impl Actuators {
 
     /// `true` when the channels follow the (saturated) command at once: no lag, no rate limit.
     pub fn is_instant(&self) -> bool {
-        let lag = self.lag();
-        lag.time_constant_s == 0.0 && lag.rate_limit_per_s == f64::INFINITY
+        self.lags()
+            .iter()
+            .all(|lag| lag.time_constant_s == 0.0 && lag.rate_limit_per_s == f64::INFINITY)
     }
 
-    /// The lag's time constant, s (0: none).
+    /// The shortest positive lag time constant over the channels, s (0: no channel lags): the
+    /// fastest actuator rate the step-size guard must resolve.
     pub fn time_constant_s(&self) -> f64 {
-        self.lag().time_constant_s
+        self.lags()
+            .iter()
+            .map(|lag| lag.time_constant_s)
+            .filter(|&tau| tau > 0.0)
+            .fold(
+                0.0,
+                |acc: f64, tau| if acc == 0.0 { tau } else { acc.min(tau) },
+            )
     }
 
-    /// The lag and rate limit shared by every channel.
-    pub fn lag(&self) -> Lag {
+    /// The lag and rate limit of each kind of channel: one for fixed pitch (thrust), two for
+    /// variable pitch (speed, pitch); channel `k` uses entry `k % channels()`.
+    pub fn lags(&self) -> &[Lag] {
         match self {
-            Actuators::FixedPitch(a) => a.lag,
-            Actuators::VariablePitch(a) => a.lag,
+            Actuators::FixedPitch(a) => std::slice::from_ref(&a.lag),
+            Actuators::VariablePitch(a) => &a.lags[..],
         }
     }
 
-    /// Every channel's state, the model's lag and the per-channel bounds: the one place that
+    /// Every channel's state, the model's lags and the per-channel bounds: the one place that
     /// knows how a model lays out its channels.
-    fn channels_mut(&mut self) -> (&mut [f64], Lag, &[f64], &[f64]) {
+    fn channels_mut(&mut self) -> (&mut [f64], &[Lag], &[f64], &[f64]) {
         match self {
-            Actuators::FixedPitch(a) => (&mut a.thrust_n, a.lag, &a.min_thrust_n, &a.max_thrust_n),
-            Actuators::VariablePitch(a) => (&mut a.state, a.lag, &a.lower, &a.upper),
+            Actuators::FixedPitch(a) => (
+                &mut a.thrust_n,
+                std::slice::from_ref(&a.lag),
+                &a.min_thrust_n,
+                &a.max_thrust_n,
+            ),
+            Actuators::VariablePitch(a) => (&mut a.state, &a.lags[..], &a.lower, &a.upper),
         }
     }
 
@@ -412,7 +549,12 @@ impl Actuators {
     /// Calls `f` with what each rotor produces (rotor 1 first) with the channels at `states`
     /// and efficiency `efficiency`: [`Actuators::output_at`] for every rotor, the model chosen once.
     #[inline(always)]
-    pub fn for_each_output(&self, states: &[f64], efficiency: &[f64], mut f: impl FnMut(RotorOutput)) {
+    pub fn for_each_output(
+        &self,
+        states: &[f64],
+        efficiency: &[f64],
+        mut f: impl FnMut(RotorOutput),
+    ) {
         match self {
             Actuators::FixedPitch(a) => {
                 let rotors = states
@@ -450,7 +592,8 @@ impl Actuators {
                 let thrust = efficiency * states[i];
                 // Spin of the healthy rotor at this command, then the one efficiency rule.
                 let spin = if a.thrust_coefficient_n_s2 > 0.0 {
-                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(efficiency)
+                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt()
+                        * spin_factor(efficiency)
                 } else {
                     0.0
                 };
@@ -563,7 +706,18 @@ mod tests {
     fn variable_pitch_follows_wang_eq3_and_can_push_down() {
         let k = [2e-8, 1e-9, 3e-10, 1e-6];
         let mut rotors = Actuators::VariablePitch(
-            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.0, Lag::none()).unwrap(),
+            VariablePitch::new(
+                &quad(),
+                k,
+                (0.0, 10_000.0),
+                (-0.3, 0.3),
+                0.0,
+                VariablePitchLags {
+                    speed: Lag::none(),
+                    pitch: Lag::none(),
+                },
+            )
+            .unwrap(),
         );
         rotors
             .settle(&[9000.0, 0.2, 9000.0, -0.2, 12_000.0, 0.5, 0.0, 0.0])
@@ -580,6 +734,103 @@ mod tests {
         assert!((out.reaction_torque_nm + torque).abs() < 1e-12); // rotor 1 clockwise
         assert!(rotors.output(1, 1.0).thrust_n < 0.0);
         assert_eq!(&rotors.state()[4..6], &[10_000.0, 0.3]); // saturated
+    }
+
+    #[test]
+    fn speed_and_pitch_follow_their_own_lag_and_rate_limit() {
+        let lags = VariablePitchLags {
+            speed: Lag {
+                time_constant_s: 0.05,
+                rate_limit_per_s: 20_000.0,
+            },
+            pitch: Lag {
+                time_constant_s: 0.01,
+                rate_limit_per_s: 1.0,
+            },
+        };
+        let k = [2e-8, 1e-9, 3e-10, 1e-6];
+        let mut rotors = Actuators::VariablePitch(
+            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.0, lags).unwrap(),
+        );
+        rotors
+            .settle(&[5000.0, 0.0, 5000.0, 0.0, 5000.0, 0.0, 5000.0, 0.0])
+            .unwrap();
+        let command = [6000.0, 0.2, 9000.0, -0.2, 5000.0, 0.0, 5000.0, 0.0];
+        let t = 0.03;
+        let mut many = rotors.clone();
+        rotors.advance(&command, t);
+        for _ in 0..30 {
+            many.advance(&command, t / 30.0);
+        }
+        // Each channel is its own lag's exact solution (an independent RK4 of its ODE).
+        for (k, (&x, &y)) in rotors.state().iter().zip(many.state()).enumerate() {
+            let lag = if k % 2 == 0 { lags.speed } else { lags.pitch };
+            let start = [5000.0, 0.0][k % 2];
+            let reference = integrate_ode(&lag, start, command[k], t);
+            let scale = if k % 2 == 0 { 1e4 } else { 1.0 };
+            assert!(
+                (x - reference).abs() < 1e-9 * scale,
+                "channel {k}: {x} vs {reference}"
+            );
+            assert!(
+                (x - y).abs() < 1e-12 * scale,
+                "channel {k}: one step {x}, many {y}"
+            );
+        }
+        // The pitch is rate-limited (0.2 / 0.01 = 20 rad/s > 1): 0.03 rad after 30 ms.
+        assert!((rotors.state()[1] - 0.03).abs() < 1e-12);
+        // The speed is not (1000 / 0.05 = 20,000 per s, at the limit): the exponential.
+        let expected = 6000.0 - 1000.0 * (-0.6f64).exp();
+        assert!((rotors.state()[0] - expected).abs() < 1e-9);
+        assert_eq!(rotors.time_constant_s(), 0.01);
+        let err = VariablePitch::new(
+            &quad(),
+            k,
+            (0.0, 1.0),
+            (-0.5, 0.5),
+            0.0,
+            VariablePitchLags {
+                pitch: Lag {
+                    time_constant_s: 0.0,
+                    rate_limit_per_s: -1.0,
+                },
+                ..VariablePitchLags::default()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("actuator.pitch_rate_limit_rad_s"),
+            "{err}"
+        );
+        let d = VariablePitchLags::default();
+        assert!((d.speed.time_constant_s - 1.0 / (20.0 * std::f64::consts::PI)).abs() < 1e-15);
+        assert_eq!(d.speed, d.pitch);
+    }
+
+    #[test]
+    fn wang_preset_parses_and_holds_the_papers_numbers() {
+        let text = crate::fixtures::preset_text("vpp/wang.toml");
+        let preset = VariablePitchPreset::from_toml_str(&text, "wang").unwrap();
+        assert_eq!(preset.coefficients, [5e-7, 1e-8, 2e-10, 4e-7]);
+        assert_eq!(preset.speed_bounds, (0.0, 10_000.0));
+        assert_eq!(preset.pitch_bounds, (-0.26, 0.26));
+        assert_eq!(preset.lags(), VariablePitchLags::default());
+        let airframe = crate::fixtures::preset(&preset.airframe);
+        assert_eq!(airframe.mass_kg(), 1.0);
+        assert_eq!(airframe.gravity_m_s2(), 10.0);
+        // The thrust box is the propeller's: k1 omega_max^2 alpha_max = 13 N either way.
+        let actuator = preset.actuator(&airframe).unwrap();
+        let mut rotors = Actuators::VariablePitch(actuator);
+        rotors.settle(&[[10_000.0, 0.26]; 4].concat()).unwrap();
+        let most = rotors.output(0, 1.0).thrust_n;
+        assert!((most - airframe.max_thrust_n()[0]).abs() < 1e-12, "{most}");
+        assert!((airframe.min_thrust_n()[0] + most).abs() < 1e-12);
+        let bad = text.replace("linear_drag_n_s_m = 0.25", "linear_drag_n_s_m = -1");
+        let err = VariablePitchPreset::from_toml_str(&bad, "wang").unwrap_err();
+        assert!(err.to_string().starts_with("linear_drag_n_s_m"), "{err}");
+        let unknown = format!("{text}\nextra = 1\n");
+        assert!(VariablePitchPreset::from_toml_str(&unknown, "wang").is_err());
     }
 
     #[test]
@@ -602,8 +853,18 @@ mod tests {
             err.to_string().starts_with("actuator.rate_limit_n_s"),
             "{err}"
         );
-        let err = VariablePitch::new(&quad(), [1.0; 4], (0.0, 1.0), (0.5, -0.5), 0.0, Lag::none())
-            .unwrap_err();
+        let err = VariablePitch::new(
+            &quad(),
+            [1.0; 4],
+            (0.0, 1.0),
+            (0.5, -0.5),
+            0.0,
+            VariablePitchLags {
+                speed: Lag::none(),
+                pitch: Lag::none(),
+            },
+        )
+        .unwrap_err();
         assert!(
             err.to_string().starts_with("actuator.pitch_bounds"),
             "{err}"
@@ -679,7 +940,18 @@ mod tests {
         fixed.settle(&[4.0; 4]).unwrap();
         let k = [2e-8, 1e-9, 3e-10, 1e-6];
         let mut variable = Actuators::VariablePitch(
-            VariablePitch::new(&quad(), k, (0.0, 10_000.0), (-0.3, 0.3), 0.1, Lag::none()).unwrap(),
+            VariablePitch::new(
+                &quad(),
+                k,
+                (0.0, 10_000.0),
+                (-0.3, 0.3),
+                0.1,
+                VariablePitchLags {
+                    speed: Lag::none(),
+                    pitch: Lag::none(),
+                },
+            )
+            .unwrap(),
         );
         variable.settle(&[[9000.0, 0.2]; 4].concat()).unwrap();
         for rotors in [&fixed, &variable] {

@@ -756,7 +756,11 @@ pub fn simulate_observed(
         // Lag decays over a half and a whole substep, shared by every substep not split by a
         // fault.
         let half_decay = actuators.decay(0.5 * h);
-        let decays = [1.0, half_decay, half_decay * half_decay];
+        let decays = [
+            [1.0; 2],
+            half_decay,
+            [half_decay[0] * half_decay[0], half_decay[1] * half_decay[1]],
+        ];
         // Rotor totals at the start of the next interval, when known (same command, efficiency).
         let mut start_totals: Option<RotorTotals> = None;
         for s in 0..config.substeps {
@@ -905,9 +909,9 @@ pub fn simulate_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight::actuator::{FixedPitch, Lag, VariablePitch};
     use crate::airframe::Airframe;
     use crate::control::{OpenLoop, ZeroCommand};
+    use crate::flight::actuator::{FixedPitch, Lag, VariablePitch, VariablePitchLags};
     use crate::flight::vehicle::Drag;
     use nalgebra::DMatrix;
 
@@ -1272,7 +1276,8 @@ mod tests {
                 "fixed pitch: error ratios {ratios:?}"
             );
         }
-        // Variable pitch (speed, pitch per rotor), the same lag; rotor 2's speed saturates.
+        // Variable pitch (speed, pitch per rotor): the speed channels with the same lag, the
+        // pitch channels their own faster one; rotor 2's speed saturates.
         let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
         let k1 = hover / (5000.0f64.powi(2) * 0.2);
         let mut variable = Actuators::VariablePitch(
@@ -1282,7 +1287,13 @@ mod tests {
                 (0.0, 5300.0),
                 (-0.3, 0.3),
                 std::f64::consts::PI / 30.0,
-                lag,
+                VariablePitchLags {
+                    speed: lag,
+                    pitch: Lag {
+                        time_constant_s: 0.4,
+                        rate_limit_per_s: 0.3,
+                    },
+                },
             )
             .unwrap(),
         );

@@ -9,9 +9,9 @@
 
 use nalgebra::Vector3;
 
-use crate::flight::actuator::RotorOutput;
 use crate::airframe::Airframe;
 use crate::error::{require_non_negative, Result};
+use crate::flight::actuator::RotorOutput;
 use crate::flight::rigid_body::{RigidBody, Wrench};
 use crate::state::RigidBodyState;
 
