@@ -109,7 +109,11 @@ impl PyAllocationBatch {
         cols: usize,
         row: impl Fn(&Allocation) -> &[f64],
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let values: Vec<f64> = self.results.iter().flat_map(|a| row(a).iter().copied()).collect();
+        let values: Vec<f64> = self
+            .results
+            .iter()
+            .flat_map(|a| row(a).iter().copied())
+            .collect();
         numpy::ndarray::Array2::from_shape_vec((self.rows, cols), values)
             .map(|a| a.into_pyarray(py))
             .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
@@ -184,7 +188,12 @@ pub fn time_allocations<'py>(
 }
 
 /// The largest scale along a direction and the commands that reach it.
-#[pyclass(name = "DirectionalLimit", module = "rotorfault._rfcore", frozen, get_all)]
+#[pyclass(
+    name = "DirectionalLimit",
+    module = "rotorfault._rfcore",
+    frozen,
+    get_all
+)]
 pub struct PyDirectionalLimit {
     scale: f64,
     commands: Vec<f64>,
@@ -231,13 +240,13 @@ pub fn max_along_direction<'py>(
 pub fn hover_thrust_margin<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
-    give_up_yaw: bool,
+    axes: &str,
     tolerance: f64,
 ) -> PyResult<PyHoverMargin> {
     let settings = ClarabelSettings::default()
         .tolerance(tolerance)
         .map_err(to_py_err)?;
-    let axes = ControlAxes::from_give_up_yaw(give_up_yaw);
+    let axes = ControlAxes::parse("axes", axes).map_err(to_py_err)?;
     let airframe = &airframe.inner;
     let h = detached(py, || core_hover_margin(airframe, axes, &settings))?;
     Ok(PyHoverMargin {
@@ -248,4 +257,3 @@ pub fn hover_thrust_margin<'py>(
         status: h.status.name(),
     })
 }
-

@@ -50,4 +50,3 @@ pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult
     }
     Ok(DMatrix::from_row_slice(rows, cols, &flat))
 }
-

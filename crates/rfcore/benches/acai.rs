@@ -21,9 +21,8 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use rfcore::Airframe;
 use rfcore::analysis::{AcaiFormula, ControlAxes, ControllabilityAnalysis, FacetNormals};
-
+use rfcore::Airframe;
 
 /// Du's Fig. 4 grid: eta1, eta2, eta5 (1-based) in {0, 0.04, ..., 1}, the other rotors at 1.
 /// Row-major, 6 per row, 26^3 rows.

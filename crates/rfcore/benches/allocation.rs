@@ -28,12 +28,11 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::DMatrix;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
+use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 use rfcore::allocation::{time_each, AllocationProblem, Method, SolvedBy};
 use rfcore::Airframe;
-use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 
 const PROBLEMS: usize = 256;
-
 
 fn problem(airframe: &Airframe) -> AllocationProblem {
     AllocationProblem::new(
@@ -204,7 +203,12 @@ fn report_targets(_: &mut Criterion) {
             let report = solver.solve_unchecked(u, &mut active, &mut commands);
             fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
             iterations += report.iterations;
-            saturated += usize::from(active.states().iter().any(|s| *s != rfcore::allocation::active_set::BoundState::Free));
+            saturated += usize::from(
+                active
+                    .states()
+                    .iter()
+                    .any(|s| *s != rfcore::allocation::active_set::BoundState::Free),
+            );
         }
         let ours = median_p90(time_each(&problem, &Method::ActiveSet, &controls, 200).unwrap());
         let clarabel = Method::Clarabel(ClarabelSettings::default());
@@ -222,7 +226,10 @@ fn report_targets(_: &mut Criterion) {
         );
         met &= ours.0 <= 1e-6 && theirs.0 / ours.0 >= 50.0;
     }
-    println!("targets (median <= 1 us, >= 50x clarabel): {}", if met { "met" } else { "NOT met" });
+    println!(
+        "targets (median <= 1 us, >= 50x clarabel): {}",
+        if met { "met" } else { "NOT met" }
+    );
 
     let cases = ill_conditioned(100);
     let mut times = Vec::with_capacity(cases.len());
@@ -266,5 +273,10 @@ fn bench_ill_conditioned(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, report_targets, bench_allocation, bench_ill_conditioned);
+criterion_group!(
+    benches,
+    report_targets,
+    bench_allocation,
+    bench_ill_conditioned
+);
 criterion_main!(benches);

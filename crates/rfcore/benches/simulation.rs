@@ -31,12 +31,12 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::{DMatrix, UnitQuaternion, Vector3};
-use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, RotorOutput};
 use rfcore::control::{LinearFeedback, OpenLoop};
-use rfcore::state::STATE_DIM;
-use rfcore::state::RigidBodyState;
+use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, RotorOutput};
 use rfcore::flight::simulation::{simulate, SimulationConfig};
 use rfcore::flight::vehicle::{Drag, Vehicle};
+use rfcore::state::RigidBodyState;
+use rfcore::state::STATE_DIM;
 use rfcore::Airframe;
 
 const CONTROL_DT_S: f64 = 1.0 / 400.0;

@@ -7,7 +7,10 @@ use crate::airframe::Airframe;
 
 /// `python/rotorfault/presets` of this source tree.
 pub fn presets_dir() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../python/rotorfault/presets"))
+    PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../python/rotorfault/presets"
+    ))
 }
 
 /// The text of `presets/{relative}` (e.g. `"quad-x.toml"`, `"ftc/ke-hil.toml"`).

@@ -18,10 +18,10 @@ pub mod allocation;
 pub mod analysis;
 pub mod control;
 pub mod error;
-pub mod flight;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod flight;
 pub mod state;
 
-pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
+pub use airframe::{Airframe, Rotor, RotorPlacement, SpinDirection, DEFAULT_GRAVITY_M_S2};
 pub use error::{Result, RfError};

@@ -150,7 +150,6 @@ fn wrap_angle(a: f64) -> f64 {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,7 +168,9 @@ mod tests {
     #[test]
     fn packed_state_keeps_a_unit_quaternion_exactly_and_normalises_any_other() {
         let q = UnitQuaternion::from_euler_angles(0.3, -0.2, 1.1).into_inner();
-        let packed = [1.0, 2.0, 3.0, 0.1, 0.2, 0.3, q.w, q.i, q.j, q.k, 0.4, 0.5, 0.6];
+        let packed = [
+            1.0, 2.0, 3.0, 0.1, 0.2, 0.3, q.w, q.i, q.j, q.k, 0.4, 0.5, 0.6,
+        ];
         let s = RigidBodyState::from_packed(&packed);
         assert_eq!(s.attitude.quaternion(), &q);
         let mut doubled = packed;

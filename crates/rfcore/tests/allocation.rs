@@ -3,8 +3,8 @@
 
 use nalgebra::DMatrix;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
-use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
 use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
+use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
 
 /// SplitMix64: a dependency-free, reproducible generator.
 struct Rng(u64);
@@ -443,8 +443,8 @@ fn degenerate_bounds_are_not_carried_into_the_next_solve() {
 // ---- Issue #20: allocation that is never silently wrong ----
 
 use rfcore::allocation::active_set::ActiveSetSettings;
-use rfcore::allocation::{allocate_many, fallback_count, Method, SolvedBy};
 use rfcore::allocation::clarabel::allocate_clarabel_unpolished;
+use rfcore::allocation::{allocate_many, fallback_count, Method, SolvedBy};
 use rfcore::Airframe;
 
 fn preset(name: &str) -> Airframe {
@@ -497,14 +497,21 @@ fn ill_conditioned_columns_are_certified_and_exact() {
             let p = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper).unwrap();
             let got = ActiveSetSolver::new(&p).allocate(&u_c).unwrap();
             assert_eq!(got.status, AllocationStatus::Optimal, "k {k} trial {trial}");
-            assert!(got.certificate.holds(), "k {k} trial {trial}: {:?}", got.certificate);
+            assert!(
+                got.certificate.holds(),
+                "k {k} trial {trial}: {:?}",
+                got.certificate
+            );
             let excess = excess_over_clarabel(&p, &u_c, &got.commands);
             assert!(excess <= 1e-9, "k {k} trial {trial}: excess {excess:e}");
             worst = worst.max(excess);
             fallbacks[k] += usize::from(got.solved_by == SolvedBy::Clarabel);
         }
     }
-    eprintln!("fallbacks per k (4..12, of 200): {:?}; worst excess {worst:e}", &fallbacks[4..]);
+    eprintln!(
+        "fallbacks per k (4..12, of 200): {:?}; worst excess {worst:e}",
+        &fallbacks[4..]
+    );
     assert_eq!(fallbacks[4..=9].iter().sum::<usize>(), 0, "{fallbacks:?}");
 }
 
@@ -546,7 +553,11 @@ fn property_wide_class_is_certified_and_never_worse_than_clarabel() {
         let p = AllocationProblem::new(matrix, &weights, &lower, &upper).unwrap();
         let got = ActiveSetSolver::new(&p).allocate(&u_c).unwrap();
         assert_eq!(got.status, AllocationStatus::Optimal, "trial {trial}");
-        assert!(got.certificate.holds(), "trial {trial}: {:?}", got.certificate);
+        assert!(
+            got.certificate.holds(),
+            "trial {trial}: {:?}",
+            got.certificate
+        );
         let excess = excess_over_clarabel(&p, &u_c, &got.commands);
         assert!(excess <= 1e-9, "trial {trial}: excess {excess:e}");
         worst = worst.max(excess);
@@ -573,11 +584,15 @@ fn regression_small_weights_are_not_dropped() {
     let u_c = [7.0, 0.05, -0.08, 0.05];
     for w_yaw in [1e-6, 1e-7, 1e-9] {
         let (_, p) = ke_preset_problem(&[1.0, 20.0, 20.0, w_yaw]);
-        let exact = p.matrix().clone().try_inverse().unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
+        let exact =
+            p.matrix().clone().try_inverse().unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
         assert!((0..4).all(|i| exact[i] > p.lower()[i] && exact[i] < p.upper()[i]));
         let settings = ClarabelSettings::default();
         for (name, got) in [
-            ("active-set", ActiveSetSolver::new(&p).allocate(&u_c).unwrap()),
+            (
+                "active-set",
+                ActiveSetSolver::new(&p).allocate(&u_c).unwrap(),
+            ),
             ("clarabel", allocate_clarabel(&p, &u_c, &settings).unwrap()),
         ] {
             assert_eq!(got.status, AllocationStatus::Optimal);
@@ -623,7 +638,11 @@ fn closest_optimum_distance(p: &AllocationProblem, achieved: &[f64], preferred: 
     let t = allocate_clarabel_unpolished(&pinned, achieved, &settings)
         .unwrap()
         .commands;
-    t.iter().zip(preferred).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt()
+    t.iter()
+        .zip(preferred)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 #[test]
@@ -649,7 +668,10 @@ fn regression_tie_rule_holds_with_active_bounds() {
         .sum::<f64>()
         .sqrt();
     let best = closest_optimum_distance(&p, &got.achieved, &preferred);
-    eprintln!("octo-x tie: {:?} distance {distance} (closest {best})", got.commands);
+    eprintln!(
+        "octo-x tie: {:?} distance {distance} (closest {best})",
+        got.commands
+    );
     assert!(distance <= best + 1e-6, "{distance} vs {best}");
     assert!(distance <= 5.9665, "{distance}"); // issue #20: 6.598 before
 
@@ -660,16 +682,32 @@ fn regression_tie_rule_holds_with_active_bounds() {
         let m = frame.rotor_count();
         let mut bad = 0;
         for _ in 0..300 {
-            let preferred: Vec<f64> = frame.max_thrust_n().iter().map(|h| rng.uniform(0.0, h * 0.8)).collect();
-            let p = AllocationProblem::new(frame.effectiveness_matrix(), &[1.0; 4], &frame.min_thrust_n(), &frame.max_thrust_n())
-                .unwrap()
-                .with_regularization(0.0, &preferred)
-                .unwrap();
-            let point: Vec<f64> = frame.max_thrust_n().iter().map(|h| rng.uniform(0.0, *h)).collect();
+            let preferred: Vec<f64> = frame
+                .max_thrust_n()
+                .iter()
+                .map(|h| rng.uniform(0.0, h * 0.8))
+                .collect();
+            let p = AllocationProblem::new(
+                frame.effectiveness_matrix(),
+                &[1.0; 4],
+                &frame.min_thrust_n(),
+                &frame.max_thrust_n(),
+            )
+            .unwrap()
+            .with_regularization(0.0, &preferred)
+            .unwrap();
+            let point: Vec<f64> = frame
+                .max_thrust_n()
+                .iter()
+                .map(|h| rng.uniform(0.0, *h))
+                .collect();
             let u_c = p.achieved(&point);
             let got = ActiveSetSolver::new(&p).allocate(&u_c).unwrap();
             assert_eq!(got.status, AllocationStatus::Optimal);
-            let d: f64 = (0..m).map(|i| (got.commands[i] - preferred[i]).powi(2)).sum::<f64>().sqrt();
+            let d: f64 = (0..m)
+                .map(|i| (got.commands[i] - preferred[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let best = closest_optimum_distance(&p, &got.achieved, &preferred);
             bad += usize::from(d > best + 1e-5 * (1.0 + best));
         }
@@ -688,8 +726,16 @@ fn scaling_by_1e150_gives_the_same_commands() {
         let scaled_u: Vec<f64> = u_c.iter().map(|u| u * s).collect();
         let w: Vec<f64> = base.weights().iter().map(|w| w * s).collect();
         for (p, u) in [
-            (AllocationProblem::new(m.clone(), base.weights(), base.lower(), base.upper()).unwrap(), scaled_u.clone()),
-            (AllocationProblem::new(base.matrix().clone(), &w, base.lower(), base.upper()).unwrap(), u_c.to_vec()),
+            (
+                AllocationProblem::new(m.clone(), base.weights(), base.lower(), base.upper())
+                    .unwrap(),
+                scaled_u.clone(),
+            ),
+            (
+                AllocationProblem::new(base.matrix().clone(), &w, base.lower(), base.upper())
+                    .unwrap(),
+                u_c.to_vec(),
+            ),
         ] {
             let got = ActiveSetSolver::new(&p).allocate(&u).unwrap();
             assert_eq!(got.status, AllocationStatus::Optimal, "{s}");
@@ -705,7 +751,13 @@ fn scaling_by_1e150_gives_the_same_commands() {
         }
     }
     // A virtual control too large for the matrix's scale is an error naming the field.
-    let tiny = AllocationProblem::new(base.matrix().map(|v| v * 1e-200), base.weights(), base.lower(), base.upper()).unwrap();
+    let tiny = AllocationProblem::new(
+        base.matrix().map(|v| v * 1e-200),
+        base.weights(),
+        base.lower(),
+        base.upper(),
+    )
+    .unwrap();
     match ActiveSetSolver::new(&tiny).allocate(&[1e200, 0.0, 0.0, 0.0]) {
         Ok(a) => assert!(a.commands.iter().all(|t| t.is_finite())),
         Err(e) => assert!(e.to_string().starts_with("virtual_control"), "{e}"),
@@ -722,32 +774,50 @@ fn permutation_invariance_and_all_paths_agree() {
         let single = ActiveSetSolver::new(p).allocate(&case.u_c).unwrap();
         // Batch path.
         let batch = allocate_many(p, &Method::ActiveSet, &case.u_c).unwrap();
-        assert_eq!(fallback_count(&batch), usize::from(single.solved_by == SolvedBy::Clarabel));
+        assert_eq!(
+            fallback_count(&batch),
+            usize::from(single.solved_by == SolvedBy::Clarabel)
+        );
         // Reusable solver, warm-started from an unrelated solve.
         let solver = ActiveSetSolver::with_settings(p, ActiveSetSettings::default());
         let mut active = ActiveSet::cold(m);
         let mut t = vec![0.0; m];
-        solver.solve(&p.achieved(p.upper()), &mut active, &mut t).unwrap();
+        solver
+            .solve(&p.achieved(p.upper()), &mut active, &mut t)
+            .unwrap();
         solver.solve(&case.u_c, &mut active, &mut t).unwrap();
         let f = p.objective(&case.u_c, &single.commands);
         let tol = 1e-10 * (1.0 + f);
         assert!((p.objective(&case.u_c, &batch[0].commands) - f).abs() <= tol);
-        assert!((p.objective(&case.u_c, &t) - f).abs() <= tol, "trial {trial}");
+        assert!(
+            (p.objective(&case.u_c, &t) - f).abs() <= tol,
+            "trial {trial}"
+        );
         for i in 0..m {
             assert_eq!(single.commands[i], batch[0].commands[i], "trial {trial}");
         }
         // Reversed columns give the reversed commands (objective; commands where unique).
         let rev = DMatrix::from_fn(n, m, |r, c| p.matrix()[(r, m - 1 - c)]);
         let flip = |v: &[f64]| v.iter().rev().copied().collect::<Vec<f64>>();
-        let mut q = AllocationProblem::new(rev, p.weights(), &flip(p.lower()), &flip(p.upper())).unwrap();
+        let mut q =
+            AllocationProblem::new(rev, p.weights(), &flip(p.lower()), &flip(p.upper())).unwrap();
         if p.regularization() > 0.0 {
-            q = q.with_regularization(p.regularization(), &flip(p.preferred())).unwrap();
+            q = q
+                .with_regularization(p.regularization(), &flip(p.preferred()))
+                .unwrap();
         }
         let got = ActiveSetSolver::new(&q).allocate(&case.u_c).unwrap();
         let back = flip(&got.commands);
-        assert!((p.objective(&case.u_c, &back) - f).abs() <= tol, "trial {trial}");
+        assert!(
+            (p.objective(&case.u_c, &back) - f).abs() <= tol,
+            "trial {trial}"
+        );
         for i in 0..m {
-            assert!((back[i] - single.commands[i]).abs() <= 1e-7 * (1.0 + single.commands[i].abs()), "trial {trial}: {back:?} vs {:?}", single.commands);
+            assert!(
+                (back[i] - single.commands[i]).abs() <= 1e-7 * (1.0 + single.commands[i].abs()),
+                "trial {trial}: {back:?} vs {:?}",
+                single.commands
+            );
         }
     }
 }

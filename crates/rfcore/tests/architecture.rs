@@ -24,7 +24,12 @@ fn sources(dir: &Path) -> Vec<PathBuf> {
 /// The top-level module a source file belongs to (`src/flight/vehicle.rs` -> `flight`).
 fn module_of(src: &Path, file: &Path) -> String {
     let rel = file.strip_prefix(src).unwrap();
-    let first = rel.components().next().unwrap().as_os_str().to_string_lossy();
+    let first = rel
+        .components()
+        .next()
+        .unwrap()
+        .as_os_str()
+        .to_string_lossy();
     first.trim_end_matches(".rs").to_string()
 }
 
@@ -81,7 +86,14 @@ fn core_rooms_depend_one_way() {
         ("control", &["error", "airframe", "state", "allocation"][..]),
         (
             "flight",
-            &["error", "airframe", "state", "control", "allocation", "analysis"][..],
+            &[
+                "error",
+                "airframe",
+                "state",
+                "control",
+                "allocation",
+                "analysis",
+            ][..],
         ),
     ]);
     for (module, uses) in &g {
@@ -113,7 +125,10 @@ fn bindings_have_no_import_circles() {
         done: &mut BTreeSet<String>,
     ) {
         if let Some(i) = path.iter().position(|p| p == node) {
-            panic!("bindings import circle: {}", path[i..].join(" -> ") + " -> " + node);
+            panic!(
+                "bindings import circle: {}",
+                path[i..].join(" -> ") + " -> " + node
+            );
         }
         if done.contains(node) {
             return;

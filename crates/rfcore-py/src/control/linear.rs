@@ -3,7 +3,7 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::control::linear::{Lti, LinearFeedback, OpenLoop};
+use rfcore::control::linear::{LinearFeedback, Lti, OpenLoop};
 
 use crate::convert::{matrix, slice1, to_py_err};
 
@@ -82,4 +82,3 @@ impl PyLti {
         Ok(PyLti { inner })
     }
 }
-

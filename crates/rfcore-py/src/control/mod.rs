@@ -19,7 +19,7 @@ use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
-use linear::{PyLti, PyLinearFeedback, PyOpenLoop};
+use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
 pub(crate) struct CallableController {

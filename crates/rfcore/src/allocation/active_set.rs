@@ -28,11 +28,11 @@
 //!    solver falls back to Clarabel, polishes its answer with phase 1 from Clarabel's active set,
 //!    and records the method that produced the commands ([`SolvedBy`]).
 
+use crate::allocation::clarabel::{allocate_clarabel_unpolished, ClarabelSettings};
 use crate::allocation::{
     Allocation, AllocationProblem, AllocationStatus, Certificate, SolvedBy, MAX_ACTUATORS,
     MAX_VIRTUAL,
 };
-use crate::allocation::clarabel::{allocate_clarabel_unpolished, ClarabelSettings};
 use crate::error::{Result, RfError};
 
 const N: usize = MAX_ACTUATORS;
@@ -182,9 +182,10 @@ impl ActiveSetSolver {
         // gamma / (s_w s_M^2) without overflow; capped (a huge value just pins T to T_pref).
         let root_gamma = (gamma.sqrt() / s_w.sqrt() / s_m).min(1e150);
         let scaled_gamma = root_gamma * root_gamma;
-        let scaled = AllocationProblem::new(matrix.clone(), &weights, problem.lower(), problem.upper())
-            .and_then(|p| p.with_regularization(scaled_gamma, problem.preferred()))
-            .expect("a scaled valid problem is valid");
+        let scaled =
+            AllocationProblem::new(matrix.clone(), &weights, problem.lower(), problem.upper())
+                .and_then(|p| p.with_regularization(scaled_gamma, problem.preferred()))
+                .expect("a scaled valid problem is valid");
         let rows = n + if gamma > 0.0 { m } else { 0 };
         let mut solver = ActiveSetSolver {
             problem: problem.clone(),
@@ -578,7 +579,12 @@ impl ActiveSetSolver {
     /// Polishes approximate commands `x` (e.g. an interior-point answer): holds what lies within
     /// 1e-7 of a bound (relative to the span), then phases 1 and 2. Returns the commands and a
     /// report (status from the certificate).
-    fn polish(&self, b: &[f64; ROWS], x: &[f64], active: &mut ActiveSet) -> ([f64; N], SolveReport) {
+    fn polish(
+        &self,
+        b: &[f64; ROWS],
+        x: &[f64],
+        active: &mut ActiveSet,
+    ) -> ([f64; N], SolveReport) {
         let m = self.m;
         let mut t = [0.0; N];
         for i in 0..m {
@@ -677,9 +683,17 @@ impl ActiveSetSolver {
         }
         for i in 0..self.m {
             let col = &self.a[i * ROWS..i * ROWS + self.rows];
-            let gi: f64 = -col.iter().zip(&r[..self.rows]).map(|(a, x)| a * x).sum::<f64>();
+            let gi: f64 = -col
+                .iter()
+                .zip(&r[..self.rows])
+                .map(|(a, x)| a * x)
+                .sum::<f64>();
             let s = self.column_norms[i] * scale;
-            g[i] = if s > 0.0 && s.is_finite() { gi / s } else { 0.0 };
+            g[i] = if s > 0.0 && s.is_finite() {
+                gi / s
+            } else {
+                0.0
+            };
         }
     }
 
@@ -713,7 +727,9 @@ impl ActiveSetSolver {
             let (lo, hi, x) = (self.lower[i], self.upper[i], t[i]);
             let span = (hi - lo).max(lo.abs()).max(hi.abs());
             let span = if span > 0.0 { span } else { 1.0 };
-            out.bound_violation = out.bound_violation.max((lo - x).max(x - hi).max(0.0) / span);
+            out.bound_violation = out
+                .bound_violation
+                .max((lo - x).max(x - hi).max(0.0) / span);
             if lo == hi {
                 continue;
             }
@@ -934,7 +950,11 @@ impl ActiveSetSolver {
                 if states[i] == BoundState::Free || excluded[i] || self.lower[i] == self.upper[i] {
                     continue;
                 }
-                let violation = if states[i] == BoundState::Lower { -g[i] } else { g[i] };
+                let violation = if states[i] == BoundState::Lower {
+                    -g[i]
+                } else {
+                    g[i]
+                };
                 if violation > worst.0 {
                     worst = (violation, i);
                 }
@@ -1107,7 +1127,11 @@ impl ActiveSetSolver {
                     scale += (self.constraint[c * N + i] * nu[c]).abs();
                 }
                 let mu = t[i] - self.preferred[i] - pull;
-                let violation = if states[i] == BoundState::Lower { -mu } else { mu };
+                let violation = if states[i] == BoundState::Lower {
+                    -mu
+                } else {
+                    mu
+                };
                 if violation > 1e-12 * scale.max(size) && violation > worst.0 {
                     worst = (violation, i);
                 }
@@ -1202,7 +1226,15 @@ fn householder_qr(
 /// Forms the reflector of column `s` (`alpha`: the norm of `a[s..rows, s]`, > 0) and applies it
 /// to columns `s + 1..k`.
 #[inline(always)]
-fn reflector(a: &mut [f64], ld: usize, rows: usize, k: usize, s: usize, alpha: f64, tau: &mut [f64]) {
+fn reflector(
+    a: &mut [f64],
+    ld: usize,
+    rows: usize,
+    k: usize,
+    s: usize,
+    alpha: f64,
+    tau: &mut [f64],
+) {
     let col = &mut a[s * ld + s..s * ld + rows];
     let x0 = col[0];
     let beta = if x0 >= 0.0 { -alpha } else { alpha };

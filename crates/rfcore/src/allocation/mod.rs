@@ -37,9 +37,9 @@ use rayon::prelude::*;
 pub mod active_set;
 pub mod clarabel;
 
+use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 use active_set::{ActiveSet, ActiveSetSolver};
 use clarabel::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
-use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
 pub const MAX_ACTUATORS: usize = 16;
@@ -228,9 +228,17 @@ impl AllocationProblem {
     /// (finite, one entry per axis / per actuator): how a user verifies an answer.
     pub fn evaluate(&self, u_c: &[f64], commands: &[f64]) -> Result<(f64, f64)> {
         self.check_virtual_control(u_c)?;
-        require_entries("commands", commands, self.actuator_count(), "one per actuator")?;
+        require_entries(
+            "commands",
+            commands,
+            self.actuator_count(),
+            "one per actuator",
+        )?;
         require_all_finite("commands", commands)?;
-        Ok((self.objective(u_c, commands), self.kkt_residual(u_c, commands)))
+        Ok((
+            self.objective(u_c, commands),
+            self.kkt_residual(u_c, commands),
+        ))
     }
 
     pub fn objective(&self, u_c: &[f64], commands: &[f64]) -> f64 {

@@ -56,4 +56,3 @@ impl Controller for Allocated {
         self.active = ActiveSet::cold(self.solver.problem().actuator_count());
     }
 }
-

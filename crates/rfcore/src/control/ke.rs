@@ -44,8 +44,8 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
-use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use crate::airframe::Airframe;
+use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use crate::allocation::{weighted_pseudo_inverse, AllocationProblem, WeightedPseudoInverse};
 use crate::control::Controller;
 use crate::error::{require_finite, require_non_negative, Result, RfError};

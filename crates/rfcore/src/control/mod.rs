@@ -23,7 +23,7 @@ pub mod lanzon;
 pub mod linear;
 
 pub use allocated::Allocated;
-pub use linear::{Lti, LinearFeedback, OpenLoop};
+pub use linear::{LinearFeedback, Lti, OpenLoop};
 
 /// Rejects a non-finite matrix entry, naming it `field[row, col]`.
 pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()> {
@@ -35,7 +35,6 @@ pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()>
         )),
     }
 }
-
 
 /// A controller: from the measured state at time `t_s`, the actuator commands.
 pub trait Controller: Send {
@@ -64,7 +63,6 @@ impl Controller for ZeroCommand {
     }
 }
 
-
 /// Runs a controller (from its reset state) on a recorded measured-state history: row k of the
 /// result is what it commands at `times_s[k]` for `states[k]`. Nothing but the measurements reaches
 /// it, so a controller that passes the same history through twice commands the same thing: the
@@ -90,4 +88,3 @@ pub fn replay(
     }
     Ok(out)
 }
-

@@ -171,7 +171,6 @@ impl FixedPitch {
                 ),
             ));
         }
-        let k_mu = airframe.drag_torque_ratio_m();
         let yaw_sign: Vec<f64> = airframe
             .rotors()
             .iter()
@@ -180,7 +179,11 @@ impl FixedPitch {
         Ok(FixedPitch {
             min_thrust_n: airframe.min_thrust_n(),
             max_thrust_n: airframe.max_thrust_n(),
-            torque_per_thrust_m: yaw_sign.iter().map(|w| w * k_mu).collect(),
+            torque_per_thrust_m: yaw_sign
+                .iter()
+                .enumerate()
+                .map(|(i, w)| w * airframe.rotor_drag_torque_ratio_m(i))
+                .collect(),
             yaw_sign,
             thrust_coefficient_n_s2,
             lag,
@@ -412,7 +415,12 @@ impl Actuators {
     /// Calls `f` with what each rotor produces (rotor 1 first) with the channels at `states`
     /// and efficiency `efficiency`: [`Actuators::output_at`] for every rotor, the model chosen once.
     #[inline(always)]
-    pub fn for_each_output(&self, states: &[f64], efficiency: &[f64], mut f: impl FnMut(RotorOutput)) {
+    pub fn for_each_output(
+        &self,
+        states: &[f64],
+        efficiency: &[f64],
+        mut f: impl FnMut(RotorOutput),
+    ) {
         match self {
             Actuators::FixedPitch(a) => {
                 let rotors = states
@@ -450,7 +458,8 @@ impl Actuators {
                 let thrust = efficiency * states[i];
                 // Spin of the healthy rotor at this command, then the one efficiency rule.
                 let spin = if a.thrust_coefficient_n_s2 > 0.0 {
-                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt() * spin_factor(efficiency)
+                    (states[i].max(0.0) / a.thrust_coefficient_n_s2).sqrt()
+                        * spin_factor(efficiency)
                 } else {
                     0.0
                 };

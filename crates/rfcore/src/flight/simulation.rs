@@ -862,9 +862,9 @@ pub fn simulate_batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight::actuator::{FixedPitch, Lag, VariablePitch};
     use crate::airframe::Airframe;
     use crate::control::{OpenLoop, ZeroCommand};
+    use crate::flight::actuator::{FixedPitch, Lag, VariablePitch};
     use crate::flight::vehicle::Drag;
     use nalgebra::DMatrix;
 
