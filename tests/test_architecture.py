@@ -18,11 +18,11 @@ PACKAGE = "rotorfault"
 #: Layers, highest first: a module may import from its own layer (no circles) and lower ones.
 LAYERS = [
     ["", "cli", "__main__"],
-    ["papers", "scenario", "campaign", "vpp"],
+    ["papers", "scenario", "campaign", "vpp", "certify"],
     ["control"],
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],
-    ["_progress"],
+    ["_progress", "_formats"],
     ["_convert", "_typing", "_output"],
 ]
 

@@ -86,3 +86,20 @@ def rotor_numbers(field: str, value: Any, rotor_count: int) -> tuple[int, ...]:
             raise ValueError(f"{field}: rotor numbers run from 1 to {rotor_count}, got {rotor}")
         rotors.append(rotor)
     return tuple(rotors)
+
+
+_AXES = ("thrust-roll-pitch-yaw", "thrust-roll-pitch", "wrench")
+
+
+def control_axes(give_up_yaw: Any, axes: Any) -> str:
+    """The axes name from ``give_up_yaw`` (the short way) or ``axes`` (None: decided by the flag)."""
+    drop_yaw = flag("give_up_yaw", give_up_yaw)
+    if axes is None:
+        return "thrust-roll-pitch" if drop_yaw else "thrust-roll-pitch-yaw"
+    if not isinstance(axes, str):
+        raise TypeError(f"axes: expected one of {', '.join(_AXES)}, got {type(axes).__name__}")
+    if axes not in _AXES:
+        raise ValueError(f"axes: must be one of {', '.join(_AXES)}, got {axes!r}")
+    if drop_yaw and axes != "thrust-roll-pitch":
+        raise ValueError(f"give_up_yaw: contradicts axes={axes!r} (give one of the two)")
+    return axes

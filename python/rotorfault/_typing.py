@@ -16,6 +16,9 @@ AcaiFormula: TypeAlias = Literal["eq13", "facet-margin"]
 #: Where the hover wrench lies relative to the attainable set (a verdict every ACAI carries:
 #: with ``formula="eq13"`` an ACAI of 0 can come with ``"outside"``, where hover is infeasible).
 HoverPoint: TypeAlias = Literal["inside", "boundary", "outside", "rank-deficient"]
+#: Virtual-control axes an analysis keeps: Du's four (thrust, roll, pitch, yaw), three with yaw
+#: given up, or the full six-axis wrench (force and torque, body FRD) of tilted rotors.
+ControlAxes: TypeAlias = Literal["thrust-roll-pitch-yaw", "thrust-roll-pitch", "wrench"]
 #: Solver of :func:`rotorfault.allocate`.
 AllocationMethod: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Outcome of one allocation.
@@ -58,6 +61,7 @@ class Controller(Protocol):
 
 __all__ = [
     "AcaiFormula",
+    "ControlAxes",
     "AllocationMethod",
     "AllocationStatus",
     "Controller",

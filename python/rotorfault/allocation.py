@@ -40,8 +40,8 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, count, flag, float_array, frozen_array, real
-from ._typing import AllocationMethod, AllocationStatus
+from ._convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
+from ._typing import AllocationMethod, AllocationStatus, ControlAxes
 from .airframe import Airframe
 
 if TYPE_CHECKING:
@@ -99,16 +99,19 @@ class Allocator:
         regularization: float = 0.0,
         preferred: npt.ArrayLike | None = None,
         give_up_yaw: bool = False,
+        axes: ControlAxes | None = None,
     ) -> None:
         drop_yaw = flag("give_up_yaw", give_up_yaw)
         if isinstance(target, Airframe):
-            matrix = target.effectiveness_matrix()
+            names = control_axes(drop_yaw, axes)
+            matrix = target.wrench_matrix() if names == "wrench" else target.effectiveness_matrix()
             if drop_yaw:
                 matrix = matrix[:3]
             default_bounds: tuple[FloatArray, FloatArray] | None = (target.min_thrust_n, target.max_thrust_n)
         else:
-            if drop_yaw:
-                raise ValueError("give_up_yaw: only applies to an Airframe (drop the row from the matrix yourself)")
+            if drop_yaw or axes is not None:
+                field = "give_up_yaw" if drop_yaw else "axes"
+                raise ValueError(f"{field}: only applies to an Airframe (pick the rows of the matrix yourself)")
             matrix = float_array("matrix", target, 2)
             default_bounds = None
         n, m = matrix.shape
@@ -215,6 +218,7 @@ def allocate(
     preferred: npt.ArrayLike | None = None,
     priorities: Sequence[Sequence[int]] | None = None,
     give_up_yaw: bool = False,
+    axes: ControlAxes | None = None,
 ) -> Allocation:
     """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
     the arguments and the module docs for the methods::
@@ -227,7 +231,7 @@ def allocate(
     """
     allocator = Allocator(
         target, weights=weights, bounds=bounds, regularization=regularization, preferred=preferred,
-        give_up_yaw=give_up_yaw,
+        give_up_yaw=give_up_yaw, axes=axes,
     )
     return allocator.allocate(virtual_control, method=method, priorities=priorities)
 
@@ -290,6 +294,7 @@ def hover_thrust_margin(
     *,
     give_up_yaw: bool = False,
     tolerance: float = CLARABEL_TOLERANCE,
+    axes: ControlAxes | None = None,
 ) -> HoverMargin:
     """How much balanced thrust an airframe has left, with rotor ``efficiency`` (default the
     airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning vehicle,
@@ -297,7 +302,8 @@ def hover_thrust_margin(
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
-    h = _rfcore.hover_thrust_margin(frame._core, flag("give_up_yaw", give_up_yaw), real("tolerance", tolerance))
+    names = control_axes(give_up_yaw, axes)
+    h = _rfcore.hover_thrust_margin(frame._core, names, real("tolerance", tolerance))
     commands = None if h.commands is None else np.asarray(h.commands)
     return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
 

@@ -22,7 +22,7 @@ from rich.table import Table
 
 from ._typing import AcaiFormula, KeLaw
 from ._output import check_output_file
-from .airframe import Airframe
+from .airframe import Airframe, rotor_labels
 from .controllability import EQ13_ZERO_NOTE, controllability, failure_table, format_acai
 from .scan import efficiency_scan
 
@@ -216,6 +216,49 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
 class _Terminated(BaseException):
     """SIGTERM, raised in the main thread so that partial outputs are cleaned up (a
     BaseException, like KeyboardInterrupt, so no library's `except Exception` swallows it)."""
+
+
+@cli.command()
+@click.option("--airframe", "-a", required=True, help="Preset name, airframe TOML, or a PX4 .params file.")
+@click.option("--require", "required", type=click.Choice(["none", "single", "double"]), default="none", show_default=True,
+              help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
+@click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
+@click.option("--force", is_flag=True, help="Replace an existing JSON file.")
+@_user_errors
+def certify(airframe: str, required: str, json_path: str | None, force: bool) -> None:
+    """For every single and double rotor failure: hover with all axes, only without yaw, or not at
+    all; the ACAI margins, the thrust-to-weight left and which axes an allocator must drop."""
+    import json
+
+    from . import certify as cert_module
+    from ._output import write_text
+
+    if json_path not in (None, "-"):
+        check_output_file("--json", json_path, suffixes=(".json",), force=force)
+    frame = Airframe.load(airframe)
+    cert = cert_module.certify(frame, max_failed=min(2, frame.rotor_count))
+    text = json.dumps(cert.to_dict(), indent=2) + "\n"
+    if json_path == "-":
+        click.echo(text, nl=False)
+    else:
+        headers, rows = cert_module.rows_for_display(cert)
+        kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
+        table = Table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
+        for header in headers:
+            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
+        styles = {"all-axes": "green", "without-yaw": "yellow", "no": "red"}
+        for case, row in zip(cert.cases, rows):
+            table.add_row(*row, style=styles[case.hover])
+        console.print(table)
+        if json_path is not None:
+            write_text(json_path, text)
+    failing = cert.failing(required)
+    if failing:
+        listed = "; ".join(rotor_labels(c.failed) for c in failing)
+        click.echo(f"certificate: FAILED: --require {required}: cannot hover with rotor(s) {listed} failed", err=True)
+        sys.exit(3)
+    if required != "none" and json_path != "-":
+        console.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
 
 
 def _raise_terminated(signum: int, frame: Any) -> None:

@@ -27,8 +27,8 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, count, flag, float_array
-from ._typing import AcaiFormula, HoverPoint
+from ._convert import FloatArray, control_axes, count, flag, float_array
+from ._typing import AcaiFormula, ControlAxes, HoverPoint
 from .airframe import Airframe, require_airframe, rotor_labels
 
 #: Tolerances of the core (see ``crates/rfcore/src/acai.rs``): rank decisions are relative to
@@ -104,6 +104,7 @@ def acai(
     *,
     give_up_yaw: bool = False,
     formula: AcaiFormula = "eq13",
+    axes: ControlAxes | None = None,
 ) -> AcaiValue:
     """ACAI of ``airframe`` with rotor ``efficiency`` (Du's eta_i; default: the airframe's own), in
     N / N m like the paper, as an :class:`AcaiValue` (a float with ``.hover``).
@@ -115,8 +116,8 @@ def acai(
     """
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
-    drop_yaw = flag("give_up_yaw", give_up_yaw)
-    return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, drop_yaw, _formula(formula)))
+    names = control_axes(give_up_yaw, axes)
+    return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, names, _formula(formula)))
 
 
 @overload
@@ -126,6 +127,7 @@ def acai_batch(
     *,
     give_up_yaw: bool = ...,
     formula: AcaiFormula = ...,
+    axes: ControlAxes | None = ...,
     with_hover: Literal[False] = ...,
 ) -> FloatArray: ...
 @overload
@@ -135,6 +137,7 @@ def acai_batch(
     *,
     give_up_yaw: bool = ...,
     formula: AcaiFormula = ...,
+    axes: ControlAxes | None = ...,
     with_hover: Literal[True],
 ) -> AcaiBatch: ...
 def acai_batch(
@@ -144,6 +147,7 @@ def acai_batch(
     give_up_yaw: bool = False,
     formula: AcaiFormula = "eq13",
     with_hover: bool = False,
+    axes: ControlAxes | None = None,
 ) -> FloatArray | AcaiBatch:
     """ACAI for every row of ``efficiencies`` (N x m), computed in parallel without the GIL: the
     bare values, or with ``with_hover=True`` an :class:`AcaiBatch` that also says where the hover
@@ -153,11 +157,11 @@ def acai_batch(
     do not modify it from another thread during the call."""
     airframe = require_airframe(airframe)
     rows = float_array("efficiencies", efficiencies, 2)
-    drop_yaw = flag("give_up_yaw", give_up_yaw)
+    names = control_axes(give_up_yaw, axes)
     if flag("with_hover", with_hover):
-        core = _rfcore.acai_batch_with_hover(airframe._core, rows, drop_yaw, _formula(formula))
+        core = _rfcore.acai_batch_with_hover(airframe._core, rows, names, _formula(formula))
         return AcaiBatch(core.acai, core.hover_code)
-    return _rfcore.acai_batch(airframe._core, rows, drop_yaw, _formula(formula))
+    return _rfcore.acai_batch(airframe._core, rows, names, _formula(formula))
 
 
 def acai_from_matrix(
@@ -205,9 +209,15 @@ class ControllabilityReport:
     controllable: bool
     #: Where the hover wrench lies; ``"outside"`` with ``acai == 0`` marks eq. (13)'s misleading 0.
     hover: HoverPoint = "inside"
+    #: Which axes were tested (``"wrench"``: force and torque, n = 6).
+    axes: ControlAxes = "thrust-roll-pitch-yaw"
 
     def __str__(self) -> str:
-        axes = "thrust, roll, pitch" if self.give_up_yaw else "thrust, roll, pitch, yaw"
+        axes = {
+            "thrust-roll-pitch": "thrust, roll, pitch",
+            "thrust-roll-pitch-yaw": "thrust, roll, pitch, yaw",
+            "wrench": "force and torque (6-D wrench)",
+        }[self.axes]
         acai = "undefined (-inf)" if math.isinf(self.acai) else format_acai(self.acai, self.hover)
         if acai.endswith("*"):
             acai += " (eq. (13) prints 0 although the hover wrench lies outside the attainable set)"
@@ -229,17 +239,19 @@ def controllability(
     *,
     give_up_yaw: bool = False,
     formula: AcaiFormula = "eq13",
+    axes: ControlAxes | None = None,
 ) -> ControllabilityReport:
     """Runs Du's Section IV.B procedure for ``airframe`` with rotor ``efficiency`` (default: the
     airframe's own)."""
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
-    give_up_yaw = flag("give_up_yaw", give_up_yaw)
-    core = _rfcore.controllability(airframe._core, eff, give_up_yaw, _formula(formula))
+    names = control_axes(give_up_yaw, axes)
+    core = _rfcore.controllability(airframe._core, eff, names, _formula(formula))
     return ControllabilityReport(
         airframe=airframe.name,
         efficiency=tuple(float(e) for e in eff),
-        give_up_yaw=give_up_yaw,
+        give_up_yaw=names == "thrust-roll-pitch",
+        axes=cast(ControlAxes, names),
         state_dimension=core.state_dimension,
         controllability_rank=core.controllability_rank,
         virtual_control_dimension=core.virtual_control_dimension,
@@ -269,6 +281,10 @@ class FailureCase:
     #: Where the hover wrench lies, with and without yaw (see :class:`AcaiValue`).
     hover: HoverPoint = "inside"
     hover_without_yaw: HoverPoint = "inside"
+    #: The full-wrench (n = 6) test, for fully actuated airframes only (else None).
+    acai_wrench: float | None = None
+    controllable_wrench: bool | None = None
+    hover_wrench: HoverPoint | None = None
 
 
 _COLUMNS = (
@@ -356,6 +372,13 @@ class FailureTable(Sequence[FailureCase]):
             ]
             for row in self._cases
         ]
+        if self._cases and self._cases[0].acai_wrench is not None:
+            headers += ["ACAI 6-D", "ok 6-D"]
+            for cells, row in zip(rows, self._cases):
+                cells += [
+                    format_acai(float(row.acai_wrench or 0.0), row.hover_wrench or "inside"),
+                    "yes" if row.controllable_wrench else "no",
+                ]
         return headers, rows
 
     def __str__(self) -> str:
@@ -397,7 +420,10 @@ def failure_table(
             verdict_without_yaw=no_yaw.verdict,
             hover=cast(HoverPoint, full.hover),
             hover_without_yaw=cast(HoverPoint, no_yaw.hover),
+            acai_wrench=None if wrench is None else wrench.acai,
+            controllable_wrench=None if wrench is None else wrench.controllable,
+            hover_wrench=None if wrench is None else cast(HoverPoint, wrench.hover),
         )
-        for failed, full, no_yaw in _rfcore.failure_table(airframe._core, max_failed, formula_name)
+        for failed, full, no_yaw, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]
     return FailureTable(airframe, max_failed, cases)

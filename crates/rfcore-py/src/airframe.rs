@@ -1,12 +1,22 @@
 //! Bindings for the airframe: the validated geometry, thrust limits and efficiencies.
 
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::Airframe;
+use rfcore::{Airframe, RotorPlacement};
 
-use crate::convert::{read_only, slice1, to_py_err};
+use crate::convert::{read_only, slice1, slice2, to_py_err};
+
+/// An m x 3 array (read-only) from per-rotor vectors.
+fn rows3<'py>(py: Python<'py>, rows: impl Iterator<Item = [f64; 3]>) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = rows.flatten().collect();
+    let array = Array2::from_shape_vec((flat.len() / 3, 3), flat)
+        .expect("3 columns by construction")
+        .into_pyarray(py);
+    array.readwrite().make_nonwriteable();
+    array
+}
 
 /// A validated multirotor airframe (the Rust side of `rotorfault.Airframe`).
 #[pyclass(name = "Airframe", module = "rotorfault._rfcore", frozen)]
@@ -48,6 +58,45 @@ impl PyAirframe {
         Ok(PyAirframe { inner })
     }
 
+    /// The general form: positions and thrust axes (m x 3, body FRD), per-rotor k_mu optional.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    fn general(
+        name: &str,
+        position_m: PyReadonlyArray2<'_, f64>,
+        thrust_axis: PyReadonlyArray2<'_, f64>,
+        spin_sign: PyReadonlyArray1<'_, f64>,
+        rotor_drag_torque_ratio_m: Option<PyReadonlyArray1<'_, f64>>,
+        max_thrust_n: PyReadonlyArray1<'_, f64>,
+        min_thrust_n: PyReadonlyArray1<'_, f64>,
+        efficiency: PyReadonlyArray1<'_, f64>,
+        mass_kg: f64,
+        inertia_kg_m2: PyReadonlyArray1<'_, f64>,
+        drag_torque_ratio_m: f64,
+        gravity_m_s2: f64,
+    ) -> PyResult<Self> {
+        let k = match &rotor_drag_torque_ratio_m {
+            Some(k) => Some(slice1("rotor_drag_torque_ratio_m", k)?),
+            None => None,
+        };
+        let inner = Airframe::from_general_columns(
+            name,
+            slice2("position_m", &position_m)?,
+            slice2("thrust_axis", &thrust_axis)?,
+            slice1("spin", &spin_sign)?,
+            k,
+            slice1("max_thrust_n", &max_thrust_n)?,
+            slice1("min_thrust_n", &min_thrust_n)?,
+            slice1("efficiency", &efficiency)?,
+            mass_kg,
+            slice1("inertia_kg_m2", &inertia_kg_m2)?,
+            drag_torque_ratio_m,
+            gravity_m_s2,
+        )
+        .map_err(to_py_err)?;
+        Ok(PyAirframe { inner })
+    }
+
     /// Parses a TOML airframe document; `origin` prefixes error messages.
     #[staticmethod]
     fn from_toml_str(text: &str, origin: &str) -> PyResult<Self> {
@@ -74,6 +123,52 @@ impl PyAirframe {
         let (rows, cols) = b.shape();
         let array = Array2::from_shape_fn((rows, cols), |(r, c)| b[(r, c)]);
         Ok(array.into_pyarray(py))
+    }
+
+    /// The 6 x m force/torque matrix (body FRD) with efficiencies applied.
+    fn wrench_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let b = self.inner.wrench_matrix();
+        let (rows, cols) = b.shape();
+        let array = Array2::from_shape_fn((rows, cols), |(r, c)| b[(r, c)]);
+        Ok(array.into_pyarray(py))
+    }
+
+    /// Rotor positions, m x 3, body FRD (planar rotors: `(r cos phi, r sin phi, 0)`).
+    #[getter]
+    fn position_m<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows3(
+            py,
+            self.inner.rotors().iter().map(|r| r.placement.position_m()),
+        )
+    }
+    /// Unit thrust axes, m x 3, body FRD.
+    #[getter]
+    fn thrust_axis<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows3(
+            py,
+            self.inner
+                .rotors()
+                .iter()
+                .map(|r| r.placement.thrust_axis()),
+        )
+    }
+    /// Each rotor's k_mu (its own, else the airframe's), m.
+    #[getter]
+    fn rotor_drag_torque_ratio_m<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        read_only(
+            py,
+            (0..self.inner.rotor_count())
+                .map(|i| self.inner.rotor_drag_torque_ratio_m(i))
+                .collect(),
+        )
+    }
+    #[getter]
+    fn is_planar(&self) -> bool {
+        self.inner.is_planar()
+    }
+    #[getter]
+    fn is_fully_actuated(&self) -> bool {
+        rfcore::analysis::is_fully_actuated(&self.inner)
     }
 
     #[getter]
@@ -111,7 +206,13 @@ impl PyAirframe {
             self.inner
                 .rotors()
                 .iter()
-                .map(|r| r.arm_angle_rad)
+                .map(|r| {
+                    let [x, y, _] = r.placement.position_m();
+                    match r.placement {
+                        RotorPlacement::Planar { arm_angle_rad, .. } => arm_angle_rad,
+                        RotorPlacement::General { .. } => y.atan2(x),
+                    }
+                })
                 .collect(),
         )
     }
@@ -119,7 +220,16 @@ impl PyAirframe {
     fn arm_length_m<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         read_only(
             py,
-            self.inner.rotors().iter().map(|r| r.arm_length_m).collect(),
+            self.inner
+                .rotors()
+                .iter()
+                .map(|r| match r.placement {
+                    RotorPlacement::Planar { arm_length_m, .. } => arm_length_m,
+                    RotorPlacement::General { position_m, .. } => {
+                        position_m[0].hypot(position_m[1])
+                    }
+                })
+                .collect(),
         )
     }
     #[getter]

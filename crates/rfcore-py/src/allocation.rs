@@ -240,13 +240,13 @@ pub fn max_along_direction<'py>(
 pub fn hover_thrust_margin<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
-    give_up_yaw: bool,
+    axes: &str,
     tolerance: f64,
 ) -> PyResult<PyHoverMargin> {
     let settings = ClarabelSettings::default()
         .tolerance(tolerance)
         .map_err(to_py_err)?;
-    let axes = ControlAxes::from_give_up_yaw(give_up_yaw);
+    let axes = ControlAxes::parse("axes", axes).map_err(to_py_err)?;
     let airframe = &airframe.inner;
     let h = detached(py, || core_hover_margin(airframe, axes, &settings))?;
     Ok(PyHoverMargin {

@@ -13,8 +13,9 @@ use rfcore::analysis::{
 use crate::airframe::PyAirframe;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 
-fn analysis(airframe: &PyAirframe, give_up_yaw: bool) -> rfcore::Result<ControllabilityAnalysis> {
-    ControllabilityAnalysis::new(&airframe.inner, ControlAxes::from_give_up_yaw(give_up_yaw))
+/// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
+fn analysis(airframe: &PyAirframe, axes: &str) -> rfcore::Result<ControllabilityAnalysis> {
+    ControllabilityAnalysis::new(&airframe.inner, ControlAxes::parse("axes", axes)?)
 }
 
 /// One controllability report (Du's procedure) as a named result.
@@ -112,13 +113,13 @@ pub(crate) fn acai(
     py: Python<'_>,
     airframe: &PyAirframe,
     efficiency: PyReadonlyArray1<'_, f64>,
-    give_up_yaw: bool,
+    axes: &str,
     formula: &str,
 ) -> PyResult<PyAcaiResult> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     let inner = detached(py, || {
-        analysis(airframe, give_up_yaw)?.acai_with_hover(efficiency, formula)
+        analysis(airframe, axes)?.acai_with_hover(efficiency, formula)
     })?;
     Ok(PyAcaiResult { inner })
 }
@@ -140,14 +141,14 @@ pub(crate) fn acai_batch_with_hover(
     py: Python<'_>,
     airframe: &PyAirframe,
     efficiencies: PyReadonlyArray2<'_, f64>,
-    give_up_yaw: bool,
+    axes: &str,
     formula: &str,
 ) -> PyResult<PyAcaiBatch> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     check_columns(airframe, &efficiencies)?;
     let flat = slice2("efficiencies", &efficiencies)?;
     let inner = detached(py, || {
-        analysis(airframe, give_up_yaw)?.acai_batch_with_hover(flat, formula)
+        analysis(airframe, axes)?.acai_batch_with_hover(flat, formula)
     })?;
     Ok(PyAcaiBatch { inner })
 }
@@ -158,15 +159,13 @@ pub(crate) fn acai_batch<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     efficiencies: PyReadonlyArray2<'py, f64>,
-    give_up_yaw: bool,
+    axes: &str,
     formula: &str,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     check_columns(airframe, &efficiencies)?;
     let flat = slice2("efficiencies", &efficiencies)?;
-    let values = detached(py, || {
-        analysis(airframe, give_up_yaw)?.acai_batch(flat, formula)
-    })?;
+    let values = detached(py, || analysis(airframe, axes)?.acai_batch(flat, formula))?;
     Ok(values.into_pyarray(py))
 }
 
@@ -202,19 +201,22 @@ pub(crate) fn controllability<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     efficiency: PyReadonlyArray1<'py, f64>,
-    give_up_yaw: bool,
+    axes: &str,
     formula: &str,
 ) -> PyResult<PyControllabilityReport> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let result = detached(py, || {
-        analysis(airframe, give_up_yaw)?.report(efficiency, formula)
-    })?;
+    let result = detached(py, || analysis(airframe, axes)?.report(efficiency, formula))?;
     Ok(report(result))
 }
 
 /// One failure-table row: failed rotors (0-based), report with yaw, report without yaw.
-type FailureRow = (Vec<usize>, PyControllabilityReport, PyControllabilityReport);
+type FailureRow = (
+    Vec<usize>,
+    PyControllabilityReport,
+    PyControllabilityReport,
+    Option<PyControllabilityReport>,
+);
 
 /// Every combination of up to `max_failed` failed rotors.
 #[pyfunction]
@@ -230,7 +232,14 @@ pub(crate) fn failure_table<'py>(
     })?;
     Ok(cases
         .into_iter()
-        .map(|case| (case.failed, report(case.with_yaw), report(case.without_yaw)))
+        .map(|case| {
+            (
+                case.failed,
+                report(case.with_yaw),
+                report(case.without_yaw),
+                case.wrench.map(report),
+            )
+        })
         .collect())
 }
 

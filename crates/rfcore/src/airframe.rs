@@ -70,12 +70,67 @@ impl SpinDirection {
     }
 }
 
+/// Where a rotor sits and where it pushes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RotorPlacement {
+    /// The short form: in the body x-y plane at `arm_angle_rad` (from body x towards body y) and
+    /// `arm_length_m` from the centre of mass, thrust along body -z (up). Its columns are
+    /// computed by Du's eq. (5) exactly as before the general form existed.
+    Planar {
+        arm_angle_rad: f64,
+        arm_length_m: f64,
+    },
+    /// PX4's form: position (body FRD, m, from the centre of mass) and the unit thrust axis
+    /// (body FRD; `[0, 0, -1]` is straight up).
+    General {
+        position_m: [f64; 3],
+        thrust_axis: [f64; 3],
+    },
+}
+
+/// How far a thrust axis may be from unit length (written with 7 significant digits it passes).
+pub const THRUST_AXIS_TOLERANCE: f64 = 1e-6;
+/// Two rotors closer than this (m), with the same axis and spin, are the same rotor twice.
+pub const COINCIDENT_ROTOR_M: f64 = 1e-9;
+
+impl RotorPlacement {
+    /// Body FRD position, m.
+    pub fn position_m(&self) -> [f64; 3] {
+        match *self {
+            RotorPlacement::Planar {
+                arm_angle_rad,
+                arm_length_m,
+            } => [
+                arm_length_m * arm_angle_rad.cos(),
+                arm_length_m * arm_angle_rad.sin(),
+                0.0,
+            ],
+            RotorPlacement::General { position_m, .. } => position_m,
+        }
+    }
+
+    /// Body FRD unit thrust direction.
+    pub fn thrust_axis(&self) -> [f64; 3] {
+        match *self {
+            RotorPlacement::Planar { .. } => [0.0, 0.0, -1.0],
+            RotorPlacement::General { thrust_axis, .. } => thrust_axis,
+        }
+    }
+
+    /// Thrust along body -z exactly (what the simulator's rotor model assumes).
+    pub fn is_vertical(&self) -> bool {
+        self.thrust_axis() == [0.0, 0.0, -1.0]
+    }
+}
+
 /// One rotor. Thrusts in newtons, angles in radians, lengths in metres.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rotor {
-    pub arm_angle_rad: f64,
-    pub arm_length_m: f64,
+    pub placement: RotorPlacement,
+    /// Seen from the side the thrust points to ("from above" for an upright rotor).
     pub spin: SpinDirection,
+    /// This rotor's k_mu (m, >= 0); `None`: the airframe's `drag_torque_ratio_m`.
+    pub drag_torque_ratio_m: Option<f64>,
     pub max_thrust_n: f64,
     /// May be negative (a variable-pitch rotor can push down).
     pub min_thrust_n: f64,
@@ -116,6 +171,7 @@ impl Airframe {
         for (i, rotor) in rotors.iter().enumerate() {
             validate_rotor(rotor, i)?;
         }
+        check_coincident(&rotors)?;
         require_finite("mass_kg", mass_kg)?;
         if mass_kg <= 0.0 {
             return Err(RfError::invalid(
@@ -195,9 +251,81 @@ impl Airframe {
         let mut rotors = Vec::with_capacity(m);
         for i in 0..m {
             rotors.push(Rotor {
-                arm_angle_rad: arm_angle_rad[i],
-                arm_length_m: arm_length_m[i],
+                placement: RotorPlacement::Planar {
+                    arm_angle_rad: arm_angle_rad[i],
+                    arm_length_m: arm_length_m[i],
+                },
                 spin: SpinDirection::from_yaw_sign(&rotor_field("spin", i), spin_sign[i])?,
+                drag_torque_ratio_m: None,
+                max_thrust_n: max_thrust_n[i],
+                min_thrust_n: min_thrust_n[i],
+                efficiency: efficiency[i],
+            });
+        }
+        Airframe::new(
+            name,
+            rotors,
+            mass_kg,
+            [inertia_kg_m2[0], inertia_kg_m2[1], inertia_kg_m2[2]],
+            drag_torque_ratio_m,
+            gravity_m_s2,
+        )
+    }
+
+    /// Builds an airframe from PX4-style per-rotor geometry: `position_m` and `thrust_axis` are
+    /// row-major m x 3 (body FRD), `rotor_drag_torque_ratio_m` holds each rotor's k_mu (`None`:
+    /// the airframe's `drag_torque_ratio_m` for every rotor).
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_general_columns(
+        name: impl Into<String>,
+        position_m: &[f64],
+        thrust_axis: &[f64],
+        spin_sign: &[f64],
+        rotor_drag_torque_ratio_m: Option<&[f64]>,
+        max_thrust_n: &[f64],
+        min_thrust_n: &[f64],
+        efficiency: &[f64],
+        mass_kg: f64,
+        inertia_kg_m2: &[f64],
+        drag_torque_ratio_m: f64,
+        gravity_m_s2: f64,
+    ) -> Result<Self> {
+        let m = spin_sign.len();
+        if m == 0 {
+            return Err(RfError::invalid("spin", "at least one rotor is required"));
+        }
+        for (field, values) in [("position_m", position_m), ("thrust_axis", thrust_axis)] {
+            if values.len() != 3 * m {
+                return Err(RfError::shape(
+                    field,
+                    format!("{m} x 3 (one row per rotor)"),
+                    format!("{} values", values.len()),
+                ));
+            }
+        }
+        if let Some(k) = rotor_drag_torque_ratio_m {
+            require_len("rotor_drag_torque_ratio_m", k, m)?;
+        }
+        require_len("max_thrust_n", max_thrust_n, m)?;
+        require_len("min_thrust_n", min_thrust_n, m)?;
+        require_len("efficiency", efficiency, m)?;
+        if inertia_kg_m2.len() != 3 {
+            return Err(RfError::shape(
+                "inertia_kg_m2",
+                "3 entries (Jx, Jy, Jz)",
+                format!("{}", inertia_kg_m2.len()),
+            ));
+        }
+        let row = |v: &[f64], i: usize| [v[3 * i], v[3 * i + 1], v[3 * i + 2]];
+        let mut rotors = Vec::with_capacity(m);
+        for i in 0..m {
+            rotors.push(Rotor {
+                placement: RotorPlacement::General {
+                    position_m: row(position_m, i),
+                    thrust_axis: row(thrust_axis, i),
+                },
+                spin: SpinDirection::from_yaw_sign(&rotor_field("spin", i), spin_sign[i])?,
+                drag_torque_ratio_m: rotor_drag_torque_ratio_m.map(|k| k[i]),
                 max_thrust_n: max_thrust_n[i],
                 min_thrust_n: min_thrust_n[i],
                 efficiency: efficiency[i],
@@ -225,21 +353,49 @@ impl Airframe {
         let mut rotors = Vec::with_capacity(raw.rotor.len());
         for (i, r) in raw.rotor.iter().enumerate() {
             let where_ = format!("[[rotor]] number {}", i + 1);
-            let arm_angle_rad = match (r.arm_angle_deg, r.arm_angle_rad) {
-                (Some(deg), None) => deg.to_radians(),
-                (None, Some(rad)) => rad,
+            let planar =
+                r.arm_angle_deg.is_some() || r.arm_angle_rad.is_some() || r.arm_length_m.is_some();
+            let general = r.position_m.is_some() || r.thrust_axis.is_some();
+            let placement = match (planar, general) {
+                (true, false) => {
+                    let arm_angle_rad = match (r.arm_angle_deg, r.arm_angle_rad) {
+                        (Some(deg), None) => deg.to_radians(),
+                        (None, Some(rad)) => rad,
+                        _ => {
+                            return Err(parse_error(format!(
+                                "{where_}: give exactly one of arm_angle_deg or arm_angle_rad"
+                            )))
+                        }
+                    };
+                    let arm_length_m = r.arm_length_m.ok_or_else(|| {
+                        parse_error(format!(
+                            "{where_}: arm_length_m is required with an arm angle"
+                        ))
+                    })?;
+                    RotorPlacement::Planar {
+                        arm_angle_rad,
+                        arm_length_m,
+                    }
+                }
+                (false, true) => RotorPlacement::General {
+                    position_m: r.position_m.ok_or_else(|| {
+                        parse_error(format!("{where_}: position_m is required with thrust_axis"))
+                    })?,
+                    thrust_axis: r.thrust_axis.unwrap_or([0.0, 0.0, -1.0]),
+                },
                 _ => {
                     return Err(parse_error(format!(
-                        "{where_}: give exactly one of arm_angle_deg or arm_angle_rad"
+                        "{where_}: give either the planar form (arm_angle_deg or arm_angle_rad, \
+                         arm_length_m) or the general form (position_m, thrust_axis), not both"
                     )))
                 }
             };
             let spin = SpinDirection::parse(&format!("{where_}.spin"), &r.spin)
                 .map_err(|e| parse_error(e.to_string()))?;
             rotors.push(Rotor {
-                arm_angle_rad,
-                arm_length_m: r.arm_length_m,
+                placement,
                 spin,
+                drag_torque_ratio_m: r.drag_torque_ratio_m,
                 max_thrust_n: r.max_thrust_n,
                 min_thrust_n: r.min_thrust_n,
                 efficiency: r.efficiency,
@@ -312,17 +468,105 @@ impl Airframe {
 
     /// The contribution vectors b̄_i of Du eq. (4)-(5) without efficiencies: a 4 x m matrix with
     /// rows thrust T (N per N), roll L and pitch M (m), yaw N (m).
+    /// A general rotor contributes its upward force `-a_z` and the torques of
+    /// [`Airframe::nominal_wrench_matrix`]; lateral force is not one of these axes.
     pub fn nominal_effectiveness_matrix(&self) -> DMatrix<f64> {
         let k_mu = self.drag_torque_ratio_m;
         DMatrix::from_fn(4, self.rotor_count(), |row, i| {
             let r = &self.rotors[i];
-            match row {
-                0 => 1.0,
-                1 => -r.arm_length_m * r.arm_angle_rad.sin(),
-                2 => r.arm_length_m * r.arm_angle_rad.cos(),
-                _ => r.spin.yaw_sign() * k_mu,
+            match r.placement {
+                // Du's eq. (5) verbatim, so planar airframes give today's bits.
+                RotorPlacement::Planar {
+                    arm_angle_rad,
+                    arm_length_m,
+                } => match row {
+                    0 => 1.0,
+                    1 => -arm_length_m * arm_angle_rad.sin(),
+                    2 => arm_length_m * arm_angle_rad.cos(),
+                    _ => r.spin.yaw_sign() * r.drag_torque_ratio_m.unwrap_or(k_mu),
+                },
+                RotorPlacement::General { .. } => {
+                    let column = self.wrench_column(i);
+                    if row == 0 {
+                        -column[2]
+                    } else {
+                        column[2 + row]
+                    }
+                }
             }
         })
+    }
+
+    /// Rotor i's k_mu (m): its own, else the airframe's.
+    pub fn rotor_drag_torque_ratio_m(&self, i: usize) -> f64 {
+        self.rotors[i]
+            .drag_torque_ratio_m
+            .unwrap_or(self.drag_torque_ratio_m)
+    }
+
+    /// Force and torque per newton of rotor i's thrust, body FRD: `[a; p x a - w k_mu a]` with `a`
+    /// the thrust axis, `p` the position and `w` the spin sign (+1 anticlockwise seen from the
+    /// side the thrust points to). For a planar rotor, `a = (0, 0, -1)` and the torque is Du's
+    /// `(-r sin(phi), r cos(phi), w k_mu)` (PX4's `p x a - KM a` with `KM = w k_mu`).
+    fn wrench_column(&self, i: usize) -> [f64; 6] {
+        let r = &self.rotors[i];
+        let k = r.spin.yaw_sign() * self.rotor_drag_torque_ratio_m(i);
+        match r.placement {
+            RotorPlacement::Planar {
+                arm_angle_rad,
+                arm_length_m,
+            } => [
+                0.0,
+                0.0,
+                -1.0,
+                -arm_length_m * arm_angle_rad.sin(),
+                arm_length_m * arm_angle_rad.cos(),
+                k,
+            ],
+            RotorPlacement::General {
+                position_m: p,
+                thrust_axis: a,
+            } => [
+                a[0],
+                a[1],
+                a[2],
+                p[1] * a[2] - p[2] * a[1] - k * a[0],
+                p[2] * a[0] - p[0] * a[2] - k * a[1],
+                p[0] * a[1] - p[1] * a[0] - k * a[2],
+            ],
+        }
+    }
+
+    /// The full 6 x m effectiveness matrix without efficiencies: rows force `(F_x, F_y, F_z)` (N
+    /// per N) and torque `(L, M, N)` (N m per N), body FRD. Hovering needs
+    /// [`Airframe::hover_wrench_6d`].
+    pub fn nominal_wrench_matrix(&self) -> DMatrix<f64> {
+        let columns: Vec<[f64; 6]> = (0..self.rotor_count())
+            .map(|i| self.wrench_column(i))
+            .collect();
+        DMatrix::from_fn(6, self.rotor_count(), |row, i| columns[i][row])
+    }
+
+    /// [`Airframe::nominal_wrench_matrix`] with column i scaled by eta_i.
+    pub fn wrench_matrix(&self) -> DMatrix<f64> {
+        let mut b = self.nominal_wrench_matrix();
+        for (i, rotor) in self.rotors.iter().enumerate() {
+            b.column_mut(i).scale_mut(rotor.efficiency);
+        }
+        b
+    }
+
+    /// The force and torque the rotors must supply to hover level, body FRD:
+    /// `[0, 0, -m g, 0, 0, 0]` (thrust up is -z).
+    pub fn hover_wrench_6d(&self) -> [f64; 6] {
+        [0.0, 0.0, -self.mass_kg * self.gravity_m_s2, 0.0, 0.0, 0.0]
+    }
+
+    /// Every rotor in the x-y plane form (what the short TOML form writes).
+    pub fn is_planar(&self) -> bool {
+        self.rotors
+            .iter()
+            .all(|r| matches!(r.placement, RotorPlacement::Planar { .. }))
     }
 
     /// The airframe in the TOML schema of the presets. Floats are written in shortest round-trip
@@ -340,15 +584,28 @@ impl Airframe {
             self.mass_kg, self.gravity_m_s2, self.drag_torque_ratio_m
         );
         for r in &self.rotors {
+            out += "\n[[rotor]]\n";
+            out += &match r.placement {
+                RotorPlacement::Planar {
+                    arm_angle_rad,
+                    arm_length_m,
+                } => {
+                    format!("arm_angle_rad = {arm_angle_rad:?}\narm_length_m = {arm_length_m:?}\n")
+                }
+                RotorPlacement::General {
+                    position_m: [x, y, z],
+                    thrust_axis: [ax, ay, az],
+                } => format!(
+                    "position_m = [{x:?}, {y:?}, {z:?}]\nthrust_axis = [{ax:?}, {ay:?}, {az:?}]\n"
+                ),
+            };
+            out += &format!("spin = \"{}\"\n", r.spin.short_name());
+            if let Some(k) = r.drag_torque_ratio_m {
+                out += &format!("drag_torque_ratio_m = {k:?}\n");
+            }
             out += &format!(
-                "\n[[rotor]]\narm_angle_rad = {:?}\narm_length_m = {:?}\nspin = \"{}\"\n\
-                 max_thrust_n = {:?}\nmin_thrust_n = {:?}\nefficiency = {:?}\n",
-                r.arm_angle_rad,
-                r.arm_length_m,
-                r.spin.short_name(),
-                r.max_thrust_n,
-                r.min_thrust_n,
-                r.efficiency
+                "max_thrust_n = {:?}\nmin_thrust_n = {:?}\nefficiency = {:?}\n",
+                r.max_thrust_n, r.min_thrust_n, r.efficiency
             );
         }
         out
@@ -365,14 +622,51 @@ impl Airframe {
 }
 
 fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
-    require_finite(&rotor_field("arm_angle_rad", i), r.arm_angle_rad)?;
-    let field = rotor_field("arm_length_m", i);
-    require_finite(&field, r.arm_length_m)?;
-    if r.arm_length_m < 0.0 {
-        return Err(RfError::invalid(
-            field,
-            format!("must be >= 0, got {}", r.arm_length_m),
-        ));
+    match r.placement {
+        RotorPlacement::Planar {
+            arm_angle_rad,
+            arm_length_m,
+        } => {
+            require_finite(&rotor_field("arm_angle_rad", i), arm_angle_rad)?;
+            let field = rotor_field("arm_length_m", i);
+            require_finite(&field, arm_length_m)?;
+            if arm_length_m < 0.0 {
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be >= 0, got {arm_length_m}"),
+                ));
+            }
+        }
+        RotorPlacement::General {
+            position_m,
+            thrust_axis,
+        } => {
+            for (name, v) in [("position_m", position_m), ("thrust_axis", thrust_axis)] {
+                for (c, &x) in v.iter().enumerate() {
+                    require_finite(&format!("{name}[{i}][{c}] (rotor {})", i + 1), x)?;
+                }
+            }
+            let norm = thrust_axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > THRUST_AXIS_TOLERANCE {
+                return Err(RfError::invalid(
+                    rotor_field("thrust_axis", i),
+                    format!(
+                        "must be a unit vector (length 1 within {THRUST_AXIS_TOLERANCE}), got \
+                         length {norm} for {thrust_axis:?}"
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(k) = r.drag_torque_ratio_m {
+        let field = rotor_field("rotor_drag_torque_ratio_m", i);
+        require_finite(&field, k)?;
+        if k < 0.0 {
+            return Err(RfError::invalid(
+                field,
+                format!("must be >= 0 (the spin direction carries the sign), got {k}"),
+            ));
+        }
     }
     require_finite(&rotor_field("max_thrust_n", i), r.max_thrust_n)?;
     let field = rotor_field("min_thrust_n", i);
@@ -393,6 +687,32 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
             field,
             format!("must lie in [0, 1], got {}", r.efficiency),
         ));
+    }
+    Ok(())
+}
+
+/// The same rotor twice (same position within [`COINCIDENT_ROTOR_M`], same axis and spin) is
+/// almost always a copy-paste slip; a coaxial pair spins the other way and passes.
+fn check_coincident(rotors: &[Rotor]) -> Result<()> {
+    for j in 1..rotors.len() {
+        for i in 0..j {
+            let (a, b) = (&rotors[i], &rotors[j]);
+            let (pa, pb) = (a.placement.position_m(), b.placement.position_m());
+            let distance = (0..3).map(|c| (pa[c] - pb[c]).powi(2)).sum::<f64>().sqrt();
+            if distance <= COINCIDENT_ROTOR_M
+                && a.placement.thrust_axis() == b.placement.thrust_axis()
+                && a.spin == b.spin
+            {
+                return Err(RfError::invalid(
+                    rotor_field("position_m", j),
+                    format!(
+                        "rotor {} coincides with rotor {} (same position, thrust axis and spin)",
+                        j + 1,
+                        i + 1
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }
@@ -444,8 +764,11 @@ struct AirframeToml {
 struct RotorToml {
     arm_angle_deg: Option<f64>,
     arm_angle_rad: Option<f64>,
-    arm_length_m: f64,
+    arm_length_m: Option<f64>,
+    position_m: Option<[f64; 3]>,
+    thrust_axis: Option<[f64; 3]>,
     spin: String,
+    drag_torque_ratio_m: Option<f64>,
     max_thrust_n: f64,
     #[serde(default)]
     min_thrust_n: f64,

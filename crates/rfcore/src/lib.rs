@@ -23,5 +23,5 @@ pub mod fixtures;
 pub mod flight;
 pub mod state;
 
-pub use airframe::{Airframe, Rotor, SpinDirection, DEFAULT_GRAVITY_M_S2};
+pub use airframe::{Airframe, Rotor, RotorPlacement, SpinDirection, DEFAULT_GRAVITY_M_S2};
 pub use error::{Result, RfError};

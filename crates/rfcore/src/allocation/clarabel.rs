@@ -405,18 +405,15 @@ pub fn hover_thrust_margin(
     axes: ControlAxes,
     settings: &ClarabelSettings,
 ) -> Result<HoverMargin> {
-    let full = airframe.effectiveness_matrix();
-    let rows = axes.rows();
-    let matrix = DMatrix::from_fn(rows.len(), full.ncols(), |r, c| full[(rows[r], c)]);
-    let mut direction = vec![0.0; rows.len()];
-    direction[0] = 1.0;
+    let matrix = axes.matrix(airframe);
+    let direction = axes.thrust_direction();
     let weight_n = airframe.hover_wrench()[0];
     let limit = max_along_direction(
         &matrix,
         &airframe.min_thrust_n(),
         &airframe.max_thrust_n(),
         &direction,
-        &vec![0.0; rows.len()],
+        &vec![0.0; axes.dimension()],
         settings,
     )?;
     Ok(match limit {

@@ -13,7 +13,7 @@ use crate::airframe::{check_efficiency, Airframe};
 use crate::analysis::acai::{
     scale_free_rank, AcaiBatch, AcaiFormula, AcaiResult, FacetNormals, HoverPoint, RANK_RTOL,
 };
-use crate::error::Result;
+use crate::error::{Result, RfError};
 
 /// Which virtual-control axes must remain controllable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -22,6 +22,9 @@ pub enum ControlAxes {
     ThrustRollPitchYaw,
     /// Thrust, roll and pitch only (yaw given up): n = 3.
     ThrustRollPitch,
+    /// The full wrench, force and torque (F_x, F_y, F_z, L, M, N) in body FRD: n = 6, for
+    /// tilted and fully actuated frames (hover needs zero lateral force as well).
+    Wrench,
 }
 
 impl ControlAxes {
@@ -33,17 +36,90 @@ impl ControlAxes {
         }
     }
 
-    /// Rows of Du's 4 x m B_f that this choice keeps.
-    pub fn rows(self) -> &'static [usize] {
+    /// The kebab-case name (`thrust-roll-pitch-yaw`, `thrust-roll-pitch`, `wrench`).
+    pub fn name(self) -> &'static str {
         match self {
-            ControlAxes::ThrustRollPitchYaw => &[0, 1, 2, 3],
-            ControlAxes::ThrustRollPitch => &[0, 1, 2],
+            ControlAxes::ThrustRollPitchYaw => "thrust-roll-pitch-yaw",
+            ControlAxes::ThrustRollPitch => "thrust-roll-pitch",
+            ControlAxes::Wrench => "wrench",
         }
+    }
+
+    /// Inverse of [`ControlAxes::name`].
+    pub fn parse(field: &str, text: &str) -> Result<Self> {
+        [
+            ControlAxes::ThrustRollPitchYaw,
+            ControlAxes::ThrustRollPitch,
+            ControlAxes::Wrench,
+        ]
+        .into_iter()
+        .find(|a| a.name() == text)
+        .ok_or_else(|| {
+            RfError::invalid(
+                field,
+                format!(
+                    "must be \"thrust-roll-pitch-yaw\", \"thrust-roll-pitch\" or \"wrench\", \
+                     got {text:?}"
+                ),
+            )
+        })
     }
 
     /// Virtual-control dimension n.
     pub fn dimension(self) -> usize {
-        self.rows().len()
+        match self {
+            ControlAxes::ThrustRollPitchYaw => 4,
+            ControlAxes::ThrustRollPitch => 3,
+            ControlAxes::Wrench => 6,
+        }
+    }
+
+    /// The n x m effectiveness matrix of these axes without efficiencies: rows of Du's 4 x m
+    /// B_f, or the 6 x m force/torque matrix.
+    pub fn nominal_matrix(self, airframe: &Airframe) -> DMatrix<f64> {
+        match self {
+            ControlAxes::ThrustRollPitchYaw => airframe.nominal_effectiveness_matrix(),
+            ControlAxes::ThrustRollPitch => airframe.nominal_effectiveness_matrix().remove_row(3),
+            ControlAxes::Wrench => airframe.nominal_wrench_matrix(),
+        }
+    }
+
+    /// The n x m matrix with the airframe's efficiencies applied.
+    pub fn matrix(self, airframe: &Airframe) -> DMatrix<f64> {
+        let mut b = self.nominal_matrix(airframe);
+        for (i, eta) in airframe.efficiency().into_iter().enumerate() {
+            b.column_mut(i).scale_mut(eta);
+        }
+        b
+    }
+
+    /// What hovering level asks of these axes: `[m g, 0, 0(, 0)]`, or `[0, 0, -m g, 0, 0, 0]`.
+    pub fn hover_wrench(self, airframe: &Airframe) -> Vec<f64> {
+        match self {
+            ControlAxes::Wrench => airframe.hover_wrench_6d().to_vec(),
+            _ => airframe.hover_wrench()[..self.dimension()].to_vec(),
+        }
+    }
+
+    /// The unit virtual control of "more thrust" (up): `e_1`, or `-e_3` for the wrench.
+    pub fn thrust_direction(self) -> Vec<f64> {
+        let mut d = vec![0.0; self.dimension()];
+        match self {
+            ControlAxes::Wrench => d[2] = -1.0,
+            _ => d[0] = 1.0,
+        }
+        d
+    }
+
+    /// The diagonal J_f of the hover model: `(-m, Jx, Jy(, Jz))` or `(m, m, m, Jx, Jy, Jz)`.
+    fn generalised_inertia(self, airframe: &Airframe) -> Vec<f64> {
+        let [jx, jy, jz] = airframe.inertia_kg_m2();
+        let m = airframe.mass_kg();
+        match self {
+            ControlAxes::ThrustRollPitchYaw => vec![-m, jx, jy, jz],
+            ControlAxes::ThrustRollPitch => vec![-m, jx, jy],
+            ControlAxes::Wrench => vec![m, m, m, jx, jy, jz],
+        }
     }
 }
 
@@ -115,15 +191,12 @@ pub struct ControllabilityAnalysis {
 
 impl ControllabilityAnalysis {
     pub fn new(airframe: &Airframe, axes: ControlAxes) -> Result<Self> {
-        let full = airframe.nominal_effectiveness_matrix();
-        let rows = axes.rows();
-        let nominal = full.select_rows(rows.iter());
+        let nominal = axes.nominal_matrix(airframe);
         let normals = FacetNormals::new(&nominal)?;
         let (a, b) = hover_model(airframe, axes);
-        let wrench = airframe.hover_wrench();
         let f_min = airframe.min_thrust_n();
         let f_max = airframe.max_thrust_n();
-        let g: Vec<f64> = rows.iter().map(|&r| wrench[r]).collect();
+        let g = axes.hover_wrench(airframe);
         normals.check_bounds_and_g(&f_min, &f_max, &g)?;
         Ok(ControllabilityAnalysis {
             axes,
@@ -225,13 +298,12 @@ impl ControllabilityAnalysis {
 /// Du's hover model (1) restricted to `axes`: `(A, B)` with A (2n x 2n) and B (2n x n).
 pub fn hover_model(airframe: &Airframe, axes: ControlAxes) -> (DMatrix<f64>, DMatrix<f64>) {
     let n = axes.dimension();
-    let [jx, jy, jz] = airframe.inertia_kg_m2();
-    let j_f = [-airframe.mass_kg(), jx, jy, jz];
+    let j_f = axes.generalised_inertia(airframe);
     let mut a = DMatrix::zeros(2 * n, 2 * n);
     let mut b = DMatrix::zeros(2 * n, n);
-    for (i, &row) in axes.rows().iter().enumerate() {
+    for (i, &j) in j_f.iter().enumerate() {
         a[(i, n + i)] = 1.0;
-        b[(n + i, i)] = 1.0 / j_f[row];
+        b[(n + i, i)] = 1.0 / j;
     }
     (a, b)
 }
@@ -272,6 +344,14 @@ pub struct FailureCase {
     pub failed: Vec<usize>,
     pub with_yaw: ControllabilityReport,
     pub without_yaw: ControllabilityReport,
+    /// The full-wrench test (n = 6), for fully actuated airframes only (nominal 6 x m matrix of
+    /// rank 6); `None` for the others, where it would always read rank deficient.
+    pub wrench: Option<ControllabilityReport>,
+}
+
+/// A fully actuated airframe: its nominal 6 x m force/torque matrix has rank 6 (scale-free).
+pub fn is_fully_actuated(airframe: &Airframe) -> bool {
+    airframe.rotor_count() >= 6 && scale_free_rank(&airframe.nominal_wrench_matrix()) == 6
 }
 
 /// Largest number of failure combinations [`failure_table`] enumerates (each becomes a Python
@@ -305,6 +385,11 @@ pub fn failure_table(
     }
     let with_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
     let without_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
+    let wrench = if is_fully_actuated(airframe) {
+        Some(ControllabilityAnalysis::new(airframe, ControlAxes::Wrench)?)
+    } else {
+        None
+    };
     let base = airframe.efficiency();
     let sets: Vec<Vec<usize>> = (0..=max_failed)
         .flat_map(|k| Combinations::new(m, k))
@@ -318,6 +403,10 @@ pub fn failure_table(
             Ok(FailureCase {
                 with_yaw: with_yaw.report(&eta, formula)?,
                 without_yaw: without_yaw.report(&eta, formula)?,
+                wrench: match &wrench {
+                    Some(analysis) => Some(analysis.report(&eta, formula)?),
+                    None => None,
+                },
                 failed,
             })
         })

@@ -11,6 +11,6 @@ pub use acai::{
     AcaiBatch, AcaiFormula, AcaiResult, AcaiValues, FacetNormals, HoverPoint, RANK_RTOL, ZERO_RTOL,
 };
 pub use controllability::{
-    failure_table, ControlAxes, ControllabilityAnalysis, ControllabilityReport, FailureCase,
-    Verdict,
+    failure_table, is_fully_actuated, ControlAxes, ControllabilityAnalysis, ControllabilityReport,
+    FailureCase, Verdict,
 };

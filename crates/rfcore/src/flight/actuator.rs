@@ -185,7 +185,6 @@ impl FixedPitch {
                 ),
             ));
         }
-        let k_mu = airframe.drag_torque_ratio_m();
         let yaw_sign: Vec<f64> = airframe
             .rotors()
             .iter()
@@ -194,7 +193,11 @@ impl FixedPitch {
         Ok(FixedPitch {
             min_thrust_n: airframe.min_thrust_n(),
             max_thrust_n: airframe.max_thrust_n(),
-            torque_per_thrust_m: yaw_sign.iter().map(|w| w * k_mu).collect(),
+            torque_per_thrust_m: yaw_sign
+                .iter()
+                .enumerate()
+                .map(|(i, w)| w * airframe.rotor_drag_torque_ratio_m(i))
+                .collect(),
             yaw_sign,
             thrust_coefficient_n_s2,
             lag,

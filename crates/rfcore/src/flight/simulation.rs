@@ -602,7 +602,7 @@ fn check_step_size(
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     vehicle: &Vehicle,
-    mut actuators: Actuators,
+    actuators: Actuators,
     controller: &mut dyn Controller,
     initial_efficiency: &[f64],
     faults: &[RotorFault],

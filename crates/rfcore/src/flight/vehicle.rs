@@ -10,7 +10,7 @@
 use nalgebra::Vector3;
 
 use crate::airframe::Airframe;
-use crate::error::{require_non_negative, Result};
+use crate::error::{require_non_negative, Result, RfError};
 use crate::flight::actuator::RotorOutput;
 use crate::flight::rigid_body::{RigidBody, Wrench};
 use crate::state::RigidBodyState;
@@ -56,16 +56,26 @@ pub struct Vehicle {
 impl Vehicle {
     pub fn new(airframe: &Airframe, aero: Drag) -> Result<Self> {
         aero.check()?;
+        // The rotor model pushes along body -z; a tilted rotor would need lateral forces here.
+        if let Some(i) = airframe
+            .rotors()
+            .iter()
+            .position(|r| !r.placement.is_vertical())
+        {
+            return Err(RfError::invalid(
+                format!("thrust_axis[{i}] (rotor {})", i + 1),
+                "the simulator models upright rotors only (thrust axis [0, 0, -1]); \
+                 tilted rotors are analysed (acai, failure tables, allocation) but not flown",
+            ));
+        }
         Ok(Vehicle {
             body: RigidBody::principal(airframe.mass_kg(), airframe.inertia_kg_m2())?,
             rotor_xy_m: airframe
                 .rotors()
                 .iter()
                 .map(|r| {
-                    (
-                        r.arm_length_m * r.arm_angle_rad.cos(),
-                        r.arm_length_m * r.arm_angle_rad.sin(),
-                    )
+                    let [x, y, _] = r.placement.position_m();
+                    (x, y)
                 })
                 .collect(),
             aero,
