@@ -692,11 +692,18 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
 }
 
 /// The same rotor twice (same position within [`COINCIDENT_ROTOR_M`], same axis and spin) is
-/// almost always a copy-paste slip; a coaxial pair spins the other way and passes.
+/// almost always a copy-paste slip in a general (PX4-style) rotor list; a coaxial pair spins the
+/// other way and passes. Planar rotors (Du's arm angle and length) are exempt: that form accepted
+/// any layout before general rotors existed, and the analysis of two rotors at one place is
+/// well defined (they act as one rotor with the summed box).
 fn check_coincident(rotors: &[Rotor]) -> Result<()> {
+    let general = |r: &Rotor| matches!(r.placement, RotorPlacement::General { .. });
     for j in 1..rotors.len() {
         for i in 0..j {
             let (a, b) = (&rotors[i], &rotors[j]);
+            if !(general(a) || general(b)) {
+                continue;
+            }
             let (pa, pb) = (a.placement.position_m(), b.placement.position_m());
             let distance = (0..3).map(|c| (pa[c] - pb[c]).powi(2)).sum::<f64>().sqrt();
             if distance <= COINCIDENT_ROTOR_M
