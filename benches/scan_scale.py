@@ -6,7 +6,7 @@ Run:  python benches/scan_scale.py [--points N] [--big N]
 Scan: octocopter ``octo-x``, efficiencies of rotors 1..k over a regular grid (the other rotors at
 1), both ACAI formulas, hover code, verdict and rank columns (``rotorfault.scan``).
 
-1. Streaming overhead: ``scan(..., out=dir)`` (chunks of 2^20 points written to Parquet, zstd)
+1. Streaming overhead: ``acai_scan(..., out=dir)`` (chunks of 2^20 points written to Parquet, zstd)
    against the baseline: the same ``acai_batch(..., with_hover=True)`` calls (both formulas) on
    the same points in a loop, results discarded (in memory, nothing written). Target <= 1.15.
 2. Dask: the same streamed scan with ``backend="dask"`` on a ``LocalCluster`` of 2 single-thread
@@ -33,14 +33,14 @@ from pathlib import Path
 import numpy as np
 
 import rotorfault as rf
-from rotorfault.scan import scan
+from rotorfault.scan import acai_scan
 
 PRESET = "octo-x"
 
 
 def grid(points: int) -> dict[str, np.ndarray]:
-    """Axes efficiency_1..8 with about ``points`` points: 8 levels on each of the first k axes
-    and the remainder on the last one."""
+    """Axes efficiency_1..8 with at least ``points`` points: 8 levels in [0.3, 1] on each of the
+    first k axes and enough levels in [0, 1] on the last one."""
     axes: dict[str, np.ndarray] = {}
     remaining = points
     r = 1
@@ -48,7 +48,8 @@ def grid(points: int) -> dict[str, np.ndarray]:
         axes[f"efficiency_{r}"] = np.linspace(0.3, 1.0, 8)
         remaining //= 8
         r += 1
-    axes[f"efficiency_{r}"] = np.linspace(0.0, 1.0, max(remaining, 2))
+    others = int(np.prod([len(v) for v in axes.values()])) if axes else 1
+    axes[f"efficiency_{r}"] = np.linspace(0.0, 1.0, max(-(-points // others), 2))
     return axes
 
 
@@ -73,7 +74,7 @@ def streamed(frame: rf.Airframe, axes: dict[str, np.ndarray], chunk: int, **kwar
     tmp = Path(tempfile.mkdtemp(prefix="scan-bench-"))
     try:
         started = time.perf_counter()
-        scan(frame, axes, out=tmp / "scan.parquet", chunk_points=chunk, progress=False, **kwargs)  # type: ignore[arg-type]
+        acai_scan(frame, axes, out=tmp / "scan.parquet", chunk_points=chunk, progress=False, **kwargs)  # type: ignore[arg-type]
         return time.perf_counter() - started
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -82,7 +83,7 @@ def streamed(frame: rf.Airframe, axes: dict[str, np.ndarray], chunk: int, **kwar
 def big(points: int, out: str) -> None:
     frame = rf.Airframe.preset(PRESET)
     started = time.perf_counter()
-    result = scan(frame, grid(points), out=out, progress=True)
+    result = acai_scan(frame, grid(points), out=out, progress=True)
     seconds = time.perf_counter() - started
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     size = sum(p.stat().st_size for p in Path(out).iterdir())
@@ -115,7 +116,7 @@ def main() -> None:
     # 2. Dask LocalCluster, 2 workers, chunks of 10^6.
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, Client(cluster) as client:
         streamed(frame, grid(2_000_000), 1_000_000, backend="dask", dask=client)  # warm the workers
         local, remote = [], []
         for _ in range(args.rounds):

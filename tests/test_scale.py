@@ -19,7 +19,7 @@ import pytest
 import rotorfault as rf
 from rotorfault import _stream
 from rotorfault.design import design_search, spin_assignments
-from rotorfault.scan import failure_samples, read_scan, scan
+from rotorfault.scan import acai_scan, failure_samples, read_scan
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -36,7 +36,7 @@ def _read_all(path: Path) -> Any:
 
 
 def test_grid_scan_matches_acai_batch_and_verdicts(pnpnpn: rf.Airframe) -> None:
-    result = scan(pnpnpn, _grid(), give_up_yaw=True)
+    result = acai_scan(pnpnpn, _grid(), give_up_yaw=True)
     t = result.table
     assert t.num_rows == 216
     # Row-major, last axis fastest (the layout of efficiency_scan).
@@ -64,7 +64,7 @@ def test_grid_scan_matches_acai_batch_and_verdicts(pnpnpn: rf.Airframe) -> None:
 
 def test_parameter_axes_match_modified_airframes(pnpnpn: rf.Airframe) -> None:
     axes = {"mass_kg": [1.2, 1.535], "drag_torque_ratio_m": [0.05, 0.1], "max_thrust_n": [6.0, 7.0], "arm_length_m": [0.2, 0.275], "efficiency_1": [0.0, 0.5, 1.0]}
-    t = scan(pnpnpn, axes, formulas=("eq13",), chunk_points=7).table
+    t = acai_scan(pnpnpn, axes, formulas=("eq13",), chunk_points=7).table
     assert t.num_rows == 48
     for i in (0, 13, 29, 47):
         row = {k: t[k][i].as_py() for k in axes}
@@ -79,7 +79,7 @@ def test_parameter_axes_match_modified_airframes(pnpnpn: rf.Airframe) -> None:
 
 def test_failure_samples_reproduce_failure_table(pnpnpn: rf.Airframe) -> None:
     octo = rf.Airframe.preset("octo-x")
-    result = scan(octo, samples=failure_samples(8, 4), formulas=("eq13",), give_up_yaw=True, chunk_points=50)
+    result = acai_scan(octo, samples=failure_samples(8, 4), formulas=("eq13",), give_up_yaw=True, chunk_points=50)
     table = rf.failure_table(octo, max_failed=4)
     assert result.table.num_rows == len(table) == 1 + 8 + 28 + 56 + 70
     np.testing.assert_array_equal(result.table["acai_eq13"].to_numpy(), [c.acai for c in table])
@@ -89,8 +89,8 @@ def test_failure_samples_reproduce_failure_table(pnpnpn: rf.Airframe) -> None:
 
 def test_parquet_output_says_what_it_holds_and_reads_back(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     out = tmp_path / "scan.parquet"
-    memory = scan(pnpnpn, _grid()).table
-    result = scan(pnpnpn, _grid(), out=out, chunk_points=50)
+    memory = acai_scan(pnpnpn, _grid()).table
+    result = acai_scan(pnpnpn, _grid(), out=out, chunk_points=50)
     assert result.table is None and result.computed_chunks == 5
     manifest = _stream.read_manifest(out)
     assert manifest["complete"] and manifest["total_rows"] == 216
@@ -110,7 +110,7 @@ def test_parquet_output_says_what_it_holds_and_reads_back(tmp_path: Path, pnpnpn
 def test_fig4_from_parquet_equals_in_memory_plot(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     out = tmp_path / "fig4.parquet"
     levels = np.linspace(0, 1, 11)
-    scan(pnpnpn, {f"efficiency_{r}": levels for r in (1, 2, 5)}, out=out, chunk_points=200)
+    acai_scan(pnpnpn, {f"efficiency_{r}": levels for r in (1, 2, 5)}, out=out, chunk_points=200)
     png = tmp_path / "fig4.png"
     fig = rf.plot_efficiency_scan(str(out), str(png))
     assert png.stat().st_size > 10_000 and len(fig.axes) >= 4
@@ -125,7 +125,7 @@ def test_fig4_from_parquet_equals_in_memory_plot(tmp_path: Path, pnpnpn: rf.Airf
 
 def test_resume_skips_written_chunks_and_writes_no_duplicate(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     out = tmp_path / "scan.parquet"
-    full = scan(pnpnpn, _grid()).table
+    full = acai_scan(pnpnpn, _grid()).table
 
     class Stop(Exception):
         pass
@@ -149,46 +149,46 @@ def test_resume_skips_written_chunks_and_writes_no_duplicate(tmp_path: Path, pnp
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(_stream, "run_chunks", interrupted)
         with pytest.raises(Stop):
-            scan(pnpnpn, _grid(), out=out, chunk_points=40)
+            acai_scan(pnpnpn, _grid(), out=out, chunk_points=40)
     assert task.total == 216
     assert not _stream.read_manifest(out)["complete"]
     present = sorted(p.name for p in out.glob("chunk-*.parquet"))
     assert present == ["chunk-000000000.parquet", "chunk-000000001.parquet"]
     # Without --resume the interrupted output is refused, not extended or overwritten.
     with pytest.raises(ValueError, match="interrupted output of this scan; pass --resume"):
-        scan(pnpnpn, _grid(), out=out, chunk_points=40)
+        acai_scan(pnpnpn, _grid(), out=out, chunk_points=40)
     stamps = {p.name: p.stat().st_mtime_ns for p in out.glob("chunk-*.parquet")}
-    result = scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
+    result = acai_scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
     assert (result.skipped_chunks, result.computed_chunks) == (2, 4)
     for name, stamp in stamps.items():
         assert (out / name).stat().st_mtime_ns == stamp  # not rewritten
     back = _read_all(out)
     assert back.equals(full)  # every row once, in order
     # A complete output resumed again: nothing to do.
-    again = scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
+    again = acai_scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
     assert again.computed_chunks == 0 and _read_all(out).equals(full)
 
 
 def test_mismatched_output_is_refused(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     out = tmp_path / "scan.parquet"
-    scan(pnpnpn, _grid(), out=out, chunk_points=100)
+    acai_scan(pnpnpn, _grid(), out=out, chunk_points=100)
     before = sorted((p.name, p.stat().st_mtime_ns) for p in out.iterdir())
     with pytest.raises(ValueError, match=r"written with other arguments: arguments .*pass --force"):
-        scan(pnpnpn, _grid((1, 2, 4)), out=out, chunk_points=100, resume=True)
+        acai_scan(pnpnpn, _grid((1, 2, 4)), out=out, chunk_points=100, resume=True)
     with pytest.raises(ValueError, match=r"other arguments: chunk_rows \(written 100, asked 50\)"):
-        scan(pnpnpn, _grid(), out=out, chunk_points=50, resume=True)
+        acai_scan(pnpnpn, _grid(), out=out, chunk_points=50, resume=True)
     with pytest.raises(ValueError, match="other arguments"):
-        scan(rf.Airframe.preset("hexa-ppnnpn"), _grid(), out=out, chunk_points=100, resume=True)
+        acai_scan(rf.Airframe.preset("hexa-ppnnpn"), _grid(), out=out, chunk_points=100, resume=True)
     assert sorted((p.name, p.stat().st_mtime_ns) for p in out.iterdir()) == before
     # --force replaces it.
-    result = scan(pnpnpn, _grid((1, 2, 4)), out=out, chunk_points=100, force=True)
+    result = acai_scan(pnpnpn, _grid((1, 2, 4)), out=out, chunk_points=100, force=True)
     assert result.computed_chunks == 3 and read_scan(out).names == ("efficiency_1", "efficiency_2", "efficiency_4")
     # A directory that is not ours is never touched.
     foreign = tmp_path / "foreign"
     foreign.mkdir()
     (foreign / "notes.txt").write_text("mine")
     with pytest.raises(ValueError, match="not a rotorfault output"):
-        scan(pnpnpn, _grid(), out=foreign, force=True)
+        acai_scan(pnpnpn, _grid(), out=foreign, force=True)
     assert (foreign / "notes.txt").read_text() == "mine"
 
 
@@ -206,22 +206,22 @@ def test_write_failure_is_clear_and_completed_chunks_stay_valid(tmp_path: Path, 
 
     monkeypatch.setattr(pq, "write_table", disk_full)
     with pytest.raises(OSError, match=r"writing chunk 2 .* No space left on device \(disk full\); the chunks already written are complete"):
-        scan(pnpnpn, _grid(), out=out, chunk_points=40)
+        acai_scan(pnpnpn, _grid(), out=out, chunk_points=40)
     assert sorted(p.name for p in out.iterdir()) == ["_rotorfault.json", "chunk-000000000.parquet", "chunk-000000001.parquet"]
     for p in out.glob("chunk-*.parquet"):
         assert pq.read_metadata(p).num_rows == 40
     monkeypatch.setattr(pq, "write_table", real_write)
-    scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
-    assert _read_all(out).equals(scan(pnpnpn, _grid()).table)
+    acai_scan(pnpnpn, _grid(), out=out, chunk_points=40, resume=True)
+    assert _read_all(out).equals(acai_scan(pnpnpn, _grid()).table)
 
 
 def test_unwritable_output_checked_before_computing(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     with pytest.raises(ValueError, match="does not exist"):
-        scan(pnpnpn, _grid(), out=tmp_path / "missing" / "scan.parquet")
+        acai_scan(pnpnpn, _grid(), out=tmp_path / "missing" / "scan.parquet")
     blocker = tmp_path / "file"
     blocker.write_text("x")
     with pytest.raises(ValueError, match="exists and is not a directory"):
-        scan(pnpnpn, _grid(), out=blocker)
+        acai_scan(pnpnpn, _grid(), out=blocker)
 
 
 @pytest.mark.parametrize(
@@ -244,7 +244,7 @@ def test_unwritable_output_checked_before_computing(tmp_path: Path, pnpnpn: rf.A
 )
 def test_scan_bad_input(pnpnpn: rf.Airframe, kwargs: dict[str, Any], error: type[Exception], message: str) -> None:
     with pytest.raises(error, match=message):
-        scan(pnpnpn, **kwargs)
+        acai_scan(pnpnpn, **kwargs)
 
 
 # -- Dask -------------------------------------------------------------------------------------------
@@ -253,7 +253,7 @@ def test_scan_bad_input(pnpnpn: rf.Airframe, kwargs: dict[str, Any], error: type
 @pytest.fixture(scope="module")
 def cluster() -> Any:
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as c:
         with distributed.Client(c) as client:
             yield c, client
 
@@ -263,8 +263,8 @@ def test_dask_rows_identical_to_local(tmp_path: Path, pnpnpn: rf.Airframe, clust
     local = tmp_path / "local.parquet"
     remote = tmp_path / "dask.parquet"
     grid = {"drag_torque_ratio_m": [0.08, 0.1], **_grid()}
-    scan(pnpnpn, grid, give_up_yaw=True, out=local, chunk_points=64)
-    result = scan(pnpnpn, grid, give_up_yaw=True, out=remote, chunk_points=64, backend="dask", dask=client)
+    acai_scan(pnpnpn, grid, give_up_yaw=True, out=local, chunk_points=64)
+    result = acai_scan(pnpnpn, grid, give_up_yaw=True, out=remote, chunk_points=64, backend="dask", dask=client)
     assert result.computed_chunks == 7
     assert _read_all(remote).equals(_read_all(local))
     for a, b in zip(sorted(local.glob("chunk-*")), sorted(remote.glob("chunk-*"))):
@@ -320,15 +320,15 @@ def test_killed_worker_chunk_recomputed_and_written_once(tmp_path: Path, pnpnpn:
     assert sorted(p.name for p in out.glob("chunk-*")) == [f"chunk-{k:09d}.parquet" for k in range(12)]
     back = _read_all(out)
     assert back.num_rows == 216
-    expected = scan(pnpnpn, dict(zip(names, [LEVELS] * 3)), formulas=("eq13",)).table
+    expected = acai_scan(pnpnpn, dict(zip(names, [LEVELS] * 3)), formulas=("eq13",)).table
     assert back.equals(expected)
     cloudpickle.unregister_pickle_by_value(me)
 
 
 def test_dask_local_n_address(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     pytest.importorskip("distributed")
-    result = scan(pnpnpn, _grid((1, 2)), backend="dask", dask="local:1", chunk_points=20)
-    assert result.table.equals(scan(pnpnpn, _grid((1, 2))).table)
+    result = acai_scan(pnpnpn, _grid((1, 2)), backend="dask", dask="local:1", chunk_points=20)
+    assert result.table.equals(acai_scan(pnpnpn, _grid((1, 2))).table)
 
 
 # -- design search ------------------------------------------------------------------------------
@@ -368,3 +368,49 @@ def test_design_over_a_parameter_axis() -> None:
     assert result.best(8.0).worst_single >= result.best(6.125).worst_single
     with pytest.raises(ValueError, match="parameter"):
         design_search(octo, parameter="efficiency_1", values=[0.5])
+
+
+# -- command line -------------------------------------------------------------------------------
+
+
+def test_cli_scan_out_resume_refusal_and_plot(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    runner = CliRunner()
+    out = tmp_path / "scan.parquet"
+    png = tmp_path / "fig4.png"
+    args = ["scan", "-a", "hexa-pnpnpn", "--step", "0.1", "--out", str(out), "--chunk-points", "500"]
+    first = runner.invoke(cli, [*args, "--plot", str(png)])
+    assert first.exit_code == 0, first.output
+    assert "1,331 points (3 chunks computed, 0 already written)" in first.output and png.stat().st_size > 10_000
+    again = runner.invoke(cli, args)
+    assert again.exit_code == 1 and "pass --resume" in again.output
+    resumed = runner.invoke(cli, [*args, "--resume"])
+    assert resumed.exit_code == 0 and "(0 chunks computed, 3 already written)" in resumed.output
+    other = runner.invoke(cli, [*args[:-1], "400", "--resume"])
+    assert other.exit_code == 1 and "other arguments: chunk_rows (written 500, asked 400)" in other.output
+    axis = runner.invoke(cli, [*args, "--force", "--axis", "mass_kg=1.2,1.535"])
+    assert axis.exit_code == 0 and "2,662 points" in axis.output
+    assert read_scan(out).names[0] == "mass_kg"
+    no_out = runner.invoke(cli, ["scan", "-a", "hexa-pnpnpn", "--resume"])
+    assert no_out.exit_code == 1 and "need --out" in no_out.output
+
+
+def test_cli_design() -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    result = CliRunner().invoke(cli, ["design", "-a", "hexa-pnpnpn", "--formula", "eq13"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    assert all(len(line) <= 80 for line in lines)
+    assert any(line.startswith("PNPNPN 1.4861 0/6 0.0000") for line in lines)
+    assert "best: PPNPNN, controllable after 4 of 6 single failures" in result.output
+    per_value = CliRunner().invoke(cli, ["design", "-a", "octo-x", "--parameter", "arm_length_m", "--values", "0.2,0.3", "--top", "2"])
+    assert per_value.exit_code == 0, per_value.output
+    # The parameter changes the answer: short arms favour PPNNPPNN, longer ones the alternating frame.
+    assert "best at arm_length_m = 0.2: PPNNPPNN" in per_value.output
+    assert "best at arm_length_m = 0.3: PNPNPNPN" in per_value.output

@@ -246,12 +246,12 @@ def dask_client(dask: Client | str) -> Iterator[Client]:
             workers = 0
         if workers < 1:
             raise ValueError(f"dask: 'local:N' needs a positive worker count N, got {dask!r}")
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, Client(cluster) as client:
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, Client(cluster) as client:  # type: ignore[no-untyped-call]
             yield client
         return
     if "://" not in dask:
         raise ValueError(f"dask: expected a scheduler address like 'tcp://host:8786' or 'local:N', got {dask!r}")
-    with Client(dask) as client:
+    with Client(dask) as client:  # type: ignore[no-untyped-call]
         yield client
 
 
@@ -342,7 +342,9 @@ def run_chunks(
 
     already = sum(spec.rows for spec in specs if spec.index in done)
     with progress_bar(total_rows, description=description, show=progress, default_show=total_rows > 10_000_000, completed=already) as advance:
-        if backend == "local":
+        if not pending:
+            pass  # nothing left (a complete output resumed): no cluster is started
+        elif backend == "local":
             _run_local(task, pending, accept, advance)
         else:
             assert dask is not None
@@ -391,7 +393,7 @@ def _run_dask(client: Client, task: ChunkTask, pending: list[ChunkSpec], accept:
     # rescheduled by Dask itself (up to the scheduler's allowed-failures).
     submitted = [client.submit(task, spec, pure=False, retries=2) for spec in _take(it, in_flight)]
     specs = {future.key: spec for future, spec in zip(submitted, pending)}
-    queue = as_completed(submitted)
+    queue = as_completed(submitted)  # type: ignore[no-untyped-call]
     try:
         for future in queue:
             spec = specs.pop(future.key)
@@ -402,9 +404,9 @@ def _run_dask(client: Client, task: ChunkTask, pending: list[ChunkSpec], accept:
             for nxt in _take(it, 1):
                 new = client.submit(task, nxt, pure=False, retries=2)
                 specs[new.key] = nxt
-                queue.add(new)
+                queue.add(new)  # type: ignore[no-untyped-call]
     except BaseException:
-        client.cancel(list(queue.futures) if hasattr(queue, "futures") else [])
+        client.cancel(list(queue.futures) if hasattr(queue, "futures") else [])  # type: ignore[no-untyped-call]
         raise
 
 

@@ -197,7 +197,7 @@ def _scan_to_parquet(
     airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool,
     out_path: str, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
 ) -> None:
-    from .scan import scan as run_scan
+    from .scan import acai_scan
 
     frame = Airframe.load(airframe)
     swept = parse_rotors("rotors", rotors)
@@ -214,7 +214,7 @@ def _scan_to_parquet(
         axes[f"efficiency_{r}"] = levels
     if plot_path is not None and (len(swept) != 3 or extra_axes):
         raise ValueError("plot: the Fig. 4 plot needs exactly three swept rotors and no --axis")
-    result = run_scan(
+    result = acai_scan(
         frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
         backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=True,
     )
@@ -246,27 +246,16 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
     frame = Airframe.load(airframe)
     numbers = parse_numbers("values", values) if values is not None else None
     result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
-    headers, rows = result.rows_for_display()
-    if top > 0:
-        counts: dict[str, int] = {}
-        kept = []
-        for row in rows:
-            key = row[0] if parameter else ""
-            counts[key] = counts.get(key, 0) + 1
-            if counts[key] <= top:
-                kept.append(row)
-        rows = kept
-    table = Table(title=f"{escape(frame.name)} frame: spin assignments, best first (P: clockwise from above; ACAI {formula})")
-    for h in headers:
-        table.add_column(h)
-    for row in rows:
-        table.add_row(*row)
-    console.print(table)
-    best = result.best(result.designs[0].parameter_value)
-    console.print(
-        f"best: {best.spins} (controllable after {best.controllable_single} of {len(best.single)} single failures, "
-        f"rotors {', '.join(map(str, best.survivable_single)) or 'none'}; worst single-failure ACAI {best.worst_single:.4f})"
-    )
+    if top < 0:
+        raise ValueError(f"top: must be 0 (all) or a positive count, got {top}")
+    click.echo(result.format(top))
+    for value in dict.fromkeys(d.parameter_value for d in result.designs):
+        best = result.best(value)
+        where = "" if value is None else f" at {parameter} = {value:g}"
+        click.echo(
+            f"best{where}: {best.spins}, controllable after {best.controllable_single} of {len(best.single)} single failures\n"
+            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure ACAI {best.worst_single:.4f}"
+        )
 
 
 @cli.command()

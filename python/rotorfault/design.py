@@ -149,7 +149,7 @@ class DesignSearch:
 
     def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
         headers = (["value"] if self.parameter else []) + [
-            "spins", "ACAI", "1 failed ok", "worst 1", "2 failed ok", "worst 2", "no-yaw 1 ok", "no-yaw worst 1", "no-yaw 2 ok", "no-yaw worst 2",
+            "spins", "ACAI", "ok1", "worst1", "ok2", "worst2", "ok1*", "worst1*", "ok2*", "worst2*",
         ]
         rows = []
         for d in self.designs:
@@ -168,17 +168,34 @@ class DesignSearch:
         return headers, rows
 
     def __str__(self) -> str:
+        return self.format()
+
+    def format(self, top: int = 0) -> str:
+        """The ranking as text (80 columns for up to 8 rotors); ``top``: only the best N per
+        parameter value (0: all)."""
         headers, rows = self.rows_for_display()
+        if top > 0:
+            seen: dict[float | None, int] = {}
+            kept = []
+            for d, row in zip(self.designs, rows):
+                seen[d.parameter_value] = seen.get(d.parameter_value, 0) + 1
+                if seen[d.parameter_value] <= top:
+                    kept.append(row)
+            rows = kept
         widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
-        lines = [f"{self.airframe}: spin assignments ranked (ACAI: {self.formula}; best first)"]
-        lines.append("  ".join(h.ljust(w) for h, w in zip(headers, widths)))
-        lines.append("  ".join("-" * w for w in widths))
-        lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
+        lines = [
+            f"{self.airframe} frame: spin assignments, best first (ACAI {self.formula})",
+            "P: clockwise seen from above; okK: controllable cases of K failed rotors;",
+            "worstK: their lowest ACAI; *: giving up yaw (thrust, roll and pitch only)",
+            " ".join(h.ljust(w) for h, w in zip(headers, widths)).rstrip(),
+            " ".join("-" * w for w in widths),
+        ]
+        lines += [" ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
         return "\n".join(lines)
 
 
 def _fmt(value: float) -> str:
-    return "undefined" if math.isinf(value) else f"{value:.4f}"
+    return "undef" if math.isinf(value) else f"{value:.4f}"
 
 
 def _evaluate(frame: Airframe, spins: str, formula: AcaiFormula, value: float | None) -> Design:
@@ -217,7 +234,7 @@ def design_search(
 ) -> DesignSearch:
     """Ranks every spin assignment of ``airframe``'s frame (its geometry, thrust bounds and mass;
     its own spins are ignored) by failure tolerance (module docstring), optionally for each value
-    of one airframe parameter (``parameter``: an axis name of :func:`rotorfault.scan`, e.g.
+    of one airframe parameter (``parameter``: an axis name of :func:`rotorfault.acai_scan`, e.g.
     ``arm_length_m`` or ``max_thrust_n``). ``formula="facet-margin"`` (default) makes the worst
     case of an infeasible hover negative (how far outside) instead of eq. (13)'s 0."""
     airframe = require_airframe(airframe)

@@ -353,7 +353,9 @@ class _ScanTask:
         if param_axes:
             keys = np.stack([coords[k] for k in param_axes], axis=1)
             combos, inverse = np.unique(keys, axis=0, return_inverse=True)
-            groups = [(combo, np.flatnonzero(inverse.ravel() == g)) for g, combo in enumerate(combos)]
+            groups: list[tuple[FloatArray, npt.NDArray[np.intp] | None]] = [
+                (combo, np.flatnonzero(inverse.ravel() == g)) for g, combo in enumerate(combos)
+            ]
         else:
             groups = [(np.zeros(0), None)]
         for combo, where in groups:
@@ -385,7 +387,7 @@ class _ScanTask:
 
 @dataclass(frozen=True)
 class Scan:
-    """Result of :func:`scan`: the rows in memory (``table``) or the Parquet output directory
+    """Result of :func:`acai_scan`: the rows in memory (``table``) or the Parquet output directory
     (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...)."""
 
     airframe: str
@@ -467,7 +469,7 @@ def _check_axis_values(base: Airframe, names: Sequence[str], columns: Sequence[F
                     raise ValueError(f"axes[{name!r}] = {value:g}: {exc}") from None
 
 
-def scan(
+def acai_scan(
     airframe: Airframe,
     axes: Mapping[str, npt.ArrayLike] | None = None,
     *,
@@ -573,7 +575,7 @@ def scan(
 
 
 def read_scan(path: str | PathLike[str]) -> Scan:
-    """A scan written to Parquet by :func:`scan` (or ``rotorfault scan --out``), read lazily."""
+    """A scan written to Parquet by :func:`acai_scan` (or ``rotorfault scan --out``), read lazily."""
     from ._stream import read_manifest
 
     manifest = read_manifest(path)
@@ -594,7 +596,7 @@ def read_scan(path: str | PathLike[str]) -> Scan:
 
 
 def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
-    """No failure and every combination of 1..``max_failed`` failed rotors as a sample set for :func:`scan`
+    """No failure and every combination of 1..``max_failed`` failed rotors as a sample set for :func:`acai_scan`
     (``efficiency_<i>`` columns of 0 and 1), in :func:`rotorfault.failure_table` order."""
     from itertools import combinations
 
