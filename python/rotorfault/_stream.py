@@ -51,8 +51,30 @@ from ._progress import progress_bar
 from ._typing import ScanBackend as Backend
 
 if TYPE_CHECKING:
-    import pyarrow as pa
     from distributed import Client
+
+#: ``pyarrow.Table`` / ``pyarrow.Schema`` (pyarrow has no type information: Any to the checker).
+Table: TypeAlias = Any
+Schema: TypeAlias = Any
+
+
+def pyarrow_module() -> Any:
+    """``pyarrow``, imported on first use, with the install hint when it is missing."""
+    return _import("pyarrow")
+
+
+def parquet_module() -> Any:
+    """``pyarrow.parquet``, imported on first use."""
+    return _import("pyarrow.parquet")
+
+
+def _import(name: str) -> Any:
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        raise ImportError(f"{name} is needed for scans at scale: pip install 'rotorfault[scale]'") from None
 
 #: Name of the manifest inside an output directory.
 STREAM_MANIFEST = "_rotorfault.json"
@@ -62,7 +84,7 @@ CHUNK_PREFIX = "chunk-"
 CHUNK_SUFFIX = ".parquet"
 
 #: A chunk's work: rows ``spec.start`` up to ``spec.stop`` of the job, as an Arrow table.
-ChunkTask: TypeAlias = Callable[["ChunkSpec"], "pa.Table"]
+ChunkTask: TypeAlias = Callable[["ChunkSpec"], Any]
 
 
 @dataclass(frozen=True)
@@ -91,7 +113,7 @@ def chunk_file_name(index: int) -> str:
 class StreamResult:
     """What :func:`run_chunks` did: the in-memory table (``out=None``) or the output directory."""
 
-    table: pa.Table | None
+    table: Table | None
     out: Path | None
     total_rows: int
     chunks: int
@@ -166,7 +188,7 @@ def _prepare_output(out: Path, identity: dict[str, Any], *, resume: bool, force:
 
 
 def _complete_chunks(out: Path, identity: Mapping[str, Any]) -> set[int]:
-    import pyarrow.parquet as pq
+    pq = parquet_module()
 
     expected = {spec.index: spec.rows for spec in chunk_specs(identity["total_rows"], identity["chunk_rows"])}
     done: set[int] = set()
@@ -193,8 +215,8 @@ def _complete_chunks(out: Path, identity: Mapping[str, Any]) -> set[int]:
     return done
 
 
-def _write_chunk(out: Path, spec: ChunkSpec, table: pa.Table, file_metadata: Mapping[str, str], compression: str) -> None:
-    import pyarrow.parquet as pq
+def _write_chunk(out: Path, spec: ChunkSpec, table: Table, file_metadata: Mapping[str, str], compression: str) -> None:
+    pq = parquet_module()
 
     final = out / chunk_file_name(spec.index)
     if final.exists():  # the caller is the only writer; never a second copy of a chunk
@@ -216,8 +238,8 @@ def _write_chunk(out: Path, spec: ChunkSpec, table: pa.Table, file_metadata: Map
 # -- running ------------------------------------------------------------------------------------
 
 
-def _check_table(spec: ChunkSpec, table: Any, schema: pa.Schema | None) -> pa.Table:
-    import pyarrow as pa
+def _check_table(spec: ChunkSpec, table: Any, schema: Schema | None) -> Table:
+    pa = pyarrow_module()
 
     if not isinstance(table, pa.Table):
         raise TypeError(f"task: must return a pyarrow.Table, got {type(table).__name__} for chunk {spec.index}")
@@ -260,7 +282,7 @@ def run_chunks(
     *,
     total_rows: int,
     chunk_rows: int,
-    schema: pa.Schema,
+    schema: Schema,
     arguments: Mapping[str, Any],
     kind: str,
     out: str | os.PathLike[str] | None = None,
@@ -281,7 +303,7 @@ def run_chunks(
     decide whether an existing output may be resumed. ``metadata`` (JSON-able) is recorded in the
     manifest too but not compared (e.g. the rotorfault version). ``on_chunk_written`` is called
     after each chunk is in place (or gathered)."""
-    import pyarrow as pa
+    pa = pyarrow_module()
 
     from . import _rfcore
 
@@ -329,7 +351,7 @@ def run_chunks(
         write_text(out_path / STREAM_MANIFEST, json.dumps(manifest, indent=2) + "\n")
         file_metadata = {"rotorfault": json.dumps({k: manifest[k] for k in ("kind", "arguments", "rotorfault_version", "total_rows", "chunk_rows")})}
     pending = [spec for spec in specs if spec.index not in done]
-    gathered: dict[int, pa.Table] = {}
+    gathered: dict[int, Table] = {}
 
     def accept(spec: ChunkSpec, table: Any) -> None:
         table = _check_table(spec, table, schema)
@@ -420,10 +442,10 @@ def _take(it: Iterator[ChunkSpec], n: int) -> list[ChunkSpec]:
     return out
 
 
-def iter_tables(path: str | os.PathLike[str], columns: list[str] | None = None, *, require_complete: bool = True) -> Iterator[pa.Table]:
+def iter_tables(path: str | os.PathLike[str], columns: list[str] | None = None, *, require_complete: bool = True) -> Iterator[Table]:
     """The chunks of a streamed output, in row order, one table at a time (``columns``: only
     these), so an output larger than memory can be read chunk by chunk."""
-    import pyarrow.parquet as pq
+    pq = parquet_module()
 
     p = Path(path)
     manifest = read_manifest(p)
@@ -448,6 +470,8 @@ __all__ = [
     "chunk_specs",
     "dask_client",
     "iter_tables",
+    "parquet_module",
+    "pyarrow_module",
     "read_manifest",
     "run_chunks",
 ]

@@ -18,6 +18,7 @@ import numpy.typing as npt
 from ._convert import FloatArray, flag, float_array, real, rotor_numbers
 from ._progress import chunks
 from ._typing import AcaiFormula, ScanBackend as Backend
+from ._stream import pyarrow_module
 from .airframe import Airframe, require_airframe
 from .controllability import acai_batch
 
@@ -283,7 +284,7 @@ def acai_column(formula: str, give_up_yaw: bool = False) -> str:
 def scan_schema(names: Sequence[str], formulas: Sequence[str], give_up_yaw: bool) -> Any:
     """The Arrow schema of a scan: the axes (float64), then per yaw choice the ACAI of each
     formula, the hover code (int8), the verdict and rank C(A, B) (int8)."""
-    import pyarrow as pa
+    pa = pyarrow_module()
 
     fields = [pa.field(n, pa.float64()) for n in names]
     for yaw in (False, True) if give_up_yaw else (False,):
@@ -326,7 +327,7 @@ class _ScanTask:
         return [np.asarray(levels, dtype=np.float64)[k] for levels, k in zip(self.levels, np.unravel_index(index, shape))]
 
     def __call__(self, spec: Any) -> Any:
-        import pyarrow as pa
+        pa = pyarrow_module()
 
         from .controllability import controllability
 
