@@ -1,8 +1,8 @@
 """The Python package's import graph (grimp; function-local imports count): no import circles,
 and dependencies point one way, from the base to the command line::
 
-    _convert, _typing  <-  _progress, airframe  <-  controllability, scan, allocation, simulation
-        <-  control  <-  papers  <-  cli
+    _convert, _typing  <-  _progress  <-  _stream  <-  airframe  <-  controllability, scan,
+        allocation, simulation  <-  design  <-  control  <-  papers  <-  cli
 
 (``scenario``, the ``rotorfault simulate`` file, may use ``control``; the package's
 ``__init__``, the public facade, sits on top.)
@@ -20,8 +20,10 @@ LAYERS = [
     ["", "cli", "__main__"],
     ["papers", "scenario", "campaign", "vpp", "certify"],
     ["control"],
+    ["design"],
     ["controllability", "scan", "allocation", "simulation"],
     ["airframe"],
+    ["_stream"],
     ["_progress", "_formats"],
     ["_convert", "_typing", "_output"],
 ]

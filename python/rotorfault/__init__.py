@@ -48,7 +48,8 @@ from .control import (
     lqr_hover_allocated,
 )
 from . import vpp
-from .scan import EfficiencyScan, efficiency_scan, plot_efficiency_scan
+from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
+from .design import Design, DesignSearch, design_search
 from .simulation import (
     BatchResult,
     DivergenceLimits,
@@ -132,4 +133,11 @@ __all__ = [
     "efficiency_scan",
     "failure_table",
     "plot_efficiency_scan",
+    "Scan",
+    "acai_scan",
+    "read_scan",
+    "failure_samples",
+    "Design",
+    "DesignSearch",
+    "design_search",
 ]

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import contextlib
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
 from ._convert import flag
 
 if TYPE_CHECKING:
-    from rich.progress import Task
+    from rich.progress import ProgressColumn, Task
     from rich.text import Text
 
 
@@ -22,7 +23,42 @@ def chunks(total: int, size: int, *, description: str, show: bool | None, defaul
         yield from ranges
         return
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), _rate_column(), TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=Console(stderr=True)) as bar:
+        task = bar.add_task(description, total=total)
+        for start, stop in ranges:
+            yield start, stop
+            bar.advance(task, stop - start)
+
+
+@contextlib.contextmanager
+def progress_bar(total: int, *, description: str, show: bool | None, default_show: bool = False, completed: int = 0) -> Iterator[Callable[[int], None]]:
+    """A bar counting ``total`` items (``completed`` already done, e.g. on resume) with rate and
+    ETA on standard error; yields ``advance(items)``. Hidden unless ``show`` (or, when it is
+    ``None``, ``default_show``); the rate counts only the items done in this run."""
+    visible = default_show if show is None else flag("progress", show)
+    if not visible:
+        yield lambda items: None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), _rate_column(), TimeElapsedColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=Console(stderr=True)) as bar:
+        task = bar.add_task(description, total=total, completed=completed)
+        # rich's speed comes from the samples since the start: begin them after the skipped part.
+        bar.reset(task, total=total, completed=completed)
+
+        def advance(items: int) -> None:
+            bar.advance(task, items)
+
+        yield advance
+
+
+def _rate_column() -> ProgressColumn:
+    from rich.progress import ProgressColumn
     from rich.text import Text
 
     class RateColumn(ProgressColumn):
@@ -32,9 +68,4 @@ def chunks(total: int, size: int, *, description: str, show: bool | None, defaul
             speed = task.finished_speed or task.speed
             return Text("-/s" if speed is None else f"{speed:,.0f}/s", style="progress.data.speed")
 
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), RateColumn(), TimeElapsedColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=Console(stderr=True)) as bar:
-        task = bar.add_task(description, total=total)
-        for start, stop in ranges:
-            yield start, stop
-            bar.advance(task, stop - start)
+    return RateColumn()

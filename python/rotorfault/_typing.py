@@ -37,6 +37,8 @@ KeOutcome: TypeAlias = Literal[
     "holds-position", "circling", "off-station",
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
+#: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
+ScanBackend: TypeAlias = Literal["local", "dask"]
 #: Controller of a ``rotorfault simulate`` scenario file.
 ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
 
@@ -70,6 +72,7 @@ __all__ = [
     "HoverPoint",
     "KeLaw",
     "KeOutcome",
+    "ScanBackend",
     "ScenarioControllerKind",
     "Spin",
 ]

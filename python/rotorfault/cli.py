@@ -154,14 +154,25 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
 @formula_option
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (.png, .pdf or .svg).")
-@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
+@click.option("--out", "out_path", type=click.Path(), help="Stream the rows to this Parquet dataset directory (chunked, resumable).")
+@click.option("--resume", is_flag=True, help="Continue an interrupted --out scan with the same arguments (skips the chunks written).")
+@click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
+@click.option("--axis", "extra_axes", multiple=True, help="An airframe parameter axis NAME=v1,v2,... (max_thrust_n, mass_kg, drag_torque_ratio_m, arm_length_m, ...); with --out.")
+@click.option("--chunk-points", default=1 << 20, show_default=True, type=int, help="Points per chunk (memory and resume granularity) with --out.")
 @_user_errors
 def scan(
-    airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool
+    airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool,
+    out_path: str | None, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
 ) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)
+    if out_path is not None:
+        _scan_to_parquet(airframe, rotors, step, give_up_yaw, plot_path, force, out_path, resume, dask_address, extra_axes, chunk_points)
+        return
+    if resume or dask_address or extra_axes:
+        raise ValueError("out: --resume, --dask and --axis need --out (a Parquet output)")
     frame = Airframe.load(airframe)
     swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
@@ -180,6 +191,71 @@ def scan(
     if plot_path is not None:
         result.plot(plot_path)
         console.print(f"plot written to {plot_path}")
+
+
+def _scan_to_parquet(
+    airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool,
+    out_path: str, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
+) -> None:
+    from .scan import acai_scan
+
+    frame = Airframe.load(airframe)
+    swept = parse_rotors("rotors", rotors)
+    if not 0.0 < step <= 1.0 or not math.isclose(round(1.0 / step) * step, 1.0, rel_tol=0.0, abs_tol=1e-9):
+        raise ValueError(f"step: must lie in (0, 1] and divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
+    levels = np.linspace(0.0, 1.0, int(round(1.0 / step)) + 1)
+    axes: dict[str, Any] = {}
+    for item in extra_axes:
+        name, sep, values = item.partition("=")
+        if not sep:
+            raise ValueError(f"axis: expected NAME=v1,v2,..., got {item!r}")
+        axes[name.strip()] = parse_numbers(f"axis {name.strip()}", values)
+    for r in swept:
+        axes[f"efficiency_{r}"] = levels
+    if plot_path is not None and (len(swept) != 3 or extra_axes):
+        raise ValueError("plot: the Fig. 4 plot needs exactly three swept rotors and no --axis")
+    result = acai_scan(
+        frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
+        backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=True,
+    )
+    ok = result.controllable_count(give_up_yaw=give_up_yaw)
+    console.print(
+        f"{escape(frame.name)}: {result.total:,} points ({result.computed_chunks} chunks computed, {result.skipped_chunks} already written) "
+        f"in {result.seconds:.1f} s; {ok:,} controllable{' giving up yaw' if give_up_yaw else ''} "
+        f"({100 * ok / max(result.total, 1):.1f}%); rows in {escape(out_path)}"
+    )
+    if plot_path is not None:
+        result.plot(plot_path, give_up_yaw=give_up_yaw)
+        console.print(f"plot written to {plot_path}")
+
+
+@cli.command()
+@airframe_option
+@click.option("--parameter", help="Rank again for each value of this airframe parameter (arm_length_m, max_thrust_n, mass_kg, ...).")
+@click.option("--values", help="Values of --parameter, comma-separated.")
+@click.option(
+    "--formula", type=click.Choice(["eq13", "facet-margin"]), default="facet-margin", show_default=True,
+    help="ACAI of an infeasible hover: facet-margin (how far outside, negative) or eq13 (Du's 0).",
+)
+@click.option("--top", default=0, type=int, help="Show only the best N designs (per parameter value; 0: all).")
+@_user_errors
+def design(airframe: str, parameter: str | None, values: str | None, formula: AcaiFormula, top: int) -> None:
+    """Rank every spin-direction assignment of the airframe's frame by failure tolerance."""
+    from .design import design_search
+
+    frame = Airframe.load(airframe)
+    numbers = parse_numbers("values", values) if values is not None else None
+    result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
+    if top < 0:
+        raise ValueError(f"top: must be 0 (all) or a positive count, got {top}")
+    click.echo(result.format(top))
+    for value in dict.fromkeys(d.parameter_value for d in result.designs):
+        best = result.best(value)
+        where = "" if value is None else f" at {parameter} = {value:g}"
+        click.echo(
+            f"best{where}: {best.spins}, controllable after {best.controllable_single} of {len(best.single)} single failures\n"
+            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure ACAI {best.worst_single:.4f}"
+        )
 
 
 @cli.command()
