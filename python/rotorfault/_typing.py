@@ -20,6 +20,8 @@ HoverPoint: TypeAlias = Literal["inside", "boundary", "outside", "rank-deficient
 AllocationMethod: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Outcome of one allocation.
 AllocationStatus: TypeAlias = Literal["optimal", "almost-optimal", "iteration-limit", "unconstrained", "failed"]
+#: Which method produced an allocation's commands (``"clarabel"`` also for the active set's fallback).
+SolvedBy: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Rotor spin direction seen from above (``"clockwise"``, ``"anticlockwise"``, ``"acw"`` and
 #: ``"counterclockwise"`` are accepted as well).
 Spin: TypeAlias = Literal["cw", "ccw"]
@@ -67,5 +69,6 @@ __all__ = [
     "KeLaw",
     "KeOutcome",
     "ScenarioControllerKind",
+    "SolvedBy",
     "Spin",
 ]

@@ -19,7 +19,7 @@ use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
-use linear::{PyLti, PyLinearFeedback, PyOpenLoop};
+use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
 pub(crate) struct CallableController {
@@ -141,7 +141,7 @@ impl PyAllocated {
         let py = law.py();
         let out = PyAllocated {
             law: law.unbind(),
-            solver: ActiveSetSolver::new(&problem.inner),
+            solver: problem.solver.clone(),
         };
         out.controller(py)?; // checks the law's output count
         Ok(out)
