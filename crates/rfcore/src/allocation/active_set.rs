@@ -403,8 +403,8 @@ impl ActiveSetSolver {
         } else {
             self.lsq_step::<BIG_WORK>(&free[..m], &r, &t, &mut d);
         }
-        for i in 0..m {
-            commands[i] = t[i] + d[i];
+        for (out, (x, step)) in commands[..m].iter_mut().zip(t.iter().zip(&d)) {
+            *out = x + step;
         }
         true
     }
