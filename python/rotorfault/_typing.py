@@ -23,6 +23,8 @@ ControlAxes: TypeAlias = Literal["thrust-roll-pitch-yaw", "thrust-roll-pitch", "
 AllocationMethod: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Outcome of one allocation.
 AllocationStatus: TypeAlias = Literal["optimal", "almost-optimal", "iteration-limit", "unconstrained", "failed"]
+#: Which method produced an allocation's commands (``"clarabel"`` also for the active set's fallback).
+SolvedBy: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 #: Rotor spin direction seen from above (``"clockwise"``, ``"anticlockwise"``, ``"acw"`` and
 #: ``"counterclockwise"`` are accepted as well).
 Spin: TypeAlias = Literal["cw", "ccw"]
@@ -74,5 +76,6 @@ __all__ = [
     "KeOutcome",
     "ScanBackend",
     "ScenarioControllerKind",
+    "SolvedBy",
     "Spin",
 ]

@@ -78,7 +78,7 @@ class Airframe:
     name : a label used in reports.
     """
 
-    __slots__ = ("_core",)
+    __slots__ = ("_core", "_allocators")  # _allocators: rotorfault.allocation's cache (immutable airframe)
     _core: _rfcore.Airframe
 
     def __init__(

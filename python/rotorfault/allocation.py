@@ -16,17 +16,30 @@ Methods (one problem type, one answer type):
 - ``"pinv"``: the unconstrained weighted pseudo-inverse (Ke eqs. (34)/(35)); bounds ignored.
 
 When several command vectors are optimal (more rotors than weighted axes, or a zero weight),
-``"active-set"`` and ``"pinv"`` return the one closest to ``preferred`` (zero by default): for
-``"pinv"`` that is exactly ``M^+ u_c`` (eq. (34)) or ``(E_1 M)^+ u_c1`` with a zero yaw weight
-(eq. (35)). ``"clarabel"`` returns some optimum (an interior-point method lands near the middle
-of the optimal set). ``max_iterations`` and ``tolerance`` apply to Clarabel only; the active-set
-solver stops after ``4 m + 20`` iterations with status ``"iteration-limit"``.
+``"active-set"`` and ``"pinv"`` return the one closest to ``preferred`` (zero by default), also
+with bounds active: for ``"pinv"`` that is exactly ``M^+ u_c`` (eq. (34)) or ``(E_1 M)^+ u_c1``
+with a zero yaw weight (eq. (35)). ``"clarabel"`` polishes its answer with the active set from the
+bounds it identifies, so it agrees with ``"active-set"`` in the commands when that certifies.
 
-Accuracy: the active-set solver works on the normal equations ``M^T W M``, so its relative error
-is about 1e-16 times their condition number (1e-9 for Lanzon's unit-weighted yaw row, 1e-12
-with weights that put the rows on one scale). Directions whose weighted curvature is below
-``RANK_RTOL = 1e-11`` of the largest (a rotor more than ~3e5 times weaker than the others) count
-as zero; problems with such rotors can end with ``"iteration-limit"``.
+Evidence: every :class:`Allocation` carries a :class:`Certificate`, the KKT residuals
+(stationarity, complementarity, bound violation) of its commands, each normalised in the
+problem's own scaling (invariant to scaling the matrix, the virtual control, the weights or one
+rotor's gain), and the ``tolerance`` they are held to (default :data:`DEFAULT_TOLERANCE`, from
+the core). ``status == "optimal"`` only when ``certificate.holds``. Where the active set cannot
+certify its answer it falls back to Clarabel on the internally scaled problem, polished, and says
+so: ``solved_by`` is ``"clarabel"`` (``"active-set"`` otherwise, ``"pinv"`` for the pseudo-inverse)
+and ``fallbacks`` counts those answers.
+
+Settings (on :class:`Allocator` and :func:`allocate`, keyword-only, defaults from the core):
+``tolerance`` the certificate tolerance; ``max_iterations`` the iteration bound of each active-set
+phase (default ``4 m + 20``) and Clarabel's iteration limit (default 200); ``clarabel_tolerance``
+Clarabel's own duality-gap and feasibility tolerance.
+
+Accuracy: the active-set solver and the pseudo-inverse solve the scaled least-squares problem
+``min |W^(1/2) (M T - u_c)|`` by a Householder QR (never the normal equations ``M^T W M``), with
+the rows sorted by size, so a weight of 1e-9 or a rotor 1e-12 times weaker than the others still
+counts; columns dependent to ``RANK_TOL = 1e-13`` of their own norm share the load by the
+closest-to-``preferred`` rule.
 """
 
 from __future__ import annotations
@@ -41,15 +54,21 @@ import numpy.typing as npt
 
 from . import _rfcore
 from ._convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
-from ._typing import AllocationMethod, AllocationStatus, ControlAxes
+from ._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
 from .airframe import Airframe
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 METHODS: tuple[AllocationMethod, ...] = get_args(AllocationMethod)
-#: Clarabel's default tolerance here: objectives agree with the exact solver to about 1e-10.
-CLARABEL_TOLERANCE = 1e-10
+_DEFAULTS = _rfcore.AllocationSettings()
+#: The certificate tolerance by default (the core's ``ActiveSetSettings::default()``).
+DEFAULT_TOLERANCE: float = _DEFAULTS.tolerance
+#: Clarabel's default tolerance here (the core's ``ClarabelSettings::default()``).
+CLARABEL_TOLERANCE: float = _DEFAULTS.clarabel_tolerance
+#: The KKT residuals of an allocation and the tolerance they are held to: ``stationarity``,
+#: ``complementarity``, ``bound_violation``, ``tolerance``, ``holds``, ``worst``.
+Certificate = _rfcore.Certificate
 
 
 @dataclass(frozen=True)
@@ -57,15 +76,21 @@ class Allocation:
     """The result of :func:`allocate`. For one virtual control ``commands`` is (m,), ``achieved``
     (n,) and ``status`` a string; for N of them (N, m), (N, n) and a tuple of N strings.
 
-    ``status``: ``"optimal"``, ``"almost-optimal"`` (clarabel at reduced accuracy),
-    ``"iteration-limit"`` (active-set; commands feasible but not proven optimal),
-    ``"unconstrained"`` (pinv) or ``"failed"`` (clarabel found no solution)."""
+    ``status``: ``"optimal"`` (the certificate holds), ``"almost-optimal"`` (clarabel at
+    reduced accuracy), ``"iteration-limit"`` (neither the active set nor its fallback could
+    certify: commands feasible, not proven optimal), ``"unconstrained"`` (pinv) or ``"failed"``
+    (clarabel found no solution). ``certificate`` (one per row for a batch): the KKT residuals
+    of the commands (:class:`Certificate`). ``solved_by``: ``"active-set"``, ``"clarabel"`` or
+    ``"pinv"``. ``fallbacks``: how many answers the active set's Clarabel fallback produced."""
 
     commands: FloatArray
     achieved: FloatArray
     virtual_control: FloatArray
     status: AllocationStatus | tuple[AllocationStatus, ...]
     iterations: int | tuple[int, ...]
+    certificate: _rfcore.Certificate | tuple[_rfcore.Certificate, ...]
+    solved_by: SolvedBy | tuple[SolvedBy, ...]
+    fallbacks: int
 
     @property
     def attained(self) -> bool | np.ndarray[Any, np.dtype[np.bool_]]:
@@ -88,7 +113,10 @@ class Allocator:
     ``target``: an :class:`~rotorfault.Airframe` (its effectiveness matrix, efficiencies applied,
     and thrust bounds) or an n x m matrix (then ``bounds`` is required). ``weights``: n entries
     >= 0 (default all 1). ``bounds``: ``(lower, upper)``, each a number or m entries.
-    ``give_up_yaw``: with an airframe, drop the yaw row (n = 3)."""
+    ``give_up_yaw``: with an airframe, drop the yaw row (n = 3). ``tolerance``,
+    ``max_iterations``, ``clarabel_tolerance``: the solver settings of the module docs (None:
+    the core's defaults); they apply to every allocation of this allocator, also inside
+    :class:`rotorfault.control.Allocated`."""
 
     def __init__(
         self,
@@ -100,8 +128,12 @@ class Allocator:
         preferred: npt.ArrayLike | None = None,
         give_up_yaw: bool = False,
         axes: ControlAxes | None = None,
+        tolerance: float | None = None,
+        max_iterations: int | None = None,
+        clarabel_tolerance: float | None = None,
     ) -> None:
         drop_yaw = flag("give_up_yaw", give_up_yaw)
+        settings = _settings(tolerance, max_iterations, clarabel_tolerance)
         if isinstance(target, Airframe):
             names = control_axes(drop_yaw, axes)
             matrix = target.wrench_matrix() if names == "wrench" else target.effectiveness_matrix()
@@ -124,7 +156,8 @@ class Allocator:
         w = np.ones(n) if weights is None else float_array("weights", weights, 1)
         pref = np.zeros(m) if preferred is None else float_array("preferred", preferred, 1)
         gamma = real("regularization", regularization)
-        self._core = _rfcore.AllocationProblem(matrix, w, lower, upper, gamma, pref)
+        self._core = _rfcore.AllocationProblem(matrix, w, lower, upper, gamma, pref, settings)
+        self.settings = settings
         self.matrix = frozen_array("matrix", matrix, 2)
         self.weights = frozen_array("weights", w, 1)
         self.lower = frozen_array("bounds.lower", lower, 1)
@@ -146,10 +179,15 @@ class Allocator:
         *,
         method: AllocationMethod = "active-set",
         priorities: Sequence[Sequence[int]] | None = None,
-        tolerance: float = CLARABEL_TOLERANCE,
-        max_iterations: int = 200,
     ) -> Allocation:
-        """Allocates one virtual control (n,) or a batch (N, n), in parallel without the GIL."""
+        """Allocates one virtual control (n,) or a batch (N, n), in parallel without the GIL,
+        with this allocator's settings."""
+        if method == "active-set" and priorities is None:
+            # The fast path: n floats as given (a float64 vector, a list or tuple of floats),
+            # one core call; anything else takes the general path below.
+            one = self._core.allocate_one(virtual_control)
+            if one is not None:
+                return _single(one)
         if not isinstance(method, str):
             raise TypeError(f"method: expected a string, got {type(method).__name__}")
         if method not in METHODS:
@@ -172,14 +210,19 @@ class Allocator:
                 f"(rows of the allocation matrix), got {rows.shape[1]}"
             )
         groups = None if priorities is None else _priorities(priorities)
-        iterations_limit = _positive_int("max_iterations", max_iterations)
-        tol = real("tolerance", tolerance)
-        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups, tol, iterations_limit)
+        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups)
         commands, achieved, iterations = batch.commands, batch.achieved, batch.iterations
         statuses = cast(list[AllocationStatus], batch.statuses)
+        certificates, solved_by = batch.certificates, cast(list[SolvedBy], batch.solved_by)
         if ndim == 1:
-            return Allocation(commands[0], achieved[0], rows[0], statuses[0], iterations[0])
-        return Allocation(commands, achieved, rows, tuple(statuses), tuple(iterations))
+            return Allocation(
+                commands[0], achieved[0], rows[0], statuses[0], iterations[0], certificates[0], solved_by[0],
+                batch.fallbacks,
+            )
+        return Allocation(
+            commands, achieved, rows, tuple(statuses), tuple(iterations), tuple(certificates), tuple(solved_by),
+            batch.fallbacks,
+        )
 
     def rate_limited(self, previous: npt.ArrayLike, max_change: float | npt.ArrayLike) -> Allocator:
         """A copy whose bounds also keep each command within ``max_change`` (a number or one per
@@ -195,7 +238,8 @@ class Allocator:
         lower, upper = self._core.rate_limited_bounds(prev, delta)
         return Allocator(
             self.matrix, weights=self.weights, bounds=(lower, upper), regularization=self.regularization,
-            preferred=self.preferred,
+            preferred=self.preferred, tolerance=self.settings.tolerance, max_iterations=self.settings.max_iterations,
+            clarabel_tolerance=self.settings.clarabel_tolerance,
         )
 
     def objective(self, virtual_control: npt.ArrayLike, commands: npt.ArrayLike) -> tuple[float, float]:
@@ -219,9 +263,14 @@ def allocate(
     priorities: Sequence[Sequence[int]] | None = None,
     give_up_yaw: bool = False,
     axes: ControlAxes | None = None,
+    tolerance: float | None = None,
+    max_iterations: int | None = None,
+    clarabel_tolerance: float | None = None,
 ) -> Allocation:
     """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
-    the arguments and the module docs for the methods::
+    the arguments and the module docs for the methods and settings. With an airframe and no
+    ``bounds``, ``regularization`` or ``preferred``, the prepared problem is kept on the
+    (immutable) airframe, keyed by the weights and settings, so repeated calls are cheap::
 
         >>> import rotorfault as rf
         >>> ke = rf.Airframe.preset("ke-quadcopter")
@@ -229,11 +278,79 @@ def allocate(
         >>> a.commands.round(4).tolist(), a.status
         ([1.75, 1.75, 1.75, 1.75], 'optimal')
     """
-    allocator = Allocator(
-        target, weights=weights, bounds=bounds, regularization=regularization, preferred=preferred,
-        give_up_yaw=give_up_yaw, axes=axes,
-    )
+    key = _cache_key(target, weights, bounds, regularization, preferred, give_up_yaw, axes, tolerance, max_iterations, clarabel_tolerance)
+    if key is not None:
+        cache: dict[Any, Allocator] | None = getattr(target, "_allocators", None)
+        if cache is None:
+            cache = {}
+            target._allocators = cache  # type: ignore[union-attr]
+        allocator = cache.get(key)
+        if allocator is None:
+            allocator = Allocator(target, weights=weights, give_up_yaw=give_up_yaw, axes=axes, tolerance=tolerance,
+                                  max_iterations=max_iterations, clarabel_tolerance=clarabel_tolerance)
+            if len(cache) >= _CACHE_SIZE:
+                cache.clear()
+            cache[key] = allocator
+    else:
+        allocator = Allocator(
+            target, weights=weights, bounds=bounds, regularization=regularization, preferred=preferred,
+            give_up_yaw=give_up_yaw, axes=axes, tolerance=tolerance, max_iterations=max_iterations,
+            clarabel_tolerance=clarabel_tolerance,
+        )
     return allocator.allocate(virtual_control, method=method, priorities=priorities)
+
+
+_CACHE_SIZE = 32
+_KEY_TYPES = (float, int)
+
+
+def _cache_key(
+    target: Any, weights: Any, bounds: Any, regularization: Any, preferred: Any, give_up_yaw: Any, *settings: Any
+) -> tuple[Any, ...] | None:
+    """The key of :func:`allocate`'s cache on an airframe, or None when the call is not
+    cacheable (anything but an airframe with default bounds, regularisation and preferred
+    commands, weights a list/tuple of plain numbers or None, plain-number settings). Exact types
+    only, so every value a key holds is validated once, when its allocator is built."""
+    if type(target) is not Airframe or bounds is not None or preferred is not None or type(give_up_yaw) is not bool:
+        return None
+    if type(regularization) not in _KEY_TYPES or regularization != 0:
+        return None
+    if not all(v is None or type(v) in _KEY_TYPES for v in settings):
+        return None
+    if weights is None:
+        w: tuple[Any, ...] | None = None
+    elif type(weights) in (list, tuple) and all(type(x) in _KEY_TYPES for x in weights):
+        w = tuple(weights)
+    else:
+        return None
+    return (w, give_up_yaw, *settings)
+
+
+def _single(one: _rfcore.SingleAllocation) -> Allocation:
+    """An :class:`Allocation` from the core's single answer, built without the dataclass's
+    ``__init__`` (a frozen dataclass sets each field through ``object.__setattr__``: about twice
+    the cost of the whole solve)."""
+    out = _new(Allocation)
+    solved_by = one.solved_by
+    _setattr(out, "__dict__", {
+        "commands": one.commands, "achieved": one.achieved, "virtual_control": one.virtual_control,
+        "status": one.status, "iterations": one.iterations, "certificate": one.certificate,
+        "solved_by": solved_by, "fallbacks": 1 if solved_by == "clarabel" else 0,
+    })
+    return out
+
+
+_new = object.__new__
+_setattr = object.__setattr__
+
+
+def _settings(tolerance: Any, max_iterations: Any, clarabel_tolerance: Any) -> _rfcore.AllocationSettings:
+    """Types checked here, values by the core (``ActiveSetSettings::check``, Clarabel's)."""
+    return _rfcore.AllocationSettings(
+        tolerance=None if tolerance is None else real("tolerance", tolerance),
+        max_iterations=None if max_iterations is None else count("max_iterations", max_iterations),
+        clarabel_tolerance=None if clarabel_tolerance is None else real("clarabel_tolerance", clarabel_tolerance),
+    )
 
 
 @dataclass(frozen=True)

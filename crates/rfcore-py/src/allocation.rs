@@ -2,32 +2,253 @@
 //! queries. Translation only.
 
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::{PyFloat, PyList, PyTuple};
 
+use rfcore::allocation::active_set::{ActiveSetSettings, ActiveSetSolver};
 use rfcore::allocation::clarabel::{
     hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
     ClarabelSettings,
 };
-use rfcore::allocation::{allocate_many, time_each, Allocation, AllocationProblem, Method};
+use rfcore::allocation::{
+    allocate_all, allocate_many, fallback_count, time_each, Allocation, AllocationProblem,
+    Certificate, Method,
+};
 use rfcore::analysis::ControlAxes;
+use rfcore::error::RfError;
 
 use crate::airframe::PyAirframe;
 use crate::convert::{detached, matrix, slice1, slice2, to_py_err};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
-/// A validated allocation problem (matrix, weights, bounds, regularisation).
+/// The solver settings of an allocation problem: the active set's certificate tolerance and
+/// iteration bound, Clarabel's tolerance and iteration limit. Defaults are the core's.
+#[pyclass(
+    name = "AllocationSettings",
+    module = "rotorfault._rfcore",
+    frozen,
+    get_all
+)]
+#[derive(Clone, Copy)]
+pub struct PyAllocationSettings {
+    /// Certificate tolerance (relative KKT residuals), [`ActiveSetSettings::tolerance`].
+    tolerance: f64,
+    /// Iteration bound per active-set phase and Clarabel's limit; None: `4 m + 20` for the
+    /// active set and Clarabel's default.
+    max_iterations: Option<usize>,
+    /// Clarabel's duality-gap and feasibility tolerance.
+    clarabel_tolerance: f64,
+}
+
+impl PyAllocationSettings {
+    fn active(&self) -> ActiveSetSettings {
+        ActiveSetSettings {
+            tolerance: self.tolerance,
+            max_iterations: self.max_iterations,
+            ..ActiveSetSettings::default()
+        }
+    }
+    fn clarabel(&self) -> PyResult<ClarabelSettings> {
+        let mut settings = ClarabelSettings::default()
+            .tolerance(self.clarabel_tolerance)
+            .map_err(|e| to_py_err(rename(e, "tolerance", "clarabel_tolerance")))?;
+        if let Some(limit) = self.max_iterations {
+            settings = settings
+                .max_iterations(u32::try_from(limit).unwrap_or(u32::MAX))
+                .map_err(to_py_err)?;
+        }
+        Ok(settings)
+    }
+}
+
+/// The core names Clarabel's tolerance `tolerance`; Python calls it `clarabel_tolerance`.
+fn rename(error: RfError, from: &str, to: &str) -> RfError {
+    match error {
+        RfError::InvalidValue { field, rule } if field == from => RfError::InvalidValue {
+            field: to.to_string(),
+            rule,
+        },
+        other => other,
+    }
+}
+
+#[pymethods]
+impl PyAllocationSettings {
+    #[new]
+    #[pyo3(signature = (*, tolerance=None, max_iterations=None, clarabel_tolerance=None))]
+    fn new(
+        tolerance: Option<f64>,
+        max_iterations: Option<usize>,
+        clarabel_tolerance: Option<f64>,
+    ) -> PyResult<Self> {
+        let out = PyAllocationSettings {
+            tolerance: tolerance.unwrap_or(ActiveSetSettings::default().tolerance),
+            max_iterations,
+            clarabel_tolerance: clarabel_tolerance.unwrap_or(ClarabelSettings::default().tolerance),
+        };
+        out.active().check().map_err(to_py_err)?;
+        out.clarabel()?;
+        Ok(out)
+    }
+}
+
+/// The KKT residuals of an allocation in the problem's own scaling and the tolerance they are
+/// held to (see the core's `Certificate`).
+#[pyclass(
+    name = "Certificate",
+    module = "rotorfault._rfcore",
+    frozen,
+    get_all,
+    eq
+)]
+#[derive(Clone, Copy, PartialEq)]
+pub struct PyCertificate {
+    stationarity: f64,
+    complementarity: f64,
+    bound_violation: f64,
+    tolerance: f64,
+}
+
+impl From<Certificate> for PyCertificate {
+    fn from(c: Certificate) -> Self {
+        PyCertificate {
+            stationarity: c.stationarity,
+            complementarity: c.complementarity,
+            bound_violation: c.bound_violation,
+            tolerance: c.tolerance,
+        }
+    }
+}
+
+impl PyCertificate {
+    fn core(&self) -> Certificate {
+        Certificate {
+            stationarity: self.stationarity,
+            complementarity: self.complementarity,
+            bound_violation: self.bound_violation,
+            tolerance: self.tolerance,
+        }
+    }
+}
+
+#[pymethods]
+impl PyCertificate {
+    /// Every residual within the tolerance.
+    #[getter]
+    fn holds(&self) -> bool {
+        self.core().holds()
+    }
+    /// The largest residual.
+    #[getter]
+    fn worst(&self) -> f64 {
+        self.core().worst()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Certificate(stationarity={:e}, complementarity={:e}, bound_violation={:e}, tolerance={:e}, holds={})",
+            self.stationarity,
+            self.complementarity,
+            self.bound_violation,
+            self.tolerance,
+            if self.holds() { "True" } else { "False" }
+        )
+    }
+}
+
+/// A validated allocation problem (matrix, weights, bounds, regularisation) with its prepared
+/// active-set solver and settings: every active-set path (one control, a batch, `Allocated`)
+/// solves with this one solver.
 #[pyclass(name = "AllocationProblem", module = "rotorfault._rfcore", frozen)]
 pub struct PyAllocationProblem {
     pub(crate) inner: AllocationProblem,
+    pub(crate) solver: ActiveSetSolver,
+    settings: PyAllocationSettings,
+}
+
+/// One allocation of one virtual control (the fast path of `Allocator.allocate`).
+#[pyclass(name = "SingleAllocation", module = "rotorfault._rfcore", frozen)]
+pub struct PySingleAllocation {
+    result: Allocation,
+    virtual_control: Vec<f64>,
+}
+
+#[pymethods]
+impl PySingleAllocation {
+    #[getter]
+    fn commands<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.result.commands)
+    }
+    #[getter]
+    fn achieved<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.result.achieved)
+    }
+    #[getter]
+    fn virtual_control<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.virtual_control)
+    }
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.result.status.name()
+    }
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.result.iterations
+    }
+    #[getter]
+    fn certificate(&self) -> PyCertificate {
+        self.result.certificate.into()
+    }
+    #[getter]
+    fn solved_by(&self) -> &'static str {
+        self.result.solved_by.name()
+    }
+}
+
+/// `value` as n floats without conversion: a C-contiguous 1-D float64 array or a list/tuple of
+/// Python floats, with n entries; anything else None (the caller's general path converts and
+/// names the type or shape error).
+fn exact_floats(value: &Bound<'_, PyAny>, n: usize) -> PyResult<Option<Vec<f64>>> {
+    if let Ok(array) = value.cast::<PyArray1<f64>>() {
+        let Ok(view) = array.try_readonly() else {
+            return Ok(None);
+        };
+        return Ok(match view.as_slice() {
+            Ok(s) if s.len() == n => Some(s.to_vec()),
+            _ => None,
+        });
+    }
+    let items = if let Ok(list) = value.cast::<PyList>() {
+        if list.len() != n {
+            return Ok(None);
+        }
+        list.iter().collect::<Vec<_>>()
+    } else if let Ok(tuple) = value.cast::<PyTuple>() {
+        if tuple.len() != n {
+            return Ok(None);
+        }
+        tuple.iter().collect::<Vec<_>>()
+    } else {
+        return Ok(None);
+    };
+    let mut out = Vec::with_capacity(n);
+    for item in items {
+        match item.cast_exact::<PyFloat>() {
+            Ok(f) => out.push(f.value()),
+            Err(_) => return Ok(None),
+        }
+    }
+    Ok(Some(out))
 }
 
 #[pymethods]
 impl PyAllocationProblem {
     #[new]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         matrix_: PyReadonlyArray2<'_, f64>,
         weights: PyReadonlyArray1<'_, f64>,
@@ -35,6 +256,7 @@ impl PyAllocationProblem {
         upper: PyReadonlyArray1<'_, f64>,
         regularization: f64,
         preferred: PyReadonlyArray1<'_, f64>,
+        settings: PyRef<'_, PyAllocationSettings>,
     ) -> PyResult<Self> {
         let preferred = slice1("preferred", &preferred)?;
         let inner = AllocationProblem::new(
@@ -45,7 +267,34 @@ impl PyAllocationProblem {
         )
         .and_then(|p| p.with_regularization(regularization, preferred))
         .map_err(to_py_err)?;
-        Ok(PyAllocationProblem { inner })
+        let settings = *settings;
+        Ok(PyAllocationProblem {
+            solver: ActiveSetSolver::with_settings(&inner, settings.active()),
+            inner,
+            settings,
+        })
+    }
+
+    #[getter]
+    fn settings(&self) -> PyAllocationSettings {
+        self.settings
+    }
+
+    /// The active-set allocation of one virtual control given as exactly n floats (see
+    /// `exact_floats`); None for anything else, so the caller converts it. Values are checked
+    /// by the core (finite entries).
+    fn allocate_one(
+        &self,
+        virtual_control: &Bound<'_, PyAny>,
+    ) -> PyResult<Option<PySingleAllocation>> {
+        let Some(u_c) = exact_floats(virtual_control, self.inner.virtual_dimension())? else {
+            return Ok(None);
+        };
+        let result = self.solver.allocate(&u_c).map_err(to_py_err)?;
+        Ok(Some(PySingleAllocation {
+            result,
+            virtual_control: u_c,
+        }))
     }
 
     /// The bounds after folding in a rate limit (see `AllocationProblem::rate_limited`).
@@ -81,22 +330,19 @@ impl PyAllocationProblem {
 }
 
 fn method(
+    problem: &PyAllocationProblem,
     name: &str,
     priorities: Option<Vec<Vec<usize>>>,
-    tolerance: f64,
-    max_iterations: u32,
 ) -> PyResult<Method> {
-    let settings = ClarabelSettings::default()
-        .tolerance(tolerance)
-        .and_then(|s| s.max_iterations(max_iterations))
-        .map_err(to_py_err)?;
-    Method::parse(name, priorities, settings).map_err(to_py_err)
+    let settings = problem.settings;
+    Method::parse(name, priorities, settings.active(), settings.clarabel()?).map_err(to_py_err)
 }
 
 /// Allocations of N virtual controls: commands (N x m), achieved (N x n), statuses, iterations.
 #[pyclass(name = "AllocationBatch", module = "rotorfault._rfcore", frozen)]
 pub struct PyAllocationBatch {
     rows: usize,
+    fallbacks: usize,
     results: Vec<Allocation>,
     actuators: usize,
     axes: usize,
@@ -138,31 +384,56 @@ impl PyAllocationBatch {
     fn iterations(&self) -> Vec<usize> {
         self.results.iter().map(|a| a.iterations).collect()
     }
+    #[getter]
+    fn certificates(&self) -> Vec<PyCertificate> {
+        self.results.iter().map(|a| a.certificate.into()).collect()
+    }
+    #[getter]
+    fn solved_by(&self) -> Vec<&'static str> {
+        self.results.iter().map(|a| a.solved_by.name()).collect()
+    }
+    /// How many answers the active-set method's Clarabel fallback produced (0 for the other
+    /// methods).
+    #[getter]
+    fn fallbacks(&self) -> usize {
+        self.fallbacks
+    }
 }
 
-/// Allocates every row of `controls` (N x n): commands (N x m), achieved (N x n), statuses,
-/// iterations.
+/// Allocates every row of `controls` (N x n) with the problem's settings: commands (N x m),
+/// achieved (N x n), statuses, iterations, certificates, methods, fallback count.
 #[pyfunction]
-#[pyo3(signature = (problem, controls, method_name, priorities, tolerance, max_iterations))]
+#[pyo3(signature = (problem, controls, method_name, priorities))]
 pub fn allocate<'py>(
     py: Python<'py>,
     problem: &PyAllocationProblem,
     controls: PyReadonlyArray2<'py, f64>,
     method_name: &str,
     priorities: Option<Vec<Vec<usize>>>,
-    tolerance: f64,
-    max_iterations: u32,
 ) -> PyResult<PyAllocationBatch> {
-    let method = method(method_name, priorities, tolerance, max_iterations)?;
+    let method = method(problem, method_name, priorities)?;
     let flat = slice2("virtual_control", &controls)?;
     let rows = controls.shape()[0];
-    let problem = &problem.inner;
-    let results = detached(py, || allocate_many(problem, &method, flat))?;
+    let results = match method {
+        Method::ActiveSet(_) => {
+            let solver = &problem.solver;
+            detached(py, || allocate_all(solver, flat))?
+        }
+        _ => {
+            let inner = &problem.inner;
+            detached(py, || allocate_many(inner, &method, flat))?
+        }
+    };
+    let fallbacks = match method {
+        Method::ActiveSet(_) => fallback_count(&results),
+        _ => 0,
+    };
     Ok(PyAllocationBatch {
         rows,
+        fallbacks,
         results,
-        actuators: problem.actuator_count(),
-        axes: problem.virtual_dimension(),
+        actuators: problem.inner.actuator_count(),
+        axes: problem.inner.virtual_dimension(),
     })
 }
 
@@ -175,12 +446,7 @@ pub fn time_allocations<'py>(
     method_name: &str,
     repeats: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let method = method(
-        method_name,
-        None,
-        ClarabelSettings::default().tolerance,
-        ClarabelSettings::default().max_iterations,
-    )?;
+    let method = method(problem, method_name, None)?;
     let flat = slice2("virtual_control", &controls)?;
     let problem = &problem.inner;
     let times = detached(py, || time_each(problem, &method, flat, repeats))?;

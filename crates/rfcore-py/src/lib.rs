@@ -38,6 +38,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::linear::PyLinearFeedback>()?;
     module.add_class::<control::linear::PyLti>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
+    module.add_class::<allocation::PyAllocationSettings>()?;
+    module.add_class::<allocation::PyCertificate>()?;
+    module.add_class::<allocation::PySingleAllocation>()?;
     module.add_class::<control::PyAllocated>()?;
     module.add_class::<control::ke::PyUniformPassiveFtc>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;

@@ -210,7 +210,7 @@ fn report_targets(_: &mut Criterion) {
                     .any(|s| *s != rfcore::allocation::active_set::BoundState::Free),
             );
         }
-        let ours = median_p90(time_each(&problem, &Method::ActiveSet, &controls, 200).unwrap());
+        let ours = median_p90(time_each(&problem, &Method::ActiveSet(Default::default()), &controls, 200).unwrap());
         let clarabel = Method::Clarabel(ClarabelSettings::default());
         let theirs = median_p90(time_each(&problem, &clarabel, &controls, 5).unwrap());
         println!(
@@ -240,7 +240,7 @@ fn report_targets(_: &mut Criterion) {
         let mut active = ActiveSet::cold(p.actuator_count());
         let report = solver.solve_unchecked(u, &mut active, &mut commands);
         fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
-        times.push(time_each(p, &Method::ActiveSet, u, 50).unwrap()[0]);
+        times.push(time_each(p, &Method::ActiveSet(Default::default()), u, 50).unwrap()[0]);
     }
     let (median, p90) = median_p90(times);
     println!(

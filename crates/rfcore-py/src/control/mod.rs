@@ -141,7 +141,7 @@ impl PyAllocated {
         let py = law.py();
         let out = PyAllocated {
             law: law.unbind(),
-            solver: ActiveSetSolver::new(&problem.inner),
+            solver: problem.solver.clone(),
         };
         out.controller(py)?; // checks the law's output count
         Ok(out)

@@ -36,8 +36,6 @@ use crate::allocation::{
 use crate::error::{Result, RfError};
 
 const N: usize = MAX_ACTUATORS;
-/// Side of the fixed-size work arrays of [`solve_psd_closest`].
-pub(crate) const WORK: usize = N;
 /// Rows of the stacked least-squares matrix: n weighted rows and m regularisation rows.
 const ROWS: usize = MAX_VIRTUAL + N;
 /// Work-array sizes (entries, at least `rows * m`): small problems (up to 8 x 8, e.g. 4 axes and
@@ -94,6 +92,22 @@ pub struct ActiveSetSettings {
     pub max_iterations: Option<usize>,
     /// Fall back to Clarabel (polished) when the certificate fails (default true).
     pub fallback: bool,
+}
+
+impl ActiveSetSettings {
+    /// The rules: `tolerance > 0` and finite, `max_iterations >= 1` when given.
+    pub fn check(&self) -> Result<()> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(RfError::invalid(
+                "tolerance",
+                format!("must be > 0 and finite, got {}", self.tolerance),
+            ));
+        }
+        if self.max_iterations == Some(0) {
+            return Err(RfError::invalid("max_iterations", "must be >= 1, got 0"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for ActiveSetSettings {
@@ -270,12 +284,11 @@ impl ActiveSetSolver {
 
     /// Replaces the certificate tolerance (> 0, finite).
     pub fn with_tolerance(mut self, tolerance: f64) -> Result<Self> {
-        if !(tolerance.is_finite() && tolerance > 0.0) {
-            return Err(RfError::invalid(
-                "tolerance",
-                format!("must be > 0 and finite, got {tolerance}"),
-            ));
+        ActiveSetSettings {
+            tolerance,
+            ..self.settings
         }
+        .check()?;
         self.settings.tolerance = tolerance;
         Ok(self)
     }
@@ -363,6 +376,37 @@ impl ActiveSetSolver {
         let mut t = [0.0; N];
         t[..self.m].copy_from_slice(&commands[..self.m]);
         self.certificate(&b, &t, &mut [0.0; N])
+    }
+
+    /// The unconstrained minimiser closest to `T_pref` (bounds ignored): `T_pref + A^+ (b - A
+    /// T_pref)` from the QR of the scaled problem, as phase 1's first step computes it (so a small
+    /// weight or a weak rotor counts, no rank cut on the curvature). `u_c` has n entries and
+    /// `commands` m; false (commands NaN) if `u_c` overflows once scaled.
+    pub fn unconstrained(&self, u_c: &[f64], commands: &mut [f64]) -> bool {
+        let m = self.m;
+        let mut b = [0.0; ROWS];
+        if !self.rhs(u_c, &mut b) {
+            commands[..m].fill(f64::NAN);
+            return false;
+        }
+        let mut t = [0.0; N];
+        t[..m].copy_from_slice(&self.preferred[..m]);
+        let mut r = [0.0; ROWS];
+        self.residual(&b, &t, &mut r);
+        let mut free = [0usize; N];
+        for (i, f) in free.iter_mut().enumerate().take(m) {
+            *f = i;
+        }
+        let mut d = [0.0; N];
+        if self.rows * m <= SMALL_WORK {
+            self.lsq_step::<SMALL_WORK>(&free[..m], &r, &t, &mut d);
+        } else {
+            self.lsq_step::<BIG_WORK>(&free[..m], &r, &t, &mut d);
+        }
+        for (out, (x, step)) in commands[..m].iter_mut().zip(t.iter().zip(&d)) {
+            *out = x + step;
+        }
+        true
     }
 
     /// The hot path: `u_c` has n finite entries and `commands` m (callers that validated once).
@@ -1352,191 +1396,35 @@ fn back_substitute(a: &[f64], ld: usize, rank: usize, y: &mut [f64]) {
     }
 }
 
-/// Overwrites the lower triangle of `s` (`k x k`, stride [`N`]) with its Cholesky factor `L`;
-/// false at the first pivot at or below `tolerance`.
-fn cholesky_factor(s: &mut [f64; N * N], k: usize, tolerance: f64) -> bool {
-    for j in 0..k {
-        let mut d = s[j * N + j];
-        for l in 0..j {
-            d -= s[j * N + l] * s[j * N + l];
-        }
-        if d <= tolerance {
-            return false;
-        }
-        let d = d.sqrt();
-        s[j * N + j] = d;
-        for i in j + 1..k {
-            let mut v = s[i * N + j];
-            for l in 0..j {
-                v -= s[i * N + l] * s[j * N + l];
-            }
-            s[i * N + j] = v / d;
-        }
-    }
-    true
-}
-
-/// Solves `L L^T x = b` in place for the `k x k` lower-triangular `L` in `l` (stride [`N`]).
-fn cholesky_substitute(l: &[f64; N * N], b: &mut [f64; N], k: usize) {
-    for i in 0..k {
-        let mut v = b[i];
-        for j in 0..i {
-            v -= l[i * N + j] * b[j];
-        }
-        b[i] = v / l[i * N + i];
-    }
-    for i in (0..k).rev() {
-        let mut v = b[i];
-        for j in i + 1..k {
-            v -= l[j * N + i] * b[j];
-        }
-        b[i] = v / l[i * N + i];
-    }
-}
-
-/// Solves `S p = r` for a symmetric positive semidefinite `k x k` system (row stride [`N`],
-/// overwritten), `r` in the range of `S`, choosing among the solutions the one closest to
-/// `target`. Pivots at or below `tolerance` mark dependent directions.
-///
-/// Pivoted Cholesky `P^T S P = [L11; L21] [L11; L21]^T` of rank `r`; the basic solution puts zero
-/// on the dependent variables, and the null space is spanned by `[-X; I]`, `X = L11^-T L21^T`,
-/// so the closest solution follows from the `(k - r)`-square system `(I + X^T X) z = ...`.
-pub(crate) fn solve_psd_closest(
-    s: &mut [f64; N * N],
-    r: &[f64; N],
-    target: &[f64; N],
-    k: usize,
-    tolerance: f64,
-    p: &mut [f64; N],
-) {
-    let mut perm = [0usize; N];
-    for (i, slot) in perm.iter_mut().enumerate().take(k) {
-        *slot = i;
-    }
-    let mut rank = 0;
-    for j in 0..k {
-        let mut q = j;
-        for i in j + 1..k {
-            if s[i * N + i] > s[q * N + q] {
-                q = i;
-            }
-        }
-        if s[q * N + q] <= tolerance {
-            break;
-        }
-        if q != j {
-            perm.swap(j, q);
-            for col in 0..k {
-                s.swap(j * N + col, q * N + col);
-            }
-            for row in 0..k {
-                s.swap(row * N + j, row * N + q);
-            }
-        }
-        let d = s[j * N + j].sqrt();
-        s[j * N + j] = d;
-        for i in j + 1..k {
-            s[i * N + j] /= d;
-        }
-        // Schur complement of the trailing block, kept full (both triangles) for later swaps.
-        for i in j + 1..k {
-            let lij = s[i * N + j];
-            for l in j + 1..k {
-                s[i * N + l] -= lij * s[l * N + j];
-            }
-        }
-        rank += 1;
-    }
-
-    // Basic solution in permuted coordinates: L11 L11^T y = r_1.
-    let mut y = [0.0; N];
-    for (i, yi) in y.iter_mut().enumerate().take(rank) {
-        *yi = r[perm[i]];
-    }
-    cholesky_substitute(s, &mut y, rank);
-    let mut permuted = [0.0; N];
-    permuted[..rank].copy_from_slice(&y[..rank]);
-
-    let nullity = k - rank;
-    if nullity > 0 {
-        // X = L11^-T L21^T, column c solves L11^T x = (row c of L21)^T.
-        let mut x = [0.0; N * N];
-        for c in 0..nullity {
-            let row = rank + c;
-            for i in (0..rank).rev() {
-                let mut v = s[row * N + i];
-                for j in i + 1..rank {
-                    v -= s[j * N + i] * x[j * N + c];
-                }
-                x[i * N + c] = v / s[i * N + i];
-            }
-        }
-        // (I + X^T X) z = -X^T (target_1 - y) + target_2.
-        let mut g = [0.0; N * N];
-        let mut b = [0.0; N];
-        for a in 0..nullity {
-            for c in 0..nullity {
-                let dot: f64 = (0..rank).map(|i| x[i * N + a] * x[i * N + c]).sum();
-                g[a * N + c] = dot + if a == c { 1.0 } else { 0.0 };
-            }
-            let pull: f64 = (0..rank)
-                .map(|i| x[i * N + a] * (target[perm[i]] - y[i]))
-                .sum();
-            b[a] = target[perm[rank + a]] - pull;
-        }
-        // I + X^T X >= I: every pivot is at least 1.
-        cholesky_factor(&mut g, nullity, 0.0);
-        let mut z = b;
-        cholesky_substitute(&g, &mut z, nullity);
-        for i in 0..rank {
-            let shift: f64 = (0..nullity).map(|c| x[i * N + c] * z[c]).sum();
-            permuted[i] -= shift;
-        }
-        permuted[rank..k].copy_from_slice(&z[..nullity]);
-    }
-    for i in 0..k {
-        p[perm[i]] = permuted[i];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::DMatrix;
 
-    fn closest_solution_check(s: DMatrix<f64>, r: &[f64], target: &[f64]) -> Vec<f64> {
-        let k = s.nrows();
-        let mut sys = [0.0; N * N];
-        for i in 0..k {
-            for j in 0..k {
-                sys[i * N + j] = s[(i, j)];
-            }
-        }
-        let mut rr = [0.0; N];
-        let mut tt = [0.0; N];
-        rr[..k].copy_from_slice(r);
-        tt[..k].copy_from_slice(target);
-        let mut p = [0.0; N];
-        solve_psd_closest(&mut sys, &rr, &tt, k, 1e-11 * s.amax(), &mut p);
-        p[..k].to_vec()
+    fn unconstrained(a: &DMatrix<f64>, b: &[f64], target: &[f64]) -> Vec<f64> {
+        let (n, m) = a.shape();
+        let problem =
+            AllocationProblem::new(a.clone(), &vec![1.0; n], &vec![-1e6; m], &vec![1e6; m])
+                .and_then(|p| p.with_regularization(0.0, target))
+                .unwrap();
+        let mut t = vec![0.0; m];
+        assert!(ActiveSetSolver::new(&problem).unconstrained(b, &mut t));
+        t
     }
 
     #[test]
-    fn singular_system_gives_the_solution_closest_to_the_target() {
-        // S = A^T A with A 2 x 4: rank 2. The closest solution to t is t + A^+ (A^-T r ... ) i.e.
-        // the projection of t onto {p : S p = r}: p = t + S^+ (r - S t).
+    fn rank_deficient_least_squares_gives_the_solution_closest_to_the_target() {
+        // A 2 x 4 (rank 2): the minimisers of |A T - b| closest to t are t + A^+ (b - A t).
         let a = DMatrix::from_row_slice(2, 4, &[1.0, 2.0, 0.5, -1.0, 0.3, -0.7, 1.1, 0.4]);
-        let s = a.transpose() * &a;
-        let p_true = DMatrix::from_column_slice(4, 1, &[0.2, -0.4, 0.9, 0.1]);
-        let r = &s * &p_true;
+        let b = [0.7, -1.3];
         let target = [1.0, 2.0, -3.0, 0.5];
-        let p = closest_solution_check(s.clone(), r.as_slice(), &target);
+        let p = unconstrained(&a, &b, &target);
         let t = DMatrix::from_column_slice(4, 1, &target);
-        let s_pinv = s.clone().pseudo_inverse(1e-10).unwrap();
-        let expected = &t + &s_pinv * (&r - &s * &t);
+        let a_pinv = a.clone().pseudo_inverse(1e-12).unwrap();
+        let expected = &t + &a_pinv * (DMatrix::from_column_slice(2, 1, &b) - &a * &t);
         for i in 0..4 {
             assert!(
-                (p[i] - expected[(i, 0)]).abs() < 1e-10,
+                (p[i] - expected[(i, 0)]).abs() < 1e-12,
                 "{p:?} vs {expected}"
             );
         }
@@ -1544,12 +1432,12 @@ mod tests {
 
     #[test]
     fn regular_system_is_solved_exactly() {
-        let s = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
-        let r = [1.0, -2.0, 0.5];
-        let p = closest_solution_check(s.clone(), &r, &[9.0; 3]);
-        let back = &s * DMatrix::from_column_slice(3, 1, &p);
+        let a = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
+        let b = [1.0, -2.0, 0.5];
+        let p = unconstrained(&a, &b, &[9.0; 3]);
+        let back = &a * DMatrix::from_column_slice(3, 1, &p);
         for i in 0..3 {
-            assert!((back[(i, 0)] - r[i]).abs() < 1e-13);
+            assert!((back[(i, 0)] - b[i]).abs() < 1e-13);
         }
     }
 }

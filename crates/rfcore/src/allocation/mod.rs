@@ -22,8 +22,8 @@
 //! With more rotors than weighted axes (a hexacopter, or a zero yaw weight) the minimisers form a
 //! set. Every method here returns, among them, the one closest to `T_pref` (zero unless set): for
 //! the pseudo-inverse exactly `T_pref + A^+ (b - A T_pref)`, i.e. `M^+ u_c` of Ke eq. (34) when
-//! `T_pref = 0` (directions whose weighted gain is below [`RANK_RTOL`] of the largest, on the
-//! squared gain, count as zero there); the active-set solver finds the closest optimum also when
+//! `T_pref = 0`, computed from the same QR as the active set (no rank cut on the weights: every
+//! positive weight counts); the active-set solver finds the closest optimum also when
 //! bounds are active (its phase 2), with no rank cut on the weights. Every active-set answer
 //! carries a [`Certificate`]; it is `Optimal` only when that holds, else the solver falls back to
 //! Clarabel ([`SolvedBy`]).
@@ -38,17 +38,13 @@ pub mod active_set;
 pub mod clarabel;
 
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
-use active_set::{ActiveSet, ActiveSetSolver};
+use active_set::{ActiveSet, ActiveSetSettings, ActiveSetSolver};
 use clarabel::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
 pub const MAX_ACTUATORS: usize = 16;
 /// Most virtual-control components a problem may have.
 pub const MAX_VIRTUAL: usize = 12;
-/// Relative threshold on the squared gain (curvature) below which a direction counts as zero in
-/// the unconstrained pseudo-inverse ([`weighted_pseudo_inverse`]); the active-set solver uses no
-/// such cut (see [`crate::allocation::active_set::RANK_TOL`]).
-pub const RANK_RTOL: f64 = 1e-11;
 
 /// A box-constrained weighted least-squares allocation problem (module docs). Validated on
 /// construction; every field is read-only afterwards.
@@ -426,75 +422,30 @@ pub struct WeightedPseudoInverse {
     offset: Vec<f64>,
 }
 
-/// Builds the [`WeightedPseudoInverse`] of a problem (bounds are ignored).
+/// Builds the [`WeightedPseudoInverse`] of a problem (bounds are ignored): column r of `P` is the
+/// answer for the unit virtual control `e_r` less the answer for zero (`o`), each from the
+/// active-set solver's QR of the scaled problem ([`ActiveSetSolver::unconstrained`]): every
+/// positive weight counts however small (no rank cut on `M^T W M`), and columns dependent to
+/// [`active_set::RANK_TOL`] of their own norm share the load by the closest-to-preferred rule.
 pub fn weighted_pseudo_inverse(problem: &AllocationProblem) -> WeightedPseudoInverse {
     let (n, m) = problem.matrix.shape();
-    let gamma = problem.regularization;
-    let root_w: Vec<f64> = problem.weights.iter().map(|w| w.sqrt()).collect();
-    // Stack [W^(1/2) M; sqrt(gamma) I] so the regularisation is part of one least-squares problem.
-    let extra = if gamma > 0.0 { m } else { 0 };
-    let mut a = DMatrix::zeros(n + extra, m);
+    let solver = ActiveSetSolver::new(problem);
+    let mut offset = vec![0.0; m];
+    let mut column = vec![0.0; m];
+    let mut unit = vec![0.0; n];
+    let mut gain = DMatrix::zeros(m, n);
+    // A matrix so small that a unit virtual control overflows once scaled (entries near the
+    // subnormal range) leaves NaN here; `checked_pseudo_inverse` refuses it for the allocations.
+    solver.unconstrained(&unit, &mut offset);
     for r in 0..n {
+        unit[r] = 1.0;
+        solver.unconstrained(&unit, &mut column);
+        unit[r] = 0.0;
         for c in 0..m {
-            a[(r, c)] = root_w[r] * problem.matrix[(r, c)];
+            gain[(c, r)] = column[c] - offset[c];
         }
     }
-    for c in 0..extra {
-        a[(n + c, c)] = gamma.sqrt();
-    }
-    let pinv = pseudo_inverse(&a);
-    // T = T_pref + A^+ (b - A T_pref), b = [W^(1/2) u_c; sqrt(gamma) T_pref].
-    let gain = DMatrix::from_fn(m, n, |c, r| pinv[(c, r)] * root_w[r]);
-    let pref = &problem.preferred;
-    let a_pref: Vec<f64> = (0..n + extra)
-        .map(|r| (0..m).map(|c| a[(r, c)] * pref[c]).sum())
-        .collect();
-    let offset = (0..m)
-        .map(|c| {
-            let correction: f64 = (0..n + extra)
-                .map(|r| {
-                    let b_pref = if r >= n {
-                        gamma.sqrt() * pref[r - n]
-                    } else {
-                        0.0
-                    };
-                    pinv[(c, r)] * (b_pref - a_pref[r])
-                })
-                .sum();
-            pref[c] + correction
-        })
-        .collect();
     WeightedPseudoInverse { gain, offset }
-}
-
-/// Moore-Penrose inverse: column r of `A^+` is the minimum-norm least-squares solution for the
-/// unit vector `e_r`, i.e. the solution of `A^T A x = A^T e_r` closest to zero, computed by the
-/// active-set solver's own pivoted-Cholesky routine with the same rank rule ([`RANK_RTOL`] on
-/// the curvature). (nalgebra 0.34's SVD returned wrong factors for some rank-deficient matrices;
-/// this also keeps one rank rule across methods.)
-fn pseudo_inverse(a: &DMatrix<f64>) -> DMatrix<f64> {
-    use crate::allocation::active_set::{solve_psd_closest, WORK};
-    let (rows, cols) = a.shape();
-    let h = a.transpose() * a;
-    let max_diagonal = (0..cols).map(|i| h[(i, i)]).fold(0.0, f64::max);
-    let tolerance = RANK_RTOL * max_diagonal;
-    let mut out = DMatrix::zeros(cols, rows);
-    for r in 0..rows {
-        let mut system = [0.0; WORK * WORK];
-        let mut rhs = [0.0; WORK];
-        for i in 0..cols {
-            for j in 0..cols {
-                system[i * WORK + j] = h[(i, j)];
-            }
-            rhs[i] = a[(r, i)];
-        }
-        let mut x = [0.0; WORK];
-        solve_psd_closest(&mut system, &rhs, &[0.0; WORK], cols, tolerance, &mut x);
-        for i in 0..cols {
-            out[(i, r)] = x[i];
-        }
-    }
-    out
 }
 
 impl WeightedPseudoInverse {
@@ -532,17 +483,31 @@ impl WeightedPseudoInverse {
     }
 }
 
+/// [`weighted_pseudo_inverse`], or an error naming the matrix when its entries are too small in
+/// scale for a finite pseudo-inverse (never a NaN allocation).
+fn checked_pseudo_inverse(problem: &AllocationProblem) -> Result<WeightedPseudoInverse> {
+    let pinv = weighted_pseudo_inverse(problem);
+    if pinv.gain.iter().chain(&pinv.offset).all(|v| v.is_finite()) {
+        Ok(pinv)
+    } else {
+        Err(RfError::invalid(
+            "matrix",
+            "too small in scale for a finite pseudo-inverse (entries near the subnormal range)",
+        ))
+    }
+}
+
 /// The unconstrained allocation of one virtual control (status [`AllocationStatus::Unconstrained`]).
 pub fn allocate_pinv(problem: &AllocationProblem, u_c: &[f64]) -> Result<Allocation> {
     problem.check_virtual_control(u_c)?;
-    Ok(weighted_pseudo_inverse(problem).allocation(problem, u_c))
+    Ok(checked_pseudo_inverse(problem)?.allocation(problem, u_c))
 }
 
 /// Which solver an allocation uses.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Method {
-    /// [`ActiveSetSolver`]: exact, the default.
-    ActiveSet,
+    /// [`ActiveSetSolver`] with its settings: exact, the default.
+    ActiveSet(ActiveSetSettings),
     /// [`crate::allocation::clarabel::allocate_clarabel`]: the interior-point reference.
     Clarabel(ClarabelSettings),
     /// [`crate::allocation::clarabel::allocate_prioritized`]: groups of rows, most important first.
@@ -553,14 +518,16 @@ pub enum Method {
 
 impl Method {
     /// The method named `name` (`"active-set"`, `"clarabel"`, `"pinv"`), with `priorities`
-    /// (groups of rows, most important first; Clarabel only) and Clarabel's `settings`.
+    /// (groups of rows, most important first; Clarabel only), the active set's `active` settings
+    /// and Clarabel's `settings`.
     pub fn parse(
         name: &str,
         priorities: Option<Vec<Vec<usize>>>,
+        active: ActiveSetSettings,
         settings: ClarabelSettings,
     ) -> Result<Self> {
         match (name, priorities) {
-            ("active-set", None) => Ok(Method::ActiveSet),
+            ("active-set", None) => Ok(Method::ActiveSet(active)),
             ("pinv", None) => Ok(Method::Pinv),
             ("clarabel", None) => Ok(Method::Clarabel(settings)),
             ("clarabel", Some(groups)) => Ok(Method::Prioritized(groups, settings)),
@@ -595,6 +562,22 @@ fn check_rows(problem: &AllocationProblem, controls: &[f64]) -> Result<()> {
     }
 }
 
+/// Active-set allocations of many virtual controls (rows of `controls`, N x n row-major) with a
+/// prepared solver, in parallel; validated as in [`allocate_many`]. The one path of the
+/// active-set method for one control or many (each row is [`ActiveSetSolver::allocate`]).
+pub fn allocate_all(solver: &ActiveSetSolver, controls: &[f64]) -> Result<Vec<Allocation>> {
+    let problem = solver.problem();
+    check_rows(problem, controls)?;
+    let n = problem.virtual_dimension();
+    if controls.len() == n {
+        return Ok(vec![solver.allocate(controls)?]);
+    }
+    controls
+        .par_chunks(n)
+        .map(|u_c| solver.allocate(u_c))
+        .collect()
+}
+
 /// Allocations of many virtual controls (rows of `controls`, N x n row-major) for one problem,
 /// in parallel. Validates every row first, so an error names the row and nothing is computed.
 pub fn allocate_many(
@@ -605,15 +588,12 @@ pub fn allocate_many(
     check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
     match method {
-        Method::ActiveSet => {
-            let solver = ActiveSetSolver::new(problem);
-            controls
-                .par_chunks(n)
-                .map(|u_c| solver.allocate(u_c))
-                .collect()
-        }
+        Method::ActiveSet(settings) => allocate_all(
+            &ActiveSetSolver::with_settings(problem, *settings),
+            controls,
+        ),
         Method::Pinv => {
-            let pinv = weighted_pseudo_inverse(problem);
+            let pinv = checked_pseudo_inverse(problem)?;
             Ok(controls
                 .chunks(n)
                 .map(|u_c| pinv.allocation(problem, u_c))
@@ -643,7 +623,10 @@ pub fn time_each(
     }
     check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
-    let solver = ActiveSetSolver::new(problem);
+    let solver = match method {
+        Method::ActiveSet(settings) => ActiveSetSolver::with_settings(problem, *settings),
+        _ => ActiveSetSolver::new(problem),
+    };
     let pinv = weighted_pseudo_inverse(problem);
     let mut commands = vec![0.0; problem.actuator_count()];
     let mut times = Vec::with_capacity(controls.len() / n);
@@ -651,7 +634,7 @@ pub fn time_each(
         let start = Instant::now();
         for _ in 0..repeats {
             match method {
-                Method::ActiveSet => {
+                Method::ActiveSet(_) => {
                     let mut active = ActiveSet::cold(problem.actuator_count());
                     black_box(solver.solve_unchecked(black_box(u_c), &mut active, &mut commands));
                 }

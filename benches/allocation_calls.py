@@ -1,0 +1,107 @@
+"""The cost of one allocation called from Python (issue 15 item 3), against clarabel's Python API.
+
+Run:  pip install ".[bench]" && python benches/allocation_calls.py      (about 20 seconds)
+
+Problem: Ke et al. eq. (33) on the ke-quadcopter preset with ``W = diag(1, 20, 20, 0.01)``, one
+virtual control at a time (a hover wrench plus small torques, inside the attainable set, and one
+beyond it so bounds are active). Timed with ``time.perf_counter`` over many calls, best of 7 runs
+(the machine is shared), per call:
+
+(a) ``Allocator.allocate(u)``: a prepared allocator, one virtual control (a list of floats);
+(b) ``rf.allocate(airframe, u, weights=w)``: the one-line call, airframe given each time;
+(c) ``rf.allocate(airframe, u)``: the same with the default weights;
+(d) clarabel (Python): the same QP set up and solved through the clarabel PyPI package;
+(e) the general path, ``Allocator.allocate([u])`` (a batch of one: conversion, shape checks, the
+    batch binding and its arrays), what every call paid before the single-vector binding (which
+    also rebuilt the solver per call: issue 15 measured 9 us and 25 us for (a) and (b) then).
+
+Also printed: the solve alone (timed inside Rust, no Python call), so the call overhead is
+(a) minus it. Targets (issue 15): (a) <= 3 us, (b) <= 6 us.
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+from collections.abc import Callable
+from typing import Any
+
+import clarabel  # type: ignore[import-untyped]
+import numpy as np
+from scipy import sparse  # type: ignore[import-untyped]
+
+import rotorfault as rf
+from rotorfault.allocation import Allocator
+
+from _timing import time_per_solve
+
+WEIGHTS = [1.0, 20.0, 20.0, 0.01]
+TARGET_ALLOCATOR_S = 3e-6
+TARGET_ONE_LINE_S = 6e-6
+
+
+def per_call(fn: Callable[[], Any], calls: int, runs: int = 7) -> float:
+    """Best over ``runs`` of the mean seconds per call of ``fn`` over ``calls`` calls."""
+    best = float("inf")
+    for _ in range(runs):
+        start = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        best = min(best, (time.perf_counter() - start) / calls)
+    return best
+
+
+def python_clarabel(m: np.ndarray, w: np.ndarray, lower: np.ndarray, upper: np.ndarray, u_c: np.ndarray) -> np.ndarray:
+    k = m.shape[1]
+    h = sparse.csc_matrix(np.triu(m.T @ (w[:, None] * m)))
+    q = -m.T @ (w * u_c)
+    a = sparse.csc_matrix(np.vstack([np.eye(k), -np.eye(k)]))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
+    solution = clarabel.DefaultSolver(h, q, a, np.r_[upper, -lower], [clarabel.NonnegativeConeT(2 * k)], settings).solve()
+    return np.clip(np.asarray(solution.x), lower, upper)
+
+
+def main() -> None:
+    print(f"rotorfault {rf.__version__}, clarabel (Python) {clarabel.__version__}, {platform.processor() or platform.machine()}")
+    frame = rf.Airframe.preset("ke-quadcopter")
+    allocator = Allocator(frame, weights=WEIGHTS)
+    w = np.asarray(WEIGHTS)
+    cases = {
+        "inside": [frame.hover_thrust_n, 0.05, -0.08, 0.005],
+        "beyond": [3.0 * frame.hover_thrust_n, 0.5, -0.8, 0.05],
+    }
+    print(f"\nper call, best of 7 runs (us); ke-quadcopter, W = diag({', '.join(map(str, WEIGHTS))})")
+    header = (
+        f"{'virtual control':<16} {'solve (Rust)':>12} {'Allocator':>10} {'rf.allocate':>12} {'(default w)':>12} "
+        f"{'general path':>13} {'clarabel Py':>12} {'Py/Allocator':>13} {'Py/rf.allocate':>15}"
+    )
+    print(header)
+    print("-" * len(header))
+    ok = True
+    for label, u in cases.items():
+        exact = allocator.allocate(u)
+        reference = python_clarabel(allocator.matrix, w, allocator.lower, allocator.upper, np.asarray(u))
+        f_exact, _ = allocator.objective(u, exact.commands)
+        f_ref, _ = allocator.objective(u, reference)
+        assert exact.status == "optimal" and f_exact <= f_ref + 1e-12 * max(f_ref, 1.0), (label, f_exact, f_ref)
+        solve = float(np.median(time_per_solve(allocator, [u], repeats=20_000)))
+        a = per_call(lambda: allocator.allocate(u), 20_000)
+        b = per_call(lambda: rf.allocate(frame, u, weights=WEIGHTS), 10_000)
+        c = per_call(lambda: rf.allocate(frame, u), 10_000)
+        e = per_call(lambda: allocator.allocate([u]), 10_000)
+        d = per_call(lambda: python_clarabel(allocator.matrix, w, allocator.lower, allocator.upper, np.asarray(u)), 300)
+        print(
+            f"{label:<16} {solve * 1e6:>12.2f} {a * 1e6:>10.2f} {b * 1e6:>12.2f} {c * 1e6:>12.2f} "
+            f"{e * 1e6:>13.2f} {d * 1e6:>12.1f} {d / a:>12.0f}x {d / b:>14.0f}x"
+        )
+        ok &= a <= TARGET_ALLOCATOR_S and b <= TARGET_ONE_LINE_S
+    print(
+        f"\ntargets: Allocator.allocate <= {TARGET_ALLOCATOR_S * 1e6:.0f} us, rf.allocate(airframe) <= "
+        f"{TARGET_ONE_LINE_S * 1e6:.0f} us per call: " + ("met" if ok else "NOT met")
+    )
+
+
+if __name__ == "__main__":
+    main()
