@@ -27,6 +27,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::DMatrix;
+use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 use rfcore::allocation::{time_each, AllocationProblem, Method, SolvedBy};
@@ -103,29 +104,6 @@ fn bench_allocation(c: &mut Criterion) {
     group.finish();
 }
 
-/// SplitMix64 (as in the tests): reproducible, dependency-free.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-    fn normal(&mut self) -> f64 {
-        let u = self.uniform(1e-12, 1.0);
-        let v = self.uniform(0.0, 1.0);
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
 
 const RANDOM_PROBLEMS: usize = 500;
 

@@ -11,6 +11,7 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 use nalgebra::DMatrix;
+use rfcore::fixtures::Rng;
 use rfcore::analysis::controllability::{controllability_matrix, hover_model, numerical_rank};
 use rfcore::analysis::{
     acai_from_matrix, acai_from_matrix_with_hover, failure_table, scale_free_rank, AcaiFormula,
@@ -19,21 +20,6 @@ use rfcore::analysis::{
 use rfcore::fixtures::{preset, preset_text};
 use rfcore::Airframe;
 
-/// SplitMix64: a seeded, platform-independent stream.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
 
 /// The gauge of G about the box centre (see the module docs), or None if Clarabel fails.
 fn lp_gauge(b: &DMatrix<f64>, lo: &[f64], hi: &[f64], g: &[f64]) -> Option<f64> {

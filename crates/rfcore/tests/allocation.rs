@@ -2,28 +2,11 @@
 //! warm starts and the unconstrained limits of Ke et al. eqs. (34)/(35).
 
 use nalgebra::DMatrix;
+use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
 use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
 use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
 
-/// SplitMix64: a dependency-free, reproducible generator.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
 
 struct Case {
     problem: AllocationProblem,
@@ -481,11 +464,6 @@ fn preset(name: &str) -> Airframe {
     rfcore::fixtures::preset(name)
 }
 
-fn normal(rng: &mut Rng) -> f64 {
-    let u = rng.uniform(1e-12, 1.0);
-    let v = rng.uniform(0.0, 1.0);
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-}
 
 /// Ours against unpolished Clarabel (tolerance 1e-12): never worse in the objective beyond
 /// `rel` of the objective's scale. Returns the relative excess.
@@ -513,7 +491,7 @@ fn ill_conditioned_columns_are_certified_and_exact() {
     for k in 4usize..=12 {
         for trial in 0..200 {
             let m = 4 + rng.below(5);
-            let mut matrix = DMatrix::from_fn(4, m, |_, _| normal(&mut rng));
+            let mut matrix = DMatrix::from_fn(4, m, |_, _| rng.normal());
             let weak = rng.below(m);
             for r in 0..4 {
                 matrix[(r, weak)] *= 10f64.powi(-(k as i32));
@@ -555,7 +533,7 @@ fn property_wide_class_is_certified_and_never_worse_than_clarabel() {
     for trial in 0..1500 {
         let n = 3 + rng.below(4);
         let m = 4 + rng.below(13);
-        let mut matrix = DMatrix::from_fn(n, m, |_, _| normal(&mut rng));
+        let mut matrix = DMatrix::from_fn(n, m, |_, _| rng.normal());
         for c in 0..m {
             let gain = match rng.below(6) {
                 0 => 0.0,
