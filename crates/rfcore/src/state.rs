@@ -108,6 +108,33 @@ impl RigidBodyState {
     }
 }
 
+/// Row-major state vectors (N x [`STATE_DIM`], e.g. a recorded flight's measurements), checked:
+/// whole rows and finite entries, each error naming `field[row, col]`. Each row becomes a state by
+/// [`state_from_vector`], the conversion the simulator applies to a noisy measurement, so a
+/// recorded measurement history replays bit for bit.
+pub fn states_from_vector_rows(field: &str, rows: &[f64]) -> Result<Vec<RigidBodyState>> {
+    if !rows.len().is_multiple_of(STATE_DIM) {
+        return Err(RfError::shape(
+            field,
+            format!("{STATE_DIM} columns (position, velocity, roll pitch yaw, rates)"),
+            format!("{} values", rows.len()),
+        ));
+    }
+    rows.chunks_exact(STATE_DIM)
+        .enumerate()
+        .map(|(k, row)| {
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                return Err(RfError::invalid(
+                    format!("{field}[{k}, {j}]"),
+                    format!("must be finite, got {}", row[j]),
+                ));
+            }
+            let x: [f64; STATE_DIM] = std::array::from_fn(|j| row[j]);
+            Ok(state_from_vector(&x))
+        })
+        .collect()
+}
+
 /// Length of the full state vector of [`state_vector`].
 pub const STATE_DIM: usize = 12;
 
