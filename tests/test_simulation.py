@@ -319,8 +319,13 @@ def test_batch_matches_single_runs(sim: rf.Simulator, lqr: rf.LinearFeedback) ->
     assert batch.position.shape == (6, 3201, 3)
     for i, (s, f) in enumerate(zip(starts, faults)):
         single = sim.run(s, 8.0, controller=lqr, faults=f)
-        n = len(single.t)
-        np.testing.assert_array_equal(batch.position[i, :n], single.position)
+        np.testing.assert_array_equal(batch.trajectories[i].position, single.position)
+        np.testing.assert_array_equal(batch.trajectories[i].t, single.t)
+        # Stacked by time: a diverged run's last row, at its located time, is off the grid.
+        n = len(single.t) - int(single.diverged)
+        np.testing.assert_array_equal(batch.t[:n], single.t[:n])
+        np.testing.assert_array_equal(batch.position[i, :n], single.position[:n])
+        assert np.isnan(batch.position[i, n:]).all()
         assert batch.diverged[i] == single.diverged
     assert batch.diverged[1] and np.isnan(batch.position[1, -1]).all()
     assert not batch.diverged[0] and np.isnan(batch.divergence_time[0])
