@@ -701,22 +701,26 @@ def simulate_batch(
             simulator._config(duration_s, record_every, seed_offset=first),
         )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
-    # The common recording grid (the core's, bit-identical to a full run's t); each run's rows
-    # go to the grid rows with their exact time. A divergence row off the grid (a crossing
-    # located between two recorded steps) is left out of the stack: it stays in its Trajectory.
+    # The common recording grid (the core's record_times, bit-identical to a completed run's t).
+    # A run's rows are a prefix of it but for a divergence row, which is stacked only when its
+    # time is the next grid time: a crossing located between two grid times stays in its
+    # Trajectory, never in a row of another time.
     grid = simulator._config(duration_s, record_every).record_times()
-    rows = []
+    stacked = []
     for tr in trajectories:
-        at = np.minimum(np.searchsorted(grid, tr.t), len(grid) - 1)
-        on_grid = grid[at] == tr.t
-        rows.append((at[on_grid], on_grid))
+        rows = len(tr.t)
+        if rows and not (rows <= len(grid) and tr.t[rows - 1] == grid[rows - 1]):
+            rows -= 1
+        if not np.array_equal(tr.t[:rows], grid[:rows]):
+            raise RuntimeError("internal: a run's recorded times left the recording grid")
+        stacked.append(rows)
 
     def stack(name: str) -> FloatArray:
         arrays = [getattr(tr, name) for tr in trajectories]
         shape = (n, len(grid), *arrays[0].shape[1:]) if arrays else (0, len(grid))
         out = np.full(shape, np.nan)
-        for i, (a, (at, on_grid)) in enumerate(zip(arrays, rows)):
-            out[i, at] = a[on_grid]
+        for i, (a, rows) in enumerate(zip(arrays, stacked)):
+            out[i, :rows] = a[:rows]
         return out
 
     return BatchResult(
