@@ -219,6 +219,63 @@ def test_passive_controller_commands_depend_only_on_what_it_measures(runs: dict[
         c.replay(thin.t, np.hstack([thin.position, thin.velocity, thin.quaternion, thin.omega]))
 
 
+def _noisy_ke_simulator(**limits: float) -> rf.Simulator:
+    """The ke-hil vehicle with 30 dB sensor noise (a fixed seed; at Wang's 15 dB, 1.8 m of
+    noise on a 10 m altitude, this controller loses the vehicle)."""
+    sim = ke.preset().simulator(limits=rf.DivergenceLimits(**limits))
+    sim.noise = rf.Noise(snr_db=30.0, seed=7)
+    return sim
+
+
+def test_replaying_a_noisy_runs_measurements_reproduces_its_commands() -> None:
+    """Under sensor noise the controller saw ``tr.measured``, not the true states: replaying the
+    measurements (12 columns, converted as the simulator converts them) gives the flown commands
+    bit for bit; replaying the true states (the old docstring's example) does not, by newtons
+    (measured: 5.2 N at 30 dB over this 1 s flight with a failure at 0.3 s)."""
+    pre = ke.preset()
+    sim = _noisy_ke_simulator()
+    c = rf.UniformPassiveFtc(KE, gains=pre.gains, position=(0, 0, -10))
+    tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=c, faults=[rf.RotorFault(rotor=1, time=0.3)])
+    assert not tr.diverged and tr.recorded_measurements.shape == (401, 12)
+    np.testing.assert_array_equal(c.replay(tr.t, tr.measured), tr.rotor_command)
+    true_states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])
+    assert np.abs(c.replay(tr.t, true_states) - tr.rotor_command).max() == pytest.approx(5.21, abs=0.01)
+
+
+def test_replay_accepts_a_shortened_last_step_and_a_divergence_row() -> None:
+    """The last interval of a recording may be shorter than dt_s (a run ending at a duration that
+    is not a multiple of dt_s; a divergence located within its step) and is replayed; a
+    divergence row of ``tr.measured`` (all NaN: no command was computed) replays to NaN, as
+    recorded. Any other spacing is refused, as are NaN rows elsewhere."""
+    pre = ke.preset()
+    c = rf.UniformPassiveFtc(KE, gains=pre.gains, position=(0, 0, -10))
+    start = rf.State(position=(0, 0, -10))
+    shortened = _noisy_ke_simulator().run(start, 0.2513, controller=c)
+    assert shortened.t[-1] == 0.2513 and shortened.t[-1] - shortened.t[-2] < sim_dt(shortened)
+    np.testing.assert_array_equal(c.replay(shortened.t, shortened.measured), shortened.rotor_command)
+    # A failure with a 0.05 rad tilt limit: the crossing is located between two control steps.
+    lost = _noisy_ke_simulator(max_tilt_rad=0.05).run(start, 2.0, controller=c, faults=[rf.RotorFault(rotor=1, time=0.3)])
+    assert lost.events[0].kind == "tilt" and 0 < lost.t[-1] - lost.t[-2] < sim_dt(lost)
+    assert np.all(np.isnan(lost.measured[-1])) and np.all(np.isnan(lost.rotor_command[-1]))
+    np.testing.assert_array_equal(c.replay(lost.t, lost.measured), lost.rotor_command)
+    with pytest.raises(ValueError, match="^times: .*only the last interval may be shorter"):
+        c.replay(lost.t[::2], lost.measured[::2])
+    late = lost.t.copy()
+    late[-1] = late[-2] + 2 * sim_dt(lost)
+    with pytest.raises(ValueError, match="^times"):
+        c.replay(late, lost.measured)
+    holed = lost.measured.copy()
+    holed[5, 3] = np.nan
+    with pytest.raises(ValueError, match=r"states\[5, 3\]: must be finite"):
+        c.replay(lost.t, holed)
+    with pytest.raises(ValueError, match="states: expected 13 columns .* or 12"):
+        c.replay(lost.t, lost.measured[:, :11])
+
+
+def sim_dt(tr: rf.Trajectory) -> float:
+    return float(tr.t[1] - tr.t[0])
+
+
 def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
     """Table IV's experiment column (k_rotor = 1.3): in the half second after the failure, before
     the spin builds up, the simulated vehicle tips past 90 degrees (n3z about -0.3). Remark 3's

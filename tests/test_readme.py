@@ -38,6 +38,17 @@ CLAIMS = [
     ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
     ("# 1.527, 1.680 (stability margin 1/gamma)", "ours", "round(ours.gamma_min, 3), round(ours.gamma, 3)", (1.527, 1.680), 0),
     ("# holds-position, within 1 cm of (0, 0, 1) m after 60 s", "ours", "run.outcome == 'holds-position' and run.final_error_m < 0.01", True, 0),
+    # The simulator's time grid, step-size guard and divergence detection (issue 18).
+    ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
+    ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),
+    ("# altitude-loss 0.6389 s = sqrt(2 x 2 m / g), not 0.65", "limited", "lost.events[0].kind", "altitude-loss", 0),
+    ("# altitude-loss 0.6389 s = sqrt(2 x 2 m / g), not 0.65", "limited", "lost.events[0].time", 0.6389, 0.5e-4),
+    ("# altitude-loss 0.6389 s = sqrt(2 x 2 m / g), not 0.65", "limited",
+     "lost.events[0].time - math.sqrt(2 * 2.0 / quad.gravity_m_s2)", 0.0, 1e-12),
+    ("# 1.7e-06 of the amplitude lost per step", "limited", "1 - abs(1 + h + h**2 / 2 + h**3 / 6 + h**4 / 24)", 1.7e-6, 0.05e-6),
+    ("at `MAX_RATE_STEP = 0.25` it loses 1.7e-6 of the amplitude per step", "limited", "rf.MAX_RATE_STEP", 0.25, 0.0),
+    ("# substeps: ... = 3.75 exceeds 0.25 ...: use substeps >= 15", "limited",
+     "refused.startswith('substeps: ') and '= 3.75 exceeds 0.25' in refused and 'use substeps >= 15 ' in refused", True, 0),
 ]
 
 

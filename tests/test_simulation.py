@@ -193,8 +193,63 @@ def test_python_controller_errors_propagate(sim: rf.Simulator) -> None:
 
     with pytest.raises(ZeroDivisionError, match="controller bug"):
         sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=broken)
-    with pytest.raises(ValueError, match="must return 4 finite commands"):
+    with pytest.raises(ValueError, match="must return 4 commands, got 2 at t = 0"):
         sim.run(rf.State(), 1.0, controller=lambda t, x: [1.0, 2.0])
+
+
+def test_a_python_controller_returning_nan_ends_the_run_with_an_event(sim: rf.Simulator) -> None:
+    """Divergence is never an exception: a callable that returns NaN (here from t = 0.1 s on)
+    ends the run at that control step with the controller named in the event, exactly as a
+    built-in controller does; the row shows the NaN command it returned."""
+
+    def blows_up(t: float, x: np.ndarray) -> list[float]:
+        return [float("nan") if t > 0.0999 else 3.0] + [3.0] * 3
+
+    tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=blows_up)
+    assert tr.diverged
+    event = tr.events[0]
+    assert event.kind == "non-finite-command" and "controller" in event.description
+    assert event.time == pytest.approx(0.1, abs=1e-12) and tr.t[-1] == event.time
+    assert np.isnan(tr.rotor_command[-1, 0]) and np.all(tr.rotor_command[-1, 1:] == 3.0)
+    assert np.all(np.isfinite(tr.rotor_command[:-1]))
+    # An infinite command is a divergence too; a wrong count stays the controller's error.
+    tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lambda t, x: [math.inf] * 4)
+    assert tr.events[0].kind == "non-finite-command" and tr.events[0].time == 0.0
+
+
+def test_batch_time_axis_is_the_recorded_times(quad: rf.Airframe) -> None:
+    """``BatchResult.t`` holds the recorded times, the thinned grid and the exact end, equal to
+    every completed run's ``t`` (issue 18: it was ``arange(rows) * dt_s``, 0.10 s for a 1 s run
+    with record_every=10). A run diverging between two grid times keeps its exact last row in its
+    Trajectory and is NaN from the next grid row on, never stacked into a row of another time."""
+    sim = rf.Simulator(quad, dt_s=0.01)
+    b = rf.simulate_batch(sim, [rf.State(position=(0, 0, -10))], 1.0, record_every=10)
+    assert b.t[-1] == 1.0 == b.trajectories[0].t[-1]
+    np.testing.assert_array_equal(b.t, b.trajectories[0].t)
+    assert b.position.shape == (1, 11, 3)
+    b = rf.simulate_batch(sim, [rf.State(position=(0, 0, -10))], 3.0, record_every=7)
+    assert len(b.t) == 44 and b.t[-1] == 3.0 and b.t[-2] == pytest.approx(2.94, abs=1e-12)
+    np.testing.assert_array_equal(b.t, b.trajectories[0].t)
+    # A shortened last step (1.05 s at dt = 0.1): the grid ends exactly at 1.05.
+    b = rf.simulate_batch(rf.Simulator(quad, dt_s=0.1), [rf.State(position=(0, 0, -10))], 1.05, record_every=3)
+    np.testing.assert_allclose(b.t, [0.0, 0.3, 0.6, 0.9, 1.05], rtol=0, atol=1e-15)
+    assert b.t[-1] == 1.05
+    # Free fall (no thrust): the 2 m altitude-loss limit is crossed at sqrt(2 * 2 / g) =
+    # 0.6389 s, between the grid rows 0.6 and 0.7 of record_every = 10; the runs thrown up at
+    # 3 m/s lose at most 3 - 4.9 = 1.9 m in 1 s and do not diverge.
+    limited = rf.Simulator(quad, dt_s=0.01, limits=rf.DivergenceLimits(max_altitude_loss_m=2.0))
+    up = rf.State(position=(0, 0, -10), velocity=(0, 0, -3))
+    b = rf.simulate_batch(limited, [up, rf.State(position=(0, 0, -10)), up], 1.0, record_every=10)
+    falls = b.trajectories[1]
+    assert falls.events[0].kind == "altitude-loss" and not b.diverged[0] and not b.diverged[2]
+    assert b.divergence_time[1] == falls.t[-1] == pytest.approx(math.sqrt(2 * 2.0 / G), abs=1e-9)
+    np.testing.assert_array_equal(b.t, b.trajectories[0].t)
+    row = int(np.searchsorted(b.t, 0.65))  # the first grid row after the last recorded step
+    np.testing.assert_array_equal(b.t[:row], falls.t[:-1])
+    np.testing.assert_array_equal(b.position[1, :row], falls.position[:-1])
+    assert np.all(np.isnan(b.position[1, row:]))
+    # Every stacked row is the state at the row's time: z = 10 + g t^2 / 2 (to RK4's round-off).
+    np.testing.assert_allclose(b.position[1, :row, 2], -10 + 0.5 * G * b.t[:row] ** 2, rtol=0, atol=1e-12)
 
 
 def test_batch_runs_start_at_their_own_trim_with_lagging_actuators(quad: rf.Airframe, lqr: rf.LinearFeedback) -> None:
@@ -264,8 +319,13 @@ def test_batch_matches_single_runs(sim: rf.Simulator, lqr: rf.LinearFeedback) ->
     assert batch.position.shape == (6, 3201, 3)
     for i, (s, f) in enumerate(zip(starts, faults)):
         single = sim.run(s, 8.0, controller=lqr, faults=f)
-        n = len(single.t)
-        np.testing.assert_array_equal(batch.position[i, :n], single.position)
+        np.testing.assert_array_equal(batch.trajectories[i].position, single.position)
+        np.testing.assert_array_equal(batch.trajectories[i].t, single.t)
+        # Stacked by time: a diverged run's last row, at its located time, is off the grid.
+        n = len(single.t) - int(single.diverged)
+        np.testing.assert_array_equal(batch.t[:n], single.t[:n])
+        np.testing.assert_array_equal(batch.position[i, :n], single.position[:n])
+        assert np.isnan(batch.position[i, n:]).all()
         assert batch.diverged[i] == single.diverged
     assert batch.diverged[1] and np.isnan(batch.position[1, -1]).all()
     assert not batch.diverged[0] and np.isnan(batch.divergence_time[0])
@@ -358,3 +418,25 @@ def test_batch_with_progress_flies_every_run_as_one_call_would(quad: rf.Airframe
         np.testing.assert_array_equal(a.measured, b.measured)
     with pytest.raises(TypeError, match="^progress"):
         rf.simulate_batch(sim, starts[:2], 0.1, controllers=lqr, progress="yes")  # type: ignore[arg-type]
+
+
+def test_a_substep_too_long_for_the_motion_is_refused_or_ends_the_run(quad: rf.Airframe) -> None:
+    """The step-size guard from Python (issue 18 item 5): h max(|omega|, 1 / time_constant) may
+    not exceed MAX_RATE_STEP = 0.25. A 75 rad/s spin at h = 0.05 s (3.75) and a 0.02 s rotor lag
+    at h = 0.02 s (1.0) are refused before the run with the numbers and the substeps needed; a
+    yaw rate that grows past 0.25 / h during the run ends it with a ``step-size`` event, a
+    numerical cause, not ``body-rate``."""
+    assert rf.MAX_RATE_STEP == 0.25
+    coarse = rf.Simulator(quad, dt_s=0.05, substeps=1)
+    with pytest.raises(ValueError, match=r"^substeps: .*h = dt / substeps = 0\.05 s .*75 rad/s.* = 3\.75 exceeds 0\.25.*substeps >= 15"):
+        coarse.run(rf.State(position=(0, 0, -10), omega=(0, 0, 75)), 1.0)
+    with pytest.raises(ValueError, match=r"^substeps: .*1 / time_constant = 50 1/s.* exceeds 0\.25.*substeps >= 4"):
+        rf.Simulator(quad, dt_s=0.02, substeps=1, actuator=rf.FixedPitchActuator(time_constant_s=0.02))
+    # Accepted at the start (4.9 rad/s x 0.05 s = 0.245), then a yaw torque spins it up past
+    # 0.25 / 0.05 = 5 rad/s.
+    f = quad.hover_thrust_n / 4
+    yaw = rf.OpenLoop.constant([f * 1.2, f * 0.8, f * 1.2, f * 0.8])
+    tr = coarse.run(rf.State(position=(0, 0, -10), omega=(0, 0, 4.9)), 2.0, controller=yaw)
+    event = tr.events[0]
+    assert event.kind == "step-size" and "substeps" in event.description
+    assert np.linalg.norm(event.state[9:12]) == pytest.approx(5.0, abs=1e-9)

@@ -7,6 +7,7 @@ import numpy.typing as npt
 
 __version__: str
 RANK_RTOL: float
+MAX_RATE_STEP: float
 ZERO_RTOL: float
 DEFAULT_GRAVITY_M_S2: float
 
@@ -284,6 +285,7 @@ class SimulationConfig:
     def limits(self) -> DivergenceLimits: ...
     @property
     def wind_m_s(self) -> list[float]: ...
+    def record_times(self) -> _F64: ...
 
 @final
 class Divergence:

@@ -64,6 +64,12 @@ def trim_command(controller: object) -> FloatArray | None:
     return None if u_trim is None else np.asarray(u_trim, dtype=np.float64)
 
 
+#: Largest ``h max(|omega|, 1 / time_constant)`` the simulator accepts, ``h = dt_s / substeps``
+#: the RK4 substep: a run whose initial spin or actuator lag is faster is refused (``ValueError``
+#: naming ``substeps`` and the numbers), and one whose body rate grows past ``MAX_RATE_STEP / h``
+#: ends with a ``step-size`` event (a numerical cause, not the vehicle's).
+MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
+
 #: The core's defaults, read once: the one source of every default below.
 _DEFAULT_DRAG = _rfcore.Drag()
 _DEFAULT_LIMITS = _rfcore.DivergenceLimits()
@@ -624,7 +630,13 @@ class Simulator:
 
 @dataclass(frozen=True)
 class BatchResult:
-    """Runs stacked along axis 0; rows after a run diverged are NaN."""
+    """Runs stacked along axis 0 on one time axis ``t``, the recording grid: the recorded control
+    steps (``k dt_s`` for every ``record_every``-th ``k``) and the end, exactly ``duration_s``;
+    equal to the ``t`` of every run that does not diverge. A run that diverges fills the rows up
+    to its last recorded step before the divergence and NaN after: its divergence row, at the
+    located crossing time, is stacked only when that time is a grid time (never into a row of
+    another time); it is always the last row of ``trajectories[i]``, and ``divergence_time[i]``
+    is its time."""
 
     t: FloatArray
     position: FloatArray
@@ -696,10 +708,12 @@ def simulate_batch(
     every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
     cannot run in a batch (they would serialise on the GIL). ``record_every`` thins what is
     recorded (every n-th control step, plus the last and any divergence): large batches need it
-    to keep memory bounded. ``progress=True`` shows a progress bar (runs done, rate, ETA) on
-    standard error; the runs then go to the core in chunks, with identical results.
-    ``memory_budget_bytes`` (default: half the available memory): a batch whose recordings would
-    need more is refused up front with the estimate (see :func:`recording_bytes`)."""
+    to keep memory bounded; the stacked arrays then sit on the thinned grid ``BatchResult.t``
+    (times, not step indices; see :class:`BatchResult`). ``progress=True`` shows a progress bar
+    (runs done, rate, ETA) on standard error; the runs then go to the core in chunks, with
+    identical results. ``memory_budget_bytes`` (default: half the available memory): a batch
+    whose recordings would need more is refused up front with the estimate (see
+    :func:`recording_bytes`)."""
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     states = list(x0s)
@@ -744,18 +758,30 @@ def simulate_batch(
             simulator._config(duration_s, record_every, seed_offset=first),
         )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
-    steps = max((len(tr.t) for tr in trajectories), default=0)
+    # The common recording grid (the core's record_times, bit-identical to a completed run's t).
+    # A run's rows are a prefix of it but for a divergence row, which is stacked only when its
+    # time is the next grid time: a crossing located between two grid times stays in its
+    # Trajectory, never in a row of another time.
+    grid = simulator._config(duration_s, record_every).record_times()
+    stacked = []
+    for tr in trajectories:
+        rows = len(tr.t)
+        if rows and not (rows <= len(grid) and tr.t[rows - 1] == grid[rows - 1]):
+            rows -= 1
+        if not np.array_equal(tr.t[:rows], grid[:rows]):
+            raise RuntimeError("internal: a run's recorded times left the recording grid")
+        stacked.append(rows)
 
     def stack(name: str) -> FloatArray:
         arrays = [getattr(tr, name) for tr in trajectories]
-        shape = (n, steps, *arrays[0].shape[1:]) if arrays else (0, steps)
+        shape = (n, len(grid), *arrays[0].shape[1:]) if arrays else (0, len(grid))
         out = np.full(shape, np.nan)
-        for i, a in enumerate(arrays):
-            out[i, : len(a)] = a
+        for i, (a, rows) in enumerate(zip(arrays, stacked)):
+            out[i, :rows] = a[:rows]
         return out
 
     return BatchResult(
-        t=np.arange(steps, dtype=np.float64) * simulator.dt_s,
+        t=grid,
         position=stack("position"),
         velocity=stack("velocity"),
         euler=stack("euler"),

@@ -391,6 +391,10 @@ impl PySimulationConfig {
     fn wind_m_s(&self) -> [f64; 3] {
         self.inner.wind_m_s.into()
     }
+    /// The recording grid: the times a run that does not diverge records (its `t`, bit for bit).
+    fn record_times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.record_times().into_pyarray(py)
+    }
 }
 
 fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {

@@ -67,6 +67,10 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("RANK_RTOL", rfcore::analysis::RANK_RTOL)?;
     module.add("ZERO_RTOL", rfcore::analysis::ZERO_RTOL)?;
     module.add("DEFAULT_GRAVITY_M_S2", rfcore::DEFAULT_GRAVITY_M_S2)?;
+    module.add(
+        "MAX_RATE_STEP",
+        rfcore::flight::simulation::MAX_RATE_STEP,
+    )?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -79,33 +79,55 @@ impl RigidBodyState {
     /// Row-major packed states (N x [`PACKED_DIM`], e.g. a recorded flight), checked: whole rows,
     /// finite entries and non-zero quaternions, each error naming `field[row, col]`.
     pub fn from_packed_rows(field: &str, rows: &[f64]) -> Result<Vec<Self>> {
-        if !rows.len().is_multiple_of(PACKED_DIM) {
-            return Err(RfError::shape(
-                field,
-                format!("{PACKED_DIM} columns (position, velocity, quaternion w x y z, rates)"),
-                format!("{} values", rows.len()),
-            ));
-        }
-        rows.chunks_exact(PACKED_DIM)
-            .enumerate()
-            .map(|(k, row)| {
-                if let Some(j) = row.iter().position(|v| !v.is_finite()) {
-                    return Err(RfError::invalid(
-                        format!("{field}[{k}, {j}]"),
-                        format!("must be finite, got {}", row[j]),
-                    ));
-                }
-                if Quaternion::new(row[6], row[7], row[8], row[9]).norm() < 1e-6 {
-                    return Err(RfError::invalid(
-                        format!("{field}[{k}]"),
-                        "the quaternion (columns 6-9) must not be zero",
-                    ));
-                }
-                let packed: [f64; PACKED_DIM] = std::array::from_fn(|j| row[j]);
-                Ok(Self::from_packed(&packed))
-            })
-            .collect()
+        let columns = "position, velocity, quaternion w x y z, rates";
+        states_from_rows::<PACKED_DIM>(field, rows, columns, |k, packed| {
+            if Quaternion::new(packed[6], packed[7], packed[8], packed[9]).norm() < 1e-6 {
+                return Err(RfError::invalid(
+                    format!("{field}[{k}]"),
+                    "the quaternion (columns 6-9) must not be zero",
+                ));
+            }
+            Ok(Self::from_packed(packed))
+        })
     }
+}
+
+/// Row-major state vectors (N x [`STATE_DIM`], e.g. a recorded flight's measurements), checked:
+/// whole rows and finite entries, each error naming `field[row, col]`. Each row becomes a state by
+/// [`state_from_vector`], the conversion the simulator applies to a noisy measurement, so a
+/// recorded measurement history replays bit for bit.
+pub fn states_from_vector_rows(field: &str, rows: &[f64]) -> Result<Vec<RigidBodyState>> {
+    let columns = "position, velocity, roll pitch yaw, rates";
+    states_from_rows::<STATE_DIM>(field, rows, columns, |_, x| Ok(state_from_vector(x)))
+}
+
+/// Rows of `D` values (`columns` says what they hold): whole rows and finite entries, checked
+/// with `field[row, col]` named, then `make(row index, row)`.
+fn states_from_rows<const D: usize>(
+    field: &str,
+    rows: &[f64],
+    columns: &str,
+    make: impl Fn(usize, &[f64; D]) -> Result<RigidBodyState>,
+) -> Result<Vec<RigidBodyState>> {
+    if !rows.len().is_multiple_of(D) {
+        return Err(RfError::shape(
+            field,
+            format!("{D} columns ({columns})"),
+            format!("{} values", rows.len()),
+        ));
+    }
+    rows.chunks_exact(D)
+        .enumerate()
+        .map(|(k, row)| {
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                return Err(RfError::invalid(
+                    format!("{field}[{k}, {j}]"),
+                    format!("must be finite, got {}", row[j]),
+                ));
+            }
+            make(k, &std::array::from_fn(|j| row[j]))
+        })
+        .collect()
 }
 
 /// Length of the full state vector of [`state_vector`].

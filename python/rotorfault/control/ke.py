@@ -220,18 +220,47 @@ class UniformPassiveFtc:
         )
 
     def replay(self, times: npt.ArrayLike, states: npt.ArrayLike, *, dt_s: float = 1.0 / 400.0) -> FloatArray:
-        """The commands this controller (from its reset state) gives for a recorded history:
-        ``times`` (N), ``states`` (N x 13: position, velocity, quaternion w x y z, body rates),
-        e.g. ``np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])``. No rotor
-        efficiency enters: the passivity check."""
+        """The commands this controller (from its reset state) gives for a recorded history of
+        what it measured: ``times`` (N) and ``states``, either N x 12 state vectors (position,
+        velocity, roll pitch yaw, body rates: :attr:`Trajectory.measured`, converted to a state
+        exactly as the simulator converts a measurement) or N x 13 (position, velocity,
+        quaternion w x y z, body rates). No rotor efficiency enters: the passivity check.
+
+        Replay what the controller saw. With sensor noise that is ``tr.measured`` (the true
+        states differ from it by the noise, and so do their commands: by 5.2 N at 30 dB in
+        ``tests/test_ftc.py``)::
+
+            commands = controller.replay(tr.t, tr.measured)           # with noise
+            states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])
+            commands = controller.replay(tr.t, states)                # without noise
+
+        Both reproduce ``tr.rotor_command`` bit for bit for a run recorded with
+        ``record_every=1`` (at the simulator's ``dt_s``, passed here), but for a diverged run's
+        last row when replaying true states (the flight computed no command there: NaN). ``times`` must be spaced
+        by ``dt_s`` (the filters assume one call per control period), except the last interval,
+        which may be shorter: a run's shortened final step or its located divergence. A last
+        row that is entirely NaN (a divergence row of ``tr.measured``, where no command was
+        computed) gives a NaN command row, as recorded."""
         t = float_array("times", times, 1)
         x = float_array("states", states, 2)
         period = real("dt_s", dt_s)
+        if x.shape[0] != t.size:
+            raise ValueError(f"states: expected one row per time ({t.size}), got {x.shape[0]}")
         # The filters assume one call per control period: a thinned recording (record_every > 1)
-        # would replay with the wrong dynamics.
-        if t.size > 1 and np.abs(np.diff(t) - period).max() > 1e-9 * max(period, 1.0):
-            raise ValueError(f"times: must be spaced by the control period dt_s = {period} s (record with record_every=1)")
-        out: FloatArray = _rfcore.replay(self.core(period), t, x, 4)
+        # would replay with the wrong dynamics. The last interval may be shorter (a shortened
+        # final step ends the run at duration_s; a divergence is located within its step).
+        gaps = np.diff(t)
+        tol = 1e-9 * max(period, 1.0)
+        if gaps.size and (np.abs(gaps[:-1] - period).max(initial=0.0) > tol or not 0.0 < gaps[-1] <= period + tol):
+            raise ValueError(
+                f"times: must be spaced by the control period dt_s = {period} s (record with record_every=1); "
+                "only the last interval may be shorter"
+            )
+        unreplayed = x.shape[0] > 0 and bool(np.all(np.isnan(x[-1])))
+        replayed = x[:-1] if unreplayed else x
+        out: FloatArray = _rfcore.replay(self.core(period), t[: len(replayed)], replayed, 4)
+        if unreplayed:
+            out = np.vstack([out, np.full((1, out.shape[1]), np.nan)])
         return out
 
 

@@ -12,7 +12,9 @@ use pyo3::prelude::*;
 
 use rfcore::allocation::active_set::ActiveSetSolver;
 use rfcore::control::{replay as core_replay, Allocated, Controller, ZeroCommand};
-use rfcore::state::{state_vector, RigidBodyState, PACKED_DIM};
+use rfcore::state::{
+    state_vector, states_from_vector_rows, RigidBodyState, PACKED_DIM, STATE_DIM,
+};
 use rfcore::RfError;
 
 use crate::allocation::PyAllocationProblem;
@@ -47,15 +49,18 @@ impl Controller for CallableController {
                 .extract::<Vec<f64>>()
         });
         match result {
-            Ok(values) if values.len() == out.len() && values.iter().all(|v| v.is_finite()) => {
+            // A non-finite command is a divergence, not an exception: the simulator ends the run
+            // with a `non-finite-command` event at this step (as for every controller).
+            Ok(values) if values.len() == out.len() => {
                 out.copy_from_slice(&values);
                 Ok(())
             }
             Ok(values) => Err(RfError::invalid(
                 "controller",
                 format!(
-                    "the Python controller must return {} finite commands, got {values:?} at t = {t_s}",
-                    out.len()
+                    "the Python controller must return {} commands, got {} at t = {t_s}",
+                    out.len(),
+                    values.len()
                 ),
             )),
             Err(err) => {
@@ -148,8 +153,10 @@ impl PyAllocated {
     }
 }
 
-/// Commands of a controller replayed on `states` (N x 13: position, velocity, quaternion w x y z,
-/// body rates) at `times` (N): an N x command_count array.
+/// Commands of a controller replayed on `states` at `times` (N): an N x command_count array.
+/// `states` is N x 13 (position, velocity, quaternion w x y z, body rates: a recorded true state)
+/// or N x 12 (the state vector with Euler angles: a recorded measurement, converted to a state as
+/// the simulator converts it).
 #[pyfunction]
 pub fn replay<'py>(
     py: Python<'py>,
@@ -160,13 +167,18 @@ pub fn replay<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let times = slice1("times", &times)?.to_vec();
     let columns = states.shape()[1];
-    if columns != PACKED_DIM {
-        return Err(PyValueError::new_err(format!(
-            "states: expected {PACKED_DIM} columns (position, velocity, quaternion w x y z, rates), got {columns}"
-        )));
+    let rows = slice2("states", &states)?;
+    let parsed = match columns {
+        PACKED_DIM => RigidBodyState::from_packed_rows("states", rows),
+        STATE_DIM => states_from_vector_rows("states", rows),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "states: expected {PACKED_DIM} columns (position, velocity, quaternion w x y z, rates) \
+                 or {STATE_DIM} (position, velocity, roll pitch yaw, rates), got {columns}"
+            )))
+        }
     }
-    let parsed = RigidBodyState::from_packed_rows("states", slice2("states", &states)?)
-        .map_err(to_py_err)?;
+    .map_err(to_py_err)?;
     let mut controller = boxed(Some(&controller), command_count)?;
     let rows = times.len();
     let count = controller.command_count();

@@ -350,6 +350,17 @@ impl SimulationConfig {
         }
     }
 
+    /// The recording grid: the times of the control steps a run that does not diverge records
+    /// (bit-identical to its [`Trajectory::t_s`]), the last exactly `duration_s`. A run that
+    /// diverges records a prefix of it and then its divergence row at the located time.
+    pub fn record_times(&self) -> Vec<f64> {
+        let steps = self.steps();
+        (0..=steps)
+            .filter(|&k| records(k, self.record_every, steps))
+            .map(|k| self.step_time(k))
+            .collect()
+    }
+
     /// Wind at time `t_s` (world, m/s).
     pub fn wind_at(&self, t_s: f64) -> Vector3<f64> {
         let p = &self.wind_profile;
@@ -364,6 +375,13 @@ impl SimulationConfig {
         };
         self.wind_m_s + extra
     }
+}
+
+/// Whether control step `k` of `steps` is recorded (without a divergence there): every
+/// `every`-th and the last. The one rule of [`simulate`] and [`SimulationConfig::record_times`].
+#[inline]
+fn records(k: usize, every: usize, steps: usize) -> bool {
+    k.is_multiple_of(every) || k == steps
 }
 
 /// Everything recorded at the control rate. Arrays are row-major, one row per control step.
@@ -731,7 +749,7 @@ pub fn simulate_observed(
         let finite = command.iter().all(|c| c.is_finite());
         observer.step(t, &state, &command, &efficiency);
         // Every `every`-th step, the last one, and a step whose command ends the run.
-        if k % every == 0 || k == steps || !finite {
+        if records(k, every, steps) || !finite {
             let row = config.noise.map(|_| &measured_vector);
             trajectory.push_step(t, &state, &efficiency, &actuators, row);
             trajectory.commands.extend_from_slice(&command);
@@ -1215,7 +1233,16 @@ mod tests {
                 .collect();
             assert_eq!(run.t_s.len(), every_second.len(), "{:?}", run.t_s);
             assert_eq!(*run.t_s.last().unwrap(), 1.0);
+            // The recording grid the batch stacks onto is the run's own time axis, bit for bit.
+            assert_eq!(thin.record_times(), run.t_s);
         }
+        // record_every = 7 over 3 s at dt = 0.01: steps 0, 7, ..., 294 and 300 (3.0 s).
+        let mut cfg = SimulationConfig::new(0.01, 1, 3.0);
+        cfg.record_every = 7;
+        let grid = cfg.record_times();
+        assert_eq!(grid.len(), 44);
+        assert_eq!(grid[1], 7.0 * 0.01);
+        assert_eq!((grid[42], grid[43]), (294.0 * 0.01, 3.0));
     }
 
     /// Constant (partly saturating) thrust commands against a lagged actuator: the coupled
