@@ -15,10 +15,12 @@ from ._numbers import PaperNumber
 
 @dataclass(frozen=True)
 class ReportFigure:
-    """A figure file (name relative to the report directory) and its caption."""
+    """A figure file (name relative to the report directory) and its caption; ``small``: shown
+    as a thumbnail in a grid (a click opens it full size), for series such as time histories."""
 
     file: str
     caption: str
+    small: bool = False
 
 
 @dataclass(frozen=True)

@@ -74,11 +74,19 @@ class Decision:
     code: tuple[str, ...]
 
 
+def _is_source_tree(root: Path) -> bool:
+    return (root / "README.md").is_file() and (root / "crates" / "rfcore").is_dir() and (root / "python" / "rotorfault").is_dir()
+
+
 def source_root() -> Path | None:
-    """The repository root when the package runs from a source tree (editable install or
-    checkout), else None."""
+    """The repository root: the source tree the package runs from (editable install or
+    checkout), else the current directory when it is a rotorfault clone (``pip install . &&
+    rotorfault reproduce`` run in the clone), else None."""
     root = Path(__file__).resolve().parents[3]
-    return root if (root / "README.md").is_file() and (root / "crates").is_dir() else None
+    if _is_source_tree(root):
+        return root
+    cwd = Path.cwd().resolve()
+    return cwd if _is_source_tree(cwd) else None
 
 
 def readme_text() -> str:
@@ -98,7 +106,9 @@ def readme_text() -> str:
 
 def _cells(line: str) -> list[str]:
     # Split on '|' outside backticks (a decision may quote `|x_i|`).
-    cells, current, code = [], [], False
+    cells: list[str] = []
+    current: list[str] = []
+    code = False
     for ch in line.strip()[1:-1] if line.strip().endswith("|") else line.strip()[1:]:
         if ch == "`":
             code = not code

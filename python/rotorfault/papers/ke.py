@@ -699,7 +699,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     for run in runs + extra:
         name = f"ke-{run.scenario.name}-{run.law}.png"
         run.plot(str(out / name))
-        section.figures.append(ReportFigure(name, f"{run.scenario.name}, law {run.law}: {run.scenario.description}"))
+        section.figures.append(ReportFigure(name, f"{run.scenario.name}, law {run.law}: {run.scenario.description}", small=True))
     section.run_time_s = time.perf_counter() - start
     return section
 

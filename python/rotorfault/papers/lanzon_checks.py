@@ -95,7 +95,7 @@ def eq26_numbers(v: LanzonVehicle | None = None) -> list[PaperNumber]:
         scale = float(np.max(np.abs(printed)))
         for (i, j), value in np.ndenumerate(printed):
             if value != 0:
-                rows.append(PaperNumber(PAPER, "eq. (26)", f"{name}[{i + 1},{j + 1}] (closed loop under RFL, finite differences)",
+                rows.append(PaperNumber(PAPER, "eq. (26)", f"{name}[{i + 1},{j + 1}] of the closed loop under RFL (finite differences)",
                                         float(value), float(ours[i, j]), EQ26_RTOL * scale))
     return rows
 
@@ -117,18 +117,18 @@ def loop_shape_numbers(design_: LanzonDesign) -> list[PaperNumber]:
     k = int(below[0])
     crossover = float(10 ** np.interp(0.0, [gain_db[k], gain_db[k - 1]], [math.log10(omega[k]), math.log10(omega[k - 1])]))
     low = float(np.interp(-2.0, np.log10(omega), gain_db))
-    where = "Section III.C (loop shape, our shaped plant G W1)"
+    where = "Section III.C"
     return [
-        PaperNumber(PAPER, where, "gain at 0.01 rad/s (dB)", LOOP_LOW_GAIN_DB, low, 1.0,
+        PaperNumber(PAPER, where, "gain at 0.01 rad/s (dB) of the shaped plant G W1", LOOP_LOW_GAIN_DB, low, 1.0,
                     "" if abs(low - LOOP_LOW_GAIN_DB) <= 1.0 else
                     "the target L is 60 dB; G W1 = G(s) G(s + e)^-1 diag(L) (rotorfault.control.robust.loop_shape_weight) "
                     "shifts the weight's zeros left of the plant's undamped spin modes, which changes the low-frequency "
                     "plateau by the gain of G(0) G(e)^-1"),
-        PaperNumber(PAPER, where, "crossover frequency (rad/s)", LOOP_CROSSOVER_RAD_S, crossover, 10.0,
+        PaperNumber(PAPER, where, "crossover frequency (rad/s) of the shaped plant G W1", LOOP_CROSSOVER_RAD_S, crossover, 10.0,
                     "tolerance 10 %: the paper states the crossover as a design target"),
-        PaperNumber(PAPER, where, "slope from crossover/10 to crossover (dB/decade)", LOOP_SLOPE_CROSSOVER_DB_DEC,
+        PaperNumber(PAPER, where, "slope from crossover/10 to crossover (dB/decade) of the shaped plant G W1", LOOP_SLOPE_CROSSOVER_DB_DEC,
                     _slope_db_per_decade(omega, gain_db, crossover / 10, crossover), 2.0),
-        PaperNumber(PAPER, where, "slope over 10^4..10^5 rad/s (dB/decade)", LOOP_SLOPE_HIGH_DB_DEC,
+        PaperNumber(PAPER, where, "slope over 10^4..10^5 rad/s (dB/decade) of the shaped plant G W1", LOOP_SLOPE_HIGH_DB_DEC,
                     _slope_db_per_decade(omega, gain_db, 1e4, 1e5), 2.0),
     ]
 

@@ -203,6 +203,19 @@ def render(
     )
 
 
+def _shown_path(path: Path | None) -> str:
+    """A path as the page shows it: relative to the source tree when inside it."""
+    if path is None:
+        return "none"
+    root = source_root()
+    if root is not None:
+        try:
+            return path.resolve().relative_to(root).as_posix()
+        except ValueError:
+            pass
+    return str(path)
+
+
 @dataclass
 class ReproduceResult:
     path: Path
@@ -253,8 +266,8 @@ def write_reproduce(
                 result.sections.append(chosen(tmp, quick=quick))
         result.run_time_s = time.perf_counter() - start
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
-                      command=manifest["command"], version=package_version,
-                      bench_directory=str(benches_dir) if benches_dir is not None else "none")
+                      command=str(manifest["command"]), version=package_version,
+                      bench_directory=_shown_path(benches_dir))
         (tmp / "index.html").write_text(html, encoding="utf-8")
     return result
 
