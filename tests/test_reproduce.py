@@ -181,3 +181,19 @@ def test_readme_main_job_is_the_report_and_links_its_screenshot() -> None:
     assert "(docs/report.png)" in text
     png = ROOT / "docs" / "report.png"
     assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_checks_the_output_directory_before_computing(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    runner = CliRunner()
+    missing = runner.invoke(cli, ["reproduce", "--quick", "--out", str(tmp_path / "no" / "report")])
+    assert missing.exit_code == 1 and "out: directory" in missing.output and "does not exist" in missing.output
+    out = tmp_path / "report"
+    reproduce.write_reproduce(out, providers={"du": None, "ke": None, "lanzon": None, "wang": None})
+    again = runner.invoke(cli, ["reproduce", "--quick", "--out", str(out)])
+    assert again.exit_code == 1 and "pass --force" in again.output
+    bad_benches = runner.invoke(cli, ["reproduce", "--quick", "--out", str(tmp_path / "r2"), "--benches", str(tmp_path / "nope")])
+    assert bad_benches.exit_code == 1 and "benches:" in bad_benches.output

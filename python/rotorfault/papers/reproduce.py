@@ -243,8 +243,12 @@ def write_reproduce(
     from .._output import check_output_directory, output_directory
 
     out = check_output_directory("out", out_dir, force=force)
-    benches_dir = default_bench_directory() if bench_directory is None else Path(bench_directory)
-    benches = bench_results(benches_dir if benches_dir is None or benches_dir.is_dir() or bench_directory is not None else None)
+    if bench_directory is None:  # the source tree's results, when there are any
+        default = default_bench_directory()
+        benches_dir = default if default is not None and default.is_dir() else None
+    else:
+        benches_dir = Path(bench_directory)
+    benches = bench_results(benches_dir)
     decision_rows = decisions()
     try:
         package_version = version("rotorfault")
