@@ -194,11 +194,15 @@ def render(
                         "partly": s.landed and not all(p.landed for p in flat(s)), "numbers": len(numbers),
                         "passed": sum(n.status == "pass" for n in numbers),
                         "differs": sum(n.status == "differs" for n in numbers)})
+    root = source_root()
+    have = {b.bench for b in benches}
+    missing_benches = [] if root is None else sorted(
+        p.stem for p in (root / "benches").glob("*.py") if not p.name.startswith("_") and p.stem not in have)
     template = env.get_template("reproduce.html.j2")
     return template.render(
         sections=sections, summary=summary, number_row=number_row,
         decisions=[{"gap": d.gap, "decision": d.decision, "links": _code_links(d, out)} for d in decision_rows],
-        benches=benches, quick=quick, run_time_s=run_time_s, command=command, version=version,
+        benches=benches, missing_benches=missing_benches, quick=quick, run_time_s=run_time_s, command=command, version=version,
         bench_directory=bench_directory, generated=time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     )
 
