@@ -1,6 +1,7 @@
 """ACAI throughput on Du et al.'s Fig. 4 grid: rotorfault (Rust) vs two NumPy implementations.
 
-Run:  python benches/acai_grid.py            (about 20 s on a 2-core machine)
+Run:  python benches/acai_grid.py [--json PATH]     (about 20 s on a 2-core machine; --json also
+      writes the figures, the machine and the date as JSON, read by ``rotorfault reproduce``)
 
 Grid: PNPNPN hexacopter (preset ``hexa-pnpnpn``), eta1, eta2, eta5 in {0, 0.04, ..., 1}, the other
 rotors at 1: 26^3 = 17,576 efficiency vectors (Du, Quan, Yang, Cai, JGCD 2015, Fig. 4).
@@ -196,6 +197,13 @@ def verdict(ok: bool) -> str:
 
 
 def main() -> None:
+    import argparse
+
+    from _results import add_json_option, figure, write
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_json_option(parser)
+    json_path = parser.parse_args().json_path
     airframe = rf.Airframe.preset(PRESET)
     bbar, k_max, g = problem(airframe)
     etas = fig4_grid()
@@ -277,6 +285,13 @@ def main() -> None:
     print(f"1-min load average: {load_before:.2f} before timing, {load_after:.2f} after "
           f"(this script alone keeps 1 to {cores_avail} cores busy; a load well above {cores_avail} means "
           f"other work shared the CPUs and the figures are pessimistic)")
+    write(json_path, "acai_grid", f"ACAI on Du Fig. 4's grid ({n:,} points, {PRESET}), end to end from Python", [
+        figure("rotorfault.acai_batch, Fig. 4 grid", rust_rate, "evaluations/s", baseline="NumPy, the paper's per-point procedure (batched SVD)",
+               baseline_value=n / median["b"], ratio=ratio_b, target=f">= {TARGET_RUST_EVALS_PER_S:,.0f}/s and >= {TARGET_RATIO_VS_B:g}x"),
+        figure("rotorfault.acai_batch, Fig. 4 grid, time", t_rust * 1e3, "ms", baseline="NumPy with rotorfault's algorithm (normals once per geometry)",
+               baseline_value=median["c"] * 1e3, ratio=ratio_c),
+        figure(f"rotorfault.acai_batch, {LARGE_N:,} random efficiency vectors", LARGE_N / t_big, "evaluations/s"),
+    ])
 
 
 if __name__ == "__main__":

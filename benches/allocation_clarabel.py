@@ -66,6 +66,14 @@ def python_clarabel(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, u_c: np
 
 
 def main() -> None:
+    import argparse
+
+    from _results import add_json_option, figure, write
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_json_option(parser)
+    json_path = parser.parse_args().json_path
+    figures = []
     print(f"rotorfault {rf.__version__}, clarabel (Python) {clarabel.__version__}, {platform.processor() or platform.machine()}")
     rng = np.random.default_rng(2026)
     rows = []
@@ -108,10 +116,17 @@ def main() -> None:
             f"{mb / ma:>7.0f}x {mc / ma:>7.0f}x"
         )
         ok &= ma <= TARGET_MEDIAN_S and mb / ma >= TARGET_RATIO
+        figures.append(figure(f"active-set allocation, {name} ({m_count} rotors), median per solve", ma * 1e9, "ns",
+                              baseline="the clarabel crate (Rust), same problems", baseline_value=mb * 1e9, ratio=mb / ma,
+                              target=f"<= {TARGET_MEDIAN_S * 1e9:.0f} ns and >= {TARGET_RATIO:.0f}x"))
+        figures.append(figure(f"active-set allocation, {name}, against clarabel from PyPI", ma * 1e9, "ns",
+                              baseline="clarabel (PyPI), same problems", baseline_value=mc * 1e9, ratio=mc / ma))
     print(
         f"\ntargets: active-set median <= {TARGET_MEDIAN_S * 1e6:.0f} us and >= {TARGET_RATIO:.0f}x clarabel (Rust): "
         + ("met" if ok else "NOT met")
     )
+    write(json_path, "allocation_clarabel",
+          f"Ke eq. (33) allocation, {PROBLEMS} random virtual controls per airframe, one thread, cold start", figures)
 
 
 if __name__ == "__main__":

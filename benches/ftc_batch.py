@@ -1,6 +1,7 @@
 """Closed-loop fault scenarios per second: Ke's uniform passive FTC in a rotorfault batch.
 
-Run:  pip install ".[bench]" && python benches/ftc_batch.py      (about a minute)
+Run:  pip install ".[bench]" && python benches/ftc_batch.py [--runs N] [--json PATH]   (about a minute;
+      ``--runs`` below 1,000 is a reduced run, labelled so in the JSON)
 
 The batch: 1,000 runs of 30 s each of the ke-quadcopter with the ``ke-hil`` controller preset
 (Table IV gains, QP allocation through the active-set solver every step, rotor lag, rotational and
@@ -43,9 +44,9 @@ PATTERNS = (
 )
 
 
-def batch_inputs(rng: np.random.Generator) -> tuple[list[rf.State], list[list[rf.RotorFault]], list[str]]:
+def batch_inputs(rng: np.random.Generator, runs: int = RUNS) -> tuple[list[rf.State], list[list[rf.RotorFault]], list[str]]:
     starts, faults, names = [], [], []
-    for _ in range(RUNS):
+    for _ in range(runs):
         name, pattern = PATTERNS[int(rng.integers(len(PATTERNS)))]
         t = float(rng.uniform(1.0, 5.0))
         run_faults = []
@@ -73,11 +74,22 @@ def rotorpy_steps_per_s() -> float | None:
 
 
 def main() -> None:
+    import argparse
+
+    from _results import add_json_option, figure, write
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--runs", type=int, default=RUNS, help=f"runs in the batch (default {RUNS})")
+    add_json_option(parser)
+    args = parser.parse_args()
+    runs = args.runs
+    if runs < 1:
+        parser.error("--runs: must be >= 1")
     print(f"rotorfault {rf.__version__}, {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs")
     preset = ke.preset("ke-hil")
     sim = preset.simulator()
     rng = np.random.default_rng(5)
-    starts, faults, names = batch_inputs(rng)
+    starts, faults, names = batch_inputs(rng, runs)
     controller = rf.UniformPassiveFtc(preset.airframe, gains=preset.gains, position=(0, 0, -10))
     steps_per_run = round(T_FINAL_S / sim.dt_s)
 
@@ -91,21 +103,30 @@ def main() -> None:
     batch = rf.simulate_batch(sim, starts, T_FINAL_S, controllers=controller, faults=faults, record_every=400)
     batch_s = time.perf_counter() - t0
     diverged = [names[i] for i in np.nonzero(batch.diverged)[0]]
-    total_steps = RUNS * steps_per_run
+    total_steps = runs * steps_per_run
     rate = total_steps / batch_s
     final_r = np.abs(batch.omega[:, -1, 2])
-    print(f"\nbatch: {RUNS} runs x {T_FINAL_S:.0f} s at {1 / sim.dt_s:.0f} Hz, {sim.substeps} RK4 substeps: "
+    print(f"\nbatch: {runs} runs x {T_FINAL_S:.0f} s at {1 / sim.dt_s:.0f} Hz, {sim.substeps} RK4 substeps: "
           f"{total_steps / 1e6:.0f} M control steps in {batch_s:.2f} s")
     print(f"  {rate:,.0f} closed-loop control steps/s  (target {TARGET_STEPS_PER_S:,}: "
           f"{'met' if rate >= TARGET_STEPS_PER_S else 'NOT met'})")
     print(f"  one run, one thread: {steps_per_run / single_s:,.0f} steps/s")
-    print(f"  runs lost: {len(diverged)} of {RUNS} {sorted(set(diverged))}; final |r| median "
+    print(f"  runs lost: {len(diverged)} of {runs} {sorted(set(diverged))}; final |r| median "
           f"{np.median(final_r[np.isfinite(final_r)]):.1f} rad/s")
     peer = rotorpy_steps_per_s()
     if peer is None:
         print("  RotorPy not installed (pip install '.[bench]'): no peer baseline")
     else:
         print(f"  RotorPy 3 SE3 hover (no faults), same run: {peer:,.0f} steps/s -> rotorfault is {rate / peer:,.0f}x")
+    write(args.json_path, "ftc_batch",
+          f"Ke's uniform passive FTC: {runs:,} fault scenarios of {T_FINAL_S:g} s at {1 / sim.dt_s:.0f} Hz, "
+          f"{sim.substeps} RK4 substeps, QP allocation every step, rf.simulate_batch", [
+              figure("closed-loop control steps/s, batch, end to end from Python", rate, "control steps/s",
+                     baseline=None if peer is None else "RotorPy 3 SE3 hover (no faults), same run",
+                     baseline_value=peer, ratio=None if peer is None else rate / peer, target=f">= {TARGET_STEPS_PER_S:,}/s"),
+              figure("one run, one thread", steps_per_run / single_s, "control steps/s"),
+              figure("runs lost", len(diverged), "runs"),
+          ], reduced=None if runs == RUNS else f"{runs:,} runs instead of {RUNS:,} (--runs)")
 
 
 if __name__ == "__main__":

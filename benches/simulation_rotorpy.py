@@ -1,6 +1,7 @@
 """Simulator throughput: rotorfault's parallel batch (Rust, rayon) vs RotorPy, in one run.
 
-Run:  python benches/simulation_rotorpy.py         (about 70 s on a 2-core machine)
+Run:  python benches/simulation_rotorpy.py [--rounds N] [--json PATH]   (about 70 s on a 2-core machine;
+      ``--json`` also writes the figures, the machine and the date, read by ``rotorfault reproduce``)
 Needs RotorPy: ``pip install rotorpy`` (or ``pip install -e .[bench]``).
 
 (a) rotorfault closed loop: ``rf.simulate_batch`` of 1,000 hover runs of the ``quad-x`` preset with
@@ -229,6 +230,17 @@ def rotorpy_breakdown() -> tuple[float, float]:
 
 
 def main() -> None:
+    import argparse
+
+    from _results import add_json_option, figure, write
+
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rounds", type=int, default=ROUNDS, help=f"interleaved timing rounds (default {ROUNDS})")
+    add_json_option(parser)
+    args = parser.parse_args()
+    rounds = args.rounds
+    if rounds < 1:
+        parser.error("--rounds: must be >= 1")
     try:
         rotorpy_version = importlib.metadata.version("rotorpy")
     except importlib.metadata.PackageNotFoundError:
@@ -279,14 +291,14 @@ def main() -> None:
 
     # -- timing: (a), (b), (c) interleaved ------------------------------------------------------------
     samples, cpu = interleaved_times(
-        {"closed": closed, "open": opened, "rotorpy": lambda: fly()[0]}, ROUNDS
+        {"closed": closed, "open": opened, "rotorpy": lambda: fly()[0]}, rounds
     )
     t_closed = statistics.median(samples["closed"])
     t_open = statistics.median(samples["open"])
     closed_steps_s = RUNS * control_steps / t_closed
     closed_rk4_s = RUNS * rk4_steps / t_closed
     open_rk4_s = RUNS * rk4_steps / t_open
-    print(f"timing: {ROUNDS} interleaved rounds (rotorfault (a), (b), RotorPy), end to end from Python, median (min)")
+    print(f"timing: {rounds} interleaved rounds (rotorfault (a), (b), RotorPy), end to end from Python, median (min)")
     print(f"{'variant':38s} {'median':>9s} {'min':>9s} {'control steps/s':>16s} {'RK4 steps/s':>13s} {'per core':>11s}")
     print(f"{'(a) closed loop, LQR (LinearFeedback)':38s} {t_closed:8.3f}s {min(samples['closed']):8.3f}s "
           f"{closed_steps_s:16,.0f} {closed_rk4_s:13,.0f} {closed_rk4_s / threads:11,.0f}")
@@ -311,7 +323,7 @@ def main() -> None:
     share, rhs_per_step = rotorpy_breakdown()
     print(f"RotorPy: Crazyflie params ({rp_params['mass_kg']} kg), SE3Control, HoverTraj, simulate() at "
           f"t_step = 1/{1 / DT:g} s, {ROTORPY_T_FINAL:g} s = {rp_steps:,} steps, sequential, "
-          f"{ROUNDS} runs: median {rp_wall:.3f} s (min {min(samples['rotorpy']):.3f} s) -> {rp_rate:,.0f} steps/s")
+          f"{rounds} runs: median {rp_wall:.3f} s (min {min(samples['rotorpy']):.3f} s) -> {rp_rate:,.0f} steps/s")
     print(f"    instrumented run: {share:.0%} of the loop in Multirotor.step (solve_ivp RK45), "
           f"{rhs_per_step:.1f} derivative evaluations per step")
     print()
@@ -331,6 +343,13 @@ def main() -> None:
     print(f"1-min load average: {load_before:.2f} before timing, {load_after:.2f} after "
           f"(this script alone keeps 1 to {cores} cores busy; a load well above {cores} means "
           f"other work shared the CPUs and the figures are pessimistic)")
+    write(args.json_path, "simulation_rotorpy",
+          f"simulator: {RUNS:,} hover runs of {T_FINAL:g} s ({PRESET}, {1 / DT:g} Hz, {SUBSTEPS} RK4 substeps), rf.simulate_batch", [
+              figure("closed loop (LQR), batch, end to end from Python", closed_steps_s, "control steps/s",
+                     baseline=f"RotorPy {rotorpy_version} SE3 hover, sequential, same run", baseline_value=rp_rate, ratio=ratio,
+                     target=f">= {TARGET_CLOSED_STEPS_PER_S:,}/s and >= {TARGET_RATIO_VS_ROTORPY:,.0f}x"),
+              figure("open loop, batch", open_rk4_s, "RK4 steps/s", target=f">= {TARGET_OPEN_RK4_PER_S:,}/s"),
+          ], reduced=None if rounds == ROUNDS else f"{rounds} timing rounds instead of {ROUNDS} (--rounds)")
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ matplotlib.pyplot, which it imported at start-up). Each figure is the median wal
 interpreters (``--repeats``, default 15). ``python -X importtime -c "import rotorfault"`` shows
 the per-module breakdown.
 
-    python benches/startup.py [--repeats N]
+    python benches/startup.py [--repeats N] [--json PATH]
 """
 
 from __future__ import annotations
@@ -30,8 +30,12 @@ def wall(args: list[str], repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    from _results import add_json_option, figure, write
+
     parser.add_argument("--repeats", type=int, default=15)
-    repeats = parser.parse_args().repeats
+    add_json_option(parser)
+    args = parser.parse_args()
+    repeats = args.repeats
     py = sys.executable
     rows = [
         ("python -c pass", wall([py, "-c", "pass"], repeats)),
@@ -50,6 +54,13 @@ def main() -> None:
         print(f"{name:<{width}}  {seconds * 1e3:8.1f} ms")
     lazy, eager = rows[2][1], rows[3][1]
     print(f"import rotorfault: {eager / lazy:.1f}x faster than the eager import (targets: < 300 ms; CLI < 600 ms)")
+    figures = [figure("import rotorfault", lazy * 1e3, "ms", baseline="the eager import before issue 15",
+                      baseline_value=eager * 1e3, ratio=eager / lazy, target="< 300 ms"),
+               figure("import numpy (the floor)", rows[1][1] * 1e3, "ms")]
+    if cli is not None:
+        figures.append(figure("CLI call: rotorfault acai -a hexa-pnpnpn", rows[4][1] * 1e3, "ms", target="< 600 ms"))
+    write(args.json_path, "startup", f"start-up: median wall time of {repeats} fresh interpreters", figures,
+          reduced=None if repeats == 15 else f"{repeats} repeats instead of 15")
 
 
 if __name__ == "__main__":

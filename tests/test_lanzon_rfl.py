@@ -18,6 +18,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault.control.lanzon import LanzonVehicle
+from rotorfault.papers.lanzon_checks import EQ26_RTOL, eq26_check, eq26_numbers
 
 
 @pytest.fixture(scope="module")
@@ -32,38 +33,22 @@ def test_table_1_and_the_spin_of_table_2(vehicle: LanzonVehicle) -> None:
     assert vehicle.rotational_drag_n_m_s == pytest.approx(0.5 * 9.81 * 2.4e-3 / 2.7, rel=1e-14)
 
 
-def _paper_26(v: LanzonVehicle) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. (26a), (26b) as printed."""
-    d, g, m, kr = v.drag_torque_ratio_m, v.gravity_m_s2, v.mass_kg, v.rotational_drag_n_m_s
-    ixx, izz, l = v.inertia_xx_kg_m2, v.inertia_zz_kg_m2, v.arm_length_m
-    a = np.array([
-        [0, d * g * m / kr, 1, 0, 0],
-        [-d * g * m / kr, 0, 0, 1, 0],
-        [0, 0, -kr / ixx, d * g * (ixx - izz) * m / (ixx * kr), 0],
-        [0, 0, -d * g * (ixx - izz) * m / (ixx * kr), -kr / ixx, 0],
-        [0, 0, 0, 0, -kr / izz],
-    ])
-    b = np.array([[0, 0, 0], [0, 0, 0], [l / (2 * ixx), 0, -l / (2 * d * ixx)], [0, 1 / ixx, 0], [0, 0, 1 / izz]])
-    return a, b
-
-
 @pytest.mark.parametrize("izz", [1.16e-3, 1.16e-2])
 def test_linearised_closed_loop_is_eq_26(izz: float) -> None:
-    v = LanzonVehicle(inertia_zz_kg_m2=izz)
-    a26, b26 = _paper_26(v)
-    a, b = v.linearisation()
-    np.testing.assert_allclose(a, a26, rtol=1e-14, atol=0)
-    np.testing.assert_allclose(b, b26, rtol=1e-14, atol=0)
+    """Eq. (26) as printed (``rotorfault.papers.lanzon_checks.eq26_printed``, typed from the
+    paper) against our closed form and against central differences of the closed loop under the
+    RFL: the same check, through the same function, as the reproduce-all report."""
+    check = eq26_check(LanzonVehicle(inertia_zz_kg_m2=izz))
+    np.testing.assert_allclose(check.a_ours, check.a_printed, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(check.b_ours, check.b_printed, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(check.a_fd, check.a_printed, rtol=EQ26_RTOL, atol=EQ26_RTOL * np.max(np.abs(check.a_printed)))
+    np.testing.assert_allclose(check.b_fd, check.b_printed, rtol=EQ26_RTOL, atol=EQ26_RTOL * np.max(np.abs(check.b_printed)))
 
-    def closed(x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        alpha, beta = v.rfl(x)
-        return v.reduced_dynamics(x, alpha + beta @ w)
 
-    h = 1e-6
-    ja = np.column_stack([(closed(h * e, np.zeros(3)) - closed(-h * e, np.zeros(3))) / (2 * h) for e in np.eye(5)])
-    jb = np.column_stack([(closed(np.zeros(5), h * e) - closed(np.zeros(5), -h * e)) / (2 * h) for e in np.eye(3)])
-    np.testing.assert_allclose(ja, a26, rtol=1e-6, atol=1e-6 * np.max(np.abs(a26)))
-    np.testing.assert_allclose(jb, b26, rtol=1e-6, atol=1e-6 * np.max(np.abs(b26)))
+def test_eq_26_numbers_all_pass() -> None:
+    numbers = eq26_numbers()
+    assert len(numbers) == 13  # the non-zero entries: 9 of (26a), 4 of (26b)
+    assert all(n.status == "pass" for n in numbers), [n for n in numbers if n.status != "pass"]
 
 
 def _sympy_phi_c_jacobian(v: LanzonVehicle):  # type: ignore[no-untyped-def]

@@ -41,7 +41,8 @@ def test_the_wheel_is_abi3_and_carries_the_package(built: tuple[Path, Path]) -> 
     assert "-cp311-abi3-" in wheel.name, wheel.name
     names = zipfile.ZipFile(wheel).namelist()
     for required in ("rotorfault/_rfcore.pyi", "rotorfault/py.typed", "rotorfault/presets/hexa-pnpnpn.toml",
-                     "rotorfault/presets/ftc/ke-hil.toml", "rotorfault/control/ke.py", "rotorfault/papers/ke.py"):
+                     "rotorfault/presets/ftc/ke-hil.toml", "rotorfault/control/ke.py", "rotorfault/papers/ke.py",
+                     "rotorfault/papers/templates/reproduce.html.j2"):
         assert required in names, required
     assert any(n.startswith("rotorfault/_rfcore") and n.endswith(".so") for n in names), names
 

@@ -508,6 +508,48 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
         console.print(table)
 
 
+@cli.command("reproduce")
+@click.option("--out", "out_dir", default="report", show_default=True, type=click.Path(file_okay=False), help="Directory for index.html and the figures (replaced as a whole).")
+@click.option("--quick", is_flag=True, help="Coarser grids and fewer flights (under 2 minutes).")
+@click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: benches/results of the source tree).")
+@click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@_user_errors
+def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> None:
+    """Reproduce every result of the four papers into one static report (index.html + figures)."""
+    from ._output import check_output_directory
+    from .papers import reproduce as reproduce_
+
+    check_output_directory("out", out_dir, force=force)
+    previous = signal.getsignal(signal.SIGTERM)
+    in_main = True
+    try:
+        signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread: leave SIGTERM alone
+        in_main = False
+    command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault reproduce"
+    try:
+        result = reproduce_.write_reproduce(
+            out_dir, quick=quick, force=force, command=command, bench_directory=bench_dir,
+            progress=lambda text: console.print(escape(text), highlight=False),
+        )
+    except _Terminated:
+        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
+    except KeyboardInterrupt:
+        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+    for section in result.sections:
+        numbers = [n for part in [section, *section.parts] for n in part.numbers]
+        state = "not landed yet" if not section.landed else f"{sum(n.status == 'pass' for n in numbers)} of {len(numbers)} printed numbers pass"
+        pending = [part.title for part in section.parts if not part.landed]
+        if pending:
+            state += f"; not landed yet: {', '.join(pending)}"
+        console.print(f"{escape(section.key)}: {escape(state)}", highlight=False)
+    console.print(f"report written to {escape(str(result.path))} in {result.run_time_s:.1f} s")
+
+
+
 def main() -> None:
     cli()
 

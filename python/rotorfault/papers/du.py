@@ -8,9 +8,16 @@ tests and the reproduce-all report read.
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 from ..airframe import Airframe
-from ..controllability import controllability
+from ..controllability import controllability, failure_table
+from ..scan import efficiency_scan
 from ._numbers import PaperNumber
+
+if TYPE_CHECKING:
+    from ._report import ReportSection
 
 PAPER = "Du et al. (JGCD 2015)"
 #: Tables II and III print four decimals: agreement to half a unit in the last place.
@@ -51,4 +58,41 @@ def printed_numbers() -> list[PaperNumber]:
     return _rows("hexa-pnpnpn", "Table II", TABLE_II) + _rows("hexa-ppnnpn", "Table III", TABLE_III)
 
 
-__all__ = ["PAPER", "TABLE_II", "TABLE_III", "TABLE_TOL", "printed_numbers"]
+#: Fig. 4's grid step (the paper's: 26 levels per rotor) and the coarser step of ``--quick``.
+FIG4_STEP = 0.04
+FIG4_QUICK_STEP = 0.1
+
+
+def report_section(out: Path, *, quick: bool = False) -> ReportSection:
+    """Du's part of ``rotorfault reproduce``: Tables II and III beside ours
+    (:func:`printed_numbers`), the failure tables of both hexacopters with up to two failed rotors
+    (:func:`rotorfault.failure_table`, as ``rotorfault failures`` prints them) and Fig. 4
+    (:func:`rotorfault.efficiency_scan`, as ``rotorfault scan --plot``; ``--quick``: a coarser
+    grid), written into ``out``."""
+    import time
+
+    from ._report import ReportFigure, ReportSection, ReportTable
+
+    start = time.perf_counter()
+    section = ReportSection("du", "Du et al.: controllability and the available control authority index (ACAI)",
+                            source="rotorfault.papers.du (rotorfault failures, rotorfault scan)")
+    section.numbers = printed_numbers()
+    for preset in ("hexa-pnpnpn", "hexa-ppnnpn"):
+        table = failure_table(Airframe.preset(preset), max_failed=2)
+        headers, rows = table.rows_for_display()
+        section.tables.append(ReportTable(
+            f"{preset}: every combination of up to 2 failed rotors (rotorfault failures -a {preset} -k 2; "
+            "* eq. (13) prints 0 although hover is infeasible)",
+            tuple(headers), tuple(tuple(row) for row in rows)))
+    step = FIG4_QUICK_STEP if quick else FIG4_STEP
+    scan = efficiency_scan(Airframe.preset("hexa-pnpnpn"), (1, 2, 5), step)
+    scan.plot(str(out / "du-fig4.png"))
+    section.figures.append(ReportFigure(
+        "du-fig4.png",
+        f"Du Fig. 4: hexa-pnpnpn, efficiencies of rotors 1, 2, 5 swept with step {step:g} ({len(scan.acai):,} points, "
+        f"{100 * scan.controllable_fraction:.1f} % controllable){' (--quick: the paper uses 0.04)' if quick else ''}."))
+    section.run_time_s = time.perf_counter() - start
+    return section
+
+
+__all__ = ["FIG4_QUICK_STEP", "FIG4_STEP", "PAPER", "TABLE_II", "TABLE_III", "TABLE_TOL", "printed_numbers", "report_section"]

@@ -20,6 +20,10 @@ from .._typing import KeLaw, KeOutcome
 from ..airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
 from ..simulation import RotorFault, State, Trajectory
+from ._numbers import PaperNumber
+
+if TYPE_CHECKING:
+    from ._report import ReportSection
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -608,6 +612,98 @@ TABLE_II_EFFICIENCY = (
 )
 
 
+#: Ke Table II: the eigenvalues of ``N = (E1 M) Lambda (E1 M)^+`` it prints (four decimals) for
+#: each health matrix of :data:`TABLE_II_EFFICIENCY`, in the paper's order.
+TABLE_II_EIGENVALUES = (
+    (1, 0.625, 1),
+    (1, 0.25, 1),
+    (0.1718, 0.644, 0.7592),
+    (0.1, 0.025, 0.1),
+    (1, 0, 0.5),
+    (0.5, 0, 0.25),
+    (0.5, 0, 1),
+    (1, 0, 0.5),
+    (1, 0, 0.5),
+    (0.75, 0, 0),
+    (0.75, 0, 0),
+)
+PAPER = "Ke et al. (IEEE TIE)"
+#: Table II prints up to four decimals: agreement to half a unit in the last place.
+TABLE_II_TOL = 0.5e-4
+
+
+def printed_numbers(airframe: Airframe | None = None) -> list[PaperNumber]:
+    """Every eigenvalue Ke Table II prints beside ours (:func:`rotorfault.control.ke.n_eigenvalues`
+    on the ``ke-quadcopter`` preset), both sorted ascending per row; a complex eigenvalue of ours
+    (none is expected) is reported as ``nan`` and so "differs"."""
+    from ..control.ke import n_eigenvalues
+
+    frame = Airframe.preset("ke-quadcopter") if airframe is None else airframe
+    rows = []
+    for efficiency, printed in zip(TABLE_II_EFFICIENCY, TABLE_II_EIGENVALUES, strict=True):
+        ours = n_eigenvalues(frame, efficiency)
+        case = f"diag({', '.join(f'{h:g}' for h in efficiency)})"
+        for k, (value, mine) in enumerate(zip(sorted(printed), ours, strict=True), start=1):
+            real_part = float(mine.real) if abs(mine.imag) <= 1e-12 else math.nan
+            rows.append(PaperNumber(PAPER, "Table II", f"eig {k} of N, {case}", float(value), real_part, TABLE_II_TOL))
+    return rows
+
+
+#: Scenarios flown for the reproduce-all report in --quick mode (the full mode flies all).
+QUICK_SCENARIOS = ("fault-free", "one-failure", "two-adjacent", "two-opposite", "two-adjacent-front", "three-failures")
+
+
+def report_section(out: Path, *, quick: bool = False) -> ReportSection:
+    """Ke's part of ``rotorfault reproduce``: Table II beside ours, the stability checks, and the
+    scenario flights (the same :func:`run_scenario`, :func:`report_rows` and figures as
+    ``rotorfault ftc-report``) written into ``out``: every scenario with the default law
+    (``--quick``: :data:`QUICK_SCENARIOS`) plus the printed law and the baseline on one failure."""
+    import time
+
+    from ..control.ke import stability_check as check_
+    from ._report import ReportFigure, ReportSection, ReportTable
+
+    start = time.perf_counter()
+    section = ReportSection("ke", "Ke et al.: uniform passive fault-tolerant control", source="rotorfault.papers.ke (rotorfault ftc-report)")
+    section.numbers = printed_numbers()
+    frame = Airframe.preset("ke-quadcopter")
+    checks = []
+    for efficiency in TABLE_II_EFFICIENCY:
+        c = check_(frame, efficiency)
+        checks.append((f"diag({', '.join(f'{h:g}' for h in efficiency)})", "yes" if c.thrust_feedback else "no",
+                       "yes" if c.full_compensation else "no"))
+    section.tables.append(ReportTable(
+        "Stability checks of Section III-D (k_rotor = 2): (25) the uniform controller, (32) Remark 5's full "
+        "compensation (fails with two or three failures, as Ke says)",
+        ("diag(efficiency)", "Re eig(I + k N) > 0 (25)", "Re eig(N) > 0 (32)"), tuple(checks)))
+    chosen = [scenario(name) for name in QUICK_SCENARIOS] if quick else scenarios()
+    runs = [run_scenario(sc) for sc in chosen]
+    extra = [run_scenario("one-failure", law=law) for law in ("literal", "baseline")]
+    rows = report_rows(runs + extra)
+    section.tables.append(ReportTable(
+        f"Flights ({'--quick: ' + str(len(chosen)) + ' scenarios' if quick else 'every scenario'}; preset ke-hil, "
+        f"outcomes judged over the last {WINDOW_S:g} s; Ke's experiment spins: about 23, 38 and 42 rad/s for one, two "
+        "adjacent and two opposite failures)",
+        ("scenario", "law", "Ke: stabilisable", "outcome", "efficiency reached", "r (rad/s)", "n3z", "max alt. loss (m)",
+         "max / final horiz. (m)"),
+        tuple(
+            (r["scenario"], r["law"], cell(r, "ke_stabilizable"), r["outcome_label"], r["efficiency"], cell(r, "r_rad_s", 1),
+             cell(r, "n3z", 3), cell(r, "max_altitude_loss_m", 2),
+             cell(r, "max_horizontal_error_m", 2) if r["max_horizontal_error_m"] is None
+             else f"{cell(r, 'max_horizontal_error_m', 2)} / {cell(r, 'final_horizontal_error_m', 2)}")
+            for r in rows
+        ),
+    ))
+    plot_primary_axis(runs, str(out / "ke-primary-axis.png"))
+    section.figures.append(ReportFigure("ke-primary-axis.png", "The primary axis n3 on the unit sphere for every flight (Ke Fig. 16 style)."))
+    for run in runs + extra:
+        name = f"ke-{run.scenario.name}-{run.law}.png"
+        run.plot(str(out / name))
+        section.figures.append(ReportFigure(name, f"{run.scenario.name}, law {run.law}: {run.scenario.description}", small=True))
+    section.run_time_s = time.perf_counter() - start
+    return section
+
+
 __all__ = [
     "CIRCLING_TURN_RAD",
     "HOLD_BAND_M",
@@ -617,6 +713,12 @@ __all__ = [
     "STEADY_COLUMNS",
     "WINDOW_S",
     "TABLE_II_EFFICIENCY",
+    "TABLE_II_EIGENVALUES",
+    "TABLE_II_TOL",
+    "PAPER",
+    "QUICK_SCENARIOS",
+    "printed_numbers",
+    "report_section",
     "FlightMetrics",
     "KeScenario",
     "ScenarioRun",

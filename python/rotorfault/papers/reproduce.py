@@ -1,0 +1,284 @@
+"""``rotorfault reproduce``: every result of the four papers in one static report (``index.html``
+plus figure files; no server, no network, opens from disk).
+
+Each paper is a section provider, ``report_section(out, *, quick)`` in its module (:data:`PAPERS`):
+the same functions the paper's CLI command and its tests call, so the report and the tests cannot
+disagree. A paper whose module is not in the package yet gets a section that says so. The
+decisions on the papers' gaps come from the README's table (:mod:`~rotorfault.papers.decisions`),
+the performance figures from the benches' JSON (``benches/results/*.json``, written by ``python
+benches/<bench>.py --json PATH``). The HTML is rendered by Jinja2 with autoescaping: every name
+and text from the data is escaped.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ._numbers import PaperNumber
+from ._report import ReportSection, SectionProvider, not_landed
+from .decisions import Decision, decisions, source_root
+
+
+@dataclass(frozen=True)
+class Paper:
+    """A paper of the report: its key, title, the module holding its ``report_section`` and what
+    the section shows (for the "not landed yet" text)."""
+
+    key: str
+    title: str
+    module: str
+    what: str
+
+
+#: The four papers, in the report's order.
+PAPERS = (
+    Paper("du", "Du et al.: controllability and the available control authority index (ACAI)", "rotorfault.papers.du",
+          "Tables II and III, the failure tables and Fig. 4"),
+    Paper("ke", "Ke et al.: uniform passive fault-tolerant control", "rotorfault.papers.ke",
+          "Table II, the stability checks, the flights and the unit-sphere plot"),
+    Paper("lanzon", "Lanzon et al.: flying a quadrotor on three rotors by letting it spin", "rotorfault.papers.lanzon_checks",
+          "eq. (26), the loop shape and the flights"),
+    Paper("wang", "Wang et al.: variable-pitch quadcopters", "rotorfault.papers.wang",
+          "the trim numbers of Section 3.1, the controllability ranks of Sections 3.3/3.4 and the flights"),
+)
+
+
+def provider(paper: Paper) -> SectionProvider | None:
+    """The paper's ``report_section``, or None when its module is not in the package (an import
+    error inside an existing module is raised, not hidden)."""
+    try:
+        module = importlib.import_module(paper.module)
+    except ModuleNotFoundError as exc:
+        if exc.name is not None and paper.module.startswith(exc.name):
+            return None
+        raise
+    found = getattr(module, "report_section", None)
+    return found if callable(found) else None
+
+
+# -- benchmarks ----------------------------------------------------------------------------------
+
+BENCH_SCHEMA = "rotorfault-bench/1"
+
+
+@dataclass(frozen=True)
+class BenchResult:
+    """One bench's JSON (see ``benches/_results.py``)."""
+
+    file: str
+    bench: str
+    title: str
+    command: str
+    date: str
+    machine: dict[str, Any]
+    reduced: str | None
+    figures: list[dict[str, Any]]
+
+
+def default_bench_directory() -> Path | None:
+    root = source_root()
+    return None if root is None else root / "benches" / "results"
+
+
+def bench_results(directory: str | os.PathLike[str] | None) -> list[BenchResult]:
+    """The bench results in ``directory`` (``*.json`` of schema ``rotorfault-bench/1``), sorted
+    by file name; an unreadable or foreign file is a ``ValueError`` naming it."""
+    if directory is None:
+        return []
+    d = Path(directory)
+    if not d.is_dir():
+        raise ValueError(f"benches: {str(d)!r} is not a directory")
+    out = []
+    for path in sorted(d.glob("*.json")):
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            if data.get("schema") != BENCH_SCHEMA:
+                raise ValueError(f"schema is {data.get('schema')!r}, expected {BENCH_SCHEMA!r}")
+            out.append(BenchResult(path.name, str(data["bench"]), str(data["title"]), str(data["command"]), str(data["date"]),
+                                   dict(data["machine"]), data.get("reduced"), list(data["figures"])))
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ValueError(f"benches: {str(path)!r} is not a bench result ({exc})") from None
+    return out
+
+
+def _number(value: float | None, unit: str = "") -> str:
+    if value is None:
+        return ""
+    if abs(value) >= 1e5:
+        text = f"{value:,.0f}" if abs(value) < 1e7 else f"{value / 1e6:,.2f} M"
+    elif abs(value) >= 100:
+        text = f"{value:,.0f}"
+    else:
+        text = f"{value:.3g}"
+    return f"{text} {unit}".strip()
+
+
+# -- rendering -----------------------------------------------------------------------------------
+
+
+def _fmt(value: float) -> str:
+    if value != value:  # nan
+        return "nan"
+    if value == 0:
+        return "0"
+    if abs(value) >= 1e4 or abs(value) < 1e-3:
+        return f"{value:.6g}"
+    return f"{value:.6g}"
+
+
+def number_row(n: PaperNumber) -> dict[str, str]:
+    return {"where": n.where, "quantity": n.quantity, "printed": _fmt(n.printed), "ours": _fmt(n.ours),
+            "difference": f"{n.difference:+.2e}" if n.difference == n.difference else "nan",
+            "tolerance": f"{n.tolerance:.1e}", "status": n.status, "note": n.note}
+
+
+_CODE = re.compile(r"`([^`]+)`")
+_BOLD = re.compile(r"\*\*([^*]+)\*\*")
+
+
+def inline_markdown(text: str) -> Any:
+    """The README's inline Markdown (backticks, bold) as HTML, everything else escaped."""
+    from markupsafe import Markup, escape
+
+    html = str(escape(text))
+    html = _CODE.sub(lambda m: f"<code>{m.group(1)}</code>", html)
+    html = _BOLD.sub(lambda m: f"<strong>{m.group(1)}</strong>", html)
+    return Markup(html)
+
+
+def _code_links(decision: Decision, out: Path) -> list[dict[str, str]]:
+    root = source_root()
+    links = []
+    for path in decision.code:
+        href = ""
+        if root is not None and (root / path).exists():
+            href = Path(os.path.relpath(root / path, out.resolve())).as_posix()
+        links.append({"path": path, "href": href})
+    return links
+
+
+def render(
+    sections: list[ReportSection],
+    decision_rows: list[Decision],
+    benches: list[BenchResult],
+    *,
+    out: Path,
+    quick: bool,
+    run_time_s: float,
+    command: str,
+    version: str,
+    bench_directory: str,
+) -> str:
+    """The page (``index.html``) as text."""
+    from jinja2 import Environment, FileSystemLoader, StrictUndefined
+
+    env = Environment(loader=FileSystemLoader(Path(__file__).with_name("templates")), autoescape=True,
+                      undefined=StrictUndefined, trim_blocks=True, lstrip_blocks=True)
+    env.filters["md"] = inline_markdown
+    env.filters["number"] = _number
+
+    def flat(section: ReportSection) -> list[ReportSection]:
+        return [section, *(p for part in section.parts for p in flat(part))]
+
+    summary = []
+    for s in sections:
+        numbers = [n for part in flat(s) for n in part.numbers]
+        summary.append({"key": s.key, "title": s.title, "landed": s.landed and all(p.landed for p in flat(s)),
+                        "partly": s.landed and not all(p.landed for p in flat(s)), "numbers": len(numbers),
+                        "passed": sum(n.status == "pass" for n in numbers),
+                        "differs": sum(n.status == "differs" for n in numbers)})
+    root = source_root()
+    have = {b.bench for b in benches}
+    missing_benches = [] if root is None else sorted(
+        p.stem for p in (root / "benches").glob("*.py") if not p.name.startswith("_") and p.stem not in have)
+    template = env.get_template("reproduce.html.j2")
+    return template.render(
+        sections=sections, summary=summary, number_row=number_row,
+        decisions=[{"gap": d.gap, "decision": d.decision, "links": _code_links(d, out)} for d in decision_rows],
+        benches=benches, missing_benches=missing_benches, quick=quick, run_time_s=run_time_s, command=command, version=version,
+        bench_directory=bench_directory, generated=time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+    )
+
+
+def _shown_path(path: Path | None) -> str:
+    """A path as the page shows it: relative to the source tree when inside it."""
+    if path is None:
+        return "none"
+    root = source_root()
+    if root is not None:
+        try:
+            return path.resolve().relative_to(root).as_posix()
+        except ValueError:
+            pass
+    return str(path)
+
+
+@dataclass
+class ReproduceResult:
+    path: Path
+    sections: list[ReportSection] = field(default_factory=list)
+    run_time_s: float = 0.0
+
+
+def write_reproduce(
+    out_dir: str | os.PathLike[str],
+    *,
+    quick: bool = False,
+    force: bool = False,
+    command: str | None = None,
+    bench_directory: str | os.PathLike[str] | None = None,
+    providers: dict[str, SectionProvider | None] | None = None,
+    progress: Any = None,
+) -> ReproduceResult:
+    """Writes the report directory ``out_dir`` (``index.html``, the figures, ``manifest.json``),
+    built beside it and swapped in when complete; an existing report is replaced only with
+    ``force``, a directory that is not a report never. ``bench_directory`` defaults to the source
+    tree's ``benches/results``; ``providers`` overrides the section providers by paper key (None:
+    not landed), for tests. ``progress(text)`` is called before each section."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .._output import check_output_directory, output_directory
+
+    out = check_output_directory("out", out_dir, force=force)
+    if bench_directory is None:  # the source tree's results, when there are any
+        default = default_bench_directory()
+        benches_dir = default if default is not None and default.is_dir() else None
+    else:
+        benches_dir = Path(bench_directory)
+    benches = bench_results(benches_dir)
+    decision_rows = decisions()
+    try:
+        package_version = version("rotorfault")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        package_version = "unknown"
+    manifest = {"generator": "rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)",
+                "command": command or "rotorfault.papers.reproduce.write_reproduce", "version": package_version,
+                "quick": quick}
+    start = time.perf_counter()
+    result = ReproduceResult(out / "index.html")
+    with output_directory(out, manifest) as tmp:
+        for paper in PAPERS:
+            chosen = providers[paper.key] if providers is not None and paper.key in providers else provider(paper)
+            if progress is not None:
+                progress(f"{paper.key}: {'computing' if chosen is not None else 'not landed yet'}")
+            if chosen is None:
+                result.sections.append(not_landed(paper.key, paper.title, paper.module, paper.what))
+            else:
+                result.sections.append(chosen(tmp, quick=quick))
+        result.run_time_s = time.perf_counter() - start
+        html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
+                      command=str(manifest["command"]), version=package_version,
+                      bench_directory=_shown_path(benches_dir))
+        (tmp / "index.html").write_text(html, encoding="utf-8")
+    return result
+
+
+__all__ = ["BENCH_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
+           "inline_markdown", "number_row", "provider", "render", "write_reproduce"]
