@@ -33,6 +33,7 @@ from ..simulation import Noise, RotorFault, State, Trajectory, simulate_batch
 from .ke import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, KeScenario, flight_metrics
 
 if TYPE_CHECKING:
+    from ._report import ReportSection
     from matplotlib.figure import Figure
 
 # -- scenarios ----------------------------------------------------------------------------------
@@ -670,6 +671,7 @@ def write_report(
 
 
 __all__ = [
+    "report_section",
     "IZZ_PRINTED",
     "IZZ_PROBABLE",
     "IZZ_VALUES",
@@ -698,3 +700,48 @@ __all__ = [
     "tilt_deg",
     "write_report",
 ]
+
+
+def _markdown_rows(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    """Header and rows of a Markdown table made by :func:`three_way_table` or
+    :func:`monte_carlo_table` (one code path for the report page and the Markdown report)."""
+    cells = [tuple(c.strip() for c in line.strip().strip("|").split(" | ")) for line in lines]
+    return cells[0], tuple(cells[2:])
+
+
+def report_section(out: Path, *, quick: bool = False) -> ReportSection:
+    """Lanzon's flights for ``rotorfault reproduce``: the three-way table (the paper's design
+    without and with its limits, ours with them; both ``I_zz`` values) from :func:`three_way`, the
+    3-D paths and the flight figures of Scenario B, and, in the full mode, a 200-run Monte Carlo
+    of design (c) beside Ke's controller (``rotorfault lanzon-report`` runs 1,000). ``--quick``
+    flies 20 s instead of 60 s and skips the Monte Carlo."""
+    import time
+
+    from ._report import ReportFigure, ReportSection, ReportTable
+
+    start = time.perf_counter()
+    section = ReportSection("lanzon-flights", "Lanzon's flights (Scenarios A and B, Figs. 6-10)",
+                            source="rotorfault.papers.lanzon (rotorfault lanzon-report)")
+    runs = three_way(duration_s=20.0 if quick else None)
+    columns, rows = _markdown_rows(three_way_table(runs))
+    section.tables.append(ReportTable(
+        "Three ways, rotor 2 dead" + (" (--quick: 20 s flights)" if quick else " (60 s flights)")
+        + ": (a) the paper's 100 rad/s design without actuator limits, (b) the same design with the paper's "
+        "[0, 5] N and 50 N/s, (c) our 30 rad/s design with those limits; for the printed I_zz and for the likely "
+        "misprint 1.16e-2", columns, rows))
+    plot_paths(runs, str(out / "lanzon-paths.png"))
+    section.figures.append(ReportFigure("lanzon-paths.png", "3-D paths of Scenario B (Lanzon Fig. 10 style)."))
+    for run in runs:
+        if run.scenario.name == "B" and run.vehicle.inertia_zz_kg_m2 == IZZ_VALUES[0]:
+            name = f"lanzon-B-{run.case.label}.png"
+            run.plot(str(out / name))
+            section.figures.append(ReportFigure(name, run.title, small=True))
+    if not quick:
+        results = [monte_carlo(c, runs=200, duration_s=60.0) for c in ("lanzon", "ke")]
+        columns, rows = _markdown_rows(monte_carlo_table(results))
+        section.tables.append(ReportTable(
+            "Robustness, 200 runs each: mass, inertias, k_r, I_R +-20 %, 15 dB sensor noise, Scenario B", columns, rows))
+    else:
+        section.notes.append("--quick: no Monte Carlo (rotorfault lanzon-report runs 1,000 runs per controller).")
+    section.run_time_s = time.perf_counter() - start
+    return section
