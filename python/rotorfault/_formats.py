@@ -201,6 +201,9 @@ def to_rotorpy(airframe: Any) -> dict[str, Any]:
 
 # ArduPilot AP_MotorsMatrix (libraries/AP_Motors/AP_MotorsMatrix.cpp): per frame, the motors in
 # ArduPilot's numbering as (angle from the nose towards the right, degrees; yaw factor, +1 = CCW).
+# Checked entry by entry against the add_motor() tables of AP_MotorsMatrix::setup_motors (quad
+# plus/X/H) and the SITL frame tables (libraries/SITL/SIM_Frame.cpp: hexa, hexax, octa), where
+# AP_MOTORS_MATRIX_YAW_FACTOR_CCW is +1; octa-X is octa-plus turned by -22.5 degrees there.
 ARDUPILOT_FRAMES: dict[tuple[int, int], tuple[str, list[tuple[float, int]]]] = {
     (1, 0): ("quad-plus", [(90, 1), (-90, 1), (0, -1), (180, -1)]),
     (1, 1): ("quad-x", [(45, 1), (-135, 1), (-45, -1), (135, -1)]),
