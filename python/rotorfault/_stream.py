@@ -183,7 +183,7 @@ def _prepare_output(out: Path, identity: dict[str, Any], *, resume: bool, force:
         )
     if not resume:
         state = "a complete output" if old.get("complete") else "an interrupted output"
-        raise ValueError(f"out: {str(out)!r} holds {state} of this scan; pass --resume (resume=True) to continue it or --force (force=True) to replace it")
+        raise ValueError(f"out: {str(out)!r} holds {state} of this {str(identity['kind']).removeprefix('rotorfault-')}; pass --resume (resume=True) to continue it or --force (force=True) to replace it")
     return _complete_chunks(out, identity)
 
 

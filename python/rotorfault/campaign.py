@@ -21,17 +21,20 @@ Decisions (README, "Fault campaigns"):
 from __future__ import annotations
 
 import functools
+import json
 import math
 import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from os import PathLike
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
 from . import _rfcore
 from ._convert import FloatArray
+from ._typing import ScanBackend as Backend
 from ._progress import chunks
 from .airframe import Airframe
 from .control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
@@ -254,6 +257,42 @@ class Campaign:
                 value = tuple(value)
             values[key] = value
         return cls(**values)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as JSON/TOML-able values (lists for tuples, ``gains`` a table of every Ke
+        gain; ``None`` fields left out): :meth:`from_dict` gives the same campaign back."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            if isinstance(value, KeGains):
+                value = {g.name: (list(v) if isinstance(v := getattr(value, g.name), tuple) else v) for g in fields(KeGains)}
+            elif f.name == "failures":
+                value = [list(p) for p in value]
+            elif isinstance(value, tuple):
+                value = list(value)
+            out[f.name] = value
+        return out
+
+    def to_toml(self) -> str:
+        """The campaign as a TOML file :meth:`from_toml` reads back to an equal campaign."""
+
+        def text(v: Any) -> str:
+            if isinstance(v, bool):
+                return "true" if v else "false"
+            if isinstance(v, str):
+                return json.dumps(v)
+            if isinstance(v, (int, float)):
+                return repr(v)
+            return "[" + ", ".join(text(x) for x in v) + "]"
+
+        data = self.to_dict()
+        gains = data.pop("gains", None)
+        lines = [f"{k} = {text(v)}" for k, v in data.items()]
+        if gains is not None:
+            lines += ["", "[gains]", *(f"{k} = {text(v)}" for k, v in gains.items())]
+        return "\n".join(lines) + "\n"
 
     def vehicle(self) -> FtcPreset:
         """The nominal vehicle: the Ke preset's (``lqr`` flies ``ke-hil``'s vehicle)."""
@@ -489,8 +528,8 @@ def summarize(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M, *, up
 def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any, Any]]:
     """Runs ``[chunk_index * chunk_size, ...)`` of ``campaign``, flown in parallel in Rust: a dict
     of equal-length NumPy columns (the draws, then the summary). Deterministic: the same chunk
-    gives the same columns, whoever runs it (the unit the Parquet/Dask machinery of issue 12
-    distributes and resumes)."""
+    gives the same columns, whoever runs it (the unit :func:`run_campaign` streams to Parquet,
+    resumes and distributes on Dask)."""
     if not isinstance(campaign, Campaign):
         raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
     if isinstance(chunk_index, bool) or not isinstance(chunk_index, (int, np.integer)):
@@ -548,33 +587,122 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
     return columns
 
 
-class ChunkSink(Protocol):
-    """Where finished chunks go. TODO(issue 12): the streaming, resumable Parquet writer and the
-    Dask backend of the scans implement this (``write(chunk_index, columns)``, ``done(chunk_index)``
-    for resume); until they land, :func:`run_campaign` keeps chunks in memory."""
+#: Kind recorded in a campaign output's manifest.
+CAMPAIGN_KIND = "rotorfault-campaign"
+#: The draw columns of a campaign row, before :data:`SUMMARY_FIELDS` (``outcome`` last).
+_DRAW_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("index", "int64"),
+    ("seed", "int64"),
+    ("failure_count", "int64"),
+    ("first_failed_rotor", "int64"),
+    ("failed_rotors", "string"),
+    ("first_fault_s", "float64"),
+    ("efficiency", "float64"),
+    ("ramp_s", "float64"),
+    ("wind_speed_m_s", "float64"),
+    ("gust_peak_m_s", "float64"),
+    ("mass_scale", "float64"),
+    ("lag_scale", "float64"),
+    ("outcome", "string"),
+)
 
-    def done(self, chunk_index: int) -> bool: ...
 
-    def write(self, chunk_index: int, columns: dict[str, np.ndarray[Any, Any]]) -> None: ...
+def campaign_schema() -> Any:
+    """The Arrow schema of a campaign's rows: :func:`run_chunk`'s columns in its order (the
+    draws, ``outcome``, then :data:`SUMMARY_FIELDS` as float64)."""
+    from ._stream import pyarrow_module
+
+    pa = pyarrow_module()
+    types = {"int64": pa.int64(), "float64": pa.float64(), "string": pa.string()}
+    return pa.schema([pa.field(n, types[t]) for n, t in _DRAW_COLUMNS] + [pa.field(n, pa.float64()) for n in SUMMARY_FIELDS])
 
 
-def run_campaign(campaign: Campaign, *, progress: bool | None = None, sink: ChunkSink | None = None) -> CampaignResult:
-    """Every chunk of ``campaign`` (a progress bar with ``progress=True``), concatenated in memory;
-    with a ``sink``, chunks it already holds are skipped and new ones written to it (the hook for
-    issue 12's Parquet/Dask machinery)."""
+@dataclass(frozen=True)
+class _CampaignTask:
+    """One chunk of a campaign as an Arrow table (picklable: the unit the streaming machinery of
+    :mod:`rotorfault._stream` runs locally or ships to Dask workers)."""
+
+    campaign: Campaign
+
+    def __call__(self, spec: Any) -> Any:
+        from ._stream import pyarrow_module
+
+        pa = pyarrow_module()
+        columns = run_chunk(self.campaign, spec.index)
+        schema = campaign_schema()
+        return pa.Table.from_arrays([pa.array(columns[f.name], type=f.type) for f in schema], schema=schema)
+
+
+def _numpy_columns(table: Any) -> dict[str, np.ndarray[Any, Any]]:
+    """An Arrow table of campaign rows as :func:`run_chunk`-style NumPy columns (strings as
+    ``str`` arrays, as in memory)."""
+    out: dict[str, np.ndarray[Any, Any]] = {}
+    for name in table.column_names:
+        values = np.asarray(table.column(name).to_numpy(zero_copy_only=False))
+        out[name] = values.astype(str) if values.dtype == object else values
+    return out
+
+
+def run_campaign(
+    campaign: Campaign,
+    *,
+    out: str | PathLike[str] | None = None,
+    resume: bool = False,
+    force: bool = False,
+    backend: Backend = "local",
+    dask: Any = None,
+    progress: bool | None = None,
+) -> CampaignResult:
+    """Every chunk of ``campaign`` (:func:`run_chunk`), through the scans' streaming machinery
+    (:mod:`rotorfault._stream`): gathered in memory (``out=None``) or streamed, one Parquet file
+    per chunk, to the directory ``out`` whose manifest records the campaign (its fields as JSON
+    and as TOML). ``resume=True`` continues an interrupted output of the same campaign (the
+    chunks present are skipped, no row is written twice); an output of another campaign is
+    refused, ``force=True`` replaces it. ``backend="dask"`` runs the chunks on a
+    ``dask.distributed`` cluster (``dask``: a Client, an address or ``"local:N"``): the rows are
+    identical to the local backend's. ``progress``: a progress bar (default: from 10,000 runs).
+
+    With ``out`` the result reads its rows back from Parquet when first asked for them (a few
+    hundred bytes per run); :func:`read_campaign` opens such an output later."""
+    from . import _rfcore
+    from ._stream import run_chunks
+
     if not isinstance(campaign, Campaign):
         raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
-    parts: list[dict[str, np.ndarray[Any, Any]]] = []
-    for first, last in chunks(campaign.chunk_count(), 1, description=f"{campaign.runs:,} runs in {campaign.chunk_count()} chunks", show=progress):
-        for index in range(first, last):
-            if sink is not None and sink.done(index):
-                continue
-            columns = run_chunk(campaign, index)
-            if sink is not None:
-                sink.write(index, columns)
-            parts.append(columns)
-    merged = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]} if parts else {}
-    return CampaignResult(campaign, merged)
+    result = run_chunks(
+        _CampaignTask(campaign),
+        total_rows=campaign.runs,
+        chunk_rows=campaign.chunk_size,
+        schema=campaign_schema(),
+        arguments={"campaign": campaign.to_dict()},
+        kind=CAMPAIGN_KIND,
+        out=out,
+        metadata={"campaign_toml": campaign.to_toml(), "rotorfault_version": _rfcore.__version__, "row_order": "run index"},
+        resume=resume,
+        force=force,
+        backend=backend,
+        dask=dask,
+        progress=campaign.runs >= 10_000 if progress is None else progress,
+        description=f"{campaign.runs:,} runs in {campaign.chunk_count()} chunks",
+    )
+    columns = None if result.table is None else _numpy_columns(result.table)
+    return CampaignResult(
+        campaign, columns, out=result.out, seconds=result.seconds, computed_chunks=result.computed_chunks, skipped_chunks=result.skipped_chunks
+    )
+
+
+def read_campaign(path: str | PathLike[str]) -> CampaignResult:
+    """A campaign written to Parquet by :func:`run_campaign` (``rotorfault campaign --out``):
+    the campaign rebuilt from the manifest, the rows read when first asked for; any row can be
+    re-flown with ``result.campaign.refly(row["index"])``."""
+    from ._stream import read_manifest
+
+    manifest = read_manifest(path)
+    if manifest.get("kind") != CAMPAIGN_KIND:
+        raise ValueError(f"path: {str(path)!r} holds a {manifest.get('kind')!r} output, not a campaign")
+    if not manifest.get("complete"):
+        raise ValueError(f"path: {str(path)!r} is an interrupted campaign; finish it with --resume (resume=True) first")
+    return CampaignResult(Campaign.from_dict(manifest["arguments"]["campaign"]), None, out=Path(path))
 
 
 # -- report ----------------------------------------------------------------------------------
@@ -606,10 +734,27 @@ class Rate:
 
 @dataclass(frozen=True)
 class CampaignResult:
-    """A campaign's rows as NumPy columns (:func:`run_chunk`'s, concatenated in run order)."""
+    """A campaign's rows as NumPy columns (:func:`run_chunk`'s, concatenated in run order), in
+    memory or read from the Parquet output ``out`` when first used."""
 
     campaign: Campaign
-    columns: dict[str, np.ndarray[Any, Any]] = field(repr=False)
+    loaded: dict[str, np.ndarray[Any, Any]] | None = field(default=None, repr=False)
+    #: The Parquet output directory (``run_campaign(out=...)``), else None.
+    out: Path | None = None
+    seconds: float = 0.0
+    #: Chunks computed by this call and chunks found already written (resume).
+    computed_chunks: int = 0
+    skipped_chunks: int = 0
+
+    @functools.cached_property
+    def columns(self) -> dict[str, np.ndarray[Any, Any]]:
+        if self.loaded is not None:
+            return self.loaded
+        if self.out is None:
+            return {}
+        from ._stream import iter_tables, pyarrow_module
+
+        return _numpy_columns(pyarrow_module().concat_tables(list(iter_tables(self.out))))
 
     def __len__(self) -> int:
         return len(self.columns.get("index", ()))

@@ -560,10 +560,16 @@ def main() -> None:
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
 @click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
 @click.option("--quick", is_flag=True, help="With --tune: a small search (12 candidates x 24 scenarios, about a minute).")
-@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@click.option("--out", "out_path", type=click.Path(), help="Stream the per-run rows to this Parquet dataset directory (chunked, resumable; the campaign is in its manifest).")
+@click.option("--resume", is_flag=True, help="Continue an interrupted --out campaign with the same campaign (skips the chunks written).")
+@click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar on standard error.")
 @_user_errors
-def campaign_command(campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, force: bool, progress: bool) -> None:
+def campaign_command(
+    campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
+    resume: bool, dask_address: str | None, force: bool, progress: bool,
+) -> None:
     """Fly a fault campaign (a TOML file of rotorfault.campaign.Campaign fields; default: every
     single failure of Ke's quadcopter) and report survival, worst cases and excursions."""
     from dataclasses import replace
@@ -572,7 +578,11 @@ def campaign_command(campaign_file: str | None, runs: int | None, plot_path: str
 
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)
+    if out_path is None and (resume or dask_address):
+        raise ValueError("out: --resume and --dask need --out (a Parquet output)")
     if tune_gains:
+        if out_path is not None:
+            raise ValueError("out: --tune writes no Parquet output")
         base = tuning_campaign(runs=24 if quick else 200)
         tuned = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
         console.print(escape(tuned.table()))
@@ -580,7 +590,15 @@ def campaign_command(campaign_file: str | None, runs: int | None, plot_path: str
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
     if runs is not None:
         campaign = replace(campaign, runs=runs)
-    result = run_campaign(campaign, progress=progress)
+    result = run_campaign(
+        campaign, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address, progress=progress,
+    )
+    if out_path is not None:
+        console.print(
+            f"{campaign.runs:,} runs ({result.computed_chunks} chunks flown, {result.skipped_chunks} already written) "
+            f"in {result.seconds:.1f} s; rows in {escape(out_path)}",
+            highlight=False,
+        )
     console.print(escape(result.table()))
     if plot_path is not None:
         result.plot(plot_path)
