@@ -122,3 +122,21 @@ def test_fixed_pitch_lqr_holds_speeds_only() -> None:
     w = vpp.fixed_pitch(vpp.preset())
     fb = vpp.lqr(w, vpp.fixed_pitch_trim(w, failed=()), pitch_fixed=True)
     assert np.all(fb.gain[1::2] == 0.0) and np.all(fb.u_trim[1::2] == 0.26)
+
+
+def test_vpp_report_cli(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """`rotorfault vpp-report --quick`: the table (ranks 12 / 8), the speed sweep, the flights and
+    one figure per scenario; refuses to overwrite without --force."""
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    out = tmp_path / "rep"
+    result = CliRunner().invoke(cli, ["vpp-report", "--out", str(out), "--quick"])
+    assert result.exit_code == 0, result.output
+    text = (out / "vpp-report.md").read_text()
+    assert "| VPP (thrust in [-13, 13] N) | 12 | none |" in text and "| 8 | y, v, phi, p |" in text
+    assert "| 1 | [3]: [8783.9, 10000.0] | [2, 4]: [6201.7, 7064.2] |" in text
+    assert sorted(p.name for p in out.glob("*.png")) == ["scenario-1.png", "scenario-2.png", "scenario-3.png"]
+    again = CliRunner().invoke(cli, ["vpp-report", "--out", str(out), "--quick"])
+    assert again.exit_code != 0 and "--force" in again.output

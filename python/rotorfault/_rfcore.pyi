@@ -330,7 +330,7 @@ class Trajectory:
     @property
     def divergence(self) -> Divergence | None: ...
 
-_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController
+_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback
 
 def simulate(
     airframe: Airframe,

@@ -241,4 +241,82 @@ def plot_flight(flights: list[WangFlight], path: str | None = None) -> Figure:
     return fig
 
 
-__all__ = ["WangFlight", "WangScenario", "controller", "fly", "plot_flight", "scenario"]
+def comparison_table() -> list[str]:
+    """Markdown: controllability (scale-free rank, uncontrollable states) and the ACAI of the VPP
+    bidirectional thrust box and of the fixed-pitch quadcopter, healthy and with propeller 1 failed."""
+    from ..controllability import acai
+
+    wang = vpp.preset("wang")
+    fixed = vpp.fixed_pitch(wang)
+    v = vpp.controllability(vpp.linearize(wang, vpp.trim(wang, failed=(1,), speeds={3: OMEGA3})))
+    f = vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True))
+    failed = np.array([0.0, 1.0, 1.0, 1.0])
+    rows = [
+        "| vehicle | rank (propeller 1 failed) | uncontrollable | ACAI healthy | ACAI propeller 1 failed |",
+        "|---|---|---|---|---|",
+        f"| VPP (thrust in [-13, 13] N) | {v.rank} | {', '.join(v.uncontrollable_states) or 'none'} | "
+        f"{float(acai(wang.airframe)):.4f} | {float(acai(wang.airframe.with_efficiency(failed))):.4f} |",
+        f"| fixed pitch (thrust in [0, 13] N) | {f.rank} | {', '.join(f.uncontrollable_states) or 'none'} | "
+        f"{float(acai(fixed.airframe)):.4f} | {float(acai(fixed.airframe.with_efficiency(failed))):.4f} |",
+    ]
+    return rows
+
+
+def speed_sweep_table() -> list[str]:
+    """Markdown: the feasible trim speeds per failed propeller (:func:`rotorfault.vpp.feasible_speeds`)."""
+    wang = vpp.preset("wang")
+    rows = ["| failed | fixed group, speed range | free group, speed range |", "|---|---|---|"]
+    for i in range(1, 5):
+        w = vpp.feasible_speeds(wang, failed=(i,))
+        rows.append(
+            f"| {i} | {list(w.fixed_rotors)}: [{w.fixed_speed_range[0]:.1f}, {w.fixed_speed_range[1]:.1f}] | "
+            f"{list(w.free_rotors)}: [{w.free_speed_range[0]:.1f}, {w.free_speed_range[1]:.1f}] |"
+        )
+    return rows
+
+
+def flights_table(flights: list[WangFlight]) -> list[str]:
+    rows = ["| scenario | vehicle | outcome | final error (m) | largest error after 15 s (m) | largest tilt (rad) |",
+            "|---|---|---|---|---|---|"]
+    for f in flights:
+        outcome = f"lost at {f.lost_at_s:.2f} s" if f.lost else "flown"
+        late = "" if f.lost or math.isnan(f.max_error_after_s) else f"{f.max_error_after_s:.3f}"
+        final = "" if f.lost else f"{f.final_error_m:.3f}"
+        rows.append(f"| {f.scenario.number} | {f.vehicle} | {outcome} | {final} | {late} | {f.max_tilt_rad:.3f} |")
+    return rows
+
+
+def write_report(out_dir: str, *, quick: bool = False, force: bool = False, command: str | None = None) -> str:
+    """Writes ``out_dir`` atomically (replaced only with ``force``): ``vpp-report.md`` (the
+    comparison table, the speed sweep, the flights), one figure per scenario
+    (``scenario-<n>.png``, VPP and the fixed-pitch quadcopter) and ``manifest.json``.
+    ``quick``: 20 s flights instead of the paper's 60 s."""
+    from .._output import check_output_directory, output_directory, write_text
+
+    check_output_directory("out_dir", out_dir, force=force)
+    duration = 20.0 if quick else DURATION_S
+    flights = []
+    pages = []
+    for n in (1, 2, 3):
+        v = fly(n, duration_s=duration)
+        fp = fly(n, fixed_pitch=True, duration_s=min(duration, 5.0))
+        flights += [v, fp]
+        pages.append((n, [v, fp]))
+    lines = [
+        "# Variable-pitch quadcopters that lose a propeller (Wang et al.): report", "",
+        "## Controllability and ACAI", "", *comparison_table(), "",
+        "## Feasible trim speeds per failed propeller", "", *speed_sweep_table(), "",
+        f"## Section 4's flights ({duration:g} s, propeller 1 failed from t = 0; fixed pitch flown 5 s)", "",
+        *flights_table(flights), "",
+    ]
+    manifest = {"generator": "rotorfault vpp-report (rotorfault.papers.wang.write_report)",
+                "command": command or "rotorfault.papers.wang.write_report", "quick": quick}
+    with output_directory(out_dir, manifest) as tmp:
+        write_text(tmp / "vpp-report.md", "\n".join(lines))
+        for n, pair in pages:
+            plot_flight(pair, str(tmp / f"scenario-{n}.png"))
+    return out_dir
+
+
+__all__ = ["WangFlight", "WangScenario", "comparison_table", "controller", "flights_table", "fly", "plot_flight",
+           "scenario", "speed_sweep_table", "write_report"]
