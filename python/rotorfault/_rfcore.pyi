@@ -209,6 +209,13 @@ class LinearFeedback:
 class Lti:
     def __new__(cls, a: _F64, b: _F64, c: _F64, d: _F64, x_trim: _F64, u_trim: _F64) -> Lti: ...
 
+@final
+class TrackingFeedback:
+    def __new__(
+        cls, *, u_trim: _F64, gain: _F64, times_s: _F64, references: _F64, error_limit: _F64
+    ) -> TrackingFeedback: ...
+    def reference(self, t_s: float) -> list[float]: ...
+
 _Actuator = FixedPitchActuator | VariablePitchActuator
 
 @final
@@ -325,7 +332,7 @@ class Trajectory:
     @property
     def divergence(self) -> Divergence | None: ...
 
-_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController
+_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback
 
 def simulate(
     airframe: Airframe,

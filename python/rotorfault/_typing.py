@@ -52,6 +52,7 @@ CoreController: TypeAlias = (
     | _rfcore.Allocated
     | _rfcore.UniformPassiveFtc
     | _rfcore.LanzonController
+    | _rfcore.TrackingFeedback
 )
 
 

@@ -400,6 +400,25 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
     console.print(f"report written to {escape(str(path))}")
 
 
+@cli.command("vpp-report")
+@click.option("--out", "out_dir", default="vpp-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the tables and figures (replaced as a whole).")
+@click.option("--quick", is_flag=True, help="20 s flights (a smoke test, not the paper's 60 s).")
+@click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@_user_errors
+def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
+    """Wang et al.'s VPP quadcopter: controllability and ACAI beside the fixed-pitch quadcopter,
+    the feasible trim speeds, and Section 4's three flights with propeller 1 failed."""
+    from ._output import check_output_directory
+    from .papers import wang as wang_paper
+
+    check_output_directory("out", out_dir, force=force)
+    command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault vpp-report"
+    path = wang_paper.write_report(out_dir, quick=quick, force=force, command=command)
+    for line in wang_paper.comparison_table():
+        console.print(escape(line), highlight=False, soft_wrap=True)
+    console.print(f"report written to {escape(str(path))}")
+
+
 @cli.command("lanzon-report")
 @click.option("--out", "out_dir", default="lanzon-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table, figures and CSV (replaced as a whole).")
 @click.option("--runs", "mc_runs", default=1000, show_default=True, type=int, help="Monte Carlo runs per controller (0: none).")

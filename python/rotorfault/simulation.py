@@ -39,6 +39,7 @@ CORE_TYPES: tuple[type, ...] = (
     _rfcore.Allocated,
     _rfcore.UniformPassiveFtc,
     _rfcore.LanzonController,
+    _rfcore.TrackingFeedback,
 )
 
 
@@ -53,7 +54,7 @@ def core_controller(controller: AnyController, dt_s: float) -> CoreController | 
     if callable(controller):
         return controller
     raise TypeError(
-        "controller: expected OpenLoop, LinearFeedback, Lti, Allocated, UniformPassiveFtc, LanzonController (anything with "
+        "controller: expected OpenLoop, LinearFeedback, Lti, TrackingFeedback, Allocated, UniformPassiveFtc, LanzonController (anything with "
         f"core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
     )
 

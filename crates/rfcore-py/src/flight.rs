@@ -181,7 +181,10 @@ pub enum ActuatorArg<'py> {
     Variable(PyRef<'py, PyVariablePitch>),
 }
 
-pub(crate) fn build_actuators(airframe: &PyAirframe, spec: &ActuatorArg<'_>) -> rfcore::Result<Actuators> {
+pub(crate) fn build_actuators(
+    airframe: &PyAirframe,
+    spec: &ActuatorArg<'_>,
+) -> rfcore::Result<Actuators> {
     Ok(match spec {
         ActuatorArg::Fixed(a) => Actuators::FixedPitch(FixedPitch::new(
             &airframe.inner,

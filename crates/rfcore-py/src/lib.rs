@@ -37,6 +37,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::linear::PyOpenLoop>()?;
     module.add_class::<control::linear::PyLinearFeedback>()?;
     module.add_class::<control::linear::PyLti>()?;
+    module.add_class::<control::tracking::PyTrackingFeedback>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<allocation::PyAllocationSettings>()?;
     module.add_class::<allocation::PyCertificate>()?;

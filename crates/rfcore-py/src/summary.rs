@@ -133,9 +133,18 @@ pub fn simulate_summaries<'py>(
     criteria: PyRef<'py, PyVerdictCriteria>,
 ) -> PyResult<PySummaryBatch> {
     let n = airframes.len();
-    if [actuators.len(), drags.len(), controllers.len(), x0s.len(), fault_lists.len(), settles.len(), configs.len(), setpoints.len()]
-        .iter()
-        .any(|&k| k != n)
+    if [
+        actuators.len(),
+        drags.len(),
+        controllers.len(),
+        x0s.len(),
+        fault_lists.len(),
+        settles.len(),
+        configs.len(),
+        setpoints.len(),
+    ]
+    .iter()
+    .any(|&k| k != n)
     {
         return Err(PyValueError::new_err(
             "runs: airframes, actuators, drags, controllers, initial states, fault lists, initial commands, configs and setpoints must have one entry per run",
@@ -156,7 +165,11 @@ pub fn simulate_summaries<'py>(
             initial_efficiency: airframe.inner.efficiency(),
             faults: fault_lists[i]
                 .iter()
-                .map(|&(rotor, time_s, efficiency)| RotorFault { rotor, time_s, efficiency })
+                .map(|&(rotor, time_s, efficiency)| RotorFault {
+                    rotor,
+                    time_s,
+                    efficiency,
+                })
                 .collect(),
             x0: RigidBodyState::from_packed(&x0s[i]),
             config: configs[i].inner.clone(),

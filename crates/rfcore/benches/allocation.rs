@@ -188,7 +188,15 @@ fn report_targets(_: &mut Criterion) {
                     .any(|s| *s != rfcore::allocation::active_set::BoundState::Free),
             );
         }
-        let ours = median_p90(time_each(&problem, &Method::ActiveSet(Default::default()), &controls, 200).unwrap());
+        let ours = median_p90(
+            time_each(
+                &problem,
+                &Method::ActiveSet(Default::default()),
+                &controls,
+                200,
+            )
+            .unwrap(),
+        );
         let clarabel = Method::Clarabel(ClarabelSettings::default());
         let theirs = median_p90(time_each(&problem, &clarabel, &controls, 5).unwrap());
         println!(

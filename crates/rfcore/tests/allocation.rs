@@ -331,25 +331,36 @@ fn pinv_counts_every_positive_weight() {
     // zero, the minimum-norm rule picks the rest). Both against nalgebra's SVD pseudo-inverse.
     let m = ke_matrix();
     let u_c = [7.0, 0.05, -0.08, 0.05];
-    let expected = m.clone().pseudo_inverse(1e-14).unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
+    let expected =
+        m.clone().pseudo_inverse(1e-14).unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
     for w_r in [1.0, 1e-6, 1e-9, 1e-12] {
         let problem =
-            AllocationProblem::new(m.clone(), &[1.0, 20.0, 20.0, w_r], &[0.0; 4], &[8.5; 4]).unwrap();
+            AllocationProblem::new(m.clone(), &[1.0, 20.0, 20.0, w_r], &[0.0; 4], &[8.5; 4])
+                .unwrap();
         let got = allocate_pinv(&problem, &u_c).unwrap();
         for i in 0..4 {
-            assert!((got.commands[i] - expected[(i, 0)]).abs() <= 1e-12, "w_r {w_r}: {:?}", got.commands);
+            assert!(
+                (got.commands[i] - expected[(i, 0)]).abs() <= 1e-12,
+                "w_r {w_r}: {:?}",
+                got.commands
+            );
         }
     }
     // A 4 x 6 matrix with weights over 14 decades.
     let mut rng = Rng(20);
     let wide = DMatrix::from_fn(4, 6, |_, _| rng.uniform(-1.0, 1.0));
     let u_c = [12.55, 0.1, -0.05, 0.02];
-    let expected = wide.clone().pseudo_inverse(1e-14).unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
+    let expected =
+        wide.clone().pseudo_inverse(1e-14).unwrap() * DMatrix::from_column_slice(4, 1, &u_c);
     let problem =
         AllocationProblem::new(wide, &[2.5e-8, 2.2e6, 2.3e-7, 1e7], &[-1e3; 6], &[1e3; 6]).unwrap();
     let got = allocate_pinv(&problem, &u_c).unwrap();
     for i in 0..6 {
-        assert!((got.commands[i] - expected[(i, 0)]).abs() <= 1e-11, "{:?} vs {expected}", got.commands);
+        assert!(
+            (got.commands[i] - expected[(i, 0)]).abs() <= 1e-11,
+            "{:?} vs {expected}",
+            got.commands
+        );
     }
 }
 
@@ -782,7 +793,10 @@ fn permutation_invariance_and_all_paths_agree() {
         let single = ActiveSetSolver::new(p).allocate(&case.u_c).unwrap();
         // Batch path.
         let batch = allocate_many(p, &Method::ActiveSet(Default::default()), &case.u_c).unwrap();
-        assert_eq!(fallback_count(&batch), usize::from(single.solved_by == SolvedBy::Clarabel));
+        assert_eq!(
+            fallback_count(&batch),
+            usize::from(single.solved_by == SolvedBy::Clarabel)
+        );
         // Reusable solver, warm-started from an unrelated solve.
         let solver = ActiveSetSolver::with_settings(p, ActiveSetSettings::default());
         let mut active = ActiveSet::cold(m);

@@ -1,6 +1,8 @@
 """Controllers for :class:`rotorfault.Simulator` and their design: design in Python, run in Rust.
 
 - :mod:`~rotorfault.control.linear`: :class:`OpenLoop`, :class:`LinearFeedback`, :class:`Lti`;
+- :mod:`~rotorfault.control.tracking`: :class:`TrackingFeedback` (state feedback on a moving
+  reference with a saturated error: reference shaping);
 - :mod:`~rotorfault.control.allocated`: :class:`Allocated` (a virtual-control law plus
   constrained allocation);
 - :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
@@ -27,6 +29,7 @@ from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
     from . import lanzon, robust
@@ -63,6 +66,7 @@ __all__ = [
     "NcfsynResult",
     "Lti",
     "OpenLoop",
+    "TrackingFeedback",
     "UniformPassiveFtc",
     "hover_trim",
     "ke",

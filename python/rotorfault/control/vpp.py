@@ -515,13 +515,17 @@ def lqr(
     *,
     q: npt.ArrayLike | None = None,
     r: npt.ArrayLike | None = None,
+    pitch_fixed: bool = False,
 ) -> LinearFeedback:
     """An LQR (python-control) on the healthy channels about ``at``, as a full-width
     :class:`~rotorfault.control.LinearFeedback` (failed channels held at 0). Defaults (Bryson):
-    1 m, 1 m/s, 0.1 rad, 1 rad/s state errors against 1000 speed units and 0.05 rad per channel."""
+    1 m, 1 m/s, 0.1 rad, 1 rad/s state errors against 1000 speed units and 0.05 rad per channel.
+    ``pitch_fixed``: speeds only (the fixed-pitch quadcopter; pitches held at the trim's)."""
     import control  # type: ignore[import-untyped]
 
-    model = linearize(vehicle, at)
+    if not isinstance(pitch_fixed, bool):
+        raise TypeError(f"pitch_fixed: expected a bool, got {type(pitch_fixed).__name__}")
+    model = linearize(vehicle, at, pitch_fixed=pitch_fixed)
     k = len(model.inputs)
     q_state = np.diag(1.0 / STATE_SCALE**2) if q is None else float_array("q", q, 2)
     r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.inputs]) if r is None else float_array("r", r, 2)

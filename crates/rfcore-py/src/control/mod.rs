@@ -5,6 +5,7 @@
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
+pub(crate) mod tracking;
 
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -22,6 +23,7 @@ use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
+use tracking::PyTrackingFeedback;
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
 pub(crate) struct CallableController {
@@ -90,6 +92,7 @@ pub enum ControllerArg<'py> {
     Allocated(PyRef<'py, PyAllocated>),
     Ftc(PyRef<'py, PyUniformPassiveFtc>),
     Lanzon(PyRef<'py, PyLanzonController>),
+    Tracking(PyRef<'py, PyTrackingFeedback>),
 }
 
 pub(crate) fn boxed(
@@ -104,6 +107,7 @@ pub(crate) fn boxed(
         Some(ControllerArg::Allocated(c)) => c.controller(c.py())?,
         Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lanzon(c)) => Box::new(c.inner.clone()),
+        Some(ControllerArg::Tracking(c)) => Box::new(c.inner.clone()),
     })
 }
 

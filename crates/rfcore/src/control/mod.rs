@@ -7,6 +7,7 @@
 //!
 //! - [`linear`]: open loop, state feedback and discrete LTI laws on the state vector of
 //!   [`crate::state::state_vector`].
+//! - [`tracking`]: state feedback on a moving reference with a saturated error.
 //! - [`allocated`]: a virtual-control law followed by constrained allocation.
 //! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
@@ -21,9 +22,11 @@ pub mod allocated;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;
+pub mod tracking;
 
 pub use allocated::Allocated;
 pub use linear::{LinearFeedback, Lti, OpenLoop};
+pub use tracking::TrackingFeedback;
 
 /// Rejects a non-finite matrix entry, naming it `field[row, col]`.
 pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()> {

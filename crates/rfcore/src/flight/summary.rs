@@ -29,7 +29,9 @@ use crate::control::Controller;
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::RotorFault;
-use crate::flight::simulation::{simulate_observed, DivergenceReason, SimulationConfig, StepObserver};
+use crate::flight::simulation::{
+    simulate_observed, DivergenceReason, SimulationConfig, StepObserver,
+};
 use crate::flight::vehicle::Vehicle;
 use crate::state::RigidBodyState;
 
@@ -67,7 +69,10 @@ impl VerdictCriteria {
             ("criteria.circling_turn_rad", self.circling_turn_rad),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(RfError::invalid(field, format!("must be > 0 and finite, got {v}")));
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be > 0 and finite, got {v}"),
+                ));
             }
         }
         Ok(())
@@ -164,7 +169,13 @@ pub struct SummaryObserver {
 
 impl SummaryObserver {
     /// For a run of `duration_s` held at `setpoint_m`; `upper` the command bounds per channel.
-    pub fn new(criteria: VerdictCriteria, setpoint_m: Vector3<f64>, duration_s: f64, upper: Vec<f64>, dt_s: f64) -> Self {
+    pub fn new(
+        criteria: VerdictCriteria,
+        setpoint_m: Vector3<f64>,
+        duration_s: f64,
+        upper: Vec<f64>,
+        dt_s: f64,
+    ) -> Self {
         let window_rows = (criteria.window_s / dt_s).ceil().min(1e7) as usize + 2;
         SummaryObserver {
             criteria,
@@ -224,7 +235,11 @@ impl SummaryObserver {
             peak_tilt_rad: self.peak_n3z_tilt_rad,
             steady_spin_rad_s: nan,
             steady_n3z: nan,
-            peak_command: if self.peak_command.is_finite() { self.peak_command } else { nan },
+            peak_command: if self.peak_command.is_finite() {
+                self.peak_command
+            } else {
+                nan
+            },
             saturated_s: self.saturated_s,
             flown_s: end_s,
         };
@@ -245,7 +260,11 @@ impl SummaryObserver {
         summary.window_altitude_error_m = self.window_vertical_m;
         summary.window_speed_m_s = self.window_speed_m_s;
         summary.window_mean_horizontal_speed_m_s = mean_h_speed;
-        let turn = if self.moving < 2 { 0.0 } else { self.heading_max - self.heading_min };
+        let turn = if self.moving < 2 {
+            0.0
+        } else {
+            self.heading_max - self.heading_min
+        };
         summary.outcome = if self.window_horizontal_m <= c.hold_horizontal_m
             && self.window_vertical_m <= c.hold_altitude_m
             && self.window_speed_m_s <= c.hold_speed_m_s
@@ -262,7 +281,11 @@ impl SummaryObserver {
         let r = self.spin.iter().map(|s| s.1).sum::<f64>() / n;
         let n3z = self.spin.iter().map(|s| s.2).sum::<f64>() / n;
         let band = (0.05 * r.abs()).max(0.2);
-        let rows: Vec<(f64, f64, f64)> = self.before_window.into_iter().chain(self.spin.iter().copied()).collect();
+        let rows: Vec<(f64, f64, f64)> = self
+            .before_window
+            .into_iter()
+            .chain(self.spin.iter().copied())
+            .collect();
         let unsettled = |s: &(f64, f64, f64)| (s.1 - r).abs() > band || (s.2 - n3z).abs() > 0.02;
         let last_unsettled = rows.iter().rposition(|s| s.0 >= last_fault && unsettled(s));
         let settled_from = match last_unsettled {
@@ -284,7 +307,11 @@ impl SummaryObserver {
 
 /// Times of the faults that changed a rotor's efficiency by `end_s` (`flight_metrics`'s
 /// `effective_fault_times`): in time order, a no-op entry is not an event.
-fn effective_fault_times(faults: &[RotorFault], initial_efficiency: &[f64], end_s: f64) -> Vec<f64> {
+fn effective_fault_times(
+    faults: &[RotorFault],
+    initial_efficiency: &[f64],
+    end_s: f64,
+) -> Vec<f64> {
     let mut sorted = faults.to_vec();
     sorted.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     let mut current = initial_efficiency.to_vec();
@@ -390,7 +417,13 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
     let count = run.actuators.channels() * run.actuators.rotor_count();
     let mut upper = vec![0.0; count];
     run.actuators.saturate(&vec![f64::MAX; count], &mut upper);
-    let mut observer = SummaryObserver::new(*criteria, run.setpoint_m, config.duration_s, upper, config.dt_s);
+    let mut observer = SummaryObserver::new(
+        *criteria,
+        run.setpoint_m,
+        config.duration_s,
+        upper,
+        config.dt_s,
+    );
     let trajectory = simulate_observed(
         &run.vehicle,
         run.actuators,
@@ -403,7 +436,10 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
     )?;
     let end = trajectory.t_s.last().copied().unwrap_or(0.0);
     let m = run.initial_efficiency.len();
-    let start_efficiency = trajectory.efficiency.get(..m).unwrap_or(&run.initial_efficiency);
+    let start_efficiency = trajectory
+        .efficiency
+        .get(..m)
+        .unwrap_or(&run.initial_efficiency);
     Ok(observer.finish(
         trajectory.divergence.map(|d| (d.time_s, d.reason)),
         &run.faults,
@@ -413,9 +449,14 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
 }
 
 /// Many runs in parallel (rayon), summaries in input order.
-pub fn simulate_summaries(runs: Vec<SummaryRun>, criteria: &VerdictCriteria) -> Result<Vec<RunSummary>> {
+pub fn simulate_summaries(
+    runs: Vec<SummaryRun>,
+    criteria: &VerdictCriteria,
+) -> Result<Vec<RunSummary>> {
     criteria.check()?;
-    runs.into_par_iter().map(|run| simulate_summary(run, criteria)).collect()
+    runs.into_par_iter()
+        .map(|run| simulate_summary(run, criteria))
+        .collect()
 }
 
 #[cfg(test)]
@@ -434,7 +475,11 @@ mod tests {
             actuators: Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap()),
             controller: Box::new(ZeroCommand { count: 4 }),
             initial_efficiency: vec![1.0; 4],
-            faults: vec![RotorFault { rotor: 0, time_s: 0.5, efficiency: 0.0 }],
+            faults: vec![RotorFault {
+                rotor: 0,
+                time_s: 0.5,
+                efficiency: 0.0,
+            }],
             x0: RigidBodyState::at_rest(),
             config,
             setpoint_m: Vector3::zeros(),
@@ -470,8 +515,13 @@ mod tests {
 
     #[test]
     fn bad_criteria_are_named() {
-        let criteria = VerdictCriteria { window_s: 0.0, ..VerdictCriteria::default() };
-        let err = simulate_summary(free_fall(1.0), &criteria).unwrap_err().to_string();
+        let criteria = VerdictCriteria {
+            window_s: 0.0,
+            ..VerdictCriteria::default()
+        };
+        let err = simulate_summary(free_fall(1.0), &criteria)
+            .unwrap_err()
+            .to_string();
         assert!(err.starts_with("criteria.window_s"), "{err}");
     }
 }

@@ -1,0 +1,322 @@
+"""Wang, Gross, Zhao (2020), Section 4: the three flights of the VPP quadcopter with propeller 1
+failed, flown in Rust by the LQR of :func:`rotorfault.vpp.lqr` on a shaped reference
+(:class:`rotorfault.TrackingFeedback`), and the fixed-pitch quadcopter with the same failure on
+the same scenario.
+
+The scenarios are Python definitions, not ``examples/*.toml`` files: the scenario-file schema
+(:mod:`rotorfault.scenario`) has no VPP actuator, no reference path and no wind profile.
+
+Frames: Wang's ``(x, y, z)`` with z up maps to NED ``(x, y, -z)`` (his y is our east up to the
+frame's sign, which mirrors the path and changes nothing else).
+
+Paper gaps, decided here (README decisions table):
+
+- scenario 1 gives no numbers: a circle of :data:`CIRCLE_RADIUS_M` every :data:`CIRCLE_PERIOD_S`,
+  climbing at :data:`CLIMB_M_S`, yaw ``YAW_AMPLITUDE_RAD sin(2 pi t / period)`` (the gain is
+  designed at yaw 0, so large yaw excursions rotate the vehicle out of its linear model);
+  the reference carries the path's velocity (feedforward through the velocity error);
+- scenario 3: "the desired states are all set to 0" (the paper), hold the origin with a 4 m/s
+  wind in x and y from t = 1 s and 15 dB SNR noise;
+- reference shaping: the paper feeds its steps to the LQR unshaped, and in our model that flies
+  (:data:`ERROR_LIMIT_M` = inf, the default); clipping each position error (``error_limit_m``)
+  trades a smaller tilt for a slower arrival and, against a steady wind, a drift (README).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._convert import FloatArray, real
+from ..control.tracking import TrackingFeedback
+from ..simulation import Noise, Simulator, State, Trajectory
+from .. import vpp
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+#: Scenario 1 (a decision: the paper prints no numbers).
+CIRCLE_RADIUS_M = 2.0
+CIRCLE_PERIOD_S = 20.0
+CLIMB_M_S = 0.1
+YAW_AMPLITUDE_RAD = 0.2
+#: Scenario 2's waypoints (Wang's frame, z up) and the times they become the target.
+WAYPOINTS = ((0.0, (0.0, 0.0, 0.0)), (2.0, (0.0, 0.0, 5.0)), (5.0, (5.0, 0.0, 5.0)), (10.0, (5.0, 5.0, 5.0)))
+YAW_STEP = (1.0, 0.1)
+WIND_M_S = (4.0, 4.0, 0.0)
+WIND_FROM_S = 1.0
+SNR_DB = 15.0
+#: Reference shaping: each position error clipped to this (m); inf: the paper's unshaped steps.
+ERROR_LIMIT_M = math.inf
+#: Wang's operating point: omega_3 = 9000 (Sec. 3.1), the 1 kHz control period of our flights.
+OMEGA3 = 9000.0
+DT_S = 0.001
+DURATION_S = 60.0
+
+
+@dataclass(frozen=True)
+class WangScenario:
+    """One flight: the reference table (rows of 12 NED states at ``times_s``, a repeated time is
+    a jump), the wind profile, and whether the measurements carry 15 dB SNR noise."""
+
+    number: int
+    title: str
+    times_s: FloatArray
+    references: FloatArray
+    wind_profile: tuple[tuple[float, tuple[float, float, float]], ...] | None
+    noisy: bool
+
+
+def _steps(events: list[tuple[float, FloatArray]]) -> tuple[FloatArray, FloatArray]:
+    times: list[float] = []
+    rows: list[FloatArray] = []
+    for t, row in events:
+        if rows:
+            times.append(t)
+            rows.append(rows[-1])
+        times.append(t)
+        rows.append(row)
+    return np.array(times), np.array(rows)
+
+
+def scenario(number: int, *, duration_s: float = DURATION_S) -> WangScenario:
+    """Scenario 1, 2 or 3 of Section 4.2 (module docs)."""
+    duration = real("duration_s", duration_s)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration_s: must be > 0 and finite, got {duration}")
+    if number == 1:
+        t = np.arange(0.0, duration + 0.05, 0.05)
+        w = 2 * math.pi / CIRCLE_PERIOD_S
+        refs = np.zeros((len(t), 12))
+        refs[:, 0] = CIRCLE_RADIUS_M * (1 - np.cos(w * t))
+        refs[:, 1] = CIRCLE_RADIUS_M * np.sin(w * t)
+        refs[:, 2] = -CLIMB_M_S * t
+        refs[:, 3] = CIRCLE_RADIUS_M * w * np.sin(w * t)
+        refs[:, 4] = CIRCLE_RADIUS_M * w * np.cos(w * t)
+        refs[:, 5] = -CLIMB_M_S
+        refs[:, 8] = YAW_AMPLITUDE_RAD * np.sin(w * t)
+        refs[:, 11] = YAW_AMPLITUDE_RAD * w * np.cos(w * t)
+        return WangScenario(1, "scenario 1: circle, climb and yaw, no noise", t, refs, None, False)
+    if number in (2, 3):
+        events: list[tuple[float, FloatArray]] = []
+        moves = WAYPOINTS if number == 2 else WAYPOINTS[:1]
+        for t_s in sorted({w[0] for w in moves} | {0.0, YAW_STEP[0]}):
+            row = np.zeros(12)
+            x, y, z = [p for s, p in moves if s <= t_s][-1]
+            row[:3] = (x, y, -z)
+            row[8] = YAW_STEP[1] if t_s >= YAW_STEP[0] else 0.0
+            events.append((t_s, row))
+        times, refs = _steps(events)
+        if number == 2:
+            return WangScenario(2, "scenario 2: waypoints, yaw 0.1 rad from 1 s, 15 dB SNR noise", times, refs, None, True)
+        wind = ((0.0, (0.0, 0.0, 0.0)), (WIND_FROM_S, WIND_M_S))
+        return WangScenario(3, "scenario 3: hold, 4 m/s wind in x and y from 1 s, 15 dB SNR noise", times, refs, wind, True)
+    raise ValueError(f"number: Wang's scenarios are 1, 2 and 3, got {number!r}")
+
+
+@dataclass(frozen=True)
+class WangFlight:
+    """A flown scenario: the trajectory, the reference it followed (sampled at the trajectory's
+    times) and the summary numbers the tests and the report print."""
+
+    scenario: WangScenario
+    vehicle: str
+    trajectory: Trajectory
+    reference: FloatArray
+    lost_at_s: float | None
+    final_error_m: float
+    max_error_after_s: float
+    max_tilt_rad: float
+
+    @property
+    def lost(self) -> bool:
+        return self.lost_at_s is not None
+
+
+def controller(vehicle: vpp.VppVehicle, s: WangScenario, *, fixed_pitch: bool = False, error_limit_m: float = ERROR_LIMIT_M) -> TrackingFeedback:
+    """The LQR of :func:`rotorfault.vpp.lqr` on ``s``'s reference. ``fixed_pitch``: the
+    fixed-pitch quadcopter's LQR designed for its healthy hover (with propeller 1 failed it has
+    no stabilising linear feedback: rank 8, roll a double integrator)."""
+    if fixed_pitch:
+        at = vpp.fixed_pitch_trim(vehicle, failed=())
+        feedback = vpp.lqr(vehicle, at, pitch_fixed=True)
+    else:
+        feedback = vpp.lqr(vehicle, vpp.trim(vehicle, failed=(1,), speeds={3: OMEGA3}))
+    limit = np.full(12, math.inf)
+    limit[:3] = real("error_limit_m", error_limit_m)
+    return TrackingFeedback.from_feedback(feedback, times_s=s.times_s, references=s.references, error_limit=limit)
+
+
+def fly(
+    number: int,
+    *,
+    fixed_pitch: bool = False,
+    duration_s: float = DURATION_S,
+    error_limit_m: float = ERROR_LIMIT_M,
+    seed: int = 0,
+    settle_s: float = 15.0,
+) -> WangFlight:
+    """Scenario ``number`` with propeller 1 failed from t = 0, on the VPP quadcopter or (with
+    ``fixed_pitch``) the fixed-pitch one. ``max_error_after_s``: the largest position error
+    after ``settle_s`` (the last waypoint at 10 s plus 5 s)."""
+    s = scenario(number, duration_s=duration_s)
+    wang = vpp.preset("wang")
+    vehicle = vpp.fixed_pitch(wang) if fixed_pitch else wang
+    law = controller(vehicle, s, fixed_pitch=fixed_pitch, error_limit_m=error_limit_m)
+    base = vehicle.simulator(failed=(1,), wind_profile=list(s.wind_profile) if s.wind_profile else None)
+    sim = Simulator(
+        base.airframe, actuator=vehicle.actuator, drag=vehicle.drag, dt_s=DT_S,
+        wind_profile=list(s.wind_profile) if s.wind_profile else None,
+        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy else None,
+    )
+    run = sim.run(State(), duration_s=duration_s, controller=law)
+    reference = np.array([law.reference(t) for t in run.t])
+    error = np.linalg.norm(run.position - reference[:, :3], axis=1)
+    late = run.t >= settle_s
+    lost = run.events[0].time if run.events else None
+    return WangFlight(
+        s, "fixed pitch" if fixed_pitch else "VPP", run, reference, lost,
+        float(error[-1]), float(np.max(error[late])) if np.any(late) else math.nan,
+        float(np.max(np.abs(run.euler[:, :2]))),
+    )
+
+
+def plot_flight(flights: list[WangFlight], path: str | None = None) -> Figure:
+    """Figs. 2-7 in one page per scenario: the 3-D path against the reference (left), position,
+    attitude and propeller commands against time (right); a fixed-pitch flight, if given, dashed
+    in the path panel with where it was lost."""
+    from .._output import new_figure, save_figure
+
+    first = flights[0]
+    fig = new_figure(figsize=(13, 9), layout="constrained")
+    grid = fig.add_gridspec(4, 2, width_ratios=[1.1, 1.0])
+    ax3 = fig.add_subplot(grid[:, 0], projection="3d")
+    ref = first.reference
+    ax3.plot(ref[:, 0], ref[:, 1], -ref[:, 2], color="0.6", lw=2.5, label="reference")
+    for k, f in enumerate(flights):
+        p = f.trajectory.position
+        label = f"{f.vehicle}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
+        ax3.plot(p[:, 0], p[:, 1], -p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
+    ax3.set_xlabel("x (m)")
+    ax3.set_ylabel("y (m)")
+    ax3.set_zlabel("altitude (m)")
+    ax3.legend(loc="upper left", fontsize=9)
+    run = first.trajectory
+    t = run.t
+    styles = ["-", "--", ":"]
+    ax = fig.add_subplot(grid[0, 1])
+    for j, name in enumerate(["x", "y", "altitude"]):
+        sign = -1.0 if j == 2 else 1.0
+        ax.plot(t, sign * run.position[:, j], color=f"C{j}", linestyle=styles[j], label=name)
+        ax.plot(t, sign * ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
+    ax.set_ylabel("position (m)\n(thin: reference)")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax = fig.add_subplot(grid[1, 1], sharex=ax)
+    for j, name in enumerate(["roll", "pitch", "yaw"]):
+        ax.plot(t, run.euler[:, j], color=f"C{j}", linestyle=styles[j], label=name)
+    ax.plot(t, ref[:, 8], color="C2", lw=0.8, alpha=0.6)
+    ax.set_ylabel("attitude (rad)")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax_w = fig.add_subplot(grid[2, 1], sharex=ax)
+    ax_a = fig.add_subplot(grid[3, 1], sharex=ax)
+    for i in range(1, 4):
+        ax_w.plot(t, run.rotor_command[:, 2 * i], color=f"C{i}", linestyle=styles[i - 1], label=f"omega {i + 1}")
+        ax_a.plot(t, run.rotor_command[:, 2 * i + 1], color=f"C{i}", linestyle=styles[i - 1], label=f"alpha {i + 1}")
+    ax_w.set_ylabel("speed command\n(paper's units)")
+    ax_a.set_ylabel("pitch command (rad)")
+    ax_a.set_xlabel("time (s)")
+    for a in (ax_w, ax_a):
+        a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    for a in fig.axes[1:]:
+        a.grid(True, alpha=0.3)
+    fig.suptitle(
+        f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed: final error "
+        f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad", fontsize=11,
+    )
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+def comparison_table() -> list[str]:
+    """Markdown: controllability (scale-free rank, uncontrollable states) and the ACAI of the VPP
+    bidirectional thrust box and of the fixed-pitch quadcopter, healthy and with propeller 1 failed."""
+    from ..controllability import acai
+
+    wang = vpp.preset("wang")
+    fixed = vpp.fixed_pitch(wang)
+    v = vpp.controllability(vpp.linearize(wang, vpp.trim(wang, failed=(1,), speeds={3: OMEGA3})))
+    f = vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True))
+    failed = np.array([0.0, 1.0, 1.0, 1.0])
+    rows = [
+        "| vehicle | rank (propeller 1 failed) | uncontrollable | ACAI healthy | ACAI propeller 1 failed |",
+        "|---|---|---|---|---|",
+        f"| VPP (thrust in [-13, 13] N) | {v.rank} | {', '.join(v.uncontrollable_states) or 'none'} | "
+        f"{float(acai(wang.airframe)):.4f} | {float(acai(wang.airframe.with_efficiency(failed))):.4f} |",
+        f"| fixed pitch (thrust in [0, 13] N) | {f.rank} | {', '.join(f.uncontrollable_states) or 'none'} | "
+        f"{float(acai(fixed.airframe)):.4f} | {float(acai(fixed.airframe.with_efficiency(failed))):.4f} |",
+    ]
+    return rows
+
+
+def speed_sweep_table() -> list[str]:
+    """Markdown: the feasible trim speeds per failed propeller (:func:`rotorfault.vpp.feasible_speeds`)."""
+    wang = vpp.preset("wang")
+    rows = ["| failed | fixed group, speed range | free group, speed range |", "|---|---|---|"]
+    for i in range(1, 5):
+        w = vpp.feasible_speeds(wang, failed=(i,))
+        rows.append(
+            f"| {i} | {list(w.fixed_rotors)}: [{w.fixed_speed_range[0]:.1f}, {w.fixed_speed_range[1]:.1f}] | "
+            f"{list(w.free_rotors)}: [{w.free_speed_range[0]:.1f}, {w.free_speed_range[1]:.1f}] |"
+        )
+    return rows
+
+
+def flights_table(flights: list[WangFlight]) -> list[str]:
+    rows = ["| scenario | vehicle | outcome | final error (m) | largest error after 15 s (m) | largest tilt (rad) |",
+            "|---|---|---|---|---|---|"]
+    for f in flights:
+        outcome = f"lost at {f.lost_at_s:.2f} s" if f.lost else "flown"
+        late = "" if f.lost or math.isnan(f.max_error_after_s) else f"{f.max_error_after_s:.3f}"
+        final = "" if f.lost else f"{f.final_error_m:.3f}"
+        rows.append(f"| {f.scenario.number} | {f.vehicle} | {outcome} | {final} | {late} | {f.max_tilt_rad:.3f} |")
+    return rows
+
+
+def write_report(out_dir: str, *, quick: bool = False, force: bool = False, command: str | None = None) -> str:
+    """Writes ``out_dir`` atomically (replaced only with ``force``): ``vpp-report.md`` (the
+    comparison table, the speed sweep, the flights), one figure per scenario
+    (``scenario-<n>.png``, VPP and the fixed-pitch quadcopter) and ``manifest.json``.
+    ``quick``: 20 s flights instead of the paper's 60 s."""
+    from .._output import check_output_directory, output_directory, write_text
+
+    check_output_directory("out_dir", out_dir, force=force)
+    duration = 20.0 if quick else DURATION_S
+    flights = []
+    pages = []
+    for n in (1, 2, 3):
+        v = fly(n, duration_s=duration)
+        fp = fly(n, fixed_pitch=True, duration_s=min(duration, 5.0))
+        flights += [v, fp]
+        pages.append((n, [v, fp]))
+    lines = [
+        "# Variable-pitch quadcopters that lose a propeller (Wang et al.): report", "",
+        "## Controllability and ACAI", "", *comparison_table(), "",
+        "## Feasible trim speeds per failed propeller", "", *speed_sweep_table(), "",
+        f"## Section 4's flights ({duration:g} s, propeller 1 failed from t = 0; fixed pitch flown 5 s)", "",
+        *flights_table(flights), "",
+    ]
+    manifest = {"generator": "rotorfault vpp-report (rotorfault.papers.wang.write_report)",
+                "command": command or "rotorfault.papers.wang.write_report", "quick": quick}
+    with output_directory(out_dir, manifest) as tmp:
+        write_text(tmp / "vpp-report.md", "\n".join(lines))
+        for n, pair in pages:
+            plot_flight(pair, str(tmp / f"scenario-{n}.png"))
+    return out_dir
+
+
+__all__ = ["WangFlight", "WangScenario", "comparison_table", "controller", "flights_table", "fly", "plot_flight",
+           "scenario", "speed_sweep_table", "write_report"]
