@@ -186,3 +186,17 @@ def test_lqr_holds_hover_with_propeller_1_failed_in_rust(wang: vpp.VppVehicle) -
     run = sim.run(rf.State(position=(0.5, -0.5, -0.3)), duration_s=10.0, controller=feedback)
     assert np.linalg.norm(run.position[-1]) < 1e-3
     assert np.max(np.abs(run.euler[:, :2])) < 0.05
+
+
+def test_printed_numbers_for_the_report() -> None:
+    """papers.wang.printed_numbers(): the rows the reproduce-all report shows. Every number
+    passes except the three the README's decisions explain (the paper's 7067 is not a root of
+    r = 1; its 8782 and 0.7714 come from the rounded 6201), each of which carries its note."""
+    from rotorfault.papers import wang as wang_paper
+
+    rows = wang_paper.printed_numbers()
+    assert len(rows) == 10
+    differs = {r.quantity for r in rows if r.status == "differs"}
+    assert differs == {"highest feasible omega2 (r = 1)", "lowest feasible omega3", "lowest r(omega2)"}
+    assert all(r.note for r in rows if r.status == "differs")
+    assert {r.quantity: r.ours for r in rows}["controllability rank, VPP, propeller 1 failed"] == 12

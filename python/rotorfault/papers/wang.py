@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,6 +37,8 @@ from ..simulation import Noise, Simulator, State, Trajectory
 from .. import vpp
 
 if TYPE_CHECKING:
+    from ._numbers import PaperNumber
+    from ._report import ReportSection
     from matplotlib.figure import Figure
 
 #: Scenario 1 (a decision: the paper prints no numbers).
@@ -318,5 +321,81 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     return out_dir
 
 
-__all__ = ["WangFlight", "WangScenario", "comparison_table", "controller", "flights_table", "fly", "plot_flight",
+__all__ = ["PAPER", "WangFlight", "WangScenario", "comparison_table", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
            "scenario", "speed_sweep_table", "write_report"]
+
+
+# -- the reproduce-all report ---------------------------------------------------------------------
+
+PAPER = "Wang et al. (2020)"
+
+
+def printed_numbers() -> list[PaperNumber]:
+    """The numbers Sections 3.1, 3.3 and 3.4 print, beside ours (propeller 1 failed): the trim at
+    omega3 = 9000, the feasible speed ranges, the range of r(omega2), and the controllability
+    ranks. Printed values carry their own rounding: half a unit in the last printed place."""
+    from ._numbers import PaperNumber
+
+    wang = vpp.preset("wang")
+    trim = vpp.trim(wang, failed=(1,), speeds={3: OMEGA3})
+    window = vpp.feasible_speeds(wang, failed=(1,))
+    fixed = vpp.fixed_pitch(wang)
+    ranks = (
+        vpp.controllability(vpp.linearize(wang, trim)).rank,
+        vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True)).rank,
+    )
+    (lo2, hi2), (lo3, hi3) = window.free_speed_range, window.fixed_speed_range
+    r_lo, r_hi = window.free_torque_range_nm
+    return [
+        PaperNumber(PAPER, "Sec. 3.1", "omega2* at omega3 = 9000", 6355, trim.speed(2), 0.5),
+        PaperNumber(PAPER, "Sec. 3.1", "alpha2* at omega3 = 9000 (rad)", 0.2476, trim.pitch(2), 0.5e-4),
+        PaperNumber(PAPER, "Sec. 3.1", "lowest feasible omega2 (pitch bound)", 6201, lo2, 1.0,
+                    "the paper truncates 6201.7 to 6201"),
+        PaperNumber(PAPER, "Sec. 3.1", "highest feasible omega2 (r = 1)", 7067, hi2, 0.5,
+                    "7067 is not a root of r = 1 (r(7067) = 1.0008); the root is 7064.2 (README decisions)"),
+        PaperNumber(PAPER, "Sec. 3.1", "lowest feasible omega3", 8782, lo3, 0.5,
+                    "the paper evaluates r at the rounded 6201 (0.7714) and truncates sqrt(0.7714 / k2) = 8782.9"),
+        PaperNumber(PAPER, "Sec. 3.1", "highest feasible omega3 (speed bound)", 10000, hi3, 0.5),
+        PaperNumber(PAPER, "Sec. 3.1", "lowest r(omega2)", 0.7714, r_lo, 0.5e-4,
+                    "at the exact pitch-bound speed 6201.7; r(6201) = 0.7714"),
+        PaperNumber(PAPER, "Sec. 3.1", "highest r(omega2)", 2, r_hi, 0.5),
+        PaperNumber(PAPER, "Sec. 3.3", "controllability rank, VPP, propeller 1 failed", 12, ranks[0], 0.0),
+        PaperNumber(PAPER, "Sec. 3.4", "controllability rank, fixed pitch, propeller 1 failed", 8, ranks[1], 0.0),
+    ]
+
+
+def _markdown_table(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    cells = [tuple(c.strip() for c in line.strip().strip("|").split(" | ")) for line in lines]
+    return cells[0], tuple(cells[2:])
+
+
+def report_section(out: Path, *, quick: bool = False) -> ReportSection:
+    """Wang's part of ``rotorfault reproduce``: the printed numbers beside ours, the same tables
+    and flights as ``rotorfault vpp-report`` (``--quick``: 20 s flights)."""
+    import time
+
+    from ._report import ReportFigure, ReportSection, ReportTable
+
+    start = time.perf_counter()
+    section = ReportSection("wang", "Wang et al.: variable-pitch quadcopters that lose a propeller",
+                            source="rotorfault.papers.wang (rotorfault vpp-report)")
+    section.numbers = printed_numbers()
+    for caption, lines in (
+        ("Controllability and ACAI, propeller 1 failed (the 4-axis ACAI's yaw row cannot see the VPP's separate "
+         "torque channel: README decisions)", comparison_table()),
+        ("Feasible trim speeds per failed propeller", speed_sweep_table()),
+    ):
+        columns, rows = _markdown_table(lines)
+        section.tables.append(ReportTable(caption, columns, rows))
+    duration = 20.0 if quick else DURATION_S
+    flights = []
+    for n in (1, 2, 3):
+        pair = [fly(n, duration_s=duration), fly(n, fixed_pitch=True, duration_s=min(duration, 5.0))]
+        flights += pair
+        name = f"wang-scenario-{n}.png"
+        plot_flight(pair, str(out / name))
+        section.figures.append(ReportFigure(name, f"Section 4 scenario {n}: VPP (solid) and fixed pitch (dashed), propeller 1 failed", small=True))
+    columns, rows = _markdown_table(flights_table(flights))
+    section.tables.append(ReportTable(f"Section 4's flights ({duration:g} s; fixed pitch flown 5 s)", columns, rows))
+    section.run_time_s = time.perf_counter() - start
+    return section
