@@ -7,11 +7,12 @@ Every user error (bad value, bad type, unreadable file) ends the command with a 
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any, TypeVar, cast
 
 import click
@@ -341,6 +342,28 @@ def _raise_terminated(signum: int, frame: Any) -> None:
     raise _Terminated()
 
 
+@contextlib.contextmanager
+def _report_interruptions() -> Iterator[None]:
+    """A report command's work: SIGTERM becomes an exception (so the temporary report directory
+    is cleaned up) and SIGTERM or Ctrl-C end with a one-line message saying the previous report is
+    unchanged. Outside the main thread (an embedding application) SIGTERM is left alone."""
+    previous = signal.getsignal(signal.SIGTERM)
+    in_main = True
+    try:
+        signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:
+        in_main = False
+    try:
+        yield
+    except _Terminated:
+        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
+    except KeyboardInterrupt:
+        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
+    finally:
+        if in_main:
+            signal.signal(signal.SIGTERM, previous)
+
+
 @cli.command("ftc-report")
 @click.option("--out", "out_dir", default="ftc-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the table and figures (replaced as a whole).")
 @click.option("--preset", "preset_name", default="ke-hil", show_default=True, help="Controller preset (gains and vehicle).")
@@ -374,13 +397,7 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
         scenarios = [ke_paper.scenario(name) for name in names]
     check_output_directory("out", out_dir, force=force)
     controller_preset = ke.preset(preset_name)
-    previous = signal.getsignal(signal.SIGTERM)
-    in_main = True
-    try:
-        signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread (an embedding application): leave SIGTERM alone
-        in_main = False
-    try:
+    with _report_interruptions():
         runs = []
         console.print(f"flying {len(scenarios) * len(chosen_laws)} runs", highlight=False)
         for law in chosen_laws:
@@ -390,13 +407,6 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
         console.print(f"writing the report to {escape(out_dir)}", highlight=False)
         command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault ftc-report"
         path = ke_paper.write_report(runs, out_dir, figures=not no_figures, force=force, command=command)
-    except _Terminated:
-        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
-    except KeyboardInterrupt:
-        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
-    finally:
-        if in_main:
-            signal.signal(signal.SIGTERM, previous)
     console.print(f"report written to {escape(str(path))}")
 
 
@@ -413,7 +423,8 @@ def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
 
     check_output_directory("out", out_dir, force=force)
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault vpp-report"
-    path = wang_paper.write_report(out_dir, quick=quick, force=force, command=command)
+    with _report_interruptions():
+        path = wang_paper.write_report(out_dir, quick=quick, force=force, command=command)
     for line in wang_paper.comparison_table():
         console.print(escape(line), highlight=False, soft_wrap=True)
     console.print(f"report written to {escape(str(path))}")
@@ -437,13 +448,7 @@ def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, for
     check_output_directory("out", out_dir, force=force)
     duration = 20.0 if quick else None
     runs_per = min(mc_runs, 50) if quick else mc_runs
-    previous = signal.getsignal(signal.SIGTERM)
-    in_main = True
-    try:
-        signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread
-        in_main = False
-    try:
+    with _report_interruptions():
         console.print("flying scenarios A and B, cases (a), (b), (c), I_zz 1.16e-3 and 1.16e-2: 12 flights", highlight=False)
         runs = lanzon_paper.three_way(duration_s=duration)
         for line in lanzon_paper.three_way_table(runs):
@@ -459,13 +464,6 @@ def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, for
         command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault lanzon-report"
         path = lanzon_paper.write_report(runs, out_dir, monte_carlo_results=results, figures=not no_figures, force=force,
                                          command=command)
-    except _Terminated:
-        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
-    except KeyboardInterrupt:
-        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
-    finally:
-        if in_main:
-            signal.signal(signal.SIGTERM, previous)
     console.print(f"report written to {escape(str(path))}")
 
 
@@ -539,25 +537,12 @@ def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> 
     from .papers import reproduce as reproduce_
 
     check_output_directory("out", out_dir, force=force)
-    previous = signal.getsignal(signal.SIGTERM)
-    in_main = True
-    try:
-        signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread: leave SIGTERM alone
-        in_main = False
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault reproduce"
-    try:
+    with _report_interruptions():
         result = reproduce_.write_reproduce(
             out_dir, quick=quick, force=force, command=command, bench_directory=bench_dir,
             progress=lambda text: console.print(escape(text), highlight=False),
         )
-    except _Terminated:
-        raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
-    except KeyboardInterrupt:
-        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
-    finally:
-        if in_main:
-            signal.signal(signal.SIGTERM, previous)
     for section in result.sections:
         numbers = [n for part in [section, *section.parts] for n in part.numbers]
         state = "not landed yet" if not section.landed else f"{sum(n.status == 'pass' for n in numbers)} of {len(numbers)} printed numbers pass"
