@@ -29,7 +29,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 
 import rotorfault as rf
 from rotorfault.campaign import Campaign, run_campaign, tune, tuning_campaign
@@ -76,7 +75,6 @@ def main() -> None:
     print(tuned.table())
     print(f"(c) tuning: {tuned.candidates} candidates x {tuned.scenarios} scenarios in {wall / 60:.1f} min "
           f"(target < 15 min: {'PASS' if wall < 900 else 'FAIL'})")
-    del np
 
 
 def dask_overhead(c: Campaign, rounds: int) -> None:
