@@ -15,7 +15,7 @@ use rfcore::allocation::clarabel::{
     ClarabelSettings,
 };
 use rfcore::allocation::{
-    allocate_all, allocate_many, fallback_count, time_each, Allocation, AllocationProblem,
+    allocate_all, allocate_many, fallback_count, Allocation, AllocationProblem,
     Certificate, Method,
 };
 use rfcore::analysis::ControlAxes;
@@ -449,7 +449,7 @@ pub fn time_allocations<'py>(
     let method = method(problem, method_name, None)?;
     let flat = slice2("virtual_control", &controls)?;
     let problem = &problem.inner;
-    let times = detached(py, || time_each(problem, &method, flat, repeats))?;
+    let times = detached(py, || rfcore::fixtures::time_each(problem, &method, flat, repeats))?;
     Ok(times.into_pyarray(py))
 }
 

@@ -30,7 +30,8 @@ use nalgebra::DMatrix;
 use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
-use rfcore::allocation::{time_each, AllocationProblem, Method, SolvedBy};
+use rfcore::allocation::{AllocationProblem, Method, SolvedBy};
+use rfcore::fixtures::time_each;
 use rfcore::Airframe;
 
 const PROBLEMS: usize = 256;

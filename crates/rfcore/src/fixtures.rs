@@ -3,7 +3,14 @@
 
 use std::path::PathBuf;
 
+use std::hint::black_box;
+use std::time::Instant;
+
 use crate::airframe::Airframe;
+use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
+use crate::allocation::clarabel::{allocate_clarabel, allocate_prioritized};
+use crate::allocation::{check_rows, weighted_pseudo_inverse, AllocationProblem, Method};
+use crate::error::{Result, RfError};
 
 /// `python/rotorfault/presets` of this source tree.
 pub fn presets_dir() -> PathBuf {
@@ -54,4 +61,51 @@ impl Rng {
         let v = self.uniform(0.0, 1.0);
         (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
     }
+}
+
+/// Bench support (benches/allocation.rs, benches/allocation_clarabel.py): the mean wall time of one solve, per virtual control (rows of `controls`),
+/// each solved `repeats` times in a row on one thread (cold-started). Seconds.
+pub fn time_each(
+    problem: &AllocationProblem,
+    method: &Method,
+    controls: &[f64],
+    repeats: usize,
+) -> Result<Vec<f64>> {
+    if repeats == 0 {
+        return Err(RfError::invalid("repeats", "must be >= 1, got 0"));
+    }
+    check_rows(problem, controls)?;
+    let n = problem.virtual_dimension();
+    let solver = match method {
+        Method::ActiveSet(settings) => ActiveSetSolver::with_settings(problem, *settings),
+        _ => ActiveSetSolver::new(problem),
+    };
+    let pinv = weighted_pseudo_inverse(problem);
+    let mut commands = vec![0.0; problem.actuator_count()];
+    let mut times = Vec::with_capacity(controls.len() / n);
+    for u_c in controls.chunks(n) {
+        let start = Instant::now();
+        for _ in 0..repeats {
+            match method {
+                Method::ActiveSet(_) => {
+                    let mut active = ActiveSet::cold(problem.actuator_count());
+                    black_box(solver.solve_unchecked(black_box(u_c), &mut active, &mut commands));
+                }
+                Method::Pinv => pinv.apply(black_box(u_c), &mut commands),
+                Method::Clarabel(settings) => {
+                    black_box(allocate_clarabel(problem, black_box(u_c), settings)?);
+                }
+                Method::Prioritized(groups, settings) => {
+                    black_box(allocate_prioritized(
+                        problem,
+                        black_box(u_c),
+                        groups,
+                        settings,
+                    )?);
+                }
+            }
+        }
+        times.push(start.elapsed().as_secs_f64() / repeats as f64);
+    }
+    Ok(times)
 }

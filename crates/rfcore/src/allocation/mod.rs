@@ -28,8 +28,6 @@
 //! carries a [`Certificate`]; it is `Optimal` only when that holds, else the solver falls back to
 //! Clarabel ([`SolvedBy`]).
 
-use std::hint::black_box;
-use std::time::Instant;
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -38,7 +36,7 @@ pub mod active_set;
 pub mod clarabel;
 
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
-use active_set::{ActiveSet, ActiveSetSettings, ActiveSetSolver};
+use active_set::{ActiveSetSettings, ActiveSetSolver};
 use clarabel::{allocate_clarabel, allocate_prioritized, ClarabelSettings};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
@@ -544,7 +542,7 @@ impl Method {
 }
 
 /// Checks N x n row-major virtual controls: whole rows, finite entries (named `[row, col]`).
-fn check_rows(problem: &AllocationProblem, controls: &[f64]) -> Result<()> {
+pub(crate) fn check_rows(problem: &AllocationProblem, controls: &[f64]) -> Result<()> {
     let n = problem.virtual_dimension();
     if !controls.len().is_multiple_of(n) {
         return Err(RfError::shape(
@@ -610,52 +608,6 @@ pub fn allocate_many(
     }
 }
 
-/// Benchmark support: the mean wall time of one solve, per virtual control (rows of `controls`),
-/// each solved `repeats` times in a row on one thread (cold-started). Seconds.
-pub fn time_each(
-    problem: &AllocationProblem,
-    method: &Method,
-    controls: &[f64],
-    repeats: usize,
-) -> Result<Vec<f64>> {
-    if repeats == 0 {
-        return Err(RfError::invalid("repeats", "must be >= 1, got 0"));
-    }
-    check_rows(problem, controls)?;
-    let n = problem.virtual_dimension();
-    let solver = match method {
-        Method::ActiveSet(settings) => ActiveSetSolver::with_settings(problem, *settings),
-        _ => ActiveSetSolver::new(problem),
-    };
-    let pinv = weighted_pseudo_inverse(problem);
-    let mut commands = vec![0.0; problem.actuator_count()];
-    let mut times = Vec::with_capacity(controls.len() / n);
-    for u_c in controls.chunks(n) {
-        let start = Instant::now();
-        for _ in 0..repeats {
-            match method {
-                Method::ActiveSet(_) => {
-                    let mut active = ActiveSet::cold(problem.actuator_count());
-                    black_box(solver.solve_unchecked(black_box(u_c), &mut active, &mut commands));
-                }
-                Method::Pinv => pinv.apply(black_box(u_c), &mut commands),
-                Method::Clarabel(settings) => {
-                    black_box(allocate_clarabel(problem, black_box(u_c), settings)?);
-                }
-                Method::Prioritized(groups, settings) => {
-                    black_box(allocate_prioritized(
-                        problem,
-                        black_box(u_c),
-                        groups,
-                        settings,
-                    )?);
-                }
-            }
-        }
-        times.push(start.elapsed().as_secs_f64() / repeats as f64);
-    }
-    Ok(times)
-}
 
 #[cfg(test)]
 mod tests {
