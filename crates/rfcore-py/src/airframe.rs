@@ -10,10 +10,8 @@ use crate::convert::{read_only, slice1, slice2, to_py_err};
 
 /// An m x 3 array (read-only) from per-rotor vectors.
 fn rows3<'py>(py: Python<'py>, rows: impl Iterator<Item = [f64; 3]>) -> Bound<'py, PyArray2<f64>> {
-    let flat: Vec<f64> = rows.flatten().collect();
-    let array = Array2::from_shape_vec((flat.len() / 3, 3), flat)
-        .expect("3 columns by construction")
-        .into_pyarray(py);
+    let rows: Vec<[f64; 3]> = rows.collect();
+    let array = Array2::from_shape_fn((rows.len(), 3), |(i, c)| rows[i][c]).into_pyarray(py);
     array.readwrite().make_nonwriteable();
     array
 }

@@ -238,35 +238,19 @@ impl Airframe {
         }
         require_len("arm_length_m", arm_length_m, m)?;
         require_len("spin", spin_sign, m)?;
-        require_len("max_thrust_n", max_thrust_n, m)?;
-        require_len("min_thrust_n", min_thrust_n, m)?;
-        require_len("efficiency", efficiency, m)?;
-        if inertia_kg_m2.len() != 3 {
-            return Err(RfError::shape(
-                "inertia_kg_m2",
-                "3 entries (Jx, Jy, Jz)",
-                format!("{}", inertia_kg_m2.len()),
-            ));
-        }
-        let mut rotors = Vec::with_capacity(m);
-        for i in 0..m {
-            rotors.push(Rotor {
-                placement: RotorPlacement::Planar {
-                    arm_angle_rad: arm_angle_rad[i],
-                    arm_length_m: arm_length_m[i],
-                },
-                spin: SpinDirection::from_yaw_sign(&rotor_field("spin", i), spin_sign[i])?,
-                drag_torque_ratio_m: None,
-                max_thrust_n: max_thrust_n[i],
-                min_thrust_n: min_thrust_n[i],
-                efficiency: efficiency[i],
-            });
-        }
+        let per_rotor = PerRotor { spin_sign, max_thrust_n, min_thrust_n, efficiency };
+        let rotors = per_rotor.rotors(|i| {
+            let placement = RotorPlacement::Planar {
+                arm_angle_rad: arm_angle_rad[i],
+                arm_length_m: arm_length_m[i],
+            };
+            (placement, None)
+        })?;
         Airframe::new(
             name,
             rotors,
             mass_kg,
-            [inertia_kg_m2[0], inertia_kg_m2[1], inertia_kg_m2[2]],
+            inertia3(inertia_kg_m2)?,
             drag_torque_ratio_m,
             gravity_m_s2,
         )
@@ -306,36 +290,20 @@ impl Airframe {
         if let Some(k) = rotor_drag_torque_ratio_m {
             require_len("rotor_drag_torque_ratio_m", k, m)?;
         }
-        require_len("max_thrust_n", max_thrust_n, m)?;
-        require_len("min_thrust_n", min_thrust_n, m)?;
-        require_len("efficiency", efficiency, m)?;
-        if inertia_kg_m2.len() != 3 {
-            return Err(RfError::shape(
-                "inertia_kg_m2",
-                "3 entries (Jx, Jy, Jz)",
-                format!("{}", inertia_kg_m2.len()),
-            ));
-        }
         let row = |v: &[f64], i: usize| [v[3 * i], v[3 * i + 1], v[3 * i + 2]];
-        let mut rotors = Vec::with_capacity(m);
-        for i in 0..m {
-            rotors.push(Rotor {
-                placement: RotorPlacement::General {
-                    position_m: row(position_m, i),
-                    thrust_axis: row(thrust_axis, i),
-                },
-                spin: SpinDirection::from_yaw_sign(&rotor_field("spin", i), spin_sign[i])?,
-                drag_torque_ratio_m: rotor_drag_torque_ratio_m.map(|k| k[i]),
-                max_thrust_n: max_thrust_n[i],
-                min_thrust_n: min_thrust_n[i],
-                efficiency: efficiency[i],
-            });
-        }
+        let per_rotor = PerRotor { spin_sign, max_thrust_n, min_thrust_n, efficiency };
+        let rotors = per_rotor.rotors(|i| {
+            let placement = RotorPlacement::General {
+                position_m: row(position_m, i),
+                thrust_axis: row(thrust_axis, i),
+            };
+            (placement, rotor_drag_torque_ratio_m.map(|k| k[i]))
+        })?;
         Airframe::new(
             name,
             rotors,
             mass_kg,
-            [inertia_kg_m2[0], inertia_kg_m2[1], inertia_kg_m2[2]],
+            inertia3(inertia_kg_m2)?,
             drag_torque_ratio_m,
             gravity_m_s2,
         )
@@ -689,6 +657,53 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// The per-rotor columns both column constructors share: spin, thrust box, efficiency.
+struct PerRotor<'a> {
+    spin_sign: &'a [f64],
+    max_thrust_n: &'a [f64],
+    min_thrust_n: &'a [f64],
+    efficiency: &'a [f64],
+}
+
+impl PerRotor<'_> {
+    /// The rotors, `placement(i)` giving rotor i's placement and own k_mu; the shared columns'
+    /// lengths are checked against the spin column's first.
+    fn rotors(
+        &self,
+        placement: impl Fn(usize) -> (RotorPlacement, Option<f64>),
+    ) -> Result<Vec<Rotor>> {
+        let m = self.spin_sign.len();
+        require_len("max_thrust_n", self.max_thrust_n, m)?;
+        require_len("min_thrust_n", self.min_thrust_n, m)?;
+        require_len("efficiency", self.efficiency, m)?;
+        (0..m)
+            .map(|i| {
+                let (placement, drag_torque_ratio_m) = placement(i);
+                Ok(Rotor {
+                    placement,
+                    spin: SpinDirection::from_yaw_sign(&rotor_field("spin", i), self.spin_sign[i])?,
+                    drag_torque_ratio_m,
+                    max_thrust_n: self.max_thrust_n[i],
+                    min_thrust_n: self.min_thrust_n[i],
+                    efficiency: self.efficiency[i],
+                })
+            })
+            .collect()
+    }
+}
+
+/// `[Jx, Jy, Jz]` from a slice, naming the field when it has another length.
+fn inertia3(inertia_kg_m2: &[f64]) -> Result<[f64; 3]> {
+    match inertia_kg_m2 {
+        [x, y, z] => Ok([*x, *y, *z]),
+        _ => Err(RfError::shape(
+            "inertia_kg_m2",
+            "3 entries (Jx, Jy, Jz)",
+            format!("{}", inertia_kg_m2.len()),
+        )),
+    }
 }
 
 /// The same rotor twice (same position within [`COINCIDENT_ROTOR_M`], same axis and spin) is

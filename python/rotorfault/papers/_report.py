@@ -55,6 +55,13 @@ class SectionProvider(Protocol):
     def __call__(self, out: Path, *, quick: bool) -> ReportSection: ...
 
 
+def markdown_table(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    """Header and rows of a Markdown table a paper module prints (``| a | b |`` lines, the second
+    the separator): one code path for its Markdown report and the report page."""
+    cells = [tuple(c.strip() for c in line.strip().strip("|").split(" | ")) for line in lines]
+    return cells[0], tuple(cells[2:])
+
+
 def not_landed(key: str, title: str, module: str, what: str) -> ReportSection:
     """The section of a paper whose reproduction has not landed yet."""
     return ReportSection(
@@ -63,4 +70,4 @@ def not_landed(key: str, title: str, module: str, what: str) -> ReportSection:
     )
 
 
-__all__ = ["ReportFigure", "ReportSection", "ReportTable", "SectionProvider", "not_landed"]
+__all__ = ["ReportFigure", "ReportSection", "ReportTable", "SectionProvider", "markdown_table", "not_landed"]

@@ -702,13 +702,6 @@ __all__ = [
 ]
 
 
-def _markdown_rows(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
-    """Header and rows of a Markdown table made by :func:`three_way_table` or
-    :func:`monte_carlo_table` (one code path for the report page and the Markdown report)."""
-    cells = [tuple(c.strip() for c in line.strip().strip("|").split(" | ")) for line in lines]
-    return cells[0], tuple(cells[2:])
-
-
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     """Lanzon's flights for ``rotorfault reproduce``: the three-way table (the paper's design
     without and with its limits, ours with them; both ``I_zz`` values) from :func:`three_way`, the
@@ -717,13 +710,13 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     flies 20 s instead of 60 s and skips the Monte Carlo."""
     import time
 
-    from ._report import ReportFigure, ReportSection, ReportTable
+    from ._report import ReportFigure, ReportSection, ReportTable, markdown_table
 
     start = time.perf_counter()
     section = ReportSection("lanzon-flights", "Lanzon's flights (Scenarios A and B, Figs. 6-10)",
                             source="rotorfault.papers.lanzon (rotorfault lanzon-report)")
     runs = three_way(duration_s=20.0 if quick else None)
-    columns, rows = _markdown_rows(three_way_table(runs))
+    columns, rows = markdown_table(three_way_table(runs))
     section.tables.append(ReportTable(
         "Three ways, rotor 2 dead" + (" (--quick: 20 s flights)" if quick else " (60 s flights)")
         + ": (a) the paper's 100 rad/s design without actuator limits, (b) the same design with the paper's "
@@ -738,7 +731,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
             section.figures.append(ReportFigure(name, run.title, small=True))
     if not quick:
         results = [monte_carlo(c, runs=200, duration_s=60.0) for c in ("lanzon", "ke")]
-        columns, rows = _markdown_rows(monte_carlo_table(results))
+        columns, rows = markdown_table(monte_carlo_table(results))
         section.tables.append(ReportTable(
             "Robustness, 200 runs each: mass, inertias, k_r, I_R +-20 %, 15 dB sensor noise, Scenario B", columns, rows))
     else:

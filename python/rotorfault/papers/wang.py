@@ -364,17 +364,12 @@ def printed_numbers() -> list[PaperNumber]:
     ]
 
 
-def _markdown_table(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
-    cells = [tuple(c.strip() for c in line.strip().strip("|").split(" | ")) for line in lines]
-    return cells[0], tuple(cells[2:])
-
-
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     """Wang's part of ``rotorfault reproduce``: the printed numbers beside ours, the same tables
     and flights as ``rotorfault vpp-report`` (``--quick``: 20 s flights)."""
     import time
 
-    from ._report import ReportFigure, ReportSection, ReportTable
+    from ._report import ReportFigure, ReportSection, ReportTable, markdown_table
 
     start = time.perf_counter()
     section = ReportSection("wang", "Wang et al.: variable-pitch quadcopters that lose a propeller",
@@ -385,7 +380,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
          "torque channel: README decisions)", comparison_table()),
         ("Feasible trim speeds per failed propeller", speed_sweep_table()),
     ):
-        columns, rows = _markdown_table(lines)
+        columns, rows = markdown_table(lines)
         section.tables.append(ReportTable(caption, columns, rows))
     duration = 20.0 if quick else DURATION_S
     flights = []
@@ -395,7 +390,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         name = f"wang-scenario-{n}.png"
         plot_flight(pair, str(out / name))
         section.figures.append(ReportFigure(name, f"Section 4 scenario {n}: VPP (solid) and fixed pitch (dashed), propeller 1 failed", small=True))
-    columns, rows = _markdown_table(flights_table(flights))
+    columns, rows = markdown_table(flights_table(flights))
     section.tables.append(ReportTable(f"Section 4's flights ({duration:g} s; fixed pitch flown 5 s)", columns, rows))
     section.run_time_s = time.perf_counter() - start
     return section
