@@ -16,12 +16,14 @@ from __future__ import annotations
 
 import html as html_lib
 import json
+import math
 import os
 import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -152,3 +154,58 @@ def test_screenshot(report: Path, tmp_path_factory: pytest.TempPathFactory) -> N
     assert done.returncode == 0, done.stderr[-2000:]
     assert target.is_file() and target.stat().st_size > 20_000, (done.stdout[-500:], done.stderr[-1500:])
     assert target.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _differences(main: dict[str, Any], here: dict[str, Any]) -> list[str]:
+    """Field-by-field differences between two reports' ``numbers.json``: numbers to 1e-9 relative
+    (a NaN equals only a NaN), every table cell exactly (they are the printed text)."""
+    found: list[str] = []
+    if set(main["sections"]) != set(here["sections"]):
+        return [f"sections differ: {sorted(main['sections'])} vs {sorted(here['sections'])}"]
+    for key, a in main["sections"].items():
+        b = here["sections"][key]
+        if len(a["numbers"]) != len(b["numbers"]):
+            found.append(f"{key}: {len(a['numbers'])} numbers vs {len(b['numbers'])}")
+        for x, y in zip(a["numbers"], b["numbers"]):
+            name = f"{key}: {x['where']} {x['quantity']}"
+            for field in ("where", "quantity", "printed", "tolerance", "status"):
+                if x[field] != y[field]:
+                    found.append(f"{name}: {field} {x[field]!r} vs {y[field]!r}")
+            p, q = x["ours"], y["ours"]
+            same = (math.isnan(p) and math.isnan(q)) or p == q or abs(p - q) <= 1e-9 * max(abs(p), abs(q))
+            if not same:
+                found.append(f"{name}: ours {p!r} vs {q!r}")
+        if len(a["tables"]) != len(b["tables"]):
+            found.append(f"{key}: {len(a['tables'])} tables vs {len(b['tables'])}")
+        for t, u in zip(a["tables"], b["tables"]):
+            if t != u:
+                rows = [f"{r} vs {s}" for r, s in zip(t["rows"], u["rows"]) if r != s]
+                found.append(f"{key}: table {t['caption']!r} differs: {rows or (t['columns'], u['columns'])}")
+    return found
+
+
+def test_the_main_jobs_report_has_the_numbers_of_the_test_environment(report: Path) -> None:
+    """One answer on every install: the README's main job, run by CI in a fresh environment
+    without the test extras (no slycot, no Dask, no pyarrow), printed the same numbers and tables
+    as this environment. ``.ci/run`` sets ``ROTORFAULT_MAIN_JOB_REPORT`` to its report."""
+    main_job = os.environ.get("ROTORFAULT_MAIN_JOB_REPORT")
+    if not main_job:
+        if os.environ.get("ROTORFAULT_REQUIRE_MAIN_JOB") == "1":
+            pytest.fail("ROTORFAULT_MAIN_JOB_REPORT is not set (ROTORFAULT_REQUIRE_MAIN_JOB=1)")
+        pytest.skip("no main-job report to compare with (.ci/run sets ROTORFAULT_MAIN_JOB_REPORT)")
+    main = json.loads((Path(main_job) / "numbers.json").read_text(encoding="utf-8"))
+    here = json.loads((report / "numbers.json").read_text(encoding="utf-8"))
+    assert main["schema"] == here["schema"] == reproduce.NUMBERS_SCHEMA
+    assert _differences(main, here) == []
+
+
+def test_the_comparison_sees_a_changed_number_and_a_changed_cell(report: Path) -> None:
+    """The comparison above can fail: a number moved by 1e-6 relative and one changed table cell
+    are both reported."""
+    here = json.loads((report / "numbers.json").read_text(encoding="utf-8"))
+    changed = json.loads(json.dumps(here))
+    number = changed["sections"]["du"]["numbers"][0]
+    number["ours"] = number["ours"] * (1 + 1e-6) + 1e-12
+    changed["sections"]["wang"]["tables"][0]["rows"][0][0] += "x"
+    found = _differences(here, changed)
+    assert len(found) == 2 and "du:" in found[0] and "wang: table" in found[1]

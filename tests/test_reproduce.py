@@ -132,7 +132,7 @@ def test_sections_render_landed_and_not_landed_and_escape_names(tmp_path: Path) 
     assert "<img src=x" not in html and "<i>x</i>" not in html
     assert html.count('<td class="pass">pass</td>') == 2 and html.count('<td class="differs">differs</td>') == 2
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-    assert set(manifest["outputs"]) == {"index.html", "du.png", "wang.png"} and manifest["quick"] is True
+    assert set(manifest["outputs"]) == {"index.html", "numbers.json", "du.png", "wang.png"} and manifest["quick"] is True
     # The decisions table: one row per README decision, linked to the files.
     assert len(re.findall(r"<tr><td>", html.split('id="decisions-table"')[1].split("</table>")[0])) == len(decisions())
     if source_root() is not None:  # from a source tree the links point into it, relative to the report

@@ -220,6 +220,32 @@ def _shown_path(path: Path | None) -> str:
     return str(path)
 
 
+#: Schema of ``numbers.json``, the report's numbers and tables in a form a program compares.
+NUMBERS_SCHEMA = "rotorfault-report-numbers/1"
+
+
+def report_numbers(sections: list[ReportSection]) -> dict[str, Any]:
+    """Every number and table cell of the report, by section (run times left out): what
+    ``numbers.json`` holds, so that two installs' reports can be compared field by field (CI
+    compares the README's main job, run without the test extras, with the test environment's)."""
+
+    def flat(section: ReportSection) -> list[ReportSection]:
+        return [section, *(p for part in section.parts for p in flat(part))]
+
+    out: dict[str, Any] = {"schema": NUMBERS_SCHEMA, "sections": {}}
+    for s in sections:
+        for part in flat(s):
+            out["sections"][part.key] = {
+                "title": part.title,
+                "landed": part.landed,
+                "numbers": [{"where": n.where, "quantity": n.quantity, "printed": n.printed, "ours": n.ours,
+                             "tolerance": n.tolerance, "status": n.status} for n in part.numbers],
+                "tables": [{"caption": t.caption, "columns": list(t.columns), "rows": [list(r) for r in t.rows]}
+                           for t in part.tables],
+            }
+    return out
+
+
 @dataclass
 class ReproduceResult:
     path: Path
@@ -277,8 +303,10 @@ def write_reproduce(
                       command=str(manifest["command"]), version=package_version,
                       bench_directory=_shown_path(benches_dir))
         (tmp / "index.html").write_text(html, encoding="utf-8")
+        (tmp / "numbers.json").write_text(json.dumps(report_numbers(result.sections), indent=1, allow_nan=True) + "\n",
+                                          encoding="utf-8")
     return result
 
 
-__all__ = ["BENCH_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
-           "inline_markdown", "number_row", "provider", "render", "write_reproduce"]
+__all__ = ["BENCH_SCHEMA", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
+           "inline_markdown", "number_row", "provider", "render", "report_numbers", "write_reproduce"]
