@@ -21,12 +21,12 @@ from rotorfault import vpp
 
 def main(quick: bool) -> None:
     wang = vpp.preset()
-    vpp.lqr(wang, vpp.trim(wang, failed=(1,)))  # warm: python-control import
+    vpp.lqr(wang, vpp.trim(wang, failed=(1,)), dt_s=0.001)  # warm: scipy import
     t0 = time.perf_counter()
     n = 5 if quick else 20
     for _ in range(n):
         trim = vpp.trim(wang, failed=(1,), speeds={3: 9000.0})
-        feedback = vpp.lqr(wang, trim)
+        feedback = vpp.lqr(wang, trim, dt_s=0.001)
     design = (time.perf_counter() - t0) / n
     print(f"trim + linearisation + LQR design, one failure case: {design * 1e3:.1f} ms (target < 50 ms)")
     print("feasible omega3-like range per failed propeller (fixed group speed range):")

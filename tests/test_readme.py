@@ -38,6 +38,11 @@ CLAIMS = [
     ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
     ("# 1.527, 1.680 (stability margin 1/gamma)", "ours", "round(ours.gamma_min, 3), round(ours.gamma, 3)", (1.527, 1.680), 0),
     ("# holds-position, within 1 cm of (0, 0, 1) m after 60 s", "ours", "run.outcome == 'holds-position' and run.final_error_m < 0.01", True, 0),
+    # The one LQR and its refusals (issue 25).
+    ("# [[1. 1.732]]: K = [1, sqrt 3] for q = I, r = 1", "d", "bool(np.allclose(d.gain, [[1.0, 3**0.5]], rtol=1e-13, atol=0))", True, 0),
+    ("# stabilisability: ... no input moves yaw rate r together with p and q: 0.132 p + 0.132 q - r", "fixed",
+     "refusal.startswith('stabilisability: ') and 'no input moves yaw rate r together with p and q: 0.132 p + 0.132 q - r' in refusal",
+     True, 0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

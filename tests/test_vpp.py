@@ -155,6 +155,39 @@ def test_controllability_vpp_12_fixed_pitch_8(wang: vpp.VppVehicle) -> None:
     fixed_result = vpp.controllability(vpp.linearize(fixed, ftrim, pitch_fixed=True))
     assert fixed_result.rank == 8
     assert set(fixed_result.uncontrollable_states) == {"y", "v", "phi", "p"}
+    # Wang 3.4: y, phi, p, v -- each a direction of its own (the span of four state axes).
+    assert [d.text for d in fixed_result.uncontrollable_directions] == [
+        "east position y", "east velocity v", "roll phi", "roll rate p"
+    ]
+    for d, j in zip(fixed_result.uncontrollable_directions, (1, 4, 6, 9)):
+        np.testing.assert_array_equal(d.coefficients, np.eye(12)[j])
+
+
+def test_healthy_fixed_pitch_names_its_two_uncontrollable_directions(wang: vpp.VppVehicle) -> None:
+    """Healthy, Sec. 3.4's layout is rank 10 although no single state is uncontrollable: opposite
+    motors spin opposite ways, so the yaw torque is a fixed combination of the roll and pitch
+    torques, c / l (tau_p - tau_q) up to sign with c = d(tau)/d(f), and r - (c J_x / (l J_z)) (p + q)
+    (and its angle) cannot be moved. Independent check: that coefficient from the preset's numbers
+    and eq. (3) differentiated at alpha = 0.26, and w^T A^k B = 0 for the directions."""
+    fixed = vpp.fixed_pitch(wang)
+    model = vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=()), pitch_fixed=True)
+    result = vpp.controllability(model)
+    assert result.rank == 10
+    angle, rate = result.uncontrollable_directions
+    assert angle.text == "yaw psi together with phi and theta: 0.132 phi + 0.132 theta - psi"
+    assert rate.text == "yaw rate r together with p and q: 0.132 p + 0.132 q - r"
+    omega, alpha = math.sqrt(2.5 / (K1 * 0.26)), 0.26  # each rotor carries m g / 4
+    # d(tau)/d(omega) over d(f)/d(omega) at the trim (eq. (3)): the torque a thrust change brings.
+    ratio = (2 * K2 * omega + 2 * K3 * omega * alpha**2 + K4 * alpha) / (2 * K1 * alpha * omega)
+    coefficient = ratio / 0.35 * 0.03 / 0.05
+    np.testing.assert_allclose(rate.coefficients[9:], [coefficient, coefficient, -1.0], rtol=1e-6)
+    np.testing.assert_allclose(angle.coefficients[6:9], [coefficient, coefficient, -1.0], rtol=1e-6)
+    power = model.b
+    for _ in range(12):
+        for d in (angle, rate):
+            assert np.max(np.abs(d.coefficients @ power)) <= 1e-12 * np.max(np.abs(power))
+        power = model.a @ power
+    assert set(result.uncontrollable_states) == {"phi", "theta", "psi", "p", "q", "r"}
 
 
 def test_scale_free_rank_is_exposed_and_scale_free() -> None:
@@ -167,9 +200,9 @@ def test_scale_free_rank_is_exposed_and_scale_free() -> None:
 
 def test_lqr_gain_checks(wang: vpp.VppVehicle) -> None:
     trim = vpp.trim(wang, failed=(1,), speeds={3: 9000.0})
-    with pytest.raises(ValueError, match="r: expected a finite 6x6"):
+    with pytest.raises(ValueError, match=r"r: expected a 6x6 matrix, got shape \(8, 8\)"):
         vpp.lqr(wang, trim, r=np.eye(8))
-    with pytest.raises(ValueError, match="q: expected a finite 12x12"):
+    with pytest.raises(ValueError, match=r"q\[0, 0\]: must be finite, got nan"):
         vpp.lqr(wang, trim, q=np.full((12, 12), math.nan))
     feedback = vpp.lqr(wang, trim)
     assert feedback.gain.shape == (8, 12) and np.all(feedback.gain[0:2] == 0.0)
@@ -200,3 +233,30 @@ def test_printed_numbers_for_the_report() -> None:
     assert differs == {"highest feasible omega2 (r = 1)", "lowest feasible omega3", "lowest r(omega2)"}
     assert all(r.note for r in rows if r.status == "differs")
     assert {r.quantity: r.ours for r in rows}["controllability rank, VPP, propeller 1 failed"] == 12
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "error", "message"),
+    [
+        ("drag", rf.Drag(linear_n_s_m=-1.0), ValueError, r"^drag.linear_n_s_m: must be >= 0"),
+        ("drag", rf.Drag(linear_n_s_m=math.inf), ValueError, r"^drag.linear_n_s_m: must be finite"),
+        ("actuator.k", (0.0, K2, K3, K4), ValueError, r"^actuator.k: k1 .* must be > 0, got 0.0"),
+        ("actuator.k", (math.nan, K2, K3, K4), ValueError, r"^actuator.k1: must be finite"),
+        ("actuator.k", (K1, -K2, K3, K4), ValueError, r"^actuator.k: k2 and k3 .* must be >= 0"),
+        ("actuator.speed_bounds", (0.0, math.inf), ValueError, r"^actuator.speed_bounds: must be finite"),
+        ("actuator.pitch_bounds", (-0.26, 0.0), ValueError, r"^actuator.pitch_bounds: the upper bound must be > 0"),
+        ("actuator.speed_time_constant_s", -1.0, ValueError, r"^actuator.speed_time_constant_s: must be >= 0"),
+        ("airframe", "wang-vpp", TypeError, r"^airframe: expected Airframe, got str"),
+        ("airframe", rf.Airframe.preset("hexa-pnpnpn"), ValueError, r"^airframe: a VPP quadcopter has 4 propellers"),
+    ],
+)
+def test_vpp_vehicle_is_checked_once_when_built(wang: vpp.VppVehicle, field: str, value: object, error: type, message: str) -> None:
+    """Every VppVehicle (a preset, vpp.fixed_pitch, a dataclasses.replace) is checked when built:
+    finite, and positive where physical (k1, the upper speed and pitch bounds), before any trim."""
+    import dataclasses
+
+    with pytest.raises(error, match=message):
+        if field.startswith("actuator."):
+            dataclasses.replace(wang, actuator=dataclasses.replace(wang.actuator, **{field.split(".")[1]: value}))
+        else:
+            dataclasses.replace(wang, **{field: value})

@@ -416,8 +416,9 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
 @_user_errors
 def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
-    """Wang et al.'s VPP quadcopter: controllability and ACAI beside the fixed-pitch quadcopter,
-    the feasible trim speeds, and Section 4's three flights with propeller 1 failed."""
+    """Wang et al.'s VPP quadcopter: the fixed-pitch comparison (hover, controllability,
+    stabilisability, ACAI), the feasible trim speeds, and Section 4's three flights with
+    propeller 1 failed."""
     from ._output import check_output_directory
     from .papers import wang as wang_paper
 

@@ -9,7 +9,11 @@
   and the N-matrix stability analysis;
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
-- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
+- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR hover controllers;
+- :mod:`~rotorfault.control.riccati`: :func:`design_lqr`, the one LQR (continuous and discrete
+  Riccati equations, scipy's solvers on every install) and its checked :class:`LqrDesign`;
+- :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
+  input moves (:func:`stabilisability`, :func:`detectability`);
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
   and the loop-shape weight.
 
@@ -29,6 +33,8 @@ from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .riccati import LqrDesign, design_lqr
+from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
@@ -63,11 +69,15 @@ __all__ = [
     "KeGains",
     "LanzonController",
     "LinearFeedback",
+    "LqrDesign",
     "NcfsynResult",
     "Lti",
     "OpenLoop",
+    "PbhTest",
     "TrackingFeedback",
     "UniformPassiveFtc",
+    "design_lqr",
+    "detectability",
     "hover_trim",
     "ke",
     "lanzon",
@@ -77,4 +87,5 @@ __all__ = [
     "lqr_hover_allocated",
     "ncfsyn",
     "robust",
+    "stabilisability",
 ]

@@ -25,6 +25,7 @@ _ACTIVE_SET = "crates/rfcore/src/allocation/active_set.rs"
 _KE_RS = "crates/rfcore/src/control/ke.rs"
 _KE_PY = "python/rotorfault/control/ke.py"
 _LQR = "python/rotorfault/control/lqr.py"
+_RICCATI = "python/rotorfault/control/riccati.py"
 _KE_PRESET = "python/rotorfault/presets/ke-quadcopter.toml"
 _LANZON_PY = "python/rotorfault/control/lanzon.py"
 _LANZON_RS = "crates/rfcore/src/control/lanzon.rs"
@@ -74,7 +75,13 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Lanzon's outer loop gains (not in the paper)": (_LANZON_PY, _LANZON_RS),
     "hover trim (`hover_trim`)": (_LQR,),
     "linear models at a bound (`linearize`)": (_LQR,),
-    "what LQR refuses (`lqr_hover`, `lqr_hover_allocated`)": (_LQR,),
+    "what LQR refuses (`lqr_hover`, `lqr_hover_allocated`)": (_LQR, _RICCATI),
+    "what an LQR design checks (`design_lqr`)": (_RICCATI,),
+    "stabilisability and detectability (PBH)": ("python/rotorfault/control/stabilisability.py", "python/rotorfault/control/vpp.py"),
+    "Wang's fixed-pitch comparison": (
+        "python/rotorfault/papers/wang.py",
+        "python/rotorfault/presets/wang-standard-fixed-pitch.toml",
+    ),
     "Euler singularity": (_LQR,),
     "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/scan.py"),
 }
