@@ -265,8 +265,8 @@ impl ActiveSetSolver {
         let mut at_minimiser = None;
         if cold {
             // Start from the clamped unconstrained solution, holding what the clamp cut.
-            for i in 0..m {
-                t[i] = self.scaled.preferred[i].clamp(self.scaled.lower[i], self.scaled.upper[i]);
+            for (i, ti) in t.iter_mut().enumerate().take(m) {
+                *ti = self.scaled.preferred[i].clamp(self.scaled.lower[i], self.scaled.upper[i]);
             }
             let mut r = [0.0; ROWS];
             self.scaled.residual(b, &t, &mut r);
@@ -298,12 +298,12 @@ impl ActiveSetSolver {
             }
         }
         if at_minimiser.is_none() {
-            for i in 0..m {
+            for (i, ti) in t.iter_mut().enumerate().take(m) {
                 let (lo, hi) = (self.scaled.lower[i], self.scaled.upper[i]);
                 if lo == hi {
                     active.states[i] = BoundState::Lower;
                 }
-                t[i] = match active.states[i] {
+                *ti = match active.states[i] {
                     BoundState::Lower => lo,
                     BoundState::Upper => hi,
                     BoundState::Free => self.scaled.preferred[i].clamp(lo, hi),
@@ -486,8 +486,8 @@ impl ActiveSetSolver {
             if !minimiser {
                 let mut free = [0usize; N];
                 let mut k = 0;
-                for i in 0..m {
-                    if states[i] == BoundState::Free {
+                for (i, state) in states.iter().enumerate().take(m) {
+                    if *state == BoundState::Free {
                         free[k] = i;
                         k += 1;
                     }
@@ -732,9 +732,9 @@ impl ActiveSetSolver {
                 }
                 let mut pull = 0.0;
                 let mut scale = (t[i] - self.scaled.preferred[i]).abs();
-                for c in 0..nc {
-                    pull += self.scaled.constraint[c * N + i] * nu[c];
-                    scale += (self.scaled.constraint[c * N + i] * nu[c]).abs();
+                for (c, nu_c) in nu.iter().enumerate().take(nc) {
+                    pull += self.scaled.constraint[c * N + i] * nu_c;
+                    scale += (self.scaled.constraint[c * N + i] * nu_c).abs();
                 }
                 let mu = t[i] - self.scaled.preferred[i] - pull;
                 let violation = if states[i] == BoundState::Lower {

@@ -283,8 +283,8 @@ fn householder_qr_scaled(
 
 /// `y <- Q^T y` for the first `rank` reflectors of [`householder_qr`].
 pub(crate) fn apply_qt(a: &[f64], ld: usize, rows: usize, rank: usize, tau: &[f64], y: &mut [f64]) {
-    for s in 0..rank {
-        reflect(a, ld, rows, s, tau[s], y);
+    for (s, &tau_s) in tau.iter().enumerate().take(rank) {
+        reflect(a, ld, rows, s, tau_s, y);
     }
 }
 

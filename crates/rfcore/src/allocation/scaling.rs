@@ -108,8 +108,8 @@ impl ScaledLeastSquares {
             constraint: [0.0; MAX_VIRTUAL * N],
             constraint_rows: 0,
         };
-        for r in 0..n {
-            form.root_weights[r] = weights[r].sqrt();
+        for (root, w) in form.root_weights.iter_mut().zip(&weights) {
+            *root = w.sqrt();
         }
         // Stacked rows and their norms; sorted by decreasing norm (stable).
         let row = |k: usize, c: usize| -> f64 {
@@ -141,8 +141,8 @@ impl ScaledLeastSquares {
                 let size = norm(&values);
                 if size > 0.0 {
                     let k = form.constraint_rows;
-                    for c in 0..m {
-                        form.constraint[k * N + c] = values[c] / size;
+                    for (c, v) in values.iter().enumerate() {
+                        form.constraint[k * N + c] = v / size;
                     }
                     form.constraint_rows += 1;
                 }
@@ -169,9 +169,8 @@ impl ScaledLeastSquares {
     /// `b` for `u_c`, in the stored row order; false if it is not finite (a virtual control too
     /// large for the matrix's scale).
     pub(crate) fn rhs(&self, u_c: &[f64], b: &mut [f64; ROWS]) -> bool {
-        for slot in 0..self.rows {
-            let k = self.source[slot];
-            b[slot] = if k < self.n {
+        for (b_slot, &k) in b.iter_mut().zip(&self.source).take(self.rows) {
+            *b_slot = if k < self.n {
                 self.root_weights[k] * (u_c[k] * self.u_scale)
             } else {
                 self.root_gamma * self.preferred[k - self.n]
@@ -183,8 +182,7 @@ impl ScaledLeastSquares {
     /// `r = b - A T`.
     pub(crate) fn residual(&self, b: &[f64; ROWS], t: &[f64; N], r: &mut [f64; ROWS]) {
         r[..self.rows].copy_from_slice(&b[..self.rows]);
-        for c in 0..self.m {
-            let x = t[c];
+        for (c, &x) in t.iter().enumerate().take(self.m) {
             if x != 0.0 {
                 let col = &self.a[c * ROWS..c * ROWS + self.rows];
                 for (ri, a) in r.iter_mut().zip(col) {
