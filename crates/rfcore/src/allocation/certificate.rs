@@ -47,12 +47,14 @@ impl Certificate {
 
 impl ScaledLeastSquares {
     /// The normalised gradient at `t` from its residual `r = b - A t` (`b_norm = |b|`).
+    // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn gradient(&self, r: &[f64; ROWS], t: &[f64; N], b_norm: f64, g: &mut [f64; N]) {
         let mut scale = b_norm;
-        for (norm_c, t_c) in self.column_norms.iter().zip(t).take(self.m) {
-            scale += norm_c * t_c.abs();
+        for c in 0..self.m {
+            scale += self.column_norms[c] * t[c].abs();
         }
-        for (i, g_i) in g.iter_mut().enumerate().take(self.m) {
+        for i in 0..self.m {
             let col = &self.a[i * ROWS..i * ROWS + self.rows];
             let gi: f64 = -col
                 .iter()
@@ -60,7 +62,7 @@ impl ScaledLeastSquares {
                 .map(|(a, x)| a * x)
                 .sum::<f64>();
             let s = self.column_norms[i] * scale;
-            *g_i = if s > 0.0 && s.is_finite() {
+            g[i] = if s > 0.0 && s.is_finite() {
                 gi / s
             } else {
                 0.0

@@ -168,9 +168,12 @@ impl ScaledLeastSquares {
 
     /// `b` for `u_c`, in the stored row order; false if it is not finite (a virtual control too
     /// large for the matrix's scale).
+    // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn rhs(&self, u_c: &[f64], b: &mut [f64; ROWS]) -> bool {
-        for (b_slot, &k) in b.iter_mut().zip(&self.source).take(self.rows) {
-            *b_slot = if k < self.n {
+        for slot in 0..self.rows {
+            let k = self.source[slot];
+            b[slot] = if k < self.n {
                 self.root_weights[k] * (u_c[k] * self.u_scale)
             } else {
                 self.root_gamma * self.preferred[k - self.n]
@@ -180,9 +183,12 @@ impl ScaledLeastSquares {
     }
 
     /// `r = b - A T`.
+    // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
+    #[allow(clippy::needless_range_loop)]
     pub(crate) fn residual(&self, b: &[f64; ROWS], t: &[f64; N], r: &mut [f64; ROWS]) {
         r[..self.rows].copy_from_slice(&b[..self.rows]);
-        for (c, &x) in t.iter().enumerate().take(self.m) {
+        for c in 0..self.m {
+            let x = t[c];
             if x != 0.0 {
                 let col = &self.a[c * ROWS..c * ROWS + self.rows];
                 for (ri, a) in r.iter_mut().zip(col) {
