@@ -11,7 +11,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault import _rfcore
-from rotorfault.campaign import (
+from rotorfault.studies.campaign import (
     SUMMARY_FIELDS,
     Campaign,
     run_campaign,
@@ -175,13 +175,13 @@ def test_a_batch_too_large_for_memory_is_refused_up_front() -> None:
     with pytest.raises(ValueError, match=r"^memory_budget_bytes: recording 10,000 runs of 10 s .* needs about 2\d\.\d\d GiB.*record_every.*summaries"):
         rf.simulate_batch(sim, [rf.State()] * 10_000, 10.0, controllers=controller, memory_budget_bytes=2**30)
     # Thinned to 1 Hz the same batch fits.
-    from rotorfault.simulation import recording_bytes
+    from rotorfault.flight.simulator import recording_bytes
 
     assert recording_bytes(sim, 10_000, 10.0, record_every=400) < 2**30
 
 
 def test_tuning_never_does_worse_than_table_iv_on_its_campaign() -> None:
-    from rotorfault.campaign import _objective, tune, tuning_campaign
+    from rotorfault.studies.tuning import _objective, tune, tuning_campaign
 
     c = tuning_campaign(runs=4, duration_s=13.0)
     result = tune(c, maxiter=1, popsize=1)

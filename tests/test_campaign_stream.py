@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rotorfault import _stream
-from rotorfault.campaign import SUMMARY_FIELDS, Campaign, campaign_schema, read_campaign, run_campaign, summarize
+from rotorfault.studies import engine, storage
+from rotorfault.studies.campaign import SUMMARY_FIELDS, Campaign, campaign_schema, read_campaign, run_campaign, summarize
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -38,7 +38,7 @@ def _campaign(**changes: Any) -> Campaign:
 
 
 def _read_all(path: Path) -> Any:
-    return pa.concat_tables(list(_stream.iter_tables(path)))
+    return pa.concat_tables(list(storage.iter_tables(path)))
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -55,9 +55,9 @@ def _same(a: Any, b: Any) -> bool:
 
 
 def _memory_table(c: Campaign) -> Any:
-    from rotorfault.campaign import _CampaignTask
+    from rotorfault.studies.campaign import _CampaignTask
 
-    return pa.concat_tables([_CampaignTask(c)(spec) for spec in _stream.chunk_specs(c.runs, c.chunk_size)])
+    return pa.concat_tables([_CampaignTask(c)(spec) for spec in storage.chunk_specs(c.runs, c.chunk_size)])
 
 
 def _equal(a: Any, b: Any) -> bool:
@@ -82,7 +82,7 @@ def test_parquet_output_holds_the_campaign_and_the_in_memory_rows(tmp_path: Path
     memory = run_campaign(c)
     result = run_campaign(c, out=out)
     assert result.out == out and result.loaded is None and (result.computed_chunks, result.skipped_chunks) == (5, 0)
-    manifest = _stream.read_manifest(out)
+    manifest = storage.read_manifest(out)
     assert manifest["kind"] == "rotorfault-campaign" and manifest["complete"]
     assert Campaign.from_dict(manifest["arguments"]["campaign"]) == c
     assert Campaign.from_dict(tomllib.loads(manifest["metadata"]["campaign_toml"])) == c
@@ -105,21 +105,21 @@ def test_resume_after_an_interruption_writes_no_row_twice(tmp_path: Path) -> Non
 
     written: list[int] = []
 
-    def stop_after_two(spec: _stream.ChunkSpec) -> None:
+    def stop_after_two(spec: storage.ChunkSpec) -> None:
         written.append(spec.index)
         if len(written) == 2:
             raise Stop
 
-    original = _stream.run_chunks
+    original = engine.run_chunks
 
     def interrupted(*args: Any, **kwargs: Any) -> Any:
         return original(*args, **{**kwargs, "on_chunk_written": stop_after_two})
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(_stream, "run_chunks", interrupted)
+        mp.setattr(engine, "run_chunks", interrupted)
         with pytest.raises(Stop):
             run_campaign(c, out=out)
-    assert not _stream.read_manifest(out)["complete"]
+    assert not storage.read_manifest(out)["complete"]
     assert sorted(p.name for p in out.glob("chunk-*.parquet")) == ["chunk-000000000.parquet", "chunk-000000001.parquet"]
     with pytest.raises(ValueError, match="interrupted campaign"):
         read_campaign(out)

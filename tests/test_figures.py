@@ -13,7 +13,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import rotorfault as rf
-from rotorfault._output import MIN_FONT_PT
+from rotorfault.plotting.style import MIN_FONT_PT
 from rotorfault.allocation import plot_attainable_slices
 from rotorfault.papers import ke as ke_paper
 

@@ -104,7 +104,7 @@ def test_committed_bench_results_are_readable() -> None:
 
 def _fake(key: str, title: str) -> reproduce.SectionProvider:
     def provide(out: Path, *, quick: bool) -> ReportSection:
-        from rotorfault._output import new_figure, save_figure
+        from rotorfault.plotting.style import new_figure, save_figure
 
         fig = new_figure(figsize=(2, 1))
         fig.add_subplot().plot([0, 1], [0, 1])

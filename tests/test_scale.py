@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
-from rotorfault import _stream
-from rotorfault.design import design_search, spin_assignments
-from rotorfault.scan import acai_scan, failure_samples, read_scan
+from rotorfault.studies import engine, storage
+from rotorfault.studies.design import design_search, spin_assignments
+from rotorfault.studies.scan import acai_scan, failure_samples, read_scan
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -32,7 +32,7 @@ def _grid(rotors: tuple[int, ...] = (1, 2, 5)) -> dict[str, Any]:
 
 
 def _read_all(path: Path) -> Any:
-    return pa.concat_tables(list(_stream.iter_tables(path)))
+    return pa.concat_tables(list(storage.iter_tables(path)))
 
 
 def test_grid_scan_matches_acai_batch_and_verdicts(pnpnpn: rf.Airframe) -> None:
@@ -92,7 +92,7 @@ def test_parquet_output_says_what_it_holds_and_reads_back(tmp_path: Path, pnpnpn
     memory = acai_scan(pnpnpn, _grid()).table
     result = acai_scan(pnpnpn, _grid(), out=out, chunk_points=50)
     assert result.table is None and result.computed_chunks == 5
-    manifest = _stream.read_manifest(out)
+    manifest = storage.read_manifest(out)
     assert manifest["complete"] and manifest["total_rows"] == 216
     assert rf.Airframe.from_toml_str(manifest["arguments"]["airframe_toml"]) == pnpnpn
     assert manifest["rotorfault_version"] == rf.__version__
@@ -132,26 +132,26 @@ def test_resume_skips_written_chunks_and_writes_no_duplicate(tmp_path: Path, pnp
 
     written: list[int] = []
 
-    def stop_after_two(spec: _stream.ChunkSpec) -> None:
+    def stop_after_two(spec: storage.ChunkSpec) -> None:
         written.append(spec.index)
         if len(written) == 2:
             raise Stop
 
-    from rotorfault.scan import _ScanTask
+    from rotorfault.studies.scan import _ScanTask
 
     task = _ScanTask(pnpnpn.to_toml(), ("efficiency_1", "efficiency_2", "efficiency_5"), tuple(tuple(LEVELS) for _ in range(3)), None, False, ("eq13", "facet-margin"))
     # The scan's own arguments, so the interrupted output is the scan's.
-    original = _stream.run_chunks
+    original = engine.run_chunks
 
     def interrupted(*args: Any, **kwargs: Any) -> Any:
         return original(*args, **{**kwargs, "on_chunk_written": stop_after_two})
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(_stream, "run_chunks", interrupted)
+        mp.setattr(engine, "run_chunks", interrupted)
         with pytest.raises(Stop):
             acai_scan(pnpnpn, _grid(), out=out, chunk_points=40)
     assert task.total == 216
-    assert not _stream.read_manifest(out)["complete"]
+    assert not storage.read_manifest(out)["complete"]
     present = sorted(p.name for p in out.glob("chunk-*.parquet"))
     assert present == ["chunk-000000000.parquet", "chunk-000000001.parquet"]
     # Without --resume the interrupted output is refused, not extended or overwritten.
@@ -293,13 +293,13 @@ def test_killed_worker_chunk_recomputed_and_written_once(tmp_path: Path, pnpnpn:
     me = sys.modules[__name__]
     cloudpickle.register_pickle_by_value(me)
     lc, client = cluster
-    from rotorfault.scan import _ScanTask, scan_schema
+    from rotorfault.studies.scan import _ScanTask, scan_schema
 
     names = ("efficiency_1", "efficiency_2", "efficiency_5")
     task = _ScanTask(pnpnpn.to_toml(), names, tuple(tuple(LEVELS) for _ in range(3)), None, False, ("eq13",))
     killed: list[str] = []
 
-    def kill_a_busy_worker(spec: _stream.ChunkSpec) -> None:
+    def kill_a_busy_worker(spec: storage.ChunkSpec) -> None:
         if killed:
             return
         processing = client.processing()
@@ -311,7 +311,7 @@ def test_killed_worker_chunk_recomputed_and_written_once(tmp_path: Path, pnpnpn:
 
     out = tmp_path / "killed.parquet"
     started = time.monotonic()
-    result = _stream.run_chunks(
+    result = engine.run_chunks(
         _SlowScanTask(task), total_rows=216, chunk_rows=18, schema=scan_schema(names, ("eq13",), False), arguments={"test": 1},
         kind="test", out=out, backend="dask", dask=client, on_chunk_written=kill_a_busy_worker,
     )

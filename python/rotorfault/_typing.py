@@ -34,11 +34,14 @@ KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "basel
 DivergenceKind: TypeAlias = Literal[
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
 ]
-#: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
-KeOutcome: TypeAlias = Literal[
+#: A flight's outcome (:mod:`rotorfault.flight.outcomes`): held, circling, off station, or how it
+#: diverged.
+FlightOutcome: TypeAlias = Literal[
     "holds-position", "circling", "off-station",
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
+#: The old name of :data:`FlightOutcome` (a verdict is a property of a flight, not of Ke's paper).
+KeOutcome: TypeAlias = FlightOutcome
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: Controller of a ``rotorfault simulate`` scenario file.
@@ -72,6 +75,7 @@ __all__ = [
     "Controller",
     "CoreController",
     "DivergenceKind",
+    "FlightOutcome",
     "HoverPoint",
     "KeLaw",
     "KeOutcome",

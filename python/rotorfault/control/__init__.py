@@ -15,7 +15,12 @@
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
-is the slow path.
+is the slow path. The Rust controllers are declared once, in the bindings, and listed by
+:mod:`~rotorfault.control.registry` (``docs/adding-a-controller.md``).
+
+May import: ``rotorfault.flight`` (a design linearises the simulator's model),
+``rotorfault.allocation``, ``rotorfault.analysis``, ``rotorfault._typing``, ``rotorfault._util``
+and, on first use, ``rotorfault.plotting``; never ``studies``, ``papers`` or ``cli``.
 """
 
 from __future__ import annotations

@@ -32,11 +32,11 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, real
+from .._util.convert import FloatArray, float_array, real
 from .._typing import KeLaw
-from ..airframe import Airframe, require_airframe
+from ..analysis.airframe import Airframe, require_airframe
 from ..allocation import Allocator
-from ..simulation import DivergenceLimits, Drag, FixedPitchActuator, Simulator
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Simulator
 
 #: Rows of the virtual control Ke's N matrix uses: thrust, roll, pitch (E_1).
 E1_ROWS = (0, 1, 2)

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real
 
 STATE_DIM = 12
 

@@ -33,9 +33,9 @@ _LANZON_PAPER = "python/rotorfault/papers/lanzon.py"
 #: Where each decision is made: the README's "gap" cell -> repository paths.
 DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Du uses `+-10^6` for infinity": (_ACAI,),
-    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/controllability.py"),
+    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/analysis/acai.py"),
     "numerical zero, rank, units": (_ACAI, "crates/rfcore/src/analysis/mod.rs", _CONTROLLABILITY),
-    "the hover verdict": (_ACAI, "python/rotorfault/controllability.py", "python/rotorfault/scan.py"),
+    "the hover verdict": (_ACAI, "python/rotorfault/analysis/acai.py", "python/rotorfault/studies/scan.py"),
     "null vectors": (_ACAI,),
     '"give up yaw"': (_CONTROLLABILITY, _ACAI),
     "Ke's yaw row `c[1, -1, 1, -1]` is rank 3 with Remark 2's angles; `l = 0.0125`": (_KE_PRESET, "python/rotorfault/presets/README.md"),
@@ -48,7 +48,7 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "gyroscopic moment (Lanzon eq. (5))": (_VEHICLE,),
     "drag, `k_r`, `I_R`": (_VEHICLE,),
     "fault timing": ("crates/rfcore/src/flight/fault_schedule.rs",),
-    "actuator start": (_SIMULATION, "python/rotorfault/simulation.py"),
+    "actuator start": (_SIMULATION, "python/rotorfault/flight/simulator.py"),
     "divergence": (_SIMULATION,),
     "noise on zero signals": (_SIMULATION,),
     "run size": (_SIMULATION,),
@@ -76,7 +76,7 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "linear models at a bound (`linearize`)": (_LQR,),
     "what LQR refuses (`lqr_hover`, `lqr_hover_allocated`)": (_LQR,),
     "Euler singularity": (_LQR,),
-    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/scan.py"),
+    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/studies/scan.py"),
 }
 
 

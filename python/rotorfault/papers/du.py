@@ -11,9 +11,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..airframe import Airframe
-from ..controllability import controllability, failure_table
-from ..scan import efficiency_scan
+from ..analysis.airframe import Airframe
+from ..analysis.controllability import controllability, failure_table
+from ..studies.scan import efficiency_scan
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:

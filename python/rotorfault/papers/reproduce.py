@@ -244,7 +244,7 @@ def write_reproduce(
     not landed), for tests. ``progress(text)`` is called before each section."""
     from importlib.metadata import PackageNotFoundError, version
 
-    from .._output import check_output_directory, output_directory
+    from .._util.output import check_output_directory, output_directory
 
     out = check_output_directory("out", out_dir, force=force)
     if bench_directory is None:  # the source tree's results, when there are any

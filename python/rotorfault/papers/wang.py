@@ -31,10 +31,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._convert import FloatArray, real
+from .._util.convert import FloatArray, real
 from ..control.tracking import TrackingFeedback
-from ..simulation import Noise, Simulator, State, Trajectory
-from .. import vpp
+from ..flight import Noise, Simulator, State, Trajectory
+from ..control import vpp
+from ..plotting.timeseries import plot_wang_flights as plot_flight
 
 if TYPE_CHECKING:
     from ._numbers import PaperNumber
@@ -187,67 +188,10 @@ def fly(
     )
 
 
-def plot_flight(flights: list[WangFlight], path: str | None = None) -> Figure:
-    """Figs. 2-7 in one page per scenario: the 3-D path against the reference (left), position,
-    attitude and propeller commands against time (right); a fixed-pitch flight, if given, dashed
-    in the path panel with where it was lost."""
-    from .._output import new_figure, save_figure
-
-    first = flights[0]
-    fig = new_figure(figsize=(13, 9), layout="constrained")
-    grid = fig.add_gridspec(4, 2, width_ratios=[1.1, 1.0])
-    ax3 = fig.add_subplot(grid[:, 0], projection="3d")
-    ref = first.reference
-    ax3.plot(ref[:, 0], ref[:, 1], -ref[:, 2], color="0.6", lw=2.5, label="reference")
-    for k, f in enumerate(flights):
-        p = f.trajectory.position
-        label = f"{f.vehicle}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
-        ax3.plot(p[:, 0], p[:, 1], -p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
-    ax3.set_xlabel("x (m)")
-    ax3.set_ylabel("y (m)")
-    ax3.set_zlabel("altitude (m)")
-    ax3.legend(loc="upper left", fontsize=9)
-    run = first.trajectory
-    t = run.t
-    styles = ["-", "--", ":"]
-    ax = fig.add_subplot(grid[0, 1])
-    for j, name in enumerate(["x", "y", "altitude"]):
-        sign = -1.0 if j == 2 else 1.0
-        ax.plot(t, sign * run.position[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-        ax.plot(t, sign * ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
-    ax.set_ylabel("position (m)\n(thin: reference)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax = fig.add_subplot(grid[1, 1], sharex=ax)
-    for j, name in enumerate(["roll", "pitch", "yaw"]):
-        ax.plot(t, run.euler[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-    ax.plot(t, ref[:, 8], color="C2", lw=0.8, alpha=0.6)
-    ax.set_ylabel("attitude (rad)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax_w = fig.add_subplot(grid[2, 1], sharex=ax)
-    ax_a = fig.add_subplot(grid[3, 1], sharex=ax)
-    for i in range(1, 4):
-        ax_w.plot(t, run.rotor_command[:, 2 * i], color=f"C{i}", linestyle=styles[i - 1], label=f"omega {i + 1}")
-        ax_a.plot(t, run.rotor_command[:, 2 * i + 1], color=f"C{i}", linestyle=styles[i - 1], label=f"alpha {i + 1}")
-    ax_w.set_ylabel("speed command\n(paper's units)")
-    ax_a.set_ylabel("pitch command (rad)")
-    ax_a.set_xlabel("time (s)")
-    for a in (ax_w, ax_a):
-        a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    for a in fig.axes[1:]:
-        a.grid(True, alpha=0.3)
-    fig.suptitle(
-        f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed: final error "
-        f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad", fontsize=11,
-    )
-    if path is not None:
-        save_figure(fig, path)
-    return fig
-
-
 def comparison_table() -> list[str]:
     """Markdown: controllability (scale-free rank, uncontrollable states) and the ACAI of the VPP
     bidirectional thrust box and of the fixed-pitch quadcopter, healthy and with propeller 1 failed."""
-    from ..controllability import acai
+    from ..analysis.acai import acai
 
     wang = vpp.preset("wang")
     fixed = vpp.fixed_pitch(wang)
@@ -294,7 +238,7 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     comparison table, the speed sweep, the flights), one figure per scenario
     (``scenario-<n>.png``, VPP and the fixed-pitch quadcopter) and ``manifest.json``.
     ``quick``: 20 s flights instead of the paper's 60 s."""
-    from .._output import check_output_directory, output_directory, write_text
+    from .._util.output import check_output_directory, output_directory, write_text
 
     check_output_directory("out_dir", out_dir, force=force)
     duration = 20.0 if quick else DURATION_S

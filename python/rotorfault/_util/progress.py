@@ -6,7 +6,7 @@ import contextlib
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
-from ._convert import flag
+from .convert import flag
 
 if TYPE_CHECKING:
     from rich.progress import ProgressColumn, Task

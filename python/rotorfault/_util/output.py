@@ -1,9 +1,9 @@
 """Files the package writes: checked before any computation, written under a temporary name in the
 same directory and renamed into place only when complete, so an interrupted run never leaves a
-truncated file under a final name. Figures are drawn on their own ``Figure`` with an Agg canvas:
-no pyplot, no global figure list, the user's backend untouched.
+truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfault.plotting.style`,
+through :func:`atomic_path`.)
 
-This module depends on nothing else in the package, so every layer can use it.
+This module depends on nothing else in the package, so every room can use it.
 """
 
 from __future__ import annotations
@@ -14,15 +14,10 @@ import signal
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from typing import Any
 
 #: File types a figure can be saved as (by extension).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
-#: No tick label, legend or annotation of a package figure is smaller than this (points).
-MIN_FONT_PT = 8.0
 
 
 def check_output_file(field: str, path: str | os.PathLike[str], *, suffixes: tuple[str, ...] = FIGURE_SUFFIXES, force: bool = False) -> Path:
@@ -35,13 +30,14 @@ def check_output_file(field: str, path: str | os.PathLike[str], *, suffixes: tup
         raise ValueError(f"{field}: the file name must end in {', '.join(suffixes)}, got {str(p)!r}")
     if p.is_dir():
         raise ValueError(f"{field}: {str(p)!r} is a directory, expected a file name")
-    _check_parent(field, p)
+    check_parent(field, p)
     if p.exists() and not force:
         raise ValueError(f"{field}: {str(p)!r} exists; pass --force (force=True) to replace it")
     return p
 
 
-def _check_parent(field: str, p: Path) -> None:
+def check_parent(field: str, p: Path) -> None:
+    """The directory ``p`` goes into exists and is writable (``ValueError`` naming ``field``)."""
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise ValueError(f"{field}: directory {str(parent)!r} does not exist")
@@ -81,28 +77,6 @@ def write_text(path: str | os.PathLike[str], text: str) -> None:
             os.fsync(handle.fileno())
 
 
-def new_figure(**kwargs: Any) -> Figure:
-    """A figure with its own Agg canvas (not registered with pyplot)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(**kwargs)
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def save_figure(fig: Figure, path: str | os.PathLike[str], *, dpi: float = 150) -> None:
-    """Saves ``fig`` to ``path`` (format from the extension) atomically, through the figure's own
-    canvas: the global matplotlib state is not touched."""
-    p = Path(path)
-    suffix = p.suffix.lower()
-    if suffix not in FIGURE_SUFFIXES:
-        raise ValueError(f"path: the file name must end in {', '.join(FIGURE_SUFFIXES)}, got {str(p)!r}")
-    _check_parent("path", p)
-    with atomic_path(p) as tmp:
-        fig.savefig(tmp, format=suffix[1:], dpi=dpi)
-
-
 #: The file that makes a directory a rotorfault output directory (lists its files).
 MANIFEST = "manifest.json"
 
@@ -117,7 +91,7 @@ def check_output_directory(field: str, path: str | os.PathLike[str], *, force: b
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise ValueError(f"{field}: {str(p)!r} exists and is not a directory")
-    _check_parent(field, p.resolve())
+    check_parent(field, p.resolve())
     if p.is_dir() and any(p.iterdir()):
         manifest = p / MANIFEST
         if not manifest.is_file():
@@ -190,14 +164,12 @@ def signals_deferred() -> Iterator[None]:
 
 __all__ = [
     "FIGURE_SUFFIXES",
-    "MIN_FONT_PT",
     "MANIFEST",
     "atomic_path",
     "check_output_directory",
     "check_output_file",
+    "check_parent",
     "output_directory",
-    "new_figure",
-    "save_figure",
     "signals_deferred",
     "write_text",
 ]

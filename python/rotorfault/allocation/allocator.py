@@ -1,64 +1,22 @@
-"""Constrained control allocation: rotor commands for a desired virtual control.
-
-The problem (Ke et al. eq. (33), generalised)::
-
-    minimise  1/2 (u_c - M T)^T W (u_c - M T) + gamma/2 |T - T_pref|^2
-    subject   T_min <= T <= T_max
-
-``M`` is an airframe's effectiveness matrix (rows thrust N, roll, pitch, yaw torque N m; see
-:meth:`rotorfault.Airframe.effectiveness_matrix`) or any n x m matrix, ``W = diag(weights)``.
-
-Methods (one problem type, one answer type):
-
-- ``"active-set"`` (default): exact, about a microsecond, in Rust; what runs in closed loops.
-- ``"clarabel"``: the Clarabel interior-point solver, the reference; also solves prioritised
-  allocations (``priorities=[[0, 1, 2], [3]]``: thrust and roll/pitch first, yaw with the rest).
-- ``"pinv"``: the unconstrained weighted pseudo-inverse (Ke eqs. (34)/(35)); bounds ignored.
-
-When several command vectors are optimal (more rotors than weighted axes, or a zero weight),
-``"active-set"`` and ``"pinv"`` return the one closest to ``preferred`` (zero by default), also
-with bounds active: for ``"pinv"`` that is exactly ``M^+ u_c`` (eq. (34)) or ``(E_1 M)^+ u_c1``
-with a zero yaw weight (eq. (35)). ``"clarabel"`` polishes its answer with the active set from the
-bounds it identifies, so it agrees with ``"active-set"`` in the commands when that certifies.
-
-Evidence: every :class:`Allocation` carries a :class:`Certificate`, the KKT residuals
-(stationarity, complementarity, bound violation) of its commands, each normalised in the
-problem's own scaling (invariant to scaling the matrix, the virtual control, the weights or one
-rotor's gain), and the ``tolerance`` they are held to (default :data:`DEFAULT_TOLERANCE`, from
-the core). ``status == "optimal"`` only when ``certificate.holds``. Where the active set cannot
-certify its answer it falls back to Clarabel on the internally scaled problem, polished, and says
-so: ``solved_by`` is ``"clarabel"`` (``"active-set"`` otherwise, ``"pinv"`` for the pseudo-inverse)
-and ``fallbacks`` counts those answers.
-
-Settings (on :class:`Allocator` and :func:`allocate`, keyword-only, defaults from the core):
-``tolerance`` the certificate tolerance; ``max_iterations`` the iteration bound of each active-set
-phase (default ``4 m + 20``) and Clarabel's iteration limit (default 200); ``clarabel_tolerance``
-Clarabel's own duality-gap and feasibility tolerance.
-
-Accuracy: the active-set solver and the pseudo-inverse solve the scaled least-squares problem
-``min |W^(1/2) (M T - u_c)|`` by a Householder QR (never the normal equations ``M^T W M``), with
-the rows sorted by size, so a weight of 1e-9 or a rotor 1e-12 times weaker than the others still
-counts; columns dependent to ``RANK_TOL = 1e-13`` of their own norm share the load by the
-closest-to-``preferred`` rule.
-"""
+"""The allocator: one validated allocation problem (:class:`Allocator`), solved for one virtual
+control or a batch by the active set (exact, the closed loops' path), Clarabel (the reference;
+prioritised allocation) or the weighted pseudo-inverse, each answer with its KKT certificate
+(:class:`Allocation`). The problem and the methods are described in :mod:`rotorfault.allocation`."""
 
 from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, cast, get_args
+from typing import Any, cast, get_args
 
 import numpy as np
 import numpy.typing as npt
 
-from . import _rfcore
-from ._convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
-from ._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
-from .airframe import Airframe
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from .. import _rfcore
+from .._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
+from .._util.convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
+from ..analysis.airframe import Airframe
 
 METHODS: tuple[AllocationMethod, ...] = get_args(AllocationMethod)
 _DEFAULTS = _rfcore.AllocationSettings()
@@ -353,176 +311,6 @@ def _settings(tolerance: Any, max_iterations: Any, clarabel_tolerance: Any) -> _
     )
 
 
-@dataclass(frozen=True)
-class DirectionalLimit:
-    """The largest ``scale`` with ``base + scale * direction`` attainable, and commands that
-    attain it (:func:`max_virtual_control`)."""
-
-    scale: float
-    commands: FloatArray
-    status: str
-
-
-def max_virtual_control(
-    target: Airframe | npt.ArrayLike,
-    direction: npt.ArrayLike,
-    *,
-    bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
-    base: npt.ArrayLike | None = None,
-    give_up_yaw: bool = False,
-    tolerance: float = CLARABEL_TOLERANCE,
-) -> DirectionalLimit | None:
-    """The attainable set along a direction: the largest ``s`` such that some bounded commands
-    produce ``base + s * direction`` (``base`` zero by default). ``None`` when no point of that
-    line is attainable; ``s`` is negative when ``base`` is not attainable but points behind it
-    are. Solved as a linear program by Clarabel."""
-    allocator = Allocator(target, bounds=bounds, give_up_yaw=give_up_yaw)
-    n = allocator.virtual_dimension
-    d = float_array("direction", direction, 1)
-    b = np.zeros(n) if base is None else float_array("base", base, 1)
-    result = _rfcore.max_along_direction(
-        allocator.matrix, allocator.lower, allocator.upper, d, b, real("tolerance", tolerance)
-    )
-    if result is None:
-        return None
-    return DirectionalLimit(result.scale, np.asarray(result.commands), result.status)
-
-
-@dataclass(frozen=True)
-class HoverMargin:
-    """:func:`hover_thrust_margin`: the largest total thrust with the controlled torques at zero,
-    the weight, and their difference (negative: cannot hover in balance). ``commands`` attain the
-    maximum; ``None`` (and ``-inf`` thrust) when zero torque is unattainable at any thrust."""
-
-    max_thrust_n: float
-    weight_n: float
-    margin_n: float
-    commands: FloatArray | None
-    status: str
-
-    @property
-    def thrust_to_weight(self) -> float:
-        return self.max_thrust_n / self.weight_n
-
-
-def hover_thrust_margin(
-    airframe: Airframe,
-    efficiency: npt.ArrayLike | None = None,
-    *,
-    give_up_yaw: bool = False,
-    tolerance: float = CLARABEL_TOLERANCE,
-    axes: ControlAxes | None = None,
-) -> HoverMargin:
-    """How much balanced thrust an airframe has left, with rotor ``efficiency`` (default the
-    airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning vehicle,
-    Ke / Lanzon)."""
-    if not isinstance(airframe, Airframe):
-        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
-    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
-    names = control_axes(give_up_yaw, axes)
-    h = _rfcore.hover_thrust_margin(frame._core, names, real("tolerance", tolerance))
-    commands = None if h.commands is None else np.asarray(h.commands)
-    return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
-
-
-AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "yaw torque N (N m)")
-
-
-def attainable_slice(
-    airframe: Airframe,
-    axes: tuple[int, int] = (1, 2),
-    efficiency: npt.ArrayLike | None = None,
-    *,
-    give_up_yaw: bool = False,
-    directions: int = 90,
-) -> FloatArray | None:
-    """The boundary of a 2-D slice of the attainable virtual-control set through hover: in the
-    plane of ``axes`` (indices into thrust, roll, pitch, yaw), from the hover wrench ``[m g, 0, 0,
-    0]``, the farthest attainable point along ``directions`` evenly spaced directions (one LP
-    each). Returns a (directions, 2) array of boundary points, or ``None`` when hover itself is
-    unattainable (:func:`hover_thrust_margin` negative). With ``give_up_yaw`` the yaw torque is
-    free (and ``axes`` may not include 3)."""
-    if not isinstance(airframe, Airframe):
-        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
-    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
-    n = 3 if flag("give_up_yaw", give_up_yaw) else 4
-    if (
-        not isinstance(axes, (tuple, list))
-        or len(axes) != 2
-        or not all(isinstance(a, numbers.Integral) and not isinstance(a, bool) for a in axes)
-    ):
-        raise TypeError("axes: expected a pair of axis indices, e.g. (1, 2) for roll and pitch")
-    axes = (int(axes[0]), int(axes[1]))
-    if not all(0 <= a < n for a in axes) or axes[0] == axes[1]:
-        raise ValueError(f"axes: two different indices in 0..{n - 1}, got {axes}")
-    if not isinstance(directions, numbers.Integral) or isinstance(directions, bool):
-        raise TypeError(f"directions: expected an integer, got {type(directions).__name__}")
-    count = int(directions)
-    if not 3 <= count <= 100_000:
-        raise ValueError(f"directions: must be between 3 and 100000, got {count}")
-    base = np.zeros(n)
-    base[0] = frame.hover_thrust_n
-    if hover_thrust_margin(frame, give_up_yaw=give_up_yaw).margin_n < 0:
-        return None
-    points = np.empty((count, 2))
-    for k, angle in enumerate(np.linspace(0.0, 2 * np.pi, count, endpoint=False)):
-        d = np.zeros(n)
-        d[axes[0]], d[axes[1]] = np.cos(angle), np.sin(angle)
-        limit = max_virtual_control(frame, d, base=base, give_up_yaw=give_up_yaw)
-        if limit is None or limit.status == "failed":
-            raise RuntimeError(f"attainable_slice: the LP along direction {k} failed although hover is attainable")
-        points[k] = base[list(axes)] + max(limit.scale, 0.0) * d[list(axes)]
-    return points
-
-
-def plot_attainable_slices(
-    airframe: Airframe,
-    cases: dict[str, npt.ArrayLike | None] | None = None,
-    *,
-    axes: tuple[int, int] = (1, 2),
-    give_up_yaw: bool = False,
-    path: str | None = None,
-) -> Figure:
-    """Overlays :func:`attainable_slice` for several rotor-efficiency cases (``{label: efficiency}``,
-    default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
-    ``path`` (``.png``, ``.pdf`` or ``.svg``, written atomically) if given; the figure is not
-    registered with pyplot. A case whose hover is unattainable is listed in the legend as such.
-    Cases differ in line style and marker as well as colour (readable in greyscale)."""
-    from ._output import new_figure, save_figure
-
-    if cases is None:
-        cases = {"healthy": None}
-        for rotor in range(airframe.rotor_count):
-            failed = np.ones(airframe.rotor_count)
-            failed[rotor] = 0.0
-            cases[f"rotor {rotor + 1} failed"] = failed
-    fig = new_figure(figsize=(9.5, 6.5), layout="constrained")
-    ax = fig.add_subplot(1, 1, 1)
-    styles = ["-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)), (0, (3, 1, 3, 3))]
-    markers = ["o", "s", "^", "v", "D", "P", "X", "*"]
-    for k, (label, efficiency) in enumerate(cases.items()):
-        points = attainable_slice(airframe, axes, efficiency, give_up_yaw=give_up_yaw)
-        if points is None:
-            ax.plot([], [], " ", label=f"{label}: hover unattainable")
-            continue
-        closed = np.vstack([points, points[:1]])
-        ax.plot(closed[:, 0], closed[:, 1], label=label, lw=2 if efficiency is None else 1.2,
-                linestyle=styles[k % len(styles)], marker=markers[k % len(markers)], markevery=max(1, len(closed) // 8),
-                markersize=5, color=f"C{k % 10}")
-    ax.plot([0], [0], "k+", ms=12, label="hover (zero torque)")
-    ax.set_xlabel(AXIS_LABELS[axes[0]])
-    ax.set_ylabel(AXIS_LABELS[axes[1]])
-    held = "yaw free" if give_up_yaw else "other torques held at 0"
-    ax.set_title(f"{airframe.name}: attainable set at hover thrust ({held})")
-    ax.axhline(0, color="0.8", lw=0.8)
-    ax.axvline(0, color="0.8", lw=0.8)
-    ax.legend(fontsize=9, loc="center left", bbox_to_anchor=(1.02, 0.5))
-    ax.set_aspect("equal", adjustable="datalim")
-    if path is not None:
-        save_figure(fig, path)
-    return fig
-
-
 def _bounds(bounds: Any, m: int) -> tuple[FloatArray, FloatArray]:
     if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
         raise TypeError("bounds: expected a pair (lower, upper), each a number or one value per actuator")
@@ -559,3 +347,14 @@ def _positive_int(field: str, value: Any) -> int:
     if not 1 <= number <= 2**32 - 1:
         raise ValueError(f"{field}: must be between 1 and {2**32 - 1}, got {number}")
     return number
+
+
+__all__ = [
+    "CLARABEL_TOLERANCE",
+    "DEFAULT_TOLERANCE",
+    "METHODS",
+    "Allocation",
+    "Allocator",
+    "Certificate",
+    "allocate",
+]

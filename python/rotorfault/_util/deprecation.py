@@ -1,0 +1,31 @@
+"""The one way an old name keeps working for one release: it warns (``DeprecationWarning``,
+naming the new name) and then does what the new name does. Used for moved modules, renamed
+arguments, attributes and keys; ``tests/cross/test_deprecations.py`` checks every one."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import warnings
+from typing import Any
+
+
+def warn(old: str, new: str, *, stacklevel: int = 3) -> None:
+    """Warns that ``old`` is deprecated in favour of ``new`` (removed after one release)."""
+    warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning, stacklevel=stacklevel)
+
+
+def moved_module(old: str, new: str) -> None:
+    """Makes the module ``old`` (being imported) the module ``new``: one object under both names,
+    so every name, private ones included, resolves as before; warns once per import."""
+    warn(f"module {old}", new, stacklevel=4)
+    sys.modules[old] = importlib.import_module(new)
+
+
+def renamed_keyword(function: str, old: str, new: str, value: Any, given: Any, default: Any) -> Any:
+    """The value of keyword ``new`` when the caller passed the deprecated ``old`` instead (``value``
+    is what ``old`` got; ``given`` what ``new`` got, ``default`` its default)."""
+    warn(f"{function}({old}=...)", f"{function}({new}=...)", stacklevel=4)
+    if given is not default:
+        raise TypeError(f"{function}: give {new} or the deprecated {old}, not both")
+    return value
