@@ -72,7 +72,7 @@ if TYPE_CHECKING:
     from .control.robust import ncfsyn
 
 #: Names whose modules import python-control and scipy: loaded on first use (via
-#: rotorfault.control), so ``import rotorfault`` stays light (tests/architecture/test_import_graph.py).
+#: rotorfault.control), so ``import rotorfault`` stays light (tests/cross/test_architecture.py).
 _LAZY_CONTROL = ("LanzonController", "ncfsyn")
 #: Modules that moved into the rooms in issue 26: ``rotorfault.<old>`` still resolves, for one
 #: release, to a module that warns (``rotorfault/<old>.py``).

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 import rotorfault as rf
 from rotorfault.cli import cli
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def test_px4_quad_x_matches_the_preset_up_to_numbering() -> None:

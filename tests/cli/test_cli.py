@@ -128,7 +128,7 @@ def test_installed_console_script() -> None:
     assert bad.stderr.strip().startswith("Error: preset: unknown airframe 'nope'")
 
 
-EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "quad-x-rotor-failure.toml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "quad-x-rotor-failure.toml"
 
 
 def test_simulate_example_scenario(tmp_path: Path) -> None:

@@ -23,11 +23,33 @@ MOVED = {
 }
 
 
+@pytest.fixture(autouse=True)
+def _package_attributes_restored() -> object:
+    """A fresh import of an old name rebinds ``rotorfault.<name>``: put the package back as it was
+    for the other tests."""
+    before = dict(vars(rf))
+    yield
+    for name in set(vars(rf)) - set(before):
+        delattr(rf, name)
+    for name, value in before.items():
+        setattr(rf, name, value)
+
+
 def _fresh_import(name: str) -> object:
     sys.modules.pop(name, None)
     parent, _, child = name.rpartition(".")
     vars(sys.modules[parent]).pop(child, None)
     return importlib.import_module(name)
+
+
+def test_importing_the_old_controllability_module_keeps_the_function_working() -> None:
+    """``rotorfault.controllability`` was a module and the package's function at once; importing
+    the old module name rebinds the package attribute to the module, which stays callable."""
+    airframe = rf.Airframe.preset("hexa-ppnnpn")
+    expected = rf.analysis.controllability(airframe)
+    with pytest.warns(DeprecationWarning):
+        _fresh_import("rotorfault.controllability")
+    assert rf.controllability(airframe) == expected
 
 
 @pytest.mark.parametrize("old", sorted(MOVED))

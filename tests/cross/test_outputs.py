@@ -81,7 +81,7 @@ def test_plot_paths_are_checked_before_the_computation(tmp_path: Path) -> None:
     assert code == 0, err
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.png"]  # no temporary file left
-    example = Path(__file__).resolve().parent.parent / "examples" / "quad-x-rotor-failure.toml"
+    example = Path(__file__).resolve().parents[2] / "examples" / "quad-x-rotor-failure.toml"
     one_line_error(*run("simulate", str(example), "--plot", str(png)), "exists; pass --force")
     assert time.perf_counter() - started < 30
 

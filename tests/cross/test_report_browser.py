@@ -30,7 +30,7 @@ from rotorfault.papers import ke as ke_paper
 from rotorfault.papers import reproduce
 from rotorfault.papers.decisions import decisions
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: Seconds Chromium may take for one page (it takes 1-3 s here).
 BROWSER_TIMEOUT_S = 90
 #: Where the screenshot is saved (beside the test's report unless set).

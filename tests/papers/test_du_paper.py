@@ -65,7 +65,7 @@ def test_table_iii_healthy(ppnnpn: rf.Airframe) -> None:
 
 def test_table_iii_zero_for_rotor_5_is_an_eq13_artifact(ppnnpn: rf.Airframe) -> None:
     """Eq. (13) prints 0, but the hover wrench is outside: the facet margin sees -0.2133.
-    (tests/test_independent.py confirms infeasibility by LP and the margin by a convex hull.)"""
+    (tests/cross/test_independent.py confirms infeasibility by LP and the margin by a convex hull.)"""
     failed = ppnnpn.with_failed_rotors([5])
     assert rf.acai(failed) == 0.0
     assert abs(rf.acai(failed, formula="facet-margin") + 0.2133) < TABLE_TOL

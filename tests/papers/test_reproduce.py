@@ -18,7 +18,7 @@ from rotorfault.papers._numbers import PaperNumber
 from rotorfault.papers._report import ReportFigure, ReportSection, ReportTable
 from rotorfault.papers.decisions import DECISION_CODE, decisions, source_root
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # Ke Table II as printed (typed again here, independently of rotorfault.papers.ke).
 KE_PRINTED = [

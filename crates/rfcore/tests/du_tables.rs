@@ -60,7 +60,7 @@ fn facet_margin_agrees_inside_and_sees_the_gap_outside() {
         assert!((failed[k] - [0.7221, 0.4510, 0.4510, 0.7221][k]).abs() < TABLE_TOL);
     }
     // Rotor 5 or 6 failed: G violates a facet inequality by 0.2133 (confirmed by an LP and a
-    // convex hull in tests/test_du_paper.py).
+    // convex hull in tests/papers/test_du_paper.py).
     assert!((failed[4] + 0.2133).abs() < TABLE_TOL, "{}", failed[4]);
     assert!((failed[5] + 0.2133).abs() < TABLE_TOL, "{}", failed[5]);
     // PNPNPN single failures really are on the boundary.

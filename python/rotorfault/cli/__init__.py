@@ -7,7 +7,7 @@
 The CLI only calls the public API: it may import the rooms' public modules and names,
 ``rotorfault._typing`` and ``rotorfault._util`` (outputs checked before work), never a private
 module of a room or the extension module; nothing in the package imports the CLI
-(``tests/architecture/test_import_graph.py``).
+(``tests/cross/test_architecture.py``).
 """
 
 from . import analysis, papers, studies  # noqa: F401  (registers the commands on the group)

@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from .robust import NcfsynResult, ncfsyn
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
-#: ``import rotorfault`` stays light (tests/test_architecture.py).
+#: ``import rotorfault`` stays light (tests/cross/test_architecture.py).
 _LAZY = {
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),

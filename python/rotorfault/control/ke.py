@@ -228,7 +228,7 @@ class UniformPassiveFtc:
 
         Replay what the controller saw. With sensor noise that is ``tr.measured`` (the true
         states differ from it by the noise, and so do their commands: by 5.2 N at 30 dB in
-        ``tests/test_ftc.py``)::
+        ``tests/control/test_ftc.py``)::
 
             commands = controller.replay(tr.t, tr.measured)           # with noise
             states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])

@@ -54,7 +54,7 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "run size": (_SIMULATION,),
     "several optimal allocations (more rotors than weighted axes, a zero weight)": (_ACTIVE_SET, _ALLOCATION),
     "allocation rank": (_ALLOCATION, _ACTIVE_SET),
-    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/test_allocation.py"),
+    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/allocation/test_allocation.py"),
     "Ke's printed command law (18)": (_KE_RS, _KE_PY),
     "Ke's filters": (_KE_RS,),
     "spin damping, drag": ("python/rotorfault/presets/ftc", _KE_PY),
