@@ -1,4 +1,4 @@
-"""Type stubs of the Rust extension (checked by mypy.stubtest in tests/test_stubs.py)."""
+"""Type stubs of the Rust extension (checked by mypy.stubtest in tests/cross/test_stubs.py)."""
 
 from typing import Any, ClassVar, final
 
@@ -10,6 +10,8 @@ RANK_RTOL: float
 MAX_RATE_STEP: float
 ZERO_RTOL: float
 DEFAULT_GRAVITY_M_S2: float
+#: ``(name, class)`` of every Rust controller (the registry of crates/rfcore-py/src/control/mod.rs).
+CONTROLLERS: tuple[tuple[str, type], ...]
 
 _F64 = npt.NDArray[np.float64]
 
@@ -332,7 +334,9 @@ class Trajectory:
     @property
     def divergence(self) -> Divergence | None: ...
 
+# <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
 _Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback
+# </controller-registry>
 
 def simulate(
     airframe: Airframe,

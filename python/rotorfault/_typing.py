@@ -47,6 +47,8 @@ ScanBackend: TypeAlias = Literal["local", "dask"]
 #: Controller of a ``rotorfault simulate`` scenario file.
 ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
 
+# <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
+# (`python -m rotorfault.control.registry` prints this block; tests/control/test_registry.py checks it)
 #: The Rust controller objects the simulator's loop runs (all can run in a batch).
 CoreController: TypeAlias = (
     _rfcore.OpenLoop
@@ -57,6 +59,23 @@ CoreController: TypeAlias = (
     | _rfcore.LanzonController
     | _rfcore.TrackingFeedback
 )
+#: Their names: each class name in kebab case (``rotorfault._rfcore.CONTROLLERS``).
+CoreControllerName: TypeAlias = Literal[
+    "open-loop",
+    "linear-feedback",
+    "lti",
+    "allocated",
+    "uniform-passive-ftc",
+    "lanzon-controller",
+    "tracking-feedback",
+]
+# </controller-registry>
+
+
+def core_controller_types() -> tuple[type, ...]:
+    """The Rust controller classes, read from the one registry the bindings expose
+    (``rotorfault._rfcore.CONTROLLERS``): what the batch type check accepts."""
+    return tuple(cls for _, cls in _rfcore.CONTROLLERS)
 
 
 class Controller(Protocol):
@@ -68,12 +87,14 @@ class Controller(Protocol):
 
 
 __all__ = [
+    "core_controller_types",
     "AcaiFormula",
     "ControlAxes",
     "AllocationMethod",
     "AllocationStatus",
     "Controller",
     "CoreController",
+    "CoreControllerName",
     "DivergenceKind",
     "FlightOutcome",
     "HoverPoint",

@@ -29,7 +29,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .._typing import Controller
-from . import ke, lqr
+from . import ke, lqr, registry
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
@@ -81,5 +81,6 @@ __all__ = [
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "registry",
     "robust",
 ]

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._typing import Controller, CoreController
+from .._typing import Controller, CoreController, core_controller_types
 from .._util.convert import FloatArray, count, float_array, real
 from .._util.progress import chunks
 from ..analysis.airframe import Airframe, require_airframe
@@ -31,16 +31,9 @@ from .trajectory import BatchResult, Event, Trajectory  # noqa: F401  (Event: th
 #: path) or ``None`` (all rotors at zero).
 AnyController: TypeAlias = Controller | Callable[[float, FloatArray], npt.ArrayLike] | None
 
-#: The Rust controller objects :func:`core_controller` can return (all can run in a batch).
-CORE_TYPES: tuple[type, ...] = (
-    _rfcore.OpenLoop,
-    _rfcore.LinearFeedback,
-    _rfcore.Lti,
-    _rfcore.Allocated,
-    _rfcore.UniformPassiveFtc,
-    _rfcore.LanzonController,
-    _rfcore.TrackingFeedback,
-)
+#: The Rust controller objects :func:`core_controller` can return (all can run in a batch): read
+#: from the one registry the bindings expose (``rotorfault._rfcore.CONTROLLERS``).
+CORE_TYPES: tuple[type, ...] = core_controller_types()
 
 
 def core_controller(controller: AnyController, dt_s: float) -> CoreController | Callable[[float, FloatArray], npt.ArrayLike] | None:
@@ -53,9 +46,9 @@ def core_controller(controller: AnyController, dt_s: float) -> CoreController | 
         return cast(Controller, controller).core(dt_s)
     if callable(controller):
         return controller
+    names = ", ".join(cls.__name__ for cls in core_controller_types())
     raise TypeError(
-        "controller: expected OpenLoop, LinearFeedback, Lti, TrackingFeedback, Allocated, UniformPassiveFtc, LanzonController (anything with "
-        f"core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
+        f"controller: expected {names} (anything with core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
     )
 
 
@@ -307,7 +300,7 @@ def simulate_batch(
     cores: list[CoreController | None] = []
     for c in per_run:
         core = core_controller(c, simulator.dt_s)
-        if core is not None and not isinstance(core, CORE_TYPES):
+        if core is not None and not isinstance(core, core_controller_types()):
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
         cores.append(cast(CoreController | None, core))
     # Each run's actuators start at initial_command, else at its own controller's trim.

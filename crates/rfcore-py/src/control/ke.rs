@@ -132,3 +132,9 @@ impl PyFtcPreset {
         self.inner.vehicle.linear_drag_n_s_m
     }
 }
+
+impl crate::control::ControllerClass for PyUniformPassiveFtc {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}
