@@ -112,7 +112,7 @@ def test_certify_cli(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output  # every single failure: hover by spinning (Du Table II)
     data = json.loads(out.read_text())
     single = [c for c in data["cases"] if len(c["failed"]) == 1]
-    assert all(c["hover"] == "without-yaw" and c["drop_axes"] == ["yaw"] for c in single)
+    assert all(c["hover"] == "give-up-yaw" and c["drop_axes"] == ["yaw"] for c in single)
     result = runner.invoke(cli, ["certify", "-a", "quad-x", "--require", "double", "--json", "-"])
     assert result.exit_code == 3  # two adjacent rotors lost: no hover at all
     data = json.loads(result.stdout)

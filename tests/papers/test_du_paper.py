@@ -153,4 +153,4 @@ def test_printed_numbers_pass_and_flag_the_eq13_zeros() -> None:
     assert len(rows) == 14
     assert all(r.status == "pass" for r in rows), [r for r in rows if r.status != "pass"]
     noted = [r.quantity for r in rows if r.note]
-    assert noted == ["ACAI, hexa-ppnnpn, rotor 5 failed", "ACAI, hexa-ppnnpn, rotor 6 failed"]
+    assert noted == ["ACAI eq13, hexa-ppnnpn, rotor 5 failed", "ACAI eq13, hexa-ppnnpn, rotor 6 failed"]

@@ -40,7 +40,7 @@ def test_du_numbers_cover_tables_ii_and_iii() -> None:
     assert len(numbers) == 14
     # Table III's zeros for rotors 5 and 6 pass as printed (eq. (13)) and carry the note why they mislead.
     noted = [n.quantity for n in numbers if n.note]
-    assert noted == ["ACAI, hexa-ppnnpn, rotor 5 failed", "ACAI, hexa-ppnnpn, rotor 6 failed"]
+    assert noted == ["ACAI eq13, hexa-ppnnpn, rotor 5 failed", "ACAI eq13, hexa-ppnnpn, rotor 6 failed"]
     assert all(n.status == "pass" for n in numbers)
 
 

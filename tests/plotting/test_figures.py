@@ -101,9 +101,9 @@ def test_primary_axis_figure(tmp_path: Path) -> None:
 def test_scan_figure(tmp_path: Path, give_up_yaw: bool) -> None:
     scan = rf.efficiency_scan(rf.Airframe.preset("hexa-pnpnpn"), (1, 2, 5), 0.1, give_up_yaw=give_up_yaw)
     fig = scan.plot(str(tmp_path / "scan.png"))
-    check_figure(fig, tmp_path / "scan.png", title_has=("hexa-pnpnpn", "without yaw" if give_up_yaw else "with yaw"))
+    check_figure(fig, tmp_path / "scan.png", title_has=("hexa-pnpnpn", "giving up yaw" if give_up_yaw else "with yaw"))
     if give_up_yaw:
-        assert all("without yaw" in ax.get_title() for ax in fig.axes if ax.get_title())
+        assert all("giving up yaw" in ax.get_title() for ax in fig.axes if ax.get_title())
     # The colour scale spans the values that occur; "uncontrollable" is a hatched patch, not a colour.
     from matplotlib.collections import QuadMesh
 

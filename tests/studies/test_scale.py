@@ -84,7 +84,7 @@ def test_failure_samples_reproduce_failure_table(pnpnpn: rf.Airframe) -> None:
     assert result.table.num_rows == len(table) == 1 + 8 + 28 + 56 + 70
     np.testing.assert_array_equal(result.table["acai_eq13"].to_numpy(), [c.acai for c in table])
     np.testing.assert_array_equal(result.table["controllable"].to_numpy(zero_copy_only=False), [c.controllable for c in table])
-    np.testing.assert_array_equal(result.table["controllable_give_up_yaw"].to_numpy(zero_copy_only=False), [c.controllable_without_yaw for c in table])
+    np.testing.assert_array_equal(result.table["controllable_give_up_yaw"].to_numpy(zero_copy_only=False), [c.controllable_give_up_yaw for c in table])
 
 
 def test_parquet_output_says_what_it_holds_and_reads_back(tmp_path: Path, pnpnpn: rf.Airframe) -> None:

@@ -101,7 +101,7 @@ fn failure_table_counts_and_matches_single_evaluations() {
     assert_eq!(table.len(), 1 + 6 + 15);
     assert!(table[0].failed.is_empty());
     assert_eq!(table[1].failed, vec![0]);
-    assert!((table[1].with_yaw.acai - 0.7221).abs() < TABLE_TOL);
+    assert!((table[1].all_axes.acai - 0.7221).abs() < TABLE_TOL);
     assert_eq!(table[7].failed, vec![0, 1]);
     assert!(failure_table(&airframe, 7, AcaiFormula::Eq13).is_err());
 }

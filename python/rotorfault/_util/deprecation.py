@@ -29,3 +29,14 @@ def renamed_keyword(function: str, old: str, new: str, value: Any, given: Any, d
     if given is not default:
         raise TypeError(f"{function}: give {new} or the deprecated {old}, not both")
     return value
+
+
+def renamed_attribute(old: str, new: str) -> property:
+    """A read-only property ``old`` that warns and returns attribute ``new`` (for a class body:
+    ``acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")``)."""
+
+    def get(self: Any) -> Any:
+        warn(f"{type(self).__name__}.{old}", f"{type(self).__name__}.{new}")
+        return getattr(self, new)
+
+    return property(get, doc=f"Deprecated name of :attr:`{new}`.")

@@ -167,7 +167,7 @@ def plot_attainable_slices(
             cases[f"rotor {rotor + 1} failed"] = failed
     slices = {label: attainable_slice(airframe, axes, efficiency, give_up_yaw=give_up_yaw) for label, efficiency in cases.items()}
     bold = [label for label, efficiency in cases.items() if efficiency is None]
-    held = "yaw free" if give_up_yaw else "other torques held at 0"
+    held = "yaw given up" if give_up_yaw else "other torques held at 0"
     return plot_slices(
         slices, (AXIS_LABELS[axes[0]], AXIS_LABELS[axes[1]]), title=f"{airframe.name}: attainable set at hover thrust ({held})",
         bold=bold, path=path,

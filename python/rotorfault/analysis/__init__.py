@@ -11,6 +11,8 @@ of the package (every other room builds on this one).
 from .acai import (
     ACAI_FORMULAS,
     EQ13_ZERO_NOTE,
+    FORMULA_DESCRIPTIONS,
+    GIVE_UP_YAW,
     HOVER_CODES,
     RANK_RTOL,
     ZERO_RTOL,
@@ -19,6 +21,7 @@ from .acai import (
     acai,
     acai_batch,
     acai_from_matrix,
+    acai_label,
     format_acai,
 )
 from .airframe import Airframe
@@ -27,6 +30,8 @@ from .controllability import ControllabilityReport, FailureCase, FailureTable, c
 __all__ = [
     "ACAI_FORMULAS",
     "EQ13_ZERO_NOTE",
+    "FORMULA_DESCRIPTIONS",
+    "GIVE_UP_YAW",
     "HOVER_CODES",
     "RANK_RTOL",
     "ZERO_RTOL",
@@ -39,6 +44,7 @@ __all__ = [
     "acai",
     "acai_batch",
     "acai_from_matrix",
+    "acai_label",
     "controllability",
     "failure_table",
     "format_acai",

@@ -39,6 +39,22 @@ RANK_RTOL: float = _rfcore.RANK_RTOL
 ZERO_RTOL: float = _rfcore.ZERO_RTOL
 #: The two ACAI formulas, by name (module docs).
 ACAI_FORMULAS: tuple[AcaiFormula, ...] = get_args(AcaiFormula)
+#: What each formula is, in words (help texts, notes).
+FORMULA_DESCRIPTIONS: dict[AcaiFormula, str] = {
+    "eq13": "Du's eq. (13), the paper's number (0 where hover is infeasible but the formula reads 0)",
+    "facet-margin": "the facet margin, minus the largest violation of a facet inequality (negative where hover is infeasible)",
+}
+#: The one name of asking the question for thrust, roll and pitch only (``give_up_yaw=True``,
+#: ``--give-up-yaw``, the ``_give_up_yaw`` columns and fields): table headers use it as written.
+GIVE_UP_YAW = "give-up-yaw"
+
+
+def acai_label(formula: str) -> str:
+    """How a printed ACAI names its formula: ``"ACAI eq13"``, ``"ACAI facet-margin"`` (table
+    headers, CLI rows, report captions: one name per formula, the option's own)."""
+    if formula not in ACAI_FORMULAS:
+        raise ValueError(f"formula: must be one of {', '.join(ACAI_FORMULAS)}, got {formula!r}")
+    return f"ACAI {formula}"
 
 
 def _formula(value: Any) -> str:
@@ -204,6 +220,8 @@ def format_acai(value: float, hover: HoverPoint = "inside") -> str:
 __all__ = [
     "ACAI_FORMULAS",
     "EQ13_ZERO_NOTE",
+    "FORMULA_DESCRIPTIONS",
+    "GIVE_UP_YAW",
     "HOVER_CODES",
     "RANK_RTOL",
     "ZERO_RTOL",
@@ -212,5 +230,6 @@ __all__ = [
     "acai",
     "acai_batch",
     "acai_from_matrix",
+    "acai_label",
     "format_acai",
 ]

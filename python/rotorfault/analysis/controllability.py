@@ -21,7 +21,8 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .._util.convert import control_axes, count
-from .acai import EQ13_ZERO_NOTE, _efficiency, _formula, format_acai
+from .._util.deprecation import renamed_attribute
+from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, _efficiency, _formula, acai_label, format_acai
 from .airframe import Airframe, require_airframe, rotor_labels
 
 
@@ -54,7 +55,7 @@ class ControllabilityReport:
 
     def __str__(self) -> str:
         axes = {
-            "thrust-roll-pitch": "thrust, roll, pitch",
+            "thrust-roll-pitch": "thrust, roll, pitch (yaw given up)",
             "thrust-roll-pitch-yaw": "thrust, roll, pitch, yaw",
             "wrench": "force and torque (6-D wrench)",
         }[self.axes]
@@ -62,13 +63,15 @@ class ControllabilityReport:
         if acai.endswith("*"):
             acai += " (eq. (13) prints 0 although the hover wrench lies outside the attainable set)"
         efficiency = ", ".join(f"{e:g}" for e in self.efficiency)
+        label = acai_label(self.formula)
+        width = max(len(label), len("rank C(A, B)"))
         return "\n".join(
             [
                 f"{self.airframe}: efficiency = [{efficiency}], axes = {axes}",
-                f"  rank C(A, B) = {self.controllability_rank} of {self.state_dimension}",
-                f"  rank B_f     = {self.effectiveness_rank} of {self.virtual_control_dimension}",
-                f"  ACAI         = {acai}",
-                f"  verdict      = {self.verdict}",
+                f"  {'rank C(A, B)':<{width}} = {self.controllability_rank} of {self.state_dimension}",
+                f"  {'rank B_f':<{width}} = {self.effectiveness_rank} of {self.virtual_control_dimension}",
+                f"  {label:<{width}} = {acai}",
+                f"  {'verdict':<{width}} = {self.verdict}",
             ]
         )
 
@@ -106,7 +109,8 @@ def controllability(
 
 @dataclass(frozen=True)
 class FailureCase:
-    """One row of a failure table: rotors (1-based) at efficiency 0 and the two verdicts."""
+    """One row of a failure table: rotors (numbered from 1) at efficiency 0 and the verdicts
+    with all four axes and giving up yaw (``..._give_up_yaw``: thrust, roll and pitch only)."""
 
     failed: tuple[int, ...]
     controllability_rank: int
@@ -114,17 +118,24 @@ class FailureCase:
     acai: float
     controllable: bool
     verdict: str
-    effectiveness_rank_without_yaw: int
-    acai_without_yaw: float
-    controllable_without_yaw: bool
-    verdict_without_yaw: str
-    #: Where the hover wrench lies, with and without yaw (see :class:`AcaiValue`).
+    effectiveness_rank_give_up_yaw: int
+    acai_give_up_yaw: float
+    controllable_give_up_yaw: bool
+    verdict_give_up_yaw: str
+    #: Where the hover wrench lies, with all axes and giving up yaw (see :class:`AcaiValue`).
     hover: HoverPoint = "inside"
-    hover_without_yaw: HoverPoint = "inside"
+    hover_give_up_yaw: HoverPoint = "inside"
     #: The full-wrench (n = 6) test, for fully actuated airframes only (else None).
     acai_wrench: float | None = None
     controllable_wrench: bool | None = None
     hover_wrench: HoverPoint | None = None
+
+    # The names before issue 26 (one name per concept: "give up yaw"), for one release.
+    effectiveness_rank_without_yaw = renamed_attribute("effectiveness_rank_without_yaw", "effectiveness_rank_give_up_yaw")
+    acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")
+    controllable_without_yaw = renamed_attribute("controllable_without_yaw", "controllable_give_up_yaw")
+    verdict_without_yaw = renamed_attribute("verdict_without_yaw", "verdict_give_up_yaw")
+    hover_without_yaw = renamed_attribute("hover_without_yaw", "hover_give_up_yaw")
 
 
 _COLUMNS = (
@@ -132,20 +143,21 @@ _COLUMNS = (
     "effectiveness_rank",
     "acai",
     "controllable",
-    "effectiveness_rank_without_yaw",
-    "acai_without_yaw",
-    "controllable_without_yaw",
+    "effectiveness_rank_give_up_yaw",
+    "acai_give_up_yaw",
+    "controllable_give_up_yaw",
     "hover",
-    "hover_without_yaw",
+    "hover_give_up_yaw",
 )
 
 
 class FailureTable(Sequence[FailureCase]):
-    """Every combination of up to ``max_failed`` failed rotors with rank, ACAI and verdict, with
-    and without the yaw axis. Prints as a table; converts with :meth:`to_dicts` and
-    :meth:`to_arrays`."""
+    """Every combination of up to ``max_failed`` failed rotors with rank, ACAI (``formula``) and
+    verdict, with all axes and giving up yaw. Prints as a table; converts with :meth:`to_dicts`
+    and :meth:`to_arrays`."""
 
-    def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase]) -> None:
+    def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase], *, formula: AcaiFormula = "eq13") -> None:
+        self.formula: AcaiFormula = formula
         self.airframe_name = airframe.name
         self.rotor_count = airframe.rotor_count
         self.max_failed = max_failed
@@ -186,8 +198,10 @@ class FailureTable(Sequence[FailureCase]):
         return arrays
 
     def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
-        """Headers and formatted cells; "no-yaw" columns keep only thrust, roll and pitch."""
-        headers = ["failed", "rank C", "rank B_f", "ACAI", "ok", "ACAI no-yaw", "ok no-yaw"]
+        """Headers and formatted cells; the ACAI columns name their formula, the "give-up-yaw"
+        columns keep only thrust, roll and pitch."""
+        acai_ = acai_label(self.formula)
+        headers = ["failed", "rank C", "rank B_f", acai_, "ok", f"{acai_} {GIVE_UP_YAW}", f"ok {GIVE_UP_YAW}"]
         rows = [
             [
                 rotor_labels(row.failed),
@@ -195,13 +209,13 @@ class FailureTable(Sequence[FailureCase]):
                 str(row.effectiveness_rank),
                 format_acai(row.acai, row.hover),
                 "yes" if row.controllable else "no",
-                format_acai(row.acai_without_yaw, row.hover_without_yaw),
-                "yes" if row.controllable_without_yaw else "no",
+                format_acai(row.acai_give_up_yaw, row.hover_give_up_yaw),
+                "yes" if row.controllable_give_up_yaw else "no",
             ]
             for row in self._cases
         ]
         if self._cases and self._cases[0].acai_wrench is not None:
-            headers += ["ACAI 6-D", "ok 6-D"]
+            headers += [f"{acai_} 6-D", "ok 6-D"]
             for cells, row in zip(rows, self._cases):
                 cells += [
                     format_acai(float(row.acai_wrench or 0.0), row.hover_wrench or "inside"),
@@ -242,19 +256,19 @@ def failure_table(
             acai=full.acai,
             controllable=full.controllable,
             verdict=full.verdict,
-            effectiveness_rank_without_yaw=no_yaw.effectiveness_rank,
-            acai_without_yaw=no_yaw.acai,
-            controllable_without_yaw=no_yaw.controllable,
-            verdict_without_yaw=no_yaw.verdict,
+            effectiveness_rank_give_up_yaw=yaw_given_up.effectiveness_rank,
+            acai_give_up_yaw=yaw_given_up.acai,
+            controllable_give_up_yaw=yaw_given_up.controllable,
+            verdict_give_up_yaw=yaw_given_up.verdict,
             hover=cast(HoverPoint, full.hover),
-            hover_without_yaw=cast(HoverPoint, no_yaw.hover),
+            hover_give_up_yaw=cast(HoverPoint, yaw_given_up.hover),
             acai_wrench=None if wrench is None else wrench.acai,
             controllable_wrench=None if wrench is None else wrench.controllable,
             hover_wrench=None if wrench is None else cast(HoverPoint, wrench.hover),
         )
-        for failed, full, no_yaw, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
+        for failed, full, yaw_given_up, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]
-    return FailureTable(airframe, max_failed, cases)
+    return FailureTable(airframe, max_failed, cases, formula=cast(AcaiFormula, formula_name))
 
 
 

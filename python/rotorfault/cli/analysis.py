@@ -11,7 +11,7 @@ from rich.table import Table
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
-from ..analysis import EQ13_ZERO_NOTE, Airframe, controllability, failure_table, format_acai
+from ..analysis import EQ13_ZERO_NOTE, Airframe, acai_label, controllability, failure_table, format_acai
 from ..analysis.airframe import rotor_labels
 from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers
 
@@ -32,7 +32,7 @@ def airframes() -> None:
 @cli.command()
 @airframe_option
 @click.option("--efficiency", help="Rotor efficiencies, comma-separated (default: the airframe's own).")
-@click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+@click.option("--give-up-yaw", is_flag=True, help="Give up yaw: only thrust, roll and pitch must stay controllable.")
 @formula_option
 @_user_errors
 def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: AcaiFormula) -> None:
@@ -44,10 +44,10 @@ def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: Acai
     table.add_column("quantity")
     table.add_column("value")
     table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.efficiency))
-    table.add_row("axes", "thrust, roll, pitch" if give_up_yaw else "thrust, roll, pitch, yaw")
+    table.add_row("axes", "thrust, roll, pitch (yaw given up)" if give_up_yaw else "thrust, roll, pitch, yaw")
     table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
     table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
-    table.add_row("ACAI", format_acai(report.acai, report.hover))
+    table.add_row(acai_label(formula), format_acai(report.acai, report.hover))
     style = "green" if report.controllable else "red"
     table.add_row("verdict", f"[{style}]{report.verdict}[/{style}]")
     console.print(table)
@@ -61,24 +61,24 @@ def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: Acai
 @formula_option
 @_user_errors
 def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
-    """Every combination of up to K failed rotors: rank, ACAI (with and without yaw), verdict."""
+    """Every combination of up to K failed rotors: rank, ACAI (all axes and giving up yaw), verdict."""
     frame = Airframe.load(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)
     headers, rows = result.rows_for_display()
-    table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) (ACAI: Du et al. Theorem 3)")
+    table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
     for header in headers:
         table.add_column(header, justify="left" if header == "failed" else "right")
     for case, row in zip(result, rows):
-        style = "green" if case.controllable else ("yellow" if case.controllable_without_yaw else "red")
+        style = "green" if case.controllable else ("yellow" if case.controllable_give_up_yaw else "red")
         table.add_row(*row, style=style)
     console.print(table)
     if any(cell.endswith("*") for row in rows for cell in row):
         console.print(escape(EQ13_ZERO_NOTE))
     survivable = sum(case.controllable for case in result)
-    spinning = sum(case.controllable_without_yaw and not case.controllable for case in result)
+    spinning = sum(case.controllable_give_up_yaw and not case.controllable for case in result)
     console.print(
         f"{survivable} of {len(result)} cases controllable; {spinning} more only by giving up yaw "
-        "(green: controllable; yellow: only without yaw, i.e. thrust, roll and pitch; red: neither)."
+        "(green: controllable; yellow: only giving up yaw, i.e. thrust, roll and pitch; red: neither)."
     )
 
 
@@ -90,8 +90,9 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
 @_user_errors
 def certify(airframe: str, required: str, json_path: str | None, force: bool) -> None:
-    """For every single and double rotor failure: hover with all axes, only without yaw, or not at
-    all; the ACAI margins, the thrust-to-weight left and which axes an allocator must drop."""
+    """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
+    not at all; the ACAI (facet margin), the thrust-to-weight left and which axes an allocator must
+    drop."""
     import json
 
     from ..studies.certify import certify as certify_airframe, rows_for_display
@@ -110,7 +111,7 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool) ->
         table = Table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
             table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
-        styles = {"all-axes": "green", "without-yaw": "yellow", "no": "red"}
+        styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
         console.print(table)

@@ -13,6 +13,8 @@ from typing import Any, TypeVar
 import click
 from rich.console import Console
 
+from ..analysis import ACAI_FORMULAS
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 console = Console()
@@ -51,10 +53,11 @@ def parse_rotors(field: str, text: str) -> list[int]:
 
 formula_option = click.option(
     "--formula",
-    type=click.Choice(["eq13", "facet-margin"]),
+    type=click.Choice(list(ACAI_FORMULAS)),
     default="eq13",
     show_default=True,
-    help="How an ACAI with hover outside the attainable set is reported (eq13: as Du prints it).",
+    help="Which ACAI: eq13 (Du's eq. (13), as the paper prints it; 0 where hover is infeasible) or facet-margin "
+    "(negative where hover is infeasible). Every printed ACAI names its formula.",
 )
 
 airframe_option = click.option(

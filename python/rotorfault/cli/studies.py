@@ -12,7 +12,7 @@ from rich.table import Table
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
-from ..analysis import Airframe
+from ..analysis import Airframe, acai_label
 from ..studies.scan import efficiency_scan
 from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers, parse_rotors
 
@@ -21,7 +21,7 @@ from .app import _user_errors, airframe_option, cli, console, formula_option, pa
 @airframe_option
 @click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
 @click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
-@click.option("--give-up-yaw", is_flag=True, help="Only thrust, roll and pitch must stay controllable.")
+@click.option("--give-up-yaw", is_flag=True, help="Give up yaw: only thrust, roll and pitch must stay controllable.")
 @formula_option
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (.png, .pdf or .svg).")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
@@ -54,7 +54,7 @@ def scan(
         f"{escape(frame.name)}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
         f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%), "
         f"hover feasible at {int(result.hover_feasible.sum()):,}; "
-        f"largest ACAI {finite.max() if finite.size else float('nan'):.4f}"
+        f"largest {acai_label(formula)} {finite.max() if finite.size else float('nan'):.4f}"
     )
     if misleading:
         console.print(f"{misleading:,} points where {formula} reads >= 0 although the hover wrench lies outside (see hover_code)")
@@ -124,7 +124,7 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
         where = "" if value is None else f" at {parameter} = {value:g}"
         click.echo(
             f"best{where}: {best.spins}, controllable after {best.controllable_single} of {len(best.single)} single failures\n"
-            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure ACAI {best.worst_single:.4f}"
+            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure {acai_label(formula)} {best.worst_single:.4f}"
         )
 
 

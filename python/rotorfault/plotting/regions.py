@@ -37,7 +37,7 @@ def plot_region(
     # Faces of the unit cube are part of the region's surface too.
     surface = ok & ~interior
     labels = [f"$\\eta_{{{r}}}$" for r in rotors]
-    axes_text = "without yaw (thrust, roll, pitch)" if give_up_yaw else "with yaw (thrust, roll, pitch, yaw)"
+    axes_text = "giving up yaw (thrust, roll, pitch)" if give_up_yaw else "with yaw (thrust, roll, pitch, yaw)"
     fig = new_figure(figsize=(12, 10), layout="constrained")
     fig.suptitle(
         f"{airframe}: controllability {axes_text} as rotors {', '.join(map(str, rotors))} degrade "
@@ -58,7 +58,7 @@ def plot_region(
     ax3.tick_params(labelsize=9)
     ax3.set_title(
         f"surface of the controllable region\n({100 * float(ok.mean()):.1f}% of the grid"
-        f"{', without yaw' if give_up_yaw else ''})",
+        f"{', giving up yaw' if give_up_yaw else ''})",
         fontsize=10,
     )
     lowest_all = []
@@ -82,7 +82,7 @@ def plot_region(
         ax.set_xlim(-0.5 * (levels[1] - levels[0]), 1 + 0.5 * (levels[1] - levels[0]))
         ax.set_ylim(-0.5 * (levels[1] - levels[0]), 1 + 0.5 * (levels[1] - levels[0]))
         ax.tick_params(labelsize=9)
-        ax.set_title(f"lowest {labels[other]} that keeps control{' without yaw' if give_up_yaw else ''}", fontsize=10)
+        ax.set_title(f"lowest {labels[other]} that keeps control{' giving up yaw' if give_up_yaw else ''}", fontsize=10)
         ax.set_aspect("equal")
         fig.colorbar(mesh, ax=ax, shrink=0.8, label=f"lowest {labels[other]}")
         ax.legend(

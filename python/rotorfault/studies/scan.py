@@ -128,7 +128,7 @@ def plot_efficiency_scan(scan: EfficiencyScan | Scan | str | PathLike[str], path
     Other panels: for each pair of swept rotors, the lowest efficiency of the third rotor that
     keeps the vehicle controllable, on a colour scale spanning the values that occur; hatched
     grey where no efficiency of the third rotor does ("uncontrollable"), which the scale never
-    confuses with a small value. A scan without yaw says so in every title. Needs exactly three
+    confuses with a small value. A scan giving up yaw says so in every title. Needs exactly three
     swept rotors. Returns the figure (not registered with pyplot), saved to ``path`` (``.png``,
     ``.pdf`` or ``.svg``, written atomically) if given.
 
