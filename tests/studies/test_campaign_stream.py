@@ -70,7 +70,7 @@ def _equal(a: Any, b: Any) -> bool:
 def test_description_round_trips_through_toml_and_json() -> None:
     from rotorfault.control.ke import preset
 
-    c = _campaign(gains=replace(preset("ke-hil").gains, k_v=0.25, weights=(1.0, 10.0, 10.0, 0.01)))
+    c = _campaign(gains=preset("ke-hil").gains.replace(k_v=0.25, weights=(1.0, 10.0, 10.0, 0.01)))
     assert Campaign.from_dict(tomllib.loads(c.to_toml())) == c
     assert Campaign.from_dict(json.loads(json.dumps(c.to_dict()))) == c
     assert Campaign.from_dict(tomllib.loads(Campaign().to_toml())) == Campaign()

@@ -40,3 +40,30 @@ def renamed_attribute(old: str, new: str) -> property:
         return getattr(self, new)
 
     return property(get, doc=f"Deprecated name of :attr:`{new}`.")
+
+
+class _DataclassFields:
+    """``__dataclass_fields__`` of a settings class of the extension (``FIELDS``), so that
+    ``dataclasses.replace(obj, ...)`` and ``dataclasses.fields(obj)`` keep working for one
+    release: read from an object it warns (use ``obj.replace(...)`` and ``Class.FIELDS``)."""
+
+    def __get__(self, obj: Any, cls: type) -> dict[str, Any]:
+        import dataclasses
+
+        if obj is not None:
+            warn(f"dataclasses.replace / dataclasses.fields on a {cls.__name__}", f"{cls.__name__}.replace(...) and {cls.__name__}.FIELDS")
+        out = {}
+        for name in cls.FIELDS:  # type: ignore[attr-defined]
+            f = dataclasses.field()
+            f.name = name
+            f.type = Any
+            f._field_type = dataclasses._FIELD  # type: ignore[attr-defined]  # what dataclasses.fields() keeps
+            out[name] = f
+        return out
+
+
+def dataclass_compat(cls: type) -> None:
+    """Lets the dataclass functions keep working, with a warning, on ``cls``: a class of the
+    extension that replaced a Python dataclass of the same name (issue 26: types cross the
+    boundary once)."""
+    setattr(cls, "__dataclass_fields__", _DataclassFields())

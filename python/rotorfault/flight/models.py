@@ -12,32 +12,21 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import count, float_array, real
+from .._util.deprecation import dataclass_compat
 
 #: The core's defaults, read once: the one source of every default below.
-_DEFAULT_DRAG = _rfcore.Drag()
 _DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
 
 
-@dataclass(frozen=True)
-class Drag:
-    """Aerodynamic damping and rotor inertia (the papers give none; all default to 0)."""
-
-    #: ``k_t``: force ``-k_t (v - wind)``, N s/m (Lanzon's Stokes drag).
-    linear_n_s_m: float = _DEFAULT_DRAG.linear_n_s_m
-    #: force ``-c |v - wind| (v - wind)``, N s^2/m^2.
-    quadratic_n_s2_m2: float = _DEFAULT_DRAG.quadratic_n_s2_m2
-    #: ``k_r``: torque ``-k_r omega``, N m s (sets a spinning vehicle's yaw rate).
-    rotational_n_m_s: float = _DEFAULT_DRAG.rotational_n_m_s
-    #: ``I_R``: rotor inertia about its axis, kg m^2 (gyroscopic moment, Lanzon eq. (5)).
-    rotor_inertia_kg_m2: float = _DEFAULT_DRAG.rotor_inertia_kg_m2
-
-    def _core(self) -> _rfcore.Drag:
-        return _rfcore.Drag(
-            linear_n_s_m=real("drag.linear_n_s_m", self.linear_n_s_m),
-            quadratic_n_s2_m2=real("drag.quadratic_n_s2_m2", self.quadratic_n_s2_m2),
-            rotational_n_m_s=real("drag.rotational_n_m_s", self.rotational_n_m_s),
-            rotor_inertia_kg_m2=real("drag.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
-        )
+#: Aerodynamic damping and rotor inertia (the papers give none; all default to 0): the core's
+#: class, used directly (keyword-only; defaults from the core's ``Default``; types checked by the
+#: bindings, values once, by the core; frozen, ``replace(**changes)``, ``FIELDS``):
+#: ``linear_n_s_m`` (``k_t``: force ``-k_t (v - wind)``, N s/m, Lanzon's Stokes drag),
+#: ``quadratic_n_s2_m2`` (force ``-c |v - wind| (v - wind)``), ``rotational_n_m_s`` (``k_r``: torque
+#: ``-k_r omega``, sets a spinning vehicle's yaw rate), ``rotor_inertia_kg_m2`` (``I_R``: rotor
+#: inertia about its axis, the gyroscopic moment of Lanzon eq. (5)).
+Drag = _rfcore.Drag
+dataclass_compat(Drag)
 
 
 @dataclass(frozen=True)

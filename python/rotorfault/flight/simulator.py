@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
 from typing import Any, TypeAlias, cast
 
 import numpy as np
@@ -19,6 +18,7 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import Controller, CoreController, core_controller_types
 from .._util.convert import FloatArray, count, float_array, real
+from .._util.deprecation import dataclass_compat
 from .._util.progress import chunks
 from ..analysis.airframe import Airframe, require_airframe
 from .faults import RotorFault, _faults
@@ -64,27 +64,16 @@ def trim_command(controller: object) -> FloatArray | None:
 #: ends with a ``step-size`` event (a numerical cause, not the vehicle's).
 MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
 
-_DEFAULT_LIMITS = _rfcore.DivergenceLimits()
 _DEFAULT_CONFIG = _rfcore.SimulationConfig()
 _DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
 
 
-@dataclass(frozen=True)
-class DivergenceLimits:
-    """A run ends with an event when it passes one of these (``math.inf``: no limit)."""
-
-    max_tilt_rad: float = _DEFAULT_LIMITS.max_tilt_rad
-    max_altitude_loss_m: float = _DEFAULT_LIMITS.max_altitude_loss_m
-    max_speed_m_s: float = _DEFAULT_LIMITS.max_speed_m_s
-    max_rate_rad_s: float = _DEFAULT_LIMITS.max_rate_rad_s
-
-    def _core(self) -> _rfcore.DivergenceLimits:
-        return _rfcore.DivergenceLimits(
-            max_tilt_rad=real("limits.max_tilt_rad", self.max_tilt_rad),
-            max_altitude_loss_m=real("limits.max_altitude_loss_m", self.max_altitude_loss_m),
-            max_speed_m_s=real("limits.max_speed_m_s", self.max_speed_m_s),
-            max_rate_rad_s=real("limits.max_rate_rad_s", self.max_rate_rad_s),
-        )
+#: A run ends with an event when it passes one of these (``math.inf``: no limit): the core's class,
+#: used directly (keyword-only ``max_tilt_rad``, ``max_altitude_loss_m``, ``max_speed_m_s``,
+#: ``max_rate_rad_s``; defaults from the core's ``Default``; values checked with the run's
+#: settings; frozen, ``replace(**changes)``, ``FIELDS``).
+DivergenceLimits = _rfcore.DivergenceLimits
+dataclass_compat(DivergenceLimits)
 
 
 def _check_duration(duration_s: Any, dt_s: float) -> float:
@@ -132,13 +121,15 @@ class Simulator:
         if not isinstance(self.actuator, (FixedPitchActuator, VariablePitchActuator)):
             raise TypeError(f"actuator: expected FixedPitchActuator or VariablePitchActuator, got {type(actuator).__name__}")
         self.limits = DivergenceLimits() if limits is None else limits
+        if not isinstance(self.limits, DivergenceLimits):
+            raise TypeError(f"limits: expected rotorfault.DivergenceLimits, got {type(limits).__name__}")
         if noise is not None and not isinstance(noise, Noise):
             raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
         self.noise = noise
         # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
         # rebuilds the core objects from these attributes, so changing one later takes effect.)
         _rfcore.simulate(
-            self.airframe._core, self.actuator._core(), self.drag._core(), None, State()._packed(), [],
+            self.airframe._core, self.actuator._core(), self.drag, None, State()._packed(), [],
             self.airframe.efficiency, None, self._config(0.0),
         )
 
@@ -155,7 +146,7 @@ class Simulator:
             dt_s=self.dt_s,
             substeps=self.substeps,
             duration_s=real("duration_s", duration_s),
-            limits=self.limits._core(),
+            limits=self.limits,
             wind_m_s=self.wind,
             wind_profile=self.wind_profile,
             noise=None if self.noise is None else self.noise._core(seed_offset),
@@ -194,7 +185,7 @@ class Simulator:
         raw = _rfcore.simulate(
             self.airframe._core,
             self.actuator._core(),
-            self.drag._core(),
+            self.drag,
             core,
             x0._packed(),
             [f._packed() for f in fault_list],
@@ -213,7 +204,7 @@ class Simulator:
         return _rfcore.state_derivative(
             self.airframe._core,
             self.actuator._core(),
-            self.drag._core(),
+            self.drag,
             list(float_array("x", x, 1)),
             float_array("command", command, 1),
             eff,
@@ -310,7 +301,7 @@ def simulate_batch(
         starts.append(None if start is None else [float(v) for v in start])
     simulator._config(duration_s, record_every)  # checks the settings before any run
     _check_memory(simulator, n, duration_s, record_every, memory_budget_bytes)
-    actuator, drag = simulator.actuator._core(), simulator.drag._core()
+    actuator, drag = simulator.actuator._core(), simulator.drag
     packed_states = [s._packed() for s in states]
     packed_faults = [[f._packed() for f in fl] for fl in fault_lists]
     # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.

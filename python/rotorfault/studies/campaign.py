@@ -226,12 +226,12 @@ class Campaign:
                 if not isinstance(value, Mapping):
                     raise TypeError("gains: expected a table of Ke gains")
                 base = preset(str(raw.get("controller", "ke-hil"))).gains
-                gain_names = {f.name for f in fields(KeGains)}
+                gain_names = set(KeGains.FIELDS)
                 bad = sorted(set(value) - gain_names)
                 if bad:
                     raise ValueError(f"gains.{bad[0]}: unknown Ke gain; known: {', '.join(sorted(gain_names))}")
                 changes: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
-                value = replace(base, **changes)
+                value = base.replace(**changes)
             elif isinstance(value, list):
                 value = tuple(value)
             values[key] = value
@@ -246,7 +246,7 @@ class Campaign:
             if value is None:
                 continue
             if isinstance(value, KeGains):
-                value = {g.name: (list(v) if isinstance(v := getattr(value, g.name), tuple) else v) for g in fields(KeGains)}
+                value = {g: (list(v) if isinstance(v := getattr(value, g), tuple) else v) for g in KeGains.FIELDS}
             elif f.name == "failures":
                 value = [list(p) for p in value]
             elif isinstance(value, tuple):
@@ -352,7 +352,7 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
     core = controller.core(campaign.dt_s)
     trim = trim_command(controller)
     start = None if trim is None else [float(v) for v in trim]
-    limits = DivergenceLimits()._core()
+    limits = DivergenceLimits()
     x0 = State(position=HOVER_M)._packed()
     airframes, actuators, drags, configs, faults = [], [], [], [], []
     for spec in specs:
@@ -360,7 +360,7 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
         noise = campaign._noise(spec)
         airframes.append(airframe._core)
         actuators.append(actuator._core())
-        drags.append(drag._core())
+        drags.append(drag)
         faults.append([f._packed() for f in spec.faults(campaign)])
         configs.append(
             _rfcore.SimulationConfig(

@@ -5,7 +5,7 @@ flown on the same runs (common random numbers), then checked on a fresh campaign
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -85,7 +85,7 @@ def tune(
     if campaign.controller == "lqr":
         raise ValueError("campaign.controller: tuning searches Ke's gains; use ke-hil or ke-experiment")
     space = dict(TUNED_GAINS if bounds is None else bounds)
-    known = {f.name for f in fields(KeGains)}
+    known = set(KeGains.FIELDS)
     for name, pair in space.items():
         if name not in known:
             raise ValueError(f"bounds.{name}: unknown Ke gain")
@@ -95,7 +95,7 @@ def tune(
 
     def gains_of(x: Sequence[float] | np.ndarray[Any, Any]) -> KeGains:
         values: dict[str, Any] = {n: float(v) for n, v in zip(names, x)}
-        return replace(baseline, **values)
+        return baseline.replace(**values)
 
     def fly(c: Campaign) -> dict[str, np.ndarray[Any, Any]]:
         parts = [run_chunk(c, k) for k in range(c.chunk_count())]
