@@ -277,32 +277,13 @@ def write_report(
     beside ``out_dir`` and swapped in only when complete: an interrupted report leaves the
     previous one as it was. An existing report is replaced only with ``force``; a non-empty
     directory that is not a report never. Returns the Markdown file's path."""
-    import csv
-    import io
-    from importlib.metadata import PackageNotFoundError, version
+    from ._report import check_report_directory, csv_text, report_directory
 
-    from .._util.output import check_output_directory, output_directory
-
-    out = check_output_directory("out_dir", out_dir, force=force)
+    out = check_report_directory("out_dir", out_dir, force=force)
     if not runs:
         raise ValueError("runs: nothing to report (give at least one law and scenario)")
     rows = report_rows(runs)
-    try:
-        package_version = version("rotorfault")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        package_version = "unknown"
-    manifest = {
-        "generator": "rotorfault ftc-report (rotorfault.papers.ke.write_report)",
-        "command": command or "rotorfault.papers.ke.write_report",
-        "version": package_version,
-        "laws": sorted({run.law for run in runs}),
-        "scenarios": sorted({run.scenario.name for run in runs}),
-    }
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    for r in rows:
-        writer.writerow({column: cell(r, column, 6) for column in r})
+    table_csv = csv_text(rows, lambda r, column: cell(r, column, 6))
     lines = [
         "# Uniform passive FTC (Ke et al.): scenario report",
         "",
@@ -344,8 +325,12 @@ def write_report(
         lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario (`<scenario>.png`)."]
     else:
         lines += ["", "No figures (written with --no-figures)."]
-    with output_directory(out, manifest) as tmp:
-        (tmp / "ftc-report.csv").write_text(buffer.getvalue(), encoding="utf-8")
+    with report_directory(
+        out, generator="rotorfault ftc-report (rotorfault.papers.ke.write_report)", command=command,
+        default_command="rotorfault.papers.ke.write_report", laws=sorted({run.law for run in runs}),
+        scenarios=sorted({run.scenario.name for run in runs}),
+    ) as tmp:
+        (tmp / "ftc-report.csv").write_text(table_csv, encoding="utf-8")
         (tmp / "ftc-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
         if figures:
             chosen = [run for run in runs if run.law == first_law]
