@@ -1,4 +1,4 @@
-"""Flight verdicts of Ke's scenarios (rotorfault.papers.ke.flight_metrics) on constructed
+"""Flight verdicts (rotorfault.flight.outcomes.flight_metrics), on Ke's scenarios and constructed
 trajectories: outcomes judged over the last window, a steady circle, runs that never settled,
 the settle clock's start, lost runs, and faults outside a run. Exact inputs, so the tolerances are
 those of the arithmetic (1e-9) unless stated."""
@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
+from rotorfault.flight import outcomes
 from rotorfault.papers import ke as ke_paper
 
 HOVER = (0.0, 0.0, -10.0)
@@ -66,49 +67,49 @@ def test_holding_is_judged_over_the_window_not_the_last_sample() -> None:
     last sample is exactly on the setpoint; the old verdict said "holds position"."""
     lap = 2 * math.pi * 7.5 / 3.6
     tr = trajectory(3 * lap, position=circle(7.5, 3.6))
-    m = ke_paper.flight_metrics(tr, scenario(duration=3 * lap))
+    m = outcomes.flight_metrics(tr, scenario(duration=3 * lap))
     # The last sample lies within one 10 ms step (3.6 cm) of the setpoint: alone it says "holds".
     assert m.final_horizontal_error_m is not None and m.final_horizontal_error_m < 0.036
     assert m.outcome == "circling" and m.outcome_label == "circling"
     assert m.window_s == 5.0
     assert m.window_speed_m_s == pytest.approx(3.6, rel=1e-3)  # central differences: O(dt^2)
-    assert m.window_horizontal_error_m is not None and m.window_horizontal_error_m > ke_paper.HOLD_BAND_M[0]
+    assert m.window_horizontal_error_m is not None and m.window_horizontal_error_m > outcomes.HOLD_BAND_M[0]
     # Any run length gives the same verdict.
     for end in (3 * lap - 2.0, 3 * lap + 2.0, 3 * lap + 7.3):
-        assert ke_paper.flight_metrics(trajectory(end, position=circle(7.5, 3.6)), scenario()).outcome == "circling"
+        assert outcomes.flight_metrics(trajectory(end, position=circle(7.5, 3.6)), scenario()).outcome == "circling"
 
 
 def test_a_small_fast_circle_inside_the_band_is_not_holding() -> None:
     """Rotor at 30 %: circling at 3.8 m/s within 2 m of the setpoint is not "holding"."""
     tr = trajectory(60.0, position=circle(1.0, 3.8, centre=(0.0, 0.0)))
-    m = ke_paper.flight_metrics(tr, scenario())
+    m = outcomes.flight_metrics(tr, scenario())
     assert m.window_horizontal_error_m is not None and m.window_horizontal_error_m <= 1.0 + 1e-9
     assert m.outcome == "circling"
 
 
 def test_an_oscillation_is_circling() -> None:
     tr = trajectory(40.0, position=lambda t: np.stack([3 * np.sin(t), 0 * t, -10 + 0 * t], axis=1))
-    assert ke_paper.flight_metrics(tr, scenario()).outcome == "circling"
+    assert outcomes.flight_metrics(tr, scenario()).outcome == "circling"
 
 
 def test_slow_drift_is_off_station_and_still_is_holding() -> None:
     drift = trajectory(40.0, position=lambda t: np.stack([10 - 0.05 * t, 0 * t, -10 + 0 * t], axis=1))
-    assert ke_paper.flight_metrics(drift, scenario()).outcome == "off-station"
+    assert outcomes.flight_metrics(drift, scenario()).outcome == "off-station"
     near = trajectory(40.0, position=lambda t: np.stack([1.5 + 0 * t, 0 * t, -10.5 + 0 * t], axis=1))
-    m = ke_paper.flight_metrics(near, scenario())
+    m = outcomes.flight_metrics(near, scenario())
     assert m.outcome == "holds-position"
     assert m.window_horizontal_error_m == pytest.approx(1.5, abs=1e-9)
     assert m.window_altitude_error_m == pytest.approx(0.5, abs=1e-9)
     # ... but passing through quickly is not (speed bound).
     fast = trajectory(40.0, position=lambda t: np.stack([0.5 * np.sin(2 * t), 0 * t, -10 + 0 * t], axis=1))
-    assert ke_paper.flight_metrics(fast, scenario()).outcome == "circling"
+    assert outcomes.flight_metrics(fast, scenario()).outcome == "circling"
 
 
 def test_a_run_that_never_settled_has_no_settle_time_or_steady_values() -> None:
     """Item 2: rotor 1 fails at 35 s of 40 s; r ramps over the whole window."""
     fault = rf.RotorFault(1, 35.0, 0.0)
     tr = trajectory(40.0, r=lambda t: np.where(t < 35.0, 0.0, -(t - 35.0) * 2.6), faults=(fault,))
-    m = ke_paper.flight_metrics(tr, scenario((fault,)))
+    m = outcomes.flight_metrics(tr, scenario((fault,)))
     assert m.spin_settle_s is None and not m.settled
     assert m.r_rad_s is None and m.n3z is None and m.rotation_axis is None
     row = ke_paper.report_rows([ke_paper.ScenarioRun(scenario((fault,)), "feedforward", tr)])[0]
@@ -120,7 +121,7 @@ def test_settled_run_reports_settle_time_from_the_last_fault() -> None:
     fault = rf.RotorFault(1, 2.0, 0.0)
     # r reaches -20 at 2 + 8 = 10 s and stays.
     tr = trajectory(40.0, r=lambda t: -20.0 * np.clip((t - 2.0) / 8.0, 0.0, 1.0), faults=(fault,))
-    m = ke_paper.flight_metrics(tr, scenario((fault,)))
+    m = outcomes.flight_metrics(tr, scenario((fault,)))
     assert m.r_rad_s == pytest.approx(-20.0, abs=1e-12)
     # Within 5 % (1 rad/s) from r = -19 at t = 2 + 7.6 s: settle 7.6 s, to one sample (10 ms).
     assert m.spin_settle_s == pytest.approx(7.6, abs=DT + 1e-9)
@@ -130,8 +131,8 @@ def test_a_no_op_fault_does_not_restart_the_settle_clock() -> None:
     """Item 3: RotorFault(2, 30.0, 1.0) sets the efficiency rotor 2 already has."""
     faults = (rf.RotorFault(1, 2.0, 0.0), rf.RotorFault(2, 30.0, 1.0))
     tr = trajectory(40.0, r=lambda t: -20.0 * np.clip((t - 2.0) / 8.0, 0.0, 1.0), faults=faults)
-    assert ke_paper.effective_fault_times(tr) == [2.0]
-    m = ke_paper.flight_metrics(tr, scenario(faults))
+    assert outcomes.effective_fault_times(tr) == [2.0]
+    m = outcomes.flight_metrics(tr, scenario(faults))
     assert m.spin_settle_s == pytest.approx(7.6, abs=DT + 1e-9)
 
 
@@ -141,7 +142,7 @@ def test_fault_times_come_from_the_trajectory_not_the_scenario() -> None:
     flown = (rf.RotorFault(1, 2.0, 0.0),)
     other = ke_paper.KeScenario("x", "x", (0, 1, 1, 1), (rf.RotorFault(1, 10.0, 0.0),))
     tr = trajectory(40.0, r=lambda t: -20.0 * np.clip((t - 2.0) / 8.0, 0.0, 1.0), faults=flown)
-    assert ke_paper.flight_metrics(tr, other).spin_settle_s == pytest.approx(7.6, abs=DT + 1e-9)
+    assert outcomes.flight_metrics(tr, other).spin_settle_s == pytest.approx(7.6, abs=DT + 1e-9)
 
 
 def test_faults_outside_the_run_are_refused() -> None:
@@ -163,7 +164,7 @@ def test_lost_runs_mark_position_columns_lost() -> None:
     faults = (rf.RotorFault(1, 2.0, 0.0), rf.RotorFault(4, 10.0, 0.0))
     tr = trajectory(2.37, faults=faults, lost_at=2.37)
     sc = ke_paper.KeScenario("pair", "pair", (0, 1, 1, 0), faults)
-    m = ke_paper.flight_metrics(tr, sc)
+    m = outcomes.flight_metrics(tr, sc)
     assert m.outcome == "tilt" and m.lost_at_s == 2.37
     assert m.max_altitude_loss_m is None and m.max_horizontal_error_m is None and m.final_altitude_error_m is None
     row = ke_paper.report_rows([ke_paper.ScenarioRun(sc, "baseline", tr)])[0]
@@ -178,7 +179,7 @@ def test_flown_one_failure_verdicts() -> None:
     (off station, settled); the baseline law is lost; half a rotor circles at about 4 m/s."""
     m = ke_paper.run_scenario("one-failure").metrics
     assert m.outcome == "off-station" and m.settled
-    assert m.window_speed_m_s is not None and m.window_speed_m_s < ke_paper.HOLD_SPEED_M_S
+    assert m.window_speed_m_s is not None and m.window_speed_m_s < outcomes.HOLD_SPEED_M_S
     lost = ke_paper.run_scenario("one-failure", law="baseline").metrics
     assert lost.outcome == "tilt" and lost.lost_at_s is not None and lost.max_altitude_loss_m is None
     half = ke_paper.run_scenario("partial-0.5").metrics

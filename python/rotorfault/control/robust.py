@@ -27,7 +27,7 @@ Formulas (Skogestad and Postlethwaite, *Multivariable Feedback Control*, 2nd ed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
 import numpy as np
@@ -36,9 +36,6 @@ import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .._util.convert import FloatArray, real
 from ..plotting.frequency import plot_singular_values
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)

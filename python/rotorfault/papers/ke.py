@@ -1,6 +1,8 @@
 """Ke et al.'s uniform passive FTC (IEEE TIE), reproduced: the named scenarios of Sections II-B
-and IV-B, the metrics of Section V and the report behind ``rotorfault ftc-report``. The controller
-and its design are in :mod:`rotorfault.control.ke`.
+and IV-B, Table II's printed numbers and the report behind ``rotorfault ftc-report``. The
+controller and its design are in :mod:`rotorfault.control.ke`; the verdict on each flight (the
+metrics of Section V, judged over the last window) is the flight's own,
+:mod:`rotorfault.flight.outcomes` (re-exported here for the report).
 
 Failures are applied one after the other from hover: the first rotor, then the next once the spin
 has built up (Remark 3: simultaneous failures from r = 0 are not recoverable).
@@ -12,8 +14,6 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-
-import numpy as np
 
 from .._typing import KeLaw
 from ..analysis.airframe import Airframe

@@ -20,8 +20,6 @@ from ..plotting.frequency import plot_loop_shape
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
     from ..control.lanzon import LanzonDesign, LanzonVehicle
     from ._report import ReportSection
 

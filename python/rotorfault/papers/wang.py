@@ -40,7 +40,6 @@ from ..plotting.timeseries import plot_wang_flights as plot_flight
 if TYPE_CHECKING:
     from ._numbers import PaperNumber
     from ._report import ReportSection
-    from matplotlib.figure import Figure
 
 #: Scenario 1 (a decision: the paper prints no numbers).
 CIRCLE_RADIUS_M = 2.0
