@@ -11,7 +11,7 @@ from typing import Literal, Protocol, TypeAlias
 from . import _rfcore
 
 #: How an ACAI reads when the hover wrench lies outside the attainable set (Du eq. (13) or the
-#: facet margin; see :mod:`rotorfault.controllability`).
+#: facet margin; see :mod:`rotorfault.analysis.acai`).
 AcaiFormula: TypeAlias = Literal["eq13", "facet-margin"]
 #: Where the hover wrench lies relative to the attainable set (a verdict every ACAI carries:
 #: with ``formula="eq13"`` an ACAI of 0 can come with ``"outside"``, where hover is infeasible).

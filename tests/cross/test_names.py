@@ -161,3 +161,20 @@ def test_the_du_report_rows_name_eq13() -> None:
 
     assert all(n.quantity.startswith("ACAI eq13, ") for n in du.printed_numbers())
     assert not math.isnan(du.printed_numbers()[0].ours)
+
+
+# -- flight verdicts: one table of words, for every paper and study ----------------------------------
+
+
+def test_every_paper_labels_flights_with_the_one_verdict_table() -> None:
+    from rotorfault.flight import outcomes
+    from rotorfault.papers import ke as ke_paper
+    from rotorfault.papers import lanzon as lanzon_paper
+
+    assert ke_paper.OUTCOME_LABELS is outcomes.OUTCOME_LABELS and ke_paper.flight_metrics is outcomes.flight_metrics
+    assert lanzon_paper.outcome_text is outcomes.outcome_text and lanzon_paper.flight_metrics is outcomes.flight_metrics
+    assert outcomes.outcome_text("holds-position") == "holds position" and outcomes.outcome_text("not-level") == "not level"
+    assert outcomes.outcome_text("tilt", 1.5) == "lost (tilt) at 1.50 s"
+    from rotorfault.studies.summaries import FLYING
+
+    assert FLYING == outcomes.FLYING == ("holds-position", "circling", "off-station")

@@ -33,7 +33,7 @@ from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .airframe import Airframe, require_airframe
 
 
-#: Tolerances of the core (see ``crates/rfcore/src/acai.rs``): rank decisions are relative to
+#: Tolerances of the core (see ``crates/rfcore/src/analysis/acai.rs``): rank decisions are relative to
 #: column norms, and an ACAI within ZERO_RTOL x (problem size) of zero is returned as exactly 0.0.
 RANK_RTOL: float = _rfcore.RANK_RTOL
 ZERO_RTOL: float = _rfcore.ZERO_RTOL

@@ -163,7 +163,7 @@ class Airframe:
             )
         )
 
-    # -- other tools' formats (conventions in rotorfault/_formats.py) ----------------------------
+    # -- other tools' formats (conventions in rotorfault/analysis/_formats.py) ----------------------------
 
     @classmethod
     def from_px4_params(
@@ -182,7 +182,7 @@ class Airframe:
         normalised as PX4 does. PX4 has no mass: give ``mass_kg`` or keep ``MPC_THR_HOVER`` in the
         file (mass = MPC_THR_HOVER x the full upward thrust / g). ``inertia_kg_m2`` (not in PX4's
         parameters; the ACAI and the failure verdicts do not depend on it) defaults to
-        :data:`rotorfault._formats.PLACEHOLDER_INERTIA_KG_M2`."""
+        :data:`rotorfault.analysis._formats.PLACEHOLDER_INERTIA_KG_M2`."""
         from . import _formats
 
         if not isinstance(path, (str, PathLike)):
@@ -242,7 +242,7 @@ class Airframe:
     ) -> Airframe:
         """An ArduPilot standard frame (``FRAME_CLASS`` / ``FRAME_TYPE`` as numbers or names, e.g.
         ``("quad", "x")`` or ``(1, 1)``) with ArduPilot's motor numbering and spins
-        (``AP_MotorsMatrix``; the table is in :data:`rotorfault._formats.ARDUPILOT_FRAMES`)."""
+        (``AP_MotorsMatrix``; the table is in :data:`rotorfault.analysis._formats.ARDUPILOT_FRAMES`)."""
         from . import _formats
 
         angles, spins, label = _formats.ardupilot_frame(frame_class, frame_type)

@@ -175,7 +175,7 @@ def campaign_command(
     campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
     resume: bool, dask_address: str | None, force: bool, progress: bool,
 ) -> None:
-    """Fly a fault campaign (a TOML file of rotorfault.campaign.Campaign fields; default: every
+    """Fly a fault campaign (a TOML file of rotorfault.studies.Campaign fields; default: every
     single failure of Ke's quadcopter) and report survival, worst cases and excursions."""
     from dataclasses import replace
 

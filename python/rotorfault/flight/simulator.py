@@ -250,7 +250,7 @@ def _check_memory(simulator: Simulator, runs: int, duration_s: float, record_eve
             f"memory_budget_bytes: recording {runs:,} runs of {duration_s:g} s with record_every={record_every} "
             f"needs about {need / 2**30:.2f} GiB, more than the budget of {budget / 2**30:.2f} GiB "
             f"(default: half the available memory): record less (record_every), fewer runs per call, "
-            f"or keep per-run summaries only (rotorfault.campaign)"
+            f"or keep per-run summaries only (rotorfault.studies.run_campaign)"
         )
 
 

@@ -341,7 +341,7 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
     gives the same columns, whoever runs it (the unit :func:`run_campaign` streams to Parquet,
     resumes and distributes on Dask)."""
     if not isinstance(campaign, Campaign):
-        raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
+        raise TypeError(f"campaign: expected rotorfault.studies.Campaign, got {type(campaign).__name__}")
     if isinstance(chunk_index, bool) or not isinstance(chunk_index, (int, np.integer)):
         raise TypeError(f"chunk_index: expected an integer, got {chunk_index!r}")
     if not 0 <= chunk_index < campaign.chunk_count():
@@ -467,7 +467,7 @@ def run_campaign(
     from .engine import run_chunks
 
     if not isinstance(campaign, Campaign):
-        raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
+        raise TypeError(f"campaign: expected rotorfault.studies.Campaign, got {type(campaign).__name__}")
     result = run_chunks(
         _CampaignTask(campaign),
         total_rows=campaign.runs,

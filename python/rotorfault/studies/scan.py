@@ -45,7 +45,7 @@ class EfficiencyScan:
     #: ACAI at each point (``formula``: how a point with the hover wrench outside reads).
     acai: FloatArray
     give_up_yaw: bool
-    #: Where the hover wrench lies at each point (:data:`rotorfault.controllability.HOVER_CODES`:
+    #: Where the hover wrench lies at each point (:data:`rotorfault.analysis.HOVER_CODES`:
     #: 1 inside, 0 boundary, -1 outside, -2 rank deficient): eq. (13) prints 0 for some outside
     #: points, this column tells them from boundaries.
     hover_code: npt.NDArray[np.int8] = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
@@ -418,7 +418,7 @@ def acai_scan(
 ) -> Scan:
     """ACAI and controllability over an N-D grid (``axes``: name -> levels, the last axis
     fastest) or a sample set (``samples``: name -> one value per point), in memory or streamed to
-    the Parquet directory ``out`` (resumable; see :mod:`rotorfault._stream`).
+    the Parquet directory ``out`` (resumable; see :mod:`rotorfault.studies.storage`).
 
     Axis names: ``efficiency_<rotor>`` (1-based), and airframe parameters ``max_thrust_n``,
     ``min_thrust_n``, ``arm_length_m`` (every rotor, or one with ``_<rotor>``), ``mass_kg`` and

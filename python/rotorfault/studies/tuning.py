@@ -81,7 +81,7 @@ def tune(
     from scipy.optimize import differential_evolution  # type: ignore[import-untyped]
 
     if not isinstance(campaign, Campaign):
-        raise TypeError(f"campaign: expected rotorfault.campaign.Campaign, got {type(campaign).__name__}")
+        raise TypeError(f"campaign: expected rotorfault.studies.Campaign, got {type(campaign).__name__}")
     if campaign.controller == "lqr":
         raise ValueError("campaign.controller: tuning searches Ke's gains; use ke-hil or ke-experiment")
     space = dict(TUNED_GAINS if bounds is None else bounds)
