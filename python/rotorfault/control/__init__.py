@@ -29,7 +29,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .._typing import Controller
-from . import ke, lqr, registry
+from . import ke, lqr
 from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
@@ -37,13 +37,15 @@ from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocate
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, robust
+    from . import lanzon, registry, robust
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
-#: ``import rotorfault`` stays light (tests/cross/test_architecture.py).
+#: ``import rotorfault`` stays light (tests/cross/test_architecture.py); and the registry, so that
+#: ``python -m rotorfault.control.registry`` runs it fresh.
 _LAZY = {
+    "registry": ("registry", None),
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
     "LanzonController": ("lanzon", "LanzonController"),
