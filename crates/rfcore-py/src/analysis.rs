@@ -210,7 +210,8 @@ pub(crate) fn controllability<'py>(
     Ok(report(result))
 }
 
-/// One failure-table row: failed rotors (0-based), report with yaw, report without yaw.
+/// One failure-table row: failed rotors (indices from 0; Python numbers them from 1), the report
+/// with all axes, the report giving up yaw, the full-wrench report.
 type FailureRow = (
     Vec<usize>,
     PyControllabilityReport,
@@ -235,8 +236,8 @@ pub(crate) fn failure_table<'py>(
         .map(|case| {
             (
                 case.failed,
-                report(case.with_yaw),
-                report(case.without_yaw),
+                report(case.all_axes),
+                report(case.give_up_yaw),
                 case.wrench.map(report),
             )
         })

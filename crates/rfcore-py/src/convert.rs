@@ -4,8 +4,9 @@
 
 use nalgebra::DMatrix;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
 use rfcore::RfError;
 
@@ -49,4 +50,87 @@ pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult
         return Err(PyValueError::new_err(format!("{field}: malformed array")));
     }
     Ok(DMatrix::from_row_slice(rows, cols, &flat))
+}
+
+// -- settings classes: one protocol for the named settings Python uses directly ----------------
+
+/// A real number for field `field`, by Python's rule (`numbers.Real`, not a bool): anything else
+/// is a `TypeError` naming the field; the value rules are the core's `check`s.
+pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
+    use pyo3::types::PyBool;
+    let real_type = value.py().import("numbers")?.getattr("Real")?;
+    if value.is_instance_of::<PyBool>() || !value.is_instance(&real_type)? {
+        return Err(PyTypeError::new_err(format!(
+            "{field}: expected a real number, got {}",
+            value.get_type().name()?
+        )));
+    }
+    value.extract::<f64>().map_err(|_| {
+        PyValueError::new_err(format!("{field}: must be finite, got a number too large for a float"))
+    })
+}
+
+/// The field values of a settings object, by name.
+fn field_values<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    fields.iter().map(|f| obj.getattr(*f)).collect()
+}
+
+/// `Name(field=value, ...)`, as a dataclass prints.
+pub(crate) fn settings_repr(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<String> {
+    let parts: PyResult<Vec<String>> = fields
+        .iter()
+        .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))
+        .collect();
+    Ok(format!("{}({})", obj.get_type().name()?, parts?.join(", ")))
+}
+
+/// Equal type and equal fields (NaN fields compare unequal, as floats do).
+pub(crate) fn settings_eq(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<bool> {
+    if !b.get_type().is(&a.get_type()) {
+        return Ok(false);
+    }
+    for f in fields {
+        if !a.getattr(*f)?.eq(b.getattr(*f)?)? {
+            return Ok(false);
+        }
+    }
+    Ok(true)
+}
+
+/// The hash of the field values (equal settings hash equal; frozen, so usable as keys).
+pub(crate) fn settings_hash(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<isize> {
+    PyTuple::new(obj.py(), field_values(obj, fields)?)?.hash()
+}
+
+/// Every field as a keyword argument (the constructor takes them back: copies and pickling).
+pub(crate) fn settings_kwargs<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Bound<'py, PyDict>> {
+    let kwargs = PyDict::new(obj.py());
+    for f in fields {
+        kwargs.set_item(*f, obj.getattr(*f)?)?;
+    }
+    Ok(kwargs)
+}
+
+/// A copy with some fields changed, validated as a new object is (an unknown field is a
+/// `TypeError` naming it and the fields).
+pub(crate) fn settings_replace<'py>(
+    obj: &Bound<'py, PyAny>,
+    fields: &[&str],
+    changes: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let kwargs = settings_kwargs(obj, fields)?;
+    if let Some(changes) = changes {
+        for (key, value) in changes.iter() {
+            let name: String = key.extract()?;
+            if !fields.contains(&name.as_str()) {
+                return Err(PyTypeError::new_err(format!(
+                    "{name}: not a field of {} (fields: {})",
+                    obj.get_type().name()?,
+                    fields.join(", ")
+                )));
+            }
+            kwargs.set_item(name, value)?;
+        }
+    }
+    obj.get_type().call((), Some(&kwargs)).map(|o| o.into_any())
 }

@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use rfcore::flight::actuator::{
     Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags, VariablePitchPreset,
@@ -19,7 +20,9 @@ use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
-use crate::convert::{detached, slice1, to_py_err};
+use crate::convert::{
+    detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
+};
 
 /// Fixed-pitch rotors: first-order lag, rate limit, thrust coefficient for rotor speed.
 #[pyclass(name = "FixedPitchActuator", module = "rotorfault._rfcore", frozen)]
@@ -202,95 +205,97 @@ pub(crate) fn build_actuators(
     })
 }
 
-/// Drag and rotor inertia (`rotorfault.Drag`); defaults and rules are the core's.
-#[pyclass(name = "Drag", module = "rotorfault._rfcore", frozen)]
-#[derive(Clone)]
-pub struct PyDrag {
-    pub(crate) inner: Drag,
-}
-
-#[pymethods]
-impl PyDrag {
-    #[new]
-    #[pyo3(signature = (*, linear_n_s_m=None, quadratic_n_s2_m2=None, rotational_n_m_s=None, rotor_inertia_kg_m2=None))]
-    fn new(
-        linear_n_s_m: Option<f64>,
-        quadratic_n_s2_m2: Option<f64>,
-        rotational_n_m_s: Option<f64>,
-        rotor_inertia_kg_m2: Option<f64>,
-    ) -> PyResult<Self> {
-        let d = Drag::default();
-        let inner = Drag {
-            linear_drag_n_s_m: linear_n_s_m.unwrap_or(d.linear_drag_n_s_m),
-            quadratic_drag_n_s2_m2: quadratic_n_s2_m2.unwrap_or(d.quadratic_drag_n_s2_m2),
-            rotational_drag_n_m_s: rotational_n_m_s.unwrap_or(d.rotational_drag_n_m_s),
-            rotor_inertia_kg_m2: rotor_inertia_kg_m2.unwrap_or(d.rotor_inertia_kg_m2),
-        };
-        inner.check().map_err(to_py_err)?;
-        Ok(PyDrag { inner })
-    }
-    #[getter]
-    fn linear_n_s_m(&self) -> f64 {
-        self.inner.linear_drag_n_s_m
-    }
-    #[getter]
-    fn quadratic_n_s2_m2(&self) -> f64 {
-        self.inner.quadratic_drag_n_s2_m2
-    }
-    #[getter]
-    fn rotational_n_m_s(&self) -> f64 {
-        self.inner.rotational_drag_n_m_s
-    }
-    #[getter]
-    fn rotor_inertia_kg_m2(&self) -> f64 {
-        self.inner.rotor_inertia_kg_m2
-    }
-}
-
-/// Limits past which a run is declared diverged (`rotorfault.DivergenceLimits`).
-#[pyclass(name = "DivergenceLimits", module = "rotorfault._rfcore", frozen)]
-#[derive(Clone)]
-pub struct PyDivergenceLimits {
-    pub(crate) inner: DivergenceLimits,
-}
-
-#[pymethods]
-impl PyDivergenceLimits {
-    #[new]
-    #[pyo3(signature = (*, max_tilt_rad=None, max_altitude_loss_m=None, max_speed_m_s=None, max_rate_rad_s=None))]
-    fn new(
-        max_tilt_rad: Option<f64>,
-        max_altitude_loss_m: Option<f64>,
-        max_speed_m_s: Option<f64>,
-        max_rate_rad_s: Option<f64>,
-    ) -> Self {
-        let d = DivergenceLimits::default();
-        PyDivergenceLimits {
-            inner: DivergenceLimits {
-                max_tilt_rad: max_tilt_rad.unwrap_or(d.max_tilt_rad),
-                max_altitude_loss_m: max_altitude_loss_m.unwrap_or(d.max_altitude_loss_m),
-                max_speed_m_s: max_speed_m_s.unwrap_or(d.max_speed_m_s),
-                max_rate_rad_s: max_rate_rad_s.unwrap_or(d.max_rate_rad_s),
-            },
+/// One settings class used directly from Python: keyword-only, defaults from the core's
+/// `Default`, types checked here (`<prefix>.<field>: expected a real number`), values once by the
+/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`.
+macro_rules! settings_class {
+    (
+        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, prefix = $prefix:literal, check = $check:expr,
+        { $($field:ident => $core_field:ident),+ $(,)? }
+    ) => {
+        $(#[$doc])*
+        #[pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
+        #[derive(Clone)]
+        pub struct $py {
+            pub(crate) inner: $core,
         }
-    }
-    #[getter]
-    fn max_tilt_rad(&self) -> f64 {
-        self.inner.max_tilt_rad
-    }
-    #[getter]
-    fn max_altitude_loss_m(&self) -> f64 {
-        self.inner.max_altitude_loss_m
-    }
-    #[getter]
-    fn max_speed_m_s(&self) -> f64 {
-        self.inner.max_speed_m_s
-    }
-    #[getter]
-    fn max_rate_rad_s(&self) -> f64 {
-        self.inner.max_rate_rad_s
-    }
+
+        impl $py {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),+];
+        }
+
+        #[pymethods]
+        impl $py {
+            #[new]
+            #[pyo3(signature = (*, $($field=None),+))]
+            fn new($($field: Option<Bound<'_, PyAny>>),+) -> PyResult<Self> {
+                let d = $core::default();
+                let inner = $core {
+                    $($core_field: match $field {
+                        Some(v) => real(concat!($prefix, ".", stringify!($field)), &v)?,
+                        None => d.$core_field,
+                    }),+
+                };
+                let check: fn(&$core) -> rfcore::Result<()> = $check;
+                check(&inner).map_err(to_py_err)?;
+                Ok($py { inner })
+            }
+            $(
+                #[getter]
+                fn $field(&self) -> f64 {
+                    self.inner.$core_field
+                }
+            )+
+            /// The field names, in order.
+            #[classattr]
+            #[pyo3(name = "FIELDS")]
+            fn fields() -> Vec<&'static str> {
+                Self::FIELDS.to_vec()
+            }
+            /// A copy with ``changes`` (validated like a new object).
+            #[pyo3(signature = (**changes))]
+            fn replace<'py>(slf: &Bound<'py, Self>, changes: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
+                settings_replace(slf.as_any(), Self::FIELDS, changes)
+            }
+            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                settings_repr(slf.as_any(), Self::FIELDS)
+            }
+            fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+                settings_eq(slf.as_any(), other, Self::FIELDS)
+            }
+            fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
+                settings_hash(slf.as_any(), Self::FIELDS)
+            }
+            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
+                Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
+            }
+        }
+    };
 }
+
+settings_class!(
+    /// Aerodynamic damping and rotor inertia (`rotorfault.Drag`; the papers give none: all 0 by
+    /// default).
+    PyDrag, "Drag", Drag, prefix = "drag", check = Drag::check,
+    {
+        linear_n_s_m => linear_drag_n_s_m,
+        quadratic_n_s2_m2 => quadratic_drag_n_s2_m2,
+        rotational_n_m_s => rotational_drag_n_m_s,
+        rotor_inertia_kg_m2 => rotor_inertia_kg_m2,
+    }
+);
+
+settings_class!(
+    /// Limits past which a run ends with an event (`rotorfault.DivergenceLimits`; `math.inf`: no
+    /// limit). Their values are checked with the run's settings (`SimulationConfig`).
+    PyDivergenceLimits, "DivergenceLimits", DivergenceLimits, prefix = "limits", check = |_| Ok(()),
+    {
+        max_tilt_rad => max_tilt_rad,
+        max_altitude_loss_m => max_altitude_loss_m,
+        max_speed_m_s => max_speed_m_s,
+        max_rate_rad_s => max_rate_rad_s,
+    }
+);
 
 /// Sensor noise: standard deviation `relative_std |x_i| + absolute_std[i]` on the 12 measured
 /// state components, seeded.

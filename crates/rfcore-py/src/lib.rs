@@ -34,19 +34,19 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;
     module.add_class::<flight::PyVariablePitchPreset>()?;
-    module.add_class::<control::linear::PyOpenLoop>()?;
-    module.add_class::<control::linear::PyLinearFeedback>()?;
-    module.add_class::<control::linear::PyLti>()?;
-    module.add_class::<control::tracking::PyTrackingFeedback>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<allocation::PyAllocationSettings>()?;
     module.add_class::<allocation::PyCertificate>()?;
     module.add_class::<allocation::PySingleAllocation>()?;
-    module.add_class::<control::PyAllocated>()?;
-    module.add_class::<control::ke::PyUniformPassiveFtc>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
-    module.add_class::<control::lanzon::PyLanzonController>()?;
+    // The Rust controllers, declared once in `control::controller_registry!`: each class, and
+    // `CONTROLLERS`, the `(name, class)` pairs Python derives its lists from.
+    let controllers = control::registry(module.py());
+    for (_, class) in &controllers {
+        module.add(class.name()?, class)?;
+    }
+    module.add("CONTROLLERS", pyo3::types::PyTuple::new(module.py(), controllers)?)?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::scale_free_rank, module)?)?;

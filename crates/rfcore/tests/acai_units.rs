@@ -486,7 +486,7 @@ fn failure_tables_flag_every_infeasible_hover() {
         let airframe = preset(name);
         let max_failed = 3.min(airframe.rotor_count());
         for case in failure_table(&airframe, max_failed, AcaiFormula::Eq13).unwrap() {
-            for report in [&case.with_yaw, &case.without_yaw] {
+            for report in [&case.all_axes, &case.give_up_yaw] {
                 total += 1;
                 if report.hover == HoverPoint::Outside {
                     infeasible += 1;

@@ -19,7 +19,12 @@
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
-is the slow path.
+is the slow path. The Rust controllers are declared once, in the bindings, and listed by
+:mod:`~rotorfault.control.registry` (``docs/adding-a-controller.md``).
+
+May import: ``rotorfault.flight`` (a design linearises the simulator's model),
+``rotorfault.allocation``, ``rotorfault.analysis``, ``rotorfault._typing``, ``rotorfault._util``
+and, on first use, ``rotorfault.plotting``; never ``studies``, ``papers`` or ``cli``.
 """
 
 from __future__ import annotations
@@ -38,13 +43,15 @@ from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, robust
+    from . import lanzon, registry, robust
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
-#: ``import rotorfault`` stays light (tests/test_architecture.py).
+#: ``import rotorfault`` stays light (tests/cross/test_architecture.py); and the registry, so that
+#: ``python -m rotorfault.control.registry`` runs it fresh.
 _LAZY = {
+    "registry": ("registry", None),
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
     "LanzonController": ("lanzon", "LanzonController"),
@@ -86,6 +93,7 @@ __all__ = [
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "registry",
     "robust",
     "stabilisability",
 ]

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real
 
 if TYPE_CHECKING:
     from .riccati import LqrDesign

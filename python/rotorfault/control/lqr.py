@@ -29,11 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray, float_array, frozen_array, real
-from ..airframe import Airframe, rotor_labels
+from .._util.convert import FloatArray, float_array, frozen_array, real
+from ..analysis.airframe import Airframe, rotor_labels
 from ..allocation import Allocator
-from ..controllability import acai
-from ..simulation import FixedPitchActuator, Simulator, VariablePitchActuator
+from ..analysis.acai import acai
+from ..flight import FixedPitchActuator, Simulator, VariablePitchActuator
 from .allocated import Allocated
 from .linear import STATE_DIM, STATE_LABELS, STATE_NAMES, LinearFeedback
 from .riccati import LqrDesign, design_lqr

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real
 from .stabilisability import ComplexArray, PbhTest, balance, detectability, stabilisability
 
 #: Largest accepted Riccati residual relative to the equation's terms (:func:`riccati_residual`):

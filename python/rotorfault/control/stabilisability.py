@@ -34,8 +34,8 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray, float_array, frozen_array
-from ..controllability import RANK_RTOL
+from .._util.convert import FloatArray, float_array, frozen_array
+from ..analysis.controllability import RANK_RTOL
 
 ComplexArray = npt.NDArray[np.complex128]
 

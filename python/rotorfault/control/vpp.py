@@ -35,9 +35,9 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array, real
-from ..airframe import Airframe
-from ..simulation import Drag, Simulator, VariablePitchActuator
+from .._util.convert import FloatArray, float_array, frozen_array, real
+from ..analysis.airframe import Airframe
+from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
 from .linear import STATE_NAMES as _STATE_NAMES
 from .lqr import linearize as _linearize

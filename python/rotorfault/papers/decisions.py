@@ -39,9 +39,9 @@ _LANZON_PAPER = "python/rotorfault/papers/lanzon.py"
 #: Where each decision is made: the README's "gap" cell -> repository paths.
 DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Du uses `+-10^6` for infinity": (_ACAI,),
-    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/controllability.py"),
+    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/analysis/acai.py"),
     "numerical zero, rank, units": (_ACAI, "crates/rfcore/src/analysis/mod.rs", _CONTROLLABILITY),
-    "the hover verdict": (_ACAI, "python/rotorfault/controllability.py", "python/rotorfault/scan.py"),
+    "the hover verdict": (_ACAI, "python/rotorfault/analysis/acai.py", "python/rotorfault/studies/scan.py"),
     "null vectors": (_ACAI,),
     '"give up yaw"': (_CONTROLLABILITY, _ACAI),
     "Ke's yaw row `c[1, -1, 1, -1]` is rank 3 with Remark 2's angles; `l = 0.0125`": (_KE_PRESET, "python/rotorfault/presets/README.md"),
@@ -54,13 +54,13 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "gyroscopic moment (Lanzon eq. (5))": (_VEHICLE,),
     "drag, `k_r`, `I_R`": (_VEHICLE,),
     "fault timing": ("crates/rfcore/src/flight/fault_schedule.rs",),
-    "actuator start": (f"{_SIMULATION}/driver.rs", "python/rotorfault/simulation.py"),
+    "actuator start": (f"{_SIMULATION}/driver.rs", "python/rotorfault/flight/simulator.py"),
     "divergence": (f"{_SIMULATION}/divergence.rs", _SIM_STEP),
     "noise on zero signals": (_SIM_NOISE,),
     "run size": (_SIM_CONFIG,),
     "several optimal allocations (more rotors than weighted axes, a zero weight)": (_ACTIVE_SET, _ALLOCATION),
     "allocation rank": (_ALLOCATION, _SCALING, _FACTORISATION),
-    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/test_allocation.py"),
+    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/allocation/test_allocation.py"),
     "Ke's printed command law (18)": (_KE_RS, _KE_PY),
     "Ke's filters": (_KE_RS,),
     "spin damping, drag": ("python/rotorfault/presets/ftc", _KE_PY),
@@ -88,7 +88,7 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
         "python/rotorfault/presets/wang-standard-fixed-pitch.toml",
     ),
     "Euler singularity": (_LQR,),
-    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/scan.py"),
+    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/studies/scan.py"),
 }
 
 

@@ -268,11 +268,9 @@ def write_reproduce(
     ``force``, a directory that is not a report never. ``bench_directory`` defaults to the source
     tree's ``benches/results``; ``providers`` overrides the section providers by paper key (None:
     not landed), for tests. ``progress(text)`` is called before each section."""
-    from importlib.metadata import PackageNotFoundError, version
+    from ._report import check_report_directory, package_version, report_directory
 
-    from .._output import check_output_directory, output_directory
-
-    out = check_output_directory("out", out_dir, force=force)
+    out = check_report_directory("out", out_dir, force=force)
     if bench_directory is None:  # the source tree's results, when there are any
         default = default_bench_directory()
         benches_dir = default if default is not None and default.is_dir() else None
@@ -280,16 +278,11 @@ def write_reproduce(
         benches_dir = Path(bench_directory)
     benches = bench_results(benches_dir)
     decision_rows = decisions()
-    try:
-        package_version = version("rotorfault")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        package_version = "unknown"
-    manifest = {"generator": "rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)",
-                "command": command or "rotorfault.papers.reproduce.write_reproduce", "version": package_version,
-                "quick": quick}
     start = time.perf_counter()
     result = ReproduceResult(out / "index.html")
-    with output_directory(out, manifest) as tmp:
+    shown_command = command or "rotorfault.papers.reproduce.write_reproduce"
+    with report_directory(out, generator="rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)", command=command,
+                          default_command=shown_command, quick=quick) as tmp:
         for paper in PAPERS:
             chosen = providers[paper.key] if providers is not None and paper.key in providers else provider(paper)
             if progress is not None:
@@ -300,7 +293,7 @@ def write_reproduce(
                 result.sections.append(chosen(tmp, quick=quick))
         result.run_time_s = time.perf_counter() - start
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
-                      command=str(manifest["command"]), version=package_version,
+                      command=shown_command, version=package_version(),
                       bench_directory=_shown_path(benches_dir))
         (tmp / "index.html").write_text(html, encoding="utf-8")
         (tmp / "numbers.json").write_text(json.dumps(report_numbers(result.sections), indent=1, allow_nan=True) + "\n",

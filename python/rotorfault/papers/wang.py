@@ -41,17 +41,17 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._convert import FloatArray, real
+from .._util.convert import FloatArray, real
 from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback
-from ..simulation import Noise, Simulator, State, Trajectory
-from .. import vpp
+from ..flight import Noise, Simulator, State, Trajectory
+from ..control import vpp
+from ..plotting.timeseries import plot_wang_flights as plot_flight
 
 if TYPE_CHECKING:
     from ..control.stabilisability import PbhTest
     from ._numbers import PaperNumber
     from ._report import ReportSection
-    from matplotlib.figure import Figure
 
 #: Scenario 1 (a decision: the paper prints no numbers).
 CIRCLE_RADIUS_M = 2.0
@@ -199,63 +199,6 @@ def fly(
     )
 
 
-def plot_flight(flights: list[WangFlight], path: str | None = None) -> Figure:
-    """Figs. 2-7 in one page per scenario: the 3-D path against the reference (left), position,
-    attitude and propeller commands against time (right); a fixed-pitch flight, if given, dashed
-    in the path panel with where it was lost."""
-    from .._output import new_figure, save_figure
-
-    first = flights[0]
-    fig = new_figure(figsize=(13, 9), layout="constrained")
-    grid = fig.add_gridspec(4, 2, width_ratios=[1.1, 1.0])
-    ax3 = fig.add_subplot(grid[:, 0], projection="3d")
-    ref = first.reference
-    ax3.plot(ref[:, 0], ref[:, 1], -ref[:, 2], color="0.6", lw=2.5, label="reference")
-    for k, f in enumerate(flights):
-        p = f.trajectory.position
-        label = f"{f.vehicle}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
-        ax3.plot(p[:, 0], p[:, 1], -p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
-    ax3.set_xlabel("x (m)")
-    ax3.set_ylabel("y (m)")
-    ax3.set_zlabel("altitude (m)")
-    ax3.legend(loc="upper left", fontsize=9)
-    run = first.trajectory
-    t = run.t
-    styles = ["-", "--", ":"]
-    ax = fig.add_subplot(grid[0, 1])
-    for j, name in enumerate(["x", "y", "altitude"]):
-        sign = -1.0 if j == 2 else 1.0
-        ax.plot(t, sign * run.position[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-        ax.plot(t, sign * ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
-    ax.set_ylabel("position (m)\n(thin: reference)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax = fig.add_subplot(grid[1, 1], sharex=ax)
-    for j, name in enumerate(["roll", "pitch", "yaw"]):
-        ax.plot(t, run.euler[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-    ax.plot(t, ref[:, 8], color="C2", lw=0.8, alpha=0.6)
-    ax.set_ylabel("attitude (rad)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax_w = fig.add_subplot(grid[2, 1], sharex=ax)
-    ax_a = fig.add_subplot(grid[3, 1], sharex=ax)
-    for i in range(1, 4):
-        ax_w.plot(t, run.rotor_command[:, 2 * i], color=f"C{i}", linestyle=styles[i - 1], label=f"omega {i + 1}")
-        ax_a.plot(t, run.rotor_command[:, 2 * i + 1], color=f"C{i}", linestyle=styles[i - 1], label=f"alpha {i + 1}")
-    ax_w.set_ylabel("speed command\n(paper's units)")
-    ax_a.set_ylabel("pitch command (rad)")
-    ax_a.set_xlabel("time (s)")
-    for a in (ax_w, ax_a):
-        a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    for a in fig.axes[1:]:
-        a.grid(True, alpha=0.3)
-    fig.suptitle(
-        f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed: final error "
-        f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad", fontsize=11,
-    )
-    if path is not None:
-        save_figure(fig, path)
-    return fig
-
-
 #: The comparison's vehicles: (label, VPP or fixed-pitch airframe preset, None for the VPP).
 LAYOUTS: tuple[tuple[str, str | None], ...] = (
     ("VPP (thrust in [-13, 13] N)", None),
@@ -295,7 +238,7 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
     """The VPP and the two fixed-pitch layouts, healthy and with propeller 1 failed (module
     notes): the comparison in place of a fixed-pitch flight."""
     from ..control.stabilisability import stabilisability
-    from ..controllability import acai
+    from ..analysis.acai import acai
 
     wang = vpp.preset("wang")
     rows = []
@@ -308,7 +251,7 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
                 at = vpp.fixed_pitch_trim(vehicle, failed=failed)
             efficiency = np.ones(4)
             efficiency[[i - 1 for i in failed]] = 0.0
-            index = float(acai(vehicle.airframe.with_efficiency(efficiency)))
+            index = float(acai(vehicle.airframe.with_efficiency(efficiency), formula="eq13"))
             if at.residual > REST_RESIDUAL:
                 rows.append(LayoutCase(label, failed, at.residual, None, None, None, index))
                 continue
@@ -327,8 +270,11 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
 def comparison_table(cases: list[LayoutCase] | None = None) -> list[str]:
     """Markdown: :func:`fixed_pitch_comparison` (hover at rest, rank, stabilisable and the modes
     no input moves, the uncontrollable directions, ACAI)."""
+    from ..analysis.acai import acai_label
+
     rows = [
-        "| vehicle | propeller 1 | hover at rest | rank | stabilisable (PBH) | uncontrollable directions | ACAI |",
+        "| vehicle | propeller 1 | hover at rest | rank | stabilisable (PBH) | uncontrollable directions | "
+        f"{acai_label('eq13')} |",
         "|---|---|---|---|---|---|---|",
     ]
     for c in fixed_pitch_comparison() if cases is None else cases:
@@ -377,7 +323,7 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     fixed-pitch comparison table, the speed sweep, the flights), one figure per scenario
     (``scenario-<n>.png``) and ``manifest.json``.
     ``quick``: 20 s flights instead of the paper's 60 s."""
-    from .._output import check_output_directory, output_directory, write_text
+    from .._util.output import check_output_directory, output_directory, write_text
 
     check_output_directory("out_dir", out_dir, force=force)
     duration = 20.0 if quick else DURATION_S

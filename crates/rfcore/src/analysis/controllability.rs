@@ -337,13 +337,13 @@ pub fn numerical_rank(matrix: &DMatrix<f64>) -> usize {
     sv.iter().filter(|&&s| s > RANK_RTOL * largest).count()
 }
 
-/// One row of a failure table: a set of fully failed rotors (0-based) and the verdicts with and
-/// without the yaw axis.
+/// One row of a failure table: a set of fully failed rotors (indices from 0 here; Python numbers
+/// them from 1) and the verdicts with all four axes and giving up yaw (thrust, roll, pitch).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FailureCase {
     pub failed: Vec<usize>,
-    pub with_yaw: ControllabilityReport,
-    pub without_yaw: ControllabilityReport,
+    pub all_axes: ControllabilityReport,
+    pub give_up_yaw: ControllabilityReport,
     /// The full-wrench test (n = 6), for fully actuated airframes only (nominal 6 x m matrix of
     /// rank 6); `None` for the others, where it would always read rank deficient.
     pub wrench: Option<ControllabilityReport>,
@@ -383,8 +383,8 @@ pub fn failure_table(
             format!("{total} failure combinations exceed the limit of {MAX_FAILURE_CASES}"),
         ));
     }
-    let with_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
-    let without_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
+    let all_axes = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
+    let give_up_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
     let wrench = if is_fully_actuated(airframe) {
         Some(ControllabilityAnalysis::new(airframe, ControlAxes::Wrench)?)
     } else {
@@ -401,8 +401,8 @@ pub fn failure_table(
                 eta[k] = 0.0;
             }
             Ok(FailureCase {
-                with_yaw: with_yaw.report(&eta, formula)?,
-                without_yaw: without_yaw.report(&eta, formula)?,
+                all_axes: all_axes.report(&eta, formula)?,
+                give_up_yaw: give_up_yaw.report(&eta, formula)?,
                 wrench: match &wrench {
                     Some(analysis) => Some(analysis.report(&eta, formula)?),
                     None => None,

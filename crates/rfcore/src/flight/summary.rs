@@ -19,7 +19,7 @@
 //! end, reached no later than one window before the end). Only the window (and the sample
 //! before it) is buffered to decide that.
 //!
-//! A test in `tests/test_campaign.py` checks every field against the same quantities computed
+//! A test in `tests/studies/test_campaign.py` checks every field against the same quantities computed
 //! from full trajectories.
 
 use nalgebra::Vector3;
