@@ -207,7 +207,10 @@ mod tests {
         for (cut, p) in [(R, 2.0 * (1.0 - normal_cdf(R))), (4.0, 6.334e-5)] {
             let hits = samples.iter().filter(|x| x.abs() > cut).count() as f64;
             let expect = p * n as f64;
-            assert!((hits - expect).abs() < 4.0 * expect.sqrt(), "|x| > {cut}: {hits} vs {expect}");
+            assert!(
+                (hits - expect).abs() < 4.0 * expect.sqrt(),
+                "|x| > {cut}: {hits} vs {expect}"
+            );
         }
         let mut again = Gaussian::new(7);
         assert!(samples[..100].iter().all(|&x| x == again.sample()));
@@ -223,7 +226,10 @@ mod tests {
             assert!(c.abs() < 4.0 / (n as f64).sqrt(), "lag {lag}: {c}");
         }
         // Squares too (the layer index and the value come from one word).
-        let c2 = xs.windows(2).map(|w| (w[0] * w[0] - 1.0) * (w[1] * w[1] - 1.0)).sum::<f64>()
+        let c2 = xs
+            .windows(2)
+            .map(|w| (w[0] * w[0] - 1.0) * (w[1] * w[1] - 1.0))
+            .sum::<f64>()
             / (n - 1) as f64
             / 2.0;
         assert!(c2.abs() < 4.0 / (n as f64).sqrt(), "{c2}");
@@ -234,7 +240,11 @@ mod tests {
         // Neighbouring seeds and neighbouring stream numbers: the SplitMix64 states of seeds s
         // and s + k * gamma would be shifted copies of one sequence; the mixed starts are not.
         let n = 100_000;
-        let pairs = [((1, 0), (1, 1)), ((1, 0), (2, 0)), ((0, 3), (GOLDEN_GAMMA, 3))];
+        let pairs = [
+            ((1, 0), (1, 1)),
+            ((1, 0), (2, 0)),
+            ((0, 3), (GOLDEN_GAMMA, 3)),
+        ];
         for ((sa, ka), (sb, kb)) in pairs {
             let mut a = Gaussian::stream(sa, ka);
             let mut b = Gaussian::stream(sb, kb);
@@ -242,7 +252,10 @@ mod tests {
             let ys: Vec<f64> = (0..n).map(|_| b.sample()).collect();
             let corr = xs.iter().zip(&ys).map(|(x, y)| x * y).sum::<f64>() / n as f64;
             // 4 standard errors of a zero correlation: 4 / sqrt(n) = 0.013.
-            assert!(corr.abs() < 0.013, "streams ({sa},{ka}) and ({sb},{kb}): {corr}");
+            assert!(
+                corr.abs() < 0.013,
+                "streams ({sa},{ka}) and ({sb},{kb}): {corr}"
+            );
             // Not a shifted copy either: no sample of the first 1000 of one appears in the other.
             let set: std::collections::HashSet<u64> =
                 xs[..1000].iter().map(|x| x.to_bits()).collect();

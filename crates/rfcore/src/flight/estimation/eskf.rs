@@ -60,7 +60,7 @@ pub(crate) struct Kinematics {
 pub(crate) struct Step {
     pub dt_s: f64,
     /// Body to world at the start.
-    pub rotation: Matrix3<f64>,
+    pub attitude: UnitQuaternion<f64>,
     /// Corrected specific force at the start, body axes.
     pub force: Vector3<f64>,
     /// The step's rotation `Exp(omega dt)` (body at the end in body at the start).
@@ -100,26 +100,8 @@ impl NominalState {
     /// the exact exponential of the midpoint rate, velocity by the trapezoid of the world-frame
     /// acceleration and position by its exact double integral (both exact when the world-frame
     /// acceleration is linear in time over the step); with the step's linearisation.
-    pub(crate) fn propagate(
-        &self,
-        a: &ImuSample,
-        b: &ImuSample,
-        t0: f64,
-        t1: f64,
-        kin: &Kinematics,
-    ) -> (NominalState, Step) {
-        let (next, step) = self.advance(a, b, t0, t1, kin);
-        let step = Step {
-            rotation: self.attitude.to_rotation_matrix().into_inner(),
-            ..step
-        };
-        (next, step)
-    }
-
-    /// [`NominalState::propagate`] without the start attitude's matrix (the output predictor
-    /// needs only the state; the same arithmetic, so both give the same state bit for bit).
     #[inline]
-    pub(crate) fn advance(
+    pub(crate) fn propagate(
         &self,
         a: &ImuSample,
         b: &ImuSample,
@@ -147,7 +129,7 @@ impl NominalState {
         };
         let step = Step {
             dt_s: dt,
-            rotation: Matrix3::identity(),
+            attitude: self.attitude,
             force: force0,
             increment,
             rate_end: rate1,
@@ -238,8 +220,9 @@ impl Block {
 /// `M` as they are).
 pub(crate) fn propagate_covariance(p: &mut Covariance, step: &Step, noise: &ProcessNoise) {
     let dt = step.dt_s;
-    let a = -(step.rotation * skew(&step.force)) * dt;
-    let c = -step.rotation * dt;
+    let rotation = step.attitude.to_rotation_matrix().into_inner();
+    let a = -(rotation * skew(&step.force)) * dt;
+    let c = -rotation * dt;
     let phi = step.increment.to_rotation_matrix().into_inner().transpose();
     let d = -right_jacobian(&step.increment.scaled_axis()) * dt;
 
@@ -368,13 +351,14 @@ mod tests {
     /// F of the module docs, built densely (the independent reference for the block product).
     fn dense_f(step: &Step) -> Covariance {
         let dt = step.dt_s;
+        let rotation = step.attitude.to_rotation_matrix().into_inner();
         let mut f = Covariance::identity();
         f.fixed_view_mut::<3, 3>(POS, VEL)
             .copy_from(&(Matrix3::identity() * dt));
         f.fixed_view_mut::<3, 3>(VEL, ATT)
-            .copy_from(&(-(step.rotation * skew(&step.force)) * dt));
+            .copy_from(&(-(rotation * skew(&step.force)) * dt));
         f.fixed_view_mut::<3, 3>(VEL, ACCEL_BIAS)
-            .copy_from(&(-step.rotation * dt));
+            .copy_from(&(-rotation * dt));
         let phi = step.increment.to_rotation_matrix().into_inner().transpose();
         f.fixed_view_mut::<3, 3>(ATT, ATT).copy_from(&phi);
         f.fixed_view_mut::<3, 3>(ATT, GYRO_BIAS)
@@ -386,9 +370,7 @@ mod tests {
     fn block_propagation_equals_the_dense_product() {
         let step = Step {
             dt_s: 2e-3,
-            rotation: UnitQuaternion::from_euler_angles(0.3, -0.4, 2.0)
-                .to_rotation_matrix()
-                .into_inner(),
+            attitude: UnitQuaternion::from_euler_angles(0.3, -0.4, 2.0),
             force: Vector3::new(0.5, -1.0, -9.6),
             increment: UnitQuaternion::from_scaled_axis(Vector3::new(0.01, -0.02, 0.06)),
             rate_end: Vector3::zeros(),

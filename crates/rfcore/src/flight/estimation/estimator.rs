@@ -494,7 +494,7 @@ impl Estimator {
         if let Some(mut a) = self.horizon_sample {
             let mut t0 = self.horizon_time_s;
             for b in &self.buffer {
-                x = x.advance(&a, b, t0, b.time_s, &self.kinematics).0;
+                x = x.propagate(&a, b, t0, b.time_s, &self.kinematics).0;
                 a = *b;
                 t0 = b.time_s;
             }

@@ -160,28 +160,32 @@ impl ImuProfile {
     /// Every rule, naming the field (`imu.gyro.noise_density_rad_s_rt_hz`, ...).
     pub fn check(&self) -> Result<()> {
         require_positive("imu.rate_hz", self.rate_hz)?;
-        let g = &self.gyro;
-        require_non_negative(
-            "imu.gyro.noise_density_rad_s_rt_hz",
-            g.noise_density_rad_s_rt_hz,
-        )?;
-        require_non_negative("imu.gyro.bias_walk_rad_s_rt_s", g.bias_walk_rad_s_rt_s)?;
-        require_non_negative("imu.gyro.turn_on_bias_rad_s", g.turn_on_bias_rad_s)?;
-        require_non_negative("imu.gyro.scale_error", g.scale_error)?;
-        require_non_negative("imu.gyro.cross_axis", g.cross_axis)?;
+        let (g, a) = (&self.gyro, &self.accel);
+        let non_negative = [
+            (
+                "imu.gyro.noise_density_rad_s_rt_hz",
+                g.noise_density_rad_s_rt_hz,
+            ),
+            ("imu.gyro.bias_walk_rad_s_rt_s", g.bias_walk_rad_s_rt_s),
+            ("imu.gyro.turn_on_bias_rad_s", g.turn_on_bias_rad_s),
+            ("imu.gyro.scale_error", g.scale_error),
+            ("imu.gyro.cross_axis", g.cross_axis),
+            (
+                "imu.accel.noise_density_m_s2_rt_hz",
+                a.noise_density_m_s2_rt_hz,
+            ),
+            ("imu.accel.bias_walk_m_s2_rt_s", a.bias_walk_m_s2_rt_s),
+            ("imu.accel.turn_on_bias_m_s2", a.turn_on_bias_m_s2),
+            ("imu.accel.scale_error", a.scale_error),
+            ("imu.accel.cross_axis", a.cross_axis),
+            ("imu.accel.vibration.rms_m_s2", a.vibration.rms_m_s2),
+        ];
+        for (field, value) in non_negative {
+            require_non_negative(field, value)?;
+        }
         require_positive("imu.gyro.range_rad_s", g.range_rad_s)?;
-        let a = &self.accel;
-        require_non_negative(
-            "imu.accel.noise_density_m_s2_rt_hz",
-            a.noise_density_m_s2_rt_hz,
-        )?;
-        require_non_negative("imu.accel.bias_walk_m_s2_rt_s", a.bias_walk_m_s2_rt_s)?;
-        require_non_negative("imu.accel.turn_on_bias_m_s2", a.turn_on_bias_m_s2)?;
-        require_non_negative("imu.accel.scale_error", a.scale_error)?;
-        require_non_negative("imu.accel.cross_axis", a.cross_axis)?;
         require_positive("imu.accel.range_m_s2", a.range_m_s2)?;
         let v = &a.vibration;
-        require_non_negative("imu.accel.vibration.rms_m_s2", v.rms_m_s2)?;
         if v.is_on() {
             require_positive("imu.accel.vibration.frequency_hz", v.frequency_hz)?;
             require_positive("imu.accel.vibration.bandwidth_hz", v.bandwidth_hz)?;

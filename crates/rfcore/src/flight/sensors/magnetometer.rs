@@ -120,6 +120,7 @@ impl Magnetometer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::flight::sensors::{assert_rules_name_fields, RuleCase};
     use nalgebra::UnitQuaternion;
 
     #[test]
@@ -150,26 +151,17 @@ mod tests {
 
     #[test]
     fn rules_name_the_field() {
-        let mut p = MagnetometerProfile::st_lis3mdl();
-        p.earth_field_ut = Vector3::zeros();
-        assert!(p
-            .check()
-            .unwrap_err()
-            .to_string()
-            .starts_with("magnetometer.earth_field_ut:"));
-        let mut p = MagnetometerProfile::st_lis3mdl();
-        p.rate_hz = 0.0;
-        assert!(p
-            .check()
-            .unwrap_err()
-            .to_string()
-            .starts_with("magnetometer.rate_hz:"));
-        let mut p = MagnetometerProfile::st_lis3mdl();
-        p.noise_ut = f64::NAN;
-        assert!(p
-            .check()
-            .unwrap_err()
-            .to_string()
-            .starts_with("magnetometer.noise_ut:"));
+        let cases: &[RuleCase<MagnetometerProfile>] = &[
+            ("magnetometer.rate_hz", |p| p.rate_hz = 0.0),
+            ("magnetometer.noise_ut", |p| p.noise_ut = f64::NAN),
+            ("magnetometer.bias_ut", |p| p.bias_ut = -1.0),
+            ("magnetometer.earth_field_ut[1]", |p| {
+                p.earth_field_ut.y = f64::INFINITY
+            }),
+            ("magnetometer.earth_field_ut", |p| {
+                p.earth_field_ut = Vector3::zeros()
+            }),
+        ];
+        assert_rules_name_fields(&MagnetometerProfile::default(), cases, |p| p.check());
     }
 }

@@ -153,6 +153,8 @@ mod tests {
         let f = AnalyticMotion::hover()
             .imu_truth_at(3.0)
             .specific_force_m_s2;
-        assert!((f - Vector3::new(0.0, 0.0, -crate::airframe::DEFAULT_GRAVITY_M_S2)).norm() < 1e-15);
+        assert!(
+            (f - Vector3::new(0.0, 0.0, -crate::airframe::DEFAULT_GRAVITY_M_S2)).norm() < 1e-15
+        );
     }
 }

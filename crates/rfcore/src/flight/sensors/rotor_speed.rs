@@ -157,6 +157,7 @@ impl RotorSpeedSensor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::flight::sensors::{assert_rules_name_fields, RuleCase};
 
     #[test]
     fn dshot_encoding_matches_the_frame_format() {
@@ -224,19 +225,13 @@ mod tests {
 
     #[test]
     fn rules_name_the_field() {
-        let mut p = RotorSpeedProfile::bidirectional_dshot();
-        p.latency_s = -1.0;
-        assert!(p
-            .check()
-            .unwrap_err()
-            .to_string()
-            .starts_with("rotor_speed.latency_s:"));
-        let mut p = RotorSpeedProfile::bidirectional_dshot();
-        p.rate_hz = f64::INFINITY;
-        assert!(p
-            .check()
-            .unwrap_err()
-            .to_string()
-            .starts_with("rotor_speed.rate_hz:"));
+        let cases: &[RuleCase<RotorSpeedProfile>] = &[
+            ("rotor_speed.rate_hz", |p| p.rate_hz = f64::INFINITY),
+            ("rotor_speed.latency_s", |p| p.latency_s = -1.0),
+            ("rotor_speed.relative_noise", |p| {
+                p.relative_noise = f64::NAN
+            }),
+        ];
+        assert_rules_name_fields(&RotorSpeedProfile::default(), cases, |p| p.check());
     }
 }
