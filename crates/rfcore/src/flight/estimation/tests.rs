@@ -780,3 +780,39 @@ fn every_setting_rule_names_its_field() {
     };
     open.check().unwrap();
 }
+
+#[test]
+fn a_measurement_older_than_the_horizon_is_counted_late_not_fused() {
+    // No fusion delay: a fix valid 10 ms before the newest IMU sample cannot be fused at its
+    // time of validity any more; one valid now is.
+    let motion = AnalyticMotion::hover();
+    let settings = EstimatorSettings {
+        fusion_delay_s: 0.0,
+        ..EstimatorSettings::default()
+    };
+    let mut estimator = Estimator::new(settings, &motion.state_at(0.0)).unwrap();
+    let mut imu = crate::flight::sensors::Imu::new(ImuProfile::default(), 2).unwrap();
+    for k in 0..=20 {
+        let s = imu.sample(&motion.imu_truth_at(k as f64 * 1e-3));
+        estimator.push_imu(&s).unwrap();
+    }
+    let fix = |valid_at_s: f64| crate::flight::sensors::PositionSample {
+        valid_at_s,
+        arrives_at_s: 0.02,
+        position_m: motion.state_at(valid_at_s).position_m,
+        velocity_m_s: None,
+        attitude: None,
+    };
+    estimator.push_position(&fix(0.010));
+    estimator.push_position(&fix(0.0205));
+    let s = imu.sample(&motion.imu_truth_at(0.021));
+    estimator.push_imu(&s).unwrap();
+    assert_eq!(
+        estimator.counts(),
+        FusionCounts {
+            fused: 1,
+            rejected: 0,
+            late: 1
+        }
+    );
+}
