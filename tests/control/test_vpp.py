@@ -238,8 +238,8 @@ def test_printed_numbers_for_the_report() -> None:
 @pytest.mark.parametrize(
     ("field", "value", "error", "message"),
     [
-        ("drag", rf.Drag(linear_n_s_m=-1.0), ValueError, r"^drag.linear_n_s_m: must be >= 0"),
-        ("drag", rf.Drag(linear_n_s_m=math.inf), ValueError, r"^drag.linear_n_s_m: must be finite"),
+        ("drag", {"linear_n_s_m": -1.0}, ValueError, r"^drag.linear_n_s_m: must be >= 0"),
+        ("drag", {"linear_n_s_m": math.inf}, ValueError, r"^drag.linear_n_s_m: must be finite"),
         ("actuator.k", (0.0, K2, K3, K4), ValueError, r"^actuator.k: k1 .* must be > 0, got 0.0"),
         ("actuator.k", (math.nan, K2, K3, K4), ValueError, r"^actuator.k1: must be finite"),
         ("actuator.k", (K1, -K2, K3, K4), ValueError, r"^actuator.k: k2 and k3 .* must be >= 0"),
@@ -256,7 +256,9 @@ def test_vpp_vehicle_is_checked_once_when_built(wang: vpp.VppVehicle, field: str
     import dataclasses
 
     with pytest.raises(error, match=message):
-        if field.startswith("actuator."):
+        if field == "drag":  # Drag is the core's class: its values are checked when it is made
+            dataclasses.replace(wang, drag=rf.Drag(**value))  # type: ignore[arg-type]
+        elif field.startswith("actuator."):
             dataclasses.replace(wang, actuator=dataclasses.replace(wang.actuator, **{field.split(".")[1]: value}))
         else:
             dataclasses.replace(wang, **{field: value})

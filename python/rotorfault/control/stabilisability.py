@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array
-from ..analysis.controllability import RANK_RTOL
+from ..analysis.acai import RANK_RTOL
 
 ComplexArray = npt.NDArray[np.complex128]
 
