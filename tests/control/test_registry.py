@@ -67,7 +67,7 @@ def test_the_recipe_was_followed_for_every_registered_controller() -> None:
         for path in paths:
             body = (ROOT / path).read_text(encoding="utf-8")
             assert class_name in body or registry.kebab(class_name) in body, f"{path} does not name {class_name}"
-        assert f"impl crate::control::ControllerClass for Py{class_name}" in (ROOT / paths[1]).read_text() or (
+        assert f"impl crate::control::class::ControllerClass for Py{class_name}" in (ROOT / paths[1]).read_text() or (
             f"impl ControllerClass for Py{class_name}" in (ROOT / paths[1]).read_text()
         ), f"{paths[1]}: no ControllerClass impl for Py{class_name}"
     stub = (ROOT / "python" / "rotorfault" / "_rfcore.pyi").read_text(encoding="utf-8")

@@ -181,7 +181,7 @@ impl PyFtcPreset {
     }
 }
 
-impl crate::control::ControllerClass for PyUniformPassiveFtc {
+impl crate::control::class::ControllerClass for PyUniformPassiveFtc {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }

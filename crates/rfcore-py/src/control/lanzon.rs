@@ -110,7 +110,7 @@ impl PyLanzonController {
     }
 }
 
-impl crate::control::ControllerClass for PyLanzonController {
+impl crate::control::class::ControllerClass for PyLanzonController {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }

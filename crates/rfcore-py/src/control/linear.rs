@@ -83,19 +83,19 @@ impl PyLti {
     }
 }
 
-impl crate::control::ControllerClass for PyOpenLoop {
+impl crate::control::class::ControllerClass for PyOpenLoop {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }
 }
 
-impl crate::control::ControllerClass for PyLinearFeedback {
+impl crate::control::class::ControllerClass for PyLinearFeedback {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }
 }
 
-impl crate::control::ControllerClass for PyLti {
+impl crate::control::class::ControllerClass for PyLti {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }

@@ -2,6 +2,7 @@
 //! argument into a core controller (`boxed`), a Python callable as the slow path, the allocating
 //! controller and replay. Translation only.
 
+pub(crate) mod class;
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
@@ -21,6 +22,7 @@ use rfcore::RfError;
 
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
+pub(crate) use class::ControllerClass;
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
@@ -85,11 +87,6 @@ impl Controller for CallableController {
     }
 }
 
-/// A Python class of a Rust controller: it gives the simulator a fresh core controller per run.
-/// Implemented once by each class of the registry below.
-pub(crate) trait ControllerClass {
-    fn core(&self, py: Python<'_>) -> PyResult<Box<dyn Controller>>;
-}
 
 /// The one registry of the Rust controllers the simulator runs (in a loop or a batch): each line
 /// `Variant(PyClass) = "kebab-name"` (the name is the class name in kebab case) makes the

@@ -41,7 +41,7 @@ impl PyTrackingFeedback {
     }
 }
 
-impl crate::control::ControllerClass for PyTrackingFeedback {
+impl crate::control::class::ControllerClass for PyTrackingFeedback {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
         Ok(Box::new(self.inner.clone()))
     }
