@@ -30,7 +30,7 @@ use crate::error::{require_finite, Result, RfError};
 use crate::flight::actuator::Actuators;
 pub use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
 use crate::flight::vehicle::{RotorTotals, Vehicle};
-use crate::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
+use crate::state::{state_from_vector, state_vector, ControllerInput, RigidBodyState, STATE_DIM};
 
 /// Most control steps one run records (about 2 GB of trajectory).
 pub const MAX_CONTROL_STEPS: usize = 10_000_000;
@@ -709,6 +709,8 @@ pub fn simulate_observed(
     let nan_row = [f64::NAN; STATE_DIM];
     let instant = actuators.is_instant();
     let constant_wind = config.wind_profile.is_empty();
+    let reads_samples = controller.reads_samples();
+    let mut rotor_thrust = vec![0.0; m];
 
     schedule.apply_due(0.0, &mut efficiency);
     if let Some(reason) = limits.reason(&state) {
@@ -745,7 +747,26 @@ pub fn simulate_observed(
             }
             _ => state,
         };
-        controller.command(t, &measured, &mut command)?;
+        // Raw samples (truth, or the noisy rates) only for a controller that reads them.
+        let input = if reads_samples {
+            for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
+                *thrust = actuators.output(i, efficiency[i]).thrust_n;
+            }
+            let totals = rotor_totals(vehicle, &actuators, actuators.state(), &efficiency);
+            ControllerInput {
+                state: &measured,
+                gyro_rad_s: Some(measured.omega_rad_s),
+                specific_force_m_s2: Some(vehicle.specific_force(
+                    &state,
+                    &totals,
+                    &config.wind_at(t),
+                )),
+                rotor_thrust_n: Some(&rotor_thrust),
+            }
+        } else {
+            ControllerInput::state_only(&measured)
+        };
+        controller.command_with(t, &input, &mut command)?;
         let finite = command.iter().all(|c| c.is_finite());
         observer.step(t, &state, &command, &efficiency);
         // Every `every`-th step, the last one, and a step whose command ends the run.
