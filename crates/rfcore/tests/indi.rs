@@ -1,42 +1,46 @@
 //! INDI fault-tolerant control (`rfcore::control::indi`) in closed loop with the simulator: the
 //! one-step prediction of the angular acceleration against the simulator's, and flights through
 //! rotor failures with the verdict taken over the whole window.
+//!
+//! Verdict (issue 30): a flight *holds* when, from 5 s after the failure to the end (25 s), it stays
+//! within 1 m altitude and 3 m horizontal of the reference, and never touches the ground (10 m
+//! below the start) nor diverges. Failures at 3 s, the controller told at once unless stated.
 
 use nalgebra::Vector3;
 
-use rfcore::control::indi::{DetectedFailure, IndiController, IndiGains, Setpoint};
+use rfcore::control::indi::{DetectedFailure, IndiController, IndiGains, IndiStep, Setpoint};
 use rfcore::control::Controller;
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag};
 use rfcore::flight::simulation::{simulate, RotorFault, SimulationConfig, Trajectory};
-use rfcore::flight::vehicle::{Drag, Vehicle};
-use rfcore::state::RigidBodyState;
-use rfcore::Airframe;
+use rfcore::flight::vehicle::{Drag, RotorTotals, Vehicle};
+use rfcore::state::{ControllerInput, RigidBodyState};
+use rfcore::{Airframe, Result};
 
-/// The vehicle model a preset flies in these tests. Ke's and Lanzon's are their presets' (ke-hil;
-/// `LanzonVehicle`'s defaults); the hexa- and octocopters (Du's Table I, no aerodynamics given)
-/// get Ke's rotor lag and drags scaled to their mass, stated here.
+const DT: f64 = 1.0 / 400.0;
+const FAULT_S: f64 = 3.0;
+const DURATION_S: f64 = 25.0;
+/// The verdict window starts this long after the failure.
+const SETTLE_S: f64 = 5.0;
+const ALTITUDE_M: f64 = 10.0;
+
+/// The vehicle a preset flies here. Ke's and Lanzon's are their presets' (`ke-hil`; the defaults of
+/// `LanzonVehicle`: `k_r = m g d / 2.7`, rotor inertia 3e-5 kg m^2, 50 N/s rate limit); the hexa-
+/// and octocopters (Du's Table I gives no aerodynamics) get Ke's rotor lag and Ke's drags scaled by
+/// mass (test values, stated here).
 struct Model {
     airframe: Airframe,
-    time_constant_s: f64,
-    rate_limit_n_s: f64,
+    lag: Lag,
     thrust_coefficient_n_s2: f64,
     drag: Drag,
 }
 
 fn model(name: &str) -> Model {
     let airframe = rfcore::fixtures::preset(name);
+    let ke_lag = Lag {
+        time_constant_s: 0.025,
+        rate_limit_per_s: f64::INFINITY,
+    };
     match name {
-        "ke-quadcopter" => Model {
-            airframe,
-            time_constant_s: 0.025,
-            rate_limit_n_s: f64::INFINITY,
-            thrust_coefficient_n_s2: 0.0,
-            drag: Drag {
-                linear_drag_n_s_m: 0.3,
-                rotational_drag_n_m_s: 2.8e-3,
-                ..Drag::default()
-            },
-        },
         "lanzon-quadrotor" => {
             let (m, g, d) = (
                 airframe.mass_kg(),
@@ -45,8 +49,10 @@ fn model(name: &str) -> Model {
             );
             Model {
                 airframe,
-                time_constant_s: 0.0,
-                rate_limit_n_s: 50.0,
+                lag: Lag {
+                    time_constant_s: 0.0,
+                    rate_limit_per_s: 50.0,
+                },
                 thrust_coefficient_n_s2: 1e-5,
                 drag: Drag {
                     linear_drag_n_s_m: 0.1,
@@ -60,8 +66,7 @@ fn model(name: &str) -> Model {
             let scale = airframe.mass_kg() / 0.72;
             Model {
                 airframe,
-                time_constant_s: 0.025,
-                rate_limit_n_s: f64::INFINITY,
+                lag: ke_lag,
                 thrust_coefficient_n_s2: 0.0,
                 drag: Drag {
                     linear_drag_n_s_m: 0.3 * scale,
@@ -73,25 +78,35 @@ fn model(name: &str) -> Model {
     }
 }
 
-/// One flight: `failed` rotors (0-based) fail at `fault_s` and the controller is told at once.
+/// One flight: rotors `failed` (0-based) lose `efficiency` at `FAULT_S`.
+#[derive(Clone, Copy)]
 struct Case {
     preset: &'static str,
     failed: &'static [usize],
     speed_m_s: f64,
+    efficiency: f64,
+    /// The controller is told `Some(delay)` after the failure; `None`: never.
+    told_after_s: Option<f64>,
 }
 
-const FAULT_S: f64 = 3.0;
-const DURATION_S: f64 = 25.0;
-/// The verdict window starts this long after the failure.
-const SETTLE_S: f64 = 5.0;
-const ALTITUDE_M: f64 = 10.0;
+impl Case {
+    fn total(preset: &'static str, failed: &'static [usize], speed_m_s: f64) -> Self {
+        Case {
+            preset,
+            failed,
+            speed_m_s,
+            efficiency: 0.0,
+            told_after_s: Some(0.0),
+        }
+    }
+}
 
 struct Outcome {
     trajectory: Trajectory,
     /// Largest altitude and horizontal errors from `FAULT_S + SETTLE_S` on, m.
     window_altitude_m: f64,
     window_horizontal_m: f64,
-    /// Largest altitude loss and horizontal error over the whole flight, m.
+    /// Largest altitude and horizontal errors over the whole flight, m.
     worst_altitude_m: f64,
     worst_horizontal_m: f64,
     /// Mean |r| over the window, rad/s.
@@ -108,52 +123,58 @@ impl Outcome {
     }
 }
 
-fn fly_with(case: &Case, gains: IndiGains) -> Outcome {
+/// Flies `case` with the vehicle `model` and the controller built from `airframe` (the nominal one
+/// it designs on) and `gains`; `wrap` may hide the controller behind another.
+fn fly_full(
+    case: &Case,
+    model: Model,
+    nominal: &Airframe,
+    gains: IndiGains,
+    wrap: impl FnOnce(IndiController) -> Box<dyn Controller>,
+) -> Outcome {
     let Model {
         airframe,
-        time_constant_s,
-        rate_limit_n_s,
+        lag,
         thrust_coefficient_n_s2,
         drag,
-    } = model(case.preset);
+    } = model;
     let vehicle = Vehicle::new(&airframe, drag).unwrap();
-    let lag = Lag {
-        time_constant_s,
-        rate_limit_per_s: rate_limit_n_s,
-    };
     let mut actuators =
         Actuators::FixedPitch(FixedPitch::new(&airframe, lag, thrust_coefficient_n_s2).unwrap());
-    let partial: Option<f64> = std::env::var("PARTIAL").ok().map(|v| v.parse().unwrap());
-    let failures: Vec<DetectedFailure> = case
-        .failed
-        .iter()
-        .filter(|_| partial.is_none())
-        .map(|&rotor| DetectedFailure {
-            rotor,
-            time_s: FAULT_S
-                + std::env::var("DELAY")
-                    .map(|d| d.parse::<f64>().unwrap())
-                    .unwrap_or(0.0),
-        })
-        .collect();
+    let failures: Vec<DetectedFailure> = match case.told_after_s {
+        Some(delay) => case
+            .failed
+            .iter()
+            .map(|&rotor| DetectedFailure {
+                rotor,
+                time_s: FAULT_S + delay,
+            })
+            .collect(),
+        None => vec![],
+    };
     let start = [0.0, 0.0, -ALTITUDE_M];
     let setpoint = Setpoint {
         time_s: 0.0,
         position_m: start,
         velocity_m_s: [case.speed_m_s, 0.0, 0.0],
     };
-    let dt = 1.0 / 400.0;
-    let mut controller =
-        IndiController::new(&airframe, gains, failures, vec![setpoint], dt).unwrap();
-    let hover = controller.failure_modes()[0].hover_thrust_n.clone();
+    let controller = IndiController::new(nominal, gains, failures, vec![setpoint], DT).unwrap();
+    // The rotors start at the true vehicle's hover.
+    let weight_ratio = airframe.mass_kg() / nominal.mass_kg();
+    let hover: Vec<f64> = controller.failure_modes()[0]
+        .hover_thrust_n
+        .iter()
+        .map(|t| t * weight_ratio)
+        .collect();
     actuators.settle(&hover).unwrap();
+    let mut controller = wrap(controller);
     let faults: Vec<RotorFault> = case
         .failed
         .iter()
         .map(|&rotor| RotorFault {
             rotor,
             time_s: FAULT_S,
-            efficiency: partial.unwrap_or(0.0),
+            efficiency: case.efficiency,
         })
         .collect();
     let x0 = RigidBodyState {
@@ -161,14 +182,15 @@ fn fly_with(case: &Case, gains: IndiGains) -> Outcome {
         velocity_m_s: Vector3::new(case.speed_m_s, 0.0, 0.0),
         ..RigidBodyState::at_rest()
     };
-    let mut config = SimulationConfig::new(dt, 4, DURATION_S);
-    // Ground at z = 0: a loss of more than the starting altitude is ground contact.
+    let mut config = SimulationConfig::new(DT, 4, DURATION_S);
+    // Ground at z = 0: a loss of the starting altitude is ground contact.
     config.limits.max_altitude_loss_m = ALTITUDE_M;
+    let m = airframe.rotor_count();
     let trajectory = simulate(
         &vehicle,
         actuators,
-        &mut controller,
-        &[1.0; 8][..airframe.rotor_count()],
+        controller.as_mut(),
+        &vec![1.0; m],
         &faults,
         x0,
         &config,
@@ -197,12 +219,14 @@ fn fly_with(case: &Case, gains: IndiGains) -> Outcome {
             spin = (spin.0 + s.omega_rad_s.z.abs(), spin.1 + 1);
         }
     }
-    out.ground_contact |= out
-        .trajectory
-        .divergence
-        .is_some_and(|d| d.state.position_m.z >= 0.0);
     out.spin_rad_s = spin.0 / spin.1.max(1) as f64;
     out
+}
+
+fn fly_with(case: &Case, gains: IndiGains) -> Outcome {
+    let model = model(case.preset);
+    let nominal = model.airframe.clone();
+    fly_full(case, model, &nominal, gains, |c| Box::new(c))
 }
 
 fn fly(case: &Case) -> Outcome {
@@ -213,27 +237,27 @@ fn describe(case: &Case, o: &Outcome) -> String {
     let lost = o
         .trajectory
         .divergence
-        .map(|d| format!(" lost at {:.2} s ({})", d.time_s, d.reason.name()))
+        .map(|d| format!(", lost at {:.2} s ({})", d.time_s, d.reason.name()))
         .unwrap_or_default();
     let failed: Vec<String> = case.failed.iter().map(|r| (r + 1).to_string()).collect();
     format!(
-        "{:17} failed [{}] at {:.0} m/s: {} | window alt {:.3} m hor {:.3} m | worst alt {:.3} m hor {:.3} m | spin {:.1} rad/s{lost}",
+        "| {} | {} | {:.0} m/s | {} | {:.1} | {:.3} / {:.3} | {:.3} / {:.3}{lost} |",
         case.preset,
-        failed.join(","),
+        failed.join(", "),
         case.speed_m_s,
-        if o.holds() { "holds" } else { "DOES NOT HOLD" },
+        if o.holds() { "holds" } else { "does not hold" },
+        o.spin_rad_s,
         o.window_altitude_m,
         o.window_horizontal_m,
         o.worst_altitude_m,
         o.worst_horizontal_m,
-        o.spin_rad_s,
     )
 }
 
+/// The flights of issue 30 (rotor numbers 1-based in the table): every case but Lanzon's holds.
 #[test]
-fn explore() {
+fn indi_holds_every_vehicle_and_failure_but_lanzons_at_hover_and_at_2_m_s() {
     let cases: [(&str, &[usize]); 11] = [
-        ("ke-quadcopter", &[]),
         ("ke-quadcopter", &[0]),
         ("ke-quadcopter", &[0, 2]),
         ("lanzon-quadrotor", &[1]),
@@ -244,123 +268,296 @@ fn explore() {
         ("octo-x", &[0]),
         ("octo-x", &[0, 4]),
         ("octo-x", &[0, 1]),
+        ("ke-quadcopter", &[]),
     ];
-    let mut gains = IndiGains::default();
-    if let Ok(t) = std::env::var("DELTA") {
-        gains.output_angle_rad = t.parse::<f64>().unwrap().to_radians();
-    }
-    if let Ok(t) = std::env::var("GYW") {
-        gains.given_up_yaw_weight = t.parse().unwrap();
-    }
+    println!("| vehicle | failed | speed | verdict | spin rad/s | window alt / hor m | worst alt / hor m |");
+    let mut misses = Vec::new();
     for speed_m_s in [0.0, 2.0] {
         for (preset, failed) in cases {
-            let case = Case {
-                preset,
-                failed,
-                speed_m_s,
-            };
-            let o = fly_with(&case, gains);
-            println!("{}", describe(&case, &o));
+            let case = Case::total(preset, failed, speed_m_s);
+            let o = fly(&case);
+            let line = describe(&case, &o);
+            println!("{line}");
+            if o.holds() == (preset == "lanzon-quadrotor") {
+                misses.push(line);
+            }
         }
+    }
+    assert!(misses.is_empty(), "{misses:#?}");
+}
+
+/// Lanzon's quadrotor is lost, and how (the measurement the report gives): without rotor 2, rotor 4
+/// (opposite) drops to 0 N at once and the roll torque can no longer turn negative, while the spin
+/// (2.7 rad/s at most with `k_r = m g d / 2.7`) is too slow to bring the missing direction round:
+/// tilt past 90 degrees 0.7 s after the failure. Without rotors 2 and 4, `J_z < J_xy` (`a = +0.80`)
+/// makes the zero dynamics unstable whatever the output angle: lost 10.8 s after the failure.
+#[test]
+fn lanzons_quadrotor_is_lost_as_the_analysis_predicts() {
+    let one = fly(&Case::total("lanzon-quadrotor", &[1], 0.0));
+    let lost = one.trajectory.divergence.unwrap();
+    assert_eq!(lost.reason.name(), "tilt");
+    assert!(
+        (lost.time_s - FAULT_S - 0.69).abs() < 0.05,
+        "{}",
+        lost.time_s
+    );
+    let two = fly(&Case::total("lanzon-quadrotor", &[1, 3], 0.0));
+    let lost = two.trajectory.divergence.unwrap();
+    assert_eq!(lost.reason.name(), "tilt");
+    assert!(lost.time_s - FAULT_S > 5.0, "{}", lost.time_s);
+}
+
+/// The coupling decision (module docs, "Filter and inertia coupling"): plain INDI, the inertia
+/// coupling left to the filtered gyro, loses ke-quadcopter at 2 m/s after rotors 1 and 3 fail; taken
+/// from the model at the current rate, the same flight holds.
+#[test]
+fn the_modelled_inertia_coupling_holds_the_double_failure_in_forward_flight() {
+    let case = Case::total("ke-quadcopter", &[0, 2], 2.0);
+    let plain = fly_with(
+        &case,
+        IndiGains {
+            model_coupling: false,
+            ..IndiGains::default()
+        },
+    );
+    assert!(
+        !plain.holds() && plain.window_horizontal_m > 10.0,
+        "{}",
+        describe(&case, &plain)
+    );
+    let ours = fly(&case);
+    assert!(
+        ours.holds() && ours.window_horizontal_m < 0.5,
+        "{}",
+        describe(&case, &ours)
+    );
+}
+
+/// The incremental base (module docs): rotor 1 of ke-quadcopter at 40 %, the controller not told.
+/// Without the mismatch correction the loop settles with a standing increment and 6 m off station.
+#[test]
+fn the_mismatch_correction_removes_the_offset_of_an_undetected_partial_loss() {
+    let case = Case {
+        efficiency: 0.4,
+        told_after_s: None,
+        ..Case::total("ke-quadcopter", &[0], 0.0)
+    };
+    let without = fly_with(
+        &case,
+        IndiGains {
+            mismatch_time_constant_s: f64::INFINITY,
+            ..IndiGains::default()
+        },
+    );
+    assert!(
+        without.window_horizontal_m > 5.0,
+        "{}",
+        describe(&case, &without)
+    );
+    let with = fly(&case);
+    assert!(
+        with.holds() && with.window_horizontal_m < 0.01,
+        "{}",
+        describe(&case, &with)
+    );
+}
+
+/// The controller behind the state alone (no gyro, accelerometer or rotor samples).
+struct StateOnly(IndiController);
+
+impl Controller for StateOnly {
+    fn command_count(&self) -> usize {
+        self.0.command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.0.command(t_s, measured, out)
+    }
+    fn reset(&mut self) {
+        self.0.reset()
     }
 }
 
-#[allow(dead_code)]
-fn unused(_: &dyn Controller) {}
-
+/// A vehicle 20 % heavier than the controller's model. With the accelerometer, INDI's thrust row
+/// settles at the altitude (the increment vanishes only where the measured acceleration is the
+/// commanded one); with the state alone the row is dynamic inversion on the model mass, which
+/// settles `g (m / m_model - 1) / k_p,z = 0.196 m` low (closed form).
 #[test]
-fn debug_case() {
-    let preset = std::env::var("CASE").unwrap_or("lanzon-quadrotor".into());
-    let failed: Vec<usize> = std::env::var("FAILED")
-        .unwrap_or("1".into())
-        .split(',')
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse().unwrap())
+fn the_accelerometer_removes_the_altitude_offset_of_a_mass_error() {
+    let case = Case::total("ke-quadcopter", &[], 0.0);
+    let heavy = || {
+        let text = rfcore::fixtures::preset_text("ke-quadcopter.toml")
+            .replace("mass_kg = 0.720", "mass_kg = 0.864");
+        Model {
+            airframe: Airframe::from_toml_str(&text, "heavy").unwrap(),
+            ..model("ke-quadcopter")
+        }
+    };
+    let nominal = rfcore::fixtures::preset("ke-quadcopter");
+    let gains = IndiGains::default();
+    let with = fly_full(&case, heavy(), &nominal, gains, |c| Box::new(c));
+    let offset = |o: &Outcome| o.trajectory.states.last().unwrap().position_m.z + ALTITUDE_M;
+
+    assert!(offset(&with).abs() < 1e-3, "{}", offset(&with));
+    let without = fly_full(&case, heavy(), &nominal, gains, |c| Box::new(StateOnly(c)));
+    let expected = nominal.gravity_m_s2() * (0.864 / 0.720 - 1.0) / gains.k_p_z;
+    assert!(
+        (offset(&without) - expected).abs() < 1e-3,
+        "{} vs {expected}",
+        offset(&without)
+    );
+}
+
+/// Told 0.2 s late, the controller still holds every case it holds when told at once.
+#[test]
+fn a_detection_delay_of_200_ms_is_survived() {
+    for (preset, failed) in [
+        ("ke-quadcopter", &[0][..]),
+        ("ke-quadcopter", &[0, 2][..]),
+        ("hexa-ppnnpn", &[4][..]),
+        ("octo-x", &[0, 1][..]),
+    ] {
+        let case = Case {
+            told_after_s: Some(0.2),
+            ..Case::total(preset, failed, 2.0)
+        };
+        let o = fly(&case);
+        assert!(o.holds(), "{}", describe(&case, &o));
+    }
+}
+
+/// Records what each step of the law computed.
+struct Recording {
+    inner: IndiController,
+    steps: Vec<IndiStep>,
+}
+
+impl Controller for Recording {
+    fn command_count(&self) -> usize {
+        self.inner.command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.command_with(t_s, &ControllerInput::state_only(measured), out)
+    }
+    fn command_with(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.steps.push(self.inner.step(t_s, input, out)?);
+        Ok(())
+    }
+    fn reads_samples(&self) -> bool {
+        true
+    }
+    fn reset(&mut self) {
+        self.inner.reset();
+        self.steps.clear();
+    }
+}
+
+/// The angular acceleration the simulator's vehicle has at `state` with the rotors producing
+/// `thrust_n` (the rigid body's own derivative: independent of the controller's model).
+fn simulator_angular_acceleration(
+    vehicle: &Vehicle,
+    state: &RigidBodyState,
+    thrust_n: &[f64],
+    yaw_ratio: &[f64],
+) -> Vector3<f64> {
+    let outputs: Vec<_> = thrust_n
+        .iter()
+        .zip(yaw_ratio)
+        .map(|(&t, &k)| rfcore::flight::actuator::RotorOutput {
+            thrust_n: t,
+            reaction_torque_nm: k * t,
+            spin_rad_s: 0.0,
+        })
         .collect();
-    let speed: f64 = std::env::var("SPEED")
-        .unwrap_or("0".into())
-        .parse()
-        .unwrap();
-    let failed: &'static [usize] = Box::leak(failed.into_boxed_slice());
-    let preset: &'static str = Box::leak(preset.into_boxed_str());
-    let case = Case {
-        preset,
-        failed,
-        speed_m_s: speed,
-    };
-    let mut gains = IndiGains::default();
-    if let Ok(t) = std::env::var("TILT") {
-        gains.primary_axis_tilt = t.parse().unwrap();
-    }
-    if let Ok(t) = std::env::var("DELTA") {
-        gains.output_angle_rad = t.parse::<f64>().unwrap().to_radians();
-    }
-    if let Ok(t) = std::env::var("WYAW") {
-        gains.weights[3] = t.parse().unwrap();
-    }
-    if let Ok(t) = std::env::var("WATT") {
-        gains.weights[1] = t.parse().unwrap();
-        gains.weights[2] = gains.weights[1];
-    }
-    if let Ok(t) = std::env::var("KP") {
-        gains.k_att_p = t.parse().unwrap();
-    }
-    if let Ok(t) = std::env::var("KD") {
-        gains.k_att_d = t.parse().unwrap();
-    }
-    if let Ok(t) = std::env::var("WF") {
-        gains.filter_frequency_rad_s = t.parse().unwrap();
-    }
-    let o = fly_with(&case, gains);
-    println!("{}", describe(&case, &o));
-    let tr = &o.trajectory;
-    let m = tr.thrust_n.len() / tr.t_s.len();
-    for (k, (t, s)) in tr.t_s.iter().zip(&tr.states).enumerate() {
-        if k % 20 != 0 && k + 1 != tr.t_s.len() {
-            continue;
-        }
-        if *t < FAULT_S - 0.1 {
-            continue;
-        }
-        let n3 = s.primary_axis();
-        println!("t {:.3} p [{:.2} {:.2} {:.2}] v [{:.2} {:.2} {:.2}] n3 [{:.3} {:.3} {:.3}] w [{:.2} {:.2} {:.2}] T {:?} C {:?}", t, s.position_m.x, s.position_m.y, s.position_m.z, s.velocity_m_s.x, s.velocity_m_s.y, s.velocity_m_s.z, n3.x, n3.y, n3.z, s.omega_rad_s.x, s.omega_rad_s.y, s.omega_rad_s.z, &tr.thrust_n[k*m..(k+1)*m].iter().map(|v| (v*100.0).round()/100.0).collect::<Vec<_>>(), &tr.commands[k*m..(k+1)*m].iter().map(|v| (v*100.0).round()/100.0).collect::<Vec<_>>());
-        if *t > 6.0 && std::env::var("LONG").is_err() {
-            break;
-        }
-    }
+    let totals: RotorTotals = vehicle.rotor_totals(&outputs);
+    let wrench = vehicle.wrench_from(state, &totals, &Vector3::zeros());
+    vehicle.body().derivative(state, &wrench).omega
 }
 
+/// The incremental law's one-step prediction, `omega'_f + J^-1 M_tau dT`, against the simulator's
+/// angular acceleration at the same state once the rotors produce the commands (instant rotors:
+/// they do from that step on). From a settled hover (a setpoint 1 m aside appears at 1 s) the two
+/// agree to rounding (measured 6e-14 of 268 rad/s^2). Through the first second of the spin-up of
+/// ke-quadcopter without rotors 1 and 3 they differ by the filter's lag on the torques the law does
+/// not model (drag): measured 0.6 % of the RMS acceleration; 2 % allowed.
 #[test]
-fn timing_probe() {
-    let case = Case {
-        preset: "octo-x",
-        failed: &[0],
-        speed_m_s: 0.0,
-    };
-    let t0 = std::time::Instant::now();
-    let n = 10;
-    for _ in 0..n {
-        let _ = fly(&case);
-    }
-    let el = t0.elapsed().as_secs_f64();
-    println!("{:.3} us/step", el / (n as f64 * DURATION_S * 400.0) * 1e6);
-    let airframe = rfcore::fixtures::preset("octo-x");
-    let t0 = std::time::Instant::now();
-    for _ in 0..n {
-        let _ = IndiController::new(
-            &airframe,
-            IndiGains::default(),
-            vec![DetectedFailure {
-                rotor: 0,
-                time_s: 3.0,
-            }],
-            vec![Setpoint::hold(0.0, [0.0, 0.0, -10.0])],
-            0.0025,
+fn the_one_step_prediction_of_the_angular_acceleration_matches_the_simulator() {
+    // From a settled hover, one step; after the failure, 1 s from when the filters have passed
+    // the loss itself (0.15 s, about 4 / (zeta w_n)).
+    for (failed, since_s, tolerance) in [(&[][..], 1.0, 1e-9), (&[0, 2][..], FAULT_S + 0.15, 0.02)]
+    {
+        let Model { airframe, drag, .. } = model("ke-quadcopter");
+        let vehicle = Vehicle::new(&airframe, drag).unwrap();
+        let yaw_ratio: Vec<f64> = (0..4)
+            .map(|i| airframe.nominal_effectiveness_matrix()[(3, i)])
+            .collect();
+        let mut actuators =
+            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let failures = failed
+            .iter()
+            .map(|&rotor| DetectedFailure {
+                rotor,
+                time_s: FAULT_S,
+            })
+            .collect();
+        let setpoints = vec![
+            Setpoint::hold(0.0, [0.0, 0.0, -ALTITUDE_M]),
+            Setpoint::hold(1.0, [0.0, 1.0, -ALTITUDE_M]),
+        ];
+        let inner =
+            IndiController::new(&airframe, IndiGains::default(), failures, setpoints, DT).unwrap();
+        actuators
+            .settle(&inner.failure_modes()[0].hover_thrust_n)
+            .unwrap();
+        let mut recording = Recording {
+            inner,
+            steps: vec![],
+        };
+        let faults: Vec<RotorFault> = failed
+            .iter()
+            .map(|&rotor| RotorFault {
+                rotor,
+                time_s: FAULT_S,
+                efficiency: 0.0,
+            })
+            .collect();
+        let x0 = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -ALTITUDE_M),
+            ..RigidBodyState::at_rest()
+        };
+        let config = SimulationConfig::new(DT, 4, since_s + 1.0);
+        let tr = simulate(
+            &vehicle,
+            actuators,
+            &mut recording,
+            &[1.0; 4],
+            &faults,
+            x0,
+            &config,
         )
         .unwrap();
+        assert!(tr.divergence.is_none());
+        let (mut error2, mut scale2, mut n) = (0.0, 0.0, 0);
+        for k in 0..tr.t_s.len() - 1 {
+            if tr.t_s[k] < since_s || (failed.is_empty() && k > (since_s / DT).round() as usize) {
+                continue;
+            }
+            // Instant rotors produce the commands from step k on (failed ones: 0, as commanded).
+            let commanded = &tr.commands[k * 4..(k + 1) * 4];
+            let actual =
+                simulator_angular_acceleration(&vehicle, &tr.states[k], commanded, &yaw_ratio);
+            let predicted = recording.steps[k].angular_acceleration_predicted;
+            error2 += (predicted - actual).norm_squared();
+            scale2 += actual.norm_squared();
+            n += 1;
+        }
+        let (error, scale) = ((error2 / n as f64).sqrt(), (scale2 / n as f64).sqrt());
+        println!("failed {failed:?}: {n} steps, prediction error {error:.3e} rad/s^2 RMS against {scale:.3e}");
+        assert!(scale > 1.0, "the test needs a commanded change: {scale}");
+        assert!(error <= tolerance * scale, "{error} vs {scale}");
     }
-    println!(
-        "construction {:.3} ms",
-        t0.elapsed().as_secs_f64() / n as f64 * 1e3
-    );
 }

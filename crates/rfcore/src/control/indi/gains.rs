@@ -64,11 +64,15 @@ pub struct IndiGains {
     pub k_att_d: f64,
     /// Yaw-rate gain, 1/s (Sun: 5).
     pub k_r: f64,
-    /// Natural frequency of the second-order filter, rad/s: 75 (module docs, "Filter": the phase
-    /// lag of Sun's first-order 0.02 s filter at 35 rad/s).
+    /// Natural frequency of the second-order filter, rad/s: 50, the bandwidth of Sun's first-order
+    /// filter (`t_indi = 0.02 s`, `controlParams.m`; module docs, "Filter").
     pub filter_frequency_rad_s: f64,
     /// Damping ratio of the filter: 0.55 (Smeur et al. 2016).
     pub filter_damping: f64,
+    /// Take the inertia coupling `-J^-1 (omega x J omega)` from the model at the current rate
+    /// instead of through the filtered gyro (module docs, step 4): true (ours; Sun leaves it to the
+    /// filter, false).
+    pub model_coupling: bool,
     /// `delta` of the output redefinition with one torque axis left, rad (module docs): 65.67
     /// degrees, Sun's `chi = 105 deg` on his vehicle. Must lie in (0, pi/2).
     pub output_angle_rad: f64,
@@ -85,6 +89,10 @@ pub struct IndiGains {
     /// rotor producing less than commanded (an undetected partial loss, a thrust-coefficient
     /// error) leaves no steady output error (module docs, "The incremental base"). 0.5.
     pub mismatch_time_constant_s: f64,
+    /// Time constant of the actuator model that stands in for the rotor samples when a step has
+    /// none (the previous command through a first-order lag), s: 0.025 (Ke's Table III rotor lag;
+    /// ours). 0: the previous command itself.
+    pub actuator_time_constant_s: f64,
     /// The yaw weight once yaw is given up, in place of `weights[3]`, when more rotors remain than
     /// the thrust and attitude rows use (a hexa- or octocopter): their spare authority still damps
     /// the spin, after thrust and attitude. Otherwise (a quadrotor) the row is dropped, weight 0, as
@@ -114,12 +122,14 @@ impl Default for IndiGains {
             k_att_p: 200.0,
             k_att_d: 30.0,
             k_r: 5.0,
-            filter_frequency_rad_s: 75.0,
+            filter_frequency_rad_s: 50.0,
             filter_damping: 0.55,
+            model_coupling: true,
             output_angle_rad: sun_output_angle_rad(),
             primary_axis_tilt: 0.0,
             weights: [1.0; 4],
             mismatch_time_constant_s: 0.5,
+            actuator_time_constant_s: 0.025,
             given_up_yaw_weight: 1e-4,
             yaw: YawMode::Auto,
             min_yaw_authority: 0.1,
@@ -164,6 +174,7 @@ impl IndiGains {
             ("k_i_xy", self.k_i_xy),
             ("k_r", self.k_r),
             ("given_up_yaw_weight", self.given_up_yaw_weight),
+            ("actuator_time_constant_s", self.actuator_time_constant_s),
             ("integral_limit_m", self.integral_limit_m),
         ] {
             require_finite(field, value)?;
@@ -231,7 +242,7 @@ mod tests {
     fn the_defaults_pass_and_every_rule_names_its_gain() {
         IndiGains::default().check().unwrap();
         type Set = fn(&mut IndiGains, f64);
-        let cases: [(&str, Set, f64); 22] = [
+        let cases: [(&str, Set, f64); 23] = [
             ("k_p_xy", |g, v| g.k_p_xy = v, 0.0),
             ("k_v_xy", |g, v| g.k_v_xy = v, -1.0),
             ("k_i_xy", |g, v| g.k_i_xy = v, -0.1),
@@ -268,6 +279,11 @@ mod tests {
                 -1e-4,
             ),
             ("min_yaw_authority", |g, v| g.min_yaw_authority = v, 1.5),
+            (
+                "actuator_time_constant_s",
+                |g, v| g.actuator_time_constant_s = v,
+                -0.01,
+            ),
             ("weights[1]", |g, v| g.weights[1] = v, 0.0),
             ("weights[3]", |g, v| g.weights[3] = v, -1.0),
         ];
@@ -337,19 +353,10 @@ mod tests {
     }
 
     #[test]
-    fn the_default_filter_has_the_phase_lag_of_suns_first_order_filter_at_35_rad_s() {
-        let omega = 35.0;
-        let first_order = (omega * 0.02f64).atan().to_degrees();
-        let second_order = |w_n: f64, zeta: f64| {
-            let x = omega / w_n;
-            (2.0 * zeta * x).atan2(1.0 - x * x).to_degrees()
-        };
+    fn the_default_filter_has_the_bandwidth_of_suns_first_order_filter() {
         let g = IndiGains::default();
-        let ours = second_order(g.filter_frequency_rad_s, g.filter_damping);
-        assert!(
-            (first_order - 35.0).abs() < 0.01 && (ours - 33.3).abs() < 0.1,
-            "{first_order} {ours}"
-        );
-        assert!((second_order(50.0, 0.55) - 56.5).abs() < 0.1);
+        assert_eq!(g.filter_frequency_rad_s, 1.0 / 0.02);
+        // |H(j w_n)| = 1 / (2 zeta): the second-order filter's gain at Sun's 3 dB frequency.
+        assert!((1.0 / (2.0 * g.filter_damping) - 0.909).abs() < 1e-3);
     }
 }

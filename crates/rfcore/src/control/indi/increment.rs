@@ -69,16 +69,14 @@ fn minimum_norm(
     let mut largest = 0.0f64;
     for i in 0..n {
         for j in 0..=i {
-            let mut sum: f64 = (0..k).map(|c| rows[i][c] * rows[j][c]).sum();
+            let gram: f64 = (0..k).map(|c| rows[i][c] * rows[j][c]).sum();
             if i == j {
-                largest = largest.max(sum);
+                largest = largest.max(gram);
             }
-            for p in 0..j {
-                sum -= l[i][p] * l[j][p];
-            }
+            let sum = gram - (0..j).map(|p| l[i][p] * l[j][p]).sum::<f64>();
             if i == j {
                 // A pivot lost to rounding against the largest diagonal: (nearly) rank deficient.
-                if !(sum > 1e-12 * largest) {
+                if sum.is_nan() || sum <= 1e-12 * largest {
                     return None;
                 }
                 l[i][i] = sum.sqrt();

@@ -21,7 +21,8 @@
 //!    may spin about its thrust axis.
 //! 3. **Pseudo-controls**: `nu_Y = -k_att,p Y - k_att,d Y'`, `nu_r = -k_r r` (yaw rate held at zero
 //!    while yaw is controlled), `nu_z` from step 1.
-//! 4. **INDI**: with the filtered gyro rate differentiated, `omega'_f`, the filtered rotor thrusts
+//! 4. **INDI**: with the filtered gyro rate differentiated, `omega'_f` (the inertia coupling taken at
+//!    the current rate, "Filter and inertia coupling" below), the filtered rotor thrusts
 //!    `T_f` (the same filter, [`crate::control::filter`]) and the filtered vertical acceleration
 //!    `z''_f` (from the specific force, the same filter), the outputs one step ahead are
 //!    `z'' = z''_f - (n3z / m) 1^T dT`,
@@ -68,14 +69,20 @@
 //! produced ([`ControllerInput`]). Missing samples are replaced, and the law says how: the gyro by
 //! the state's body rates; the vertical acceleration by its model `g - n3z sum(T_f) / m` (the
 //! thrust row becomes plain dynamic inversion: a mass error then leaves an altitude offset); the
-//! rotor thrusts by the previous commands (no actuator lag model).
+//! rotor thrusts by an actuator model, the previous commands through a first-order lag
+//! ([`IndiGains::actuator_time_constant_s`]; without it the commanded base runs ahead of the
+//! measured acceleration by the rotor lag and the loop oscillates).
 //!
-//! # Filter (a decision)
-//! Sun's code filters with a first-order 0.02 s low-pass; this law uses the second-order filter
-//! of Smeur et al. (JGCD 2016), damping 0.55, so that the gyro is differentiated exactly. Its
-//! natural frequency, 75 rad/s, gives it the first-order filter's phase lag at 35 rad/s (33 against
-//! 35 degrees), the spin of a quadrotor that lost rotors; at 50 rad/s (56 degrees there) the lag
-//! loses ke-quadcopter flying at 2 m/s after losing rotors 1 and 3 (16 m off station, `tests/indi.rs`).
+//! # Filter and inertia coupling (decisions)
+//! Sun's code filters with a first-order 0.02 s low-pass; this law uses the second-order filter of
+//! Smeur et al. (JGCD 2016), damping 0.55, at Sun's 50 rad/s, so that the gyro is differentiated
+//! exactly. Plain INDI leaves every torque but the rotors' to the filtered gyro, the inertia
+//! coupling `-J^-1 (omega x J omega)` included; at the 40 rad/s spin of a quadrotor that lost rotors
+//! the filter's lag on that large, fast term loses ke-quadcopter flying at 2 m/s after losing rotors
+//! 1 and 3 (16 m off station). The coupling is known from the gyro and `J`, so the law takes it at
+//! the current rate and removes its filtered value from `omega'_f`
+//! ([`IndiGains::model_coupling`]): the filter then lags only on the unknown torques (drag, rotor
+//! gyroscopic moment), and that flight holds to 0.42 m (`tests/indi.rs`).
 //!
 //! # Floors (stated once)
 //! `n3z` in the thrust row is floored at [`MIN_N3Z`] (the law needs the thrust to point up); Sun's
@@ -144,6 +151,10 @@ struct Memory {
     direction: [[f64; 2]; 3],
     integral_xy: [f64; 2],
     previous: Vec<f64>,
+    /// The actuator model's thrusts (used without rotor samples), N.
+    modelled: Vec<f64>,
+    /// `gamma(omega) = -J^-1 (omega x J omega)` through the filter.
+    coupling: [[f64; 2]; 3],
     /// Slow low-pass of (previous command - produced thrust) per rotor, N.
     mismatch: Vec<f64>,
     mode: usize,
@@ -155,9 +166,12 @@ pub struct IndiController {
     gains: IndiGains,
     dt_s: f64,
     mass_kg: f64,
+    inertia_kg_m2: [f64; 3],
     gravity_m_s2: f64,
     rotor_count: usize,
     filter: SecondOrderLowPass,
+    /// `exp(-dt / actuator_time_constant_s)` of the actuator model.
+    actuator_keep: f64,
     setpoints: Vec<Setpoint>,
     /// Failures sorted by time; `modes[k]` flies the first `k` of them.
     failures: Vec<DetectedFailure>,
@@ -246,6 +260,12 @@ impl IndiController {
             gains,
             dt_s,
             mass_kg: airframe.mass_kg(),
+            inertia_kg_m2: airframe.inertia_kg_m2(),
+            actuator_keep: if gains.actuator_time_constant_s > 0.0 {
+                (-dt_s / gains.actuator_time_constant_s).exp()
+            } else {
+                0.0
+            },
             gravity_m_s2: airframe.gravity_m_s2(),
             rotor_count: m,
             filter,
@@ -311,10 +331,23 @@ impl IndiController {
         Vector3::new(a_xy.x, a_xy.y, nu_z)
     }
 
+    /// `gamma(omega) = -J^-1 (omega x J omega)`: the angular acceleration the inertia coupling
+    /// gives (principal axes), rad/s^2.
+    fn coupling(&self, omega: &Vector3<f64>) -> Vector3<f64> {
+        let [jx, jy, jz] = self.inertia_kg_m2;
+        let (p, q, r) = (omega.x, omega.y, omega.z);
+        Vector3::new(
+            (jy - jz) * q * r / jx,
+            (jz - jx) * r * p / jy,
+            (jx - jy) * p * q / jz,
+        )
+    }
+
     /// Filters started at their inputs (a settled start).
     fn start(
         &mut self,
         gyro: &Vector3<f64>,
+        coupling: &Vector3<f64>,
         thrust: &[f64],
         vertical: f64,
         direction: &Vector3<f64>,
@@ -323,6 +356,7 @@ impl IndiController {
         mem.started = true;
         for i in 0..3 {
             mem.gyro[i] = SecondOrderLowPass::settled(gyro[i]);
+            mem.coupling[i] = SecondOrderLowPass::settled(coupling[i]);
             mem.direction[i] = SecondOrderLowPass::settled(direction[i]);
         }
         mem.thrust = thrust
@@ -387,13 +421,21 @@ impl IndiController {
         }
         if !self.memory.started {
             self.memory.previous = self.modes[mode_index].info.hover_thrust_n.clone();
+            self.memory.modelled = self.memory.previous.clone();
         }
         self.memory.mode = mode_index;
+        if input.rotor_thrust_n.is_none() {
+            // The actuator model: the previous command through the first-order lag.
+            let keep = self.actuator_keep;
+            for (a, &c) in self.memory.modelled.iter_mut().zip(&self.memory.previous) {
+                *a = keep * *a + (1.0 - keep) * c;
+            }
+        }
 
         let rot: Matrix3<f64> = s.attitude.to_rotation_matrix().into_inner();
         let omega = input.gyro_rad_s.unwrap_or(s.omega_rad_s);
         let mut thrust_sample = [0.0; MAX_ACTUATORS];
-        thrust_sample[..m].copy_from_slice(input.rotor_thrust_n.unwrap_or(&self.memory.previous));
+        thrust_sample[..m].copy_from_slice(input.rotor_thrust_n.unwrap_or(&self.memory.modelled));
         let thrust_sample = &thrust_sample[..m];
         let n3z_true = rot[(2, 2)];
         let g = self.gravity_m_s2;
@@ -405,14 +447,23 @@ impl IndiController {
         let measured_vertical = input.specific_force_m_s2.map(|f| (rot * f).z + g);
         if !self.memory.started {
             let start_vertical = measured_vertical.unwrap_or(0.0);
-            self.start(&omega, thrust_sample, start_vertical, &z_des);
+            let coupling = self.coupling(&omega);
+            self.start(&omega, &coupling, thrust_sample, start_vertical, &z_des);
         }
+        let coupling = self.coupling(&omega);
         let filter = self.filter;
         let mem = &mut self.memory;
+        // The inertia coupling is known: taken at the current rate, its filtered value removed
+        // from the filtered acceleration (module docs, step 4).
         let mut omega_dot_f = Vector3::zeros();
+        let model_coupling = self.gains.model_coupling;
         for i in 0..3 {
             filter.step(&mut mem.gyro[i], omega[i]);
+            filter.step(&mut mem.coupling[i], coupling[i]);
             omega_dot_f[i] = mem.gyro[i][1];
+            if model_coupling {
+                omega_dot_f[i] += coupling[i] - mem.coupling[i][0];
+            }
         }
         for (state, &t) in mem.thrust.iter_mut().zip(thrust_sample) {
             filter.step(state, t);
