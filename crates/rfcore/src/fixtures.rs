@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use crate::airframe::Airframe;
 use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
-use crate::allocation::clarabel::{allocate_clarabel, allocate_prioritized};
+use crate::allocation::{allocate_clarabel, allocate_prioritized};
 use crate::allocation::{check_rows, weighted_pseudo_inverse, AllocationProblem, Method};
 use crate::error::{Result, RfError};
 

@@ -4,7 +4,8 @@
 use nalgebra::DMatrix;
 use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
-use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
+use rfcore::allocation::allocate_clarabel;
+use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
 
 
@@ -467,7 +468,7 @@ fn degenerate_bounds_are_not_carried_into_the_next_solve() {
 // ---- Issue #20: allocation that is never silently wrong ----
 
 use rfcore::allocation::active_set::ActiveSetSettings;
-use rfcore::allocation::clarabel::allocate_clarabel_unpolished;
+use rfcore::allocation::allocate_clarabel_unpolished;
 use rfcore::allocation::{allocate_many, fallback_count, Method, SolvedBy};
 use rfcore::Airframe;
 
