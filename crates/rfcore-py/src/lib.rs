@@ -47,6 +47,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
     module.add_class::<control::lanzon::PyLanzonController>()?;
+    module.add_class::<control::indi::PyIndiGains>()?;
+    module.add_class::<control::indi::PyIndiFailureMode>()?;
+    module.add_class::<control::indi::PyIndiController>()?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::scale_free_rank, module)?)?;

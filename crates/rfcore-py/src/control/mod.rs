@@ -2,6 +2,7 @@
 //! argument into a core controller (`boxed`), a Python callable as the slow path, the allocating
 //! controller and replay. Translation only.
 
+pub(crate) mod indi;
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
@@ -20,6 +21,7 @@ use rfcore::RfError;
 
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
+use indi::PyIndiController;
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
@@ -93,6 +95,7 @@ pub enum ControllerArg<'py> {
     Ftc(PyRef<'py, PyUniformPassiveFtc>),
     Lanzon(PyRef<'py, PyLanzonController>),
     Tracking(PyRef<'py, PyTrackingFeedback>),
+    Indi(PyRef<'py, PyIndiController>),
 }
 
 pub(crate) fn boxed(
@@ -108,6 +111,7 @@ pub(crate) fn boxed(
         Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lanzon(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Tracking(c)) => Box::new(c.inner.clone()),
+        Some(ControllerArg::Indi(c)) => Box::new(c.inner.clone()),
     })
 }
 

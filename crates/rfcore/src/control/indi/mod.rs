@@ -173,9 +173,10 @@ pub struct IndiController {
     /// `exp(-dt / actuator_time_constant_s)` of the actuator model.
     actuator_keep: f64,
     setpoints: Vec<Setpoint>,
-    /// Failures sorted by time; `modes[k]` flies the first `k` of them.
+    /// Failures sorted by time; `modes[j]` flies the first `mode_counts[j]` of them.
     failures: Vec<DetectedFailure>,
     modes: Vec<Mode>,
+    mode_counts: Vec<usize>,
     active: ActiveSet,
     memory: Memory,
 }
@@ -244,11 +245,18 @@ impl IndiController {
         let all: Vec<usize> = (0..m).collect();
         let healthy_authority =
             yaw_authority(airframe, &airframe.nominal_effectiveness_matrix(), &all)?;
+        // One mode per distinct detection time: failures told at once are flown together (a set
+        // between them, never flown, is not built nor judged).
         let mut modes = Vec::with_capacity(failures.len() + 1);
+        let mut mode_counts = Vec::with_capacity(failures.len() + 1);
         for k in 0..=failures.len() {
+            if k > 0 && k < failures.len() && failures[k].time_s == failures[k - 1].time_s {
+                continue;
+            }
             let mut failed: Vec<usize> = failures[..k].iter().map(|f| f.rotor).collect();
             failed.sort_unstable();
             modes.push(Mode::new(airframe, &gains, failed, healthy_authority)?);
+            mode_counts.push(k);
         }
         let filter = SecondOrderLowPass::new(
             ("filter_frequency_rad_s", gains.filter_frequency_rad_s),
@@ -272,13 +280,14 @@ impl IndiController {
             setpoints,
             failures,
             modes,
+            mode_counts,
             active: ActiveSet::cold(first),
             memory: Memory::default(),
         })
     }
 
-    /// How each failure set is flown: `[0]` the healthy vehicle, `[k]` after the first `k`
-    /// failures (in time order).
+    /// How each failure set is flown: `[0]` the healthy vehicle, then one per detection time (the
+    /// failures told at that time and all before, in time order).
     pub fn failure_modes(&self) -> Vec<FailureMode> {
         self.modes.iter().map(|m| m.info.clone()).collect()
     }
@@ -301,7 +310,9 @@ impl IndiController {
 
     /// Index of the failure set in force at `t_s`.
     fn mode_at(&self, t_s: f64) -> usize {
-        self.failures.partition_point(|f| f.time_s <= t_s)
+        let told = self.failures.partition_point(|f| f.time_s <= t_s);
+        // Every failure told by `t_s`: a group boundary, so a built mode.
+        self.mode_counts.partition_point(|&k| k < told)
     }
 
     /// Step 1 of the law: the desired acceleration (NED) from the position loop; updates the
@@ -676,6 +687,35 @@ mod tests {
             before.iter().all(|t| (t - before[1]).abs() < 1e-9),
             "{before:?}"
         );
+    }
+
+    #[test]
+    fn failures_told_at_once_are_flown_together_and_no_set_between_them_is_judged() {
+        // Rotors 1 and 2 of ke-quadcopter (adjacent) told at once: the set is refused as a whole;
+        // rotors 1 and 3 at once: the single failure of rotor 1 between them is never built.
+        let together = |a: usize, b: usize| {
+            let airframe = crate::fixtures::preset("ke-quadcopter");
+            let failures = vec![
+                DetectedFailure {
+                    rotor: a,
+                    time_s: 1.0,
+                },
+                DetectedFailure {
+                    rotor: b,
+                    time_s: 1.0,
+                },
+            ];
+            let hold = vec![Setpoint::hold(0.0, [0.0; 3])];
+            IndiController::new(&airframe, IndiGains::default(), failures, hold, DT)
+        };
+        assert!(together(0, 1)
+            .unwrap_err()
+            .to_string()
+            .contains("rotor(s) 1, 2 failed"));
+        let c = together(0, 2).unwrap();
+        let failed: Vec<Vec<usize>> = c.failure_modes().into_iter().map(|m| m.failed).collect();
+        assert_eq!(failed, vec![vec![], vec![0, 2]]);
+        assert_eq!((c.mode_at(0.99), c.mode_at(1.0)), (0, 1));
     }
 
     #[test]
