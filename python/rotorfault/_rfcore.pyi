@@ -630,6 +630,7 @@ class IndiGains:
         k_d_z: float | None = None,
         max_speed_m_s: float | None = None,
         max_tilt_rad: float | None = None,
+        max_vertical_accel_m_s2: float | None = None,
         integral_limit_m: float | None = None,
         k_att_p: float | None = None,
         k_att_d: float | None = None,
@@ -660,6 +661,8 @@ class IndiGains:
     def max_speed_m_s(self) -> float: ...
     @property
     def max_tilt_rad(self) -> float: ...
+    @property
+    def max_vertical_accel_m_s2(self) -> float: ...
     @property
     def integral_limit_m(self) -> float: ...
     @property

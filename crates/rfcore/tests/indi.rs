@@ -131,6 +131,7 @@ fn fly_full(
     nominal: &Airframe,
     gains: IndiGains,
     wrap: impl FnOnce(IndiController) -> Box<dyn Controller>,
+    start_offset_m: [f64; 3],
 ) -> Outcome {
     let Model {
         airframe,
@@ -178,7 +179,7 @@ fn fly_full(
         })
         .collect();
     let x0 = RigidBodyState {
-        position_m: Vector3::from(start),
+        position_m: Vector3::from(start) + Vector3::from(start_offset_m),
         velocity_m_s: Vector3::new(case.speed_m_s, 0.0, 0.0),
         ..RigidBodyState::at_rest()
     };
@@ -226,7 +227,7 @@ fn fly_full(
 fn fly_with(case: &Case, gains: IndiGains) -> Outcome {
     let model = model(case.preset);
     let nominal = model.airframe.clone();
-    fly_full(case, model, &nominal, gains, |c| Box::new(c))
+    fly_full(case, model, &nominal, gains, |c| Box::new(c), [0.0; 3])
 }
 
 fn fly(case: &Case) -> Outcome {
@@ -320,8 +321,10 @@ fn the_modelled_inertia_coupling_holds_the_double_failure_in_forward_flight() {
             ..IndiGains::default()
         },
     );
+    // Measured: 2.36 m altitude error in the window (the oscillation grows with the spin until
+    // the rotors saturate).
     assert!(
-        !plain.holds() && plain.window_horizontal_m > 10.0,
+        !plain.holds() && plain.window_altitude_m > 2.0,
         "{}",
         describe(&case, &plain)
     );
@@ -394,17 +397,55 @@ fn the_accelerometer_removes_the_altitude_offset_of_a_mass_error() {
     };
     let nominal = rfcore::fixtures::preset("ke-quadcopter");
     let gains = IndiGains::default();
-    let with = fly_full(&case, heavy(), &nominal, gains, |c| Box::new(c));
+    let with = fly_full(&case, heavy(), &nominal, gains, |c| Box::new(c), [0.0; 3]);
     let offset = |o: &Outcome| o.trajectory.states.last().unwrap().position_m.z + ALTITUDE_M;
 
     assert!(offset(&with).abs() < 1e-3, "{}", offset(&with));
-    let without = fly_full(&case, heavy(), &nominal, gains, |c| Box::new(StateOnly(c)));
+    let without = fly_full(
+        &case,
+        heavy(),
+        &nominal,
+        gains,
+        |c| Box::new(StateOnly(c)),
+        [0.0; 3],
+    );
     let expected = nominal.gravity_m_s2() * (0.864 / 0.720 - 1.0) / gains.k_p_z;
     assert!(
         (offset(&without) - expected).abs() < 1e-3,
         "{} vs {expected}",
         offset(&without)
     );
+}
+
+/// Starts a metre off the setpoint in every direction (the bench's random starts): the vehicle
+/// comes back and, after rotors 1 and 3 fail at 3 s, holds (a metre above, the uncapped vertical
+/// demand of 10 m/s^2 would turn the thrust over: `max_vertical_accel_m_s2`).
+#[test]
+fn starts_a_metre_off_the_setpoint_come_back_and_hold() {
+    use rayon::prelude::*;
+    let offsets: Vec<[f64; 3]> = (0..8)
+        .map(|k| {
+            [
+                (k & 1) as f64 * 2.0 - 1.0,
+                (k >> 1 & 1) as f64 * 2.0 - 1.0,
+                (k >> 2 & 1) as f64 * 2.0 - 1.0,
+            ]
+        })
+        .collect();
+    offsets.par_iter().for_each(|d| {
+        let case = Case::total("ke-quadcopter", &[0, 2], 0.0);
+        let model = model(case.preset);
+        let nominal = model.airframe.clone();
+        let o = fly_full(
+            &case,
+            model,
+            &nominal,
+            IndiGains::default(),
+            |c| Box::new(c),
+            *d,
+        );
+        assert!(o.holds(), "start off by {d:?}: {}", describe(&case, &o));
+    });
 }
 
 /// Told 0.2 s late, the controller still holds every case it holds when told at once.

@@ -70,6 +70,7 @@ indi_gains!(
     k_d_z,
     max_speed_m_s,
     max_tilt_rad,
+    max_vertical_accel_m_s2,
     integral_limit_m,
     k_att_p,
     k_att_d,

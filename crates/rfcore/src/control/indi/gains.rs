@@ -56,6 +56,10 @@ pub struct IndiGains {
     pub max_speed_m_s: f64,
     /// Largest tilt of the thrust direction the position loop asks for, rad (Sun: 10 degrees).
     pub max_tilt_rad: f64,
+    /// Largest vertical acceleration `|nu_z|` the position loop asks for, m/s^2: 5 (ours; Sun's
+    /// code has none, and a demand beyond `g` downward would turn the thrust direction over: 1 m
+    /// above the setpoint, `k_p,z = 10` asks for 10 m/s^2).
+    pub max_vertical_accel_m_s2: f64,
     /// Limit on each horizontal velocity integral, m (Sun: 5).
     pub integral_limit_m: f64,
     /// Reduced-attitude proportional gain, 1/s^2 (Sun: 200).
@@ -118,6 +122,7 @@ impl Default for IndiGains {
             k_d_z: 6.0,
             max_speed_m_s: 10.0,
             max_tilt_rad: 10f64.to_radians(),
+            max_vertical_accel_m_s2: 5.0,
             integral_limit_m: 5.0,
             k_att_p: 200.0,
             k_att_d: 30.0,
@@ -155,6 +160,7 @@ impl IndiGains {
             ("k_p_z", self.k_p_z),
             ("k_d_z", self.k_d_z),
             ("max_speed_m_s", self.max_speed_m_s),
+            ("max_vertical_accel_m_s2", self.max_vertical_accel_m_s2),
             ("k_att_p", self.k_att_p),
             ("k_att_d", self.k_att_d),
             ("filter_frequency_rad_s", self.filter_frequency_rad_s),
@@ -242,13 +248,18 @@ mod tests {
     fn the_defaults_pass_and_every_rule_names_its_gain() {
         IndiGains::default().check().unwrap();
         type Set = fn(&mut IndiGains, f64);
-        let cases: [(&str, Set, f64); 23] = [
+        let cases: [(&str, Set, f64); 24] = [
             ("k_p_xy", |g, v| g.k_p_xy = v, 0.0),
             ("k_v_xy", |g, v| g.k_v_xy = v, -1.0),
             ("k_i_xy", |g, v| g.k_i_xy = v, -0.1),
             ("k_p_z", |g, v| g.k_p_z = v, 0.0),
             ("k_d_z", |g, v| g.k_d_z = v, f64::NAN),
             ("max_speed_m_s", |g, v| g.max_speed_m_s = v, 0.0),
+            (
+                "max_vertical_accel_m_s2",
+                |g, v| g.max_vertical_accel_m_s2 = v,
+                0.0,
+            ),
             ("max_tilt_rad", |g, v| g.max_tilt_rad = v, 1.6),
             ("max_tilt_rad", |g, v| g.max_tilt_rad = v, 0.0),
             ("integral_limit_m", |g, v| g.integral_limit_m = v, -1.0),

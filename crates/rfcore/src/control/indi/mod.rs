@@ -12,7 +12,8 @@
 //! # The control law (one control step, body FRD, world NED)
 //! 1. **Position loop** (Sun's `URpositionControl`, plus a moving reference): horizontal
 //!    `v_t = sat(k_p,xy (p_r - p) + v_r, v_max)`, `a_xy = k_v,xy (v_t - v) + k_i,xy int (v_t - v)`,
-//!    limited to `g tan(max_tilt)`; vertical `nu_z = k_p,z (z_r - z) + k_d,z (w_r - w)`. The thrust
+//!    limited to `g tan(max_tilt)`; vertical `nu_z = k_p,z (z_r - z) + k_d,z (w_r - w)`, limited to
+//!    `max_vertical_accel_m_s2` (below `g`: the thrust keeps pointing up). The thrust
 //!    direction wanted is `z_d = (g e3 - a) / |g e3 - a|` (body z, pointing down), `a = (a_xy, nu_z)`,
 //!    passed through the low-pass filter (value, rate `z_d'`, acceleration `z_d''`).
 //! 2. **Reduced attitude of the primary axis `n`** (body frame, unit; body z unless tilted, see
@@ -79,7 +80,8 @@
 //! exactly. Plain INDI leaves every torque but the rotors' to the filtered gyro, the inertia
 //! coupling `-J^-1 (omega x J omega)` included; at the 40 rad/s spin of a quadrotor that lost rotors
 //! the filter's lag on that large, fast term loses ke-quadcopter flying at 2 m/s after losing rotors
-//! 1 and 3 (16 m off station). The coupling is known from the gyro and `J`, so the law takes it at
+//! 1 and 3 (the oscillation grows with the spin until the rotors saturate: 2.4 m altitude error in
+//! the window). The coupling is known from the gyro and `J`, so the law takes it at
 //! the current rate and removes its filtered value from `omega'_f`
 //! ([`IndiGains::model_coupling`]): the filter then lags only on the unknown torques (drag, rotor
 //! gyroscopic moment), and that flight holds to 0.42 m (`tests/indi.rs`).
@@ -196,6 +198,17 @@ impl IndiController {
         require_finite("dt_s", dt_s)?;
         if dt_s <= 0.0 {
             return Err(RfError::invalid("dt_s", format!("must be > 0, got {dt_s}")));
+        }
+        let gravity = airframe.gravity_m_s2();
+        if gains.max_vertical_accel_m_s2 >= gravity {
+            return Err(RfError::invalid(
+                "max_vertical_accel_m_s2",
+                format!(
+                    "must be below g = {gravity} m/s^2 (a larger downward demand turns the thrust \
+                     direction over), got {}",
+                    gains.max_vertical_accel_m_s2
+                ),
+            ));
         }
         if setpoints.is_empty() {
             return Err(RfError::invalid(
@@ -338,7 +351,8 @@ impl IndiController {
             self.memory.integral_xy[i] =
                 (self.memory.integral_xy[i] + e * self.dt_s).clamp(-limit, limit);
         }
-        let nu_z = g.k_p_z * e_p.z + g.k_d_z * (v_r.z - s.velocity_m_s.z);
+        let nu_z = (g.k_p_z * e_p.z + g.k_d_z * (v_r.z - s.velocity_m_s.z))
+            .clamp(-g.max_vertical_accel_m_s2, g.max_vertical_accel_m_s2);
         Vector3::new(a_xy.x, a_xy.y, nu_z)
     }
 
