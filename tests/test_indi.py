@@ -27,6 +27,7 @@ def test_gains_defaults_are_the_cores_and_suns():
     # chi = 105 deg (65.67 deg from the remaining pair's angular acceleration).
     assert (g.k_att_p, g.k_att_d, g.k_p_z, g.k_d_z, g.k_p_xy, g.k_v_xy) == (200, 30, 10, 6, 1, 2)
     assert g.filter_frequency_rad_s == 50.0 and g.max_tilt_rad == pytest.approx(math.radians(10))
+    assert (g.max_vertical_accel_m_s2, g.given_up_yaw_weight, g.mismatch_time_constant_s) == (5.0, 1e-4, 0.5)
     assert math.degrees(g.output_angle_rad) == pytest.approx(65.67, abs=0.005)
     assert (g.yaw, g.model_coupling, g.weights) == ("auto", True, [1.0, 1.0, 1.0, 1.0])
     changed = rf.IndiGains(k_att_p=150.0, yaw="give-up", weights=[1, 2, 2, 0])
@@ -136,3 +137,25 @@ def test_indi_runs_in_a_batch_and_replays_what_the_simulator_flew():
     states13 = np.hstack([run.position, run.velocity, run.quaternion, run.omega])
     commands = _rfcore.replay(controller.core(sim.dt_s), run.t, states13, 8)
     assert commands.shape == (run.t.size, 8) and np.all(np.isfinite(commands))
+
+
+def test_the_given_up_yaw_weight_trades_spin_for_altitude_on_a_hexacopter():
+    """PPNNPN without rotor 5 (yaw given up): weight 0 (Sun's row elimination) spins at 79 rad/s,
+    beyond a 2000 deg/s gyro's 34.9 rad/s; the default 1e-4 at 33 rad/s for 5 mm of altitude; 1e-2
+    trades 0.41 m (IndiGains.given_up_yaw_weight). Ke's rotor lag and drags scaled by mass."""
+    hexa = rf.Airframe.preset("hexa-ppnnpn")
+    scale = hexa.mass_kg / 0.72
+    sim = rf.Simulator(hexa, dt_s=1 / 400, substeps=4, actuator=rf.FixedPitchActuator(time_constant_s=0.025),
+                       drag=rf.Drag(linear_n_s_m=0.3 * scale, rotational_n_m_s=2.8e-3 * scale))
+    faults = [rf.RotorFault(5, 3.0)]
+    measured = {}
+    for weight in (0.0, 1e-4, 1e-2):
+        gains = rf.IndiGains(given_up_yaw_weight=weight)
+        run = sim.run(rf.State(position=HOVER), 25.0, controller=rf.IndiController(hexa, failures=faults, position=HOVER, gains=gains),
+                      faults=faults)
+        altitude, horizontal = _hold_verdict(run, 3.0, np.tile(HOVER, (run.t.size, 1)))
+        measured[weight] = (altitude, horizontal, float(np.mean(np.abs(run.omega[run.t >= 8.0, 2]))))
+    assert measured[0.0][2] > 70.0 and measured[0.0][0] < 0.01
+    assert 30.0 < measured[1e-4][2] < math.radians(2000) and measured[1e-4][0] < 0.01
+    assert 0.3 < measured[1e-2][0] < 0.5 and measured[1e-2][2] < measured[1e-4][2]
+    assert all(h < 0.01 for _, h, _ in measured.values())

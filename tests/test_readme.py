@@ -38,6 +38,9 @@ CLAIMS = [
     ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
     ("# 1.527, 1.680 (stability margin 1/gamma)", "ours", "round(ours.gamma_min, 3), round(ours.gamma, 3)", (1.527, 1.680), 0),
     ("# holds-position, within 1 cm of (0, 0, 1) m after 60 s", "ours", "run.outcome == 'holds-position' and run.final_error_m < 0.01", True, 0),
+    # INDI fault-tolerant control (issue 30).
+    ("# True: one torque axis left, output redefined", "indi", "indi.failure_modes()[1].single_axis", True, 0),
+    ("# the spin: about 40 rad/s", "indi", "float(abs(run.omega[run.t > 10, 2]).mean())", 40.0, 1.0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

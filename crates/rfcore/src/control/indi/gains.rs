@@ -100,9 +100,9 @@ pub struct IndiGains {
     /// The yaw weight once yaw is given up, in place of `weights[3]`, when more rotors remain than
     /// the thrust and attitude rows use (a hexa- or octocopter): their spare authority still damps
     /// the spin, after thrust and attitude. Otherwise (a quadrotor) the row is dropped, weight 0, as
-    /// Sun does. 1e-4 (ours): it keeps the PPNNPN hexacopter without rotor 5 at 33 rad/s instead
-    /// of 70 (where the 50 rad/s filter no longer keeps up), and a larger weight trades altitude
-    /// for yaw (1e-2: 0.4 m).
+    /// Sun does. 1e-4 (ours): the PPNNPN hexacopter without rotor 5 then spins at 33 rad/s, within
+    /// a 2000 deg/s gyro's range, instead of 79 rad/s with weight 0, for 5 mm of altitude; a larger
+    /// weight trades more altitude for yaw (1e-3: 5 cm, 1e-2: 0.41 m; `tests/test_indi.py`).
     pub given_up_yaw_weight: f64,
     /// Whether yaw is held (module docs).
     pub yaw: YawMode,
