@@ -86,13 +86,14 @@ def test_failure_modes_say_how_each_failure_set_is_flown():
     c = rf.IndiController(quad, failures=[rf.RotorFault(1, 2.0), rf.RotorFault(3, 2.0)], position=HOVER)
     healthy, pair = c.failure_modes()  # told at once: no set in between
     assert healthy.yaw_controlled and not healthy.single_axis and healthy.zero_dynamics_damping is None
-    assert pair.failed == [0, 2] and pair.single_axis and not pair.yaw_controlled
+    assert pair.failed == (1, 3) and pair.healthy == (2, 4) and pair.single_axis and not pair.yaw_controlled
     # J_z > J_xy: stable zero dynamics, damping (1 + a) cot(delta) / (2 sqrt(-a)) with Sun's delta.
     jx, _, jz = quad.inertia_kg_m2
     a = (jx - jz) / jx
     expected = (1 + a) / math.tan(c.gains.output_angle_rad) / (2 * math.sqrt(-a))
     assert pair.zero_dynamics_a == pytest.approx(a) and pair.zero_dynamics_damping == pytest.approx(expected)
-    assert np.allclose(c.u_trim, quad.mass_kg * quad.gravity_m_s2 / 4)
+    assert np.allclose(c.u_trim, quad.mass_kg * quad.gravity_m_s2 / 4) and pair.hover_thrust_n[0] == 0.0
+    assert c.failures == ((1, 2.0), (3, 2.0))
     hexa = rf.IndiController(rf.Airframe.preset("hexa-ppnnpn"), failures=[(1, 1.0), (5, 2.0)])
     assert [m.yaw_controlled for m in hexa.failure_modes()] == [True, True, False]
     assert isinstance(c.core(0.0025), CORE_TYPES)

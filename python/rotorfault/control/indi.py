@@ -22,6 +22,7 @@ or the noisy body rates with sensor noise).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -35,8 +36,38 @@ from ..airframe import Airframe, require_airframe
 #: ``IndiGains::default``; values are checked there, naming the gain).
 IndiGains = _rfcore.IndiGains
 
-#: How the controller flies one failure set (rotor indices 0-based, as the core's).
-IndiFailureMode = _rfcore.IndiFailureMode
+
+
+@dataclass(frozen=True)
+class IndiFailureMode:
+    """How the controller flies one set of failed rotors (1-based rotor numbers), decided at
+    construction: whether yaw is held or given up (the vehicle spins), whether one roll/pitch
+    torque axis is left (two opposing rotors of a quadrotor: the output is redefined), and then the
+    zero dynamics ``eta'' = a r^2 eta - ...`` (stable when ``a < 0``, with the damping ratio
+    ``zero_dynamics_damping``)."""
+
+    failed: tuple[int, ...]
+    healthy: tuple[int, ...]
+    yaw_controlled: bool
+    single_axis: bool
+    #: The controlled output direction (single axis only), body x-y plane.
+    output_direction: tuple[float, float] | None
+    #: The primary axis in the body frame.
+    primary_axis: tuple[float, float, float]
+    zero_dynamics_a: float | None
+    zero_dynamics_damping: float | None
+    #: Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
+    hover_thrust_n: tuple[float, ...]
+
+    @classmethod
+    def _from_core(cls, core: _rfcore.IndiFailureMode) -> IndiFailureMode:
+        direction = core.output_direction
+        x, y, z = core.primary_axis
+        return cls(
+            tuple(k + 1 for k in core.failed), tuple(k + 1 for k in core.healthy), core.yaw_controlled,
+            core.single_axis, None if direction is None else (direction[0], direction[1]), (x, y, z),
+            core.zero_dynamics_a, core.zero_dynamics_damping, tuple(core.hover_thrust_n),
+        )
 
 
 def _vector(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
@@ -48,7 +79,7 @@ def _vector(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
 
 def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
     """``(rotor, time_s)`` with a 1-based rotor, or a :class:`rotorfault.RotorFault` of a complete
-    loss: the 0-based rotor and the time the controller is told."""
+    loss: the (1-based) rotor and the time the controller is told."""
     efficiency = getattr(item, "efficiency", None)
     if efficiency is not None:
         if real(f"failures[{k}].efficiency", efficiency) != 0.0:
@@ -65,7 +96,7 @@ def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
         raise TypeError(f"failures[{k}].rotor: expected a 1-based rotor number, got {rotor!r}")
     if not 1 <= int(rotor) <= rotor_count:
         raise ValueError(f"failures[{k}].rotor: rotor numbers run from 1 to {rotor_count}, got {rotor}")
-    return int(rotor) - 1, real(f"failures[{k}].time", time)
+    return int(rotor), real(f"failures[{k}].time", time)
 
 
 class IndiController:
@@ -95,7 +126,7 @@ class IndiController:
         self.gains = gains
         if isinstance(failures, (str, bytes)) or not isinstance(failures, Sequence):
             raise TypeError(f"failures: expected a sequence of (rotor, time_s) or RotorFault, got {type(failures).__name__}")
-        #: ``(rotor, time_s)``, 0-based rotors (the core's).
+        #: ``(rotor, time_s)``, 1-based rotors as given.
         self.failures = tuple(_failure(k, item, airframe.rotor_count) for k, item in enumerate(failures))
         if setpoints is None:
             setpoints = [(0.0, position, velocity)]
@@ -111,13 +142,14 @@ class IndiController:
                  _vector(f"setpoints[{k}].velocity", moving))
             )
         self.setpoints = tuple(parsed)
-        self._modes = self.core(1.0 / 400.0).failure_modes()  # validates everything now
+        # Validates everything now.
+        self._modes = [IndiFailureMode._from_core(m) for m in self.core(1.0 / 400.0).failure_modes()]
 
     def core(self, dt_s: float) -> _rfcore.IndiController:
         return _rfcore.IndiController(
             self.airframe._core,
             gains=self.gains,
-            failures=list(self.failures),
+            failures=[(rotor - 1, time) for rotor, time in self.failures],
             setpoints=[(t, list(p), list(v)) for t, p, v in self.setpoints],
             dt_s=real("dt_s", dt_s),
         )
@@ -128,8 +160,8 @@ class IndiController:
         return np.array(self._modes[0].hover_thrust_n)
 
     def failure_modes(self) -> list[IndiFailureMode]:
-        """How each failure set is flown: ``[0]`` healthy, ``[k]`` after the first ``k`` failures
-        in time order (yaw held or given up, one torque axis left, the zero dynamics' damping)."""
+        """How each failure set is flown: ``[0]`` the healthy vehicle, then one per detection time
+        (the failures told then and before; failures told at once are flown together)."""
         return list(self._modes)
 
 
