@@ -151,7 +151,14 @@ mod tests {
             let s = solver(&g, &w, k, -big, big);
             let reference = s.allocate(&b).unwrap();
             assert!(reference.certificate.holds(), "{trial}");
+            // And a third computation: the SVD pseudo-inverse of the weighted rows.
+            let rows: Vec<usize> = (0..4).filter(|&r| w[r] > 0.0).collect();
+            let gw = DMatrix::from_fn(rows.len(), k, |i, c| w[rows[i]].sqrt() * g[rows[i]][c]);
+            let bw = nalgebra::DVector::from_fn(rows.len(), |i, _| w[rows[i]].sqrt() * b[rows[i]]);
+            let svd_x = gw.pseudo_inverse(1e-12).unwrap() * bw;
             for c in 0..k {
+                let scale = svd_x.amax().max(1.0);
+                assert!((x[c] - svd_x[c]).abs() < 1e-8 * scale, "{trial}: svd");
                 let tol = 1e-8
                     * reference
                         .commands
