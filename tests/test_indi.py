@@ -66,7 +66,7 @@ def test_bad_controller_arguments_are_named():
         (dict(failures=[(5, 1.0)]), ValueError, r"^failures\[0\]\.rotor"),
         (dict(failures=[(1.5, 1.0)]), TypeError, r"^failures\[0\]\.rotor"),
         (dict(failures=[rf.RotorFault(1, 1.0, efficiency=0.5)]), ValueError, r"^failures\[0\]\.efficiency"),
-        (dict(failures=[(1, 1.0), (2, 1.0)]), ValueError, r"^failures: with rotor\(s\) 1, 2 failed .* even spinning"),
+        (dict(failures=[(1, 1.0), (2, 1.0)]), ValueError, r"^failures: with rotor\(s\) 1, 2 failed .* cannot hold the weight with zero roll and pitch torque"),
         (dict(failures=[(2, 1.0), (2, 2.0)]), ValueError, r"^failures\[1\]\.rotor: rotor 2 is listed twice"),
         (dict(failures="1"), TypeError, r"^failures"),
         (dict(setpoints=[(0.0, (0, 0))]), ValueError, r"^setpoints\[0\]\.position"),

@@ -69,7 +69,7 @@ pub struct IndiGains {
     /// Yaw-rate gain, 1/s (Sun: 5).
     pub k_r: f64,
     /// Natural frequency of the second-order filter, rad/s: 50, the bandwidth of Sun's first-order
-    /// filter (`t_indi = 0.02 s`, `controlParams.m`; module docs, "Filter").
+    /// filter (`t_indi = 0.02 s`, `controlParams.m`; module docs, "Filter and inertia coupling").
     pub filter_frequency_rad_s: f64,
     /// Damping ratio of the filter: 0.55 (Smeur et al. 2016).
     pub filter_damping: f64,

@@ -63,7 +63,9 @@
 //!   spin rate. With `J_z < J_xy` no choice of `delta` is stable ([`FailureMode::zero_dynamics`]).
 //!   Sun's `chi = 105 deg` on his Bebop 2 is `delta = 65.67 deg` here (a test derives it).
 //! - **No hover**: a failure set whose remaining rotors cannot hold the weight with zero roll and
-//!   pitch torque, even spinning, is refused at construction (naming `failures`).
+//!   pitch torque (the hover this law flies, spinning about the thrust axis) is refused at
+//!   construction, naming `failures`; a relaxed hover about a tilted spin axis (Mueller and
+//!   D'Andrea), which two adjacent or three lost rotors of a quadrotor need, is not attempted.
 //!
 //! # Samples and their substitutes
 //! [`Controller::command_with`] reads the gyro, the specific force and the rotor thrusts actually

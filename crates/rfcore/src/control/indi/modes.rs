@@ -141,9 +141,10 @@ impl Mode {
         let max_thrust = limit.as_ref().map_or(f64::NEG_INFINITY, |l| l.scale);
         if max_thrust < weight {
             return Err(invalid_failures(format!(
-                "with rotor(s) {names} failed the remaining rotors cannot hold the weight even \
-                 spinning: the largest thrust with zero roll and pitch torque is {max_thrust} N \
-                 < {weight} N"
+                "with rotor(s) {names} failed the remaining rotors cannot hold the weight with \
+                 zero roll and pitch torque, the hover this controller flies (spinning about the \
+                 thrust axis; a relaxed hover about a tilted axis is not attempted): the largest \
+                 such thrust is {max_thrust} N < {weight} N"
             )));
         }
         // The hover thrusts (closest to zero among those with zero roll/pitch torque).
@@ -331,7 +332,8 @@ mod tests {
         ] {
             let err = mode(preset, failed).unwrap_err().to_string();
             assert!(
-                err.starts_with("failures:") && err.contains("even spinning"),
+                err.starts_with("failures:")
+                    && err.contains("cannot hold the weight with zero roll and pitch torque"),
                 "{err}"
             );
         }
