@@ -24,6 +24,7 @@ macro_rules! indi_gains {
         impl PyIndiGains {
             #[new]
             #[pyo3(signature = (*, $($name=None,)* weights=None, model_coupling=None, yaw=None))]
+            #[allow(clippy::too_many_arguments)] // keyword-only, one per gain
             fn new(
                 $($name: Option<f64>,)*
                 weights: Option<[f64; 4]>,
