@@ -345,7 +345,7 @@ class Trajectory:
     def divergence(self) -> Divergence | None: ...
 
 # <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
-_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback
+_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback | IndiController
 # </controller-registry>
 
 def simulate(
@@ -633,6 +633,116 @@ class LanzonController:
         position: list[float] | None = None,
         outer_loop: LanzonOuterLoop | None = None,
     ) -> LanzonController: ...
+
+@final
+class IndiGains:
+    def __new__(
+        cls,
+        *,
+        k_p_xy: float | None = None,
+        k_v_xy: float | None = None,
+        k_i_xy: float | None = None,
+        k_p_z: float | None = None,
+        k_d_z: float | None = None,
+        max_speed_m_s: float | None = None,
+        max_tilt_rad: float | None = None,
+        max_vertical_accel_m_s2: float | None = None,
+        integral_limit_m: float | None = None,
+        k_att_p: float | None = None,
+        k_att_d: float | None = None,
+        k_r: float | None = None,
+        filter_frequency_rad_s: float | None = None,
+        filter_damping: float | None = None,
+        output_angle_rad: float | None = None,
+        primary_axis_tilt: float | None = None,
+        mismatch_time_constant_s: float | None = None,
+        actuator_time_constant_s: float | None = None,
+        given_up_yaw_weight: float | None = None,
+        min_yaw_authority: float | None = None,
+        weights: list[float] | None = None,
+        model_coupling: bool | None = None,
+        yaw: str | None = None,
+    ) -> IndiGains: ...
+    @property
+    def k_p_xy(self) -> float: ...
+    @property
+    def k_v_xy(self) -> float: ...
+    @property
+    def k_i_xy(self) -> float: ...
+    @property
+    def k_p_z(self) -> float: ...
+    @property
+    def k_d_z(self) -> float: ...
+    @property
+    def max_speed_m_s(self) -> float: ...
+    @property
+    def max_tilt_rad(self) -> float: ...
+    @property
+    def max_vertical_accel_m_s2(self) -> float: ...
+    @property
+    def integral_limit_m(self) -> float: ...
+    @property
+    def k_att_p(self) -> float: ...
+    @property
+    def k_att_d(self) -> float: ...
+    @property
+    def k_r(self) -> float: ...
+    @property
+    def filter_frequency_rad_s(self) -> float: ...
+    @property
+    def filter_damping(self) -> float: ...
+    @property
+    def output_angle_rad(self) -> float: ...
+    @property
+    def primary_axis_tilt(self) -> float: ...
+    @property
+    def mismatch_time_constant_s(self) -> float: ...
+    @property
+    def actuator_time_constant_s(self) -> float: ...
+    @property
+    def given_up_yaw_weight(self) -> float: ...
+    @property
+    def min_yaw_authority(self) -> float: ...
+    @property
+    def weights(self) -> list[float]: ...
+    @property
+    def model_coupling(self) -> bool: ...
+    @property
+    def yaw(self) -> str: ...
+
+@final
+class IndiFailureMode:
+    @property
+    def failed(self) -> list[int]: ...
+    @property
+    def healthy(self) -> list[int]: ...
+    @property
+    def yaw_controlled(self) -> bool: ...
+    @property
+    def single_axis(self) -> bool: ...
+    @property
+    def output_direction(self) -> list[float] | None: ...
+    @property
+    def primary_axis(self) -> list[float]: ...
+    @property
+    def zero_dynamics_a(self) -> float | None: ...
+    @property
+    def zero_dynamics_damping(self) -> float | None: ...
+    @property
+    def hover_thrust_n(self) -> list[float]: ...
+
+@final
+class IndiController:
+    def __new__(
+        cls,
+        airframe: Airframe,
+        *,
+        gains: IndiGains,
+        failures: list[tuple[int, float]],
+        setpoints: list[tuple[float, list[float], list[float]]],
+        dt_s: float,
+    ) -> IndiController: ...
+    def failure_modes(self) -> list[IndiFailureMode]: ...
 
 @final
 class FtcPreset:

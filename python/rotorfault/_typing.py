@@ -58,6 +58,7 @@ CoreController: TypeAlias = (
     | _rfcore.UniformPassiveFtc
     | _rfcore.LanzonController
     | _rfcore.TrackingFeedback
+    | _rfcore.IndiController
 )
 #: Their names: each class name in kebab case (``rotorfault._rfcore.CONTROLLERS``).
 CoreControllerName: TypeAlias = Literal[
@@ -68,6 +69,7 @@ CoreControllerName: TypeAlias = Literal[
     "uniform-passive-ftc",
     "lanzon-controller",
     "tracking-feedback",
+    "indi-controller",
 ]
 # </controller-registry>
 

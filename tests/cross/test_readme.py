@@ -43,6 +43,9 @@ CLAIMS = [
     ("# stabilisability: ... no input moves yaw rate r together with p and q: 0.132 p + 0.132 q - r", "fixed",
      "refusal.startswith('stabilisability: ') and 'no input moves yaw rate r together with p and q: 0.132 p + 0.132 q - r' in refusal",
      True, 0),
+    # INDI fault-tolerant control (issue 30).
+    ("# True: one torque axis left, output redefined", "indi", "indi.failure_modes()[1].single_axis", True, 0),
+    ("# the spin: about 40 rad/s", "indi", "float(abs(run.omega[run.t > 10, 2]).mean())", 40.0, 1.0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

@@ -40,6 +40,8 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<allocation::PySingleAllocation>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
+    module.add_class::<control::indi::PyIndiGains>()?;
+    module.add_class::<control::indi::PyIndiFailureMode>()?;
     // The Rust controllers, declared once in `control::controller_registry!`: each class, and
     // `CONTROLLERS`, the `(name, class)` pairs Python derives its lists from.
     let controllers = control::registry(module.py());

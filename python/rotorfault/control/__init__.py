@@ -7,6 +7,8 @@
   constrained allocation);
 - :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
   and the N-matrix stability analysis;
+- :mod:`~rotorfault.control.indi`: :class:`IndiController` (incremental nonlinear dynamic
+  inversion fault-tolerant control after Sun et al.) and its :class:`IndiGains`;
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR hover controllers;
@@ -33,8 +35,9 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .._typing import Controller
-from . import ke, lqr
+from . import indi, ke, lqr
 from .allocated import Allocated
+from .indi import IndiController, IndiGains
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
@@ -73,6 +76,8 @@ __all__ = [
     "Allocated",
     "Controller",
     "HoverTrim",
+    "IndiController",
+    "IndiGains",
     "KeGains",
     "LanzonController",
     "LinearFeedback",
@@ -86,6 +91,7 @@ __all__ = [
     "design_lqr",
     "detectability",
     "hover_trim",
+    "indi",
     "ke",
     "lanzon",
     "linearize",

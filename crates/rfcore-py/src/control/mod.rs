@@ -3,6 +3,7 @@
 //! controller and replay. Translation only.
 
 pub(crate) mod class;
+pub(crate) mod indi;
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
@@ -23,6 +24,7 @@ use rfcore::RfError;
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 pub(crate) use class::ControllerClass;
+use indi::PyIndiController;
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
@@ -125,6 +127,7 @@ controller_registry! {
     UniformPassiveFtc(PyUniformPassiveFtc) = "uniform-passive-ftc",
     LanzonController(PyLanzonController) = "lanzon-controller",
     TrackingFeedback(PyTrackingFeedback) = "tracking-feedback",
+    IndiController(PyIndiController) = "indi-controller",
 }
 
 /// The core controller for one run: `None` holds every command at zero.

@@ -10,15 +10,19 @@
 //! - [`tracking`]: state feedback on a moving reference with a saturated error.
 //! - [`allocated`]: a virtual-control law followed by constrained allocation.
 //! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
+//! - [`indi`]: incremental nonlinear dynamic inversion fault-tolerant control (Sun et al.), with
+//!   the second-order [`filter`] it differentiates the gyro through.
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
 
 use nalgebra::DMatrix;
 
 use crate::error::{require_all_finite, Result, RfError};
-use crate::state::RigidBodyState;
+use crate::state::{ControllerInput, RigidBodyState};
 
 pub mod allocated;
+pub mod filter;
+pub mod indi;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;
@@ -46,6 +50,23 @@ pub trait Controller: Send {
     /// Writes the commands for the measured state into `out` (length [`Controller::command_count`]).
     /// An error (only controllers that call out, such as a Python callable, can fail) ends the run.
     fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()>;
+    /// [`Controller::command`] given everything measured this step: the state plus the raw samples
+    /// of [`ControllerInput`] (gyro, accelerometer, rotor outputs). The simulator calls this one;
+    /// by default it uses the state alone, so a controller that needs no samples implements
+    /// [`Controller::command`] only.
+    fn command_with(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.command(t_s, input.state, out)
+    }
+    /// Whether [`Controller::command_with`] reads the raw samples: the simulator computes them only
+    /// for a controller that does (they cost a rotor evaluation per control step).
+    fn reads_samples(&self) -> bool {
+        false
+    }
     /// Back to the initial internal state (called at the start of every run).
     fn reset(&mut self) {}
 }

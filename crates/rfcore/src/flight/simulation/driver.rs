@@ -12,9 +12,9 @@ use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, DivergenceReason};
 use crate::flight::simulation::noise::Gaussian;
 use crate::flight::simulation::recording::{records, NoObserver, StepObserver, Trajectory};
-use crate::flight::simulation::step::{check_step_size, Integrator};
+use crate::flight::simulation::step::{check_step_size, rotor_totals, Integrator};
 use crate::flight::vehicle::Vehicle;
-use crate::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
+use crate::state::{state_from_vector, state_vector, ControllerInput, RigidBodyState, STATE_DIM};
 
 /// One closed-loop run. `actuators` is the initial actuator state (settle it to the trim first
 /// for a trimmed start); `efficiency` the initial rotor efficiency. Faults may come in any order.
@@ -102,6 +102,8 @@ pub fn simulate_observed(
     let mut integrator = Integrator::new(vehicle, &actuators, config, &x0);
     let mut gaussian = config.noise.map(|n| Gaussian::new(n.seed));
     let mut measured_vector = [0.0; STATE_DIM];
+    let reads_samples = controller.reads_samples();
+    let mut rotor_thrust = vec![0.0; m];
 
     schedule.apply_due(0.0, &mut efficiency);
     if let Some(reason) = integrator.limits().reason(&state) {
@@ -135,7 +137,23 @@ pub fn simulate_observed(
             }
             _ => state,
         };
-        controller.command(t, &measured, &mut command)?;
+        // Raw samples (truth, or the noisy rates) only for a controller that reads them.
+        let input = if reads_samples {
+            for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
+                *thrust = actuators.output(i, efficiency[i]).thrust_n;
+            }
+            let totals = rotor_totals(vehicle, &actuators, actuators.state(), &efficiency);
+            let wind = config.wind_at(t);
+            ControllerInput {
+                state: &measured,
+                gyro_rad_s: Some(measured.omega_rad_s),
+                specific_force_m_s2: Some(vehicle.specific_force(&state, &totals, &wind)),
+                rotor_thrust_n: Some(&rotor_thrust),
+            }
+        } else {
+            ControllerInput::state_only(&measured)
+        };
+        controller.command_with(t, &input, &mut command)?;
         let finite = command.iter().all(|c| c.is_finite());
         observer.step(t, &state, &command, &efficiency);
         // Every `every`-th step, the last one, and a step whose command ends the run.

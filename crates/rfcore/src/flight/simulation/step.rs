@@ -13,7 +13,7 @@ use crate::state::RigidBodyState;
 
 /// The rotors' summed contribution with the channels at `states`.
 #[inline]
-fn rotor_totals(
+pub(super) fn rotor_totals(
     vehicle: &Vehicle,
     actuators: &Actuators,
     states: &[f64],
