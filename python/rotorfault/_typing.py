@@ -32,11 +32,11 @@ Spin: TypeAlias = Literal["cw", "ccw"]
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
 #: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
 DivergenceKind: TypeAlias = Literal[
-    "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
+    "crashed", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
 ]
 #: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
 KeOutcome: TypeAlias = Literal[
-    "holds-position", "circling", "off-station",
+    "holds-position", "circling", "off-station", "crashed",
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.

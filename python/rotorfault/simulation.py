@@ -3,6 +3,10 @@ saturation, rate limits and faults, drag and wind, closed by a controller at its
 
 Frames: world NED (north, east, down; altitude is ``-position[2]``), body FRD. Rotor numbers in
 faults are 1-based like the papers; arrays are ordered rotor 1..m.
+
+The ground is the plane ``z = ground_z_m`` (default 0: altitude is height above the ground); the
+centre of mass reaching it ends the run with a ``crashed`` event (time, impact speed, attitude).
+There is no ground reaction, so a run starts above the ground; ``ground=False`` removes it.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _rfcore
-from ._convert import FloatArray, count, float_array, real
+from ._convert import FloatArray, count, flag, float_array, real
 from ._typing import Controller, CoreController, DivergenceKind
 from ._progress import chunks
 from .airframe import Airframe, require_airframe
@@ -70,6 +74,10 @@ def trim_command(controller: object) -> FloatArray | None:
 #: naming ``substeps`` and the numbers), and one whose body rate grows past ``MAX_RATE_STEP / h``
 #: ends with a ``step-size`` event (a numerical cause, not the vehicle's).
 MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
+
+#: Where :meth:`Simulator.run` starts when no ``x0`` is given: at rest, level, 10 m above a ground
+#: at z = 0 (world NED).
+DEFAULT_START_M = (0.0, 0.0, -10.0)
 
 #: The core's defaults, read once: the one source of every default below.
 _DEFAULT_DRAG = _rfcore.Drag()
@@ -305,16 +313,26 @@ class Noise:
 
 @dataclass(frozen=True)
 class Event:
-    """Why and when a run ended early, with the state (12-vector) at that moment."""
+    """Why and when a run ended early, with the state (12-vector) at that moment. A ``crashed``
+    event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
+    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise."""
 
     time: float
-    #: A kebab-case code (``"tilt"``, ``"non-finite-state"``, ...); ``description`` is the
-    #: human-readable text.
+    #: A kebab-case code (``"crashed"``, ``"tilt"``, ``"non-finite-state"``, ...);
+    #: ``description`` is the human-readable text.
     kind: DivergenceKind
     description: str
     state: FloatArray
+    impact_speed_m_s: float | None = None
+    impact_vertical_speed_m_s: float | None = None
+    impact_tilt_rad: float | None = None
 
     def __str__(self) -> str:
+        if self.kind == "crashed" and self.impact_speed_m_s is not None:
+            return (
+                f"crashed at t = {self.time:.4f} s: {self.description} at {self.impact_speed_m_s:.2f} m/s "
+                f"({self.impact_vertical_speed_m_s:.2f} m/s down), tilted {math.degrees(self.impact_tilt_rad or 0.0):.1f} deg"
+            )
         return f"diverged at t = {self.time:.4f} s: {self.description}"
 
 
@@ -373,7 +391,8 @@ class Trajectory:
         d = raw.divergence
         if d is not None:
             kind = cast(DivergenceKind, d.reason)
-            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state)))
+            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state),
+                                d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad))
         return cls(
             t=raw.t,
             position=raw.position,
@@ -509,7 +528,9 @@ class Simulator:
 
     ``dt_s`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
     ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
-    ``(time_s, (n, e, d))`` points added to it, interpolated linearly.
+    ``(time_s, (n, e, d))`` points added to it, interpolated linearly. The ground is the plane
+    ``z = ground_z_m`` (world NED, m; default the core's, 0); ``ground=False``: no ground.
+    ``ground_z_m`` holds the ground in effect (``None`` without one).
     """
 
     def __init__(
@@ -524,6 +545,8 @@ class Simulator:
         actuator: FixedPitchActuator | VariablePitchActuator | None = None,
         limits: DivergenceLimits | None = None,
         noise: Noise | None = None,
+        ground_z_m: float | None = None,
+        ground: bool = True,
     ) -> None:
         self.airframe = require_airframe(airframe)
         self.dt_s = real("dt_s", dt_s)
@@ -543,11 +566,17 @@ class Simulator:
         if noise is not None and not isinstance(noise, Noise):
             raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
         self.noise = noise
-        # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
-        # rebuilds the core objects from these attributes, so changing one later takes effect.)
+        self.ground = flag("ground", ground)
+        self.ground_z_m: float | None = None if ground_z_m is None else real("ground_z_m", ground_z_m)
+        # Fail early on bad parameters: the core validates them in a zero-length run (from above
+        # the ground). (Every run rebuilds the core objects from these attributes, so changing one
+        # later takes effect.)
+        config = self._config(0.0)
+        self.ground_z_m = config.ground_z_m
+        above = State(position=(0.0, 0.0, (self.ground_z_m or 0.0) - 1.0))
         _rfcore.simulate(
-            self.airframe._core, self.actuator._core(), self.drag._core(), None, State()._packed(), [],
-            self.airframe.efficiency, None, self._config(0.0),
+            self.airframe._core, self.actuator._core(), self.drag._core(), None, above._packed(), [],
+            self.airframe.efficiency, None, config,
         )
 
     @property
@@ -564,6 +593,8 @@ class Simulator:
             substeps=self.substeps,
             duration_s=real("duration_s", duration_s),
             limits=self.limits._core(),
+            ground_z_m=self.ground_z_m,
+            ground=self.ground,
             wind_m_s=self.wind,
             wind_profile=self.wind_profile,
             noise=None if self.noise is None else self.noise._core(seed_offset),
@@ -587,11 +618,12 @@ class Simulator:
         initial_command: npt.ArrayLike | None = None,
         record_every: int = 1,
     ) -> Trajectory:
-        """Flies from ``x0`` for ``duration_s`` seconds. The actuators start settled at
+        """Flies from ``x0`` (default: at rest, level, at :data:`DEFAULT_START_M`, 10 m up) for
+        ``duration_s`` seconds; a start on or below the ground is refused. The actuators start settled at
         ``initial_command`` (default: the controller's trim command if it has one, else zero).
         Rotor efficiency starts at the airframe's own; ``faults`` change it on schedule.
         ``record_every`` keeps every n-th control step (plus the last and any divergence)."""
-        x0 = State() if x0 is None else x0
+        x0 = State(position=DEFAULT_START_M) if x0 is None else x0
         if not isinstance(x0, State):
             raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
         duration_s = _check_duration(duration_s, self.dt_s)
