@@ -287,6 +287,8 @@ class SimulationConfig:
         substeps: int | None = None,
         duration_s: float | None = None,
         limits: DivergenceLimits | None = None,
+        ground_z_m: float | None = None,
+        ground: bool | None = None,
         wind_m_s: tuple[float, float, float] | None = None,
         wind_profile: list[tuple[float, tuple[float, float, float]]] | None = None,
         noise: SensorNoise | None = None,
@@ -303,6 +305,8 @@ class SimulationConfig:
     @property
     def limits(self) -> DivergenceLimits: ...
     @property
+    def ground_z_m(self) -> float | None: ...
+    @property
     def wind_m_s(self) -> list[float]: ...
     def record_times(self) -> _F64: ...
 
@@ -316,6 +320,12 @@ class Divergence:
     def description(self) -> str: ...
     @property
     def state(self) -> list[float]: ...
+    @property
+    def impact_speed_m_s(self) -> float | None: ...
+    @property
+    def impact_vertical_speed_m_s(self) -> float | None: ...
+    @property
+    def impact_tilt_rad(self) -> float | None: ...
 
 @final
 class Trajectory:

@@ -32,12 +32,12 @@ Spin: TypeAlias = Literal["cw", "ccw"]
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
 #: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
 DivergenceKind: TypeAlias = Literal[
-    "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
+    "crashed", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
 ]
 #: A flight's outcome (:mod:`rotorfault.flight.outcomes`): held, circling, off station, or how it
 #: diverged.
 FlightOutcome: TypeAlias = Literal[
-    "holds-position", "circling", "off-station",
+    "holds-position", "circling", "off-station", "crashed",
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
 #: The old name of :data:`FlightOutcome` (a verdict is a property of a flight, not of Ke's paper).

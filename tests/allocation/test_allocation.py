@@ -405,14 +405,14 @@ def test_warm_started_controller_gives_the_cold_answer() -> None:
     allocator = Allocator(frame)
     hover = [frame.hover_thrust_n, 0, 0, 0]
     law = rf.OpenLoop([0, 0.01], [[15.04, 1.96, 1.42, -1.06], hover])
-    tr = rf.Simulator(frame).run(rf.State(), 0.02, controller=rf.Allocated(law, allocator))
+    tr = rf.Simulator(frame).run(rf.State(position=(0, 0, -10)), 0.02, controller=rf.Allocated(law, allocator))
     np.testing.assert_allclose(tr.rotor_command[-1], allocator.allocate(hover).commands, atol=1e-12)
 
 
 def test_allocated_accepts_a_discrete_lti() -> None:
     quad = rf.Airframe.preset("quad-x")
     law = rf.Lti(np.zeros((1, 1)), np.zeros((1, 12)), np.zeros((4, 1)), np.zeros((4, 12)), np.zeros(12), [quad.hover_thrust_n, 0, 0, 0], dt_s=1 / 400)
-    tr = rf.Simulator(quad).run(rf.State(), 0.1, controller=rf.Allocated(law, Allocator(quad)))
+    tr = rf.Simulator(quad).run(rf.State(position=(0, 0, -10)), 0.1, controller=rf.Allocated(law, Allocator(quad)))
     np.testing.assert_allclose(tr.rotor_command[-1], quad.hover_thrust_n / 4, rtol=1e-12)
 
 

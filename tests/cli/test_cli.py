@@ -135,7 +135,8 @@ def test_simulate_example_scenario(tmp_path: Path) -> None:
     png = tmp_path / "run.png"
     code, out, err = run("simulate", str(EXAMPLE), "--plot", str(png))
     assert code == 0, err
-    assert "diverged at t =" in out and "tilt beyond the limit" in out
+    # The quad falls its 10 m and crashes at 2.76 s (without a ground: 13.7 m down, tilt at 3.05 s).
+    assert "crashed at t = 2.75" in out and "hit the ground at" in out and "no divergence" not in out
     assert png.stat().st_size > 20_000
 
 
@@ -161,6 +162,12 @@ def test_simulate_hover_scenario_with_everything(tmp_path: Path) -> None:
         ('airframe = "quad-x"\ndt_s = -1.0\n', "dt_s: must be > 0"),
         ("airframe = [", "scenario.toml: "),
         ("duration_s = 1.0\n", "airframe: required"),
+        ('airframe = "quad-x"\nground_z_m = "low"\n', "ground_z_m: expected a real number"),
+        ('airframe = "quad-x"\nground_z_m = nan\n', "ground_z_m: must be finite"),
+        ('airframe = "quad-x"\nground = "no"\n', "ground: expected True or False"),
+        ('airframe = "quad-x"\nground = false\nground_z_m = 1.0\n', "ground_z_m, ground: a ground height"),
+        ('airframe = "quad-x"\n[initial]\nposition_m = [0.0, 0.0, 0.0]\n',
+         "initial.position_m[2]: the run starts on or below the ground"),
     ],
 )
 def test_simulate_bad_scenarios_are_one_line(tmp_path: Path, text: str, message: str) -> None:
@@ -179,7 +186,8 @@ def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
     assert "| one-failure | feedforward | yes | off station |" in report
     assert "| fault-free | feedforward | yes | holds position |" in report
     assert "| one-failure | baseline | yes | tilt |" in report
-    assert "| two-adjacent-front | feedforward | no | tilt |" in report
+    # Fig. 7's pair falls the 10 m to the ground (issue #28: it used to fall 15.5 m and tilt).
+    assert "| two-adjacent-front | feedforward | no | crashed |" in report
     rows = (tmp_path / "ftc-report.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * len(ke_paper.scenarios())
     assert (tmp_path / "primary-axis.png").stat().st_size > 10_000

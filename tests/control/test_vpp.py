@@ -210,14 +210,14 @@ def test_lqr_gain_checks(wang: vpp.VppVehicle) -> None:
 
 def test_lqr_holds_hover_with_propeller_1_failed_in_rust(wang: vpp.VppVehicle) -> None:
     """Designed in Python, flown in Rust at 1 kHz with the 10 Hz actuators: from (0.5, -0.5, -0.3) m
-    off the trim the VPP quadcopter with propeller 1 dead returns. Measured: 2.2e-4 m left after
-    10 s, largest roll/pitch 0.036 rad; bounds 1e-3 m and 0.05 rad."""
-    trim = vpp.trim(wang, failed=(1,), speeds={3: 9000.0})
+    off the trim (10 m above the ground) the VPP quadcopter with propeller 1 dead returns.
+    Measured: 2.2e-4 m left after 10 s, largest roll/pitch 0.036 rad; bounds 1e-3 m and 0.05 rad."""
+    trim = vpp.trim(wang, failed=(1,), speeds={3: 9000.0}, position=(0, 0, -10))
     feedback = vpp.lqr(wang, trim)
     base = wang.simulator(failed=(1,))
     sim = rf.Simulator(base.airframe, actuator=wang.actuator, drag=wang.drag, dt_s=0.001)
-    run = sim.run(rf.State(position=(0.5, -0.5, -0.3)), duration_s=10.0, controller=feedback)
-    assert np.linalg.norm(run.position[-1]) < 1e-3
+    run = sim.run(rf.State(position=(0.5, -0.5, -10.3)), duration_s=10.0, controller=feedback)
+    assert np.linalg.norm(run.position[-1] - (0, 0, -10)) < 1e-3
     assert np.max(np.abs(run.euler[:, :2])) < 0.05
 
 

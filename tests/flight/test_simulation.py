@@ -72,13 +72,24 @@ def test_free_fall_matches_the_closed_form(sim: rf.Simulator) -> None:
 
 def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
     """The problem rotorfault exists for: a hovering quad-x loses rotor 1 at 1 s, the hover LQR
-    cannot hold it, and the run ends with an event saying when and why."""
+    cannot hold it, and the run ends with an event saying when and why: it falls the 10 m to the
+    ground and crashes (issue #28: without a ground it fell 13.7 m and ended later, by tilt)."""
     tr = sim.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
     assert tr.diverged
     event = tr.events[0]
-    assert event.kind == "tilt" and 1.0 < event.time < 10.0
-    assert "tilt" in str(event) and event.state.shape == (12,)
+    assert event.kind == "crashed" and 1.0 < event.time < 10.0
+    assert str(event).startswith("crashed at t = ") and event.state.shape == (12,)
     assert tr.t[-1] == pytest.approx(event.time)
+    # At the ground (z = 0), with the impact read off the state there.
+    assert 0.0 < tr.position[-1, 2] < 1e-9 and event.state[2] == tr.position[-1, 2]
+    assert event.impact_speed_m_s == pytest.approx(float(np.linalg.norm(event.state[3:6])), rel=1e-12)
+    assert event.impact_vertical_speed_m_s == pytest.approx(event.state[5], rel=1e-12) and event.state[5] > 0
+    assert event.impact_tilt_rad == pytest.approx(math.acos(tr.primary_axis[-1, 2]), abs=1e-9)
+    # Without the ground the same flight goes on through the plane until it tilts past 90 degrees.
+    free = rf.Simulator(sim.airframe, dt_s=sim.dt_s, substeps=sim.substeps, ground=False)
+    lost = free.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
+    assert lost.events[0].kind == "tilt" and lost.events[0].time > event.time and lost.position[-1, 2] > 0
+    assert lost.events[0].impact_speed_m_s is None and "tilt" in str(lost.events[0])
     before, after = np.searchsorted(tr.t, [0.5, 1.5])
     np.testing.assert_array_equal(tr.efficiency[before], [1, 1, 1, 1])
     np.testing.assert_array_equal(tr.efficiency[after], [0, 1, 1, 1])
@@ -194,7 +205,7 @@ def test_python_controller_errors_propagate(sim: rf.Simulator) -> None:
     with pytest.raises(ZeroDivisionError, match="controller bug"):
         sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=broken)
     with pytest.raises(ValueError, match="must return 4 commands, got 2 at t = 0"):
-        sim.run(rf.State(), 1.0, controller=lambda t, x: [1.0, 2.0])
+        sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lambda t, x: [1.0, 2.0])
 
 
 def test_a_python_controller_returning_nan_ends_the_run_with_an_event(sim: rf.Simulator) -> None:
@@ -227,7 +238,8 @@ def test_batch_time_axis_is_the_recorded_times(quad: rf.Airframe) -> None:
     assert b.t[-1] == 1.0 == b.trajectories[0].t[-1]
     np.testing.assert_array_equal(b.t, b.trajectories[0].t)
     assert b.position.shape == (1, 11, 3)
-    b = rf.simulate_batch(sim, [rf.State(position=(0, 0, -10))], 3.0, record_every=7)
+    # 100 m up: the 3 s free fall (44 m) stays clear of the ground.
+    b = rf.simulate_batch(sim, [rf.State(position=(0, 0, -100))], 3.0, record_every=7)
     assert len(b.t) == 44 and b.t[-1] == 3.0 and b.t[-2] == pytest.approx(2.94, abs=1e-12)
     np.testing.assert_array_equal(b.t, b.trajectories[0].t)
     # A shortened last step (1.05 s at dt = 0.1): the grid ends exactly at 1.05.
@@ -295,7 +307,7 @@ def test_non_finite_commands_and_inputs(sim: rf.Simulator) -> None:
     with pytest.raises(ValueError, match=r"initial_command\[0\]: must be finite"):
         sim.run(rf.State(), 1.0, initial_command=[float("nan")] * 4)
     with pytest.raises(TypeError, match="controller: must return a sequence of 4 numbers"):
-        sim.run(rf.State(), 1.0, controller=lambda t, x: None)
+        sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lambda t, x: None)
     with pytest.raises(ValueError, match=r"x\[3\]: must be finite"):
         sim.state_derivative([0, 0, 0, float("nan")] + [0] * 8, [3.0] * 4)
     with pytest.raises(ValueError, match="duration_s, dt_s: .* control steps exceed"):

@@ -53,10 +53,20 @@ def runs_printed() -> dict[tuple[str, str], P.LanzonRun]:
 
 def test_our_design_flies_both_scenarios_with_the_limits(runs_printed: dict[tuple[str, str], P.LanzonRun]) -> None:
     a, b = runs_printed[("A", "c")], runs_printed[("B", "c")]
-    # Scenario A: level (tilt < 1 deg, spin within 10 % of m g d / k_r = 2.7 rad/s) by 20 s.
-    assert a.outcome == "level", a.attitude
-    assert a.attitude.level_after_s is not None and a.attitude.level_after_s < 16.0
-    assert abs(a.attitude.window_spin_rad_s - 2.7) < 0.27  # type: ignore[operator]
+    # Scenario A from 10 m up (Table 2 prints no position): the inner loop alone sinks 26 m
+    # before it levels, so it hits the ground at 4.10 s (issue #28).
+    assert a.outcome == "crashed" and a.lost_at_s == pytest.approx(4.104, abs=1e-3)
+    assert -a.trajectory.position[0, 2] == P.SCENARIO_A_HEIGHT_M and a.trajectory.position[-1, 2] < 1e-9
+    # Without the ground the same flight is level (tilt < 1 deg, spin within 10 % of
+    # m g d / k_r = 2.7 rad/s) by 20 s, 25 m lower.
+    sim = a.vehicle.simulator(limits=a.case.limits, ground=False)
+    controller = L.LanzonController(a.design, position=None, outer_loop=a.case.outer_loop)
+    free = sim.run(a.scenario.initial_state(), 20.0, controller=controller, faults=[rf.RotorFault(2, 0.0)], record_every=20)
+    attitude = P.attitude_metrics(free, a.vehicle.spin_rate_rad_s)
+    assert attitude.outcome == "level", attitude
+    assert attitude.level_after_s is not None and attitude.level_after_s < 16.0
+    assert abs(attitude.window_spin_rad_s - 2.7) < 0.27  # type: ignore[operator]
+    assert attitude.max_altitude_loss_m is not None and attitude.max_altitude_loss_m > 2 * P.SCENARIO_A_HEIGHT_M  # 25.3 m
     # Scenario B: holds the setpoint, within 1 cm at 60 s; thrusts inside the limits.
     assert b.outcome == "holds-position"
     assert b.final_error_m is not None and b.final_error_m < 0.01

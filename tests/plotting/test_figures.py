@@ -126,6 +126,6 @@ def test_plot_does_not_switch_the_backend(tmp_path: Path) -> None:
     returned and not in pyplot's list."""
     import matplotlib.pyplot as plt
 
-    fig = rf.Simulator(rf.Airframe.preset("quad-x")).run(rf.State(), 0.1).plot(str(tmp_path / "x.png"))
+    fig = rf.Simulator(rf.Airframe.preset("quad-x")).run(rf.State(position=(0, 0, -10)), 0.1).plot(str(tmp_path / "x.png"))
     assert isinstance(fig, Figure)
     assert fig not in [plt.figure(n) for n in plt.get_fignums()]

@@ -332,8 +332,9 @@ impl PySensorNoise {
     }
 }
 
-/// Timing, limits, wind, noise and recording of a run; defaults are the core's
-/// (`SimulationConfig::default`), the rules its `check`.
+/// Timing, limits, ground, wind, noise and recording of a run; defaults are the core's
+/// (`SimulationConfig::default`), the rules its `check`. The ground: `ground_z_m` (world NED,
+/// default the core's) unless `ground=False` (no ground).
 #[pyclass(name = "SimulationConfig", module = "rotorfault._rfcore", frozen)]
 pub struct PySimulationConfig {
     pub(crate) inner: SimulationConfig,
@@ -343,23 +344,35 @@ pub struct PySimulationConfig {
 impl PySimulationConfig {
     #[new]
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
+    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
     fn new(
         dt_s: Option<f64>,
         substeps: Option<usize>,
         duration_s: Option<f64>,
         limits: Option<PyRef<'_, PyDivergenceLimits>>,
+        ground_z_m: Option<f64>,
+        ground: Option<bool>,
         wind_m_s: Option<[f64; 3]>,
         wind_profile: Option<Vec<(f64, [f64; 3])>>,
         noise: Option<PyRef<'_, PySensorNoise>>,
         record_every: Option<usize>,
     ) -> PyResult<Self> {
         let d = SimulationConfig::default();
+        let ground_z_m = match (ground.unwrap_or(true), ground_z_m) {
+            (true, z) => z.or(d.ground_z_m),
+            (false, None) => None,
+            (false, Some(z)) => {
+                return Err(PyValueError::new_err(format!(
+                "ground_z_m, ground: a ground height ({z} m) with ground=False; give one of them"
+            )))
+            }
+        };
         let inner = SimulationConfig {
             dt_s: dt_s.unwrap_or(d.dt_s),
             substeps: substeps.unwrap_or(d.substeps),
             duration_s: duration_s.unwrap_or(d.duration_s),
             limits: limits.map_or(d.limits, |l| l.inner),
+            ground_z_m,
             wind_m_s: wind_m_s.map_or(d.wind_m_s, Vector3::from),
             wind_profile: wind_profile.map_or(d.wind_profile, |points| {
                 points
@@ -395,6 +408,11 @@ impl PySimulationConfig {
             inner: self.inner.limits,
         }
     }
+    /// The ground plane's world NED z, m (`None`: no ground).
+    #[getter]
+    fn ground_z_m(&self) -> Option<f64> {
+        self.inner.ground_z_m
+    }
     #[getter]
     fn wind_m_s(&self) -> [f64; 3] {
         self.inner.wind_m_s.into()
@@ -415,13 +433,17 @@ fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {
         .collect()
 }
 
-/// Why and when a run ended early, with the 12-element state vector at that moment.
+/// Why and when a run ended early, with the 12-element state vector at that moment; for a
+/// `crashed` run, the impact (speed, speed into the ground, tilt), else `None`.
 #[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen, get_all)]
 pub struct PyDivergence {
     time_s: f64,
     reason: &'static str,
     description: &'static str,
     state: [f64; STATE_DIM],
+    impact_speed_m_s: Option<f64>,
+    impact_vertical_speed_m_s: Option<f64>,
+    impact_tilt_rad: Option<f64>,
 }
 
 /// A recorded run: one row per recorded control step; arrays are built on access.
@@ -498,11 +520,17 @@ impl PyTrajectory {
     }
     #[getter]
     fn divergence(&self) -> Option<PyDivergence> {
-        self.run.divergence.map(|d| PyDivergence {
-            time_s: d.time_s,
-            reason: d.reason.name(),
-            description: d.reason.describe(),
-            state: state_vector(&d.state),
+        self.run.divergence.map(|d| {
+            let impact = d.impact();
+            PyDivergence {
+                time_s: d.time_s,
+                reason: d.reason.name(),
+                description: d.reason.describe(),
+                state: state_vector(&d.state),
+                impact_speed_m_s: impact.map(|i| i.speed_m_s),
+                impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
+                impact_tilt_rad: impact.map(|i| i.tilt_rad),
+            }
         })
     }
 }

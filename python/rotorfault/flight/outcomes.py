@@ -108,6 +108,7 @@ OUTCOME_LABELS: dict[str, str] = {
     "holds-position": "holds position",
     "circling": "circling",
     "off-station": "off station",
+    "crashed": "crashed",
     "non-finite-state": "non-finite state",
     "non-finite-command": "non-finite command",
     "tilt": "tilt",

@@ -3,6 +3,10 @@ saturation, rate limits and faults, drag and wind, closed by a controller at its
 
 Frames: world NED (north, east, down; altitude is ``-position[2]``), body FRD. Rotor numbers in
 faults are 1-based like the papers; arrays are ordered rotor 1..m.
+
+The ground is the plane ``z = ground_z_m`` (default 0: altitude is height above the ground); the
+centre of mass reaching it ends the run with a ``crashed`` event (time, impact speed, attitude).
+There is no ground reaction, so a run starts above the ground; ``ground=False`` removes it.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._typing import Controller, CoreController, core_controller_types
-from .._util.convert import FloatArray, count, float_array, real
+from .._util.convert import FloatArray, count, flag, float_array, real
 from .._util.deprecation import dataclass_compat
 from .._util.progress import chunks
 from ..analysis.airframe import Airframe, require_airframe
@@ -64,6 +68,10 @@ def trim_command(controller: object) -> FloatArray | None:
 #: ends with a ``step-size`` event (a numerical cause, not the vehicle's).
 MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
 
+#: Where :meth:`Simulator.run` starts when no ``x0`` is given: at rest, level, 10 m above a ground
+#: at z = 0 (world NED).
+DEFAULT_START_M = (0.0, 0.0, -10.0)
+
 _DEFAULT_CONFIG = _rfcore.SimulationConfig()
 _DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
 
@@ -90,7 +98,9 @@ class Simulator:
 
     ``dt_s`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
     ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
-    ``(time_s, (n, e, d))`` points added to it, interpolated linearly.
+    ``(time_s, (n, e, d))`` points added to it, interpolated linearly. The ground is the plane
+    ``z = ground_z_m`` (world NED, m; default the core's, 0); ``ground=False``: no ground.
+    ``ground_z_m`` holds the ground in effect (``None`` without one).
     """
 
     def __init__(
@@ -105,6 +115,8 @@ class Simulator:
         actuator: FixedPitchActuator | VariablePitchActuator | None = None,
         limits: DivergenceLimits | None = None,
         noise: Noise | None = None,
+        ground_z_m: float | None = None,
+        ground: bool = True,
     ) -> None:
         self.airframe = require_airframe(airframe)
         self.dt_s = real("dt_s", dt_s)
@@ -126,11 +138,17 @@ class Simulator:
         if noise is not None and not isinstance(noise, Noise):
             raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
         self.noise = noise
-        # Fail early on bad parameters: the core validates them in a zero-length run. (Every run
-        # rebuilds the core objects from these attributes, so changing one later takes effect.)
+        self.ground = flag("ground", ground)
+        self.ground_z_m: float | None = None if ground_z_m is None else real("ground_z_m", ground_z_m)
+        # Fail early on bad parameters: the core validates them in a zero-length run (from above
+        # the ground). (Every run rebuilds the core objects from these attributes, so changing one
+        # later takes effect.)
+        config = self._config(0.0)
+        self.ground_z_m = config.ground_z_m
+        above = State(position=(0.0, 0.0, (self.ground_z_m or 0.0) - 1.0))
         _rfcore.simulate(
-            self.airframe._core, self.actuator._core(), self.drag, None, State()._packed(), [],
-            self.airframe.efficiency, None, self._config(0.0),
+            self.airframe._core, self.actuator._core(), self.drag, None, above._packed(), [],
+            self.airframe.efficiency, None, config,
         )
 
     @property
@@ -147,6 +165,8 @@ class Simulator:
             substeps=self.substeps,
             duration_s=real("duration_s", duration_s),
             limits=self.limits,
+            ground_z_m=self.ground_z_m,
+            ground=self.ground,
             wind_m_s=self.wind,
             wind_profile=self.wind_profile,
             noise=None if self.noise is None else self.noise._core(seed_offset),
@@ -170,11 +190,12 @@ class Simulator:
         initial_command: npt.ArrayLike | None = None,
         record_every: int = 1,
     ) -> Trajectory:
-        """Flies from ``x0`` for ``duration_s`` seconds. The actuators start settled at
+        """Flies from ``x0`` (default: at rest, level, at :data:`DEFAULT_START_M`, 10 m up) for
+        ``duration_s`` seconds; a start on or below the ground is refused. The actuators start settled at
         ``initial_command`` (default: the controller's trim command if it has one, else zero).
         Rotor efficiency starts at the airframe's own; ``faults`` change it on schedule.
         ``record_every`` keeps every n-th control step (plus the last and any divergence)."""
-        x0 = State() if x0 is None else x0
+        x0 = State(position=DEFAULT_START_M) if x0 is None else x0
         if not isinstance(x0, State):
             raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
         duration_s = _check_duration(duration_s, self.dt_s)

@@ -3,6 +3,7 @@ the :class:`Event` that ended it early, if any) and the :class:`BatchResult` of 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, cast
@@ -21,16 +22,26 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Event:
-    """Why and when a run ended early, with the state (12-vector) at that moment."""
+    """Why and when a run ended early, with the state (12-vector) at that moment. A ``crashed``
+    event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
+    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise."""
 
     time: float
-    #: A kebab-case code (``"tilt"``, ``"non-finite-state"``, ...); ``description`` is the
-    #: human-readable text.
+    #: A kebab-case code (``"crashed"``, ``"tilt"``, ``"non-finite-state"``, ...);
+    #: ``description`` is the human-readable text.
     kind: DivergenceKind
     description: str
     state: FloatArray
+    impact_speed_m_s: float | None = None
+    impact_vertical_speed_m_s: float | None = None
+    impact_tilt_rad: float | None = None
 
     def __str__(self) -> str:
+        if self.kind == "crashed" and self.impact_speed_m_s is not None:
+            return (
+                f"crashed at t = {self.time:.4f} s: {self.description} at {self.impact_speed_m_s:.2f} m/s "
+                f"({self.impact_vertical_speed_m_s:.2f} m/s down), tilted {math.degrees(self.impact_tilt_rad or 0.0):.1f} deg"
+            )
         return f"diverged at t = {self.time:.4f} s: {self.description}"
 
 
@@ -89,7 +100,8 @@ class Trajectory:
         d = raw.divergence
         if d is not None:
             kind = cast(DivergenceKind, d.reason)
-            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state)))
+            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state),
+                                d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad))
         return cls(
             t=raw.t,
             position=raw.position,

@@ -56,6 +56,13 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "fault timing": ("crates/rfcore/src/flight/fault_schedule.rs",),
     "actuator start": (f"{_SIMULATION}/driver.rs", "python/rotorfault/flight/simulator.py"),
     "divergence": (f"{_SIMULATION}/divergence.rs", _SIM_STEP),
+    "the ground (no paper models one)": (_SIM_CONFIG, f"{_SIMULATION}/divergence.rs"),
+    "altitudes the papers do not print": (
+        "python/rotorfault/papers/ke.py",
+        "python/rotorfault/campaign.py",
+        _LANZON_PAPER,
+        "python/rotorfault/papers/wang.py",
+    ),
     "noise on zero signals": (_SIM_NOISE,),
     "run size": (_SIM_CONFIG,),
     "several optimal allocations (more rotors than weighted axes, a zero weight)": (_ACTIVE_SET, _ALLOCATION),

@@ -47,8 +47,12 @@ if TYPE_CHECKING:
 IZZ_PRINTED = 1.16e-3
 IZZ_PROBABLE = 1.16e-2
 IZZ_VALUES = (IZZ_PRINTED, IZZ_PROBABLE)
-#: Scenario B's setpoint (Section IV.B: x = y = 0, z = 1 m up), world NED.
+#: Scenario B's setpoint (Section IV.B: x = y = 0, z = 1 m up), world NED; the paper's z is the
+#: height above the ground (its "recovery base at the origin"), where the simulator's ground is.
 SETPOINT_NED = (0.0, 0.0, -1.0)
+#: Scenario A's initial height above the ground, m: Table 2 prints no position and Section IV.A
+#: holds "an arbitrary constant altitude" (a decision: 10 m, clear of the ground).
+SCENARIO_A_HEIGHT_M = 10.0
 #: "level" in Scenario A: tilt below this (deg) throughout the judging window.
 LEVEL_TILT_DEG = 1.0
 #: ... and the spin within this fraction of its set point (m g d / k_r).
@@ -75,8 +79,8 @@ def scenarios() -> list[LanzonScenario]:
     """Scenario A (Table 2) and Scenario B (Table 3)."""
     q = math.pi / 4
     return [
-        LanzonScenario("A", "inner loop only from Table 2 (roll -45 deg, pitch 45 deg)",
-                       (-q, q, q, -0.5, 0.5, 2.7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), None),
+        LanzonScenario("A", f"inner loop only from Table 2 (roll -45 deg, pitch 45 deg), {SCENARIO_A_HEIGHT_M:g} m up",
+                       (-q, q, q, -0.5, 0.5, 2.7, 0.0, 0.0, SCENARIO_A_HEIGHT_M, 0.0, 0.0, 0.0), None),
         LanzonScenario("B", "inner and outer loop from Table 3 (x = y = z = 5 m) to x = y = 0, z = 1 m",
                        (0.075, 0.025, 0.1, 0.03, 0.02, 2.7, 5.0, 5.0, 5.0, 0.0, 0.0, 0.0), SETPOINT_NED),
     ]

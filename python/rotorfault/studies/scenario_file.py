@@ -6,9 +6,11 @@ a default. Schema (every table optional except the top-level ``airframe``)::
     duration_s = 10.0
     dt_s = 0.0025                # control period
     substeps = 4                 # RK4 steps per control period
+    ground_z_m = 0.0             # the ground plane (world NED z); contact ends the run as crashed
+    ground = true                # false: no ground
 
     [initial]                    # world NED; altitude is -position_m[2]
-    position_m = [0, 0, -10]
+    position_m = [0, 0, -10]     # default: 10 m up; must be above the ground
     velocity_m_s = [0, 0, 0]
     euler_rad = [0, 0, 0]
     omega_rad_s = [0, 0, 0]
@@ -52,8 +54,9 @@ from .._util.convert import real
 from ..analysis.airframe import Airframe
 from ..control import OpenLoop, hover_trim, lqr_hover
 from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
+from ..flight.simulator import DEFAULT_START_M
 
-_TOP = {"airframe", "duration_s", "dt_s", "substeps", "initial", "controller", "actuator", "drag", "wind", "noise", "fault"}
+_TOP = {"airframe", "duration_s", "dt_s", "substeps", "ground_z_m", "ground", "initial", "controller", "actuator", "drag", "wind", "noise", "fault"}
 _TABLES: dict[str, set[str]] = {
     "initial": {"position_m", "velocity_m_s", "euler_rad", "omega_rad_s"},
     "controller": {"kind"},
@@ -130,6 +133,7 @@ def _file_keys() -> Iterator[None]:
     except (ValueError, TypeError) as exc:
         text = re.sub(r"\bfaults\[(\d+)\]\.time\b", r"fault[\1].time_s", str(exc))
         text = re.sub(r"\bfaults\[(\d+)\]", r"fault[\1]", text)
+        text = re.sub(r"\bx0\.position\[", "initial.position_m[", text)
         raise type(exc)(text) from None
 
 
@@ -170,7 +174,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
     airframe = Airframe.load(data["airframe"], relative_to=path.parent)
     initial = _table(data, "initial")
     state = State(
-        position=initial.get("position_m", (0.0, 0.0, 0.0)),
+        position=initial.get("position_m", DEFAULT_START_M),
         velocity=initial.get("velocity_m_s", (0.0, 0.0, 0.0)),
         euler=initial.get("euler_rad", (0.0, 0.0, 0.0)),
         omega=initial.get("omega_rad_s", (0.0, 0.0, 0.0)),
@@ -201,6 +205,8 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
             thrust_coefficient_n_s2=actuator.get("thrust_coefficient_n_s2", 0.0),
         ),
         noise=None if noise is None else Noise(**_table(data, "noise")),
+        ground_z_m=data.get("ground_z_m"),
+        ground=data.get("ground", True),
     )
     duration_s = real("duration_s", data.get("duration_s", 10.0))
     if not duration_s >= simulator.dt_s:

@@ -11,7 +11,8 @@
 //!   the direction of travel (unwrapped heading over the samples moving faster than a quarter of
 //!   it) turning by at least `circling_turn_rad` (90 degrees);
 //! - `off-station`: neither;
-//! - a divergence kind (`tilt`, `altitude-loss`, ...): lost at `lost_at_s`.
+//! - a divergence kind (`crashed`: it hit the ground; `tilt`, `altitude-loss`, ...): lost at
+//!   `lost_at_s`.
 //!
 //! The steady spin rate is the mean body yaw rate over the window, reported only when the run
 //! settled (the same test as `flight_metrics`: from the last fault that changed an efficiency,
@@ -466,7 +467,8 @@ mod tests {
     use crate::flight::actuator::{FixedPitch, Lag};
     use crate::flight::vehicle::Drag;
 
-    fn free_fall(duration_s: f64) -> SummaryRun {
+    /// Rotors off from `height_m` above the ground (at rest, level), judged against the start.
+    fn free_fall_from(height_m: f64, duration_s: f64) -> SummaryRun {
         let airframe = crate::fixtures::preset("quad-x");
         let mut config = SimulationConfig::new(0.0025, 2, duration_s);
         config.limits.max_altitude_loss_m = 20.0;
@@ -480,10 +482,31 @@ mod tests {
                 time_s: 0.5,
                 efficiency: 0.0,
             }],
-            x0: RigidBodyState::at_rest(),
+            x0: RigidBodyState {
+                position_m: Vector3::new(0.0, 0.0, -height_m),
+                ..RigidBodyState::at_rest()
+            },
             config,
-            setpoint_m: Vector3::zeros(),
+            setpoint_m: Vector3::new(0.0, 0.0, -height_m),
         }
+    }
+
+    /// 100 m up: these falls end before the ground.
+    fn free_fall(duration_s: f64) -> SummaryRun {
+        free_fall_from(100.0, duration_s)
+    }
+
+    #[test]
+    fn a_fall_to_the_ground_is_counted_crashed() {
+        // 10 m of free fall reach the ground at sqrt(20 / g) s, before the 20 m limit.
+        let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default()).unwrap();
+        let g = crate::fixtures::preset("quad-x").gravity_m_s2();
+        assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::Crashed));
+        assert_eq!(s.outcome.name(), "crashed");
+        assert!((s.lost_at_s - (20.0 / g).sqrt()).abs() < 1e-9);
+        assert!((s.max_altitude_loss_m - 10.0).abs() < 1e-9);
+        assert!((s.final_altitude_error_m - 10.0).abs() < 1e-9);
+        assert!(s.window_speed_m_s.is_nan());
     }
 
     #[test]

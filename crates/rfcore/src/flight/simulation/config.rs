@@ -1,5 +1,5 @@
-//! A run's timing, limits, wind and noise ([`SimulationConfig`]), checked before any work: the
-//! control steps it takes, when, and what is recorded.
+//! A run's timing, limits, ground, wind and noise ([`SimulationConfig`]), checked before any
+//! work: the control steps it takes, when, and what is recorded.
 
 use nalgebra::Vector3;
 
@@ -7,6 +7,7 @@ use crate::error::{require_finite, Result, RfError};
 use crate::flight::simulation::divergence::DivergenceLimits;
 use crate::flight::simulation::noise::SensorNoise;
 use crate::flight::simulation::recording::records;
+use crate::state::RigidBodyState;
 
 /// Most control steps one run records (about 2 GB of trajectory).
 pub const MAX_CONTROL_STEPS: usize = 10_000_000;
@@ -16,7 +17,11 @@ pub const MAX_RK4_STEPS: usize = 1_000_000_000;
 /// Relative tolerance below which `duration / dt` counts as a whole number of control steps.
 const WHOLE_STEPS_RTOL: f64 = 1e-9;
 
-/// Timing, limits and wind of a run.
+/// Where the ground is by default: the plane z = 0 of the world frame (NED), so a scenario states
+/// its altitudes as heights above the ground (`position[2] = -10`: 10 m up).
+pub const DEFAULT_GROUND_Z_M: f64 = 0.0;
+
+/// Timing, limits, ground and wind of a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimulationConfig {
     /// Control period, s (e.g. 1/400).
@@ -27,6 +32,13 @@ pub struct SimulationConfig {
     /// control step is shortened (and recorded at `duration_s`).
     pub duration_s: f64,
     pub limits: DivergenceLimits,
+    /// The ground plane: world NED `z = ground_z_m` (default [`DEFAULT_GROUND_Z_M`]); `None`: no
+    /// ground. The vehicle's centre of mass below it (`position[2] > ground_z_m`) is contact,
+    /// which ends the run as [`crate::flight::simulation::DivergenceReason::Crashed`] at the
+    /// located time. There is no ground reaction (no landing, no take-off): a run must start above
+    /// the ground. The vehicle's extent below its centre of mass (landing gear, a tilted arm) is
+    /// not modelled; raise the plane by it (`ground_z_m - extent`) to count it.
+    pub ground_z_m: Option<f64>,
     /// Constant wind, world NED, m/s.
     pub wind_m_s: Vector3<f64>,
     /// Optional wind profile added to the constant: piecewise-linear through `(time_s, wind)`
@@ -48,13 +60,14 @@ impl Default for SimulationConfig {
 
 impl SimulationConfig {
     /// A run of `duration_s` at control period `dt_s` with `substeps` RK4 steps per
-    /// period, default limits, no wind, no noise.
+    /// period, default limits, the ground at [`DEFAULT_GROUND_Z_M`], no wind, no noise.
     pub fn new(dt_s: f64, substeps: usize, duration_s: f64) -> Self {
         SimulationConfig {
             dt_s,
             substeps,
             duration_s,
             limits: DivergenceLimits::default(),
+            ground_z_m: Some(DEFAULT_GROUND_Z_M),
             wind_m_s: Vector3::zeros(),
             wind_profile: Vec::new(),
             noise: None,
@@ -116,6 +129,14 @@ impl SimulationConfig {
                 ));
             }
         }
+        if let Some(z) = self.ground_z_m {
+            if !z.is_finite() {
+                return Err(RfError::invalid(
+                    "ground_z_m",
+                    format!("must be finite (no ground: turn it off), got {z}"),
+                ));
+            }
+        }
         for (i, w) in self.wind_m_s.iter().enumerate() {
             require_finite(&format!("wind[{i}]"), *w)?;
         }
@@ -174,6 +195,24 @@ impl SimulationConfig {
             .filter(|&k| records(k, self.record_every, steps))
             .map(|k| self.step_time(k))
             .collect()
+    }
+
+    /// Refuses a start (`field`, e.g. `x0`) on or below the ground: without a ground reaction
+    /// the vehicle would sink into it at once.
+    pub fn check_start(&self, field: &str, x0: &RigidBodyState) -> Result<()> {
+        match self.ground_z_m {
+            Some(ground) if x0.position_m.z >= ground => Err(RfError::invalid(
+                format!("{field}.position[2]"),
+                format!(
+                    "the run starts on or below the ground: z = {} m (NED, down) is not above \
+                     ground_z_m = {ground} m; start in the air (z < {ground}, e.g. {} for 10 m up) \
+                     or fly without a ground",
+                    x0.position_m.z,
+                    ground - 10.0
+                ),
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// Wind at time `t_s` (world, m/s).

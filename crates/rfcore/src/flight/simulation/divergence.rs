@@ -1,6 +1,7 @@
 //! Divergence: the limits past which a run is declared diverged ([`DivergenceLimits`]), why a run
-//! ended early ([`DivergenceReason`], [`Divergence`]), and how a crossing is found: the cheap check
-//! after every RK4 substep and the bisection that locates the crossing within it (`Limits`).
+//! ended early ([`DivergenceReason`], [`Divergence`]; contact with the ground is one of them,
+//! [`DivergenceReason::Crashed`], with its [`Impact`]), and how a crossing is found: the cheap
+//! check after every RK4 substep and the bisection that locates the crossing within it (`Limits`).
 
 use crate::state::RigidBodyState;
 
@@ -35,6 +36,8 @@ impl Default for DivergenceLimits {
 /// Why a run ended early.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DivergenceReason {
+    /// The centre of mass reached the ground plane ([`crate::flight::simulation::SimulationConfig::ground_z_m`]).
+    Crashed,
     NonFinite,
     /// The controller produced a non-finite command.
     NonFiniteCommand,
@@ -51,6 +54,7 @@ impl DivergenceReason {
     /// A short identifier (`"tilt"`, `"non-finite-command"`, ...).
     pub fn name(self) -> &'static str {
         match self {
+            DivergenceReason::Crashed => "crashed",
             DivergenceReason::NonFinite => "non-finite-state",
             DivergenceReason::NonFiniteCommand => "non-finite-command",
             DivergenceReason::Tilt => "tilt",
@@ -63,6 +67,7 @@ impl DivergenceReason {
 
     pub fn describe(self) -> &'static str {
         match self {
+            DivergenceReason::Crashed => "hit the ground",
             DivergenceReason::NonFinite => "state became non-finite",
             DivergenceReason::NonFiniteCommand => "the controller produced a non-finite command",
             DivergenceReason::Tilt => "tilt beyond the limit",
@@ -85,11 +90,36 @@ pub struct Divergence {
     pub state: RigidBodyState,
 }
 
+/// How a crashed run hit the ground, from the state at the located contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impact {
+    /// Speed at contact, m/s.
+    pub speed_m_s: f64,
+    /// Speed into the ground (world NED down), m/s.
+    pub vertical_speed_m_s: f64,
+    /// Angle between body z and world z (down) at contact, rad (the whole attitude is the
+    /// state's).
+    pub tilt_rad: f64,
+}
+
+impl Divergence {
+    /// The impact of a [`DivergenceReason::Crashed`] run (`None` for any other reason).
+    pub fn impact(&self) -> Option<Impact> {
+        (self.reason == DivergenceReason::Crashed).then(|| Impact {
+            speed_m_s: self.state.velocity_m_s.norm(),
+            vertical_speed_m_s: self.state.velocity_m_s.z,
+            tilt_rad: self.state.primary_axis().z.clamp(-1.0, 1.0).acos(),
+        })
+    }
+}
+
 /// The divergence limits in the form checked after every substep (cheap comparisons; the
 /// step-size bound folded into the body-rate limit) and the exceedances a crossing is located on.
 pub(crate) struct Limits {
     limits: DivergenceLimits,
     start_altitude_m: f64,
+    /// The ground plane's z (NED; infinity: no ground).
+    ground_z_m: f64,
     /// `MAX_RATE_STEP / h`: the fastest body rate the substep resolves.
     step_rate_rad_s: f64,
     min_n3z: f64,
@@ -98,12 +128,18 @@ pub(crate) struct Limits {
 }
 
 impl Limits {
-    pub(crate) fn new(limits: &DivergenceLimits, start_altitude_m: f64, h: f64) -> Self {
+    pub(crate) fn new(
+        limits: &DivergenceLimits,
+        ground_z_m: Option<f64>,
+        start_altitude_m: f64,
+        h: f64,
+    ) -> Self {
         let step_rate_rad_s = MAX_RATE_STEP / h;
         let max_rate = limits.max_rate_rad_s.min(step_rate_rad_s);
         Limits {
             limits: *limits,
             start_altitude_m,
+            ground_z_m: ground_z_m.unwrap_or(f64::INFINITY),
             step_rate_rad_s,
             // tilt > max  <=>  n3z = cos(tilt) < cos(max), for max below pi.
             min_n3z: if limits.max_tilt_rad < std::f64::consts::PI {
@@ -123,6 +159,7 @@ impl Limits {
         // n3z, the z component of body z in the world frame.
         let n3z = q.w * q.w - q.i * q.i - q.j * q.j + q.k * q.k;
         n3z >= self.min_n3z
+            && s.position_m.z <= self.ground_z_m
             && self.start_altitude_m + s.position_m.z <= self.limits.max_altitude_loss_m
             && s.velocity_m_s.norm_squared() <= self.max_speed2
             && s.omega_rad_s.norm_squared() <= self.max_rate2
@@ -130,11 +167,13 @@ impl Limits {
             && s.position_m.y.is_finite()
     }
 
-    /// How far past each limit the state is (positive: beyond), in the order of precedence.
-    fn exceedances(&self, s: &RigidBodyState) -> [(DivergenceReason, f64); 5] {
+    /// How far past each limit the state is (positive: beyond), in the order of precedence
+    /// (the ground first: a vehicle that hits it crashed, whatever else it did at that instant).
+    fn exceedances(&self, s: &RigidBodyState) -> [(DivergenceReason, f64); 6] {
         let l = &self.limits;
         let rate = s.omega_rad_s.norm();
         [
+            (DivergenceReason::Crashed, s.position_m.z - self.ground_z_m),
             (
                 DivergenceReason::Tilt,
                 s.primary_axis().z.clamp(-1.0, 1.0).acos() - l.max_tilt_rad,

@@ -78,6 +78,7 @@ pub fn simulate_observed(
         return Err(RfError::invalid("x0", "must be finite"));
     }
     check_step_size(config, &actuators, &x0)?;
+    config.check_start("x0", &x0)?;
 
     let steps = config.steps();
     let every = config.record_every;
@@ -242,6 +243,10 @@ pub fn simulate_batch(
     runs: Vec<BatchRun>,
     config: &SimulationConfig,
 ) -> Result<Vec<Trajectory>> {
+    config.check()?;
+    for (i, run) in runs.iter().enumerate() {
+        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
+    }
     runs.into_par_iter()
         .enumerate()
         .map(|(i, mut run)| {

@@ -10,9 +10,16 @@
 //! RK4 stage times, so the body sees them evolve; an interval also ends at every fault time
 //! ([`FaultSchedule`]), so faults act from exactly their time.
 //!
-//! After every substep the divergence limits are checked; a crossing is located within the
-//! substep by re-integrating from its start (bisection on the step length), and the run ends at
-//! that time with the state there.
+//! After every substep the divergence limits and the ground are checked; a crossing is located
+//! within the substep by re-integrating from its start (bisection on the step length), and the
+//! run ends at that time with the state there.
+//!
+//! # Ground
+//! The ground is the plane `z = ground_z_m` of the world frame (NED; default 0, so altitudes are
+//! heights above it; `None`: no ground). Contact is the centre of mass below it; it ends the run
+//! as `crashed` at the located time, with the state there (impact speed, attitude:
+//! [`Divergence::impact`]). The simulator has no ground reaction, so a run must start above the
+//! ground (a start on or below it is refused).
 //!
 //! # Step size
 //! RK4 resolves a motion of rate `lambda` only when `h |lambda|` is small: a rotation at
@@ -26,7 +33,7 @@
 //! - [`driver`]: one run and a batch of runs: checks, then control step by control step.
 //! - [`step`]: one control period of body and actuators (RK4 substeps, faults, divergence
 //!   check), and the step-size check.
-//! - [`config`]: timing, limits, wind and noise of a run.
+//! - [`config`]: timing, limits, ground, wind and noise of a run.
 //! - [`recording`]: the trajectory, which steps it keeps, the step observer.
 //! - [`noise`]: sensor noise on what the controller sees.
 //! - [`divergence`]: divergence limits, reasons and events, and how a crossing is located.
@@ -34,6 +41,8 @@
 pub mod config;
 pub mod divergence;
 pub mod driver;
+#[cfg(test)]
+mod ground_tests;
 pub mod noise;
 pub mod recording;
 pub mod step;
@@ -41,8 +50,8 @@ pub mod step;
 mod tests;
 
 pub use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
-pub use config::{SimulationConfig, MAX_CONTROL_STEPS, MAX_RK4_STEPS};
-pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, MAX_RATE_STEP};
+pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS};
+pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
 pub use driver::{simulate, simulate_batch, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
 pub use recording::{StepObserver, Trajectory};

@@ -84,7 +84,12 @@ impl<'a> Integrator<'a> {
         Integrator {
             vehicle,
             config,
-            limits: Limits::new(&config.limits, -x0.position_m.z, h_nominal),
+            limits: Limits::new(
+                &config.limits,
+                config.ground_z_m,
+                -x0.position_m.z,
+                h_nominal,
+            ),
             instant: actuators.is_instant(),
             constant_wind: config.wind_profile.is_empty(),
             targets: vec![0.0; count],

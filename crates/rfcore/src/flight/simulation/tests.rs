@@ -11,24 +11,35 @@ use crate::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch, Variabl
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::RigidBodyState;
 
-fn quad_x() -> Airframe {
+pub(super) fn quad_x() -> Airframe {
     crate::fixtures::preset("quad-x")
 }
 
-fn still_air(airframe: &Airframe) -> Vehicle {
+pub(super) fn still_air(airframe: &Airframe) -> Vehicle {
     Vehicle::new(airframe, Drag::default()).unwrap()
 }
 
 /// Fixed-pitch rotors with no lag or rate limit.
-fn instant_rotors(airframe: &Airframe) -> Actuators {
+pub(super) fn instant_rotors(airframe: &Airframe) -> Actuators {
     Actuators::FixedPitch(FixedPitch::new(airframe, Lag::none(), 0.0).unwrap())
+}
+
+/// Altitude of the runs that measure the integrator: none of them comes near the ground.
+const ALOFT_M: f64 = 100.0;
+
+/// At rest, level, [`ALOFT_M`] above the ground (world NED: `z = -ALOFT_M`).
+fn aloft() -> RigidBodyState {
+    RigidBodyState {
+        position_m: Vector3::new(0.0, 0.0, -ALOFT_M),
+        ..RigidBodyState::at_rest()
+    }
 }
 
 fn config(duration_s: f64) -> SimulationConfig {
     SimulationConfig::new(0.0025, 2, duration_s)
 }
 
-fn hover_schedule(airframe: &Airframe) -> OpenLoop {
+pub(super) fn hover_schedule(airframe: &Airframe) -> OpenLoop {
     let f = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
     OpenLoop::new(vec![0.0], DMatrix::from_element(1, 4, f)).unwrap()
 }
@@ -78,13 +89,13 @@ fn no_thrust_is_free_fall_until_the_altitude_limit() {
         &mut controller,
         &[1.0; 4],
         &[],
-        RigidBodyState::at_rest(),
+        aloft(),
         &config(2.0),
     )
     .unwrap();
     let end = run.states.last().unwrap();
     let g = airframe.gravity_m_s2();
-    assert!((end.position_m.z - 0.5 * g * 4.0).abs() < 1e-9);
+    assert!((end.position_m.z + ALOFT_M - 0.5 * g * 4.0).abs() < 1e-9);
     let mut short = config(10.0);
     short.limits.max_altitude_loss_m = 20.0;
     let actuators = instant_rotors(&airframe);
@@ -94,7 +105,7 @@ fn no_thrust_is_free_fall_until_the_altitude_limit() {
         &mut controller,
         &[1.0; 4],
         &[],
-        RigidBodyState::at_rest(),
+        aloft(),
         &short,
     )
     .unwrap();
@@ -105,7 +116,7 @@ fn no_thrust_is_free_fall_until_the_altitude_limit() {
     // the located time can be ~1e-15 s early by rounding).
     let expected = (40.0 / g).sqrt();
     assert!((event.time_s - expected).abs() < 1e-12, "{}", event.time_s);
-    assert!((event.state.position_m.z - 20.0).abs() < 1e-9);
+    assert!((event.state.position_m.z + ALOFT_M - 20.0).abs() < 1e-9);
     assert_eq!(*run.t_s.last().unwrap(), event.time_s);
 }
 
@@ -128,7 +139,7 @@ fn open_loop_rotor_failure_tumbles_and_is_reported() {
         &mut controller,
         &[1.0; 4],
         &[fault],
-        RigidBodyState::at_rest(),
+        aloft(),
         &config(10.0),
     )
     .unwrap();
@@ -155,7 +166,7 @@ fn bad_configuration_is_named() {
     let vehicle = still_air(&airframe);
     let actuators = instant_rotors(&airframe);
     let mut controller = ZeroCommand { count: 4 };
-    let x0 = RigidBodyState::at_rest();
+    let x0 = aloft();
     let run = |cfg: &SimulationConfig, faults: &[RotorFault], controller: &mut dyn Controller| {
         simulate(
             &vehicle,
@@ -250,7 +261,7 @@ fn simulation_ends_exactly_at_a_duration_that_is_not_a_multiple_of_dt() {
             &mut controller,
             &[1.0; 4],
             &[],
-            RigidBodyState::at_rest(),
+            aloft(),
             &cfg,
         )
         .unwrap();
@@ -262,7 +273,7 @@ fn simulation_ends_exactly_at_a_duration_that_is_not_a_multiple_of_dt() {
         // Free fall is integrated exactly, including the shortened last step.
         let end = run.states.last().unwrap();
         assert!(
-            (end.position_m.z - 0.5 * g).abs() < 1e-12,
+            (end.position_m.z + ALOFT_M - 0.5 * g).abs() < 1e-12,
             "dt {dt}: {}",
             end.position_m.z
         );
@@ -275,7 +286,7 @@ fn simulation_ends_exactly_at_a_duration_that_is_not_a_multiple_of_dt() {
             &mut controller,
             &[1.0; 4],
             &[],
-            RigidBodyState::at_rest(),
+            aloft(),
             &thin,
         )
         .unwrap();
@@ -310,7 +321,7 @@ fn convergence_ratios(actuators: &Actuators, command: &[f64], vehicle: &Vehicle)
     .unwrap();
     let x0 = RigidBodyState {
         omega_rad_s: Vector3::new(0.3, -0.2, 0.5),
-        ..RigidBodyState::at_rest()
+        ..aloft()
     };
     let run = |n: usize, controller: &mut OpenLoop| {
         end_state(
@@ -429,7 +440,7 @@ fn simulation_with_rate_limit_and_saturation_matches_a_fine_step_reference() {
     }
     let mut controller =
         OpenLoop::new(vec![0.0, 0.5, 1.0], DMatrix::from_row_slice(3, 4, &rows)).unwrap();
-    let x0 = RigidBodyState::at_rest();
+    let x0 = aloft();
     let coarse = end_state(
         &vehicle,
         &rotors_settled,
@@ -482,7 +493,7 @@ fn simulation_fault_acts_at_its_own_time_not_the_next_substep() {
         &mut controller,
         &[1.0; 4],
         &faults,
-        RigidBodyState::at_rest(),
+        aloft(),
         &SimulationConfig::new(0.05, 1, 0.5),
     )
     .unwrap();
@@ -490,7 +501,7 @@ fn simulation_fault_acts_at_its_own_time_not_the_next_substep() {
         let falling = (t - t_fault).max(0.0);
         let v = run.states[k].velocity_m_s.z;
         assert!((v - 0.5 * g * falling).abs() < 1e-12, "t = {t}: v = {v}");
-        let z = run.states[k].position_m.z;
+        let z = run.states[k].position_m.z + ALOFT_M;
         assert!(
             (z - 0.25 * g * falling * falling).abs() < 1e-12,
             "t = {t}: z = {z}"
@@ -509,7 +520,7 @@ fn simulation_refuses_a_substep_too_long_for_the_spin_or_the_lag() {
     let mut controller = ZeroCommand { count: 4 };
     let spinning = RigidBodyState {
         omega_rad_s: Vector3::new(0.0, 0.0, 75.0),
-        ..RigidBodyState::at_rest()
+        ..aloft()
     };
     let err = simulate(
         &vehicle,
@@ -537,7 +548,7 @@ fn simulation_refuses_a_substep_too_long_for_the_spin_or_the_lag() {
         &mut controller,
         &[1.0; 4],
         &[],
-        RigidBodyState::at_rest(),
+        aloft(),
         &SimulationConfig::new(0.02, 1, 1.0),
     )
     .unwrap_err()
@@ -558,7 +569,7 @@ fn simulation_torque_free_spin_keeps_its_wobble_at_an_accepted_step() {
     let mut controller = ZeroCommand { count: 4 };
     let x0 = RigidBodyState {
         omega_rad_s: Vector3::new(3.0, 0.0, 42.0),
-        ..RigidBodyState::at_rest()
+        ..aloft()
     };
     let run = |substeps: usize, controller: &mut ZeroCommand| {
         let mut cfg = SimulationConfig::new(0.05, substeps, 3.0);
@@ -614,7 +625,7 @@ fn simulation_ends_with_a_step_size_divergence_when_rates_outgrow_the_substep() 
         &mut controller,
         &[1.0; 4],
         &[],
-        RigidBodyState::at_rest(),
+        aloft(),
         &SimulationConfig::new(0.01, 1, 10.0),
     )
     .unwrap();
@@ -642,7 +653,7 @@ fn simulation_locates_a_limit_crossing_within_the_substep() {
     let mut controller = ZeroCommand { count: 4 };
     let x0 = RigidBodyState {
         omega_rad_s: Vector3::new(2.0, 0.0, 0.0),
-        ..RigidBodyState::at_rest()
+        ..aloft()
     };
     let mut cfg = SimulationConfig::new(0.05, 1, 2.0);
     cfg.record_every = 4;
@@ -679,7 +690,7 @@ fn simulation_locates_a_limit_crossing_within_the_substep() {
         &mut controller,
         &[1.0; 4],
         &[],
-        RigidBodyState::at_rest(),
+        aloft(),
         &cfg,
     )
     .unwrap();
