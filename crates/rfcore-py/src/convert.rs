@@ -1,25 +1,120 @@
-//! The one conversion layer between Python and the core: core errors to `ValueError`, the GIL
-//! helper every heavy call uses, and array views. Every bindings file uses these; none defines
+//! The one conversion layer between Python and the core: core errors to `ValueError` (and a
+//! cancelled call to `KeyboardInterrupt`), the GIL helper every heavy call uses (which also
+//! watches for Ctrl-C), and array views. Every bindings file uses these; none defines
 //! its own.
+
+use std::sync::mpsc::{channel, RecvTimeoutError};
+use std::sync::OnceLock;
+use std::time::Duration;
 
 use nalgebra::DMatrix;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
-use rfcore::RfError;
+use rfcore::{Cancel, RfError};
 
 pub(crate) fn to_py_err(error: RfError) -> PyErr {
-    PyValueError::new_err(error.to_string())
+    match error {
+        // Only a Ctrl-C cancels (`detached`), so the core's "interrupted" is Python's.
+        RfError::Interrupted => PyKeyboardInterrupt::new_err(error.to_string()),
+        _ => PyValueError::new_err(error.to_string()),
+    }
 }
 
-/// Runs `work` with the GIL released and converts core errors: the one helper every heavy call uses.
+/// How often the calling thread looks for Ctrl-C while a heavy call runs. With the core's checks
+/// (about every millisecond of work, `rfcore::cancel`) a call stops within about this long.
+pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Stack of the worker a heavy call runs on: a Python callable controller runs there too, so the
+/// main thread's usual 8 MiB rather than Rust's 2 MiB.
+const WORKER_STACK_BYTES: usize = 8 << 20;
+
+/// Python's main thread (`threading.main_thread().ident`), recorded when the module loads: the
+/// only thread Python delivers Ctrl-C to.
+static MAIN_THREAD: OnceLock<u64> = OnceLock::new();
+
+pub(crate) fn remember_main_thread(py: Python<'_>) -> PyResult<()> {
+    let ident: u64 = py
+        .import("threading")?
+        .call_method0("main_thread")?
+        .getattr("ident")?
+        .extract()?;
+    let _ = MAIN_THREAD.set(ident);
+    Ok(())
+}
+
+fn on_main_thread() -> bool {
+    // SAFETY: reads the calling thread's identifier; needs no interpreter state.
+    let current = unsafe { pyo3::ffi::PyThread_get_thread_ident() } as u64;
+    MAIN_THREAD.get().is_none_or(|&main| main == current)
+}
+
+/// Runs `work` with the GIL released and converts core errors: the one helper every heavy call
+/// uses. On Python's main thread the work runs on a worker thread while this thread looks for
+/// Ctrl-C every [`SIGNAL_POLL`] (re-attaching briefly: `PyErr_CheckSignals` acts only there);
+/// on a signal it cancels the work's [`Cancel`] token, waits for the worker to stop (the core
+/// checks the token in its loops, rayon batches included) and returns the `KeyboardInterrupt`,
+/// whatever the work returned. On any other thread (Dask workers, a controller callback) no
+/// signal can arrive, so the work runs right here.
 pub(crate) fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send,
-    F: FnOnce() -> rfcore::Result<T> + Send,
+    F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
 {
-    py.detach(work).map_err(to_py_err)
+    let cancel = Cancel::new();
+    if !on_main_thread() {
+        return py.detach(|| work(&cancel)).map_err(to_py_err);
+    }
+    let (result, interrupt) = py.detach(|| watched(work, &cancel));
+    match interrupt {
+        Some(err) => Err(err),
+        None => result.map_err(to_py_err),
+    }
+}
+
+/// `work` on a worker thread while this one polls for signals (see [`detached`]); returns the
+/// work's result and the exception to raise instead, if any (the signal's, or the failure to
+/// start the worker).
+fn watched<T, F>(work: F, cancel: &Cancel) -> (rfcore::Result<T>, Option<PyErr>)
+where
+    T: Send,
+    F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
+{
+    std::thread::scope(|scope| {
+        let (done, finished) = channel::<()>();
+        let worker = std::thread::Builder::new()
+            .name("rotorfault-work".into())
+            .stack_size(WORKER_STACK_BYTES)
+            .spawn_scoped(scope, move || {
+                // One Python thread state for the whole call (kept while detached), so a
+                // Python controller called at every step does not create one each time.
+                let result = Python::attach(|py| py.detach(|| work(cancel)));
+                let _ = done.send(());
+                result
+            });
+        let worker = match worker {
+            Ok(worker) => worker,
+            Err(err) => {
+                let raised = PyRuntimeError::new_err(format!("could not start a worker thread: {err}"));
+                return (Err(RfError::Interrupted), Some(raised));
+            }
+        };
+        let mut interrupt = None;
+        // The sender is dropped (Disconnected) if the work panics: stop waiting then too.
+        while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
+            if interrupt.is_none() {
+                if let Err(err) = Python::attach(|py| py.check_signals()) {
+                    cancel.cancel();
+                    interrupt = Some(err);
+                }
+            }
+        }
+        match worker.join() {
+            Ok(result) => (result, interrupt),
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    })
 }
 
 /// Borrows a contiguous 1-D array as a slice, naming the field if it is not contiguous.

@@ -11,7 +11,7 @@ use rfcore::flight::actuator::{
 };
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
-    simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
+    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
@@ -548,7 +548,7 @@ pub fn simulate<'py>(
                 count,
                 error: None,
             };
-            let result = detached(py, || {
+            let result = detached(py, |cancel| {
                 core_simulate(
                     &vehicle,
                     actuators,
@@ -557,6 +557,7 @@ pub fn simulate<'py>(
                     &faults,
                     x0,
                     config,
+                    cancel,
                 )
             });
             if let Some(err) = callable.error.take() {
@@ -576,7 +577,7 @@ pub fn simulate<'py>(
                 })
                 .transpose()?;
             let mut boxed = boxed(spec.as_ref(), count)?;
-            detached(py, || {
+            detached(py, |cancel| {
                 core_simulate(
                     &vehicle,
                     actuators,
@@ -585,6 +586,7 @@ pub fn simulate<'py>(
                     &faults,
                     x0,
                     config,
+                    cancel,
                 )
             })?
         }
@@ -632,8 +634,8 @@ pub fn simulate_batch<'py>(
             })
         })
         .collect::<PyResult<_>>()?;
-    let results = detached(py, || {
-        core_batch(&vehicle, &actuators, &efficiency, runs, config)
+    let results = detached(py, |cancel| {
+        core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
     Ok(results
         .into_iter()

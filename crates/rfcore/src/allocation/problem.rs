@@ -13,7 +13,9 @@
 
 use nalgebra::DMatrix;
 
-use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
+use crate::error::{
+    require_all_finite, require_all_normal, require_entries, require_normal, Result, RfError,
+};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
 pub const MAX_ACTUATORS: usize = 16;
@@ -62,8 +64,16 @@ impl AllocationProblem {
                 format!("must be finite, got {}", matrix.as_slice()[i]),
             ));
         }
+        // The solver's scaling divides by the largest entry and weight and by column norms: a
+        // subnormal has no reciprocal (see `crate::error`).
+        if let Some(i) = matrix.iter().position(|v| !(*v == 0.0 || v.is_normal())) {
+            require_normal(
+                &format!("matrix[{}, {}]", i % n, i / n),
+                matrix.as_slice()[i],
+            )?;
+        }
         require_entries("weights", weights, n, "one per virtual-control component")?;
-        require_all_finite("weights", weights)?;
+        require_all_normal("weights", weights)?;
         if let Some(i) = weights.iter().position(|&w| w < 0.0) {
             return Err(RfError::invalid(
                 format!("weights[{i}]"),
@@ -102,7 +112,7 @@ impl AllocationProblem {
 
     /// Adds `gamma/2 |T - preferred|^2` to the objective (`gamma >= 0`, finite).
     pub fn with_regularization(mut self, gamma: f64, preferred: &[f64]) -> Result<Self> {
-        require_finite("regularization", gamma)?;
+        require_normal("regularization", gamma)?;
         if gamma < 0.0 {
             return Err(RfError::invalid(
                 "regularization",
@@ -275,13 +285,14 @@ pub enum AllocationStatus {
     /// Clarabel finished at reduced accuracy.
     AlmostOptimal,
     /// The active-set solver could not certify its answer (iteration bound, or the certificate
-    /// above its tolerance) and neither could its fallback; the commands are feasible, not proven
-    /// optimal (see the allocation's certificate).
+    /// above its tolerance) and neither could its fallback, or Clarabel reached its
+    /// `max_iterations`; the commands are feasible, not proven optimal (see the allocation's
+    /// certificate).
     IterationLimit,
     /// The unconstrained pseudo-inverse: bounds were not applied.
     Unconstrained,
-    /// Clarabel stopped without a solution (iteration limit, numerical trouble, infeasible
-    /// equality constraints); the commands are its last iterate.
+    /// Clarabel stopped without a solution (numerical trouble, infeasible equality
+    /// constraints); the commands are its last iterate.
     Failed,
 }
 
