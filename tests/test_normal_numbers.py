@@ -80,10 +80,13 @@ def test_general_rotors_and_every_room_check_their_scales() -> None:
         rf.Simulator(quad, dt_s=SUBNORMAL)
     with pytest.raises(ValueError, match=r"^actuator.time_constant_s: must lie in"):
         rf.Simulator(quad, actuator=rf.FixedPitchActuator(time_constant_s=SUBNORMAL))
-    with pytest.raises(ValueError, match=r"^substeps: must be at most 10000"):
-        rf.Simulator(quad, substeps=10_001)
+    with pytest.raises(ValueError, match=r"^substeps: must be at most 10000 RK4 steps per control period"):
+        rf.Simulator(quad, substeps=10_001).run(duration_s=0.01)
     with pytest.raises(ValueError, match=r"^weights\[3\]: must be 0 or a normal"):
         rf.allocate(quad, [9.81, 0.0, 0.0, 0.0], weights=[1.0, 1.0, 1.0, SUBNORMAL])
+    # 1.5e308 rounded to the power of two 2^1024 = inf inside the solver: zeros, "optimal".
+    with pytest.raises(ValueError, match=r"^matrix\[0, 0\]: must be at most 1e300 in magnitude"):
+        rf.allocate(np.eye(2) * 1.5e308, [1.0, 1.0], bounds=([0.0, 0.0], [1.0, 1.0]))
     # The values the papers and the tests use stay accepted: zero gravity, 1e300 m arms (only
     # multiplied; the analysis is unit-free), the J/m range of the rank tests.
     rf.Airframe(**{**QUAD, "gravity_m_s2": 0.0})  # type: ignore[arg-type]

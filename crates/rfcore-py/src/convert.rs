@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use nalgebra::DMatrix;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 
 use rfcore::{Cancel, RfError};
@@ -26,15 +26,20 @@ pub(crate) fn to_py_err(error: RfError) -> PyErr {
 /// (about every millisecond of work, `rfcore::cancel`) a call stops within about this long.
 pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
-/// Stack of the worker a heavy call runs on: a Python callable controller runs there too, so the
-/// main thread's usual 8 MiB rather than Rust's 2 MiB.
+/// Stack of rayon's worker threads, where heavy calls run (a Python callable controller too):
+/// the main thread's usual 8 MiB rather than Rust's 2 MiB.
 const WORKER_STACK_BYTES: usize = 8 << 20;
 
 /// Python's main thread (`threading.main_thread().ident`), recorded when the module loads: the
 /// only thread Python delivers Ctrl-C to.
 static MAIN_THREAD: OnceLock<u64> = OnceLock::new();
 
-pub(crate) fn remember_main_thread(py: Python<'_>) -> PyResult<()> {
+/// Records Python's main thread and gives rayon's global pool (unless something built it first)
+/// the stack a Python callback may need: called once, when the module loads.
+pub(crate) fn prepare_threads(py: Python<'_>) -> PyResult<()> {
+    let _ = rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK_BYTES)
+        .build_global();
     let ident: u64 = py
         .import("threading")?
         .call_method0("main_thread")?
@@ -51,12 +56,12 @@ fn on_main_thread() -> bool {
 }
 
 /// Runs `work` with the GIL released and converts core errors: the one helper every heavy call
-/// uses. On Python's main thread the work runs on a worker thread while this thread looks for
-/// Ctrl-C every [`SIGNAL_POLL`] (re-attaching briefly: `PyErr_CheckSignals` acts only there);
-/// on a signal it cancels the work's [`Cancel`] token, waits for the worker to stop (the core
-/// checks the token in its loops, rayon batches included) and returns the `KeyboardInterrupt`,
-/// whatever the work returned. On any other thread (Dask workers, a controller callback) no
-/// signal can arrive, so the work runs right here.
+/// uses. On Python's main thread the work runs on rayon's pool while this thread looks for
+/// Ctrl-C every [`SIGNAL_POLL`] (re-attaching briefly: `PyErr_CheckSignals` acts only there); on
+/// a signal it cancels the work's [`Cancel`] token, waits for the work to stop (the core checks
+/// the token in its loops, rayon batches included) and returns the `KeyboardInterrupt`, whatever
+/// the work returned. Handing the work over costs about 10 us. On any other thread (Dask
+/// workers, a controller callback) no signal can arrive, so the work runs right here.
 pub(crate) fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send,
@@ -73,46 +78,34 @@ where
     }
 }
 
-/// `work` on a worker thread while this one polls for signals (see [`detached`]); returns the
-/// work's result and the exception to raise instead, if any (the signal's, or the failure to
-/// start the worker).
+/// `work` on rayon's pool while this thread polls for signals (see [`detached`]); returns the
+/// work's result and the signal's exception, if one came. A panic in the work is re-raised here
+/// when the scope ends (pyo3 turns it into `PanicException`).
 fn watched<T, F>(work: F, cancel: &Cancel) -> (rfcore::Result<T>, Option<PyErr>)
 where
     T: Send,
     F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
 {
-    std::thread::scope(|scope| {
-        let (done, finished) = channel::<()>();
-        let worker = std::thread::Builder::new()
-            .name("rotorfault-work".into())
-            .stack_size(WORKER_STACK_BYTES)
-            .spawn_scoped(scope, move || {
-                // One Python thread state for the whole call (kept while detached), so a
-                // Python controller called at every step does not create one each time.
-                let result = Python::attach(|py| py.detach(|| work(cancel)));
-                let _ = done.send(());
-                result
-            });
-        let worker = match worker {
-            Ok(worker) => worker,
-            Err(err) => {
-                let raised = PyRuntimeError::new_err(format!("could not start a worker thread: {err}"));
-                return (Err(RfError::Interrupted), Some(raised));
-            }
-        };
+    let (done, finished) = channel();
+    rayon::in_place_scope(|scope| {
+        scope.spawn(move |_| {
+            let _ = done.send(work(cancel));
+        });
         let mut interrupt = None;
-        // The sender is dropped (Disconnected) if the work panics: stop waiting then too.
-        while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
-            if interrupt.is_none() {
-                if let Err(err) = Python::attach(|py| py.check_signals()) {
-                    cancel.cancel();
-                    interrupt = Some(err);
+        loop {
+            match finished.recv_timeout(SIGNAL_POLL) {
+                Ok(result) => return (result, interrupt),
+                Err(RecvTimeoutError::Timeout) => {
+                    if interrupt.is_none() {
+                        if let Err(err) = Python::attach(|py| py.check_signals()) {
+                            cancel.cancel();
+                            interrupt = Some(err);
+                        }
+                    }
                 }
+                // The work panicked (its sender dropped): the scope re-raises the panic.
+                Err(RecvTimeoutError::Disconnected) => return (Err(RfError::Interrupted), interrupt),
             }
-        }
-        match worker.join() {
-            Ok(result) => (result, interrupt),
-            Err(panic) => std::panic::resume_unwind(panic),
         }
     })
 }

@@ -549,16 +549,22 @@ pub fn simulate<'py>(
                 error: None,
             };
             let result = detached(py, |cancel| {
-                core_simulate(
-                    &vehicle,
-                    actuators,
-                    &mut callable,
-                    &efficiency,
-                    &faults,
-                    x0,
-                    config,
-                    cancel,
-                )
+                // One Python thread state for the whole run (kept while detached), so the
+                // callback at every step does not create one each time.
+                Python::attach(|py| {
+                    py.detach(|| {
+                        core_simulate(
+                            &vehicle,
+                            actuators,
+                            &mut callable,
+                            &efficiency,
+                            &faults,
+                            x0,
+                            config,
+                            cancel,
+                        )
+                    })
+                })
             });
             if let Some(err) = callable.error.take() {
                 return Err(err);

@@ -17,7 +17,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
-    convert::remember_main_thread(module.py())?;
+    convert::prepare_threads(module.py())?;
     module.add_class::<airframe::PyAirframe>()?;
     module.add_class::<analysis::PyControllabilityReport>()?;
     module.add_class::<analysis::PyAcaiResult>()?;

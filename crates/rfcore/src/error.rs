@@ -24,10 +24,11 @@
 //!   finite double (1e+-300), so nothing the model forms from them (`m g`, `J / m`, `J^-1`,
 //!   `J omega^2`, `r0`) overflows or turns subnormal.
 //! - **Numbers a unit-free rule equilibrates** ([`require_normal`]: rotor positions and arm
-//!   lengths, `k_mu`, the entries and weights of an allocation problem) are zero or normal. The
-//!   analysis and the allocator divide by their magnitudes (row and column scaling by powers of
-//!   two) and are tested exact from 1e-160 to 1e300, so no tighter bound is needed; their sums
-//!   are checked for overflow where they are formed (`f_min, f_max, g_vec: too large`).
+//!   lengths, `k_mu`, the entries, weights and regularisation of an allocation problem) are zero
+//!   or normal. The analysis and the allocator divide by their magnitudes (row and column scaling
+//!   by powers of two) and are tested exact from 1e-160 to 1e300, so no tighter bound is needed;
+//!   the allocator refuses magnitudes above 1e300 (the power of two nearest 1.5e308 is infinite),
+//!   and sums are checked for overflow where they are formed (`f_min, f_max, g_vec: too large`).
 //! - Everything else (angles, thrust bounds, efficiencies, states, gains, set points) only
 //!   multiplies or is compared: finite is the rule.
 
@@ -162,17 +163,6 @@ pub(crate) fn require_normal(field: &str, value: f64) -> Result<()> {
                 f64::MIN_POSITIVE
             ),
         ))
-    }
-}
-
-/// [`require_normal`] for every entry, naming the first offending index.
-pub(crate) fn require_all_normal(field: &str, values: &[f64]) -> Result<()> {
-    match values
-        .iter()
-        .position(|v| !(v.is_finite() && (*v == 0.0 || v.is_normal())))
-    {
-        None => Ok(()),
-        Some(i) => require_normal(&format!("{field}[{i}]"), values[i]),
     }
 }
 

@@ -147,6 +147,7 @@ fn every_scale_the_simulator_and_controllers_divide_by_is_checked() {
     let mut config = SimulationConfig::new(SUBNORMAL, 1, 0.0);
     assert!(message(config.check().map(|_| ())).starts_with("dt_s: must lie in"));
     config.dt_s = 0.0025;
+    config.duration_s = 0.0025;
     config.substeps = MAX_SUBSTEPS + 1;
     assert!(message(config.check().map(|_| ())).starts_with("substeps: must be at most"));
     config.substeps = MAX_SUBSTEPS;
@@ -200,6 +201,28 @@ fn allocation_problems_refuse_subnormal_scales() {
     ));
     assert!(
         err.starts_with("weights[1]: must be 0 or a normal"),
+        "{err}"
+    );
+    // 1.5e308 rounds to the power of two 2^1024 = inf in the solver's scaling: it answered zeros
+    // and called them optimal.
+    let err = message(AllocationProblem::new(
+        DMatrix::identity(2, 2) * 1.5e308,
+        &[1.0; 2],
+        &[0.0; 2],
+        &[1.0; 2],
+    ));
+    assert!(
+        err.starts_with("matrix[0, 0]: must be at most 1e300 in magnitude"),
+        "{err}"
+    );
+    let err = message(AllocationProblem::new(
+        DMatrix::identity(2, 2),
+        &[1.5e308, 1.0],
+        &[0.0; 2],
+        &[1.0; 2],
+    ));
+    assert!(
+        err.starts_with("weights[0]: must be at most 1e300"),
         "{err}"
     );
     // The scale-free solver's own range: 1e-160 and 1e300 stay accepted.

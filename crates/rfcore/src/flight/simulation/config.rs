@@ -81,16 +81,6 @@ impl SimulationConfig {
         if self.substeps == 0 {
             return Err(RfError::invalid("substeps", "must be >= 1"));
         }
-        if self.substeps > MAX_SUBSTEPS {
-            return Err(RfError::invalid(
-                "substeps",
-                format!(
-                    "must be at most {MAX_SUBSTEPS} RK4 steps per control period, got {} (a \
-                     finer integration needs a shorter dt_s)",
-                    self.substeps
-                ),
-            ));
-        }
         require_finite("duration_s", self.duration_s)?;
         if self.duration_s < 0.0 {
             return Err(RfError::invalid(
@@ -114,6 +104,18 @@ impl SimulationConfig {
                 "substeps",
                 format!(
                     "{steps} control steps x {} substeps exceed the limit of {MAX_RK4_STEPS} RK4 steps per run",
+                    self.substeps
+                ),
+            ));
+        }
+        // Only a run that integrates anything has periods to bound (a zero-length run checks
+        // the other settings).
+        if steps >= 1.0 && self.substeps > MAX_SUBSTEPS {
+            return Err(RfError::invalid(
+                "substeps",
+                format!(
+                    "must be at most {MAX_SUBSTEPS} RK4 steps per control period, got {} (a \
+                     finer integration needs a shorter dt_s)",
                     self.substeps
                 ),
             ));
