@@ -34,6 +34,10 @@ const WORKER_STACK_BYTES: usize = 8 << 20;
 /// only thread Python delivers Ctrl-C to.
 static MAIN_THREAD: OnceLock<u64> = OnceLock::new();
 
+/// The process the module loaded in: a `fork()`ed child inherits no rayon threads, so work is
+/// never handed to the pool there (the hand-over would wait forever).
+static LOADED_IN: OnceLock<u32> = OnceLock::new();
+
 /// Records Python's main thread and gives rayon's global pool (unless something built it first)
 /// the stack a Python callback may need: called once, when the module loads.
 pub(crate) fn prepare_threads(py: Python<'_>) -> PyResult<()> {
@@ -46,13 +50,17 @@ pub(crate) fn prepare_threads(py: Python<'_>) -> PyResult<()> {
         .getattr("ident")?
         .extract()?;
     let _ = MAIN_THREAD.set(ident);
+    let _ = LOADED_IN.set(std::process::id());
     Ok(())
 }
 
-fn on_main_thread() -> bool {
+/// Python's main thread, in the process the module loaded in: the one place a signal can arrive
+/// and the pool is alive.
+fn watchable() -> bool {
     // SAFETY: reads the calling thread's identifier; needs no interpreter state.
     let current = unsafe { pyo3::ffi::PyThread_get_thread_ident() } as u64;
-    MAIN_THREAD.get().is_none_or(|&main| main == current)
+    MAIN_THREAD.get().is_some_and(|&main| main == current)
+        && LOADED_IN.get() == Some(&std::process::id())
 }
 
 /// Runs `work` with the GIL released and converts core errors: the one helper every heavy call
@@ -61,14 +69,15 @@ fn on_main_thread() -> bool {
 /// a signal it cancels the work's [`Cancel`] token, waits for the work to stop (the core checks
 /// the token in its loops, rayon batches included) and returns the `KeyboardInterrupt`, whatever
 /// the work returned. Handing the work over costs about 10 us. On any other thread (Dask
-/// workers, a controller callback) no signal can arrive, so the work runs right here.
+/// workers, a controller callback) no signal can arrive, so the work runs right here, as it does
+/// in a `fork()`ed child (whose rayon pool has no threads).
 pub(crate) fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send,
     F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
 {
     let cancel = Cancel::new();
-    if !on_main_thread() {
+    if !watchable() {
         return py.detach(|| work(&cancel)).map_err(to_py_err);
     }
     let (result, interrupt) = py.detach(|| watched(work, &cancel));
