@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 import click
 from rich.console import Console
 
-from ..analysis import ACAI_FORMULAS
+from ..analysis import ACAI_FORMULAS, Airframe
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -60,9 +60,34 @@ formula_option = click.option(
     "(negative where hover is infeasible). Every printed ACAI names its formula.",
 )
 
-airframe_option = click.option(
-    "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`) or a TOML file."
+_MASS_KEY = "rotorfault.mass_kg"
+
+
+def _remember_mass(ctx: click.Context, param: click.Parameter, value: float | None) -> None:
+    ctx.meta[_MASS_KEY] = value
+
+
+#: ``--mass``: the vehicle mass of a PX4 ``.params`` airframe (PX4 keeps none), read by
+#: :func:`load_airframe`.
+mass_option = click.option(
+    "--mass", "mass_kg", type=float, default=None, expose_value=False, callback=_remember_mass, is_eager=True,
+    help="Vehicle mass in kg of a PX4 .params airframe (PX4 keeps none; needed when MPC_THR_HOVER cannot give it).",
 )
+
+
+def airframe_option(command: F) -> F:
+    """``--airframe`` (a preset, a TOML file or a PX4 .params file) and ``--mass``."""
+    command = click.option(
+        "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`), a TOML file or a PX4 .params file."
+    )(command)
+    return mass_option(command)  # type: ignore[no-any-return]
+
+
+def load_airframe(spec: str) -> Airframe:
+    """The airframe ``--airframe`` names, with ``--mass`` for a PX4 file."""
+    ctx = click.get_current_context(silent=True)
+    mass = None if ctx is None else ctx.meta.get(_MASS_KEY)
+    return Airframe.load(spec, mass_kg=mass)
 
 
 @click.group()

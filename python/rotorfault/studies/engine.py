@@ -9,6 +9,7 @@ bounded by the chunk size times the tasks in flight (two per worker, or two loca
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
@@ -19,7 +20,8 @@ from typing import TYPE_CHECKING, Any
 
 from .._typing import ScanBackend as Backend
 from .._util.convert import flag
-from .._util.output import write_text
+from .._util.lock import output_lock
+from .._util.output import check_parent, write_text
 from .._util.progress import progress_bar
 from .backends import ChunkTask, dask_client, run_dask, run_local
 from .storage import (
@@ -92,9 +94,7 @@ def run_chunks(
     decide whether an existing output may be resumed. ``metadata`` (JSON-able) is recorded in the
     manifest too but not compared (e.g. the rotorfault version). ``on_chunk_written`` is called
     after each chunk is in place (or gathered)."""
-    pa = pyarrow_module()
-
-    from .. import _rfcore
+    pyarrow_module()  # the install hint before anything else
 
     if not callable(task):
         raise TypeError(f"task: expected a callable returning a pyarrow.Table, got {type(task).__name__}")
@@ -122,10 +122,31 @@ def run_chunks(
     out_path: Path | None = None
     done: set[int] = set()
     started = time.perf_counter()
+    held = contextlib.ExitStack()
     if out is not None:
         if not isinstance(out, (str, os.PathLike)):
             raise TypeError(f"out: expected a directory path, got {type(out).__name__}")
         out_path = Path(out)
+        check_parent("out", out_path.absolute())
+        # One writer: the lock is taken before the directory is looked at and held until the
+        # manifest says complete (a second run, --resume or --force is refused, naming this one).
+        held.enter_context(output_lock("out", out_path))
+    with held:
+        return _run(task, specs, identity, out_path, done, started, resume, force, metadata, schema, backend, dask,
+                    progress, description, compression, on_chunk_written, total_rows)
+
+
+def _run(
+    task: ChunkTask, specs: list[ChunkSpec], identity: dict[str, Any], out_path: Path | None, done: set[int], started: float,
+    resume: bool, force: bool, metadata: Mapping[str, Any] | None, schema: Schema, backend: Backend, dask: Any,
+    progress: bool | None, description: str, compression: str, on_chunk_written: Callable[[ChunkSpec], None] | None,
+    total_rows: int,
+) -> StreamResult:
+    pa = pyarrow_module()
+
+    from .. import _rfcore
+
+    if out_path is not None:
         done = prepare_output(out_path, identity, resume=resume, force=force)
         manifest = {
             "format": STREAM_FORMAT,
