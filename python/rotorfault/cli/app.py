@@ -8,11 +8,13 @@ import contextlib
 import functools
 import signal
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any, TypeVar
 
 import click
 from rich.console import Console
 
+from .._util.output import claim_output_directory
 from ..analysis import ACAI_FORMULAS, Airframe
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -27,7 +29,7 @@ def _user_errors(command: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return command(*args, **kwargs)
-        except (ValueError, TypeError, OSError, OverflowError) as exc:
+        except (ValueError, TypeError, OSError, OverflowError, ImportError) as exc:
             raise click.ClickException(str(exc).replace("\n", " ")) from None
         except RecursionError:
             raise click.ClickException("input: nested too deeply to read (a TOML file of arrays or tables within tables?)") from None
@@ -88,6 +90,13 @@ def load_airframe(spec: str) -> Airframe:
     ctx = click.get_current_context(silent=True)
     mass = None if ctx is None else ctx.meta.get(_MASS_KEY)
     return Airframe.load(spec, mass_kg=mass)
+
+
+def claim_output(field: str, path: str, *, force: bool) -> Path:
+    """Holds the output directory ``path`` until the command ends, checked before any work:
+    its lock (a second writer is refused, naming this one), an interrupted run's leftovers
+    recovered, then the directory checked (:func:`rotorfault._util.output.claim_output_directory`)."""
+    return click.get_current_context().with_resource(claim_output_directory(field, path, force=force))
 
 
 @click.group()
