@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._util.convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real, rotor_numbers
 from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
@@ -310,7 +310,15 @@ def feasible_speeds(vehicle: VppVehicle, *, failed: Sequence[int] = (1,), fixed_
     group's common speed range, the torque ranges (:class:`FeasibleSpeeds`). Raises
     ``ValueError`` naming the bound when there is none."""
     problem = _Problem(vehicle, failed)
-    fixed, free = problem.groups(None if fixed_rotors is None else tuple(int(i) for i in fixed_rotors))
+    chosen = None
+    if fixed_rotors is not None:
+        chosen = rotor_numbers("fixed_rotors", fixed_rotors, problem.m)
+        bad = [i for i in chosen if i not in problem.healthy]
+        if bad:
+            raise ValueError(f"fixed_rotors: propeller {bad[0]} is failed; give healthy propellers of one spin direction ({list(problem.healthy)})")
+        if not chosen or len(set(chosen)) != len(chosen):
+            raise ValueError(f"fixed_rotors: give each healthy propeller at most once and at least one, got {list(chosen)}")
+    fixed, free = problem.groups(chosen)
     fixed_lo, fixed_hi = problem.interval(fixed)
     free_lo, free_hi = problem.interval(free)
     problem.require_increasing(fixed, fixed_lo, fixed_hi)
