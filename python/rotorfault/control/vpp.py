@@ -40,6 +40,7 @@ from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
 from .linear import STATE_NAMES as _STATE_NAMES
+from .lqr import TRIM_RESIDUAL_TOL
 from .lqr import linearize as _linearize
 from .riccati import design_lqr
 from .stabilisability import Direction, describe_directions, left_null_space
@@ -179,6 +180,12 @@ class VppTrim:
     fixed_rotors: tuple[int, ...]
     free_rotors: tuple[int, ...]
     residual: float
+
+    @property
+    def balanced(self) -> bool:
+        """The evidence holds: ``residual`` at most :data:`TRIM_RESIDUAL_TOL` (:func:`trim`
+        raises otherwise; :func:`fixed_pitch_trim` may return an unbalanced frame, and says so here)."""
+        return bool(self.residual <= TRIM_RESIDUAL_TOL)
 
     def speed(self, rotor: int) -> float:
         return float(self.command[2 * (rotor - 1)])
@@ -408,6 +415,11 @@ def trim(
     state[0:3] = pos
     state[8] = heading
     residual = float(np.linalg.norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command)))
+    if not residual <= TRIM_RESIDUAL_TOL:
+        raise ValueError(
+            f"trim residual: the trim leaves ||f(x, u)|| = {residual:.3g} (at most {TRIM_RESIDUAL_TOL:g}): "
+            "the speeds found do not balance the model"
+        )
     return VppTrim(
         frozen_array("state", state, 1), frozen_array("command", command, 1), frozen_array("thrust_n", problem.thrust, 1),
         problem.failed, fixed, free, residual,
