@@ -542,7 +542,7 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError(f"value: must be finite, got {value}")
-        return repr(value)
+        return repr(float(value))  # shortest round trip (a NumPy float's repr names its type)
     if isinstance(value, int):
         return str(value)
     if isinstance(value, list):
