@@ -13,7 +13,7 @@ from .._typing import AcaiFormula
 from .._util.output import check_output_file
 from ..analysis import EQ13_ZERO_NOTE, Airframe, acai_label, controllability, failure_table, format_acai
 from ..analysis.airframe import rotor_labels
-from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers
+from .app import _user_errors, airframe_option, cli, console, formula_option, load_airframe, mass_option, parse_numbers
 
 
 @cli.command()
@@ -37,7 +37,7 @@ def airframes() -> None:
 @_user_errors
 def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: AcaiFormula) -> None:
     """Run Du's controllability test and print the ACAI."""
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     efficiencies = None if efficiency is None else parse_numbers("efficiency", efficiency)
     report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)
     table = Table(title=f"{escape(frame.name)}: controllability", show_header=False)
@@ -62,7 +62,7 @@ def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: Acai
 @_user_errors
 def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
     """Every combination of up to K failed rotors: rank, ACAI (all axes and giving up yaw), verdict."""
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)
     headers, rows = result.rows_for_display()
     table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
@@ -84,6 +84,7 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 
 @cli.command()
 @click.option("--airframe", "-a", required=True, help="Preset name, airframe TOML, or a PX4 .params file.")
+@mass_option
 @click.option("--require", "required", type=click.Choice(["none", "single", "double"]), default="none", show_default=True,
               help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
@@ -100,7 +101,7 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool) ->
 
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count))
     text = json.dumps(cert.to_dict(), indent=2) + "\n"
     if json_path == "-":

@@ -11,7 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .._typing import KeLaw
-from .app import _report_interruptions, _user_errors, cli, console
+from .app import _report_interruptions, _user_errors, claim_output, cli, console
 
 
 @cli.command("ftc-report")
@@ -29,7 +29,6 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
     """Fly every uniform-passive-FTC scenario (Ke et al.) and write a table and figures."""
     from typing import get_args
 
-    from .._util.output import check_output_directory
     from ..control import ke
     from ..papers import ke as ke_paper
 
@@ -45,7 +44,7 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
         if not names:
             raise ValueError("scenarios: give at least one scenario name")
         scenarios = [ke_paper.scenario(name) for name in names]
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     controller_preset = ke.preset(preset_name)
     with _report_interruptions():
         runs = []
@@ -69,10 +68,9 @@ def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
     """Wang et al.'s VPP quadcopter: the fixed-pitch comparison (hover, controllability,
     stabilisability, ACAI), the feasible trim speeds, and Section 4's three flights with
     propeller 1 failed."""
-    from .._util.output import check_output_directory
     from ..papers import wang as wang_paper
 
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault vpp-report"
     with _report_interruptions():
         path = wang_paper.write_report(out_dir, quick=quick, force=force, command=command)
@@ -91,12 +89,11 @@ def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
 def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, force: bool) -> None:
     """Fly Lanzon et al.'s two flights three ways (paper's design without and with limits, ours),
     for both I_zz values, run the Monte Carlo comparison with Ke's controller, and write a report."""
-    from .._util.output import check_output_directory
     from ..papers import lanzon as lanzon_paper
 
     if mc_runs < 0:
         raise ValueError(f"runs: must be >= 0, got {mc_runs}")
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     duration = 20.0 if quick else None
     runs_per = min(mc_runs, 50) if quick else mc_runs
     with _report_interruptions():
@@ -184,10 +181,9 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
 @_user_errors
 def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> None:
     """Reproduce every result of the four papers into one static report (index.html + figures)."""
-    from .._util.output import check_output_directory
     from ..papers import reproduce as reproduce_
 
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault reproduce"
     with _report_interruptions():
         result = reproduce_.write_reproduce(

@@ -14,7 +14,7 @@ from .._typing import AcaiFormula
 from .._util.output import check_output_file
 from ..analysis import Airframe, acai_label
 from ..studies.scan import efficiency_scan
-from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers, parse_rotors
+from .app import _user_errors, airframe_option, cli, console, formula_option, load_airframe, parse_numbers, parse_rotors
 
 
 @cli.command()
@@ -43,7 +43,7 @@ def scan(
         return
     if resume or dask_address or extra_axes:
         raise ValueError("out: --resume, --dask and --axis need --out (a Parquet output)")
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
         raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")
@@ -69,7 +69,7 @@ def _scan_to_parquet(
 ) -> None:
     from ..studies.scan import acai_scan
 
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     swept = parse_rotors("rotors", rotors)
     if not 0.0 < step <= 1.0 or not math.isclose(round(1.0 / step) * step, 1.0, rel_tol=0.0, abs_tol=1e-9):
         raise ValueError(f"step: must lie in (0, 1] and divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
@@ -113,7 +113,7 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
     """Rank every spin-direction assignment of the airframe's frame by failure tolerance."""
     from ..studies.design import design_search
 
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     numbers = parse_numbers("values", values) if values is not None else None
     result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
     if top < 0:

@@ -50,6 +50,11 @@ MAX_PITCH_RAD = math.radians(80.0)
 PITCH_LIMIT_CAP_RAD = math.radians(89.0)
 
 
+#: Largest ``||f(state, command)||`` a trim may leave (m/s^2 and rad/s^2 together): the presets'
+#: trims leave 1e-13; a trim above this is not an equilibrium and is never returned as one.
+TRIM_RESIDUAL_TOL = 1e-8
+
+
 @dataclass(frozen=True)
 class HoverTrim:
     """A hover equilibrium of a simulator.
@@ -69,6 +74,12 @@ class HoverTrim:
     def saturated(self) -> bool:
         """Whether hover needs a rotor on a thrust bound."""
         return bool(self.saturated_rotors)
+
+    @property
+    def balanced(self) -> bool:
+        """The evidence holds: ``residual`` at most :data:`TRIM_RESIDUAL_TOL` (a returned trim
+        always is: :func:`hover_trim` raises otherwise)."""
+        return bool(self.residual <= TRIM_RESIDUAL_TOL)
 
 
 def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0), yaw: float = 0.0) -> HoverTrim:
@@ -115,6 +126,11 @@ def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0
     x[7] = math.atan2(n, d)  # pitch
     command, saturated = _hover_thrusts(airframe, thrust)
     residual = float(np.linalg.norm(simulator.state_derivative(x, command)))
+    if not residual <= TRIM_RESIDUAL_TOL:
+        raise ValueError(
+            f"trim residual: the hover of {airframe.name} leaves ||f(x, u)|| = {residual:.3g} (at most "
+            f"{TRIM_RESIDUAL_TOL:g}): the thrusts found do not balance the model at this attitude"
+        )
     return HoverTrim(frozen_array("state", x, 1), frozen_array("command", command, 1), residual, saturated)
 
 

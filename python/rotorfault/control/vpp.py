@@ -35,11 +35,12 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._util.convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real, rotor_numbers
 from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
 from .linear import STATE_NAMES as _STATE_NAMES
+from .lqr import TRIM_RESIDUAL_TOL
 from .lqr import linearize as _linearize
 from .riccati import design_lqr
 from .stabilisability import Direction, describe_directions, left_null_space
@@ -180,6 +181,12 @@ class VppTrim:
     free_rotors: tuple[int, ...]
     residual: float
 
+    @property
+    def balanced(self) -> bool:
+        """The evidence holds: ``residual`` at most :data:`TRIM_RESIDUAL_TOL` (:func:`trim`
+        raises otherwise; :func:`fixed_pitch_trim` may return an unbalanced frame, and says so here)."""
+        return bool(self.residual <= TRIM_RESIDUAL_TOL)
+
     def speed(self, rotor: int) -> float:
         return float(self.command[2 * (rotor - 1)])
 
@@ -310,7 +317,15 @@ def feasible_speeds(vehicle: VppVehicle, *, failed: Sequence[int] = (1,), fixed_
     group's common speed range, the torque ranges (:class:`FeasibleSpeeds`). Raises
     ``ValueError`` naming the bound when there is none."""
     problem = _Problem(vehicle, failed)
-    fixed, free = problem.groups(None if fixed_rotors is None else tuple(int(i) for i in fixed_rotors))
+    chosen = None
+    if fixed_rotors is not None:
+        chosen = rotor_numbers("fixed_rotors", fixed_rotors, problem.m)
+        bad = [i for i in chosen if i not in problem.healthy]
+        if bad:
+            raise ValueError(f"fixed_rotors: propeller {bad[0]} is failed; give healthy propellers of one spin direction ({list(problem.healthy)})")
+        if not chosen or len(set(chosen)) != len(chosen):
+            raise ValueError(f"fixed_rotors: give each healthy propeller at most once and at least one, got {list(chosen)}")
+    fixed, free = problem.groups(chosen)
     fixed_lo, fixed_hi = problem.interval(fixed)
     free_lo, free_hi = problem.interval(free)
     problem.require_increasing(fixed, fixed_lo, fixed_hi)
@@ -400,6 +415,11 @@ def trim(
     state[0:3] = pos
     state[8] = heading
     residual = float(np.linalg.norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command)))
+    if not residual <= TRIM_RESIDUAL_TOL:
+        raise ValueError(
+            f"trim residual: the trim leaves ||f(x, u)|| = {residual:.3g} (at most {TRIM_RESIDUAL_TOL:g}): "
+            "the speeds found do not balance the model"
+        )
     return VppTrim(
         frozen_array("state", state, 1), frozen_array("command", command, 1), frozen_array("thrust_n", problem.thrust, 1),
         problem.failed, fixed, free, residual,

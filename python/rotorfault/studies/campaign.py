@@ -19,7 +19,6 @@ from __future__ import annotations
 import functools
 import json
 import math
-import tomllib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from os import PathLike
@@ -30,6 +29,7 @@ import numpy as np
 
 from .. import _rfcore
 from .._typing import ScanBackend as Backend
+from .._util.convert import read_toml
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Simulator, State, Trajectory
@@ -140,6 +140,8 @@ class Campaign:
                 raise TypeError(f"{name}: expected an integer, got {v!r}")
         if self.runs < 1:
             raise ValueError(f"runs: must be >= 1, got {self.runs}")
+        if self.substeps < 1:
+            raise ValueError(f"substeps: must be >= 1 (RK4 steps per control period), got {self.substeps}")
         if not 0 <= self.seed < 2**63:
             raise ValueError(f"seed: must lie in [0, 2**63), got {self.seed}")
         if self.chunk_size < 1:
@@ -157,6 +159,8 @@ class Campaign:
                 raise TypeError(f"{name}: expected a number, got {v!r}")
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}: must be > 0 and finite, got {v}")
+        # The core's rules for one run (step counts), here rather than in the first chunk.
+        _rfcore.SimulationConfig(dt_s=float(self.dt_s), substeps=int(self.substeps), duration_s=float(self.duration_s))
         if isinstance(self.failures, (str, bytes)) or not isinstance(self.failures, (tuple, list)) or not self.failures:
             raise TypeError("failures: expected a non-empty sequence of failure patterns (tuples of 1-based rotors)")
         rotors = rotor_count(self.vehicle().airframe_name)
@@ -205,12 +209,7 @@ class Campaign:
     def from_toml(cls, path: str | Path) -> Campaign:
         """A campaign from a TOML file whose keys are this class's fields (``gains`` a table of
         :class:`KeGains` fields over the preset's)."""
-        text = Path(path).read_text(encoding="utf-8")
-        try:
-            raw = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"{path}: not valid TOML: {exc}") from None
-        return cls.from_dict(raw)
+        return cls.from_dict(read_toml("campaign_file", path))
 
     @classmethod
     def from_dict(cls, raw: Mapping[str, Any]) -> Campaign:

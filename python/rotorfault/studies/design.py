@@ -67,14 +67,20 @@ def spin_assignments(rotor_count: int, *, symmetric: bool = True) -> list[str]:
 
 
 def is_regular(airframe: Airframe) -> bool:
-    """Rotors equally spaced round the centre, with equal arms and thrust bounds (the symmetries
-    the search uses hold)."""
+    """Rotors upright, equally spaced round the centre at one height, with equal arms, thrust
+    bounds and k_mu (the symmetries the search uses hold)."""
     m = airframe.rotor_count
     angles = np.sort(np.mod(airframe.arm_angle_rad - airframe.arm_angle_rad[0], 2 * np.pi))
     spaced = np.allclose(angles, np.arange(m) * 2 * np.pi / m, rtol=0.0, atol=1e-9)
-    same = all(np.ptp(v) <= 1e-12 * max(1.0, float(np.max(np.abs(v)))) for v in (airframe.arm_length_m, airframe.max_thrust_n, airframe.min_thrust_n, airframe.efficiency))
+    same = all(
+        np.ptp(v) <= 1e-12 * max(1.0, float(np.max(np.abs(v))))
+        for v in (airframe.arm_length_m, airframe.max_thrust_n, airframe.min_thrust_n, airframe.efficiency,
+                  airframe.rotor_drag_torque_ratio_m, airframe.position_m[:, 2])
+    )
+    # Tilted rotors break the mirror symmetry the classes rely on: every assignment is then ranked.
+    upright = bool(np.all(airframe.thrust_axis == np.array([0.0, 0.0, -1.0])))
     ordered = bool(np.all(np.diff(np.mod(airframe.arm_angle_rad - airframe.arm_angle_rad[0], 2 * np.pi)) > 0))
-    return bool(spaced and same and ordered)
+    return bool(spaced and same and ordered and upright)
 
 
 def with_spins(airframe: Airframe, spins: str) -> Airframe:
@@ -84,11 +90,8 @@ def with_spins(airframe: Airframe, spins: str) -> Airframe:
     if len(spins) != airframe.rotor_count or set(spins) - {"P", "N"}:
         raise ValueError(f"spins: expected {airframe.rotor_count} letters P or N, got {spins!r}")
     signs = np.array([-1.0 if c == "P" else 1.0 for c in spins])
-    return Airframe(
-        airframe.arm_angle_rad, airframe.arm_length_m, signs, airframe.max_thrust_n, airframe.mass_kg, airframe.inertia_kg_m2,
-        airframe.drag_torque_ratio_m, min_thrust_n=airframe.min_thrust_n, efficiency=airframe.efficiency,
-        gravity_m_s2=airframe.gravity_m_s2, name=f"{airframe.name} {spins}",
-    )
+    # Only the spins change: 3-D positions, tilted axes, each rotor's k_mu and the bounds are kept.
+    return airframe.with_parameters(spin=signs, name=f"{airframe.name} {spins}")
 
 
 @dataclass(frozen=True)

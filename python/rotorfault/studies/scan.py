@@ -6,6 +6,7 @@ values; the ACAI is evaluated at every grid point by the parallel Rust batch.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -29,6 +30,10 @@ if TYPE_CHECKING:
 CHUNK_POINTS = 1 << 20
 #: Largest grid a scan holds in memory (points, ACAI and efficiencies: about 4 GB for 3 rotors).
 MAX_SCAN_POINTS = 100_000_000
+#: Largest scan streamed to Parquet: row numbers stay far inside int64 and the chunk files
+#: (``chunk-<9 digits>``) stay countable; planning it takes constant memory (chunks are made
+#: one at a time), running it takes as long as it takes.
+MAX_STREAM_POINTS = 10**15
 
 
 @dataclass(frozen=True)
@@ -176,29 +181,35 @@ def _axis_name(name: Any, rotor_count: int) -> tuple[str, int | None]:
 
 
 def _variant(base: Airframe, params: Mapping[str, float]) -> Airframe:
-    """``base`` with the parameter axes' values (the core checks them, naming the field)."""
+    """``base`` with the parameter axes' values and nothing else changed (its 3-D positions, thrust
+    axes, reversible bounds, each rotor's k_mu and efficiencies kept: :meth:`Airframe.with_parameters`);
+    the core checks the values, naming the field."""
     if not params:
         return base
-    values: dict[str, Any] = {
-        "max_thrust_n": base.max_thrust_n.copy(),
-        "min_thrust_n": base.min_thrust_n.copy(),
-        "arm_length_m": base.arm_length_m.copy(),
-        "mass_kg": base.mass_kg,
-        "drag_torque_ratio_m": base.drag_torque_ratio_m,
-    }
+    changes: dict[str, Any] = {}
     for name, value in params.items():
         param, rotor = _axis_name(name, base.rotor_count)
-        if rotor is None and param in _PER_ROTOR:
-            values[param][:] = value
-        elif rotor is None:
-            values[param] = float(value)
+        if param in ("mass_kg", "drag_torque_ratio_m"):
+            changes[param] = float(value)
+            continue
+        values = changes.setdefault(param, np.array(getattr(base, param), dtype=np.float64))
+        if rotor is None:
+            values[:] = value
         else:
-            values[param][rotor] = value
-    return Airframe(
-        base.arm_angle_rad, values["arm_length_m"], base.spin_sign, values["max_thrust_n"], values["mass_kg"],
-        base.inertia_kg_m2, values["drag_torque_ratio_m"], min_thrust_n=values["min_thrust_n"],
-        efficiency=base.efficiency, gravity_m_s2=base.gravity_m_s2, name=base.name,
-    )
+            values[rotor] = value
+    return base.with_parameters(**changes)
+
+
+def _check_overlaps(names: Sequence[str], rotor_count: int) -> None:
+    """Two axes on one parameter (``max_thrust_n`` and ``max_thrust_n_2``, or the same rotor
+    written twice) would both set it: refused, naming them."""
+    seen: dict[tuple[str, int | None], str] = {}
+    for name in names:
+        param, rotor = _axis_name(name, rotor_count)
+        clashes = [other for (p, r), other in seen.items() if p == param and (r == rotor or r is None or rotor is None)]
+        if clashes:
+            raise ValueError(f"axes: {clashes[0]!r} and {name!r} both set {param}{'' if rotor is None else f' of rotor {rotor + 1}'}; give one axis per parameter")
+        seen[(param, rotor)] = name
 
 
 def _column_suffix(give_up_yaw: bool) -> str:
@@ -242,8 +253,9 @@ class _ScanTask:
 
     @property
     def total(self) -> int:
+        """Rows, exactly (Python integers: a grid's size never wraps)."""
         if self.levels is not None:
-            return int(np.prod([len(v) for v in self.levels], dtype=np.int64))
+            return math.prod(len(v) for v in self.levels)
         assert self.samples is not None
         return len(self.samples[0])
 
@@ -458,9 +470,19 @@ def acai_scan(
     if not spec:
         raise ValueError(f"{'axes' if axes is not None else 'samples'}: give at least one axis")
     names = tuple(spec)
-    for name in names:
-        _axis_name(name, airframe.rotor_count)
+    _check_overlaps(names, airframe.rotor_count)
     columns = [_axis_values(n, spec[n]) for n in names]
+    if axes is not None:
+        # The size on Python integers, before anything is built from it.
+        total_points = math.prod(len(c) for c in columns)
+        shape = " x ".join(str(len(c)) for c in columns)
+        limit = MAX_SCAN_POINTS if out is None else MAX_STREAM_POINTS
+        if total_points > limit:
+            where = "the in-memory limit" if out is None else "the limit of a streamed scan"
+            hint = "; stream them to Parquet (out=...)" if out is None and total_points <= MAX_STREAM_POINTS else ""
+            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed {where} of {limit:,}{hint}")
+        if -(-total_points // chunk_points) >= 10**9:
+            raise ValueError(f"chunk_points: {total_points:,} points in chunks of {chunk_points:,} make over 10^9 chunk files; use larger chunks")
     if samples is not None and len({len(c) for c in columns}) != 1:
         raise ValueError(f"samples: every axis needs one value per point, got lengths {[len(c) for c in columns]}")
     _check_axis_values(airframe, names, columns)

@@ -43,14 +43,13 @@ from __future__ import annotations
 import contextlib
 import math
 import re
-import tomllib
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast, get_args
 
 from .._typing import ScenarioControllerKind
-from .._util.convert import real
+from .._util.convert import read_toml, real
 from ..analysis.airframe import Airframe
 from ..control import OpenLoop, hover_trim, lqr_hover
 from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
@@ -139,23 +138,8 @@ def _file_keys() -> Iterator[None]:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Reads and validates a scenario file (errors name the key and the file)."""
+    data = read_toml("scenario_file", path)
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise ValueError(f"scenario_file: {str(path)!r} does not exist") from None
-    except OSError as exc:
-        raise ValueError(f"scenario_file: cannot read {str(path)!r}: {exc.strerror or exc}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); a scenario file is TOML") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: {exc}") from None
-    except RecursionError:
-        raise ValueError(f"{path}: nested too deeply to read (a scenario file has at most two levels of tables)") from None
     try:
         with _file_keys():
             scenario = _parse(data, path)
