@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._util.convert import FloatArray, real
+from .._util.tables import Records
 from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback
 from ..flight import Noise, Simulator, State, Trajectory
@@ -312,6 +313,40 @@ def speed_sweep_table() -> list[str]:
     return rows
 
 
+def flight_rows(flights: list[WangFlight]) -> Records:
+    """One record per flight (a sequence of dicts with ``to_arrow()`` and ``to_pandas()``):
+    ``final_error_m`` and ``max_error_after_settle_m`` are ``None`` for a lost flight."""
+    columns = [("scenario", "int64"), ("vehicle", "string"), ("lost", "bool"), ("lost_at_s", "float64"), ("final_error_m", "float64"),
+               ("max_error_after_settle_m", "float64"), ("max_tilt_rad", "float64")]
+    rows = [
+        {
+            "scenario": f.scenario.number, "vehicle": f.vehicle, "lost": f.lost, "lost_at_s": f.lost_at_s,
+            "final_error_m": None if f.lost else f.final_error_m,
+            "max_error_after_settle_m": None if f.lost or math.isnan(f.max_error_after_s) else f.max_error_after_s,
+            "max_tilt_rad": f.max_tilt_rad,
+        }
+        for f in flights
+    ]
+    return Records(rows, columns, title="Wang et al.: Section 4's flights", kind="wang-flights")
+
+
+def comparison_rows(cases: list[LayoutCase] | None = None) -> Records:
+    """:func:`fixed_pitch_comparison` as records (one per vehicle and propeller state); the rank,
+    stabilisability and directions are ``None`` where the vehicle has no hover at rest."""
+    columns = [("vehicle", "string"), ("failed_rotors", "list<int64>"), ("trim_residual", "float64"), ("hover_at_rest", "bool"),
+               ("controllability_rank", "int64"), ("stabilisable", "bool"), ("uncontrollable_directions", "list<string>"),
+               ("acai_eq13", "float64")]
+    rows = [
+        {
+            "vehicle": c.vehicle, "failed_rotors": list(c.failed), "trim_residual": c.residual, "hover_at_rest": c.at_rest,
+            "controllability_rank": c.rank, "stabilisable": None if c.stabilisability is None else c.stabilisability.holds,
+            "uncontrollable_directions": None if c.uncontrollable is None else list(c.uncontrollable), "acai_eq13": c.acai,
+        }
+        for c in (fixed_pitch_comparison() if cases is None else cases)
+    ]
+    return Records(rows, columns, title="Wang et al.: the fixed-pitch comparison", kind="wang-comparison")
+
+
 def flights_table(flights: list[WangFlight]) -> list[str]:
     rows = ["| scenario | vehicle | outcome | final error (m) | largest error after 15 s (m) | largest tilt (rad) |",
             "|---|---|---|---|---|---|"]
@@ -355,7 +390,7 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     return out_dir
 
 
-__all__ = ["COMPARISON_NOTE", "LAYOUTS", "PAPER", "REST_RESIDUAL", "LayoutCase", "WangFlight", "WangScenario", "comparison_table", "fixed_pitch_comparison", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
+__all__ = ["COMPARISON_NOTE", "LAYOUTS", "PAPER", "REST_RESIDUAL", "LayoutCase", "WangFlight", "WangScenario", "comparison_rows", "comparison_table", "fixed_pitch_comparison", "flight_rows", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
            "scenario", "speed_sweep_table", "write_report"]
 
 

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from .._typing import ScanBackend as Backend
 from .._util.convert import flag
+from .._util.optional import require_available
 from .._util.output import write_text
 from .._util.progress import progress_bar
 from .backends import ChunkTask, dask_client, run_dask, run_local
@@ -110,6 +111,8 @@ def run_chunks(
         raise ValueError(f"backend: must be 'local' or 'dask', got {backend!r}")
     if backend == "dask" and dask is None:
         raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
+    if backend == "dask":
+        require_available("backend='dask'", "dask", "distributed")
     schema = schema.remove_metadata()
     identity: dict[str, Any] = {
         "kind": kind,
