@@ -264,7 +264,7 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
             model = vpp.linearize(vehicle, at, pitch_fixed=frame is not None)
             kalman = vpp.controllability(model)
             test = stabilisability(
-                model.a, model.b, state_names=vpp.STATE_NAMES, state_labels=STATE_LABELS,
+                model.A, model.B, state_names=vpp.STATE_NAMES, state_labels=STATE_LABELS,
             )
             rows.append(LayoutCase(
                 label, failed, at.residual, kalman.rank, test,

@@ -580,7 +580,7 @@ class CampaignResult(Tabular):
         rows = [
             {"by": by, "group": r.label, "survived": r.survived, "runs": r.runs, "rate": r.rate, "low": r.low, "high": r.high}
             for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s")
-            for r in self.survival(by, bins=bins)  # type: ignore[arg-type]
+            for r in self.survival(by, bins=bins)
         ]
         columns = [("by", "string"), ("group", "string"), ("survived", "int64"), ("runs", "int64"),
                    ("rate", "float64"), ("low", "float64"), ("high", "float64")]
