@@ -1,6 +1,8 @@
-"""The ``rotorfault`` command group and what every command shares: the console, the one-line
-``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2),
-number and rotor-list parsing, and a report command's handling of SIGTERM and Ctrl-C."""
+"""The ``rotorfault`` command group and what every command shares: the one-line
+``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2; a
+missing optional package names its extra), number and rotor-list parsing, and a report command's
+handling of SIGTERM and Ctrl-C. What a command writes, and in which format, is
+:mod:`~rotorfault.cli.output`."""
 
 from __future__ import annotations
 
@@ -13,10 +15,13 @@ from typing import Any, TypeVar
 import click
 from rich.console import Console
 
+from .._util.optional import MissingDependency
 from ..analysis import ACAI_FORMULAS
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+#: A rich console on standard output (the table format's on a terminal; commands write through
+#: :class:`rotorfault.cli.output.Output`).
 console = Console()
 
 
@@ -27,7 +32,7 @@ def _user_errors(command: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return command(*args, **kwargs)
-        except (ValueError, TypeError, OSError, OverflowError) as exc:
+        except (ValueError, TypeError, OSError, OverflowError, MissingDependency) as exc:
             raise click.ClickException(str(exc).replace("\n", " ")) from None
         except RecursionError:
             raise click.ClickException("input: nested too deeply to read (a TOML file of arrays or tables within tables?)") from None
