@@ -47,7 +47,7 @@ import numpy as np
 from .._util.convert import FloatArray, real
 from .._util.tables import Records
 from ..control.linear import STATE_LABELS
-from ..control.tracking import TrackingFeedback
+from ..control.tracking import TrackingFeedback, circle_reference, step_reference
 from ..flight import Noise, Simulator, State, Trajectory
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
@@ -98,46 +98,19 @@ class WangScenario:
     noisy: bool
 
 
-def _steps(events: list[tuple[float, FloatArray]]) -> tuple[FloatArray, FloatArray]:
-    times: list[float] = []
-    rows: list[FloatArray] = []
-    for t, row in events:
-        if rows:
-            times.append(t)
-            rows.append(rows[-1])
-        times.append(t)
-        rows.append(row)
-    return np.array(times), np.array(rows)
-
-
 def scenario(number: int, *, duration_s: float = DURATION_S) -> WangScenario:
     """Scenario 1, 2 or 3 of Section 4.2 (module docs)."""
     duration = real("duration_s", duration_s)
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration_s: must be > 0 and finite, got {duration}")
     if number == 1:
-        t = np.arange(0.0, duration + 0.05, 0.05)
-        w = 2 * math.pi / CIRCLE_PERIOD_S
-        refs = np.zeros((len(t), 12))
-        refs[:, 0] = CIRCLE_RADIUS_M * (1 - np.cos(w * t))
-        refs[:, 1] = CIRCLE_RADIUS_M * np.sin(w * t)
-        refs[:, 2] = -CLIMB_M_S * t
-        refs[:, 3] = CIRCLE_RADIUS_M * w * np.sin(w * t)
-        refs[:, 4] = CIRCLE_RADIUS_M * w * np.cos(w * t)
-        refs[:, 5] = -CLIMB_M_S
-        refs[:, 8] = YAW_AMPLITUDE_RAD * np.sin(w * t)
-        refs[:, 11] = YAW_AMPLITUDE_RAD * w * np.cos(w * t)
+        t, refs = circle_reference(radius_m=CIRCLE_RADIUS_M, period_s=CIRCLE_PERIOD_S, climb_m_s=CLIMB_M_S,
+                                   yaw_amplitude_rad=YAW_AMPLITUDE_RAD, duration_s=duration)
         return WangScenario(1, "scenario 1: circle, climb and yaw, no noise", t, refs, None, False)
     if number in (2, 3):
-        events: list[tuple[float, FloatArray]] = []
         moves = WAYPOINTS if number == 2 else WAYPOINTS[:1]
-        for t_s in sorted({w[0] for w in moves} | {0.0, YAW_STEP[0]}):
-            row = np.zeros(12)
-            x, y, z = [p for s, p in moves if s <= t_s][-1]
-            row[:3] = (x, y, -z)
-            row[8] = YAW_STEP[1] if t_s >= YAW_STEP[0] else 0.0
-            events.append((t_s, row))
-        times, refs = _steps(events)
+        # Wang's waypoints are (x, y, z up); the reference is NED.
+        times, refs = step_reference([(t_s, (x, y, -z)) for t_s, (x, y, z) in moves], [YAW_STEP])
         if number == 2:
             return WangScenario(2, "scenario 2: waypoints, yaw 0.1 rad from 1 s, 15 dB SNR noise", times, refs, None, True)
         wind = ((0.0, (0.0, 0.0, 0.0)), (WIND_FROM_S, WIND_M_S))
