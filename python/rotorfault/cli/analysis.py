@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 from rich.markup import escape
@@ -21,7 +22,7 @@ from .output import EXIT_REQUIREMENT, CommandOutput, Output, Rows, output_option
 @_user_errors
 def airframes(output: Output) -> None:
     """List the preset airframes."""
-    rows = []
+    rows: list[dict[str, Any]] = []
     for name in Airframe.presets():
         a = Airframe.preset(name)
         rows.append({"name": name, "rotors": a.rotor_count, "mass_kg": a.mass_kg, "max_thrust_n": float(a.max_thrust_n.max()),

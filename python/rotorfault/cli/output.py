@@ -80,7 +80,8 @@ class CommandOutput:
         out: dict[str, Any] = {"command": self.command, "schema_version": SCHEMA_VERSION, **self.fields}
         for table in self.tables:
             out[table.name] = [dict(row) for row in table.rows]
-        return _finite(out)
+        finite: dict[str, Any] = _finite(out)
+        return finite
 
 
 def _finite(value: Any) -> Any:

@@ -96,9 +96,9 @@ def _lti(context: Context, p: dict[str, Any]) -> Lti:
         if key not in p:
             raise ValueError(f"controller.{key}: required for an lti controller (xi' = a xi + b e, u = u_trim + c xi + d e)")
     trim = hover_trim(context.simulator, position=context.setpoint)
-    matrices = [float_array(f"controller.{key}", p[key], 2) for key in ("a", "b", "c", "d")]
+    a, b, c, d = (float_array(f"controller.{key}", p[key], 2) for key in ("a", "b", "c", "d"))
     dt_s = None if "dt_s" not in p else real("controller.dt_s", p["dt_s"])
-    return Lti(*matrices, trim.state, trim.command, dt_s=dt_s)
+    return Lti(a, b, c, d, trim.state, trim.command, dt_s=dt_s)
 
 
 def _allocated(context: Context, p: dict[str, Any]) -> Allocated:
