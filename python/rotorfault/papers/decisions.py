@@ -59,7 +59,7 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "the ground (no paper models one)": (_SIM_CONFIG, f"{_SIMULATION}/divergence.rs"),
     "altitudes the papers do not print": (
         "python/rotorfault/papers/ke.py",
-        "python/rotorfault/campaign.py",
+        "python/rotorfault/studies/campaign.py",
         _LANZON_PAPER,
         "python/rotorfault/papers/wang.py",
     ),
