@@ -44,8 +44,13 @@ FlightOutcome: TypeAlias = Literal[
 KeOutcome: TypeAlias = FlightOutcome
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
-#: Controller of a ``rotorfault simulate`` scenario file.
-ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
+#: Controller of a ``rotorfault simulate`` scenario file: none, a registered controller by its
+#: registry name (:mod:`rotorfault.studies.scenario_controllers` builds each), or the first
+#: release's names of two designs (``lqr-hover``: linear-feedback, ``open-loop-hover``: open-loop).
+ScenarioControllerKind: TypeAlias = Literal[
+    "none", "open-loop", "linear-feedback", "lti", "allocated", "uniform-passive-ftc", "lanzon-controller",
+    "tracking-feedback", "indi-controller", "lqr-hover", "open-loop-hover",
+]
 
 # <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
 # (`python -m rotorfault.control.registry` prints this block; tests/control/test_registry.py checks it)

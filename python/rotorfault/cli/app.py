@@ -1,6 +1,8 @@
-"""The ``rotorfault`` command group and what every command shares: the console, the one-line
-``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2),
-number and rotor-list parsing, and a report command's handling of SIGTERM and Ctrl-C."""
+"""The ``rotorfault`` command group and what every command shares: the one-line
+``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2; a
+missing optional package names its extra), number and rotor-list parsing, and a report command's
+handling of SIGTERM and Ctrl-C. What a command writes, and in which format, is
+:mod:`~rotorfault.cli.output`."""
 
 from __future__ import annotations
 
@@ -14,11 +16,14 @@ from typing import Any, TypeVar
 import click
 from rich.console import Console
 
+from .._util.optional import MissingDependency
 from .._util.output import claim_output_directory
 from ..analysis import ACAI_FORMULAS, Airframe
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+#: A rich console on standard output (the table format's on a terminal; commands write through
+#: :class:`rotorfault.cli.output.Output`).
 console = Console()
 
 
@@ -82,7 +87,7 @@ def airframe_option(command: F) -> F:
     command = click.option(
         "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`), a TOML file or a PX4 .params file."
     )(command)
-    return mass_option(command)  # type: ignore[no-any-return]
+    return mass_option(command)
 
 
 def load_airframe(spec: str) -> Airframe:

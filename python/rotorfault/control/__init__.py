@@ -12,6 +12,9 @@
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR hover controllers;
+- :mod:`~rotorfault.control.systems`: the linear models as python-control systems
+  (:class:`LinearModel`: a ``control.StateSpace`` with named signals and its operating point;
+  :func:`lanzon_plant`);
 - :mod:`~rotorfault.control.riccati`: :func:`design_lqr`, the one LQR (continuous and discrete
   Riccati equations, scipy's solvers on every install) and its checked :class:`LqrDesign`;
 - :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
@@ -46,9 +49,10 @@ from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, registry, robust
+    from . import lanzon, registry, robust, systems
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
+    from .systems import LinearModel, lanzon_plant
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
 #: ``import rotorfault`` stays light (tests/cross/test_architecture.py); and the registry, so that
@@ -57,6 +61,9 @@ _LAZY = {
     "registry": ("registry", None),
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
+    "systems": ("systems", None),
+    "LinearModel": ("systems", "LinearModel"),
+    "lanzon_plant": ("systems", "lanzon_plant"),
     "LanzonController": ("lanzon", "LanzonController"),
     "NcfsynResult": ("robust", "NcfsynResult"),
     "ncfsyn": ("robust", "ncfsyn"),
@@ -81,6 +88,7 @@ __all__ = [
     "KeGains",
     "LanzonController",
     "LinearFeedback",
+    "LinearModel",
     "LqrDesign",
     "NcfsynResult",
     "Lti",
@@ -94,6 +102,7 @@ __all__ = [
     "indi",
     "ke",
     "lanzon",
+    "lanzon_plant",
     "linearize",
     "lqr",
     "lqr_hover",
@@ -102,4 +111,5 @@ __all__ = [
     "registry",
     "robust",
     "stabilisability",
+    "systems",
 ]

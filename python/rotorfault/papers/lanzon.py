@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .._util.convert import FloatArray, count, real
+from .._util.tables import Column, Records, Tabular
 from ..control.ke import UniformPassiveFtc
 from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
 from ..flight import Noise, RotorFault, State, Trajectory, simulate_batch
@@ -291,12 +292,13 @@ MonteCarloController = Literal["lanzon", "ke"]
 
 
 @dataclass(frozen=True)
-class MonteCarloResult:
+class MonteCarloResult(Tabular):
     """A Monte Carlo batch: ``runs`` perturbed vehicles (mass, ``I_xx = I_yy``, ``I_zz``,
     ``k_r``, ``I_R`` each scaled by a factor drawn uniformly from ``[1 - spread, 1 + spread]``)
     with sensor noise at ``snr_db``, flown from Scenario B's start to its setpoint for
     ``duration_s``. ``outcomes`` holds Ke's windowed verdict per run, ``final_error_m`` the
-    distance from the setpoint at the end (NaN: lost), ``factors`` the draws (runs x 5)."""
+    distance from the setpoint at the end (NaN: lost), ``factors`` the draws (runs x 5).
+    ``to_arrow()`` / ``to_pandas()``: one row per run (its draws, outcome and final error)."""
 
     controller: str
     runs: int
@@ -327,6 +329,19 @@ class MonteCarloResult:
     def median_final_error_m(self) -> float:
         finite = self.final_error_m[np.isfinite(self.final_error_m)]
         return float(np.median(finite)) if finite.size else math.inf
+
+    def _table_columns(self) -> list[Column]:
+        draws = ("mass_scale", "inertia_xx_scale", "inertia_zz_scale", "rotational_drag_scale", "rotor_inertia_scale")
+        columns: list[Column] = [("run", "int64", np.arange(self.runs, dtype=np.int64))]
+        columns += [(name, "float64", self.factors[:, k]) for k, name in enumerate(draws)]
+        return columns + [("outcome", "string", list(self.outcomes)), ("final_error_m", "float64", self.final_error_m)]
+
+    def _table_title(self) -> str:
+        return f"Monte Carlo: {self.runs} runs of {self.controller}, spread {self.spread:g}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "lanzon-monte-carlo", "controller": self.controller, "spread": self.spread, "snr_db": self.snr_db,
+                "duration_s": self.duration_s, "inertia_zz_kg_m2": self.inertia_zz_kg_m2}
 
     def counts(self) -> dict[str, int]:
         out: dict[str, int] = {}
@@ -398,8 +413,20 @@ def monte_carlo(
 # -- report (rotorfault lanzon-report) -----------------------------------------------------------
 
 
-def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
-    """One record per run of the three-way table."""
+#: The columns of :func:`report_rows` and their types.
+REPORT_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("scenario", "string"), ("case", "string"), ("case_description", "string"), ("inertia_zz_kg_m2", "float64"),
+    ("crossover_rad_s", "float64"), ("limits", "bool"), ("gamma_min", "float64"), ("gamma", "float64"),
+    ("outcome", "string"), ("outcome_text", "string"), ("lost_at_s", "float64"), ("duration_s", "float64"),
+    ("level_after_s", "float64"), ("window_tilt_deg", "float64"), ("window_spin_rad_s", "float64"),
+    ("max_altitude_loss_m", "float64"), ("final_error_m", "float64"), ("window_horizontal_error_m", "float64"),
+    ("window_altitude_error_m", "float64"), ("min_thrust_n", "float64"), ("max_thrust_n", "float64"),
+)
+
+
+def report_rows(runs: list[LanzonRun]) -> Records:
+    """One record per run of the three-way table (:data:`REPORT_COLUMNS`; a sequence of dicts with
+    ``to_arrow()`` and ``to_pandas()``)."""
     rows = []
     for run in runs:
         a, p = run.attitude, run.position
@@ -426,7 +453,7 @@ def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
             "min_thrust_n": float(np.nanmin(run.trajectory.rotor_thrust[:, [0, 2, 3]])),
             "max_thrust_n": float(np.nanmax(run.trajectory.rotor_thrust)),
         })
-    return rows
+    return Records(rows, REPORT_COLUMNS, title="Lanzon et al.: three-way flights", kind="lanzon-flights")
 
 
 def _num(value: Any, digits: int) -> str:

@@ -30,6 +30,7 @@ import numpy as np
 from .. import _rfcore
 from .._typing import ScanBackend as Backend
 from .._util.convert import read_toml
+from .._util.tables import Records, Tabular
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Simulator, State, Trajectory
@@ -434,12 +435,16 @@ class _CampaignTask:
     campaign: Campaign
 
     def __call__(self, spec: Any) -> Any:
-        from .storage import pyarrow_module
+        return campaign_table(run_chunk(self.campaign, spec.index))
 
-        pa = pyarrow_module()
-        columns = run_chunk(self.campaign, spec.index)
-        schema = campaign_schema()
-        return pa.Table.from_arrays([pa.array(columns[f.name], type=f.type) for f in schema], schema=schema)
+
+def campaign_table(columns: Mapping[str, np.ndarray[Any, Any]]) -> Any:
+    """Campaign rows (:func:`run_chunk`'s NumPy columns) as an Arrow table of :func:`campaign_schema`."""
+    from .storage import pyarrow_module
+
+    pa = pyarrow_module()
+    schema = campaign_schema()
+    return pa.Table.from_arrays([pa.array(columns[f.name], type=f.type) for f in schema], schema=schema)
 
 
 def run_campaign(
@@ -507,9 +512,11 @@ def read_campaign(path: str | PathLike[str]) -> CampaignResult:
 
 
 @dataclass(frozen=True)
-class CampaignResult:
+class CampaignResult(Tabular):
     """A campaign's rows as NumPy columns (:func:`run_chunk`'s, concatenated in run order), in
-    memory or read from the Parquet output ``out`` when first used."""
+    memory or read from the Parquet output ``out`` when first used. ``to_arrow()`` /
+    ``to_pandas()``: one row per run (:func:`campaign_schema`, the same schema as the Parquet
+    output); :meth:`survival_table`: the survival rates as a table."""
 
     campaign: Campaign
     loaded: dict[str, np.ndarray[Any, Any]] | None = field(default=None, repr=False)
@@ -556,6 +563,27 @@ class CampaignResult:
         else:
             raise ValueError(f"by: expected all, first_failed_rotor, failed_rotors or first_fault_s, got {by!r}")
         return rates(ok, groups)
+
+    def to_arrow(self) -> Any:
+        """Every run's row as one ``pyarrow.Table`` (:func:`campaign_schema`)."""
+        if not self.columns:
+            return campaign_schema().empty_table()
+        return campaign_table(self.columns)
+
+    def _table_title(self) -> str:
+        return f"campaign: {len(self)} runs, {self.campaign.controller}"
+
+    def survival_table(self, *, bins: int = 5) -> Records:
+        """Survival rates with their 95 % Wilson interval, over all runs and per group (as
+        :meth:`table` prints them): one row per group, ``by`` naming the grouping."""
+        rows = [
+            {"by": by, "group": r.label, "survived": r.survived, "runs": r.runs, "rate": r.rate, "low": r.low, "high": r.high}
+            for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s")
+            for r in self.survival(by, bins=bins)
+        ]
+        columns = [("by", "string"), ("group", "string"), ("survived", "int64"), ("runs", "int64"),
+                   ("rate", "float64"), ("low", "float64"), ("high", "float64")]
+        return Records(rows, columns, title=f"survival of {len(self)} runs (95 % Wilson interval)", kind="campaign-survival")
 
     def worst(self, n: int = 5, *, by: str = "max_horizontal_error_m") -> list[dict[str, Any]]:
         """The ``n`` worst runs: lost runs first (earliest loss first), then the largest ``by``;
@@ -613,6 +641,7 @@ __all__ = [
     "Rate",
     "RunSpec",
     "campaign_schema",
+    "campaign_table",
     "iter_specs",
     "read_campaign",
     "run_campaign",

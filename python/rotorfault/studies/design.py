@@ -28,6 +28,7 @@ import numpy as np
 
 from .._typing import AcaiFormula
 from .._util.convert import float_array
+from .._util.tables import Column, Tabular
 from ..analysis.acai import acai
 from ..analysis.airframe import Airframe, require_airframe
 from ..analysis.controllability import failure_table
@@ -130,8 +131,10 @@ class Design:
 
 
 @dataclass(frozen=True)
-class DesignSearch:
-    """Designs ranked best first (per parameter value when a parameter axis was given)."""
+class DesignSearch(Tabular):
+    """Designs ranked best first (per parameter value when a parameter axis was given);
+    ``to_arrow()`` / ``to_pandas()``: one row per design (its ``rank`` from 1 within its parameter
+    value, the parameter's own column when there is one)."""
 
     airframe: str
     formula: AcaiFormula
@@ -150,6 +153,40 @@ class DesignSearch:
             if (parameter_value is None or d.parameter_value == parameter_value) and (d.spins == spins or spins in _orbit(d.spins)):
                 return d
         raise KeyError(f"no design {spins!r}")
+
+    def _table_columns(self) -> list[Column]:
+        acai_ = f"acai_{self.formula.replace('-', '_')}"
+        designs = self.designs
+        ranks: list[int] = []
+        seen: dict[float | None, int] = {}
+        for d in designs:
+            seen[d.parameter_value] = seen.get(d.parameter_value, 0) + 1
+            ranks.append(seen[d.parameter_value])
+        single = [len(d.single) for d in designs]
+        columns: list[Column] = [(self.parameter, "float64", [d.parameter_value for d in designs])] if self.parameter else []
+        columns += [
+            ("rank", "int64", ranks),
+            ("spins", "string", [d.spins for d in designs]),
+            (acai_, "float64", [d.nominal for d in designs]),
+            ("single_failures", "int64", single),
+            ("controllable_single", "int64", [d.controllable_single for d in designs]),
+            ("survivable_single_rotors", "list<int64>", [list(d.survivable_single) for d in designs]),
+            (f"worst_single_{acai_}", "float64", [d.worst_single for d in designs]),
+            ("double_failures", "int64", [m * (m - 1) // 2 for m in single]),
+            ("controllable_double", "int64", [d.controllable_double for d in designs]),
+            (f"worst_double_{acai_}", "float64", [d.worst_double for d in designs]),
+            ("controllable_single_give_up_yaw", "int64", [d.controllable_single_give_up_yaw for d in designs]),
+            (f"worst_single_{acai_}_give_up_yaw", "float64", [d.worst_single_give_up_yaw for d in designs]),
+            ("controllable_double_give_up_yaw", "int64", [d.controllable_double_give_up_yaw for d in designs]),
+            (f"worst_double_{acai_}_give_up_yaw", "float64", [d.worst_double_give_up_yaw for d in designs]),
+        ]
+        return columns
+
+    def _table_title(self) -> str:
+        return f"{self.airframe} frame: spin assignments, best first (ACAI {self.formula})"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "design-search", "airframe": self.airframe, "formula": self.formula, "parameter": self.parameter}
 
     def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
         headers = (["value"] if self.parameter else []) + [

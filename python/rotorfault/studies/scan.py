@@ -19,6 +19,7 @@ import numpy.typing as npt
 from .._typing import AcaiFormula, ScanBackend as Backend
 from .._util.convert import FloatArray, flag, float_array, real, rotor_numbers
 from .._util.progress import chunks
+from .._util.tables import Column, Tabular
 from ..analysis.acai import acai_batch
 from ..analysis.airframe import Airframe, require_airframe
 from .storage import pyarrow_module
@@ -37,8 +38,10 @@ MAX_STREAM_POINTS = 10**15
 
 
 @dataclass(frozen=True)
-class EfficiencyScan:
-    """Result of :func:`efficiency_scan`."""
+class EfficiencyScan(Tabular):
+    """Result of :func:`efficiency_scan`; ``to_arrow()`` / ``to_pandas()``: one row per grid point
+    with the columns of :func:`acai_scan` (``efficiency_<rotor>``, ``acai_<formula>``,
+    ``hover_code``, ``controllable``; ``..._give_up_yaw`` when yaw was given up)."""
 
     airframe: str
     #: Swept rotors, 1-based.
@@ -72,6 +75,21 @@ class EfficiencyScan:
     def plot(self, path: str | None = None) -> Figure:
         """Du Fig. 4 style: the controllable points in 3-D and their projections."""
         return plot_efficiency_scan(self, path)
+
+    def _table_columns(self) -> list[Column]:
+        suffix = _column_suffix(self.give_up_yaw)
+        columns: list[Column] = [(f"efficiency_{r}", "float64", self.points[:, k]) for k, r in enumerate(self.rotors)]
+        return columns + [
+            (acai_column(self.formula, self.give_up_yaw), "float64", self.acai),
+            (f"hover_code{suffix}", "int8", self.hover_code),
+            (f"controllable{suffix}", "bool", self.controllable),
+        ]
+
+    def _table_title(self) -> str:
+        return f"{self.airframe}: efficiency scan of rotors {', '.join(map(str, self.rotors))}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "efficiency-scan", "airframe": self.airframe, "formula": self.formula, "give_up_yaw": self.give_up_yaw}
 
 
 def efficiency_scan(
@@ -328,9 +346,12 @@ class _ScanTask:
 
 
 @dataclass(frozen=True)
-class Scan:
+class Scan(Tabular):
     """Result of :func:`acai_scan`: the rows in memory (``table``) or the Parquet output directory
-    (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...)."""
+    (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...).
+    ``to_arrow()`` / ``to_pandas()``: every row, in memory or read whole from Parquet (the same
+    schema either way, :func:`scan_schema`; :meth:`iter_tables` reads a large output chunk by
+    chunk)."""
 
     airframe: str
     names: tuple[str, ...]
@@ -355,6 +376,17 @@ class Scan:
 
         assert self.out is not None
         yield from iter_tables(self.out, cols)
+
+    def to_arrow(self) -> Any:
+        """Every row as one ``pyarrow.Table`` with the scan's schema (:func:`scan_schema`)."""
+        pa = pyarrow_module()
+        schema = scan_schema(self.names, self.formulas, self.give_up_yaw)
+        tables = [t.replace_schema_metadata(None) for t in self.iter_tables()]
+        return pa.concat_tables(tables) if tables else schema.empty_table()
+
+    def _table_title(self) -> str:
+        where = "in memory" if self.out is None else str(self.out)
+        return f"{self.airframe}: scan over {', '.join(self.names)} ({where})"
 
     def column(self, name: str) -> npt.NDArray[Any]:
         """One whole column as a numpy array (reads only that column from Parquet)."""

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeAlias
 
+from .._util.optional import require
 from .._util.output import atomic_path, check_parent
 
 #: ``pyarrow.Table`` / ``pyarrow.Schema`` (pyarrow has no type information: Any to the checker).
@@ -36,7 +37,7 @@ Schema: TypeAlias = Any
 
 
 def pyarrow_module() -> Any:
-    """``pyarrow``, imported on first use, with the install hint when it is missing."""
+    """``pyarrow``, imported on first use (a dependency; the message names it if it is missing)."""
     return _import("pyarrow")
 
 
@@ -46,12 +47,7 @@ def parquet_module() -> Any:
 
 
 def _import(name: str) -> Any:
-    import importlib
-
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        raise ImportError(f"{name} is needed for scans at scale: pip install 'rotorfault[scale]'") from None
+    return require(name, feature="Parquet outputs of scans and campaigns")
 
 #: Name of the manifest inside an output directory.
 STREAM_MANIFEST = "_rotorfault.json"
