@@ -11,7 +11,11 @@
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
-  and the loop-shape weight.
+  and the loop-shape weight;
+- :mod:`~rotorfault.control.realisation`: state-space realisations built here (transfer
+  functions, series, balancing, minimal and balanced realisations), the same on every install;
+- :mod:`~rotorfault.control.norms`: the H-infinity norm (:func:`hinf_norm`, continuous and
+  discrete).
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
@@ -32,7 +36,7 @@ from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocate
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, robust
+    from . import lanzon, norms, realisation, robust
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
 
@@ -41,6 +45,8 @@ if TYPE_CHECKING:
 _LAZY = {
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
+    "norms": ("norms", None),
+    "realisation": ("realisation", None),
     "LanzonController": ("lanzon", "LanzonController"),
     "NcfsynResult": ("robust", "NcfsynResult"),
     "ncfsyn": ("robust", "ncfsyn"),
@@ -76,5 +82,7 @@ __all__ = [
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "norms",
+    "realisation",
     "robust",
 ]
