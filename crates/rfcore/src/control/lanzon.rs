@@ -20,7 +20,7 @@
 //! finite near +-90 degrees (the paper restricts both angles to (-pi/2, pi/2)). Commands are not
 //! clipped: the actuators saturate and rate-limit them.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{linalg::Schur, DMatrix, DVector, Matrix3, Vector3};
 
 use super::{require_finite_matrix, Controller};
 use crate::error::{require_all_finite, require_finite, Result, RfError};
@@ -313,8 +313,20 @@ impl DiscreteController {
             require_finite_matrix(field, m)?;
         }
         if n > 0 {
-            let radius = self
-                .a
+            // nalgebra's `complex_eigenvalues` iterates without limit and can loop for ever on
+            // some matrices: bound the Schur iteration and say so instead of hanging.
+            let max_iterations = 100 * n.max(10);
+            let schur = Schur::try_new(self.a.clone(), f64::EPSILON, max_iterations).ok_or_else(|| {
+                RfError::invalid(
+                    "A_K",
+                    format!(
+                        "its eigenvalues could not be computed (the Schur iteration did not converge in \
+                         {max_iterations} iterations); give A_K in real Schur form (an orthogonal change of the \
+                         controller's states, e.g. scipy.linalg.schur)"
+                    ),
+                )
+            })?;
+            let radius = schur
                 .complex_eigenvalues()
                 .iter()
                 .map(|z| z.norm())
