@@ -1,6 +1,6 @@
 """The design results that must not depend on the install (issue 25), as one JSON-able dict:
 run in the test process (slycot installed) and in a subprocess where slycot cannot be imported
-(tests/without_slycot.py), then compared by tests/test_robust_install.py."""
+(tests/without_slycot.py), then compared by tests/cross/test_robust_install.py."""
 
 from __future__ import annotations
 

@@ -12,10 +12,10 @@ Controllability under rotor degradation (Du et al., JGCD 2015)::
 from typing import TYPE_CHECKING
 
 from ._rfcore import __version__
-from .airframe import Airframe
-from .controllability import (
+from .analysis import (
     RANK_RTOL,
     ZERO_RTOL,
+    Airframe,
     ControllabilityReport,
     FailureCase,
     FailureTable,
@@ -38,6 +38,8 @@ from .control import (
     Allocated,
     Controller,
     HoverTrim,
+    IndiController,
+    IndiGains,
     LinearFeedback,
     Lti,
     OpenLoop,
@@ -49,9 +51,9 @@ from .control import (
     lqr_hover_allocated,
 )
 from . import vpp
-from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
-from .design import Design, DesignSearch, design_search
-from .simulation import (
+from .studies.scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
+from .studies.design import Design, DesignSearch, design_search
+from .flight import (
     BatchResult,
     DivergenceLimits,
     Drag,
@@ -72,8 +74,11 @@ if TYPE_CHECKING:
     from .control.robust import ncfsyn
 
 #: Names whose modules import python-control and scipy: loaded on first use (via
-#: rotorfault.control), so ``import rotorfault`` stays light (tests/test_architecture.py).
+#: rotorfault.control), so ``import rotorfault`` stays light (tests/cross/test_architecture.py).
 _LAZY_CONTROL = ("LanzonController", "ncfsyn")
+#: Modules that moved into the rooms in issue 26: ``rotorfault.<old>`` still resolves, for one
+#: release, to a module that warns (``rotorfault/<old>.py``).
+_MOVED_MODULES = ("airframe", "campaign", "certify", "controllability", "design", "scan", "scenario", "simulation")
 
 
 def __getattr__(name: str) -> object:
@@ -83,6 +88,10 @@ def __getattr__(name: str) -> object:
         value = getattr(control, name)
         globals()[name] = value
         return value
+    if name in _MOVED_MODULES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -92,6 +101,8 @@ __all__ = [
     "vpp",
     "Lti",
     "UniformPassiveFtc",
+    "IndiController",
+    "IndiGains",
     "Controller",
     "Allocated",
     "Allocation",

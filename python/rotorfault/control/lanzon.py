@@ -46,9 +46,9 @@ import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, real
-from ..airframe import Airframe, require_airframe
-from ..simulation import Drag, FixedPitchActuator, Simulator
+from .._util.convert import FloatArray, float_array, real
+from ..analysis.airframe import Airframe, require_airframe
+from ..flight import Drag, FixedPitchActuator, Simulator
 from .realisation import state_space
 from .robust import NcfsynEvidence, NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
 

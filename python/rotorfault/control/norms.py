@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray
+from .._util.convert import FloatArray
 from .realisation import as_state_space, balance_states, frequency_response, sampling_period, state_space
 
 #: Relative real part below which a Hamiltonian eigenvalue is a candidate crossing.

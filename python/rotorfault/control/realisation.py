@@ -33,7 +33,7 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
-from .._convert import FloatArray
+from .._util.convert import FloatArray
 
 Matrices = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
 

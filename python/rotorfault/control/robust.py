@@ -17,7 +17,7 @@ One answer on every install: the weights and the shaped plant are built in state
 (:mod:`~rotorfault.control.realisation`; a ``TransferFunction`` argument is realised by our own
 code, never by python-control's slycot-or-scipy conversion), minimal realisations and norms
 (:mod:`~rotorfault.control.norms`) are ours, and the Riccati and Lyapunov equations are
-scipy.linalg's. ``tests/test_robust_install.py`` runs the designs with slycot hidden and
+scipy.linalg's. ``tests/cross/test_robust_install.py`` runs the designs with slycot hidden and
 compares.
 
 Sign convention: the returned controllers are for **negative feedback**, ``u = -K y``
@@ -38,14 +38,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
-from .._convert import FloatArray, real
+from .._util.convert import FloatArray, real
+from ..plotting.frequency import plot_singular_values
 from .norms import hinf_norm, hinf_norm_below, peak_gain
 from .realisation import (
     as_state_space,
@@ -56,9 +57,6 @@ from .realisation import (
     state_space,
     system_matrices,
 )
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 #: The synthesis checks' tolerances (stated once; tests break each check against them):
 #: the achieved four-block norm on the full shaped plant may exceed gamma by this fraction
@@ -540,39 +538,6 @@ def singular_values(system: ct.StateSpace, omega: npt.ArrayLike) -> FloatArray:
     """Singular values (columns, descending) of ``system(j omega)`` at each frequency (rows)."""
     resp = frequency_response(as_state_space("system", system), omega)
     return np.asarray(np.linalg.svd(resp, compute_uv=False), dtype=np.float64)
-
-
-def plot_singular_values(
-    plant: ct.StateSpace,
-    shaped: ct.StateSpace,
-    path: str | None = None,
-    *,
-    omega: npt.ArrayLike | None = None,
-    title: str = "",
-) -> Figure:
-    """Singular values of ``plant`` and of the shaped plant ``G W1`` (dB), Lanzon's Fig. 4."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    w = np.logspace(-2, 4, 400) if omega is None else np.asarray(omega, dtype=float)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for sys_, label, style in ((plant, "G", "--"), (shaped, "G W1", "-")):
-        sv = singular_values(sys_, w)
-        for j in range(sv.shape[1]):
-            ax.semilogx(w, 20 * np.log10(np.maximum(sv[:, j], 1e-300)), style,
-                        label=label if j == 0 else None, color="C0" if label == "G" else "C1")
-    ax.axhline(0, color="k", lw=0.5)
-    ax.set_xlabel("frequency (rad/s)")
-    ax.set_ylabel("singular values (dB)")
-    ax.set_title(title or "open-loop singular values")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
-    if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
-    return fig
 
 
 __all__ = [
