@@ -114,13 +114,15 @@ def _start_frequencies(poles: npt.NDArray[np.complex128]) -> FloatArray:
     return np.unique(np.asarray(pts, dtype=np.float64))
 
 
-def peak_gain(system: Any, *, rtol: float = 1e-9) -> PeakGain:
+def peak_gain(system: Any, *, rtol: float = 1e-9, field: str = "system") -> PeakGain:
     """The H-infinity norm of ``system`` (a python-control ``StateSpace`` or ``TransferFunction``,
     continuous or discrete) and where it peaks; see the module notes. ``rtol``: the relative
-    width of the bracket returned (the true norm is in ``[gain, gain (1 + 2 rtol)]``)."""
+    width of the bracket returned (the true norm is in ``[gain, gain (1 + 2 rtol)]``); ``field``:
+    the name refusals give the system (its entries are checked by
+    :func:`~rotorfault.control.realisation.as_state_space`)."""
     if not (isinstance(rtol, float | int) and 1e-15 <= float(rtol) <= 1e-1):
         raise ValueError(f"rtol: must be a number in [1e-15, 0.1], got {rtol!r}")
-    sys_ = as_state_space("system", system)
+    sys_ = as_state_space(field, system)
     dt = sampling_period(sys_)
     balanced, _ = balance_states(sys_)
     a, b, c, d = (np.asarray(m, dtype=np.float64) for m in (balanced.A, balanced.B, balanced.C, balanced.D))

@@ -37,6 +37,7 @@ Formulas (Skogestad and Postlethwaite, *Multivariable Feedback Control*, 2nd ed.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -147,7 +148,12 @@ def _care(a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray, name: str)
     residual; ``ValueError`` naming ``name`` when scipy finds none, the residual is above
     ``RICCATI_RESIDUAL_RTOL`` or ``A - B R^-1 B^T X`` is not stable."""
     try:
-        x = sla.solve_continuous_are(a, b, q, r)
+        # scipy's balancing casts a NaN scale to an index on extreme entries (a RuntimeWarning);
+        # the residual and closed-loop checks below judge whatever comes back.
+        with np.errstate(invalid="ignore", over="ignore"):
+            x = sla.solve_continuous_are(a, b, q, r)
+        if not np.all(np.isfinite(x)):
+            raise np.linalg.LinAlgError("the solution is not finite")
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(f"{name}: no stabilising Riccati solution (scipy: {exc}); the shaped plant W2 G W1 "
                          "has a mode on the imaginary axis that no input moves or no output sees") from None
@@ -189,16 +195,16 @@ def _gamma_from_xz(x: FloatArray, z: FloatArray) -> float:
 
 def ncf_gamma_min(plant: Any) -> float:
     """``gamma_min = sqrt(1 + rho(X Z))`` of a (shaped) plant, on its minimal realisation."""
-    gs = minimal_realisation(as_state_space("plant", plant, static=False, discrete=False))
+    gs = minimal_realisation(as_state_space("plant", plant, static=False, discrete=False), field="plant")
     x, z = riccati_solutions(gs)
     return _gamma_from_xz(x, z)
 
 
-def hankel_gamma_min(plant: Any) -> float:
+def hankel_gamma_min(plant: Any, *, field: str = "plant") -> float:
     """``(1 - ||[N M]||_H^2)^(-1/2)`` from the Hankel singular values of the normalised left
     coprime factors (gramians from two Lyapunov equations): an independent route to ``gamma_min``
-    (it uses ``Z`` for the factorisation but not ``X``)."""
-    gs = minimal_realisation(as_state_space("plant", plant, static=False, discrete=False))
+    (it uses ``Z`` for the factorisation but not ``X``). ``field``: the name refusals give it."""
+    gs = minimal_realisation(as_state_space(field, plant, static=False, discrete=False), field=field)
     a, b, c, d = _matrices(gs)
     _, z = riccati_solutions(gs)
     r = np.eye(c.shape[0]) + d @ d.T
@@ -206,9 +212,12 @@ def hankel_gamma_min(plant: Any) -> float:
     ah = a + h @ c
     bnm = np.hstack([b + h @ d, h])
     try:
-        p = sla.solve_continuous_lyapunov(ah, -bnm @ bnm.T)
-        q = sla.solve_continuous_lyapunov(ah.T, -c.T @ np.linalg.solve(r, c))
-    except (np.linalg.LinAlgError, ValueError) as exc:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", sla.LinAlgWarning)
+            warnings.simplefilter("error", RuntimeWarning)
+            p = sla.solve_continuous_lyapunov(ah, -bnm @ bnm.T)
+            q = sla.solve_continuous_lyapunov(ah.T, -c.T @ np.linalg.solve(r, c))
+    except (np.linalg.LinAlgError, ValueError, sla.LinAlgWarning, RuntimeWarning) as exc:
         raise ValueError(f"plant: the gramians of the coprime factors have no solution (scipy: {exc})") from None
     hankel_sq = float(np.max(np.linalg.eigvals(p @ q).real))
     if not 0.0 <= hankel_sq < 1.0:
@@ -327,7 +336,7 @@ def check_synthesis(
     full = series(w1, plant, w2)
     used = full if synthesis_plant is None else synthesis_plant
     reduced = used.nstates < full.nstates
-    hankel = hankel_gamma_min(used)
+    hankel = hankel_gamma_min(used, field="the synthesis plant (a minimal realisation of W2 G W1)")
     tol = min(GAMMA_MIN_RTOL * gamma_min**2, GAMMA_MIN_RTOL_CAP)
     if not abs(hankel - gamma_min) <= tol * gamma_min:
         raise ValueError(
@@ -350,7 +359,7 @@ def check_synthesis(
         raise ValueError(f"internal-stability check: the loop of the plant with K = W1 Ks W2 has a pole at {worst:.6g} "
                          "(real part >= 0): the weights cancel an unstable or undamped mode of the plant, or the "
                          "controller does not stabilise it")
-    achieved = peak_gain(four_block(full, shaped_controller))
+    achieved = peak_gain(four_block(full, shaped_controller), field="the four-block loop of Ks with W2 G W1")
     bound = gamma * (1.0 + ACHIEVED_NORM_RTOL)
     if not achieved.gain <= bound:
         cause = (f"the realisation the synthesis used ({used.nstates} of the {full.nstates} states) does not "
@@ -397,7 +406,7 @@ def ncfsyn(
     # realisation, after checking that no hidden mode is on or right of the imaginary axis
     # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
     _require_stabilisable_detectable(full)
-    gs = minimal_realisation(full)
+    gs = minimal_realisation(full, field="the shaped plant W2 G W1")
     ks, gamma_min, gamma, x, z, rx, rz = _central_controller(gs, factor)
     evidence = check_synthesis(g, w1s, w2s, ks, gamma_min, gamma, synthesis_plant=gs, residuals=(rx, rz))
     return NcfsynResult(controller=series(w2s, ks, w1s), shaped_controller=ks, shaped_plant=full, synthesis_plant=gs,
