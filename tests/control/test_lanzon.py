@@ -135,6 +135,14 @@ def test_vehicle_parameters_finite_and_positive(field: str, value: float) -> Non
         L.LanzonVehicle(**{field: value})
 
 
+@pytest.mark.parametrize("field", ["mass_kg", "inertia_zz_kg_m2", "arm_length_m", "rotational_drag_n_m_s"])
+@pytest.mark.parametrize("value", [1e-310, 1e300])
+def test_vehicle_scales_in_the_cores_range_at_construction(field: str, value: float) -> None:
+    # Subnormal and absurd scales: refused when the vehicle is built, by the core's rule.
+    with pytest.raises(ValueError, match=rf"^model\.{field}: must lie in \[1e-15, 1e15\]"):
+        L.LanzonVehicle(**{field: value})
+
+
 @pytest.mark.parametrize("field", ["linear_drag_n_s_m", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2"])
 @pytest.mark.parametrize("value", [math.inf, math.nan, -1e-9])
 def test_vehicle_drag_and_rotor_parameters_finite_and_non_negative(field: str, value: float) -> None:

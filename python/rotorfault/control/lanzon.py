@@ -100,6 +100,9 @@ class LanzonVehicle:
         if not math.isfinite(self.spin_rate_rad_s):
             raise ValueError(f"rotational_drag_n_m_s: m g d / k_r (the working point's spin) must be finite, "
                              f"got {self.spin_rate_rad_s} with k_r = {self.rotational_drag_n_m_s}")
+        # ... and the scales the law divides by in the core's accepted range (rfcore::error), here
+        # rather than at the first design or flight.
+        self._core()
 
     @classmethod
     def from_airframe(cls, airframe: Airframe, **overrides: Any) -> LanzonVehicle:
