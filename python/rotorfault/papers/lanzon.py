@@ -106,6 +106,18 @@ class DesignCase:
     channel_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
     outer_loop: OuterLoopGains = field(default_factory=OuterLoopGains)
 
+    def __post_init__(self) -> None:
+        crossover = real("crossover_rad_s", self.crossover_rad_s)
+        if not (math.isfinite(crossover) and crossover > 0):
+            raise ValueError(f"crossover_rad_s: must be finite and > 0, got {crossover}")
+        gains = np.asarray(self.channel_gain, dtype=np.float64)
+        if gains.shape != (3,) or not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+            raise ValueError(f"channel_gain: expected 3 finite numbers > 0 (phi, theta, r), got {self.channel_gain}")
+        if not isinstance(self.limits, bool):
+            raise TypeError(f"limits: expected True or False, got {type(self.limits).__name__}")
+        if not isinstance(self.outer_loop, OuterLoopGains):
+            raise TypeError(f"outer_loop: expected OuterLoopGains, got {type(self.outer_loop).__name__}")
+
     def design(self, vehicle: LanzonVehicle) -> LanzonDesign:
         return design(vehicle, crossover_rad_s=self.crossover_rad_s, channel_gain=self.channel_gain)
 
@@ -439,6 +451,7 @@ def report_rows(runs: list[LanzonRun]) -> Records:
             "limits": run.case.limits,
             "gamma_min": run.design.gamma_min,
             "gamma": run.design.gamma,
+            "achieved_norm": run.design.evidence.achieved_norm,
             "outcome": run.outcome,
             "outcome_text": outcome_text(run.outcome, run.lost_at_s),
             "lost_at_s": run.lost_at_s,
