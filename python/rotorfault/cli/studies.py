@@ -135,6 +135,7 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
 @_user_errors
 def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
     """Fly a scenario file (airframe, controller, faults, wind, noise, duration)."""
+    from ..flight.outcomes import VERDICT_MEANINGS, flight_metrics
     from ..studies.scenario_file import load_scenario
 
     if plot_path is not None:
@@ -152,8 +153,18 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
     table.add_row("max altitude loss", f"{max(0.0, altitude[0] - altitude.min()):.3f} m")
     table.add_row("max horizontal excursion", f"{np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max():.3f} m")
     table.add_row("max tilt", f"{tilt.max():.1f} deg")
-    table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
+    if scenario.setpoints is not None:
+        metrics = flight_metrics(run, scenario)
+    else:
+        # No position controller: judged against where it started (a vehicle that falls is not held).
+        start = np.tile(np.asarray(scenario.initial.position, dtype=np.float64), (len(run.t), 1))
+        metrics = flight_metrics(run, reference=(start, np.zeros_like(start)))
+    colour = {"holds": "green", "drifts": "yellow", "circles": "yellow"}.get(metrics.verdict, "red")
+    table.add_row("verdict", f"[{colour}]{escape(metrics.verdict_label)}[/{colour}]")
+    if run.diverged:
+        table.add_row("event", f"[red]{escape(str(run.events[0]))}[/red]")
     console.print(table)
+    console.print(f"{metrics.verdict}: {escape(VERDICT_MEANINGS[metrics.verdict])}", highlight=False)
     if plot_path is not None:
         run.plot(plot_path, title=scenario.title, setpoints=scenario.setpoints)
         console.print(f"plot written to {escape(plot_path)}")
