@@ -127,7 +127,7 @@ def test_the_certificate_says_give_up_yaw() -> None:
 
 def test_tables_say_give_up_yaw_never_no_yaw(hexa: rf.Airframe) -> None:
     headers, _ = rf.failure_table(hexa).rows_for_display()
-    assert headers[5:7] == ["ACAI eq13 give-up-yaw", "ok give-up-yaw"]
+    assert headers[6:9] == ["ACAI eq13 give-up-yaw", "hover wrench give-up-yaw", "ok give-up-yaw"]
     out = CliRunner().invoke(cli, ["failures", "-a", "hexa-ppnnpn"]).output
     assert "give-up-yaw" in out and "no-yaw" not in out and "without yaw" not in out
 
@@ -178,3 +178,8 @@ def test_every_paper_labels_flights_with_the_one_verdict_table() -> None:
     from rotorfault.studies.summaries import FLYING
 
     assert FLYING == outcomes.FLYING == ("holds-position", "circling", "off-station")
+    # The one verdict (issue 28) and the codes before it, kept for one release.
+    assert outcomes.VERDICTS == ("holds", "drifts", "circles", "crashed", "diverged")
+    assert [outcomes.verdict_of(c) for c in ("holds-position", "circling", "off-station", "crashed", "tilt", "step-size")] == [
+        "holds", "circles", "drifts", "crashed", "diverged", "diverged"]
+    assert set(outcomes.VERDICT_MEANINGS) == set(outcomes.VERDICTS)

@@ -6,13 +6,16 @@ from __future__ import annotations
 import sys
 
 import click
+from rich import box
 from rich.markup import escape
 from rich.table import Table
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
-from ..analysis import EQ13_ZERO_NOTE, Airframe, acai_label, controllability, failure_table, format_acai
+from ..analysis import EQ13_ZERO_NOTE, HOVER_WRENCH_NOTE, Airframe, acai_label, controllability, failure_table, format_acai, hover_wrench_text
+from ..allocation import hover_distances
 from ..analysis.airframe import rotor_labels
+from ..studies.certify import ALL_AXES
 from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers
 
 
@@ -64,16 +67,28 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
     """Every combination of up to K failed rotors: rank, ACAI (all axes and giving up yaw), verdict."""
     frame = Airframe.load(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)
-    headers, rows = result.rows_for_display()
-    table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
-    for header in headers:
-        table.add_column(header, justify="left" if header == "failed" else "right")
+    headers, rows = result.rows_for_display(hover_distances(frame, [case.failed for case in result]))
+    # Below 120 columns the rank and "ok" columns are left out so that every cell stays whole (the
+    # row's colour and the count below say which cases are controllable).
+    narrow = console.width < 120
+    shown = [k for k, h in enumerate(headers) if not (narrow and (h.startswith("rank ") or h.startswith("ok")))]
+    title = f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)"
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False) if narrow else Table(title=title)
+    for k in shown:
+        header = headers[k]
+        wrench = header.startswith("hover wrench")
+        # Every cell whole (the headers may wrap): the widest value of the column.
+        width = max(len(row[k]) for row in rows) if rows else None
+        table.add_column(header, justify="left" if header == "failed" or wrench else "right", min_width=width)
     for case, row in zip(result, rows):
         style = "green" if case.controllable else ("yellow" if case.controllable_give_up_yaw else "red")
-        table.add_row(*row, style=style)
+        table.add_row(*(row[k] for k in shown), style=style)
     console.print(table)
+    if narrow:
+        console.print("(rank C, rank B_f and Du's verdict per case: in a terminal of 120 columns or more)", highlight=False)
     if any(cell.endswith("*") for row in rows for cell in row):
         console.print(escape(EQ13_ZERO_NOTE))
+    console.print(escape(HOVER_WRENCH_NOTE), highlight=False)
     survivable = sum(case.controllable for case in result)
     spinning = sum(case.controllable_give_up_yaw and not case.controllable for case in result)
     console.print(
@@ -85,19 +100,22 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
 @cli.command()
 @click.option("--airframe", "-a", required=True, help="Preset name, airframe TOML, or a PX4 .params file.")
 @click.option("--require", "required", type=click.Choice(["none", "single", "double"]), default="none", show_default=True,
-              help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
+              help="Failure class that must stay hoverable with --require-axes (double includes single); exit status 3 if not.")
+@click.option("--require-axes", "required_axes", default=",".join(ALL_AXES), show_default=True,
+              help="Axes that must remain after those failures: thrust,roll,pitch,yaw or thrust,roll,pitch (giving up yaw: spinning).")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
 @_user_errors
-def certify(airframe: str, required: str, json_path: str | None, force: bool) -> None:
+def certify(airframe: str, required: str, required_axes: str, json_path: str | None, force: bool) -> None:
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
-    not at all; the ACAI (facet margin), the thrust-to-weight left and which axes an allocator must
-    drop."""
+    not at all; where the hover wrench lies (inside, on the boundary, outside and how far), the
+    ACAI (facet margin), the thrust-to-weight left and which axes an allocator must drop."""
     import json
 
-    from ..studies.certify import certify as certify_airframe, rows_for_display
+    from ..studies.certify import certify as certify_airframe, parse_axes, rows_for_display
     from .._util.output import write_text
 
+    axes = parse_axes("require_axes", required_axes)
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
     frame = Airframe.load(airframe)
@@ -110,17 +128,20 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool) ->
         kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
         table = Table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
-            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
+            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") or header.startswith("hover wrench") else "right")
         styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
         console.print(table)
+        console.print(escape(HOVER_WRENCH_NOTE), highlight=False)
         if json_path is not None:
             write_text(json_path, text)
-    failing = cert.failing(required)
+    failing = cert.failing(required, axes=axes)
+    named = ", ".join(axes)
     if failing:
-        listed = "; ".join(rotor_labels(c.failed) for c in failing)
-        click.echo(f"certificate: FAILED: --require {required}: cannot hover with rotor(s) {listed} failed", err=True)
+        listed = "; ".join(f"{rotor_labels(c.failed)} ({c.hover}, all axes {hover_wrench_text(c.hover_wrench, c.distance)})" for c in failing)
+        click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "
+                   f"with rotor(s) {listed} failed", err=True)
         sys.exit(3)
     if required != "none" and json_path != "-":
-        console.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
+        console.print(f"certificate: every {required} failure (and fewer) leaves a vehicle that hovers with {named}")
