@@ -128,8 +128,8 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
     rows = ke_paper.report_rows(runs)
 
     def outcome(row: dict[str, Any]) -> str:
-        colour = {"holds-position": "green", "circling": "yellow", "off-station": "yellow"}.get(row["outcome"], "red")
-        return f"[{colour}]{escape(row['outcome_label'])}[/{colour}]"
+        colour = {"holds": "green", "circles": "yellow", "drifts": "yellow"}.get(row["verdict"], "red")
+        return f"[{colour}]{escape(row['verdict'])}[/{colour}]"
 
     def num(row: dict[str, Any], column: str, digits: int) -> str:
         return escape(ke_paper.cell(row, column, digits))
@@ -142,8 +142,8 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
     title = f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights"
     if console.width >= 120:
         table = Table(title=title)
-        for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
-            table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
+        for column in ("scenario", "law", "Ke", "verdict", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
+            table.add_column(column, justify="left" if column in ("scenario", "law", "verdict", "Ke") else "right")
         for row in rows:
             table.add_row(
                 row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", outcome(row),
@@ -158,16 +158,18 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
             box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1),
         )
         table.add_column("scenario", no_wrap=True)
-        table.add_column("outcome", no_wrap=True)
+        table.add_column("verdict", no_wrap=True)
         table.add_column("r", justify="right", no_wrap=True)
         table.add_column("alt. loss", justify="right")
-        table.add_column("horiz. max/final", justify="right")
+        table.add_column("horiz. max/final", justify="right", no_wrap=True)
         for row in rows:
             if row["law"] != law:
                 continue
             name = row["scenario"] + ("" if row["ke_stabilizable"] else "*")
             if row["lost_at_s"] is not None:
-                lost = f"[red]{escape(row['outcome_label'])} at {row['lost_at_s']:.2f} s[/red]"
+                # The short form (the impact speed is in the wide table and the report).
+                how = row["verdict"] if not row["cause"] or row["cause"] == row["verdict"] else f"{row['verdict']}: {row['cause']}"
+                lost = f"[red]{escape(how)}\nat {row['lost_at_s']:.2f} s[/red]"
                 table.add_row(name, lost, "lost", "lost", "lost")
                 continue
             r = "unsettled" if row["r_rad_s"] is None else num(row, "r_rad_s", 1)
@@ -179,7 +181,7 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
 @cli.command("reproduce")
 @click.option("--out", "out_dir", default="report", show_default=True, type=click.Path(file_okay=False), help="Directory for index.html and the figures (replaced as a whole).")
 @click.option("--quick", is_flag=True, help="Coarser grids and fewer flights (under 2 minutes).")
-@click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: benches/results of the source tree).")
+@click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: the results that ship with the package).")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
 @_user_errors
 def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> None:
@@ -195,8 +197,15 @@ def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> 
             progress=lambda text: console.print(escape(text), highlight=False),
         )
     for section in result.sections:
-        numbers = [n for part in [section, *section.parts] for n in part.numbers]
-        state = "not landed yet" if not section.landed else f"{sum(n.status == 'pass' for n in numbers)} of {len(numbers)} printed numbers pass"
+        parts = [section, *section.parts]
+        board = reproduce_.score([n for part in parts for n in part.numbers])
+        claims = [c for part in parts for c in part.claims]
+        beside = board["input"] + board["consistency"] + board["unclassified"]
+        state = "not landed yet" if not section.landed else (
+            f"{board['passed']} of {board['reproduced']} reproduced numbers pass"
+            + (f" ({beside} input, consistency or unclassified rows beside them, not scored)" if beside else "")
+            + (f"; {sum(c.status == 'confirmed' for c in claims)} of {len(claims)} flight claims confirmed" if claims else "")
+        )
         pending = [part.title for part in section.parts if not part.landed]
         if pending:
             state += f"; not landed yet: {', '.join(pending)}"
