@@ -138,7 +138,10 @@ def test_every_table_has_the_expected_rows(browser_check: dict[str, object]) -> 
     assert tables["du-table-1"] == tables["du-table-2"] == 22
     assert tables["ke-table-1"] == 11  # stability checks, one row per Table II health matrix
     assert tables["ke-table-2"] == len(ke_paper.QUICK_SCENARIOS) + 2
-    for bench in reproduce.bench_results(ROOT / "benches" / "results"):
+    # The papers' flight claims: Ke's five quick scenarios and the overshoot; Wang's scenarios.
+    assert tables["ke-claims"] == len(ke_paper.KE_CLAIMS) + 1
+    assert tables["wang-claims"] > 0
+    for bench in reproduce.bench_results(reproduce.default_bench_directory()):
         assert tables[f"bench-{bench.bench}"] == len(bench.figures)
     assert all(rows > 0 for rows in tables.values()), tables
 
