@@ -93,7 +93,7 @@ def test_lost_run_figure_says_when(tmp_path: Path) -> None:
 def test_primary_axis_figure(tmp_path: Path) -> None:
     runs = [ke_paper.run_scenario("one-failure"), ke_paper.run_scenario("one-failure", law="baseline")]
     fig = ke_paper.plot_primary_axis(runs, str(tmp_path / "pa.png"))
-    check_figure(fig, tmp_path / "pa.png", title_has=("primary axis", "one-failure (feedforward)", "lost at 2.37 s"))
+    check_figure(fig, tmp_path / "pa.png", title_has=("primary axis", "one-failure (feedforward)", "diverged (tilt) at 2.37 s"))
     assert [t.get_text() for t in fig.legends[0].get_texts()] == ["whole flight", "last 10 s", "start", "lost"]
 
 
@@ -104,15 +104,19 @@ def test_scan_figure(tmp_path: Path, give_up_yaw: bool) -> None:
     check_figure(fig, tmp_path / "scan.png", title_has=("hexa-pnpnpn", "giving up yaw" if give_up_yaw else "with yaw"))
     if give_up_yaw:
         assert all("giving up yaw" in ax.get_title() for ax in fig.axes if ax.get_title())
-    # The colour scale spans the values that occur; "uncontrollable" is a hatched patch, not a colour.
+    # The colour scale has one colour per grid level that occurs (a discrete bar: no values between
+    # levels suggested), centred on it; "uncontrollable" is a hatched patch, not a colour.
     from matplotlib.collections import QuadMesh
+    from matplotlib.colors import BoundaryNorm
 
     meshes = [c for ax in fig.axes for c in ax.collections if isinstance(c, QuadMesh) and ax.get_label() != "<colorbar>"]
     assert len(meshes) == 3
     data = np.concatenate([np.ma.compressed(np.ma.masked_invalid(m.get_array())) for m in meshes])
     for mesh in meshes:
-        assert mesh.norm.vmin == pytest.approx(data.min(), abs=1e-12) or data.min() == data.max()
-        assert mesh.norm.vmax == pytest.approx(data.max(), abs=1e-12) or data.min() == data.max()
+        assert isinstance(mesh.norm, BoundaryNorm)
+        centres = (mesh.norm.boundaries[:-1] + mesh.norm.boundaries[1:]) / 2
+        np.testing.assert_allclose(centres, np.unique(data), atol=1e-12)
+        np.testing.assert_allclose(np.diff(mesh.norm.boundaries), 0.1, atol=1e-12)
 
 
 def test_attainable_slices_figure(tmp_path: Path) -> None:
