@@ -44,6 +44,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -220,6 +221,15 @@ def true_distance(b: FloatArray, f_min: FloatArray, f_max: FloatArray, g: FloatA
     return float(np.linalg.norm(b @ result.x - g))
 
 
+def airframes_with_failed_rotors(rng: np.random.Generator, count: int) -> Iterator[rf.Airframe]:
+    """``count`` random airframes, each rotor failed (efficiency exactly 0) with probability 0.2."""
+    for _ in range(count):
+        airframe = random_airframe(rng)
+        eta = airframe.efficiency.copy()
+        eta[rng.random(eta.size) < 0.2] = 0.0
+        yield airframe.with_efficiency(eta)
+
+
 @pytest.mark.parametrize("n", [4, 3], ids=["with-yaw", "give-up-yaw"])
 def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
     """With some efficiencies exactly 0 (failed rotors): inside, both formulas are still the hull
@@ -228,11 +238,7 @@ def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
     squares), and |eq13| <= |facet-margin|."""
     rng = np.random.default_rng(6)
     inside = outside = 0
-    for _ in range(900):
-        airframe = random_airframe(rng)
-        eta = airframe.efficiency.copy()
-        eta[rng.random(eta.size) < 0.2] = 0.0
-        airframe = airframe.with_efficiency(eta)
+    for airframe in airframes_with_failed_rotors(rng, 900):
         b = airframe.effectiveness_matrix()[:n]
         g = hover_wrench(airframe, n)
         f_min, f_max = airframe.min_thrust_n, airframe.max_thrust_n
@@ -267,11 +273,7 @@ def test_hover_wrench_distance_equals_bounded_least_squares(n: int) -> None:
 
     rng = np.random.default_rng(11)
     inside = outside = 0
-    for _ in range(900):
-        airframe = random_airframe(rng)
-        eta = airframe.efficiency.copy()
-        eta[rng.random(eta.size) < 0.2] = 0.0
-        airframe = airframe.with_efficiency(eta)
+    for airframe in airframes_with_failed_rotors(rng, 900):
         b = airframe.effectiveness_matrix()[:n]
         if np.linalg.matrix_rank(b) < n:
             continue

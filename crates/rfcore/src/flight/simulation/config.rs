@@ -310,7 +310,11 @@ mod tests {
         assert_eq!(c.wind_before(1.000_001), w);
         assert_eq!(c.wind_at(2.0), w);
         assert_eq!(c.wind_step_before(0.9, 1.1), 1.0);
-        assert_eq!(c.wind_step_before(1.0, 1.1), 1.1, "a step at the start does not split");
+        assert_eq!(
+            c.wind_step_before(1.0, 1.1),
+            1.1,
+            "a step at the start does not split"
+        );
         assert_eq!(c.wind_step_before(0.9, 1.0), 1.0);
         c.wind_profile.push((1.0, Vector3::zeros()));
         let err = c.check().unwrap_err().to_string();

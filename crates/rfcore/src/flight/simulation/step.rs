@@ -206,7 +206,11 @@ impl<'a> Integrator<'a> {
                             actuators.response(&self.targets, elapsed, &mut channels);
                             tot[node] = rotor_totals(vehicle, actuators, &channels, efficiency);
                         }
-                        let w = [config.wind_at(a), config.wind_at(mid), config.wind_before(fin)];
+                        let w = [
+                            config.wind_at(a),
+                            config.wind_at(mid),
+                            config.wind_before(fin),
+                        ];
                         body.rk4_step_nodes(state, l, |node, x| {
                             vehicle.wrench_from(x, &tot[node], &w[node])
                         })
