@@ -88,6 +88,8 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
                           capture_output=True, text=True, timeout=600, check=False)
     assert done.returncode == 0, done.stderr
     assert "report written to" in done.stdout
+    # The per-paper score lines count the reproduced rows only (Du's and Ke's are all reproduced).
+    assert "du: 14 of 14 reproduced numbers pass" in done.stdout and "ke: 33 of 33 reproduced numbers pass" in done.stdout
     return out
 
 

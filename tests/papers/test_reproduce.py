@@ -244,3 +244,21 @@ def test_the_bench_results_ship_with_the_package() -> None:
     directory = reproduce.default_bench_directory()
     assert directory is not None and directory.is_relative_to(Path(rotorfault.__file__).parent)
     assert len(reproduce.bench_results(directory)) >= 5
+
+
+def test_the_score_line_counts_only_reproduced_rows() -> None:
+    """What ``rotorfault reproduce`` prints per paper: only reproduced rows are counted as passing
+    or not; inputs, consistency checks and unclassified rows are said to be beside them."""
+    from rotorfault.papers._numbers import PaperClaim, PaperNumber
+    from rotorfault.papers._report import ReportSection
+
+    rows = [PaperNumber("P", "T", "a", 1.0, 1.0, 0.1, kind="reproduced"), PaperNumber("P", "T", "b", 1.0, 2.0, 0.1, kind="reproduced"),
+            PaperNumber("P", "T", "c", 1.0, 1.0, 0.1, kind="input"), PaperNumber("P", "T", "d", 1.0, 1.0, 0.1)]
+    claim = PaperClaim("P", "w", "c", "m", "drifts", "not confirmed", "r")
+    section = ReportSection("p", "P", numbers=rows, claims=[claim], parts=[ReportSection("q", "flights", landed=False)])
+    assert reproduce.score_text(section) == (
+        "1 of 2 reproduced numbers pass (2 input, consistency or unclassified rows beside them, not scored); "
+        "0 of 1 flight claims confirmed; not landed yet: flights")
+    assert reproduce.score_text(ReportSection("p", "P", numbers=rows[3:])) == (
+        "no reproduced number scored (1 input, consistency or unclassified rows beside them, not scored)")
+    assert reproduce.score_text(ReportSection("p", "P", landed=False)) == "not landed yet"

@@ -76,6 +76,25 @@ def test_trajectory_figure(tmp_path: Path) -> None:
     roll_pitch = fig.axes[1]
     assert {line.get_label() for line in roll_pitch.get_lines() if not line.get_label().startswith("_")} == {"roll", "pitch"}
     assert np.ptp(roll_pitch.get_ylim()) < 200
+    # Issue 28: the spinning vehicle's yaw is not drawn to tens of thousands of degrees: its panel
+    # shows the heading's rate in rev/s, which settles at the body yaw rate r / (2 pi).
+    yaw = fig.axes[2]
+    assert "rev/s" in yaw.get_ylabel()
+    line = next(line for line in yaw.get_lines() if line.get_label().startswith("heading rate"))
+    t, rate = (np.asarray(v, dtype=float) for v in line.get_data())
+    settled = t >= t[-1] - 5.0
+    r = run.metrics.r_rad_s
+    assert r is not None and abs(np.mean(rate[settled]) - r / (2 * np.pi)) <= 0.02 * abs(r / (2 * np.pi))
+
+
+def test_yaw_of_a_run_that_does_not_spin_is_wrapped(tmp_path: Path) -> None:
+    run = rf.Simulator(rf.Airframe.preset("quad-x")).run(rf.State(position=(0, 0, -10), euler=(0, 0, 3.0)), 1.0,
+                                                        controller=None)
+    fig = run.plot(str(tmp_path / "yaw.png"))
+    yaw = fig.axes[2]
+    assert yaw.get_ylabel() == "yaw (deg)"
+    values = np.concatenate([np.asarray(line.get_ydata(), dtype=float) for line in yaw.get_lines() if line.get_label().startswith("yaw")])
+    assert np.all(np.abs(values) <= 180.0) and values[0] == pytest.approx(np.degrees(3.0))
 
 
 def test_round_off_is_not_magnified(tmp_path: Path) -> None:

@@ -197,17 +197,5 @@ def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> 
             progress=lambda text: console.print(escape(text), highlight=False),
         )
     for section in result.sections:
-        parts = [section, *section.parts]
-        board = reproduce_.score([n for part in parts for n in part.numbers])
-        claims = [c for part in parts for c in part.claims]
-        beside = board["input"] + board["consistency"] + board["unclassified"]
-        state = "not landed yet" if not section.landed else (
-            f"{board['passed']} of {board['reproduced']} reproduced numbers pass"
-            + (f" ({beside} input, consistency or unclassified rows beside them, not scored)" if beside else "")
-            + (f"; {sum(c.status == 'confirmed' for c in claims)} of {len(claims)} flight claims confirmed" if claims else "")
-        )
-        pending = [part.title for part in section.parts if not part.landed]
-        if pending:
-            state += f"; not landed yet: {', '.join(pending)}"
-        console.print(f"{escape(section.key)}: {escape(state)}", highlight=False)
+        console.print(f"{escape(section.key)}: {escape(reproduce_.score_text(section))}", highlight=False)
     console.print(f"report written to {escape(str(result.path))} in {result.run_time_s:.1f} s")

@@ -133,6 +133,27 @@ def _number(value: float | None, unit: str = "") -> str:
 # -- rendering -----------------------------------------------------------------------------------
 
 
+def score_text(section: ReportSection) -> str:
+    """One line on a section's scoreboard (what ``rotorfault reproduce`` prints per paper): the
+    reproduced numbers that pass, the rows shown beside them unscored, the flight claims
+    confirmed, the parts not landed."""
+    if not section.landed:
+        return "not landed yet"
+    parts = [section, *section.parts]
+    board = score([n for part in parts for n in part.numbers])
+    claims = [c for part in parts for c in part.claims]
+    beside = board["input"] + board["consistency"] + board["unclassified"]
+    text = f"{board['passed']} of {board['reproduced']} reproduced numbers pass" if board["reproduced"] else "no reproduced number scored"
+    if beside:
+        text += f" ({beside} input, consistency or unclassified rows beside them, not scored)"
+    if claims:
+        text += f"; {sum(c.status == 'confirmed' for c in claims)} of {len(claims)} flight claims confirmed"
+    pending = [part.title for part in section.parts if not part.landed]
+    if pending:
+        text += f"; not landed yet: {', '.join(pending)}"
+    return text
+
+
 def verdict_legend() -> list[dict[str, str]]:
     """The flight verdicts and their thresholds, as the page states them
     (:data:`rotorfault.flight.outcomes.VERDICT_MEANINGS`)."""
@@ -380,5 +401,5 @@ def write_reproduce(
 
 
 __all__ = ["BENCH_RESULTS", "BENCH_SCHEMA", "LINK_RULE", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "claim_row",
-           "default_bench_directory", "inline_markdown", "number_row", "provider", "render", "report_numbers", "score",
+           "default_bench_directory", "inline_markdown", "number_row", "provider", "render", "report_numbers", "score", "score_text",
            "verdict_legend", "write_reproduce"]
