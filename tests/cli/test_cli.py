@@ -200,6 +200,8 @@ def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
     # Fig. 7's pair falls the 10 m to the ground (issue #28: it used to fall 15.5 m and tilt).
     assert "| two-adjacent-front | feedforward | no | crashed at 12.34 s (" in report
     assert "- drifts: airborne to the end but neither holding nor circling" in report
+    counted = {v: report.count(f"| {v}") for v in ("holds", "drifts", "circles", "crashed", "diverged")}
+    assert f"Verdicts counted ({2 * len(ke_paper.scenarios())} flights): " + ", ".join(f"{v} {n}" for v, n in counted.items()) in report
     rows = (tmp_path / "ftc-report.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * len(ke_paper.scenarios())
     assert (tmp_path / "primary-axis.png").stat().st_size > 10_000

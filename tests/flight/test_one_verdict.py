@@ -122,3 +122,13 @@ def test_a_wind_step_acts_from_exactly_its_time() -> None:
         rf.Simulator(quad, wind_profile=[(1.0, (0, 0, 0)), (1.0, (1, 0, 0)), (1.0, (2, 0, 0))]).run(rf.State(), 1.0)
     with pytest.raises(ValueError, match=r"wind_profile\[1\].time: times must not decrease"):
         rf.Simulator(quad, wind_profile=[(1.0, (0, 0, 0)), (0.5, (1, 0, 0))]).run(rf.State(), 1.0)
+
+
+def test_verdicts_are_counted_every_verdict_listed() -> None:
+    """Issue 28: count each verdict, the ones that did not occur included, in one order."""
+    from rotorfault.flight.outcomes import count_verdicts, verdict_count_text
+
+    assert count_verdicts(["drifts", "crashed", "drifts"]) == {"holds": 0, "drifts": 2, "circles": 0, "crashed": 1, "diverged": 0}
+    assert verdict_count_text([]) == "holds 0, drifts 0, circles 0, crashed 0, diverged 0"
+    with pytest.raises(ValueError, match="verdicts: 'off-station' not among holds"):
+        count_verdicts(["off-station"])

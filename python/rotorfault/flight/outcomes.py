@@ -30,6 +30,7 @@ the one module of a room that ``rotorfault.plotting`` may import (for the words 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any, get_args
 
@@ -75,6 +76,23 @@ VERDICT_MEANINGS: dict[FlightVerdict, str] = {
         "or command, or a body rate too fast for the step size"
     ),
 }
+
+
+def count_verdicts(verdicts: Iterable[str]) -> dict[FlightVerdict, int]:
+    """How many flights got each verdict, every verdict listed in :data:`VERDICTS` order (0s
+    included: a table that counts only what occurred hides what did not)."""
+    given = list(verdicts)
+    unknown = sorted(set(given) - set(VERDICTS))
+    if unknown:
+        raise ValueError(f"verdicts: {', '.join(map(repr, unknown))} not among {', '.join(VERDICTS)}")
+    return {v: given.count(v) for v in VERDICTS}
+
+
+def verdict_count_text(verdicts: Iterable[str]) -> str:
+    """:func:`count_verdicts` in words: ``"holds 1, drifts 4, circles 0, crashed 1, diverged 2"``."""
+    return ", ".join(f"{v} {n}" for v, n in count_verdicts(verdicts).items())
+
+
 #: The outcome code of each flying verdict (the codes before issue 28, kept for one release).
 _OUTCOME_OF_VERDICT: dict[str, FlightOutcome] = {"holds": "holds-position", "circles": "circling", "drifts": "off-station"}
 
@@ -361,6 +379,8 @@ __all__ = [
     "HOLD_BAND_M",
     "VERDICTS",
     "VERDICT_MEANINGS",
+    "count_verdicts",
+    "verdict_count_text",
     "HOLD_SPEED_M_S",
     "OUTCOME_LABELS",
     "WINDOW_S",

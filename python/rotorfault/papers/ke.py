@@ -26,6 +26,7 @@ from ..flight.outcomes import (
     OUTCOME_LABELS,
     VERDICT_MEANINGS,
     VERDICTS,
+    verdict_count_text,
     WINDOW_S,
     FlightMetrics,
     effective_fault_times,
@@ -314,6 +315,7 @@ def write_report(
             f"| {cell(r, 'spin_settle_s', 1)} | {cell(r, 'max_altitude_loss_m', 2)} | {cell(r, 'max_horizontal_error_m', 2)} "
             f"| {cell(r, 'final_horizontal_error_m', 2)} | {cell(r, 'final_altitude_error_m', 2)} |"
         )
+    lines += ["", f"Verdicts counted ({len(rows)} flights): {verdict_count_text(r['verdict'] for r in rows)}."]
     lines += ["", "Stability checks of Section III-D (Table II health matrices, k_rotor = 2):", ""]
     lines += ["| diag(efficiency) | eig(N) | Re eig(I + k N) > 0 (25) | Re eig(N) > 0 (32) |", "|---|---|---|---|"]
     frame = Airframe.preset("ke-quadcopter")
@@ -503,7 +505,8 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     section.claims = flight_claims(runs)
     section.tables.append(ReportTable(
         f"Flights ({'--quick: ' + str(len(chosen)) + ' scenarios' if quick else 'every scenario'}; preset ke-hil, "
-        f"verdicts judged over the last {WINDOW_S:g} s (window errors: largest horizontal and altitude error and speed); Ke's experiment spins: about 23, 38 and 42 rad/s for one, two "
+        f"verdicts judged over the last {WINDOW_S:g} s (window errors: largest horizontal and altitude error and speed), "
+        f"counted: {verdict_count_text(r['verdict'] for r in rows)}; Ke's experiment spins: about 23, 38 and 42 rad/s for one, two "
         "adjacent and two opposite failures)",
         ("scenario", "law", "Ke: stabilisable", "verdict", "efficiency reached", "r (rad/s)", "n3z", "max alt. loss (m)",
          "max / final horiz. (m)"),

@@ -73,7 +73,7 @@ from .._util.convert import FloatArray, real
 from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback
 from ..flight import Noise, Simulator, State, Trajectory
-from ..flight.outcomes import FlightMetrics, flight_metrics
+from ..flight.outcomes import FlightMetrics, flight_metrics, verdict_count_text
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
 
@@ -655,7 +655,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     section.tables.append(ReportTable(
         f"Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0): the paper's design and our variant; "
         "speeds limited to 10,000 and pitches to +-0.26 rad by the actuator, the share of the time a command sat at "
-        "a limit reported", columns, rows))
+        f"a limit reported; verdicts counted: {verdict_count_text(f.verdict for f in flights)}", columns, rows))
     section.claims = flight_claims(flights)
     section.run_time_s = time.perf_counter() - start
     return section
