@@ -32,6 +32,7 @@ from .allocation import (
     HoverMargin,
     allocate,
     hover_thrust_margin,
+    hover_wrench_distance,
     max_virtual_control,
 )
 from .control import (
@@ -111,6 +112,7 @@ __all__ = [
     "HoverMargin",
     "allocate",
     "hover_thrust_margin",
+    "hover_wrench_distance",
     "max_virtual_control",
     "lqr_hover_allocated",
     "BatchResult",

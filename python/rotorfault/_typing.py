@@ -42,6 +42,24 @@ FlightOutcome: TypeAlias = Literal[
 ]
 #: The old name of :data:`FlightOutcome` (a verdict is a property of a flight, not of Ke's paper).
 KeOutcome: TypeAlias = FlightOutcome
+#: The one verdict on a whole flight (:mod:`rotorfault.flight.outcomes`, judged over its last
+#: window): it holds its setpoint, drifts (airborne to the end, not held, not circling), circles,
+#: crashed into the ground, or diverged (lost another way: tilt, altitude loss, ...).
+FlightVerdict: TypeAlias = Literal["holds", "drifts", "circles", "crashed", "diverged"]
+#: What a row of a paper's scoreboard is (:class:`rotorfault.papers._numbers.PaperNumber`):
+#: ``reproduced`` (our computation, independent of the printed number, agrees with it or not; the
+#: only kind that is scored), ``input`` (a parameter taken from the paper, shown for reference)
+#: or ``consistency`` (a check of our own code against the paper's statement).
+NumberKind: TypeAlias = Literal["reproduced", "input", "consistency"]
+#: Whether a paper's claim holds in our model (:class:`rotorfault.papers._numbers.PaperClaim`).
+ClaimStatus: TypeAlias = Literal["confirmed", "not confirmed"]
+#: Which channels a linear design of a VPP quadcopter commands (:func:`rotorfault.vpp.lqr`):
+#: ``"wang"``, Wang's design (the fixed group's speeds held at the trim, the free group's speeds
+#: one shared input, every healthy pitch an input) or ``"every-channel"`` (every healthy speed
+#: and pitch).
+VppInputs: TypeAlias = Literal["wang", "every-channel"]
+#: Axes a certificate requires to remain after a failure (``rotorfault certify --require-axes``).
+CertifiedAxis: TypeAlias = Literal["thrust", "roll", "pitch", "yaw"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: Controller of a ``rotorfault simulate`` scenario file: none, a registered controller by its
@@ -104,6 +122,11 @@ __all__ = [
     "CoreControllerName",
     "DivergenceKind",
     "FlightOutcome",
+    "FlightVerdict",
+    "NumberKind",
+    "ClaimStatus",
+    "VppInputs",
+    "CertifiedAxis",
     "HoverPoint",
     "KeLaw",
     "KeOutcome",

@@ -105,14 +105,27 @@ def test_ardupilot_frames() -> None:
 def test_certify_cli(tmp_path: Path) -> None:
     runner = CliRunner()
     hexa = DATA / "px4-hexa-x.params"
-    result = runner.invoke(cli, ["certify", "--airframe", str(hexa), "--require", "single"])
+    # PX4's hexa X alternates the spins (PNPNPN): a single failure keeps thrust, roll and pitch.
+    result = runner.invoke(cli, ["certify", "--airframe", str(hexa), "--require", "single", "--require-axes", "thrust,roll,pitch"])
     assert result.exit_code == 0, result.output
     out = tmp_path / "cert.json"
+    # Every single failure of PNPNPN leaves the hover wrench on the boundary (Du Table II's zeros):
+    # it hovers only by spinning, so requiring all four axes (the default) fails with status 3 ...
     result = runner.invoke(cli, ["certify", "-a", "hexa-pnpnpn", "--require", "single", "--json", str(out)])
-    assert result.exit_code == 0, result.output  # every single failure: hover by spinning (Du Table II)
+    assert result.exit_code == 3, result.output
+    assert "--require-axes thrust,roll,pitch,yaw" in result.stderr and "1 (give-up-yaw, all axes boundary)" in result.stderr
     data = json.loads(out.read_text())
     single = [c for c in data["cases"] if len(c["failed"]) == 1]
     assert all(c["hover"] == "give-up-yaw" and c["drop_axes"] == ["yaw"] for c in single)
+    assert all(c["hover_wrench"] == "boundary" and c["distance"] == 0.0 for c in single)
+    # ... and passes when the required axes allow spinning.
+    result = runner.invoke(cli, ["certify", "-a", "hexa-pnpnpn", "--require", "single", "--require-axes", "pitch, thrust,roll"])
+    assert result.exit_code == 0, result.output
+    assert "hovers with thrust, roll, pitch" in " ".join(result.output.split())
+    result = runner.invoke(cli, ["certify", "-a", "hexa-pnpnpn", "--require-axes", "thrust,roll"])
+    assert result.exit_code == 1 and "require_axes: a certificate requires thrust, roll, pitch and yaw, or thrust" in result.output
+    result = runner.invoke(cli, ["certify", "-a", "hexa-pnpnpn", "--require-axes", "thrust,roll,pitch,spin"])
+    assert result.exit_code == 1 and "require_axes: unknown axis 'spin'" in result.output
     result = runner.invoke(cli, ["certify", "-a", "quad-x", "--require", "double", "--json", "-"])
     assert result.exit_code == 3  # two adjacent rotors lost: no hover at all
     data = json.loads(result.stdout)

@@ -149,7 +149,18 @@ def test_simulate_hover_scenario_with_everything(tmp_path: Path) -> None:
     )
     code, out, err = run("simulate", str(path))
     assert code == 0, err
-    assert "no divergence" in out
+    assert "│ verdict" in out and "holds" in out and "no divergence" not in out
+
+
+def test_simulate_calls_a_vehicle_that_falls_without_touching_the_ground_drifts(tmp_path: Path) -> None:
+    """Issue 28: no controller, 10 m up, 1.38 s: it falls 9.3 m (0.5 g t^2) and the run ends before
+    the ground. Never "no divergence": the verdict over the window says it drifts (not held)."""
+    path = tmp_path / "fall.toml"
+    path.write_text('airframe = "quad-x"\nduration_s = 1.38\n[controller]\nkind = "none"\n')
+    code, out, err = run("simulate", str(path))
+    assert code == 0, err
+    assert "no divergence" not in out and "holds" not in out
+    assert "drifts (window: 0.00 m off, 9.33 m" in out and "\ndrifts: airborne to the end" in out
 
 
 @pytest.mark.parametrize(
@@ -183,11 +194,14 @@ def test_ftc_report_writes_table_and_figures(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["ftc-report", "--out", str(tmp_path), "--laws", "feedforward,baseline"])
     assert result.exit_code == 0, result.output
     report = (tmp_path / "ftc-report.md").read_text()
-    assert "| one-failure | feedforward | yes | off station |" in report
-    assert "| fault-free | feedforward | yes | holds position |" in report
-    assert "| one-failure | baseline | yes | tilt |" in report
+    assert "| one-failure | feedforward | yes | drifts (window: " in report
+    assert "| fault-free | feedforward | yes | holds |" in report
+    assert "| one-failure | baseline | yes | diverged (tilt) at " in report
     # Fig. 7's pair falls the 10 m to the ground (issue #28: it used to fall 15.5 m and tilt).
-    assert "| two-adjacent-front | feedforward | no | crashed |" in report
+    assert "| two-adjacent-front | feedforward | no | crashed at 12.34 s (" in report
+    assert "- drifts: airborne to the end but neither holding nor circling" in report
+    counted = {v: report.count(f"| {v}") for v in ("holds", "drifts", "circles", "crashed", "diverged")}
+    assert f"Verdicts counted ({2 * len(ke_paper.scenarios())} flights): " + ", ".join(f"{v} {n}" for v, n in counted.items()) in report
     rows = (tmp_path / "ftc-report.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * len(ke_paper.scenarios())
     assert (tmp_path / "primary-axis.png").stat().st_size > 10_000

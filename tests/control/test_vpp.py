@@ -228,11 +228,11 @@ def test_printed_numbers_for_the_report() -> None:
     from rotorfault.papers import wang as wang_paper
 
     rows = wang_paper.printed_numbers()
-    assert len(rows) == 10
+    assert len(rows) == 11
     differs = {r.quantity for r in rows if r.status == "differs"}
     assert differs == {"highest feasible omega2 (r = 1)", "lowest feasible omega3", "lowest r(omega2)"}
     assert all(r.note for r in rows if r.status == "differs")
-    assert {r.quantity: r.ours for r in rows}["controllability rank, VPP, propeller 1 failed"] == 12
+    assert {r.quantity: r.ours for r in rows}["controllability rank, VPP, propeller 1 failed (the paper's inputs, omega_3 held)"] == 12
 
 
 @pytest.mark.parametrize(

@@ -44,6 +44,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -220,6 +221,15 @@ def true_distance(b: FloatArray, f_min: FloatArray, f_max: FloatArray, g: FloatA
     return float(np.linalg.norm(b @ result.x - g))
 
 
+def airframes_with_failed_rotors(rng: np.random.Generator, count: int) -> Iterator[rf.Airframe]:
+    """``count`` random airframes, each rotor failed (efficiency exactly 0) with probability 0.2."""
+    for _ in range(count):
+        airframe = random_airframe(rng)
+        eta = airframe.efficiency.copy()
+        eta[rng.random(eta.size) < 0.2] = 0.0
+        yield airframe.with_efficiency(eta)
+
+
 @pytest.mark.parametrize("n", [4, 3], ids=["with-yaw", "give-up-yaw"])
 def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
     """With some efficiencies exactly 0 (failed rotors): inside, both formulas are still the hull
@@ -228,11 +238,7 @@ def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
     squares), and |eq13| <= |facet-margin|."""
     rng = np.random.default_rng(6)
     inside = outside = 0
-    for _ in range(900):
-        airframe = random_airframe(rng)
-        eta = airframe.efficiency.copy()
-        eta[rng.random(eta.size) < 0.2] = 0.0
-        airframe = airframe.with_efficiency(eta)
+    for airframe in airframes_with_failed_rotors(rng, 900):
         b = airframe.effectiveness_matrix()[:n]
         g = hover_wrench(airframe, n)
         f_min, f_max = airframe.min_thrust_n, airframe.max_thrust_n
@@ -255,6 +261,48 @@ def test_failed_rotors_inside_exact_outside_bracketed(n: int) -> None:
             assert abs(eq13) <= abs(margin) + tol
     assert inside >= MIN_CASES
     assert outside >= MIN_CASES
+
+
+@pytest.mark.parametrize("n", [4, 3], ids=["with-yaw", "give-up-yaw"])
+def test_hover_wrench_distance_equals_bounded_least_squares(n: int) -> None:
+    """``rf.allocation.hover_wrench_distance`` (the allocation QP, its KKT certificate checked) is
+    the distance from G to the attainable set that bounded least squares (scipy's BVLS, no
+    rotorfault code) computes, on random airframes with failed rotors: 0 inside and on the
+    boundary, the true distance outside (observed agreement ~1e-15 of the scale)."""
+    from rotorfault.allocation import hover_wrench_distance
+
+    rng = np.random.default_rng(11)
+    inside = outside = 0
+    for airframe in airframes_with_failed_rotors(rng, 900):
+        b = airframe.effectiveness_matrix()[:n]
+        if np.linalg.matrix_rank(b) < n:
+            continue
+        g = hover_wrench(airframe, n)
+        f_min, f_max = airframe.min_thrust_n, airframe.max_thrust_n
+        reference = true_distance(b, f_min, f_max, g)
+        scale = problem_scale(b, f_min, f_max, g)
+        ours = hover_wrench_distance(airframe, give_up_yaw=n == 3)
+        assert ours == pytest.approx(reference, rel=0, abs=REL_TOL * scale)
+        if reference > STRICT * scale:
+            outside += 1
+            assert ours > 0.0
+        else:
+            inside += 1
+    assert inside >= MIN_CASES and outside >= MIN_CASES
+
+
+def test_hover_wrench_distance_on_du_s_hexacopters() -> None:
+    """PPNNPN with rotor 5 failed is 0.2133 outside (Du's eq. (13) prints 0 there); PNPNPN after
+    any single failure is on the boundary, distance exactly 0 (and inside giving up yaw)."""
+    from rotorfault.allocation import hover_wrench_distance
+
+    ppnnpn = rf.Airframe.preset("hexa-ppnnpn").with_failed_rotors([5])
+    assert round(hover_wrench_distance(ppnnpn), 4) == 0.2133
+    assert hover_wrench_distance(ppnnpn, give_up_yaw=True) == 0.0
+    for rotor in range(1, 7):
+        pnpnpn = rf.Airframe.preset("hexa-pnpnpn").with_failed_rotors([rotor])
+        assert hover_wrench_distance(pnpnpn) == 0.0
+        assert hover_wrench_distance(pnpnpn, give_up_yaw=True) == 0.0
 
 
 # --------------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -127,7 +128,7 @@ def test_the_certificate_says_give_up_yaw() -> None:
 
 def test_tables_say_give_up_yaw_never_no_yaw(hexa: rf.Airframe) -> None:
     headers, _ = rf.failure_table(hexa).rows_for_display()
-    assert headers[5:7] == ["ACAI eq13 give-up-yaw", "ok give-up-yaw"]
+    assert headers[6:9] == ["ACAI eq13 give-up-yaw", "hover wrench give-up-yaw", "ok give-up-yaw"]
     out = CliRunner().invoke(cli, ["failures", "-a", "hexa-ppnnpn"]).output
     assert "give-up-yaw" in out and "no-yaw" not in out and "without yaw" not in out
 
@@ -166,6 +167,42 @@ def test_the_du_report_rows_name_eq13() -> None:
 # -- flight verdicts: one table of words, for every paper and study ----------------------------------
 
 
+@pytest.mark.parametrize("preset", ["hexa-ppnnpn", "hexa-pnpnpn"])
+def test_certify_the_failures_table_and_the_report_say_the_same_of_each_case(preset: str, du_tables: list[Any]) -> None:
+    """Issue 28: for the same case, the failure table (``rotorfault failures``), the certificate
+    and Du's report table print the same words for the hover wrench (inside, boundary, outside
+    with the same distance), with all axes and giving up yaw."""
+    from rotorfault.allocation import hover_distances
+    from rotorfault.studies.certify import certify, rows_for_display
+
+    frame = rf.Airframe.preset(preset)
+    table = rf.failure_table(frame, max_failed=2)
+    headers, rows = table.rows_for_display(hover_distances(frame, [case.failed for case in table]))
+    columns = [headers.index("hover wrench"), headers.index("hover wrench give-up-yaw")]
+    failures = {row[0]: [row[k] for k in columns] for row in rows}
+    cert_headers, cert_rows = rows_for_display(certify(frame))
+    cert_columns = [cert_headers.index("hover wrench"), cert_headers.index("hover wrench give-up-yaw")]
+    certified = {row[0]: [row[k] for k in cert_columns] for row in cert_rows}
+    assert failures == certified
+    assert any(cells[0] == "boundary" for cells in failures.values()) or any(cells[0].startswith("outside ") for cells in failures.values())
+    if preset == "hexa-ppnnpn":
+        assert failures["5"] == ["outside 0.2133", "inside"]
+    else:
+        assert all(failures[str(k)] == ["boundary", "inside"] for k in range(1, 7))
+    report_tables = [t for t in du_tables if t.caption.startswith(f"{preset}:")]
+    assert len(report_tables) == 1
+    report = {row[0]: [row[k] for k in columns] for row in report_tables[0].rows}
+    assert report == failures
+
+
+@pytest.fixture(scope="module")
+def du_tables(tmp_path_factory: pytest.TempPathFactory) -> list[Any]:
+    """Du's report section's failure tables (built with the Fig. 4 scan at its quick step)."""
+    from rotorfault.papers import du as du_paper
+
+    return list(du_paper.report_section(tmp_path_factory.mktemp("du"), quick=True).tables)
+
+
 def test_every_paper_labels_flights_with_the_one_verdict_table() -> None:
     from rotorfault.flight import outcomes
     from rotorfault.papers import ke as ke_paper
@@ -178,3 +215,8 @@ def test_every_paper_labels_flights_with_the_one_verdict_table() -> None:
     from rotorfault.studies.summaries import FLYING
 
     assert FLYING == outcomes.FLYING == ("holds-position", "circling", "off-station")
+    # The one verdict (issue 28) and the codes before it, kept for one release.
+    assert outcomes.VERDICTS == ("holds", "drifts", "circles", "crashed", "diverged")
+    assert [outcomes.verdict_of(c) for c in ("holds-position", "circling", "off-station", "crashed", "tilt", "step-size")] == [
+        "holds", "circles", "drifts", "crashed", "diverged", "diverged"]
+    assert set(outcomes.VERDICT_MEANINGS) == set(outcomes.VERDICTS)

@@ -178,4 +178,5 @@ def test_ftc_table_fits_80_columns() -> None:
             console.width = old
     text = captured.get()
     assert max(len(line) for line in text.splitlines()) <= 80
-    assert "two-adjacent-front-reversed*" in text and "tilt at 2.37 s" in text and "lost" in text
+    assert "two-adjacent-front-reversed*" in text and "diverged: tilt" in text and "at 2.37 s" in text and "lost" in text
+    assert "…" not in text  # no number or word cut

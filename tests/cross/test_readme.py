@@ -36,7 +36,7 @@ CLAIMS = [
     ("# two opposite rotors (1 front right, 3 rear left)", "preset", "[f.rotor for f in run.faults]", [1, 3], 0),
     ("Ke Table II (efficiency = diag of Ke's health matrix): 0, 0.5, 1", "preset",
      "[round(float(v.real), 12) for v in ke.n_eigenvalues(preset.airframe, [0, 0, 1, 1])]", [0.0, 0.5, 1.0], 0),
-    ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
+    ("# 'drifts' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.verdict", "drifts", 0),
     ("# 1.527, 1.680 (stability margin 1/gamma)", "ours", "round(ours.gamma_min, 3), round(ours.gamma, 3)", (1.527, 1.680), 0),
     ("# holds-position, within 1 cm of (0, 0, 1) m after 60 s", "ours", "run.outcome == 'holds-position' and run.final_error_m < 0.01", True, 0),
     # The one LQR and its refusals (issue 25).

@@ -42,7 +42,8 @@ def test_the_wheel_is_abi3_and_carries_the_package(built: tuple[Path, Path]) -> 
     names = zipfile.ZipFile(wheel).namelist()
     for required in ("rotorfault/_rfcore.pyi", "rotorfault/py.typed", "rotorfault/presets/hexa-pnpnpn.toml",
                      "rotorfault/presets/ftc/ke-hil.toml", "rotorfault/control/ke.py", "rotorfault/papers/ke.py",
-                     "rotorfault/papers/templates/reproduce.html.j2"):
+                     "rotorfault/papers/templates/reproduce.html.j2", "rotorfault/papers/bench_results/acai_grid.json",
+                     "rotorfault/papers/bench_results/ftc_batch.json"):
         assert required in names, required
     assert any(n.startswith("rotorfault/_rfcore") and n.endswith(".so") for n in names), names
 
@@ -75,4 +76,8 @@ def test_the_wheel_installs_into_a_fresh_environment_and_works(built: tuple[Path
     assert out == ["1.4861", "0.7221", "201"], out  # Du Table II, Table III, 0.5 s at 400 Hz
     cli = _run([env / "bin" / "rotorfault", "acai", "-a", "hexa-pnpnpn"], tmp_path)
     assert "1.4861" in cli, cli
+    # The report's Performance section has what it shows (issue 28): the bench results ship.
+    benches = _run([python, "-c", "from rotorfault.papers import reproduce as r; "
+                    "print(len(r.bench_results(r.default_bench_directory())))"], tmp_path)
+    assert int(benches) >= 5, benches
     assert sys.version_info >= (3, 11)

@@ -15,7 +15,7 @@ from rotorfault._util.lock import is_lock_file
 from rotorfault.papers import du as du_paper
 from rotorfault.papers import ke as ke_paper
 from rotorfault.papers import reproduce
-from rotorfault.papers._numbers import PaperNumber
+from rotorfault.papers._numbers import PaperClaim, PaperNumber
 from rotorfault.papers._report import ReportFigure, ReportSection, ReportTable
 from rotorfault.papers.decisions import DECISION_CODE, decisions, source_root
 
@@ -97,7 +97,8 @@ def test_bench_results_are_read_and_checked(tmp_path: Path) -> None:
 
 
 def test_committed_bench_results_are_readable() -> None:
-    got = reproduce.bench_results(ROOT / "benches" / "results")
+    assert reproduce.default_bench_directory() == ROOT / "python" / "rotorfault" / "papers" / "bench_results"
+    got = reproduce.bench_results(reproduce.default_bench_directory())
     assert {b.bench for b in got} >= {"acai_grid", "allocation_clarabel", "ftc_batch", "startup"}
     for b in got:
         assert b.figures and b.machine["cpus"] >= 1 and b.date
@@ -112,8 +113,11 @@ def _fake(key: str, title: str) -> reproduce.SectionProvider:
         save_figure(fig, out / f"{key}.png")
         return ReportSection(
             key, title,
-            numbers=[PaperNumber("P", "T1", "<img src=x onerror=alert(1)>", 1.0, 1.0, 0.1),
-                     PaperNumber("P", "T1", "q2", 1.0, 2.0, 0.1, "a note")],
+            numbers=[PaperNumber("P", "T1", "<img src=x onerror=alert(1)>", 1.0, 1.0, 0.1, kind="reproduced"),
+                     PaperNumber("P", "T1", "q2", 1.0, 2.0, 0.1, "a note", kind="reproduced"),
+                     PaperNumber("P", "T1", "an input", 3.0, 3.0, 0.1, kind="input"),
+                     PaperNumber("P", "T1", "not yet classified", 3.0, 4.0, 0.1)],
+            claims=[PaperClaim("P", "Sec. 1", "<b>it flies</b>", "it flew", "holds", "confirmed", "held")],
             tables=[ReportTable("<script>alert(1)</script>", ("a", "b"), (("<i>x</i>", "y"),))],
             figures=[ReportFigure(f"{key}.png", "a figure")],
         )
@@ -131,13 +135,23 @@ def test_sections_render_landed_and_not_landed_and_escape_names(tmp_path: Path) 
     assert "Du &amp; &lt;Co&gt;" in html
     assert "<script>alert" not in html and "&lt;script&gt;alert(1)&lt;/script&gt;" in html
     assert "<img src=x" not in html and "<i>x</i>" not in html
+    # Only reproduced rows carry the pass/differs marker; the other kinds are shown unscored.
     assert html.count('<td class="pass">pass</td>') == 2 and html.count('<td class="differs">differs</td>') == 2
+    assert html.count('<td class="unscored">') == 4
+    assert '<td class="kind">input</td>' in html and '<td class="kind">not classified</td>' in html
+    summary = html.split('id="summary"')[1].split("</table>")[0]
+    assert summary.count('<td class="num">2</td><td class="num">1</td><td class="num">1</td>') == 2  # 2 scored: 1 pass, 1 differs
+    assert "&lt;b&gt;it flies&lt;/b&gt;" in html and 'id="du-claims"' in html
+    assert 'id="verdicts"' in html and "holds" in html.split('id="verdicts"')[1].split("</ul>")[0]
+    numbers = json.loads((out / "numbers.json").read_text(encoding="utf-8"))
+    assert [n["kind"] for n in numbers["sections"]["du"]["numbers"]] == ["reproduced", "reproduced", "input", None]
+    assert numbers["sections"]["du"]["claims"][0]["status"] == "confirmed"
     manifest = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
     assert set(manifest["outputs"]) == {"index.html", "numbers.json", "du.png", "wang.png"} and manifest["quick"] is True
     # The decisions table: one row per README decision, linked to the files.
     assert len(re.findall(r"<tr><td>", html.split('id="decisions-table"')[1].split("</table>")[0])) == len(decisions())
     if source_root() is not None:  # from a source tree the links point into it, relative to the report
-        hrefs = re.findall(r'<a href="([^"]+)"><code>', html.split('id="decisions-table"')[1])
+        hrefs = re.findall(r'<a href="([^"]+)" title="source tree"><code>', html.split('id="decisions-table"')[1])
         assert hrefs and all((out / h).resolve().exists() for h in hrefs)
 
 
@@ -198,3 +212,54 @@ def test_cli_checks_the_output_directory_before_computing(tmp_path: Path) -> Non
     assert again.exit_code == 1 and "pass --force" in again.output
     bad_benches = runner.invoke(cli, ["reproduce", "--quick", "--out", str(tmp_path / "r2"), "--benches", str(tmp_path / "nope")])
     assert bad_benches.exit_code == 1 and "benches:" in bad_benches.output
+
+
+def test_decision_links_outside_a_source_tree_point_to_the_installed_file_or_the_version(tmp_path: Path,
+                                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 28: from an installed package the links must not point at files it does not have.
+    A Python file or preset links to the installed file (it exists); a Rust file, which the wheel
+    does not install, shows its path in that version's source, or the repository at tag
+    v<version> when the package's metadata names one."""
+    decision = next(d for d in decisions() if d.gap == "Wang's design, frames and u4")
+    links = reproduce._code_links(decision, tmp_path, root=tmp_path, version="9.9.9")
+    by_path = {link["path"]: link for link in links}
+    wang = by_path["python/rotorfault/papers/wang.py"]
+    assert wang["href"].startswith("file://") and wang["where"] == "installed rotorfault 9.9.9"
+    monkeypatch.setattr(reproduce, "_repository_url", lambda: None)
+    rust = {link["path"]: link for link in reproduce._code_links(decision, tmp_path, root=tmp_path, version="9.9.9")}[
+        "crates/rfcore/src/flight/actuator.rs"]
+    assert rust["href"] == "" and rust["where"] == "rotorfault 9.9.9 source (not installed)"
+    monkeypatch.setattr(reproduce, "_repository_url", lambda: "https://example.org/rotorfault")
+    rust = {link["path"]: link for link in reproduce._code_links(decision, tmp_path, root=tmp_path, version="9.9.9")}[
+        "crates/rfcore/src/flight/actuator.rs"]
+    assert rust["href"] == "https://example.org/rotorfault/blob/v9.9.9/crates/rfcore/src/flight/actuator.rs"
+    assert "9.9.9" in reproduce.LINK_RULE.format(version="9.9.9")
+
+
+def test_the_bench_results_ship_with_the_package() -> None:
+    """The Performance section's results are package data (issue 28: after ``pip install .`` the
+    section was empty): the default directory is inside the package, and the wheel test checks
+    that the built wheel carries it."""
+    import rotorfault
+
+    directory = reproduce.default_bench_directory()
+    assert directory is not None and directory.is_relative_to(Path(rotorfault.__file__).parent)
+    assert len(reproduce.bench_results(directory)) >= 5
+
+
+def test_the_score_line_counts_only_reproduced_rows() -> None:
+    """What ``rotorfault reproduce`` prints per paper: only reproduced rows are counted as passing
+    or not; inputs, consistency checks and unclassified rows are said to be beside them."""
+    from rotorfault.papers._numbers import PaperClaim, PaperNumber
+    from rotorfault.papers._report import ReportSection
+
+    rows = [PaperNumber("P", "T", "a", 1.0, 1.0, 0.1, kind="reproduced"), PaperNumber("P", "T", "b", 1.0, 2.0, 0.1, kind="reproduced"),
+            PaperNumber("P", "T", "c", 1.0, 1.0, 0.1, kind="input"), PaperNumber("P", "T", "d", 1.0, 1.0, 0.1)]
+    claim = PaperClaim("P", "w", "c", "m", "drifts", "not confirmed", "r")
+    section = ReportSection("p", "P", numbers=rows, claims=[claim], parts=[ReportSection("q", "flights", landed=False)])
+    assert reproduce.score_text(section) == (
+        "1 of 2 reproduced numbers pass (2 input, consistency or unclassified rows beside them, not scored); "
+        "0 of 1 flight claims confirmed; not landed yet: flights")
+    assert reproduce.score_text(ReportSection("p", "P", numbers=rows[3:])) == (
+        "no reproduced number scored (1 input, consistency or unclassified rows beside them, not scored)")
+    assert reproduce.score_text(ReportSection("p", "P", landed=False)) == "not landed yet"

@@ -76,6 +76,25 @@ def test_trajectory_figure(tmp_path: Path) -> None:
     roll_pitch = fig.axes[1]
     assert {line.get_label() for line in roll_pitch.get_lines() if not line.get_label().startswith("_")} == {"roll", "pitch"}
     assert np.ptp(roll_pitch.get_ylim()) < 200
+    # Issue 28: the spinning vehicle's yaw is not drawn to tens of thousands of degrees: its panel
+    # shows the heading's rate in rev/s, which settles at the body yaw rate r / (2 pi).
+    yaw = fig.axes[2]
+    assert "rev/s" in yaw.get_ylabel()
+    line = next(line for line in yaw.get_lines() if line.get_label().startswith("heading rate"))
+    t, rate = (np.asarray(v, dtype=float) for v in line.get_data())
+    settled = t >= t[-1] - 5.0
+    r = run.metrics.r_rad_s
+    assert r is not None and abs(np.mean(rate[settled]) - r / (2 * np.pi)) <= 0.02 * abs(r / (2 * np.pi))
+
+
+def test_yaw_of_a_run_that_does_not_spin_is_wrapped(tmp_path: Path) -> None:
+    run = rf.Simulator(rf.Airframe.preset("quad-x")).run(rf.State(position=(0, 0, -10), euler=(0, 0, 3.0)), 1.0,
+                                                        controller=None)
+    fig = run.plot(str(tmp_path / "yaw.png"))
+    yaw = fig.axes[2]
+    assert yaw.get_ylabel() == "yaw (deg)"
+    values = np.concatenate([np.asarray(line.get_ydata(), dtype=float) for line in yaw.get_lines() if line.get_label().startswith("yaw")])
+    assert np.all(np.abs(values) <= 180.0) and values[0] == pytest.approx(np.degrees(3.0))
 
 
 def test_round_off_is_not_magnified(tmp_path: Path) -> None:
@@ -93,7 +112,7 @@ def test_lost_run_figure_says_when(tmp_path: Path) -> None:
 def test_primary_axis_figure(tmp_path: Path) -> None:
     runs = [ke_paper.run_scenario("one-failure"), ke_paper.run_scenario("one-failure", law="baseline")]
     fig = ke_paper.plot_primary_axis(runs, str(tmp_path / "pa.png"))
-    check_figure(fig, tmp_path / "pa.png", title_has=("primary axis", "one-failure (feedforward)", "lost at 2.37 s"))
+    check_figure(fig, tmp_path / "pa.png", title_has=("primary axis", "one-failure (feedforward)", "diverged (tilt) at 2.37 s"))
     assert [t.get_text() for t in fig.legends[0].get_texts()] == ["whole flight", "last 10 s", "start", "lost"]
 
 
@@ -104,15 +123,19 @@ def test_scan_figure(tmp_path: Path, give_up_yaw: bool) -> None:
     check_figure(fig, tmp_path / "scan.png", title_has=("hexa-pnpnpn", "giving up yaw" if give_up_yaw else "with yaw"))
     if give_up_yaw:
         assert all("giving up yaw" in ax.get_title() for ax in fig.axes if ax.get_title())
-    # The colour scale spans the values that occur; "uncontrollable" is a hatched patch, not a colour.
+    # The colour scale has one colour per grid level that occurs (a discrete bar: no values between
+    # levels suggested), centred on it; "uncontrollable" is a hatched patch, not a colour.
     from matplotlib.collections import QuadMesh
+    from matplotlib.colors import BoundaryNorm
 
     meshes = [c for ax in fig.axes for c in ax.collections if isinstance(c, QuadMesh) and ax.get_label() != "<colorbar>"]
     assert len(meshes) == 3
     data = np.concatenate([np.ma.compressed(np.ma.masked_invalid(m.get_array())) for m in meshes])
     for mesh in meshes:
-        assert mesh.norm.vmin == pytest.approx(data.min(), abs=1e-12) or data.min() == data.max()
-        assert mesh.norm.vmax == pytest.approx(data.max(), abs=1e-12) or data.min() == data.max()
+        assert isinstance(mesh.norm, BoundaryNorm)
+        centres = (mesh.norm.boundaries[:-1] + mesh.norm.boundaries[1:]) / 2
+        np.testing.assert_allclose(centres, np.unique(data), atol=1e-12)
+        np.testing.assert_allclose(np.diff(mesh.norm.boundaries), 0.1, atol=1e-12)
 
 
 def test_attainable_slices_figure(tmp_path: Path) -> None:

@@ -78,7 +78,7 @@ def test_core_summaries_equal_those_of_full_trajectories() -> None:
     for i in range(c.runs):
         full = summarize(c.refly(i), upper=upper)
         row = {k: v[i].item() for k, v in result.columns.items()}
-        for key in ("outcome", *SUMMARY_FIELDS):
+        for key in ("outcome", "verdict", "cause", *SUMMARY_FIELDS):
             assert _equal(full[key], row[key]), (i, key, full[key], row[key])
 
 
@@ -89,11 +89,11 @@ def test_a_reflown_worst_case_equals_its_row() -> None:
     assert len(worst) == 2 and worst[0]["seed"] == 3
     # Lost runs first (the double failure falls its 10 m and crashes: issue #28), then the largest
     # horizontal error.
-    assert worst[0]["outcome"] == "crashed"
+    assert worst[0]["outcome"] == "crashed" and worst[0]["verdict"] == "crashed" and worst[0]["cause"] == "crashed"
     assert worst[0]["max_horizontal_error_m"] >= worst[1]["max_horizontal_error_m"] or worst[0]["outcome"] not in FLYING
     for row in worst:
         full = summarize(c.refly(row["index"]), upper=c.vehicle().airframe.max_thrust_n)
-        for key in ("outcome", *SUMMARY_FIELDS):
+        for key in ("outcome", "verdict", "cause", *SUMMARY_FIELDS):
             assert _equal(full[key], row[key]), (key, full[key], row[key])
 
 
@@ -101,6 +101,7 @@ def test_lqr_flies_a_campaign() -> None:
     c = Campaign(runs=2, controller="lqr", duration_s=6.0, failures=((),), wind_m_s=(0.0, 1.0))
     columns = run_chunk(c, 0)
     assert columns["outcome"].tolist() == ["holds-position", "holds-position"]
+    assert columns["verdict"].tolist() == ["holds", "holds"] and columns["cause"].tolist() == ["", ""]
 
 
 def test_verdict_criteria_are_the_papers() -> None:
@@ -125,8 +126,20 @@ def test_survival_groups_and_report(tmp_path: Path) -> None:
     assert sum(r.runs for r in rates) == 8
     lost = result.survival("failed_rotors")
     front = [r for r in lost if r.label == "1-4"]
-    assert front and front[0].survived == 0  # Ke Fig. 7: the front pair is lost
+    assert front and front[0].held == 0  # Ke Fig. 7: the front pair is lost
     assert "Wilson" in result.table()
+    # Survival is the share of runs that hold; every other verdict is counted beside it.
+    counts = result.verdict_counts()
+    assert sum(counts[v] for v in ("holds", "drifts", "circles", "crashed", "diverged")) == len(result)
+    assert result.survival()[0].held == counts["holds"] == int(result.held.sum())
+    assert int(result.lost.sum()) == counts["crashed"] + counts["diverged"]
+    table = result.table()
+    assert "survival (the share of runs that hold)" in table and "not lost" not in table
+    assert all(f"{v} {counts[v]}" in table for v in ("holds", "drifts", "circles", "crashed", "diverged"))
+    with pytest.warns(DeprecationWarning, match="CampaignResult.survived is deprecated"):
+        assert np.array_equal(result.survived, result.held)
+    with pytest.warns(DeprecationWarning, match="Rate.survived is deprecated"):
+        assert front[0].survived == 0
     result.plot(tmp_path / "campaign.png")
     assert (tmp_path / "campaign.png").stat().st_size > 10_000
 

@@ -166,7 +166,7 @@ def test_a_worst_case_reflown_from_parquet_equals_its_row(tmp_path: Path) -> Non
     upper = result.campaign.vehicle().airframe.max_thrust_n
     for row in worst:
         full = summarize(result.campaign.refly(row["index"]), upper=upper)
-        for key in ("outcome", *SUMMARY_FIELDS):
+        for key in ("outcome", "verdict", "cause", *SUMMARY_FIELDS):
             assert _equal(full[key], row[key]), (row["index"], key, full[key], row[key])
 
 

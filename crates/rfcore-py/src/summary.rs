@@ -79,10 +79,22 @@ macro_rules! column {
     ($($name:ident),*) => {
         #[pymethods]
         impl PySummaryBatch {
-            /// Outcome codes (`holds-position`, `circling`, `off-station` or a divergence kind).
+            /// Outcome codes (`holds-position`, `circling`, `off-station` or a divergence kind;
+            /// the codes before the verdicts, kept for one release).
             #[getter]
             fn outcome(&self) -> Vec<&'static str> {
                 self.runs.iter().map(|r| r.outcome.name()).collect()
+            }
+            /// Verdicts (`holds`, `drifts`, `circles`, `crashed`, `diverged`), decided by the core.
+            #[getter]
+            fn verdict(&self) -> Vec<&'static str> {
+                self.runs.iter().map(|r| r.outcome.verdict().name()).collect()
+            }
+            /// How each lost run was lost (the divergence kind); an empty string for a run flown
+            /// to the end.
+            #[getter]
+            fn cause(&self) -> Vec<&'static str> {
+                self.runs.iter().map(|r| r.outcome.cause().unwrap_or("")).collect()
             }
             fn __len__(&self) -> usize {
                 self.runs.len()

@@ -64,7 +64,9 @@ from .attainable import (
     DirectionalLimit,
     HoverMargin,
     attainable_slice,
+    hover_distances,
     hover_thrust_margin,
+    hover_wrench_distance,
     max_virtual_control,
     plot_attainable_slices,
 )
@@ -81,7 +83,9 @@ __all__ = [
     "HoverMargin",
     "allocate",
     "attainable_slice",
+    "hover_distances",
     "hover_thrust_margin",
+    "hover_wrench_distance",
     "max_virtual_control",
     "plot_attainable_slices",
 ]

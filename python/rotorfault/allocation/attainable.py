@@ -6,6 +6,7 @@ its figure :func:`plot_attainable_slices`)."""
 from __future__ import annotations
 
 import numbers
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -94,6 +95,46 @@ def hover_thrust_margin(
     return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
 
 
+def hover_wrench_distance(airframe: Airframe, efficiency: npt.ArrayLike | None = None, *, give_up_yaw: bool = False) -> float:
+    """How far the hover wrench ``G = [m g, 0, 0(, 0)]`` lies from the attainable set, with rotor
+    ``efficiency`` (default the airframe's own): the Euclidean distance in the ACAI's units (N on
+    the thrust axis, N m on the torque axes, Du eq. (9)), ``0.0`` when hover is attainable (inside
+    or on the boundary). It is the optimum of the allocation QP with unit weights (Ke eq. (33)),
+    whose KKT certificate is checked; the facet margin (``formula="facet-margin"``) is a lower
+    bound on it, equal when the nearest point lies inside one facet."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
+    n = 3 if flag("give_up_yaw", give_up_yaw) else 4
+    goal = np.zeros(n)
+    goal[0] = frame.mass_kg * frame.gravity_m_s2
+    from .allocator import allocate
+
+    answer = allocate(frame, goal, weights=np.ones(n), give_up_yaw=give_up_yaw)
+    certificate = answer.certificate
+    assert not isinstance(certificate, tuple)  # one wrench, one certificate
+    if not certificate.holds:
+        raise ValueError(
+            f"airframe: the distance of {frame.name}'s hover wrench to its attainable set could not be certified "
+            f"(allocation status {answer.status}); report this case"
+        )
+    distance = float(np.linalg.norm(np.asarray(answer.achieved) - goal))
+    # Attained up to the solver's rounding: within the certificate's tolerance of the wrench's size.
+    return 0.0 if distance <= certificate.tolerance * max(1.0, float(goal[0])) else distance
+
+
+def hover_distances(airframe: Airframe, failed: Iterable[Sequence[int]]) -> dict[tuple[int, ...], tuple[float, float]]:
+    """:func:`hover_wrench_distance` with all four axes and giving up yaw, for each set of failed
+    rotors (numbered from 1) of ``airframe``: what failure tables and certificates print beside
+    "outside" (:func:`rotorfault.analysis.acai.hover_wrench_text`)."""
+    out = {}
+    for rotors in failed:
+        key = tuple(int(r) for r in rotors)
+        frame = airframe.with_failed_rotors(list(key)) if key else airframe
+        out[key] = (hover_wrench_distance(frame), hover_wrench_distance(frame, give_up_yaw=True))
+    return out
+
+
 AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "yaw torque N (N m)")
 
 
@@ -178,7 +219,9 @@ __all__ = [
     "DirectionalLimit",
     "HoverMargin",
     "attainable_slice",
+    "hover_distances",
     "hover_thrust_margin",
+    "hover_wrench_distance",
     "max_virtual_control",
     "plot_attainable_slices",
 ]

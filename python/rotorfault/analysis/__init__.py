@@ -14,6 +14,7 @@ from .acai import (
     FORMULA_DESCRIPTIONS,
     GIVE_UP_YAW,
     HOVER_CODES,
+    HOVER_WRENCH_NOTE,
     RANK_RTOL,
     ZERO_RTOL,
     AcaiBatch,
@@ -23,6 +24,7 @@ from .acai import (
     acai_from_matrix,
     acai_label,
     format_acai,
+    hover_wrench_text,
 )
 from .airframe import Airframe
 from .controllability import ControllabilityReport, FailureCase, FailureTable, controllability, failure_table
@@ -33,6 +35,7 @@ __all__ = [
     "FORMULA_DESCRIPTIONS",
     "GIVE_UP_YAW",
     "HOVER_CODES",
+    "HOVER_WRENCH_NOTE",
     "RANK_RTOL",
     "ZERO_RTOL",
     "AcaiBatch",
@@ -48,4 +51,5 @@ __all__ = [
     "controllability",
     "failure_table",
     "format_acai",
+    "hover_wrench_text",
 ]

@@ -212,6 +212,28 @@ def acai_from_matrix(
     return AcaiValue._from_core(core)
 
 
+#: How each position of the hover wrench reads in a table (failure tables, certificates, the
+#: report): "boundary" (an ACAI of exactly 0: only a zero-margin static hover, or a spinning one)
+#: apart from "outside" (hover infeasible, with its distance when known).
+HOVER_WORDS: dict[str, str] = {"inside": "inside", "boundary": "boundary", "outside": "outside",
+                               "rank-deficient": "rank-deficient"}
+#: The footnote of every table with a hover wrench column.
+HOVER_WRENCH_NOTE = (
+    "hover wrench: inside; boundary (ACAI exactly 0: a static hover without any margin, or spinning); "
+    "outside d (no static hover: d is its distance to the attainable set, N / N m); rank-deficient (rank B_f < n)"
+)
+
+
+def hover_wrench_text(hover: HoverPoint, distance: float | None = None) -> str:
+    """Where the hover wrench lies, for a table cell (:data:`HOVER_WRENCH_NOTE`): ``"inside"``,
+    ``"boundary"``, ``"outside 0.2133"`` (``distance``: from the hover wrench to the attainable
+    set, in the ACAI's units, :func:`rotorfault.allocation.hover_wrench_distance`; a rank-deficient
+    case whose wrench is not attained reads the same), ``"rank-deficient"``."""
+    if hover in ("outside", "rank-deficient") and distance is not None and distance > 0.0:
+        return f"outside {distance:.4f}"
+    return HOVER_WORDS[hover]
+
+
 #: Footnote for an eq. (13) value of 0 whose hover wrench is in fact outside.
 EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formula facet-margin shows the gap)"
 
@@ -230,11 +252,14 @@ __all__ = [
     "FORMULA_DESCRIPTIONS",
     "GIVE_UP_YAW",
     "HOVER_CODES",
+    "HOVER_WORDS",
+    "HOVER_WRENCH_NOTE",
     "RANK_RTOL",
     "ZERO_RTOL",
     "AcaiBatch",
     "AcaiValue",
     "acai",
+    "hover_wrench_text",
     "acai_batch",
     "acai_from_matrix",
     "acai_label",

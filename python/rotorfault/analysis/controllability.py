@@ -11,7 +11,7 @@ spins, as the controllers of Lanzon et al. and Ke et al. do?
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any, cast, overload
 
@@ -23,7 +23,7 @@ from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .._util.convert import control_axes, count
 from .._util.deprecation import renamed_attribute
 from .._util.tables import Column, Tabular
-from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, _efficiency, _formula, acai_label, format_acai
+from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, HOVER_WRENCH_NOTE, _efficiency, _formula, acai_label, format_acai, hover_wrench_text
 from .airframe import Airframe, require_airframe, rotor_labels
 
 
@@ -232,19 +232,28 @@ class FailureTable(Sequence[FailureCase], Tabular):
     def _table_metadata(self) -> dict[str, Any]:
         return {"kind": "failure-table", "airframe": self.airframe_name, "max_failed": self.max_failed, "formula": self.formula}
 
-    def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
+    def rows_for_display(
+        self, distances: Mapping[tuple[int, ...], tuple[float, float]] | None = None,
+    ) -> tuple[list[str], list[list[str]]]:
         """Headers and formatted cells; the ACAI columns name their formula, the "give-up-yaw"
-        columns keep only thrust, roll and pitch."""
+        columns keep only thrust, roll and pitch; the "hover wrench" columns say where it lies
+        (inside, on the boundary, outside, rank deficient: :func:`~rotorfault.analysis.acai.hover_wrench_text`),
+        with the distance of an outside one when ``distances`` gives it (failed rotors -> (all
+        axes, giving up yaw), :func:`rotorfault.allocation.hover_distances`)."""
         acai_ = acai_label(self.formula)
-        headers = ["failed", "rank C", "rank B_f", acai_, "ok", f"{acai_} {GIVE_UP_YAW}", f"ok {GIVE_UP_YAW}"]
+        headers = ["failed", "rank C", "rank B_f", acai_, "hover wrench", "ok", f"{acai_} {GIVE_UP_YAW}",
+                   f"hover wrench {GIVE_UP_YAW}", f"ok {GIVE_UP_YAW}"]
+        given = {} if distances is None else dict(distances)
         rows = [
             [
                 rotor_labels(row.failed),
                 str(row.controllability_rank),
                 str(row.effectiveness_rank),
                 format_acai(row.acai, row.hover),
+                hover_wrench_text(row.hover, given.get(row.failed, (None, None))[0]),
                 "yes" if row.controllable else "no",
                 format_acai(row.acai_give_up_yaw, row.hover_give_up_yaw),
+                hover_wrench_text(row.hover_give_up_yaw, given.get(row.failed, (None, None))[1]),
                 "yes" if row.controllable_give_up_yaw else "no",
             ]
             for row in self._cases
@@ -269,6 +278,7 @@ class FailureTable(Sequence[FailureCase], Tabular):
         lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in rows]
         if any(cell.endswith("*") for row in rows for cell in row):
             lines.append(EQ13_ZERO_NOTE)
+        lines.append(HOVER_WRENCH_NOTE)
         return "\n".join(lines)
 
     def __repr__(self) -> str:

@@ -7,12 +7,15 @@ import sys
 from typing import Any
 
 import click
+from rich import box
 from rich.markup import escape
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
-from ..analysis import EQ13_ZERO_NOTE, Airframe, acai_label, controllability, failure_table, format_acai
+from ..analysis import EQ13_ZERO_NOTE, HOVER_WRENCH_NOTE, Airframe, acai_label, controllability, failure_table, format_acai, hover_wrench_text
+from ..allocation import hover_distances
 from ..analysis.airframe import rotor_labels
+from ..studies.certify import ALL_AXES
 from .app import _user_errors, airframe_option, cli, formula_option, load_airframe, mass_option, parse_numbers
 from .output import EXIT_REQUIREMENT, CommandOutput, Output, Rows, output_options, records
 
@@ -91,17 +94,31 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
     fields = {"airframe": frame.name, "max_failed": max_failed, "formula": result.formula, "case_count": len(result),
               "controllable_count": survivable, "give_up_yaw_only_count": spinning}
 
+    distances = hover_distances(frame, [case.failed for case in result])
+
     def human(out: Output) -> None:
-        headers, rows = result.rows_for_display()
-        table = out.table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
-        for header in headers:
-            table.add_column(header, justify="left" if header == "failed" else "right")
+        headers, rows = result.rows_for_display(distances)
+        # Below 120 columns the rank and "ok" columns are left out so that every cell stays whole (the
+        # row's colour and the count below say which cases are controllable).
+        narrow = out.console.width < 120
+        shown = [k for k, h in enumerate(headers) if not (narrow and (h.startswith("rank ") or h.startswith("ok")))]
+        title = f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)"
+        table = out.table(title=title, box=box.SIMPLE_HEAD, pad_edge=False) if narrow else out.table(title=title)
+        for k in shown:
+            header = headers[k]
+            wrench = header.startswith("hover wrench")
+            # Every cell whole (the headers may wrap): the widest value of the column.
+            width = max(len(row[k]) for row in rows) if rows else None
+            table.add_column(header, justify="left" if header == "failed" or wrench else "right", min_width=width)
         for case, row in zip(result, rows):
             style = "green" if case.controllable else ("yellow" if case.controllable_give_up_yaw else "red")
-            table.add_row(*row, style=style)
+            table.add_row(*(row[k] for k in shown), style=style)
         out.print(table)
+        if narrow:
+            out.print("(rank C, rank B_f and Du's verdict per case: in a terminal of 120 columns or more)", highlight=False)
         if any(cell.endswith("*") for row in rows for cell in row):
             out.print(escape(EQ13_ZERO_NOTE))
+        out.print(escape(HOVER_WRENCH_NOTE), highlight=False)
         out.print(
             f"{survivable} of {len(result)} cases controllable; {spinning} more only by giving up yaw "
             "(green: controllable; yellow: only giving up yaw, i.e. thrust, roll and pitch; red: neither)."
@@ -114,20 +131,23 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
 @click.option("--airframe", "-a", required=True, help="Preset name, airframe TOML, or a PX4 .params file.")
 @mass_option
 @click.option("--require", "required", type=click.Choice(["none", "single", "double"]), default="none", show_default=True,
-              help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
+              help="Failure class that must stay hoverable with --require-axes (double includes single); exit status 3 if not.")
+@click.option("--require-axes", "required_axes", default=",".join(ALL_AXES), show_default=True,
+              help="Axes that must remain after those failures: thrust,roll,pitch,yaw or thrust,roll,pitch (giving up yaw: spinning).")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
 @output_options
 @_user_errors
-def certify(airframe: str, required: str, json_path: str | None, force: bool, output: Output) -> None:
+def certify(airframe: str, required: str, required_axes: str, json_path: str | None, force: bool, output: Output) -> None:
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
-    not at all; the ACAI (facet margin), the thrust-to-weight left and which axes an allocator must
-    drop."""
+    not at all; where the hover wrench lies (inside, on the boundary, outside and how far), the
+    ACAI (facet margin), the thrust-to-weight left and which axes an allocator must drop."""
     import json
 
-    from ..studies.certify import certify as certify_airframe, rows_for_display
+    from ..studies.certify import certify as certify_airframe, parse_axes, rows_for_display
     from .._util.output import write_text
 
+    axes = parse_axes("require_axes", required_axes)
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
     if json_path == "-" and output.format != "table":
@@ -135,22 +155,24 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool, ou
     frame = load_airframe(airframe)
     cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count))
     text = json.dumps(cert.to_dict(), indent=2) + "\n"
-    failing = cert.failing(required)
+    failing = cert.failing(required, axes=axes)
+    named = ", ".join(axes)
     fields = {"airframe": cert.airframe, "rotor_count": cert.rotor_count, "fully_actuated": cert.fully_actuated, "require": required,
-              "requirement_met": not failing, "failing": [list(c.failed) for c in failing]}
+              "require_axes": list(axes), "requirement_met": not failing, "failing": [list(c.failed) for c in failing]}
 
     def human(out: Output) -> None:
         headers, rows = rows_for_display(cert)
         kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
         table = out.table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
-            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
+            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") or header.startswith("hover wrench") else "right")
         styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
         out.print(table)
+        out.print(escape(HOVER_WRENCH_NOTE), highlight=False)
         if required != "none" and not failing:
-            out.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
+            out.print(f"certificate: every {required} failure (and fewer) leaves a vehicle that hovers with {named}")
 
     if json_path == "-":
         if not output.quiet:
@@ -160,6 +182,7 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool, ou
         if json_path is not None:
             write_text(json_path, text)
     if failing:
-        listed = "; ".join(rotor_labels(c.failed) for c in failing)
-        click.echo(f"certificate: FAILED: --require {required}: cannot hover with rotor(s) {listed} failed", err=True)
+        listed = "; ".join(f"{rotor_labels(c.failed)} ({c.hover}, all axes {hover_wrench_text(c.hover_wrench, c.distance)})" for c in failing)
+        click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "
+                   f"with rotor(s) {listed} failed", err=True)
         sys.exit(EXIT_REQUIREMENT)

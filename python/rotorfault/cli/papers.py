@@ -154,8 +154,8 @@ def _print_ftc_table(runs: list[Any], preset_name: str, console: Console = conso
     rows = ke_paper.report_rows(runs)
 
     def outcome(row: dict[str, Any]) -> str:
-        colour = {"holds-position": "green", "circling": "yellow", "off-station": "yellow"}.get(row["outcome"], "red")
-        return f"[{colour}]{escape(row['outcome_label'])}[/{colour}]"
+        colour = {"holds": "green", "circles": "yellow", "drifts": "yellow"}.get(row["verdict"], "red")
+        return f"[{colour}]{escape(row['verdict'])}[/{colour}]"
 
     def num(row: dict[str, Any], column: str, digits: int) -> str:
         return escape(ke_paper.cell(row, column, digits))
@@ -168,8 +168,8 @@ def _print_ftc_table(runs: list[Any], preset_name: str, console: Console = conso
     title = f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights"
     if console.width >= 120:
         table = Table(title=title) if output is None else output.table(title=title)
-        for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
-            table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
+        for column in ("scenario", "law", "Ke", "verdict", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
+            table.add_column(column, justify="left" if column in ("scenario", "law", "verdict", "Ke") else "right")
         for row in rows:
             table.add_row(
                 row["scenario"], row["law"], "yes" if row["ke_stabilizable"] else "no", outcome(row),
@@ -184,16 +184,18 @@ def _print_ftc_table(runs: list[Any], preset_name: str, console: Console = conso
             box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1),
         )
         table.add_column("scenario", no_wrap=True)
-        table.add_column("outcome", no_wrap=True)
+        table.add_column("verdict", no_wrap=True)
         table.add_column("r", justify="right", no_wrap=True)
         table.add_column("alt. loss", justify="right")
-        table.add_column("horiz. max/final", justify="right")
+        table.add_column("horiz. max/final", justify="right", no_wrap=True)
         for row in rows:
             if row["law"] != law:
                 continue
             name = row["scenario"] + ("" if row["ke_stabilizable"] else "*")
             if row["lost_at_s"] is not None:
-                lost = f"[red]{escape(row['outcome_label'])} at {row['lost_at_s']:.2f} s[/red]"
+                # The short form (the impact speed is in the wide table and the report).
+                how = row["verdict"] if not row["cause"] or row["cause"] == row["verdict"] else f"{row['verdict']}: {row['cause']}"
+                lost = f"[red]{escape(how)}\nat {row['lost_at_s']:.2f} s[/red]"
                 table.add_row(name, lost, "lost", "lost", "lost")
                 continue
             r = "unsettled" if row["r_rad_s"] is None else num(row, "r_rad_s", 1)
@@ -205,7 +207,7 @@ def _print_ftc_table(runs: list[Any], preset_name: str, console: Console = conso
 @cli.command("reproduce")
 @click.option("--out", "out_dir", default="report", show_default=True, type=click.Path(file_okay=False), help="Directory for index.html and the figures (replaced as a whole).")
 @click.option("--quick", is_flag=True, help="Coarser grids and fewer flights (under 2 minutes).")
-@click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: benches/results of the source tree).")
+@click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: the results that ship with the package).")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
 @output_options
 @_user_errors
@@ -224,20 +226,20 @@ def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool, out
 
     sections, numbers_all, lines = [], [], []
     for section in result.sections:
-        numbers = [n for part in [section, *section.parts] for n in part.numbers]
-        passed = sum(n.status == "pass" for n in numbers)
-        state = "not landed yet" if not section.landed else f"{passed} of {len(numbers)} printed numbers pass"
+        parts = [section, *section.parts]
+        numbers = [n for part in parts for n in part.numbers]
+        board = reproduce_.score(numbers)
+        claims = [c for part in parts for c in part.claims]
         pending = [part.title for part in section.parts if not part.landed]
-        if pending:
-            state += f"; not landed yet: {', '.join(pending)}"
-        lines.append(f"{section.key}: {state}")
-        sections.append({"key": section.key, "title": section.title, "landed": section.landed, "numbers": len(numbers), "passed": passed,
-                         "not_landed": pending})
+        lines.append(f"{section.key}: {reproduce_.score_text(section)}")
+        sections.append({"key": section.key, "title": section.title, "landed": section.landed, "numbers": len(numbers),
+                         "reproduced": board["reproduced"], "passed": board["passed"],
+                         "claims": len(claims), "claims_confirmed": sum(c.status == "confirmed" for c in claims), "not_landed": pending})
         numbers_all += numbers
 
     def human(out: Output) -> None:
         for line in lines:
-            out.print(escape(line))
+            out.print(escape(line), highlight=False)
         out.print(f"report written to {escape(str(result.path))} in {result.run_time_s:.1f} s")
 
     output.emit(CommandOutput("reproduce", {"out": str(result.path), "quick": quick, "run_time_s": result.run_time_s},

@@ -176,7 +176,8 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
 @_user_errors
 def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Output) -> None:
     """Fly a scenario file (airframe, controller, faults, wind, noise, duration) and judge the
-    whole flight (holds position, circling, off station, or how it was lost)."""
+    whole flight (holds, drifts, circles, crashed or diverged; the thresholds are printed)."""
+    from ..flight.outcomes import VERDICT_MEANINGS
     from ..studies.scenario_file import load_scenario
 
     if plot_path is not None:
@@ -196,7 +197,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         "max_altitude_loss_m": float(max(0.0, altitude[0] - altitude.min())),
         "max_horizontal_excursion_m": float(np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
         "max_tilt_deg": float(tilt.max()),
-        "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
+        "verdict": metrics.verdict, "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
         "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time, "description": run.events[0].description},
         "plot": plot_path,
     }
@@ -211,10 +212,12 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         table.add_row("max altitude loss", f"{fields['max_altitude_loss_m']:.3f} m")
         table.add_row("max horizontal excursion", f"{fields['max_horizontal_excursion_m']:.3f} m")
         table.add_row("max tilt", f"{tilt.max():.1f} deg")
-        table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
-        colour = {"holds-position": "green", "circling": "yellow", "off-station": "yellow"}.get(metrics.outcome, "red")
-        table.add_row("verdict (last 5 s)", f"[{colour}]{escape(metrics.outcome_label)}[/{colour}]")
+        colour = {"holds": "green", "drifts": "yellow", "circles": "yellow"}.get(metrics.verdict, "red")
+        table.add_row("verdict", f"[{colour}]{escape(metrics.verdict_label)}[/{colour}]")
+        if run.diverged:
+            table.add_row("event", f"[red]{escape(str(run.events[0]))}[/red]")
         out.print(table)
+        out.print(f"{metrics.verdict}: {escape(VERDICT_MEANINGS[metrics.verdict])}", highlight=False)
         if plot_path is not None:
             out.print(f"plot written to {escape(plot_path)}")
 

@@ -36,8 +36,12 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
 
     ``x_trim`` (12 states) and ``u_trim`` (every command channel of the simulator) are the point
     it was taken about; ``command_columns``: the index in the simulator's command vector of each
-    input (all channels, or the healthy ones of a VPP model); ``state_descriptions``: what each
-    state is (``"yaw rate r"``), used in the design checks' messages."""
+    input (all channels, or the healthy ones of a VPP model; the first it moves when it moves
+    several); ``input_map`` (channels x inputs): how an input moves the command vector,
+    ``u = u_trim + input_map (v - v_trim)`` (one 1 per column, several for a shared input such as
+    Wang's ``omega_2=omega_4``; default: input ``j`` moves channel ``command_columns[j]``);
+    ``state_descriptions``: what each state is (``"yaw rate r"``), used in the design checks'
+    messages."""
 
     def __init__(
         self,
@@ -49,6 +53,7 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
         u_trim: npt.ArrayLike,
         command_columns: Sequence[int],
         name: str,
+        input_map: npt.ArrayLike | None = None,
         states: Sequence[str] = STATE_NAMES,
         state_descriptions: Sequence[str] = STATE_LABELS,
     ) -> None:
@@ -60,6 +65,13 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
         self.x_trim: FloatArray = frozen_array("x_trim", x_trim, 1)
         self.u_trim: FloatArray = frozen_array("u_trim", u_trim, 1)
         self.command_columns: tuple[int, ...] = tuple(int(c) for c in command_columns)
+        if input_map is None:
+            selection = np.zeros((self.u_trim.shape[0], m))
+            selection[list(self.command_columns), list(range(m))] = 1.0
+            input_map = selection
+        self.input_map: FloatArray = frozen_array("input_map", input_map, 2)
+        if self.input_map.shape != (self.u_trim.shape[0], m):
+            raise ValueError(f"input_map: expected {self.u_trim.shape[0]} x {m} (channels x inputs), got {self.input_map.shape}")
         self.state_descriptions: tuple[str, ...] = tuple(state_descriptions)
 
     # The names of ``rotorfault.vpp.VppLinearization``, which this replaces, for one release.

@@ -30,19 +30,20 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, get_args
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
+from .._typing import VppInputs
 from .._util.convert import FloatArray, float_array, frozen_array, real, rotor_numbers
 from .._util.deprecation import warn
 from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
 from .linear import STATE_NAMES as _STATE_NAMES
-from .lqr import TRIM_RESIDUAL_TOL, linear_model
+from .lqr import TRIM_RESIDUAL_TOL
 from .lqr import linearize as _linearize
 from .riccati import design_lqr
 from .stabilisability import Direction, describe_directions, left_null_space
@@ -492,16 +493,24 @@ class VppLinearization:
     columns: tuple[int, ...]
 
 
-def linearize(vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, step: float = 1e-6) -> LinearModel:
+def linearize(
+    vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, inputs: VppInputs = "every-channel", step: float = 1e-6,
+) -> LinearModel:
     """The Jacobians of the simulator's own dynamics at ``at``
     (:func:`rotorfault.control.lqr.linearize`: central differences, one-sided at a bound) restricted
-    to the healthy propellers' channels, as a python-control ``StateSpace``
-    (:class:`~rotorfault.control.systems.LinearModel`: states ``x ... r``, inputs ``omega_<i>``,
-    ``alpha_<i>`` of the healthy propellers, ``command_columns`` their place in the simulator's
-    command vector, the operating point ``x_trim``, ``u_trim``); ``pitch_fixed`` keeps the speeds
-    only (Wang Sec. 3.4: the fixed-pitch quadcopter)."""
+    to the design's inputs, as a python-control ``StateSpace``
+    (:class:`~rotorfault.control.systems.LinearModel`: states ``x ... r``, the operating point
+    ``x_trim``, ``u_trim``, and ``input_map``, how an input moves the simulator's command vector,
+    ``u = u_trim + input_map (v - v_trim)``). ``inputs="every-channel"``: every healthy speed and
+    pitch (inputs ``omega_<i>``, ``alpha_<i>``); ``inputs="wang"``: Wang's design (Sec. 3.1-3.2:
+    the trim's fixed group of speeds, Wang's ``omega_3``, held at the trim, "omega_3 remains
+    constant all the time"; the free group's speeds one shared input ``omega_2=omega_4`` of
+    eq. (11); every healthy pitch an input: Wang's ``z = [omega_2, alpha_2, alpha_3, alpha_4]``).
+    ``pitch_fixed`` keeps the speeds only (Wang Sec. 3.4: the fixed-pitch quadcopter)."""
     if not isinstance(at, VppTrim):
         raise TypeError(f"at: expected a VppTrim, got {type(at).__name__}")
+    if inputs not in get_args(VppInputs):
+        raise ValueError(f"inputs: must be one of {', '.join(get_args(VppInputs))}, got {inputs!r}")
     simulator = vehicle.simulator(failed=at.failed)
     full = _linearize(simulator, at, step=step)
     # Central differences leave round-off (about eps |f| / step, 1e-18 here) where the model has
@@ -509,14 +518,28 @@ def linearize(vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, st
     # as authority. Entries below ROUNDOFF_RTOL of their column's largest are that noise.
     a = _snap(full.A)
     b = _snap(full.B)
-    columns = []
+    channels = 2 * vehicle.airframe.rotor_count
+    moves: list[tuple[str, tuple[int, ...]]] = []
+    shared = inputs == "wang" and len(at.free_rotors) > 0
+    if shared:
+        free = tuple(i for i in at.free_rotors if i not in at.failed)
+        moves.append(("=".join(f"omega_{i}" for i in free), tuple(2 * (i - 1) for i in free)))
     for i in range(1, vehicle.airframe.rotor_count + 1):
         if i in at.failed:
             continue
-        columns.append(2 * (i - 1))
+        if not shared:
+            moves.append((f"omega_{i}", (2 * (i - 1),)))
         if not pitch_fixed:
-            columns.append(2 * (i - 1) + 1)
-    return linear_model(simulator, a, b[:, columns], at.state, at.command, columns)
+            moves.append((f"alpha_{i}", (2 * (i - 1) + 1,)))
+    input_map = np.zeros((channels, len(moves)))
+    for j, (_, moved) in enumerate(moves):
+        input_map[list(moved), j] = 1.0
+    from .systems import LinearModel  # python-control: imported when a model is built
+
+    return LinearModel(
+        a, b @ input_map, inputs=[name for name, _ in moves], x_trim=at.state, u_trim=at.command,
+        command_columns=[moved[0] for _, moved in moves], input_map=input_map, name=f"{vehicle.airframe.name} linearisation",
+    )
 
 
 def _model_matrices(model: LinearModel | VppLinearization) -> tuple[FloatArray, FloatArray, tuple[str, ...]]:
@@ -604,12 +627,16 @@ def lqr(
     q: npt.ArrayLike | None = None,
     r: npt.ArrayLike | None = None,
     pitch_fixed: bool = False,
+    inputs: VppInputs = "every-channel",
     dt_s: float = DEFAULT_DT_S,
 ) -> LinearFeedback:
-    """An LQR on the healthy channels about ``at``, as a full-width
-    :class:`~rotorfault.control.LinearFeedback` (failed channels held at 0). Defaults (Bryson):
-    1 m, 1 m/s, 0.1 rad, 1 rad/s state errors against 1000 speed units and 0.05 rad per channel.
-    ``pitch_fixed``: speeds only (the fixed-pitch quadcopter; pitches held at the trim's).
+    """An LQR on the design's inputs about ``at`` (:func:`linearize`: ``inputs="wang"`` is Wang's
+    design, the fixed group's speeds held at the trim and the free group's sharing one input;
+    ``"every-channel"`` every healthy speed and pitch), as a full-width
+    :class:`~rotorfault.control.LinearFeedback` (failed channels held at 0, held channels at the
+    trim). Defaults (Bryson): 1 m, 1 m/s, 0.1 rad, 1 rad/s state errors against 1000 speed units
+    and 0.05 rad per input. ``pitch_fixed``: speeds only (the fixed-pitch quadcopter; pitches held
+    at the trim's).
     ``dt_s``: the control period of the simulator that flies it (the sampled loop is checked
     there). Raises ``ValueError`` naming the check that fails (:func:`lqr_design`): e.g. the
     fixed-pitch model, which no input can stabilise (the modes named). The returned feedback's
@@ -617,7 +644,7 @@ def lqr(
     per healthy channel)."""
     if not isinstance(pitch_fixed, bool):
         raise TypeError(f"pitch_fixed: expected a bool, got {type(pitch_fixed).__name__}")
-    model = linearize(vehicle, at, pitch_fixed=pitch_fixed)
+    model = linearize(vehicle, at, pitch_fixed=pitch_fixed, inputs=inputs)
     q_state = np.diag(1.0 / STATE_SCALE**2) if q is None else q
     r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.input_labels]) if r is None else r
     kind = "fixed-pitch" if pitch_fixed else "VPP"
@@ -626,8 +653,7 @@ def lqr(
         model, q_state, r_in, dt_s=dt_s, state_names=STATE_NAMES, state_labels=STATE_LABELS,
         model=f"the {kind} hover model of {vehicle.name} ({failed}; inputs {', '.join(model.input_labels)})",
     )
-    full = np.zeros((2 * vehicle.airframe.rotor_count, STATE_DIM))
-    full[list(model.command_columns)] = design.gain
+    full = model.input_map @ design.gain
     return LinearFeedback(full, at.state, at.command, design=design)
 
 

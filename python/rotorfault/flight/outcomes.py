@@ -1,13 +1,27 @@
-"""The verdict on a whole flight: did the vehicle hold its setpoint, circle, stay off station, or
-was it lost? A verdict is a property of a flight, judged over the last ``window_s`` seconds of the
-run (not its last sample), with thresholds stated here and shared with the core's per-run
-summaries (``VerdictCriteria``: one source, read from the core's ``Default``). Every paper, study
-and report labels its runs with these functions.
+"""The verdict on a whole flight: one word, judged over the last ``window_s`` seconds of the run
+(not its last sample), with thresholds stated here and shared with the core's per-run summaries
+(``VerdictCriteria``: one source, read from the core's ``Default``; the core decides the same
+verdict for every campaign run, ``crates/rfcore/src/flight/summary.rs``, tested equal). Every paper,
+study and report labels its runs with these functions.
 
-Outcome codes (:data:`OUTCOME_LABELS` gives the words every table prints): ``holds-position``,
-``circling``, ``off-station`` (the vehicle flies to the end: :data:`FLYING`), or the divergence
-kind that ended the run (``tilt``, ``altitude-loss``, ...: lost). Studies with their own question
-add their own codes to the one table (``level`` / ``not-level`` of an attitude-only flight).
+The verdicts (:data:`VERDICTS`, :data:`VERDICT_MEANINGS` states them with their thresholds):
+
+- ``holds``: throughout the window within :data:`HOLD_BAND_M` (2 m horizontally, 1 m in
+  altitude) of the setpoint (or the reference it tracks) and moving at most
+  :data:`HOLD_SPEED_M_S` (0.5 m/s) relative to it;
+- ``circles``: not holding, the mean horizontal speed over the window above 0.5 m/s and the
+  direction of travel turning by at least :data:`CIRCLING_TURN_RAD` (90 degrees): a circle or an
+  oscillation;
+- ``drifts``: airborne to the end but neither: away from the setpoint, sinking, or moving off it
+  (a vehicle that falls 9.4 of its 10 m without touching the ground drifts: it is not held);
+- ``crashed``: it hit the ground (time and impact speed in the run's event);
+- ``diverged``: lost another way (``cause``: ``tilt``, ``altitude-loss``, ``speed``,
+  ``body-rate``, ``non-finite-state``, ``non-finite-command``, ``step-size``).
+
+Only ``holds`` is a success. ``FlightMetrics.outcome`` keeps the codes before issue 28
+(``holds-position``, ``circling``, ``off-station`` or the divergence kind) for one release; the
+verdict is ``verdict`` (and ``cause`` for a lost run). Studies with their own question add their
+own codes to the one table (``level`` / ``not-level`` of an attitude-only flight).
 
 This module reads a :class:`~rotorfault.flight.trajectory.Trajectory` without importing it: it is
 the one module of a room that ``rotorfault.plotting`` may import (for the words of a verdict).
@@ -16,13 +30,14 @@ the one module of a room that ``rotorfault.plotting`` may import (for the words 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 
 from .. import _rfcore
-from .._typing import FlightOutcome
+from .._typing import DivergenceKind, FlightOutcome, FlightVerdict
 from .._util.convert import FloatArray, real
 
 _CRITERIA = _rfcore.VerdictCriteria()
@@ -39,6 +54,63 @@ CIRCLING_TURN_RAD = _CRITERIA.circling_turn_rad
 WINDOW_S = _CRITERIA.window_s
 #: Outcomes of a vehicle that flew to the end (every other outcome is a loss).
 FLYING: tuple[FlightOutcome, ...] = ("holds-position", "circling", "off-station")
+#: The verdicts, in the order every table counts them (only ``holds`` is a success).
+VERDICTS: tuple[FlightVerdict, ...] = get_args(FlightVerdict)
+#: Each verdict with its thresholds, in words (the docs, the report page and the CLI state them).
+VERDICT_MEANINGS: dict[FlightVerdict, str] = {
+    "holds": (
+        f"throughout the last {WINDOW_S:g} s within {HOLD_BAND_M[0]:g} m horizontally and {HOLD_BAND_M[1]:g} m in altitude "
+        f"of the setpoint (or the reference it tracks), moving at most {HOLD_SPEED_M_S:g} m/s relative to it"
+    ),
+    "circles": (
+        f"not holding; over the last {WINDOW_S:g} s the mean horizontal speed is above {HOLD_SPEED_M_S:g} m/s and the "
+        f"direction of travel turns by at least {math.degrees(CIRCLING_TURN_RAD):g} degrees (a circle or an oscillation)"
+    ),
+    "drifts": (
+        "airborne to the end but neither holding nor circling: away from the setpoint, sinking or moving off it "
+        "(a vehicle that falls most of its height without touching the ground drifts)"
+    ),
+    "crashed": "the vehicle hit the ground (the run ends there; its event has the time and the impact speed)",
+    "diverged": (
+        "lost another way: tilt, altitude loss, speed or body rate beyond the divergence limits, a non-finite state "
+        "or command, or a body rate too fast for the step size"
+    ),
+}
+
+
+def count_verdicts(verdicts: Iterable[str]) -> dict[FlightVerdict, int]:
+    """How many flights got each verdict, every verdict listed in :data:`VERDICTS` order (0s
+    included: a table that counts only what occurred hides what did not)."""
+    given = list(verdicts)
+    unknown = sorted(set(given) - set(VERDICTS))
+    if unknown:
+        raise ValueError(f"verdicts: {', '.join(map(repr, unknown))} not among {', '.join(VERDICTS)}")
+    return {v: given.count(v) for v in VERDICTS}
+
+
+def verdict_count_text(verdicts: Iterable[str]) -> str:
+    """:func:`count_verdicts` in words: ``"holds 1, drifts 4, circles 0, crashed 1, diverged 2"``."""
+    return ", ".join(f"{v} {n}" for v, n in count_verdicts(verdicts).items())
+
+
+#: The outcome code of each flying verdict (the codes before issue 28, kept for one release).
+_OUTCOME_OF_VERDICT: dict[str, FlightOutcome] = {"holds": "holds-position", "circles": "circling", "drifts": "off-station"}
+
+
+def verdict_of(outcome: str) -> FlightVerdict:
+    """The verdict of an outcome code (``holds-position`` -> ``holds``, ``circling`` ->
+    ``circles``, ``off-station`` -> ``drifts``, ``crashed``, any other divergence kind ->
+    ``diverged``); a verdict is returned as it is."""
+    if outcome in VERDICTS:
+        return outcome
+    for verdict, code in _OUTCOME_OF_VERDICT.items():
+        if outcome == code:
+            return verdict  # type: ignore[return-value]
+    if outcome == "crashed":
+        return "crashed"
+    if outcome in get_args(DivergenceKind):
+        return "diverged"
+    raise ValueError(f"outcome: {outcome!r} is not a flight outcome code")
 
 
 @dataclass(frozen=True)
@@ -89,11 +161,41 @@ class FlightMetrics:
     window_speed_m_s: float | None = None
     window_mean_horizontal_speed_m_s: float | None = None
     lost_at_s: float | None = None
+    #: A crash's impact speed (m/s; the run's ``crashed`` event), else None.
+    impact_speed_m_s: float | None = None
+
+    @property
+    def verdict(self) -> FlightVerdict:
+        """The one verdict on the flight (module docs): ``holds``, ``drifts``, ``circles``,
+        ``crashed`` or ``diverged``."""
+        return verdict_of(self.outcome)
+
+    @property
+    def cause(self) -> str | None:
+        """How a lost run was lost (the divergence kind: ``crashed``, ``tilt``, ...); None for a
+        run that flew to the end."""
+        return self.outcome if self.lost_at_s is not None else None
+
+    @property
+    def verdict_label(self) -> str:
+        """The verdict with what decided it, for tables: ``"holds"``, ``"drifts (14.4 m off, 0.3 m
+        in altitude, 0.05 m/s)"``, ``"crashed at 12.34 s (5.6 m/s)"``, ``"diverged (tilt) at
+        1.52 s"``."""
+        return verdict_text(self.verdict, cause=self.cause, lost_at_s=self.lost_at_s, impact_speed_m_s=self.impact_speed_m_s,
+                            window=None if self.verdict in ("holds", "crashed", "diverged") else self.window_errors)
+
+    @property
+    def window_errors(self) -> tuple[float, float, float] | None:
+        """(largest horizontal error, largest altitude error, largest speed) over the window, the
+        numbers the verdict was judged on (None for a lost run)."""
+        if self.window_horizontal_error_m is None or self.window_altitude_error_m is None or self.window_speed_m_s is None:
+            return None
+        return (self.window_horizontal_error_m, self.window_altitude_error_m, self.window_speed_m_s)
 
     @property
     def outcome_label(self) -> str:
-        """The outcome in words, for tables (``"holds position"``, ``"circling"``, ``"off
-        station"``, ``"tilt"``, ...)."""
+        """The outcome code in words (``"holds position"``, ``"circling"``, ``"off station"``,
+        ``"tilt"``, ...): the wording before issue 28; tables print :attr:`verdict_label`."""
         return OUTCOME_LABELS.get(self.outcome, self.outcome)
 
     @property
@@ -121,6 +223,27 @@ OUTCOME_LABELS: dict[str, str] = {
 
 
 
+def verdict_text(
+    verdict: FlightVerdict,
+    *,
+    cause: str | None = None,
+    lost_at_s: float | None = None,
+    impact_speed_m_s: float | None = None,
+    window: tuple[float, float, float] | None = None,
+) -> str:
+    """A verdict in words with what decided it: ``"crashed at 12.34 s (5.6 m/s)"``, ``"diverged
+    (tilt) at 1.52 s"``, ``"drifts (window: 14.4 m off, 0.3 m in altitude, up to 0.05 m/s)"``."""
+    if verdict == "crashed":
+        speed = "" if impact_speed_m_s is None else f" ({impact_speed_m_s:.1f} m/s)"
+        return f"crashed at {lost_at_s:.2f} s{speed}" if lost_at_s is not None else "crashed"
+    if verdict == "diverged":
+        what = f" ({OUTCOME_LABELS.get(cause, cause)})" if cause else ""
+        return f"diverged{what} at {lost_at_s:.2f} s" if lost_at_s is not None else f"diverged{what}"
+    if window is not None:
+        return f"{verdict} (window: {window[0]:.2f} m off, {window[1]:.2f} m in altitude, up to {window[2]:.2f} m/s)"
+    return verdict
+
+
 def outcome_text(code: str, lost_at_s: float | None = None) -> str:
     """An outcome code in words (:data:`OUTCOME_LABELS`); a lost run says when (``"lost (tilt)
     at 1.52 s"``)."""
@@ -146,20 +269,38 @@ def effective_fault_times(trajectory: Any) -> list[float]:
     return times
 
 
-def flight_metrics(trajectory: Any, scenario_: Any, *, window_s: float = WINDOW_S) -> FlightMetrics:
+def flight_metrics(
+    trajectory: Any,
+    scenario_: Any = None,
+    *,
+    window_s: float = WINDOW_S,
+    reference: tuple[Any, Any] | None = None,
+) -> FlightMetrics:
     """Scores ``trajectory`` against ``scenario_``'s setpoints (anything with ``setpoints``, a
-    sequence of ``(time_s, (north, east, down))``: a :class:`~rotorfault.flight.scenarios.FlightScenario`). Fault times come from the
-    trajectory's own faults (what it was flown with), not from the scenario."""
+    sequence of ``(time_s, (north, east, down))``: a :class:`~rotorfault.flight.scenarios.FlightScenario`),
+    or against a moving ``reference``: ``(positions, velocities)``, each N x 3 (NED) at the
+    trajectory's times, the speed then judged relative to the reference's velocity (a setpoint
+    is a reference at rest: the same verdict). Fault times come from the trajectory's own faults
+    (what it was flown with), not from the scenario."""
     window_s = real("window_s", window_s)
     if not window_s > 0:
         raise ValueError(f"window_s: must be > 0, got {window_s}")
     t = trajectory.t
     if len(t) < 2:
         raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    if (scenario_ is None) == (reference is None):
+        raise ValueError("reference: give a scenario with setpoints or a reference (positions, velocities), not both or neither")
     if trajectory.diverged:
         event = trajectory.events[0]
-        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time))
-    setpoint = _setpoint_track(scenario_, t)
+        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time),
+                             impact_speed_m_s=getattr(event, "impact_speed_m_s", None))
+    if reference is None:
+        setpoint = _setpoint_track(scenario_, t)
+        reference_velocity = np.zeros_like(setpoint)
+    else:
+        setpoint, reference_velocity = (np.asarray(r, dtype=np.float64) for r in reference)
+        if setpoint.shape != (len(t), 3) or reference_velocity.shape != (len(t), 3):
+            raise ValueError(f"reference: expected two arrays of shape ({len(t)}, 3), got {setpoint.shape} and {reference_velocity.shape}")
     error = trajectory.position - setpoint
     horizontal = np.hypot(error[:, 0], error[:, 1])
     vertical = np.abs(error[:, 2])
@@ -171,8 +312,9 @@ def flight_metrics(trajectory: Any, scenario_: Any, *, window_s: float = WINDOW_
         float(vertical[-1]),
     )
     last = t >= t[-1] - window_s
-    speed = np.linalg.norm(trajectory.velocity, axis=1)
-    h_speed = np.hypot(trajectory.velocity[:, 0], trajectory.velocity[:, 1])
+    relative = trajectory.velocity - reference_velocity
+    speed = np.linalg.norm(relative, axis=1)
+    h_speed = np.hypot(relative[:, 0], relative[:, 1])
     window = (
         float(np.max(horizontal[last])),
         float(np.max(vertical[last])),
@@ -182,7 +324,7 @@ def flight_metrics(trajectory: Any, scenario_: Any, *, window_s: float = WINDOW_
     held = window[0] <= HOLD_BAND_M[0] and window[1] <= HOLD_BAND_M[1] and window[2] <= HOLD_SPEED_M_S
     if held:
         outcome: FlightOutcome = "holds-position"
-    elif window[3] > HOLD_SPEED_M_S and _turn_rad(trajectory.velocity[last], HOLD_SPEED_M_S / 4) >= CIRCLING_TURN_RAD:
+    elif window[3] > HOLD_SPEED_M_S and _turn_rad(relative[last], HOLD_SPEED_M_S / 4) >= CIRCLING_TURN_RAD:
         outcome = "circling"
     else:
         outcome = "off-station"
@@ -235,6 +377,10 @@ __all__ = [
     "CIRCLING_TURN_RAD",
     "FLYING",
     "HOLD_BAND_M",
+    "VERDICTS",
+    "VERDICT_MEANINGS",
+    "count_verdicts",
+    "verdict_count_text",
     "HOLD_SPEED_M_S",
     "OUTCOME_LABELS",
     "WINDOW_S",
@@ -242,4 +388,6 @@ __all__ = [
     "effective_fault_times",
     "flight_metrics",
     "outcome_text",
+    "verdict_of",
+    "verdict_text",
 ]

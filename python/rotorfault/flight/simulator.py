@@ -98,7 +98,9 @@ class Simulator:
 
     ``dt_s`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
     ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
-    ``(time_s, (n, e, d))`` points added to it, interpolated linearly. The ground is the plane
+    ``(time_s, (n, e, d))`` points added to it, interpolated linearly (times not decreasing; a
+    time given twice is a step: ``[(1.0, (0, 0, 0)), (1.0, (4, 4, 0))]`` is 4 m/s from 1 s on,
+    exactly). The ground is the plane
     ``z = ground_z_m`` (world NED, m; default the core's, 0); ``ground=False``: no ground.
     ``ground_z_m`` holds the ground in effect (``None`` without one).
     """

@@ -177,13 +177,26 @@ class Trajectory(Tabular):
         setpoints: Sequence[tuple[float, npt.ArrayLike]] | None = None,
     ) -> Figure:
         """Position (with the setpoint, if given as ``(time, NED position)`` steps), roll and
-        pitch, yaw unwrapped, body rates and rotor thrusts against time, with fault and loss
-        markers (:func:`rotorfault.plotting.timeseries.plot_trajectory`). Returns the figure (not
+        pitch, yaw (wrapped, or its rate for a spinning vehicle), body rates and rotor thrusts
+        against time, with fault and loss markers and, when the setpoints are given, the flight's
+        verdict (:mod:`rotorfault.flight.outcomes`) in the title
+        (:func:`rotorfault.plotting.timeseries.plot_trajectory`). Returns the figure (not
         registered with pyplot), saved to ``path`` (``.png``, ``.pdf`` or ``.svg``, written
         atomically) if given."""
         from ..plotting.timeseries import plot_trajectory
+        from .outcomes import flight_metrics
 
-        return plot_trajectory(self, path, title=title, setpoints=setpoints)
+        verdict = None
+        if setpoints and len(self.t) >= 2:
+            verdict = flight_metrics(self, _Setpoints(tuple(setpoints))).verdict_label
+        return plot_trajectory(self, path, title=title, setpoints=setpoints, verdict=verdict)
+
+
+@dataclass(frozen=True)
+class _Setpoints:
+    """What :func:`~rotorfault.flight.outcomes.flight_metrics` reads of a scenario."""
+
+    setpoints: tuple[tuple[float, npt.ArrayLike], ...]
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from ._numbers import PaperNumber
+from ._numbers import PaperClaim, PaperNumber
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,8 @@ class ReportSection:
     title: str
     landed: bool = True
     numbers: list[PaperNumber] = field(default_factory=list)
+    #: The paper's claims about its flights, each beside our measurement and verdict.
+    claims: list[PaperClaim] = field(default_factory=list)
     tables: list[ReportTable] = field(default_factory=list)
     figures: list[ReportFigure] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)

@@ -97,6 +97,9 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
         "python/rotorfault/presets/wang-standard-fixed-pitch.toml",
     ),
     "Euler singularity": (_LQR,),
+    "Wang's design, frames and u4": ("python/rotorfault/papers/wang.py", "python/rotorfault/control/vpp.py", _ACTUATOR, _SIM_CONFIG),
+    "flight verdicts (no paper defines them)": ("python/rotorfault/flight/outcomes.py", "crates/rfcore/src/flight/summary.rs"),
+    "the report outside a source tree": ("python/rotorfault/papers/reproduce.py", "python/rotorfault/papers/bench_results"),
     "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/studies/scan.py"),
 }
 

@@ -5,8 +5,9 @@ Each paper is a section provider, ``report_section(out, *, quick)`` in its modul
 the same functions the paper's CLI command and its tests call, so the report and the tests cannot
 disagree. A paper whose module is not in the package yet gets a section that says so. The
 decisions on the papers' gaps come from the README's table (:mod:`~rotorfault.papers.decisions`),
-the performance figures from the benches' JSON (``benches/results/*.json``, written by ``python
-benches/<bench>.py --json PATH``). The HTML is rendered by Jinja2 with autoescaping: every name
+the performance figures from the benches' JSON (``rotorfault/papers/bench_results/*.json``,
+package data written by ``python benches/<bench>.py --json PATH``: an installed package shows
+them too). The HTML is rendered by Jinja2 with autoescaping: every name
 and text from the data is escaped.
 """
 
@@ -22,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._numbers import PaperNumber
+from ._numbers import KIND_DESCRIPTIONS, PaperClaim, PaperNumber, score
 from ._report import ReportSection, SectionProvider, not_landed
 from .decisions import Decision, decisions, source_root
 
@@ -83,9 +84,18 @@ class BenchResult:
     figures: list[dict[str, Any]]
 
 
+#: The committed bench results: package data, so an installed package (``pip install .``, the
+#: wheel) shows the same Performance section as the source tree (benches/README.md refreshes them).
+BENCH_RESULTS = "bench_results"
+
+
 def default_bench_directory() -> Path | None:
-    root = source_root()
-    return None if root is None else root / "benches" / "results"
+    """The bench results that ship with the package (:data:`BENCH_RESULTS`), None if absent."""
+    from importlib import resources
+
+    found = resources.files("rotorfault.papers").joinpath(BENCH_RESULTS)
+    path = Path(str(found))
+    return path if path.is_dir() else None
 
 
 def bench_results(directory: str | os.PathLike[str] | None) -> list[BenchResult]:
@@ -164,6 +174,35 @@ def _number(value: float | None, unit: str = "") -> str:
 # -- rendering -----------------------------------------------------------------------------------
 
 
+def score_text(section: ReportSection) -> str:
+    """One line on a section's scoreboard (what ``rotorfault reproduce`` prints per paper): the
+    reproduced numbers that pass, the rows shown beside them unscored, the flight claims
+    confirmed, the parts not landed."""
+    if not section.landed:
+        return "not landed yet"
+    parts = [section, *section.parts]
+    board = score([n for part in parts for n in part.numbers])
+    claims = [c for part in parts for c in part.claims]
+    beside = board["input"] + board["consistency"] + board["unclassified"]
+    text = f"{board['passed']} of {board['reproduced']} reproduced numbers pass" if board["reproduced"] else "no reproduced number scored"
+    if beside:
+        text += f" ({beside} input, consistency or unclassified rows beside them, not scored)"
+    if claims:
+        text += f"; {sum(c.status == 'confirmed' for c in claims)} of {len(claims)} flight claims confirmed"
+    pending = [part.title for part in section.parts if not part.landed]
+    if pending:
+        text += f"; not landed yet: {', '.join(pending)}"
+    return text
+
+
+def verdict_legend() -> list[dict[str, str]]:
+    """The flight verdicts and their thresholds, as the page states them
+    (:data:`rotorfault.flight.outcomes.VERDICT_MEANINGS`)."""
+    from ..flight.outcomes import VERDICT_MEANINGS
+
+    return [{"verdict": k, "meaning": v} for k, v in VERDICT_MEANINGS.items()]
+
+
 def _fmt(value: float) -> str:
     if value != value:  # nan
         return "nan"
@@ -175,9 +214,18 @@ def _fmt(value: float) -> str:
 
 
 def number_row(n: PaperNumber) -> dict[str, str]:
+    """A row of a paper's numbers table as text. ``status`` is the pass/differs marker of a
+    scored (``reproduced``) row; the other kinds show the comparison without a score."""
     return {"where": n.where, "quantity": n.quantity, "printed": _fmt(n.printed), "ours": _fmt(n.ours),
             "difference": f"{n.difference:+.2e}" if n.difference == n.difference else "nan",
-            "tolerance": f"{n.tolerance:.1e}", "status": n.status, "note": n.note}
+            "tolerance": f"{n.tolerance:.1e}", "status": n.status, "note": n.note, "kind": n.kind_label,
+            "scored": "scored" if n.scored else "not scored"}
+
+
+def claim_row(c: PaperClaim) -> dict[str, str]:
+    """A row of a paper's flight-claims table as text."""
+    return {"where": c.where, "claim": c.claim, "measurement": c.measurement, "verdict": c.verdict,
+            "status": c.status, "reason": c.reason}
 
 
 _CODE = re.compile(r"`([^`]+)`")
@@ -194,14 +242,56 @@ def inline_markdown(text: str) -> Any:
     return Markup(html)
 
 
-def _code_links(decision: Decision, out: Path) -> list[dict[str, str]]:
-    root = source_root()
+#: Where a decision's code link points (README "Decisions on the paper's gaps", the report's note):
+#: the file in the source tree the report was built from; else the installed file (the package's
+#: own Python and presets); else, for files the wheel does not install (the Rust core), the file
+#: in the repository at the installed version's tag ``v<version>`` when the package's metadata
+#: names its repository (``Project-URL: Source``), or the path in that version's source as text.
+LINK_RULE = (
+    "Links: into the source tree this report was built from; from an installed package, to the installed file; "
+    "files the package does not install (the Rust core) at tag v{version} of the repository when the package "
+    "names one, else as their path in rotorfault {version}'s source (sdist, or the repository at that tag)."
+)
+
+
+def _repository_url() -> str | None:
+    """The repository the package's metadata names (``Project-URL: Source, <url>``), if any."""
+    from importlib.metadata import PackageNotFoundError, metadata
+
+    try:
+        urls = metadata("rotorfault").get_all("Project-URL") or []
+    except PackageNotFoundError:  # pragma: no cover - neither installed nor a source tree
+        return None
+    for entry in urls:
+        name, _, url = entry.partition(",")
+        if name.strip().lower() in ("source", "repository") and url.strip():
+            return str(url).strip().rstrip("/")
+    return None
+
+
+def _code_links(decision: Decision, out: Path, *, root: Path | None = None, version: str | None = None) -> list[dict[str, str]]:
+    """Each code path of ``decision`` with its link (:data:`LINK_RULE`): ``href`` (relative to
+    the report in a source tree, a ``file:`` URI of the installed file, a repository URL at the
+    version's tag, or empty) and ``where`` (how to read the link)."""
+    from ._report import package_version
+
+    root = source_root() if root is None else root
+    version = package_version() if version is None else version
+    package = Path(__file__).resolve().parents[1]
     links = []
     for path in decision.code:
-        href = ""
         if root is not None and (root / path).exists():
-            href = Path(os.path.relpath(root / path, out.resolve())).as_posix()
-        links.append({"path": path, "href": href})
+            links.append({"path": path, "href": Path(os.path.relpath(root / path, out.resolve())).as_posix(), "where": "source tree"})
+            continue
+        installed = package / path.removeprefix("python/rotorfault/") if path.startswith("python/rotorfault/") else None
+        if installed is not None and installed.exists():
+            links.append({"path": path, "href": installed.as_uri(), "where": f"installed rotorfault {version}"})
+            continue
+        repository = _repository_url()
+        if repository is not None:
+            links.append({"path": path, "href": f"{repository}/blob/v{version}/{path}", "where": f"repository at v{version}"})
+        else:
+            links.append({"path": path, "href": "", "where": f"rotorfault {version} source (not installed)"})
     return links
 
 
@@ -231,25 +321,28 @@ def render(
     summary = []
     for s in sections:
         numbers = [n for part in flat(s) for n in part.numbers]
+        claims = [c for part in flat(s) for c in part.claims]
         summary.append({"key": s.key, "title": s.title, "landed": s.landed and all(p.landed for p in flat(s)),
-                        "partly": s.landed and not all(p.landed for p in flat(s)), "numbers": len(numbers),
-                        "passed": sum(n.status == "pass" for n in numbers),
-                        "differs": sum(n.status == "differs" for n in numbers)})
+                        "partly": s.landed and not all(p.landed for p in flat(s)), **score(numbers),
+                        "claims": len(claims), "confirmed": sum(c.status == "confirmed" for c in claims)})
     root = source_root()
     have = {b.bench for b in benches}
     missing_benches = [] if root is None else sorted(
         p.stem for p in (root / "benches").glob("*.py") if not p.name.startswith("_") and p.stem not in have)
     template = env.get_template("reproduce.html.j2")
     return template.render(
-        sections=sections, summary=summary, number_row=number_row,
+        sections=sections, summary=summary, number_row=number_row, claim_row=claim_row, kinds=KIND_DESCRIPTIONS,
+        verdicts=verdict_legend(),
         decisions=[{"gap": d.gap, "decision": d.decision, "links": _code_links(d, out)} for d in decision_rows],
+        link_rule=LINK_RULE.format(version=version),
         benches=benches, missing_benches=missing_benches, quick=quick, run_time_s=run_time_s, command=command, version=version,
         bench_directory=bench_directory, generated=time.strftime("%Y-%m-%d %H:%M:%S %Z"),
     )
 
 
 def _shown_path(path: Path | None) -> str:
-    """A path as the page shows it: relative to the source tree when inside it."""
+    """A path as the page shows it: relative to the source tree when inside it, the package's
+    own results by their place in the package."""
     if path is None:
         return "none"
     root = source_root()
@@ -258,15 +351,19 @@ def _shown_path(path: Path | None) -> str:
             return path.resolve().relative_to(root).as_posix()
         except ValueError:
             pass
+    default = default_bench_directory()
+    if default is not None and path.resolve() == default.resolve():
+        return f"rotorfault/papers/{BENCH_RESULTS} (installed with the package: {path})"
     return str(path)
 
 
 #: Schema of ``numbers.json``, the report's numbers and tables in a form a program compares.
-NUMBERS_SCHEMA = "rotorfault-report-numbers/1"
+NUMBERS_SCHEMA = "rotorfault-report-numbers/2"
 
 
 def report_numbers(sections: list[ReportSection]) -> dict[str, Any]:
-    """Every number and table cell of the report, by section (run times left out): what
+    """Every number (with its kind), flight claim and table cell of the report, by section (run
+    times left out): what
     ``numbers.json`` holds, so that two installs' reports can be compared field by field (CI
     compares the README's main job, run without the test extras, with the test environment's)."""
 
@@ -280,7 +377,9 @@ def report_numbers(sections: list[ReportSection]) -> dict[str, Any]:
                 "title": part.title,
                 "landed": part.landed,
                 "numbers": [{"where": n.where, "quantity": n.quantity, "printed": n.printed, "ours": n.ours,
-                             "tolerance": n.tolerance, "status": n.status} for n in part.numbers],
+                             "tolerance": n.tolerance, "status": n.status, "kind": n.kind} for n in part.numbers],
+                "claims": [{"where": c.where, "claim": c.claim, "measurement": c.measurement, "verdict": c.verdict,
+                            "status": c.status, "reason": c.reason} for c in part.claims],
                 "tables": [{"caption": t.caption, "columns": list(t.columns), "rows": [list(r) for r in t.rows]}
                            for t in part.tables],
             }
@@ -307,7 +406,7 @@ def write_reproduce(
     """Writes the report directory ``out_dir`` (``index.html``, the figures, ``manifest.json``),
     built beside it and swapped in when complete; an existing report is replaced only with
     ``force``, a directory that is not a report never. ``bench_directory`` defaults to the source
-    tree's ``benches/results``; ``providers`` overrides the section providers by paper key (None:
+    results shipped with the package (:func:`default_bench_directory`); ``providers`` overrides the section providers by paper key (None:
     not landed), for tests. ``progress(text)`` is called before each section."""
     from ._report import check_report_directory, package_version, report_directory
 
@@ -342,5 +441,6 @@ def write_reproduce(
     return result
 
 
-__all__ = ["BENCH_SCHEMA", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
-           "inline_markdown", "number_row", "provider", "render", "report_numbers", "write_reproduce"]
+__all__ = ["BENCH_RESULTS", "BENCH_SCHEMA", "LINK_RULE", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "claim_row",
+           "default_bench_directory", "inline_markdown", "number_row", "provider", "render", "report_numbers", "score", "score_text",
+           "verdict_legend", "write_reproduce"]

@@ -16,18 +16,19 @@ if TYPE_CHECKING:
 
 def plot_excursions(
     columns: Mapping[str, np.ndarray[Any, Any]],
-    survived: np.ndarray[Any, np.dtype[np.bool_]],
+    not_lost: np.ndarray[Any, np.dtype[np.bool_]],
     *,
     title: str,
     path: str | None = None,
 ) -> Figure:
     """Histograms of the runs not lost (largest altitude loss, horizontal error, tilt) and the
     envelope (largest horizontal error against largest altitude loss, lost runs marked), from a
-    campaign's summary ``columns`` and its ``survived`` mask. Saved to ``path`` if given."""
+    campaign's summary ``columns`` and its ``not_lost`` mask (flown to the end, whatever the
+    verdict: not the survivors, which are the runs that hold). Saved to ``path`` if given."""
     fig = new_figure(figsize=(11, 7.5), layout="constrained")
     axes = fig.subplots(2, 2)
     c = columns
-    ok = survived
+    ok = not_lost
     panels = [
         (axes[0, 0], "max_altitude_loss_m", "max altitude loss (m)"),
         (axes[0, 1], "max_horizontal_error_m", "max horizontal error (m)"),

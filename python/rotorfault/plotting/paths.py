@@ -55,11 +55,11 @@ def plot_primary_axis(runs: Sequence[Any], path: str | None = None, *, tail_s: f
         ax.set_zticks([-1, 0, 1] if below else [0, 0.5, 1])
         m = run.metrics
         if m.lost_at_s is not None:
-            state = f"lost at {m.lost_at_s:.2f} s ({m.outcome_label})"
+            state = m.verdict_label
         elif m.r_rad_s is not None and m.n3z is not None:
-            state = f"{m.outcome_label}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
+            state = f"{m.verdict}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
         else:
-            state = f"{m.outcome_label}, not settled"
+            state = f"{m.verdict}, not settled"
         ax.set_title(f"{run.scenario.name} ({run.law})\n{state}", fontsize=9)
         for name, setter in (("n3x", ax.set_xlabel), ("n3y", ax.set_ylabel), ("n3z", ax.set_zlabel)):
             setter(name, fontsize=9, labelpad=2)

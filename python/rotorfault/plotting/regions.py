@@ -27,6 +27,7 @@ def plot_region(
     on a colour scale spanning the values that occur; hatched grey where no efficiency of the
     third rotor does ("uncontrollable"), which the scale never confuses with a small value. A scan
     giving up yaw says so in every title. Saved to ``path`` if given."""
+    from matplotlib.colors import BoundaryNorm
     from matplotlib.patches import Patch
 
     padded = np.pad(ok, 1, constant_values=False)
@@ -36,7 +37,7 @@ def plot_region(
             interior &= np.roll(padded, shift, axis=axis)[1:-1, 1:-1, 1:-1]
     # Faces of the unit cube are part of the region's surface too.
     surface = ok & ~interior
-    labels = [f"$\\eta_{{{r}}}$" for r in rotors]
+    labels = [f"efficiency $\\eta_{{{r}}}$" for r in rotors]
     axes_text = "giving up yaw (thrust, roll, pitch)" if give_up_yaw else "with yaw (thrust, roll, pitch, yaw)"
     fig = new_figure(figsize=(12, 10), layout="constrained")
     fig.suptitle(
@@ -67,16 +68,20 @@ def plot_region(
         along = np.moveaxis(ok, other, -1)
         lowest_all.append(np.where(along.any(axis=-1), levels[np.argmax(along, axis=-1)], np.nan))
     values = np.concatenate([x[np.isfinite(x)] for x in lowest_all])
-    vmin, vmax = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
-    if vmax - vmin < 1e-12:
-        vmin, vmax = vmin - 0.05, vmax + 0.05
+    # The values are grid levels: a discrete colour scale with one colour per level that occurs
+    # (a continuous bar would suggest values between them, e.g. 0.15 on a 0.1 grid).
+    present = np.unique(values) if values.size else levels[:1]
+    step = float(levels[1] - levels[0])
+    bounds = np.concatenate([present - step / 2, [present[-1] + step / 2]])
+    norm = BoundaryNorm(bounds, ncolors=256)
+    ticks = present if present.size <= 11 else present[:: int(np.ceil(present.size / 11))]
     for slot, (a, b), lowest in zip((2, 3, 4), ((0, 1), (0, 2), (1, 2)), lowest_all):
         ax = fig.add_subplot(2, 2, slot)
         other = 3 - a - b
         ax.set_facecolor("0.8")
         ax.patch.set_hatch("///")
         ax.patch.set_edgecolor("0.55")
-        mesh = ax.pcolormesh(levels, levels, lowest.T, shading="nearest", cmap="viridis", vmin=vmin, vmax=vmax)
+        mesh = ax.pcolormesh(levels, levels, lowest.T, shading="nearest", cmap="viridis", norm=norm)
         ax.set_xlabel(labels[a])
         ax.set_ylabel(labels[b])
         ax.set_xlim(-0.5 * (levels[1] - levels[0]), 1 + 0.5 * (levels[1] - levels[0]))
@@ -84,7 +89,8 @@ def plot_region(
         ax.tick_params(labelsize=9)
         ax.set_title(f"lowest {labels[other]} that keeps control{' giving up yaw' if give_up_yaw else ''}", fontsize=10)
         ax.set_aspect("equal")
-        fig.colorbar(mesh, ax=ax, shrink=0.8, label=f"lowest {labels[other]}")
+        bar = fig.colorbar(mesh, ax=ax, shrink=0.8, label=f"lowest {labels[other]} (grid levels)", ticks=ticks)
+        bar.ax.set_yticklabels([f"{v:g}" for v in ticks])
         ax.legend(
             handles=[Patch(facecolor="0.8", edgecolor="0.55", hatch="///", label="uncontrollable for every " + labels[other])],
             loc="upper center", bbox_to_anchor=(0.5, -0.13), fontsize=9, frameon=False,

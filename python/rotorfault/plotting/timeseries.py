@@ -25,23 +25,27 @@ def plot_trajectory(
     *,
     title: str | None = None,
     setpoints: Sequence[tuple[float, npt.ArrayLike]] | None = None,
+    verdict: str | None = None,
 ) -> Figure:
     """Position (with the setpoint, if given as ``(time, NED position)`` steps), roll and pitch,
-    yaw unwrapped, body rates and rotor thrusts of a :class:`rotorfault.Trajectory` against time,
-    with fault and loss markers. ``title`` says what the run is (default: the faults); the faults
-    and the loss, if any, are always added. Saved to ``path`` if given."""
+    yaw, body rates and rotor thrusts of a :class:`rotorfault.Trajectory` against time, with fault
+    and loss markers. Yaw is wrapped to +-180 degrees; a run that turns more than one revolution
+    (a spinning vehicle) shows the rate of its heading instead, in revolutions per second (its
+    wrapped angle would be a saw and its unwrapped one tens of thousands of degrees). ``title``
+    says what the run is (default: the faults); the faults, the loss and ``verdict`` (the flight's
+    verdict in words, :mod:`rotorfault.flight.outcomes`), if any, are always added. Saved to
+    ``path`` if given."""
     tr = trajectory
     fig = new_figure(figsize=(10, 12.5), layout="constrained")
     axes = fig.subplots(5, 1, sharex=True)
     styles = LINE_STYLES
     euler_deg = np.degrees(tr.euler)
-    yaw = np.degrees(np.unwrap(tr.euler[:, 2])) if len(tr.t) else euler_deg[:, 2]
     m = tr.rotor_thrust.shape[1]
     # (data, series names, axis label, smallest y span shown: round-off is not magnified)
     panels: list[tuple[FloatArray, list[str], str, float]] = [
         (tr.position * np.array([1, 1, -1]), ["north", "east", "altitude"], "position (m)\n(altitude = -down)", 1.0),
         (euler_deg[:, :2], ["roll", "pitch"], "roll, pitch (deg)", 2.0),
-        (yaw[:, None], ["yaw (unwrapped)"], "yaw (deg)", 2.0),
+        _yaw_panel(tr.t, tr.euler[:, 2]),
         (tr.omega, ["p (roll rate)", "q (pitch rate)", "r (yaw rate)"], "body rate (rad/s)", 0.2),
         (tr.rotor_thrust, [f"rotor {i + 1}" for i in range(m)], "rotor thrust (N)", 0.2),
     ]
@@ -70,9 +74,22 @@ def plot_trajectory(
         e = tr.events[0]
         lines.append(f"lost at t = {e.time:.2f} s (thick line): {e.description}")
     elif len(tr.t):
-        lines.append(f"flown for {tr.t[-1]:g} s, not lost")
+        lines.append(f"flown for {tr.t[-1]:g} s" + ("" if verdict else " (no setpoint given: no verdict)"))
+    if verdict:
+        lines.append(f"verdict: {verdict}")
     fig.suptitle("\n".join(textwrap.fill(line, 110) for line in "\n".join(lines).splitlines()), fontsize=11)
     return finish(fig, path)
+
+
+def _yaw_panel(t: FloatArray, yaw_rad: FloatArray) -> tuple[FloatArray, list[str], str, float]:
+    """The yaw panel: the angle wrapped to +-180 degrees, or for a run that turns more than one
+    revolution the heading's rate (rev/s, from the unwrapped angle)."""
+    unwrapped = np.unwrap(yaw_rad) if len(t) else yaw_rad
+    if len(t) > 1 and np.ptp(unwrapped) > 2 * np.pi:
+        rate = np.gradient(unwrapped, t) / (2 * np.pi)
+        return rate[:, None], ["heading rate (yaw angle turning)"], "yaw rate (rev/s)\n(spinning: > 1 turn)", 0.05
+    wrapped = np.degrees((yaw_rad + np.pi) % (2 * np.pi) - np.pi)
+    return wrapped[:, None], ["yaw (wrapped to +-180)"], "yaw (deg)", 2.0
 
 
 def _plot_setpoints(ax: Any, t: FloatArray, setpoints: Sequence[tuple[float, npt.ArrayLike]], styles: list[Any]) -> None:
@@ -131,38 +148,40 @@ def plot_lanzon_flight(run: Any, path: str | None = None) -> Figure:
 
 
 def plot_wang_flights(flights: Sequence[Any], path: str | None = None) -> Figure:
-    """Figs. 2-7 in one page per scenario: the 3-D path against the reference (left), position,
-    attitude and propeller commands against time (right); a fixed-pitch flight, if given, dashed
-    in the path panel with where it was lost. ``flights``: :class:`rotorfault.papers.wang.WangFlight`
-    results, the first drawn in full. Saved to ``path`` if given."""
+    """Figs. 2-7 in one page per scenario, in Wang's frame (z up): the 3-D path against the
+    reference (left), position, attitude and propeller commands against time (right), the
+    actuator's limits (10,000 rpm, +-0.26 rad) drawn on the command panels. ``flights``:
+    :class:`rotorfault.papers.wang.WangFlight` results (their ``paper_states``,
+    ``paper_reference``, ``label``, verdict), the first drawn in full, the others dashed in the
+    path panel. Saved to ``path`` if given."""
 
     first = flights[0]
     fig = new_figure(figsize=(13, 9), layout="constrained")
     grid = fig.add_gridspec(4, 2, width_ratios=[1.1, 1.0])
     ax3 = fig.add_subplot(grid[:, 0], projection="3d")
-    ref = first.reference
-    ax3.plot(ref[:, 0], ref[:, 1], -ref[:, 2], color="0.6", lw=2.5, label="reference")
+    ref = first.paper_reference
+    ax3.plot(ref[:, 0], ref[:, 1], ref[:, 2], color="0.6", lw=2.5, label="reference")
     for k, f in enumerate(flights):
-        p = f.trajectory.position
-        label = f"{f.vehicle}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
-        ax3.plot(p[:, 0], p[:, 1], -p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
+        p = f.paper_states
+        label = f"{f.label}: {f.verdict}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
+        ax3.plot(p[:, 0], p[:, 1], p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
     ax3.set_xlabel("x (m)")
     ax3.set_ylabel("y (m)")
-    ax3.set_zlabel("altitude (m)")
+    ax3.set_zlabel("z, up (m)")
     ax3.legend(loc="upper left", fontsize=9)
     run = first.trajectory
+    states = first.paper_states
     t = run.t
     styles = ["-", "--", ":"]
     ax = fig.add_subplot(grid[0, 1])
-    for j, name in enumerate(["x", "y", "altitude"]):
-        sign = -1.0 if j == 2 else 1.0
-        ax.plot(t, sign * run.position[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-        ax.plot(t, sign * ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
+    for j, name in enumerate(["x", "y", "z (up)"]):
+        ax.plot(t, states[:, j], color=f"C{j}", linestyle=styles[j], label=name)
+        ax.plot(t, ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
     ax.set_ylabel("position (m)\n(thin: reference)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     ax = fig.add_subplot(grid[1, 1], sharex=ax)
-    for j, name in enumerate(["roll", "pitch", "yaw"]):
-        ax.plot(t, run.euler[:, j], color=f"C{j}", linestyle=styles[j], label=name)
+    for j, name in enumerate(["roll phi", "pitch theta", "yaw psi"]):
+        ax.plot(t, states[:, 6 + j], color=f"C{j}", linestyle=styles[j], label=name)
     ax.plot(t, ref[:, 8], color="C2", lw=0.8, alpha=0.6)
     ax.set_ylabel("attitude (rad)")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
@@ -171,16 +190,26 @@ def plot_wang_flights(flights: Sequence[Any], path: str | None = None) -> Figure
     for i in range(1, 4):
         ax_w.plot(t, run.rotor_command[:, 2 * i], color=f"C{i}", linestyle=styles[i - 1], label=f"omega {i + 1}")
         ax_a.plot(t, run.rotor_command[:, 2 * i + 1], color=f"C{i}", linestyle=styles[i - 1], label=f"alpha {i + 1}")
-    ax_w.set_ylabel("speed command\n(paper's units)")
+    limits = getattr(first, "limits", None)
+    if limits is not None:
+        (_, speed_hi), (pitch_lo, pitch_hi) = limits
+        ax_w.axhline(speed_hi, color="black", lw=0.9, linestyle=(0, (4, 2)), label="limit (clamped)")
+        for level in (pitch_lo, pitch_hi):
+            ax_a.axhline(level, color="black", lw=0.9, linestyle=(0, (4, 2)), label="limit (clamped)" if level == pitch_hi else None)
+    ax_w.set_ylabel("speed command (rpm,\nthe paper's unit)")
     ax_a.set_ylabel("pitch command (rad)")
     ax_a.set_xlabel("time (s)")
     for a in (ax_w, ax_a):
         a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     for a in fig.axes[1:]:
         a.grid(True, alpha=0.3)
+    verdict = first.metrics.verdict_label if getattr(first, "metrics", None) is not None else first.verdict
     fig.suptitle(
-        f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed: final error "
-        f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad", fontsize=11,
+        textwrap.fill(
+            f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed, {first.label}: {verdict}; final error "
+            f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad; a pitch at its limit "
+            f"{100 * first.pitch_limit_share:.1f} % of the time, a speed {100 * first.speed_limit_share:.1f} %", 150),
+        fontsize=11,
     )
     return finish(fig, path)
 

@@ -7,7 +7,9 @@ The jobs are split by module: what run ``i`` flies is drawn by :mod:`~rotorfault
 and a campaign cut into chunks, :func:`run_chunk`, gives the same rows however it is cut); the
 chunks run on :mod:`~rotorfault.studies.backends` through :mod:`~rotorfault.studies.engine` and
 land in memory or in :mod:`~rotorfault.studies.storage`; rows and survival rates are
-:mod:`~rotorfault.studies.summaries`; :mod:`~rotorfault.studies.tuning` searches Ke's gains on a
+:mod:`~rotorfault.studies.summaries` (survival is the share of runs whose verdict is ``holds``;
+the other verdicts, ``drifts``, ``circles``, ``crashed``, ``diverged``, are counted beside it,
+never folded into a "did not diverge"); :mod:`~rotorfault.studies.tuning` searches Ke's gains on a
 campaign.
 
 The controller is designed on the nominal vehicle; each run flies a perturbed one (mass, inertia,
@@ -31,10 +33,11 @@ from .. import _rfcore
 from .._typing import ScanBackend as Backend
 from .._util.convert import read_toml
 from .._util.tables import Records, Tabular
+from .._util.deprecation import renamed_attribute
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Simulator, State, Trajectory
-from ..flight.outcomes import FLYING
+from ..flight.outcomes import FLYING, VERDICTS
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
 from .sampling import (
@@ -391,6 +394,8 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
         "mass_scale": np.array([s.mass_scale for s in specs]),
         "lag_scale": np.array([s.lag_scale for s in specs]),
         "outcome": np.array(batch.outcome),
+        "verdict": np.array(batch.verdict),
+        "cause": np.array(batch.cause),
     }
     for name in SUMMARY_FIELDS:
         columns[name] = np.asarray(getattr(batch, name))
@@ -399,7 +404,9 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
 
 #: Kind recorded in a campaign output's manifest.
 CAMPAIGN_KIND = "rotorfault-campaign"
-#: The draw columns of a campaign row, before :data:`SUMMARY_FIELDS` (``outcome`` last).
+#: The draw columns of a campaign row, before :data:`SUMMARY_FIELDS` (``outcome``, ``verdict`` and
+#: ``cause`` last: ``outcome`` is the code before issue 28, kept for one release; ``verdict`` the one
+#: verdict, ``cause`` how a lost run was lost, empty otherwise).
 _DRAW_COLUMNS: tuple[tuple[str, str], ...] = (
     ("index", "int64"),
     ("seed", "int64"),
@@ -414,12 +421,14 @@ _DRAW_COLUMNS: tuple[tuple[str, str], ...] = (
     ("mass_scale", "float64"),
     ("lag_scale", "float64"),
     ("outcome", "string"),
+    ("verdict", "string"),
+    ("cause", "string"),
 )
 
 
 def campaign_schema() -> Any:
     """The Arrow schema of a campaign's rows: :func:`run_chunk`'s columns in its order (the
-    draws, ``outcome``, then :data:`SUMMARY_FIELDS` as float64)."""
+    draws, ``outcome``, ``verdict``, ``cause``, then :data:`SUMMARY_FIELDS` as float64)."""
     from .storage import pyarrow_module
 
     pa = pyarrow_module()
@@ -541,14 +550,35 @@ class CampaignResult(Tabular):
         return len(self.columns.get("index", ()))
 
     @property
-    def survived(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
-        """Not lost (held position, circled or stayed off station to the end)."""
-        return np.isin(self.columns["outcome"], FLYING)
+    def held(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
+        """The runs whose verdict is ``holds``: the only success a campaign counts."""
+        return np.asarray(self.columns["verdict"] == "holds", dtype=bool)
+
+    @property
+    def lost(self) -> np.ndarray[Any, np.dtype[np.bool_]]:
+        """The runs that ``crashed`` or ``diverged`` (the rest flew to the end)."""
+        return np.isin(self.columns["verdict"], ("crashed", "diverged"))
+
+    #: Before issue 28 "not lost", which counted a vehicle 95 m off its setpoint as a survivor;
+    #: now the runs that hold (:attr:`held`), for one release.
+    survived = renamed_attribute("survived", "held")
+
+    def verdict_counts(self) -> dict[str, int]:
+        """How many runs got each verdict (``holds``, ``drifts``, ``circles``, ``crashed``,
+        ``diverged``), and each cause of the diverged ones (``diverged: tilt``, ...)."""
+        verdicts = self.columns["verdict"]
+        out: dict[str, int] = {v: int(np.sum(verdicts == v)) for v in VERDICTS}
+        causes = self.columns["cause"][verdicts == "diverged"]
+        for cause in sorted(set(causes.tolist())):
+            out[f"diverged: {cause}"] = int(np.sum(causes == cause))
+        return out
 
     def survival(self, by: Literal["all", "first_failed_rotor", "failed_rotors", "first_fault_s"] = "all", *, bins: int = 5) -> list[Rate]:
-        """Survival rate with its 95 % Wilson interval, over all runs or per group (the failed
-        rotor, the failure pattern, or ``bins`` equal bins of the first failure time)."""
-        ok = self.survived
+        """Survival, the share of runs that hold (verdict ``holds``), with its 95 % Wilson
+        interval, over all runs or per group (the failed rotor, the failure pattern, or ``bins``
+        equal bins of the first failure time). Drifting, circling, crashed and diverged runs are
+        not survivors (:meth:`verdict_counts` counts them)."""
+        ok = self.held
         if by == "all":
             groups: list[tuple[str, np.ndarray[Any, Any]]] = [("all", np.ones(len(ok), dtype=bool))]
         elif by == "first_fault_s":
@@ -588,20 +618,26 @@ class CampaignResult(Tabular):
     def worst(self, n: int = 5, *, by: str = "max_horizontal_error_m") -> list[dict[str, Any]]:
         """The ``n`` worst runs: lost runs first (earliest loss first), then the largest ``by``;
         each row has ``index`` and ``seed``: ``campaign.refly(index)`` flies it again."""
-        lost = ~self.survived
+        lost = self.lost
         key = np.where(lost, np.nan_to_num(self.columns["lost_at_s"]) - 1e12, -np.nan_to_num(self.columns[by], nan=-np.inf))
         order = np.argsort(key, kind="stable")[:n]
         return [{k: v[i].item() for k, v in self.columns.items()} for i in order]
 
     def table(self) -> str:
-        lines = ["survival (not lost), 95 % Wilson interval"]
+        from ..flight.outcomes import VERDICT_MEANINGS
+
+        counts = self.verdict_counts()
+        lines = [f"verdicts of {len(self)} runs: " + ", ".join(f"{k} {v}" for k, v in counts.items())]
+        lines += [f"  {v}: {VERDICT_MEANINGS[v]}" for v in VERDICTS]
+        lines.append("survival (the share of runs that hold), 95 % Wilson interval")
         for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s"):
             for r in self.survival(by):
-                lines.append(f"  {by:<19} {r.label:<16} {r.survived:>7}/{r.runs:<7} {100 * r.rate:6.2f} %  [{100 * r.low:6.2f}, {100 * r.high:6.2f}]")
+                lines.append(f"  {by:<19} {r.label:<16} {r.held:>7}/{r.runs:<7} {100 * r.rate:6.2f} %  [{100 * r.low:6.2f}, {100 * r.high:6.2f}]")
         lines.append("worst runs (re-fly with campaign.refly(index)):")
         for row in self.worst(5):
+            verdict = row["verdict"] + (f" ({row['cause']})" if row["cause"] and row["cause"] != row["verdict"] else "")
             lines.append(
-                f"  index {row['index']:>6} seed {row['seed']} rotors {row['failed_rotors']:<6} {row['outcome']:<15} "
+                f"  index {row['index']:>6} seed {row['seed']} rotors {row['failed_rotors']:<6} {verdict:<22} "
                 f"max alt loss {row['max_altitude_loss_m']:.2f} m, max horizontal {row['max_horizontal_error_m']:.2f} m"
             )
         return "\n".join(lines)
@@ -614,9 +650,10 @@ class CampaignResult(Tabular):
 
         all_rate = self.survival()[0]
         return plot_excursions(
-            self.columns, self.survived,
-            title=f"campaign: {len(self)} runs, {self.campaign.controller}, survival {100 * all_rate.rate:.1f} % "
-            f"[{100 * all_rate.low:.1f}, {100 * all_rate.high:.1f}] (95 % Wilson)",
+            self.columns, ~self.lost,
+            title=f"campaign: {len(self)} runs, {self.campaign.controller}, {100 * all_rate.rate:.1f} % hold "
+            f"[{100 * all_rate.low:.1f}, {100 * all_rate.high:.1f}] (95 % Wilson); "
+            + ", ".join(f"{k} {v}" for k, v in self.verdict_counts().items() if ":" not in k),
             path=None if path is None else str(path),
         )
 

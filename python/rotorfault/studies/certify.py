@@ -1,23 +1,35 @@
 """A controllability certificate for a real vehicle: for every single and double rotor failure,
-can it still hover with all axes, only by giving up yaw, or not at all (``rotorfault certify``).
+can it still hover with all axes, only by giving up yaw, or not at all (``rotorfault certify``),
+where the hover wrench lies (inside, on the boundary, outside and how far), and whether the
+required axes remain (``--require-axes``; default all four: thrust, roll, pitch, yaw).
 
 The JSON certificate names the hover classes ``all-axes``, ``give-up-yaw`` and ``no`` and the
-ACAI fields ``acai`` and ``acai_give_up_yaw`` (the facet margin); before issue 26 they read
-``without-yaw`` and ``acai_without_yaw``."""
+ACAI fields ``acai`` and ``acai_give_up_yaw`` (the facet margin, labelled ``ACAI facet-margin``
+wherever printed); before issue 26 they read ``without-yaw`` and ``acai_without_yaw``. The same
+case reads the same in ``rotorfault failures`` and the report: the hover wrench columns come from
+one function (:func:`rotorfault.analysis.hover_wrench_text`) and one distance
+(:func:`rotorfault.allocation.hover_wrench_distance`).
+
+"On the boundary" (an ACAI of exactly 0: a static hover with no margin at all, e.g. hexa-pnpnpn
+with any rotor failed) is reported apart from "outside" (no static hover: the distance of the
+hover wrench to the attainable set). Neither keeps all four axes: a vehicle there survives only
+by giving up yaw (spinning), which ``--require-axes thrust,roll,pitch`` allows and the default
+does not.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
-from .._typing import AcaiFormula
+from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
 from .._util.convert import count
 from .._util.deprecation import renamed_attribute
 from .._util.tables import Column, Tabular
-from ..allocation.attainable import hover_thrust_margin
+from ..allocation.attainable import hover_distances, hover_thrust_margin
 from ..analysis.airframe import Airframe, require_airframe, rotor_labels
-from ..analysis.acai import GIVE_UP_YAW, acai_label
+from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
 from ..analysis.controllability import failure_table
 
 #: ``all-axes``: hovers with thrust, roll, pitch and yaw; ``give-up-yaw``: only by giving up yaw
@@ -26,6 +38,29 @@ Hover = Literal["all-axes", "give-up-yaw", "no"]
 FAILURE_CLASSES = {"none": 0, "single": 1, "double": 2}
 #: The ACAI a certificate reports: the facet margin (how far outside, where hover is infeasible).
 FORMULA: AcaiFormula = "facet-margin"
+#: The axes a certificate can require to remain: all four (the default) ...
+ALL_AXES: tuple[CertifiedAxis, ...] = get_args(CertifiedAxis)
+#: ... or thrust, roll and pitch (giving up yaw: the vehicle may spin).
+GIVE_UP_YAW_AXES: tuple[CertifiedAxis, ...] = ("thrust", "roll", "pitch")
+
+
+def parse_axes(field: str, value: str | tuple[str, ...] | list[str]) -> tuple[CertifiedAxis, ...]:
+    """The axes a certificate must keep, from ``"thrust,roll,pitch"`` or a sequence of names:
+    all four, or thrust, roll and pitch (the two questions rotorfault answers: Du's test with four
+    axes or with three). Anything else is a ``ValueError`` naming ``field`` and the rule."""
+    names = [p.strip() for p in value.split(",")] if isinstance(value, str) else [str(p).strip() for p in value]
+    unknown = [n for n in names if n not in ALL_AXES]
+    if unknown:
+        raise ValueError(f"{field}: unknown axis {', '.join(map(repr, unknown))}; axes are {', '.join(ALL_AXES)}")
+    chosen = set(names)
+    if chosen == set(ALL_AXES):
+        return ALL_AXES
+    if chosen == set(GIVE_UP_YAW_AXES):
+        return GIVE_UP_YAW_AXES
+    raise ValueError(
+        f"{field}: a certificate requires thrust, roll, pitch and yaw, or thrust, roll and pitch (giving up yaw); "
+        f"got {', '.join(names) or 'none'}"
+    )
 
 
 @dataclass(frozen=True)
@@ -41,9 +76,22 @@ class CertificateCase:
     #: What an allocator must let go (``"lateral-force"`` only for fully actuated frames whose
     #: 6-D wrench is lost; ``None``: nothing helps).
     drop_axes: tuple[str, ...] | None
+    #: Where the hover wrench lies with all four axes and giving up yaw (``inside``,
+    #: ``boundary``: ACAI exactly 0, no margin; ``outside``; ``rank-deficient``).
+    hover_wrench: HoverPoint = "inside"
+    hover_wrench_give_up_yaw: HoverPoint = "inside"
+    #: The distance of the hover wrench to the attainable set (N / N m, 0 when attained), with all
+    #: four axes and giving up yaw (:func:`rotorfault.allocation.hover_wrench_distance`).
+    distance: float = 0.0
+    distance_give_up_yaw: float = 0.0
 
     #: The name before issue 26, for one release.
     acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")
+
+    def keeps(self, axes: tuple[CertifiedAxis, ...] = ALL_AXES) -> bool:
+        """Hovers at rest with ``axes`` controllable (with all four: ``hover == "all-axes"``;
+        giving up yaw: anything but ``"no"``)."""
+        return self.hover == "all-axes" if "yaw" in axes else self.hover != "no"
 
 
 @dataclass(frozen=True)
@@ -56,10 +104,16 @@ class Certificate(Tabular):
     fully_actuated: bool
     cases: tuple[CertificateCase, ...]
 
-    def failing(self, required: str) -> list[CertificateCase]:
-        """The cases up to the ``required`` class (``none``, ``single``, ``double``) it cannot hover."""
+    def failing(self, required: str, *, axes: tuple[CertifiedAxis, ...] | str = ALL_AXES) -> list[CertificateCase]:
+        """The cases up to the ``required`` class (``none``, ``single``, ``double``) that do not
+        hover with ``axes`` kept (default all four: a case that hovers only by giving up yaw, or
+        whose hover wrench is on the boundary, fails; ``("thrust", "roll", "pitch")`` allows
+        spinning)."""
+        if required not in FAILURE_CLASSES:
+            raise ValueError(f"required: must be one of {', '.join(FAILURE_CLASSES)}, got {required!r}")
+        kept = parse_axes("axes", axes)
         k = FAILURE_CLASSES[required]
-        return [c for c in self.cases if len(c.failed) <= k and c.hover == "no"]
+        return [c for c in self.cases if len(c.failed) <= k and not c.keeps(kept)]
 
     def _table_columns(self) -> list[Column]:
         acai_ = f"acai_{FORMULA.replace('-', '_')}"
@@ -72,6 +126,10 @@ class Certificate(Tabular):
             (f"{acai_}_give_up_yaw", "float64", [c.acai_give_up_yaw for c in cases]),
             ("thrust_to_weight", "float64", [c.thrust_to_weight for c in cases]),
             ("drop_axes", "list<string>", [None if c.drop_axes is None else list(c.drop_axes) for c in cases]),
+            ("hover_wrench", "string", [c.hover_wrench for c in cases]),
+            ("hover_wrench_give_up_yaw", "string", [c.hover_wrench_give_up_yaw for c in cases]),
+            ("hover_wrench_distance", "float64", [c.distance for c in cases]),
+            ("hover_wrench_distance_give_up_yaw", "float64", [c.distance_give_up_yaw for c in cases]),
         ]
 
     def _table_title(self) -> str:
@@ -95,6 +153,7 @@ def certify(airframe: Airframe, *, max_failed: int = 2) -> Certificate:
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
     table = failure_table(airframe, max_failed=max_failed, formula=FORMULA)
+    distances = hover_distances(airframe, [row.failed for row in table])
     full = airframe.is_fully_actuated
     cases = []
     for row in table:
@@ -108,23 +167,31 @@ def certify(airframe: Airframe, *, max_failed: int = 2) -> Certificate:
                 drop = ("lateral-force", *drop)
             margin = hover_thrust_margin(airframe.with_failed_rotors(row.failed), give_up_yaw=hover == "give-up-yaw")
             ratio = margin.thrust_to_weight
-        cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop))
+        distance, distance_give_up_yaw = distances[row.failed]
+        cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop, row.hover,
+                                     row.hover_give_up_yaw, distance, distance_give_up_yaw))
     return Certificate(airframe.name, airframe.rotor_count, full, tuple(cases))
 
 
 def rows_for_display(cert: Certificate) -> tuple[list[str], list[list[str]]]:
     acai_ = acai_label(FORMULA)
-    headers = ["failed", "hover", acai_, f"{acai_} {GIVE_UP_YAW}", "T/W", "allocator drops"]
+    headers = ["failed", "hover", "hover wrench", acai_, f"hover wrench {GIVE_UP_YAW}", f"{acai_} {GIVE_UP_YAW}", "T/W",
+               "allocator drops"]
 
     def number(x: float) -> str:
         return "undefined" if math.isinf(x) else f"{x:.4f}"
 
     rows = [
         [
-            rotor_labels(c.failed), c.hover, number(c.acai), number(c.acai_give_up_yaw),
+            rotor_labels(c.failed), c.hover, hover_wrench_text(c.hover_wrench, c.distance), number(c.acai),
+            hover_wrench_text(c.hover_wrench_give_up_yaw, c.distance_give_up_yaw), number(c.acai_give_up_yaw),
             f"{c.thrust_to_weight:.2f}" if c.hover != "no" else "-",
             "-" if c.drop_axes is None else (", ".join(c.drop_axes) or "nothing"),
         ]
         for c in cert.cases
     ]
     return headers, rows
+
+
+__all__ = ["ALL_AXES", "FAILURE_CLASSES", "FORMULA", "GIVE_UP_YAW_AXES", "Certificate", "CertificateCase", "Hover", "certify",
+           "parse_axes", "rows_for_display"]

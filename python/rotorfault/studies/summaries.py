@@ -1,7 +1,9 @@
 """Summaries: what one run's row says (:data:`SUMMARY_FIELDS`, computed by the core for every run
 of a campaign; :func:`summarize` computes the same in NumPy from a full trajectory, the
-independent check) and how rows add up (survival rates with their Wilson interval). The verdict
-in a row is the flight's own (:mod:`rotorfault.flight.outcomes`)."""
+independent check) and how rows add up (survival, the share of runs that hold, with its Wilson
+interval). The verdict in a row is the flight's own (:mod:`rotorfault.flight.outcomes`), decided
+by the core for every campaign run and by :func:`~rotorfault.flight.outcomes.flight_metrics` here:
+the tests compare the two."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._util.convert import FloatArray
+from .._util.deprecation import renamed_attribute
 from ..flight import Trajectory
 from ..flight.outcomes import FLYING, WINDOW_S, effective_fault_times, flight_metrics
 from ..flight.scenarios import HOVER_M, FlightScenario
@@ -61,6 +64,8 @@ def summarize(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M, *, up
 
     return {
         "outcome": metrics.outcome,
+        "verdict": metrics.verdict,
+        "cause": metrics.cause or "",
         "lost_at_s": lost,
         "time_to_loss_s": lost - fault_times[0] if trajectory.events and fault_times else nan,
         "max_altitude_loss_m": float(np.max(trajectory.position[:, 2] - trajectory.position[0, 2])),
@@ -93,25 +98,29 @@ def wilson_interval(successes: int, trials: int, *, z: float = 1.959963984540054
 
 @dataclass(frozen=True)
 class Rate:
-    """``survived`` of ``runs`` in one group (``label``), with the 95 % Wilson interval
-    ``[low, high]`` of the rate."""
+    """``held`` of ``runs`` in one group (``label``) hold their setpoint (verdict ``holds``), with
+    the 95 % Wilson interval ``[low, high]`` of the rate: a campaign's survival."""
 
     label: str
-    survived: int
+    held: int
     runs: int
     low: float
     high: float
 
     @property
     def rate(self) -> float:
-        return self.survived / self.runs if self.runs else math.nan
+        return self.held / self.runs if self.runs else math.nan
+
+    #: The name before issue 28, for one release.
+    survived = renamed_attribute("survived", "held")
 
 
-def rates(survived: np.ndarray[Any, np.dtype[np.bool_]], groups: Sequence[tuple[str, np.ndarray[Any, Any]]]) -> list[Rate]:
-    """The survival rate of each group (``(label, mask)``) with its Wilson interval."""
+def rates(held: np.ndarray[Any, np.dtype[np.bool_]], groups: Sequence[tuple[str, np.ndarray[Any, Any]]]) -> list[Rate]:
+    """The survival rate (the share of runs that hold) of each group (``(label, mask)``) with its
+    Wilson interval."""
     out = []
     for label, mask in groups:
-        n, s = int(mask.sum()), int((survived & mask).sum())
+        n, s = int(mask.sum()), int((held & mask).sum())
         out.append(Rate(label, s, n, *wilson_interval(s, n)))
     return out
 

@@ -12,7 +12,6 @@ import numpy as np
 
 from .._util.progress import chunks
 from ..control.ke import KeGains
-from ..flight.outcomes import FLYING
 from .campaign import Campaign, _pair, run_chunk
 
 #: Ke gains tuned by default, with their search bounds (Table IV's values lie inside).
@@ -50,9 +49,9 @@ class TuningResult:
 
 
 def _score(columns: dict[str, np.ndarray[Any, Any]]) -> dict[str, float]:
-    flying = np.isin(columns["outcome"], FLYING)
+    lost = np.isin(columns["verdict"], ("crashed", "diverged"))
     return {
-        "lost": float((~flying).sum()),
+        "lost": float(lost.sum()),
         "max_altitude_loss_m": float(np.max(columns["max_altitude_loss_m"])),
         "max_horizontal_error_m": float(np.max(columns["max_horizontal_error_m"])),
     }

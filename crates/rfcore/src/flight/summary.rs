@@ -14,6 +14,10 @@
 //! - a divergence kind (`crashed`: it hit the ground; `tilt`, `altitude-loss`, ...): lost at
 //!   `lost_at_s`.
 //!
+//! Those outcome codes are the ones before the verdicts; [`Outcome::verdict`] maps them to the
+//! one verdict every table counts: `holds`, `circles`, `drifts` (off station), `crashed`,
+//! `diverged` (any other divergence, [`Outcome::cause`] says which).
+//!
 //! The steady spin rate is the mean body yaw rate over the window, reported only when the run
 //! settled (the same test as `flight_metrics`: from the last fault that changed an efficiency,
 //! yaw rate within 5 % (at least 0.2 rad/s) and n3z within 0.02 of their window means to the
@@ -90,14 +94,63 @@ pub enum Outcome {
     Lost(DivergenceReason),
 }
 
+/// The one verdict on a whole run (`rotorfault.flight.outcomes`): only `Holds` is a success.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Within the hold band of the setpoint, slower than the hold speed, throughout the window.
+    Holds,
+    /// Airborne to the end but neither holding nor circling (away, sinking, moving off).
+    Drifts,
+    /// Not holding, moving with the direction of travel turning by the circling turn or more.
+    Circles,
+    /// Hit the ground.
+    Crashed,
+    /// Lost another way (the divergence reason says how).
+    Diverged,
+}
+
+impl Verdict {
+    /// The kebab-case name (`holds`, `drifts`, `circles`, `crashed`, `diverged`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Drifts => "drifts",
+            Verdict::Circles => "circles",
+            Verdict::Crashed => "crashed",
+            Verdict::Diverged => "diverged",
+        }
+    }
+}
+
 impl Outcome {
-    /// The kebab-case code (`holds-position`, `circling`, `off-station`, or the divergence's).
+    /// The kebab-case code (`holds-position`, `circling`, `off-station`, or the divergence's):
+    /// the codes before the verdicts, kept for one release.
     pub fn name(self) -> &'static str {
         match self {
             Outcome::HoldsPosition => "holds-position",
             Outcome::Circling => "circling",
             Outcome::OffStation => "off-station",
             Outcome::Lost(reason) => reason.name(),
+        }
+    }
+
+    /// The verdict: decided here once for every campaign run (`flight_metrics` computes the same
+    /// from a full trajectory, tested equal).
+    pub fn verdict(self) -> Verdict {
+        match self {
+            Outcome::HoldsPosition => Verdict::Holds,
+            Outcome::Circling => Verdict::Circles,
+            Outcome::OffStation => Verdict::Drifts,
+            Outcome::Lost(DivergenceReason::Crashed) => Verdict::Crashed,
+            Outcome::Lost(_) => Verdict::Diverged,
+        }
+    }
+
+    /// How a lost run was lost (the divergence reason's code), `None` for a run flown to the end.
+    pub fn cause(self) -> Option<&'static str> {
+        match self {
+            Outcome::Lost(reason) => Some(reason.name()),
+            _ => None,
         }
     }
 }
@@ -510,6 +563,8 @@ mod tests {
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::Crashed));
         assert_eq!(s.outcome.name(), "crashed");
+        assert_eq!(s.outcome.verdict(), Verdict::Crashed);
+        assert_eq!(s.outcome.cause(), Some("crashed"));
         assert!((s.lost_at_s - (20.0 / g).sqrt()).abs() < 1e-9);
         assert!((s.max_altitude_loss_m - 10.0).abs() < 1e-9);
         assert!((s.final_altitude_error_m - 10.0).abs() < 1e-9);
@@ -528,6 +583,8 @@ mod tests {
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         let expected = (40.0 / g).sqrt();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::AltitudeLoss));
+        assert_eq!(s.outcome.verdict().name(), "diverged");
+        assert_eq!(s.outcome.cause(), Some("altitude-loss"));
         assert!((s.lost_at_s - expected).abs() < 1e-12);
         assert!((s.time_to_loss_s - (expected - 0.5)).abs() < 1e-12);
         assert!((s.max_altitude_loss_m - 20.0).abs() < 1e-9);
@@ -546,7 +603,10 @@ mod tests {
         )
         .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
+        // A vehicle falling freely for the whole window is not a success: it drifts.
         assert_eq!(s.outcome, Outcome::OffStation);
+        assert_eq!(s.outcome.verdict(), Verdict::Drifts);
+        assert_eq!(s.outcome.cause(), None);
         assert!((s.max_altitude_loss_m - 0.5 * g).abs() < 1e-9);
         assert!((s.window_speed_m_s - g).abs() < 1e-9);
         assert_eq!(s.window_mean_horizontal_speed_m_s, 0.0);

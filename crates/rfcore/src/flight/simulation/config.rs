@@ -47,7 +47,8 @@ pub struct SimulationConfig {
     /// Constant wind, world NED, m/s.
     pub wind_m_s: Vector3<f64>,
     /// Optional wind profile added to the constant: piecewise-linear through `(time_s, wind)`
-    /// points, held constant outside them.
+    /// points, held constant outside them; a time given twice is a step (the first value before
+    /// it, the second from it on; the integration ends an RK4 step there, like a fault).
     pub wind_profile: Vec<(f64, Vector3<f64>)>,
     /// Sensor noise on what the controller sees (`None`: the true state).
     pub noise: Option<SensorNoise>,
@@ -169,10 +170,18 @@ impl SimulationConfig {
                     "must be finite",
                 ));
             }
-            if k > 0 && *t <= self.wind_profile[k - 1].0 {
+            // A time given twice is a step (the later point holds from then); three points at
+            // one time would leave the value there ambiguous.
+            if k > 0 && *t < self.wind_profile[k - 1].0 {
                 return Err(RfError::invalid(
                     format!("wind_profile[{k}].time"),
-                    "times must be strictly increasing",
+                    "times must not decrease (a time given twice is a step)",
+                ));
+            }
+            if k > 1 && *t == self.wind_profile[k - 1].0 && *t == self.wind_profile[k - 2].0 {
+                return Err(RfError::invalid(
+                    format!("wind_profile[{k}].time"),
+                    "a time may be given at most twice (a step: the value before and after)",
                 ));
             }
         }
@@ -233,19 +242,45 @@ impl SimulationConfig {
         }
     }
 
-    /// Wind at time `t_s` (world, m/s).
+    /// Wind at time `t_s` (world, m/s): the profile interpolated linearly, a step (a time given
+    /// twice) taking its later value from its time on.
     pub fn wind_at(&self, t_s: f64) -> Vector3<f64> {
+        self.wind_m_s + self.profile_at(|t| t > t_s, t_s)
+    }
+
+    /// Wind just before `t_s` (the left limit: a step at `t_s` has not happened yet). An RK4
+    /// step ending at a step's time evaluates its last stage here, so the step acts from
+    /// exactly its time on.
+    pub fn wind_before(&self, t_s: f64) -> Vector3<f64> {
+        self.wind_m_s + self.profile_at(|t| t >= t_s, t_s)
+    }
+
+    /// The profile at `t_s` between the last point before the first that `after` picks and it.
+    fn profile_at(&self, after: impl Fn(f64) -> bool, t_s: f64) -> Vector3<f64> {
         let p = &self.wind_profile;
-        let extra = match p.iter().position(|(t, _)| *t > t_s) {
+        match p.iter().position(|(t, _)| after(*t)) {
             _ if p.is_empty() => Vector3::zeros(),
             Some(0) => p[0].1,
             None => p[p.len() - 1].1,
             Some(k) => {
                 let ((t0, w0), (t1, w1)) = (p[k - 1], p[k]);
+                // t0 < t1 here: a step's two points are never on both sides of t_s.
                 w0 + (w1 - w0) * ((t_s - t0) / (t1 - t0))
             }
-        };
-        self.wind_m_s + extra
+        }
+    }
+
+    /// The end of an RK4 step from `from_s` towards `to_s`: `to_s`, or the first wind step
+    /// strictly between them (the integration must not carry a step inside a stage).
+    pub fn wind_step_before(&self, from_s: f64, to_s: f64) -> f64 {
+        self.wind_profile
+            .windows(2)
+            .map(|w| w[0].0)
+            .zip(self.wind_profile.windows(2).map(|w| w[1].0))
+            .filter(|(a, b)| a == b)
+            .map(|(a, _)| a)
+            .find(|&t| t > from_s && t < to_s)
+            .unwrap_or(to_s)
     }
 }
 
@@ -261,5 +296,31 @@ mod tests {
         assert_eq!(c.wind_at(0.0), Vector3::new(1.0, 0.0, 0.0));
         assert_eq!(c.wind_at(1.5), Vector3::new(1.0, 2.0, 0.0));
         assert_eq!(c.wind_at(5.0), Vector3::new(1.0, 4.0, 0.0));
+    }
+
+    #[test]
+    fn a_time_given_twice_is_a_step() {
+        let mut c = SimulationConfig::new(0.0025, 2, 3.0);
+        let w = Vector3::new(4.0, 4.0, 0.0);
+        c.wind_profile = vec![(1.0, Vector3::zeros()), (1.0, w)];
+        c.check().unwrap();
+        assert_eq!(c.wind_at(0.999_999), Vector3::zeros());
+        assert_eq!(c.wind_at(1.0), w);
+        assert_eq!(c.wind_before(1.0), Vector3::zeros());
+        assert_eq!(c.wind_before(1.000_001), w);
+        assert_eq!(c.wind_at(2.0), w);
+        assert_eq!(c.wind_step_before(0.9, 1.1), 1.0);
+        assert_eq!(
+            c.wind_step_before(1.0, 1.1),
+            1.1,
+            "a step at the start does not split"
+        );
+        assert_eq!(c.wind_step_before(0.9, 1.0), 1.0);
+        c.wind_profile.push((1.0, Vector3::zeros()));
+        let err = c.check().unwrap_err().to_string();
+        assert!(err.starts_with("wind_profile[2].time"), "{err}");
+        c.wind_profile = vec![(1.0, Vector3::zeros()), (0.5, w)];
+        let err = c.check().unwrap_err().to_string();
+        assert!(err.contains("must not decrease"), "{err}");
     }
 }

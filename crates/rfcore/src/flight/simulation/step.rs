@@ -142,8 +142,14 @@ impl<'a> Integrator<'a> {
                 t + (s + 1) as f64 * h
             };
             while a < b {
-                // One RK4 step of body and actuators over [a, end], end = b or the next fault.
-                let end = schedule.interval_end(a, b);
+                // One RK4 step of body and actuators over [a, end], end = b, the next fault or
+                // the next wind step (evaluated at its left limit at `end`: a step acts from its
+                // time on, exactly).
+                let end = if self.constant_wind {
+                    schedule.interval_end(a, b)
+                } else {
+                    config.wind_step_before(a, schedule.interval_end(a, b))
+                };
                 let len = end - a;
                 let winds = if self.constant_wind {
                     [config.wind_m_s; 3]
@@ -151,7 +157,7 @@ impl<'a> Integrator<'a> {
                     [
                         config.wind_at(a),
                         config.wind_at(a + 0.5 * len),
-                        config.wind_at(end),
+                        config.wind_before(end),
                     ]
                 };
                 let totals = if constant {
@@ -200,7 +206,11 @@ impl<'a> Integrator<'a> {
                             actuators.response(&self.targets, elapsed, &mut channels);
                             tot[node] = rotor_totals(vehicle, actuators, &channels, efficiency);
                         }
-                        let w = [config.wind_at(a), config.wind_at(mid), config.wind_at(fin)];
+                        let w = [
+                            config.wind_at(a),
+                            config.wind_at(mid),
+                            config.wind_before(fin),
+                        ];
                         body.rk4_step_nodes(state, l, |node, x| {
                             vehicle.wrench_from(x, &tot[node], &w[node])
                         })
