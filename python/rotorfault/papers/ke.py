@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from .._typing import KeLaw
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
-from ..flight import RotorFault, State, Trajectory
+from ..flight import RotorFault, Sensing, State, Trajectory
 from ..flight.outcomes import (
     CIRCLING_TURN_RAD,
     HOLD_BAND_M,
@@ -169,15 +169,17 @@ def run_scenario(
     law: KeLaw = "feedforward",
     controller_preset: FtcPreset | str = "ke-hil",
     record_every: int = 4,
+    sensing: Sensing | None = None,
 ) -> ScenarioRun:
-    """Flies one scenario with the uniform passive FTC (or ``law="baseline"``)."""
+    """Flies one scenario with the uniform passive FTC (or ``law="baseline"``), on the truth or
+    on ``sensing`` (sensors and the estimator; the run records the estimate beside the truth)."""
     if not isinstance(scenario_, (str, KeScenario)):
         raise TypeError(f"scenario: expected a KeScenario or a scenario name, got {type(scenario_).__name__}")
     if not isinstance(controller_preset, (str, FtcPreset)):
         raise TypeError(f"controller_preset: expected an FtcPreset or a preset name, got {type(controller_preset).__name__}")
     sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
     pre = preset(controller_preset) if isinstance(controller_preset, str) else controller_preset
-    sim = pre.simulator()
+    sim = pre.simulator(sensing=sensing)
     controller = UniformPassiveFtc(pre.airframe, gains=pre.gains, law=law, setpoints=sc.setpoints)
     start = State(position=sc.setpoints[0][1])
     trajectory = sim.run(start, sc.duration_s, controller=controller, faults=sc.faults, record_every=record_every)
