@@ -12,7 +12,7 @@ use rfcore::flight::actuator::{
 };
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
-    simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
+    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
@@ -655,16 +655,23 @@ pub fn simulate<'py>(
                 count,
                 error: None,
             };
-            let result = detached(py, || {
-                core_simulate(
-                    &vehicle,
-                    actuators,
-                    &mut callable,
-                    &efficiency,
-                    &faults,
-                    x0,
-                    config,
-                )
+            let result = detached(py, |cancel| {
+                // One Python thread state for the whole run (kept while detached), so the
+                // callback at every step does not create one each time.
+                Python::attach(|py| {
+                    py.detach(|| {
+                        core_simulate(
+                            &vehicle,
+                            actuators,
+                            &mut callable,
+                            &efficiency,
+                            &faults,
+                            x0,
+                            config,
+                            cancel,
+                        )
+                    })
+                })
             });
             if let Some(err) = callable.error.take() {
                 return Err(err);
@@ -683,7 +690,7 @@ pub fn simulate<'py>(
                 })
                 .transpose()?;
             let mut boxed = boxed(spec.as_ref(), count)?;
-            detached(py, || {
+            detached(py, |cancel| {
                 core_simulate(
                     &vehicle,
                     actuators,
@@ -692,6 +699,7 @@ pub fn simulate<'py>(
                     &faults,
                     x0,
                     config,
+                    cancel,
                 )
             })?
         }
@@ -739,8 +747,8 @@ pub fn simulate_batch<'py>(
             })
         })
         .collect::<PyResult<_>>()?;
-    let results = detached(py, || {
-        core_batch(&vehicle, &actuators, &efficiency, runs, config)
+    let results = detached(py, |cancel| {
+        core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
     Ok(results
         .into_iter()

@@ -1,8 +1,9 @@
 //! Python bindings for rfcore (module `rotorfault._rfcore`): translation only, one file per core
 //! room (`analysis`, `allocation`, `control`, `flight`, plus `airframe`) and one `convert` for
 //! the helpers they share. Arrays come in as read-only numpy views, heavy calls run with the GIL
-//! released (`convert::detached`), and every core error becomes a `ValueError` carrying the core's
-//! message, which names the field and the rule.
+//! released (`convert::detached`, which also turns Ctrl-C into a cancelled call and a
+//! `KeyboardInterrupt`), and every core error becomes a `ValueError` carrying the core's message,
+//! which names the field and the rule.
 
 mod airframe;
 mod allocation;
@@ -17,6 +18,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    convert::prepare_threads(module.py())?;
     module.add_class::<airframe::PyAirframe>()?;
     module.add_class::<analysis::PyControllabilityReport>()?;
     module.add_class::<analysis::PyAcaiResult>()?;

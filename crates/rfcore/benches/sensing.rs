@@ -26,6 +26,7 @@ use rfcore::flight::simulation::{
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::RigidBodyState;
+use rfcore::Cancel;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -123,9 +124,20 @@ fn flight(s: &Setup, law: Law, config: &SimulationConfig) -> usize {
     let (mut c, hover) = controller(law);
     let mut actuators = s.actuators.clone();
     actuators.settle(&hover).expect("settle");
-    let run = simulate(&s.vehicle, actuators, c.as_mut(), &[1.0; 4], &s.faults, s.start, config)
-        .expect("flight");
-    assert!(run.divergence.is_none(), "the benched flight must not diverge");
+    let run = simulate(
+        &s.vehicle,
+        actuators,
+        c.as_mut(),
+        &[1.0; 4],
+        &s.faults,
+        s.start,
+        config,
+    )
+    .expect("flight");
+    assert!(
+        run.divergence.is_none(),
+        "the benched flight must not diverge"
+    );
     run.states.len()
 }
 
@@ -141,7 +153,15 @@ fn batch(s: &Setup, law: Law, config: &SimulationConfig) -> usize {
             }
         })
         .collect();
-    let runs = simulate_batch(&s.vehicle, &s.actuators, &[1.0; 4], runs, config).expect("batch");
+    let runs = simulate_batch(
+        &s.vehicle,
+        &s.actuators,
+        &[1.0; 4],
+        runs,
+        config,
+        &Cancel::never(),
+    )
+    .expect("batch");
     runs.iter().map(|r| r.states.len()).sum()
 }
 
@@ -170,8 +190,12 @@ fn bench_sensing(c: &mut Criterion) {
     group.throughput(Throughput::Elements(4 * steps));
     group.sample_size(10);
     for (name, law) in [("ke", Law::Ke), ("indi", Law::Indi)] {
-        group.bench_function(format!("{name}/truth"), |b| b.iter(|| batch(&s, law, &truth)));
-        group.bench_function(format!("{name}/mocap"), |b| b.iter(|| batch(&s, law, &mocap)));
+        group.bench_function(format!("{name}/truth"), |b| {
+            b.iter(|| batch(&s, law, &truth))
+        });
+        group.bench_function(format!("{name}/mocap"), |b| {
+            b.iter(|| batch(&s, law, &mocap))
+        });
     }
     group.finish();
 }

@@ -23,6 +23,7 @@ use rfcore::flight::simulation::{
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::RigidBodyState;
+use rfcore::Cancel;
 
 const DT: f64 = 1.0 / 400.0;
 const ALTITUDE_M: f64 = 10.0;
@@ -68,7 +69,11 @@ fn flight(law: Law, failed: &[usize]) -> Flight {
         actuators,
         faults: failed
             .iter()
-            .map(|&rotor| RotorFault { rotor, time_s: FAULT_S, efficiency: 0.0 })
+            .map(|&rotor| RotorFault {
+                rotor,
+                time_s: FAULT_S,
+                efficiency: 0.0,
+            })
             .collect(),
         x0: RigidBodyState {
             position_m: Vector3::new(0.0, 0.0, -ALTITUDE_M),
@@ -89,7 +94,10 @@ impl Flight {
                 let failures = self
                     .failed
                     .iter()
-                    .map(|&rotor| DetectedFailure { rotor, time_s: FAULT_S })
+                    .map(|&rotor| DetectedFailure {
+                        rotor,
+                        time_s: FAULT_S,
+                    })
                     .collect();
                 let setpoint = Setpoint {
                     time_s: 0.0,
@@ -104,7 +112,9 @@ impl Flight {
                     DT,
                 )
                 .unwrap();
-                actuators.settle(&c.failure_modes()[0].hover_thrust_n).unwrap();
+                actuators
+                    .settle(&c.failure_modes()[0].hover_thrust_n)
+                    .unwrap();
                 (Box::new(c), actuators)
             }
             Law::Ke => {
@@ -204,7 +214,10 @@ fn estimator_error(run: &Trajectory, from_s: f64) -> EstimatorError {
 fn raw_mocap_errors() -> (f64, f64) {
     let p = PositionSourceProfile::optitrack_primex_13();
     let sqrt3 = 3f64.sqrt();
-    (sqrt3 * p.attitude_noise_rad.unwrap(), sqrt3 * p.horizontal_noise_m)
+    (
+        sqrt3 * p.attitude_noise_rad.unwrap(),
+        sqrt3 * p.horizontal_noise_m,
+    )
 }
 
 #[test]
@@ -237,7 +250,10 @@ fn estimator_beats_the_raw_fixes_and_knows_its_error_in_hover_and_after_rotor_lo
             ("attitude", e.attitude_rad, e.attitude_sigma_rad),
             ("position", e.position_m, e.position_sigma_m),
         ] {
-            assert!((0.5..2.0).contains(&(rms / sigma)), "{name} {what}: {rms} vs sigma {sigma}");
+            assert!(
+                (0.5..2.0).contains(&(rms / sigma)),
+                "{name} {what}: {rms} vs sigma {sigma}"
+            );
         }
         // The sensors' clocks: the IMU at 500 Hz from t = 0 (both ends), the mocap at 240 Hz with
         // position and attitude fused per fix (those still in flight at the end: latency 2.9 ms).
@@ -250,10 +266,21 @@ fn estimator_beats_the_raw_fixes_and_knows_its_error_in_hover_and_after_rotor_lo
             assert_eq!(r.gyro_saturated_samples, 0);
         } else {
             // Spinning from about a second after the failure to the end.
-            assert!(r.gyro_saturated_samples > 20 * 500 / 2, "{name}: {}", r.gyro_saturated_samples);
+            assert!(
+                r.gyro_saturated_samples > 20 * 500 / 2,
+                "{name}: {}",
+                r.gyro_saturated_samples
+            );
             let flagged = r.rows.iter().filter(|row| row.gyro_saturated).count();
-            let beyond = run.states.iter().filter(|s| s.omega_rad_s.amax() > 2000f64.to_radians()).count();
-            assert!(flagged > 0 && flagged.abs_diff(beyond) * 50 < beyond, "{flagged} vs {beyond}");
+            let beyond = run
+                .states
+                .iter()
+                .filter(|s| s.omega_rad_s.amax() > 2000f64.to_radians())
+                .count();
+            assert!(
+                flagged > 0 && flagged.abs_diff(beyond) * 50 < beyond,
+                "{flagged} vs {beyond}"
+            );
         }
     }
 }
@@ -261,14 +288,26 @@ fn estimator_beats_the_raw_fixes_and_knows_its_error_in_hover_and_after_rotor_lo
 #[test]
 fn same_seed_same_flight_and_a_batch_flies_each_run_as_alone() {
     let f = flight(Law::Indi, &[0]);
-    let sensing = Sensing { seed: 7, ..Sensing::default() };
+    let sensing = Sensing {
+        seed: 7,
+        ..Sensing::default()
+    };
     let mut cfg = config(Some(sensing));
     cfg.duration_s = 6.0;
     let alone = |seed: u64| {
         let mut c = cfg.clone();
         c.sensing = Some(Sensing { seed, ..sensing });
         let (mut controller, actuators) = f.controller();
-        simulate(&f.vehicle, actuators, controller.as_mut(), &[1.0; 4], &f.faults, f.x0, &c).unwrap()
+        simulate(
+            &f.vehicle,
+            actuators,
+            controller.as_mut(),
+            &[1.0; 4],
+            &f.faults,
+            f.x0,
+            &c,
+        )
+        .unwrap()
     };
     let (a, b, other) = (alone(7), alone(7), alone(8));
     assert_eq!(a, b);
@@ -281,11 +320,24 @@ fn same_seed_same_flight_and_a_batch_flies_each_run_as_alone() {
     let runs = (0..2)
         .map(|_| {
             let (controller, _) = f.controller();
-            BatchRun { controller, x0: f.x0, initial_command: None, faults: f.faults.clone() }
+            BatchRun {
+                controller,
+                x0: f.x0,
+                initial_command: None,
+                faults: f.faults.clone(),
+            }
         })
         .collect();
     let (_, settled) = f.controller();
-    let batch = simulate_batch(&f.vehicle, &settled, &[1.0; 4], runs, &cfg).unwrap();
+    let batch = simulate_batch(
+        &f.vehicle,
+        &settled,
+        &[1.0; 4],
+        runs,
+        &cfg,
+        &Cancel::never(),
+    )
+    .unwrap();
     assert_eq!(batch[0], a);
     assert_eq!(batch[1], other);
 }
@@ -308,10 +360,18 @@ fn ke_and_indi_with_truth_and_with_mocap_side_by_side() {
             println!(
                 "{law:?} {name}: truth {} (altitude {:.3} m, horizontal {:.3} m); mocap {} \
                  (altitude {:.3} m, horizontal {:.3} m)",
-                if truth.holds { "holds" } else { "does not hold" },
+                if truth.holds {
+                    "holds"
+                } else {
+                    "does not hold"
+                },
                 truth.altitude_m,
                 truth.horizontal_m,
-                if sensed.holds { "holds" } else { "does not hold" },
+                if sensed.holds {
+                    "holds"
+                } else {
+                    "does not hold"
+                },
                 sensed.altitude_m,
                 sensed.horizontal_m,
             );

@@ -216,7 +216,9 @@ pub fn replay<'py>(
     let mut controller = boxed(Some(&controller), command_count)?;
     let rows = times.len();
     let count = controller.command_count();
-    let flat = detached(py, || core_replay(controller.as_mut(), &times, &parsed))?;
+    let flat = detached(py, |cancel| {
+        core_replay(controller.as_mut(), &times, &parsed, cancel)
+    })?;
     numpy::ndarray::Array2::from_shape_vec((rows, count), flat)
         .map(|a| a.into_pyarray(py))
         .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))

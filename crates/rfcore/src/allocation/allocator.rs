@@ -15,6 +15,7 @@ use crate::allocation::clarabel::{
 use crate::allocation::pinv::{checked_pseudo_inverse, WeightedPseudoInverse};
 use crate::allocation::problem::{check_rows, AllocationProblem, AllocationStatus, SolvedBy};
 use crate::allocation::scaling::{BIG_WORK, N, ROWS, SMALL_WORK};
+use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 
 /// The result of one allocation.
@@ -321,7 +322,12 @@ impl Method {
 /// Active-set allocations of many virtual controls (rows of `controls`, N x n row-major) with a
 /// prepared solver, in parallel; validated as in [`allocate_many`]. The one path of the
 /// active-set method for one control or many (each row is [`ActiveSetSolver::allocate`]).
-pub fn allocate_all(solver: &ActiveSetSolver, controls: &[f64]) -> Result<Vec<Allocation>> {
+/// `cancel` is checked before every row.
+pub fn allocate_all(
+    solver: &ActiveSetSolver,
+    controls: &[f64],
+    cancel: &Cancel,
+) -> Result<Vec<Allocation>> {
     let problem = solver.problem();
     check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
@@ -330,16 +336,21 @@ pub fn allocate_all(solver: &ActiveSetSolver, controls: &[f64]) -> Result<Vec<Al
     }
     controls
         .par_chunks(n)
-        .map(|u_c| solver.allocate(u_c))
+        .map(|u_c| {
+            cancel.check()?;
+            solver.allocate(u_c)
+        })
         .collect()
 }
 
 /// Allocations of many virtual controls (rows of `controls`, N x n row-major) for one problem,
 /// in parallel. Validates every row first, so an error names the row and nothing is computed.
+/// `cancel` is checked before every row.
 pub fn allocate_many(
     problem: &AllocationProblem,
     method: &Method,
     controls: &[f64],
+    cancel: &Cancel,
 ) -> Result<Vec<Allocation>> {
     check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
@@ -347,21 +358,31 @@ pub fn allocate_many(
         Method::ActiveSet(settings) => allocate_all(
             &ActiveSetSolver::with_settings(problem, *settings),
             controls,
+            cancel,
         ),
         Method::Pinv => {
             let pinv = checked_pseudo_inverse(problem)?;
-            Ok(controls
+            controls
                 .chunks(n)
-                .map(|u_c| pinv_allocation(&pinv, problem, u_c))
-                .collect())
+                .map(|u_c| {
+                    cancel.check()?;
+                    Ok(pinv_allocation(&pinv, problem, u_c))
+                })
+                .collect()
         }
         Method::Clarabel(settings) => controls
             .par_chunks(n)
-            .map(|u_c| allocate_clarabel(problem, u_c, settings))
+            .map(|u_c| {
+                cancel.check()?;
+                allocate_clarabel(problem, u_c, settings)
+            })
             .collect(),
         Method::Prioritized(groups, settings) => controls
             .par_chunks(n)
-            .map(|u_c| allocate_prioritized(problem, u_c, groups, settings))
+            .map(|u_c| {
+                cancel.check()?;
+                allocate_prioritized(problem, u_c, groups, settings)
+            })
             .collect(),
     }
 }

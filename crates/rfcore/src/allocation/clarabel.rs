@@ -163,10 +163,13 @@ fn clamped(x: &[f64], lower: &[f64], upper: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Clarabel's status in the allocation vocabulary: reaching `max_iterations` is reported as
+/// such ([`AllocationStatus::IterationLimit`]), the commands being its last iterate.
 fn status_of(status: SolverStatus) -> AllocationStatus {
     match status {
         SolverStatus::Solved => AllocationStatus::Optimal,
         SolverStatus::AlmostSolved => AllocationStatus::AlmostOptimal,
+        SolverStatus::MaxIterations => AllocationStatus::IterationLimit,
         _ => AllocationStatus::Failed,
     }
 }
@@ -293,7 +296,10 @@ pub(crate) fn solve_prioritized(
         let solution = program.solve(settings)?;
         iterations += solution.iterations;
         let stage_answer = answer(problem, solution, iterations);
-        if stage_answer.status == AllocationStatus::Failed {
+        if matches!(
+            stage_answer.status,
+            AllocationStatus::Failed | AllocationStatus::IterationLimit
+        ) {
             return Ok(stage_answer);
         }
         let achieved = problem.achieved(&stage_answer.commands);

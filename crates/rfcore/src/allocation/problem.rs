@@ -13,12 +13,28 @@
 
 use nalgebra::DMatrix;
 
-use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
+use crate::error::{require_all_finite, require_entries, require_normal, Result, RfError};
 
 /// Most actuators a problem may have (the active-set solver works in fixed-size arrays).
 pub const MAX_ACTUATORS: usize = 16;
 /// Most virtual-control components a problem may have.
 pub const MAX_VIRTUAL: usize = 12;
+
+/// Largest magnitude of a matrix entry, weight or regularisation: the solver scales them by
+/// powers of two and is tested exact from 1e-160 to 1e300 (see `crate::error`).
+pub const MAX_MAGNITUDE: f64 = 1e300;
+
+/// Zero or a normal number of magnitude at most [`MAX_MAGNITUDE`], naming `field`.
+fn require_scale_free(field: &str, value: f64) -> Result<()> {
+    require_normal(field, value)?;
+    if value.abs() > MAX_MAGNITUDE {
+        return Err(RfError::invalid(
+            field,
+            format!("must be at most {MAX_MAGNITUDE:e} in magnitude (the solver scales it by powers of two), got {value:e}"),
+        ));
+    }
+    Ok(())
+}
 
 /// A box-constrained weighted least-squares allocation problem (module docs). Validated on
 /// construction; every field is read-only afterwards.
@@ -62,8 +78,22 @@ impl AllocationProblem {
                 format!("must be finite, got {}", matrix.as_slice()[i]),
             ));
         }
+        // The solver's scaling divides by the largest entry and weight and by column norms: a
+        // subnormal has no reciprocal (see `crate::error`), and the power of two nearest a
+        // magnitude above 2^1023.5 is infinite (a 1.5e308 matrix was "solved" by zeros).
+        if let Some(i) = matrix
+            .iter()
+            .position(|v| !(*v == 0.0 || v.is_normal()) || v.abs() > MAX_MAGNITUDE)
+        {
+            require_scale_free(
+                &format!("matrix[{}, {}]", i % n, i / n),
+                matrix.as_slice()[i],
+            )?;
+        }
         require_entries("weights", weights, n, "one per virtual-control component")?;
-        require_all_finite("weights", weights)?;
+        for (i, &w) in weights.iter().enumerate() {
+            require_scale_free(&format!("weights[{i}]"), w)?;
+        }
         if let Some(i) = weights.iter().position(|&w| w < 0.0) {
             return Err(RfError::invalid(
                 format!("weights[{i}]"),
@@ -102,7 +132,7 @@ impl AllocationProblem {
 
     /// Adds `gamma/2 |T - preferred|^2` to the objective (`gamma >= 0`, finite).
     pub fn with_regularization(mut self, gamma: f64, preferred: &[f64]) -> Result<Self> {
-        require_finite("regularization", gamma)?;
+        require_scale_free("regularization", gamma)?;
         if gamma < 0.0 {
             return Err(RfError::invalid(
                 "regularization",
@@ -275,13 +305,14 @@ pub enum AllocationStatus {
     /// Clarabel finished at reduced accuracy.
     AlmostOptimal,
     /// The active-set solver could not certify its answer (iteration bound, or the certificate
-    /// above its tolerance) and neither could its fallback; the commands are feasible, not proven
-    /// optimal (see the allocation's certificate).
+    /// above its tolerance) and neither could its fallback, or Clarabel reached its
+    /// `max_iterations`; the commands are feasible, not proven optimal (see the allocation's
+    /// certificate).
     IterationLimit,
     /// The unconstrained pseudo-inverse: bounds were not applied.
     Unconstrained,
-    /// Clarabel stopped without a solution (iteration limit, numerical trouble, infeasible
-    /// equality constraints); the commands are its last iterate.
+    /// Clarabel stopped without a solution (numerical trouble, infeasible equality
+    /// constraints); the commands are its last iterate.
     Failed,
 }
 

@@ -17,6 +17,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::cancel::Cancel;
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::{ControllerInput, RigidBodyState};
 
@@ -91,10 +92,12 @@ impl Controller for ZeroCommand {
 /// result is what it commands at `times_s[k]` for `states[k]`. Nothing but the measurements reaches
 /// it, so a controller that passes the same history through twice commands the same thing: the
 /// check that a "passive" controller really sees no fault information.
+/// `cancel` is checked before every step.
 pub fn replay(
     controller: &mut dyn Controller,
     times_s: &[f64],
     states: &[RigidBodyState],
+    cancel: &Cancel,
 ) -> Result<Vec<f64>> {
     if times_s.len() != states.len() {
         return Err(RfError::shape(
@@ -108,6 +111,7 @@ pub fn replay(
     let mut out = vec![0.0; count * times_s.len()];
     controller.reset();
     for (k, (t, state)) in times_s.iter().zip(states).enumerate() {
+        cancel.check()?;
         controller.command(*t, state, &mut out[k * count..(k + 1) * count])?;
     }
     Ok(out)

@@ -26,6 +26,7 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::cancel::Cancel;
 use crate::control::Controller;
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
@@ -410,8 +411,12 @@ pub struct SummaryRun {
 }
 
 /// Flies one run, keeping only its summary (the trajectory is thinned to its first and last
-/// rows whatever `config.record_every` says).
-pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Result<RunSummary> {
+/// rows whatever `config.record_every` says), checking `cancel` once per control period.
+pub fn simulate_summary(
+    mut run: SummaryRun,
+    criteria: &VerdictCriteria,
+    cancel: &Cancel,
+) -> Result<RunSummary> {
     criteria.check()?;
     let mut config = run.config;
     config.record_every = usize::MAX;
@@ -434,6 +439,7 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
         run.x0,
         &config,
         &mut observer,
+        cancel,
     )?;
     let end = trajectory.t_s.last().copied().unwrap_or(0.0);
     let m = run.initial_efficiency.len();
@@ -453,10 +459,11 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
 pub fn simulate_summaries(
     runs: Vec<SummaryRun>,
     criteria: &VerdictCriteria,
+    cancel: &Cancel,
 ) -> Result<Vec<RunSummary>> {
     criteria.check()?;
     runs.into_par_iter()
-        .map(|run| simulate_summary(run, criteria))
+        .map(|run| simulate_summary(run, criteria, cancel))
         .collect()
 }
 
@@ -499,7 +506,7 @@ mod tests {
     #[test]
     fn a_fall_to_the_ground_is_counted_crashed() {
         // 10 m of free fall reach the ground at sqrt(20 / g) s, before the 20 m limit.
-        let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default()).unwrap();
+        let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default(), &crate::Cancel::never()).unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::Crashed));
         assert_eq!(s.outcome.name(), "crashed");
@@ -512,7 +519,12 @@ mod tests {
     #[test]
     fn free_fall_is_lost_at_the_analytic_time() {
         // 20 m of free fall take sqrt(40 / g) s (the located crossing, to 1e-12 s).
-        let s = simulate_summary(free_fall(10.0), &VerdictCriteria::default()).unwrap();
+        let s = simulate_summary(
+            free_fall(10.0),
+            &VerdictCriteria::default(),
+            &Cancel::never(),
+        )
+        .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         let expected = (40.0 / g).sqrt();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::AltitudeLoss));
@@ -527,7 +539,12 @@ mod tests {
     #[test]
     fn a_short_fall_is_off_station_with_window_values() {
         // 1 s of free fall: 0.5 g m down, speed g m/s, all in a 5 s window.
-        let s = simulate_summary(free_fall(1.0), &VerdictCriteria::default()).unwrap();
+        let s = simulate_summary(
+            free_fall(1.0),
+            &VerdictCriteria::default(),
+            &Cancel::never(),
+        )
+        .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         assert_eq!(s.outcome, Outcome::OffStation);
         assert!((s.max_altitude_loss_m - 0.5 * g).abs() < 1e-9);
@@ -542,7 +559,7 @@ mod tests {
             window_s: 0.0,
             ..VerdictCriteria::default()
         };
-        let err = simulate_summary(free_fall(1.0), &criteria)
+        let err = simulate_summary(free_fall(1.0), &criteria, &Cancel::never())
             .unwrap_err()
             .to_string();
         assert!(err.starts_with("criteria.window_s"), "{err}");

@@ -755,8 +755,8 @@ mod tests {
             })
             .collect();
         let times: Vec<f64> = (0..300).map(|k| k as f64 * DT).collect();
-        let first = crate::control::replay(&mut c, &times, &states).unwrap();
-        let second = crate::control::replay(&mut c, &times, &states).unwrap();
+        let first = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+        let second = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
         assert_eq!(first, second);
         assert!(first.iter().all(|v| v.is_finite()));
     }

@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_finite, require_scale, Result, RfError};
 use crate::flight::simulation::divergence::DivergenceLimits;
 use crate::flight::simulation::noise::SensorNoise;
 use crate::flight::simulation::recording::records;
@@ -14,6 +14,11 @@ use crate::state::RigidBodyState;
 pub const MAX_CONTROL_STEPS: usize = 10_000_000;
 /// Most RK4 steps one run takes (a few minutes on one core).
 pub const MAX_RK4_STEPS: usize = 1_000_000_000;
+
+/// Most RK4 substeps per control period. The run checks for cancellation once per control period
+/// (`driver`), so this bounds the work between two checks: 10,000 substeps of the largest
+/// vehicle take well under 100 ms. A step-size guard that asks for more means dt_s is too long.
+pub const MAX_SUBSTEPS: usize = 10_000;
 
 /// Relative tolerance below which `duration / dt` counts as a whole number of control steps.
 const WHOLE_STEPS_RTOL: f64 = 1e-9;
@@ -87,6 +92,7 @@ impl SimulationConfig {
                 format!("must be > 0 and finite, got {}", self.dt_s),
             ));
         }
+        require_scale("dt_s", self.dt_s, "s")?;
         if self.record_every == 0 {
             return Err(RfError::invalid("record_every", "must be >= 1"));
         }
@@ -116,6 +122,18 @@ impl SimulationConfig {
                 "substeps",
                 format!(
                     "{steps} control steps x {} substeps exceed the limit of {MAX_RK4_STEPS} RK4 steps per run",
+                    self.substeps
+                ),
+            ));
+        }
+        // Only a run that integrates anything has periods to bound (a zero-length run checks
+        // the other settings).
+        if steps >= 1.0 && self.substeps > MAX_SUBSTEPS {
+            return Err(RfError::invalid(
+                "substeps",
+                format!(
+                    "must be at most {MAX_SUBSTEPS} RK4 steps per control period, got {} (a \
+                     finer integration needs a shorter dt_s)",
                     self.substeps
                 ),
             ));

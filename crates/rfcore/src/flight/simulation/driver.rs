@@ -1,9 +1,11 @@
 //! The driver: one closed-loop run ([`simulate`], [`simulate_observed`]) checked before any
 //! work, flown control step by control step (measure, command, record, then one
-//! `Integrator::period`), and many runs in parallel ([`simulate_batch`]).
+//! `Integrator::period`), and many runs in parallel ([`simulate_batch`]). Runs check a
+//! [`Cancel`] token once per control period (`*_cancellable`, the batch).
 
 use rayon::prelude::*;
 
+use crate::cancel::Cancel;
 use crate::control::Controller;
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
@@ -29,6 +31,30 @@ pub fn simulate(
     x0: RigidBodyState,
     config: &SimulationConfig,
 ) -> Result<Trajectory> {
+    simulate_cancellable(
+        vehicle,
+        actuators,
+        controller,
+        initial_efficiency,
+        faults,
+        x0,
+        config,
+        &Cancel::never(),
+    )
+}
+
+/// [`simulate`], checking `cancel` once per control period.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_cancellable(
+    vehicle: &Vehicle,
+    actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+    cancel: &Cancel,
+) -> Result<Trajectory> {
     simulate_observed(
         vehicle,
         actuators,
@@ -38,10 +64,12 @@ pub fn simulate(
         x0,
         config,
         &mut NoObserver,
+        cancel,
     )
 }
 
-/// [`simulate`], showing every control step to `observer` as it is flown.
+/// [`simulate`], showing every control step to `observer` as it is flown, and checking `cancel`
+/// once per control period (at most [`crate::flight::simulation::MAX_SUBSTEPS`] RK4 steps).
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_observed(
     vehicle: &Vehicle,
@@ -52,6 +80,7 @@ pub fn simulate_observed(
     x0: RigidBodyState,
     config: &SimulationConfig,
     observer: &mut dyn StepObserver,
+    cancel: &Cancel,
 ) -> Result<Trajectory> {
     config.check()?;
     let m = vehicle.rotor_count();
@@ -144,6 +173,7 @@ pub fn simulate_observed(
         return Ok(trajectory);
     }
     for k in 0..=steps {
+        cancel.check()?;
         let t = config.step_time(k);
         let estimate = onboard.as_ref().map(|o| o.estimate(t));
         // Measurements are recorded only when they differ from the true state (with noise);
@@ -285,13 +315,15 @@ pub struct BatchRun {
 }
 
 /// Many runs in parallel (rayon); results in input order. With sensor noise or sensing, run `i`
-/// uses seed `seed + i`, so runs are independent and the batch is reproducible.
+/// uses seed `seed + i`, so runs are independent and the batch is reproducible. Every run checks
+/// `cancel` once per control period.
 pub fn simulate_batch(
     vehicle: &Vehicle,
     actuators: &Actuators,
     initial_efficiency: &[f64],
     runs: Vec<BatchRun>,
     config: &SimulationConfig,
+    cancel: &Cancel,
 ) -> Result<Vec<Trajectory>> {
     config.check()?;
     for (i, run) in runs.iter().enumerate() {
@@ -311,7 +343,7 @@ pub fn simulate_batch(
             if let Some(command) = &run.initial_command {
                 actuators.settle(command)?;
             }
-            simulate(
+            simulate_cancellable(
                 vehicle,
                 actuators,
                 run.controller.as_mut(),
@@ -319,6 +351,7 @@ pub fn simulate_batch(
                 &run.faults,
                 run.x0,
                 &own,
+                cancel,
             )
         })
         .collect()

@@ -187,7 +187,7 @@ fn a_batch_crashes_exactly_like_single_runs() {
             faults: vec![],
         })
         .collect();
-    let batch = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs, &config).unwrap();
+    let batch = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs, &config, &crate::Cancel::never()).unwrap();
     for (x0, run) in starts.iter().zip(&batch) {
         let single = fall(*x0, &config).unwrap();
         assert_eq!((&run.t_s, &run.states), (&single.t_s, &single.states));
@@ -251,6 +251,7 @@ fn bad_ground_settings_and_starts_underground_are_refused_by_name() {
         &[1.0; 4],
         runs,
         &config,
+        &crate::Cancel::never(),
     )
     .unwrap_err()
     .to_string();

@@ -57,9 +57,9 @@ mod tape;
 mod tests;
 
 pub use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
-pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS};
+pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS};
 pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
-pub use driver::{simulate, simulate_batch, simulate_observed, BatchRun};
+pub use driver::{simulate, simulate_batch, simulate_cancellable, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
 pub use recording::{EstimateRow, SensingRecord, StepObserver, Trajectory};
 pub use sensing::{ImuPart, Sensing, SuiteName};

@@ -113,7 +113,11 @@ impl Onboard {
             Next::Position,
         );
         if let Some(m) = &s.magnetometer {
-            consider(m.is_due(t_end_s), m.next_sample_time_s(), Next::Magnetometer);
+            consider(
+                m.is_due(t_end_s),
+                m.next_sample_time_s(),
+                Next::Magnetometer,
+            );
         }
         if self.rotor.is_some() {
             consider(
@@ -127,7 +131,12 @@ impl Onboard {
     }
 
     /// Takes every sample due up to `t_end_s` from `tape` (module docs).
-    pub(crate) fn catch_up(&mut self, tape: &mut Tape, vehicle: &Vehicle, t_end_s: f64) -> Result<()> {
+    pub(crate) fn catch_up(
+        &mut self,
+        tape: &mut Tape,
+        vehicle: &Vehicle,
+        t_end_s: f64,
+    ) -> Result<()> {
         while let Some(which) = self.next_due(t_end_s) {
             let s = &mut self.sensors;
             match which {
@@ -170,7 +179,11 @@ impl Onboard {
         if let Some(rotor) = self.rotor.as_mut() {
             if self.sensors.rotor_speed.poll(t_end_s) {
                 rotor.arrived = true;
-                for (f, &w) in rotor.thrust_n.iter_mut().zip(self.sensors.rotor_speed.latest()) {
+                for (f, &w) in rotor
+                    .thrust_n
+                    .iter_mut()
+                    .zip(self.sensors.rotor_speed.latest())
+                {
                     *f = rotor.coefficient * w * w.abs();
                 }
             }

@@ -183,15 +183,38 @@ mod tests {
             assert_eq!(ImuPart::from_name("imu", p.name()).unwrap(), p);
         }
         let err = SuiteName::from_name("sensing.suite", "vicon").unwrap_err();
-        assert!(err.to_string().starts_with("sensing.suite: expected one of mocap, gnss, rtk"));
+        assert!(err
+            .to_string()
+            .starts_with("sensing.suite: expected one of mocap, gnss, rtk"));
         Sensing::default().check().unwrap();
         for (field, bad) in [
-            ("sensing.imu_rate_hz", Sensing { imu_rate_hz: 0.0, ..Sensing::default() }),
-            ("sensing.imu_rate_hz", Sensing { imu_rate_hz: f64::NAN, ..Sensing::default() }),
-            ("sensing.imu_rate_hz", Sensing { imu_rate_hz: 1e6, ..Sensing::default() }),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: 0.0,
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: f64::NAN,
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: 1e6,
+                    ..Sensing::default()
+                },
+            ),
             (
                 "sensing.position_rate_hz",
-                Sensing { position_rate_hz: Some(-1.0), ..Sensing::default() },
+                Sensing {
+                    position_rate_hz: Some(-1.0),
+                    ..Sensing::default()
+                },
             ),
         ] {
             let err = bad.check().unwrap_err().to_string();

@@ -157,7 +157,14 @@ mod tests {
         // A tumbling, thrusting quadrotor: the truth 0.6 ms after a node against RK4 with
         // 1 us steps from the node; halving tau divides the error by about 8.
         let airframe = crate::fixtures::preset("quad-x");
-        let vehicle = Vehicle::new(&airframe, Drag { linear_drag_n_s_m: 0.3, ..Drag::default() }).unwrap();
+        let vehicle = Vehicle::new(
+            &airframe,
+            Drag {
+                linear_drag_n_s_m: 0.3,
+                ..Drag::default()
+            },
+        )
+        .unwrap();
         let totals = RotorTotals {
             thrust_n: 14.0,
             torque_body_nm: Vector3::new(0.05, -0.08, 0.02),
@@ -200,6 +207,9 @@ mod tests {
         // The module docs' bound: position within jerk tau^3 / 6 for a jerk of 400 m/s^3
         // (1.4e-8 m at 0.6 ms; this tumble's jerk is lower).
         let position_bound_m = 400.0 * 6e-4f64.powi(3) / 6.0;
-        assert!(big[0] < position_bound_m && big[2] < 1e-7 && big[4] < 1e-3, "{big:?}");
+        assert!(
+            big[0] < position_bound_m && big[2] < 1e-7 && big[4] < 1e-3,
+            "{big:?}"
+        );
     }
 }
