@@ -134,7 +134,7 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @_user_errors
 def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
-    """Fly a scenario file (airframe, controller, faults, wind, noise, duration)."""
+    """Fly a scenario file (airframe, controller, faults, wind, noise or sensing, duration)."""
     from ..studies.scenario_file import load_scenario
 
     if plot_path is not None:
@@ -152,6 +152,13 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
     table.add_row("max altitude loss", f"{max(0.0, altitude[0] - altitude.min()):.3f} m")
     table.add_row("max horizontal excursion", f"{np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max():.3f} m")
     table.add_row("max tilt", f"{tilt.max():.1f} deg")
+    table.add_row("flew on", run.sensed)
+    if run.estimate is not None:
+        finite = np.isfinite(run.estimate_position_error_m)
+        table.add_row("estimate error, position RMS", f"{1e3 * np.sqrt(np.mean(run.estimate_position_error_m[finite] ** 2)):.3f} mm")
+        table.add_row("estimate error, attitude RMS", f"{np.degrees(np.sqrt(np.mean(run.estimate_attitude_error_rad[finite] ** 2))):.4f} deg")
+        counts = run.estimate.counts
+        table.add_row("gyro clamped", f"{counts.gyro_saturated_samples} of {counts.imu_samples} IMU samples")
     table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
     console.print(table)
     if plot_path is not None:

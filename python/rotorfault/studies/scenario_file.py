@@ -1,5 +1,5 @@
 """Scenario files for ``rotorfault simulate``: one TOML file names an airframe, a controller,
-faults, wind, noise and the duration. Unknown keys are errors, so a typo never silently becomes
+faults, wind, noise or sensing and the duration. Unknown keys are errors, so a typo never silently becomes
 a default. Schema (every table optional except the top-level ``airframe``)::
 
     airframe = "quad-x"          # a preset name, or an airframe TOML path (relative to this file)
@@ -28,8 +28,14 @@ a default. Schema (every table optional except the top-level ``airframe``)::
     [wind]
     velocity_m_s = [0, 0, 0]
 
-    [noise]                      # fields of rotorfault.Noise
+    [noise]                      # fields of rotorfault.Noise (the papers' noise on the state)
     snr_db = 15.0
+    seed = 0
+
+    [sensing]                    # fields of rotorfault.Sensing: sensors and the estimator
+    suite = "mocap"              # "mocap", "gnss" or "rtk" (not with [noise])
+    imu = "icm-42688-p"          # or "mpu-6000"
+    imu_rate_hz = 500.0
     seed = 0
 
     [[fault]]                    # any number
@@ -53,10 +59,10 @@ from .._typing import ScenarioControllerKind
 from .._util.convert import real
 from ..analysis.airframe import Airframe
 from ..control import OpenLoop, hover_trim, lqr_hover
-from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
+from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Sensing, Simulator, State, Trajectory
 from ..flight.simulator import DEFAULT_START_M
 
-_TOP = {"airframe", "duration_s", "dt_s", "substeps", "ground_z_m", "ground", "initial", "controller", "actuator", "drag", "wind", "noise", "fault"}
+_TOP = {"airframe", "duration_s", "dt_s", "substeps", "ground_z_m", "ground", "initial", "controller", "actuator", "drag", "wind", "noise", "sensing", "fault"}
 _TABLES: dict[str, set[str]] = {
     "initial": {"position_m", "velocity_m_s", "euler_rad", "omega_rad_s"},
     "controller": {"kind"},
@@ -64,6 +70,7 @@ _TABLES: dict[str, set[str]] = {
     "drag": {"linear_n_s_m", "quadratic_n_s2_m2", "rotational_n_m_s", "rotor_inertia_kg_m2"},
     "wind": {"velocity_m_s"},
     "noise": {"snr_db", "std", "seed"},
+    "sensing": set(Sensing.FIELDS),
     "fault": {"rotor", "time_s", "efficiency"},
 }
 CONTROLLERS: tuple[ScenarioControllerKind, ...] = get_args(ScenarioControllerKind)
@@ -184,6 +191,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         raise ValueError(f"controller.kind: must be one of {', '.join(CONTROLLERS)}, got {kind!r}")
     actuator = _table(data, "actuator")
     noise = data.get("noise")
+    sensing = data.get("sensing")
     faults_raw = data.get("fault", [])
     if not isinstance(faults_raw, list):
         raise ValueError("fault: expected an array of tables ([[fault]])")
@@ -205,6 +213,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
             thrust_coefficient_n_s2=actuator.get("thrust_coefficient_n_s2", 0.0),
         ),
         noise=None if noise is None else Noise(**_table(data, "noise")),
+        sensing=None if sensing is None else Sensing(**_table(data, "sensing")),
         ground_z_m=data.get("ground_z_m"),
         ground=data.get("ground", True),
     )
