@@ -109,3 +109,17 @@ def test_ke_scenarios_with_truth_and_with_mocap(name: str) -> None:
     assert a.outcome == b.outcome, (a.outcome, b.outcome)
     assert a.window_horizontal_error_m is not None and b.window_horizontal_error_m is not None
     assert abs(a.window_horizontal_error_m - b.window_horizontal_error_m) < max(0.05, 0.02 * a.window_horizontal_error_m)
+
+
+def test_the_report_table_sets_truth_and_sensors_side_by_side() -> None:
+    """Ke's report table (:func:`rotorfault.papers.ke.sensing_table`): mocap keeps the fault-free
+    hold; GNSS (metres of noise) loses it, and the table says "differs"."""
+    truth = [ke_paper.run_scenario("fault-free")]
+    mocap = ke_paper.sensing_table(truth, [ke_paper.run_scenario("fault-free", sensing=rf.Sensing())])
+    gnss = ke_paper.sensing_table(truth, [ke_paper.run_scenario("fault-free", sensing=rf.Sensing(suite="gnss"))])
+    assert "on mocap" in mocap.caption and "on gnss" in gnss.caption
+    (row,) = mocap.rows
+    assert row[:4] == ("fault-free", "holds position", "holds position", "same")
+    assert 0 < float(row[5]) < 0.35 and 0 < float(row[6]) < 0.14
+    (row,) = gnss.rows
+    assert row[1] == "holds position" and row[2] != "holds position" and row[3] == "differs"

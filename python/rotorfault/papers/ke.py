@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from .._typing import KeLaw
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
@@ -34,7 +36,7 @@ from ..plotting.paths import plot_primary_axis
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
-    from ._report import ReportSection
+    from ._report import ReportSection, ReportTable
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -395,6 +397,35 @@ def printed_numbers(airframe: Airframe | None = None) -> list[PaperNumber]:
     return rows
 
 
+def sensing_table(truth: list[ScenarioRun], sensed: list[ScenarioRun]) -> ReportTable:
+    """The same scenarios flown on the truth and on sensors, side by side: each verdict, the
+    window's horizontal error, and the estimate's error (position and attitude RMS over the run)."""
+    from ._report import ReportTable
+
+    rows = []
+    for a, b, row_a, row_b in zip(truth, sensed, report_rows(truth), report_rows(sensed), strict=True):
+        tr = b.trajectory
+        finite = np.isfinite(tr.estimate_position_error_m)
+        position_mm = 1e3 * float(np.sqrt(np.mean(tr.estimate_position_error_m[finite] ** 2)))
+        attitude_deg = float(np.degrees(np.sqrt(np.mean(tr.estimate_attitude_error_rad[finite] ** 2))))
+        counts = tr.estimate.counts if tr.estimate is not None else None
+        clamped = "" if counts is None else f"{counts.gyro_saturated_samples / max(counts.imu_samples, 1):.0%}"
+        rows.append((
+            a.scenario.name, a.metrics.outcome_label, b.metrics.outcome_label,
+            "same" if a.metrics.outcome == b.metrics.outcome else "differs",
+            f"{cell(row_a, 'window_horizontal_error_m', 3)} / {cell(row_b, 'window_horizontal_error_m', 3)}",
+            f"{position_mm:.3f}", f"{attitude_deg:.4f}", clamped,
+        ))
+    return ReportTable(
+        f"With sensors: the same flights on the truth and on {sensed[0].trajectory.sensed} (rotorfault.Sensing: the "
+        "suite's IMU and position source, the error-state Kalman filter), side by side; the estimate's error over the "
+        "whole run (a lost run's tumble included) and the share of IMU samples with the gyro clamped at 2000 deg/s",
+        ("scenario", "truth: outcome", "sensors: outcome", "verdict", "window horiz. (m) truth / sensors",
+         "estimate position RMS (mm)", "estimate attitude RMS (deg)", "gyro clamped"),
+        tuple(rows),
+    )
+
+
 #: Scenarios flown for the reproduce-all report in --quick mode (the full mode flies all).
 QUICK_SCENARIOS = ("fault-free", "one-failure", "two-adjacent", "two-opposite", "two-adjacent-front", "three-failures")
 
@@ -440,12 +471,19 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
             for r in rows
         ),
     ))
+    sensed = [run_scenario(sc, sensing=Sensing()) for sc in chosen]
+    section.tables.append(sensing_table(runs, sensed))
     plot_primary_axis(runs, str(out / "ke-primary-axis.png"))
     section.figures.append(ReportFigure("ke-primary-axis.png", "The primary axis n3 on the unit sphere for every flight (Ke Fig. 16 style)."))
     for run in runs + extra:
         name = f"ke-{run.scenario.name}-{run.law}.png"
         run.plot(str(out / name))
         section.figures.append(ReportFigure(name, f"{run.scenario.name}, law {run.law}: {run.scenario.description}", small=True))
+    for run in sensed:
+        name = f"ke-{run.scenario.name}-{run.law}-mocap.png"
+        run.plot(str(out / name))
+        section.figures.append(ReportFigure(
+            name, f"{run.scenario.name}, law {run.law}, on mocap sensors: truth, the estimate (dotted) and its error", small=True))
     section.run_time_s = time.perf_counter() - start
     return section
 
@@ -474,6 +512,7 @@ __all__ = [
     "plot_primary_axis",
     "report_rows",
     "run_scenario",
+    "sensing_table",
     "scenario",
     "scenarios",
     "write_report",
