@@ -29,7 +29,7 @@ import numpy as np
 from .._util.convert import FloatArray, count, real
 from ..control.ke import UniformPassiveFtc
 from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
-from ..flight import Noise, RotorFault, State, Trajectory, simulate_batch
+from ..flight import Noise, RotorFault, Sensing, State, Trajectory, simulate_batch
 from ..plotting.paths import plot_lanzon_paths as plot_paths
 from ..plotting.timeseries import plot_lanzon_flight as plot_flight
 from ..studies.backends import map_runs
@@ -248,9 +248,11 @@ def fly(
     duration_s: float | None = None,
     record_every: int = 10,
     designed: LanzonDesign | None = None,
+    sensing: Sensing | None = None,
 ) -> LanzonRun:
     """Flies one scenario with one design case on ``vehicle`` (default: Table 1 with the printed
-    ``I_zz``), rotor 2 dead from the start. ``designed`` reuses a design of that case."""
+    ``I_zz``), rotor 2 dead from the start. ``designed`` reuses a design of that case. The
+    controller flies on the truth, or on ``sensing`` (sensors and the estimator)."""
     sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
     cs = design_case(case) if isinstance(case, str) else case
     if not isinstance(sc, LanzonScenario):
@@ -261,7 +263,7 @@ def fly(
     d = cs.design(v) if designed is None else designed
     controller = LanzonController(d, position=sc.position, outer_loop=cs.outer_loop)
     duration = sc.duration_s if duration_s is None else real("duration_s", duration_s)
-    sim = v.simulator(limits=cs.limits)
+    sim = v.simulator(limits=cs.limits, sensing=sensing)
     trajectory = sim.run(sc.initial_state(), duration, controller=controller, faults=[RotorFault(2, 0.0)],
                          record_every=record_every)
     return LanzonRun(replace(sc, duration_s=duration), cs, v, d, trajectory)

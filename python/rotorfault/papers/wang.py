@@ -47,7 +47,7 @@ import numpy as np
 from .._util.convert import FloatArray, real
 from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback
-from ..flight import Noise, Simulator, State, Trajectory
+from ..flight import Noise, Sensing, Simulator, State, Trajectory
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
 
@@ -179,10 +179,12 @@ def fly(
     error_limit_m: float = ERROR_LIMIT_M,
     seed: int = 0,
     settle_s: float = 15.0,
+    sensing: Sensing | None = None,
 ) -> WangFlight:
     """Scenario ``number`` with propeller 1 failed from t = 0 on the VPP quadcopter (the
     fixed-pitch quadcopter is not flown: module notes). ``max_error_after_s``: the largest
-    position error after ``settle_s`` (the last waypoint at 10 s plus 5 s)."""
+    position error after ``settle_s`` (the last waypoint at 10 s plus 5 s). With ``sensing`` the
+    controller flies on sensors and the estimator instead of the paper's 15 dB noise."""
     s = scenario(number, duration_s=duration_s)
     vehicle = vpp.preset("wang")
     law = controller(vehicle, s, error_limit_m=error_limit_m)
@@ -190,7 +192,8 @@ def fly(
     sim = Simulator(
         base.airframe, actuator=vehicle.actuator, drag=vehicle.drag, dt_s=DT_S,
         wind_profile=list(s.wind_profile) if s.wind_profile else None,
-        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy else None, ground_z_m=GROUND_Z_M,
+        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy and sensing is None else None, ground_z_m=GROUND_Z_M,
+        sensing=sensing,
     )
     run = sim.run(State(), duration_s=duration_s, controller=law)
     reference = np.array([law.reference(t) for t in run.t])
