@@ -47,3 +47,11 @@ def test_wang_lqr_flies_on_mocap(number: int) -> None:
         assert sensed.max_error_after_s < paper.max_error_after_s
     else:
         assert abs(sensed.max_error_after_s - paper.max_error_after_s) < 0.05
+
+
+def test_lanzon_report_table_flags_a_verdict_that_sensing_changes() -> None:
+    truth = [lanzon.fly("A", "a")]
+    same = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=lanzon.MOCAP_AT_LOOP_RATE)])
+    slow_imu = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=rf.Sensing())])
+    assert same.rows[0][3:6] == ("level", "level", "same")
+    assert slow_imu.rows[0][3:6] == ("level", "tilt", "differs")

@@ -400,6 +400,10 @@ def printed_numbers() -> list[PaperNumber]:
     ]
 
 
+def _lost(time_s: float | None) -> str:
+    return "not lost" if time_s is None else f"{time_s:.2f}"
+
+
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     """Wang's part of ``rotorfault reproduce``: the printed numbers beside ours, the same tables
     and flights as ``rotorfault vpp-report`` (``--quick``: 20 s flights)."""
@@ -428,5 +432,14 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         section.figures.append(ReportFigure(name, f"Section 4 scenario {n}: VPP, propeller 1 failed", small=True))
     columns, rows = markdown_table(flights_table(flights))
     section.tables.append(ReportTable(f"Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0)", columns, rows))
+    sensed = [fly(n, duration_s=duration, sensing=Sensing(imu_rate_hz=1000.0)) for n in (1, 2, 3)]
+    section.tables.append(ReportTable(
+        "With sensors: the same flights on the paper's sensing (scenario 1 the truth, 2 and 3 its 15 dB noise) and on "
+        "mocap (rotorfault.Sensing, the IMU at the 1 kHz loop rate; the error-state Kalman filter), side by side",
+        ("scenario", "paper: lost at (s)", "mocap: lost at (s)", "paper: max error after 15 s (m)",
+         "mocap: max error after 15 s (m)"),
+        tuple((str(n), _lost(a.lost_at_s), _lost(b.lost_at_s), f"{a.max_error_after_s:.3f}", f"{b.max_error_after_s:.3f}")
+              for n, a, b in zip((1, 2, 3), flights, sensed, strict=True)),
+    ))
     section.run_time_s = time.perf_counter() - start
     return section
