@@ -62,6 +62,14 @@ VppInputs: TypeAlias = Literal["wang", "every-channel"]
 CertifiedAxis: TypeAlias = Literal["thrust", "roll", "pitch", "yaw"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
+#: A named sensor suite (:class:`rotorfault.Sensing` ``suite``): motion capture, GNSS with a
+#: magnetometer, GNSS with RTK; each with an IMU and rotor-speed feedback.
+SensorSuiteName: TypeAlias = Literal["mocap", "gnss", "rtk"]
+#: An IMU part (:class:`rotorfault.Sensing` ``imu``).
+ImuPart: TypeAlias = Literal["icm-42688-p", "mpu-6000"]
+#: What a controller flies on: the true state, the papers' relative noise on it, or a sensor suite
+#: with the estimator (:attr:`rotorfault.Trajectory.sensed`).
+Sensed: TypeAlias = Literal["truth", "paper-noise", "mocap", "gnss", "rtk"]
 #: Controller of a ``rotorfault simulate`` scenario file: none, a registered controller by its
 #: registry name (:mod:`rotorfault.studies.scenario_controllers` builds each), or the first
 #: release's names of two designs (``lqr-hover``: linear-feedback, ``open-loop-hover``: open-loop).

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -163,9 +164,24 @@ def test_simulate_calls_a_vehicle_that_falls_without_touching_the_ground_drifts(
     assert "drifts (window: 0.00 m off, 9.33 m" in out and "\ndrifts: airborne to the end" in out
 
 
+def test_simulate_a_scenario_on_sensors(tmp_path: Path) -> None:
+    """A [sensing] table flies the hover LQR on mocap and the estimator; the table says what the
+    controller flew on and the estimate's error (sub-millimetre with the 0.2 mm mocap)."""
+    path = tmp_path / "sensed.toml"
+    path.write_text('airframe = "quad-x"\nduration_s = 2.0\n[sensing]\nsuite = "mocap"\nseed = 4\n')
+    code, out, err = run("simulate", str(path))
+    assert code == 0, err
+    assert "no divergence" in out and "flew on" in out and "mocap" in out
+    rms_mm = float(re.search(r"position RMS\s*│?\s*([0-9.]+) mm", out).group(1))  # type: ignore[union-attr]
+    assert 0 < rms_mm < 0.35, out
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
+        ('airframe = "quad-x"\n[sensing]\nsuite = "vicon"\n', "sensing.suite: expected one of mocap, gnss, rtk"),
+        ('airframe = "quad-x"\n[sensing]\nrate = 1\n', "sensing: unknown key(s) rate"),
+        ('airframe = "quad-x"\n[sensing]\n[noise]\nsnr_db = 15.0\n', "noise, sensing: a run flies on one of them"),
         ('airframe = "quad-x"\ncolour = 1\n', "unknown key(s) colour"),
         ('airframe = "quad-x"\n[controller]\nkind = "pid"\n', "controller.kind: must be one of"),
         ('airframe = "quad-x"\n[[fault]]\nrotor = 5\ntime_s = 1.0\n', "fault[0].rotor: rotor numbers run from 1 to 4, got 5"),

@@ -20,6 +20,7 @@ use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
+use crate::sensing::PySensing;
 use crate::convert::{
     detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
 };
@@ -344,7 +345,7 @@ pub struct PySimulationConfig {
 impl PySimulationConfig {
     #[new]
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
+    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, sensing=None, record_every=None))]
     fn new(
         dt_s: Option<f64>,
         substeps: Option<usize>,
@@ -355,6 +356,7 @@ impl PySimulationConfig {
         wind_m_s: Option<[f64; 3]>,
         wind_profile: Option<Vec<(f64, [f64; 3])>>,
         noise: Option<PyRef<'_, PySensorNoise>>,
+        sensing: Option<PyRef<'_, PySensing>>,
         record_every: Option<usize>,
     ) -> PyResult<Self> {
         let d = SimulationConfig::default();
@@ -381,6 +383,7 @@ impl PySimulationConfig {
                     .collect()
             }),
             noise: noise.map(|n| n.inner).or(d.noise),
+            sensing: sensing.map(|n| n.inner).or(d.sensing),
             record_every: record_every.unwrap_or(d.record_every),
         };
         inner.check().map_err(to_py_err)?;
@@ -417,6 +420,11 @@ impl PySimulationConfig {
     fn wind_m_s(&self) -> [f64; 3] {
         self.inner.wind_m_s.into()
     }
+    /// Sensors and the estimator the controller flies on (`None`: the truth, or `noise`).
+    #[getter]
+    fn sensing(&self) -> Option<PySensing> {
+        self.inner.sensing.map(|inner| PySensing { inner })
+    }
     /// The recording grid: the times a run that does not diverge records (its `t`, bit for bit).
     fn record_times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.inner.record_times().into_pyarray(py)
@@ -444,6 +452,17 @@ pub struct PyDivergence {
     impact_speed_m_s: Option<f64>,
     impact_vertical_speed_m_s: Option<f64>,
     impact_tilt_rad: Option<f64>,
+}
+
+/// A run's sensor counts (`Trajectory.sensing_counts`).
+#[pyclass(name = "SensingCounts", module = "rotorfault._rfcore", frozen, get_all)]
+pub struct PySensingCounts {
+    imu_samples: u64,
+    gyro_saturated_samples: u64,
+    accel_saturated_samples: u64,
+    fused_measurements: u64,
+    rejected_measurements: u64,
+    late_measurements: u64,
 }
 
 /// A recorded run: one row per recorded control step; arrays are built on access.
@@ -517,6 +536,61 @@ impl PyTrajectory {
     #[getter]
     fn measured<'py>(&self, py: Python<'py>) -> Array2<'py> {
         self.rows(py, self.run.measured.clone())
+    }
+    /// What the controller flew on: `"truth"`, `"paper-noise"` or the sensor suite's name.
+    #[getter]
+    fn sensed(&self) -> &'static str {
+        self.run.sensed()
+    }
+    /// With sensing, the estimate the controller saw per row (N x 13: position, velocity,
+    /// quaternion w x y z, body rates); else `None`.
+    #[getter]
+    fn estimate_state<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.run.sensing.as_ref().map(|r| {
+            let values = r.rows.iter().flat_map(|row| row.state.to_packed()).collect();
+            self.rows(py, values)
+        }).transpose()
+    }
+    /// With sensing, the estimate as the 12-element state vector per row (Euler angles); else
+    /// `None`.
+    #[getter]
+    fn estimate_vector<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.run.sensing.as_ref().map(|r| {
+            let values = r.rows.iter().flat_map(|row| state_vector(&row.state)).collect();
+            self.rows(py, values)
+        }).transpose()
+    }
+    /// With sensing, one sigma of the estimator's error state per row (N x 15: position m,
+    /// velocity m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2); else `None`.
+    #[getter]
+    fn estimate_std<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.run.sensing.as_ref().map(|r| {
+            let values = r.rows.iter().flat_map(|row| row.std).collect();
+            self.rows(py, values)
+        }).transpose()
+    }
+    /// With sensing, per row: the newest IMU sample's gyroscope (accelerometer) was clamped.
+    #[getter]
+    fn gyro_saturated(&self) -> Option<Vec<bool>> {
+        self.run.sensing.as_ref().map(|r| r.rows.iter().map(|row| row.gyro_saturated).collect())
+    }
+    #[getter]
+    fn accel_saturated(&self) -> Option<Vec<bool>> {
+        self.run.sensing.as_ref().map(|r| r.rows.iter().map(|row| row.accel_saturated).collect())
+    }
+    /// With sensing, counts over the whole run: IMU samples, those with the gyroscope
+    /// (accelerometer) clamped, and the estimator's measurements fused, refused by its gate and
+    /// late; else `None`.
+    #[getter]
+    fn sensing_counts(&self) -> Option<PySensingCounts> {
+        self.run.sensing.as_ref().map(|r| PySensingCounts {
+            imu_samples: r.imu_samples,
+            gyro_saturated_samples: r.gyro_saturated_samples,
+            accel_saturated_samples: r.accel_saturated_samples,
+            fused_measurements: r.fusion.fused,
+            rejected_measurements: r.fusion.rejected,
+            late_measurements: r.fusion.late,
+        })
     }
     #[getter]
     fn divergence(&self) -> Option<PyDivergence> {

@@ -11,6 +11,7 @@ mod analysis;
 mod control;
 mod convert;
 mod flight;
+mod sensing;
 mod summary;
 
 use pyo3::prelude::*;
@@ -30,6 +31,8 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<flight::PyDivergenceLimits>()?;
     module.add_class::<flight::PySensorNoise>()?;
     module.add_class::<flight::PySimulationConfig>()?;
+    module.add_class::<sensing::PySensing>()?;
+    module.add_class::<flight::PySensingCounts>()?;
     module.add_class::<flight::PyTrajectory>()?;
     module.add_class::<flight::PyDivergence>()?;
     module.add_class::<control::ke::PyKeGains>()?;

@@ -21,7 +21,9 @@
 //!   4 RK4 substeps, trajectory recording), 10 s flights (100 s in the summary).
 
 use std::hint::black_box;
-use std::time::Instant;
+#[path = "common/cpu_time.rs"]
+mod cpu_time;
+use cpu_time::median_s;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::{DMatrix, Vector3};
@@ -153,29 +155,6 @@ fn truth_flight(
     )
     .expect("flight");
     run.states.len()
-}
-
-/// This thread's CPU time, s: the first field of `/proc/thread-self/schedstat` (ns on the CPU),
-/// which other processes on a loaded machine do not inflate; wall time where it is missing.
-fn cpu_time_s(wall: Instant) -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or_else(|| wall.elapsed().as_secs_f64(), |ns| ns * 1e-9)
-}
-
-/// Median CPU time of `f` over `reps` calls, s.
-fn median_s(reps: usize, mut f: impl FnMut()) -> f64 {
-    let origin = Instant::now();
-    let mut times: Vec<f64> = (0..reps)
-        .map(|_| {
-            let start = cpu_time_s(origin);
-            f();
-            cpu_time_s(origin) - start
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[reps / 2]
 }
 
 fn bench_sensors(c: &mut Criterion) {

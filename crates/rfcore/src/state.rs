@@ -88,6 +88,19 @@ impl<'a> ControllerInput<'a> {
 }
 
 impl RigidBodyState {
+    /// The [`PACKED_DIM`] numbers of [`RigidBodyState::from_packed`].
+    pub fn to_packed(&self) -> [f64; PACKED_DIM] {
+        let (p, v, q, w) = (
+            &self.position_m,
+            &self.velocity_m_s,
+            self.attitude.quaternion(),
+            &self.omega_rad_s,
+        );
+        [
+            p.x, p.y, p.z, v.x, v.y, v.z, q.w, q.i, q.j, q.k, w.x, w.y, w.z,
+        ]
+    }
+
     /// A state from [`PACKED_DIM`] numbers: position, velocity, quaternion (w, x, y, z), body rates.
     /// A quaternion that is unit to rounding (|q| - 1 <= 1e-12) is used exactly as given, so a
     /// recorded flight replays bit for bit; any other is normalised.

@@ -175,7 +175,7 @@ def design(airframe: str, parameter: str | None, values: str | None, formula: Ac
 @output_options
 @_user_errors
 def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Output) -> None:
-    """Fly a scenario file (airframe, controller, faults, wind, noise, duration) and judge the
+    """Fly a scenario file (airframe, controller, faults, wind, noise or sensing, duration) and judge the
     whole flight (holds, drifts, circles, crashed or diverged; the thresholds are printed)."""
     from ..flight.outcomes import VERDICT_MEANINGS
     from ..studies.scenario_file import load_scenario
@@ -196,7 +196,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         "final_position_m": [float(v) for v in run.position[-1]],
         "max_altitude_loss_m": float(max(0.0, altitude[0] - altitude.min())),
         "max_horizontal_excursion_m": float(np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
-        "max_tilt_deg": float(tilt.max()),
+        "max_tilt_deg": float(tilt.max()), "sensed": run.sensed,
         "verdict": metrics.verdict, "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
         "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time, "description": run.events[0].description},
         "plot": plot_path,
@@ -212,6 +212,13 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         table.add_row("max altitude loss", f"{fields['max_altitude_loss_m']:.3f} m")
         table.add_row("max horizontal excursion", f"{fields['max_horizontal_excursion_m']:.3f} m")
         table.add_row("max tilt", f"{tilt.max():.1f} deg")
+        table.add_row("flew on", run.sensed)
+        if run.estimate is not None:
+            finite = np.isfinite(run.estimate_position_error_m)
+            table.add_row("estimate error, position RMS", f"{1e3 * np.sqrt(np.mean(run.estimate_position_error_m[finite] ** 2)):.3f} mm")
+            table.add_row("estimate error, attitude RMS", f"{np.degrees(np.sqrt(np.mean(run.estimate_attitude_error_rad[finite] ** 2))):.4f} deg")
+            counts = run.estimate.counts
+            table.add_row("gyro clamped", f"{counts.gyro_saturated_samples} of {counts.imu_samples} IMU samples")
         colour = {"holds": "green", "drifts": "yellow", "circles": "yellow"}.get(metrics.verdict, "red")
         table.add_row("verdict", f"[{colour}]{escape(metrics.verdict_label)}[/{colour}]")
         if run.diverged:

@@ -37,7 +37,7 @@ from .._util.deprecation import dataclass_compat
 from .._typing import KeLaw
 from ..analysis.airframe import Airframe, require_airframe
 from ..allocation import Allocator
-from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Simulator
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Sensing, Simulator
 
 #: Rows of the virtual control Ke's N matrix uses: thrust, roll, pitch (E_1).
 E1_ROWS = (0, 1, 2)
@@ -74,9 +74,17 @@ class FtcPreset:
     def airframe(self) -> Airframe:
         return Airframe.preset(self.airframe_name)
 
-    def simulator(self, *, dt_s: float | None = None, substeps: int | None = None, limits: DivergenceLimits | None = None) -> Simulator:
+    def simulator(
+        self,
+        *,
+        dt_s: float | None = None,
+        substeps: int | None = None,
+        limits: DivergenceLimits | None = None,
+        sensing: Sensing | None = None,
+    ) -> Simulator:
         """The preset's vehicle at Ke's 400 Hz control rate (the simulator's default; ``dt_s`` and
-        ``substeps`` override it): rotor lag and rotational damping."""
+        ``substeps`` override it): rotor lag and rotational damping; the controller flies on the
+        truth, or on ``sensing`` (sensors and the estimator)."""
         timing = {k: v for k, v in (("dt_s", dt_s), ("substeps", substeps)) if v is not None}
         return Simulator(
             self.airframe,
@@ -84,6 +92,7 @@ class FtcPreset:
             actuator=FixedPitchActuator(time_constant_s=self.rotor_time_constant_s),
             drag=Drag(rotational_n_m_s=self.rotational_drag_n_m_s, linear_n_s_m=self.linear_drag_n_s_m),
             limits=limits,
+            sensing=sensing,
         )
 
 

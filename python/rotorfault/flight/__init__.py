@@ -1,6 +1,6 @@
 """Flight: one vehicle flown through time. The simulator wrapper (:mod:`~rotorfault.flight.simulator`:
 :class:`Simulator`, :func:`simulate_batch`, the divergence limits), the vehicle state, the actuator,
-drag and noise models, rotor faults, the trajectory a run returns, named flight scenarios
+drag and noise models, the sensors a controller may fly on (:data:`Sensing`), rotor faults, the trajectory a run returns, named flight scenarios
 (:mod:`~rotorfault.flight.scenarios`) and the verdict on a whole flight
 (:mod:`~rotorfault.flight.outcomes`: holds position, circling, off station, or lost). Mirrors the
 core's ``flight`` room.
@@ -12,20 +12,22 @@ simulator flies any ``Controller``.
 """
 
 from .faults import RotorFault
-from .models import Drag, FixedPitchActuator, Noise, VariablePitchActuator
+from .models import Drag, FixedPitchActuator, Noise, Sensing, VariablePitchActuator
 from .simulator import MAX_RATE_STEP, DivergenceLimits, Simulator, simulate_batch
 from .state import State
-from .trajectory import BatchResult, Event, Trajectory
+from .trajectory import BatchResult, Estimates, Event, Trajectory
 
 __all__ = [
     "MAX_RATE_STEP",
     "BatchResult",
     "DivergenceLimits",
     "Drag",
+    "Estimates",
     "Event",
     "FixedPitchActuator",
     "Noise",
     "RotorFault",
+    "Sensing",
     "Simulator",
     "State",
     "Trajectory",

@@ -1,5 +1,6 @@
 """What a flight is flown with besides the airframe: the rotor actuators (fixed or variable
-pitch), aerodynamic drag and sensor noise. Defaults come from the core's ``Default`` (read once)."""
+pitch), aerodynamic drag, the papers' sensor noise and the sensors with the estimator
+(:data:`Sensing`). Defaults come from the core's ``Default`` (read once)."""
 
 from __future__ import annotations
 
@@ -27,6 +28,28 @@ _DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (
 #: inertia about its axis, the gyroscopic moment of Lanzon eq. (5)).
 Drag = _rfcore.Drag
 dataclass_compat(Drag)
+
+
+#: What the controller flies on when it flies on sensors: the core's class, used directly
+#: (keyword-only; defaults from the core's ``Sensing::default()``; values checked by the core,
+#: errors naming ``sensing.<field>``; frozen, ``replace(**changes)``, ``FIELDS``, ``SUITES``,
+#: ``IMUS``): ``suite`` (``"mocap"``: ICM-42688-P + OptiTrack PrimeX 13 + DShot rotor speeds;
+#: ``"gnss"``: u-blox NEO-M8N + ST LIS3MDL instead of mocap; ``"rtk"``: the ZED-F9P), ``imu``
+#: (``"icm-42688-p"``, ``"mpu-6000"``), ``imu_rate_hz`` (default 500, an ICM-42688-P output data
+#: rate), ``position_rate_hz`` (``None``: the suite's 240 / 5 / 10 Hz) and ``seed`` (run ``i`` of a
+#: batch uses ``seed + i``). The estimator (an error-state Kalman filter with latency
+#: compensation, ``crates/rfcore/src/flight/estimation``) is matched to the sensors; the profiles
+#: and their datasheet sources are in ``crates/rfcore/src/flight/sensors/README.md``.
+Sensing = _rfcore.Sensing
+
+
+def sensing_with_offset(sensing: Any, offset: int) -> Any:
+    """``sensing`` with its seed moved on by ``offset`` (run ``i`` of a batch sent in chunks)."""
+    if offset == 0:
+        return sensing
+    if sensing.seed + offset >= 2**64:
+        raise ValueError("sensing.seed: must be below 2**64 for every run of the batch (seed + run index)")
+    return sensing.replace(seed=sensing.seed + offset)
 
 
 @dataclass(frozen=True)
@@ -118,4 +141,4 @@ class Noise:
         return _rfcore.SensorNoise(relative_std=relative, absolute_std=[float(v) for v in absolute], seed=seed + seed_offset)
 
 
-__all__ = ["Drag", "FixedPitchActuator", "Noise", "VariablePitchActuator"]
+__all__ = ["Drag", "FixedPitchActuator", "Noise", "Sensing", "VariablePitchActuator", "sensing_with_offset"]

@@ -7,6 +7,11 @@ faults are 1-based like the papers; arrays are ordered rotor 1..m.
 The ground is the plane ``z = ground_z_m`` (default 0: altitude is height above the ground); the
 centre of mass reaching it ends the run with a ``crashed`` event (time, impact speed, attitude).
 There is no ground reaction, so a run starts above the ground; ``ground=False`` removes it.
+
+What the controller flies on: the true state (default), the papers' relative noise on it
+(``noise=``) or sensors with the estimator (``sensing=``, :data:`rotorfault.Sensing`); the
+trajectory records the truth and, with sensing, the estimate beside it
+(:attr:`~rotorfault.Trajectory.estimate`).
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from .._util.deprecation import dataclass_compat
 from .._util.progress import chunks
 from ..analysis.airframe import Airframe, require_airframe
 from .faults import RotorFault, _faults
-from .models import Drag, FixedPitchActuator, Noise, VariablePitchActuator
+from .models import Drag, FixedPitchActuator, Noise, Sensing, VariablePitchActuator, sensing_with_offset
 from .state import State, _vector3
 from .trajectory import BatchResult, Event, Trajectory  # noqa: F401  (Event: the old rotorfault.simulation name)
 
@@ -102,7 +107,9 @@ class Simulator:
     time given twice is a step: ``[(1.0, (0, 0, 0)), (1.0, (4, 4, 0))]`` is 4 m/s from 1 s on,
     exactly). The ground is the plane
     ``z = ground_z_m`` (world NED, m; default the core's, 0); ``ground=False``: no ground.
-    ``ground_z_m`` holds the ground in effect (``None`` without one).
+    ``ground_z_m`` holds the ground in effect (``None`` without one). The controller flies on the
+    true state, on it with the papers' ``noise``, or on ``sensing`` (sensors and the estimator; a
+    :data:`rotorfault.Sensing`); one of the two at most.
     """
 
     def __init__(
@@ -119,6 +126,7 @@ class Simulator:
         noise: Noise | None = None,
         ground_z_m: float | None = None,
         ground: bool = True,
+        sensing: Sensing | None = None,
     ) -> None:
         self.airframe = require_airframe(airframe)
         self.dt_s = real("dt_s", dt_s)
@@ -140,6 +148,9 @@ class Simulator:
         if noise is not None and not isinstance(noise, Noise):
             raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
         self.noise = noise
+        if sensing is not None and not isinstance(sensing, Sensing):
+            raise TypeError(f"sensing: expected rotorfault.Sensing, got {type(sensing).__name__}")
+        self.sensing = sensing
         self.ground = flag("ground", ground)
         self.ground_z_m: float | None = None if ground_z_m is None else real("ground_z_m", ground_z_m)
         # Fail early on bad parameters: the core validates them in a zero-length run (from above
@@ -160,8 +171,9 @@ class Simulator:
         return per_rotor * self.airframe.rotor_count
 
     def _config(self, duration_s: float, record_every: int = 1, seed_offset: int = 0) -> _rfcore.SimulationConfig:
-        """The core's run settings; ``seed_offset`` shifts the noise seed (run ``i`` of a batch
-        uses ``seed + i``, so a batch sent in chunks flies every run exactly as one call would)."""
+        """The core's run settings; ``seed_offset`` shifts the noise and sensing seeds (run ``i``
+        of a batch uses ``seed + i``, so a batch sent in chunks flies every run exactly as one call
+        would)."""
         return _rfcore.SimulationConfig(
             dt_s=self.dt_s,
             substeps=self.substeps,
@@ -172,6 +184,7 @@ class Simulator:
             wind_m_s=self.wind,
             wind_profile=self.wind_profile,
             noise=None if self.noise is None else self.noise._core(seed_offset),
+            sensing=None if self.sensing is None else sensing_with_offset(self.sensing, seed_offset),
             record_every=count("record_every", record_every),
         )
 
@@ -247,7 +260,9 @@ def recording_bytes(simulator: Simulator, runs: int, duration_s: float, record_e
     steps = math.ceil(duration_s / simulator.dt_s - 1e-9)
     rows = steps // max(record_every, 1) + 3
     noise = 12 * 8 if simulator.noise is not None else 0
-    return int(runs * rows * (ROW_BYTES_FIXED + ROW_BYTES_PER_ROTOR * simulator.airframe.rotor_count + noise))
+    # The core's estimate row (13 + 15 + 2) and the Python arrays of it (13 + 12 + 15 + 2).
+    sensing = 8 * 72 if simulator.sensing is not None else 0
+    return int(runs * rows * (ROW_BYTES_FIXED + ROW_BYTES_PER_ROTOR * simulator.airframe.rotor_count + noise + sensing))
 
 
 def available_memory_bytes() -> int:

@@ -14,7 +14,7 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._util.convert import FloatArray
 from .._util.tables import Column, Tabular, arrow_table, pyarrow, schema_metadata
-from .._typing import DivergenceKind
+from .._typing import DivergenceKind, Sensed
 from .faults import RotorFault
 
 if TYPE_CHECKING:
@@ -66,6 +66,46 @@ class Event:
 
 
 @dataclass(frozen=True)
+class Estimates:
+    """What the estimator gave the controller, one row per recorded control step beside the
+    truth of the same row (a run with :data:`rotorfault.Sensing`): the estimate at the newest IMU
+    sample carried to the control time. The divergence row is NaN (no command was computed).
+
+    ``std`` is one sigma of the filter's 15-element error state per row (position m, velocity
+    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2; the covariance at its fusion
+    horizon); ``gyro_saturated`` / ``accel_saturated`` flag rows whose newest IMU sample was
+    clamped at the range; ``counts`` holds the run's totals (IMU samples, clamped samples,
+    measurements fused, refused by the innovation gate, late)."""
+
+    position: FloatArray
+    velocity: FloatArray
+    quaternion: FloatArray
+    euler: FloatArray
+    omega: FloatArray
+    std: FloatArray
+    gyro_saturated: np.ndarray[Any, np.dtype[np.bool_]]
+    accel_saturated: np.ndarray[Any, np.dtype[np.bool_]]
+    counts: _rfcore.SensingCounts
+
+    @property
+    def position_std_m(self) -> FloatArray:
+        return self.std[:, 0:3]
+
+    @property
+    def velocity_std_m_s(self) -> FloatArray:
+        return self.std[:, 3:6]
+
+    @property
+    def attitude_std_rad(self) -> FloatArray:
+        return self.std[:, 6:9]
+
+    @property
+    def vector(self) -> FloatArray:
+        """The 12-element state vector per row (position, velocity, Euler angles, body rates)."""
+        return np.hstack([self.position, self.velocity, self.euler, self.omega])
+
+
+@dataclass(frozen=True)
 class Trajectory(Tabular):
     """A run sampled at the control rate. Arrays have one row per control step.
 
@@ -90,15 +130,43 @@ class Trajectory(Tabular):
     recorded_measurements: FloatArray
     events: list[Event] = field(default_factory=list)
     faults: tuple[RotorFault, ...] = ()
+    #: What the controller flew on: ``"truth"``, ``"paper-noise"`` or the sensor suite's name.
+    sensed: Sensed = "truth"
+    #: With sensing, the estimate beside the truth (else ``None``).
+    estimate: Estimates | None = None
 
     @property
     def diverged(self) -> bool:
         return bool(self.events)
 
     @property
+    def estimate_attitude_error_rad(self) -> FloatArray:
+        """Per row, the angle between the estimated and the true attitude (rad); a run without
+        sensing has none (``ValueError``)."""
+        e = self._estimate("estimate_attitude_error_rad")
+        dot = np.abs(np.einsum("ij,ij->i", e.quaternion, self.quaternion))
+        out: FloatArray = 2.0 * np.arccos(np.clip(dot, 0.0, 1.0))
+        return out
+
+    @property
+    def estimate_position_error_m(self) -> FloatArray:
+        """Per row, the distance between the estimated and the true position (m)."""
+        e = self._estimate("estimate_position_error_m")
+        out: FloatArray = np.linalg.norm(e.position - self.position, axis=1)
+        return out
+
+    def _estimate(self, name: str) -> Estimates:
+        if self.estimate is None:
+            raise ValueError(f"{name}: the run flew on {self.sensed}, without sensing there is no estimate")
+        return self.estimate
+
+    @property
     def measured(self) -> FloatArray:
-        """What the controller saw: the 12-element state vector per step (with sensor noise;
-        without noise the true state, built on demand). The divergence row is NaN."""
+        """What the controller saw: the 12-element state vector per step (with sensor noise; with
+        sensing the estimate; otherwise the true state, built on demand). The divergence row is
+        NaN."""
+        if self.estimate is not None:
+            return self.estimate.vector
         if self.recorded_measurements.shape[1] > 0:
             return self.recorded_measurements
         measured = np.hstack([self.position, self.velocity, self.euler, self.omega])
@@ -153,6 +221,16 @@ class Trajectory(Tabular):
             kind = cast(DivergenceKind, d.reason)
             events.append(Event(d.time_s, kind, d.description, np.asarray(d.state),
                                 d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad))
+        estimate = None
+        packed, vector, std, counts = raw.estimate_state, raw.estimate_vector, raw.estimate_std, raw.sensing_counts
+        if packed is not None and vector is not None and std is not None and counts is not None:
+            estimate = Estimates(
+                position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10],
+                euler=vector[:, 6:9], omega=packed[:, 10:13], std=std,
+                gyro_saturated=np.asarray(raw.gyro_saturated, dtype=bool),
+                accel_saturated=np.asarray(raw.accel_saturated, dtype=bool),
+                counts=counts,
+            )
         return cls(
             t=raw.t,
             position=raw.position,
@@ -167,6 +245,8 @@ class Trajectory(Tabular):
             recorded_measurements=raw.measured,
             events=events,
             faults=faults,
+            sensed=raw.sensed,
+            estimate=estimate,
         )
 
     def plot(
@@ -238,4 +318,4 @@ class BatchResult(Tabular):
         return f"batch: {len(self.trajectories)} runs, {int(np.sum(self.diverged))} diverged"
 
 
-__all__ = ["STATE_COLUMNS", "BatchResult", "Event", "Trajectory", "command_columns"]
+__all__ = ["STATE_COLUMNS", "BatchResult", "Estimates", "Event", "Trajectory", "command_columns"]

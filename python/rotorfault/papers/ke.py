@@ -15,11 +15,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from .._typing import KeLaw
 from .._util.tables import Records
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
-from ..flight import RotorFault, State, Trajectory
+from ..flight import RotorFault, Sensing, State, Trajectory
 from ..flight.outcomes import (
     CIRCLING_TURN_RAD,
     HOLD_BAND_M,
@@ -38,7 +40,7 @@ from ..plotting.paths import plot_primary_axis
 from ._numbers import PaperClaim, PaperNumber
 
 if TYPE_CHECKING:
-    from ._report import ReportSection
+    from ._report import ReportSection, ReportTable
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -173,15 +175,17 @@ def run_scenario(
     law: KeLaw = "feedforward",
     controller_preset: FtcPreset | str = "ke-hil",
     record_every: int = 4,
+    sensing: Sensing | None = None,
 ) -> ScenarioRun:
-    """Flies one scenario with the uniform passive FTC (or ``law="baseline"``)."""
+    """Flies one scenario with the uniform passive FTC (or ``law="baseline"``), on the truth or
+    on ``sensing`` (sensors and the estimator; the run records the estimate beside the truth)."""
     if not isinstance(scenario_, (str, KeScenario)):
         raise TypeError(f"scenario: expected a KeScenario or a scenario name, got {type(scenario_).__name__}")
     if not isinstance(controller_preset, (str, FtcPreset)):
         raise TypeError(f"controller_preset: expected an FtcPreset or a preset name, got {type(controller_preset).__name__}")
     sc = scenario(scenario_) if isinstance(scenario_, str) else scenario_
     pre = preset(controller_preset) if isinstance(controller_preset, str) else controller_preset
-    sim = pre.simulator()
+    sim = pre.simulator(sensing=sensing)
     controller = UniformPassiveFtc(pre.airframe, gains=pre.gains, law=law, setpoints=sc.setpoints)
     start = State(position=sc.setpoints[0][1])
     trajectory = sim.run(start, sc.duration_s, controller=controller, faults=sc.faults, record_every=record_every)
@@ -486,6 +490,35 @@ def flight_claims(runs: list[ScenarioRun]) -> list[PaperClaim]:
     return claims
 
 
+def sensing_table(truth: list[ScenarioRun], sensed: list[ScenarioRun]) -> ReportTable:
+    """The same scenarios flown on the truth and on sensors, side by side: each verdict, the
+    window's horizontal error, and the estimate's error (position and attitude RMS over the run)."""
+    from ._report import ReportTable
+
+    rows = []
+    for a, b, row_a, row_b in zip(truth, sensed, report_rows(truth), report_rows(sensed), strict=True):
+        tr = b.trajectory
+        finite = np.isfinite(tr.estimate_position_error_m)
+        position_mm = 1e3 * float(np.sqrt(np.mean(tr.estimate_position_error_m[finite] ** 2)))
+        attitude_deg = float(np.degrees(np.sqrt(np.mean(tr.estimate_attitude_error_rad[finite] ** 2))))
+        counts = tr.estimate.counts if tr.estimate is not None else None
+        clamped = "" if counts is None else f"{counts.gyro_saturated_samples / max(counts.imu_samples, 1):.0%}"
+        rows.append((
+            a.scenario.name, a.metrics.verdict_label, b.metrics.verdict_label,
+            "same" if a.metrics.verdict == b.metrics.verdict else "differs",
+            f"{cell(row_a, 'window_horizontal_error_m', 3)} / {cell(row_b, 'window_horizontal_error_m', 3)}",
+            f"{position_mm:.3f}", f"{attitude_deg:.4f}", clamped,
+        ))
+    return ReportTable(
+        f"With sensors: the same flights on the truth and on {sensed[0].trajectory.sensed} (rotorfault.Sensing: the "
+        "suite's IMU and position source, the error-state Kalman filter), side by side; the estimate's error over the "
+        "whole run (a lost run's tumble included) and the share of IMU samples with the gyro clamped at 2000 deg/s",
+        ("scenario", "truth: verdict", "sensors: verdict", "same verdict", "window horiz. (m) truth / sensors",
+         "estimate position RMS (mm)", "estimate attitude RMS (deg)", "gyro clamped"),
+        tuple(rows),
+    )
+
+
 #: Scenarios flown for the reproduce-all report in --quick mode (the full mode flies all).
 QUICK_SCENARIOS = ("fault-free", "one-failure", "two-adjacent", "two-opposite", "two-adjacent-front", "three-failures")
 
@@ -533,12 +566,19 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
             for r in rows
         ),
     ))
+    sensed = [run_scenario(sc, sensing=Sensing()) for sc in chosen]
+    section.tables.append(sensing_table(runs, sensed))
     plot_primary_axis(runs, str(out / "ke-primary-axis.png"))
     section.figures.append(ReportFigure("ke-primary-axis.png", "The primary axis n3 on the unit sphere for every flight (Ke Fig. 16 style)."))
     for run in runs + extra:
         name = f"ke-{run.scenario.name}-{run.law}.png"
         run.plot(str(out / name))
         section.figures.append(ReportFigure(name, f"{run.scenario.name}, law {run.law}: {run.scenario.description}", small=True))
+    for run in sensed:
+        name = f"ke-{run.scenario.name}-{run.law}-mocap.png"
+        run.plot(str(out / name))
+        section.figures.append(ReportFigure(
+            name, f"{run.scenario.name}, law {run.law}, on mocap sensors: truth, the estimate (dotted) and its error", small=True))
     section.run_time_s = time.perf_counter() - start
     return section
 
@@ -570,6 +610,7 @@ __all__ = [
     "plot_primary_axis",
     "report_rows",
     "run_scenario",
+    "sensing_table",
     "scenario",
     "scenarios",
     "write_report",

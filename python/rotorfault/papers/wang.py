@@ -73,7 +73,7 @@ from .._util.convert import FloatArray, real
 from .._util.tables import Records
 from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback, circle_reference, step_reference
-from ..flight import Noise, Simulator, State, Trajectory
+from ..flight import Noise, Sensing, Simulator, State, Trajectory
 from ..flight.outcomes import FlightMetrics, flight_metrics, verdict_count_text
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
@@ -266,11 +266,13 @@ def fly(
     seed: int = 0,
     settle_s: float = 15.0,
     inputs: VppInputs = "wang",
+    sensing: Sensing | None = None,
 ) -> WangFlight:
     """Scenario ``number`` with propeller 1 failed from t = 0 on the VPP quadcopter with
     ``inputs``'s design (:data:`DESIGNS`; the fixed-pitch quadcopter is not flown: module notes).
     ``max_error_after_s``: the largest position error after ``settle_s`` (the last waypoint at
-    10 s plus 5 s)."""
+    10 s plus 5 s). With ``sensing`` the controller flies on sensors and the estimator instead of
+    the paper's 15 dB noise."""
     s = scenario(number, duration_s=duration_s)
     vehicle = vpp.preset("wang")
     law = controller(vehicle, s, error_limit_m=error_limit_m, inputs=inputs)
@@ -278,7 +280,8 @@ def fly(
     sim = Simulator(
         base.airframe, actuator=vehicle.actuator, drag=vehicle.drag, dt_s=DT_S,
         wind_profile=list(s.wind_profile) if s.wind_profile else None,
-        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy else None, ground_z_m=GROUND_Z_M,
+        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy and sensing is None else None, ground_z_m=GROUND_Z_M,
+        sensing=sensing,
     )
     run = sim.run(State(), duration_s=duration_s, controller=law)
     reference = np.array([law.reference(t) for t in run.t])
@@ -633,6 +636,8 @@ def flight_claims(flights: list[WangFlight]) -> list[PaperClaim]:
              f"{f.final_error_m:.2f} m downwind") if steady else "roll and pitch do not settle at nonzero values",
         ))
     return claims
+def _lost(time_s: float | None) -> str:
+    return "not lost" if time_s is None else f"{time_s:.2f}"
 
 
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
@@ -668,5 +673,16 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         "speeds limited to 10,000 and pitches to +-0.26 rad by the actuator, the share of the time a command sat at "
         f"a limit reported; verdicts counted: {verdict_count_text(f.verdict for f in flights)}", columns, rows))
     section.claims = flight_claims(flights)
+    paper_flights = sorted((f for f in flights if f.design == "wang"), key=lambda f: f.scenario.number)
+    sensed = [fly(f.scenario.number, duration_s=duration, sensing=Sensing(imu_rate_hz=1000.0)) for f in paper_flights]
+    section.tables.append(ReportTable(
+        "With sensors: Wang's design on the paper's sensing (scenario 1 the truth, 2 and 3 its 15 dB noise) and on "
+        "mocap (rotorfault.Sensing, the IMU at the 1 kHz loop rate; the error-state Kalman filter), side by side",
+        ("scenario", "paper: verdict", "mocap: verdict", "paper: lost at (s)", "mocap: lost at (s)",
+         "paper: max error after 15 s (m)", "mocap: max error after 15 s (m)"),
+        tuple((str(a.scenario.number), a.verdict, b.verdict, _lost(a.lost_at_s), _lost(b.lost_at_s),
+               f"{a.max_error_after_s:.3f}", f"{b.max_error_after_s:.3f}")
+              for a, b in zip(paper_flights, sensed, strict=True)),
+    ))
     section.run_time_s = time.perf_counter() - start
     return section

@@ -11,7 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..flight.outcomes import outcome_text
-from .style import LINE_STYLES, at_least_span, finish, legend_outside, new_figure
+from .style import LINE_STYLES, MIN_FONT_PT, at_least_span, finish, legend_outside, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -31,13 +31,16 @@ def plot_trajectory(
     yaw, body rates and rotor thrusts of a :class:`rotorfault.Trajectory` against time, with fault
     and loss markers. Yaw is wrapped to +-180 degrees; a run that turns more than one revolution
     (a spinning vehicle) shows the rate of its heading instead, in revolutions per second (its
-    wrapped angle would be a saw and its unwrapped one tens of thousands of degrees). ``title``
-    says what the run is (default: the faults); the faults, the loss and ``verdict`` (the flight's
-    verdict in words, :mod:`rotorfault.flight.outcomes`), if any, are always added. Saved to
-    ``path`` if given."""
+    wrapped angle would be a saw and its unwrapped one tens of thousands of degrees). A run flown
+    on sensors also shows the estimate the controller flew on (thin dotted lines over the truth)
+    and a last panel of the estimate's error against the truth (position mm, attitude deg).
+    ``title`` says what the run is (default: the faults); the faults, the loss and ``verdict``
+    (the flight's verdict in words, :mod:`rotorfault.flight.outcomes`), if any, are always added.
+    Saved to ``path`` if given."""
     tr = trajectory
-    fig = new_figure(figsize=(10, 12.5), layout="constrained")
-    axes = fig.subplots(5, 1, sharex=True)
+    estimate = tr.estimate
+    fig = new_figure(figsize=(10, 12.5 if estimate is None else 15), layout="constrained")
+    axes = fig.subplots(5 if estimate is None else 6, 1, sharex=True)
     styles = LINE_STYLES
     euler_deg = np.degrees(tr.euler)
     m = tr.rotor_thrust.shape[1]
@@ -49,9 +52,17 @@ def plot_trajectory(
         (tr.omega, ["p (roll rate)", "q (pitch rate)", "r (yaw rate)"], "body rate (rad/s)", 0.2),
         (tr.rotor_thrust, [f"rotor {i + 1}" for i in range(m)], "rotor thrust (N)", 0.2),
     ]
+    estimated: list[FloatArray | None] = [None] * len(panels)
+    if estimate is not None:
+        e_deg = np.degrees(estimate.euler)
+        e_yaw = np.degrees(np.unwrap(estimate.euler[:, 2])) if len(tr.t) else e_deg[:, 2]
+        estimated[:4] = [estimate.position * np.array([1, 1, -1]), e_deg[:, :2], e_yaw[:, None], estimate.omega]
     for k, (ax, (data, labels, ylabel, span)) in enumerate(zip(axes, panels)):
         for j, (column, label) in enumerate(zip(data.T, labels)):
             ax.plot(tr.t, column, label=label, linestyle=styles[j % len(styles)], color=f"C{j}", lw=1.3)
+        if (seen := estimated[k]) is not None:
+            for j, (column, label) in enumerate(zip(seen.T, labels)):
+                ax.plot(tr.t, column, label=f"{label} (estimate)", linestyle=":", color=f"C{j}", lw=0.9, alpha=0.9)
         if k == 0 and setpoints:
             _plot_setpoints(ax, tr.t, setpoints, styles)
         at_least_span(ax, data, span)
@@ -63,8 +74,12 @@ def plot_trajectory(
         for event in tr.events:
             ax.axvline(event.time, color="black", linestyle="-", lw=2.0, alpha=0.5)
         legend_outside(ax)
+    if estimate is not None:
+        _plot_estimate_error(axes[-1], tr)
     axes[-1].set_xlabel("time (s)", fontsize=10)
     lines = [title if title else "rotorfault simulation"]
+    if tr.sensed != "truth":
+        lines.append(f"flown on: {tr.sensed}" + (" (dotted: the estimate the controller saw)" if estimate is not None else ""))
     if tr.faults:
         lines.append(
             "faults (thin dashed lines): "
@@ -90,6 +105,20 @@ def _yaw_panel(t: FloatArray, yaw_rad: FloatArray) -> tuple[FloatArray, list[str
         return rate[:, None], ["heading rate (yaw angle turning)"], "yaw rate (rev/s)\n(spinning: > 1 turn)", 0.05
     wrapped = np.degrees((yaw_rad + np.pi) % (2 * np.pi) - np.pi)
     return wrapped[:, None], ["yaw (wrapped to +-180)"], "yaw (deg)", 2.0
+
+
+def _plot_estimate_error(ax: Any, tr: Any) -> None:
+    """The estimate's error against the truth: position (mm, left axis) and attitude (deg, right)."""
+    ax.plot(tr.t, 1e3 * tr.estimate_position_error_m, color="C0", lw=1.0, label="position error (mm)")
+    ax.set_ylabel("estimate error,\nposition (mm)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.tick_params(labelsize=9)
+    right = ax.twinx()
+    right.plot(tr.t, np.degrees(tr.estimate_attitude_error_rad), color="C3", lw=1.0, linestyle="--", label="attitude error (deg)")
+    right.set_ylabel("attitude (deg)", fontsize=10, color="C3")
+    right.tick_params(labelsize=9)
+    handles = [*ax.get_legend_handles_labels()[0], *right.get_legend_handles_labels()[0]]
+    ax.legend(handles=handles, fontsize=max(MIN_FONT_PT, 8.5), loc="upper left", bbox_to_anchor=(1.06, 1.0), frameon=False)
 
 
 def _plot_setpoints(ax: Any, t: FloatArray, setpoints: Sequence[tuple[float, npt.ArrayLike]], styles: list[Any]) -> None:

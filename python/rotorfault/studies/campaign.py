@@ -36,7 +36,7 @@ from .._util.tables import Records, Tabular
 from .._util.deprecation import renamed_attribute
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
-from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Simulator, State, Trajectory
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Sensing, Simulator, State, Trajectory
 from ..flight.outcomes import FLYING, VERDICTS
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
@@ -49,6 +49,7 @@ from .sampling import (
     gust_profile,
     perturbed_vehicle,
     rotor_count,
+    run_sensing,
     sensor_noise,
 )
 from .summaries import SUMMARY_FIELDS, Rate, numpy_columns, rates, summarize, wilson_interval
@@ -108,6 +109,9 @@ class Campaign:
       ``1 - cos`` gust of ``gust_duration_s`` in a random direction at a random time;
     - ``noise_std``: sensor noise floors (position m, velocity m/s, angle rad, rate rad/s) or
       ``None``;
+    - ``sensing``: fly on sensors and the estimator instead (a :class:`rotorfault.Sensing`; not
+      with ``noise_std``); run ``i`` seeds its sensors with ``sensing.seed`` plus its own drawn
+      seed, so runs differ and the campaign is reproducible;
     - ``mass_rel``, ``inertia_rel``, ``drag_torque_rel``, ``lag_rel``: relative errors (uniform in
       ``1 +- rel``); ``thrust_rel``: each rotor's thrust factor in ``[1 - rel, 1]``.
     """
@@ -129,6 +133,7 @@ class Campaign:
     gust_m_s: tuple[float, float] = (0.0, 0.0)
     gust_duration_s: float = 2.0
     noise_std: tuple[float, float, float, float] | None = None
+    sensing: Sensing | None = None
     mass_rel: float = 0.0
     inertia_rel: float = 0.0
     thrust_rel: float = 0.0
@@ -197,6 +202,11 @@ class Campaign:
             if not np.all(np.isfinite(std) & (std >= 0)):
                 raise ValueError(f"noise_std: must be finite and >= 0, got {self.noise_std}")
             object.__setattr__(self, "noise_std", tuple(float(v) for v in std))
+        if self.sensing is not None:
+            if not isinstance(self.sensing, Sensing):
+                raise TypeError(f"sensing: expected rotorfault.Sensing, got {type(self.sensing).__name__}")
+            if self.noise_std is not None:
+                raise ValueError("noise_std, sensing: a run flies on one of them (the papers' noise on the state, or sensors)")
         longest = max(len(p) for p in self.failures)
         last = self.fault_time_s[1] + max(longest - 1, 0) * self.gap_s[1] + self.ramp_s[1]
         if longest and not last < self.duration_s:
@@ -235,6 +245,10 @@ class Campaign:
                     raise ValueError(f"gains.{bad[0]}: unknown Ke gain; known: {', '.join(sorted(gain_names))}")
                 changes: dict[str, Any] = {k: (tuple(v) if isinstance(v, list) else v) for k, v in value.items()}
                 value = base.replace(**changes)
+            elif key == "sensing":
+                if not isinstance(value, Mapping):
+                    raise TypeError("sensing: expected a table of rotorfault.Sensing fields")
+                value = Sensing(**value)
             elif isinstance(value, list):
                 value = tuple(value)
             values[key] = value
@@ -250,6 +264,8 @@ class Campaign:
                 continue
             if isinstance(value, KeGains):
                 value = {g: (list(v) if isinstance(v := getattr(value, g), tuple) else v) for g in KeGains.FIELDS}
+            elif isinstance(value, Sensing):
+                value = {k: v for k in Sensing.FIELDS if (v := getattr(value, k)) is not None}
             elif f.name == "failures":
                 value = [list(p) for p in value]
             elif isinstance(value, tuple):
@@ -270,10 +286,10 @@ class Campaign:
             return "[" + ", ".join(text(x) for x in v) + "]"
 
         data = self.to_dict()
-        gains = data.pop("gains", None)
+        tables = {name: data.pop(name) for name in ("gains", "sensing") if name in data}
         lines = [f"{k} = {text(v)}" for k, v in data.items()]
-        if gains is not None:
-            lines += ["", "[gains]", *(f"{k} = {text(v)}" for k, v in gains.items())]
+        for name, table in tables.items():
+            lines += ["", f"[{name}]", *(f"{k} = {text(v)}" for k, v in table.items())]
         return "\n".join(lines) + "\n"
 
     def vehicle(self) -> FtcPreset:
@@ -316,6 +332,7 @@ class Campaign:
             wind_profile=self._gust_profile(spec),
             actuator=actuator,
             noise=self._noise(spec),
+            sensing=self._sensing(spec),
         )
 
     def refly(self, index: int, *, controller: Any = None) -> Trajectory:
@@ -333,6 +350,9 @@ class Campaign:
 
     def _noise(self, spec: RunSpec) -> Noise | None:
         return sensor_noise(self.noise_std, spec)
+
+    def _sensing(self, spec: RunSpec) -> Sensing | None:
+        return run_sensing(self.sensing, spec)
 
 
 # -- execution -------------------------------------------------------------------------------
@@ -374,6 +394,7 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
                 wind_m_s=(*spec.wind_m_s, 0.0),
                 wind_profile=campaign._gust_profile(spec),
                 noise=None if noise is None else noise._core(),
+                sensing=campaign._sensing(spec),
             )
         )
     n = len(specs)

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis.airframe import Airframe
-from ..flight import Drag, FixedPitchActuator, Noise, RotorFault
+from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Sensing
 
 #: Steps of a ramped failure's staircase.
 RAMP_STEPS = 10
@@ -167,4 +167,10 @@ def sensor_noise(noise_std: tuple[float, float, float, float] | None, spec: RunS
     return None if noise_std is None else Noise(std=noise_std, seed=spec.noise_seed)
 
 
-__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunSpec", "draw", "gust_profile", "perturbed_vehicle", "rotor_count", "sensor_noise"]
+def run_sensing(sensing: Sensing | None, spec: RunSpec) -> Sensing | None:
+    """The run's sensing: the campaign's with its seed plus the run's drawn seed (mod 2**64), or
+    None without sensing."""
+    return None if sensing is None else sensing.replace(seed=(sensing.seed + spec.noise_seed) % 2**64)
+
+
+__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunSpec", "draw", "gust_profile", "perturbed_vehicle", "rotor_count", "run_sensing", "sensor_noise"]

@@ -1,5 +1,5 @@
 """Scenario files for ``rotorfault simulate``: one TOML file names a vehicle, a controller,
-faults, wind, noise and the duration. Unknown keys are errors, so a typo never silently becomes
+faults, wind, noise or sensing and the duration. Unknown keys are errors, so a typo never silently becomes
 a default. ``examples/`` has one file per paper flight (``tests/studies/test_scenario_files.py``
 flies each and compares the verdict with the paper module's). Schema (every table optional;
 ``airframe`` or ``[vehicle]`` required)::
@@ -50,8 +50,14 @@ flies each and compares the verdict with the paper module's). Schema (every tabl
     velocity_m_s = [0, 0, 0]
     profile = [[0, 0, 0, 0], [1, 4, 4, 0]]   # [[time_s, north, east, down], ...] (m/s)
 
-    [noise]                      # fields of rotorfault.Noise
+    [noise]                      # fields of rotorfault.Noise (the papers' noise on the state)
     snr_db = 15.0
+    seed = 0
+
+    [sensing]                    # fields of rotorfault.Sensing: sensors and the estimator
+    suite = "mocap"              # "mocap", "gnss" or "rtk" (not with [noise])
+    imu = "icm-42688-p"          # or "mpu-6000"
+    imu_rate_hz = 500.0
     seed = 0
 
     [[fault]]                    # any number
@@ -77,7 +83,7 @@ from .._typing import ScenarioControllerKind
 from .._util.convert import FloatArray, count, float_array, read_toml, real
 from ..analysis.airframe import Airframe
 from ..control.tracking import circle_reference, step_reference
-from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Simulator, State, Trajectory
+from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Sensing, Simulator, State, Trajectory
 from ..flight.outcomes import FlightMetrics, flight_metrics
 from ..flight.scenarios import FlightScenario
 from ..flight.simulator import DEFAULT_START_M
@@ -85,13 +91,14 @@ from . import scenario_controllers
 from .scenario_controllers import Context
 
 _TOP = {"airframe", "vehicle", "duration_s", "dt_s", "substeps", "record_every", "ground_z_m", "ground", "initial", "controller",
-        "reference", "actuator", "drag", "wind", "noise", "fault"}
+        "reference", "actuator", "drag", "wind", "noise", "sensing", "fault"}
 _TABLES: dict[str, set[str]] = {
     "initial": {"position_m", "velocity_m_s", "euler_rad", "omega_rad_s"},
     "actuator": {"time_constant_s", "rate_limit_n_s", "thrust_coefficient_n_s2"},
     "drag": {"linear_n_s_m", "quadratic_n_s2_m2", "rotational_n_m_s", "rotor_inertia_kg_m2"},
     "wind": {"velocity_m_s", "profile"},
     "noise": {"snr_db", "std", "seed"},
+    "sensing": set(Sensing.FIELDS),
     "fault": {"rotor", "time_s", "efficiency"},
 }
 _VEHICLES: dict[str, set[str]] = {"ke": {"kind", "preset"}, "lanzon": {"kind", "inertia_zz_kg_m2", "limits"}, "vpp": {"kind", "preset", "failed"}}
@@ -238,6 +245,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         raise ValueError(f"controller.kind: must be one of {', '.join(CONTROLLERS)}, got {kind!r}")
     steps = _setpoints(parameters)
     noise = data.get("noise")
+    sensing = data.get("sensing")
     faults_raw = data.get("fault", [])
     if not isinstance(faults_raw, list):
         raise ValueError("fault: expected an array of tables ([[fault]])")
@@ -258,6 +266,7 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
         wind_profile=_rows("wind.profile", wind["profile"], 4, lambda r: (r[0], tuple(r[1:]))) if "profile" in wind else None,
         actuator=parts["actuator"],
         noise=None if noise is None else Noise(**_table(data, "noise")),
+        sensing=None if sensing is None else Sensing(**_table(data, "sensing")),
         ground_z_m=data.get("ground_z_m"),
         ground=data.get("ground", True),
     )

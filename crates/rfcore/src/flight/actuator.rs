@@ -397,6 +397,17 @@ impl Actuators {
         }
     }
 
+    /// `k_f` of `f = k_f omega^2` when a rotor's speed alone gives its thrust (fixed pitch with a
+    /// thrust coefficient); `None` otherwise (no rotor speed modelled, or variable pitch).
+    pub fn speed_thrust_coefficient(&self) -> Option<f64> {
+        match self {
+            Actuators::FixedPitch(a) if a.thrust_coefficient_n_s2 > 0.0 => {
+                Some(a.thrust_coefficient_n_s2)
+            }
+            _ => None,
+        }
+    }
+
     /// Commands per rotor: 1 (thrust) or 2 (speed, pitch).
     pub fn channels(&self) -> usize {
         match self {

@@ -24,6 +24,9 @@ pub struct Estimate {
     pub state: RigidBodyState,
     /// The newest gyro sample, bias-corrected, unfiltered, rad/s.
     pub gyro_rad_s: Vector3<f64>,
+    /// The newest accelerometer sample, bias-corrected and moved to the centre of mass (the
+    /// `omega x (omega x r)` of the IMU's lever arm removed), m/s^2: the specific force.
+    pub accel_m_s2: Vector3<f64>,
     /// The newest IMU sample was clamped at the gyro's (accelerometer's) range.
     pub gyro_saturated: bool,
     pub accel_saturated: bool,
@@ -203,14 +206,20 @@ impl Estimator {
 
     /// The estimate at the newest IMU sample (the initial state before the first).
     pub fn estimate(&self) -> Estimate {
-        let (time_s, gyro_rad_s, gyro_saturated, accel_saturated) = match &self.newest {
-            Some(s) => (
-                s.time_s,
-                s.gyro_rad_s - self.output.gyro_bias_rad_s,
-                s.gyro_saturated,
-                s.accel_saturated,
-            ),
-            None => (f64::NAN, Vector3::zeros(), false, false),
+        let (time_s, gyro_rad_s, accel_m_s2, gyro_saturated, accel_saturated) = match &self.newest
+        {
+            Some(s) => {
+                let rate = s.gyro_rad_s - self.output.gyro_bias_rad_s;
+                let r = &self.kinematics.imu_position_m;
+                (
+                    s.time_s,
+                    rate,
+                    s.accel_m_s2 - self.output.accel_bias_m_s2 - rate.cross(&rate.cross(r)),
+                    s.gyro_saturated,
+                    s.accel_saturated,
+                )
+            }
+            None => (f64::NAN, Vector3::zeros(), Vector3::zeros(), false, false),
         };
         Estimate {
             time_s,
@@ -221,6 +230,7 @@ impl Estimator {
                 omega_rad_s: self.gyro_filtered,
             },
             gyro_rad_s,
+            accel_m_s2,
             gyro_saturated,
             accel_saturated,
         }
@@ -383,18 +393,28 @@ impl Estimator {
         self.force_mean += (force - self.force_mean) * blend;
         let walk_g = s.gyro_bias_walk_rad_s_rt_s.powi(2);
         let walk_a = s.accel_bias_walk_m_s2_rt_s.powi(2);
+        // A clamped axis's hidden excess walks (settings' `saturation_walk`).
+        let clamped_walk = |clamped: &[bool; 3], range: f64| {
+            let q = (s.saturation_walk * range).powi(2);
+            Vector3::from_fn(|i, _| if clamped[i] { q } else { 0.0 })
+        };
         ProcessNoise {
             gyro_psd: s.gyro_noise_density_rad_s_rt_hz.powi(2),
             accel_psd: s.accel_noise_density_m_s2_rt_hz.powi(2),
-            gyro_bias_psd: gyro_extra * (2.0 / tau) + Vector3::repeat(walk_g),
-            accel_bias_psd: accel_extra * (2.0 / tau) + Vector3::repeat(walk_a),
+            gyro_bias_psd: gyro_extra * (2.0 / tau)
+                + Vector3::repeat(walk_g)
+                + clamped_walk(&self.gyro_clamped, s.gyro_range_rad_s),
+            accel_bias_psd: accel_extra * (2.0 / tau)
+                + Vector3::repeat(walk_a)
+                + clamped_walk(&self.accel_clamped, s.accel_range_m_s2),
         }
     }
 
-    /// A clamped axis reads its range while the truth is beyond it by an unknown, slowly
-    /// changing amount: to the filter, a bias that appears when the clamping starts and goes
-    /// when it ends. Each switch adds `(saturation_excess range)^2` to that axis's bias variance,
-    /// so the bias state learns the excess from the aiding measurements.
+    /// A clamped axis reads its range while the truth is beyond it by an unknown, changing
+    /// amount: to the filter, a bias that appears when the clamping starts, walks while it lasts
+    /// (`saturation_walk`, in the process noise) and goes when it ends. Each switch
+    /// adds `(saturation_excess range)^2` to that axis's bias variance, so the bias state learns
+    /// the excess from the aiding measurements.
     fn track_clamping(&mut self, sample: &ImuSample) {
         let s = &self.settings;
         let mut switches: Vec<(usize, f64)> = Vec::new();

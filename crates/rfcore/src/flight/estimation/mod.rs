@@ -30,8 +30,9 @@
 //! appears as a bias change, and this term lets the bias follow it; in a steady spin it fades and
 //! the bias estimate settles. A reading clamped at the range hides an unknown excess that acts
 //! like a bias while the clamping lasts: when an axis starts or stops clamping, its bias
-//! variance grows by `(saturation_excess range)^2`, and the aiding measurements teach the bias
-//! state the excess.
+//! variance grows by `(saturation_excess range)^2`, while it lasts the bias walks with density
+//! `saturation_walk range` (the excess changes with the true rate, e.g. through a spin-up), and
+//! the aiding measurements teach the bias state the excess.
 //!
 //! # Measurements
 //! Each fused at its time of validity, gated on the normalised innovation squared:

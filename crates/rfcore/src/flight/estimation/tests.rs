@@ -497,6 +497,7 @@ fn saturated_gyro_is_reported_and_its_excess_learned() {
     assert!(o.attitude_rms_deg < raw_att_deg && o.position_rms_m < raw_pos_m);
     assert_consistent("attitude", o.attitude_rms_deg, o.predicted_attitude_deg);
     flight.settings.saturation_excess = 0.0;
+    flight.settings.saturation_walk = 0.0;
     let blind = fly(&flight);
     report("40 rad/s, clamping ignored", &blind);
     assert!(blind.attitude_rms_deg > 10.0, "{}", blind.attitude_rms_deg);
@@ -730,6 +731,7 @@ fn every_setting_rule_names_its_field() {
         ("estimator.saturation_excess", |s| {
             s.saturation_excess = -0.5
         }),
+        ("estimator.saturation_walk", |s| s.saturation_walk = f64::NAN),
         ("estimator.initial_position_std_m", |s| {
             s.initial_position_std_m = -1.0
         }),

@@ -1,4 +1,4 @@
-//! A run's timing, limits, ground, wind and noise ([`SimulationConfig`]), checked before any
+//! A run's timing, limits, ground, wind, noise and sensing ([`SimulationConfig`]), checked before any
 //! work: the control steps it takes, when, and what is recorded.
 
 use nalgebra::Vector3;
@@ -7,6 +7,7 @@ use crate::error::{require_finite, require_scale, Result, RfError};
 use crate::flight::simulation::divergence::DivergenceLimits;
 use crate::flight::simulation::noise::SensorNoise;
 use crate::flight::simulation::recording::records;
+use crate::flight::simulation::sensing::Sensing;
 use crate::state::RigidBodyState;
 
 /// Most control steps one run records (about 2 GB of trajectory).
@@ -50,8 +51,11 @@ pub struct SimulationConfig {
     /// points, held constant outside them; a time given twice is a step (the first value before
     /// it, the second from it on; the integration ends an RK4 step there, like a fault).
     pub wind_profile: Vec<(f64, Vector3<f64>)>,
-    /// Sensor noise on what the controller sees (`None`: the true state).
+    /// Sensor noise on what the controller sees (`None`: the true state): the papers' noise.
     pub noise: Option<SensorNoise>,
+    /// Sensors and the estimator: the controller flies on the estimate (`None`: on the true
+    /// state, or on `noise`; a run has at most one of the two).
+    pub sensing: Option<Sensing>,
     /// Record every this many control steps (1: all). The first and last steps and a divergence
     /// are always recorded; large batches use it to keep memory bounded.
     pub record_every: usize,
@@ -77,6 +81,7 @@ impl SimulationConfig {
             wind_m_s: Vector3::zeros(),
             wind_profile: Vec::new(),
             noise: None,
+            sensing: None,
             record_every: 1,
         }
     }
@@ -161,6 +166,16 @@ impl SimulationConfig {
         }
         if let Some(noise) = &self.noise {
             noise.check()?;
+        }
+        if let Some(sensing) = &self.sensing {
+            if self.noise.is_some() {
+                return Err(RfError::invalid(
+                    "noise, sensing",
+                    "a run flies on one of them: the papers' relative noise on the state (noise) \
+                     or sensors with the estimator (sensing)",
+                ));
+            }
+            sensing.check()?;
         }
         for (k, (t, w)) in self.wind_profile.iter().enumerate() {
             require_finite(&format!("wind_profile[{k}].time"), *t)?;

@@ -13,6 +13,7 @@ use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, DivergenceReason};
 use crate::flight::simulation::noise::Gaussian;
+use crate::flight::simulation::onboard::{nan_row, Onboard};
 use crate::flight::simulation::recording::{records, NoObserver, StepObserver, Trajectory};
 use crate::flight::simulation::step::{check_step_size, rotor_totals, Integrator};
 use crate::flight::vehicle::Vehicle;
@@ -124,6 +125,7 @@ pub fn simulate_observed(
             0
         }),
         divergence: None,
+        sensing: None,
     };
     controller.reset();
     let mut efficiency = initial_efficiency.to_vec();
@@ -134,8 +136,25 @@ pub fn simulate_observed(
     let mut measured_vector = [0.0; STATE_DIM];
     let reads_samples = controller.reads_samples();
     let mut rotor_thrust = vec![0.0; m];
+    // With sensing the controller flies on the estimator, fed by sensors sampling the truth
+    // between control steps (the integrator's tape).
+    let mut onboard = match &config.sensing {
+        Some(sensing) => {
+            let (onboard, tape) = Onboard::new(sensing, &x0, &actuators, reads_samples)?;
+            integrator.record_on(tape);
+            trajectory.sensing = Some(onboard.record(rows));
+            Some(onboard)
+        }
+        None => None,
+    };
 
     schedule.apply_due(0.0, &mut efficiency);
+    if let Some(onboard) = onboard.as_mut() {
+        integrator.tape_start(0.0, &state, &actuators, &efficiency);
+        if let Some(tape) = integrator.tape() {
+            onboard.catch_up(tape, vehicle, 0.0)?;
+        }
+    }
     if let Some(reason) = integrator.limits().reason(&state) {
         let divergence = Divergence {
             time_s: 0.0,
@@ -149,16 +168,20 @@ pub fn simulate_observed(
             &efficiency,
             &actuators,
             config,
+            onboard.as_ref(),
         );
         return Ok(trajectory);
     }
     for k in 0..=steps {
         cancel.check()?;
         let t = config.step_time(k);
+        let estimate = onboard.as_ref().map(|o| o.estimate(t));
         // Measurements are recorded only when they differ from the true state (with noise);
-        // without noise the Python layer rebuilds them from the recorded state.
-        let measured = match (&config.noise, gaussian.as_mut()) {
-            (Some(noise), Some(gaussian)) => {
+        // without noise the Python layer rebuilds them from the recorded state. With sensing,
+        // the estimate (recorded beside the truth).
+        let measured = match (&config.noise, gaussian.as_mut(), &estimate) {
+            (_, _, Some(estimate)) => estimate.state,
+            (Some(noise), Some(gaussian), None) => {
                 measured_vector = state_vector(&state);
                 for (i, v) in measured_vector.iter_mut().enumerate() {
                     *v +=
@@ -168,8 +191,18 @@ pub fn simulate_observed(
             }
             _ => state,
         };
-        // Raw samples (truth, or the noisy rates) only for a controller that reads them.
-        let input = if reads_samples {
+        // Raw samples (truth, the noisy rates, or the sensors') only for a controller that
+        // reads them.
+        let input = if let (true, Some(estimate), Some(onboard)) =
+            (reads_samples, &estimate, onboard.as_ref())
+        {
+            ControllerInput {
+                state: &measured,
+                gyro_rad_s: Some(estimate.gyro_rad_s),
+                specific_force_m_s2: Some(estimate.accel_m_s2),
+                rotor_thrust_n: onboard.rotor_thrust(),
+            }
+        } else if reads_samples {
             for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
                 *thrust = actuators.output(i, efficiency[i]).thrust_n;
             }
@@ -192,6 +225,11 @@ pub fn simulate_observed(
             let row = config.noise.map(|_| &measured_vector);
             trajectory.push_step(t, &state, &efficiency, &actuators, row);
             trajectory.commands.extend_from_slice(&command);
+            if let (Some(record), Some(onboard), Some(estimate)) =
+                (trajectory.sensing.as_mut(), onboard.as_ref(), &estimate)
+            {
+                record.rows.push(onboard.row(estimate));
+            }
         }
         if !finite {
             trajectory.divergence = Some(Divergence {
@@ -221,15 +259,22 @@ pub fn simulate_observed(
                 &efficiency,
                 &actuators,
                 config,
+                onboard.as_ref(),
             );
             return Ok(trajectory);
         }
+        if let (Some(onboard), Some(tape)) = (onboard.as_mut(), integrator.tape()) {
+            onboard.catch_up(tape, vehicle, t_next)?;
+        }
+    }
+    if let (Some(record), Some(onboard)) = (trajectory.sensing.as_mut(), onboard.as_ref()) {
+        onboard.finish(record);
     }
     Ok(trajectory)
 }
 
-/// Ends a run with `divergence`: its row (NaN commands; NaN measurements with sensor noise),
-/// shown to the observer and recorded with the event.
+/// Ends a run with `divergence`: its row (NaN commands; NaN measurements with sensor noise, a
+/// NaN estimate with sensing), shown to the observer and recorded with the event.
 fn end_with(
     trajectory: &mut Trajectory,
     observer: &mut dyn StepObserver,
@@ -237,7 +282,12 @@ fn end_with(
     efficiency: &[f64],
     actuators: &Actuators,
     config: &SimulationConfig,
+    onboard: Option<&Onboard>,
 ) {
+    if let (Some(record), Some(onboard)) = (trajectory.sensing.as_mut(), onboard) {
+        record.rows.push(nan_row());
+        onboard.finish(record);
+    }
     let count = actuators.channels() * actuators.rotor_count();
     let nan_row = [f64::NAN; STATE_DIM];
     let Divergence { time_s, state, .. } = divergence;
@@ -264,9 +314,9 @@ pub struct BatchRun {
     pub faults: Vec<RotorFault>,
 }
 
-/// Many runs in parallel (rayon); results in input order. With sensor noise, run `i` uses seed
-/// `seed + i`, so runs are independent and the batch is reproducible. Every run checks `cancel`
-/// once per control period.
+/// Many runs in parallel (rayon); results in input order. With sensor noise or sensing, run `i`
+/// uses seed `seed + i`, so runs are independent and the batch is reproducible. Every run checks
+/// `cancel` once per control period.
 pub fn simulate_batch(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -285,6 +335,9 @@ pub fn simulate_batch(
             let mut own = config.clone();
             if let Some(noise) = own.noise.as_mut() {
                 noise.seed = noise.seed.wrapping_add(i as u64);
+            }
+            if let Some(sensing) = own.sensing.as_mut() {
+                sensing.seed = sensing.seed.wrapping_add(i as u64);
             }
             let mut actuators = actuators.clone();
             if let Some(command) = &run.initial_command {

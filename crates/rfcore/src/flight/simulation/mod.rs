@@ -31,11 +31,15 @@
 //!
 //! # Layout (one concept per file; imports run down this list, never back up)
 //! - [`driver`]: one run and a batch of runs: checks, then control step by control step.
+//! - `onboard`: one run's sensors and estimator, fed from the tape after every period.
 //! - [`step`]: one control period of body and actuators (RK4 substeps, faults, divergence
 //!   check), and the step-size check.
-//! - [`config`]: timing, limits, ground, wind and noise of a run.
-//! - [`recording`]: the trajectory, which steps it keeps, the step observer.
-//! - [`noise`]: sensor noise on what the controller sees.
+//! - `tape`: the truth between integration nodes, for sensors on their own clocks.
+//! - [`config`]: timing, limits, ground, wind, noise and sensing of a run.
+//! - [`recording`]: the trajectory (with the estimate beside the truth), which steps it keeps,
+//!   the step observer.
+//! - [`sensing`]: which sensors (a named suite) the controller flies on.
+//! - [`noise`]: the papers' sensor noise on what the controller sees.
 //! - [`divergence`]: divergence limits, reasons and events, and how a crossing is located.
 
 pub mod config;
@@ -44,8 +48,11 @@ pub mod driver;
 #[cfg(test)]
 mod ground_tests;
 pub mod noise;
+mod onboard;
 pub mod recording;
+pub mod sensing;
 pub mod step;
+mod tape;
 #[cfg(test)]
 mod tests;
 
@@ -54,4 +61,5 @@ pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK
 pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
 pub use driver::{simulate, simulate_batch, simulate_cancellable, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
-pub use recording::{StepObserver, Trajectory};
+pub use recording::{EstimateRow, SensingRecord, StepObserver, Trajectory};
+pub use sensing::{ImuPart, Sensing, SuiteName};

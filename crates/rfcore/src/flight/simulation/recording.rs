@@ -1,7 +1,9 @@
-//! What a run records: the [`Trajectory`] at the control rate, which control steps it keeps
-//! (`records`), and the [`StepObserver`] that sees every step as it is flown.
+//! What a run records: the [`Trajectory`] at the control rate (with sensing, the estimate beside
+//! the truth: [`SensingRecord`]), which control steps it keeps (`records`), and the
+//! [`StepObserver`] that sees every step as it is flown.
 
 use crate::flight::actuator::Actuators;
+use crate::flight::estimation::{FusionCounts, ERROR_DIM};
 use crate::flight::simulation::divergence::Divergence;
 use crate::state::{RigidBodyState, STATE_DIM};
 
@@ -30,9 +32,50 @@ pub struct Trajectory {
     /// empty without noise (the controller then saw exactly `states`).
     pub measured: Vec<f64>,
     pub divergence: Option<Divergence>,
+    /// With sensing: the estimate the controller flew on, one row per recorded row.
+    pub sensing: Option<SensingRecord>,
+}
+
+/// What the estimator gave the controller at one recorded control step, beside the truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimateRow {
+    /// The estimate the controller saw (position, velocity and attitude of the output predictor,
+    /// the bias-corrected gyro); NaN on a divergence row (no command was computed there).
+    pub state: RigidBodyState,
+    /// One sigma of the error state `[dp, dv, dtheta, dbg, dba]` (m, m/s, rad, rad/s, m/s^2):
+    /// the square roots of the covariance's diagonal at the fusion horizon.
+    pub std: [f64; ERROR_DIM],
+    /// The newest IMU sample was clamped at the gyroscope's (accelerometer's) range.
+    pub gyro_saturated: bool,
+    pub accel_saturated: bool,
+}
+
+/// A run's sensing: which sensors, the estimate at every recorded step, and counts over the
+/// whole run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensingRecord {
+    /// The sensor suite's name (`mocap`, `gnss`, `rtk`).
+    pub name: &'static str,
+    pub rows: Vec<EstimateRow>,
+    pub imu_samples: u64,
+    /// IMU samples with a gyroscope (accelerometer) axis clamped at its range.
+    pub gyro_saturated_samples: u64,
+    pub accel_saturated_samples: u64,
+    /// The estimator's measurements: fused, refused by its gate, late.
+    pub fusion: FusionCounts,
 }
 
 impl Trajectory {
+    /// What the controller flew on: `"truth"`, `"paper-noise"` (the papers' relative noise on the
+    /// state) or the sensor suite's name.
+    pub fn sensed(&self) -> &'static str {
+        match &self.sensing {
+            Some(record) => record.name,
+            None if !self.measured.is_empty() => "paper-noise",
+            None => "truth",
+        }
+    }
+
     /// Records one control step's time, state, efficiency, rotor thrusts and (with sensor noise)
     /// measurement row; the caller adds the commands.
     pub(crate) fn push_step(

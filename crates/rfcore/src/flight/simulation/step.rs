@@ -8,6 +8,7 @@ use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::FaultSchedule;
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, Limits, MAX_RATE_STEP};
+use crate::flight::simulation::tape::Tape;
 use crate::flight::vehicle::{RotorTotals, Vehicle};
 use crate::state::RigidBodyState;
 
@@ -68,6 +69,9 @@ pub(crate) struct Integrator<'a> {
     targets: Vec<f64>,
     /// Channel states at the start, middle and end of an interval.
     nodes: [Vec<f64>; 3],
+    /// The period's nodes for sensors on their own clocks (`None`: nobody samples between
+    /// control steps; the integration is the same either way).
+    tape: Option<Tape>,
 }
 
 impl<'a> Integrator<'a> {
@@ -94,6 +98,31 @@ impl<'a> Integrator<'a> {
             constant_wind: config.wind_profile.is_empty(),
             targets: vec![0.0; count],
             nodes: [vec![0.0; count], vec![0.0; count], vec![0.0; count]],
+            tape: None,
+        }
+    }
+
+    /// Records every period's nodes on `tape` from now on.
+    pub(crate) fn record_on(&mut self, tape: Tape) {
+        self.tape = Some(tape);
+    }
+
+    /// The nodes of the last period (or of the start, [`Integrator::tape_start`]).
+    pub(crate) fn tape(&mut self) -> Option<&mut Tape> {
+        self.tape.as_mut()
+    }
+
+    /// Starts the tape with one node at `t_s`: `state` with the actuators as they are.
+    pub(crate) fn tape_start(
+        &mut self,
+        t_s: f64,
+        state: &RigidBodyState,
+        actuators: &Actuators,
+        efficiency: &[f64],
+    ) {
+        if let Some(tape) = self.tape.as_mut() {
+            tape.clear();
+            push_node(tape, self.vehicle, self.config, t_s, state, actuators, actuators.state(), efficiency, None);
         }
     }
 
@@ -134,6 +163,9 @@ impl<'a> Integrator<'a> {
         ];
         // Rotor totals at the start of the next interval, when known (same command, efficiency).
         let mut start_totals: Option<RotorTotals> = None;
+        if let Some(tape) = self.tape.as_mut() {
+            tape.clear();
+        }
         for s in 0..config.substeps {
             let mut a = t + s as f64 * h;
             let b = if s + 1 == config.substeps {
@@ -193,6 +225,10 @@ impl<'a> Integrator<'a> {
                     }
                     totals
                 };
+                if let Some(tape) = self.tape.as_mut() {
+                    let channels = if constant { &self.targets[..] } else { actuators.state() };
+                    push_node(tape, vehicle, config, a, state, actuators, channels, efficiency, Some((&totals[0], &winds[0])));
+                }
                 let next = body.rk4_step_nodes(state, len, |node, x| {
                     vehicle.wrench_from(x, &totals[node], &winds[node])
                 });
@@ -238,6 +274,31 @@ impl<'a> Integrator<'a> {
                 }
             }
         }
+        if let Some(tape) = self.tape.as_mut() {
+            push_node(tape, vehicle, config, t_next, state, actuators, actuators.state(), efficiency, None);
+        }
         None
     }
+}
+
+/// One node of `tape`: `state` at `t_s` with the channels at `channels` (rotor totals and wind
+/// as given, else computed there).
+#[allow(clippy::too_many_arguments)]
+fn push_node(
+    tape: &mut Tape,
+    vehicle: &Vehicle,
+    config: &SimulationConfig,
+    t_s: f64,
+    state: &RigidBodyState,
+    actuators: &Actuators,
+    channels: &[f64],
+    efficiency: &[f64],
+    known: Option<(&RotorTotals, &nalgebra::Vector3<f64>)>,
+) {
+    let (totals, wind) = match known {
+        Some((totals, wind)) => (*totals, *wind),
+        None => (rotor_totals(vehicle, actuators, channels, efficiency), config.wind_at(t_s)),
+    };
+    let thrust = |i: usize| actuators.output_at(channels, i, efficiency[i]).thrust_n;
+    tape.push(t_s, state, &totals, &wind, thrust);
 }

@@ -1,0 +1,157 @@
+//! Bindings for flying on sensors: the `Sensing` settings (`rotorfault.Sensing`: a named sensor
+//! suite, its IMU part and rates, the seed), defaults from the core's `Sensing::default()`, values
+//! checked by its `check()`. Translation only.
+
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyInt, PyString};
+
+use rfcore::flight::simulation::{ImuPart, Sensing, SuiteName};
+
+use crate::convert::{
+    real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err,
+};
+
+/// What the controller flies on with sensors: the sensor suite (`"mocap"`, `"gnss"`, `"rtk"`),
+/// the IMU part (`"icm-42688-p"`, `"mpu-6000"`) and its output data rate, the position source's
+/// rate (`None`: the suite's), and the seed of the sensors' random streams (run ``i`` of a batch
+/// uses ``seed + i``). The estimator is matched to the sensors.
+#[pyclass(name = "Sensing", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
+pub struct PySensing {
+    pub(crate) inner: Sensing,
+}
+
+impl PySensing {
+    const FIELDS: &'static [&'static str] =
+        &["suite", "imu", "imu_rate_hz", "position_rate_hz", "seed"];
+}
+
+fn name<'py>(field: &str, value: &Bound<'py, PyAny>) -> PyResult<String> {
+    if !value.is_instance_of::<PyString>() {
+        return Err(PyTypeError::new_err(format!(
+            "{field}: expected a string, got {}",
+            value.get_type().name()?
+        )));
+    }
+    value.extract()
+}
+
+fn seed(value: &Bound<'_, PyAny>) -> PyResult<u64> {
+    if value.is_instance_of::<PyBool>() || !value.is_instance_of::<PyInt>() {
+        return Err(PyTypeError::new_err(format!(
+            "sensing.seed: expected an integer, got {}",
+            value.get_type().name()?
+        )));
+    }
+    value.extract::<u64>().map_err(|_| {
+        PyValueError::new_err(format!(
+            "sensing.seed: must lie in [0, 2**64), got {}",
+            value.repr().map(|r| r.to_string()).unwrap_or_default()
+        ))
+    })
+}
+
+#[pymethods]
+impl PySensing {
+    #[new]
+    #[pyo3(signature = (*, suite=None, imu=None, imu_rate_hz=None, position_rate_hz=None, seed=None))]
+    fn new(
+        suite: Option<Bound<'_, PyAny>>,
+        imu: Option<Bound<'_, PyAny>>,
+        imu_rate_hz: Option<Bound<'_, PyAny>>,
+        position_rate_hz: Option<Bound<'_, PyAny>>,
+        seed: Option<Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let d = Sensing::default();
+        let inner = Sensing {
+            suite: match suite {
+                Some(v) => SuiteName::from_name("sensing.suite", &name("sensing.suite", &v)?)
+                    .map_err(to_py_err)?,
+                None => d.suite,
+            },
+            imu: match imu {
+                Some(v) => ImuPart::from_name("sensing.imu", &name("sensing.imu", &v)?)
+                    .map_err(to_py_err)?,
+                None => d.imu,
+            },
+            imu_rate_hz: match imu_rate_hz {
+                Some(v) => real("sensing.imu_rate_hz", &v)?,
+                None => d.imu_rate_hz,
+            },
+            position_rate_hz: match position_rate_hz {
+                Some(v) if !v.is_none() => Some(real("sensing.position_rate_hz", &v)?),
+                _ => d.position_rate_hz,
+            },
+            seed: match seed {
+                Some(v) => self::seed(&v)?,
+                None => d.seed,
+            },
+        };
+        inner.check().map_err(to_py_err)?;
+        Ok(PySensing { inner })
+    }
+    #[getter]
+    fn suite(&self) -> &'static str {
+        self.inner.suite.name()
+    }
+    #[getter]
+    fn imu(&self) -> &'static str {
+        self.inner.imu.name()
+    }
+    #[getter]
+    fn imu_rate_hz(&self) -> f64 {
+        self.inner.imu_rate_hz
+    }
+    #[getter]
+    fn position_rate_hz(&self) -> Option<f64> {
+        self.inner.position_rate_hz
+    }
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+    /// The position source's rate in effect, Hz (the suite's when `position_rate_hz` is None).
+    #[getter]
+    fn position_rate_in_effect_hz(&self) -> f64 {
+        self.inner.profile().position.rate_hz
+    }
+    /// The names `suite` accepts.
+    #[classattr]
+    #[pyo3(name = "SUITES")]
+    fn suites() -> Vec<&'static str> {
+        SuiteName::ALL.iter().map(|s| s.name()).collect()
+    }
+    /// The names `imu` accepts.
+    #[classattr]
+    #[pyo3(name = "IMUS")]
+    fn imus() -> Vec<&'static str> {
+        ImuPart::ALL.iter().map(|s| s.name()).collect()
+    }
+    /// The field names, in order.
+    #[classattr]
+    #[pyo3(name = "FIELDS")]
+    fn fields() -> Vec<&'static str> {
+        Self::FIELDS.to_vec()
+    }
+    /// A copy with ``changes`` (validated like a new object).
+    #[pyo3(signature = (**changes))]
+    fn replace<'py>(
+        slf: &Bound<'py, Self>,
+        changes: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        settings_replace(slf.as_any(), Self::FIELDS, changes)
+    }
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        settings_repr(slf.as_any(), Self::FIELDS)
+    }
+    fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        settings_eq(slf.as_any(), other, Self::FIELDS)
+    }
+    fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
+        settings_hash(slf.as_any(), Self::FIELDS)
+    }
+    fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
+        Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
+    }
+}

@@ -1,0 +1,241 @@
+//! What the controller flies on when it flies on sensors ([`Sensing`]): a named sensor suite
+//! (`mocap`, `gnss`, `rtk`), its IMU part and rates, and the seed of the run's sensors. The
+//! estimator is matched to the sensors ([`EstimatorSettings::for_sensors`]), so choosing a suite
+//! chooses both.
+//!
+//! A run flies on one of three things (one concept, one name: "sensing"): the truth (no noise, no
+//! sensing), the papers' relative noise on the state (`SimulationConfig::noise`, kept to reproduce
+//! the papers' scenarios) or sensors with the estimator (`SimulationConfig::sensing`).
+
+use crate::error::{require_finite, Result, RfError};
+use crate::flight::estimation::EstimatorSettings;
+use crate::flight::sensors::{ImuProfile, SensorSuiteProfile};
+
+/// A sensor suite by name (the profiles of [`SensorSuiteProfile`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SuiteName {
+    /// ICM-42688-P, OptiTrack PrimeX 13 pose, DShot rotor speeds: a lab flight.
+    Mocap,
+    /// ICM-42688-P, u-blox NEO-M8N, ST LIS3MDL, DShot: outdoors.
+    Gnss,
+    /// As `gnss` with the u-blox ZED-F9P in RTK.
+    Rtk,
+}
+
+impl SuiteName {
+    pub const ALL: [SuiteName; 3] = [SuiteName::Mocap, SuiteName::Gnss, SuiteName::Rtk];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SuiteName::Mocap => "mocap",
+            SuiteName::Gnss => "gnss",
+            SuiteName::Rtk => "rtk",
+        }
+    }
+
+    /// The suite called `name`, or an error naming `field` and the names.
+    pub fn from_name(field: &str, name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|s| s.name() == name)
+            .ok_or_else(|| unknown(field, name, &Self::ALL.map(Self::name)))
+    }
+
+    pub fn profile(self) -> SensorSuiteProfile {
+        match self {
+            SuiteName::Mocap => SensorSuiteProfile::mocap(),
+            SuiteName::Gnss => SensorSuiteProfile::gnss(),
+            SuiteName::Rtk => SensorSuiteProfile::rtk(),
+        }
+    }
+}
+
+/// An IMU part by name (the profiles of [`ImuProfile`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ImuPart {
+    Icm42688P,
+    Mpu6000,
+}
+
+impl ImuPart {
+    pub const ALL: [ImuPart; 2] = [ImuPart::Icm42688P, ImuPart::Mpu6000];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ImuPart::Icm42688P => "icm-42688-p",
+            ImuPart::Mpu6000 => "mpu-6000",
+        }
+    }
+
+    pub fn from_name(field: &str, name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|s| s.name() == name)
+            .ok_or_else(|| unknown(field, name, &Self::ALL.map(Self::name)))
+    }
+
+    pub fn profile(self) -> ImuProfile {
+        match self {
+            ImuPart::Icm42688P => ImuProfile::icm_42688_p(),
+            ImuPart::Mpu6000 => ImuProfile::mpu_6000(),
+        }
+    }
+}
+
+fn unknown(field: &str, name: &str, names: &[&str]) -> RfError {
+    RfError::invalid(
+        field,
+        format!("expected one of {}, got {name:?}", names.join(", ")),
+    )
+}
+
+/// The highest IMU output data rate accepted, Hz: the ICM-42688-P's highest ODR (32 kHz).
+pub const MAX_IMU_RATE_HZ: f64 = 32_000.0;
+/// The highest position-source rate accepted, Hz (motion-capture systems reach 1 kHz).
+pub const MAX_POSITION_RATE_HZ: f64 = 1_000.0;
+
+/// Sensors and the estimator for one run (module docs). Run `i` of a batch uses `seed + i`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sensing {
+    pub suite: SuiteName,
+    pub imu: ImuPart,
+    /// The IMU's output data rate (gyroscope and accelerometer), Hz.
+    pub imu_rate_hz: f64,
+    /// The position source's rate, Hz; `None`: the suite's (mocap 240, NEO-M8N 5, ZED-F9P 10).
+    pub position_rate_hz: Option<f64>,
+    /// Seeds every sensor's random stream (its own stream per sensor: `flight::random`).
+    pub seed: u64,
+}
+
+/// The motion-capture suite with the ICM-42688-P at 500 Hz, one of the part's output data rates
+/// (DS-000347, ODR table): the datasheet profile's 1 kHz costs twice the IMU samples and estimator
+/// steps for a controller running at 400 Hz, which sees one estimate per control step either way
+/// (benches/sensing.py measures both).
+impl Default for Sensing {
+    fn default() -> Self {
+        Sensing {
+            suite: SuiteName::Mocap,
+            imu: ImuPart::Icm42688P,
+            imu_rate_hz: 500.0,
+            position_rate_hz: None,
+            seed: 0,
+        }
+    }
+}
+
+impl Sensing {
+    /// The sensors' profiles: the suite's, with this IMU part at `imu_rate_hz` and the position
+    /// source at `position_rate_hz` (when given).
+    pub fn profile(&self) -> SensorSuiteProfile {
+        let mut profile = self.suite.profile();
+        profile.imu = ImuProfile {
+            rate_hz: self.imu_rate_hz,
+            ..self.imu.profile()
+        };
+        if let Some(rate) = self.position_rate_hz {
+            profile.position.rate_hz = rate;
+        }
+        profile
+    }
+
+    /// The estimator matched to [`Sensing::profile`].
+    pub fn estimator(&self) -> EstimatorSettings {
+        EstimatorSettings::for_sensors(&self.profile())
+    }
+
+    /// Every rule, naming the field (`sensing.imu_rate_hz`, ...).
+    pub fn check(&self) -> Result<()> {
+        rate("sensing.imu_rate_hz", self.imu_rate_hz, MAX_IMU_RATE_HZ)?;
+        if let Some(r) = self.position_rate_hz {
+            rate("sensing.position_rate_hz", r, MAX_POSITION_RATE_HZ)?;
+        }
+        self.profile().check()?;
+        self.estimator().check()
+    }
+
+    /// What the controller sees, by name: the suite's (`mocap`, `gnss`, `rtk`).
+    pub fn name(&self) -> &'static str {
+        self.suite.name()
+    }
+}
+
+fn rate(field: &str, value: f64, most: f64) -> Result<()> {
+    require_finite(field, value)?;
+    if !(value > 0.0 && value <= most) {
+        return Err(RfError::invalid(
+            field,
+            format!("must be > 0 and at most {most} Hz, got {value}"),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_bad_settings_are_named() {
+        for s in SuiteName::ALL {
+            assert_eq!(SuiteName::from_name("suite", s.name()).unwrap(), s);
+        }
+        for p in ImuPart::ALL {
+            assert_eq!(ImuPart::from_name("imu", p.name()).unwrap(), p);
+        }
+        let err = SuiteName::from_name("sensing.suite", "vicon").unwrap_err();
+        assert!(err
+            .to_string()
+            .starts_with("sensing.suite: expected one of mocap, gnss, rtk"));
+        Sensing::default().check().unwrap();
+        for (field, bad) in [
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: 0.0,
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: f64::NAN,
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: 1e6,
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.position_rate_hz",
+                Sensing {
+                    position_rate_hz: Some(-1.0),
+                    ..Sensing::default()
+                },
+            ),
+        ] {
+            let err = bad.check().unwrap_err().to_string();
+            assert!(err.starts_with(&format!("{field}:")), "{err}");
+        }
+    }
+
+    #[test]
+    fn the_profile_carries_the_chosen_part_and_rates() {
+        let s = Sensing {
+            suite: SuiteName::Gnss,
+            imu: ImuPart::Mpu6000,
+            imu_rate_hz: 1000.0,
+            position_rate_hz: Some(10.0),
+            seed: 3,
+        };
+        let p = s.profile();
+        assert_eq!(p.imu.rate_hz, 1000.0);
+        assert_eq!(p.imu.gyro, ImuProfile::mpu_6000().gyro);
+        assert_eq!(p.position.rate_hz, 10.0);
+        assert!(p.magnetometer.is_some());
+        assert_eq!(s.estimator().fusion_delay_s, p.position.latency_s);
+    }
+}
