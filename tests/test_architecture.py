@@ -21,7 +21,7 @@ LAYERS = [
     ["papers", "scenario", "campaign", "vpp", "certify"],
     ["control"],
     ["design"],
-    ["controllability", "scan", "allocation", "simulation"],
+    ["controllability", "scan", "allocation", "simulation", "relaxed_hover"],
     ["airframe"],
     ["_stream"],
     ["_progress", "_formats"],

@@ -41,6 +41,7 @@ from .control import (
     LinearFeedback,
     Lti,
     OpenLoop,
+    RelaxedHoverLqr,
     TrackingFeedback,
     UniformPassiveFtc,
     hover_trim,
@@ -49,6 +50,7 @@ from .control import (
     lqr_hover_allocated,
 )
 from . import vpp
+from .relaxed_hover import RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution, periodic_state, relaxed_hover
 from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
 from .design import Design, DesignSearch, design_search
 from .simulation import (
@@ -90,6 +92,12 @@ __all__ = [
     "LanzonController",
     "ncfsyn",
     "vpp",
+    "RelaxedHoverAnalysis",
+    "RelaxedHoverLqr",
+    "RelaxedHoverSettings",
+    "RelaxedHoverSolution",
+    "periodic_state",
+    "relaxed_hover",
     "Lti",
     "UniformPassiveFtc",
     "Controller",

@@ -138,6 +138,98 @@ def failure_table(
 def scale_free_rank(matrix: _F64) -> int: ...
 
 @final
+class RelaxedHoverSettings:
+    def __new__(
+        cls,
+        *,
+        rotational_drag_n_m_s: float | None = None,
+        rotor_inertia_kg_m2: float | None = None,
+        thrust_coefficient_n_s2: float | None = None,
+        max_spin_rate_rad_s: float | None = None,
+        max_circle_radius_m: float | None = None,
+        max_idle_rotors: int | None = None,
+        grid_points: int | None = None,
+    ) -> RelaxedHoverSettings: ...
+    @property
+    def rotational_drag_n_m_s(self) -> float: ...
+    @property
+    def rotor_inertia_kg_m2(self) -> float: ...
+    @property
+    def thrust_coefficient_n_s2(self) -> float: ...
+    @property
+    def max_spin_rate_rad_s(self) -> float: ...
+    @property
+    def max_circle_radius_m(self) -> float: ...
+    @property
+    def max_idle_rotors(self) -> int: ...
+    @property
+    def grid_points(self) -> int: ...
+
+@final
+class RelaxedHoverSolution:
+    @property
+    def kind(self) -> str: ...
+    @property
+    def body_rate_rad_s(self) -> _F64: ...
+    @property
+    def spin_rate_rad_s(self) -> float: ...
+    @property
+    def spin_axis(self) -> _F64: ...
+    @property
+    def thrust_direction(self) -> _F64: ...
+    @property
+    def thrust_n(self) -> _F64: ...
+    @property
+    def command_n(self) -> _F64: ...
+    @property
+    def thrust_margin_n(self) -> float: ...
+    @property
+    def thrust_floor_n(self) -> float: ...
+    @property
+    def carrying(self) -> list[int]: ...
+    @property
+    def idle(self) -> list[int]: ...
+    @property
+    def total_thrust_n(self) -> float: ...
+    @property
+    def tilt_rad(self) -> float: ...
+    @property
+    def circle_radius_m(self) -> float: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def at_spin_rate_limit(self) -> bool: ...
+    @property
+    def at_circle_radius_limit(self) -> bool: ...
+    @property
+    def linear_a(self) -> _F64: ...
+    @property
+    def linear_b(self) -> _F64: ...
+    @property
+    def tangent_basis(self) -> _F64: ...
+    @property
+    def stabilizable(self) -> bool: ...
+
+@final
+class RelaxedHoverAnalysis:
+    @property
+    def solutions(self) -> list[RelaxedHoverSolution]: ...
+    @property
+    def best(self) -> RelaxedHoverSolution | None: ...
+    @property
+    def settings(self) -> RelaxedHoverSettings: ...
+    def __len__(self) -> int: ...
+
+def relaxed_hover(airframe: Airframe, settings: RelaxedHoverSettings) -> RelaxedHoverAnalysis: ...
+def relaxed_hover_residual(
+    airframe: Airframe,
+    settings: RelaxedHoverSettings,
+    body_rate_rad_s: tuple[float, float, float],
+    up: tuple[float, float, float],
+    thrust_n: _F64,
+) -> float: ...
+
+@final
 class FixedPitchActuator:
     def __new__(
         cls, time_constant_s: float, rate_limit_per_s: float, thrust_coefficient_n_s2: float
@@ -215,6 +307,36 @@ class TrackingFeedback:
         cls, *, u_trim: _F64, gain: _F64, times_s: _F64, references: _F64, error_limit: _F64
     ) -> TrackingFeedback: ...
     def reference(self, t_s: float) -> list[float]: ...
+
+@final
+class RelaxedHoverOuterLoop:
+    def __new__(
+        cls, *, position_gain_s2: float | None = None, velocity_gain_s: float | None = None, max_tilt_rad: float | None = None
+    ) -> RelaxedHoverOuterLoop: ...
+    @property
+    def position_gain_s2(self) -> float: ...
+    @property
+    def velocity_gain_s(self) -> float: ...
+    @property
+    def max_tilt_rad(self) -> float: ...
+
+@final
+class RelaxedHoverFeedback:
+    def __new__(
+        cls,
+        *,
+        axis: tuple[float, float, float],
+        e1: tuple[float, float, float],
+        e2: tuple[float, float, float],
+        body_rate_rad_s: tuple[float, float, float],
+        circle_offset_m: tuple[float, float, float],
+        circle_velocity_m_s: tuple[float, float, float],
+        gravity_m_s2: float,
+        u_trim: _F64,
+        gain: _F64,
+        position_m: tuple[float, float, float],
+        outer_loop: RelaxedHoverOuterLoop | None = None,
+    ) -> RelaxedHoverFeedback: ...
 
 _Actuator = FixedPitchActuator | VariablePitchActuator
 
@@ -332,7 +454,9 @@ class Trajectory:
     @property
     def divergence(self) -> Divergence | None: ...
 
-_Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback
+_Controller = (
+    OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback | RelaxedHoverFeedback
+)
 
 def simulate(
     airframe: Airframe,

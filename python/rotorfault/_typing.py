@@ -53,6 +53,7 @@ CoreController: TypeAlias = (
     | _rfcore.UniformPassiveFtc
     | _rfcore.LanzonController
     | _rfcore.TrackingFeedback
+    | _rfcore.RelaxedHoverFeedback
 )
 
 

@@ -40,6 +40,7 @@ CORE_TYPES: tuple[type, ...] = (
     _rfcore.UniformPassiveFtc,
     _rfcore.LanzonController,
     _rfcore.TrackingFeedback,
+    _rfcore.RelaxedHoverFeedback,
 )
 
 

@@ -10,6 +10,7 @@
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
+- :mod:`~rotorfault.control.relaxed_hover`: :class:`RelaxedHoverLqr` (an LQR about a relaxed hover);
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
   and the loop-shape weight.
 
@@ -29,6 +30,7 @@ from .allocated import Allocated
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .relaxed_hover import RelaxedHoverLqr
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
@@ -66,6 +68,7 @@ __all__ = [
     "NcfsynResult",
     "Lti",
     "OpenLoop",
+    "RelaxedHoverLqr",
     "TrackingFeedback",
     "UniformPassiveFtc",
     "hover_trim",

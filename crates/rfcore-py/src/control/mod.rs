@@ -5,6 +5,7 @@
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
+pub(crate) mod relaxed_hover;
 pub(crate) mod tracking;
 
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -23,6 +24,7 @@ use crate::convert::{detached, slice1, slice2, to_py_err};
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
+use relaxed_hover::PyRelaxedHoverFeedback;
 use tracking::PyTrackingFeedback;
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
@@ -93,6 +95,7 @@ pub enum ControllerArg<'py> {
     Ftc(PyRef<'py, PyUniformPassiveFtc>),
     Lanzon(PyRef<'py, PyLanzonController>),
     Tracking(PyRef<'py, PyTrackingFeedback>),
+    RelaxedHover(PyRef<'py, PyRelaxedHoverFeedback>),
 }
 
 pub(crate) fn boxed(
@@ -108,6 +111,7 @@ pub(crate) fn boxed(
         Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Lanzon(c)) => Box::new(c.inner.clone()),
         Some(ControllerArg::Tracking(c)) => Box::new(c.inner.clone()),
+        Some(ControllerArg::RelaxedHover(c)) => Box::new(c.inner.clone()),
     })
 }
 

@@ -12,6 +12,7 @@
 //! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
+//! - [`relaxed_hover`]: linear feedback about a relaxed hover (Mueller and D'Andrea's cascade).
 
 use nalgebra::DMatrix;
 
@@ -22,6 +23,7 @@ pub mod allocated;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;
+pub mod relaxed_hover;
 pub mod tracking;
 
 pub use allocated::Allocated;

@@ -39,6 +39,8 @@ pub(crate) struct Headroom {
     /// Generators in range coordinates (r x k).
     generators: DMatrix<f64>,
     facets: Vec<Facet>,
+    /// Pseudo-inverse of the generators (k x r): least squares in range coordinates.
+    inverse: DMatrix<f64>,
     lower: Vec<f64>,
     upper: Vec<f64>,
     cap: f64,
@@ -64,28 +66,12 @@ impl Headroom {
                 }
             })
             .collect();
-        let scaled = DMatrix::from_fn(p, k.max(p), |r, c| {
-            if c < k {
-                matrix[(r, c)] * row_scale[r]
-            } else {
-                0.0
-            }
-        });
-        let svd = scaled.clone().svd(true, false);
-        let u = svd.u.expect("svd computed with u");
-        let sigma = &svd.singular_values;
-        let largest = sigma.amax();
-        let mut order: Vec<usize> = (0..sigma.len()).collect();
-        order.sort_by(|&a, &b| sigma[b].total_cmp(&sigma[a]));
-        let rank = order
-            .iter()
-            .filter(|&&i| largest > 0.0 && sigma[i] > RANK_RTOL * largest)
-            .count();
-        let range = DMatrix::from_fn(p, rank, |r, c| u[(r, order[c])]);
-        let null = DMatrix::from_fn(p, p - rank, |r, c| u[(r, order[rank + c])]);
-        let scaled = scaled.columns(0, k).into_owned();
+        let scaled = DMatrix::from_fn(p, k, |r, c| matrix[(r, c)] * row_scale[r]);
+        let (range, null) = super::numeric::range_and_null(&scaled, RANK_RTOL);
         let generators = range.transpose() * &scaled;
         let facets = facets(&generators, lower, upper);
+        // Minimum-norm least squares: G^T (G G^T)^+ (G has full row rank r).
+        let inverse = generators.transpose() * super::numeric::symmetric_pinv(&(&generators * generators.transpose()), 1e-14);
         let cap = lower
             .iter()
             .zip(upper)
@@ -97,6 +83,7 @@ impl Headroom {
             null,
             generators,
             facets,
+            inverse,
             lower: lower.to_vec(),
             upper: upper.to_vec(),
             cap,
@@ -196,99 +183,82 @@ impl Headroom {
     /// when the rotors are exactly as many as the rank and `v` is in the range).
     pub fn least_squares(&self, v: &[f64]) -> Option<Vec<f64>> {
         let (w, _) = self.project(v);
-        let g = &self.generators;
-        if g.nrows() == 0 {
-            return Some(vec![0.0; g.ncols()]);
-        }
-        let pinv = g.clone().pseudo_inverse(1e-13 * g.amax()).ok()?;
-        Some((pinv * w).iter().copied().collect())
+        Some((&self.inverse * w).iter().copied().collect())
     }
 
     /// The thrusts with headroom `margin` closest to the middle of the box `[lower, upper -
-    /// margin]` (the one choice that depends on neither rotor order nor units): Dykstra's
-    /// projection, finished exactly on the bounds it leaves active. `None` when the box is empty.
+    /// margin]` (the one choice that depends on neither rotor order nor units), exactly: the
+    /// projection's dual, `f(l) = clamp(c + G^T l)` with `G f(l) = w`, solved by semismooth Newton
+    /// (a piecewise-linear equation: exact once the clamped set is right). The box is widened by
+    /// 1e-10 of the bounds' size so it has an interior when `margin` is the largest headroom
+    /// (the thrusts' own headroom may then be that much smaller). `None` when the box is empty or `v` is
+    /// not reachable.
     pub fn thrusts(&self, v: &[f64], margin: f64) -> Option<Vec<f64>> {
         let k = self.lower.len();
-        let top: Vec<f64> = (0..k).map(|i| self.upper[i] - margin).collect();
-        if (0..k).any(|i| top[i] < self.lower[i]) {
-            return None;
-        }
-        let (w, _) = self.project(v);
-        let g = &self.generators;
-        let r = g.nrows();
-        let centre: Vec<f64> = (0..k).map(|i| 0.5 * (self.lower[i] + top[i])).collect();
-        if r == 0 {
-            return Some(centre);
-        }
-        let gram = (g * g.transpose()).pseudo_inverse(1e-14).ok()?;
-        let onto_affine = |x: &mut DVector<f64>| {
-            let miss = g * &*x - &w;
-            *x -= g.transpose() * (&gram * miss);
-        };
         let scale = self
             .lower
             .iter()
-            .chain(&top)
+            .chain(&self.upper)
             .fold(0.0f64, |a, b| a.max(b.abs()))
             .max(f64::MIN_POSITIVE);
-        let mut x = DVector::from_column_slice(&centre);
-        onto_affine(&mut x);
-        let mut correction = DVector::zeros(k);
-        let mut y = x.clone();
-        for _ in 0..20_000 {
-            let shifted = &x + &correction;
-            for i in 0..k {
-                y[i] = shifted[i].clamp(self.lower[i], top[i]);
+        let t = margin - 1e-10 * scale;
+        let top: Vec<f64> = (0..k).map(|i| self.upper[i] - t).collect();
+        if (0..k).any(|i| top[i] < self.lower[i]) {
+            return None;
+        }
+        let centre: Vec<f64> = (0..k).map(|i| 0.5 * (self.lower[i] + top[i])).collect();
+        let (w, _) = self.project(v);
+        let g = &self.generators;
+        let r = g.nrows();
+        if r == 0 {
+            return Some(centre);
+        }
+        let clamp = |l: &DVector<f64>| -> Vec<f64> {
+            let shift = g.transpose() * l;
+            (0..k).map(|i| (centre[i] + shift[i]).clamp(self.lower[i], top[i])).collect()
+        };
+        let dual = |l: &DVector<f64>| -> f64 {
+            let f = clamp(l);
+            let miss = g * DVector::from_column_slice(&f) - &w;
+            0.5 * f.iter().zip(&centre).map(|(a, b)| (a - b) * (a - b)).sum::<f64>() - l.dot(&miss)
+        };
+        let size = w.amax() + g.amax() * scale;
+        let mut l = DVector::zeros(r);
+        for _ in 0..200 {
+            let f = clamp(&l);
+            let gap = &w - g * DVector::from_column_slice(&f);
+            if gap.amax() <= 1e-14 * size {
+                return Some(f);
             }
-            correction = shifted - &y;
-            let previous = x.clone();
-            x = y.clone();
-            onto_affine(&mut x);
-            if (&x - &y).amax() <= 1e-14 * scale && (&x - previous).amax() <= 1e-15 * scale {
+            let shift = g.transpose() * &l;
+            let free: Vec<usize> = (0..k)
+                .filter(|&i| centre[i] + shift[i] > self.lower[i] && centre[i] + shift[i] < top[i])
+                .collect();
+            let gf = DMatrix::from_fn(r, free.len(), |a, b| g[(a, free[b])]);
+            let hessian = &gf * gf.transpose();
+            let mut step = super::numeric::symmetric_pinv(&hessian, 1e-14) * &gap;
+            if step.amax() == 0.0 {
+                step = gap.clone();
+            }
+            let base = dual(&l);
+            let mut alpha = 1.0;
+            let mut moved = false;
+            for _ in 0..60 {
+                let trial = &l + &step * alpha;
+                if dual(&trial) > base {
+                    l = trial;
+                    moved = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !moved {
                 break;
             }
         }
-        // Exact finish: fix the bounds Dykstra left active, project the rest exactly.
-        let tol = 1e-9 * scale;
-        let mut fixed: Vec<Option<f64>> = (0..k)
-            .map(|i| {
-                if y[i] <= self.lower[i] + tol {
-                    Some(self.lower[i])
-                } else if y[i] >= top[i] - tol {
-                    Some(top[i])
-                } else {
-                    None
-                }
-            })
-            .collect();
-        for _ in 0..=k {
-            let free: Vec<usize> = (0..k).filter(|&i| fixed[i].is_none()).collect();
-            let mut f: Vec<f64> = (0..k).map(|i| fixed[i].unwrap_or(centre[i])).collect();
-            let known: DVector<f64> = (0..k)
-                .filter(|&i| fixed[i].is_some())
-                .fold(DVector::zeros(r), |acc, i| acc + g.column(i) * f[i]);
-            if !free.is_empty() {
-                let gf = DMatrix::from_fn(r, free.len(), |a, b| g[(a, free[b])]);
-                let cf = DVector::from_iterator(free.len(), free.iter().map(|&i| centre[i]));
-                let rhs = &w - known - &gf * &cf;
-                let step = gf.transpose() * (&gf * gf.transpose()).pseudo_inverse(1e-14).ok()? * rhs;
-                for (j, &i) in free.iter().enumerate() {
-                    f[i] = cf[j] + step[j];
-                }
-            }
-            let outside: Vec<usize> = free
-                .iter()
-                .copied()
-                .filter(|&i| f[i] < self.lower[i] - 1e-13 * scale || f[i] > top[i] + 1e-13 * scale)
-                .collect();
-            if outside.is_empty() {
-                return Some(f);
-            }
-            for i in outside {
-                fixed[i] = Some(if f[i] < self.lower[i] { self.lower[i] } else { top[i] });
-            }
-        }
-        Some(y.iter().copied().collect())
+        let f = clamp(&l);
+        let gap = &w - g * DVector::from_column_slice(&f);
+        (gap.amax() <= 1e-12 * size).then_some(f)
     }
 }
 

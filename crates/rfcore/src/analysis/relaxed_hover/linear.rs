@@ -77,11 +77,13 @@ pub(crate) fn stabilizable(a: &DMatrix<f64>, b: &DMatrix<f64>) -> bool {
         if lambda.re < -1e-9 * size {
             return true;
         }
-        let mut pbh = DMatrix::zeros(n, n + b.ncols());
-        pbh.view_mut((0, 0), (n, n)).copy_from(&(&a_c - DMatrix::identity(n, n) * lambda));
-        pbh.view_mut((0, n), (n, b.ncols())).copy_from(&b_c);
-        let sigma = pbh.singular_values();
-        let largest = sigma.amax().max(1e-300);
-        sigma.iter().filter(|s| **s > 1e-9 * largest).count() == n
+        // Rank of [A - l I, B] (n rows) from column-pivoted QR of its adjoint (no SVD: module
+        // `numeric` says why).
+        let mut pbh = DMatrix::zeros(n + b.ncols(), n);
+        pbh.view_mut((0, 0), (n, n)).copy_from(&(&a_c - DMatrix::identity(n, n) * lambda).adjoint());
+        pbh.view_mut((n, 0), (b.ncols(), n)).copy_from(&b_c.adjoint());
+        let diagonal = pbh.col_piv_qr().r().diagonal();
+        let largest = diagonal.iter().map(|d| d.norm()).fold(0.0, f64::max).max(1e-300);
+        diagonal.iter().filter(|d| d.norm() > 1e-9 * largest).count() == n
     })
 }

@@ -44,9 +44,11 @@ impl Chart {
     }
 }
 
-/// Maximises `f` from `start` with the Nelder-Mead simplex (initial edge `step`), restarting
-/// from the best point until a restart no longer improves it. Points where `f` is not finite are
-/// worse than any finite one. Returns the best point and value.
+/// Maximises `f` from `start` with the Nelder-Mead simplex (initial edges `step` along each
+/// coordinate), restarting from the best point with a turned and smaller simplex until a restart
+/// no longer improves it (the optimum of a min of smooth functions sits on a kink, where a
+/// simplex aligned with the kink can stall). Points where `f` is not finite are worse than any
+/// finite one. Returns the best point and value.
 pub(crate) fn nelder_mead(
     f: &mut dyn FnMut(&[f64]) -> f64,
     start: &[f64],
@@ -54,20 +56,39 @@ pub(crate) fn nelder_mead(
     tolerance: &[f64],
 ) -> (Vec<f64>, f64) {
     let score = |v: f64| if v.is_nan() { f64::NEG_INFINITY } else { v };
+    let d = start.len();
     let mut best = start.to_vec();
     let mut best_value = score(f(start));
-    let mut scale = 1.0;
-    for _restart in 0..3 {
-        let (x, value) = simplex(f, &best, step, tolerance, scale);
-        let improved = value > best_value + 1e-15 * best_value.abs();
+    let mut stalled = 0;
+    for restart in 0..24 {
+        // Edges: the coordinate steps turned by a restart-dependent rotation (a Householder
+        // reflection of a fixed pseudo-random direction), shrinking slowly.
+        let scale = 0.7f64.powi(restart);
+        let edges: Vec<Vec<f64>> = (0..d)
+            .map(|i| {
+                let mut e = vec![0.0; d];
+                e[i] = 1.0;
+                if restart > 0 && d > 1 {
+                    let u: Vec<f64> = (0..d).map(|j| ((restart as usize * 7 + j * 3) as f64 * 0.618_034).sin()).collect();
+                    let norm2: f64 = u.iter().map(|x| x * x).sum();
+                    let dot: f64 = u.iter().zip(&e).map(|(a, b)| a * b).sum();
+                    for j in 0..d {
+                        e[j] -= 2.0 * dot * u[j] / norm2;
+                    }
+                }
+                (0..d).map(|j| e[j] * step[j] * scale).collect()
+            })
+            .collect();
+        let (x, value) = simplex(f, &best, &edges, tolerance);
+        let improved = value > best_value + 1e-15 * best_value.abs().max(1e-300);
         if value >= best_value {
             best = x;
             best_value = value;
         }
-        if !improved {
+        stalled = if improved { 0 } else { stalled + 1 };
+        if stalled >= 3 {
             break;
         }
-        scale *= 0.5;
     }
     (best, best_value)
 }
@@ -75,17 +96,14 @@ pub(crate) fn nelder_mead(
 fn simplex(
     f: &mut dyn FnMut(&[f64]) -> f64,
     start: &[f64],
-    step: &[f64],
+    edges: &[Vec<f64>],
     tolerance: &[f64],
-    scale: f64,
 ) -> (Vec<f64>, f64) {
     let d = start.len();
     let score = |v: f64| if v.is_nan() { f64::NEG_INFINITY } else { v };
     let mut points: Vec<Vec<f64>> = vec![start.to_vec()];
-    for i in 0..d {
-        let mut p = start.to_vec();
-        p[i] += step[i] * scale;
-        points.push(p);
+    for edge in edges {
+        points.push((0..d).map(|j| start[j] + edge[j]).collect());
     }
     let mut values: Vec<f64> = points.iter().map(|p| score(f(p))).collect();
     for _ in 0..300 * (d + 1) {
@@ -166,10 +184,59 @@ pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Option<Vec<f64>> {
     Some(roots)
 }
 
-/// `x - J^+ r` for the scaled variables: one minimum-norm Gauss-Newton step.
+// nalgebra 0.34's SVD loses accuracy on rank-deficient matrices (dimforge/nalgebra#1172: here a
+// pseudo-inverse off by 2e-7 and a range basis off by 4e-4 on a 4 x 4 rotor matrix of rank 3), so
+// this module uses none: column-pivoted QR (Householder) for ranges and null spaces, symmetric
+// eigendecompositions (Jacobi-accurate) for pseudo-inverses and null vectors.
+
+/// Orthonormal bases of the range (p x r) and of the left null space (p x (p - r)) of `m`
+/// (p x k), the rank from column-pivoted QR: diagonal entries of R above `rtol` times the largest.
+pub(crate) fn range_and_null(m: &DMatrix<f64>, rtol: f64) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (p, k) = m.shape();
+    let padded = DMatrix::from_fn(p, k.max(p), |r, c| if c < k { m[(r, c)] } else { 0.0 });
+    let qr = padded.col_piv_qr();
+    let q = qr.q();
+    let r = qr.r();
+    let diagonal: Vec<f64> = (0..r.nrows().min(r.ncols())).map(|i| r[(i, i)]).collect();
+    let largest = diagonal.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+    let rank = diagonal.iter().filter(|d| largest > 0.0 && d.abs() > rtol * largest).count();
+    (q.columns(0, rank).into_owned(), q.columns(rank, p - rank).into_owned())
+}
+
+/// The pseudo-inverse of a symmetric positive semi-definite matrix (eigenvalues below `rtol`
+/// times the largest count as zero).
+pub(crate) fn symmetric_pinv(h: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
+    let n = h.nrows();
+    if n == 0 {
+        return DMatrix::zeros(0, 0);
+    }
+    let symmetric = (h + h.transpose()) * 0.5;
+    let eig = symmetric.symmetric_eigen();
+    let largest = eig.eigenvalues.amax();
+    let inverse = eig.eigenvalues.map(|l| if largest > 0.0 && l > rtol * largest { 1.0 / l } else { 0.0 });
+    &eig.eigenvectors * DMatrix::from_diagonal(&inverse) * eig.eigenvectors.transpose()
+}
+
+/// The minimum-norm least-squares solution of `J x = r` (J^+ r).
+pub(crate) fn min_norm_solve(j: &DMatrix<f64>, r: &DVector<f64>) -> DVector<f64> {
+    if j.nrows() <= j.ncols() {
+        j.transpose() * (symmetric_pinv(&(j * j.transpose()), 1e-14) * r)
+    } else {
+        symmetric_pinv(&(j.transpose() * j), 1e-14) * (j.transpose() * r)
+    }
+}
+
+/// `-J^+ r`: one minimum-norm Gauss-Newton step.
 pub(crate) fn gauss_newton_step(jacobian: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
-    let pinv = jacobian.clone().pseudo_inverse(1e-13 * jacobian.amax().max(f64::MIN_POSITIVE)).ok()?;
-    Some(-(pinv * residual))
+    let step = -min_norm_solve(jacobian, residual);
+    step.iter().all(|x| x.is_finite()).then_some(step)
+}
+
+/// The unit vector `x` minimising `|J x|` (a null vector of `J` when it has one).
+pub(crate) fn null_vector(j: &DMatrix<f64>) -> Option<DVector<f64>> {
+    let eig = (j.transpose() * j).symmetric_eigen();
+    let smallest = (0..eig.eigenvalues.len()).min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))?;
+    Some(eig.eigenvectors.column(smallest).into_owned())
 }
 
 #[cfg(test)]
@@ -194,6 +261,28 @@ mod tests {
         let mut f = |p: &[f64]| -((p[0] - 0.3).abs() + 2.0 * (p[1] + 0.1).abs());
         let (x, v) = nelder_mead(&mut f, &[0.0, 0.0], &[0.1, 0.1], &[1e-12, 1e-12]);
         assert!((x[0] - 0.3).abs() < 1e-9 && (x[1] + 0.1).abs() < 1e-9 && v > -1e-8, "{x:?}");
+    }
+
+    #[test]
+    fn range_and_null_of_a_rank_three_rotor_matrix() {
+        // Four PPNNPN rotors (60 to 240 degrees): thrust and three torques of rank 3, where
+        // nalgebra's SVD gives a range basis off by 4e-4.
+        let (r, w) = (0.275f64, [-1.0, 1.0, 1.0, -1.0]);
+        let m = DMatrix::from_fn(4, 4, |row, c| {
+            let phi = (60.0 + 60.0 * c as f64).to_radians();
+            match row {
+                0 => 1.0,
+                1 => -r * phi.sin(),
+                2 => r * phi.cos(),
+                _ => w[c] * 0.1,
+            }
+        });
+        let (range, null) = range_and_null(&m, 1e-10);
+        assert_eq!((range.ncols(), null.ncols()), (3, 1));
+        assert!((&range * range.transpose() * &m - &m).amax() < 1e-15);
+        assert!((null.transpose() * &m).amax() < 1e-15);
+        let x = min_norm_solve(&m, &(&m * DVector::from_column_slice(&[1.0, 2.0, 3.0, 4.0])));
+        assert!((&m * &x - &m * DVector::from_column_slice(&[1.0, 2.0, 3.0, 4.0])).amax() < 1e-14);
     }
 
     #[test]

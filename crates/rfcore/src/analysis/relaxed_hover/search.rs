@@ -329,7 +329,11 @@ impl<'a> Branch<'a> {
             if value.is_nan() || value < 0.0 {
                 return None;
             }
-            point = best;
+            point = self.polish_kink(&best, &|p| {
+                let (_, s) = self.best_spin(p[0], p[1], sign, &h);
+                let n = self.chart.direction(p[0], p[1])?;
+                self.unique_thrusts(&self.headroom(&n), &self.rhs(&n, s, &h)?)
+            });
             let (margin, s) = self.best_spin(point[0], point[1], sign, &h);
             let n = self.chart.direction(point[0], point[1])?;
             let v = self.rhs(&n, s, &h)?;
@@ -344,6 +348,65 @@ impl<'a> Branch<'a> {
         }
         let (n, s, f) = found?;
         Some((self.candidate(n, s, &f), (point[0], point[1])))
+    }
+
+    /// Nelder-Mead stops near, not on, a kinked optimum, where several carrying rotors share the
+    /// smallest headroom (on stiff problems, a fast spin, that costs visible margin). Gauss-Newton
+    /// on "their headrooms are equal" over the point's coordinates lands on the kink; the result
+    /// is kept only if the margin does not drop. `thrusts` gives the unique thrusts at a point
+    /// (`None`: not unique, nothing to do).
+    fn polish_kink(&self, point: &[f64], thrusts: &dyn Fn(&[f64]) -> Option<Vec<f64>>) -> Vec<f64> {
+        let Some(f0) = thrusts(point) else {
+            return point.to_vec();
+        };
+        let k = self.k();
+        let d = point.len();
+        let scale = self.bound_scale();
+        let margin0 = self.margin_of(&f0);
+        if !margin0.is_finite() {
+            return point.to_vec();
+        }
+        // Rotors by headroom, smallest first: the kink has the first j of them equal, j up to
+        // one more than the point's coordinates (a vertex).
+        let mut order: Vec<usize> = (0..k).collect();
+        order.sort_by(|&a, &b| (self.upper[a] - f0[a]).total_cmp(&(self.upper[b] - f0[b])));
+        let (mut best, mut best_margin) = (point.to_vec(), margin0);
+        for j in 2..=k.min(d + 1) {
+            let active = &order[..j];
+            let residual = |p: &[f64]| -> Option<DVector<f64>> {
+                let f = thrusts(p)?;
+                let first = self.upper[active[0]] - f[active[0]];
+                Some(DVector::from_iterator(j - 1, active[1..].iter().map(|&c| (self.upper[c] - f[c] - first) / scale)))
+            };
+            let mut z = point.to_vec();
+            for _ in 0..30 {
+                let Some(r) = residual(&z) else { break };
+                if r.amax() <= 1e-15 {
+                    break;
+                }
+                let mut jac = DMatrix::zeros(j - 1, d);
+                let mut ok = true;
+                for c in 0..d {
+                    let step = 1e-8 * z[c].abs().max(1e-3);
+                    let (mut plus, mut minus) = (z.clone(), z.clone());
+                    plus[c] += step;
+                    minus[c] -= step;
+                    match (residual(&plus), residual(&minus)) {
+                        (Some(rp), Some(rm)) => jac.set_column(c, &((rp - rm) / (2.0 * step))),
+                        _ => ok = false,
+                    }
+                }
+                let Some(delta) = ok.then(|| gauss_newton_step(&jac, &r)).flatten() else { break };
+                z = (0..d).map(|c| z[c] + delta[c]).collect();
+            }
+            if let Some(f) = thrusts(&z) {
+                let m = self.margin_of(&f);
+                if m > best_margin {
+                    (best, best_margin) = (z, m);
+                }
+            }
+        }
+        best
     }
 
     // -- r = 3: surface ---------------------------------------------------------------------
@@ -376,7 +439,12 @@ impl<'a> Branch<'a> {
                     if value.is_nan() || value < 0.0 {
                         break;
                     }
-                    point = best;
+                    point = self.polish_kink(&best, &|p| {
+                        if self.k() != self.rank {
+                            return None;
+                        }
+                        self.surface_eval(p[0], p[1], sheet, &h, true).map(|e| e.2)
+                    });
                     let Some((_, s, f, n)) = self.surface_eval(point[0], point[1], sheet, &h, true) else {
                         break;
                     };
@@ -566,18 +634,11 @@ impl<'a> Branch<'a> {
         z
     }
 
-    /// The curve's direction at `z` in scaled variables: the right singular vector of the
-    /// equations' Jacobian with the smallest singular value (the Jacobian padded square so the
-    /// null space is part of the decomposition).
+    /// The curve's direction at `z` in scaled variables: the null vector of the equations'
+    /// Jacobian.
     fn tangent(&self, z: &[f64]) -> Option<Vec<f64>> {
         let jac = self.jacobian(z, None)?;
-        let k = jac.ncols();
-        let square = DMatrix::from_fn(k.max(4), k, |r, c| if r < 4 { jac[(r, c)] } else { 0.0 });
-        let svd = square.svd(false, true);
-        let v_t = svd.v_t?;
-        let sigma = &svd.singular_values;
-        let smallest = (0..sigma.len()).min_by(|&a, &b| sigma[a].total_cmp(&sigma[b]))?;
-        Some(v_t.row(smallest).iter().copied().collect())
+        super::numeric::null_vector(&jac).map(|v| v.iter().copied().collect())
     }
 
     // -- the exact equations ----------------------------------------------------------------

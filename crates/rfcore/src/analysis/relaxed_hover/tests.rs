@@ -165,3 +165,18 @@ fn residual_rejects_a_wrong_solution() {
     let bad = relaxed_hover_residual(&a, &ke(), best.body_rate_rad_s, best.spin_axis, &off).unwrap();
     assert!(bad > 1e-4, "{bad}");
 }
+
+#[test]
+#[ignore]
+fn timing() {
+    let t = std::time::Instant::now();
+    let _ = relaxed_hover(&failed("ke-quadcopter", &[0]), &ke()).unwrap();
+    println!("ke one {:?}", t.elapsed());
+    let t = std::time::Instant::now();
+    let _ = relaxed_hover(&failed("hexa-ppnnpn", &[4]), &Default::default()).unwrap();
+    println!("hexa {:?}", t.elapsed());
+    let t = std::time::Instant::now();
+    let _ = relaxed_hover(&preset("octo-x"), &Default::default()).unwrap();
+    println!("octo {:?}", t.elapsed());
+}
+
