@@ -38,6 +38,11 @@ CLAIMS = [
     ("# 'off-station' (see the findings below)", "preset", "ke_paper.run_scenario('one-failure').metrics.outcome", "off-station", 0),
     ("# 1.527, 1.680 (stability margin 1/gamma)", "ours", "round(ours.gamma_min, 3), round(ours.gamma, 3)", (1.527, 1.680), 0),
     ("# holds-position, within 1 cm of (0, 0, 1) m after 60 s", "ours", "run.outcome == 'holds-position' and run.final_error_m < 0.01", True, 0),
+    # Relaxed hover (issue 30).
+    ("# 10 strategies, best first", "analysis", "len(analysis)", 10, 0),
+    ("# 15.22 rad/s, rotors 2, 3, 4 at 2.459 N each, 6.04 N headroom", "best",
+     "(round(best.spin_rate_rad_s, 2), best.carrying, [round(float(f), 3) for f in best.thrust_n[1:]], round(best.thrust_margin_n, 2))",
+     (15.22, [2, 3, 4], [2.459, 2.459, 2.459], 6.04), 0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

@@ -63,15 +63,21 @@ def _lqr(a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray) -> LqrDesig
     return LqrDesign(gain=gain, x=x, residual=residual, closed_loop_eigenvalues=eigenvalues)
 
 
-def bryson_weights(solution: RelaxedHoverSolution) -> tuple[FloatArray, FloatArray]:
+def bryson_weights(solution: RelaxedHoverSolution, airframe: Airframe) -> tuple[FloatArray, FloatArray]:
     """Default ``(Q, R)`` by Bryson's rule: 0.05 (about 3 degrees) on the up axis, 2 rad/s on the
-    body rates, 0.2 m and 0.5 m/s on altitude, against a tenth of the largest carrying thrust per
-    rotor."""
+    body rates, 0.2 m and 0.5 m/s on altitude, against each carrying rotor's room to move: a
+    tenth of the largest carrying thrust, or less where the rotor is nearer one of its bounds (a
+    rotor carrying 0.03 N above its floor must barely be used to push down; at least a
+    thousandth of the largest thrust)."""
     scale = np.array([0.05, 0.05, 2.0, 2.0, 2.0, 0.2, 0.5])
     thrust = np.asarray(solution.thrust_n)
-    per_rotor = 0.1 * float(np.max(np.abs(thrust)))
-    inputs = np.asarray(solution.linear_b).shape[1]
-    return np.diag(1.0 / scale**2), np.eye(inputs) / per_rotor**2
+    largest = float(np.max(np.abs(thrust)))
+    efficiency = np.asarray(airframe.efficiency)
+    room = []
+    for i in (j - 1 for j in solution.carrying):
+        lo, hi = efficiency[i] * airframe.min_thrust_n[i], efficiency[i] * airframe.max_thrust_n[i]
+        room.append(max(min(0.1 * largest, thrust[i] - lo, hi - thrust[i]), 1e-3 * largest))
+    return np.diag(1.0 / scale**2), np.diag(1.0 / np.asarray(room) ** 2)
 
 
 class RelaxedHoverLqr:
@@ -115,7 +121,7 @@ class RelaxedHoverLqr:
         self.position = pos
         a = np.asarray(solution.linear_a)
         b = np.asarray(solution.linear_b)
-        q_default, r_default = bryson_weights(solution)
+        q_default, r_default = bryson_weights(solution, airframe)
         self.q = q_default if q is None else float_array("q", q, 2)
         self.r = r_default if r is None else float_array("r", r, 2)
         if self.q.shape != (7, 7):

@@ -6,15 +6,16 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::prelude::*;
 
 use rfcore::analysis::relaxed_hover::{
-    relaxed_hover as core_relaxed_hover, relaxed_hover_residual as core_residual, RelaxedHoverAnalysis,
-    RelaxedHoverSettings, RelaxedHoverSolution,
+    relaxed_hover as core_relaxed_hover, relaxed_hover_residual as core_residual,
+    RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution,
 };
 
 use crate::airframe::PyAirframe;
 use crate::convert::{detached, read_only, slice1};
 
 fn array2<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
-    numpy::ndarray::Array2::from_shape_fn((m.nrows(), m.ncols()), |(r, c)| m[(r, c)]).into_pyarray(py)
+    numpy::ndarray::Array2::from_shape_fn((m.nrows(), m.ncols()), |(r, c)| m[(r, c)])
+        .into_pyarray(py)
 }
 
 fn rotor_numbers(indices: &[usize]) -> Vec<usize> {
@@ -185,7 +186,14 @@ impl PyRelaxedHoverSolution {
     #[getter]
     fn tangent_basis<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let l = &self.inner.linear;
-        array2(py, &DMatrix::from_row_slice(2, 3, &[l.e1[0], l.e1[1], l.e1[2], l.e2[0], l.e2[1], l.e2[2]]))
+        array2(
+            py,
+            &DMatrix::from_row_slice(
+                2,
+                3,
+                &[l.e1[0], l.e1[1], l.e1[2], l.e2[0], l.e2[1], l.e2[2]],
+            ),
+        )
     }
     #[getter]
     fn stabilizable(&self) -> bool {
@@ -226,7 +234,9 @@ impl PyRelaxedHoverAnalysis {
     }
     #[getter]
     fn settings(&self) -> PyRelaxedHoverSettings {
-        PyRelaxedHoverSettings { inner: self.settings }
+        PyRelaxedHoverSettings {
+            inner: self.settings,
+        }
     }
     fn __len__(&self) -> usize {
         self.solutions.len()
@@ -240,7 +250,11 @@ fn analysis(py: Python<'_>, result: RelaxedHoverAnalysis) -> PyResult<PyRelaxedH
         .into_iter()
         .map(|inner| Py::new(py, PyRelaxedHoverSolution { inner }))
         .collect::<PyResult<Vec<_>>>()?;
-    Ok(PyRelaxedHoverAnalysis { solutions, best, settings: result.settings })
+    Ok(PyRelaxedHoverAnalysis {
+        solutions,
+        best,
+        settings: result.settings,
+    })
 }
 
 /// Every relaxed hover solution of `airframe` (efficiencies included), GIL released.
@@ -264,6 +278,12 @@ pub(crate) fn relaxed_hover_residual(
     up: [f64; 3],
     thrust_n: PyReadonlyArray1<'_, f64>,
 ) -> PyResult<f64> {
-    core_residual(&airframe.inner, &settings.inner, body_rate_rad_s, up, slice1("thrust_n", &thrust_n)?)
-        .map_err(crate::convert::to_py_err)
+    core_residual(
+        &airframe.inner,
+        &settings.inner,
+        body_rate_rad_s,
+        up,
+        slice1("thrust_n", &thrust_n)?,
+    )
+    .map_err(crate::convert::to_py_err)
 }

@@ -3,7 +3,9 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::control::relaxed_hover::{RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim};
+use rfcore::control::relaxed_hover::{
+    RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim,
+};
 
 use crate::convert::{matrix, slice1, to_py_err};
 
@@ -18,7 +20,11 @@ pub struct PyRelaxedHoverOuterLoop {
 impl PyRelaxedHoverOuterLoop {
     #[new]
     #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None))]
-    fn new(position_gain_s2: Option<f64>, velocity_gain_s: Option<f64>, max_tilt_rad: Option<f64>) -> PyResult<Self> {
+    fn new(
+        position_gain_s2: Option<f64>,
+        velocity_gain_s: Option<f64>,
+        max_tilt_rad: Option<f64>,
+    ) -> PyResult<Self> {
         let d = RelaxedHoverOuterLoop::default();
         let inner = RelaxedHoverOuterLoop {
             position_gain_s2: position_gain_s2.unwrap_or(d.position_gain_s2),
@@ -67,10 +73,24 @@ impl PyRelaxedHoverFeedback {
         position_m: [f64; 3],
         outer_loop: Option<&PyRelaxedHoverOuterLoop>,
     ) -> PyResult<Self> {
-        let trim = RelaxedHoverTrim { axis, e1, e2, body_rate_rad_s, circle_offset_m, circle_velocity_m_s, gravity_m_s2 };
+        let trim = RelaxedHoverTrim {
+            axis,
+            e1,
+            e2,
+            body_rate_rad_s,
+            circle_offset_m,
+            circle_velocity_m_s,
+            gravity_m_s2,
+        };
         let outer = outer_loop.map_or_else(RelaxedHoverOuterLoop::default, |o| o.inner);
-        let inner = RelaxedHoverFeedback::new(&trim, slice1("u_trim", &u_trim)?, matrix("gain", &gain)?, position_m, outer)
-            .map_err(to_py_err)?;
+        let inner = RelaxedHoverFeedback::new(
+            &trim,
+            slice1("u_trim", &u_trim)?,
+            matrix("gain", &gain)?,
+            position_m,
+            outer,
+        )
+        .map_err(to_py_err)?;
         Ok(PyRelaxedHoverFeedback { inner })
     }
 }

@@ -35,7 +35,11 @@ pub struct RelaxedHoverOuterLoop {
 impl Default for RelaxedHoverOuterLoop {
     /// A loop well below the attitude loop's bandwidth: 0.5 rad/s natural frequency, damping 1.
     fn default() -> Self {
-        RelaxedHoverOuterLoop { position_gain_s2: 0.25, velocity_gain_s: 1.0, max_tilt_rad: 0.2 }
+        RelaxedHoverOuterLoop {
+            position_gain_s2: 0.25,
+            velocity_gain_s: 1.0,
+            max_tilt_rad: 0.2,
+        }
     }
 }
 
@@ -46,12 +50,18 @@ impl RelaxedHoverOuterLoop {
             ("outer_loop.velocity_gain_s", self.velocity_gain_s),
         ] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(RfError::invalid(field, format!("must be finite and >= 0, got {value}")));
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be finite and >= 0, got {value}"),
+                ));
             }
         }
         let t = self.max_tilt_rad;
         if !(t > 0.0 && t < std::f64::consts::FRAC_PI_2) {
-            return Err(RfError::invalid("outer_loop.max_tilt_rad", format!("must lie in (0, pi/2), got {t}")));
+            return Err(RfError::invalid(
+                "outer_loop.max_tilt_rad",
+                format!("must lie in (0, pi/2), got {t}"),
+            ));
         }
         Ok(())
     }
@@ -109,13 +119,25 @@ impl RelaxedHoverFeedback {
         ] {
             require_all_finite(field, v)?;
         }
-        let (n, e1, e2) = (Vector3::from(trim.axis), Vector3::from(trim.e1), Vector3::from(trim.e2));
+        let (n, e1, e2) = (
+            Vector3::from(trim.axis),
+            Vector3::from(trim.e1),
+            Vector3::from(trim.e2),
+        );
         let frame = nalgebra::Matrix3::from_columns(&[e1, e2, n]);
-        if (frame.transpose() * frame - nalgebra::Matrix3::identity()).amax() > 1e-9 || frame.determinant() < 0.0 {
-            return Err(RfError::invalid("axis", "(e1, e2, axis) must be a right-handed orthonormal frame"));
+        if (frame.transpose() * frame - nalgebra::Matrix3::identity()).amax() > 1e-9
+            || frame.determinant() < 0.0
+        {
+            return Err(RfError::invalid(
+                "axis",
+                "(e1, e2, axis) must be a right-handed orthonormal frame",
+            ));
         }
         if !(trim.gravity_m_s2.is_finite() && trim.gravity_m_s2 > 0.0) {
-            return Err(RfError::invalid("gravity_m_s2", format!("must be finite and > 0, got {}", trim.gravity_m_s2)));
+            return Err(RfError::invalid(
+                "gravity_m_s2",
+                format!("must be finite and > 0, got {}", trim.gravity_m_s2),
+            ));
         }
         outer.check()?;
         require_all_finite("u_trim", u_trim)?;
@@ -123,7 +145,10 @@ impl RelaxedHoverFeedback {
         if gain.shape() != (u_trim.len(), REDUCED_STATES) {
             return Err(RfError::shape(
                 "gain",
-                format!("{} x {REDUCED_STATES} (commands x reduced states)", u_trim.len()),
+                format!(
+                    "{} x {REDUCED_STATES} (commands x reduced states)",
+                    u_trim.len()
+                ),
                 format!("{} x {}", gain.nrows(), gain.ncols()),
             ));
         }
@@ -156,7 +181,15 @@ impl RelaxedHoverFeedback {
         let up_wanted = Vector3::new(accel.x, accel.y, -self.gravity).normalize();
         let n_body = r.inverse() * up_wanted - self.axis;
         let rate = measured.omega_rad_s - self.body_rate;
-        [self.e1.dot(&n_body), self.e2.dot(&n_body), rate.x, rate.y, rate.z, -centre.z, -velocity.z]
+        [
+            self.e1.dot(&n_body),
+            self.e2.dot(&n_body),
+            rate.x,
+            rate.y,
+            rate.z,
+            -centre.z,
+            -velocity.z,
+        ]
     }
 }
 
@@ -181,7 +214,11 @@ mod tests {
     use super::*;
 
     fn trim(axis: Vector3<f64>) -> RelaxedHoverTrim {
-        let helper = if axis.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let helper = if axis.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
         let e1 = helper.cross(&axis).normalize();
         let e2 = axis.cross(&e1);
         RelaxedHoverTrim {
@@ -198,12 +235,24 @@ mod tests {
     #[test]
     fn on_the_solution_the_reduced_state_is_zero_whatever_the_yaw() {
         let axis = Vector3::new(0.1, -0.2, -0.97).normalize();
-        let c = RelaxedHoverFeedback::new(&trim(axis), &[1.0; 4], DMatrix::zeros(4, 7), [0.0; 3], Default::default()).unwrap();
+        let c = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap();
         // An attitude whose inverse maps world up (NED -z) to the axis, then any turn about it.
         let align = UnitQuaternion::rotation_between(&axis, &Vector3::new(0.0, 0.0, -1.0)).unwrap();
         for yaw in [0.0, 1.0, 2.5] {
-            let attitude = UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw) * align;
-            let state = RigidBodyState { attitude, omega_rad_s: axis * 15.0, ..RigidBodyState::at_rest() };
+            let attitude =
+                UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw) * align;
+            let state = RigidBodyState {
+                attitude,
+                omega_rad_s: axis * 15.0,
+                ..RigidBodyState::at_rest()
+            };
             let x = c.reduced_state(&state);
             assert!(x.iter().all(|v| v.abs() < 1e-12), "{x:?}");
         }
@@ -214,30 +263,74 @@ mod tests {
         let axis = Vector3::new(0.0, 0.0, -1.0);
         let mut gain = DMatrix::zeros(1, 7);
         gain[(0, 5)] = 2.0; // altitude
-        let mut c = RelaxedHoverFeedback::new(&trim(axis), &[3.0], gain, [0.0, 0.0, -10.0], Default::default()).unwrap();
+        let mut c = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[3.0],
+            gain,
+            [0.0, 0.0, -10.0],
+            Default::default(),
+        )
+        .unwrap();
         // 0.5 m below the set point (NED z = -9.5): z error -0.5 up, u = 3 - 2 (-0.5) = 4.
-        let state = RigidBodyState { position_m: Vector3::new(0.0, 0.0, -9.5), omega_rad_s: axis * 15.0, ..RigidBodyState::at_rest() };
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -9.5),
+            omega_rad_s: axis * 15.0,
+            ..RigidBodyState::at_rest()
+        };
         let mut out = [0.0];
         c.command(0.0, &state, &mut out).unwrap();
         assert!((out[0] - 4.0).abs() < 1e-12);
         // 1 m east of the set point: the wanted up tilts west (towards -east) by atan(k_p / g).
-        let state = RigidBodyState { position_m: Vector3::new(0.0, 1.0, -10.0), ..state };
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 1.0, -10.0),
+            ..state
+        };
         let x = c.reduced_state(&state);
         let tilt = (x[0] * x[0] + x[1] * x[1]).sqrt();
-        assert!((tilt - (0.25f64 / 9.81).atan()).abs() < 1e-3 * tilt, "{x:?}");
+        assert!(
+            (tilt - (0.25f64 / 9.81).atan()).abs() < 1e-3 * tilt,
+            "{x:?}"
+        );
     }
 
     #[test]
     fn bad_input_is_named() {
         let axis = Vector3::new(0.0, 0.0, -1.0);
-        let err = RelaxedHoverFeedback::new(&trim(axis), &[1.0; 4], DMatrix::zeros(4, 6), [0.0; 3], Default::default()).unwrap_err();
+        let err = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 6),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap_err();
         assert!(err.to_string().starts_with("gain"), "{err}");
         let mut bad = trim(axis);
         bad.e1 = [1.0, 1.0, 0.0];
-        let err = RelaxedHoverFeedback::new(&bad, &[1.0; 4], DMatrix::zeros(4, 7), [0.0; 3], Default::default()).unwrap_err();
+        let err = RelaxedHoverFeedback::new(
+            &bad,
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap_err();
         assert!(err.to_string().starts_with("axis"), "{err}");
-        let outer = RelaxedHoverOuterLoop { max_tilt_rad: 2.0, ..Default::default() };
-        let err = RelaxedHoverFeedback::new(&trim(axis), &[1.0; 4], DMatrix::zeros(4, 7), [0.0; 3], outer).unwrap_err();
-        assert!(err.to_string().starts_with("outer_loop.max_tilt_rad"), "{err}");
+        let outer = RelaxedHoverOuterLoop {
+            max_tilt_rad: 2.0,
+            ..Default::default()
+        };
+        let err = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            outer,
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().starts_with("outer_loop.max_tilt_rad"),
+            "{err}"
+        );
     }
 }

@@ -71,7 +71,8 @@ impl Headroom {
         let generators = range.transpose() * &scaled;
         let facets = facets(&generators, lower, upper);
         // Minimum-norm least squares: G^T (G G^T)^+ (G has full row rank r).
-        let inverse = generators.transpose() * super::numeric::symmetric_pinv(&(&generators * generators.transpose()), 1e-14);
+        let inverse = generators.transpose()
+            * super::numeric::symmetric_pinv(&(&generators * generators.transpose()), 1e-14);
         let cap = lower
             .iter()
             .zip(upper)
@@ -167,7 +168,8 @@ impl Headroom {
         for piece in cuts.windows(2) {
             let (a, b) = (piece[0], piece[1]);
             let mid = 0.5 * (a + b);
-            let tol = |q: &[f64; 3]| 1e-12 * (q[0].abs() + (mid * q[1]).abs() + (mid * mid * q[2]).abs());
+            let tol =
+                |q: &[f64; 3]| 1e-12 * (q[0].abs() + (mid * q[1]).abs() + (mid * mid * q[2]).abs());
             if hard.iter().any(|q| eval(q, mid) < -tol(q)) {
                 continue;
             }
@@ -215,12 +217,19 @@ impl Headroom {
         }
         let clamp = |l: &DVector<f64>| -> Vec<f64> {
             let shift = g.transpose() * l;
-            (0..k).map(|i| (centre[i] + shift[i]).clamp(self.lower[i], top[i])).collect()
+            (0..k)
+                .map(|i| (centre[i] + shift[i]).clamp(self.lower[i], top[i]))
+                .collect()
         };
         let dual = |l: &DVector<f64>| -> f64 {
             let f = clamp(l);
             let miss = g * DVector::from_column_slice(&f) - &w;
-            0.5 * f.iter().zip(&centre).map(|(a, b)| (a - b) * (a - b)).sum::<f64>() - l.dot(&miss)
+            0.5 * f
+                .iter()
+                .zip(&centre)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                - l.dot(&miss)
         };
         let size = w.amax() + g.amax() * scale;
         let mut l = DVector::zeros(r);
@@ -353,7 +362,11 @@ fn facets(g: &DMatrix<f64>, lower: &[f64], upper: &[f64]) -> Vec<Facet> {
                     support += along * lower[i];
                 }
             }
-            out.push(Facet { normal: d, rising, support });
+            out.push(Facet {
+                normal: d,
+                rising,
+                support,
+            });
         }
     };
     if r == 1 {
@@ -381,7 +394,11 @@ fn cofactor_normal(g: &DMatrix<f64>, subset: &[usize]) -> Vec<f64> {
                 let source = if a < row { a } else { a + 1 };
                 g[(source, subset[b])]
             });
-            let sign = if (row + r - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
+            let sign = if (row + r - 1).is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
             sign * minor.determinant()
         })
         .collect()
@@ -391,7 +408,13 @@ fn cofactor_normal(g: &DMatrix<f64>, subset: &[usize]) -> Vec<f64> {
 pub(crate) fn combinations(n: usize, size: usize) -> Vec<Vec<usize>> {
     let mut out = Vec::new();
     let mut current = Vec::with_capacity(size);
-    fn walk(start: usize, n: usize, size: usize, current: &mut Vec<usize>, out: &mut Vec<Vec<usize>>) {
+    fn walk(
+        start: usize,
+        n: usize,
+        size: usize,
+        current: &mut Vec<usize>,
+        out: &mut Vec<Vec<usize>>,
+    ) {
         if current.len() == size {
             out.push(current.clone());
             return;
@@ -446,7 +469,11 @@ mod tests {
                 }
             }
         }
-        let cap = lower.iter().zip(upper).map(|(a, b)| b - a).fold(f64::INFINITY, f64::min);
+        let cap = lower
+            .iter()
+            .zip(upper)
+            .map(|(a, b)| b - a)
+            .fold(f64::INFINITY, f64::min);
         best.min(cap)
     }
 
@@ -458,7 +485,10 @@ mod tests {
         let value = h.value(&[4.0, 2.0]);
         assert!((value.margin - 2.0).abs() < 1e-12, "{value:?}");
         let f = h.thrusts(&[4.0, 2.0], value.margin).unwrap();
-        assert!((f[0] - 3.0).abs() < 1e-12 && (f[1] - 1.0).abs() < 1e-12, "{f:?}");
+        assert!(
+            (f[0] - 3.0).abs() < 1e-12 && (f[1] - 1.0).abs() < 1e-12,
+            "{f:?}"
+        );
         // f = (-0.5, 2.5) needs a thrust below its lower bound: infeasible for every t.
         assert_eq!(h.value(&[2.0, -3.0]).margin, f64::NEG_INFINITY);
     }
@@ -468,18 +498,30 @@ mod tests {
         let m = DMatrix::from_row_slice(
             3,
             5,
-            &[1.0, 1.0, 1.0, 1.0, 1.0, 0.3, -0.2, 0.5, -0.4, 0.1, 0.02, -0.03, 0.01, 0.04, -0.05],
+            &[
+                1.0, 1.0, 1.0, 1.0, 1.0, 0.3, -0.2, 0.5, -0.4, 0.1, 0.02, -0.03, 0.01, 0.04, -0.05,
+            ],
         );
         let lower = [0.0, 0.0, -1.0, 0.0, 0.5];
         let upper = [4.0, 3.0, 4.0, 5.0, 4.0];
-        for v in [[6.0, 0.1, 0.0], [10.0, -0.5, 0.02], [15.0, 0.0, 0.0], [2.0, 0.8, -0.1]] {
+        for v in [
+            [6.0, 0.1, 0.0],
+            [10.0, -0.5, 0.02],
+            [15.0, 0.0, 0.0],
+            [2.0, 0.8, -0.1],
+        ] {
             let h = Headroom::new(&m, &lower, &upper);
             let exact = h.value(&v).margin;
             let bisected = by_vertices(&m, &v, &lower, &upper);
             if exact.is_finite() {
-                assert!((exact - bisected).abs() < 1e-6, "{v:?}: {exact} vs {bisected}");
+                assert!(
+                    (exact - bisected).abs() < 1e-6,
+                    "{v:?}: {exact} vs {bisected}"
+                );
                 let f = h.thrusts(&v, exact).unwrap();
-                let headroom = (0..5).map(|i| upper[i] - f[i]).fold(f64::INFINITY, f64::min);
+                let headroom = (0..5)
+                    .map(|i| upper[i] - f[i])
+                    .fold(f64::INFINITY, f64::min);
                 assert!((headroom - exact).abs() < 1e-9, "{f:?}");
             } else {
                 assert_eq!(bisected, f64::NEG_INFINITY, "{v:?}");
@@ -508,8 +550,8 @@ mod tests {
             4,
             5,
             &[
-                1.0, 1.0, 1.0, 1.0, 1.0, 0.2, -0.1, -0.2, 0.1, 0.05, 0.1, 0.2, -0.1, -0.2, 0.0, 0.02, -0.02,
-                0.02, -0.02, 0.02,
+                1.0, 1.0, 1.0, 1.0, 1.0, 0.2, -0.1, -0.2, 0.1, 0.05, 0.1, 0.2, -0.1, -0.2, 0.0,
+                0.02, -0.02, 0.02, -0.02, 0.02,
             ],
         );
         let lower = [0.0; 5];
@@ -524,8 +566,13 @@ mod tests {
             h.value(&v).margin
         };
         assert!((at(s) - t).abs() < 1e-12, "{t} at {s}: {}", at(s));
-        let sampled = (0..=200_000).map(|j| at(0.5 + 59.5 * j as f64 / 200_000.0)).fold(f64::NEG_INFINITY, f64::max);
-        assert!(t >= sampled - 1e-12 && t - sampled < 1e-6, "{t} vs {sampled}");
+        let sampled = (0..=200_000)
+            .map(|j| at(0.5 + 59.5 * j as f64 / 200_000.0))
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            t >= sampled - 1e-12 && t - sampled < 1e-6,
+            "{t} vs {sampled}"
+        );
     }
 
     #[test]

@@ -37,7 +37,10 @@ pub(crate) fn linear_model(
     let h = model.rotor_momentum(thrust_n);
     let force = model.force(thrust_n);
     let cross = |v: &V3| Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0);
-    let rate = j_inv * (cross(&(j * omega + h)) - cross(&omega) * j - Matrix3::identity() * model.rotational_drag_n_m_s);
+    let rate = j_inv
+        * (cross(&(j * omega + h))
+            - cross(&omega) * j
+            - Matrix3::identity() * model.rotational_drag_n_m_s);
     let k = inputs.len();
     let mut a = DMatrix::zeros(LINEAR_STATES, LINEAR_STATES);
     a[(0, 1)] = spin_rate;
@@ -55,7 +58,11 @@ pub(crate) fn linear_model(
     let mut b = DMatrix::zeros(LINEAR_STATES, k);
     for (col, &i) in inputs.iter().enumerate() {
         let f = thrust_n[i];
-        let dh = if f > 0.0 { model.momentum[i] / (2.0 * f.sqrt()) } else { V3::zeros() };
+        let dh = if f > 0.0 {
+            model.momentum[i] / (2.0 * f.sqrt())
+        } else {
+            V3::zeros()
+        };
         let torque = j_inv * (model.torque[i] - omega.cross(&dh));
         for r in 0..3 {
             b[(2 + r, col)] = torque[r];
@@ -70,7 +77,11 @@ pub(crate) fn linear_model(
 pub(crate) fn stabilizable(a: &DMatrix<f64>, b: &DMatrix<f64>) -> bool {
     let n = a.nrows();
     let eigenvalues = a.complex_eigenvalues();
-    let size = eigenvalues.iter().map(|l| l.norm()).fold(0.0, f64::max).max(1e-300);
+    let size = eigenvalues
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max)
+        .max(1e-300);
     let a_c = a.map(|x| Complex::new(x, 0.0));
     let b_c = b.map(|x| Complex::new(x, 0.0));
     eigenvalues.iter().all(|&lambda| {
@@ -80,10 +91,20 @@ pub(crate) fn stabilizable(a: &DMatrix<f64>, b: &DMatrix<f64>) -> bool {
         // Rank of [A - l I, B] (n rows) from column-pivoted QR of its adjoint (no SVD: module
         // `numeric` says why).
         let mut pbh = DMatrix::zeros(n + b.ncols(), n);
-        pbh.view_mut((0, 0), (n, n)).copy_from(&(&a_c - DMatrix::identity(n, n) * lambda).adjoint());
-        pbh.view_mut((n, 0), (b.ncols(), n)).copy_from(&b_c.adjoint());
+        pbh.view_mut((0, 0), (n, n))
+            .copy_from(&(&a_c - DMatrix::identity(n, n) * lambda).adjoint());
+        pbh.view_mut((n, 0), (b.ncols(), n))
+            .copy_from(&b_c.adjoint());
         let diagonal = pbh.col_piv_qr().r().diagonal();
-        let largest = diagonal.iter().map(|d| d.norm()).fold(0.0, f64::max).max(1e-300);
-        diagonal.iter().filter(|d| d.norm() > 1e-9 * largest).count() == n
+        let largest = diagonal
+            .iter()
+            .map(|d| d.norm())
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        diagonal
+            .iter()
+            .filter(|d| d.norm() > 1e-9 * largest)
+            .count()
+            == n
     })
 }

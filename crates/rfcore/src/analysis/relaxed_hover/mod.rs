@@ -127,7 +127,10 @@ impl RelaxedHoverSettings {
             ("thrust_coefficient_n_s2", self.thrust_coefficient_n_s2),
         ] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(RfError::invalid(field, format!("must be finite and >= 0, got {value}")));
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be finite and >= 0, got {value}"),
+                ));
             }
         }
         if self.rotor_inertia_kg_m2 > 0.0 && self.thrust_coefficient_n_s2 == 0.0 {
@@ -139,15 +142,24 @@ impl RelaxedHoverSettings {
         }
         let s = self.max_spin_rate_rad_s;
         if !(s.is_finite() && s > 0.0) {
-            return Err(RfError::invalid("max_spin_rate_rad_s", format!("must be finite and > 0, got {s}")));
+            return Err(RfError::invalid(
+                "max_spin_rate_rad_s",
+                format!("must be finite and > 0, got {s}"),
+            ));
         }
         let r = self.max_circle_radius_m;
         if r.is_nan() || r <= 0.0 {
-            return Err(RfError::invalid("max_circle_radius_m", format!("must be > 0 (inf for no limit), got {r}")));
+            return Err(RfError::invalid(
+                "max_circle_radius_m",
+                format!("must be > 0 (inf for no limit), got {r}"),
+            ));
         }
         let g = self.grid_points;
         if !(11..=401).contains(&g) || g.is_multiple_of(2) {
-            return Err(RfError::invalid("grid_points", format!("must be odd and in [11, 401], got {g}")));
+            return Err(RfError::invalid(
+                "grid_points",
+                format!("must be odd and in [11, 401], got {g}"),
+            ));
         }
         Ok(())
     }
@@ -241,19 +253,28 @@ impl RelaxedHoverAnalysis {
 
 /// Every relaxed hover solution of `airframe` (efficiencies included) with `settings` (module
 /// docs: equations, margin, method, checks).
-pub fn relaxed_hover(airframe: &Airframe, settings: &RelaxedHoverSettings) -> Result<RelaxedHoverAnalysis> {
+pub fn relaxed_hover(
+    airframe: &Airframe,
+    settings: &RelaxedHoverSettings,
+) -> Result<RelaxedHoverAnalysis> {
     settings.check()?;
     let model = Model::new(airframe, settings)?;
     let mut found: Vec<Candidate> = static_hover(&model, settings)?;
     let working = model.working.clone();
-    let branches: Vec<Vec<usize>> = (0..=settings.max_idle_rotors.min(working.len().saturating_sub(1)))
+    let branches: Vec<Vec<usize>> = (0..=settings
+        .max_idle_rotors
+        .min(working.len().saturating_sub(1)))
         .flat_map(|size| headroom::combinations(working.len(), size))
         .map(|idle| idle.iter().map(|&j| working[j]).collect())
         .collect();
     let spinning: Vec<Vec<Candidate>> = branches
         .par_iter()
         .map(|idle: &Vec<usize>| {
-            let free: Vec<usize> = working.iter().copied().filter(|i| !idle.contains(i)).collect();
+            let free: Vec<usize> = working
+                .iter()
+                .copied()
+                .filter(|i| !idle.contains(i))
+                .collect();
             match Branch::new(&model, settings, free, idle.clone()) {
                 None => Vec::new(),
                 Some(branch) => branch
@@ -272,7 +293,9 @@ pub fn relaxed_hover(airframe: &Airframe, settings: &RelaxedHoverSettings) -> Re
             continue; // the static limit of a spinning family: reported as static hover
         }
         let solution = finish(&model, settings, &candidate)?;
-        if solution.kind == HoverKind::Spinning && solution.circle_radius_m > settings.max_circle_radius_m * (1.0 + 1e-9) {
+        if solution.kind == HoverKind::Spinning
+            && solution.circle_radius_m > settings.max_circle_radius_m * (1.0 + 1e-9)
+        {
             continue; // outside the definition (only possible with tilted rotors)
         }
         if solutions.iter().any(|s| same(&model, s, &solution)) {
@@ -291,10 +314,15 @@ pub fn relaxed_hover(airframe: &Airframe, settings: &RelaxedHoverSettings) -> Re
         } else if better(&model, b, a) {
             std::cmp::Ordering::Greater
         } else {
-            a.spin_axis.partial_cmp(&b.spin_axis).unwrap_or(std::cmp::Ordering::Equal)
+            a.spin_axis
+                .partial_cmp(&b.spin_axis)
+                .unwrap_or(std::cmp::Ordering::Equal)
         }
     });
-    Ok(RelaxedHoverAnalysis { solutions, settings: *settings })
+    Ok(RelaxedHoverAnalysis {
+        solutions,
+        settings: *settings,
+    })
 }
 
 /// The scaled residual of a proposed solution ([`Model`]): `up` the body axis pointing up,
@@ -313,7 +341,10 @@ pub fn relaxed_hover_residual(
     require_all_finite("up", &up)?;
     let up = V3::from(up);
     if (up.norm() - 1.0).abs() > 1e-9 {
-        return Err(RfError::invalid("up", format!("must be a unit vector, got length {}", up.norm())));
+        return Err(RfError::invalid(
+            "up",
+            format!("must be a unit vector, got length {}", up.norm()),
+        ));
     }
     let model = Model::new(airframe, settings)?;
     Ok(model.residual(&V3::from(body_rate_rad_s), &up, thrust_n))
@@ -347,11 +378,17 @@ fn better(model: &Model, a: &RelaxedHoverSolution, b: &RelaxedHoverSolution) -> 
 }
 
 fn same_strategy(a: &RelaxedHoverSolution, b: &RelaxedHoverSolution) -> bool {
-    a.kind == b.kind && a.carrying == b.carrying && a.spin_rate_rad_s.signum() == b.spin_rate_rad_s.signum()
+    a.kind == b.kind
+        && a.carrying == b.carrying
+        && a.spin_rate_rad_s.signum() == b.spin_rate_rad_s.signum()
 }
 
 /// Checks a candidate and measures it.
-fn finish(model: &Model, settings: &RelaxedHoverSettings, candidate: &Candidate) -> Result<RelaxedHoverSolution> {
+fn finish(
+    model: &Model,
+    settings: &RelaxedHoverSettings,
+    candidate: &Candidate,
+) -> Result<RelaxedHoverSolution> {
     let up = candidate.up.normalize();
     let s = candidate.spin_rate_rad_s;
     let omega = up * s;
@@ -388,10 +425,26 @@ fn finish(model: &Model, settings: &RelaxedHoverSettings, candidate: &Candidate)
             ));
         }
     }
-    let carrying: Vec<usize> = model.working.iter().copied().filter(|&i| f[i].abs() > 1e-12 * scale).collect();
-    let idle: Vec<usize> = model.working.iter().copied().filter(|i| !carrying.contains(i)).collect();
-    let margin = carrying.iter().map(|&i| model.upper[i] - f[i]).fold(f64::INFINITY, f64::min);
-    let floor = carrying.iter().map(|&i| f[i] - model.lower[i]).fold(f64::INFINITY, f64::min);
+    let carrying: Vec<usize> = model
+        .working
+        .iter()
+        .copied()
+        .filter(|&i| f[i].abs() > 1e-12 * scale)
+        .collect();
+    let idle: Vec<usize> = model
+        .working
+        .iter()
+        .copied()
+        .filter(|i| !carrying.contains(i))
+        .collect();
+    let margin = carrying
+        .iter()
+        .map(|&i| model.upper[i] - f[i])
+        .fold(f64::INFINITY, f64::min);
+    let floor = carrying
+        .iter()
+        .map(|&i| f[i] - model.lower[i])
+        .fold(f64::INFINITY, f64::min);
     let force = model.force(f);
     let total = force.norm();
     let direction = if total > 0.0 { force / total } else { up };
@@ -407,8 +460,19 @@ fn finish(model: &Model, settings: &RelaxedHoverSettings, candidate: &Candidate)
     Ok(RelaxedHoverSolution {
         at_spin_rate_limit: s.abs() >= settings.max_spin_rate_rad_s * (1.0 - 1e-6),
         at_circle_radius_limit: circle >= settings.max_circle_radius_m * (1.0 - 1e-6),
-        linear: LinearModel { a, b, e1: e1.into(), e2: e2.into(), inputs: carrying.clone(), stabilizable },
-        kind: if s == 0.0 { HoverKind::Static } else { HoverKind::Spinning },
+        linear: LinearModel {
+            a,
+            b,
+            e1: e1.into(),
+            e2: e2.into(),
+            inputs: carrying.clone(),
+            stabilizable,
+        },
+        kind: if s == 0.0 {
+            HoverKind::Static
+        } else {
+            HoverKind::Spinning
+        },
         body_rate_rad_s: omega.into(),
         spin_rate_rad_s: s,
         spin_axis: up.into(),
@@ -434,12 +498,17 @@ fn finish(model: &Model, settings: &RelaxedHoverSettings, candidate: &Candidate)
 /// with a static one's axis and thrusts is that static hover turning about its thrust axis.
 fn same(model: &Model, a: &RelaxedHoverSolution, b: &RelaxedHoverSolution) -> bool {
     let scale = bound_scale(model);
-    let thrusts = a.thrust_n.iter().zip(&b.thrust_n).all(|(x, y)| (x - y).abs() <= 1e-6 * scale);
+    let thrusts = a
+        .thrust_n
+        .iter()
+        .zip(&b.thrust_n)
+        .all(|(x, y)| (x - y).abs() <= 1e-6 * scale);
     let axes = V3::from(a.spin_axis).dot(&V3::from(b.spin_axis)) >= 1.0 - 1e-12;
     if a.kind != b.kind {
         return thrusts && axes;
     }
-    let spin = (a.spin_rate_rad_s - b.spin_rate_rad_s).abs() <= 1e-6 * (1.0 + a.spin_rate_rad_s.abs());
+    let spin =
+        (a.spin_rate_rad_s - b.spin_rate_rad_s).abs() <= 1e-6 * (1.0 + a.spin_rate_rad_s.abs());
     thrusts && axes && spin
 }
 

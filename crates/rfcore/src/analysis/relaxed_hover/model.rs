@@ -44,7 +44,8 @@ impl Model {
     pub fn new(airframe: &Airframe, settings: &RelaxedHoverSettings) -> Result<Self> {
         let wrench = airframe.nominal_wrench_matrix();
         let m = airframe.rotor_count();
-        let column = |i: usize, r: usize| V3::new(wrench[(r, i)], wrench[(r + 1, i)], wrench[(r + 2, i)]);
+        let column =
+            |i: usize, r: usize| V3::new(wrench[(r, i)], wrench[(r + 1, i)], wrench[(r + 2, i)]);
         let axis: Vec<V3> = (0..m).map(|i| column(i, 0)).collect();
         let torque: Vec<V3> = (0..m).map(|i| column(i, 3)).collect();
         let gyro = if settings.rotor_inertia_kg_m2 > 0.0 {
@@ -57,8 +58,14 @@ impl Model {
             .map(|i| axis[i] * (gyro * rotors[i].spin.yaw_sign()))
             .collect();
         let efficiency: Vec<f64> = rotors.iter().map(|r| r.efficiency).collect();
-        let lower: Vec<f64> = rotors.iter().map(|r| r.efficiency * r.min_thrust_n).collect();
-        let upper: Vec<f64> = rotors.iter().map(|r| r.efficiency * r.max_thrust_n).collect();
+        let lower: Vec<f64> = rotors
+            .iter()
+            .map(|r| r.efficiency * r.min_thrust_n)
+            .collect();
+        let upper: Vec<f64> = rotors
+            .iter()
+            .map(|r| r.efficiency * r.max_thrust_n)
+            .collect();
         let working = (0..m).filter(|&i| efficiency[i] > 0.0).collect();
         let weight = airframe.mass_kg() * airframe.gravity_m_s2();
         let arm = torque.iter().map(|t| t.norm()).fold(0.0, f64::max);

@@ -19,7 +19,12 @@ pub(crate) struct Chart {
 impl Chart {
     pub fn new(centre: V3, max_angle: f64) -> Self {
         let (e1, e2) = tangent_basis(&centre);
-        Chart { centre, e1, e2, max_angle }
+        Chart {
+            centre,
+            e1,
+            e2,
+            max_angle,
+        }
     }
 
     /// The direction at chart point `(x, y)`, `None` outside the unit disk.
@@ -69,7 +74,9 @@ pub(crate) fn nelder_mead(
                 let mut e = vec![0.0; d];
                 e[i] = 1.0;
                 if restart > 0 && d > 1 {
-                    let u: Vec<f64> = (0..d).map(|j| ((restart as usize * 7 + j * 3) as f64 * 0.618_034).sin()).collect();
+                    let u: Vec<f64> = (0..d)
+                        .map(|j| ((restart as usize * 7 + j * 3) as f64 * 0.618_034).sin())
+                        .collect();
                     let norm2: f64 = u.iter().map(|x| x * x).sum();
                     let dot: f64 = u.iter().zip(&e).map(|(a, b)| a * b).sum();
                     for j in 0..d {
@@ -113,15 +120,22 @@ fn simplex(
         points = order.iter().map(|&i| points[i].clone()).collect();
         values = order.iter().map(|&i| values[i]).collect();
         let small = (0..d).all(|i| {
-            points.iter().map(|p| (p[i] - points[0][i]).abs()).fold(0.0, f64::max) <= tolerance[i]
+            points
+                .iter()
+                .map(|p| (p[i] - points[0][i]).abs())
+                .fold(0.0, f64::max)
+                <= tolerance[i]
         });
         if small {
             break;
         }
-        let centroid: Vec<f64> =
-            (0..d).map(|i| points[..d].iter().map(|p| p[i]).sum::<f64>() / d as f64).collect();
+        let centroid: Vec<f64> = (0..d)
+            .map(|i| points[..d].iter().map(|p| p[i]).sum::<f64>() / d as f64)
+            .collect();
         let toward = |t: f64| -> Vec<f64> {
-            (0..d).map(|i| centroid[i] + t * (points[d][i] - centroid[i])).collect()
+            (0..d)
+                .map(|i| centroid[i] + t * (points[d][i] - centroid[i]))
+                .collect()
         };
         let reflected = toward(-1.0);
         let fr = score(f(&reflected));
@@ -139,22 +153,29 @@ fn simplex(
             points[d] = reflected;
             values[d] = fr;
         } else {
-            let contracted = if fr > values[d] { toward(-0.5) } else { toward(0.5) };
+            let contracted = if fr > values[d] {
+                toward(-0.5)
+            } else {
+                toward(0.5)
+            };
             let fc = score(f(&contracted));
             if fc > values[d].max(fr) {
                 points[d] = contracted;
                 values[d] = fc;
             } else {
                 for j in 1..=d {
-                    let shrunk: Vec<f64> =
-                        (0..d).map(|i| points[0][i] + 0.5 * (points[j][i] - points[0][i])).collect();
+                    let shrunk: Vec<f64> = (0..d)
+                        .map(|i| points[0][i] + 0.5 * (points[j][i] - points[0][i]))
+                        .collect();
                     values[j] = score(f(&shrunk));
                     points[j] = shrunk;
                 }
             }
         }
     }
-    let best = (0..=d).max_by(|&a, &b| values[a].total_cmp(&values[b])).unwrap_or(0);
+    let best = (0..=d)
+        .max_by(|&a, &b| values[a].total_cmp(&values[b]))
+        .unwrap_or(0);
     (points[best].clone(), values[best])
 }
 
@@ -169,7 +190,11 @@ pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Option<Vec<f64>> {
     let tiny = 1e-13 * size;
     if a.abs() <= tiny {
         if b.abs() <= tiny {
-            return if c.abs() <= tiny { None } else { Some(Vec::new()) };
+            return if c.abs() <= tiny {
+                None
+            } else {
+                Some(Vec::new())
+            };
         }
         return Some(vec![-c / b]);
     }
@@ -179,7 +204,11 @@ pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Option<Vec<f64>> {
     }
     // The numerically stable pair.
     let q = -0.5 * (b + b.signum() * disc.sqrt());
-    let mut roots = if q == 0.0 { vec![0.0] } else { vec![q / a, c / q] };
+    let mut roots = if q == 0.0 {
+        vec![0.0]
+    } else {
+        vec![q / a, c / q]
+    };
     roots.sort_by(f64::total_cmp);
     Some(roots)
 }
@@ -199,8 +228,14 @@ pub(crate) fn range_and_null(m: &DMatrix<f64>, rtol: f64) -> (DMatrix<f64>, DMat
     let r = qr.r();
     let diagonal: Vec<f64> = (0..r.nrows().min(r.ncols())).map(|i| r[(i, i)]).collect();
     let largest = diagonal.iter().fold(0.0f64, |a, d| a.max(d.abs()));
-    let rank = diagonal.iter().filter(|d| largest > 0.0 && d.abs() > rtol * largest).count();
-    (q.columns(0, rank).into_owned(), q.columns(rank, p - rank).into_owned())
+    let rank = diagonal
+        .iter()
+        .filter(|d| largest > 0.0 && d.abs() > rtol * largest)
+        .count();
+    (
+        q.columns(0, rank).into_owned(),
+        q.columns(rank, p - rank).into_owned(),
+    )
 }
 
 /// The pseudo-inverse of a symmetric positive semi-definite matrix (eigenvalues below `rtol`
@@ -213,7 +248,13 @@ pub(crate) fn symmetric_pinv(h: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
     let symmetric = (h + h.transpose()) * 0.5;
     let eig = symmetric.symmetric_eigen();
     let largest = eig.eigenvalues.amax();
-    let inverse = eig.eigenvalues.map(|l| if largest > 0.0 && l > rtol * largest { 1.0 / l } else { 0.0 });
+    let inverse = eig.eigenvalues.map(|l| {
+        if largest > 0.0 && l > rtol * largest {
+            1.0 / l
+        } else {
+            0.0
+        }
+    });
     &eig.eigenvectors * DMatrix::from_diagonal(&inverse) * eig.eigenvectors.transpose()
 }
 
@@ -227,7 +268,10 @@ pub(crate) fn min_norm_solve(j: &DMatrix<f64>, r: &DVector<f64>) -> DVector<f64>
 }
 
 /// `-J^+ r`: one minimum-norm Gauss-Newton step.
-pub(crate) fn gauss_newton_step(jacobian: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
+pub(crate) fn gauss_newton_step(
+    jacobian: &DMatrix<f64>,
+    residual: &DVector<f64>,
+) -> Option<DVector<f64>> {
     let step = -min_norm_solve(jacobian, residual);
     step.iter().all(|x| x.is_finite()).then_some(step)
 }
@@ -235,7 +279,8 @@ pub(crate) fn gauss_newton_step(jacobian: &DMatrix<f64>, residual: &DVector<f64>
 /// The unit vector `x` minimising `|J x|` (a null vector of `J` when it has one).
 pub(crate) fn null_vector(j: &DMatrix<f64>) -> Option<DVector<f64>> {
     let eig = (j.transpose() * j).symmetric_eigen();
-    let smallest = (0..eig.eigenvalues.len()).min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))?;
+    let smallest = (0..eig.eigenvalues.len())
+        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))?;
     Some(eig.eigenvectors.column(smallest).into_owned())
 }
 
@@ -260,7 +305,10 @@ mod tests {
     fn nelder_mead_finds_a_kinked_maximum() {
         let mut f = |p: &[f64]| -((p[0] - 0.3).abs() + 2.0 * (p[1] + 0.1).abs());
         let (x, v) = nelder_mead(&mut f, &[0.0, 0.0], &[0.1, 0.1], &[1e-12, 1e-12]);
-        assert!((x[0] - 0.3).abs() < 1e-9 && (x[1] + 0.1).abs() < 1e-9 && v > -1e-8, "{x:?}");
+        assert!(
+            (x[0] - 0.3).abs() < 1e-9 && (x[1] + 0.1).abs() < 1e-9 && v > -1e-8,
+            "{x:?}"
+        );
     }
 
     #[test]
@@ -281,7 +329,10 @@ mod tests {
         assert_eq!((range.ncols(), null.ncols()), (3, 1));
         assert!((&range * range.transpose() * &m - &m).amax() < 1e-15);
         assert!((null.transpose() * &m).amax() < 1e-15);
-        let x = min_norm_solve(&m, &(&m * DVector::from_column_slice(&[1.0, 2.0, 3.0, 4.0])));
+        let x = min_norm_solve(
+            &m,
+            &(&m * DVector::from_column_slice(&[1.0, 2.0, 3.0, 4.0])),
+        );
         assert!((&m * &x - &m * DVector::from_column_slice(&[1.0, 2.0, 3.0, 4.0])).amax() < 1e-14);
     }
 

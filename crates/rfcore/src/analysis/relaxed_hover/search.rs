@@ -94,12 +94,19 @@ impl<'a> Branch<'a> {
             }
             None => {
                 let sum: V3 = free.iter().map(|&i| model.axis[i]).sum();
-                let centre = if sum.norm() > 1e-9 { sum.normalize() } else { first };
+                let centre = if sum.norm() > 1e-9 {
+                    sum.normalize()
+                } else {
+                    first
+                };
                 let spread = free
                     .iter()
                     .map(|&i| model.axis[i].dot(&centre).clamp(-1.0, 1.0).acos())
                     .fold(0.0, f64::max);
-                (centre, (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI - 1e-6))
+                (
+                    centre,
+                    (std::f64::consts::FRAC_PI_2 + spread).min(std::f64::consts::PI - 1e-6),
+                )
             }
         };
         let chart = Chart::new(centre, max_angle);
@@ -125,7 +132,8 @@ impl<'a> Branch<'a> {
             branch.fixed = Some(fixed);
         } else {
             let generic = chart.direction(0.3137, 0.1709).unwrap_or(centre);
-            branch.rank = Headroom::new(&branch.matrix(&generic), &branch.lower, &branch.upper).rank();
+            branch.rank =
+                Headroom::new(&branch.matrix(&generic), &branch.lower, &branch.upper).rank();
         }
         Some(branch)
     }
@@ -214,7 +222,9 @@ impl<'a> Branch<'a> {
     /// guess, made consistent later.
     fn reference_momentum(&self) -> V3 {
         let share = self.model.weight_n() / self.k() as f64;
-        let f: Vec<f64> = (0..self.k()).map(|c| share.clamp(self.lower[c], self.upper[c])).collect();
+        let f: Vec<f64> = (0..self.k())
+            .map(|c| share.clamp(self.lower[c], self.upper[c]))
+            .collect();
         self.momentum(&f)
     }
 
@@ -234,10 +244,16 @@ impl<'a> Branch<'a> {
 
     fn margin_of(&self, f: &[f64]) -> f64 {
         let scale = self.bound_scale();
-        if f.iter().zip(&self.lower).any(|(x, lo)| *x < lo - 1e-12 * scale) {
+        if f.iter()
+            .zip(&self.lower)
+            .any(|(x, lo)| *x < lo - 1e-12 * scale)
+        {
             return f64::NEG_INFINITY;
         }
-        f.iter().zip(&self.upper).map(|(x, hi)| hi - x).fold(f64::INFINITY, f64::min)
+        f.iter()
+            .zip(&self.upper)
+            .map(|(x, hi)| hi - x)
+            .fold(f64::INFINITY, f64::min)
     }
 
     fn bound_scale(&self) -> f64 {
@@ -279,7 +295,11 @@ impl<'a> Branch<'a> {
         for sign in [1.0, -1.0] {
             let margins: Vec<f64> = grid
                 .iter()
-                .map(|p| p.map_or(f64::NEG_INFINITY, |(x, y)| self.best_spin(x, y, sign, &h_ref).0))
+                .map(|p| {
+                    p.map_or(f64::NEG_INFINITY, |(x, y)| {
+                        self.best_spin(x, y, sign, &h_ref).0
+                    })
+                })
                 .collect();
             for idx in grid_maxima(side, &margins) {
                 let (x, y) = grid[idx].expect("maxima lie on the disk");
@@ -314,7 +334,14 @@ impl<'a> Branch<'a> {
         (margin, sign * u)
     }
 
-    fn refine_volume(&self, x: f64, y: f64, sign: f64, spacing: f64, h_ref: V3) -> Option<(Candidate, (f64, f64))> {
+    fn refine_volume(
+        &self,
+        x: f64,
+        y: f64,
+        sign: f64,
+        spacing: f64,
+        h_ref: V3,
+    ) -> Option<(Candidate, (f64, f64))> {
         let mut point = vec![x, y];
         let mut h = h_ref;
         let mut found = None;
@@ -376,7 +403,12 @@ impl<'a> Branch<'a> {
             let residual = |p: &[f64]| -> Option<DVector<f64>> {
                 let f = thrusts(p)?;
                 let first = self.upper[active[0]] - f[active[0]];
-                Some(DVector::from_iterator(j - 1, active[1..].iter().map(|&c| (self.upper[c] - f[c] - first) / scale)))
+                Some(DVector::from_iterator(
+                    j - 1,
+                    active[1..]
+                        .iter()
+                        .map(|&c| (self.upper[c] - f[c] - first) / scale),
+                ))
             };
             let mut z = point.to_vec();
             for _ in 0..30 {
@@ -396,7 +428,9 @@ impl<'a> Branch<'a> {
                         _ => ok = false,
                     }
                 }
-                let Some(delta) = ok.then(|| gauss_newton_step(&jac, &r)).flatten() else { break };
+                let Some(delta) = ok.then(|| gauss_newton_step(&jac, &r)).flatten() else {
+                    break;
+                };
                 z = (0..d).map(|c| z[c] + delta[c]).collect();
             }
             if let Some(f) = thrusts(&z) {
@@ -420,7 +454,9 @@ impl<'a> Branch<'a> {
                 .iter()
                 .map(|p| match p {
                     None => f64::NEG_INFINITY,
-                    Some((x, y)) => self.surface_eval(*x, *y, sheet, &h_ref, false).map_or(f64::NEG_INFINITY, |e| e.0),
+                    Some((x, y)) => self
+                        .surface_eval(*x, *y, sheet, &h_ref, false)
+                        .map_or(f64::NEG_INFINITY, |e| e.0),
                 })
                 .collect();
             for idx in grid_maxima(side, &margins) {
@@ -432,10 +468,15 @@ impl<'a> Branch<'a> {
                 let mut result = None;
                 for _ in 0..30 {
                     let mut objective = |p: &[f64]| {
-                        self.surface_eval(p[0], p[1], sheet, &h, false).map_or(f64::NEG_INFINITY, |e| e.0)
+                        self.surface_eval(p[0], p[1], sheet, &h, false)
+                            .map_or(f64::NEG_INFINITY, |e| e.0)
                     };
-                    let (best, value) =
-                        nelder_mead(&mut objective, &point, &[0.5 * spacing, 0.5 * spacing], &[1e-12, 1e-12]);
+                    let (best, value) = nelder_mead(
+                        &mut objective,
+                        &point,
+                        &[0.5 * spacing, 0.5 * spacing],
+                        &[1e-12, 1e-12],
+                    );
                     if value.is_nan() || value < 0.0 {
                         break;
                     }
@@ -445,7 +486,8 @@ impl<'a> Branch<'a> {
                         }
                         self.surface_eval(p[0], p[1], sheet, &h, true).map(|e| e.2)
                     });
-                    let Some((_, s, f, n)) = self.surface_eval(point[0], point[1], sheet, &h, true) else {
+                    let Some((_, s, f, n)) = self.surface_eval(point[0], point[1], sheet, &h, true)
+                    else {
                         break;
                     };
                     let h_new = self.momentum(&f);
@@ -465,7 +507,14 @@ impl<'a> Branch<'a> {
     /// Headroom, spin rate, thrusts and axis of root `sheet` at chart point `(x, y)`; with
     /// more carrying rotors than the rank, the thrusts only when `thrusts` is asked for (they
     /// cost a projection).
-    fn surface_eval(&self, x: f64, y: f64, sheet: usize, h_start: &V3, thrusts: bool) -> Option<(f64, f64, Vec<f64>, V3)> {
+    fn surface_eval(
+        &self,
+        x: f64,
+        y: f64,
+        sheet: usize,
+        h_start: &V3,
+        thrusts: bool,
+    ) -> Option<(f64, f64, Vec<f64>, V3)> {
         let n = self.chart.direction(x, y)?;
         let (low, high) = self.spin_range(x, y);
         let headroom = self.headroom(&n);
@@ -487,7 +536,11 @@ impl<'a> Branch<'a> {
             let v = self.rhs(&n, s, &h)?;
             if !unique {
                 let margin = headroom.value(&v).margin;
-                let f = if thrusts && margin.is_finite() { headroom.thrusts(&v, margin)? } else { Vec::new() };
+                let f = if thrusts && margin.is_finite() {
+                    headroom.thrusts(&v, margin)?
+                } else {
+                    Vec::new()
+                };
                 return Some((margin, s, f, n));
             }
             let f = self.unique_thrusts(&headroom, &v)?;
@@ -520,7 +573,10 @@ impl<'a> Branch<'a> {
 
     /// Isolated solutions: Newton from every local minimum of the residual on the grid.
     fn points(&self) -> Vec<(Candidate, (f64, f64))> {
-        self.converged_points().iter().filter_map(|z| self.accept(z)).collect()
+        self.converged_points()
+            .iter()
+            .filter_map(|z| self.accept(z))
+            .collect()
     }
 
     /// A Newton solution `z = [x, y, s, f...]` as a candidate, if its thrusts and spin are
@@ -548,10 +604,18 @@ impl<'a> Branch<'a> {
             let mut best: Option<(Vec<f64>, f64)> = None;
             for sign in [1.0, -1.0] {
                 for j in 0..SPIN_SAMPLES {
-                    let s = sign * low * ((high / low).ln() * j as f64 / (SPIN_SAMPLES - 1) as f64).exp();
-                    let Some(v) = self.rhs(&n, s, &h_ref) else { continue };
-                    let Some(f) = headroom.least_squares(&v) else { continue };
-                    let Some(r) = self.residual_vector(&[x, y, s], &f) else { continue };
+                    let s = sign
+                        * low
+                        * ((high / low).ln() * j as f64 / (SPIN_SAMPLES - 1) as f64).exp();
+                    let Some(v) = self.rhs(&n, s, &h_ref) else {
+                        continue;
+                    };
+                    let Some(f) = headroom.least_squares(&v) else {
+                        continue;
+                    };
+                    let Some(r) = self.residual_vector(&[x, y, s], &f) else {
+                        continue;
+                    };
                     let size = r.norm();
                     if best.as_ref().is_none_or(|b| size < b.1) {
                         let mut z = vec![x, y, s];
@@ -562,12 +626,20 @@ impl<'a> Branch<'a> {
             }
             best
         };
-        let starts: Vec<Option<(Vec<f64>, f64)>> = grid.iter().map(|p| p.and_then(|(x, y)| start(x, y))).collect();
-        let scores: Vec<f64> = starts.iter().map(|s| s.as_ref().map_or(f64::NAN, |s| -s.1)).collect();
+        let starts: Vec<Option<(Vec<f64>, f64)>> = grid
+            .iter()
+            .map(|p| p.and_then(|(x, y)| start(x, y)))
+            .collect();
+        let scores: Vec<f64> = starts
+            .iter()
+            .map(|s| s.as_ref().map_or(f64::NAN, |s| -s.1))
+            .collect();
         let mut found: Vec<Vec<f64>> = Vec::new();
         for idx in local_maxima(side, &scores) {
             let (z, _) = starts[idx].clone().expect("finite");
-            let Some(z) = self.newton(z, 60, None) else { continue };
+            let Some(z) = self.newton(z, 60, None) else {
+                continue;
+            };
             let near = |w: &Vec<f64>| {
                 (w[0] - z[0]).hypot(w[1] - z[1]) < 0.25 * spacing
                     && (w[2] - z[2]).abs() <= 1e-3 * (1.0 + z[2].abs())
@@ -581,11 +653,16 @@ impl<'a> Branch<'a> {
 
     /// From a solution on a curve, the most headroom along it nearby (see [`Branch::curve`]).
     fn follow_curve(&self, mut z: Vec<f64>, spacing: f64) -> Vec<f64> {
-        let headroom = |z: &[f64]| self.accept(z).map_or(f64::NEG_INFINITY, |_| self.margin_of(&z[3..]));
+        let headroom = |z: &[f64]| {
+            self.accept(z)
+                .map_or(f64::NEG_INFINITY, |_| self.margin_of(&z[3..]))
+        };
         let mut best = headroom(&z);
         let mut reach = spacing;
         for _ in 0..12 {
-            let Some(tangent) = self.tangent(&z) else { break };
+            let Some(tangent) = self.tangent(&z) else {
+                break;
+            };
             // The coordinate (x, y or s; the tangent is in scaled variables) the curve advances
             // most in.
             let scale = [1.0, 1.0, z[2].abs().max(1.0)];
@@ -696,7 +773,12 @@ impl<'a> Branch<'a> {
 
     /// Minimum-norm Gauss-Newton on `z = [x, y, s, f...]` (scaled variables; coordinate `fixed`
     /// held); `None` unless the residual falls below 1e-13.
-    pub fn newton(&self, mut z: Vec<f64>, iterations: usize, fixed: Option<usize>) -> Option<Vec<f64>> {
+    pub fn newton(
+        &self,
+        mut z: Vec<f64>,
+        iterations: usize,
+        fixed: Option<usize>,
+    ) -> Option<Vec<f64>> {
         let eval = |z: &[f64]| self.residual_vector(&z[..3], &z[3..]);
         for _ in 0..iterations {
             let r = eval(&z)?;
@@ -741,7 +823,10 @@ impl<'a> Branch<'a> {
             Some(r) if r.amax() <= 1e-13 => candidate,
             _ => match self.newton(z, 20, None) {
                 Some(z) => {
-                    let n = self.chart.direction(z[0], z[1]).expect("newton stays on the disk");
+                    let n = self
+                        .chart
+                        .direction(z[0], z[1])
+                        .expect("newton stays on the disk");
                     self.candidate(n, z[2], &z[3..])
                 }
                 None => candidate,
@@ -750,7 +835,11 @@ impl<'a> Branch<'a> {
     }
 
     fn candidate(&self, up: V3, s: f64, free_thrust: &[f64]) -> Candidate {
-        Candidate { up, spin_rate_rad_s: s, thrust_n: self.full_thrust(free_thrust) }
+        Candidate {
+            up,
+            spin_rate_rad_s: s,
+            thrust_n: self.full_thrust(free_thrust),
+        }
     }
 }
 
@@ -779,7 +868,8 @@ fn local_maxima(side: usize, values: &[f64]) -> Vec<usize> {
             for di in -1i64..=1 {
                 for dj in -1i64..=1 {
                     let (a, b) = (i as i64 + di, j as i64 + dj);
-                    if (di, dj) == (0, 0) || a < 0 || b < 0 || a >= side as i64 || b >= side as i64 {
+                    if (di, dj) == (0, 0) || a < 0 || b < 0 || a >= side as i64 || b >= side as i64
+                    {
                         continue;
                     }
                     let w = values[a as usize * side + b as usize];
@@ -801,7 +891,10 @@ fn local_maxima(side: usize, values: &[f64]) -> Vec<usize> {
 /// Static hover (no spin) with every working rotor free: for rotors sharing one thrust axis, the
 /// axis points up and `[sum f, tau(f)] = [m g, 0]`; otherwise the force must point along the up
 /// axis: `[n.F, e1.F, e2.F, tau] = [m g, 0, 0, 0]`, searched over the axis like a sheet.
-pub(crate) fn static_hover(model: &Model, settings: &RelaxedHoverSettings) -> Result<Vec<Candidate>> {
+pub(crate) fn static_hover(
+    model: &Model,
+    settings: &RelaxedHoverSettings,
+) -> Result<Vec<Candidate>> {
     let free = model.working.clone();
     if free.is_empty() {
         return Ok(Vec::new());
@@ -810,7 +903,9 @@ pub(crate) fn static_hover(model: &Model, settings: &RelaxedHoverSettings) -> Re
     let upper: Vec<f64> = free.iter().map(|&i| model.upper[i]).collect();
     let weight = model.weight_n();
     let first = model.axis[free[0]];
-    let common = free.iter().all(|&i| (model.axis[i] - first).amax() <= 1e-12);
+    let common = free
+        .iter()
+        .all(|&i| (model.axis[i] - first).amax() <= 1e-12);
     let solve = |n: &V3, rows: DMatrix<f64>, v: &[f64]| -> Option<Candidate> {
         let headroom = Headroom::new(&rows, &lower, &upper);
         let value = headroom.value(v);
@@ -822,15 +917,31 @@ pub(crate) fn static_hover(model: &Model, settings: &RelaxedHoverSettings) -> Re
         for (c, &i) in free.iter().enumerate() {
             thrust[i] = f[c];
         }
-        Some(Candidate { up: *n, spin_rate_rad_s: 0.0, thrust_n: thrust })
+        Some(Candidate {
+            up: *n,
+            spin_rate_rad_s: 0.0,
+            thrust_n: thrust,
+        })
     };
     let torque_rows = |r: usize, c: usize| model.torque[free[c]][r];
     if common {
-        let rows = DMatrix::from_fn(4, free.len(), |r, c| if r == 0 { 1.0 } else { torque_rows(r - 1, c) });
-        return Ok(solve(&first, rows, &[weight, 0.0, 0.0, 0.0]).into_iter().collect());
+        let rows = DMatrix::from_fn(4, free.len(), |r, c| {
+            if r == 0 {
+                1.0
+            } else {
+                torque_rows(r - 1, c)
+            }
+        });
+        return Ok(solve(&first, rows, &[weight, 0.0, 0.0, 0.0])
+            .into_iter()
+            .collect());
     }
     let sum: V3 = free.iter().map(|&i| model.axis[i]).sum();
-    let centre = if sum.norm() > 1e-9 { sum.normalize() } else { first };
+    let centre = if sum.norm() > 1e-9 {
+        sum.normalize()
+    } else {
+        first
+    };
     let chart = Chart::new(centre, std::f64::consts::PI - 1e-6);
     let rows_at = |n: &V3| {
         let (e1, e2) = super::model::tangent_basis(n);
@@ -873,11 +984,17 @@ pub(crate) fn static_hover(model: &Model, settings: &RelaxedHoverSettings) -> Re
     let spacing = 2.0 / (side - 1) as f64;
     let grid: Vec<Option<(f64, f64)>> = (0..side * side)
         .map(|idx| {
-            let (x, y) = (-1.0 + (idx / side) as f64 * spacing, -1.0 + (idx % side) as f64 * spacing);
+            let (x, y) = (
+                -1.0 + (idx / side) as f64 * spacing,
+                -1.0 + (idx % side) as f64 * spacing,
+            );
             (x * x + y * y <= 1.0).then_some((x, y))
         })
         .collect();
-    let values: Vec<f64> = grid.iter().map(|p| p.map_or(f64::NEG_INFINITY, |(x, y)| value_at(x, y))).collect();
+    let values: Vec<f64> = grid
+        .iter()
+        .map(|p| p.map_or(f64::NEG_INFINITY, |(x, y)| value_at(x, y)))
+        .collect();
     let mut out = Vec::new();
     for idx in grid_maxima(side, &values) {
         let (x, y) = grid[idx].expect("on the disk");

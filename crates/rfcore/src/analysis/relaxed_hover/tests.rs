@@ -13,7 +13,10 @@ fn failed(name: &str, rotors: &[usize]) -> Airframe {
 
 /// Ke's vehicle as the `ke-hil` preset flies it: rotational damping 2.8e-3 N m s.
 fn ke() -> RelaxedHoverSettings {
-    RelaxedHoverSettings { rotational_drag_n_m_s: 2.8e-3, ..Default::default() }
+    RelaxedHoverSettings {
+        rotational_drag_n_m_s: 2.8e-3,
+        ..Default::default()
+    }
 }
 
 fn check(result: &RelaxedHoverAnalysis) {
@@ -24,21 +27,43 @@ fn check(result: &RelaxedHoverAnalysis) {
 
 #[test]
 fn healthy_frames_hover_statically() {
-    for name in ["quad-x", "quad-plus", "hexa-pnpnpn", "hexa-ppnnpn", "octo-x", "ke-quadcopter", "lanzon-quadrotor"] {
+    for name in [
+        "quad-x",
+        "quad-plus",
+        "hexa-pnpnpn",
+        "hexa-ppnnpn",
+        "octo-x",
+        "ke-quadcopter",
+        "lanzon-quadrotor",
+    ] {
         for settings in [RelaxedHoverSettings::default(), ke()] {
             let a = preset(name);
-            let result = relaxed_hover(&a, &RelaxedHoverSettings { max_idle_rotors: 1, ..settings }).unwrap();
+            let result = relaxed_hover(
+                &a,
+                &RelaxedHoverSettings {
+                    max_idle_rotors: 1,
+                    ..settings
+                },
+            )
+            .unwrap();
             let best = result.best().unwrap();
             assert_eq!(best.kind, HoverKind::Static, "{name}: {best:?}");
             assert_eq!(best.body_rate_rad_s, [0.0; 3]);
             // Every rotor of these symmetric frames carries an equal share.
             let share = a.mass_kg() * a.gravity_m_s2() / a.rotor_count() as f64;
             for f in &best.thrust_n {
-                assert!((f - share).abs() < 1e-9 * share, "{name}: {:?}", best.thrust_n);
+                assert!(
+                    (f - share).abs() < 1e-9 * share,
+                    "{name}: {:?}",
+                    best.thrust_n
+                );
             }
             assert!((best.thrust_margin_n - (a.rotors()[0].max_thrust_n - share)).abs() < 1e-9);
             // No spinning solution has more margin than static hover on a healthy frame.
-            assert!(result.solutions.iter().all(|s| s.thrust_margin_n <= best.thrust_margin_n + 1e-9));
+            assert!(result
+                .solutions
+                .iter()
+                .all(|s| s.thrust_margin_n <= best.thrust_margin_n + 1e-9));
         }
     }
 }
@@ -53,10 +78,20 @@ fn two_opposing_rotors_spin_level_at_the_damping_rate() {
     let best = result.best().unwrap();
     let weight = a.mass_kg() * a.gravity_m_s2();
     let expected = a.drag_torque_ratio_m() * weight / 2.8e-3;
-    assert!((best.spin_rate_rad_s - expected).abs() < 1e-9 * expected, "{best:?}");
+    assert!(
+        (best.spin_rate_rad_s - expected).abs() < 1e-9 * expected,
+        "{best:?}"
+    );
     assert_eq!(best.carrying, vec![1, 3]);
-    assert!((best.thrust_n[1] - 0.5 * weight).abs() < 1e-9 && (best.thrust_n[3] - 0.5 * weight).abs() < 1e-9);
-    assert!((best.spin_axis[2] + 1.0).abs() < 1e-12, "{:?}", best.spin_axis);
+    assert!(
+        (best.thrust_n[1] - 0.5 * weight).abs() < 1e-9
+            && (best.thrust_n[3] - 0.5 * weight).abs() < 1e-9
+    );
+    assert!(
+        (best.spin_axis[2] + 1.0).abs() < 1e-12,
+        "{:?}",
+        best.spin_axis
+    );
     assert!(best.linear.stabilizable);
 }
 
@@ -74,8 +109,15 @@ fn lanzon_working_point_is_a_relaxed_hover() {
     };
     let result = relaxed_hover(&failed("lanzon-quadrotor", &[1]), &settings).unwrap();
     check(&result);
-    let level = result.solutions.iter().find(|s| s.carrying == vec![0, 2]).expect("rotors 1 and 3 alone");
-    assert!((level.spin_rate_rad_s.abs() - 2.7).abs() < 1e-9, "{level:?}");
+    let level = result
+        .solutions
+        .iter()
+        .find(|s| s.carrying == vec![0, 2])
+        .expect("rotors 1 and 3 alone");
+    assert!(
+        (level.spin_rate_rad_s.abs() - 2.7).abs() < 1e-9,
+        "{level:?}"
+    );
     assert!((level.thrust_n[0] - 0.5 * weight).abs() < 1e-9);
     // The best uses rotor 4 as well and has more margin.
     let best = result.best().unwrap();
@@ -91,16 +133,25 @@ fn ke_single_failure_best_loads_three_rotors_equally() {
     assert_eq!(best.carrying, vec![1, 2, 3]);
     assert_eq!(best.kind, HoverKind::Spinning);
     let f = &best.thrust_n;
-    assert!((f[1] - f[2]).abs() < 1e-7 && (f[2] - f[3]).abs() < 1e-7, "{f:?}");
+    assert!(
+        (f[1] - f[2]).abs() < 1e-7 && (f[2] - f[3]).abs() < 1e-7,
+        "{f:?}"
+    );
     assert!((best.thrust_margin_n - (8.5 - f[1])).abs() < 1e-9);
     // The vertical component carries the weight.
     let weight = a.mass_kg() * a.gravity_m_s2();
     assert!((3.0 * f[1] * -best.spin_axis[2] - weight).abs() < 1e-9 * weight);
     // An independent check of the equations: the body rate is the spin about the axis, and the
     // moment balance along the axis is the damping: n . tau(f) = k_r s.
-    let tau: V3 = (1..4).map(|i| Model::new(&a, &ke()).unwrap().torque[i] * f[i]).sum();
+    let tau: V3 = (1..4)
+        .map(|i| Model::new(&a, &ke()).unwrap().torque[i] * f[i])
+        .sum();
     let n = V3::from(best.spin_axis);
-    assert!((n.dot(&tau) - 2.8e-3 * best.spin_rate_rad_s).abs() < 1e-12, "{}", n.dot(&tau));
+    assert!(
+        (n.dot(&tau) - 2.8e-3 * best.spin_rate_rad_s).abs() < 1e-12,
+        "{}",
+        n.dot(&tau)
+    );
     assert!(best.linear.stabilizable);
 }
 
@@ -115,13 +166,31 @@ fn static_verdicts_match_du_tables() {
                 .unwrap()
                 .acai(&a.efficiency(), AcaiFormula::Eq13)
                 .unwrap();
-            let result = relaxed_hover(&a, &RelaxedHoverSettings { max_idle_rotors: 1, grid_points: 31, ..Default::default() }).unwrap();
-            assert!(result.best().is_some(), "{name} rotor {}: every single failure is survivable", r + 1);
+            let result = relaxed_hover(
+                &a,
+                &RelaxedHoverSettings {
+                    max_idle_rotors: 1,
+                    grid_points: 31,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            assert!(
+                result.best().is_some(),
+                "{name} rotor {}: every single failure is survivable",
+                r + 1
+            );
             let holdable_static = result
                 .solutions
                 .iter()
                 .any(|s| s.kind == HoverKind::Static && s.linear.stabilizable);
-            assert_eq!(holdable_static, acai > 0.0, "{name} rotor {}: ACAI {acai}, {:#?}", r + 1, result.solutions);
+            assert_eq!(
+                holdable_static,
+                acai > 0.0,
+                "{name} rotor {}: ACAI {acai}, {:#?}",
+                r + 1,
+                result.solutions
+            );
         }
     }
 }
@@ -130,11 +199,41 @@ fn static_verdicts_match_du_tables() {
 fn bad_settings_are_named() {
     let a = preset("quad-x");
     for (settings, field) in [
-        (RelaxedHoverSettings { rotational_drag_n_m_s: -1.0, ..Default::default() }, "rotational_drag_n_m_s"),
-        (RelaxedHoverSettings { rotor_inertia_kg_m2: 1e-5, ..Default::default() }, "thrust_coefficient_n_s2"),
-        (RelaxedHoverSettings { max_spin_rate_rad_s: 0.0, ..Default::default() }, "max_spin_rate_rad_s"),
-        (RelaxedHoverSettings { max_circle_radius_m: f64::NAN, ..Default::default() }, "max_circle_radius_m"),
-        (RelaxedHoverSettings { grid_points: 60, ..Default::default() }, "grid_points"),
+        (
+            RelaxedHoverSettings {
+                rotational_drag_n_m_s: -1.0,
+                ..Default::default()
+            },
+            "rotational_drag_n_m_s",
+        ),
+        (
+            RelaxedHoverSettings {
+                rotor_inertia_kg_m2: 1e-5,
+                ..Default::default()
+            },
+            "thrust_coefficient_n_s2",
+        ),
+        (
+            RelaxedHoverSettings {
+                max_spin_rate_rad_s: 0.0,
+                ..Default::default()
+            },
+            "max_spin_rate_rad_s",
+        ),
+        (
+            RelaxedHoverSettings {
+                max_circle_radius_m: f64::NAN,
+                ..Default::default()
+            },
+            "max_circle_radius_m",
+        ),
+        (
+            RelaxedHoverSettings {
+                grid_points: 60,
+                ..Default::default()
+            },
+            "grid_points",
+        ),
     ] {
         let err = relaxed_hover(&a, &settings).unwrap_err();
         assert!(err.to_string().starts_with(field), "{err}");
@@ -143,11 +242,23 @@ fn bad_settings_are_named() {
 
 #[test]
 fn a_vehicle_that_cannot_lift_itself_has_no_solution() {
-    let result = relaxed_hover(&failed("ke-quadcopter", &[0, 1, 2]), &RelaxedHoverSettings { rotational_drag_n_m_s: 2.8e-3, ..Default::default() }).unwrap();
-    assert!(!result.solutions.is_empty(), "one rotor of 8.5 N lifts 7.06 N");
+    let result = relaxed_hover(
+        &failed("ke-quadcopter", &[0, 1, 2]),
+        &RelaxedHoverSettings {
+            rotational_drag_n_m_s: 2.8e-3,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        !result.solutions.is_empty(),
+        "one rotor of 8.5 N lifts 7.06 N"
+    );
     let heavy = {
         let a = failed("ke-quadcopter", &[0, 1, 2]);
-        let text = a.to_toml_string().replace("mass_kg = 0.72", "mass_kg = 0.9");
+        let text = a
+            .to_toml_string()
+            .replace("mass_kg = 0.72", "mass_kg = 0.9");
         Airframe::from_toml_str(&text, "heavy").unwrap()
     };
     let result = relaxed_hover(&heavy, &ke()).unwrap();
@@ -158,11 +269,19 @@ fn a_vehicle_that_cannot_lift_itself_has_no_solution() {
 fn residual_rejects_a_wrong_solution() {
     let a = failed("ke-quadcopter", &[0, 2]);
     let best = relaxed_hover(&a, &ke()).unwrap().best().unwrap().clone();
-    let ok = relaxed_hover_residual(&a, &ke(), best.body_rate_rad_s, best.spin_axis, &best.thrust_n).unwrap();
+    let ok = relaxed_hover_residual(
+        &a,
+        &ke(),
+        best.body_rate_rad_s,
+        best.spin_axis,
+        &best.thrust_n,
+    )
+    .unwrap();
     assert!(ok < 1e-12);
     let mut off = best.thrust_n.clone();
     off[1] *= 1.001;
-    let bad = relaxed_hover_residual(&a, &ke(), best.body_rate_rad_s, best.spin_axis, &off).unwrap();
+    let bad =
+        relaxed_hover_residual(&a, &ke(), best.body_rate_rad_s, best.spin_axis, &off).unwrap();
     assert!(bad > 1e-4, "{bad}");
 }
 
@@ -179,4 +298,3 @@ fn timing() {
     let _ = relaxed_hover(&preset("octo-x"), &Default::default()).unwrap();
     println!("octo {:?}", t.elapsed());
 }
-
