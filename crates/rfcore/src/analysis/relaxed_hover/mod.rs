@@ -41,15 +41,22 @@
 //!    thrusts and quadratic in `s` (with `h` held, made consistent by a fixed point), and the
 //!    largest margin of a linear rotor problem has a closed form (the facets of the attainable
 //!    zonotope; `headroom`). The rank of the carrying rotors' thrust-and-torque matrix decides the
-//!    solution set's shape over the axes: an open set (rank 4: every `s`, the best found per
-//!    axis), two sheets (rank 3: roots of one quadratic), curves (rank 2: the resultant of two
-//!    quadratics vanishes) or isolated points (rank 1).
+//!    solution set's shape over the axes: an open set (rank 4: every `s`; the best `s` per axis
+//!    exactly, each facet's bound being a quadratic in `s`: the maximum of their lower envelope),
+//!    two sheets (rank 3: the roots of one quadratic), curves (rank 2: two quadratics with a
+//!    common root) or isolated points (rank 1).
 //! 3. *Over the axes*: a grid on the cap of possible up axes (`grid_points` per side of an
-//!    azimuthal-equidistant chart, about `2 * max_tilt / (grid_points - 1)` apart), every local
-//!    maximum of each sheet refined (Nelder-Mead over the axis and spin rate, curves followed by
-//!    bisection and golden-section search, points by Newton), then brought exactly onto the
-//!    equations. A solution set is missed only if it is narrower than the grid spacing in every
-//!    direction (an isolated point is found from the residual's local minima instead).
+//!    azimuthal-equidistant chart, about `2 * max_tilt / (grid_points - 1)` apart); every local
+//!    maximum of each sheet refined (Nelder-Mead over the axis with restarts, then Gauss-Newton
+//!    onto the kink where several rotors share the margin), curves and points reached by Newton
+//!    from the residual's local minima on the grid and curves followed to their best point
+//!    (golden-section search along them), then everything brought exactly onto the equations.
+//!    A solution set is missed only if it is narrower than the grid spacing in every direction
+//!    and no residual minimum of the grid leads to it. Static hover: rotors sharing one thrust
+//!    axis hover with it pointing up (one linear problem); tilted rotors that make every wrench
+//!    are searched over the up axis like a sheet; tilted rotors that do not (rank < 6) hover
+//!    statically at isolated axes or along families, reached by Newton (on a family, one of its
+//!    points, not necessarily the one with the most margin).
 //! 4. *Checks*: every solution's residual (scaled by `m g` and `m g` times the largest torque
 //!    per newton) must be below [`RESIDUAL_TOLERANCE`] and its thrusts inside their bounds, or
 //!    the analysis fails naming the check. Solutions equal in axis, spin and thrusts are merged
@@ -259,7 +266,7 @@ pub fn relaxed_hover(
 ) -> Result<RelaxedHoverAnalysis> {
     settings.check()?;
     let model = Model::new(airframe, settings)?;
-    let mut found: Vec<Candidate> = static_hover(&model, settings)?;
+    let mut found: Vec<Candidate> = static_hover(&model, settings);
     let working = model.working.clone();
     let branches: Vec<Vec<usize>> = (0..=settings
         .max_idle_rotors

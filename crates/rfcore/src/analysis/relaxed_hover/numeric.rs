@@ -267,6 +267,57 @@ pub(crate) fn min_norm_solve(j: &DMatrix<f64>, r: &DVector<f64>) -> DVector<f64>
     }
 }
 
+/// Minimum-norm Gauss-Newton on `residual(z) = 0` in scaled variables (`z_i / scale_i`;
+/// coordinate `fixed` held), Jacobian by central differences, each step backtracked until the
+/// residual shrinks; `None` unless its largest entry falls below `tolerance`.
+pub(crate) fn newton(
+    residual: &dyn Fn(&[f64]) -> Option<DVector<f64>>,
+    mut z: Vec<f64>,
+    scale: &dyn Fn(&[f64]) -> Vec<f64>,
+    fixed: Option<usize>,
+    iterations: usize,
+    tolerance: f64,
+) -> Option<Vec<f64>> {
+    let columns: Vec<usize> = (0..z.len()).filter(|&c| Some(c) != fixed).collect();
+    for _ in 0..iterations {
+        let r = residual(&z)?;
+        if r.amax() <= tolerance {
+            return Some(z);
+        }
+        let s = scale(&z);
+        let mut jac = DMatrix::zeros(r.len(), columns.len());
+        for (j, &c) in columns.iter().enumerate() {
+            let step = 1e-7 * s[c];
+            let (mut plus, mut minus) = (z.clone(), z.clone());
+            plus[c] += step;
+            minus[c] -= step;
+            jac.set_column(
+                j,
+                &((residual(&plus)? - residual(&minus)?) * (s[c] / (2.0 * step))),
+            );
+        }
+        let delta = gauss_newton_step(&jac, &r)?;
+        let mut factor = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let mut trial = z.clone();
+            for (j, &c) in columns.iter().enumerate() {
+                trial[c] += factor * delta[j] * s[c];
+            }
+            if residual(&trial).is_some_and(|rt| rt.norm() < r.norm()) {
+                z = trial;
+                accepted = true;
+                break;
+            }
+            factor *= 0.5;
+        }
+        if !accepted {
+            return None;
+        }
+    }
+    residual(&z).filter(|r| r.amax() <= tolerance).map(|_| z)
+}
+
 /// `-J^+ r`: one minimum-norm Gauss-Newton step.
 pub(crate) fn gauss_newton_step(
     jacobian: &DMatrix<f64>,

@@ -26,9 +26,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::headroom::Headroom;
 use super::model::{Model, V3};
-use super::numeric::{gauss_newton_step, nelder_mead, quadratic_roots, Chart};
+use super::numeric::{gauss_newton_step, nelder_mead, newton, quadratic_roots, Chart};
 use super::RelaxedHoverSettings;
-use crate::error::{Result, RfError};
 
 /// How many grid maxima per sheet are refined (the best first).
 const REFINED_PER_SHEET: usize = 4;
@@ -714,7 +713,7 @@ impl<'a> Branch<'a> {
     /// The curve's direction at `z` in scaled variables: the null vector of the equations'
     /// Jacobian.
     fn tangent(&self, z: &[f64]) -> Option<Vec<f64>> {
-        let jac = self.jacobian(z, None)?;
+        let jac = self.jacobian(z)?;
         super::numeric::null_vector(&jac).map(|v| v.iter().copied().collect())
     }
 
@@ -752,65 +751,33 @@ impl<'a> Branch<'a> {
             .collect()
     }
 
-    /// The Jacobian of the scaled residual in the scaled variables (central differences),
-    /// without column `fixed`.
-    fn jacobian(&self, z: &[f64], fixed: Option<usize>) -> Option<DMatrix<f64>> {
+    /// The Jacobian of the scaled residual in the scaled variables (central differences).
+    fn jacobian(&self, z: &[f64]) -> Option<DMatrix<f64>> {
         let scale = self.scales(z);
-        let columns: Vec<usize> = (0..z.len()).filter(|&c| Some(c) != fixed).collect();
-        let mut jac = DMatrix::zeros(4, columns.len());
-        for (j, &c) in columns.iter().enumerate() {
+        let mut jac = DMatrix::zeros(4, z.len());
+        for c in 0..z.len() {
             let step = 1e-7 * scale[c];
-            let mut plus = z.to_vec();
-            let mut minus = z.to_vec();
+            let (mut plus, mut minus) = (z.to_vec(), z.to_vec());
             plus[c] += step;
             minus[c] -= step;
             let rp = self.residual_vector(&plus[..3], &plus[3..])?;
             let rm = self.residual_vector(&minus[..3], &minus[3..])?;
-            jac.set_column(j, &((rp - rm) * (scale[c] / (2.0 * step))));
+            jac.set_column(c, &((rp - rm) * (scale[c] / (2.0 * step))));
         }
         Some(jac)
     }
 
-    /// Minimum-norm Gauss-Newton on `z = [x, y, s, f...]` (scaled variables; coordinate `fixed`
-    /// held); `None` unless the residual falls below 1e-13.
-    pub fn newton(
-        &self,
-        mut z: Vec<f64>,
-        iterations: usize,
-        fixed: Option<usize>,
-    ) -> Option<Vec<f64>> {
-        let eval = |z: &[f64]| self.residual_vector(&z[..3], &z[3..]);
-        for _ in 0..iterations {
-            let r = eval(&z)?;
-            if r.amax() <= 1e-13 {
-                return Some(z);
-            }
-            let scale = self.scales(&z);
-            let jac = self.jacobian(&z, fixed)?;
-            let delta = gauss_newton_step(&jac, &r)?;
-            let columns: Vec<usize> = (0..z.len()).filter(|&c| Some(c) != fixed).collect();
-            // Backtracking: the first step that reduces the residual.
-            let mut factor = 1.0;
-            let mut accepted = false;
-            for _ in 0..30 {
-                let mut trial = z.clone();
-                for (j, &c) in columns.iter().enumerate() {
-                    trial[c] += factor * delta[j] * scale[c];
-                }
-                if let Some(rt) = eval(&trial) {
-                    if rt.norm() < r.norm() {
-                        z = trial;
-                        accepted = true;
-                        break;
-                    }
-                }
-                factor *= 0.5;
-            }
-            if !accepted {
-                return None;
-            }
-        }
-        eval(&z).filter(|r| r.amax() <= 1e-13).map(|_| z)
+    /// Minimum-norm Gauss-Newton on `z = [x, y, s, f...]` (coordinate `fixed` held); `None`
+    /// unless the residual falls below 1e-13.
+    pub fn newton(&self, z: Vec<f64>, iterations: usize, fixed: Option<usize>) -> Option<Vec<f64>> {
+        newton(
+            &|z| self.residual_vector(&z[..3], &z[3..]),
+            z,
+            &|z| self.scales(z),
+            fixed,
+            iterations,
+            1e-13,
+        )
     }
 
     /// Brings a candidate exactly onto the equations (a few Newton steps from where the search
@@ -891,13 +858,10 @@ fn local_maxima(side: usize, values: &[f64]) -> Vec<usize> {
 /// Static hover (no spin) with every working rotor free: for rotors sharing one thrust axis, the
 /// axis points up and `[sum f, tau(f)] = [m g, 0]`; otherwise the force must point along the up
 /// axis: `[n.F, e1.F, e2.F, tau] = [m g, 0, 0, 0]`, searched over the axis like a sheet.
-pub(crate) fn static_hover(
-    model: &Model,
-    settings: &RelaxedHoverSettings,
-) -> Result<Vec<Candidate>> {
+pub(crate) fn static_hover(model: &Model, settings: &RelaxedHoverSettings) -> Vec<Candidate> {
     let free = model.working.clone();
     if free.is_empty() {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     let lower: Vec<f64> = free.iter().map(|&i| model.lower[i]).collect();
     let upper: Vec<f64> = free.iter().map(|&i| model.upper[i]).collect();
@@ -932,9 +896,9 @@ pub(crate) fn static_hover(
                 torque_rows(r - 1, c)
             }
         });
-        return Ok(solve(&first, rows, &[weight, 0.0, 0.0, 0.0])
+        return solve(&first, rows, &[weight, 0.0, 0.0, 0.0])
             .into_iter()
-            .collect());
+            .collect();
     }
     let sum: V3 = free.iter().map(|&i| model.axis[i]).sum();
     let centre = if sum.norm() > 1e-9 {
@@ -958,16 +922,11 @@ pub(crate) fn static_hover(
     let v = [weight, 0.0, 0.0, 0.0, 0.0, 0.0];
     let generic = chart.direction(0.3137, 0.1709).unwrap_or(centre);
     let rank = Headroom::new(&rows_at(&generic), &lower, &upper).rank();
+    let side = settings.grid_points;
     if rank < 6 {
-        // The static solutions then form a lower-dimensional set over the axes that a grid does
-        // not meet; refused rather than reported as "no static hover".
-        return Err(RfError::invalid(
-            "rotors",
-            format!(
-                "static hover of rotors whose thrust axes are neither parallel nor span every force \
-                 and torque (wrench rank {rank} < 6) is not implemented"
-            ),
-        ));
+        // The static solutions form a lower-dimensional set over the axes, which a grid does not
+        // meet: Newton from the residual's local minima on the grid reaches them.
+        return static_points(model, &free, &chart, side, &rows_at, &lower, &upper);
     }
     let value_at = |x: f64, y: f64| -> f64 {
         chart.direction(x, y).map_or(f64::NEG_INFINITY, |n| {
@@ -980,7 +939,6 @@ pub(crate) fn static_hover(
             }
         })
     };
-    let side = settings.grid_points;
     let spacing = 2.0 / (side - 1) as f64;
     let grid: Vec<Option<(f64, f64)>> = (0..side * side)
         .map(|idx| {
@@ -1010,5 +968,86 @@ pub(crate) fn static_hover(
             }
         }
     }
-    Ok(out)
+    out
+}
+
+/// Static hover of tilted rotors whose wrench matrix has rank < 6: `F(f) = m g n`, `tau(f) = 0`
+/// solved by Newton over `[x, y, f...]` from every local minimum of the least-squares residual
+/// on the axis grid. Where the solutions form a family, Newton lands on one of its points, not
+/// on the one with the most margin.
+fn static_points(
+    model: &Model,
+    free: &[usize],
+    chart: &Chart,
+    side: usize,
+    rows_at: &dyn Fn(&V3) -> DMatrix<f64>,
+    lower: &[f64],
+    upper: &[f64],
+) -> Vec<Candidate> {
+    let weight = model.weight_n();
+    let full = |f: &[f64]| {
+        let mut out = vec![0.0; model.rotor_count()];
+        for (c, &i) in free.iter().enumerate() {
+            out[i] = f[c];
+        }
+        out
+    };
+    let residual = |z: &[f64]| -> Option<DVector<f64>> {
+        let n = chart.direction(z[0], z[1])?;
+        let thrust = full(&z[2..]);
+        let force = (model.force(&thrust) - n * weight) / weight;
+        let torque = model.rotor_torque(&thrust) / model.torque_scale;
+        Some(DVector::from_vec(vec![
+            force.x, force.y, force.z, torque.x, torque.y, torque.z,
+        ]))
+    };
+    let share = weight / free.len() as f64;
+    let scale = |z: &[f64]| -> Vec<f64> {
+        (0..z.len())
+            .map(|i| if i < 2 { 1.0 } else { share })
+            .collect()
+    };
+    let spacing = 2.0 / (side - 1) as f64;
+    let v = [0.0, 0.0, weight, 0.0, 0.0, 0.0];
+    let starts: Vec<Option<(Vec<f64>, f64)>> = (0..side * side)
+        .map(|idx| {
+            let (x, y) = (
+                -1.0 + (idx / side) as f64 * spacing,
+                -1.0 + (idx % side) as f64 * spacing,
+            );
+            let n = chart.direction(x, y)?;
+            let f = Headroom::new(&rows_at(&n), lower, upper).least_squares(&v)?;
+            let mut z = vec![x, y];
+            z.extend(f);
+            let size = residual(&z)?.norm();
+            Some((z, size))
+        })
+        .collect();
+    let scores: Vec<f64> = starts
+        .iter()
+        .map(|s| s.as_ref().map_or(f64::NAN, |s| -s.1))
+        .collect();
+    let mut out: Vec<Candidate> = Vec::new();
+    for idx in local_maxima(side, &scores) {
+        let (z, _) = starts[idx].clone().expect("finite");
+        let Some(z) = newton(&residual, z, &scale, None, 60, 1e-13) else {
+            continue;
+        };
+        let f = &z[2..];
+        let inside = f
+            .iter()
+            .zip(lower.iter().zip(upper))
+            .all(|(x, (lo, hi))| *x >= *lo - 1e-12 * share && *x <= *hi + 1e-12 * share);
+        let Some(n) = chart.direction(z[0], z[1]) else {
+            continue;
+        };
+        if inside && !out.iter().any(|c| (c.up - n).norm() < 1e-9) {
+            out.push(Candidate {
+                up: n,
+                spin_rate_rad_s: 0.0,
+                thrust_n: full(f),
+            });
+        }
+    }
+    out
 }

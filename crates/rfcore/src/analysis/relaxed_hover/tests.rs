@@ -298,3 +298,111 @@ fn timing() {
     let _ = relaxed_hover(&preset("octo-x"), &Default::default()).unwrap();
     println!("octo {:?}", t.elapsed());
 }
+
+/// A quadrotor whose rotors lean 10 degrees sideways, alternately (non-parallel thrust axes: the
+/// general path, per-axis matrices, static hover by Newton since four rotors cannot make every
+/// wrench).
+fn leaning_quad(failed: &[usize]) -> Airframe {
+    let lean = 10f64.to_radians();
+    let mut position = Vec::new();
+    let mut axis = Vec::new();
+    for i in 0..4 {
+        let phi = (45.0 + 90.0 * i as f64).to_radians();
+        position.extend([0.2 * phi.cos(), 0.2 * phi.sin(), 0.0]);
+        let side = if i % 2 == 0 { 1.0 } else { -1.0 } * lean.sin();
+        // Tangential lean: along (-sin phi, cos phi).
+        axis.extend([-phi.sin() * side, phi.cos() * side, -lean.cos()]);
+    }
+    let mut eta = vec![1.0; 4];
+    for &r in failed {
+        eta[r] = 0.0;
+    }
+    Airframe::from_general_columns(
+        "leaning",
+        &position,
+        &axis,
+        &[1.0, -1.0, 1.0, -1.0],
+        None,
+        &[6.0; 4],
+        &[0.0; 4],
+        &eta,
+        1.0,
+        &[0.01, 0.01, 0.02],
+        0.016,
+        9.81,
+    )
+    .unwrap()
+}
+
+#[test]
+fn tilted_rotors_are_analysed() {
+    let healthy = relaxed_hover(
+        &leaning_quad(&[]),
+        &RelaxedHoverSettings {
+            max_idle_rotors: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    check(&healthy);
+    let best = healthy.best().expect("a healthy leaning quad hovers");
+    assert_eq!(best.kind, HoverKind::Static, "{best:?}");
+    // By symmetry it hovers level with equal thrusts: 9.81 / (4 cos 10 deg) each.
+    let share = 9.81 / (4.0 * 10f64.to_radians().cos());
+    for f in &best.thrust_n {
+        assert!((f - share).abs() < 1e-9, "{:?}", best.thrust_n);
+    }
+    assert!(
+        (best.spin_axis[2] + 1.0).abs() < 1e-12,
+        "{:?}",
+        best.spin_axis
+    );
+    // A fully actuated hexarotor (rotors leaning 30 degrees alternately): static hover over a
+    // range of attitudes, searched over the up axis; the level one carries the most.
+    let lean = 30f64.to_radians();
+    let (mut position, mut axis) = (Vec::new(), Vec::new());
+    for i in 0..6 {
+        let phi = (60.0 * i as f64).to_radians();
+        position.extend([0.25 * phi.cos(), 0.25 * phi.sin(), 0.0]);
+        let side = if i % 2 == 0 { 1.0 } else { -1.0 } * lean.sin();
+        axis.extend([-phi.sin() * side, phi.cos() * side, -lean.cos()]);
+    }
+    let hexa = Airframe::from_general_columns(
+        "omni",
+        &position,
+        &axis,
+        &[1.0, -1.0, 1.0, -1.0, 1.0, -1.0],
+        None,
+        &[6.0; 6],
+        &[0.0; 6],
+        &[1.0; 6],
+        1.5,
+        &[0.03, 0.03, 0.05],
+        0.016,
+        9.81,
+    )
+    .unwrap();
+    let omni = relaxed_hover(
+        &hexa,
+        &RelaxedHoverSettings {
+            max_idle_rotors: 0,
+            grid_points: 31,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    check(&omni);
+    let best = omni.best().unwrap();
+    assert_eq!(best.kind, HoverKind::Static);
+    assert!(
+        (best.spin_axis[2] + 1.0).abs() < 1e-6,
+        "{:?}",
+        best.spin_axis
+    );
+    let one_lost = relaxed_hover(&leaning_quad(&[0]), &ke()).unwrap();
+    check(&one_lost);
+    assert!(one_lost
+        .solutions
+        .iter()
+        .any(|s| s.kind == HoverKind::Spinning && s.linear.stabilizable));
+}
