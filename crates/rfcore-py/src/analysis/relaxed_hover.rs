@@ -241,6 +241,17 @@ impl PyRelaxedHoverAnalysis {
     fn __len__(&self) -> usize {
         self.solutions.len()
     }
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let best = if self.best {
+            self.solutions[0].borrow(py).__repr__()
+        } else {
+            "None".to_string()
+        };
+        format!(
+            "RelaxedHoverAnalysis({} solutions, best={best})",
+            self.solutions.len()
+        )
+    }
 }
 
 fn analysis(py: Python<'_>, result: RelaxedHoverAnalysis) -> PyResult<PyRelaxedHoverAnalysis> {

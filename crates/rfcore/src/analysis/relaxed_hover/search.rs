@@ -65,13 +65,16 @@ pub(crate) struct Branch<'a> {
 }
 
 impl<'a> Branch<'a> {
-    /// `None` when the carrying rotors cannot even carry the weight straight up.
+    /// `None` when there are no carrying rotors or they cannot even carry the weight straight up.
     pub fn new(
         model: &'a Model,
         settings: &'a RelaxedHoverSettings,
         free: Vec<usize>,
         idle: Vec<usize>,
     ) -> Option<Self> {
+        if free.is_empty() {
+            return None;
+        }
         let idle_force: V3 = idle.iter().map(|&i| model.axis[i] * model.lower[i]).sum();
         let idle_torque: V3 = idle.iter().map(|&i| model.torque[i] * model.lower[i]).sum();
         let lower: Vec<f64> = free.iter().map(|&i| model.lower[i]).collect();

@@ -285,20 +285,6 @@ fn residual_rejects_a_wrong_solution() {
     assert!(bad > 1e-4, "{bad}");
 }
 
-#[test]
-#[ignore]
-fn timing() {
-    let t = std::time::Instant::now();
-    let _ = relaxed_hover(&failed("ke-quadcopter", &[0]), &ke()).unwrap();
-    println!("ke one {:?}", t.elapsed());
-    let t = std::time::Instant::now();
-    let _ = relaxed_hover(&failed("hexa-ppnnpn", &[4]), &Default::default()).unwrap();
-    println!("hexa {:?}", t.elapsed());
-    let t = std::time::Instant::now();
-    let _ = relaxed_hover(&preset("octo-x"), &Default::default()).unwrap();
-    println!("octo {:?}", t.elapsed());
-}
-
 /// A quadrotor whose rotors lean 10 degrees sideways, alternately (non-parallel thrust axes: the
 /// general path, per-axis matrices, static hover by Newton since four rotors cannot make every
 /// wrench).
@@ -405,4 +391,38 @@ fn tilted_rotors_are_analysed() {
         .solutions
         .iter()
         .any(|s| s.kind == HoverKind::Spinning && s.linear.stabilizable));
+}
+
+#[test]
+fn edge_cases_give_answers_not_panics() {
+    // Every rotor failed: nothing carries the vehicle.
+    let none = relaxed_hover(&failed("ke-quadcopter", &[0, 1, 2, 3]), &ke()).unwrap();
+    assert!(none.solutions.is_empty());
+    // A nearly failed rotor (efficiency 1e-9) and a half-efficient one: the commands are the
+    // thrusts over the efficiency, the bounds scaled by it.
+    let a = preset("ke-quadcopter")
+        .with_efficiency(&[1e-9, 0.5, 1.0, 1.0])
+        .unwrap();
+    let result = relaxed_hover(&a, &ke()).unwrap();
+    check(&result);
+    let best = result.best().unwrap();
+    for (i, eta) in [1e-9, 0.5, 1.0, 1.0].iter().enumerate() {
+        assert!(best.thrust_n[i] <= eta * 8.5 * (1.0 + 1e-12), "{best:?}");
+        assert!((best.command_n[i] * eta - best.thrust_n[i]).abs() < 1e-12);
+    }
+    // No gravity: nothing to carry, said so.
+    let text: String = preset("quad-x")
+        .to_toml_string()
+        .lines()
+        .map(|l| {
+            if l.starts_with("gravity_m_s2") {
+                "gravity_m_s2 = 0.0\n".to_string()
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let floating = Airframe::from_toml_str(&text, "floating").unwrap();
+    let err = relaxed_hover(&floating, &RelaxedHoverSettings::default()).unwrap_err();
+    assert!(err.to_string().starts_with("gravity_m_s2"), "{err}");
 }
