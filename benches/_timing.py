@@ -7,9 +7,10 @@ import numpy as np
 import numpy.typing as npt
 
 from rotorfault import _rfcore
-from rotorfault._convert import float_array
+from rotorfault._util.convert import float_array
 from rotorfault._typing import AllocationMethod
-from rotorfault.allocation import METHODS, Allocator, _positive_int
+from rotorfault.allocation import METHODS, Allocator
+from rotorfault.allocation.allocator import _positive_int
 
 
 def time_per_solve(

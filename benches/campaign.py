@@ -31,7 +31,7 @@ from pathlib import Path
 
 
 import rotorfault as rf
-from rotorfault.campaign import Campaign, run_campaign, tune, tuning_campaign
+from rotorfault.studies import Campaign, run_campaign, tune, tuning_campaign
 
 
 def main() -> None:

@@ -17,6 +17,11 @@ same run RotorPy 3 flying its SE3 hover controller (no rotor faults: it has none
 baseline, when RotorPy is installed (``.[bench]``).
 
 Target (issue 5): at least 500,000 closed-loop control steps per second on the 2-core machine.
+
+INDI (issue 30): in the same run, the same kind of batch (``--runs`` runs) over the patterns INDI
+flies on this quadrotor (one rotor, one plus undetected partial faults, two opposite; INDI is told
+of each complete loss at its time), flown by ``rf.IndiController`` and, as the baseline on exactly
+the same scenarios, by Ke's FTC: INDI's closed-loop steps/s and the ratio to Ke's.
 """
 
 from __future__ import annotations
@@ -44,10 +49,17 @@ PATTERNS = (
 )
 
 
-def batch_inputs(rng: np.random.Generator, runs: int = RUNS) -> tuple[list[rf.State], list[list[rf.RotorFault]], list[str]]:
+#: The patterns INDI flies on the ke-quadcopter (it refuses two adjacent and three: no hover with
+#: zero roll and pitch torque is left).
+INDI_PATTERNS = tuple(p for p in PATTERNS if p[0] in ("one", "one+partial", "two-opposite"))
+
+
+def batch_inputs(rng: np.random.Generator, runs: int = RUNS,
+                 patterns: tuple[tuple[str, tuple[tuple[int, float], ...]], ...] = PATTERNS,
+                 ) -> tuple[list[rf.State], list[list[rf.RotorFault]], list[str]]:
     starts, faults, names = [], [], []
     for _ in range(runs):
-        name, pattern = PATTERNS[int(rng.integers(len(PATTERNS)))]
+        name, pattern = patterns[int(rng.integers(len(patterns)))]
         t = float(rng.uniform(1.0, 5.0))
         run_faults = []
         for k, (rotor, efficiency) in enumerate(pattern):
@@ -71,6 +83,26 @@ def rotorpy_steps_per_s() -> float | None:
     fly, _ = module.rotorpy_setup()
     wall, steps, _, _ = fly()
     return float(steps / wall)
+
+
+def indi_comparison(sim: rf.Simulator, preset: ke.FtcPreset, runs: int, steps_per_run: int) -> tuple[float, float, int, float]:
+    """INDI's batch and Ke's FTC on the same INDI-flyable scenarios: (INDI steps/s, INDI one run on
+    one thread, INDI runs lost, Ke steps/s)."""
+    starts, faults, _ = batch_inputs(np.random.default_rng(30), runs, INDI_PATTERNS)
+    indi = [rf.IndiController(preset.airframe, failures=[f for f in fl if f.efficiency == 0.0], position=(0, 0, -10))
+            for fl in faults]
+    ftc = rf.UniformPassiveFtc(preset.airframe, gains=preset.gains, position=(0, 0, -10))
+    t0 = time.perf_counter()
+    single = sim.run(starts[0], T_FINAL_S, controller=indi[0], faults=faults[0], record_every=400)
+    single_rate = steps_per_run / (time.perf_counter() - t0)
+    assert not single.diverged
+    t0 = time.perf_counter()
+    batch = rf.simulate_batch(sim, starts, T_FINAL_S, controllers=indi, faults=faults, record_every=400)
+    indi_rate = runs * steps_per_run / (time.perf_counter() - t0)
+    t0 = time.perf_counter()
+    rf.simulate_batch(sim, starts, T_FINAL_S, controllers=ftc, faults=faults, record_every=400)
+    ke_rate = runs * steps_per_run / (time.perf_counter() - t0)
+    return indi_rate, single_rate, int(np.count_nonzero(batch.diverged)), ke_rate
 
 
 def main() -> None:
@@ -118,6 +150,11 @@ def main() -> None:
         print("  RotorPy not installed (pip install '.[bench]'): no peer baseline")
     else:
         print(f"  RotorPy 3 SE3 hover (no faults), same run: {peer:,.0f} steps/s -> rotorfault is {rate / peer:,.0f}x")
+    indi_rate, indi_single, indi_lost, ke_same_rate = indi_comparison(sim, preset, runs, steps_per_run)
+    print(f"\nINDI: {runs} runs x {T_FINAL_S:.0f} s over {', '.join(p[0] for p in INDI_PATTERNS)}: "
+          f"{indi_rate:,.0f} closed-loop control steps/s (one run, one thread: {indi_single:,.0f})")
+    print(f"  Ke's FTC on the same scenarios, same run: {ke_same_rate:,.0f} steps/s -> INDI runs at "
+          f"{indi_rate / ke_same_rate:.2f}x; runs lost: INDI {indi_lost} of {runs}")
     write(args.json_path, "ftc_batch",
           f"Ke's uniform passive FTC: {runs:,} fault scenarios of {T_FINAL_S:g} s at {1 / sim.dt_s:.0f} Hz, "
           f"{sim.substeps} RK4 substeps, QP allocation every step, rf.simulate_batch", [
@@ -126,6 +163,11 @@ def main() -> None:
                      baseline_value=peer, ratio=None if peer is None else rate / peer, target=f">= {TARGET_STEPS_PER_S:,}/s"),
               figure("one run, one thread", steps_per_run / single_s, "control steps/s"),
               figure("runs lost", len(diverged), "runs"),
+              figure("INDI (issue 30): closed-loop control steps/s, batch, end to end from Python", indi_rate,
+                     "control steps/s", baseline="Ke's FTC on the same scenarios, same run",
+                     baseline_value=ke_same_rate, ratio=indi_rate / ke_same_rate),
+              figure("INDI: one run, one thread", indi_single, "control steps/s"),
+              figure("INDI: runs lost", indi_lost, "runs"),
           ], reduced=None if runs == RUNS else f"{runs:,} runs instead of {RUNS:,} (--runs)")
 
 

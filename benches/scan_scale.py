@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 import rotorfault as rf
-from rotorfault.scan import acai_scan
+from rotorfault.studies.scan import acai_scan
 
 PRESET = "octo-x"
 
@@ -54,7 +54,7 @@ def grid(points: int) -> dict[str, np.ndarray]:
 
 
 def baseline(frame: rf.Airframe, axes: dict[str, np.ndarray], chunk: int) -> float:
-    from rotorfault.scan import _ScanTask
+    from rotorfault.studies.scan import _ScanTask
 
     task = _ScanTask(frame.to_toml(), tuple(axes), tuple(tuple(map(float, v)) for v in axes.values()), None, False, ("eq13",))
     total = task.total

@@ -1,8 +1,22 @@
+"""Shared fixtures. Tests live in one folder per room (``analysis/``, ``flight/``, ``allocation/``,
+``control/``, ``studies/``, ``plotting/``, ``cli/``), plus ``papers/`` (every number a paper
+prints) and ``cross/`` (independent checks, properties, bad input, the architecture, the browser,
+the wheel). Helper modules shared by tests (``without_slycot.py``) sit here, in ``tests/``, which
+is put on ``sys.path`` so any test folder can import them."""
+
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import pytest
 
 import rotorfault as rf
+
+#: ``tests/``: helper modules shared by the test folders are imported from here.
+TESTS = Path(__file__).resolve().parent
+if str(TESTS) not in sys.path:
+    sys.path.insert(0, str(TESTS))
 
 
 @pytest.fixture(scope="session")

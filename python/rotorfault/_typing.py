@@ -11,7 +11,7 @@ from typing import Literal, Protocol, TypeAlias
 from . import _rfcore
 
 #: How an ACAI reads when the hover wrench lies outside the attainable set (Du eq. (13) or the
-#: facet margin; see :mod:`rotorfault.controllability`).
+#: facet margin; see :mod:`rotorfault.analysis.acai`).
 AcaiFormula: TypeAlias = Literal["eq13", "facet-margin"]
 #: Where the hover wrench lies relative to the attainable set (a verdict every ACAI carries:
 #: with ``formula="eq13"`` an ACAI of 0 can come with ``"outside"``, where hover is infeasible).
@@ -32,18 +32,23 @@ Spin: TypeAlias = Literal["cw", "ccw"]
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
 #: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
 DivergenceKind: TypeAlias = Literal[
-    "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
+    "crashed", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
 ]
-#: A flight's outcome in Ke's scenarios: held, off station, or how it diverged.
-KeOutcome: TypeAlias = Literal[
-    "holds-position", "circling", "off-station",
+#: A flight's outcome (:mod:`rotorfault.flight.outcomes`): held, circling, off station, or how it
+#: diverged.
+FlightOutcome: TypeAlias = Literal[
+    "holds-position", "circling", "off-station", "crashed",
     "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size",
 ]
+#: The old name of :data:`FlightOutcome` (a verdict is a property of a flight, not of Ke's paper).
+KeOutcome: TypeAlias = FlightOutcome
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: Controller of a ``rotorfault simulate`` scenario file.
 ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
 
+# <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
+# (`python -m rotorfault.control.registry` prints this block; tests/control/test_registry.py checks it)
 #: The Rust controller objects the simulator's loop runs (all can run in a batch).
 CoreController: TypeAlias = (
     _rfcore.OpenLoop
@@ -53,8 +58,28 @@ CoreController: TypeAlias = (
     | _rfcore.UniformPassiveFtc
     | _rfcore.LanzonController
     | _rfcore.TrackingFeedback
+    | _rfcore.IndiController
     | _rfcore.RelaxedHoverFeedback
 )
+#: Their names: each class name in kebab case (``rotorfault._rfcore.CONTROLLERS``).
+CoreControllerName: TypeAlias = Literal[
+    "open-loop",
+    "linear-feedback",
+    "lti",
+    "allocated",
+    "uniform-passive-ftc",
+    "lanzon-controller",
+    "tracking-feedback",
+    "indi-controller",
+    "relaxed-hover-feedback",
+]
+# </controller-registry>
+
+
+def core_controller_types() -> tuple[type, ...]:
+    """The Rust controller classes, read from the one registry the bindings expose
+    (``rotorfault._rfcore.CONTROLLERS``): what the batch type check accepts."""
+    return tuple(cls for _, cls in _rfcore.CONTROLLERS)
 
 
 class Controller(Protocol):
@@ -66,13 +91,16 @@ class Controller(Protocol):
 
 
 __all__ = [
+    "core_controller_types",
     "AcaiFormula",
     "ControlAxes",
     "AllocationMethod",
     "AllocationStatus",
     "Controller",
     "CoreController",
+    "CoreControllerName",
     "DivergenceKind",
+    "FlightOutcome",
     "HoverPoint",
     "KeLaw",
     "KeOutcome",

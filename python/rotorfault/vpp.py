@@ -4,6 +4,7 @@ The implementation lives in :mod:`rotorfault.control.vpp` (it designs controller
 the control layer); this module is its public name."""
 
 from .control.vpp import (
+    DEFAULT_DT_S,
     ROUNDOFF_RTOL,
     STATE_NAMES,
     STATE_SCALE,
@@ -24,6 +25,7 @@ from .control.vpp import (
 )
 
 __all__ = [
+    "DEFAULT_DT_S",
     "ROUNDOFF_RTOL",
     "STATE_NAMES",
     "STATE_SCALE",

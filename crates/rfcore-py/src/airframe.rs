@@ -165,8 +165,8 @@ impl PyAirframe {
         self.inner.is_planar()
     }
     #[getter]
-    fn is_fully_actuated(&self) -> bool {
-        rfcore::analysis::is_fully_actuated(&self.inner)
+    fn is_fully_actuated(&self) -> PyResult<bool> {
+        rfcore::analysis::is_fully_actuated(&self.inner).map_err(to_py_err)
     }
 
     #[getter]

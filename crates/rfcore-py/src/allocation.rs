@@ -417,11 +417,11 @@ pub fn allocate<'py>(
     let results = match method {
         Method::ActiveSet(_) => {
             let solver = &problem.solver;
-            detached(py, || allocate_all(solver, flat))?
+            detached(py, |cancel| allocate_all(solver, flat, cancel))?
         }
         _ => {
             let inner = &problem.inner;
-            detached(py, || allocate_many(inner, &method, flat))?
+            detached(py, |cancel| allocate_many(inner, &method, flat, cancel))?
         }
     };
     let fallbacks = match method {
@@ -449,7 +449,9 @@ pub fn time_allocations<'py>(
     let method = method(problem, method_name, None)?;
     let flat = slice2("virtual_control", &controls)?;
     let problem = &problem.inner;
-    let times = detached(py, || rfcore::fixtures::time_each(problem, &method, flat, repeats))?;
+    let times = detached(py, |cancel| {
+        rfcore::fixtures::time_each(problem, &method, flat, repeats, cancel)
+    })?;
     Ok(times.into_pyarray(py))
 }
 
@@ -493,7 +495,8 @@ pub fn max_along_direction<'py>(
     let m = matrix("matrix", &matrix_)?;
     let (lo, hi) = (slice1("lower", &lower)?, slice1("upper", &upper)?);
     let (d, b) = (slice1("direction", &direction)?, slice1("base", &base)?);
-    let limit = detached(py, || core_max_along(&m, lo, hi, d, b, &settings))?;
+    // One Clarabel solve, bounded by its iteration cap: nothing to cancel.
+    let limit = detached(py, |_| core_max_along(&m, lo, hi, d, b, &settings))?;
     Ok(limit.map(|l| PyDirectionalLimit {
         scale: l.scale,
         commands: l.commands,
@@ -514,7 +517,7 @@ pub fn hover_thrust_margin<'py>(
         .map_err(to_py_err)?;
     let axes = ControlAxes::parse("axes", axes).map_err(to_py_err)?;
     let airframe = &airframe.inner;
-    let h = detached(py, || core_hover_margin(airframe, axes, &settings))?;
+    let h = detached(py, |_| core_hover_margin(airframe, axes, &settings))?;
     Ok(PyHoverMargin {
         max_thrust_n: h.max_thrust_n,
         weight_n: h.weight_n,

@@ -8,16 +8,26 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use rfcore::analysis::{
-    acai_from_matrix_with_hover, failure_table as core_failure_table, AcaiBatch, AcaiFormula,
+    acai_from_matrix_cancellable, failure_table as core_failure_table, AcaiBatch, AcaiFormula,
     AcaiResult, ControlAxes, ControllabilityAnalysis, ControllabilityReport,
 };
+
+use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
 use crate::convert::{detached, slice1, slice2, to_py_err};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
-fn analysis(airframe: &PyAirframe, axes: &str) -> rfcore::Result<ControllabilityAnalysis> {
-    ControllabilityAnalysis::new(&airframe.inner, ControlAxes::parse("axes", axes)?)
+fn analysis(
+    airframe: &PyAirframe,
+    axes: &str,
+    cancel: &Cancel,
+) -> rfcore::Result<ControllabilityAnalysis> {
+    ControllabilityAnalysis::new_cancellable(
+        &airframe.inner,
+        ControlAxes::parse("axes", axes)?,
+        cancel,
+    )
 }
 
 /// One controllability report (Du's procedure) as a named result.
@@ -120,8 +130,8 @@ pub(crate) fn acai(
 ) -> PyResult<PyAcaiResult> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let inner = detached(py, || {
-        analysis(airframe, axes)?.acai_with_hover(efficiency, formula)
+    let inner = detached(py, |cancel| {
+        analysis(airframe, axes, cancel)?.acai_with_hover(efficiency, formula)
     })?;
     Ok(PyAcaiResult { inner })
 }
@@ -149,8 +159,8 @@ pub(crate) fn acai_batch_with_hover(
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     check_columns(airframe, &efficiencies)?;
     let flat = slice2("efficiencies", &efficiencies)?;
-    let inner = detached(py, || {
-        analysis(airframe, axes)?.acai_batch_with_hover(flat, formula)
+    let inner = detached(py, |cancel| {
+        analysis(airframe, axes, cancel)?.acai_batch_with_hover(flat, formula, cancel)
     })?;
     Ok(PyAcaiBatch { inner })
 }
@@ -167,7 +177,9 @@ pub(crate) fn acai_batch<'py>(
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     check_columns(airframe, &efficiencies)?;
     let flat = slice2("efficiencies", &efficiencies)?;
-    let values = detached(py, || analysis(airframe, axes)?.acai_batch(flat, formula))?;
+    let values = detached(py, |cancel| {
+        analysis(airframe, axes, cancel)?.acai_batch(flat, formula, cancel)
+    })?;
     Ok(values.into_pyarray(py))
 }
 
@@ -190,9 +202,9 @@ pub(crate) fn acai_from_matrix(
         slice1("f_max", &f_max)?,
         slice1("g_vec", &g_vec)?,
     );
-    let inner = detached(py, || {
+    let inner = detached(py, |cancel| {
         let b = nalgebra::DMatrix::from_row_slice(rows, cols, flat);
-        acai_from_matrix_with_hover(&b, f_min, f_max, g_vec, formula)
+        acai_from_matrix_cancellable(&b, f_min, f_max, g_vec, formula, cancel)
     })?;
     Ok(PyAcaiResult { inner })
 }
@@ -208,11 +220,14 @@ pub(crate) fn controllability<'py>(
 ) -> PyResult<PyControllabilityReport> {
     let efficiency = slice1("efficiency", &efficiency)?;
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let result = detached(py, || analysis(airframe, axes)?.report(efficiency, formula))?;
+    let result = detached(py, |cancel| {
+        analysis(airframe, axes, cancel)?.report(efficiency, formula)
+    })?;
     Ok(report(result))
 }
 
-/// One failure-table row: failed rotors (0-based), report with yaw, report without yaw.
+/// One failure-table row: failed rotors (indices from 0; Python numbers them from 1), the report
+/// with all axes, the report giving up yaw, the full-wrench report.
 type FailureRow = (
     Vec<usize>,
     PyControllabilityReport,
@@ -229,16 +244,16 @@ pub(crate) fn failure_table<'py>(
     formula: &str,
 ) -> PyResult<Vec<FailureRow>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
-    let cases = detached(py, || {
-        core_failure_table(&airframe.inner, max_failed, formula)
+    let cases = detached(py, |cancel| {
+        core_failure_table(&airframe.inner, max_failed, formula, cancel)
     })?;
     Ok(cases
         .into_iter()
         .map(|case| {
             (
                 case.failed,
-                report(case.with_yaw),
-                report(case.without_yaw),
+                report(case.all_axes),
+                report(case.give_up_yaw),
                 case.wrench.map(report),
             )
         })
@@ -250,10 +265,10 @@ pub(crate) fn failure_table<'py>(
 /// largest counted. For a controllability matrix with speeds of 1e4 and pitches of 0.1 side by
 /// side, where a plain SVD threshold reads the small units as zeros.
 #[pyfunction]
-pub(crate) fn scale_free_rank(matrix: PyReadonlyArray2<'_, f64>) -> PyResult<usize> {
+pub(crate) fn scale_free_rank(py: Python<'_>, matrix: PyReadonlyArray2<'_, f64>) -> PyResult<usize> {
     let m = crate::convert::matrix("matrix", &matrix)?;
     if m.iter().any(|v| !v.is_finite()) {
         return Err(PyValueError::new_err("matrix: must be finite"));
     }
-    Ok(rfcore::analysis::acai::scale_free_rank(&m))
+    detached(py, |_| rfcore::analysis::scale_free_rank(&m, "matrix"))
 }

@@ -1,25 +1,123 @@
-//! The one conversion layer between Python and the core: core errors to `ValueError`, the GIL
-//! helper every heavy call uses, and array views. Every bindings file uses these; none defines
+//! The one conversion layer between Python and the core: core errors to `ValueError` (and a
+//! cancelled call to `KeyboardInterrupt`), the GIL helper every heavy call uses (which also
+//! watches for Ctrl-C), and array views. Every bindings file uses these; none defines
 //! its own.
+
+use std::sync::mpsc::{channel, RecvTimeoutError};
+use std::sync::OnceLock;
+use std::time::Duration;
 
 use nalgebra::DMatrix;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
-use rfcore::RfError;
+use rfcore::{Cancel, RfError};
 
 pub(crate) fn to_py_err(error: RfError) -> PyErr {
-    PyValueError::new_err(error.to_string())
+    match error {
+        // Only a Ctrl-C cancels (`detached`), so the core's "interrupted" is Python's.
+        RfError::Interrupted => PyKeyboardInterrupt::new_err(error.to_string()),
+        _ => PyValueError::new_err(error.to_string()),
+    }
 }
 
-/// Runs `work` with the GIL released and converts core errors: the one helper every heavy call uses.
+/// How often the calling thread looks for Ctrl-C while a heavy call runs. With the core's checks
+/// (about every millisecond of work, `rfcore::cancel`) a call stops within about this long.
+pub(crate) const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Stack of rayon's worker threads, where heavy calls run (a Python callable controller too):
+/// the main thread's usual 8 MiB rather than Rust's 2 MiB.
+const WORKER_STACK_BYTES: usize = 8 << 20;
+
+/// Python's main thread (`threading.main_thread().ident`), recorded when the module loads: the
+/// only thread Python delivers Ctrl-C to.
+static MAIN_THREAD: OnceLock<u64> = OnceLock::new();
+
+/// The process the module loaded in: a `fork()`ed child inherits no rayon threads, so work is
+/// never handed to the pool there (the hand-over would wait forever).
+static LOADED_IN: OnceLock<u32> = OnceLock::new();
+
+/// Records Python's main thread and gives rayon's global pool (unless something built it first)
+/// the stack a Python callback may need: called once, when the module loads.
+pub(crate) fn prepare_threads(py: Python<'_>) -> PyResult<()> {
+    let _ = rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK_BYTES)
+        .build_global();
+    let ident: u64 = py
+        .import("threading")?
+        .call_method0("main_thread")?
+        .getattr("ident")?
+        .extract()?;
+    let _ = MAIN_THREAD.set(ident);
+    let _ = LOADED_IN.set(std::process::id());
+    Ok(())
+}
+
+/// Python's main thread, in the process the module loaded in: the one place a signal can arrive
+/// and the pool is alive.
+fn watchable() -> bool {
+    // SAFETY: reads the calling thread's identifier; needs no interpreter state.
+    let current = unsafe { pyo3::ffi::PyThread_get_thread_ident() } as u64;
+    MAIN_THREAD.get().is_some_and(|&main| main == current)
+        && LOADED_IN.get() == Some(&std::process::id())
+}
+
+/// Runs `work` with the GIL released and converts core errors: the one helper every heavy call
+/// uses. On Python's main thread the work runs on rayon's pool while this thread looks for
+/// Ctrl-C every [`SIGNAL_POLL`] (re-attaching briefly: `PyErr_CheckSignals` acts only there); on
+/// a signal it cancels the work's [`Cancel`] token, waits for the work to stop (the core checks
+/// the token in its loops, rayon batches included) and returns the `KeyboardInterrupt`, whatever
+/// the work returned. Handing the work over costs about 10 us. On any other thread (Dask
+/// workers, a controller callback) no signal can arrive, so the work runs right here, as it does
+/// in a `fork()`ed child (whose rayon pool has no threads).
 pub(crate) fn detached<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send,
-    F: FnOnce() -> rfcore::Result<T> + Send,
+    F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
 {
-    py.detach(work).map_err(to_py_err)
+    let cancel = Cancel::new();
+    if !watchable() {
+        return py.detach(|| work(&cancel)).map_err(to_py_err);
+    }
+    let (result, interrupt) = py.detach(|| watched(work, &cancel));
+    match interrupt {
+        Some(err) => Err(err),
+        None => result.map_err(to_py_err),
+    }
+}
+
+/// `work` on rayon's pool while this thread polls for signals (see [`detached`]); returns the
+/// work's result and the signal's exception, if one came. A panic in the work is re-raised here
+/// when the scope ends (pyo3 turns it into `PanicException`).
+fn watched<T, F>(work: F, cancel: &Cancel) -> (rfcore::Result<T>, Option<PyErr>)
+where
+    T: Send,
+    F: FnOnce(&Cancel) -> rfcore::Result<T> + Send,
+{
+    let (done, finished) = channel();
+    rayon::in_place_scope(|scope| {
+        scope.spawn(move |_| {
+            let _ = done.send(work(cancel));
+        });
+        let mut interrupt = None;
+        loop {
+            match finished.recv_timeout(SIGNAL_POLL) {
+                Ok(result) => return (result, interrupt),
+                Err(RecvTimeoutError::Timeout) => {
+                    if interrupt.is_none() {
+                        if let Err(err) = Python::attach(|py| py.check_signals()) {
+                            cancel.cancel();
+                            interrupt = Some(err);
+                        }
+                    }
+                }
+                // The work panicked (its sender dropped): the scope re-raises the panic.
+                Err(RecvTimeoutError::Disconnected) => return (Err(RfError::Interrupted), interrupt),
+            }
+        }
+    })
 }
 
 /// Borrows a contiguous 1-D array as a slice, naming the field if it is not contiguous.
@@ -49,4 +147,87 @@ pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult
         return Err(PyValueError::new_err(format!("{field}: malformed array")));
     }
     Ok(DMatrix::from_row_slice(rows, cols, &flat))
+}
+
+// -- settings classes: one protocol for the named settings Python uses directly ----------------
+
+/// A real number for field `field`, by Python's rule (`numbers.Real`, not a bool): anything else
+/// is a `TypeError` naming the field; the value rules are the core's `check`s.
+pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
+    use pyo3::types::PyBool;
+    let real_type = value.py().import("numbers")?.getattr("Real")?;
+    if value.is_instance_of::<PyBool>() || !value.is_instance(&real_type)? {
+        return Err(PyTypeError::new_err(format!(
+            "{field}: expected a real number, got {}",
+            value.get_type().name()?
+        )));
+    }
+    value.extract::<f64>().map_err(|_| {
+        PyValueError::new_err(format!("{field}: must be finite, got a number too large for a float"))
+    })
+}
+
+/// The field values of a settings object, by name.
+fn field_values<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    fields.iter().map(|f| obj.getattr(*f)).collect()
+}
+
+/// `Name(field=value, ...)`, as a dataclass prints.
+pub(crate) fn settings_repr(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<String> {
+    let parts: PyResult<Vec<String>> = fields
+        .iter()
+        .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))
+        .collect();
+    Ok(format!("{}({})", obj.get_type().name()?, parts?.join(", ")))
+}
+
+/// Equal type and equal fields (NaN fields compare unequal, as floats do).
+pub(crate) fn settings_eq(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<bool> {
+    if !b.get_type().is(&a.get_type()) {
+        return Ok(false);
+    }
+    for f in fields {
+        if !a.getattr(*f)?.eq(b.getattr(*f)?)? {
+            return Ok(false);
+        }
+    }
+    Ok(true)
+}
+
+/// The hash of the field values (equal settings hash equal; frozen, so usable as keys).
+pub(crate) fn settings_hash(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<isize> {
+    PyTuple::new(obj.py(), field_values(obj, fields)?)?.hash()
+}
+
+/// Every field as a keyword argument (the constructor takes them back: copies and pickling).
+pub(crate) fn settings_kwargs<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Bound<'py, PyDict>> {
+    let kwargs = PyDict::new(obj.py());
+    for f in fields {
+        kwargs.set_item(*f, obj.getattr(*f)?)?;
+    }
+    Ok(kwargs)
+}
+
+/// A copy with some fields changed, validated as a new object is (an unknown field is a
+/// `TypeError` naming it and the fields).
+pub(crate) fn settings_replace<'py>(
+    obj: &Bound<'py, PyAny>,
+    fields: &[&str],
+    changes: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let kwargs = settings_kwargs(obj, fields)?;
+    if let Some(changes) = changes {
+        for (key, value) in changes.iter() {
+            let name: String = key.extract()?;
+            if !fields.contains(&name.as_str()) {
+                return Err(PyTypeError::new_err(format!(
+                    "{name}: not a field of {} (fields: {})",
+                    obj.get_type().name()?,
+                    fields.join(", ")
+                )));
+            }
+            kwargs.set_item(name, value)?;
+        }
+    }
+    obj.get_type().call((), Some(&kwargs)).map(|o| o.into_any())
 }

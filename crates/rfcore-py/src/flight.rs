@@ -5,13 +5,14 @@ use nalgebra::Vector3;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use rfcore::flight::actuator::{
     Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags, VariablePitchPreset,
 };
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
-    simulate as core_simulate, simulate_batch as core_batch, BatchRun, DivergenceLimits,
+    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
@@ -19,7 +20,9 @@ use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
-use crate::convert::{detached, slice1, to_py_err};
+use crate::convert::{
+    detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
+};
 
 /// Fixed-pitch rotors: first-order lag, rate limit, thrust coefficient for rotor speed.
 #[pyclass(name = "FixedPitchActuator", module = "rotorfault._rfcore", frozen)]
@@ -202,95 +205,97 @@ pub(crate) fn build_actuators(
     })
 }
 
-/// Drag and rotor inertia (`rotorfault.Drag`); defaults and rules are the core's.
-#[pyclass(name = "Drag", module = "rotorfault._rfcore", frozen)]
-#[derive(Clone)]
-pub struct PyDrag {
-    pub(crate) inner: Drag,
-}
-
-#[pymethods]
-impl PyDrag {
-    #[new]
-    #[pyo3(signature = (*, linear_n_s_m=None, quadratic_n_s2_m2=None, rotational_n_m_s=None, rotor_inertia_kg_m2=None))]
-    fn new(
-        linear_n_s_m: Option<f64>,
-        quadratic_n_s2_m2: Option<f64>,
-        rotational_n_m_s: Option<f64>,
-        rotor_inertia_kg_m2: Option<f64>,
-    ) -> PyResult<Self> {
-        let d = Drag::default();
-        let inner = Drag {
-            linear_drag_n_s_m: linear_n_s_m.unwrap_or(d.linear_drag_n_s_m),
-            quadratic_drag_n_s2_m2: quadratic_n_s2_m2.unwrap_or(d.quadratic_drag_n_s2_m2),
-            rotational_drag_n_m_s: rotational_n_m_s.unwrap_or(d.rotational_drag_n_m_s),
-            rotor_inertia_kg_m2: rotor_inertia_kg_m2.unwrap_or(d.rotor_inertia_kg_m2),
-        };
-        inner.check().map_err(to_py_err)?;
-        Ok(PyDrag { inner })
-    }
-    #[getter]
-    fn linear_n_s_m(&self) -> f64 {
-        self.inner.linear_drag_n_s_m
-    }
-    #[getter]
-    fn quadratic_n_s2_m2(&self) -> f64 {
-        self.inner.quadratic_drag_n_s2_m2
-    }
-    #[getter]
-    fn rotational_n_m_s(&self) -> f64 {
-        self.inner.rotational_drag_n_m_s
-    }
-    #[getter]
-    fn rotor_inertia_kg_m2(&self) -> f64 {
-        self.inner.rotor_inertia_kg_m2
-    }
-}
-
-/// Limits past which a run is declared diverged (`rotorfault.DivergenceLimits`).
-#[pyclass(name = "DivergenceLimits", module = "rotorfault._rfcore", frozen)]
-#[derive(Clone)]
-pub struct PyDivergenceLimits {
-    pub(crate) inner: DivergenceLimits,
-}
-
-#[pymethods]
-impl PyDivergenceLimits {
-    #[new]
-    #[pyo3(signature = (*, max_tilt_rad=None, max_altitude_loss_m=None, max_speed_m_s=None, max_rate_rad_s=None))]
-    fn new(
-        max_tilt_rad: Option<f64>,
-        max_altitude_loss_m: Option<f64>,
-        max_speed_m_s: Option<f64>,
-        max_rate_rad_s: Option<f64>,
-    ) -> Self {
-        let d = DivergenceLimits::default();
-        PyDivergenceLimits {
-            inner: DivergenceLimits {
-                max_tilt_rad: max_tilt_rad.unwrap_or(d.max_tilt_rad),
-                max_altitude_loss_m: max_altitude_loss_m.unwrap_or(d.max_altitude_loss_m),
-                max_speed_m_s: max_speed_m_s.unwrap_or(d.max_speed_m_s),
-                max_rate_rad_s: max_rate_rad_s.unwrap_or(d.max_rate_rad_s),
-            },
+/// One settings class used directly from Python: keyword-only, defaults from the core's
+/// `Default`, types checked here (`<prefix>.<field>: expected a real number`), values once by the
+/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`.
+macro_rules! settings_class {
+    (
+        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, prefix = $prefix:literal, check = $check:expr,
+        { $($field:ident => $core_field:ident),+ $(,)? }
+    ) => {
+        $(#[$doc])*
+        #[pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
+        #[derive(Clone)]
+        pub struct $py {
+            pub(crate) inner: $core,
         }
-    }
-    #[getter]
-    fn max_tilt_rad(&self) -> f64 {
-        self.inner.max_tilt_rad
-    }
-    #[getter]
-    fn max_altitude_loss_m(&self) -> f64 {
-        self.inner.max_altitude_loss_m
-    }
-    #[getter]
-    fn max_speed_m_s(&self) -> f64 {
-        self.inner.max_speed_m_s
-    }
-    #[getter]
-    fn max_rate_rad_s(&self) -> f64 {
-        self.inner.max_rate_rad_s
-    }
+
+        impl $py {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),+];
+        }
+
+        #[pymethods]
+        impl $py {
+            #[new]
+            #[pyo3(signature = (*, $($field=None),+))]
+            fn new($($field: Option<Bound<'_, PyAny>>),+) -> PyResult<Self> {
+                let d = $core::default();
+                let inner = $core {
+                    $($core_field: match $field {
+                        Some(v) => real(concat!($prefix, ".", stringify!($field)), &v)?,
+                        None => d.$core_field,
+                    }),+
+                };
+                let check: fn(&$core) -> rfcore::Result<()> = $check;
+                check(&inner).map_err(to_py_err)?;
+                Ok($py { inner })
+            }
+            $(
+                #[getter]
+                fn $field(&self) -> f64 {
+                    self.inner.$core_field
+                }
+            )+
+            /// The field names, in order.
+            #[classattr]
+            #[pyo3(name = "FIELDS")]
+            fn fields() -> Vec<&'static str> {
+                Self::FIELDS.to_vec()
+            }
+            /// A copy with ``changes`` (validated like a new object).
+            #[pyo3(signature = (**changes))]
+            fn replace<'py>(slf: &Bound<'py, Self>, changes: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
+                settings_replace(slf.as_any(), Self::FIELDS, changes)
+            }
+            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                settings_repr(slf.as_any(), Self::FIELDS)
+            }
+            fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+                settings_eq(slf.as_any(), other, Self::FIELDS)
+            }
+            fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
+                settings_hash(slf.as_any(), Self::FIELDS)
+            }
+            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
+                Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
+            }
+        }
+    };
 }
+
+settings_class!(
+    /// Aerodynamic damping and rotor inertia (`rotorfault.Drag`; the papers give none: all 0 by
+    /// default).
+    PyDrag, "Drag", Drag, prefix = "drag", check = Drag::check,
+    {
+        linear_n_s_m => linear_drag_n_s_m,
+        quadratic_n_s2_m2 => quadratic_drag_n_s2_m2,
+        rotational_n_m_s => rotational_drag_n_m_s,
+        rotor_inertia_kg_m2 => rotor_inertia_kg_m2,
+    }
+);
+
+settings_class!(
+    /// Limits past which a run ends with an event (`rotorfault.DivergenceLimits`; `math.inf`: no
+    /// limit). Their values are checked with the run's settings (`SimulationConfig`).
+    PyDivergenceLimits, "DivergenceLimits", DivergenceLimits, prefix = "limits", check = |_| Ok(()),
+    {
+        max_tilt_rad => max_tilt_rad,
+        max_altitude_loss_m => max_altitude_loss_m,
+        max_speed_m_s => max_speed_m_s,
+        max_rate_rad_s => max_rate_rad_s,
+    }
+);
 
 /// Sensor noise: standard deviation `relative_std |x_i| + absolute_std[i]` on the 12 measured
 /// state components, seeded.
@@ -327,8 +332,9 @@ impl PySensorNoise {
     }
 }
 
-/// Timing, limits, wind, noise and recording of a run; defaults are the core's
-/// (`SimulationConfig::default`), the rules its `check`.
+/// Timing, limits, ground, wind, noise and recording of a run; defaults are the core's
+/// (`SimulationConfig::default`), the rules its `check`. The ground: `ground_z_m` (world NED,
+/// default the core's) unless `ground=False` (no ground).
 #[pyclass(name = "SimulationConfig", module = "rotorfault._rfcore", frozen)]
 pub struct PySimulationConfig {
     pub(crate) inner: SimulationConfig,
@@ -338,23 +344,35 @@ pub struct PySimulationConfig {
 impl PySimulationConfig {
     #[new]
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
+    #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, record_every=None))]
     fn new(
         dt_s: Option<f64>,
         substeps: Option<usize>,
         duration_s: Option<f64>,
         limits: Option<PyRef<'_, PyDivergenceLimits>>,
+        ground_z_m: Option<f64>,
+        ground: Option<bool>,
         wind_m_s: Option<[f64; 3]>,
         wind_profile: Option<Vec<(f64, [f64; 3])>>,
         noise: Option<PyRef<'_, PySensorNoise>>,
         record_every: Option<usize>,
     ) -> PyResult<Self> {
         let d = SimulationConfig::default();
+        let ground_z_m = match (ground.unwrap_or(true), ground_z_m) {
+            (true, z) => z.or(d.ground_z_m),
+            (false, None) => None,
+            (false, Some(z)) => {
+                return Err(PyValueError::new_err(format!(
+                "ground_z_m, ground: a ground height ({z} m) with ground=False; give one of them"
+            )))
+            }
+        };
         let inner = SimulationConfig {
             dt_s: dt_s.unwrap_or(d.dt_s),
             substeps: substeps.unwrap_or(d.substeps),
             duration_s: duration_s.unwrap_or(d.duration_s),
             limits: limits.map_or(d.limits, |l| l.inner),
+            ground_z_m,
             wind_m_s: wind_m_s.map_or(d.wind_m_s, Vector3::from),
             wind_profile: wind_profile.map_or(d.wind_profile, |points| {
                 points
@@ -390,6 +408,11 @@ impl PySimulationConfig {
             inner: self.inner.limits,
         }
     }
+    /// The ground plane's world NED z, m (`None`: no ground).
+    #[getter]
+    fn ground_z_m(&self) -> Option<f64> {
+        self.inner.ground_z_m
+    }
     #[getter]
     fn wind_m_s(&self) -> [f64; 3] {
         self.inner.wind_m_s.into()
@@ -410,13 +433,17 @@ fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {
         .collect()
 }
 
-/// Why and when a run ended early, with the 12-element state vector at that moment.
+/// Why and when a run ended early, with the 12-element state vector at that moment; for a
+/// `crashed` run, the impact (speed, speed into the ground, tilt), else `None`.
 #[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen, get_all)]
 pub struct PyDivergence {
     time_s: f64,
     reason: &'static str,
     description: &'static str,
     state: [f64; STATE_DIM],
+    impact_speed_m_s: Option<f64>,
+    impact_vertical_speed_m_s: Option<f64>,
+    impact_tilt_rad: Option<f64>,
 }
 
 /// A recorded run: one row per recorded control step; arrays are built on access.
@@ -493,11 +520,17 @@ impl PyTrajectory {
     }
     #[getter]
     fn divergence(&self) -> Option<PyDivergence> {
-        self.run.divergence.map(|d| PyDivergence {
-            time_s: d.time_s,
-            reason: d.reason.name(),
-            description: d.reason.describe(),
-            state: state_vector(&d.state),
+        self.run.divergence.map(|d| {
+            let impact = d.impact();
+            PyDivergence {
+                time_s: d.time_s,
+                reason: d.reason.name(),
+                description: d.reason.describe(),
+                state: state_vector(&d.state),
+                impact_speed_m_s: impact.map(|i| i.speed_m_s),
+                impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
+                impact_tilt_rad: impact.map(|i| i.tilt_rad),
+            }
         })
     }
 }
@@ -548,16 +581,23 @@ pub fn simulate<'py>(
                 count,
                 error: None,
             };
-            let result = detached(py, || {
-                core_simulate(
-                    &vehicle,
-                    actuators,
-                    &mut callable,
-                    &efficiency,
-                    &faults,
-                    x0,
-                    config,
-                )
+            let result = detached(py, |cancel| {
+                // One Python thread state for the whole run (kept while detached), so the
+                // callback at every step does not create one each time.
+                Python::attach(|py| {
+                    py.detach(|| {
+                        core_simulate(
+                            &vehicle,
+                            actuators,
+                            &mut callable,
+                            &efficiency,
+                            &faults,
+                            x0,
+                            config,
+                            cancel,
+                        )
+                    })
+                })
             });
             if let Some(err) = callable.error.take() {
                 return Err(err);
@@ -576,7 +616,7 @@ pub fn simulate<'py>(
                 })
                 .transpose()?;
             let mut boxed = boxed(spec.as_ref(), count)?;
-            detached(py, || {
+            detached(py, |cancel| {
                 core_simulate(
                     &vehicle,
                     actuators,
@@ -585,6 +625,7 @@ pub fn simulate<'py>(
                     &faults,
                     x0,
                     config,
+                    cancel,
                 )
             })?
         }
@@ -632,8 +673,8 @@ pub fn simulate_batch<'py>(
             })
         })
         .collect::<PyResult<_>>()?;
-    let results = detached(py, || {
-        core_batch(&vehicle, &actuators, &efficiency, runs, config)
+    let results = detached(py, |cancel| {
+        core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
     Ok(results
         .into_iter()

@@ -1,8 +1,9 @@
 //! Python bindings for rfcore (module `rotorfault._rfcore`): translation only, one file per core
 //! room (`analysis`, `allocation`, `control`, `flight`, plus `airframe`) and one `convert` for
 //! the helpers they share. Arrays come in as read-only numpy views, heavy calls run with the GIL
-//! released (`convert::detached`), and every core error becomes a `ValueError` carrying the core's
-//! message, which names the field and the rule.
+//! released (`convert::detached`, which also turns Ctrl-C into a cancelled call and a
+//! `KeyboardInterrupt`), and every core error becomes a `ValueError` carrying the core's message,
+//! which names the field and the rule.
 
 mod airframe;
 mod allocation;
@@ -16,6 +17,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    convert::prepare_threads(module.py())?;
     module.add_class::<airframe::PyAirframe>()?;
     module.add_class::<analysis::PyControllabilityReport>()?;
     module.add_class::<analysis::PyAcaiResult>()?;
@@ -34,19 +36,21 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;
     module.add_class::<flight::PyVariablePitchPreset>()?;
-    module.add_class::<control::linear::PyOpenLoop>()?;
-    module.add_class::<control::linear::PyLinearFeedback>()?;
-    module.add_class::<control::linear::PyLti>()?;
-    module.add_class::<control::tracking::PyTrackingFeedback>()?;
     module.add_class::<allocation::PyAllocationProblem>()?;
     module.add_class::<allocation::PyAllocationSettings>()?;
     module.add_class::<allocation::PyCertificate>()?;
     module.add_class::<allocation::PySingleAllocation>()?;
-    module.add_class::<control::PyAllocated>()?;
-    module.add_class::<control::ke::PyUniformPassiveFtc>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
-    module.add_class::<control::lanzon::PyLanzonController>()?;
+    module.add_class::<control::indi::PyIndiGains>()?;
+    module.add_class::<control::indi::PyIndiFailureMode>()?;
+    // The Rust controllers, declared once in `control::controller_registry!`: each class, and
+    // `CONTROLLERS`, the `(name, class)` pairs Python derives its lists from.
+    let controllers = control::registry(module.py());
+    for (_, class) in &controllers {
+        module.add(class.name()?, class)?;
+    }
+    module.add("CONTROLLERS", pyo3::types::PyTuple::new(module.py(), controllers)?)?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::scale_free_rank, module)?)?;
@@ -71,7 +75,6 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover_residual, module)?)?;
     module.add_class::<control::relaxed_hover::PyRelaxedHoverOuterLoop>()?;
-    module.add_class::<control::relaxed_hover::PyRelaxedHoverFeedback>()?;
     module.add("RANK_RTOL", rfcore::analysis::RANK_RTOL)?;
     module.add("ZERO_RTOL", rfcore::analysis::ZERO_RTOL)?;
     module.add("DEFAULT_GRAVITY_M_S2", rfcore::DEFAULT_GRAVITY_M_S2)?;

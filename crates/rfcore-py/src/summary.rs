@@ -177,6 +177,6 @@ pub fn simulate_summaries<'py>(
         });
     }
     let criteria = criteria.inner;
-    let runs = detached(py, || core_summaries(runs, &criteria))?;
+    let runs = detached(py, |cancel| core_summaries(runs, &criteria, cancel))?;
     Ok(PySummaryBatch { runs })
 }

@@ -22,7 +22,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rfcore::analysis::{AcaiFormula, ControlAxes, ControllabilityAnalysis, FacetNormals};
-use rfcore::Airframe;
+use rfcore::{Airframe, Cancel};
 
 /// Du's Fig. 4 grid: eta1, eta2, eta5 (1-based) in {0, 0.04, ..., 1}, the other rotors at 1.
 /// Row-major, 6 per row, 26^3 rows.
@@ -55,7 +55,9 @@ fn bench_acai(c: &mut Criterion) {
     let grid = fig4_grid();
     let rows = grid.len() / 6;
     assert_eq!(rows, 17_576);
-    let values = hexa_analysis.acai_batch(&grid, AcaiFormula::Eq13).unwrap();
+    let values = hexa_analysis
+        .acai_batch(&grid, AcaiFormula::Eq13, &Cancel::never())
+        .unwrap();
     assert_eq!(values.len(), rows);
 
     let mut group = c.benchmark_group("acai");
@@ -115,10 +117,11 @@ fn bench_acai(c: &mut Criterion) {
 
     // (c) The Fig. 4 grid in one parallel batch (the analysis is built outside the loop).
     group.throughput(Throughput::Elements(rows as u64));
+    let never = Cancel::never();
     group.bench_function("batch/fig4-grid", |b| {
         b.iter(|| {
             hexa_analysis
-                .acai_batch(black_box(&grid), black_box(AcaiFormula::Eq13))
+                .acai_batch(black_box(&grid), black_box(AcaiFormula::Eq13), &never)
                 .unwrap()
         })
     });

@@ -27,12 +27,13 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use nalgebra::DMatrix;
-use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
-use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
+use rfcore::allocation::allocate_clarabel;
+use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{AllocationProblem, Method, SolvedBy};
 use rfcore::fixtures::time_each;
-use rfcore::Airframe;
+use rfcore::fixtures::Rng;
+use rfcore::{Airframe, Cancel};
 
 const PROBLEMS: usize = 256;
 
@@ -104,7 +105,6 @@ fn bench_allocation(c: &mut Criterion) {
     }
     group.finish();
 }
-
 
 const RANDOM_PROBLEMS: usize = 500;
 
@@ -195,11 +195,13 @@ fn report_targets(_: &mut Criterion) {
                 &Method::ActiveSet(Default::default()),
                 &controls,
                 200,
+                &Cancel::never(),
             )
             .unwrap(),
         );
         let clarabel = Method::Clarabel(ClarabelSettings::default());
-        let theirs = median_p90(time_each(&problem, &clarabel, &controls, 5).unwrap());
+        let theirs =
+            median_p90(time_each(&problem, &clarabel, &controls, 5, &Cancel::never()).unwrap());
         println!(
             "{name:<12} {m:>2} {:>8.0} / {:>6.0} ns {:>9.1} / {:>6.1} us {:>7.0}x {:>8.0}% {:>9} {:>6.2}",
             ours.0 * 1e9,
@@ -227,7 +229,16 @@ fn report_targets(_: &mut Criterion) {
         let mut active = ActiveSet::cold(p.actuator_count());
         let report = solver.solve_unchecked(u, &mut active, &mut commands);
         fallbacks += usize::from(report.solved_by == SolvedBy::Clarabel);
-        times.push(time_each(p, &Method::ActiveSet(Default::default()), u, 50).unwrap()[0]);
+        times.push(
+            time_each(
+                p,
+                &Method::ActiveSet(Default::default()),
+                u,
+                50,
+                &Cancel::never(),
+            )
+            .unwrap()[0],
+        );
     }
     let (median, p90) = median_p90(times);
     println!(

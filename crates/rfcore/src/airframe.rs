@@ -13,7 +13,10 @@
 use nalgebra::DMatrix;
 use serde::Deserialize;
 
-use crate::error::{require_finite, require_len, Result, RfError};
+use crate::error::{
+    require_finite, require_len, require_normal, require_scale, require_scale_or_zero, Result,
+    RfError,
+};
 
 /// Standard gravity used when an airframe does not give its own (m/s^2).
 pub const DEFAULT_GRAVITY_M_S2: f64 = 9.81;
@@ -172,21 +175,12 @@ impl Airframe {
             validate_rotor(rotor, i)?;
         }
         check_coincident(&rotors)?;
-        require_finite("mass_kg", mass_kg)?;
-        if mass_kg <= 0.0 {
-            return Err(RfError::invalid(
-                "mass_kg",
-                format!("must be > 0, got {mass_kg}"),
-            ));
-        }
+        // Both are divided by (the rigid body, the hover model's J_f): see `crate::error`.
+        require_scale("mass_kg", mass_kg, "kg")?;
         for (axis, value) in ["Jx", "Jy", "Jz"].iter().zip(inertia_kg_m2) {
-            let field = format!("inertia_kg_m2 ({axis})");
-            require_finite(&field, value)?;
-            if value <= 0.0 {
-                return Err(RfError::invalid(field, format!("must be > 0, got {value}")));
-            }
+            require_scale(&format!("inertia_kg_m2 ({axis})"), value, "kg m^2")?;
         }
-        require_finite("drag_torque_ratio_m", drag_torque_ratio_m)?;
+        require_normal("drag_torque_ratio_m", drag_torque_ratio_m)?;
         if drag_torque_ratio_m < 0.0 {
             return Err(RfError::invalid(
                 "drag_torque_ratio_m",
@@ -195,13 +189,7 @@ impl Airframe {
                 ),
             ));
         }
-        require_finite("gravity_m_s2", gravity_m_s2)?;
-        if gravity_m_s2 < 0.0 {
-            return Err(RfError::invalid(
-                "gravity_m_s2",
-                format!("must be >= 0, got {gravity_m_s2}"),
-            ));
-        }
+        require_scale_or_zero("gravity_m_s2", gravity_m_s2, "m/s^2")?;
         Ok(Airframe {
             name: name.into(),
             description: String::new(),
@@ -238,7 +226,12 @@ impl Airframe {
         }
         require_len("arm_length_m", arm_length_m, m)?;
         require_len("spin", spin_sign, m)?;
-        let per_rotor = PerRotor { spin_sign, max_thrust_n, min_thrust_n, efficiency };
+        let per_rotor = PerRotor {
+            spin_sign,
+            max_thrust_n,
+            min_thrust_n,
+            efficiency,
+        };
         let rotors = per_rotor.rotors(|i| {
             let placement = RotorPlacement::Planar {
                 arm_angle_rad: arm_angle_rad[i],
@@ -291,7 +284,12 @@ impl Airframe {
             require_len("rotor_drag_torque_ratio_m", k, m)?;
         }
         let row = |v: &[f64], i: usize| [v[3 * i], v[3 * i + 1], v[3 * i + 2]];
-        let per_rotor = PerRotor { spin_sign, max_thrust_n, min_thrust_n, efficiency };
+        let per_rotor = PerRotor {
+            spin_sign,
+            max_thrust_n,
+            min_thrust_n,
+            efficiency,
+        };
         let rotors = per_rotor.rotors(|i| {
             let placement = RotorPlacement::General {
                 position_m: row(position_m, i),
@@ -597,7 +595,7 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
         } => {
             require_finite(&rotor_field("arm_angle_rad", i), arm_angle_rad)?;
             let field = rotor_field("arm_length_m", i);
-            require_finite(&field, arm_length_m)?;
+            require_normal(&field, arm_length_m)?;
             if arm_length_m < 0.0 {
                 return Err(RfError::invalid(
                     field,
@@ -609,10 +607,11 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
             position_m,
             thrust_axis,
         } => {
-            for (name, v) in [("position_m", position_m), ("thrust_axis", thrust_axis)] {
-                for (c, &x) in v.iter().enumerate() {
-                    require_finite(&format!("{name}[{i}][{c}] (rotor {})", i + 1), x)?;
-                }
+            for (c, &x) in position_m.iter().enumerate() {
+                require_normal(&format!("position_m[{i}][{c}] (rotor {})", i + 1), x)?;
+            }
+            for (c, &x) in thrust_axis.iter().enumerate() {
+                require_finite(&format!("thrust_axis[{i}][{c}] (rotor {})", i + 1), x)?;
             }
             let norm = thrust_axis.iter().map(|x| x * x).sum::<f64>().sqrt();
             if (norm - 1.0).abs() > THRUST_AXIS_TOLERANCE {
@@ -628,7 +627,7 @@ fn validate_rotor(r: &Rotor, i: usize) -> Result<()> {
     }
     if let Some(k) = r.drag_torque_ratio_m {
         let field = rotor_field("rotor_drag_torque_ratio_m", i);
-        require_finite(&field, k)?;
+        require_normal(&field, k)?;
         if k < 0.0 {
             return Err(RfError::invalid(
                 field,

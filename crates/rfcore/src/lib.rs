@@ -1,7 +1,8 @@
 //! rfcore: the pure-Rust core of rotorfault, in rooms by concept.
 //!
 //! - [`airframe`], [`state`], [`error`]: the shared vocabulary (geometry and thrust limits, the
-//!   vehicle state, errors that name the field and the rule).
+//!   vehicle state, errors that name the field and the rule, the accepted magnitudes).
+//! - [`cancel`]: the token a caller sets to stop a long call (Ctrl-C), polled in every long loop.
 //! - [`analysis`]: controllability and the Available Control Authority Index (Du et al.).
 //! - [`allocation`]: constrained control allocation (Ke eq. (33)): the exact active set, Clarabel
 //!   as the reference, the weighted pseudo-inverse.
@@ -16,6 +17,7 @@
 pub mod airframe;
 pub mod allocation;
 pub mod analysis;
+pub mod cancel;
 pub mod control;
 pub mod error;
 #[doc(hidden)]
@@ -24,4 +26,5 @@ pub mod flight;
 pub mod state;
 
 pub use airframe::{Airframe, Rotor, RotorPlacement, SpinDirection, DEFAULT_GRAVITY_M_S2};
+pub use cancel::Cancel;
 pub use error::{Result, RfError};

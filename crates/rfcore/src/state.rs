@@ -57,6 +57,36 @@ impl RigidBodyState {
     }
 }
 
+/// Everything a controller receives at one control step: the measured state (an estimator's
+/// output, or the truth) and, where the vehicle has them, raw samples that incremental laws such as
+/// INDI need besides the state. The simulator fills the samples only for a controller that asks for
+/// them ([`crate::control::Controller::reads_samples`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControllerInput<'a> {
+    /// The measured state.
+    pub state: &'a RigidBodyState,
+    /// Body rates as the gyroscope samples them, body FRD, rad/s.
+    pub gyro_rad_s: Option<Vector3<f64>>,
+    /// Specific force as the accelerometer samples it (non-gravitational force per unit mass), body
+    /// FRD, m/s^2: about (0, 0, -g) in hover.
+    pub specific_force_m_s2: Option<Vector3<f64>>,
+    /// Thrust each rotor actually produces (one per rotor, N): what rotor-speed telemetry gives
+    /// through the thrust coefficient, after lag, saturation and loss of efficiency.
+    pub rotor_thrust_n: Option<&'a [f64]>,
+}
+
+impl<'a> ControllerInput<'a> {
+    /// The state alone, no raw samples.
+    pub fn state_only(state: &'a RigidBodyState) -> Self {
+        ControllerInput {
+            state,
+            gyro_rad_s: None,
+            specific_force_m_s2: None,
+            rotor_thrust_n: None,
+        }
+    }
+}
+
 impl RigidBodyState {
     /// A state from [`PACKED_DIM`] numbers: position, velocity, quaternion (w, x, y, z), body rates.
     /// A quaternion that is unit to rounding (|q| - 1 <= 1e-12) is used exactly as given, so a

@@ -11,15 +11,15 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 use nalgebra::DMatrix;
-use rfcore::fixtures::Rng;
-use rfcore::analysis::controllability::{controllability_matrix, hover_model, numerical_rank};
+use rfcore::analysis::controllability::{controllability_matrix, hover_model};
+use rfcore::analysis::numerical_rank;
 use rfcore::analysis::{
     acai_from_matrix, acai_from_matrix_with_hover, failure_table, scale_free_rank, AcaiFormula,
     ControlAxes, ControllabilityAnalysis, HoverPoint, Verdict,
 };
+use rfcore::fixtures::Rng;
 use rfcore::fixtures::{preset, preset_text};
-use rfcore::Airframe;
-
+use rfcore::{Airframe, Cancel};
 
 /// The gauge of G about the box centre (see the module docs), or None if Clarabel fails.
 fn lp_gauge(b: &DMatrix<f64>, lo: &[f64], hi: &[f64], g: &[f64]) -> Option<f64> {
@@ -349,8 +349,11 @@ fn controllability_rank_is_unit_free() {
             let (a, b) = hover_model(&airframe, axes);
             let c = controllability_matrix(&a, &b);
             let n = axes.dimension();
-            assert!(numerical_rank(&c) < 2 * n, "the plain SVD rank misreads it");
-            assert_eq!(scale_free_rank(&c), 2 * n, "{inertia}");
+            assert!(
+                numerical_rank(&c).unwrap() < 2 * n,
+                "the plain SVD rank misreads it"
+            );
+            assert_eq!(scale_free_rank(&c, "C").unwrap(), 2 * n, "{inertia}");
             let analysis = ControllabilityAnalysis::new(&airframe, axes).unwrap();
             let report = analysis.report(&[1.0; 4], AcaiFormula::Eq13).unwrap();
             assert_eq!(report.controllability_rank, 2 * n, "{inertia} {axes:?}");
@@ -360,8 +363,8 @@ fn controllability_rank_is_unit_free() {
     // A genuinely deficient matrix stays deficient whatever its scaling.
     let deficient =
         DMatrix::from_row_slice(3, 3, &[1e-12, 2e-12, 0.0, 1e6, 2e6, 0.0, 0.0, 0.0, 3.0]);
-    assert_eq!(scale_free_rank(&deficient), 2);
-    assert_eq!(scale_free_rank(&DMatrix::zeros(2, 3)), 0);
+    assert_eq!(scale_free_rank(&deficient, "m").unwrap(), 2);
+    assert_eq!(scale_free_rank(&DMatrix::zeros(2, 3), "m").unwrap(), 0);
 }
 
 /// Item 2: every ACAI can carry where G lies. Du Table III's 0 for PPNNPN with rotor 5 failed is
@@ -437,8 +440,12 @@ fn batch_with_hover_matches_single_evaluations_and_reports() {
                 })
                 .collect();
             for formula in [AcaiFormula::Eq13, AcaiFormula::FacetMargin] {
-                let batch = analysis.acai_batch_with_hover(&etas, formula).unwrap();
-                let plain = analysis.acai_batch(&etas, formula).unwrap();
+                let batch = analysis
+                    .acai_batch_with_hover(&etas, formula, &Cancel::never())
+                    .unwrap();
+                let plain = analysis
+                    .acai_batch(&etas, formula, &Cancel::never())
+                    .unwrap();
                 assert_eq!(batch.acai.len(), 300);
                 for (i, eta) in etas.chunks(m).enumerate() {
                     let single = analysis.acai_with_hover(eta, formula).unwrap();
@@ -485,8 +492,10 @@ fn failure_tables_flag_every_infeasible_hover() {
     ] {
         let airframe = preset(name);
         let max_failed = 3.min(airframe.rotor_count());
-        for case in failure_table(&airframe, max_failed, AcaiFormula::Eq13).unwrap() {
-            for report in [&case.with_yaw, &case.without_yaw] {
+        for case in
+            failure_table(&airframe, max_failed, AcaiFormula::Eq13, &Cancel::never()).unwrap()
+        {
+            for report in [&case.all_axes, &case.give_up_yaw] {
                 total += 1;
                 if report.hover == HoverPoint::Outside {
                     infeasible += 1;

@@ -2,11 +2,11 @@
 //! warm starts and the unconstrained limits of Ke et al. eqs. (34)/(35).
 
 use nalgebra::DMatrix;
-use rfcore::fixtures::Rng;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
-use rfcore::allocation::clarabel::{allocate_clarabel, ClarabelSettings};
+use rfcore::allocation::allocate_clarabel;
+use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
-
+use rfcore::fixtures::Rng;
 
 struct Case {
     problem: AllocationProblem,
@@ -467,14 +467,13 @@ fn degenerate_bounds_are_not_carried_into_the_next_solve() {
 // ---- Issue #20: allocation that is never silently wrong ----
 
 use rfcore::allocation::active_set::ActiveSetSettings;
-use rfcore::allocation::clarabel::allocate_clarabel_unpolished;
+use rfcore::allocation::allocate_clarabel_unpolished;
 use rfcore::allocation::{allocate_many, fallback_count, Method, SolvedBy};
-use rfcore::Airframe;
+use rfcore::{Airframe, Cancel};
 
 fn preset(name: &str) -> Airframe {
     rfcore::fixtures::preset(name)
 }
-
 
 /// Ours against unpolished Clarabel (tolerance 1e-12): never worse in the objective beyond
 /// `rel` of the objective's scale. Returns the relative excess.
@@ -792,7 +791,13 @@ fn permutation_invariance_and_all_paths_agree() {
         let (n, m) = p.matrix().shape();
         let single = ActiveSetSolver::new(p).allocate(&case.u_c).unwrap();
         // Batch path.
-        let batch = allocate_many(p, &Method::ActiveSet(Default::default()), &case.u_c).unwrap();
+        let batch = allocate_many(
+            p,
+            &Method::ActiveSet(Default::default()),
+            &case.u_c,
+            &Cancel::never(),
+        )
+        .unwrap();
         assert_eq!(
             fallback_count(&batch),
             usize::from(single.solved_by == SolvedBy::Clarabel)

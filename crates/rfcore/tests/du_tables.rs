@@ -2,7 +2,7 @@
 
 use rfcore::analysis::{failure_table, AcaiFormula, ControlAxes, ControllabilityAnalysis, Verdict};
 use rfcore::fixtures::{preset, presets_dir};
-use rfcore::Airframe;
+use rfcore::{Airframe, Cancel};
 
 fn single_failure_acai(name: &str, formula: AcaiFormula) -> (f64, Vec<f64>) {
     let airframe = preset(name);
@@ -60,7 +60,7 @@ fn facet_margin_agrees_inside_and_sees_the_gap_outside() {
         assert!((failed[k] - [0.7221, 0.4510, 0.4510, 0.7221][k]).abs() < TABLE_TOL);
     }
     // Rotor 5 or 6 failed: G violates a facet inequality by 0.2133 (confirmed by an LP and a
-    // convex hull in tests/test_du_paper.py).
+    // convex hull in tests/papers/test_du_paper.py).
     assert!((failed[4] + 0.2133).abs() < TABLE_TOL, "{}", failed[4]);
     assert!((failed[5] + 0.2133).abs() < TABLE_TOL, "{}", failed[5]);
     // PNPNPN single failures really are on the boundary.
@@ -97,13 +97,13 @@ fn procedure_reports_ranks_and_verdicts() {
 #[test]
 fn failure_table_counts_and_matches_single_evaluations() {
     let airframe = preset("hexa-ppnnpn");
-    let table = failure_table(&airframe, 2, AcaiFormula::Eq13).unwrap();
+    let table = failure_table(&airframe, 2, AcaiFormula::Eq13, &Cancel::never()).unwrap();
     assert_eq!(table.len(), 1 + 6 + 15);
     assert!(table[0].failed.is_empty());
     assert_eq!(table[1].failed, vec![0]);
-    assert!((table[1].with_yaw.acai - 0.7221).abs() < TABLE_TOL);
+    assert!((table[1].all_axes.acai - 0.7221).abs() < TABLE_TOL);
     assert_eq!(table[7].failed, vec![0, 1]);
-    assert!(failure_table(&airframe, 7, AcaiFormula::Eq13).is_err());
+    assert!(failure_table(&airframe, 7, AcaiFormula::Eq13, &Cancel::never()).is_err());
 }
 
 #[test]

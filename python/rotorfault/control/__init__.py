@@ -7,16 +7,28 @@
   constrained allocation);
 - :mod:`~rotorfault.control.ke`: Ke et al.'s :class:`UniformPassiveFtc`, its gains and presets,
   and the N-matrix stability analysis;
+- :mod:`~rotorfault.control.indi`: :class:`IndiController` (incremental nonlinear dynamic
+  inversion fault-tolerant control after Sun et al.) and its :class:`IndiGains`;
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
-- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR design;
-- :mod:`~rotorfault.control.relaxed_hover`: :class:`RelaxedHoverLqr` (an LQR about a relaxed hover);
+- :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR hover controllers;
+- :mod:`~rotorfault.control.relaxed_hover`: :class:`RelaxedHoverFeedback` (an LQR about a relaxed
+  hover, Mueller and D'Andrea) and :func:`periodic_state` (where its periodic solution passes);
+- :mod:`~rotorfault.control.riccati`: :func:`design_lqr`, the one LQR (continuous and discrete
+  Riccati equations, scipy's solvers on every install) and its checked :class:`LqrDesign`;
+- :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
+  input moves (:func:`stabilisability`, :func:`detectability`);
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
   and the loop-shape weight.
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
-is the slow path.
+is the slow path. The Rust controllers are declared once, in the bindings, and listed by
+:mod:`~rotorfault.control.registry` (``docs/adding-a-controller.md``).
+
+May import: ``rotorfault.flight`` (a design linearises the simulator's model),
+``rotorfault.allocation``, ``rotorfault.analysis``, ``rotorfault._typing``, ``rotorfault._util``
+and, on first use, ``rotorfault.plotting``; never ``studies``, ``papers`` or ``cli``.
 """
 
 from __future__ import annotations
@@ -25,22 +37,27 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from .._typing import Controller
-from . import ke, lqr
+from . import indi, ke, lqr
 from .allocated import Allocated
+from .indi import IndiController, IndiGains
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
-from .relaxed_hover import RelaxedHoverLqr
+from .relaxed_hover import RelaxedHoverFeedback, RelaxedHoverOuterLoop, periodic_state
+from .riccati import LqrDesign, design_lqr
+from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, robust
+    from . import lanzon, registry, robust
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
-#: ``import rotorfault`` stays light (tests/test_architecture.py).
+#: ``import rotorfault`` stays light (tests/cross/test_architecture.py); and the registry, so that
+#: ``python -m rotorfault.control.registry`` runs it fresh.
 _LAZY = {
+    "registry": ("registry", None),
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
     "LanzonController": ("lanzon", "LanzonController"),
@@ -62,16 +79,24 @@ __all__ = [
     "Allocated",
     "Controller",
     "HoverTrim",
+    "IndiController",
+    "IndiGains",
     "KeGains",
     "LanzonController",
     "LinearFeedback",
+    "LqrDesign",
     "NcfsynResult",
     "Lti",
     "OpenLoop",
-    "RelaxedHoverLqr",
+    "PbhTest",
+    "RelaxedHoverFeedback",
+    "RelaxedHoverOuterLoop",
     "TrackingFeedback",
     "UniformPassiveFtc",
+    "design_lqr",
+    "detectability",
     "hover_trim",
+    "indi",
     "ke",
     "lanzon",
     "linearize",
@@ -79,5 +104,9 @@ __all__ = [
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "periodic_state",
+    "registry",
+    "relaxed_hover",
     "robust",
+    "stabilisability",
 ]

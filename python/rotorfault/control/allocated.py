@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _rfcore
-from .._convert import FloatArray
+from .._util.convert import FloatArray
 from ..allocation import Allocator
 from .linear import LinearFeedback, Lti, OpenLoop
 

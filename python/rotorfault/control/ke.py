@@ -23,70 +23,37 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, get_args
+from typing import get_args
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, real
+from .._util.convert import FloatArray, float_array, real
+from .._util.deprecation import dataclass_compat
 from .._typing import KeLaw
-from ..airframe import Airframe, require_airframe
+from ..analysis.airframe import Airframe, require_airframe
 from ..allocation import Allocator
-from ..simulation import DivergenceLimits, Drag, FixedPitchActuator, Simulator
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Simulator
 
 #: Rows of the virtual control Ke's N matrix uses: thrust, roll, pitch (E_1).
 E1_ROWS = (0, 1, 2)
 
 
-#: The core's default gains (Table IV HIL column, the ``ke-hil`` preset): the one source.
-_DEFAULT_GAINS = _rfcore.KeGains()
-
-
-@dataclass(frozen=True)
-class KeGains:
-    """Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4 and the remedy's altitude
-    integral ``k_iz`` (not in the paper; equal to the ``ke-hil`` preset). Validated in Rust when a
-    controller is built: ``epsilon_s``, ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``,
-    ``accel_limit_m_s2`` > 0, ``k_vz`` and ``k_omega`` > 0.5 (Theorem 1)."""
-
-    k_p: float = _DEFAULT_GAINS.k_p
-    k_v: float = _DEFAULT_GAINS.k_v
-    k_vz: float = _DEFAULT_GAINS.k_vz
-    accel_limit_m_s2: float = _DEFAULT_GAINS.accel_limit_m_s2
-    k_n3: float = _DEFAULT_GAINS.k_n3
-    k_omega: float = _DEFAULT_GAINS.k_omega
-    k_r: float = _DEFAULT_GAINS.k_r
-    k_cp: float = _DEFAULT_GAINS.k_cp
-    epsilon_s: float = _DEFAULT_GAINS.epsilon_s
-    k_rotor: float = _DEFAULT_GAINS.k_rotor
-    k_rotor_z: float = _DEFAULT_GAINS.k_rotor_z
-    weights: tuple[float, float, float, float] = tuple(_DEFAULT_GAINS.weights)  # type: ignore[assignment]
-    #: Altitude integral of the remedy (``law="feedforward"`` only), 1/s^2; not in the paper (the
-    #: ``ke-hil`` preset's value).
-    k_iz: float = _DEFAULT_GAINS.k_iz
-
-    @classmethod
-    def _from_core(cls, core: _rfcore.KeGains) -> KeGains:
-        values = {f.name: getattr(core, f.name) for f in fields(cls)}
-        values["weights"] = tuple(values["weights"])
-        return cls(**values)
-
-    def _core(self) -> _rfcore.KeGains:
-        values: dict[str, Any] = {}
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name == "weights":
-                w = float_array("gains.weights", value, 1)
-                if w.shape != (4,):
-                    raise ValueError(f"gains.weights: expected 4 entries (w_f, w_p, w_q, w_r), got {w.shape[0]}")
-                values["weights"] = [float(v) for v in w]
-            else:
-                values[f.name] = real(f"gains.{f.name}", value)
-        return _rfcore.KeGains(**values)
+#: Ke Table IV (HIL column by default) plus ``k_cp`` of Remark 4 and the remedy's altitude integral
+#: ``k_iz`` (not in the paper; equal to the ``ke-hil`` preset): the core's class, used directly
+#: (issue 26: no Python mirror). Keyword-only, defaults from the core's ``Default``; types checked
+#: by the bindings, values once, by the core's ``check``, when the gains are made: ``epsilon_s``,
+#: ``k_rotor``, ``k_rotor_z``, ``k_p``, ``k_v``, ``k_n3``, ``accel_limit_m_s2`` > 0, ``k_vz`` and
+#: ``k_omega`` > 0.5 (Theorem 1), ``weights`` four entries ``(w_f, w_p, w_q, w_r)``. Frozen,
+#: comparable, hashable and picklable; ``gains.replace(k_v=0.5)`` gives a validated copy and
+#: ``KeGains.FIELDS`` the names (``dataclasses.replace`` and ``dataclasses.fields`` still work,
+#: with a ``DeprecationWarning``, for one release).
+KeGains = _rfcore.KeGains
+dataclass_compat(KeGains)
 
 
 @dataclass(frozen=True)
@@ -141,7 +108,7 @@ def preset(name: str = "ke-hil") -> FtcPreset:
         raw.description,
         raw.source,
         raw.airframe,
-        KeGains._from_core(raw.gains),
+        raw.gains,
         raw.rotor_time_constant_s,
         raw.rotational_drag_n_m_s,
         raw.linear_drag_n_s_m,
@@ -216,7 +183,7 @@ class UniformPassiveFtc:
             law=self.law,
             setpoints=list(self.setpoints),
             dt_s=float(dt_s),
-            gains=self.gains._core(),
+            gains=self.gains,
         )
 
     def replay(self, times: npt.ArrayLike, states: npt.ArrayLike, *, dt_s: float = 1.0 / 400.0) -> FloatArray:
@@ -228,7 +195,7 @@ class UniformPassiveFtc:
 
         Replay what the controller saw. With sensor noise that is ``tr.measured`` (the true
         states differ from it by the noise, and so do their commands: by 5.2 N at 30 dB in
-        ``tests/test_ftc.py``)::
+        ``tests/control/test_ftc.py``)::
 
             commands = controller.replay(tr.t, tr.measured)           # with noise
             states = np.hstack([tr.position, tr.velocity, tr.quaternion, tr.omega])

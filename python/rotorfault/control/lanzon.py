@@ -45,9 +45,9 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, real
-from ..airframe import Airframe, require_airframe
-from ..simulation import Drag, FixedPitchActuator, Simulator
+from .._util.convert import FloatArray, float_array, real
+from ..analysis.airframe import Airframe, require_airframe
+from ..flight import Drag, FixedPitchActuator, Simulator
 from .robust import NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
 
 #: Table 2's initial spin, rad/s: ``k_r = m g d / SPIN_RATE_RAD_S`` reproduces it (the paper

@@ -11,14 +11,28 @@ Z-Y-X), p, q, r (rad/s, body FRD)]``; yaw errors are wrapped to (-pi, pi].
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real
+
+if TYPE_CHECKING:
+    from .riccati import LqrDesign
 
 STATE_DIM = 12
+
+#: Short names of the 12 states, in order (Wang's symbols; NED position and velocity, Euler
+#: angles, body rates): errors and reports name a state by these.
+STATE_NAMES = ("x", "y", "z", "u", "v", "w", "phi", "theta", "psi", "p", "q", "r")
+
+#: What each state is, for the lead state of a named mode ("yaw rate r together with p and q").
+STATE_LABELS = (
+    "north position x", "east position y", "down position z", "north velocity u", "east velocity v",
+    "down velocity w", "roll phi", "pitch theta", "yaw psi", "roll rate p", "pitch rate q", "yaw rate r",
+)
 
 
 class OpenLoop:
@@ -46,13 +60,17 @@ class OpenLoop:
 
 
 class LinearFeedback:
-    """``u = u_trim - K (x - x_trim)``, e.g. with ``K`` from ``control.lqr`` (see
-    :func:`rotorfault.control.lqr.lqr_hover`)."""
+    """``u = u_trim - K (x - x_trim)``, e.g. with ``K`` from
+    :func:`rotorfault.control.riccati.design_lqr` (see :func:`rotorfault.control.lqr.lqr_hover`).
+    ``design``: the checked design the gain came from (an ``LqrDesign`` with its evidence:
+    Riccati residual, closed-loop and sampled-loop eigenvalues, PBH tests), None for a gain given
+    by hand."""
 
-    def __init__(self, gain: npt.ArrayLike, x_trim: npt.ArrayLike, u_trim: npt.ArrayLike) -> None:
+    def __init__(self, gain: npt.ArrayLike, x_trim: npt.ArrayLike, u_trim: npt.ArrayLike, *, design: LqrDesign | None = None) -> None:
         self.gain = frozen_array("gain", gain, 2)
         self.x_trim = frozen_array("x_trim", x_trim, 1)
         self.u_trim = frozen_array("u_trim", u_trim, 1)
+        self.design = design
         self._core = _rfcore.LinearFeedback(self.x_trim, self.u_trim, self.gain)
 
     def core(self, dt_s: float) -> _rfcore.LinearFeedback:
@@ -104,4 +122,4 @@ class Lti:
         return _rfcore.Lti(a, b, c, d, self.x_trim, self.u_trim)
 
 
-__all__ = ["STATE_DIM", "LinearFeedback", "Lti", "OpenLoop"]
+__all__ = ["STATE_DIM", "STATE_LABELS", "STATE_NAMES", "LinearFeedback", "Lti", "OpenLoop"]

@@ -10,6 +10,9 @@ Rules (README, "Decisions"):
 - a hover trim whose thrusts must put a rotor on a thrust bound is returned with that rotor named
   in :attr:`HoverTrim.saturated_rotors`; :func:`lqr_hover` refuses it (and any airframe whose ACAI is
   <= 0), because a linear controller about a saturated trim loses the directions it would need;
+- the gains are :func:`~rotorfault.control.riccati.design_lqr`'s, the one LQR on every install,
+  checked before they are returned (stabilisability with the modes named, detectability of the
+  weights, Riccati residual, closed loop, and the sampled loop at ``simulator.dt_s``);
 - :func:`linearize` never differentiates across a command bound: at a bound it takes the one-sided
   difference pointing into the box;
 - :func:`linearize` refuses ``|pitch| > max_pitch_rad`` (default 80 degrees): the Euler rates divide
@@ -26,13 +29,14 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from .._convert import FloatArray, float_array, frozen_array, real
-from ..airframe import Airframe, rotor_labels
+from .._util.convert import FloatArray, float_array, frozen_array, real
+from ..analysis.airframe import Airframe, rotor_labels
 from ..allocation import Allocator
-from ..controllability import acai
-from ..simulation import FixedPitchActuator, Simulator, VariablePitchActuator
+from ..analysis.acai import acai
+from ..flight import FixedPitchActuator, Simulator, VariablePitchActuator
 from .allocated import Allocated
-from .linear import STATE_DIM, LinearFeedback
+from .linear import STATE_DIM, STATE_LABELS, STATE_NAMES, LinearFeedback
+from .riccati import LqrDesign, design_lqr
 
 #: A rotor whose hover thrust cannot be moved further than this fraction of its thrust range from
 #: a bound is on that bound (the same relative size as ``ZERO_RTOL`` for the ACAI).
@@ -268,18 +272,23 @@ def lqr_hover(
     position: npt.ArrayLike = (0.0, 0.0, 0.0),
     yaw: float = 0.0,
 ) -> LinearFeedback:
-    """An LQR hover controller (python-control's ``lqr``) on the linearisation about
-    :func:`hover_trim`. Default weights (Bryson's rule): 1 m position, 1 m/s velocity, 0.1 rad
-    attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor.
+    """An LQR hover controller (:func:`~rotorfault.control.riccati.design_lqr`) on the
+    linearisation about :func:`hover_trim`. Default weights (Bryson's rule): 1 m position, 1 m/s
+    velocity, 0.1 rad attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor.
+    The returned feedback's ``design`` carries the evidence (Riccati residual, closed-loop
+    eigenvalues, the sampled loop at ``simulator.dt_s``, the PBH tests).
 
     Raises ``ValueError`` for a hover it cannot hold: an airframe whose ACAI is <= 0 (Du et al.:
     no control authority around hover; ``-inf`` when ``rank B_f < 4``), a trim with a rotor on a
-    thrust bound, or a linear model that is not stabilisable."""
+    thrust bound, or a design check that fails (a model that is not stabilisable, named by its
+    modes; weights that do not see an unstable mode; a gain whose sampled loop at
+    ``simulator.dt_s`` is unstable)."""
     trim = hover_trim(simulator, position=position, yaw=yaw)
     _require_holdable(simulator, trim)
     a, b = linearize(simulator, trim.state, trim.command)
     q_state, r_rotor = _bryson_weights(simulator, q, r)
-    return LinearFeedback(_lqr_gain(simulator, a, b, q_state, r_rotor), trim.state, trim.command)
+    design = _lqr_design(simulator, a, b, q_state, r_rotor, "rotor thrusts")
+    return LinearFeedback(design.gain, trim.state, trim.command, design=design)
 
 
 def lqr_hover_allocated(
@@ -330,8 +339,8 @@ def lqr_hover_allocated(
             "(the minimum-norm hover thrusts leave the bounds), so the design model B P does not hold at "
             "the trim; use lqr_hover"
         )
-    gain = _lqr_gain(simulator, a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T))
-    return Allocated(LinearFeedback(gain, trim.state, v_trim), allocator)
+    design = _lqr_design(simulator, a, b @ p, q_state, 0.5 * (r_virtual + r_virtual.T), "virtual control through the allocator")
+    return Allocated(LinearFeedback(design.gain, trim.state, v_trim, design=design), allocator)
 
 
 def _require_holdable(simulator: Simulator, trim: HoverTrim) -> None:
@@ -358,17 +367,14 @@ def _require_holdable(simulator: Simulator, trim: HoverTrim) -> None:
         )
 
 
-def _lqr_gain(simulator: Simulator, a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray) -> FloatArray:
-    import control  # type: ignore[import-untyped]
-
-    try:
-        gain, _, _ = control.lqr(a, b, q, r)
-    except (np.linalg.LinAlgError, ArithmeticError, ValueError, control.ControlArgument) as error:
-        raise ValueError(
-            f"{simulator.airframe.name}: the hover linearisation is not stabilisable with these weights "
-            f"(LQR failed: {error})"
-        ) from error
-    return np.asarray(gain, dtype=np.float64)
+def _lqr_design(simulator: Simulator, a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray, what: str) -> LqrDesign:
+    """The checked LQR (:func:`~rotorfault.control.riccati.design_lqr`) of the hover model, its
+    sampled loop at the simulator's control period; errors name the airframe and the check."""
+    airframe = simulator.airframe
+    return design_lqr(
+        (a, b), q, r, dt_s=simulator.dt_s, state_names=STATE_NAMES, state_labels=STATE_LABELS,
+        model=f"the hover linearisation of {airframe.name} ({what}, efficiency {list(map(float, airframe.efficiency))})",
+    )
 
 
 def _bryson_weights(

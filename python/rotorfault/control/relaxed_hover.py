@@ -3,7 +3,7 @@
 The analysis (:func:`rotorfault.relaxed_hover`) gives each solution's linear model, time-invariant
 in body axes: state ``x = [a, b, dp, dq, dr, z, w]`` (the up axis seen from the body,
 ``n + a e1 + b e2``; body-rate deviation; altitude up and its rate), input the carrying rotors'
-thrust deviations. :class:`RelaxedHoverLqr` designs ``K`` on it (continuous-time Riccati equation,
+thrust deviations. :class:`RelaxedHoverFeedback` designs ``K`` on it (continuous-time Riccati equation,
 checked: residual, closed-loop eigenvalues, and the loop sampled at the control period) and runs
 ``u = u_trim - K x`` in Rust with an outer loop that tilts the up axis towards the set point
 (:class:`rotorfault._rfcore.RelaxedHoverFeedback`). Idle and failed rotors stay at their trim.
@@ -12,55 +12,21 @@ checked: residual, closed-loop eigenvalues, and the loop sampled at the control 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, real
-from ..airframe import Airframe, require_airframe
-from ..relaxed_hover import RelaxedHoverSolution, circle_offsets
-
-#: Largest relative residual of the Riccati equation a design may have.
-RICCATI_RTOL = 1e-8
+from .._util.convert import FloatArray, float_array, real
+from ..analysis.airframe import Airframe, require_airframe
+from ..analysis.relaxed_hover import RelaxedHoverSolution, _three, circle_offsets
+from ..flight.state import State
+from .riccati import CLOSED_LOOP_RTOL, LqrDesign, design_lqr, sampled_spectral_radius
 
 RelaxedHoverOuterLoop = _rfcore.RelaxedHoverOuterLoop
 
-
-@dataclass(frozen=True)
-class LqrDesign:
-    """An LQR gain with its evidence: ``gain`` (inputs x states), the Riccati solution ``x``, its
-    relative ``residual`` and the closed-loop eigenvalues (all real parts < 0)."""
-
-    gain: FloatArray
-    x: FloatArray
-    residual: float
-    closed_loop_eigenvalues: npt.NDArray[np.complex128]
-
-
-def _lqr(a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray) -> LqrDesign:
-    """The one LQR call of this module (scipy's continuous-time Riccati solver), checked: the
-    residual of ``A'X + XA - XBR^-1B'X + Q = 0`` relative to its terms, and stable closed-loop
-    eigenvalues. A ``ValueError`` names the check that fails."""
-    import scipy.linalg  # type: ignore[import-untyped]
-
-    try:
-        x = scipy.linalg.solve_continuous_are(a, b, q, r)
-    except (np.linalg.LinAlgError, ValueError) as error:
-        raise ValueError(f"LQR: the Riccati equation has no stabilising solution ({error})") from error
-    gain = np.linalg.solve(r, b.T @ x)
-    terms = [a.T @ x, x @ a, x @ b @ gain, q]
-    residual_matrix = terms[0] + terms[1] - terms[2] + terms[3]
-    size = max(float(np.abs(t).max()) for t in terms)
-    residual = float(np.abs(residual_matrix).max()) / size
-    if not residual <= RICCATI_RTOL:
-        raise ValueError(f"LQR: Riccati residual check failed: {residual:.3e} > {RICCATI_RTOL:g}")
-    eigenvalues = np.linalg.eigvals(a - b @ gain).astype(np.complex128)
-    if not np.all(eigenvalues.real < 0):
-        worst = eigenvalues[np.argmax(eigenvalues.real)]
-        raise ValueError(f"LQR: closed-loop eigenvalue check failed: {worst:.6g} has a real part >= 0")
-    return LqrDesign(gain=gain, x=x, residual=residual, closed_loop_eigenvalues=eigenvalues)
+#: The states of a relaxed hover's linear model (module notes), as the LQR's refusals name them.
+LINEAR_STATE_NAMES = ("a", "b", "dp", "dq", "dr", "z", "w")
 
 
 def bryson_weights(solution: RelaxedHoverSolution, airframe: Airframe) -> tuple[FloatArray, FloatArray]:
@@ -80,7 +46,7 @@ def bryson_weights(solution: RelaxedHoverSolution, airframe: Airframe) -> tuple[
     return np.diag(1.0 / scale**2), np.diag(1.0 / np.asarray(room) ** 2)
 
 
-class RelaxedHoverLqr:
+class RelaxedHoverFeedback:
     """Holds a relaxed hover ``solution`` of ``airframe`` (the airframe it was computed for, with
     its efficiencies) at ``position`` (world NED): LQR on the solution's linear model with weights
     ``q`` (7 x 7) and ``r`` (carrying rotors square; default :func:`bryson_weights`), commands in
@@ -128,7 +94,9 @@ class RelaxedHoverLqr:
             raise ValueError(f"q: expected 7 x 7 (the reduced states), got {self.q.shape}")
         if self.r.shape != (b.shape[1], b.shape[1]):
             raise ValueError(f"r: expected {b.shape[1]} x {b.shape[1]} (the carrying rotors), got {self.r.shape}")
-        self.design = _lqr(a, b, self.q, self.r)
+        self.design: LqrDesign = design_lqr(
+            (a, b), self.q, self.r, state_names=LINEAR_STATE_NAMES, model="the relaxed hover's linear model"
+        )
         # Commands: a rotor's command is its thrust over its efficiency.
         efficiency = np.asarray(airframe.efficiency)
         carrying = [i - 1 for i in solution.carrying]
@@ -141,26 +109,21 @@ class RelaxedHoverLqr:
         self.linear_drag_n_s_m = real("linear_drag_n_s_m", linear_drag_n_s_m)
         self.offsets = circle_offsets(solution, airframe, linear_drag_n_s_m=self.linear_drag_n_s_m)
 
-    def check_sampled(self, dt_s: float) -> npt.NDArray[np.complex128]:
-        """Eigenvalues of the loop sampled at ``dt_s`` (zero-order hold): ``ValueError`` unless all
-        lie inside the unit circle."""
-        import scipy.linalg
-
+    def check_sampled(self, dt_s: float) -> float:
+        """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
+        :func:`rotorfault.control.riccati.sampled_spectral_radius`): ``ValueError`` unless < 1."""
         dt = real("dt_s", dt_s)
         if not (dt > 0 and math.isfinite(dt)):
-            raise ValueError(f"dt_s: must be > 0, got {dt}")
+            raise ValueError(f"dt_s: must be finite and > 0, got {dt}")
         a = np.asarray(self.solution.linear_a)
         b = np.asarray(self.solution.linear_b)
-        n, m = b.shape
-        block = np.zeros((n + m, n + m))
-        block[:n, :n], block[:n, n:] = a, b
-        phi = scipy.linalg.expm(block * dt)
-        sampled = phi[:n, :n] - phi[:n, n:] @ self.design.gain
-        eigenvalues = np.linalg.eigvals(sampled).astype(np.complex128)
-        if not np.all(np.abs(eigenvalues) < 1.0):
-            worst = float(np.max(np.abs(eigenvalues)))
-            raise ValueError(f"LQR: sampled-loop check failed at dt_s = {dt:g}: an eigenvalue of modulus {worst:.6g} >= 1")
-        return eigenvalues
+        radius = sampled_spectral_radius(a, b, self.design.gain, dt)
+        if not radius < 1.0 - CLOSED_LOOP_RTOL:
+            raise ValueError(
+                f"sampled loop: the relaxed hover LQR held over dt_s = {dt:g} s (zero-order hold) has spectral "
+                f"radius {radius:.6g} >= 1: shorten dt_s or slow the design (larger r)"
+            )
+        return radius
 
     def core(self, dt_s: float) -> _rfcore.RelaxedHoverFeedback:
         self.check_sampled(dt_s)
@@ -186,4 +149,72 @@ def _triple(v: npt.ArrayLike) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
-__all__ = ["LqrDesign", "RICCATI_RTOL", "RelaxedHoverLqr", "RelaxedHoverOuterLoop", "bryson_weights"]
+def periodic_state(
+    solution: RelaxedHoverSolution,
+    airframe: Airframe,
+    *,
+    position: npt.ArrayLike = (0.0, 0.0, 0.0),
+    yaw: float = 0.0,
+    linear_drag_n_s_m: float = 0.0,
+) -> State:
+    """A state on the periodic solution whose circle is centred at ``position`` (world NED): the
+    attitude turns the spin axis to world up (then ``yaw`` about it), the body rate is the
+    solution's, position and velocity are on the circle (:func:`circle_offsets`)."""
+    centre = np.asarray(_three("position", position))
+    yaw = real("yaw", yaw)
+    n = np.asarray(solution.spin_axis)
+    rotation = _rotation_between(n, np.array([0.0, 0.0, -1.0]))
+    turn = _axis_angle(np.array([0.0, 0.0, -1.0]), yaw)
+    attitude = turn @ rotation
+    offsets = circle_offsets(solution, airframe, linear_drag_n_s_m=linear_drag_n_s_m)
+    return State(
+        position=centre + attitude @ offsets.position_m,
+        velocity=attitude @ offsets.velocity_m_s,
+        quaternion=_quaternion(attitude),
+        omega=np.asarray(solution.body_rate_rad_s),
+    )
+
+
+def _axis_angle(axis: FloatArray, angle: float) -> FloatArray:
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    result: FloatArray = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    return result
+
+
+def _rotation_between(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The shortest rotation taking unit ``a`` to unit ``b``."""
+    axis = np.cross(a, b)
+    size = float(np.linalg.norm(axis))
+    cosine = float(np.clip(a @ b, -1.0, 1.0))
+    if size < 1e-15:
+        if cosine > 0:
+            return np.eye(3)
+        other = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        axis = np.cross(a, other)
+        return _axis_angle(axis / np.linalg.norm(axis), math.pi)
+    return _axis_angle(axis / size, math.atan2(size, cosine))
+
+
+def _quaternion(r: FloatArray) -> tuple[float, float, float, float]:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
+    trace = float(np.trace(r))
+    candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(candidates))
+    if k == 0:
+        w = 0.5 * math.sqrt(1.0 + trace)
+        q = (w, (r[2, 1] - r[1, 2]) / (4 * w), (r[0, 2] - r[2, 0]) / (4 * w), (r[1, 0] - r[0, 1]) / (4 * w))
+    elif k == 1:
+        x = 0.5 * math.sqrt(1.0 + 2 * r[0, 0] - trace)
+        q = ((r[2, 1] - r[1, 2]) / (4 * x), x, (r[0, 1] + r[1, 0]) / (4 * x), (r[0, 2] + r[2, 0]) / (4 * x))
+    elif k == 2:
+        y = 0.5 * math.sqrt(1.0 + 2 * r[1, 1] - trace)
+        q = ((r[0, 2] - r[2, 0]) / (4 * y), (r[0, 1] + r[1, 0]) / (4 * y), y, (r[1, 2] + r[2, 1]) / (4 * y))
+    else:
+        z = 0.5 * math.sqrt(1.0 + 2 * r[2, 2] - trace)
+        q = ((r[1, 0] - r[0, 1]) / (4 * z), (r[0, 2] + r[2, 0]) / (4 * z), (r[1, 2] + r[2, 1]) / (4 * z), z)
+    norm = math.sqrt(sum(v * v for v in q))
+    sign = 1.0 if q[0] >= 0 else -1.0
+    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
+
+
+__all__ = ["RelaxedHoverFeedback", "RelaxedHoverOuterLoop", "bryson_weights", "periodic_state"]

@@ -27,17 +27,15 @@ Formulas (Skogestad and Postlethwaite, *Multivariable Feedback Control*, 2nd ed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
-from .._convert import FloatArray, real
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from .._util.convert import FloatArray, real
+from ..plotting.frequency import plot_singular_values
 
 
 @dataclass(frozen=True)
@@ -424,39 +422,6 @@ def singular_values(system: ct.StateSpace, omega: npt.ArrayLike) -> FloatArray:
     w = np.asarray(omega, dtype=float)
     resp = np.asarray(system(1j * w)).reshape(system.noutputs, system.ninputs, -1)
     return np.array([np.linalg.svd(resp[:, :, i], compute_uv=False) for i in range(len(w))])
-
-
-def plot_singular_values(
-    plant: ct.StateSpace,
-    shaped: ct.StateSpace,
-    path: str | None = None,
-    *,
-    omega: npt.ArrayLike | None = None,
-    title: str = "",
-) -> Figure:
-    """Singular values of ``plant`` and of the shaped plant ``G W1`` (dB), Lanzon's Fig. 4."""
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    w = np.logspace(-2, 4, 400) if omega is None else np.asarray(omega, dtype=float)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for sys_, label, style in ((plant, "G", "--"), (shaped, "G W1", "-")):
-        sv = singular_values(sys_, w)
-        for j in range(sv.shape[1]):
-            ax.semilogx(w, 20 * np.log10(np.maximum(sv[:, j], 1e-300)), style,
-                        label=label if j == 0 else None, color="C0" if label == "G" else "C1")
-    ax.axhline(0, color="k", lw=0.5)
-    ax.set_xlabel("frequency (rad/s)")
-    ax.set_ylabel("singular values (dB)")
-    ax.set_title(title or "open-loop singular values")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
-    if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
-    return fig
 
 
 __all__ = [

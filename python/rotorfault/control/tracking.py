@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array
+from .._util.convert import FloatArray, float_array, frozen_array
 from .linear import STATE_DIM, LinearFeedback
 
 

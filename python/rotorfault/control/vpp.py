@@ -35,15 +35,19 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._convert import FloatArray, float_array, frozen_array, real
-from ..airframe import Airframe
-from ..simulation import Drag, Simulator, VariablePitchActuator
-from .linear import STATE_DIM, LinearFeedback
+from .._util.convert import FloatArray, float_array, frozen_array, real
+from ..analysis.airframe import Airframe
+from ..flight import Drag, Simulator, VariablePitchActuator
+from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
+from .linear import STATE_NAMES as _STATE_NAMES
 from .lqr import linearize as _linearize
+from .riccati import design_lqr
+from .stabilisability import Direction, describe_directions, left_null_space
 
 #: Names of the 12 states in rotorfault's order (NED position, velocity, roll/pitch/yaw, body rates)
-#: with Wang's symbols (his y/v are our east position/velocity up to the frame's sign).
-STATE_NAMES = ("x", "y", "z", "u", "v", "w", "phi", "theta", "psi", "p", "q", "r")
+#: with Wang's symbols (his y/v are our east position/velocity up to the frame's sign): the
+#: control layer's :data:`~rotorfault.control.linear.STATE_NAMES`.
+STATE_NAMES = _STATE_NAMES
 
 #: Characteristic sizes used to scale the linear model before rank and decomposition (not the
 #: rank itself, which is scale-free): 1 m, 1 m/s, 0.1 rad, 1 rad/s.
@@ -79,6 +83,28 @@ class VppVehicle:
     airframe: Airframe
     actuator: VariablePitchActuator
     drag: Drag
+
+    def __post_init__(self) -> None:
+        # Checked once, here: the types, the core's rules (finite coefficients and bounds, lags,
+        # drag >= 0: building the simulator runs them) and what the trim divides by.
+        for field, value, kind in (
+            ("name", self.name, str), ("source", self.source, str), ("airframe", self.airframe, Airframe),
+            ("actuator", self.actuator, VariablePitchActuator), ("drag", self.drag, Drag),
+        ):
+            if not isinstance(value, kind):
+                raise TypeError(f"{field}: expected {kind.__name__}, got {type(value).__name__}")
+        if self.airframe.rotor_count != 4:
+            raise ValueError(f"airframe: a VPP quadcopter has 4 propellers, {self.airframe.name} has {self.airframe.rotor_count}")
+        self.simulator()
+        k1, k2, k3, _ = self.coefficients
+        if not k1 > 0:
+            raise ValueError(f"actuator.k: k1 (thrust per speed^2 per pitch) must be > 0, got {k1}")
+        if not (k2 >= 0 and k3 >= 0):
+            raise ValueError(f"actuator.k: k2 and k3 (drag torque coefficients) must be >= 0, got {k2}, {k3}")
+        if not self.actuator.speed_bounds[1] > 0:
+            raise ValueError(f"actuator.speed_bounds: the upper bound must be > 0, got {self.actuator.speed_bounds[1]}")
+        if not self.actuator.pitch_bounds[1] > 0:
+            raise ValueError(f"actuator.pitch_bounds: the upper bound must be > 0 (lift), got {self.actuator.pitch_bounds[1]}")
 
     @property
     def coefficients(self) -> tuple[float, float, float, float]:
@@ -407,10 +433,15 @@ def fixed_pitch_trim(vehicle: VppVehicle, *, failed: Sequence[int] = (1,), pitch
 
 
 def fixed_pitch(vehicle: VppVehicle, airframe: str = "wang-fixed-pitch") -> VppVehicle:
-    """``vehicle`` on the fixed-pitch comparison airframe (Sec. 3.4's spin layout, [0, 13] N)."""
+    """``vehicle`` on a fixed-pitch comparison airframe preset, named after it: Sec. 3.4's spin
+    layout ``wang-fixed-pitch`` (default) or the standard layout ``wang-standard-fixed-pitch``
+    (both [0, 13] N; fly them with ``pitch_fixed=True`` models and :func:`fixed_pitch_trim`)."""
     import dataclasses
 
-    return dataclasses.replace(vehicle, name=f"{vehicle.name}-fixed-pitch", airframe=Airframe.preset(airframe))
+    if not isinstance(airframe, str):
+        raise TypeError(f"airframe: expected an airframe preset name, got {type(airframe).__name__}")
+    frame = Airframe.preset(airframe)
+    return dataclasses.replace(vehicle, name=frame.name, airframe=frame)
 
 
 # -- linear model and controllability ------------------------------------------------------------
@@ -464,11 +495,16 @@ def linearize(vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, st
 class ControllabilityResult:
     """``rank``: the scale-free rank of ``[B AB ... A^11 B]`` (core rule); ``plain_rank``: numpy's
     default SVD rank of the unscaled matrix (for contrast: round-off decides it);
-    ``uncontrollable_states``: the state axes inside the uncontrollable subspace of the Kalman
-    decomposition; ``basis``: orthonormal basis of the controllable subspace (scaled states)."""
+    ``uncontrollable_directions``: a basis of the combinations of states no input moves (the left
+    null space of the controllability matrix, the uncontrollable part of the Kalman
+    decomposition), each in state names (``"yaw rate r together with p and q: 0.132 p + 0.132 q -
+    r"``; a single state when the direction is one state); ``uncontrollable_states``: the states
+    that take part in them; ``basis``: orthonormal basis of the controllable subspace (scaled
+    states)."""
 
     rank: int
     plain_rank: int
+    uncontrollable_directions: tuple[Direction, ...]
     uncontrollable_states: tuple[str, ...]
     basis: FloatArray
 
@@ -476,7 +512,8 @@ class ControllabilityResult:
 def controllability(model: VppLinearization, *, input_scale: npt.ArrayLike | None = None) -> ControllabilityResult:
     """Rank and Kalman decomposition of ``model``. States are scaled by :data:`STATE_SCALE`,
     inputs by ``input_scale`` (default: 1000 per speed, 0.1 rad per pitch) so one SVD sees
-    comparable columns; the rank is also the core's scale-free rank."""
+    comparable columns; the rank is also the core's scale-free rank, and the uncontrollable
+    directions are the left null space of the same equilibrated matrix (one rank rule)."""
     if not isinstance(model, VppLinearization):
         raise TypeError(f"model: expected a VppLinearization, got {type(model).__name__}")
     n = STATE_DIM
@@ -497,16 +534,28 @@ def controllability(model: VppLinearization, *, input_scale: npt.ArrayLike | Non
         raw.append(model.a @ raw[-1])
     rank = int(_rfcore.scale_free_rank(q))
     plain = int(np.linalg.matrix_rank(np.hstack(raw)))
+    own_rank, null = left_null_space(q)
+    if own_rank != rank:
+        raise ValueError(
+            f"model: the core's scale-free rank ({rank}) and numpy's on the same equilibrated matrix "
+            f"({own_rank}) disagree: the controllability matrix is at the edge of rank deficiency"
+        )
     u, s, _ = np.linalg.svd(q)
     basis = u[:, :rank]
-    # A state axis is uncontrollable when it lies in the orthogonal complement (the Kalman
-    # decomposition's uncontrollable block): its projection on the controllable subspace vanishes.
-    projection = np.linalg.norm(basis.T @ np.eye(n), axis=0)
-    names = tuple(STATE_NAMES[j] for j in range(n) if projection[j] < 1e-6)
-    return ControllabilityResult(rank, plain, names, frozen_array("basis", basis, 2))
+    # Scaled state x_s = x / STATE_SCALE, so a functional w_s^T x_s is (w_s / STATE_SCALE)^T x.
+    directions = describe_directions(null.T, 1.0 / STATE_SCALE, STATE_NAMES, STATE_LABELS)
+    involved = np.zeros(n, dtype=bool)
+    for d in directions:
+        involved |= d.coefficients != 0.0
+    names = tuple(STATE_NAMES[j] for j in range(n) if involved[j])
+    return ControllabilityResult(rank, plain, directions, names, frozen_array("basis", basis, 2))
 
 
 # -- LQR -----------------------------------------------------------------------------------------
+
+#: The control period an LQR is checked at when none is given: the simulator's default (the
+#: core's ``SimulationConfig``).
+DEFAULT_DT_S: float = _rfcore.SimulationConfig().dt_s
 
 
 def lqr(
@@ -516,34 +565,36 @@ def lqr(
     q: npt.ArrayLike | None = None,
     r: npt.ArrayLike | None = None,
     pitch_fixed: bool = False,
+    dt_s: float = DEFAULT_DT_S,
 ) -> LinearFeedback:
-    """An LQR (python-control) on the healthy channels about ``at``, as a full-width
+    """An LQR on the healthy channels about ``at``, as a full-width
     :class:`~rotorfault.control.LinearFeedback` (failed channels held at 0). Defaults (Bryson):
     1 m, 1 m/s, 0.1 rad, 1 rad/s state errors against 1000 speed units and 0.05 rad per channel.
-    ``pitch_fixed``: speeds only (the fixed-pitch quadcopter; pitches held at the trim's)."""
-    import control  # type: ignore[import-untyped]
-
+    ``pitch_fixed``: speeds only (the fixed-pitch quadcopter; pitches held at the trim's).
+    ``dt_s``: the control period of the simulator that flies it (the sampled loop is checked
+    there). Raises ``ValueError`` naming the check that fails (:func:`lqr_design`): e.g. the
+    fixed-pitch model, which no input can stabilise (the modes named). The returned feedback's
+    ``design`` is the checked :class:`~rotorfault.control.riccati.LqrDesign` (its gain has one row
+    per healthy channel)."""
     if not isinstance(pitch_fixed, bool):
         raise TypeError(f"pitch_fixed: expected a bool, got {type(pitch_fixed).__name__}")
     model = linearize(vehicle, at, pitch_fixed=pitch_fixed)
-    k = len(model.inputs)
-    q_state = np.diag(1.0 / STATE_SCALE**2) if q is None else float_array("q", q, 2)
-    r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.inputs]) if r is None else float_array("r", r, 2)
-    if q_state.shape != (STATE_DIM, STATE_DIM) or not np.all(np.isfinite(q_state)):
-        raise ValueError(f"q: expected a finite {STATE_DIM}x{STATE_DIM} matrix, got shape {q_state.shape}")
-    if r_in.shape != (k, k) or not np.all(np.isfinite(r_in)):
-        raise ValueError(f"r: expected a finite {k}x{k} matrix (one row per healthy channel), got shape {r_in.shape}")
-    try:
-        gain, _, _ = control.lqr(model.a, model.b, q_state, r_in)
-    except (np.linalg.LinAlgError, ArithmeticError, ValueError, control.ControlArgument) as error:
-        raise ValueError(f"q, r: the linear model is not stabilisable with these weights (LQR failed: {error})") from error
+    q_state = np.diag(1.0 / STATE_SCALE**2) if q is None else q
+    r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.inputs]) if r is None else r
+    kind = "fixed-pitch" if pitch_fixed else "VPP"
+    failed = f"propeller(s) {', '.join(map(str, at.failed))} failed" if at.failed else "no propeller failed"
+    design = design_lqr(
+        (model.a, model.b), q_state, r_in, dt_s=dt_s, state_names=STATE_NAMES, state_labels=STATE_LABELS,
+        model=f"the {kind} hover model of {vehicle.name} ({failed}; inputs {', '.join(model.inputs)})",
+    )
     full = np.zeros((2 * vehicle.airframe.rotor_count, STATE_DIM))
-    full[list(model.columns)] = np.asarray(gain)
-    return LinearFeedback(full, at.state, at.command)
+    full[list(model.columns)] = design.gain
+    return LinearFeedback(full, at.state, at.command, design=design)
 
 
 __all__ = [
     "STATE_NAMES",
+    "DEFAULT_DT_S",
     "ControllabilityResult",
     "FeasibleSpeeds",
     "VppLinearization",

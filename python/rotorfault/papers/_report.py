@@ -1,14 +1,24 @@
-"""What a paper contributes to the reproduce-all report (``rotorfault reproduce``): a
+"""The one report writer every paper feeds.
+
+A paper contributes to the reproduce-all report (``rotorfault reproduce``) a
 :class:`ReportSection` of printed numbers (:class:`~rotorfault.papers._numbers.PaperNumber`),
-tables and figures. Each paper module provides ``report_section(out, *, quick)``, which writes
-its figures into the directory ``out`` and returns the section; the report imports the modules
-that exist and shows a "not landed yet" section for those that do not."""
+tables and figures: each paper module provides ``report_section(out, *, quick)``, which writes its
+figures into the directory ``out`` and returns the section; the report imports the modules that
+exist and shows a "not landed yet" section for those that do not. A paper's own report command
+(``ftc-report``, ...) writes its directory through the same functions: :func:`check_report_directory`
+before any work, :func:`report_directory` (built beside the final place, with ``manifest.json``,
+swapped in when complete), :func:`csv_text` and :func:`markdown_table` for its tables."""
 
 from __future__ import annotations
 
+import contextlib
+import csv
+import io
+import os
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from ._numbers import PaperNumber
 
@@ -70,4 +80,56 @@ def not_landed(key: str, title: str, module: str, what: str) -> ReportSection:
     )
 
 
-__all__ = ["ReportFigure", "ReportSection", "ReportTable", "SectionProvider", "markdown_table", "not_landed"]
+def package_version() -> str:
+    """The installed rotorfault's version (``"unknown"`` from a bare source tree)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rotorfault")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown"
+
+
+def check_report_directory(field_name: str, out_dir: str | os.PathLike[str], *, force: bool) -> Path:
+    """Checks, before any work, that ``out_dir`` can take a report (new, empty, or with ``force``
+    a previous report; never a directory holding other files)."""
+    from .._util.output import check_output_directory
+
+    return check_output_directory(field_name, out_dir, force=force)
+
+
+@contextlib.contextmanager
+def report_directory(out: Path, *, generator: str, command: str | None, default_command: str, **extra: Any) -> Iterator[Path]:
+    """Yields a temporary directory to fill; when the block completes it gets ``manifest.json``
+    (the files, ``generator``, ``command``, the version, ``extra``) and replaces ``out`` as a whole;
+    on an error or interrupt ``out`` is left as it was. Call :func:`check_report_directory` first."""
+    from .._util.output import output_directory
+
+    manifest = {"generator": generator, "command": command or default_command, "version": package_version(), **extra}
+    with output_directory(out, manifest) as tmp:
+        yield tmp
+
+
+def csv_text(rows: Sequence[dict[str, Any]], cell: Callable[[dict[str, Any], str], str] | None = None) -> str:
+    """The rows as CSV text, one column per key of the first row (``cell(row, column)`` formats
+    each value; by default ``None`` is empty)."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({column: ("" if row[column] is None else row[column]) if cell is None else cell(row, column) for column in row})
+    return buffer.getvalue()
+
+
+__all__ = [
+    "ReportFigure",
+    "ReportSection",
+    "ReportTable",
+    "SectionProvider",
+    "check_report_directory",
+    "csv_text",
+    "markdown_table",
+    "not_landed",
+    "package_version",
+    "report_directory",
+]

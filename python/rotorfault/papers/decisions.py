@@ -19,12 +19,18 @@ _ACAI = "crates/rfcore/src/analysis/acai.rs"
 _CONTROLLABILITY = "crates/rfcore/src/analysis/controllability.rs"
 _ACTUATOR = "crates/rfcore/src/flight/actuator.rs"
 _VEHICLE = "crates/rfcore/src/flight/vehicle.rs"
-_SIMULATION = "crates/rfcore/src/flight/simulation.rs"
+_SIMULATION = "crates/rfcore/src/flight/simulation"
+_SIM_STEP = f"{_SIMULATION}/step.rs"
+_SIM_CONFIG = f"{_SIMULATION}/config.rs"
+_SIM_NOISE = f"{_SIMULATION}/noise.rs"
 _ALLOCATION = "crates/rfcore/src/allocation/mod.rs"
 _ACTIVE_SET = "crates/rfcore/src/allocation/active_set.rs"
+_SCALING = "crates/rfcore/src/allocation/scaling.rs"
+_FACTORISATION = "crates/rfcore/src/allocation/factorisation.rs"
 _KE_RS = "crates/rfcore/src/control/ke.rs"
 _KE_PY = "python/rotorfault/control/ke.py"
 _LQR = "python/rotorfault/control/lqr.py"
+_RICCATI = "python/rotorfault/control/riccati.py"
 _KE_PRESET = "python/rotorfault/presets/ke-quadcopter.toml"
 _LANZON_PY = "python/rotorfault/control/lanzon.py"
 _LANZON_RS = "crates/rfcore/src/control/lanzon.rs"
@@ -33,28 +39,35 @@ _LANZON_PAPER = "python/rotorfault/papers/lanzon.py"
 #: Where each decision is made: the README's "gap" cell -> repository paths.
 DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Du uses `+-10^6` for infinity": (_ACAI,),
-    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/controllability.py"),
+    "Du eq. (13) for G outside the attainable set": (_ACAI, "python/rotorfault/analysis/acai.py"),
     "numerical zero, rank, units": (_ACAI, "crates/rfcore/src/analysis/mod.rs", _CONTROLLABILITY),
-    "the hover verdict": (_ACAI, "python/rotorfault/controllability.py", "python/rotorfault/scan.py"),
+    "the hover verdict": (_ACAI, "python/rotorfault/analysis/acai.py", "python/rotorfault/studies/scan.py"),
     "null vectors": (_ACAI,),
     '"give up yaw"': (_CONTROLLABILITY, _ACAI),
     "Ke's yaw row `c[1, -1, 1, -1]` is rank 3 with Remark 2's angles; `l = 0.0125`": (_KE_PRESET, "python/rotorfault/presets/README.md"),
     "Ke gives no g; Lanzon prints `d` in kg m^2": (_KE_PRESET, "python/rotorfault/presets/lanzon-quadrotor.toml"),
-    "actuator integration": (_ACTUATOR, _SIMULATION),
-    "time grid": (_SIMULATION,),
+    "actuator integration": (_ACTUATOR, _SIM_STEP),
+    "time grid": (_SIM_CONFIG,),
     "rotor efficiency": (_VEHICLE,),
     "Wang's \"10 Hz\" actuator": (_ACTUATOR,),
-    "Wang's \"15 dB SNR noise\"": (_SIMULATION,),
+    "Wang's \"15 dB SNR noise\"": (_SIM_NOISE,),
     "gyroscopic moment (Lanzon eq. (5))": (_VEHICLE,),
     "drag, `k_r`, `I_R`": (_VEHICLE,),
     "fault timing": ("crates/rfcore/src/flight/fault_schedule.rs",),
-    "actuator start": (_SIMULATION, "python/rotorfault/simulation.py"),
-    "divergence": (_SIMULATION,),
-    "noise on zero signals": (_SIMULATION,),
-    "run size": (_SIMULATION,),
+    "actuator start": (f"{_SIMULATION}/driver.rs", "python/rotorfault/flight/simulator.py"),
+    "divergence": (f"{_SIMULATION}/divergence.rs", _SIM_STEP),
+    "the ground (no paper models one)": (_SIM_CONFIG, f"{_SIMULATION}/divergence.rs"),
+    "altitudes the papers do not print": (
+        "python/rotorfault/papers/ke.py",
+        "python/rotorfault/studies/campaign.py",
+        _LANZON_PAPER,
+        "python/rotorfault/papers/wang.py",
+    ),
+    "noise on zero signals": (_SIM_NOISE,),
+    "run size": (_SIM_CONFIG,),
     "several optimal allocations (more rotors than weighted axes, a zero weight)": (_ACTIVE_SET, _ALLOCATION),
-    "allocation rank": (_ALLOCATION, _ACTIVE_SET),
-    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/test_allocation.py"),
+    "allocation rank": (_ALLOCATION, _SCALING, _FACTORISATION),
+    "Ke's w_r -> 0 \"continuity\" (eq. (36))": (_ACTIVE_SET, "tests/allocation/test_allocation.py"),
     "Ke's printed command law (18)": (_KE_RS, _KE_PY),
     "Ke's filters": (_KE_RS,),
     "spin damping, drag": ("python/rotorfault/presets/ftc", _KE_PY),
@@ -74,9 +87,15 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Lanzon's outer loop gains (not in the paper)": (_LANZON_PY, _LANZON_RS),
     "hover trim (`hover_trim`)": (_LQR,),
     "linear models at a bound (`linearize`)": (_LQR,),
-    "what LQR refuses (`lqr_hover`, `lqr_hover_allocated`)": (_LQR,),
+    "what LQR refuses (`lqr_hover`, `lqr_hover_allocated`)": (_LQR, _RICCATI),
+    "what an LQR design checks (`design_lqr`)": (_RICCATI,),
+    "stabilisability and detectability (PBH)": ("python/rotorfault/control/stabilisability.py", "python/rotorfault/control/vpp.py"),
+    "Wang's fixed-pitch comparison": (
+        "python/rotorfault/papers/wang.py",
+        "python/rotorfault/presets/wang-standard-fixed-pitch.toml",
+    ),
     "Euler singularity": (_LQR,),
-    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/scan.py"),
+    "limits": (_ACAI, _CONTROLLABILITY, "python/rotorfault/studies/scan.py"),
 }
 
 

@@ -1,7 +1,7 @@
 """Du, Quan, Yang, Cai (JGCD 2015): controllability and the Available Control Authority Index.
 
-The generic machinery is :mod:`rotorfault.controllability` (ACAI, the 9-step test, failure
-tables) and :mod:`rotorfault.scan` (the Fig. 4 efficiency grid). This module holds what is Du's
+The generic machinery is :mod:`rotorfault.analysis` (ACAI, the 9-step test, failure tables) and
+:mod:`rotorfault.studies.scan` (the Fig. 4 efficiency grid). This module holds what is Du's
 own: the numbers Tables II and III print, each beside ours (:func:`printed_numbers`), which the
 tests and the reproduce-all report read.
 """
@@ -11,9 +11,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..airframe import Airframe
-from ..controllability import controllability, failure_table
-from ..scan import efficiency_scan
+from ..analysis.airframe import Airframe
+from ..analysis.acai import acai_label
+from ..analysis.controllability import controllability, failure_table
+from ..studies.scan import efficiency_scan
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
@@ -49,7 +50,7 @@ def _rows(preset: str, table: str, printed: dict[str, float]) -> list[PaperNumbe
         report = controllability(airframe.with_failed_rotors(failed) if failed else airframe)
         margin = controllability(airframe.with_failed_rotors(failed) if failed else airframe, formula="facet-margin")
         note = _NOTE_EQ13 if report.acai == 0.0 and margin.acai < 0.0 else ""
-        rows.append(PaperNumber(PAPER, table, f"ACAI, {preset}, {case}", value, report.acai, TABLE_TOL, note))
+        rows.append(PaperNumber(PAPER, table, f"{acai_label('eq13')}, {preset}, {case}", value, report.acai, TABLE_TOL, note))
     return rows
 
 

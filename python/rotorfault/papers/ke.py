@@ -1,6 +1,8 @@
 """Ke et al.'s uniform passive FTC (IEEE TIE), reproduced: the named scenarios of Sections II-B
-and IV-B, the metrics of Section V and the report behind ``rotorfault ftc-report``. The controller
-and its design are in :mod:`rotorfault.control.ke`.
+and IV-B, Table II's printed numbers and the report behind ``rotorfault ftc-report``. The
+controller and its design are in :mod:`rotorfault.control.ke`; the verdict on each flight (the
+metrics of Section V, judged over the last window) is the flight's own,
+:mod:`rotorfault.flight.outcomes` (re-exported here for the report).
 
 Failures are applied one after the other from hover: the first rotor, then the next once the spin
 has built up (Remark 3: simultaneous failures from r = 0 are not recoverable).
@@ -13,13 +15,22 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from .._convert import FloatArray, real
-from .._typing import KeLaw, KeOutcome
-from ..airframe import Airframe
+from .._typing import KeLaw
+from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
-from ..simulation import RotorFault, State, Trajectory
+from ..flight import RotorFault, State, Trajectory
+from ..flight.outcomes import (
+    CIRCLING_TURN_RAD,
+    HOLD_BAND_M,
+    HOLD_SPEED_M_S,
+    OUTCOME_LABELS,
+    WINDOW_S,
+    FlightMetrics,
+    effective_fault_times,
+    flight_metrics,
+)
+from ..flight.scenarios import HOVER_M, FlightScenario
+from ..plotting.paths import plot_primary_axis
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
@@ -30,21 +41,15 @@ if TYPE_CHECKING:
 
 # -- scenarios ----------------------------------------------------------------------------------
 
-HOVER = (0.0, 0.0, -10.0)
+HOVER = HOVER_M
 
 
 @dataclass(frozen=True)
-class KeScenario:
-    """A named flight: faults applied in order from hover, setpoints (time, NED position).
-    ``efficiency`` is the rotor efficiencies after the last fault (Ke's health matrix is
-    ``diag(efficiency)``)."""
+class KeScenario(FlightScenario):
+    """One of Ke's flights (a :class:`~rotorfault.flight.scenarios.FlightScenario`: faults applied
+    in order from hover, setpoints). ``efficiency`` is the rotor efficiencies after the last fault
+    (Ke's health matrix is ``diag(efficiency)``)."""
 
-    name: str
-    description: str
-    efficiency: tuple[float, ...]
-    faults: tuple[RotorFault, ...]
-    duration_s: float = 40.0
-    setpoints: tuple[tuple[float, tuple[float, float, float]], ...] = ((0.0, HOVER),)
     #: What Ke predicts: True (stabilised), False (Fig. 7: not stabilisable).
     ke_stabilizable: bool = True
 
@@ -128,196 +133,6 @@ def scenario(name: str) -> KeScenario:
     raise ValueError(f"scenario: unknown {name!r}; available: {', '.join(s.name for s in scenarios())}")
 
 
-# -- metrics (Section V) -----------------------------------------------------------------------
-
-
-#: "holds position": over the last ``window_s`` seconds the horizontal error stays within 2 m
-#: and the altitude error within 1 m of the setpoint (m).
-HOLD_BAND_M = (2.0, 1.0)
-#: ... and the speed stays below this (m/s): passing through the setpoint is not holding it.
-HOLD_SPEED_M_S = 0.5
-#: "circling": not holding, the mean horizontal speed over the window above
-#: :data:`HOLD_SPEED_M_S` and the direction of travel turning by at least this much (rad) within
-#: the window: a steady circle, or an oscillation (which reverses, a turn of pi).
-CIRCLING_TURN_RAD = math.pi / 2
-#: Length of the judging window at the end of a run (s): outcome, steady values, settling.
-WINDOW_S = 5.0
-
-
-@dataclass(frozen=True)
-class FlightMetrics:
-    """What Ke reports per flight, judged over the last ``window_s`` seconds of the run (not its
-    last sample). Outcome codes (:data:`OUTCOME_LABELS` gives the table text):
-
-    - ``"holds-position"``: no divergence, and throughout the window the horizontal error is
-      within ``HOLD_BAND_M[0]`` (2 m), the altitude error within ``HOLD_BAND_M[1]`` (1 m) and
-      the speed below :data:`HOLD_SPEED_M_S` (0.5 m/s);
-    - ``"circling"``: no divergence, not holding, moving (mean horizontal speed above 0.5 m/s)
-      with the direction of travel turning by at least :data:`CIRCLING_TURN_RAD` (90 degrees)
-      within the window: a steady circle or oscillation around or near the setpoint;
-    - ``"off-station"``: no divergence, neither of the above (e.g. drifting back slowly, or
-      parked away from the setpoint);
-    - a divergence kind (``"tilt"``, ``"altitude-loss"``, ...): the vehicle was lost at
-      ``lost_at_s``.
-
-    Window values (``None`` for a lost run): ``window_horizontal_error_m`` and
-    ``window_altitude_error_m`` the largest errors, ``window_speed_m_s`` the largest speed,
-    ``window_mean_horizontal_speed_m_s``.
-
-    Steady values, ``None`` unless the run settled: ``r_rad_s`` mean body yaw rate; ``n3z``
-    mean vertical component of the primary axis ``n3 = R_eb b_3`` (Fig. 14); ``rotation_axis``
-    the mean of ``R_eb^T [0, 0, 1]``, the world vertical in body axes (Section V-B: the axis a
-    steady spin turns about). ``spin_settle_s``: time from the last fault that changed an
-    efficiency (or from the start) until ``r`` stays within 5 % (at least 0.2 rad/s) and ``n3z``
-    within 0.02 of those means to the end of the run; the run counts as settled only if that
-    happens no later than ``window_s`` before its end (Ke's "enter into a steady state").
-
-    Position values over the whole run (``None`` for a lost run, whose track stops at the loss:
-    tables show "lost at t"): ``max_altitude_loss_m`` the largest drop below the start,
-    ``max_horizontal_error_m``, ``final_horizontal_error_m``, ``final_altitude_error_m``
-    against the setpoint."""
-
-    outcome: KeOutcome
-    r_rad_s: float | None
-    n3z: float | None
-    rotation_axis: tuple[float, float, float] | None
-    spin_settle_s: float | None
-    max_altitude_loss_m: float | None
-    max_horizontal_error_m: float | None
-    final_horizontal_error_m: float | None
-    final_altitude_error_m: float | None
-    window_s: float = WINDOW_S
-    window_horizontal_error_m: float | None = None
-    window_altitude_error_m: float | None = None
-    window_speed_m_s: float | None = None
-    window_mean_horizontal_speed_m_s: float | None = None
-    lost_at_s: float | None = None
-
-    @property
-    def outcome_label(self) -> str:
-        """The outcome in words, for tables (``"holds position"``, ``"circling"``, ``"off
-        station"``, ``"tilt"``, ...)."""
-        return OUTCOME_LABELS.get(self.outcome, self.outcome)
-
-    @property
-    def settled(self) -> bool:
-        return self.spin_settle_s is not None
-
-
-#: Table text of the outcome codes.
-OUTCOME_LABELS: dict[str, str] = {
-    "holds-position": "holds position",
-    "circling": "circling",
-    "off-station": "off station",
-    "non-finite-state": "non-finite state",
-    "non-finite-command": "non-finite command",
-    "tilt": "tilt",
-    "altitude-loss": "altitude loss",
-    "speed": "speed",
-    "body-rate": "body rate",
-}
-
-
-def effective_fault_times(trajectory: Trajectory) -> list[float]:
-    """Times of the trajectory's own faults that changed a rotor's efficiency within the run (a
-    no-op entry, which sets the efficiency a rotor already has, is not an event; nor is a fault
-    the run never reached because it ended first)."""
-    if not len(trajectory.t):
-        return []
-    current = np.array(trajectory.efficiency[0], dtype=np.float64)
-    times = []
-    for f in sorted(trajectory.faults, key=lambda f: f.time):
-        if f.time > trajectory.t[-1]:
-            break
-        if current[f.rotor - 1] != f.efficiency:
-            times.append(float(f.time))
-            current[f.rotor - 1] = f.efficiency
-    return times
-
-
-def flight_metrics(trajectory: Trajectory, scenario_: KeScenario, *, window_s: float = WINDOW_S) -> FlightMetrics:
-    """Scores ``trajectory`` against ``scenario_``'s setpoints. Fault times come from the
-    trajectory's own faults (what it was flown with), not from the scenario."""
-    window_s = real("window_s", window_s)
-    if not window_s > 0:
-        raise ValueError(f"window_s: must be > 0, got {window_s}")
-    t = trajectory.t
-    if len(t) < 2:
-        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
-    if trajectory.diverged:
-        event = trajectory.events[0]
-        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time))
-    setpoint = _setpoint_track(scenario_, t)
-    error = trajectory.position - setpoint
-    horizontal = np.hypot(error[:, 0], error[:, 1])
-    vertical = np.abs(error[:, 2])
-    start_alt = -trajectory.position[0, 2]
-    position_errors = (
-        float(np.max(start_alt - (-trajectory.position[:, 2]))),
-        float(np.max(horizontal)),
-        float(horizontal[-1]),
-        float(vertical[-1]),
-    )
-    last = t >= t[-1] - window_s
-    speed = np.linalg.norm(trajectory.velocity, axis=1)
-    h_speed = np.hypot(trajectory.velocity[:, 0], trajectory.velocity[:, 1])
-    window = (
-        float(np.max(horizontal[last])),
-        float(np.max(vertical[last])),
-        float(np.max(speed[last])),
-        float(np.mean(h_speed[last])),
-    )
-    held = window[0] <= HOLD_BAND_M[0] and window[1] <= HOLD_BAND_M[1] and window[2] <= HOLD_SPEED_M_S
-    if held:
-        outcome: KeOutcome = "holds-position"
-    elif window[3] > HOLD_SPEED_M_S and _turn_rad(trajectory.velocity[last], HOLD_SPEED_M_S / 4) >= CIRCLING_TURN_RAD:
-        outcome = "circling"
-    else:
-        outcome = "off-station"
-    r = float(np.mean(trajectory.omega[last, 2]))
-    n3z = float(np.mean(trajectory.primary_axis[last, 2]))
-    # R_eb^T e_z: the world vertical seen from the body (the rotation axis of a steady spin).
-    axis = np.einsum("nji,j->ni", trajectory.rotation[last], np.array([0.0, 0.0, 1.0])).mean(axis=0)
-    axis = axis / np.linalg.norm(axis)
-    last_fault = max([0.0, *effective_fault_times(trajectory)])
-    unsettled = (np.abs(trajectory.omega[:, 2] - r) > max(0.05 * abs(r), 0.2)) | (
-        np.abs(trajectory.primary_axis[:, 2] - n3z) > 0.02
-    )
-    idx = np.nonzero(unsettled & (t >= last_fault))[0]
-    settled_from = last_fault if idx.size == 0 else (float(t[idx[-1] + 1]) if idx[-1] + 1 < len(t) else math.inf)
-    if settled_from > t[-1] - window_s + 1e-9:
-        # Still moving at (or within the window before) the end: no settle time, no steady values.
-        return FlightMetrics(outcome, None, None, None, None, *position_errors, window_s, *window)
-    return FlightMetrics(
-        outcome,
-        r,
-        n3z,
-        (float(axis[0]), float(axis[1]), float(axis[2])),
-        settled_from - last_fault,
-        *position_errors,
-        window_s,
-        *window,
-    )
-
-
-def _turn_rad(velocity: FloatArray, min_speed: float) -> float:
-    """How far the horizontal direction of travel turns (range of the unwrapped heading, rad),
-    over the samples moving faster than ``min_speed``; a reversal counts as pi."""
-    moving = np.hypot(velocity[:, 0], velocity[:, 1]) > min_speed
-    if moving.sum() < 2:
-        return 0.0
-    heading = np.unwrap(np.arctan2(velocity[moving, 1], velocity[moving, 0]))
-    return float(np.max(heading) - np.min(heading))
-
-
-def _setpoint_track(scenario_: KeScenario, t: FloatArray) -> FloatArray:
-    times = np.array([s for s, _ in scenario_.setpoints])
-    points = np.array([p for _, p in scenario_.setpoints])
-    k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1)
-    out: FloatArray = points[k]
-    return out
-
-
 @dataclass
 class ScenarioRun:
     scenario: KeScenario
@@ -370,62 +185,6 @@ def run_scenario(
 
 
 # -- report (rotorfault ftc-report) --------------------------------------------------------------
-
-
-def plot_primary_axis(runs: list[ScenarioRun], path: str | None = None, *, tail_s: float = 10.0) -> Figure:
-    """Ke Fig. 16 style: the path of the primary axis ``n3`` (body z in the world, NED) on the
-    unit sphere for each run, drawn with ``n3z`` (the world-down component: 1 is level) upward
-    and viewed obliquely from above that pole; the whole path thin and dashed, the last
-    ``tail_s`` seconds solid and bold, the start a circle, the loss (if any) a cross. Returns the
-    figure (not registered with pyplot), saved to ``path`` if given."""
-    from .._output import MIN_FONT_PT, new_figure, save_figure
-
-    if not runs:
-        raise ValueError("runs: give at least one run to plot")
-    count = len(runs)
-    cols = min(count, 4)
-    rows_ = -(-count // cols)
-    fig = new_figure(figsize=(4.4 * cols, 4.6 * rows_ + 0.9), layout="constrained")
-    u, v = np.mgrid[0 : 2 * np.pi : 30j, 0 : np.pi : 24j]
-    handles: dict[str, Any] = {}
-    for k, run in enumerate(runs):
-        ax = fig.add_subplot(rows_, cols, k + 1, projection="3d")
-        n3 = run.trajectory.primary_axis
-        t = run.trajectory.t
-        below = bool(np.nanmin(n3[:, 2]) < 0)
-        uu, vv = (u, v) if below else (u[:, :13], v[:, :13])
-        ax.plot_wireframe(np.cos(uu) * np.sin(vv), np.sin(uu) * np.sin(vv), np.cos(vv), color="0.85", lw=0.4)
-        late = t >= t[-1] - tail_s
-        whole = ax.plot(n3[:, 0], n3[:, 1], n3[:, 2], color="0.45", lw=0.7, linestyle="--", label="whole flight")
-        tail = ax.plot(n3[late, 0], n3[late, 1], n3[late, 2], color="black", lw=1.8, label=f"last {tail_s:g} s")
-        start = ax.scatter([n3[0, 0]], [n3[0, 1]], [n3[0, 2]], color="black", marker="o", s=28, label="start")
-        handles.update({"whole flight": whole[0], f"last {tail_s:g} s": tail[0], "start": start})
-        if run.trajectory.diverged:
-            handles["lost"] = ax.scatter([n3[-1, 0]], [n3[-1, 1]], [n3[-1, 2]], color="black", marker="x", s=60, label="lost")
-        ax.set_xlim(-1, 1)
-        ax.set_ylim(-1, 1)
-        ax.set_zlim(-1 if below else 0, 1)
-        ax.set_box_aspect((1, 1, 1 if below else 0.5), zoom=0.82)
-        ax.view_init(elev=30, azim=-60)
-        ax.set_xticks([-1, 0, 1])
-        ax.set_yticks([-1, 0, 1])
-        ax.set_zticks([-1, 0, 1] if below else [0, 0.5, 1])
-        m = run.metrics
-        if m.lost_at_s is not None:
-            state = f"lost at {m.lost_at_s:.2f} s ({m.outcome_label})"
-        elif m.r_rad_s is not None and m.n3z is not None:
-            state = f"{m.outcome_label}, r = {m.r_rad_s:.1f} rad/s, n3z = {m.n3z:.3f}"
-        else:
-            state = f"{m.outcome_label}, not settled"
-        ax.set_title(f"{run.scenario.name} ({run.law})\n{state}", fontsize=9)
-        for name, setter in (("n3x", ax.set_xlabel), ("n3y", ax.set_ylabel), ("n3z", ax.set_zlabel)):
-            setter(name, fontsize=9, labelpad=2)
-        ax.tick_params(labelsize=MIN_FONT_PT, pad=1)
-    fig.suptitle("primary axis n3 on the unit sphere (Ke Fig. 16 style; n3z = 1 is level)", fontsize=11)
-    fig.legend(list(handles.values()), list(handles), loc="outside lower center", ncol=len(handles), fontsize=9, frameon=False)
-    if path is not None:
-        save_figure(fig, path)
-    return fig
 
 
 def _efficiency_text(values: Any) -> str:
@@ -518,32 +277,13 @@ def write_report(
     beside ``out_dir`` and swapped in only when complete: an interrupted report leaves the
     previous one as it was. An existing report is replaced only with ``force``; a non-empty
     directory that is not a report never. Returns the Markdown file's path."""
-    import csv
-    import io
-    from importlib.metadata import PackageNotFoundError, version
+    from ._report import check_report_directory, csv_text, report_directory
 
-    from .._output import check_output_directory, output_directory
-
-    out = check_output_directory("out_dir", out_dir, force=force)
+    out = check_report_directory("out_dir", out_dir, force=force)
     if not runs:
         raise ValueError("runs: nothing to report (give at least one law and scenario)")
     rows = report_rows(runs)
-    try:
-        package_version = version("rotorfault")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        package_version = "unknown"
-    manifest = {
-        "generator": "rotorfault ftc-report (rotorfault.papers.ke.write_report)",
-        "command": command or "rotorfault.papers.ke.write_report",
-        "version": package_version,
-        "laws": sorted({run.law for run in runs}),
-        "scenarios": sorted({run.scenario.name for run in runs}),
-    }
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    for r in rows:
-        writer.writerow({column: cell(r, column, 6) for column in r})
+    table_csv = csv_text(rows, lambda r, column: cell(r, column, 6))
     lines = [
         "# Uniform passive FTC (Ke et al.): scenario report",
         "",
@@ -585,8 +325,12 @@ def write_report(
         lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario (`<scenario>.png`)."]
     else:
         lines += ["", "No figures (written with --no-figures)."]
-    with output_directory(out, manifest) as tmp:
-        (tmp / "ftc-report.csv").write_text(buffer.getvalue(), encoding="utf-8")
+    with report_directory(
+        out, generator="rotorfault ftc-report (rotorfault.papers.ke.write_report)", command=command,
+        default_command="rotorfault.papers.ke.write_report", laws=sorted({run.law for run in runs}),
+        scenarios=sorted({run.scenario.name for run in runs}),
+    ) as tmp:
+        (tmp / "ftc-report.csv").write_text(table_csv, encoding="utf-8")
         (tmp / "ftc-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
         if figures:
             chosen = [run for run in runs if run.law == first_law]

@@ -26,11 +26,16 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from .._convert import FloatArray, count, real
+from .._util.convert import FloatArray, count, real
 from ..control.ke import UniformPassiveFtc
 from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
-from ..simulation import Noise, RotorFault, State, Trajectory, simulate_batch
-from .ke import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, KeScenario, flight_metrics
+from ..flight import Noise, RotorFault, State, Trajectory, simulate_batch
+from ..plotting.paths import plot_lanzon_paths as plot_paths
+from ..plotting.timeseries import plot_lanzon_flight as plot_flight
+from ..studies.backends import map_runs
+from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text
+from ..flight.outcomes import OUTCOME_LABELS as OUTCOME_TEXT  # noqa: F401  (the one table of outcome words)
+from ..flight.scenarios import FlightScenario as KeScenario  # a generic flight scenario (no paper imports another)
 
 if TYPE_CHECKING:
     from ._report import ReportSection
@@ -42,8 +47,12 @@ if TYPE_CHECKING:
 IZZ_PRINTED = 1.16e-3
 IZZ_PROBABLE = 1.16e-2
 IZZ_VALUES = (IZZ_PRINTED, IZZ_PROBABLE)
-#: Scenario B's setpoint (Section IV.B: x = y = 0, z = 1 m up), world NED.
+#: Scenario B's setpoint (Section IV.B: x = y = 0, z = 1 m up), world NED; the paper's z is the
+#: height above the ground (its "recovery base at the origin"), where the simulator's ground is.
 SETPOINT_NED = (0.0, 0.0, -1.0)
+#: Scenario A's initial height above the ground, m: Table 2 prints no position and Section IV.A
+#: holds "an arbitrary constant altitude" (a decision: 10 m, clear of the ground).
+SCENARIO_A_HEIGHT_M = 10.0
 #: "level" in Scenario A: tilt below this (deg) throughout the judging window.
 LEVEL_TILT_DEG = 1.0
 #: ... and the spin within this fraction of its set point (m g d / k_r).
@@ -70,8 +79,8 @@ def scenarios() -> list[LanzonScenario]:
     """Scenario A (Table 2) and Scenario B (Table 3)."""
     q = math.pi / 4
     return [
-        LanzonScenario("A", "inner loop only from Table 2 (roll -45 deg, pitch 45 deg)",
-                       (-q, q, q, -0.5, 0.5, 2.7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), None),
+        LanzonScenario("A", f"inner loop only from Table 2 (roll -45 deg, pitch 45 deg), {SCENARIO_A_HEIGHT_M:g} m up",
+                       (-q, q, q, -0.5, 0.5, 2.7, 0.0, 0.0, SCENARIO_A_HEIGHT_M, 0.0, 0.0, 0.0), None),
         LanzonScenario("B", "inner and outer loop from Table 3 (x = y = z = 5 m) to x = y = 0, z = 1 m",
                        (0.075, 0.025, 0.1, 0.03, 0.02, 2.7, 5.0, 5.0, 5.0, 0.0, 0.0, 0.0), SETPOINT_NED),
     ]
@@ -176,17 +185,6 @@ def attitude_metrics(trajectory: Trajectory, spin_setpoint_rad_s: float, *, wind
     alt = -trajectory.position[:, 2]
     return AttitudeMetrics("level" if level else "not-level", level_after, float(tilt[-1]), window_tilt, window_spin,
                            float(np.max(alt[0] - alt)), None, window_s)
-
-
-OUTCOME_TEXT = {"level": "level", "not-level": "not level", "holds-position": "holds position",
-                "off-station": "off station", "circling": "circling"}
-
-
-def outcome_text(code: str, lost_at_s: float | None = None) -> str:
-    """An outcome code in words; a lost run says when (``"lost (tilt) at 1.52 s"``)."""
-    if lost_at_s is not None:
-        return f"lost ({code}) at {lost_at_s:.2f} s"
-    return OUTCOME_TEXT.get(code, code)
 
 
 # -- flights ------------------------------------------------------------------------------------
@@ -392,94 +390,9 @@ def monte_carlo(
         err = math.nan if tr.diverged else float(np.linalg.norm(tr.position[-1] - np.asarray(sc.position)))
         return m.outcome, err
 
-    from .._progress import chunks
-
-    results: list[tuple[str, float]] = []
-    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
-        for first, last in chunks(n, max(8, n // 50), description=f"{n:,} {controller} runs", show=progress):
-            results += list(pool.map(one, range(first, last)))
+    results = map_runs(one, n, description=f"{n:,} {controller} runs", progress=progress)
     return MonteCarloResult(controller, n, spread, snr_db, float(duration_s), float(inertia_zz_kg_m2),
                             tuple(o for o, _ in results), np.array([e for _, e in results]), factors)
-
-
-# -- figures ------------------------------------------------------------------------------------
-
-_STYLES: list[Any] = ["-", "--", ":", "-."]
-
-
-def plot_flight(run: LanzonRun, path: str | None = None) -> Figure:
-    """Lanzon Figs. 6-9 style for one run: roll and pitch, spin r, position (paper frame, z up,
-    with the setpoint) and rotor thrusts."""
-    from .._output import MIN_FONT_PT, new_figure, save_figure
-
-    tr = run.trajectory
-    paper = np.array([LanzonVehicle.paper_state(x) for x in np.column_stack(
-        [tr.position, tr.velocity, tr.euler, tr.omega])]) if len(tr.t) else np.zeros((0, 12))
-    fig = new_figure(figsize=(10, 10.5), layout="constrained")
-    axes = fig.subplots(4, 1, sharex=True)
-    panels: list[tuple[FloatArray, list[str], str]] = [
-        (np.degrees(paper[:, 0:2]), ["roll phi", "pitch theta"], "attitude (deg)"),
-        (paper[:, 3:6], ["p", "q", "r (spin)"], "body rates (rad/s)"),
-        (paper[:, 6:9], ["x", "y", "z (up)"], "position (m)"),
-        (tr.rotor_thrust, [f"rotor {i + 1}" + (" (failed)" if i == 1 else "") for i in range(4)], "rotor thrust (N)"),
-    ]
-    for k, (ax, (data, labels, ylabel)) in enumerate(zip(axes, panels)):
-        for j, (col, label) in enumerate(zip(data.T, labels)):
-            ax.plot(tr.t, col, label=label, linestyle=_STYLES[j % 4], color=f"C{j}", lw=1.2)
-        if k == 2 and run.scenario.position is not None:
-            sp = np.asarray(run.scenario.position) * np.array([1, -1, -1])
-            for j in range(3):
-                ax.axhline(sp[j], color=f"C{j}", lw=0.7, linestyle=_STYLES[j], alpha=0.7)
-        if k == 1:
-            ax.axhline(run.vehicle.spin_rate_rad_s, color="0.4", lw=0.7, linestyle=(0, (1, 2)), label="spin set point")
-        if k == 3 and run.case.limits:
-            for level in (0.0, run.vehicle.max_thrust_n):
-                ax.axhline(level, color="0.3", lw=0.7, linestyle=(0, (4, 2)))
-        ax.set_ylabel(ylabel, fontsize=10)
-        ax.grid(True, alpha=0.3)
-        ax.tick_params(labelsize=9)
-        for event in tr.events:
-            ax.axvline(event.time, color="black", lw=2.0, alpha=0.5)
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
-    axes[-1].set_xlabel("time (s)", fontsize=10)
-    lost = run.lost_at_s
-    verdict = outcome_text(run.outcome, lost)
-    import textwrap
-
-    fig.suptitle(textwrap.fill(f"{run.title}: {verdict}", 110), fontsize=11)
-    if path is not None:
-        save_figure(fig, path)
-    return fig
-
-
-def plot_paths(runs: list[LanzonRun], path: str | None = None) -> Figure:
-    """Lanzon Fig. 8 style: the 3-D paths (paper frame, z up) of Scenario B runs, with the start
-    (circle), the setpoint (star) and any loss (cross)."""
-    from .._output import MIN_FONT_PT, new_figure, save_figure
-
-    if not runs:
-        raise ValueError("runs: give at least one run to plot")
-    fig = new_figure(figsize=(8, 7), layout="constrained")
-    ax = fig.add_subplot(1, 1, 1, projection="3d")
-    for j, run in enumerate(runs):
-        p = run.trajectory.position * np.array([1, -1, -1])
-        label = f"({run.case.label}) I_zz {run.vehicle.inertia_zz_kg_m2:g}: {outcome_text(run.outcome, run.lost_at_s)}"
-        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=f"C{j}", linestyle=_STYLES[j % 4], lw=1.2, label=label)
-        ax.scatter([p[0, 0]], [p[0, 1]], [p[0, 2]], color="black", marker="o", s=25)
-        if run.trajectory.diverged:
-            ax.scatter([p[-1, 0]], [p[-1, 1]], [p[-1, 2]], color=f"C{j}", marker="x", s=60)
-    sp = runs[0].scenario.position
-    if sp is not None:
-        ax.scatter([sp[0]], [-sp[1]], [-sp[2]], color="black", marker="*", s=90, label="setpoint")
-    ax.set_xlabel("x (m)", fontsize=9)
-    ax.set_ylabel("y (m)", fontsize=9)
-    ax.set_zlabel("z, up (m)", fontsize=9)
-    ax.tick_params(labelsize=MIN_FONT_PT)
-    ax.legend(loc="upper left", fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
-    fig.suptitle("Lanzon scenario B: 3-D path from (5, 5, 5) m to the setpoint (0, 0, 1) m (circle: start)", fontsize=11)
-    if path is not None:
-        save_figure(fig, path)
-    return fig
 
 
 # -- report (rotorfault lanzon-report) -----------------------------------------------------------
@@ -591,7 +504,7 @@ def write_report(
     import io
     from importlib.metadata import PackageNotFoundError, version
 
-    from .._output import check_output_directory, output_directory
+    from .._util.output import check_output_directory, output_directory
 
     out = check_output_directory("out_dir", out_dir, force=force)
     if not runs:

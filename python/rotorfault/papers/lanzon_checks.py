@@ -15,12 +15,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._convert import FloatArray
+from .._util.convert import FloatArray
+from ..plotting.frequency import plot_loop_shape
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
     from ..control.lanzon import LanzonDesign, LanzonVehicle
     from ._report import ReportSection
 
@@ -131,32 +130,6 @@ def loop_shape_numbers(design_: LanzonDesign) -> list[PaperNumber]:
         PaperNumber(PAPER, where, "slope over 10^4..10^5 rad/s (dB/decade) of the shaped plant G W1", LOOP_SLOPE_HIGH_DB_DEC,
                     _slope_db_per_decade(omega, gain_db, 1e4, 1e5), 2.0),
     ]
-
-
-def plot_loop_shape(design_: LanzonDesign, path: str | None = None) -> Figure:
-    """Singular values (dB) of the RFL plant ``G`` and of the shaped plant ``G W1`` (Lanzon
-    Fig. 4 style), on the figure's own canvas; saved to ``path`` if given."""
-    from .._output import new_figure, save_figure
-    from ..control.robust import singular_values
-
-    omega = np.logspace(-2, 5, 500)
-    fig = new_figure(figsize=(7, 4.5), layout="constrained")
-    ax = fig.add_subplot()
-    for system, label, style, colour in ((design_.vehicle.plant(), "G (plant after RFL)", "--", "0.5"),
-                                         (design_.synthesis.shaped_plant, "G W1 (shaped plant)", "-", "black")):
-        sv = singular_values(system, omega)
-        for j in range(sv.shape[1]):
-            ax.semilogx(omega, 20 * np.log10(np.maximum(sv[:, j], 1e-300)), style, color=colour, label=label if j == 0 else None)
-    ax.axhline(0, color="k", lw=0.5)
-    ax.axvline(design_.crossover_rad_s, color="0.7", lw=0.8, linestyle=":", label=f"target crossover {design_.crossover_rad_s:g} rad/s")
-    ax.set_xlabel("frequency (rad/s)")
-    ax.set_ylabel("singular values (dB)")
-    ax.set_title(f"Lanzon loop shape: gamma = {design_.gamma:.3f} (gamma_min {design_.gamma_min:.3f})")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=9)
-    if path is not None:
-        save_figure(fig, path)
-    return fig
 
 
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:

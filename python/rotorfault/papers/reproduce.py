@@ -220,6 +220,32 @@ def _shown_path(path: Path | None) -> str:
     return str(path)
 
 
+#: Schema of ``numbers.json``, the report's numbers and tables in a form a program compares.
+NUMBERS_SCHEMA = "rotorfault-report-numbers/1"
+
+
+def report_numbers(sections: list[ReportSection]) -> dict[str, Any]:
+    """Every number and table cell of the report, by section (run times left out): what
+    ``numbers.json`` holds, so that two installs' reports can be compared field by field (CI
+    compares the README's main job, run without the test extras, with the test environment's)."""
+
+    def flat(section: ReportSection) -> list[ReportSection]:
+        return [section, *(p for part in section.parts for p in flat(part))]
+
+    out: dict[str, Any] = {"schema": NUMBERS_SCHEMA, "sections": {}}
+    for s in sections:
+        for part in flat(s):
+            out["sections"][part.key] = {
+                "title": part.title,
+                "landed": part.landed,
+                "numbers": [{"where": n.where, "quantity": n.quantity, "printed": n.printed, "ours": n.ours,
+                             "tolerance": n.tolerance, "status": n.status} for n in part.numbers],
+                "tables": [{"caption": t.caption, "columns": list(t.columns), "rows": [list(r) for r in t.rows]}
+                           for t in part.tables],
+            }
+    return out
+
+
 @dataclass
 class ReproduceResult:
     path: Path
@@ -242,11 +268,9 @@ def write_reproduce(
     ``force``, a directory that is not a report never. ``bench_directory`` defaults to the source
     tree's ``benches/results``; ``providers`` overrides the section providers by paper key (None:
     not landed), for tests. ``progress(text)`` is called before each section."""
-    from importlib.metadata import PackageNotFoundError, version
+    from ._report import check_report_directory, package_version, report_directory
 
-    from .._output import check_output_directory, output_directory
-
-    out = check_output_directory("out", out_dir, force=force)
+    out = check_report_directory("out", out_dir, force=force)
     if bench_directory is None:  # the source tree's results, when there are any
         default = default_bench_directory()
         benches_dir = default if default is not None and default.is_dir() else None
@@ -254,16 +278,11 @@ def write_reproduce(
         benches_dir = Path(bench_directory)
     benches = bench_results(benches_dir)
     decision_rows = decisions()
-    try:
-        package_version = version("rotorfault")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        package_version = "unknown"
-    manifest = {"generator": "rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)",
-                "command": command or "rotorfault.papers.reproduce.write_reproduce", "version": package_version,
-                "quick": quick}
     start = time.perf_counter()
     result = ReproduceResult(out / "index.html")
-    with output_directory(out, manifest) as tmp:
+    shown_command = command or "rotorfault.papers.reproduce.write_reproduce"
+    with report_directory(out, generator="rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)", command=command,
+                          default_command=shown_command, quick=quick) as tmp:
         for paper in PAPERS:
             chosen = providers[paper.key] if providers is not None and paper.key in providers else provider(paper)
             if progress is not None:
@@ -274,11 +293,13 @@ def write_reproduce(
                 result.sections.append(chosen(tmp, quick=quick))
         result.run_time_s = time.perf_counter() - start
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
-                      command=str(manifest["command"]), version=package_version,
+                      command=shown_command, version=package_version(),
                       bench_directory=_shown_path(benches_dir))
         (tmp / "index.html").write_text(html, encoding="utf-8")
+        (tmp / "numbers.json").write_text(json.dumps(report_numbers(result.sections), indent=1, allow_nan=True) + "\n",
+                                          encoding="utf-8")
     return result
 
 
-__all__ = ["BENCH_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
-           "inline_markdown", "number_row", "provider", "render", "write_reproduce"]
+__all__ = ["BENCH_SCHEMA", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "default_bench_directory",
+           "inline_markdown", "number_row", "provider", "render", "report_numbers", "write_reproduce"]

@@ -1,7 +1,17 @@
 """Wang, Gross, Zhao (2020), Section 4: the three flights of the VPP quadcopter with propeller 1
 failed, flown in Rust by the LQR of :func:`rotorfault.vpp.lqr` on a shaped reference
-(:class:`rotorfault.TrackingFeedback`), and the fixed-pitch quadcopter with the same failure on
-the same scenario.
+(:class:`rotorfault.TrackingFeedback`), and the fixed-pitch comparison of Section 3.4.
+
+The fixed-pitch comparison (a decision, README "Wang's fixed-pitch comparison"): no fixed-pitch
+flight. Sec. 3.4's layout (``wang-fixed-pitch``: motors on one axis spin opposite ways) is not
+stabilisable healthy (rank 10: yaw rate moves only with roll and pitch rate) nor with propeller 1
+failed (rank 8), so no linear controller exists to fly it and none is designed (the LQR's PBH test
+refuses, naming the modes). The standard layout (``wang-standard-fixed-pitch``) is stabilisable
+healthy but has no hover at rest once propeller 1 fails; flying it needs a spinning controller
+tuned for this vehicle and a rotational damping Wang does not give (it sets the spin rate), so
+such a flight would measure our choices, not the vehicle. :func:`fixed_pitch_comparison` tabulates
+both layouts beside the VPP, healthy and failed: hover at rest, rank, stabilisability with the
+modes no input moves, the uncontrollable directions, the ACAI.
 
 The scenarios are Python definitions, not ``examples/*.toml`` files: the scenario-file schema
 (:mod:`rotorfault.scenario`) has no VPP actuator, no reference path and no wind profile.
@@ -17,6 +27,9 @@ Paper gaps, decided here (README decisions table):
   the reference carries the path's velocity (feedforward through the velocity error);
 - scenario 3: "the desired states are all set to 0" (the paper), hold the origin with a 4 m/s
   wind in x and y from t = 1 s and 15 dB SNR noise;
+- the ground: the paper prints none, and its vehicle hovers at its origin (scenario 3), so the
+  origin is in the air: the simulator's ground is :data:`GROUND_Z_M` below it (the paper's
+  coordinates are kept, so the paths and errors are the paper's frame);
 - reference shaping: the paper feeds its steps to the LQR unshaped, and in our model that flies
   (:data:`ERROR_LIMIT_M` = inf, the default); clipping each position error (``error_limit_m``)
   trades a smaller tilt for a slower arrival and, against a steady wind, a drift (README).
@@ -31,15 +44,17 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._convert import FloatArray, real
+from .._util.convert import FloatArray, real
+from ..control.linear import STATE_LABELS
 from ..control.tracking import TrackingFeedback
-from ..simulation import Noise, Simulator, State, Trajectory
-from .. import vpp
+from ..flight import Noise, Simulator, State, Trajectory
+from ..control import vpp
+from ..plotting.timeseries import plot_wang_flights as plot_flight
 
 if TYPE_CHECKING:
+    from ..control.stabilisability import PbhTest
     from ._numbers import PaperNumber
     from ._report import ReportSection
-    from matplotlib.figure import Figure
 
 #: Scenario 1 (a decision: the paper prints no numbers).
 CIRCLE_RADIUS_M = 2.0
@@ -58,6 +73,15 @@ ERROR_LIMIT_M = math.inf
 OMEGA3 = 9000.0
 DT_S = 0.001
 DURATION_S = 60.0
+#: The ground plane in the paper's frame (NED z, m): 10 m below its origin (module notes).
+GROUND_Z_M = 10.0
+
+#: What the fixed-pitch comparison is (report text; module notes and README decisions).
+COMPARISON_NOTE = (
+    "Wang's Sec. 3.4 layout cannot be stabilised by any linear feedback, healthy or with propeller 1 failed "
+    "(the LQR refuses it, naming the modes no input moves), so it is not flown; the standard layout has no "
+    "hover at rest once propeller 1 fails."
+)
 
 
 @dataclass(frozen=True)
@@ -139,15 +163,10 @@ class WangFlight:
         return self.lost_at_s is not None
 
 
-def controller(vehicle: vpp.VppVehicle, s: WangScenario, *, fixed_pitch: bool = False, error_limit_m: float = ERROR_LIMIT_M) -> TrackingFeedback:
-    """The LQR of :func:`rotorfault.vpp.lqr` on ``s``'s reference. ``fixed_pitch``: the
-    fixed-pitch quadcopter's LQR designed for its healthy hover (with propeller 1 failed it has
-    no stabilising linear feedback: rank 8, roll a double integrator)."""
-    if fixed_pitch:
-        at = vpp.fixed_pitch_trim(vehicle, failed=())
-        feedback = vpp.lqr(vehicle, at, pitch_fixed=True)
-    else:
-        feedback = vpp.lqr(vehicle, vpp.trim(vehicle, failed=(1,), speeds={3: OMEGA3}))
+def controller(vehicle: vpp.VppVehicle, s: WangScenario, *, error_limit_m: float = ERROR_LIMIT_M) -> TrackingFeedback:
+    """The LQR of :func:`rotorfault.vpp.lqr` at Wang's trim (propeller 1 failed, omega_3 = 9000),
+    checked at the flights' control period :data:`DT_S`, on ``s``'s reference."""
+    feedback = vpp.lqr(vehicle, vpp.trim(vehicle, failed=(1,), speeds={3: OMEGA3}), dt_s=DT_S)
     limit = np.full(12, math.inf)
     limit[:3] = real("error_limit_m", error_limit_m)
     return TrackingFeedback.from_feedback(feedback, times_s=s.times_s, references=s.references, error_limit=limit)
@@ -156,24 +175,22 @@ def controller(vehicle: vpp.VppVehicle, s: WangScenario, *, fixed_pitch: bool = 
 def fly(
     number: int,
     *,
-    fixed_pitch: bool = False,
     duration_s: float = DURATION_S,
     error_limit_m: float = ERROR_LIMIT_M,
     seed: int = 0,
     settle_s: float = 15.0,
 ) -> WangFlight:
-    """Scenario ``number`` with propeller 1 failed from t = 0, on the VPP quadcopter or (with
-    ``fixed_pitch``) the fixed-pitch one. ``max_error_after_s``: the largest position error
-    after ``settle_s`` (the last waypoint at 10 s plus 5 s)."""
+    """Scenario ``number`` with propeller 1 failed from t = 0 on the VPP quadcopter (the
+    fixed-pitch quadcopter is not flown: module notes). ``max_error_after_s``: the largest
+    position error after ``settle_s`` (the last waypoint at 10 s plus 5 s)."""
     s = scenario(number, duration_s=duration_s)
-    wang = vpp.preset("wang")
-    vehicle = vpp.fixed_pitch(wang) if fixed_pitch else wang
-    law = controller(vehicle, s, fixed_pitch=fixed_pitch, error_limit_m=error_limit_m)
+    vehicle = vpp.preset("wang")
+    law = controller(vehicle, s, error_limit_m=error_limit_m)
     base = vehicle.simulator(failed=(1,), wind_profile=list(s.wind_profile) if s.wind_profile else None)
     sim = Simulator(
         base.airframe, actuator=vehicle.actuator, drag=vehicle.drag, dt_s=DT_S,
         wind_profile=list(s.wind_profile) if s.wind_profile else None,
-        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy else None,
+        noise=Noise(snr_db=SNR_DB, seed=seed) if s.noisy else None, ground_z_m=GROUND_Z_M,
     )
     run = sim.run(State(), duration_s=duration_s, controller=law)
     reference = np.array([law.reference(t) for t in run.t])
@@ -181,87 +198,104 @@ def fly(
     late = run.t >= settle_s
     lost = run.events[0].time if run.events else None
     return WangFlight(
-        s, "fixed pitch" if fixed_pitch else "VPP", run, reference, lost,
+        s, "VPP", run, reference, lost,
         float(error[-1]), float(np.max(error[late])) if np.any(late) else math.nan,
         float(np.max(np.abs(run.euler[:, :2]))),
     )
 
 
-def plot_flight(flights: list[WangFlight], path: str | None = None) -> Figure:
-    """Figs. 2-7 in one page per scenario: the 3-D path against the reference (left), position,
-    attitude and propeller commands against time (right); a fixed-pitch flight, if given, dashed
-    in the path panel with where it was lost."""
-    from .._output import new_figure, save_figure
+#: The comparison's vehicles: (label, VPP or fixed-pitch airframe preset, None for the VPP).
+LAYOUTS: tuple[tuple[str, str | None], ...] = (
+    ("VPP (thrust in [-13, 13] N)", None),
+    ("fixed pitch, Sec. 3.4 layout (1 cw, 2 ccw, 3 ccw, 4 cw)", "wang-fixed-pitch"),
+    ("fixed pitch, standard layout (1, 3 cw; 2, 4 ccw)", "wang-standard-fixed-pitch"),
+)
 
-    first = flights[0]
-    fig = new_figure(figsize=(13, 9), layout="constrained")
-    grid = fig.add_gridspec(4, 2, width_ratios=[1.1, 1.0])
-    ax3 = fig.add_subplot(grid[:, 0], projection="3d")
-    ref = first.reference
-    ax3.plot(ref[:, 0], ref[:, 1], -ref[:, 2], color="0.6", lw=2.5, label="reference")
-    for k, f in enumerate(flights):
-        p = f.trajectory.position
-        label = f"{f.vehicle}" + (f" (lost at {f.lost_at_s:.2f} s)" if f.lost else "")
-        ax3.plot(p[:, 0], p[:, 1], -p[:, 2], color="black" if k == 0 else "0.35", lw=1.2, linestyle="-" if k == 0 else "--", label=label)
-    ax3.set_xlabel("x (m)")
-    ax3.set_ylabel("y (m)")
-    ax3.set_zlabel("altitude (m)")
-    ax3.legend(loc="upper left", fontsize=9)
-    run = first.trajectory
-    t = run.t
-    styles = ["-", "--", ":"]
-    ax = fig.add_subplot(grid[0, 1])
-    for j, name in enumerate(["x", "y", "altitude"]):
-        sign = -1.0 if j == 2 else 1.0
-        ax.plot(t, sign * run.position[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-        ax.plot(t, sign * ref[:, j], color=f"C{j}", lw=0.8, alpha=0.6)
-    ax.set_ylabel("position (m)\n(thin: reference)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax = fig.add_subplot(grid[1, 1], sharex=ax)
-    for j, name in enumerate(["roll", "pitch", "yaw"]):
-        ax.plot(t, run.euler[:, j], color=f"C{j}", linestyle=styles[j], label=name)
-    ax.plot(t, ref[:, 8], color="C2", lw=0.8, alpha=0.6)
-    ax.set_ylabel("attitude (rad)")
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    ax_w = fig.add_subplot(grid[2, 1], sharex=ax)
-    ax_a = fig.add_subplot(grid[3, 1], sharex=ax)
-    for i in range(1, 4):
-        ax_w.plot(t, run.rotor_command[:, 2 * i], color=f"C{i}", linestyle=styles[i - 1], label=f"omega {i + 1}")
-        ax_a.plot(t, run.rotor_command[:, 2 * i + 1], color=f"C{i}", linestyle=styles[i - 1], label=f"alpha {i + 1}")
-    ax_w.set_ylabel("speed command\n(paper's units)")
-    ax_a.set_ylabel("pitch command (rad)")
-    ax_a.set_xlabel("time (s)")
-    for a in (ax_w, ax_a):
-        a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    for a in fig.axes[1:]:
-        a.grid(True, alpha=0.3)
-    fig.suptitle(
-        f"Wang et al. {first.scenario.title}; VPP quadcopter, propeller 1 failed: final error "
-        f"{first.final_error_m:.3f} m, largest tilt {first.max_tilt_rad:.3f} rad", fontsize=11,
-    )
-    if path is not None:
-        save_figure(fig, path)
-    return fig
+#: A hover is "at rest" when the trim leaves no acceleration beyond this (the trims' own
+#: rounding is about 1e-13; an unbalanced yaw torque leaves about 10 rad/s^2).
+REST_RESIDUAL = 1e-9
 
 
-def comparison_table() -> list[str]:
-    """Markdown: controllability (scale-free rank, uncontrollable states) and the ACAI of the VPP
-    bidirectional thrust box and of the fixed-pitch quadcopter, healthy and with propeller 1 failed."""
-    from ..controllability import acai
+@dataclass(frozen=True)
+class LayoutCase:
+    """One row of the fixed-pitch comparison: a vehicle, healthy or with propeller 1 failed.
+
+    ``residual``: the trim's ``||f(x*, u*)||`` (:data:`REST_RESIDUAL`: whether it hovers at
+    rest); when it does, ``rank`` (scale-free, :func:`rotorfault.vpp.controllability`),
+    ``stabilisability`` (the PBH test of :func:`rotorfault.control.stabilisability`, which the
+    LQR runs first) and ``uncontrollable`` (the Kalman directions); else those are None (no
+    equilibrium to linearise about). ``acai``: Du's index of the airframe's thrust box."""
+
+    vehicle: str
+    failed: tuple[int, ...]
+    residual: float
+    rank: int | None
+    stabilisability: PbhTest | None
+    uncontrollable: tuple[str, ...] | None
+    acai: float
+
+    @property
+    def at_rest(self) -> bool:
+        return self.residual <= REST_RESIDUAL
+
+
+def fixed_pitch_comparison() -> list[LayoutCase]:
+    """The VPP and the two fixed-pitch layouts, healthy and with propeller 1 failed (module
+    notes): the comparison in place of a fixed-pitch flight."""
+    from ..control.stabilisability import stabilisability
+    from ..analysis.acai import acai
 
     wang = vpp.preset("wang")
-    fixed = vpp.fixed_pitch(wang)
-    v = vpp.controllability(vpp.linearize(wang, vpp.trim(wang, failed=(1,), speeds={3: OMEGA3})))
-    f = vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True))
-    failed = np.array([0.0, 1.0, 1.0, 1.0])
+    rows = []
+    for label, frame in LAYOUTS:
+        vehicle = wang if frame is None else vpp.fixed_pitch(wang, frame)
+        for failed in ((), (1,)):
+            if frame is None:
+                at = vpp.trim(vehicle, failed=failed, speeds={3: OMEGA3} if failed else None)
+            else:
+                at = vpp.fixed_pitch_trim(vehicle, failed=failed)
+            efficiency = np.ones(4)
+            efficiency[[i - 1 for i in failed]] = 0.0
+            index = float(acai(vehicle.airframe.with_efficiency(efficiency), formula="eq13"))
+            if at.residual > REST_RESIDUAL:
+                rows.append(LayoutCase(label, failed, at.residual, None, None, None, index))
+                continue
+            model = vpp.linearize(vehicle, at, pitch_fixed=frame is not None)
+            kalman = vpp.controllability(model)
+            test = stabilisability(
+                model.a, model.b, state_names=vpp.STATE_NAMES, state_labels=STATE_LABELS,
+            )
+            rows.append(LayoutCase(
+                label, failed, at.residual, kalman.rank, test,
+                tuple(d.text for d in kalman.uncontrollable_directions), index,
+            ))
+    return rows
+
+
+def comparison_table(cases: list[LayoutCase] | None = None) -> list[str]:
+    """Markdown: :func:`fixed_pitch_comparison` (hover at rest, rank, stabilisable and the modes
+    no input moves, the uncontrollable directions, ACAI)."""
+    from ..analysis.acai import acai_label
+
     rows = [
-        "| vehicle | rank (propeller 1 failed) | uncontrollable | ACAI healthy | ACAI propeller 1 failed |",
-        "|---|---|---|---|---|",
-        f"| VPP (thrust in [-13, 13] N) | {v.rank} | {', '.join(v.uncontrollable_states) or 'none'} | "
-        f"{float(acai(wang.airframe)):.4f} | {float(acai(wang.airframe.with_efficiency(failed))):.4f} |",
-        f"| fixed pitch (thrust in [0, 13] N) | {f.rank} | {', '.join(f.uncontrollable_states) or 'none'} | "
-        f"{float(acai(fixed.airframe)):.4f} | {float(acai(fixed.airframe.with_efficiency(failed))):.4f} |",
+        "| vehicle | propeller 1 | hover at rest | rank | stabilisable (PBH) | uncontrollable directions | "
+        f"{acai_label('eq13')} |",
+        "|---|---|---|---|---|---|---|",
     ]
+    for c in fixed_pitch_comparison() if cases is None else cases:
+        state = "failed" if c.failed else "healthy"
+        if not c.at_rest:
+            rows.append(
+                f"| {c.vehicle} | {state} | no (trim residual {c.residual:.3g}) | - | "
+                f"no equilibrium to linearise | - | {c.acai:.4f} |"
+            )
+            continue
+        assert c.stabilisability is not None and c.uncontrollable is not None
+        verdict = "yes" if c.stabilisability.holds else f"no: {c.stabilisability.describe()}"
+        rows.append(
+            f"| {c.vehicle} | {state} | yes | {c.rank} | {verdict} | {'; '.join(c.uncontrollable) or 'none'} | "
+            f"{c.acai:.4f} |"
+        )
     return rows
 
 
@@ -291,10 +325,10 @@ def flights_table(flights: list[WangFlight]) -> list[str]:
 
 def write_report(out_dir: str, *, quick: bool = False, force: bool = False, command: str | None = None) -> str:
     """Writes ``out_dir`` atomically (replaced only with ``force``): ``vpp-report.md`` (the
-    comparison table, the speed sweep, the flights), one figure per scenario
-    (``scenario-<n>.png``, VPP and the fixed-pitch quadcopter) and ``manifest.json``.
+    fixed-pitch comparison table, the speed sweep, the flights), one figure per scenario
+    (``scenario-<n>.png``) and ``manifest.json``.
     ``quick``: 20 s flights instead of the paper's 60 s."""
-    from .._output import check_output_directory, output_directory, write_text
+    from .._util.output import check_output_directory, output_directory, write_text
 
     check_output_directory("out_dir", out_dir, force=force)
     duration = 20.0 if quick else DURATION_S
@@ -302,14 +336,14 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     pages = []
     for n in (1, 2, 3):
         v = fly(n, duration_s=duration)
-        fp = fly(n, fixed_pitch=True, duration_s=min(duration, 5.0))
-        flights += [v, fp]
-        pages.append((n, [v, fp]))
+        flights.append(v)
+        pages.append((n, [v]))
     lines = [
         "# Variable-pitch quadcopters that lose a propeller (Wang et al.): report", "",
-        "## Controllability and ACAI", "", *comparison_table(), "",
+        "## The fixed-pitch comparison: hover, controllability, ACAI", "", COMPARISON_NOTE, "",
+        *comparison_table(), "",
         "## Feasible trim speeds per failed propeller", "", *speed_sweep_table(), "",
-        f"## Section 4's flights ({duration:g} s, propeller 1 failed from t = 0; fixed pitch flown 5 s)", "",
+        f"## Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0)", "",
         *flights_table(flights), "",
     ]
     manifest = {"generator": "rotorfault vpp-report (rotorfault.papers.wang.write_report)",
@@ -321,7 +355,7 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     return out_dir
 
 
-__all__ = ["PAPER", "WangFlight", "WangScenario", "comparison_table", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
+__all__ = ["COMPARISON_NOTE", "LAYOUTS", "PAPER", "REST_RESIDUAL", "LayoutCase", "WangFlight", "WangScenario", "comparison_table", "fixed_pitch_comparison", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
            "scenario", "speed_sweep_table", "write_report"]
 
 
@@ -340,10 +374,8 @@ def printed_numbers() -> list[PaperNumber]:
     trim = vpp.trim(wang, failed=(1,), speeds={3: OMEGA3})
     window = vpp.feasible_speeds(wang, failed=(1,))
     fixed = vpp.fixed_pitch(wang)
-    ranks = (
-        vpp.controllability(vpp.linearize(wang, trim)).rank,
-        vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True)).rank,
-    )
+    fixed_model = vpp.controllability(vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=(1,)), pitch_fixed=True))
+    ranks = (vpp.controllability(vpp.linearize(wang, trim)).rank, fixed_model.rank)
     (lo2, hi2), (lo3, hi3) = window.free_speed_range, window.fixed_speed_range
     r_lo, r_hi = window.free_torque_range_nm
     return [
@@ -360,7 +392,8 @@ def printed_numbers() -> list[PaperNumber]:
                     "at the exact pitch-bound speed 6201.7; r(6201) = 0.7714"),
         PaperNumber(PAPER, "Sec. 3.1", "highest r(omega2)", 2, r_hi, 0.5),
         PaperNumber(PAPER, "Sec. 3.3", "controllability rank, VPP, propeller 1 failed", 12, ranks[0], 0.0),
-        PaperNumber(PAPER, "Sec. 3.4", "controllability rank, fixed pitch, propeller 1 failed", 8, ranks[1], 0.0),
+        PaperNumber(PAPER, "Sec. 3.4", "controllability rank, fixed pitch, propeller 1 failed", 8, ranks[1], 0.0,
+                    f"uncontrollable: {', '.join(fixed_model.uncontrollable_states)} (Wang: y, phi, p, v)"),
     ]
 
 
@@ -376,8 +409,8 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
                             source="rotorfault.papers.wang (rotorfault vpp-report)")
     section.numbers = printed_numbers()
     for caption, lines in (
-        ("Controllability and ACAI, propeller 1 failed (the 4-axis ACAI's yaw row cannot see the VPP's separate "
-         "torque channel: README decisions)", comparison_table()),
+        (f"The fixed-pitch comparison (no fixed-pitch flight): {COMPARISON_NOTE} The 4-axis ACAI's yaw row "
+         "cannot see the VPP's separate torque channel (README decisions).", comparison_table()),
         ("Feasible trim speeds per failed propeller", speed_sweep_table()),
     ):
         columns, rows = markdown_table(lines)
@@ -385,12 +418,12 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     duration = 20.0 if quick else DURATION_S
     flights = []
     for n in (1, 2, 3):
-        pair = [fly(n, duration_s=duration), fly(n, fixed_pitch=True, duration_s=min(duration, 5.0))]
-        flights += pair
+        flight = fly(n, duration_s=duration)
+        flights.append(flight)
         name = f"wang-scenario-{n}.png"
-        plot_flight(pair, str(out / name))
-        section.figures.append(ReportFigure(name, f"Section 4 scenario {n}: VPP (solid) and fixed pitch (dashed), propeller 1 failed", small=True))
+        plot_flight([flight], str(out / name))
+        section.figures.append(ReportFigure(name, f"Section 4 scenario {n}: VPP, propeller 1 failed", small=True))
     columns, rows = markdown_table(flights_table(flights))
-    section.tables.append(ReportTable(f"Section 4's flights ({duration:g} s; fixed pitch flown 5 s)", columns, rows))
+    section.tables.append(ReportTable(f"Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0)", columns, rows))
     section.run_time_s = time.perf_counter() - start
     return section

@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::prelude::*;
 
 use rfcore::analysis::relaxed_hover::{
-    relaxed_hover as core_relaxed_hover, relaxed_hover_residual as core_residual,
+    relaxed_hover_cancellable as core_relaxed_hover, relaxed_hover_residual as core_residual,
     RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution,
 };
 
@@ -276,7 +276,7 @@ pub(crate) fn relaxed_hover(
     settings: &PyRelaxedHoverSettings,
 ) -> PyResult<PyRelaxedHoverAnalysis> {
     let (frame, s) = (airframe.inner.clone(), settings.inner);
-    let result = detached(py, move || core_relaxed_hover(&frame, &s))?;
+    let result = detached(py, move |cancel| core_relaxed_hover(&frame, &s, cancel))?;
     analysis(py, result)
 }
 

@@ -1,31 +1,38 @@
 //! Bindings for Ke et al.'s uniform passive FTC: the controller, its gains and its preset files.
 
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use rfcore::control::ke::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
 
 use crate::airframe::PyAirframe;
-use crate::convert::to_py_err;
+use crate::convert::{real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err};
 
-/// Ke Table IV gains (`rotorfault.control.ke.KeGains`); defaults from the core's `Default` (the
-/// `ke-hil` preset), rules from its `check`.
+/// Ke Table IV gains: the one `KeGains` class, used directly from Python (re-exported as
+/// `rotorfault.control.ke.KeGains`). Keyword-only; defaults from the core's `Default` (the `ke-hil`
+/// preset); types checked here, values once, by the core's `check`, with its messages. Frozen,
+/// comparable, hashable, picklable; `replace(**changes)` gives a validated copy.
 #[pyclass(name = "KeGains", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyKeGains {
     pub(crate) inner: KeGains,
 }
 
-macro_rules! gain_getters {
+macro_rules! gains_class {
     ($($name:ident),*) => {
+        /// The field names, in order (`weights` last).
+        const KE_GAIN_FIELDS: &[&str] = &[$(stringify!($name),)* "weights"];
+
         #[pymethods]
         impl PyKeGains {
             #[new]
             #[pyo3(signature = (*, $($name=None,)* weights=None))]
-            fn new($($name: Option<f64>,)* weights: Option<[f64; 4]>) -> PyResult<Self> {
+            fn new($($name: Option<Bound<'_, PyAny>>,)* weights: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
                 let d = KeGains::default();
                 let inner = KeGains {
-                    $($name: $name.unwrap_or(d.$name),)*
-                    weights: weights.unwrap_or(d.weights),
+                    $($name: match $name { Some(v) => real(stringify!($name), &v)?, None => d.$name },)*
+                    weights: match weights { Some(v) => gain_weights(&v)?, None => d.weights },
                 };
                 inner.check().map_err(to_py_err)?;
                 Ok(PyKeGains { inner })
@@ -36,15 +43,40 @@ macro_rules! gain_getters {
                     self.inner.$name
                 }
             )*
+            /// `(w_f, w_p, w_q, w_r)`: the allocation weights.
             #[getter]
-            fn weights(&self) -> [f64; 4] {
-                self.inner.weights
+            fn weights(&self) -> (f64, f64, f64, f64) {
+                let [a, b, c, e] = self.inner.weights;
+                (a, b, c, e)
+            }
+            /// The field names, in order.
+            #[classattr]
+            #[pyo3(name = "FIELDS")]
+            fn fields() -> Vec<&'static str> {
+                KE_GAIN_FIELDS.to_vec()
+            }
+            /// A copy with ``changes`` (validated like a new object).
+            #[pyo3(signature = (**changes))]
+            fn replace<'py>(slf: &Bound<'py, Self>, changes: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
+                settings_replace(slf.as_any(), KE_GAIN_FIELDS, changes)
+            }
+            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+                settings_repr(slf.as_any(), KE_GAIN_FIELDS)
+            }
+            fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+                settings_eq(slf.as_any(), other, KE_GAIN_FIELDS)
+            }
+            fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
+                settings_hash(slf.as_any(), KE_GAIN_FIELDS)
+            }
+            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
+                Ok(((), settings_kwargs(slf.as_any(), KE_GAIN_FIELDS)?))
             }
         }
     };
 }
 
-gain_getters!(
+gains_class!(
     k_p,
     k_v,
     k_vz,
@@ -58,6 +90,22 @@ gain_getters!(
     k_rotor_z,
     k_iz
 );
+
+/// The four allocation weights `(w_f, w_p, w_q, w_r)` (values checked by the core).
+fn gain_weights(value: &Bound<'_, PyAny>) -> PyResult<[f64; 4]> {
+    let items: Vec<Bound<'_, PyAny>> = value
+        .try_iter()
+        .map_err(|_| PyTypeError::new_err(format!("weights: expected 4 numbers (w_f, w_p, w_q, w_r), got {}", value.get_type().name().map(|n| n.to_string()).unwrap_or_default())))?
+        .collect::<PyResult<_>>()?;
+    if items.len() != 4 {
+        return Err(PyValueError::new_err(format!("weights: expected 4 entries (w_f, w_p, w_q, w_r), got {}", items.len())));
+    }
+    let mut out = [0.0; 4];
+    for (k, item) in items.iter().enumerate() {
+        out[k] = real(&format!("weights[{k}]"), item)?;
+    }
+    Ok(out)
+}
 
 /// The uniform passive fault-tolerant controller (Ke et al.).
 #[pyclass(name = "UniformPassiveFtc", module = "rotorfault._rfcore", frozen)]
@@ -130,5 +178,11 @@ impl PyFtcPreset {
     #[getter]
     fn linear_drag_n_s_m(&self) -> f64 {
         self.inner.vehicle.linear_drag_n_s_m
+    }
+}
+
+impl crate::control::class::ControllerClass for PyUniformPassiveFtc {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
     }
 }

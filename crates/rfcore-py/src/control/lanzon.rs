@@ -109,3 +109,9 @@ impl PyLanzonController {
         Ok(PyLanzonController { inner })
     }
 }
+
+impl crate::control::class::ControllerClass for PyLanzonController {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}

@@ -82,3 +82,21 @@ impl PyLti {
         Ok(PyLti { inner })
     }
 }
+
+impl crate::control::class::ControllerClass for PyOpenLoop {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}
+
+impl crate::control::class::ControllerClass for PyLinearFeedback {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}
+
+impl crate::control::class::ControllerClass for PyLti {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}

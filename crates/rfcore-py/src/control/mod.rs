@@ -2,6 +2,8 @@
 //! argument into a core controller (`boxed`), a Python callable as the slow path, the allocating
 //! controller and replay. Translation only.
 
+pub(crate) mod class;
+pub(crate) mod indi;
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
@@ -11,6 +13,7 @@ pub(crate) mod tracking;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyType;
 
 use rfcore::allocation::active_set::ActiveSetSolver;
 use rfcore::control::{replay as core_replay, Allocated, Controller, ZeroCommand};
@@ -21,6 +24,8 @@ use rfcore::RfError;
 
 use crate::allocation::PyAllocationProblem;
 use crate::convert::{detached, slice1, slice2, to_py_err};
+pub(crate) use class::ControllerClass;
+use indi::PyIndiController;
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
@@ -86,33 +91,57 @@ impl Controller for CallableController {
     }
 }
 
-#[derive(FromPyObject)]
-pub enum ControllerArg<'py> {
-    OpenLoop(PyRef<'py, PyOpenLoop>),
-    LinearFeedback(PyRef<'py, PyLinearFeedback>),
-    Lti(PyRef<'py, PyLti>),
-    Allocated(PyRef<'py, PyAllocated>),
-    Ftc(PyRef<'py, PyUniformPassiveFtc>),
-    Lanzon(PyRef<'py, PyLanzonController>),
-    Tracking(PyRef<'py, PyTrackingFeedback>),
-    RelaxedHover(PyRef<'py, PyRelaxedHoverFeedback>),
+
+/// The one registry of the Rust controllers the simulator runs (in a loop or a batch): each line
+/// `Variant(PyClass) = "kebab-name"` (the name is the class name in kebab case) makes the
+/// `ControllerArg` variant every call accepts, the arm of `boxed`, and the `(name, class)` pair
+/// Python reads as `rotorfault._rfcore.CONTROLLERS`, from which `rotorfault._typing`, the batch
+/// type check and `docs/adding-a-controller.md` are derived (and checked by tests). Adding a
+/// controller: `docs/adding-a-controller.md`.
+macro_rules! controller_registry {
+    ($($variant:ident($class:ty) = $name:literal),+ $(,)?) => {
+        /// A built-in controller passed from Python: any class of the registry.
+        #[derive(FromPyObject)]
+        pub enum ControllerArg<'py> {
+            $($variant(PyRef<'py, $class>)),+
+        }
+
+        impl ControllerArg<'_> {
+            fn core(&self) -> PyResult<Box<dyn Controller>> {
+                match self {
+                    $(ControllerArg::$variant(c) => c.core(c.py())),+
+                }
+            }
+        }
+
+        /// `(name, class)` of every registered controller, in declaration order.
+        pub(crate) fn registry(py: Python<'_>) -> Vec<(&'static str, Bound<'_, PyType>)> {
+            vec![$(($name, py.get_type::<$class>())),+]
+        }
+    };
 }
 
+controller_registry! {
+    OpenLoop(PyOpenLoop) = "open-loop",
+    LinearFeedback(PyLinearFeedback) = "linear-feedback",
+    Lti(PyLti) = "lti",
+    Allocated(PyAllocated) = "allocated",
+    UniformPassiveFtc(PyUniformPassiveFtc) = "uniform-passive-ftc",
+    LanzonController(PyLanzonController) = "lanzon-controller",
+    TrackingFeedback(PyTrackingFeedback) = "tracking-feedback",
+    IndiController(PyIndiController) = "indi-controller",
+    RelaxedHoverFeedback(PyRelaxedHoverFeedback) = "relaxed-hover-feedback",
+}
+
+/// The core controller for one run: `None` holds every command at zero.
 pub(crate) fn boxed(
     controller: Option<&ControllerArg<'_>>,
     count: usize,
 ) -> PyResult<Box<dyn Controller>> {
-    Ok(match controller {
-        None => Box::new(ZeroCommand { count }),
-        Some(ControllerArg::OpenLoop(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::LinearFeedback(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Lti(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Allocated(c)) => c.controller(c.py())?,
-        Some(ControllerArg::Ftc(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Lanzon(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::Tracking(c)) => Box::new(c.inner.clone()),
-        Some(ControllerArg::RelaxedHover(c)) => Box::new(c.inner.clone()),
-    })
+    match controller {
+        None => Ok(Box::new(ZeroCommand { count })),
+        Some(c) => c.core(),
+    }
 }
 
 /// A virtual-control law followed by active-set allocation. The law is kept as the Python
@@ -123,9 +152,9 @@ pub struct PyAllocated {
     solver: ActiveSetSolver,
 }
 
-impl PyAllocated {
+impl ControllerClass for PyAllocated {
     /// A fresh controller for one run.
-    pub(crate) fn controller(&self, py: Python<'_>) -> PyResult<Box<dyn Controller>> {
+    fn core(&self, py: Python<'_>) -> PyResult<Box<dyn Controller>> {
         let law: ControllerArg = self.law.bind(py).extract()?;
         let law = boxed(Some(&law), 0)?;
         Ok(Box::new(
@@ -156,7 +185,7 @@ impl PyAllocated {
             law: law.unbind(),
             solver: problem.solver.clone(),
         };
-        out.controller(py)?; // checks the law's output count
+        out.core(py)?; // checks the law's output count
         Ok(out)
     }
 }
@@ -190,7 +219,9 @@ pub fn replay<'py>(
     let mut controller = boxed(Some(&controller), command_count)?;
     let rows = times.len();
     let count = controller.command_count();
-    let flat = detached(py, || core_replay(controller.as_mut(), &times, &parsed))?;
+    let flat = detached(py, |cancel| {
+        core_replay(controller.as_mut(), &times, &parsed, cancel)
+    })?;
     numpy::ndarray::Array2::from_shape_vec((rows, count), flat)
         .map(|a| a.into_pyarray(py))
         .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))

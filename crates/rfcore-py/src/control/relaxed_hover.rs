@@ -94,3 +94,9 @@ impl PyRelaxedHoverFeedback {
         Ok(PyRelaxedHoverFeedback { inner })
     }
 }
+
+impl crate::control::class::ControllerClass for PyRelaxedHoverFeedback {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}

@@ -40,3 +40,9 @@ impl PyTrackingFeedback {
         self.inner.reference(t_s).to_vec()
     }
 }
+
+impl crate::control::class::ControllerClass for PyTrackingFeedback {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}

@@ -6,6 +6,11 @@
 //! constraints (priorities, directions) are the zero cone. Its answers are accurate to the
 //! tolerances of [`ClarabelSettings`], not exact: use it to check and to explore, and the active-set
 //! solver in loops.
+//!
+//! A leaf of the allocation room: it knows the problem, not the active set. Its answers are raw
+//! (`ClarabelAnswer`); the allocator ([`crate::allocation::allocator`]) certifies them, polishes
+//! them with the active set ([`crate::allocation::allocate_clarabel`]) and uses them as the active
+//! set's fallback.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -14,8 +19,7 @@ use clarabel::solver::{
 use nalgebra::DMatrix;
 
 use crate::airframe::Airframe;
-use crate::allocation::active_set::ActiveSetSolver;
-use crate::allocation::{Allocation, AllocationProblem, AllocationStatus, SolvedBy};
+use crate::allocation::problem::{AllocationProblem, AllocationStatus};
 use crate::analysis::controllability::ControlAxes;
 use crate::error::{require_all_finite, require_entries, Result, RfError};
 
@@ -159,10 +163,13 @@ fn clamped(x: &[f64], lower: &[f64], upper: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Clarabel's status in the allocation vocabulary: reaching `max_iterations` is reported as
+/// such ([`AllocationStatus::IterationLimit`]), the commands being its last iterate.
 fn status_of(status: SolverStatus) -> AllocationStatus {
     match status {
         SolverStatus::Solved => AllocationStatus::Optimal,
         SolverStatus::AlmostSolved => AllocationStatus::AlmostOptimal,
+        SolverStatus::MaxIterations => AllocationStatus::IterationLimit,
         _ => AllocationStatus::Failed,
     }
 }
@@ -190,74 +197,53 @@ fn qp_program(problem: &AllocationProblem, u_c: &[f64], rows: &[usize]) -> Progr
     program
 }
 
-fn finish(
+/// Clarabel's answer to an allocation problem, before any certificate or polish.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ClarabelAnswer {
+    /// Clarabel's commands clamped into the box.
+    pub(crate) commands: Vec<f64>,
+    pub(crate) status: AllocationStatus,
+    pub(crate) iterations: usize,
+}
+
+fn answer(
     problem: &AllocationProblem,
-    u_c: &[f64],
     solution: ProgramSolution,
     iterations: usize,
-) -> Allocation {
-    let commands = clamped(&solution.x, problem.lower(), problem.upper());
-    Allocation {
-        achieved: problem.achieved(&commands),
-        certificate: ActiveSetSolver::new(problem).certify(u_c, &commands),
-        commands,
+) -> ClarabelAnswer {
+    ClarabelAnswer {
+        commands: clamped(&solution.x, problem.lower(), problem.upper()),
         status: status_of(solution.status),
         iterations,
-        solved_by: SolvedBy::Clarabel,
     }
 }
 
-/// The box-constrained weighted least-squares allocation (Ke eq. (33)) through Clarabel, polished:
-/// the active set Clarabel's answer identifies is re-solved exactly (the active-set solver's
-/// phases 1 and 2), so the commands are exact, not only the objective; when that polish does not
-/// certify, Clarabel's own (clamped) answer is returned with its status.
-pub fn allocate_clarabel(
+/// Clarabel's own answer to the box-constrained weighted least-squares allocation (Ke eq. (33)),
+/// clamped into the box, after checking `u_c`.
+pub(crate) fn solve_allocation(
     problem: &AllocationProblem,
     u_c: &[f64],
     settings: &ClarabelSettings,
-) -> Result<Allocation> {
-    let raw = allocate_clarabel_unpolished(problem, u_c, settings)?;
-    let solver = ActiveSetSolver::new(problem);
-    if let Some((commands, report)) = solver.polish_commands(u_c, &raw.commands) {
-        if report.certificate.holds() {
-            return Ok(Allocation {
-                achieved: problem.achieved(&commands),
-                commands,
-                status: AllocationStatus::Optimal,
-                iterations: raw.iterations + report.iterations,
-                certificate: report.certificate,
-                solved_by: SolvedBy::Clarabel,
-            });
-        }
-    }
-    Ok(raw)
-}
-
-/// Clarabel's own answer, clamped into the box (accurate in the objective to its tolerance, not
-/// necessarily in the commands): the independent reference of the tests.
-pub fn allocate_clarabel_unpolished(
-    problem: &AllocationProblem,
-    u_c: &[f64],
-    settings: &ClarabelSettings,
-) -> Result<Allocation> {
+) -> Result<ClarabelAnswer> {
     problem.check_virtual_control(u_c)?;
     let rows: Vec<usize> = (0..problem.virtual_dimension()).collect();
     let solution = qp_program(problem, u_c, &rows).solve(settings)?;
     let iterations = solution.iterations;
-    Ok(finish(problem, u_c, solution, iterations))
+    Ok(answer(problem, solution, iterations))
 }
 
 /// Prioritised allocation: `priorities` lists groups of virtual-control rows, most important
 /// first (e.g. `[[0, 1, 2], [3]]`: thrust and roll/pitch, then yaw with what is left). Stage k
 /// minimises the weighted residual of group k subject to the box and to every earlier group
 /// keeping what its stage achieved (to [`PRIORITY_BAND`]). Rows in no group are ignored. The problem's
-/// regularisation applies to the last stage.
-pub fn allocate_prioritized(
+/// regularisation applies to the last stage. Clarabel's answer of the last stage (or of the
+/// first that fails); [`crate::allocation::allocate_prioritized`] certifies it.
+pub(crate) fn solve_prioritized(
     problem: &AllocationProblem,
     u_c: &[f64],
     priorities: &[Vec<usize>],
     settings: &ClarabelSettings,
-) -> Result<Allocation> {
+) -> Result<ClarabelAnswer> {
     problem.check_virtual_control(u_c)?;
     let n = problem.virtual_dimension();
     if priorities.is_empty() {
@@ -309,10 +295,14 @@ pub fn allocate_prioritized(
         program.inequalities.extend(fixed.iter().cloned());
         let solution = program.solve(settings)?;
         iterations += solution.iterations;
-        let allocation = finish(problem, u_c, solution, iterations);
-        if allocation.status == AllocationStatus::Failed {
-            return Ok(allocation);
+        let stage_answer = answer(problem, solution, iterations);
+        if matches!(
+            stage_answer.status,
+            AllocationStatus::Failed | AllocationStatus::IterationLimit
+        ) {
+            return Ok(stage_answer);
         }
+        let achieved = problem.achieved(&stage_answer.commands);
         // Later stages keep what this group achieved with the (box-feasible) commands, to a
         // band of PRIORITY_BAND relative: exact equalities are degenerate next to active bounds
         // and made Clarabel fail (review finding).
@@ -325,10 +315,10 @@ pub fn allocate_prioritized(
                 .sum();
             let band = PRIORITY_BAND * scale.max(f64::MIN_POSITIVE);
             let negated: Vec<f64> = row.iter().map(|v| -v).collect();
-            fixed.push((row, allocation.achieved[r] + band));
-            fixed.push((negated, -(allocation.achieved[r] - band)));
+            fixed.push((row, achieved[r] + band));
+            fixed.push((negated, -(achieved[r] - band)));
         }
-        last = Some(allocation);
+        last = Some(stage_answer);
     }
     last.ok_or_else(|| RfError::invalid("priorities", "must list at least one group of rows"))
 }

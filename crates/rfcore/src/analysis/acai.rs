@@ -39,8 +39,8 @@
 //!   unit column of E and the group's normal in E is `<= RANK_RTOL`.
 //! - `rank B_f = n` iff some group of `n - 1` independent working columns has a working column off
 //!   its hyperplane; otherwise the ACAI is `-inf` and the report's `rank B_f` (Step 2) is the
-//!   [`scale_free_rank`] of B_f capped at `n - 1`, so the report and the ACAI cannot disagree.
-//!   `rank C(A, B)` (Step 1) is [`scale_free_rank`] too: rows and columns equilibrated by powers of
+//!   [`scale_free_rank`](crate::analysis::rank::scale_free_rank) of B_f capped at `n - 1`, so the
+//!   report and the ACAI cannot disagree. `rank C(A, B)` (Step 1) is that rank too: rows and columns equilibrated by powers of
 //!   two, then singular values above `RANK_RTOL` times the largest (any J/m is read correctly).
 //! - **Distances in the user's units.** A group's normal `xi` in E maps to `D xi` in B (for any v,
 //!   `(D xi) . v = xi . (D v)`); `xi_j` is that vector normalised, so every `d_j` is exactly the
@@ -83,6 +83,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::analysis::combinations::{binomial, Combinations};
+use crate::cancel::{rows_per_check, Cancel, GROUPS_PER_CHECK};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
 /// Relative tolerance for rank decisions (see the module documentation).
@@ -260,6 +261,12 @@ pub struct FacetNormals {
 impl FacetNormals {
     /// Enumerates the column groups of `b` (n x m, efficiencies not applied).
     pub fn new(b: &DMatrix<f64>) -> Result<Self> {
+        Self::new_cancellable(b, &Cancel::never())
+    }
+
+    /// [`FacetNormals::new`], checking `cancel` every [`GROUPS_PER_CHECK`] groups: up to
+    /// [`MAX_TABLE_ENTRIES`] entries take seconds.
+    pub fn new_cancellable(b: &DMatrix<f64>, cancel: &Cancel) -> Result<Self> {
         let (n, m) = b.shape();
         if n == 0 || m == 0 {
             return Err(RfError::shape(
@@ -325,7 +332,10 @@ impl FacetNormals {
         let mut xi = vec![0.0; n];
         let mut normal = vec![0.0; n];
         // With m < n - 1 there is no group at all, and every evaluation reports rank < n.
-        for group in Combinations::new(m, n - 1) {
+        for (index, group) in Combinations::new(m, n - 1).enumerate() {
+            if index % GROUPS_PER_CHECK == 0 {
+                cancel.check()?;
+            }
             if group.iter().any(|&k| equilibrated_norms[k] == 0.0) {
                 continue; // a zero column: rank B_{1,j} < n - 1
             }
@@ -500,7 +510,8 @@ impl FacetNormals {
     }
 
     /// ACAI for each row of `etas` (row-major, `m` per row), in parallel. Every row is validated
-    /// first; the error names the first bad row and rotor.
+    /// first; the error names the first bad row and rotor. `cancel` is checked every
+    /// [`rows_per_check`] rows (about 1 ms of work).
     pub fn acai_batch(
         &self,
         etas: &[f64],
@@ -508,13 +519,14 @@ impl FacetNormals {
         f_max: &[f64],
         g: &[f64],
         formula: AcaiFormula,
+        cancel: &Cancel,
     ) -> Result<Vec<f64>> {
         self.check_batch(etas, f_min, f_max, g)?;
-        Ok(etas
-            .par_chunks_exact(self.m)
-            .with_min_len(256)
-            .map(|eta| self.evaluate(eta, f_min, f_max, g).get(formula))
-            .collect())
+        let mut acai = vec![0.0; etas.len() / self.m];
+        self.for_each_row(etas, &mut acai, cancel, |eta, out| {
+            *out = self.evaluate(eta, f_min, f_max, g).get(formula);
+        })?;
+        Ok(acai)
     }
 
     /// [`FacetNormals::acai_batch`] with where G lies for each row.
@@ -525,17 +537,38 @@ impl FacetNormals {
         f_max: &[f64],
         g: &[f64],
         formula: AcaiFormula,
+        cancel: &Cancel,
     ) -> Result<AcaiBatch> {
         self.check_batch(etas, f_min, f_max, g)?;
-        let (acai, hover) = etas
-            .par_chunks_exact(self.m)
-            .with_min_len(256)
-            .map(|eta| {
-                let values = self.evaluate(eta, f_min, f_max, g);
-                (values.get(formula), values.hover())
-            })
-            .unzip();
+        let mut rows = vec![(0.0, HoverPoint::Inside); etas.len() / self.m];
+        self.for_each_row(etas, &mut rows, cancel, |eta, out| {
+            let values = self.evaluate(eta, f_min, f_max, g);
+            *out = (values.get(formula), values.hover());
+        })?;
+        let (acai, hover) = rows.into_iter().unzip();
         Ok(AcaiBatch { acai, hover })
+    }
+
+    /// Runs `row(eta, out)` for every row of `etas` into `out` (one entry per row), in parallel
+    /// blocks of at most [`ROWS_PER_BLOCK`] rows and at most [`rows_per_check`] rows, checking
+    /// `cancel` before each block.
+    fn for_each_row<T: Send>(
+        &self,
+        etas: &[f64],
+        out: &mut [T],
+        cancel: &Cancel,
+        row: impl Fn(&[f64], &mut T) + Sync,
+    ) -> Result<()> {
+        let block = rows_per_check(self.group_count() * self.m).min(ROWS_PER_BLOCK);
+        out.par_chunks_mut(block)
+            .zip(etas.par_chunks(block * self.m))
+            .try_for_each(|(out, etas)| {
+                cancel.check()?;
+                for (o, eta) in out.iter_mut().zip(etas.chunks_exact(self.m)) {
+                    row(eta, o);
+                }
+                Ok(())
+            })
     }
 
     fn check_batch(&self, etas: &[f64], f_min: &[f64], f_max: &[f64], g: &[f64]) -> Result<()> {
@@ -561,11 +594,15 @@ impl FacetNormals {
     }
 }
 
+/// Rows of an ACAI batch per parallel block (rayon groups blocks further), small enough to share
+/// a batch among many threads (the batch used `with_min_len(256)` before blocks existed).
+const ROWS_PER_BLOCK: usize = 256;
+
 /// Airframes with at most this many rotors evaluate without touching the heap.
 const STACK_ROTORS: usize = 32;
 
 /// Euclidean norm without intermediate overflow or underflow (entries of 1e300 are fine).
-fn scaled_norm<'a>(values: impl Iterator<Item = &'a f64> + Clone) -> f64 {
+pub(crate) fn scaled_norm<'a>(values: impl Iterator<Item = &'a f64> + Clone) -> f64 {
     let largest = values.clone().fold(0.0_f64, |acc, v| acc.max(v.abs()));
     if largest == 0.0 {
         return 0.0;
@@ -574,7 +611,7 @@ fn scaled_norm<'a>(values: impl Iterator<Item = &'a f64> + Clone) -> f64 {
 }
 
 /// The power of two nearest to `1 / norm` (1 for a zero norm): multiplying by it is exact.
-fn inverse_power_of_two(norm: f64) -> f64 {
+pub(crate) fn inverse_power_of_two(norm: f64) -> f64 {
     if norm > 0.0 && norm.is_finite() {
         2.0_f64.powi(-(norm.log2().round() as i32).clamp(-1000, 1000))
     } else {
@@ -589,41 +626,6 @@ pub fn equilibrating_row_scale(b: &DMatrix<f64>) -> Vec<f64> {
     (0..b.nrows())
         .map(|r| inverse_power_of_two(scaled_norm(b.row(r).iter())))
         .collect()
-}
-
-/// The rank of `matrix` by one rule for every rank test of this crate, free of units: rows and
-/// columns are equilibrated (alternately scaled by powers of two to unit norm, a few sweeps, so a
-/// change of units of any row or column is undone), then singular values above `RANK_RTOL` times
-/// the largest are counted. `rank(D1 M D2) = rank(M)` for positive diagonal `D1, D2`, so this
-/// decides the same question as a plain SVD, without reading a small unit as a zero.
-pub fn scale_free_rank(matrix: &DMatrix<f64>) -> usize {
-    let mut scaled = matrix.clone();
-    for _ in 0..8 {
-        let mut changed = false;
-        for r in 0..scaled.nrows() {
-            let s = inverse_power_of_two(scaled_norm(scaled.row(r).iter()));
-            if s != 1.0 {
-                scaled.row_mut(r).scale_mut(s);
-                changed = true;
-            }
-        }
-        for c in 0..scaled.ncols() {
-            let s = inverse_power_of_two(scaled_norm(scaled.column(c).iter()));
-            if s != 1.0 {
-                scaled.column_mut(c).scale_mut(s);
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    let sv = scaled.svd(false, false).singular_values;
-    let largest = sv.iter().cloned().fold(0.0, f64::max);
-    if largest == 0.0 {
-        return 0;
-    }
-    sv.iter().filter(|&&s| s > RANK_RTOL * largest).count()
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -650,7 +652,20 @@ pub fn acai_from_matrix_with_hover(
     g: &[f64],
     formula: AcaiFormula,
 ) -> Result<AcaiResult> {
-    let normals = FacetNormals::new(b)?;
+    acai_from_matrix_cancellable(b, f_min, f_max, g, formula, &Cancel::never())
+}
+
+/// [`acai_from_matrix_with_hover`] with the facet enumeration checking `cancel` (up to
+/// [`MAX_TABLE_ENTRIES`] entries take seconds).
+pub fn acai_from_matrix_cancellable(
+    b: &DMatrix<f64>,
+    f_min: &[f64],
+    f_max: &[f64],
+    g: &[f64],
+    formula: AcaiFormula,
+    cancel: &Cancel,
+) -> Result<AcaiResult> {
+    let normals = FacetNormals::new_cancellable(b, cancel)?;
     normals.check_bounds_and_g(f_min, f_max, g)?;
     Ok(normals
         .evaluate(&vec![1.0; b.ncols()], f_min, f_max, g)

@@ -10,9 +10,9 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::airframe::{check_efficiency, Airframe};
-use crate::analysis::acai::{
-    scale_free_rank, AcaiBatch, AcaiFormula, AcaiResult, FacetNormals, HoverPoint, RANK_RTOL,
-};
+use crate::analysis::acai::{AcaiBatch, AcaiFormula, AcaiResult, FacetNormals, HoverPoint};
+use crate::analysis::rank::scale_free_rank;
+use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 
 /// Which virtual-control axes must remain controllable.
@@ -191,8 +191,17 @@ pub struct ControllabilityAnalysis {
 
 impl ControllabilityAnalysis {
     pub fn new(airframe: &Airframe, axes: ControlAxes) -> Result<Self> {
+        Self::new_cancellable(airframe, axes, &Cancel::never())
+    }
+
+    /// [`ControllabilityAnalysis::new`] with the facet enumeration checking `cancel`.
+    pub fn new_cancellable(
+        airframe: &Airframe,
+        axes: ControlAxes,
+        cancel: &Cancel,
+    ) -> Result<Self> {
         let nominal = axes.nominal_matrix(airframe);
-        let normals = FacetNormals::new(&nominal)?;
+        let normals = FacetNormals::new_cancellable(&nominal, cancel)?;
         let (a, b) = hover_model(airframe, axes);
         let f_min = airframe.min_thrust_n();
         let f_max = airframe.max_thrust_n();
@@ -202,7 +211,10 @@ impl ControllabilityAnalysis {
             axes,
             nominal,
             normals,
-            controllability_rank: scale_free_rank(&controllability_matrix(&a, &b)),
+            controllability_rank: scale_free_rank(
+                &controllability_matrix(&a, &b),
+                "C(A, B) (from mass_kg and inertia_kg_m2)",
+            )?,
             f_min,
             f_max,
             g,
@@ -238,16 +250,26 @@ impl ControllabilityAnalysis {
             .result(formula))
     }
 
-    /// ACAI for N efficiency vectors (row-major N x m), in parallel.
-    pub fn acai_batch(&self, etas: &[f64], formula: AcaiFormula) -> Result<Vec<f64>> {
+    /// ACAI for N efficiency vectors (row-major N x m), in parallel, checking `cancel`.
+    pub fn acai_batch(
+        &self,
+        etas: &[f64],
+        formula: AcaiFormula,
+        cancel: &Cancel,
+    ) -> Result<Vec<f64>> {
         self.normals
-            .acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula)
+            .acai_batch(etas, &self.f_min, &self.f_max, &self.g, formula, cancel)
     }
 
     /// [`ControllabilityAnalysis::acai_batch`] with where the hover wrench lies for each row.
-    pub fn acai_batch_with_hover(&self, etas: &[f64], formula: AcaiFormula) -> Result<AcaiBatch> {
+    pub fn acai_batch_with_hover(
+        &self,
+        etas: &[f64],
+        formula: AcaiFormula,
+        cancel: &Cancel,
+    ) -> Result<AcaiBatch> {
         self.normals
-            .acai_batch_with_hover(etas, &self.f_min, &self.f_max, &self.g, formula)
+            .acai_batch_with_hover(etas, &self.f_min, &self.f_max, &self.g, formula, cancel)
     }
 
     /// Du's Steps 1-9 for one efficiency vector; `formula` chooses how an ACAI with G outside
@@ -265,7 +287,7 @@ impl ControllabilityAnalysis {
             for (k, &e) in eta.iter().enumerate() {
                 scaled.column_mut(k).scale_mut(e);
             }
-            scale_free_rank(&scaled).min(n - 1)
+            scale_free_rank(&scaled, "B_f")?.min(n - 1)
         } else {
             n
         };
@@ -326,32 +348,22 @@ pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64
     )
 }
 
-/// Number of singular values above `RANK_RTOL` times the largest: a plain SVD rank that reads a
-/// small unit as a zero. The analysis uses [`scale_free_rank`] instead.
-pub fn numerical_rank(matrix: &DMatrix<f64>) -> usize {
-    let sv = matrix.clone().svd(false, false).singular_values;
-    let largest = sv.iter().cloned().fold(0.0, f64::max);
-    if largest == 0.0 {
-        return 0;
-    }
-    sv.iter().filter(|&&s| s > RANK_RTOL * largest).count()
-}
-
-/// One row of a failure table: a set of fully failed rotors (0-based) and the verdicts with and
-/// without the yaw axis.
+/// One row of a failure table: a set of fully failed rotors (indices from 0 here; Python numbers
+/// them from 1) and the verdicts with all four axes and giving up yaw (thrust, roll, pitch).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FailureCase {
     pub failed: Vec<usize>,
-    pub with_yaw: ControllabilityReport,
-    pub without_yaw: ControllabilityReport,
+    pub all_axes: ControllabilityReport,
+    pub give_up_yaw: ControllabilityReport,
     /// The full-wrench test (n = 6), for fully actuated airframes only (nominal 6 x m matrix of
     /// rank 6); `None` for the others, where it would always read rank deficient.
     pub wrench: Option<ControllabilityReport>,
 }
 
 /// A fully actuated airframe: its nominal 6 x m force/torque matrix has rank 6 (scale-free).
-pub fn is_fully_actuated(airframe: &Airframe) -> bool {
-    airframe.rotor_count() >= 6 && scale_free_rank(&airframe.nominal_wrench_matrix()) == 6
+pub fn is_fully_actuated(airframe: &Airframe) -> Result<bool> {
+    Ok(airframe.rotor_count() >= 6
+        && scale_free_rank(&airframe.nominal_wrench_matrix(), "wrench matrix")? == 6)
 }
 
 /// Largest number of failure combinations [`failure_table`] enumerates (each becomes a Python
@@ -360,10 +372,12 @@ pub const MAX_FAILURE_CASES: usize = 100_000;
 
 /// Every combination of up to `max_failed` fully failed rotors (efficiency set to 0, the other
 /// rotors keeping the airframe's efficiencies), in order of the number failed, then lexicographic.
+/// `cancel` is checked before every combination.
 pub fn failure_table(
     airframe: &Airframe,
     max_failed: usize,
     formula: AcaiFormula,
+    cancel: &Cancel,
 ) -> Result<Vec<FailureCase>> {
     use crate::analysis::combinations::{binomial, Combinations};
     use crate::error::RfError;
@@ -383,10 +397,11 @@ pub fn failure_table(
             format!("{total} failure combinations exceed the limit of {MAX_FAILURE_CASES}"),
         ));
     }
-    let with_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitchYaw)?;
-    let without_yaw = ControllabilityAnalysis::new(airframe, ControlAxes::ThrustRollPitch)?;
-    let wrench = if is_fully_actuated(airframe) {
-        Some(ControllabilityAnalysis::new(airframe, ControlAxes::Wrench)?)
+    let analysis = |axes| ControllabilityAnalysis::new_cancellable(airframe, axes, cancel);
+    let all_axes = analysis(ControlAxes::ThrustRollPitchYaw)?;
+    let give_up_yaw = analysis(ControlAxes::ThrustRollPitch)?;
+    let wrench = if is_fully_actuated(airframe)? {
+        Some(analysis(ControlAxes::Wrench)?)
     } else {
         None
     };
@@ -396,13 +411,14 @@ pub fn failure_table(
         .collect();
     sets.into_par_iter()
         .map(|failed| {
+            cancel.check()?;
             let mut eta = base.clone();
             for &k in &failed {
                 eta[k] = 0.0;
             }
             Ok(FailureCase {
-                with_yaw: with_yaw.report(&eta, formula)?,
-                without_yaw: without_yaw.report(&eta, formula)?,
+                all_axes: all_axes.report(&eta, formula)?,
+                give_up_yaw: give_up_yaw.report(&eta, formula)?,
                 wrench: match &wrench {
                     Some(analysis) => Some(analysis.report(&eta, formula)?),
                     None => None,

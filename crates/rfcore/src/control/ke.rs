@@ -48,7 +48,9 @@ use crate::airframe::Airframe;
 use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use crate::allocation::{weighted_pseudo_inverse, AllocationProblem, WeightedPseudoInverse};
 use crate::control::Controller;
-use crate::error::{require_finite, require_non_negative, Result, RfError};
+use crate::error::{
+    require_finite, require_non_negative, require_normal, require_scale, Result, RfError,
+};
 use crate::state::RigidBodyState;
 
 /// Floor on `n3z` in `B_2^-1` (keeps the command finite when the vehicle tips past 87 degrees).
@@ -131,6 +133,8 @@ impl KeGains {
                 return Err(RfError::invalid(field, format!("must be > 0, got {value}")));
             }
         }
+        // The filter divides by it ((x - f) / eps, exp(-dt / eps)): a scale.
+        require_scale("epsilon_s", self.epsilon_s, "s")?;
         for (field, value) in [("k_vz", self.k_vz), ("k_omega", self.k_omega)] {
             require_finite(field, value)?;
             if value <= 0.5 {
@@ -150,7 +154,7 @@ impl KeGains {
             }
         }
         for (i, &w) in self.weights.iter().enumerate() {
-            require_finite(&format!("weights[{i}]"), w)?;
+            require_normal(&format!("weights[{i}]"), w)?;
             if w < 0.0 || (i < 3 && w == 0.0) {
                 return Err(RfError::invalid(
                     format!("weights[{i}]"),
@@ -305,6 +309,7 @@ impl UniformPassiveFtc {
         if dt_s <= 0.0 {
             return Err(RfError::invalid("dt_s", format!("must be > 0, got {dt_s}")));
         }
+        require_scale("dt_s", dt_s, "s")?;
         if setpoints.is_empty() {
             return Err(RfError::invalid(
                 "setpoints",

@@ -20,10 +20,10 @@
 //! finite near +-90 degrees (the paper restricts both angles to (-pi/2, pi/2)). Commands are not
 //! clipped: the actuators saturate and rate-limit them.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Schur, Vector3};
 
 use super::{require_finite_matrix, Controller};
-use crate::error::{require_all_finite, require_finite, Result, RfError};
+use crate::error::{require_all_finite, require_finite, require_scale, Result, RfError};
 use crate::state::{state_vector, RigidBodyState};
 
 /// Floor on `|cos(phi)|`, `|cos(theta)|` in the linearising law.
@@ -67,19 +67,21 @@ impl Default for LanzonModel {
 impl LanzonModel {
     /// Every parameter finite and positive (`k_t` may be zero).
     pub fn check(&self) -> Result<()> {
-        for (field, value) in [
-            ("model.mass_kg", self.mass_kg),
-            ("model.gravity_m_s2", self.gravity_m_s2),
-            ("model.inertia_xx_kg_m2", self.inertia_xx_kg_m2),
-            ("model.inertia_zz_kg_m2", self.inertia_zz_kg_m2),
-            ("model.arm_length_m", self.arm_length_m),
-            ("model.drag_torque_ratio_m", self.drag_torque_ratio_m),
-            ("model.rotational_drag_n_m_s", self.rotational_drag_n_m_s),
+        // Every one is divided by in the law (eq. (9), (20)-(24), r0 = m g d / k_r): scales.
+        for (field, value, unit) in [
+            ("model.mass_kg", self.mass_kg, "kg"),
+            ("model.gravity_m_s2", self.gravity_m_s2, "m/s^2"),
+            ("model.inertia_xx_kg_m2", self.inertia_xx_kg_m2, "kg m^2"),
+            ("model.inertia_zz_kg_m2", self.inertia_zz_kg_m2, "kg m^2"),
+            ("model.arm_length_m", self.arm_length_m, "m"),
+            ("model.drag_torque_ratio_m", self.drag_torque_ratio_m, "m"),
+            (
+                "model.rotational_drag_n_m_s",
+                self.rotational_drag_n_m_s,
+                "N m s",
+            ),
         ] {
-            require_finite(field, value)?;
-            if value <= 0.0 {
-                return Err(RfError::invalid(field, format!("must be > 0, got {value}")));
-            }
+            require_scale(field, value, unit)?;
         }
         require_finite("model.linear_drag_n_s_m", self.linear_drag_n_s_m)?;
         if self.linear_drag_n_s_m < 0.0 {
@@ -313,12 +315,7 @@ impl DiscreteController {
             require_finite_matrix(field, m)?;
         }
         if n > 0 {
-            let radius = self
-                .a
-                .complex_eigenvalues()
-                .iter()
-                .map(|z| z.norm())
-                .fold(0.0_f64, f64::max);
+            let radius = spectral_radius(&self.a, "A_K", schur_iteration_cap(n))?;
             if !(radius < 1.0) {
                 return Err(RfError::invalid(
                     "A_K",
@@ -331,6 +328,26 @@ impl DiscreteController {
         }
         Ok(())
     }
+}
+
+/// Most Francis (QR) sweeps the Schur form of an `n x n` matrix may take: LAPACK `dlahqr`'s
+/// `30 max(10, n)` per eigenvalue, for all `n`. Converging matrices take a few per eigenvalue.
+pub fn schur_iteration_cap(n: usize) -> usize {
+    30 * n.max(10) * n.max(1)
+}
+
+/// Largest eigenvalue modulus of `a` from its real Schur form in at most `cap` sweeps (nalgebra's
+/// tolerance, as `complex_eigenvalues` uses); [`RfError::IterationLimit`] naming `field` instead
+/// of an endless loop on a matrix the iteration cannot settle.
+pub fn spectral_radius(a: &DMatrix<f64>, field: &str, cap: usize) -> Result<f64> {
+    let schur = Schur::try_new(a.clone(), f64::EPSILON, cap).ok_or_else(|| {
+        RfError::iteration_limit(field, "the Schur decomposition (eigenvalues)", cap)
+    })?;
+    Ok(schur
+        .complex_eigenvalues()
+        .iter()
+        .map(|z| z.norm())
+        .fold(0.0_f64, f64::max))
 }
 
 /// Lanzon et al.'s controller (module docs).

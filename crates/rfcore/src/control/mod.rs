@@ -10,16 +10,21 @@
 //! - [`tracking`]: state feedback on a moving reference with a saturated error.
 //! - [`allocated`]: a virtual-control law followed by constrained allocation.
 //! - [`ke`]: Ke et al.'s uniform passive fault-tolerant controller.
+//! - [`indi`]: incremental nonlinear dynamic inversion fault-tolerant control (Sun et al.), with
+//!   the second-order [`filter`] it differentiates the gyro through.
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
 //! - [`relaxed_hover`]: linear feedback about a relaxed hover (Mueller and D'Andrea's cascade).
 
 use nalgebra::DMatrix;
 
+use crate::cancel::Cancel;
 use crate::error::{require_all_finite, Result, RfError};
-use crate::state::RigidBodyState;
+use crate::state::{ControllerInput, RigidBodyState};
 
 pub mod allocated;
+pub mod filter;
+pub mod indi;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;
@@ -48,6 +53,23 @@ pub trait Controller: Send {
     /// Writes the commands for the measured state into `out` (length [`Controller::command_count`]).
     /// An error (only controllers that call out, such as a Python callable, can fail) ends the run.
     fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()>;
+    /// [`Controller::command`] given everything measured this step: the state plus the raw samples
+    /// of [`ControllerInput`] (gyro, accelerometer, rotor outputs). The simulator calls this one;
+    /// by default it uses the state alone, so a controller that needs no samples implements
+    /// [`Controller::command`] only.
+    fn command_with(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.command(t_s, input.state, out)
+    }
+    /// Whether [`Controller::command_with`] reads the raw samples: the simulator computes them only
+    /// for a controller that does (they cost a rotor evaluation per control step).
+    fn reads_samples(&self) -> bool {
+        false
+    }
     /// Back to the initial internal state (called at the start of every run).
     fn reset(&mut self) {}
 }
@@ -72,10 +94,12 @@ impl Controller for ZeroCommand {
 /// result is what it commands at `times_s[k]` for `states[k]`. Nothing but the measurements reaches
 /// it, so a controller that passes the same history through twice commands the same thing: the
 /// check that a "passive" controller really sees no fault information.
+/// `cancel` is checked before every step.
 pub fn replay(
     controller: &mut dyn Controller,
     times_s: &[f64],
     states: &[RigidBodyState],
+    cancel: &Cancel,
 ) -> Result<Vec<f64>> {
     if times_s.len() != states.len() {
         return Err(RfError::shape(
@@ -89,6 +113,7 @@ pub fn replay(
     let mut out = vec![0.0; count * times_s.len()];
     controller.reset();
     for (k, (t, state)) in times_s.iter().zip(states).enumerate() {
+        cancel.check()?;
         controller.command(*t, state, &mut out[k * count..(k + 1) * count])?;
     }
     Ok(out)

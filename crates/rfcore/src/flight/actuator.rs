@@ -29,7 +29,9 @@
 use serde::Deserialize;
 
 use crate::airframe::Airframe;
-use crate::error::{require_finite, require_non_negative, Result, RfError};
+use crate::error::{
+    require_finite, require_non_negative, require_normal, require_scale_or_zero, Result, RfError,
+};
 
 /// What rotor i produces right now, after efficiency is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -70,20 +72,22 @@ impl Lag {
 
     /// `rate_field` names the rate limit as the caller's API does (its unit differs by model).
     fn check(&self, prefix: &str, rate_field: &str) -> Result<()> {
-        let field = format!("{prefix}time_constant_s");
-        require_finite(&field, self.time_constant_s)?;
-        if self.time_constant_s < 0.0 {
-            return Err(RfError::invalid(
-                field,
-                format!("must be >= 0, got {}", self.time_constant_s),
-            ));
-        }
+        // Divided by (exp(-h / tau), the step-size guard's 1 / tau): a scale, 0 for no lag.
+        require_scale_or_zero(
+            &format!("{prefix}time_constant_s"),
+            self.time_constant_s,
+            "s",
+        )?;
         let field = format!("{prefix}{rate_field}");
-        if self.rate_limit_per_s.is_nan() || self.rate_limit_per_s <= 0.0 {
+        // Divided by too (the end of the rate-limited line): positive and normal, or infinity.
+        if self.rate_limit_per_s.is_nan()
+            || self.rate_limit_per_s <= 0.0
+            || !(self.rate_limit_per_s.is_normal() || self.rate_limit_per_s.is_infinite())
+        {
             return Err(RfError::invalid(
                 field,
                 format!(
-                    "must be > 0 (infinity for none), got {}",
+                    "must be > 0 and normal (infinity for none), got {}",
                     self.rate_limit_per_s
                 ),
             ));
@@ -176,15 +180,12 @@ pub struct FixedPitch {
 impl FixedPitch {
     pub fn new(airframe: &Airframe, lag: Lag, thrust_coefficient_n_s2: f64) -> Result<Self> {
         lag.check("actuator.", "rate_limit_n_s")?;
-        require_finite("actuator.thrust_coefficient_n_s2", thrust_coefficient_n_s2)?;
-        if thrust_coefficient_n_s2 < 0.0 {
-            return Err(RfError::invalid(
-                "actuator.thrust_coefficient_n_s2",
-                format!(
-                    "must be >= 0 (0: rotor speed not modelled), got {thrust_coefficient_n_s2}"
-                ),
-            ));
-        }
+        // `sqrt(f / k_f)` is the rotor's spin: a scale, 0 when rotor speed is not modelled.
+        require_scale_or_zero(
+            "actuator.thrust_coefficient_n_s2",
+            thrust_coefficient_n_s2,
+            "N s^2 (0: rotor speed not modelled)",
+        )?;
         let yaw_sign: Vec<f64> = airframe
             .rotors()
             .iter()
@@ -263,7 +264,8 @@ impl VariablePitch {
     ) -> Result<Self> {
         lags.check()?;
         for (i, &k) in coefficients.iter().enumerate() {
-            require_finite(&format!("actuator.k{}", i + 1), k)?;
+            // Python's trim and linearisation divide by them: zero or normal.
+            require_normal(&format!("actuator.k{}", i + 1), k)?;
         }
         for (field, (lo, hi)) in [
             ("actuator.speed_bounds", speed_bounds),

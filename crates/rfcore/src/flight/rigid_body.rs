@@ -18,7 +18,7 @@
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_finite, require_scale, Result, RfError};
 use crate::state::RigidBodyState;
 
 /// Mass and inertia of a rigid body.
@@ -35,13 +35,8 @@ impl RigidBody {
     /// `inertia_kg_m2` is the full body-frame inertia tensor about the centre of mass: symmetric
     /// and positive definite.
     pub fn new(mass_kg: f64, inertia_kg_m2: Matrix3<f64>) -> Result<Self> {
-        require_finite("mass_kg", mass_kg)?;
-        if mass_kg <= 0.0 {
-            return Err(RfError::invalid(
-                "mass_kg",
-                format!("must be > 0, got {mass_kg}"),
-            ));
-        }
+        // Divided by in every derivative: a scale (see `crate::error`).
+        require_scale("mass_kg", mass_kg, "kg")?;
         for (i, &v) in inertia_kg_m2.iter().enumerate() {
             require_finite(&format!("inertia_kg_m2[{}, {}]", i % 3, i / 3), v)?;
         }
@@ -54,6 +49,14 @@ impl RigidBody {
                 "inertia_kg_m2",
                 "must be positive definite",
             ));
+        }
+        // Positive definite, so the diagonal is positive: each moment is a scale `J^-1` divides by.
+        for i in 0..3 {
+            require_scale(
+                &format!("inertia_kg_m2[{i}, {i}]"),
+                inertia_kg_m2[(i, i)],
+                "kg m^2",
+            )?;
         }
         let inertia_inverse = inertia_kg_m2
             .try_inverse()

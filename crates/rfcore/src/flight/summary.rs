@@ -11,7 +11,8 @@
 //!   the direction of travel (unwrapped heading over the samples moving faster than a quarter of
 //!   it) turning by at least `circling_turn_rad` (90 degrees);
 //! - `off-station`: neither;
-//! - a divergence kind (`tilt`, `altitude-loss`, ...): lost at `lost_at_s`.
+//! - a divergence kind (`crashed`: it hit the ground; `tilt`, `altitude-loss`, ...): lost at
+//!   `lost_at_s`.
 //!
 //! The steady spin rate is the mean body yaw rate over the window, reported only when the run
 //! settled (the same test as `flight_metrics`: from the last fault that changed an efficiency,
@@ -19,12 +20,13 @@
 //! end, reached no later than one window before the end). Only the window (and the sample
 //! before it) is buffered to decide that.
 //!
-//! A test in `tests/test_campaign.py` checks every field against the same quantities computed
+//! A test in `tests/studies/test_campaign.py` checks every field against the same quantities computed
 //! from full trajectories.
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::cancel::Cancel;
 use crate::control::Controller;
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
@@ -409,8 +411,12 @@ pub struct SummaryRun {
 }
 
 /// Flies one run, keeping only its summary (the trajectory is thinned to its first and last
-/// rows whatever `config.record_every` says).
-pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Result<RunSummary> {
+/// rows whatever `config.record_every` says), checking `cancel` once per control period.
+pub fn simulate_summary(
+    mut run: SummaryRun,
+    criteria: &VerdictCriteria,
+    cancel: &Cancel,
+) -> Result<RunSummary> {
     criteria.check()?;
     let mut config = run.config;
     config.record_every = usize::MAX;
@@ -433,6 +439,7 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
         run.x0,
         &config,
         &mut observer,
+        cancel,
     )?;
     let end = trajectory.t_s.last().copied().unwrap_or(0.0);
     let m = run.initial_efficiency.len();
@@ -452,10 +459,11 @@ pub fn simulate_summary(mut run: SummaryRun, criteria: &VerdictCriteria) -> Resu
 pub fn simulate_summaries(
     runs: Vec<SummaryRun>,
     criteria: &VerdictCriteria,
+    cancel: &Cancel,
 ) -> Result<Vec<RunSummary>> {
     criteria.check()?;
     runs.into_par_iter()
-        .map(|run| simulate_summary(run, criteria))
+        .map(|run| simulate_summary(run, criteria, cancel))
         .collect()
 }
 
@@ -466,7 +474,8 @@ mod tests {
     use crate::flight::actuator::{FixedPitch, Lag};
     use crate::flight::vehicle::Drag;
 
-    fn free_fall(duration_s: f64) -> SummaryRun {
+    /// Rotors off from `height_m` above the ground (at rest, level), judged against the start.
+    fn free_fall_from(height_m: f64, duration_s: f64) -> SummaryRun {
         let airframe = crate::fixtures::preset("quad-x");
         let mut config = SimulationConfig::new(0.0025, 2, duration_s);
         config.limits.max_altitude_loss_m = 20.0;
@@ -480,16 +489,42 @@ mod tests {
                 time_s: 0.5,
                 efficiency: 0.0,
             }],
-            x0: RigidBodyState::at_rest(),
+            x0: RigidBodyState {
+                position_m: Vector3::new(0.0, 0.0, -height_m),
+                ..RigidBodyState::at_rest()
+            },
             config,
-            setpoint_m: Vector3::zeros(),
+            setpoint_m: Vector3::new(0.0, 0.0, -height_m),
         }
+    }
+
+    /// 100 m up: these falls end before the ground.
+    fn free_fall(duration_s: f64) -> SummaryRun {
+        free_fall_from(100.0, duration_s)
+    }
+
+    #[test]
+    fn a_fall_to_the_ground_is_counted_crashed() {
+        // 10 m of free fall reach the ground at sqrt(20 / g) s, before the 20 m limit.
+        let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default(), &crate::Cancel::never()).unwrap();
+        let g = crate::fixtures::preset("quad-x").gravity_m_s2();
+        assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::Crashed));
+        assert_eq!(s.outcome.name(), "crashed");
+        assert!((s.lost_at_s - (20.0 / g).sqrt()).abs() < 1e-9);
+        assert!((s.max_altitude_loss_m - 10.0).abs() < 1e-9);
+        assert!((s.final_altitude_error_m - 10.0).abs() < 1e-9);
+        assert!(s.window_speed_m_s.is_nan());
     }
 
     #[test]
     fn free_fall_is_lost_at_the_analytic_time() {
         // 20 m of free fall take sqrt(40 / g) s (the located crossing, to 1e-12 s).
-        let s = simulate_summary(free_fall(10.0), &VerdictCriteria::default()).unwrap();
+        let s = simulate_summary(
+            free_fall(10.0),
+            &VerdictCriteria::default(),
+            &Cancel::never(),
+        )
+        .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         let expected = (40.0 / g).sqrt();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::AltitudeLoss));
@@ -504,7 +539,12 @@ mod tests {
     #[test]
     fn a_short_fall_is_off_station_with_window_values() {
         // 1 s of free fall: 0.5 g m down, speed g m/s, all in a 5 s window.
-        let s = simulate_summary(free_fall(1.0), &VerdictCriteria::default()).unwrap();
+        let s = simulate_summary(
+            free_fall(1.0),
+            &VerdictCriteria::default(),
+            &Cancel::never(),
+        )
+        .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         assert_eq!(s.outcome, Outcome::OffStation);
         assert!((s.max_altitude_loss_m - 0.5 * g).abs() < 1e-9);
@@ -519,7 +559,7 @@ mod tests {
             window_s: 0.0,
             ..VerdictCriteria::default()
         };
-        let err = simulate_summary(free_fall(1.0), &criteria)
+        let err = simulate_summary(free_fall(1.0), &criteria, &Cancel::never())
             .unwrap_err()
             .to_string();
         assert!(err.starts_with("criteria.window_s"), "{err}");

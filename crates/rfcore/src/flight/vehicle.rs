@@ -157,6 +157,22 @@ impl Vehicle {
     }
 }
 
+impl Vehicle {
+    /// What an accelerometer at the centre of mass measures, body FRD, m/s^2: every force but
+    /// gravity (rotor thrust, drag) per unit mass; about (0, 0, -g) in hover.
+    pub fn specific_force(
+        &self,
+        state: &RigidBodyState,
+        rotors: &RotorTotals,
+        wind_m_s: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let mass = self.body.mass_kg();
+        let force = self.wrench_from(state, rotors, wind_m_s).force_world_n;
+        let weight = Vector3::new(0.0, 0.0, mass * self.gravity_m_s2);
+        state.attitude.inverse() * ((force - weight) / mass)
+    }
+}
+
 /// The rotors' summed contribution: total thrust (N, along body -z), torque about the centre of
 /// mass (body, N m) and net spin along body z (rad/s, for the gyroscopic moment).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -74,103 +74,24 @@ mod linear;
 mod model;
 mod numeric;
 mod search;
+mod settings;
+mod static_hover;
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::airframe::Airframe;
+use crate::cancel::Cancel;
 use crate::error::{require_all_finite, Result, RfError};
 
 pub use linear::LINEAR_STATES;
+pub use settings::RelaxedHoverSettings;
 use model::{Model, V3};
-use search::{static_hover, Branch, Candidate, SPIN_FLOOR_FRACTION};
+use search::{Branch, Candidate, SPIN_FLOOR_FRACTION};
+use static_hover::static_hover;
 
 /// Largest scaled equation residual a returned solution may have.
 pub const RESIDUAL_TOLERANCE: f64 = 1e-9;
-
-/// What the analysis needs beyond the airframe, and how hard it looks. The first three are the
-/// simulator's (`Drag::rotational_drag_n_m_s`, `Drag::rotor_inertia_kg_m2`,
-/// `FixedPitch::thrust_coefficient_n_s2`): pass the values the vehicle is flown with.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RelaxedHoverSettings {
-    /// `k_r`: aerodynamic rotational damping, torque `-k_r omega` (N m s). Default 0.
-    pub rotational_drag_n_m_s: f64,
-    /// `I_R`: rotor and propeller inertia about its axis (kg m^2). Default 0 (no gyroscopic
-    /// moment).
-    pub rotor_inertia_kg_m2: f64,
-    /// `k_f` in `f = k_f omega_rotor^2` (N s^2): the rotor speed behind the gyroscopic moment.
-    /// Needed (> 0) when `rotor_inertia_kg_m2 > 0`. Default 0.
-    pub thrust_coefficient_n_s2: f64,
-    /// Largest spin rate searched (rad/s). Default 200, the simulator's body-rate limit.
-    pub max_spin_rate_rad_s: f64,
-    /// Largest circle the centre of mass may describe (m): a relaxed hover stays substantially
-    /// in one place. Default 0.1; `inf` for no limit.
-    pub max_circle_radius_m: f64,
-    /// Largest number of working rotors held at their lower bound (idle) in a branch. Default 2.
-    pub max_idle_rotors: usize,
-    /// Points per side of the spin-axis grid (odd, 11 to 401). Default 61.
-    pub grid_points: usize,
-}
-
-impl Default for RelaxedHoverSettings {
-    fn default() -> Self {
-        RelaxedHoverSettings {
-            rotational_drag_n_m_s: 0.0,
-            rotor_inertia_kg_m2: 0.0,
-            thrust_coefficient_n_s2: 0.0,
-            max_spin_rate_rad_s: 200.0,
-            max_circle_radius_m: 0.1,
-            max_idle_rotors: 2,
-            grid_points: 61,
-        }
-    }
-}
-
-impl RelaxedHoverSettings {
-    pub fn check(&self) -> Result<()> {
-        for (field, value) in [
-            ("rotational_drag_n_m_s", self.rotational_drag_n_m_s),
-            ("rotor_inertia_kg_m2", self.rotor_inertia_kg_m2),
-            ("thrust_coefficient_n_s2", self.thrust_coefficient_n_s2),
-        ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(RfError::invalid(
-                    field,
-                    format!("must be finite and >= 0, got {value}"),
-                ));
-            }
-        }
-        if self.rotor_inertia_kg_m2 > 0.0 && self.thrust_coefficient_n_s2 == 0.0 {
-            return Err(RfError::invalid(
-                "thrust_coefficient_n_s2",
-                "must be > 0 when rotor_inertia_kg_m2 > 0 (the gyroscopic moment needs the rotor \
-                 speed sqrt(f / k_f))",
-            ));
-        }
-        let s = self.max_spin_rate_rad_s;
-        if !(s.is_finite() && s > 0.0) {
-            return Err(RfError::invalid(
-                "max_spin_rate_rad_s",
-                format!("must be finite and > 0, got {s}"),
-            ));
-        }
-        let r = self.max_circle_radius_m;
-        if r.is_nan() || r <= 0.0 {
-            return Err(RfError::invalid(
-                "max_circle_radius_m",
-                format!("must be > 0 (inf for no limit), got {r}"),
-            ));
-        }
-        let g = self.grid_points;
-        if !(11..=401).contains(&g) || g.is_multiple_of(2) {
-            return Err(RfError::invalid(
-                "grid_points",
-                format!("must be odd and in [11, 401], got {g}"),
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// Static hover (no spin) or a spinning relaxed hover.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -264,7 +185,18 @@ pub fn relaxed_hover(
     airframe: &Airframe,
     settings: &RelaxedHoverSettings,
 ) -> Result<RelaxedHoverAnalysis> {
+    relaxed_hover_cancellable(airframe, settings, &Cancel::never())
+}
+
+/// [`relaxed_hover`] that stops with [`RfError::Interrupted`] once `cancel` is cancelled (checked
+/// before the static search and once per branch of carrying rotors).
+pub fn relaxed_hover_cancellable(
+    airframe: &Airframe,
+    settings: &RelaxedHoverSettings,
+    cancel: &Cancel,
+) -> Result<RelaxedHoverAnalysis> {
     settings.check()?;
+    cancel.check()?;
     let model = Model::new(airframe, settings)?;
     let mut found: Vec<Candidate> = static_hover(&model, settings);
     let working = model.working.clone();
@@ -274,24 +206,26 @@ pub fn relaxed_hover(
         .flat_map(|size| headroom::combinations(working.len(), size))
         .map(|idle| idle.iter().map(|&j| working[j]).collect())
         .collect();
+    cancel.check()?;
     let spinning: Vec<Vec<Candidate>> = branches
         .par_iter()
-        .map(|idle: &Vec<usize>| {
+        .map(|idle: &Vec<usize>| -> Result<Vec<Candidate>> {
+            cancel.check()?;
             let free: Vec<usize> = working
                 .iter()
                 .copied()
                 .filter(|i| !idle.contains(i))
                 .collect();
-            match Branch::new(&model, settings, free, idle.clone()) {
+            Ok(match Branch::new(&model, settings, free, idle.clone()) {
                 None => Vec::new(),
                 Some(branch) => branch
                     .spinning()
                     .into_iter()
                     .map(|(candidate, chart_point)| branch.polish(candidate, chart_point))
                     .collect(),
-            }
+            })
         })
-        .collect();
+        .collect::<Result<_>>()?;
     found.extend(spinning.into_iter().flatten());
     let floor = 2.0 * SPIN_FLOOR_FRACTION * settings.max_spin_rate_rad_s;
     let mut solutions: Vec<RelaxedHoverSolution> = Vec::new();

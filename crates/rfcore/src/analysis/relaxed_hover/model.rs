@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, Vector3};
 use crate::airframe::Airframe;
 use crate::error::{Result, RfError};
 
-use super::RelaxedHoverSettings;
+use super::settings::RelaxedHoverSettings;
 
 pub(crate) type V3 = Vector3<f64>;
 

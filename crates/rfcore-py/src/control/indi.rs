@@ -1,0 +1,177 @@
+//! Bindings for the INDI fault-tolerant controller (Sun et al.): its gains and the controller, with
+//! how it flies each failure set. Rotor indices are 0-based here (the Python layer converts).
+
+use pyo3::prelude::*;
+
+use rfcore::control::indi::{
+    DetectedFailure, FailureMode, IndiController, IndiGains, Setpoint, YawMode,
+};
+
+use crate::airframe::PyAirframe;
+use crate::convert::to_py_err;
+
+/// INDI gains (`rotorfault.IndiGains`); defaults from the core's `Default` (Sun's printed values
+/// where he prints them), rules from its `check`.
+#[pyclass(name = "IndiGains", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
+pub struct PyIndiGains {
+    pub(crate) inner: IndiGains,
+}
+
+macro_rules! indi_gains {
+    ($($name:ident),*) => {
+        #[pymethods]
+        impl PyIndiGains {
+            #[new]
+            #[pyo3(signature = (*, $($name=None,)* weights=None, model_coupling=None, yaw=None))]
+            #[allow(clippy::too_many_arguments)] // keyword-only, one per gain
+            fn new(
+                $($name: Option<f64>,)*
+                weights: Option<[f64; 4]>,
+                model_coupling: Option<bool>,
+                yaw: Option<&str>,
+            ) -> PyResult<Self> {
+                let d = IndiGains::default();
+                let inner = IndiGains {
+                    $($name: $name.unwrap_or(d.$name),)*
+                    weights: weights.unwrap_or(d.weights),
+                    model_coupling: model_coupling.unwrap_or(d.model_coupling),
+                    yaw: yaw.map(YawMode::parse).transpose().map_err(to_py_err)?.unwrap_or(d.yaw),
+                };
+                inner.check().map_err(to_py_err)?;
+                Ok(PyIndiGains { inner })
+            }
+            $(
+                #[getter]
+                fn $name(&self) -> f64 {
+                    self.inner.$name
+                }
+            )*
+            #[getter]
+            fn weights(&self) -> [f64; 4] {
+                self.inner.weights
+            }
+            #[getter]
+            fn model_coupling(&self) -> bool {
+                self.inner.model_coupling
+            }
+            #[getter]
+            fn yaw(&self) -> &'static str {
+                self.inner.yaw.name()
+            }
+        }
+    };
+}
+
+indi_gains!(
+    k_p_xy,
+    k_v_xy,
+    k_i_xy,
+    k_p_z,
+    k_d_z,
+    max_speed_m_s,
+    max_tilt_rad,
+    max_vertical_accel_m_s2,
+    integral_limit_m,
+    k_att_p,
+    k_att_d,
+    k_r,
+    filter_frequency_rad_s,
+    filter_damping,
+    output_angle_rad,
+    primary_axis_tilt,
+    mismatch_time_constant_s,
+    actuator_time_constant_s,
+    given_up_yaw_weight,
+    min_yaw_authority
+);
+
+/// How the controller flies one failure set (`FailureMode` of the core), rotor indices 0-based.
+#[pyclass(
+    name = "IndiFailureMode",
+    module = "rotorfault._rfcore",
+    frozen,
+    get_all
+)]
+pub struct PyIndiFailureMode {
+    failed: Vec<usize>,
+    healthy: Vec<usize>,
+    yaw_controlled: bool,
+    single_axis: bool,
+    output_direction: Option<[f64; 2]>,
+    primary_axis: [f64; 3],
+    /// `a` of the zero dynamics (one torque axis left only).
+    zero_dynamics_a: Option<f64>,
+    /// Their damping ratio (`None` when unstable or not applicable).
+    zero_dynamics_damping: Option<f64>,
+    hover_thrust_n: Vec<f64>,
+}
+
+impl From<FailureMode> for PyIndiFailureMode {
+    fn from(m: FailureMode) -> Self {
+        PyIndiFailureMode {
+            failed: m.failed,
+            healthy: m.healthy,
+            yaw_controlled: m.yaw_controlled,
+            single_axis: m.single_axis,
+            output_direction: m.output_direction,
+            primary_axis: m.primary_axis,
+            zero_dynamics_a: m.zero_dynamics.map(|(a, _)| a),
+            zero_dynamics_damping: m.zero_dynamics.and_then(|(_, zeta)| zeta),
+            hover_thrust_n: m.hover_thrust_n,
+        }
+    }
+}
+
+/// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
+/// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`
+/// (NED), times strictly increasing.
+#[pyclass(name = "IndiController", module = "rotorfault._rfcore", frozen)]
+pub struct PyIndiController {
+    pub(crate) inner: IndiController,
+}
+
+#[pymethods]
+impl PyIndiController {
+    #[new]
+    #[pyo3(signature = (airframe, *, gains, failures, setpoints, dt_s))]
+    fn new(
+        airframe: &PyAirframe,
+        gains: &PyIndiGains,
+        failures: Vec<(usize, f64)>,
+        setpoints: Vec<(f64, [f64; 3], [f64; 3])>,
+        dt_s: f64,
+    ) -> PyResult<Self> {
+        let failures = failures
+            .into_iter()
+            .map(|(rotor, time_s)| DetectedFailure { rotor, time_s })
+            .collect();
+        let setpoints = setpoints
+            .into_iter()
+            .map(|(time_s, position_m, velocity_m_s)| Setpoint {
+                time_s,
+                position_m,
+                velocity_m_s,
+            })
+            .collect();
+        let inner = IndiController::new(&airframe.inner, gains.inner, failures, setpoints, dt_s)
+            .map_err(to_py_err)?;
+        Ok(PyIndiController { inner })
+    }
+
+    /// How each failure set is flown: `[0]` healthy, `[k]` after the first `k` failures in time
+    /// order.
+    fn failure_modes(&self) -> Vec<PyIndiFailureMode> {
+        self.inner
+            .failure_modes()
+            .into_iter()
+            .map(PyIndiFailureMode::from)
+            .collect()
+    }
+}
+
+impl crate::control::class::ControllerClass for PyIndiController {
+    fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        Ok(Box::new(self.inner.clone()))
+    }
+}

@@ -1,0 +1,845 @@
+//! Incremental nonlinear dynamic inversion (INDI) fault-tolerant control, after Sun, Wang, Chu and
+//! de Visser, "Incremental nonlinear fault-tolerant control of a quadrotor with complete loss of two
+//! opposing rotors" (IEEE T-RO 37(1), 2021; MATLAB code `SihaoSun/INDI_Quadrotor_FTC`), written
+//! for any planar multirotor and any set of failed rotors.
+//!
+//! **An active controller.** INDI as in Sun is told which rotors failed (after a fault detector):
+//! [`DetectedFailure`] lists each failed rotor and the time the controller learns of it. Until then
+//! it flies the healthy vehicle; from then on it allocates over the remaining rotors only and
+//! commands the failed ones to zero. Partial losses it is not told about reach it, as any
+//! disturbance does, through the measured accelerations.
+//!
+//! # The control law (one control step, body FRD, world NED)
+//! 1. **Position loop** (Sun's `URpositionControl`, plus a moving reference): horizontal
+//!    `v_t = sat(k_p,xy (p_r - p) + v_r, v_max)`, `a_xy = k_v,xy (v_t - v) + k_i,xy int (v_t - v)`,
+//!    limited to `g tan(max_tilt)`; vertical `nu_z = k_p,z (z_r - z) + k_d,z (w_r - w)`, limited to
+//!    `max_vertical_accel_m_s2` (below `g`: the thrust keeps pointing up). The thrust
+//!    direction wanted is `z_d = (g e3 - a) / |g e3 - a|` (body z, pointing down), `a = (a_xy, nu_z)`,
+//!    passed through the low-pass filter (value, rate `z_d'`, acceleration `z_d''`).
+//! 2. **Reduced attitude of the primary axis `n`** (body frame, unit; body z unless tilted, see
+//!    [`IndiGains::primary_axis_tilt`]): `h = R^T z_d`, output `Y = h_xy - n_xy`, `Y' = (h')_xy`
+//!    with `h' = lambda + h x omega`, `lambda = R^T z_d'`. The yaw about `n` is free: the vehicle
+//!    may spin about its thrust axis.
+//! 3. **Pseudo-controls**: `nu_Y = -k_att,p Y - k_att,d Y'`, `nu_r = -k_r r` (yaw rate held at zero
+//!    while yaw is controlled), `nu_z` from step 1.
+//! 4. **INDI**: with the filtered gyro rate differentiated, `omega'_f` (the inertia coupling taken at
+//!    the current rate, "Filter and inertia coupling" below), the filtered rotor thrusts
+//!    `T_f` (the same filter, [`crate::control::filter`]) and the filtered vertical acceleration
+//!    `z''_f` (from the specific force, the same filter), the outputs one step ahead are
+//!    `z'' = z''_f - (n3z / m) 1^T dT`,
+//!    `Y'' = K + (h x (omega'_f + J^-1 M_tau dT))_xy`, `K = (h' x omega + lambda x omega + R^T z_d'')_xy`,
+//!    `r' = r'_f + (J^-1 M_tau dT)_z`
+//!    (`M_tau` the torque rows of the nominal effectiveness matrix, `J` the inertia). Equating them
+//!    to the pseudo-controls gives `G dT = b` (rows thrust, two attitude, yaw). `K` is evaluated
+//!    at the current sample, not filtered: it holds no input.
+//! 5. **Incremental allocation over the remaining rotors**: `min |W^(1/2) (b - G dT)|` with
+//!    `T_min - base <= dT <= T_max - base`, the failed rotors' columns removed, the smallest `dT`
+//!    among equal optima (Sun's pseudo-inverse): the minimum-norm solution when it lies within the
+//!    bounds, else the exact active-set solver of [`crate::allocation`], warm-started. The command
+//!    is `T = base + dT`, the failed rotors 0.
+//!
+//! # The incremental base
+//! `base = T_f + d`: `T_f` the filtered thrusts the rotors produce (in step with `omega'_f`), and
+//! `d` a slow low-pass (time constant [`IndiGains::mismatch_time_constant_s`]) of (previous command
+//! minus produced thrust). A rotor producing a fraction `e` of its command (a partial loss the
+//! controller is not told of, a weak motor) would otherwise settle with a standing increment
+//! `(1 - e) T / e` and the output error that sustains it (ke-quadcopter, rotor 1 at 40 %: 6.1 m off
+//! station); with `d`, the steady state has `dT = 0` and no output error (`tests/indi.rs`).
+//!
+//! # When rotors fail (decided once per failure set, at construction)
+//! - **Yaw** ([`YawMode`]): given up (weight `weights[3]` replaced by the small
+//!   [`IndiGains::given_up_yaw_weight`]; Sun eliminates the row)
+//!   when the remaining rotors, at hover, can make less than [`IndiGains::min_yaw_authority`] of
+//!   the healthy vehicle's yaw torque in either direction (an attainable-set LP), e.g. any rotor of
+//!   a quadrotor or of the PNPNPN hexacopter. The vehicle then spins about `n`.
+//! - **One torque axis left** (two opposing rotors of a quadrotor): only one combination
+//!   `y = c . Y` of the two attitude outputs can be controlled. Sun's output redefinition: `c` at
+//!   the angle `beta + s delta` with `beta` the direction of the angular acceleration the remaining
+//!   rotors make, `delta` = [`IndiGains::output_angle_rad`] and `s` the sign of the spin (the yaw
+//!   torque at hover) times the sign of `1 + a`, `a = (J_xy - J_z) / J_xy`. Linearised about the
+//!   spin `r`, the other combination (the zero dynamics) obeys
+//!   `eta'' = a r^2 eta - (1 + a) |r| cot(delta) eta'` : stable when `J_z > J_xy` (`a < 0`) and the
+//!   sign is chosen so; its damping ratio `(1 + a) cot(delta) / (2 sqrt(-a))` does not depend on the
+//!   spin rate. With `J_z < J_xy` no choice of `delta` is stable ([`FailureMode::zero_dynamics`]).
+//!   Sun's `chi = 105 deg` on his Bebop 2 is `delta = 65.67 deg` here (a test derives it).
+//! - **No hover**: a failure set whose remaining rotors cannot hold the weight with zero roll and
+//!   pitch torque (the hover this law flies, spinning about the thrust axis) is refused at
+//!   construction, naming `failures`; a relaxed hover about a tilted spin axis (Mueller and
+//!   D'Andrea), which two adjacent or three lost rotors of a quadrotor need, is not attempted.
+//!
+//! # Samples and their substitutes
+//! [`Controller::command_with`] reads the gyro, the specific force and the rotor thrusts actually
+//! produced ([`ControllerInput`]). Missing samples are replaced, and the law says how: the gyro by
+//! the state's body rates; the vertical acceleration by its model `g - n3z sum(T_f) / m` (the
+//! thrust row becomes plain dynamic inversion: a mass error then leaves an altitude offset); the
+//! rotor thrusts by an actuator model, the previous commands through a first-order lag
+//! ([`IndiGains::actuator_time_constant_s`]; without it the commanded base runs ahead of the
+//! measured acceleration by the rotor lag and the loop oscillates).
+//!
+//! # Filter and inertia coupling (decisions)
+//! Sun's code filters with a first-order 0.02 s low-pass; this law uses the second-order filter of
+//! Smeur et al. (JGCD 2016), damping 0.55, at Sun's 50 rad/s, so that the gyro is differentiated
+//! exactly. Plain INDI leaves every torque but the rotors' to the filtered gyro, the inertia
+//! coupling `-J^-1 (omega x J omega)` included; at the 40 rad/s spin of a quadrotor that lost rotors
+//! the filter's lag on that large, fast term loses ke-quadcopter flying at 2 m/s after losing rotors
+//! 1 and 3 (the oscillation grows with the spin until the rotors saturate: 2.4 m altitude error in
+//! the window). The coupling is known from the gyro and `J`, so the law takes it at
+//! the current rate and removes its filtered value from `omega'_f`
+//! ([`IndiGains::model_coupling`]): the filter then lags only on the unknown torques (drag, rotor
+//! gyroscopic moment), and that flight holds to 0.42 m (`tests/indi.rs`).
+//!
+//! # Floors (stated once)
+//! `n3z` in the thrust row is floored at [`MIN_N3Z`] (the law needs the thrust to point up); Sun's
+//! saturation of the reference rate `|lambda_i| <= 0.5` 1/s is kept ([`MAX_REFERENCE_RATE`]).
+
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+use crate::airframe::Airframe;
+use crate::allocation::active_set::ActiveSet;
+use crate::allocation::MAX_ACTUATORS;
+use crate::control::filter::SecondOrderLowPass;
+use crate::control::Controller;
+use crate::error::{require_finite, Result, RfError};
+use crate::state::{ControllerInput, RigidBodyState};
+
+mod gains;
+mod increment;
+mod modes;
+
+pub use gains::{sun_output_angle_rad, IndiGains, YawMode};
+use increment::incremental_allocation;
+pub use modes::FailureMode;
+use modes::{yaw_authority, Mode};
+
+/// Floor on `n3z` in the thrust row of `G` (the tilt at which it binds: 87 degrees).
+pub const MIN_N3Z: f64 = 0.05;
+/// Largest rate of the filtered thrust direction the law feeds forward, 1/s (Sun's saturation).
+pub const MAX_REFERENCE_RATE: f64 = 0.5;
+
+/// A rotor the controller is told has failed, from `time_s` on (the detection time).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectedFailure {
+    /// Rotor index (0-based).
+    pub rotor: usize,
+    pub time_s: f64,
+}
+
+/// A piece of the reference: from `time_s` until the next setpoint, position
+/// `position_m + velocity_m_s (t - time_s)` (NED, m) at velocity `velocity_m_s` (the first setpoint
+/// also holds before its time, at its position).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Setpoint {
+    pub time_s: f64,
+    pub position_m: [f64; 3],
+    pub velocity_m_s: [f64; 3],
+}
+
+impl Setpoint {
+    /// Holds `position_m` from `time_s`.
+    pub fn hold(time_s: f64, position_m: [f64; 3]) -> Self {
+        Setpoint {
+            time_s,
+            position_m,
+            velocity_m_s: [0.0; 3],
+        }
+    }
+}
+
+/// Filter states and memories, reset at the start of every run.
+#[derive(Debug, Clone, Default)]
+struct Memory {
+    started: bool,
+    gyro: [[f64; 2]; 3],
+    thrust: Vec<[f64; 2]>,
+    vertical: [f64; 2],
+    direction: [[f64; 2]; 3],
+    integral_xy: [f64; 2],
+    previous: Vec<f64>,
+    /// The actuator model's thrusts (used without rotor samples), N.
+    modelled: Vec<f64>,
+    /// `gamma(omega) = -J^-1 (omega x J omega)` through the filter.
+    coupling: [[f64; 2]; 3],
+    /// Slow low-pass of (previous command - produced thrust) per rotor, N.
+    mismatch: Vec<f64>,
+    mode: usize,
+}
+
+/// The INDI fault-tolerant controller (module docs). Rotor commands are thrusts, N.
+#[derive(Debug, Clone)]
+pub struct IndiController {
+    gains: IndiGains,
+    dt_s: f64,
+    mass_kg: f64,
+    inertia_kg_m2: [f64; 3],
+    gravity_m_s2: f64,
+    rotor_count: usize,
+    filter: SecondOrderLowPass,
+    /// `exp(-dt / actuator_time_constant_s)` of the actuator model.
+    actuator_keep: f64,
+    setpoints: Vec<Setpoint>,
+    /// Failures sorted by time; `modes[j]` flies the first `mode_counts[j]` of them.
+    failures: Vec<DetectedFailure>,
+    modes: Vec<Mode>,
+    mode_counts: Vec<usize>,
+    active: ActiveSet,
+    memory: Memory,
+}
+
+impl IndiController {
+    /// `failures`: the rotors the controller is told have failed and when (module docs);
+    /// `setpoints`: the reference, times strictly increasing; `dt_s`: the control period the
+    /// simulator calls it at.
+    pub fn new(
+        airframe: &Airframe,
+        gains: IndiGains,
+        failures: Vec<DetectedFailure>,
+        setpoints: Vec<Setpoint>,
+        dt_s: f64,
+    ) -> Result<Self> {
+        gains.check()?;
+        require_finite("dt_s", dt_s)?;
+        if dt_s <= 0.0 {
+            return Err(RfError::invalid("dt_s", format!("must be > 0, got {dt_s}")));
+        }
+        let gravity = airframe.gravity_m_s2();
+        if gains.max_vertical_accel_m_s2 >= gravity {
+            return Err(RfError::invalid(
+                "max_vertical_accel_m_s2",
+                format!(
+                    "must be below g = {gravity} m/s^2 (a larger downward demand turns the thrust \
+                     direction over), got {}",
+                    gains.max_vertical_accel_m_s2
+                ),
+            ));
+        }
+        if setpoints.is_empty() {
+            return Err(RfError::invalid(
+                "setpoints",
+                "must hold at least one setpoint",
+            ));
+        }
+        for (k, s) in setpoints.iter().enumerate() {
+            require_finite(&format!("setpoints[{k}].time"), s.time_s)?;
+            for v in s.position_m {
+                require_finite(&format!("setpoints[{k}].position"), v)?;
+            }
+            for v in s.velocity_m_s {
+                require_finite(&format!("setpoints[{k}].velocity"), v)?;
+            }
+            if k > 0 && s.time_s <= setpoints[k - 1].time_s {
+                return Err(RfError::invalid(
+                    format!("setpoints[{k}].time"),
+                    "times must be strictly increasing",
+                ));
+            }
+        }
+        let m = airframe.rotor_count();
+        if m > MAX_ACTUATORS {
+            return Err(RfError::invalid(
+                "airframe",
+                format!("INDI allocates over at most {MAX_ACTUATORS} rotors, got {m}"),
+            ));
+        }
+        let mut failures = failures;
+        for (k, f) in failures.iter().enumerate() {
+            require_finite(&format!("failures[{k}].time"), f.time_s)?;
+            if f.rotor >= m {
+                return Err(RfError::invalid(
+                    format!("failures[{k}].rotor"),
+                    format!("the airframe has {m} rotors, got rotor index {}", f.rotor),
+                ));
+            }
+            if failures[..k].iter().any(|g| g.rotor == f.rotor) {
+                return Err(RfError::invalid(
+                    format!("failures[{k}].rotor"),
+                    format!("rotor {} is listed twice", f.rotor + 1),
+                ));
+            }
+        }
+        failures.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        let all: Vec<usize> = (0..m).collect();
+        let healthy_authority =
+            yaw_authority(airframe, &airframe.nominal_effectiveness_matrix(), &all)?;
+        // One mode per distinct detection time: failures told at once are flown together (a set
+        // between them, never flown, is not built nor judged).
+        let mut modes = Vec::with_capacity(failures.len() + 1);
+        let mut mode_counts = Vec::with_capacity(failures.len() + 1);
+        for k in 0..=failures.len() {
+            if k > 0 && k < failures.len() && failures[k].time_s == failures[k - 1].time_s {
+                continue;
+            }
+            let mut failed: Vec<usize> = failures[..k].iter().map(|f| f.rotor).collect();
+            failed.sort_unstable();
+            modes.push(Mode::new(airframe, &gains, failed, healthy_authority)?);
+            mode_counts.push(k);
+        }
+        let filter = SecondOrderLowPass::new(
+            ("filter_frequency_rad_s", gains.filter_frequency_rad_s),
+            ("filter_damping", gains.filter_damping),
+            dt_s,
+        )?;
+        let first = modes[0].info.healthy.len();
+        Ok(IndiController {
+            gains,
+            dt_s,
+            mass_kg: airframe.mass_kg(),
+            inertia_kg_m2: airframe.inertia_kg_m2(),
+            actuator_keep: if gains.actuator_time_constant_s > 0.0 {
+                (-dt_s / gains.actuator_time_constant_s).exp()
+            } else {
+                0.0
+            },
+            gravity_m_s2: airframe.gravity_m_s2(),
+            rotor_count: m,
+            filter,
+            setpoints,
+            failures,
+            modes,
+            mode_counts,
+            active: ActiveSet::cold(first),
+            memory: Memory::default(),
+        })
+    }
+
+    /// How each failure set is flown: `[0]` the healthy vehicle, then one per detection time (the
+    /// failures told at that time and all before, in time order).
+    pub fn failure_modes(&self) -> Vec<FailureMode> {
+        self.modes.iter().map(|m| m.info.clone()).collect()
+    }
+
+    pub fn gains(&self) -> &IndiGains {
+        &self.gains
+    }
+
+    /// The reference position and velocity at `t_s`.
+    fn reference(&self, t_s: f64) -> (Vector3<f64>, Vector3<f64>) {
+        let k = self
+            .setpoints
+            .partition_point(|s| s.time_s <= t_s)
+            .saturating_sub(1);
+        let s = &self.setpoints[k];
+        let v = Vector3::from(s.velocity_m_s);
+        let elapsed = (t_s - s.time_s).max(0.0);
+        (Vector3::from(s.position_m) + v * elapsed, v)
+    }
+
+    /// Index of the failure set in force at `t_s`.
+    fn mode_at(&self, t_s: f64) -> usize {
+        let told = self.failures.partition_point(|f| f.time_s <= t_s);
+        // Every failure told by `t_s`: a group boundary, so a built mode.
+        self.mode_counts.partition_point(|&k| k < told)
+    }
+
+    /// Step 1 of the law: the desired acceleration (NED) from the position loop; updates the
+    /// velocity integral after use.
+    fn position_loop(&mut self, t_s: f64, s: &RigidBodyState) -> Vector3<f64> {
+        let g = &self.gains;
+        let (p_r, v_r) = self.reference(t_s);
+        let e_p = p_r - s.position_m;
+        let mut v_t = Vector2::new(g.k_p_xy * e_p.x + v_r.x, g.k_p_xy * e_p.y + v_r.y);
+        let speed = v_t.norm();
+        if speed > g.max_speed_m_s {
+            v_t *= g.max_speed_m_s / speed;
+        }
+        let e_v = v_t - s.velocity_m_s.xy();
+        let integral = Vector2::from(self.memory.integral_xy);
+        let mut a_xy = e_v * g.k_v_xy + integral * g.k_i_xy;
+        let lateral = self.gravity_m_s2 * g.max_tilt_rad.tan();
+        if a_xy.norm() > lateral {
+            a_xy *= lateral / a_xy.norm();
+        }
+        let limit = g.integral_limit_m;
+        for (i, e) in e_v.iter().enumerate() {
+            self.memory.integral_xy[i] =
+                (self.memory.integral_xy[i] + e * self.dt_s).clamp(-limit, limit);
+        }
+        let nu_z = (g.k_p_z * e_p.z + g.k_d_z * (v_r.z - s.velocity_m_s.z))
+            .clamp(-g.max_vertical_accel_m_s2, g.max_vertical_accel_m_s2);
+        Vector3::new(a_xy.x, a_xy.y, nu_z)
+    }
+
+    /// `gamma(omega) = -J^-1 (omega x J omega)`: the angular acceleration the inertia coupling
+    /// gives (principal axes), rad/s^2.
+    fn coupling(&self, omega: &Vector3<f64>) -> Vector3<f64> {
+        let [jx, jy, jz] = self.inertia_kg_m2;
+        let (p, q, r) = (omega.x, omega.y, omega.z);
+        Vector3::new(
+            (jy - jz) * q * r / jx,
+            (jz - jx) * r * p / jy,
+            (jx - jy) * p * q / jz,
+        )
+    }
+
+    /// Filters started at their inputs (a settled start).
+    fn start(
+        &mut self,
+        gyro: &Vector3<f64>,
+        coupling: &Vector3<f64>,
+        thrust: &[f64],
+        vertical: f64,
+        direction: &Vector3<f64>,
+    ) {
+        let mem = &mut self.memory;
+        mem.started = true;
+        for i in 0..3 {
+            mem.gyro[i] = SecondOrderLowPass::settled(gyro[i]);
+            mem.coupling[i] = SecondOrderLowPass::settled(coupling[i]);
+            mem.direction[i] = SecondOrderLowPass::settled(direction[i]);
+        }
+        mem.thrust = thrust
+            .iter()
+            .map(|&t| SecondOrderLowPass::settled(t))
+            .collect();
+        mem.mismatch = vec![0.0; thrust.len()];
+        mem.vertical = SecondOrderLowPass::settled(vertical);
+    }
+}
+
+/// What one step of the law computes besides the commands (for tests: the one-step prediction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IndiStep {
+    /// Filtered angular acceleration `omega'_f`, rad/s^2.
+    pub angular_acceleration_f: Vector3<f64>,
+    /// Predicted angular acceleration once the rotors produce the commands, rad/s^2.
+    pub angular_acceleration_predicted: Vector3<f64>,
+    /// Filtered vertical acceleration `z''_f` (NED), m/s^2.
+    pub vertical_acceleration_f: f64,
+}
+
+impl IndiController {
+    /// One control step (module docs); writes the commands and returns the intermediate values.
+    pub fn step(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<IndiStep> {
+        let s = input.state;
+        // A non-finite sample would poison every filter for good: refuse it (the simulator stops
+        // at a non-finite state before calling the controller).
+        let samples_finite = input
+            .gyro_rad_s
+            .is_none_or(|v| v.iter().all(|x| x.is_finite()))
+            && input
+                .specific_force_m_s2
+                .is_none_or(|v| v.iter().all(|x| x.is_finite()))
+            && input
+                .rotor_thrust_n
+                .is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        if !s.is_finite() || !t_s.is_finite() || !samples_finite {
+            return Err(RfError::invalid(
+                "measured",
+                format!("the state and samples at t = {t_s} s must be finite"),
+            ));
+        }
+        let m = self.rotor_count;
+        if let Some(thrust) = input.rotor_thrust_n {
+            if thrust.len() != m {
+                return Err(RfError::shape(
+                    "rotor_thrust_n",
+                    format!("{m} entries (one per rotor)"),
+                    thrust.len().to_string(),
+                ));
+            }
+        }
+        let mode_index = self.mode_at(t_s);
+        if !self.memory.started || mode_index != self.memory.mode {
+            self.active = ActiveSet::cold(self.modes[mode_index].info.healthy.len());
+        }
+        if !self.memory.started {
+            self.memory.previous = self.modes[mode_index].info.hover_thrust_n.clone();
+            self.memory.modelled = self.memory.previous.clone();
+        }
+        self.memory.mode = mode_index;
+        if input.rotor_thrust_n.is_none() {
+            // The actuator model: the previous command through the first-order lag.
+            let keep = self.actuator_keep;
+            for (a, &c) in self.memory.modelled.iter_mut().zip(&self.memory.previous) {
+                *a = keep * *a + (1.0 - keep) * c;
+            }
+        }
+
+        let rot: Matrix3<f64> = s.attitude.to_rotation_matrix().into_inner();
+        let omega = input.gyro_rad_s.unwrap_or(s.omega_rad_s);
+        let mut thrust_sample = [0.0; MAX_ACTUATORS];
+        thrust_sample[..m].copy_from_slice(input.rotor_thrust_n.unwrap_or(&self.memory.modelled));
+        let thrust_sample = &thrust_sample[..m];
+        let n3z_true = rot[(2, 2)];
+        let g = self.gravity_m_s2;
+        let a_des = self.position_loop(t_s, s);
+        let thrust_dir = Vector3::new(-a_des.x, -a_des.y, g - a_des.z);
+        let z_des = thrust_dir / thrust_dir.norm();
+
+        // Vertical acceleration sample (NED): measured, or its model from the filtered thrusts.
+        let measured_vertical = input.specific_force_m_s2.map(|f| (rot * f).z + g);
+        if !self.memory.started {
+            let start_vertical = measured_vertical.unwrap_or(0.0);
+            let coupling = self.coupling(&omega);
+            self.start(&omega, &coupling, thrust_sample, start_vertical, &z_des);
+        }
+        let coupling = self.coupling(&omega);
+        let filter = self.filter;
+        let mem = &mut self.memory;
+        // The inertia coupling is known: taken at the current rate, its filtered value removed
+        // from the filtered acceleration (module docs, step 4).
+        let mut omega_dot_f = Vector3::zeros();
+        let model_coupling = self.gains.model_coupling;
+        for i in 0..3 {
+            filter.step(&mut mem.gyro[i], omega[i]);
+            filter.step(&mut mem.coupling[i], coupling[i]);
+            omega_dot_f[i] = mem.gyro[i][1];
+            if model_coupling {
+                omega_dot_f[i] += coupling[i] - mem.coupling[i][0];
+            }
+        }
+        for (state, &t) in mem.thrust.iter_mut().zip(thrust_sample) {
+            filter.step(state, t);
+        }
+        let mut z_f = Vector3::zeros();
+        let mut z_rate = Vector3::zeros();
+        let mut z_acc = Vector3::zeros();
+        for i in 0..3 {
+            filter.step(&mut mem.direction[i], z_des[i]);
+            z_f[i] = mem.direction[i][0];
+            z_rate[i] = mem.direction[i][1].clamp(-MAX_REFERENCE_RATE, MAX_REFERENCE_RATE);
+            z_acc[i] = filter.acceleration(&mem.direction[i], z_des[i]);
+        }
+        let keep = (-self.dt_s / self.gains.mismatch_time_constant_s).exp();
+        for ((d, &c), &p) in mem
+            .mismatch
+            .iter_mut()
+            .zip(&mem.previous)
+            .zip(thrust_sample)
+        {
+            *d = keep * *d + (1.0 - keep) * (c - p);
+        }
+        let mode = &self.modes[mode_index];
+        let n3z = n3z_true.max(MIN_N3Z);
+        let total_f: f64 = mode
+            .info
+            .healthy
+            .iter()
+            .zip(&mode.thrust)
+            .map(|(&i, c)| c * mem.thrust[i][0])
+            .sum();
+        let vertical_f = match measured_vertical {
+            Some(v) => {
+                filter.step(&mut mem.vertical, v);
+                mem.vertical[0]
+            }
+            None => g - n3z * total_f / self.mass_kg,
+        };
+
+        // Step 2-3: reduced attitude and pseudo-controls.
+        let rt = rot.transpose();
+        let h = rt * z_f;
+        let lambda = rt * z_rate;
+        let h_dot = lambda + h.cross(&omega);
+        let n = mode.primary_axis;
+        let y = Vector2::new(h.x - n.x, h.y - n.y);
+        let y_dot = h_dot.xy();
+        let kinematic = (h_dot.cross(&omega) + lambda.cross(&omega) + rt * z_acc).xy();
+        let gains = &self.gains;
+        let nu_y = -y * gains.k_att_p - y_dot * gains.k_att_d;
+        let b_att = nu_y - kinematic - h.cross(&omega_dot_f).xy();
+        let b_yaw = -gains.k_r * omega.z - omega_dot_f.z;
+        let b_z = a_des.z - vertical_f;
+
+        // Step 4-5: G dT = b over the healthy rotors.
+        let k = mode.info.healthy.len();
+        let rows = mode.rotation;
+        let mut g_rows = [[0.0; MAX_ACTUATORS]; 4];
+        for (c, (a, &thrust_entry)) in mode.angular.iter().zip(&mode.thrust).enumerate() {
+            let att = h.cross(a).xy();
+            g_rows[0][c] = -n3z / self.mass_kg * thrust_entry;
+            g_rows[1][c] = rows[0][0] * att.x + rows[0][1] * att.y;
+            g_rows[2][c] = rows[1][0] * att.x + rows[1][1] * att.y;
+            g_rows[3][c] = a.z;
+        }
+        let b = [
+            b_z,
+            rows[0][0] * b_att.x + rows[0][1] * b_att.y,
+            rows[1][0] * b_att.x + rows[1][1] * b_att.y,
+            b_yaw,
+        ];
+        let mut base = [0.0; MAX_ACTUATORS];
+        let mut lower = [0.0; MAX_ACTUATORS];
+        let mut upper = [0.0; MAX_ACTUATORS];
+        for (c, &i) in mode.info.healthy.iter().enumerate() {
+            base[c] = (mem.thrust[i][0] + mem.mismatch[i]).clamp(mode.lower[c], mode.upper[c]);
+            lower[c] = mode.lower[c] - base[c];
+            upper[c] = mode.upper[c] - base[c];
+        }
+        let increment = incremental_allocation(
+            &g_rows,
+            &mode.weights,
+            &b,
+            &lower[..k],
+            &upper[..k],
+            &mut self.active,
+        );
+        out[..m].fill(0.0);
+        let mut predicted = omega_dot_f;
+        for (c, &i) in mode.info.healthy.iter().enumerate() {
+            out[i] = base[c] + increment[c];
+            predicted += mode.angular[c] * increment[c];
+        }
+        self.memory.previous.copy_from_slice(&out[..m]);
+        Ok(IndiStep {
+            angular_acceleration_f: omega_dot_f,
+            angular_acceleration_predicted: predicted,
+            vertical_acceleration_f: vertical_f,
+        })
+    }
+}
+
+impl Controller for IndiController {
+    fn command_count(&self) -> usize {
+        self.rotor_count
+    }
+
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.step(t_s, &ControllerInput::state_only(measured), out)
+            .map(|_| ())
+    }
+
+    fn command_with(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.step(t_s, input, out).map(|_| ())
+    }
+
+    fn reads_samples(&self) -> bool {
+        true
+    }
+
+    fn reset(&mut self) {
+        self.memory = Memory::default();
+        self.active = ActiveSet::cold(self.modes[0].info.healthy.len());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    const DT: f64 = 1.0 / 400.0;
+
+    fn hover_state() -> RigidBodyState {
+        RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -10.0),
+            ..RigidBodyState::at_rest()
+        }
+    }
+
+    fn controller(preset: &str, failures: Vec<DetectedFailure>) -> IndiController {
+        let airframe = crate::fixtures::preset(preset);
+        IndiController::new(
+            &airframe,
+            IndiGains::default(),
+            failures,
+            vec![Setpoint::hold(0.0, [0.0, 0.0, -10.0])],
+            DT,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn hover_at_the_setpoint_commands_the_hover_thrusts_with_and_without_samples() {
+        let airframe = crate::fixtures::preset("hexa-ppnnpn");
+        let mut c = controller("hexa-ppnnpn", vec![]);
+        let hover = c.failure_modes()[0].hover_thrust_n.clone();
+        let state = hover_state();
+        let force = Vector3::new(0.0, 0.0, -airframe.gravity_m_s2());
+        let with = ControllerInput {
+            state: &state,
+            gyro_rad_s: Some(Vector3::zeros()),
+            specific_force_m_s2: Some(force),
+            rotor_thrust_n: Some(&hover),
+        };
+        let mut out = [0.0; 6];
+        for k in 0..200 {
+            c.command_with(k as f64 * DT, &with, &mut out).unwrap();
+            for (t, h) in out.iter().zip(&hover) {
+                assert!((t - h).abs() < 1e-9, "{k}: {out:?} vs {hover:?}");
+            }
+        }
+        c.reset();
+        for k in 0..200 {
+            c.command(k as f64 * DT, &state, &mut out).unwrap();
+            for (t, h) in out.iter().zip(&hover) {
+                assert!((t - h).abs() < 1e-9, "{k}: {out:?} vs {hover:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_detected_failure_switches_the_allocation_at_its_time_and_commands_the_rotor_to_zero() {
+        let failure = DetectedFailure {
+            rotor: 0,
+            time_s: 0.5,
+        };
+        let mut c = controller("octo-x", vec![failure]);
+        let modes = c.failure_modes();
+        assert_eq!((modes.len(), modes[1].failed.clone()), (2, vec![0]));
+        let state = hover_state();
+        let mut out = [0.0; 8];
+        let mut before = [0.0; 8];
+        for k in 0..400 {
+            let t = k as f64 * DT;
+            c.command(t, &state, &mut out).unwrap();
+            if t < 0.5 {
+                assert!(out[0] > 1.0, "{t}: {out:?}");
+                before = out;
+            } else {
+                assert_eq!(out[0], 0.0, "{t}");
+            }
+        }
+        assert!(
+            before.iter().all(|t| (t - before[1]).abs() < 1e-9),
+            "{before:?}"
+        );
+    }
+
+    #[test]
+    fn failures_told_at_once_are_flown_together_and_no_set_between_them_is_judged() {
+        // Rotors 1 and 2 of ke-quadcopter (adjacent) told at once: the set is refused as a whole;
+        // rotors 1 and 3 at once: the single failure of rotor 1 between them is never built.
+        let together = |a: usize, b: usize| {
+            let airframe = crate::fixtures::preset("ke-quadcopter");
+            let failures = vec![
+                DetectedFailure {
+                    rotor: a,
+                    time_s: 1.0,
+                },
+                DetectedFailure {
+                    rotor: b,
+                    time_s: 1.0,
+                },
+            ];
+            let hold = vec![Setpoint::hold(0.0, [0.0; 3])];
+            IndiController::new(&airframe, IndiGains::default(), failures, hold, DT)
+        };
+        assert!(together(0, 1)
+            .unwrap_err()
+            .to_string()
+            .contains("rotor(s) 1, 2 failed"));
+        let c = together(0, 2).unwrap();
+        let failed: Vec<Vec<usize>> = c.failure_modes().into_iter().map(|m| m.failed).collect();
+        assert_eq!(failed, vec![vec![], vec![0, 2]]);
+        assert_eq!((c.mode_at(0.99), c.mode_at(1.0)), (0, 1));
+    }
+
+    #[test]
+    fn the_same_measurements_give_the_same_commands_after_a_reset() {
+        let mut c = controller(
+            "ke-quadcopter",
+            vec![DetectedFailure {
+                rotor: 1,
+                time_s: 0.1,
+            }],
+        );
+        let states: Vec<RigidBodyState> = (0..300)
+            .map(|k| {
+                let t = k as f64 * DT;
+                RigidBodyState {
+                    position_m: Vector3::new(0.1 * t.sin(), -0.2 * t, -10.0 + 0.05 * t),
+                    velocity_m_s: Vector3::new(0.1 * t.cos(), -0.2, 0.05),
+                    attitude: UnitQuaternion::from_euler_angles(0.05 * t, -0.03, 2.0 * t),
+                    omega_rad_s: Vector3::new(0.05, 0.0, 2.0 + t),
+                }
+            })
+            .collect();
+        let times: Vec<f64> = (0..300).map(|k| k as f64 * DT).collect();
+        let first = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+        let second = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+        assert_eq!(first, second);
+        assert!(first.iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn bad_measurements_and_arguments_are_named() {
+        let mut c = controller("ke-quadcopter", vec![]);
+        let mut state = hover_state();
+        let mut out = [0.0; 4];
+        c.command(0.0, &state, &mut out).unwrap();
+        state.velocity_m_s.y = f64::NAN;
+        let err = c.command(DT, &state, &mut out).unwrap_err().to_string();
+        assert!(err.starts_with("measured:"), "{err}");
+        let state = hover_state();
+        let short = [1.0; 3];
+        let input = ControllerInput {
+            rotor_thrust_n: Some(&short),
+            ..ControllerInput::state_only(&state)
+        };
+        let err = c
+            .command_with(DT, &input, &mut out)
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("rotor_thrust_n:"), "{err}");
+        let input = ControllerInput {
+            gyro_rad_s: Some(Vector3::new(0.0, f64::INFINITY, 0.0)),
+            ..ControllerInput::state_only(&state)
+        };
+        assert!(c
+            .command_with(DT, &input, &mut out)
+            .unwrap_err()
+            .to_string()
+            .starts_with("measured:"));
+
+        let airframe = crate::fixtures::preset("ke-quadcopter");
+        let hold = vec![Setpoint::hold(0.0, [0.0; 3])];
+        let new = |failures: Vec<DetectedFailure>, setpoints: Vec<Setpoint>, dt: f64| {
+            IndiController::new(&airframe, IndiGains::default(), failures, setpoints, dt)
+                .unwrap_err()
+                .to_string()
+        };
+        let failure = |rotor, time_s| DetectedFailure { rotor, time_s };
+        for (err, field) in [
+            (new(vec![], hold.clone(), 0.0), "dt_s:"),
+            (new(vec![], vec![], DT), "setpoints:"),
+            (
+                new(
+                    vec![],
+                    vec![Setpoint::hold(1.0, [0.0; 3]), Setpoint::hold(1.0, [1.0; 3])],
+                    DT,
+                ),
+                "setpoints[1].time:",
+            ),
+            (
+                new(vec![], vec![Setpoint::hold(0.0, [0.0, f64::NAN, 0.0])], DT),
+                "setpoints[0].position:",
+            ),
+            (
+                new(vec![failure(4, 1.0)], hold.clone(), DT),
+                "failures[0].rotor:",
+            ),
+            (
+                new(vec![failure(1, 1.0), failure(1, 2.0)], hold.clone(), DT),
+                "failures[1].rotor:",
+            ),
+            (
+                new(vec![failure(1, f64::NAN)], hold.clone(), DT),
+                "failures[0].time:",
+            ),
+            (
+                new(vec![failure(0, 1.0), failure(1, 2.0)], hold.clone(), DT),
+                "failures:",
+            ),
+        ] {
+            assert!(err.starts_with(field), "{field}: {err}");
+        }
+        let gains = IndiGains {
+            k_att_p: -1.0,
+            ..IndiGains::default()
+        };
+        let err = IndiController::new(&airframe, gains, vec![], hold, DT)
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("k_att_p:"), "{err}");
+    }
+}

@@ -1,0 +1,74 @@
+//! When a sensor samples: its own clock, `t_k = k / rate_hz` from time 0, independent of the
+//! control period. The simulator hands a sensor the true state at each of its sample times (exact
+//! when the time falls on the integration grid, the latest grid state otherwise: sample-and-hold),
+//! so any rate works with any control period; none has to divide another.
+
+/// Sample times `k / rate_hz`, k = 0, 1, 2, ... (computed from k, so they never drift).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleClock {
+    rate_hz: f64,
+    next_index: u64,
+}
+
+impl SampleClock {
+    /// A clock at `rate_hz` (finite and > 0, checked by the sensor's profile).
+    pub fn new(rate_hz: f64) -> Self {
+        SampleClock {
+            rate_hz,
+            next_index: 0,
+        }
+    }
+
+    pub fn rate_hz(&self) -> f64 {
+        self.rate_hz
+    }
+
+    pub fn period_s(&self) -> f64 {
+        1.0 / self.rate_hz
+    }
+
+    /// The time of the next sample, s.
+    pub fn next_time_s(&self) -> f64 {
+        self.next_index as f64 / self.rate_hz
+    }
+
+    /// `true` when the next sample is due at or before `t_s`. A sample within a millionth of a
+    /// period after `t_s` counts as due, so a simulator time `k dt` that rounds just below a
+    /// sample time `j / rate` still takes that sample.
+    pub fn is_due(&self, t_s: f64) -> bool {
+        self.next_time_s() <= t_s + 1e-6 * self.period_s()
+    }
+
+    /// The time of the sample being taken now; the clock moves to the next one.
+    pub fn tick(&mut self) -> f64 {
+        let t = self.next_time_s();
+        self.next_index += 1;
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn times_are_exact_multiples_and_due_with_rounding() {
+        let mut clock = SampleClock::new(240.0);
+        for k in 0..1000u64 {
+            assert_eq!(clock.tick(), k as f64 / 240.0);
+        }
+        // 400 Hz control steps: step k at k * (1/400) is due for every sample j/240 <= k/400.
+        let mut clock = SampleClock::new(240.0);
+        let dt = 1.0 / 400.0;
+        let mut taken = 0;
+        for k in 0..=400 {
+            let t = k as f64 * dt;
+            while clock.is_due(t) {
+                clock.tick();
+                taken += 1;
+            }
+        }
+        // Samples at 0, 1/240, ..., 1 s: 241 of them in [0, 1].
+        assert_eq!(taken, 241);
+    }
+}

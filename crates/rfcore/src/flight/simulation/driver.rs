@@ -1,0 +1,305 @@
+//! The driver: one closed-loop run ([`simulate`], [`simulate_observed`]) checked before any
+//! work, flown control step by control step (measure, command, record, then one
+//! `Integrator::period`), and many runs in parallel ([`simulate_batch`]). Runs check a
+//! [`Cancel`] token once per control period (`*_cancellable`, the batch).
+
+use rayon::prelude::*;
+
+use crate::cancel::Cancel;
+use crate::control::Controller;
+use crate::error::{Result, RfError};
+use crate::flight::actuator::Actuators;
+use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
+use crate::flight::simulation::config::SimulationConfig;
+use crate::flight::simulation::divergence::{Divergence, DivergenceReason};
+use crate::flight::simulation::noise::Gaussian;
+use crate::flight::simulation::recording::{records, NoObserver, StepObserver, Trajectory};
+use crate::flight::simulation::step::{check_step_size, rotor_totals, Integrator};
+use crate::flight::vehicle::Vehicle;
+use crate::state::{state_from_vector, state_vector, ControllerInput, RigidBodyState, STATE_DIM};
+
+/// One closed-loop run. `actuators` is the initial actuator state (settle it to the trim first
+/// for a trimmed start); `efficiency` the initial rotor efficiency. Faults may come in any order.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(
+    vehicle: &Vehicle,
+    actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+) -> Result<Trajectory> {
+    simulate_cancellable(
+        vehicle,
+        actuators,
+        controller,
+        initial_efficiency,
+        faults,
+        x0,
+        config,
+        &Cancel::never(),
+    )
+}
+
+/// [`simulate`], checking `cancel` once per control period.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_cancellable(
+    vehicle: &Vehicle,
+    actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+    cancel: &Cancel,
+) -> Result<Trajectory> {
+    simulate_observed(
+        vehicle,
+        actuators,
+        controller,
+        initial_efficiency,
+        faults,
+        x0,
+        config,
+        &mut NoObserver,
+        cancel,
+    )
+}
+
+/// [`simulate`], showing every control step to `observer` as it is flown, and checking `cancel`
+/// once per control period (at most [`crate::flight::simulation::MAX_SUBSTEPS`] RK4 steps).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_observed(
+    vehicle: &Vehicle,
+    mut actuators: Actuators,
+    controller: &mut dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: RigidBodyState,
+    config: &SimulationConfig,
+    observer: &mut dyn StepObserver,
+    cancel: &Cancel,
+) -> Result<Trajectory> {
+    config.check()?;
+    let m = vehicle.rotor_count();
+    if actuators.rotor_count() != m {
+        return Err(RfError::shape(
+            "actuator",
+            format!("{m} rotors"),
+            actuators.rotor_count().to_string(),
+        ));
+    }
+    let count = actuators.channels() * m;
+    if controller.command_count() != count {
+        return Err(RfError::shape(
+            "controller",
+            format!(
+                "{count} commands ({} per rotor x {m} rotors)",
+                actuators.channels()
+            ),
+            controller.command_count().to_string(),
+        ));
+    }
+    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
+    let mut schedule = FaultSchedule::new(faults, m)?;
+    if !x0.is_finite() {
+        return Err(RfError::invalid("x0", "must be finite"));
+    }
+    check_step_size(config, &actuators, &x0)?;
+    config.check_start("x0", &x0)?;
+
+    let steps = config.steps();
+    let every = config.record_every;
+    let rows = steps / every + 3;
+    let mut trajectory = Trajectory {
+        t_s: Vec::with_capacity(rows),
+        states: Vec::with_capacity(rows),
+        commands: Vec::with_capacity(rows * count),
+        thrust_n: Vec::with_capacity(rows * m),
+        efficiency: Vec::with_capacity(rows * m),
+        measured: Vec::with_capacity(if config.noise.is_some() {
+            rows * STATE_DIM
+        } else {
+            0
+        }),
+        divergence: None,
+    };
+    controller.reset();
+    let mut efficiency = initial_efficiency.to_vec();
+    let mut command = vec![0.0; count];
+    let mut state = x0;
+    let mut integrator = Integrator::new(vehicle, &actuators, config, &x0);
+    let mut gaussian = config.noise.map(|n| Gaussian::new(n.seed));
+    let mut measured_vector = [0.0; STATE_DIM];
+    let reads_samples = controller.reads_samples();
+    let mut rotor_thrust = vec![0.0; m];
+
+    schedule.apply_due(0.0, &mut efficiency);
+    if let Some(reason) = integrator.limits().reason(&state) {
+        let divergence = Divergence {
+            time_s: 0.0,
+            reason,
+            state,
+        };
+        end_with(
+            &mut trajectory,
+            observer,
+            divergence,
+            &efficiency,
+            &actuators,
+            config,
+        );
+        return Ok(trajectory);
+    }
+    for k in 0..=steps {
+        cancel.check()?;
+        let t = config.step_time(k);
+        // Measurements are recorded only when they differ from the true state (with noise);
+        // without noise the Python layer rebuilds them from the recorded state.
+        let measured = match (&config.noise, gaussian.as_mut()) {
+            (Some(noise), Some(gaussian)) => {
+                measured_vector = state_vector(&state);
+                for (i, v) in measured_vector.iter_mut().enumerate() {
+                    *v +=
+                        (noise.relative_std * v.abs() + noise.absolute_std[i]) * gaussian.sample();
+                }
+                state_from_vector(&measured_vector)
+            }
+            _ => state,
+        };
+        // Raw samples (truth, or the noisy rates) only for a controller that reads them.
+        let input = if reads_samples {
+            for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
+                *thrust = actuators.output(i, efficiency[i]).thrust_n;
+            }
+            let totals = rotor_totals(vehicle, &actuators, actuators.state(), &efficiency);
+            let wind = config.wind_at(t);
+            ControllerInput {
+                state: &measured,
+                gyro_rad_s: Some(measured.omega_rad_s),
+                specific_force_m_s2: Some(vehicle.specific_force(&state, &totals, &wind)),
+                rotor_thrust_n: Some(&rotor_thrust),
+            }
+        } else {
+            ControllerInput::state_only(&measured)
+        };
+        controller.command_with(t, &input, &mut command)?;
+        let finite = command.iter().all(|c| c.is_finite());
+        observer.step(t, &state, &command, &efficiency);
+        // Every `every`-th step, the last one, and a step whose command ends the run.
+        if records(k, every, steps) || !finite {
+            let row = config.noise.map(|_| &measured_vector);
+            trajectory.push_step(t, &state, &efficiency, &actuators, row);
+            trajectory.commands.extend_from_slice(&command);
+        }
+        if !finite {
+            trajectory.divergence = Some(Divergence {
+                time_s: t,
+                reason: DivergenceReason::NonFiniteCommand,
+                state,
+            });
+            break;
+        }
+        if k == steps {
+            break;
+        }
+        let t_next = config.step_time(k + 1);
+        if let Some(divergence) = integrator.period(
+            t,
+            t_next,
+            &command,
+            &mut state,
+            &mut actuators,
+            &mut efficiency,
+            &mut schedule,
+        ) {
+            end_with(
+                &mut trajectory,
+                observer,
+                divergence,
+                &efficiency,
+                &actuators,
+                config,
+            );
+            return Ok(trajectory);
+        }
+    }
+    Ok(trajectory)
+}
+
+/// Ends a run with `divergence`: its row (NaN commands; NaN measurements with sensor noise),
+/// shown to the observer and recorded with the event.
+fn end_with(
+    trajectory: &mut Trajectory,
+    observer: &mut dyn StepObserver,
+    divergence: Divergence,
+    efficiency: &[f64],
+    actuators: &Actuators,
+    config: &SimulationConfig,
+) {
+    let count = actuators.channels() * actuators.rotor_count();
+    let nan_row = [f64::NAN; STATE_DIM];
+    let Divergence { time_s, state, .. } = divergence;
+    trajectory.push_step(
+        time_s,
+        &state,
+        efficiency,
+        actuators,
+        config.noise.map(|_| &nan_row),
+    );
+    trajectory
+        .commands
+        .extend(std::iter::repeat_n(f64::NAN, count));
+    observer.step(time_s, &state, &vec![f64::NAN; count], efficiency);
+    trajectory.divergence = Some(divergence);
+}
+
+/// One run of a batch: its own controller, initial state and faults.
+pub struct BatchRun {
+    pub controller: Box<dyn Controller>,
+    /// Actuator start for this run (settled), or `None` to keep the batch's actuator state.
+    pub initial_command: Option<Vec<f64>>,
+    pub x0: RigidBodyState,
+    pub faults: Vec<RotorFault>,
+}
+
+/// Many runs in parallel (rayon); results in input order. With sensor noise, run `i` uses seed
+/// `seed + i`, so runs are independent and the batch is reproducible. Every run checks `cancel`
+/// once per control period.
+pub fn simulate_batch(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    initial_efficiency: &[f64],
+    runs: Vec<BatchRun>,
+    config: &SimulationConfig,
+    cancel: &Cancel,
+) -> Result<Vec<Trajectory>> {
+    config.check()?;
+    for (i, run) in runs.iter().enumerate() {
+        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
+    }
+    runs.into_par_iter()
+        .enumerate()
+        .map(|(i, mut run)| {
+            let mut own = config.clone();
+            if let Some(noise) = own.noise.as_mut() {
+                noise.seed = noise.seed.wrapping_add(i as u64);
+            }
+            let mut actuators = actuators.clone();
+            if let Some(command) = &run.initial_command {
+                actuators.settle(command)?;
+            }
+            simulate_cancellable(
+                vehicle,
+                actuators,
+                run.controller.as_mut(),
+                initial_efficiency,
+                &run.faults,
+                run.x0,
+                &own,
+                cancel,
+            )
+        })
+        .collect()
+}

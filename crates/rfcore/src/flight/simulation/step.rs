@@ -1,0 +1,233 @@
+//! One control period of the coupled body and actuators: `substeps` RK4 steps with the command
+//! held, the actuators following their exact response at the RK4 stage times, intervals ending at
+//! every fault time, and the divergence check after every substep (module docs of
+//! [`crate::flight::simulation`]). Also the up-front step-size check.
+
+use crate::error::{Result, RfError};
+use crate::flight::actuator::Actuators;
+use crate::flight::fault_schedule::FaultSchedule;
+use crate::flight::simulation::config::SimulationConfig;
+use crate::flight::simulation::divergence::{Divergence, Limits, MAX_RATE_STEP};
+use crate::flight::vehicle::{RotorTotals, Vehicle};
+use crate::state::RigidBodyState;
+
+/// The rotors' summed contribution with the channels at `states`.
+#[inline]
+pub(super) fn rotor_totals(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    states: &[f64],
+    efficiency: &[f64],
+) -> RotorTotals {
+    let mut totals = RotorTotals::default();
+    let mut xy = vehicle.rotor_xy_m().iter();
+    actuators.for_each_output(states, efficiency, |out| {
+        if let Some(&at) = xy.next() {
+            totals.add(at, &out);
+        }
+    });
+    totals
+}
+
+/// The up-front step-size check (module docs).
+pub(crate) fn check_step_size(
+    config: &SimulationConfig,
+    actuators: &Actuators,
+    x0: &RigidBodyState,
+) -> Result<()> {
+    let h = config.dt_s / config.substeps as f64;
+    let spin = x0.omega_rad_s.norm();
+    let tau = actuators.time_constant_s();
+    let lag_rate = if tau > 0.0 { 1.0 / tau } else { 0.0 };
+    let fastest = spin.max(lag_rate);
+    let product = h * fastest;
+    if product > MAX_RATE_STEP {
+        let needed = (config.dt_s * fastest / MAX_RATE_STEP).ceil();
+        return Err(RfError::invalid(
+            "substeps",
+            format!(
+                "the RK4 substep h = dt / substeps = {h} s is too long for the fastest rate: \
+                 h x max(|omega_0| = {spin} rad/s, 1 / time_constant = {lag_rate} 1/s) = \
+                 {product} exceeds {MAX_RATE_STEP}, beyond which RK4 no longer resolves the \
+                 motion: use substeps >= {needed} (or a shorter dt)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// One run's integrator: what stays fixed over the run and the work arrays every control period
+/// reuses.
+pub(crate) struct Integrator<'a> {
+    vehicle: &'a Vehicle,
+    config: &'a SimulationConfig,
+    limits: Limits,
+    instant: bool,
+    constant_wind: bool,
+    /// The command of the current period, saturated.
+    targets: Vec<f64>,
+    /// Channel states at the start, middle and end of an interval.
+    nodes: [Vec<f64>; 3],
+}
+
+impl<'a> Integrator<'a> {
+    /// For a run of `vehicle` from `x0` (the divergence limits' reference altitude) with
+    /// `actuators` (their command count and whether they respond instantly).
+    pub(crate) fn new(
+        vehicle: &'a Vehicle,
+        actuators: &Actuators,
+        config: &'a SimulationConfig,
+        x0: &RigidBodyState,
+    ) -> Self {
+        let count = actuators.channels() * vehicle.rotor_count();
+        let h_nominal = config.dt_s / config.substeps as f64;
+        Integrator {
+            vehicle,
+            config,
+            limits: Limits::new(
+                &config.limits,
+                config.ground_z_m,
+                -x0.position_m.z,
+                h_nominal,
+            ),
+            instant: actuators.is_instant(),
+            constant_wind: config.wind_profile.is_empty(),
+            targets: vec![0.0; count],
+            nodes: [vec![0.0; count], vec![0.0; count], vec![0.0; count]],
+        }
+    }
+
+    /// The run's divergence limits.
+    pub(crate) fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Integrates `state` and `actuators` from `t` to `t_next` with `command` held, applying the
+    /// faults of `schedule` to `efficiency` at their times. A limit crossed within the period
+    /// ends it: the divergence at the located crossing is returned, with `actuators` there
+    /// (`state` is left at the start of the substep that crossed).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn period(
+        &mut self,
+        t: f64,
+        t_next: f64,
+        command: &[f64],
+        state: &mut RigidBodyState,
+        actuators: &mut Actuators,
+        efficiency: &mut [f64],
+        schedule: &mut FaultSchedule,
+    ) -> Option<Divergence> {
+        let (vehicle, config) = (self.vehicle, self.config);
+        let body = vehicle.body();
+        let h = (t_next - t) / config.substeps as f64;
+        actuators.saturate(command, &mut self.targets);
+        // The channels do not move within this control step (they jump to the command or sit
+        // at it): one rotor evaluation serves every node of every substep.
+        let constant = self.instant || actuators.state() == &self.targets[..];
+        // Lag decays over a half and a whole substep, shared by every substep not split by a
+        // fault.
+        let half_decay = actuators.decay(0.5 * h);
+        let decays = [
+            [1.0; 2],
+            half_decay,
+            [half_decay[0] * half_decay[0], half_decay[1] * half_decay[1]],
+        ];
+        // Rotor totals at the start of the next interval, when known (same command, efficiency).
+        let mut start_totals: Option<RotorTotals> = None;
+        for s in 0..config.substeps {
+            let mut a = t + s as f64 * h;
+            let b = if s + 1 == config.substeps {
+                t_next
+            } else {
+                t + (s + 1) as f64 * h
+            };
+            while a < b {
+                // One RK4 step of body and actuators over [a, end], end = b or the next fault.
+                let end = schedule.interval_end(a, b);
+                let len = end - a;
+                let winds = if self.constant_wind {
+                    [config.wind_m_s; 3]
+                } else {
+                    [
+                        config.wind_at(a),
+                        config.wind_at(a + 0.5 * len),
+                        config.wind_at(end),
+                    ]
+                };
+                let totals = if constant {
+                    let at_start = match start_totals {
+                        Some(t) => t,
+                        None => rotor_totals(vehicle, actuators, &self.targets, efficiency),
+                    };
+                    [at_start; 3]
+                } else {
+                    let mut totals = [RotorTotals::default(); 3];
+                    // Shortened by a fault (not by rounding of the substep grid).
+                    let split = (len - h).abs() > 1e-9 * h;
+                    for (node, elapsed) in [0.0, 0.5 * len, len].into_iter().enumerate() {
+                        if node == 0 {
+                            if let Some(t) = start_totals {
+                                totals[0] = t;
+                                continue;
+                            }
+                        }
+                        let decay = if split {
+                            actuators.decay(elapsed)
+                        } else {
+                            decays[node]
+                        };
+                        actuators.response_with_decay(
+                            &self.targets,
+                            elapsed,
+                            decay,
+                            &mut self.nodes[node],
+                        );
+                        totals[node] =
+                            rotor_totals(vehicle, actuators, &self.nodes[node], efficiency);
+                    }
+                    totals
+                };
+                let next = body.rk4_step_nodes(state, len, |node, x| {
+                    vehicle.wrench_from(x, &totals[node], &winds[node])
+                });
+                if !self.limits.within(&next) {
+                    // Locate the crossing by re-integrating shorter steps from `state`.
+                    let mut channels = vec![0.0; command.len()];
+                    let mut step = |l: f64| {
+                        let (mid, fin) = (a + 0.5 * l, a + l);
+                        let mut tot = [RotorTotals::default(); 3];
+                        for (node, elapsed) in [0.0, 0.5 * l, l].into_iter().enumerate() {
+                            actuators.response(&self.targets, elapsed, &mut channels);
+                            tot[node] = rotor_totals(vehicle, actuators, &channels, efficiency);
+                        }
+                        let w = [config.wind_at(a), config.wind_at(mid), config.wind_at(fin)];
+                        body.rk4_step_nodes(state, l, |node, x| {
+                            vehicle.wrench_from(x, &tot[node], &w[node])
+                        })
+                    };
+                    let (elapsed, reason) = self.limits.locate(len, &next, &mut step);
+                    let at = if elapsed == len { next } else { step(elapsed) };
+                    actuators.response(&self.targets, elapsed, &mut channels);
+                    actuators.set_state(&channels);
+                    return Some(Divergence {
+                        time_s: a + elapsed,
+                        reason,
+                        state: at,
+                    });
+                }
+                *state = next;
+                actuators.set_state(if constant {
+                    &self.targets
+                } else {
+                    &self.nodes[2]
+                });
+                start_totals = Some(totals[2]);
+                a = end;
+                if schedule.apply_due(a, efficiency) {
+                    start_totals = None;
+                }
+            }
+        }
+        None
+    }
+}

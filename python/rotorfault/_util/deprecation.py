@@ -1,0 +1,69 @@
+"""The one way an old name keeps working for one release: it warns (``DeprecationWarning``,
+naming the new name) and then does what the new name does. Used for moved modules, renamed
+arguments, attributes and keys; ``tests/cross/test_deprecations.py`` checks every one."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import warnings
+from typing import Any
+
+
+def warn(old: str, new: str, *, stacklevel: int = 3) -> None:
+    """Warns that ``old`` is deprecated in favour of ``new`` (removed after one release)."""
+    warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning, stacklevel=stacklevel)
+
+
+def moved_module(old: str, new: str) -> None:
+    """Makes the module ``old`` (being imported) the module ``new``: one object under both names,
+    so every name, private ones included, resolves as before; warns once per import."""
+    warn(f"module {old}", new, stacklevel=4)
+    sys.modules[old] = importlib.import_module(new)
+
+
+def renamed_keyword(function: str, old: str, new: str, value: Any, given: Any, default: Any) -> Any:
+    """The value of keyword ``new`` when the caller passed the deprecated ``old`` instead (``value``
+    is what ``old`` got; ``given`` what ``new`` got, ``default`` its default)."""
+    warn(f"{function}({old}=...)", f"{function}({new}=...)", stacklevel=4)
+    if given is not default:
+        raise TypeError(f"{function}: give {new} or the deprecated {old}, not both")
+    return value
+
+
+def renamed_attribute(old: str, new: str) -> property:
+    """A read-only property ``old`` that warns and returns attribute ``new`` (for a class body:
+    ``acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")``)."""
+
+    def get(self: Any) -> Any:
+        warn(f"{type(self).__name__}.{old}", f"{type(self).__name__}.{new}")
+        return getattr(self, new)
+
+    return property(get, doc=f"Deprecated name of :attr:`{new}`.")
+
+
+class _DataclassFields:
+    """``__dataclass_fields__`` of a settings class of the extension (``FIELDS``), so that
+    ``dataclasses.replace(obj, ...)`` and ``dataclasses.fields(obj)`` keep working for one
+    release: read from an object it warns (use ``obj.replace(...)`` and ``Class.FIELDS``)."""
+
+    def __get__(self, obj: Any, cls: type) -> dict[str, Any]:
+        import dataclasses
+
+        if obj is not None:
+            warn(f"dataclasses.replace / dataclasses.fields on a {cls.__name__}", f"{cls.__name__}.replace(...) and {cls.__name__}.FIELDS")
+        out = {}
+        for name in cls.FIELDS:  # type: ignore[attr-defined]
+            f = dataclasses.field()
+            f.name = name
+            f.type = Any
+            f._field_type = dataclasses._FIELD  # type: ignore[attr-defined]  # what dataclasses.fields() keeps
+            out[name] = f
+        return out
+
+
+def dataclass_compat(cls: type) -> None:
+    """Lets the dataclass functions keep working, with a warning, on ``cls``: a class of the
+    extension that replaced a Python dataclass of the same name (issue 26: types cross the
+    boundary once)."""
+    setattr(cls, "__dataclass_fields__", _DataclassFields())

@@ -1,0 +1,175 @@
+"""Files the package writes: checked before any computation, written under a temporary name in the
+same directory and renamed into place only when complete, so an interrupted run never leaves a
+truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfault.plotting.style`,
+through :func:`atomic_path`.)
+
+This module depends on nothing else in the package, so every room can use it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+#: File types a figure can be saved as (by extension).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def check_output_file(field: str, path: str | os.PathLike[str], *, suffixes: tuple[str, ...] = FIGURE_SUFFIXES, force: bool = False) -> Path:
+    """Checks, before any work is done, that ``path`` can be written: a known extension, an
+    existing writable directory, and no existing file unless ``force``."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{field}: expected a file path, got {type(path).__name__}")
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise ValueError(f"{field}: the file name must end in {', '.join(suffixes)}, got {str(p)!r}")
+    if p.is_dir():
+        raise ValueError(f"{field}: {str(p)!r} is a directory, expected a file name")
+    check_parent(field, p)
+    if p.exists() and not force:
+        raise ValueError(f"{field}: {str(p)!r} exists; pass --force (force=True) to replace it")
+    return p
+
+
+def check_parent(field: str, p: Path) -> None:
+    """The directory ``p`` goes into exists and is writable (``ValueError`` naming ``field``)."""
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise ValueError(f"{field}: directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{field}: directory {str(parent)!r} is not writable")
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yields a temporary name beside ``path``; on success renames it to ``path`` (``os.replace``,
+    atomic on one file system), on any error or interrupt removes it and leaves ``path`` as it was."""
+    final = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else ".")
+    os.close(fd)
+    tmp_path = Path(tmp)
+    os.chmod(tmp_path, 0o666 & ~_umask())  # as an ordinary open() would create it
+    try:
+        yield tmp_path
+        os.replace(tmp_path, final)
+    except BaseException:
+        tmp_path.unlink(missing_ok=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Writes ``text`` (UTF-8) to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+
+
+#: The file that makes a directory a rotorfault output directory (lists its files).
+MANIFEST = "manifest.json"
+
+
+def check_output_directory(field: str, path: str | os.PathLike[str], *, force: bool = False) -> Path:
+    """Checks, before any work is done, that the output directory ``path`` can be (re)placed: it
+    does not exist, is empty, or (with ``force``) holds a previous output of this package (a
+    manifest, and no file the manifest does not list). A directory with anything else in it is
+    never replaced."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{field}: expected a directory path, got {type(path).__name__}")
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"{field}: {str(p)!r} exists and is not a directory")
+    check_parent(field, p.resolve())
+    if p.is_dir() and any(p.iterdir()):
+        manifest = p / MANIFEST
+        if not manifest.is_file():
+            raise ValueError(
+                f"{field}: {str(p)!r} is not empty and holds no {MANIFEST} (not a rotorfault output); "
+                "choose a new or empty directory"
+            )
+        import json
+
+        try:
+            listed = set(json.loads(manifest.read_text(encoding="utf-8"))["outputs"]) | {MANIFEST}
+        except (ValueError, KeyError, TypeError, OSError):
+            raise ValueError(f"{field}: {str(manifest)!r} is unreadable; choose a new or empty directory") from None
+        foreign = sorted(entry.name for entry in p.iterdir() if entry.name not in listed)
+        if foreign:
+            raise ValueError(
+                f"{field}: {str(p)!r} holds files its {MANIFEST} does not list ({', '.join(foreign[:5])}); "
+                "choose a new or empty directory"
+            )
+        if not force:
+            raise ValueError(f"{field}: {str(p)!r} holds a previous output; pass --force (force=True) to replace it")
+    return p
+
+
+@contextlib.contextmanager
+def output_directory(path: str | os.PathLike[str], manifest: dict[str, Any]) -> Iterator[Path]:
+    """Yields a temporary sibling directory to fill; when the block completes, writes ``manifest``
+    (plus ``outputs``: the files present) into it and swaps it in for ``path`` as one unit (the
+    previous directory, if any, is removed only after the new one is in place). On any error or
+    interrupt the temporary directory is removed and ``path`` is left as it was. Call
+    :func:`check_output_directory` first."""
+    import json
+    import shutil
+
+    final = Path(path)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else "."))
+    os.chmod(tmp, 0o777 & ~_umask())
+    old: Path | None = None
+    try:
+        yield tmp
+        outputs = sorted(entry.name for entry in tmp.iterdir())
+        write_text(tmp / MANIFEST, json.dumps({**manifest, "outputs": outputs}, indent=2) + "\n")
+        with signals_deferred():
+            if final.exists():
+                old = final.parent / f".{final.name}.{os.getpid()}.old"
+                os.replace(final, old)
+            os.replace(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Holds SIGINT and SIGTERM for the duration (a few renames), so a directory swap is not cut
+    in half; they are delivered afterwards."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    except (AttributeError, ValueError, OSError):  # not the main thread, or no POSIX signals
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+__all__ = [
+    "FIGURE_SUFFIXES",
+    "MANIFEST",
+    "atomic_path",
+    "check_output_directory",
+    "check_output_file",
+    "check_parent",
+    "output_directory",
+    "signals_deferred",
+    "write_text",
+]

@@ -1,0 +1,360 @@
+"""The allocator: one validated allocation problem (:class:`Allocator`), solved for one virtual
+control or a batch by the active set (exact, the closed loops' path), Clarabel (the reference;
+prioritised allocation) or the weighted pseudo-inverse, each answer with its KKT certificate
+(:class:`Allocation`). The problem and the methods are described in :mod:`rotorfault.allocation`."""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, cast, get_args
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
+from .._util.convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
+from ..analysis.airframe import Airframe
+
+METHODS: tuple[AllocationMethod, ...] = get_args(AllocationMethod)
+_DEFAULTS = _rfcore.AllocationSettings()
+#: The certificate tolerance by default (the core's ``ActiveSetSettings::default()``).
+DEFAULT_TOLERANCE: float = _DEFAULTS.tolerance
+#: Clarabel's default tolerance here (the core's ``ClarabelSettings::default()``).
+CLARABEL_TOLERANCE: float = _DEFAULTS.clarabel_tolerance
+#: The KKT residuals of an allocation and the tolerance they are held to: ``stationarity``,
+#: ``complementarity``, ``bound_violation``, ``tolerance``, ``holds``, ``worst``.
+Certificate = _rfcore.Certificate
+
+
+@dataclass(frozen=True)
+class Allocation:
+    """The result of :func:`allocate`. For one virtual control ``commands`` is (m,), ``achieved``
+    (n,) and ``status`` a string; for N of them (N, m), (N, n) and a tuple of N strings.
+
+    ``status``: ``"optimal"`` (the certificate holds), ``"almost-optimal"`` (clarabel at
+    reduced accuracy), ``"iteration-limit"`` (neither the active set nor its fallback could
+    certify: commands feasible, not proven optimal), ``"unconstrained"`` (pinv) or ``"failed"``
+    (clarabel found no solution). ``certificate`` (one per row for a batch): the KKT residuals
+    of the commands (:class:`Certificate`). ``solved_by``: ``"active-set"``, ``"clarabel"`` or
+    ``"pinv"``. ``fallbacks``: how many answers the active set's Clarabel fallback produced."""
+
+    commands: FloatArray
+    achieved: FloatArray
+    virtual_control: FloatArray
+    status: AllocationStatus | tuple[AllocationStatus, ...]
+    iterations: int | tuple[int, ...]
+    certificate: _rfcore.Certificate | tuple[_rfcore.Certificate, ...]
+    solved_by: SolvedBy | tuple[SolvedBy, ...]
+    fallbacks: int
+
+    @property
+    def attained(self) -> bool | np.ndarray[Any, np.dtype[np.bool_]]:
+        """Whether the rotors produce the virtual control exactly (to 1e-9 of its size)."""
+        scale = np.maximum(np.max(np.abs(self.virtual_control), axis=-1), 1e-300)
+        ok = np.max(np.abs(self.achieved - self.virtual_control), axis=-1) <= 1e-9 * scale
+        return bool(ok) if np.ndim(ok) == 0 else ok
+
+    @property
+    def residual(self) -> FloatArray:
+        """``u_c - M T``: what the rotors could not give."""
+        out: FloatArray = self.virtual_control - self.achieved
+        return out
+
+
+class Allocator:
+    """A validated allocation problem, reusable across calls and by
+    :class:`rotorfault.control.Allocated`.
+
+    ``target``: an :class:`~rotorfault.Airframe` (its effectiveness matrix, efficiencies applied,
+    and thrust bounds) or an n x m matrix (then ``bounds`` is required). ``weights``: n entries
+    >= 0 (default all 1). ``bounds``: ``(lower, upper)``, each a number or m entries.
+    ``give_up_yaw``: with an airframe, drop the yaw row (n = 3). ``tolerance``,
+    ``max_iterations``, ``clarabel_tolerance``: the solver settings of the module docs (None:
+    the core's defaults); they apply to every allocation of this allocator, also inside
+    :class:`rotorfault.control.Allocated`."""
+
+    def __init__(
+        self,
+        target: Airframe | npt.ArrayLike,
+        *,
+        weights: npt.ArrayLike | None = None,
+        bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+        regularization: float = 0.0,
+        preferred: npt.ArrayLike | None = None,
+        give_up_yaw: bool = False,
+        axes: ControlAxes | None = None,
+        tolerance: float | None = None,
+        max_iterations: int | None = None,
+        clarabel_tolerance: float | None = None,
+    ) -> None:
+        drop_yaw = flag("give_up_yaw", give_up_yaw)
+        settings = _settings(tolerance, max_iterations, clarabel_tolerance)
+        if isinstance(target, Airframe):
+            names = control_axes(drop_yaw, axes)
+            matrix = target.wrench_matrix() if names == "wrench" else target.effectiveness_matrix()
+            if drop_yaw:
+                matrix = matrix[:3]
+            default_bounds: tuple[FloatArray, FloatArray] | None = (target.min_thrust_n, target.max_thrust_n)
+        else:
+            if drop_yaw or axes is not None:
+                field = "give_up_yaw" if drop_yaw else "axes"
+                raise ValueError(f"{field}: only applies to an Airframe (pick the rows of the matrix yourself)")
+            matrix = float_array("matrix", target, 2)
+            default_bounds = None
+        n, m = matrix.shape
+        if bounds is None:
+            if default_bounds is None:
+                raise ValueError("bounds: required with a matrix, as (lower, upper)")
+            lower, upper = default_bounds
+        else:
+            lower, upper = _bounds(bounds, m)
+        w = np.ones(n) if weights is None else float_array("weights", weights, 1)
+        pref = np.zeros(m) if preferred is None else float_array("preferred", preferred, 1)
+        gamma = real("regularization", regularization)
+        self._core = _rfcore.AllocationProblem(matrix, w, lower, upper, gamma, pref, settings)
+        self.settings = settings
+        self.matrix = frozen_array("matrix", matrix, 2)
+        self.weights = frozen_array("weights", w, 1)
+        self.lower = frozen_array("bounds.lower", lower, 1)
+        self.upper = frozen_array("bounds.upper", upper, 1)
+        self.regularization = gamma
+        self.preferred = frozen_array("preferred", pref, 1)
+
+    @property
+    def actuator_count(self) -> int:
+        return int(self.matrix.shape[1])
+
+    @property
+    def virtual_dimension(self) -> int:
+        return int(self.matrix.shape[0])
+
+    def allocate(
+        self,
+        virtual_control: npt.ArrayLike,
+        *,
+        method: AllocationMethod = "active-set",
+        priorities: Sequence[Sequence[int]] | None = None,
+    ) -> Allocation:
+        """Allocates one virtual control (n,) or a batch (N, n), in parallel without the GIL,
+        with this allocator's settings."""
+        if method == "active-set" and priorities is None:
+            # The fast path: n floats as given (a float64 vector, a list or tuple of floats),
+            # one core call; anything else takes the general path below.
+            one = self._core.allocate_one(virtual_control)
+            if one is not None:
+                return _single(one)
+        if not isinstance(method, str):
+            raise TypeError(f"method: expected a string, got {type(method).__name__}")
+        if method not in METHODS:
+            raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, got {method!r}")
+        if isinstance(virtual_control, (str, bytes)):
+            raise TypeError(f"virtual_control: expected an array of numbers, got {type(virtual_control).__name__}")
+        try:
+            ndim = np.ndim(virtual_control)
+        except ValueError as exc:
+            raise TypeError(f"virtual_control: expected an array of numbers ({exc})") from None
+        if ndim not in (1, 2):
+            raise ValueError(f"virtual_control: expected shape (n,) or (N, n), got {ndim} dimensions")
+        given = float_array("virtual_control", virtual_control, ndim)
+        if given.size == 0:
+            raise ValueError(f"virtual_control: expected {self.virtual_dimension} entries per row, got an empty array")
+        rows = given.reshape(-1, given.shape[-1])
+        if rows.shape[1] != self.virtual_dimension:
+            raise ValueError(
+                f"virtual_control: expected {self.virtual_dimension} entries per row "
+                f"(rows of the allocation matrix), got {rows.shape[1]}"
+            )
+        groups = None if priorities is None else _priorities(priorities)
+        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups)
+        commands, achieved, iterations = batch.commands, batch.achieved, batch.iterations
+        statuses = cast(list[AllocationStatus], batch.statuses)
+        certificates, solved_by = batch.certificates, cast(list[SolvedBy], batch.solved_by)
+        if ndim == 1:
+            return Allocation(
+                commands[0], achieved[0], rows[0], statuses[0], iterations[0], certificates[0], solved_by[0],
+                batch.fallbacks,
+            )
+        return Allocation(
+            commands, achieved, rows, tuple(statuses), tuple(iterations), tuple(certificates), tuple(solved_by),
+            batch.fallbacks,
+        )
+
+    def rate_limited(self, previous: npt.ArrayLike, max_change: float | npt.ArrayLike) -> Allocator:
+        """A copy whose bounds also keep each command within ``max_change`` (a number or one per
+        actuator, e.g. rate x control period) of ``previous``: Lanzon's rate limit (11) folded into
+        the box. A previous command outside the bounds is pulled to the nearest bound, so the
+        result is always a valid box."""
+        prev = float_array("previous", previous, 1)
+        delta = (
+            np.full(self.actuator_count, real("max_change", max_change))
+            if isinstance(max_change, numbers.Real) and not isinstance(max_change, bool)
+            else float_array("max_change", max_change, 1)
+        )
+        lower, upper = self._core.rate_limited_bounds(prev, delta)
+        return Allocator(
+            self.matrix, weights=self.weights, bounds=(lower, upper), regularization=self.regularization,
+            preferred=self.preferred, tolerance=self.settings.tolerance, max_iterations=self.settings.max_iterations,
+            clarabel_tolerance=self.settings.clarabel_tolerance,
+        )
+
+    def objective(self, virtual_control: npt.ArrayLike, commands: npt.ArrayLike) -> tuple[float, float]:
+        """``(objective, kkt_residual)`` of any commands: the residual (command units) is zero
+        exactly at an optimum, whichever solver produced it."""
+        u = float_array("virtual_control", virtual_control, 1)
+        t = float_array("commands", commands, 1)
+        value, kkt = self._core.objective(u, t)
+        return float(value), float(kkt)
+
+
+def allocate(
+    target: Airframe | npt.ArrayLike,
+    virtual_control: npt.ArrayLike,
+    *,
+    weights: npt.ArrayLike | None = None,
+    bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+    method: AllocationMethod = "active-set",
+    regularization: float = 0.0,
+    preferred: npt.ArrayLike | None = None,
+    priorities: Sequence[Sequence[int]] | None = None,
+    give_up_yaw: bool = False,
+    axes: ControlAxes | None = None,
+    tolerance: float | None = None,
+    max_iterations: int | None = None,
+    clarabel_tolerance: float | None = None,
+) -> Allocation:
+    """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
+    the arguments and the module docs for the methods and settings. With an airframe and no
+    ``bounds``, ``regularization`` or ``preferred``, the prepared problem is kept on the
+    (immutable) airframe, keyed by the weights and settings, so repeated calls are cheap::
+
+        >>> import rotorfault as rf
+        >>> ke = rf.Airframe.preset("ke-quadcopter")
+        >>> a = rf.allocate(ke, [7.0, 0.0, 0.0, 0.0])
+        >>> a.commands.round(4).tolist(), a.status
+        ([1.75, 1.75, 1.75, 1.75], 'optimal')
+    """
+    key = _cache_key(target, weights, bounds, regularization, preferred, give_up_yaw, axes, tolerance, max_iterations, clarabel_tolerance)
+    if key is not None:
+        cache: dict[Any, Allocator] | None = getattr(target, "_allocators", None)
+        if cache is None:
+            cache = {}
+            target._allocators = cache  # type: ignore[union-attr]
+        allocator = cache.get(key)
+        if allocator is None:
+            allocator = Allocator(target, weights=weights, give_up_yaw=give_up_yaw, axes=axes, tolerance=tolerance,
+                                  max_iterations=max_iterations, clarabel_tolerance=clarabel_tolerance)
+            if len(cache) >= _CACHE_SIZE:
+                cache.clear()
+            cache[key] = allocator
+    else:
+        allocator = Allocator(
+            target, weights=weights, bounds=bounds, regularization=regularization, preferred=preferred,
+            give_up_yaw=give_up_yaw, axes=axes, tolerance=tolerance, max_iterations=max_iterations,
+            clarabel_tolerance=clarabel_tolerance,
+        )
+    return allocator.allocate(virtual_control, method=method, priorities=priorities)
+
+
+_CACHE_SIZE = 32
+_KEY_TYPES = (float, int)
+
+
+def _cache_key(
+    target: Any, weights: Any, bounds: Any, regularization: Any, preferred: Any, give_up_yaw: Any, *settings: Any
+) -> tuple[Any, ...] | None:
+    """The key of :func:`allocate`'s cache on an airframe, or None when the call is not
+    cacheable (anything but an airframe with default bounds, regularisation and preferred
+    commands, weights a list/tuple of plain numbers or None, plain-number settings). Exact types
+    only, so every value a key holds is validated once, when its allocator is built."""
+    if type(target) is not Airframe or bounds is not None or preferred is not None or type(give_up_yaw) is not bool:
+        return None
+    if type(regularization) not in _KEY_TYPES or regularization != 0:
+        return None
+    if not all(v is None or type(v) in _KEY_TYPES for v in settings):
+        return None
+    if weights is None:
+        w: tuple[Any, ...] | None = None
+    elif type(weights) in (list, tuple) and all(type(x) in _KEY_TYPES for x in weights):
+        w = tuple(weights)
+    else:
+        return None
+    return (w, give_up_yaw, *settings)
+
+
+def _single(one: _rfcore.SingleAllocation) -> Allocation:
+    """An :class:`Allocation` from the core's single answer, built without the dataclass's
+    ``__init__`` (a frozen dataclass sets each field through ``object.__setattr__``: about twice
+    the cost of the whole solve)."""
+    out = _new(Allocation)
+    solved_by = one.solved_by
+    _setattr(out, "__dict__", {
+        "commands": one.commands, "achieved": one.achieved, "virtual_control": one.virtual_control,
+        "status": one.status, "iterations": one.iterations, "certificate": one.certificate,
+        "solved_by": solved_by, "fallbacks": 1 if solved_by == "clarabel" else 0,
+    })
+    return out
+
+
+_new = object.__new__
+_setattr = object.__setattr__
+
+
+def _settings(tolerance: Any, max_iterations: Any, clarabel_tolerance: Any) -> _rfcore.AllocationSettings:
+    """Types checked here, values by the core (``ActiveSetSettings::check``, Clarabel's)."""
+    return _rfcore.AllocationSettings(
+        tolerance=None if tolerance is None else real("tolerance", tolerance),
+        max_iterations=None if max_iterations is None else count("max_iterations", max_iterations),
+        clarabel_tolerance=None if clarabel_tolerance is None else real("clarabel_tolerance", clarabel_tolerance),
+    )
+
+
+def _bounds(bounds: Any, m: int) -> tuple[FloatArray, FloatArray]:
+    if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
+        raise TypeError("bounds: expected a pair (lower, upper), each a number or one value per actuator")
+    out = []
+    for name, value in zip(("lower", "upper"), bounds):
+        if isinstance(value, numbers.Real) and not isinstance(value, bool):
+            out.append(np.full(m, float(value)))
+        else:
+            out.append(float_array(f"bounds.{name}", value, 1))
+    return out[0], out[1]
+
+
+def _priorities(priorities: Any) -> list[list[int]]:
+    if isinstance(priorities, (str, bytes)) or not hasattr(priorities, "__iter__"):
+        raise TypeError("priorities: expected a list of groups of row indices, e.g. [[0, 1, 2], [3]]")
+    groups = []
+    for k, group in enumerate(priorities):
+        if isinstance(group, (str, bytes)) or not hasattr(group, "__iter__"):
+            raise TypeError(f"priorities[{k}]: expected a list of row indices, got {type(group).__name__}")
+        rows = []
+        for r in group:
+            if isinstance(r, bool) or not isinstance(r, numbers.Integral):
+                raise TypeError(f"priorities[{k}]: expected integer row indices, got {r!r}")
+            index = int(r)
+            if not 0 <= index < 2**32:
+                raise ValueError(f"priorities[{k}]: row indices must be in 0..n-1, got {index}")
+            rows.append(index)
+        groups.append(rows)
+    return groups
+
+
+def _positive_int(field: str, value: Any) -> int:
+    number = count(field, value)
+    if not 1 <= number <= 2**32 - 1:
+        raise ValueError(f"{field}: must be between 1 and {2**32 - 1}, got {number}")
+    return number
+
+
+__all__ = [
+    "CLARABEL_TOLERANCE",
+    "DEFAULT_TOLERANCE",
+    "METHODS",
+    "Allocation",
+    "Allocator",
+    "Certificate",
+    "allocate",
+]

@@ -1,0 +1,184 @@
+"""The attainable set of virtual controls: how far it reaches along a direction
+(:func:`max_virtual_control`, a linear program solved by Clarabel), how much balanced thrust is
+left (:func:`hover_thrust_margin`) and a 2-D slice through hover (:func:`attainable_slice`, with
+its figure :func:`plot_attainable_slices`)."""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._typing import ControlAxes
+from .._util.convert import FloatArray, control_axes, flag, float_array, real
+from ..analysis.airframe import Airframe
+from .allocator import CLARABEL_TOLERANCE, Allocator
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class DirectionalLimit:
+    """The largest ``scale`` with ``base + scale * direction`` attainable, and commands that
+    attain it (:func:`max_virtual_control`)."""
+
+    scale: float
+    commands: FloatArray
+    status: str
+
+
+def max_virtual_control(
+    target: Airframe | npt.ArrayLike,
+    direction: npt.ArrayLike,
+    *,
+    bounds: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+    base: npt.ArrayLike | None = None,
+    give_up_yaw: bool = False,
+    tolerance: float = CLARABEL_TOLERANCE,
+) -> DirectionalLimit | None:
+    """The attainable set along a direction: the largest ``s`` such that some bounded commands
+    produce ``base + s * direction`` (``base`` zero by default). ``None`` when no point of that
+    line is attainable; ``s`` is negative when ``base`` is not attainable but points behind it
+    are. Solved as a linear program by Clarabel."""
+    allocator = Allocator(target, bounds=bounds, give_up_yaw=give_up_yaw)
+    n = allocator.virtual_dimension
+    d = float_array("direction", direction, 1)
+    b = np.zeros(n) if base is None else float_array("base", base, 1)
+    result = _rfcore.max_along_direction(
+        allocator.matrix, allocator.lower, allocator.upper, d, b, real("tolerance", tolerance)
+    )
+    if result is None:
+        return None
+    return DirectionalLimit(result.scale, np.asarray(result.commands), result.status)
+
+
+@dataclass(frozen=True)
+class HoverMargin:
+    """:func:`hover_thrust_margin`: the largest total thrust with the controlled torques at zero,
+    the weight, and their difference (negative: cannot hover in balance). ``commands`` attain the
+    maximum; ``None`` (and ``-inf`` thrust) when zero torque is unattainable at any thrust."""
+
+    max_thrust_n: float
+    weight_n: float
+    margin_n: float
+    commands: FloatArray | None
+    status: str
+
+    @property
+    def thrust_to_weight(self) -> float:
+        return self.max_thrust_n / self.weight_n
+
+
+def hover_thrust_margin(
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    tolerance: float = CLARABEL_TOLERANCE,
+    axes: ControlAxes | None = None,
+) -> HoverMargin:
+    """How much balanced thrust an airframe has left, with rotor ``efficiency`` (default the
+    airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning vehicle,
+    Ke / Lanzon)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
+    names = control_axes(give_up_yaw, axes)
+    h = _rfcore.hover_thrust_margin(frame._core, names, real("tolerance", tolerance))
+    commands = None if h.commands is None else np.asarray(h.commands)
+    return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
+
+
+AXIS_LABELS = ("thrust T (N)", "roll torque L (N m)", "pitch torque M (N m)", "yaw torque N (N m)")
+
+
+def attainable_slice(
+    airframe: Airframe,
+    axes: tuple[int, int] = (1, 2),
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    directions: int = 90,
+) -> FloatArray | None:
+    """The boundary of a 2-D slice of the attainable virtual-control set through hover: in the
+    plane of ``axes`` (indices into thrust, roll, pitch, yaw), from the hover wrench ``[m g, 0, 0,
+    0]``, the farthest attainable point along ``directions`` evenly spaced directions (one LP
+    each). Returns a (directions, 2) array of boundary points, or ``None`` when hover itself is
+    unattainable (:func:`hover_thrust_margin` negative). With ``give_up_yaw`` the yaw torque is
+    free (and ``axes`` may not include 3)."""
+    if not isinstance(airframe, Airframe):
+        raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
+    frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
+    n = 3 if flag("give_up_yaw", give_up_yaw) else 4
+    if (
+        not isinstance(axes, (tuple, list))
+        or len(axes) != 2
+        or not all(isinstance(a, numbers.Integral) and not isinstance(a, bool) for a in axes)
+    ):
+        raise TypeError("axes: expected a pair of axis indices, e.g. (1, 2) for roll and pitch")
+    axes = (int(axes[0]), int(axes[1]))
+    if not all(0 <= a < n for a in axes) or axes[0] == axes[1]:
+        raise ValueError(f"axes: two different indices in 0..{n - 1}, got {axes}")
+    if not isinstance(directions, numbers.Integral) or isinstance(directions, bool):
+        raise TypeError(f"directions: expected an integer, got {type(directions).__name__}")
+    count = int(directions)
+    if not 3 <= count <= 100_000:
+        raise ValueError(f"directions: must be between 3 and 100000, got {count}")
+    base = np.zeros(n)
+    base[0] = frame.hover_thrust_n
+    if hover_thrust_margin(frame, give_up_yaw=give_up_yaw).margin_n < 0:
+        return None
+    points = np.empty((count, 2))
+    for k, angle in enumerate(np.linspace(0.0, 2 * np.pi, count, endpoint=False)):
+        d = np.zeros(n)
+        d[axes[0]], d[axes[1]] = np.cos(angle), np.sin(angle)
+        limit = max_virtual_control(frame, d, base=base, give_up_yaw=give_up_yaw)
+        if limit is None or limit.status == "failed":
+            raise RuntimeError(f"attainable_slice: the LP along direction {k} failed although hover is attainable")
+        points[k] = base[list(axes)] + max(limit.scale, 0.0) * d[list(axes)]
+    return points
+
+
+def plot_attainable_slices(
+    airframe: Airframe,
+    cases: dict[str, npt.ArrayLike | None] | None = None,
+    *,
+    axes: tuple[int, int] = (1, 2),
+    give_up_yaw: bool = False,
+    path: str | None = None,
+) -> Figure:
+    """Overlays :func:`attainable_slice` for several rotor-efficiency cases (``{label: efficiency}``,
+    default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
+    ``path`` (``.png``, ``.pdf`` or ``.svg``, written atomically) if given; the figure is not
+    registered with pyplot. A case whose hover is unattainable is listed in the legend as such.
+    Cases differ in line style and marker as well as colour (readable in greyscale)."""
+    from ..plotting.attainable import plot_slices
+
+    if cases is None:
+        cases = {"healthy": None}
+        for rotor in range(airframe.rotor_count):
+            failed = np.ones(airframe.rotor_count)
+            failed[rotor] = 0.0
+            cases[f"rotor {rotor + 1} failed"] = failed
+    slices = {label: attainable_slice(airframe, axes, efficiency, give_up_yaw=give_up_yaw) for label, efficiency in cases.items()}
+    bold = [label for label, efficiency in cases.items() if efficiency is None]
+    held = "yaw given up" if give_up_yaw else "other torques held at 0"
+    return plot_slices(
+        slices, (AXIS_LABELS[axes[0]], AXIS_LABELS[axes[1]]), title=f"{airframe.name}: attainable set at hover thrust ({held})",
+        bold=bold, path=path,
+    )
+
+__all__ = [
+    "AXIS_LABELS",
+    "DirectionalLimit",
+    "HoverMargin",
+    "attainable_slice",
+    "hover_thrust_margin",
+    "max_virtual_control",
+    "plot_attainable_slices",
+]

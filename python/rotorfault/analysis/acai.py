@@ -1,0 +1,235 @@
+"""The Available Control Authority Index (Du, Quan, Yang, Cai, JGCD 2015, Theorem 3).
+
+The ACAI is the radius of the largest ball centred at the hover wrench G = [m g, 0, 0, 0] inside
+the attainable set of thrust and torques (Du eq. (9)). Units: it mixes N (thrust axis) and N m
+(torque axes), exactly as in the paper.
+
+Two formulas, named everywhere the number is printed (tables, CLI, reports, scan columns):
+
+- ``"eq13"`` (the default, Du's eq. (13)): the paper's number. Where G lies outside the
+  attainable set it is not the distance of its own definition (9): Du Table III prints 0 for the
+  PPNNPN hexacopter with rotor 5 failed, where hover is infeasible. Such a value carries
+  ``hover == "outside"`` and prints with a star (``0.0000*``).
+- ``"facet-margin"``: minus the largest violation of a facet inequality, a lower bound on the
+  distance that is continuous and non-decreasing in every efficiency (negative outside).
+
+Both agree whenever G is inside or on the boundary, and verdicts never depend on the choice
+(details: ``crates/rfcore/src/analysis/acai.rs``). ``give_up_yaw=True`` asks the same question
+for thrust, roll and pitch only (n = 3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal, cast, get_args, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._util.convert import FloatArray, control_axes, flag, float_array
+from .._typing import AcaiFormula, ControlAxes, HoverPoint
+from .airframe import Airframe, require_airframe
+
+
+#: Tolerances of the core (see ``crates/rfcore/src/analysis/acai.rs``): rank decisions are relative to
+#: column norms, and an ACAI within ZERO_RTOL x (problem size) of zero is returned as exactly 0.0.
+RANK_RTOL: float = _rfcore.RANK_RTOL
+ZERO_RTOL: float = _rfcore.ZERO_RTOL
+#: The two ACAI formulas, by name (module docs).
+ACAI_FORMULAS: tuple[AcaiFormula, ...] = get_args(AcaiFormula)
+#: What each formula is, in words (help texts, notes).
+FORMULA_DESCRIPTIONS: dict[AcaiFormula, str] = {
+    "eq13": "Du's eq. (13), the paper's number (0 where hover is infeasible but the formula reads 0)",
+    "facet-margin": "the facet margin, minus the largest violation of a facet inequality (negative where hover is infeasible)",
+}
+#: The one name of asking the question for thrust, roll and pitch only (``give_up_yaw=True``,
+#: ``--give-up-yaw``, the ``_give_up_yaw`` columns and fields): table headers use it as written.
+GIVE_UP_YAW = "give-up-yaw"
+
+
+def acai_label(formula: str) -> str:
+    """How a printed ACAI names its formula: ``"ACAI eq13"``, ``"ACAI facet-margin"`` (table
+    headers, CLI rows, report captions: one name per formula, the option's own)."""
+    if formula not in ACAI_FORMULAS:
+        raise ValueError(f"formula: must be one of {', '.join(ACAI_FORMULAS)}, got {formula!r}")
+    return f"ACAI {formula}"
+
+
+def _formula(value: Any) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"formula: expected 'eq13' or 'facet-margin', got {type(value).__name__}")
+    return value
+
+
+#: ``HoverPoint`` of each code in :attr:`AcaiBatch.hover_code` (the core's compact column).
+HOVER_CODES: dict[int, HoverPoint] = {1: "inside", 0: "boundary", -1: "outside", -2: "rank-deficient"}
+
+
+class AcaiValue(float):
+    """An ACAI: a float (N / N m, as in the paper) that also says where the hover wrench lies.
+
+    ``hover`` is ``"inside"``, ``"boundary"``, ``"outside"`` or ``"rank-deficient"``. With
+    ``formula="eq13"`` a value of ``0.0`` can come with ``hover == "outside"`` (Du Table III's
+    PPNNPN with rotor 5 failed): hover is infeasible although the number reads like a boundary.
+    Such a value prints with a star (``0.0*``)."""
+
+    hover: HoverPoint
+
+    def __new__(cls, value: float, hover: HoverPoint) -> AcaiValue:
+        obj = super().__new__(cls, value)
+        obj.hover = hover
+        return obj
+
+    @property
+    def hover_feasible(self) -> bool:
+        """The hover wrench is attainable (inside or on the boundary)."""
+        return self.hover in ("inside", "boundary")
+
+    def __repr__(self) -> str:
+        text = float.__repr__(self)
+        return text + "*" if self.hover == "outside" and self >= 0.0 else text
+
+    __str__ = __repr__
+
+    def __reduce__(self) -> tuple[type[AcaiValue], tuple[float, HoverPoint]]:
+        return (AcaiValue, (float(self), self.hover))
+
+    @classmethod
+    def _from_core(cls, core: _rfcore.AcaiResult) -> AcaiValue:
+        return cls(core.acai, cast(HoverPoint, core.hover))
+
+
+@dataclass(frozen=True)
+class AcaiBatch:
+    """:func:`acai_batch` with ``with_hover=True``: the ACAIs and where the hover wrench lies for
+    each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient)."""
+
+    acai: FloatArray
+    hover_code: npt.NDArray[np.int8]
+
+    @property
+    def hover_feasible(self) -> npt.NDArray[np.bool_]:
+        return self.hover_code >= 0
+
+
+def _efficiency(airframe: Airframe, efficiency: npt.ArrayLike | None) -> FloatArray:
+    return airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
+
+
+def acai(
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
+    axes: ControlAxes | None = None,
+) -> AcaiValue:
+    """ACAI of ``airframe`` with rotor ``efficiency`` (Du's eta_i; default: the airframe's own), in
+    N / N m like the paper, as an :class:`AcaiValue` (a float with ``.hover``).
+
+    Positive: the distance from G to the boundary of the attainable set. ``0.0``: G on the
+    boundary (within ``ZERO_RTOL``) or, with ``formula="eq13"``, a degenerate outside case
+    (``.hover == "outside"``, printed ``0.0*``). Negative: G outside. ``-inf``: rank B_f < n, the
+    index is undefined.
+    """
+    airframe = require_airframe(airframe)
+    eff = _efficiency(airframe, efficiency)
+    names = control_axes(give_up_yaw, axes)
+    return AcaiValue._from_core(_rfcore.acai(airframe._core, eff, names, _formula(formula)))
+
+
+@overload
+def acai_batch(
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = ...,
+    formula: AcaiFormula = ...,
+    axes: ControlAxes | None = ...,
+    with_hover: Literal[False] = ...,
+) -> FloatArray: ...
+@overload
+def acai_batch(
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = ...,
+    formula: AcaiFormula = ...,
+    axes: ControlAxes | None = ...,
+    with_hover: Literal[True],
+) -> AcaiBatch: ...
+def acai_batch(
+    airframe: Airframe,
+    efficiencies: npt.ArrayLike,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
+    with_hover: bool = False,
+    axes: ControlAxes | None = None,
+) -> FloatArray | AcaiBatch:
+    """ACAI for every row of ``efficiencies`` (N x m), computed in parallel without the GIL: the
+    bare values, or with ``with_hover=True`` an :class:`AcaiBatch` that also says where the hover
+    wrench lies for each row (needed to tell eq. (13)'s outside zeros from boundaries).
+
+    A float64 C-contiguous ``efficiencies`` is read in place (no copy) while other Python threads run:
+    do not modify it from another thread during the call."""
+    airframe = require_airframe(airframe)
+    rows = float_array("efficiencies", efficiencies, 2)
+    names = control_axes(give_up_yaw, axes)
+    if flag("with_hover", with_hover):
+        core = _rfcore.acai_batch_with_hover(airframe._core, rows, names, _formula(formula))
+        return AcaiBatch(core.acai, core.hover_code)
+    return _rfcore.acai_batch(airframe._core, rows, names, _formula(formula))
+
+
+def acai_from_matrix(
+    effectiveness_matrix: npt.ArrayLike,
+    f_min: npt.ArrayLike,
+    f_max: npt.ArrayLike,
+    g_vec: npt.ArrayLike,
+    *,
+    formula: AcaiFormula = "eq13",
+) -> AcaiValue:
+    """ACAI of any effectiveness matrix B (n x m, efficiencies applied), actuator box
+    ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1, with
+    where ``g_vec`` lies (``.hover``). Facets and rank are decided free of the rows' units."""
+    core = _rfcore.acai_from_matrix(
+        float_array("effectiveness_matrix", effectiveness_matrix, 2),
+        float_array("f_min", f_min, 1),
+        float_array("f_max", f_max, 1),
+        float_array("g_vec", g_vec, 1),
+        _formula(formula),
+    )
+    return AcaiValue._from_core(core)
+
+
+#: Footnote for an eq. (13) value of 0 whose hover wrench is in fact outside.
+EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formula facet-margin shows the gap)"
+
+
+def format_acai(value: float, hover: HoverPoint = "inside") -> str:
+    """4 decimals like the paper; "undefined" for -inf; a star where the number reads as
+    non-negative (eq. (13)'s 0) but the hover wrench lies outside the attainable set."""
+    if math.isinf(value):
+        return "undefined"
+    return f"{value:.4f}*" if value >= 0.0 and hover == "outside" else f"{value:.4f}"
+
+
+__all__ = [
+    "ACAI_FORMULAS",
+    "EQ13_ZERO_NOTE",
+    "FORMULA_DESCRIPTIONS",
+    "GIVE_UP_YAW",
+    "HOVER_CODES",
+    "RANK_RTOL",
+    "ZERO_RTOL",
+    "AcaiBatch",
+    "AcaiValue",
+    "acai",
+    "acai_batch",
+    "acai_from_matrix",
+    "acai_label",
+    "format_acai",
+]

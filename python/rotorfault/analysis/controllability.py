@@ -1,0 +1,281 @@
+"""Controllability under rotor degradation and failure (Du, Quan, Yang, Cai, JGCD 2015): the
+9-step test of Section IV.B (:func:`controllability`) and every combination of failed rotors
+(:func:`failure_table`).
+
+The vehicle is controllable about hover iff rank C(A, B) is full and the ACAI
+(:mod:`~rotorfault.analysis.acai`) is positive (Theorem 2). ``give_up_yaw=True`` asks the same
+question for thrust, roll and pitch only (n = 3): can the vehicle hover if it gives up yaw and
+spins, as the controllers of Lanzon et al. and Ke et al. do?
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, cast, overload
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._typing import AcaiFormula, ControlAxes, HoverPoint
+from .._util.convert import control_axes, count
+from .._util.deprecation import renamed_attribute
+from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, _efficiency, _formula, acai_label, format_acai
+from .airframe import Airframe, require_airframe, rotor_labels
+
+
+@dataclass(frozen=True)
+class ControllabilityReport:
+    """Outcome of Du's 9-step test for one airframe and efficiency vector."""
+
+    airframe: str
+    efficiency: tuple[float, ...]
+    give_up_yaw: bool
+    #: 2n: 8 with yaw, 6 without.
+    state_dimension: int
+    #: rank of C(A, B) (Step 1).
+    controllability_rank: int
+    #: n: 4 with yaw, 3 without.
+    virtual_control_dimension: int
+    #: rank of B_f with efficiencies applied (Step 2).
+    effectiveness_rank: int
+    #: rho(G, dOmega) (Steps 3-8); -inf when rank B_f < n.
+    acai: float
+    #: "eq13" or "facet-margin": how ``acai`` reads when G is outside.
+    formula: AcaiFormula
+    #: "controllable" or "uncontrollable: <reason>" (Du Step 9).
+    verdict: str
+    controllable: bool
+    #: Where the hover wrench lies; ``"outside"`` with ``acai == 0`` marks eq. (13)'s misleading 0.
+    hover: HoverPoint = "inside"
+    #: Which axes were tested (``"wrench"``: force and torque, n = 6).
+    axes: ControlAxes = "thrust-roll-pitch-yaw"
+
+    def __str__(self) -> str:
+        axes = {
+            "thrust-roll-pitch": "thrust, roll, pitch (yaw given up)",
+            "thrust-roll-pitch-yaw": "thrust, roll, pitch, yaw",
+            "wrench": "force and torque (6-D wrench)",
+        }[self.axes]
+        acai = "undefined (-inf)" if math.isinf(self.acai) else format_acai(self.acai, self.hover)
+        if acai.endswith("*"):
+            acai += " (eq. (13) prints 0 although the hover wrench lies outside the attainable set)"
+        efficiency = ", ".join(f"{e:g}" for e in self.efficiency)
+        label = acai_label(self.formula)
+        width = max(len(label), len("rank C(A, B)"))
+        return "\n".join(
+            [
+                f"{self.airframe}: efficiency = [{efficiency}], axes = {axes}",
+                f"  {'rank C(A, B)':<{width}} = {self.controllability_rank} of {self.state_dimension}",
+                f"  {'rank B_f':<{width}} = {self.effectiveness_rank} of {self.virtual_control_dimension}",
+                f"  {label:<{width}} = {acai}",
+                f"  {'verdict':<{width}} = {self.verdict}",
+            ]
+        )
+
+
+def controllability(
+    airframe: Airframe,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    give_up_yaw: bool = False,
+    formula: AcaiFormula = "eq13",
+    axes: ControlAxes | None = None,
+) -> ControllabilityReport:
+    """Runs Du's Section IV.B procedure for ``airframe`` with rotor ``efficiency`` (default: the
+    airframe's own)."""
+    airframe = require_airframe(airframe)
+    eff = _efficiency(airframe, efficiency)
+    names = control_axes(give_up_yaw, axes)
+    core = _rfcore.controllability(airframe._core, eff, names, _formula(formula))
+    return ControllabilityReport(
+        airframe=airframe.name,
+        efficiency=tuple(float(e) for e in eff),
+        give_up_yaw=names == "thrust-roll-pitch",
+        axes=cast(ControlAxes, names),
+        state_dimension=core.state_dimension,
+        controllability_rank=core.controllability_rank,
+        virtual_control_dimension=core.virtual_control_dimension,
+        effectiveness_rank=core.effectiveness_rank,
+        acai=core.acai,
+        formula=cast(AcaiFormula, core.formula),
+        verdict=core.verdict,
+        controllable=core.controllable,
+        hover=cast(HoverPoint, core.hover),
+    )
+
+
+@dataclass(frozen=True)
+class FailureCase:
+    """One row of a failure table: rotors (numbered from 1) at efficiency 0 and the verdicts
+    with all four axes and giving up yaw (``..._give_up_yaw``: thrust, roll and pitch only)."""
+
+    failed: tuple[int, ...]
+    controllability_rank: int
+    effectiveness_rank: int
+    acai: float
+    controllable: bool
+    verdict: str
+    effectiveness_rank_give_up_yaw: int
+    acai_give_up_yaw: float
+    controllable_give_up_yaw: bool
+    verdict_give_up_yaw: str
+    #: Where the hover wrench lies, with all axes and giving up yaw (see :class:`AcaiValue`).
+    hover: HoverPoint = "inside"
+    hover_give_up_yaw: HoverPoint = "inside"
+    #: The full-wrench (n = 6) test, for fully actuated airframes only (else None).
+    acai_wrench: float | None = None
+    controllable_wrench: bool | None = None
+    hover_wrench: HoverPoint | None = None
+
+    # The names before issue 26 (one name per concept: "give up yaw"), for one release.
+    effectiveness_rank_without_yaw = renamed_attribute("effectiveness_rank_without_yaw", "effectiveness_rank_give_up_yaw")
+    acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")
+    controllable_without_yaw = renamed_attribute("controllable_without_yaw", "controllable_give_up_yaw")
+    verdict_without_yaw = renamed_attribute("verdict_without_yaw", "verdict_give_up_yaw")
+    hover_without_yaw = renamed_attribute("hover_without_yaw", "hover_give_up_yaw")
+
+
+_COLUMNS = (
+    "controllability_rank",
+    "effectiveness_rank",
+    "acai",
+    "controllable",
+    "effectiveness_rank_give_up_yaw",
+    "acai_give_up_yaw",
+    "controllable_give_up_yaw",
+    "hover",
+    "hover_give_up_yaw",
+)
+
+
+class FailureTable(Sequence[FailureCase]):
+    """Every combination of up to ``max_failed`` failed rotors with rank, ACAI (``formula``) and
+    verdict, with all axes and giving up yaw. Prints as a table; converts with :meth:`to_dicts`
+    and :meth:`to_arrays`."""
+
+    def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase], *, formula: AcaiFormula = "eq13") -> None:
+        self.formula: AcaiFormula = formula
+        self.airframe_name = airframe.name
+        self.rotor_count = airframe.rotor_count
+        self.max_failed = max_failed
+        self._cases = tuple(cases)
+
+    @overload
+    def __getitem__(self, index: int) -> FailureCase: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[FailureCase]: ...
+    def __getitem__(self, index: int | slice) -> FailureCase | Sequence[FailureCase]:
+        return self._cases[index]
+
+    def __len__(self) -> int:
+        return len(self._cases)
+
+    def __iter__(self) -> Iterator[FailureCase]:
+        return iter(self._cases)
+
+    def case(self, *failed: int) -> FailureCase:
+        """The row for exactly these failed rotors (1-based, any order)."""
+        key = tuple(sorted(failed))
+        for row in self._cases:
+            if row.failed == key:
+                return row
+        raise KeyError(f"no row for failed rotors {key} (max_failed={self.max_failed})")
+
+    def to_dicts(self) -> list[dict[str, Any]]:
+        return [asdict(row) for row in self._cases]
+
+    def to_arrays(self) -> dict[str, npt.NDArray[Any]]:
+        """Columns as numpy arrays; ``failed_mask`` is N x m (True where a rotor failed)."""
+        mask = np.zeros((len(self), self.rotor_count), dtype=bool)
+        for i, row in enumerate(self._cases):
+            mask[i, [r - 1 for r in row.failed]] = True
+        arrays: dict[str, npt.NDArray[Any]] = {"failed_mask": mask, "n_failed": mask.sum(axis=1)}
+        for column in _COLUMNS:
+            arrays[column] = np.array([getattr(row, column) for row in self._cases])
+        return arrays
+
+    def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
+        """Headers and formatted cells; the ACAI columns name their formula, the "give-up-yaw"
+        columns keep only thrust, roll and pitch."""
+        acai_ = acai_label(self.formula)
+        headers = ["failed", "rank C", "rank B_f", acai_, "ok", f"{acai_} {GIVE_UP_YAW}", f"ok {GIVE_UP_YAW}"]
+        rows = [
+            [
+                rotor_labels(row.failed),
+                str(row.controllability_rank),
+                str(row.effectiveness_rank),
+                format_acai(row.acai, row.hover),
+                "yes" if row.controllable else "no",
+                format_acai(row.acai_give_up_yaw, row.hover_give_up_yaw),
+                "yes" if row.controllable_give_up_yaw else "no",
+            ]
+            for row in self._cases
+        ]
+        if self._cases and self._cases[0].acai_wrench is not None:
+            headers += [f"{acai_} 6-D", "ok 6-D"]
+            for cells, row in zip(rows, self._cases):
+                cells += [
+                    format_acai(float(row.acai_wrench or 0.0), row.hover_wrench or "inside"),
+                    "yes" if row.controllable_wrench else "no",
+                ]
+        return headers, rows
+
+    def __str__(self) -> str:
+        headers, rows = self.rows_for_display()
+        widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
+        lines = [
+            f"{self.airframe_name}: up to {self.max_failed} failed rotor(s)",
+            "  ".join(h.ljust(w) for h, w in zip(headers, widths)),
+            "  ".join("-" * w for w in widths),
+        ]
+        lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)) for row in rows]
+        if any(cell.endswith("*") for row in rows for cell in row):
+            lines.append(EQ13_ZERO_NOTE)
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        return f"<FailureTable {self.airframe_name}: {len(self)} cases, max_failed={self.max_failed}>"
+
+
+def failure_table(
+    airframe: Airframe, *, max_failed: int = 1, formula: AcaiFormula = "eq13"
+) -> FailureTable:
+    """Every combination of up to ``max_failed`` fully failed rotors (the other rotors keep the
+    airframe's efficiencies), ordered by number failed, then lexicographically."""
+    airframe = require_airframe(airframe)
+    max_failed = count("max_failed", max_failed)
+    formula_name = _formula(formula)
+    cases = [
+        FailureCase(
+            failed=tuple(k + 1 for k in failed),
+            controllability_rank=full.controllability_rank,
+            effectiveness_rank=full.effectiveness_rank,
+            acai=full.acai,
+            controllable=full.controllable,
+            verdict=full.verdict,
+            effectiveness_rank_give_up_yaw=yaw_given_up.effectiveness_rank,
+            acai_give_up_yaw=yaw_given_up.acai,
+            controllable_give_up_yaw=yaw_given_up.controllable,
+            verdict_give_up_yaw=yaw_given_up.verdict,
+            hover=cast(HoverPoint, full.hover),
+            hover_give_up_yaw=cast(HoverPoint, yaw_given_up.hover),
+            acai_wrench=None if wrench is None else wrench.acai,
+            controllable_wrench=None if wrench is None else wrench.controllable,
+            hover_wrench=None if wrench is None else cast(HoverPoint, wrench.hover),
+        )
+        for failed, full, yaw_given_up, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
+    ]
+    return FailureTable(airframe, max_failed, cases, formula=cast(AcaiFormula, formula_name))
+
+
+
+__all__ = [
+    "ControllabilityReport",
+    "FailureCase",
+    "FailureTable",
+    "controllability",
+    "failure_table",
+]

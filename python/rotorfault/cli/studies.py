@@ -1,0 +1,211 @@
+"""Commands that run studies: ``scan``, ``design``, ``simulate``, ``campaign``."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import click
+import numpy as np
+from rich.markup import escape
+from rich.table import Table
+
+from .._typing import AcaiFormula
+from .._util.output import check_output_file
+from ..analysis import Airframe, acai_label
+from ..studies.scan import efficiency_scan
+from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers, parse_rotors
+
+
+@cli.command()
+@airframe_option
+@click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
+@click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
+@click.option("--give-up-yaw", is_flag=True, help="Give up yaw: only thrust, roll and pitch must stay controllable.")
+@formula_option
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write a Du Fig. 4 style plot (.png, .pdf or .svg).")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
+@click.option("--out", "out_path", type=click.Path(), help="Stream the rows to this Parquet dataset directory (chunked, resumable).")
+@click.option("--resume", is_flag=True, help="Continue an interrupted --out scan with the same arguments (skips the chunks written).")
+@click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
+@click.option("--axis", "extra_axes", multiple=True, help="An airframe parameter axis NAME=v1,v2,... (max_thrust_n, mass_kg, drag_torque_ratio_m, arm_length_m, ...); with --out.")
+@click.option("--chunk-points", default=1 << 20, show_default=True, type=int, help="Points per chunk (memory and resume granularity) with --out.")
+@_user_errors
+def scan(
+    airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool,
+    out_path: str | None, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
+) -> None:
+    """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
+    if out_path is not None:
+        _scan_to_parquet(airframe, rotors, step, give_up_yaw, plot_path, force, out_path, resume, dask_address, extra_axes, chunk_points)
+        return
+    if resume or dask_address or extra_axes:
+        raise ValueError("out: --resume, --dask and --axis need --out (a Parquet output)")
+    frame = Airframe.load(airframe)
+    swept = parse_rotors("rotors", rotors)
+    if plot_path is not None and len(swept) != 3:
+        raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")
+    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw, formula=formula)
+    finite = result.acai[~(result.acai == -math.inf)]
+    misleading = int(np.sum((result.acai >= 0.0) & (result.hover_code < 0)))
+    console.print(
+        f"{escape(frame.name)}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
+        f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%), "
+        f"hover feasible at {int(result.hover_feasible.sum()):,}; "
+        f"largest {acai_label(formula)} {finite.max() if finite.size else float('nan'):.4f}"
+    )
+    if misleading:
+        console.print(f"{misleading:,} points where {formula} reads >= 0 although the hover wrench lies outside (see hover_code)")
+    if plot_path is not None:
+        result.plot(plot_path)
+        console.print(f"plot written to {plot_path}")
+
+
+def _scan_to_parquet(
+    airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool,
+    out_path: str, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
+) -> None:
+    from ..studies.scan import acai_scan
+
+    frame = Airframe.load(airframe)
+    swept = parse_rotors("rotors", rotors)
+    if not 0.0 < step <= 1.0 or not math.isclose(round(1.0 / step) * step, 1.0, rel_tol=0.0, abs_tol=1e-9):
+        raise ValueError(f"step: must lie in (0, 1] and divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
+    levels = np.linspace(0.0, 1.0, int(round(1.0 / step)) + 1)
+    axes: dict[str, Any] = {}
+    for item in extra_axes:
+        name, sep, values = item.partition("=")
+        if not sep:
+            raise ValueError(f"axis: expected NAME=v1,v2,..., got {item!r}")
+        axes[name.strip()] = parse_numbers(f"axis {name.strip()}", values)
+    for r in swept:
+        axes[f"efficiency_{r}"] = levels
+    if plot_path is not None and (len(swept) != 3 or extra_axes):
+        raise ValueError("plot: the Fig. 4 plot needs exactly three swept rotors and no --axis")
+    result = acai_scan(
+        frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
+        backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=True,
+    )
+    ok = result.controllable_count(give_up_yaw=give_up_yaw)
+    console.print(
+        f"{escape(frame.name)}: {result.total:,} points ({result.computed_chunks} chunks computed, {result.skipped_chunks} already written) "
+        f"in {result.seconds:.1f} s; {ok:,} controllable{' giving up yaw' if give_up_yaw else ''} "
+        f"({100 * ok / max(result.total, 1):.1f}%); rows in {escape(out_path)}"
+    )
+    if plot_path is not None:
+        result.plot(plot_path, give_up_yaw=give_up_yaw)
+        console.print(f"plot written to {plot_path}")
+
+
+@cli.command()
+@airframe_option
+@click.option("--parameter", help="Rank again for each value of this airframe parameter (arm_length_m, max_thrust_n, mass_kg, ...).")
+@click.option("--values", help="Values of --parameter, comma-separated.")
+@click.option(
+    "--formula", type=click.Choice(["eq13", "facet-margin"]), default="facet-margin", show_default=True,
+    help="ACAI of an infeasible hover: facet-margin (how far outside, negative) or eq13 (Du's 0).",
+)
+@click.option("--top", default=0, type=int, help="Show only the best N designs (per parameter value; 0: all).")
+@_user_errors
+def design(airframe: str, parameter: str | None, values: str | None, formula: AcaiFormula, top: int) -> None:
+    """Rank every spin-direction assignment of the airframe's frame by failure tolerance."""
+    from ..studies.design import design_search
+
+    frame = Airframe.load(airframe)
+    numbers = parse_numbers("values", values) if values is not None else None
+    result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
+    if top < 0:
+        raise ValueError(f"top: must be 0 (all) or a positive count, got {top}")
+    click.echo(result.format(top))
+    for value in dict.fromkeys(d.parameter_value for d in result.designs):
+        best = result.best(value)
+        where = "" if value is None else f" at {parameter} = {value:g}"
+        click.echo(
+            f"best{where}: {best.spins}, controllable after {best.controllable_single} of {len(best.single)} single failures\n"
+            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure {acai_label(formula)} {best.worst_single:.4f}"
+        )
+
+
+@cli.command()
+@click.argument("scenario_file", type=click.Path(dir_okay=False))
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write the time-history figure (.png, .pdf or .svg).")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@_user_errors
+def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
+    """Fly a scenario file (airframe, controller, faults, wind, noise, duration)."""
+    from ..studies.scenario_file import load_scenario
+
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
+    scenario = load_scenario(scenario_file)
+    run = scenario.run()
+    altitude = -run.position[:, 2]
+    tilt = np.degrees(np.arccos(np.clip(run.primary_axis[:, 2], -1.0, 1.0)))
+    table = Table(title=f"{escape(scenario.name)}: {escape(scenario.simulator.airframe.name)}, {scenario.controller_kind}")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_row("simulated", f"{run.t[-1]:.3f} s of {scenario.duration_s:g} s")
+    table.add_row("faults", ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in run.faults) or "none")
+    table.add_row("final position (N, E, alt)", ", ".join(f"{v:.3f}" for v in (*run.position[-1, :2], altitude[-1])))
+    table.add_row("max altitude loss", f"{max(0.0, altitude[0] - altitude.min()):.3f} m")
+    table.add_row("max horizontal excursion", f"{np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max():.3f} m")
+    table.add_row("max tilt", f"{tilt.max():.1f} deg")
+    table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
+    console.print(table)
+    if plot_path is not None:
+        run.plot(plot_path, title=scenario.title, setpoints=scenario.setpoints)
+        console.print(f"plot written to {escape(plot_path)}")
+
+
+@cli.command("campaign")
+@click.argument("campaign_file", type=click.Path(dir_okay=False), required=False)
+@click.option("--runs", type=int, help="Override the file's run count.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
+@click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
+@click.option("--quick", is_flag=True, help="With --tune: a small search (12 candidates x 24 scenarios, about a minute).")
+@click.option("--out", "out_path", type=click.Path(), help="Stream the per-run rows to this Parquet dataset directory (chunked, resumable; the campaign is in its manifest).")
+@click.option("--resume", is_flag=True, help="Continue an interrupted --out campaign with the same campaign (skips the chunks written).")
+@click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
+@click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar on standard error.")
+@_user_errors
+def campaign_command(
+    campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
+    resume: bool, dask_address: str | None, force: bool, progress: bool,
+) -> None:
+    """Fly a fault campaign (a TOML file of rotorfault.studies.Campaign fields; default: every
+    single failure of Ke's quadcopter) and report survival, worst cases and excursions."""
+    from dataclasses import replace
+
+    from ..studies.campaign import Campaign, run_campaign
+    from ..studies.tuning import tune, tuning_campaign
+
+    if plot_path is not None:
+        check_output_file("plot", plot_path, force=force)
+    if out_path is None and (resume or dask_address):
+        raise ValueError("out: --resume and --dask need --out (a Parquet output)")
+    if tune_gains:
+        if out_path is not None:
+            raise ValueError("out: --tune writes no Parquet output")
+        base = tuning_campaign(runs=24 if quick else 200)
+        tuned = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
+        console.print(escape(tuned.table()))
+        return
+    campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
+    if runs is not None:
+        campaign = replace(campaign, runs=runs)
+    result = run_campaign(
+        campaign, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address, progress=progress,
+    )
+    if out_path is not None:
+        console.print(
+            f"{campaign.runs:,} runs ({result.computed_chunks} chunks flown, {result.skipped_chunks} already written) "
+            f"in {result.seconds:.1f} s; rows in {escape(out_path)}",
+            highlight=False,
+        )
+    console.print(escape(result.table()))
+    if plot_path is not None:
+        result.plot(plot_path)
+        console.print(f"plot written to {escape(plot_path)}")

@@ -1,0 +1,168 @@
+"""Incremental nonlinear dynamic inversion (INDI) fault-tolerant control, after Sun, Wang, Chu and de
+Visser (IEEE T-RO 2021, "Incremental nonlinear fault-tolerant control of a quadrotor with complete
+loss of two opposing rotors"), for any planar multirotor and any set of failed rotors. It runs in
+Rust (:class:`IndiController` hands the core a ``rotorfault._rfcore.IndiController``); the law,
+its equations and decisions are documented in ``crates/rfcore/src/control/indi/mod.rs``.
+
+- Reduced attitude of the primary axis (the thrust direction, the vehicle free to spin about it when
+  yaw is given up), an outer position loop giving the desired acceleration, and the INDI inner loop:
+  angular acceleration from the filtered gyro (a second-order low-pass, differentiated), the same
+  filter on the rotor thrusts actually produced and on the accelerometer, and an incremental
+  allocation over the remaining rotors.
+- **An active controller**: it is told which rotors failed and when (``failures``: the time a
+  detector reports it). Partial losses it is not told of reach it through the measurements.
+- With two opposing rotors of a quadrotor gone, only one attitude output can be controlled; Sun's
+  output redefinition keeps the rest (the zero dynamics) stable when ``J_z > J_xy``
+  (:meth:`IndiController.failure_modes` reports their damping).
+
+The simulator gives it the gyro, the specific force and the rotor thrusts each control step (truth,
+or the noisy body rates with sensor noise).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._util.convert import FloatArray, float_array, real
+from ..analysis.airframe import Airframe, require_airframe
+
+#: The gains (keyword-only; defaults are Sun's printed values where he prints them, from the core's
+#: ``IndiGains::default``; values are checked there, naming the gain).
+IndiGains = _rfcore.IndiGains
+
+
+
+@dataclass(frozen=True)
+class IndiFailureMode:
+    """How the controller flies one set of failed rotors (1-based rotor numbers), decided at
+    construction: whether yaw is held or given up (the vehicle spins), whether one roll/pitch
+    torque axis is left (two opposing rotors of a quadrotor: the output is redefined), and then the
+    zero dynamics ``eta'' = a r^2 eta - ...`` (stable when ``a < 0``, with the damping ratio
+    ``zero_dynamics_damping``)."""
+
+    failed: tuple[int, ...]
+    healthy: tuple[int, ...]
+    yaw_controlled: bool
+    single_axis: bool
+    #: The controlled output direction (single axis only), body x-y plane.
+    output_direction: tuple[float, float] | None
+    #: The primary axis in the body frame.
+    primary_axis: tuple[float, float, float]
+    zero_dynamics_a: float | None
+    zero_dynamics_damping: float | None
+    #: Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
+    hover_thrust_n: tuple[float, ...]
+
+    @classmethod
+    def _from_core(cls, core: _rfcore.IndiFailureMode) -> IndiFailureMode:
+        direction = core.output_direction
+        x, y, z = core.primary_axis
+        return cls(
+            tuple(k + 1 for k in core.failed), tuple(k + 1 for k in core.healthy), core.yaw_controlled,
+            core.single_axis, None if direction is None else (direction[0], direction[1]), (x, y, z),
+            core.zero_dynamics_a, core.zero_dynamics_damping, tuple(core.hover_thrust_n),
+        )
+
+
+def _vector(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
+    arr = float_array(field, value, 1)
+    if arr.shape != (3,):
+        raise ValueError(f"{field}: expected 3 entries (north, east, down), got {arr.shape[0]}")
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
+    """``(rotor, time_s)`` with a 1-based rotor, or a :class:`rotorfault.RotorFault` of a complete
+    loss: the (1-based) rotor and the time the controller is told."""
+    efficiency = getattr(item, "efficiency", None)
+    if efficiency is not None:
+        if real(f"failures[{k}].efficiency", efficiency) != 0.0:
+            raise ValueError(
+                f"failures[{k}].efficiency: INDI is told of complete losses only (efficiency 0); a partial "
+                f"loss reaches it through the measurements, got {efficiency}"
+            )
+        rotor, time = item.rotor, item.time
+    elif isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != 2:
+        raise TypeError(f"failures[{k}]: expected (rotor, time_s) or a RotorFault, got {item!r}")
+    else:
+        rotor, time = item
+    if isinstance(rotor, bool) or not isinstance(rotor, (int, np.integer)):
+        raise TypeError(f"failures[{k}].rotor: expected a 1-based rotor number, got {rotor!r}")
+    if not 1 <= int(rotor) <= rotor_count:
+        raise ValueError(f"failures[{k}].rotor: rotor numbers run from 1 to {rotor_count}, got {rotor}")
+    return int(rotor), real(f"failures[{k}].time", time)
+
+
+class IndiController:
+    """INDI fault-tolerant control (Sun et al.), run in Rust at the simulator's control rate.
+
+    ``failures``: the rotors it is told have failed, ``(rotor, time_s)`` (1-based rotor, the time it
+    learns of it) or :class:`rotorfault.RotorFault` objects of complete losses (told at the fault's
+    time). ``gains``: :class:`IndiGains`. The reference: ``setpoints`` ``[(time_s, position)]`` or
+    ``[(time_s, position, velocity)]`` (NED; from each time on the position moves at the velocity),
+    or one ``position`` and ``velocity`` (``velocity=(2, 0, 0)``: forward flight at 2 m/s)."""
+
+    def __init__(
+        self,
+        airframe: Airframe,
+        *,
+        failures: Sequence[Any] = (),
+        gains: Any = None,
+        position: npt.ArrayLike = (0.0, 0.0, 0.0),
+        velocity: npt.ArrayLike = (0.0, 0.0, 0.0),
+        setpoints: Sequence[Any] | None = None,
+    ) -> None:
+        self.airframe = require_airframe(airframe)
+        if gains is None:
+            gains = IndiGains()
+        if not isinstance(gains, IndiGains):
+            raise TypeError(f"gains: expected rotorfault.IndiGains, got {type(gains).__name__}")
+        self.gains = gains
+        if isinstance(failures, (str, bytes)) or not isinstance(failures, Sequence):
+            raise TypeError(f"failures: expected a sequence of (rotor, time_s) or RotorFault, got {type(failures).__name__}")
+        #: ``(rotor, time_s)``, 1-based rotors as given.
+        self.failures = tuple(_failure(k, item, airframe.rotor_count) for k, item in enumerate(failures))
+        if setpoints is None:
+            setpoints = [(0.0, position, velocity)]
+        if isinstance(setpoints, (str, bytes)) or not isinstance(setpoints, Sequence):
+            raise TypeError("setpoints: expected a sequence of (time_s, position) or (time_s, position, velocity)")
+        parsed = []
+        for k, item in enumerate(setpoints):
+            if isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) not in (2, 3):
+                raise TypeError(f"setpoints[{k}]: expected (time_s, position) or (time_s, position, velocity)")
+            moving = item[2] if len(item) == 3 else (0.0, 0.0, 0.0)
+            parsed.append(
+                (real(f"setpoints[{k}].time", item[0]), _vector(f"setpoints[{k}].position", item[1]),
+                 _vector(f"setpoints[{k}].velocity", moving))
+            )
+        self.setpoints = tuple(parsed)
+        # Validates everything now.
+        self._modes = [IndiFailureMode._from_core(m) for m in self.core(1.0 / 400.0).failure_modes()]
+
+    def core(self, dt_s: float) -> _rfcore.IndiController:
+        return _rfcore.IndiController(
+            self.airframe._core,
+            gains=self.gains,
+            failures=[(rotor - 1, time) for rotor, time in self.failures],
+            setpoints=[(t, list(p), list(v)) for t, p, v in self.setpoints],
+            dt_s=real("dt_s", dt_s),
+        )
+
+    @property
+    def u_trim(self) -> FloatArray:
+        """The healthy vehicle's hover thrusts: where the actuators start."""
+        return np.array(self._modes[0].hover_thrust_n)
+
+    def failure_modes(self) -> list[IndiFailureMode]:
+        """How each failure set is flown: ``[0]`` the healthy vehicle, then one per detection time
+        (the failures told then and before; failures told at once are flown together)."""
+        return list(self._modes)
+
+
+__all__ = ["IndiController", "IndiFailureMode", "IndiGains"]

@@ -1,0 +1,121 @@
+"""What a flight is flown with besides the airframe: the rotor actuators (fixed or variable
+pitch), aerodynamic drag and sensor noise. Defaults come from the core's ``Default`` (read once)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._util.convert import count, float_array, real
+from .._util.deprecation import dataclass_compat
+
+#: The core's defaults, read once: the one source of every default below.
+_DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
+
+
+#: Aerodynamic damping and rotor inertia (the papers give none; all default to 0): the core's
+#: class, used directly (keyword-only; defaults from the core's ``Default``; types checked by the
+#: bindings, values once, by the core; frozen, ``replace(**changes)``, ``FIELDS``):
+#: ``linear_n_s_m`` (``k_t``: force ``-k_t (v - wind)``, N s/m, Lanzon's Stokes drag),
+#: ``quadratic_n_s2_m2`` (force ``-c |v - wind| (v - wind)``), ``rotational_n_m_s`` (``k_r``: torque
+#: ``-k_r omega``, sets a spinning vehicle's yaw rate), ``rotor_inertia_kg_m2`` (``I_R``: rotor
+#: inertia about its axis, the gyroscopic moment of Lanzon eq. (5)).
+Drag = _rfcore.Drag
+dataclass_compat(Drag)
+
+
+@dataclass(frozen=True)
+class FixedPitchActuator:
+    """Rotors commanded in thrust (N): first-order lag ``time_constant_s`` (Ke Table III: 0.025),
+    rate limit (Lanzon: 50 N/s), thrust saturation from the airframe; ``thrust_coefficient_n_s2``
+    (``f = k_f omega^2``) gives rotor speed for the gyroscopic moment (0: not modelled)."""
+
+    time_constant_s: float = 0.0
+    rate_limit_n_s: float = math.inf
+    thrust_coefficient_n_s2: float = 0.0
+
+    def _core(self) -> Any:
+        return _rfcore.FixedPitchActuator(
+            real("actuator.time_constant_s", self.time_constant_s),
+            real("actuator.rate_limit_n_s", self.rate_limit_n_s),
+            real("actuator.thrust_coefficient_n_s2", self.thrust_coefficient_n_s2),
+        )
+
+
+@dataclass(frozen=True)
+class VariablePitchActuator:
+    """Variable-pitch propellers (Wang et al. eq. (3)), commanded per rotor in speed and pitch
+    (interleaved ``[omega_1, alpha_1, omega_2, ...]``): thrust ``k1 omega^2 alpha``, torque
+    ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``.
+
+    The speed and pitch channels have their own first-order lag and rate limit (a motor's speed
+    loop and a pitch servo are different hardware). Defaults (the core's): Wang's "first-order
+    transfer function ... cut-off frequency 10 Hz" for both, ``time_constant_s = 1 / (2 pi 10)``,
+    and no rate limit (the paper gives none). ``speed_rate_limit_per_s`` is in speed units per
+    second, ``pitch_rate_limit_rad_s`` in rad/s."""
+
+    k: tuple[float, float, float, float]
+    speed_bounds: tuple[float, float]
+    pitch_bounds: tuple[float, float]
+    speed_to_rad_s: float = 0.0
+    speed_time_constant_s: float = _DEFAULT_VPP.speed_time_constant_s
+    speed_rate_limit_per_s: float = _DEFAULT_VPP.speed_rate_limit_per_s
+    pitch_time_constant_s: float = _DEFAULT_VPP.pitch_time_constant_s
+    pitch_rate_limit_rad_s: float = _DEFAULT_VPP.pitch_rate_limit_rad_s
+
+    def _core(self) -> Any:
+        k = float_array("actuator.k", self.k, 1)
+        if k.shape != (4,):
+            raise ValueError(f"actuator.k: expected 4 coefficients (k1..k4), got {k.shape[0]}")
+        speed = float_array("actuator.speed_bounds", self.speed_bounds, 1)
+        pitch = float_array("actuator.pitch_bounds", self.pitch_bounds, 1)
+        if speed.shape != (2,) or pitch.shape != (2,):
+            raise ValueError("actuator.speed_bounds, actuator.pitch_bounds: expected (lower, upper)")
+        return _rfcore.VariablePitchActuator(
+            (float(k[0]), float(k[1]), float(k[2]), float(k[3])),
+            (float(speed[0]), float(speed[1])),
+            (float(pitch[0]), float(pitch[1])),
+            real("actuator.speed_to_rad_s", self.speed_to_rad_s),
+            speed_time_constant_s=real("actuator.speed_time_constant_s", self.speed_time_constant_s),
+            speed_rate_limit_per_s=real("actuator.speed_rate_limit_per_s", self.speed_rate_limit_per_s),
+            pitch_time_constant_s=real("actuator.pitch_time_constant_s", self.pitch_time_constant_s),
+            pitch_rate_limit_rad_s=real("actuator.pitch_rate_limit_rad_s", self.pitch_rate_limit_rad_s),
+        )
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Additive Gaussian sensor noise on the 12 measured state components (position, velocity,
+    Euler angles, body rates), standard deviation ``10^(-snr_db / 20) |x_i| + std_i``.
+
+    ``snr_db`` is a per-sample signal-to-noise ratio (Wang et al.'s scenarios use 15 dB; they do
+    not say how signal power is measured, and per sample is the causal reading). ``std`` adds an
+    absolute floor: 12 values, or 4 (position m, velocity m/s, angle rad, rate rad/s). Seeded and
+    reproducible on every platform; in a batch, run ``i`` uses ``seed + i``."""
+
+    snr_db: float | None = None
+    std: npt.ArrayLike | None = None
+    seed: int = 0
+
+    def _core(self, seed_offset: int = 0) -> _rfcore.SensorNoise:
+        relative = 0.0 if self.snr_db is None else 10.0 ** (-real("noise.snr_db", self.snr_db) / 20.0)
+        if self.std is None:
+            absolute = np.zeros(12)
+        else:
+            absolute = float_array("noise.std", self.std, 1)
+            if absolute.shape == (4,):
+                absolute = np.repeat(absolute, 3)
+            if absolute.shape != (12,):
+                raise ValueError(f"noise.std: expected 4 or 12 entries, got {absolute.shape[0]}")
+        seed = count("noise.seed", self.seed)
+        if seed + seed_offset >= 2**64:
+            raise ValueError("noise.seed: must be below 2**64")
+        return _rfcore.SensorNoise(relative_std=relative, absolute_std=[float(v) for v in absolute], seed=seed + seed_offset)
+
+
+__all__ = ["Drag", "FixedPitchActuator", "Noise", "VariablePitchActuator"]

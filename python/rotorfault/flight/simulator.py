@@ -1,0 +1,390 @@
+"""The flight simulator: a Rust 6-DOF rigid body integrated with RK4, rotor actuators with lag,
+saturation, rate limits and faults, drag and wind, closed by a controller at its own rate.
+
+Frames: world NED (north, east, down; altitude is ``-position[2]``), body FRD. Rotor numbers in
+faults are 1-based like the papers; arrays are ordered rotor 1..m.
+
+The ground is the plane ``z = ground_z_m`` (default 0: altitude is height above the ground); the
+centre of mass reaching it ends the run with a ``crashed`` event (time, impact speed, attitude).
+There is no ground reaction, so a run starts above the ground; ``ground=False`` removes it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any, TypeAlias, cast
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._typing import Controller, CoreController, core_controller_types
+from .._util.convert import FloatArray, count, flag, float_array, real
+from .._util.deprecation import dataclass_compat
+from .._util.progress import chunks
+from ..analysis.airframe import Airframe, require_airframe
+from .faults import RotorFault, _faults
+from .models import Drag, FixedPitchActuator, Noise, VariablePitchActuator
+from .state import State, _vector3
+from .trajectory import BatchResult, Event, Trajectory  # noqa: F401  (Event: the old rotorfault.simulation name)
+
+#: A controller the simulator flies: a built-in one (anything with ``core(dt_s)``, see
+#: :class:`rotorfault.control.Controller`), a Python callable ``f(t, x) -> commands`` (the slow
+#: path) or ``None`` (all rotors at zero).
+AnyController: TypeAlias = Controller | Callable[[float, FloatArray], npt.ArrayLike] | None
+
+#: The Rust controller objects :func:`core_controller` can return (all can run in a batch): read
+#: from the one registry the bindings expose (``rotorfault._rfcore.CONTROLLERS``).
+CORE_TYPES: tuple[type, ...] = core_controller_types()
+
+
+def core_controller(controller: AnyController, dt_s: float) -> CoreController | Callable[[float, FloatArray], npt.ArrayLike] | None:
+    """The object the Rust loop runs for ``controller`` (``None``: all rotors at zero): a built-in
+    controller's ``core(dt_s)``, or the callable itself."""
+    if controller is None:
+        return None
+    core = getattr(controller, "core", None)
+    if callable(core):
+        return cast(Controller, controller).core(dt_s)
+    if callable(controller):
+        return controller
+    names = ", ".join(cls.__name__ for cls in core_controller_types())
+    raise TypeError(
+        f"controller: expected {names} (anything with core(dt_s)), a callable f(t, x) or None, got {type(controller).__name__}"
+    )
+
+
+def trim_command(controller: object) -> FloatArray | None:
+    """The trim command a controller holds, if any (the actuators start there)."""
+    u_trim = getattr(controller, "u_trim", None)
+    return None if u_trim is None else np.asarray(u_trim, dtype=np.float64)
+
+
+#: Largest ``h max(|omega|, 1 / time_constant)`` the simulator accepts, ``h = dt_s / substeps``
+#: the RK4 substep: a run whose initial spin or actuator lag is faster is refused (``ValueError``
+#: naming ``substeps`` and the numbers), and one whose body rate grows past ``MAX_RATE_STEP / h``
+#: ends with a ``step-size`` event (a numerical cause, not the vehicle's).
+MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
+
+#: Where :meth:`Simulator.run` starts when no ``x0`` is given: at rest, level, 10 m above a ground
+#: at z = 0 (world NED).
+DEFAULT_START_M = (0.0, 0.0, -10.0)
+
+_DEFAULT_CONFIG = _rfcore.SimulationConfig()
+_DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
+
+
+#: A run ends with an event when it passes one of these (``math.inf``: no limit): the core's class,
+#: used directly (keyword-only ``max_tilt_rad``, ``max_altitude_loss_m``, ``max_speed_m_s``,
+#: ``max_rate_rad_s``; defaults from the core's ``Default``; values checked with the run's
+#: settings; frozen, ``replace(**changes)``, ``FIELDS``).
+DivergenceLimits = _rfcore.DivergenceLimits
+dataclass_compat(DivergenceLimits)
+
+
+def _check_duration(duration_s: Any, dt_s: float) -> float:
+    duration = real("duration_s", duration_s)
+    if not math.isfinite(duration):
+        raise ValueError(f"duration_s: must be finite, got {duration}")
+    if not duration >= dt_s:
+        raise ValueError(f"duration_s: must be at least one control period (dt_s = {dt_s:g} s), got {duration:g}")
+    return duration
+
+
+class Simulator:
+    """One airframe with its actuators, drag and wind, ready to fly controllers through faults.
+
+    ``dt_s`` is the control period (s); the rigid body takes ``substeps`` RK4 steps per period.
+    ``wind`` is a constant world-frame (NED) wind in m/s; ``wind_profile`` an optional sequence of
+    ``(time_s, (n, e, d))`` points added to it, interpolated linearly. The ground is the plane
+    ``z = ground_z_m`` (world NED, m; default the core's, 0); ``ground=False``: no ground.
+    ``ground_z_m`` holds the ground in effect (``None`` without one).
+    """
+
+    def __init__(
+        self,
+        airframe: Airframe,
+        *,
+        dt_s: float = _DEFAULT_CONFIG.dt_s,
+        substeps: int = _DEFAULT_CONFIG.substeps,
+        drag: Drag | None = None,
+        wind: npt.ArrayLike = (0.0, 0.0, 0.0),
+        wind_profile: Sequence[tuple[float, npt.ArrayLike]] | None = None,
+        actuator: FixedPitchActuator | VariablePitchActuator | None = None,
+        limits: DivergenceLimits | None = None,
+        noise: Noise | None = None,
+        ground_z_m: float | None = None,
+        ground: bool = True,
+    ) -> None:
+        self.airframe = require_airframe(airframe)
+        self.dt_s = real("dt_s", dt_s)
+        self.substeps = count("substeps", substeps)
+        self.drag = Drag() if drag is None else drag
+        if not isinstance(self.drag, Drag):
+            raise TypeError(f"drag: expected rotorfault.Drag, got {type(drag).__name__}")
+        self.wind = _vector3("wind", wind)
+        self.wind_profile = [
+            (real(f"wind_profile[{k}].time", t), _vector3(f"wind_profile[{k}]", w))
+            for k, (t, w) in enumerate(wind_profile or [])
+        ]
+        self.actuator = FixedPitchActuator() if actuator is None else actuator
+        if not isinstance(self.actuator, (FixedPitchActuator, VariablePitchActuator)):
+            raise TypeError(f"actuator: expected FixedPitchActuator or VariablePitchActuator, got {type(actuator).__name__}")
+        self.limits = DivergenceLimits() if limits is None else limits
+        if not isinstance(self.limits, DivergenceLimits):
+            raise TypeError(f"limits: expected rotorfault.DivergenceLimits, got {type(limits).__name__}")
+        if noise is not None and not isinstance(noise, Noise):
+            raise TypeError(f"noise: expected rotorfault.Noise, got {type(noise).__name__}")
+        self.noise = noise
+        self.ground = flag("ground", ground)
+        self.ground_z_m: float | None = None if ground_z_m is None else real("ground_z_m", ground_z_m)
+        # Fail early on bad parameters: the core validates them in a zero-length run (from above
+        # the ground). (Every run rebuilds the core objects from these attributes, so changing one
+        # later takes effect.)
+        config = self._config(0.0)
+        self.ground_z_m = config.ground_z_m
+        above = State(position=(0.0, 0.0, (self.ground_z_m or 0.0) - 1.0))
+        _rfcore.simulate(
+            self.airframe._core, self.actuator._core(), self.drag, None, above._packed(), [],
+            self.airframe.efficiency, None, config,
+        )
+
+    @property
+    def command_count(self) -> int:
+        """Commands per control step: one per rotor (thrust) or two (speed, pitch)."""
+        per_rotor = 2 if isinstance(self.actuator, VariablePitchActuator) else 1
+        return per_rotor * self.airframe.rotor_count
+
+    def _config(self, duration_s: float, record_every: int = 1, seed_offset: int = 0) -> _rfcore.SimulationConfig:
+        """The core's run settings; ``seed_offset`` shifts the noise seed (run ``i`` of a batch
+        uses ``seed + i``, so a batch sent in chunks flies every run exactly as one call would)."""
+        return _rfcore.SimulationConfig(
+            dt_s=self.dt_s,
+            substeps=self.substeps,
+            duration_s=real("duration_s", duration_s),
+            limits=self.limits,
+            ground_z_m=self.ground_z_m,
+            ground=self.ground,
+            wind_m_s=self.wind,
+            wind_profile=self.wind_profile,
+            noise=None if self.noise is None else self.noise._core(seed_offset),
+            record_every=count("record_every", record_every),
+        )
+
+    def _start(self, controller: AnyController, initial_command: npt.ArrayLike | None) -> FloatArray | None:
+        if initial_command is not None:
+            return float_array("initial_command", initial_command, 1)
+        trim = trim_command(controller)
+        # A trim of the wrong length is the controller's error; the core reports it as such.
+        return trim if trim is not None and trim.shape == (self.command_count,) else None
+
+    def run(
+        self,
+        x0: State | None = None,
+        duration_s: float = 10.0,
+        *,
+        controller: AnyController = None,
+        faults: Iterable[RotorFault] | None = None,
+        initial_command: npt.ArrayLike | None = None,
+        record_every: int = 1,
+    ) -> Trajectory:
+        """Flies from ``x0`` (default: at rest, level, at :data:`DEFAULT_START_M`, 10 m up) for
+        ``duration_s`` seconds; a start on or below the ground is refused. The actuators start settled at
+        ``initial_command`` (default: the controller's trim command if it has one, else zero).
+        Rotor efficiency starts at the airframe's own; ``faults`` change it on schedule.
+        ``record_every`` keeps every n-th control step (plus the last and any divergence)."""
+        x0 = State(position=DEFAULT_START_M) if x0 is None else x0
+        if not isinstance(x0, State):
+            raise TypeError(f"x0: expected rotorfault.State, got {type(x0).__name__}")
+        duration_s = _check_duration(duration_s, self.dt_s)
+        fault_list = _faults(faults, duration_s)
+        core = core_controller(controller, self.dt_s)
+        start = self._start(controller, initial_command)
+        config = self._config(duration_s, record_every)
+        raw = _rfcore.simulate(
+            self.airframe._core,
+            self.actuator._core(),
+            self.drag,
+            core,
+            x0._packed(),
+            [f._packed() for f in fault_list],
+            self.airframe.efficiency,
+            start,
+            config,
+        )
+        return Trajectory._from_core(raw, fault_list)
+
+    def state_derivative(self, x: npt.ArrayLike, command: npt.ArrayLike, efficiency: npt.ArrayLike | None = None) -> FloatArray:
+        """d/dt of the 12-element state vector with the actuators settled at ``command`` (clamped to
+        its bounds, as the actuators do) and rotor ``efficiency`` (default: the airframe's own), in
+        the constant ``wind`` (``wind_profile`` is a time-varying disturbance and is left out): the
+        model :func:`rotorfault.control.lqr.hover_trim` balances and ``linearize`` differentiates."""
+        eff = self.airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
+        return _rfcore.state_derivative(
+            self.airframe._core,
+            self.actuator._core(),
+            self.drag,
+            list(float_array("x", x, 1)),
+            float_array("command", command, 1),
+            eff,
+            list(self.wind),
+        )
+
+
+#: Bytes one recorded row costs, measured: the core's row, the Python trajectory's arrays and the
+#: stacked batch arrays (a 10 s quadcopter run at 400 Hz: about 2.4 MB), per rotor and fixed.
+ROW_BYTES_FIXED = 8 * (1 + 13 + 19 + 12 + 12)
+ROW_BYTES_PER_ROTOR = 8 * (3 + 2 + 3 + 2)
+
+
+def recording_bytes(simulator: Simulator, runs: int, duration_s: float, record_every: int = 1) -> int:
+    """Estimated peak memory of a :func:`simulate_batch` of ``runs`` runs: recorded rows times
+    the bytes each costs (the core's row, the Python arrays, the stacked copies)."""
+    steps = math.ceil(duration_s / simulator.dt_s - 1e-9)
+    rows = steps // max(record_every, 1) + 3
+    noise = 12 * 8 if simulator.noise is not None else 0
+    return int(runs * rows * (ROW_BYTES_FIXED + ROW_BYTES_PER_ROTOR * simulator.airframe.rotor_count + noise))
+
+
+def available_memory_bytes() -> int:
+    """Memory available to new allocations (``MemAvailable`` on Linux, else total physical)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+
+
+def _check_memory(simulator: Simulator, runs: int, duration_s: float, record_every: int, budget: int | None) -> None:
+    if budget is None:
+        budget = available_memory_bytes() // 2
+    else:
+        budget = count("memory_budget_bytes", budget)
+    need = recording_bytes(simulator, runs, duration_s, record_every)
+    if need > budget:
+        raise ValueError(
+            f"memory_budget_bytes: recording {runs:,} runs of {duration_s:g} s with record_every={record_every} "
+            f"needs about {need / 2**30:.2f} GiB, more than the budget of {budget / 2**30:.2f} GiB "
+            f"(default: half the available memory): record less (record_every), fewer runs per call, "
+            f"or keep per-run summaries only (rotorfault.studies.run_campaign)"
+        )
+
+
+def simulate_batch(
+    simulator: Simulator,
+    x0s: Sequence[State],
+    duration_s: float,
+    *,
+    controllers: AnyController | Sequence[AnyController] = None,
+    faults: Sequence[Iterable[RotorFault] | None] | None = None,
+    initial_command: npt.ArrayLike | None = None,
+    record_every: int = 1,
+    progress: bool | None = None,
+    memory_budget_bytes: int | None = None,
+) -> BatchResult:
+    """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
+    every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
+    cannot run in a batch (they would serialise on the GIL). ``record_every`` thins what is
+    recorded (every n-th control step, plus the last and any divergence): large batches need it
+    to keep memory bounded; the stacked arrays then sit on the thinned grid ``BatchResult.t``
+    (times, not step indices; see :class:`BatchResult`). ``progress=True`` shows a progress bar
+    (runs done, rate, ETA) on standard error; the runs then go to the core in chunks, with
+    identical results. ``memory_budget_bytes`` (default: half the available memory): a batch
+    whose recordings would need more is refused up front with the estimate (see
+    :func:`recording_bytes`)."""
+    if not isinstance(simulator, Simulator):
+        raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
+    states = list(x0s)
+    n = len(states)
+    for s in states:
+        if not isinstance(s, State):
+            raise TypeError(f"x0s: expected rotorfault.State items, got {type(s).__name__}")
+    per_run: list[AnyController] = list(controllers) if isinstance(controllers, (list, tuple)) else [controllers] * n  # type: ignore[list-item]
+    duration_s = _check_duration(duration_s, simulator.dt_s)
+    fault_lists = [_faults(f, duration_s, f"faults[{i}]") for i, f in enumerate(faults if faults is not None else [None] * n)]
+    if len(per_run) != n or len(fault_lists) != n:
+        raise ValueError(f"controllers, faults: expected one entry per run ({n})")
+    cores: list[CoreController | None] = []
+    for c in per_run:
+        core = core_controller(c, simulator.dt_s)
+        if core is not None and not isinstance(core, core_controller_types()):
+            raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
+        cores.append(cast(CoreController | None, core))
+    # Each run's actuators start at initial_command, else at its own controller's trim.
+    starts = []
+    for c in per_run:
+        start = simulator._start(c, initial_command)
+        starts.append(None if start is None else [float(v) for v in start])
+    simulator._config(duration_s, record_every)  # checks the settings before any run
+    _check_memory(simulator, n, duration_s, record_every, memory_budget_bytes)
+    actuator, drag = simulator.actuator._core(), simulator.drag
+    packed_states = [s._packed() for s in states]
+    packed_faults = [[f._packed() for f in fl] for fl in fault_lists]
+    # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.
+    size = n if not progress else max(8 * (os.cpu_count() or 1), n // 100)
+    raws: list[_rfcore.Trajectory] = []
+    for first, last in chunks(n, size, description=f"{n:,} runs", show=progress):
+        raws += _rfcore.simulate_batch(
+            simulator.airframe._core,
+            actuator,
+            drag,
+            cores[first:last],
+            packed_states[first:last],
+            packed_faults[first:last],
+            simulator.airframe.efficiency,
+            starts[first:last],
+            simulator._config(duration_s, record_every, seed_offset=first),
+        )
+    trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
+    # The common recording grid (the core's record_times, bit-identical to a completed run's t).
+    # A run's rows are a prefix of it but for a divergence row, which is stacked only when its
+    # time is the next grid time: a crossing located between two grid times stays in its
+    # Trajectory, never in a row of another time.
+    grid = simulator._config(duration_s, record_every).record_times()
+    stacked = []
+    for tr in trajectories:
+        rows = len(tr.t)
+        if rows and not (rows <= len(grid) and tr.t[rows - 1] == grid[rows - 1]):
+            rows -= 1
+        if not np.array_equal(tr.t[:rows], grid[:rows]):
+            raise RuntimeError("internal: a run's recorded times left the recording grid")
+        stacked.append(rows)
+
+    def stack(name: str) -> FloatArray:
+        arrays = [getattr(tr, name) for tr in trajectories]
+        shape = (n, len(grid), *arrays[0].shape[1:]) if arrays else (0, len(grid))
+        out = np.full(shape, np.nan)
+        for i, (a, rows) in enumerate(zip(arrays, stacked)):
+            out[i, :rows] = a[:rows]
+        return out
+
+    return BatchResult(
+        t=grid,
+        position=stack("position"),
+        velocity=stack("velocity"),
+        euler=stack("euler"),
+        omega=stack("omega"),
+        rotor_thrust=stack("rotor_thrust"),
+        efficiency=stack("efficiency"),
+        diverged=np.array([tr.diverged for tr in trajectories], dtype=bool),
+        divergence_time=np.array([tr.events[0].time if tr.events else np.nan for tr in trajectories]),
+        trajectories=trajectories,
+    )
+
+
+__all__ = [
+    "MAX_RATE_STEP",
+    "AnyController",
+    "DivergenceLimits",
+    "Simulator",
+    "available_memory_bytes",
+    "core_controller",
+    "recording_bytes",
+    "simulate_batch",
+    "trim_command",
+]

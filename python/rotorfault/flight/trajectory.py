@@ -1,0 +1,160 @@
+"""What a flight returns: the :class:`Trajectory` of one run (sampled at the control rate, with
+the :class:`Event` that ended it early, if any) and the :class:`BatchResult` of many."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._util.convert import FloatArray
+from .._typing import DivergenceKind
+from .faults import RotorFault
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class Event:
+    """Why and when a run ended early, with the state (12-vector) at that moment. A ``crashed``
+    event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
+    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise."""
+
+    time: float
+    #: A kebab-case code (``"crashed"``, ``"tilt"``, ``"non-finite-state"``, ...);
+    #: ``description`` is the human-readable text.
+    kind: DivergenceKind
+    description: str
+    state: FloatArray
+    impact_speed_m_s: float | None = None
+    impact_vertical_speed_m_s: float | None = None
+    impact_tilt_rad: float | None = None
+
+    def __str__(self) -> str:
+        if self.kind == "crashed" and self.impact_speed_m_s is not None:
+            return (
+                f"crashed at t = {self.time:.4f} s: {self.description} at {self.impact_speed_m_s:.2f} m/s "
+                f"({self.impact_vertical_speed_m_s:.2f} m/s down), tilted {math.degrees(self.impact_tilt_rad or 0.0):.1f} deg"
+            )
+        return f"diverged at t = {self.time:.4f} s: {self.description}"
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A run sampled at the control rate. Arrays have one row per control step."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    quaternion: FloatArray
+    euler: FloatArray
+    omega: FloatArray
+    #: Body z in the world frame (Ke's n3).
+    primary_axis: FloatArray
+    rotor_command: FloatArray
+    rotor_thrust: FloatArray
+    #: Rotor efficiencies applied by the simulator at each step (faults included).
+    efficiency: FloatArray
+    #: Sensor readings as recorded by the core (empty without noise); see :attr:`measured`.
+    recorded_measurements: FloatArray
+    events: list[Event] = field(default_factory=list)
+    faults: tuple[RotorFault, ...] = ()
+
+    @property
+    def diverged(self) -> bool:
+        return bool(self.events)
+
+    @property
+    def measured(self) -> FloatArray:
+        """What the controller saw: the 12-element state vector per step (with sensor noise;
+        without noise the true state, built on demand). The divergence row is NaN."""
+        if self.recorded_measurements.shape[1] > 0:
+            return self.recorded_measurements
+        measured = np.hstack([self.position, self.velocity, self.euler, self.omega])
+        if self.events:
+            measured[-1] = np.nan  # no command was computed at the divergence
+        return measured
+
+    @property
+    def rotation(self) -> FloatArray:
+        """Rotation matrices body -> world (N x 3 x 3) from the quaternions."""
+        w, x, y, z = self.quaternion.T
+        return np.stack(
+            [
+                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+            ],
+            axis=1,
+        )
+
+    @classmethod
+    def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
+        events = []
+        d = raw.divergence
+        if d is not None:
+            kind = cast(DivergenceKind, d.reason)
+            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state),
+                                d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad))
+        return cls(
+            t=raw.t,
+            position=raw.position,
+            velocity=raw.velocity,
+            quaternion=raw.quaternion,
+            euler=raw.euler,
+            omega=raw.omega,
+            primary_axis=raw.primary_axis,
+            rotor_command=raw.command,
+            rotor_thrust=raw.thrust,
+            efficiency=raw.efficiency,
+            recorded_measurements=raw.measured,
+            events=events,
+            faults=faults,
+        )
+
+    def plot(
+        self,
+        path: str | None = None,
+        *,
+        title: str | None = None,
+        setpoints: Sequence[tuple[float, npt.ArrayLike]] | None = None,
+    ) -> Figure:
+        """Position (with the setpoint, if given as ``(time, NED position)`` steps), roll and
+        pitch, yaw unwrapped, body rates and rotor thrusts against time, with fault and loss
+        markers (:func:`rotorfault.plotting.timeseries.plot_trajectory`). Returns the figure (not
+        registered with pyplot), saved to ``path`` (``.png``, ``.pdf`` or ``.svg``, written
+        atomically) if given."""
+        from ..plotting.timeseries import plot_trajectory
+
+        return plot_trajectory(self, path, title=title, setpoints=setpoints)
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Runs stacked along axis 0 on one time axis ``t``, the recording grid: the recorded control
+    steps (``k dt_s`` for every ``record_every``-th ``k``) and the end, exactly ``duration_s``;
+    equal to the ``t`` of every run that does not diverge. A run that diverges fills the rows up
+    to its last recorded step before the divergence and NaN after: its divergence row, at the
+    located crossing time, is stacked only when that time is a grid time (never into a row of
+    another time); it is always the last row of ``trajectories[i]``, and ``divergence_time[i]``
+    is its time."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    euler: FloatArray
+    omega: FloatArray
+    rotor_thrust: FloatArray
+    efficiency: FloatArray
+    diverged: np.ndarray[Any, np.dtype[np.bool_]]
+    divergence_time: FloatArray
+    trajectories: list[Trajectory]
+
+
+__all__ = ["BatchResult", "Event", "Trajectory"]

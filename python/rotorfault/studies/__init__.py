@@ -1,0 +1,47 @@
+"""Studies: many flights or many evaluations, and what they add up to. ACAI scans over grids and
+sample sets (:mod:`~rotorfault.studies.scan`), the spin-assignment design search
+(:mod:`~rotorfault.studies.design`), a vehicle's controllability certificate
+(:mod:`~rotorfault.studies.certify`), the ``rotorfault simulate`` scenario file
+(:mod:`~rotorfault.studies.scenario_file`), and one Monte Carlo engine split by job: the spec
+(:mod:`~rotorfault.studies.campaign`), sampling (:mod:`~rotorfault.studies.sampling`), execution
+backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
+(:mod:`~rotorfault.studies.storage`: the one Parquet writer, resumable), the engine that joins them
+(:mod:`~rotorfault.studies.engine`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
+tuning (:mod:`~rotorfault.studies.tuning`). The papers' Monte Carlo studies run on the same
+backends.
+
+May import: ``control``, ``flight``, ``allocation``, ``analysis``, ``plotting`` (on first use),
+``rotorfault._typing`` and ``rotorfault._util``; never ``papers`` or ``cli``.
+"""
+
+from .campaign import Campaign, CampaignResult, read_campaign, run_campaign
+from .certify import Certificate, CertificateCase, certify
+from .design import Design, DesignSearch, design_search
+from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
+from .scenario_file import Scenario, load_scenario
+from .tuning import TuningResult, tune, tuning_campaign
+
+__all__ = [
+    "Campaign",
+    "CampaignResult",
+    "Certificate",
+    "CertificateCase",
+    "Design",
+    "DesignSearch",
+    "EfficiencyScan",
+    "Scan",
+    "Scenario",
+    "TuningResult",
+    "acai_scan",
+    "certify",
+    "design_search",
+    "efficiency_scan",
+    "failure_samples",
+    "load_scenario",
+    "plot_efficiency_scan",
+    "read_campaign",
+    "read_scan",
+    "run_campaign",
+    "tune",
+    "tuning_campaign",
+]

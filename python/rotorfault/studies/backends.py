@@ -1,0 +1,129 @@
+"""Execution backends: where a study's work runs. ``"local"``: a small thread pool on this
+machine (the Rust kernels release the GIL and are parallel themselves; the pool only overlaps
+computing one chunk with writing the previous one, or flies a few runs side by side).
+``"dask"``: the same picklable tasks on a ``dask.distributed`` cluster (a ``Client``, an address
+``"tcp://host:port"``, or ``"local:N"`` for a ``LocalCluster`` of N worker processes made for the
+call); Dask schedules, retries and, when a worker dies, recomputes its tasks elsewhere. Results
+come back to the caller in a known order, so the caller stays the only writer.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from .._util.progress import chunks
+from .storage import ChunkSpec
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+#: A chunk's work: rows ``spec.start`` up to ``spec.stop`` of the job, as an Arrow table.
+ChunkTask = Callable[[ChunkSpec], Any]
+R = TypeVar("R")
+
+
+def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: bool | None, chunk: int | None = None) -> list[R]:
+    """``[run(0), ..., run(runs - 1)]``, two at a time on threads (the core releases the GIL), in
+    pieces of ``chunk`` runs (default ``max(8, runs // 50)``) that drive the progress bar: the
+    local backend for studies whose runs each need their own simulator."""
+    results: list[R] = []
+    size = max(8, runs // 50) if chunk is None else chunk
+    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
+        for first, last in chunks(runs, size, description=description, show=progress):
+            results += list(pool.map(run, range(first, last)))
+    return results
+
+
+@contextlib.contextmanager
+def dask_client(dask: Client | str) -> Iterator[Client]:
+    """A ``distributed.Client`` for ``dask``: the client itself, an address, or ``"local:N"``
+    (a ``LocalCluster`` of N single-threaded worker processes, closed at the end)."""
+    from distributed import Client, LocalCluster
+
+    if isinstance(dask, Client):
+        yield dask
+        return
+    if not isinstance(dask, str):
+        raise TypeError(f"dask: expected a distributed.Client, an address or 'local:N', got {type(dask).__name__}")
+    if dask.startswith("local:"):
+        try:
+            workers = int(dask[len("local:") :])
+        except ValueError:
+            workers = 0
+        if workers < 1:
+            raise ValueError(f"dask: 'local:N' needs a positive worker count N, got {dask!r}")
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, Client(cluster) as client:  # type: ignore[no-untyped-call]
+            yield client
+        return
+    if "://" not in dask:
+        raise ValueError(f"dask: expected a scheduler address like 'tcp://host:8786' or 'local:N', got {dask!r}")
+    with Client(dask) as client:  # type: ignore[no-untyped-call]
+        yield client
+
+
+def run_local(task: ChunkTask, pending: list[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
+    # Two in flight: one computing while the previous is written. Results are accepted in chunk
+    # order, so an interrupted local run leaves a prefix (plus at most one) of the chunks.
+    in_flight = 2
+    with ThreadPoolExecutor(max_workers=in_flight) as pool:
+        queue: list[tuple[ChunkSpec, Future[Any]]] = []
+        it = iter(pending)
+        try:
+            for spec in it:
+                queue.append((spec, pool.submit(task, spec)))
+                if len(queue) >= in_flight:
+                    head, future = queue.pop(0)
+                    accept(head, future.result())
+                    advance(head.rows)
+            while queue:
+                head, future = queue.pop(0)
+                accept(head, future.result())
+                advance(head.rows)
+        except BaseException:
+            for _, future in queue:
+                future.cancel()
+            raise
+
+
+def run_dask(client: Client, task: ChunkTask, pending: list[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
+    from distributed import as_completed
+
+    workers = max(1, len(client.scheduler_info().get("workers", {})))
+    in_flight = 2 * workers
+    it = iter(pending)
+    # Retries cover a task that raised on a worker that then died; a killed worker's tasks are
+    # rescheduled by Dask itself (up to the scheduler's allowed-failures).
+    submitted = [client.submit(task, spec, pure=False, retries=2) for spec in _take(it, in_flight)]
+    specs = {future.key: spec for future, spec in zip(submitted, pending)}
+    queue = as_completed(submitted)  # type: ignore[no-untyped-call]
+    try:
+        for future in queue:
+            spec = specs.pop(future.key)
+            table = future.result()
+            future.release()
+            accept(spec, table)
+            advance(spec.rows)
+            for nxt in _take(it, 1):
+                new = client.submit(task, nxt, pure=False, retries=2)
+                specs[new.key] = nxt
+                queue.add(new)  # type: ignore[no-untyped-call]
+    except BaseException:
+        client.cancel(list(queue.futures) if hasattr(queue, "futures") else [])  # type: ignore[no-untyped-call]
+        raise
+
+
+def _take(it: Iterator[ChunkSpec], n: int) -> list[ChunkSpec]:
+    out = []
+    for _ in range(n):
+        try:
+            out.append(next(it))
+        except StopIteration:
+            break
+    return out
+
+
+__all__ = ["ChunkTask", "dask_client", "map_runs", "run_dask", "run_local"]

@@ -1,0 +1,173 @@
+"""The study engine: one job of many rows (a scan's points, a campaign's runs), cut into
+chunks, computed on an execution backend (:mod:`~rotorfault.studies.backends`: threads or Dask)
+and gathered in memory or written to a Parquet directory (:mod:`~rotorfault.studies.storage`).
+
+A *task* is a picklable callable ``task(spec: ChunkSpec) -> pyarrow.Table`` that returns exactly
+the chunk's rows; :func:`run_chunks` runs it over every chunk not already written. Memory is
+bounded by the chunk size times the tasks in flight (two per worker, or two locally).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .._typing import ScanBackend as Backend
+from .._util.convert import flag
+from .._util.output import write_text
+from .._util.progress import progress_bar
+from .backends import ChunkTask, dask_client, run_dask, run_local
+from .storage import (
+    CHUNK_PREFIX,
+    CHUNK_SUFFIX,
+    STREAM_FORMAT,
+    STREAM_MANIFEST,
+    ChunkSpec,
+    Schema,
+    Table,
+    chunk_specs,
+    prepare_output,
+    pyarrow_module,
+    write_chunk,
+)
+
+if TYPE_CHECKING:
+    from distributed import Client
+
+
+@dataclass(frozen=True)
+class StreamResult:
+    """What :func:`run_chunks` did: the in-memory table (``out=None``) or the output directory."""
+
+    table: Table | None
+    out: Path | None
+    total_rows: int
+    chunks: int
+    #: Chunks computed in this call (the rest were already present and skipped on resume).
+    computed_chunks: int
+    skipped_chunks: int
+    seconds: float
+
+
+def _check_table(spec: ChunkSpec, table: Any, schema: Schema | None) -> Table:
+    pa = pyarrow_module()
+
+    if not isinstance(table, pa.Table):
+        raise TypeError(f"task: must return a pyarrow.Table, got {type(table).__name__} for chunk {spec.index}")
+    if table.num_rows != spec.rows:
+        raise ValueError(f"task: chunk {spec.index} must have {spec.rows} rows, got {table.num_rows}")
+    if schema is not None and not table.schema.remove_metadata().equals(schema):
+        raise ValueError(f"task: chunk {spec.index} has schema {table.schema} instead of {schema}")
+    return table
+
+
+def run_chunks(
+    task: ChunkTask,
+    *,
+    total_rows: int,
+    chunk_rows: int,
+    schema: Schema,
+    arguments: Mapping[str, Any],
+    kind: str,
+    out: str | os.PathLike[str] | None = None,
+    metadata: Mapping[str, Any] | None = None,
+    resume: bool = False,
+    force: bool = False,
+    backend: Backend = "local",
+    dask: Client | str | None = None,
+    progress: bool | None = None,
+    description: str = "chunks",
+    compression: str = "zstd",
+    on_chunk_written: Callable[[ChunkSpec], None] | None = None,
+) -> StreamResult:
+    """Runs ``task`` over every chunk of ``total_rows`` rows and gathers the tables in memory
+    (``out=None``) or streams them to the directory ``out`` (see the module docstring).
+
+    ``arguments`` (JSON-able) identify the job: with ``kind``, the schema and the chunking they
+    decide whether an existing output may be resumed. ``metadata`` (JSON-able) is recorded in the
+    manifest too but not compared (e.g. the rotorfault version). ``on_chunk_written`` is called
+    after each chunk is in place (or gathered)."""
+    pa = pyarrow_module()
+
+    from .. import _rfcore
+
+    if not callable(task):
+        raise TypeError(f"task: expected a callable returning a pyarrow.Table, got {type(task).__name__}")
+    if isinstance(total_rows, bool) or not isinstance(total_rows, int) or total_rows < 0:
+        raise ValueError(f"total_rows: must be a non-negative integer, got {total_rows!r}")
+    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int):
+        raise TypeError(f"chunk_rows: expected an integer, got {type(chunk_rows).__name__}")
+    if chunk_rows < 1:
+        raise ValueError(f"chunk_rows: must be at least 1, got {chunk_rows}")
+    resume = flag("resume", resume)
+    force = flag("force", force)
+    if backend not in ("local", "dask"):
+        raise ValueError(f"backend: must be 'local' or 'dask', got {backend!r}")
+    if backend == "dask" and dask is None:
+        raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
+    schema = schema.remove_metadata()
+    identity: dict[str, Any] = {
+        "kind": kind,
+        "arguments": json.loads(json.dumps(dict(arguments))),
+        "schema": schema.to_string(),
+        "total_rows": total_rows,
+        "chunk_rows": chunk_rows,
+    }
+    specs = chunk_specs(total_rows, chunk_rows)
+    out_path: Path | None = None
+    done: set[int] = set()
+    started = time.perf_counter()
+    if out is not None:
+        if not isinstance(out, (str, os.PathLike)):
+            raise TypeError(f"out: expected a directory path, got {type(out).__name__}")
+        out_path = Path(out)
+        done = prepare_output(out_path, identity, resume=resume, force=force)
+        manifest = {
+            "format": STREAM_FORMAT,
+            **identity,
+            "chunks": len(specs),
+            "chunk_file": f"{CHUNK_PREFIX}<index, 9 digits>{CHUNK_SUFFIX}",
+            "rotorfault_version": _rfcore.__version__,
+            "metadata": json.loads(json.dumps(dict(metadata or {}))),
+            "complete": False,
+        }
+        out_path.mkdir(exist_ok=True)
+        write_text(out_path / STREAM_MANIFEST, json.dumps(manifest, indent=2) + "\n")
+        file_metadata = {"rotorfault": json.dumps({k: manifest[k] for k in ("kind", "arguments", "rotorfault_version", "total_rows", "chunk_rows")})}
+    pending = [spec for spec in specs if spec.index not in done]
+    gathered: dict[int, Table] = {}
+
+    def accept(spec: ChunkSpec, table: Any) -> None:
+        table = _check_table(spec, table, schema)
+        if out_path is None:
+            gathered[spec.index] = table
+        else:
+            write_chunk(out_path, spec, table, file_metadata, compression)
+        if on_chunk_written is not None:
+            on_chunk_written(spec)
+
+    already = sum(spec.rows for spec in specs if spec.index in done)
+    with progress_bar(total_rows, description=description, show=progress, default_show=total_rows > 10_000_000, completed=already) as advance:
+        if not pending:
+            pass  # nothing left (a complete output resumed): no cluster is started
+        elif backend == "local":
+            run_local(task, pending, accept, advance)
+        else:
+            assert dask is not None
+            with dask_client(dask) as client:
+                run_dask(client, task, pending, accept, advance)
+    if out_path is not None:
+        manifest["complete"] = True
+        write_text(out_path / STREAM_MANIFEST, json.dumps(manifest, indent=2) + "\n")
+        table = None
+    else:
+        table = pa.concat_tables([gathered[k] for k in sorted(gathered)]) if gathered else schema.empty_table()
+    return StreamResult(table, out_path, total_rows, len(specs), len(pending), len(done), time.perf_counter() - started)
+
+
+__all__ = ["Backend", "ChunkSpec", "ChunkTask", "StreamResult", "run_chunks"]

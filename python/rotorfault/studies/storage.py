@@ -1,0 +1,224 @@
+"""Storage of a study's rows: a Parquet dataset directory, one file per chunk, resumable.
+
+A job is ``total`` rows cut into chunks of ``chunk_rows`` with deterministic ids (chunk ``k``
+holds rows ``k * chunk_rows`` up to the next chunk)::
+
+    out/
+      _rotorfault.json          what the directory holds: kind, arguments, schema, chunking,
+                                rotorfault version, any extra metadata (e.g. the airframe TOML)
+      chunk-000000000.parquet   rows 0 .. chunk_rows - 1
+      chunk-000000001.parquet   ...
+
+Every file is written under a temporary name and renamed into place when complete, so a chunk
+file that exists is whole; the manifest is written before any chunk and marked ``complete`` at the
+end. A re-run with ``resume=True`` and the same arguments skips the chunks present (each one is
+checked: readable, the expected rows and schema) and never writes a row twice; an output written
+with other arguments is refused, naming the arguments that differ; ``force=True`` replaces it.
+This is the one Parquet writer of the package (scans and campaigns alike).
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shutil
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeAlias
+
+from .._util.output import atomic_path, check_parent
+
+#: ``pyarrow.Table`` / ``pyarrow.Schema`` (pyarrow has no type information: Any to the checker).
+Table: TypeAlias = Any
+Schema: TypeAlias = Any
+
+
+def pyarrow_module() -> Any:
+    """``pyarrow``, imported on first use, with the install hint when it is missing."""
+    return _import("pyarrow")
+
+
+def parquet_module() -> Any:
+    """``pyarrow.parquet``, imported on first use."""
+    return _import("pyarrow.parquet")
+
+
+def _import(name: str) -> Any:
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        raise ImportError(f"{name} is needed for scans at scale: pip install 'rotorfault[scale]'") from None
+
+#: Name of the manifest inside an output directory.
+STREAM_MANIFEST = "_rotorfault.json"
+#: Format version of the directory layout (a reader refuses other versions).
+STREAM_FORMAT = 1
+CHUNK_PREFIX = "chunk-"
+CHUNK_SUFFIX = ".parquet"
+
+
+@dataclass(frozen=True)
+class ChunkSpec:
+    """One chunk: its id (``index``) and its rows ``start <= row < stop`` of the whole job."""
+
+    index: int
+    start: int
+    stop: int
+
+    @property
+    def rows(self) -> int:
+        return self.stop - self.start
+
+
+def chunk_specs(total: int, chunk_rows: int) -> list[ChunkSpec]:
+    """The deterministic chunking of ``total`` rows: chunk ``k`` starts at ``k * chunk_rows``."""
+    return [ChunkSpec(k, start, min(start + chunk_rows, total)) for k, start in enumerate(range(0, total, chunk_rows))]
+
+
+def chunk_file_name(index: int) -> str:
+    return f"{CHUNK_PREFIX}{index:09d}{CHUNK_SUFFIX}"
+
+
+def read_manifest(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The manifest of a streamed output directory (ValueError if it is not one)."""
+    p = Path(path)
+    manifest = p / STREAM_MANIFEST
+    if not p.is_dir() or not manifest.is_file():
+        raise ValueError(f"out: {str(p)!r} is not a rotorfault streamed output (no {STREAM_MANIFEST} inside)")
+    try:
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"out: {str(manifest)!r} is unreadable ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != STREAM_FORMAT:
+        raise ValueError(f"out: {str(manifest)!r} is not a format-{STREAM_FORMAT} rotorfault manifest")
+    return data
+
+
+def _describe_differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> str:
+    keys = sorted(set(old) | set(new))
+    parts = []
+    for key in keys:
+        if old.get(key) != new.get(key):
+            a, b = json.dumps(old.get(key)), json.dumps(new.get(key))
+            a = a if len(a) <= 60 else a[:57] + "..."
+            b = b if len(b) <= 60 else b[:57] + "..."
+            parts.append(f"{key} (written {a}, asked {b})")
+    return "; ".join(parts)
+
+
+def prepare_output(out: Path, identity: dict[str, Any], *, resume: bool, force: bool) -> set[int]:
+    """Checks ``out`` before any work and returns the chunk ids already complete (resume)."""
+    check_parent("out", out.absolute())
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"out: {str(out)!r} exists and is not a directory (a streamed output is a directory of Parquet files)")
+    if not out.is_dir() or not any(out.iterdir()):
+        return set()
+    if not (out / STREAM_MANIFEST).is_file():
+        raise ValueError(f"out: {str(out)!r} is not empty and holds no {STREAM_MANIFEST} (not a rotorfault output); choose a new or empty directory")
+    old = read_manifest(out)
+    foreign = sorted(
+        e.name for e in out.iterdir()
+        if e.name != STREAM_MANIFEST and not (e.name.startswith(CHUNK_PREFIX) and e.name.endswith(CHUNK_SUFFIX))
+        and not e.name.startswith(".")
+    )
+    if foreign:
+        raise ValueError(f"out: {str(out)!r} holds files that are not part of a rotorfault output ({', '.join(foreign[:5])}); choose a new or empty directory")
+    if force:
+        for entry in out.iterdir():
+            entry.unlink() if not entry.is_dir() else shutil.rmtree(entry)
+        return set()
+    same = {k: old.get(k) for k in identity} == identity
+    if not same:
+        raise ValueError(
+            f"out: {str(out)!r} holds an output written with other arguments: "
+            f"{_describe_differences({k: old.get(k) for k in identity}, identity)}; "
+            "choose another output or pass --force (force=True) to replace it"
+        )
+    if not resume:
+        state = "a complete output" if old.get("complete") else "an interrupted output"
+        raise ValueError(f"out: {str(out)!r} holds {state} of this {str(identity['kind']).removeprefix('rotorfault-')}; pass --resume (resume=True) to continue it or --force (force=True) to replace it")
+    return _complete_chunks(out, identity)
+
+
+def _complete_chunks(out: Path, identity: Mapping[str, Any]) -> set[int]:
+    pq = parquet_module()
+
+    expected = {spec.index: spec.rows for spec in chunk_specs(identity["total_rows"], identity["chunk_rows"])}
+    done: set[int] = set()
+    for entry in out.iterdir():
+        name = entry.name
+        if name.startswith("."):
+            # A temporary file of an interrupted write: never part of the output.
+            entry.unlink(missing_ok=True) if entry.is_file() else shutil.rmtree(entry, ignore_errors=True)
+            continue
+        if not (name.startswith(CHUNK_PREFIX) and name.endswith(CHUNK_SUFFIX)):
+            continue
+        try:
+            index = int(name[len(CHUNK_PREFIX) : -len(CHUNK_SUFFIX)])
+            meta = pq.read_metadata(entry)
+            ok = index in expected and meta.num_rows == expected[index] and meta.schema.to_arrow_schema().remove_metadata().to_string() == identity["schema"]
+        except (ValueError, OSError):
+            ok = False
+        if ok:
+            done.add(index)
+        else:
+            # Not a chunk this job would write (should not happen: files are renamed into place
+            # whole); recomputing it is the safe choice.
+            entry.unlink()
+    return done
+
+
+def write_chunk(out: Path, spec: ChunkSpec, table: Table, file_metadata: Mapping[str, str], compression: str) -> None:
+    pq = parquet_module()
+
+    final = out / chunk_file_name(spec.index)
+    if final.exists():  # the caller is the only writer; never a second copy of a chunk
+        raise RuntimeError(f"chunk {spec.index} written twice")
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), **{k.encode(): v.encode() for k, v in file_metadata.items()}})
+    try:
+        with atomic_path(final) as tmp:
+            pq.write_table(table, tmp, compression=compression)
+    except OSError as exc:
+        reason = os.strerror(exc.errno) if exc.errno else str(exc)
+        hint = " (disk full)" if exc.errno == errno.ENOSPC else ""
+        raise OSError(
+            exc.errno or errno.EIO,
+            f"out: writing chunk {spec.index} ({chunk_file_name(spec.index)}) to {str(out)!r} failed: {reason}{hint}; "
+            "the chunks already written are complete and valid: free space or fix the directory, then re-run with --resume (resume=True)",
+        ) from exc
+
+
+def iter_tables(path: str | os.PathLike[str], columns: list[str] | None = None, *, require_complete: bool = True) -> Iterator[Table]:
+    """The chunks of a streamed output, in row order, one table at a time (``columns``: only
+    these), so an output larger than memory can be read chunk by chunk."""
+    pq = parquet_module()
+
+    p = Path(path)
+    manifest = read_manifest(p)
+    if require_complete and not manifest.get("complete"):
+        raise ValueError(f"out: {str(p)!r} is an interrupted output; finish it with --resume (resume=True) first")
+    for spec in chunk_specs(manifest["total_rows"], manifest["chunk_rows"]):
+        file = p / chunk_file_name(spec.index)
+        if not file.is_file():
+            if require_complete:
+                raise ValueError(f"out: {str(p)!r} is missing {file.name}")
+            continue
+        yield pq.read_table(file, columns=columns)
+
+
+__all__ = [
+    "STREAM_MANIFEST",
+    "ChunkSpec",
+    "Schema",
+    "Table",
+    "chunk_file_name",
+    "chunk_specs",
+    "iter_tables",
+    "parquet_module",
+    "pyarrow_module",
+    "read_manifest",
+]

@@ -1,0 +1,97 @@
+"""Old names keep working for one release, with a ``DeprecationWarning`` that names the new one
+(pytest turns warnings into errors, so every test below asserts the warning it expects)."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import pytest
+
+import rotorfault as rf
+
+#: Old module -> (new module, a name it must still give, the object that name is now).
+MOVED = {
+    "rotorfault.airframe": ("rotorfault.analysis.airframe", "Airframe"),
+    "rotorfault.certify": ("rotorfault.studies.certify", "certify"),
+    "rotorfault.scan": ("rotorfault.studies.scan", "acai_scan"),
+    "rotorfault.design": ("rotorfault.studies.design", "design_search"),
+    "rotorfault.scenario": ("rotorfault.studies.scenario_file", "load_scenario"),
+    "rotorfault.simulation": ("rotorfault.flight.simulator", "Simulator"),
+    "rotorfault.controllability": ("rotorfault.analysis.controllability", "failure_table"),
+    "rotorfault.campaign": ("rotorfault.studies.campaign", "run_campaign"),
+}
+
+
+@pytest.fixture(autouse=True)
+def _package_attributes_restored() -> object:
+    """A fresh import of an old name rebinds ``rotorfault.<name>``: put the package back as it was
+    for the other tests."""
+    before = dict(vars(rf))
+    yield
+    for name in set(vars(rf)) - set(before):
+        delattr(rf, name)
+    for name, value in before.items():
+        setattr(rf, name, value)
+
+
+def _fresh_import(name: str) -> object:
+    sys.modules.pop(name, None)
+    parent, _, child = name.rpartition(".")
+    vars(sys.modules[parent]).pop(child, None)
+    return importlib.import_module(name)
+
+
+def test_importing_the_old_controllability_module_keeps_the_function_working() -> None:
+    """``rotorfault.controllability`` was a module and the package's function at once; importing
+    the old module name rebinds the package attribute to the module, which stays callable."""
+    airframe = rf.Airframe.preset("hexa-ppnnpn")
+    expected = rf.analysis.controllability(airframe)
+    with pytest.warns(DeprecationWarning):
+        _fresh_import("rotorfault.controllability")
+    assert rf.controllability(airframe) == expected
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_a_moved_module_warns_and_gives_the_same_objects(old: str) -> None:
+    new, name = MOVED[old]
+    with pytest.warns(DeprecationWarning, match=rf"{old}.*deprecated.*rotorfault\.(analysis|studies|flight)"):
+        module = _fresh_import(old)
+    assert getattr(module, name) is getattr(importlib.import_module(new), name)
+
+
+def test_old_module_attributes_of_the_package_warn() -> None:
+    """``rf.scan`` was an attribute of the package (its submodule): it still is, with a warning."""
+    sys.modules.pop("rotorfault.scan", None)
+    vars(rf).pop("scan", None)
+    with pytest.warns(DeprecationWarning, match="rotorfault.scan"):
+        module = rf.scan  # type: ignore[attr-defined]
+    assert module.acai_scan is rf.acai_scan
+
+
+def test_the_old_private_names_of_the_moved_modules_still_resolve() -> None:
+    """What a user might have reached for (``_ScanTask`` of the scan module, the campaign's
+    chunk task, the simulator's ``Event``) resolves through the old names too."""
+    with pytest.warns(DeprecationWarning):
+        scan = _fresh_import("rotorfault.scan")
+    with pytest.warns(DeprecationWarning):
+        simulation = _fresh_import("rotorfault.simulation")
+    with pytest.warns(DeprecationWarning):
+        campaign = _fresh_import("rotorfault.campaign")
+    from rotorfault.flight import Event
+    from rotorfault.studies.campaign import _CampaignTask
+    from rotorfault.studies.scan import _ScanTask
+    from rotorfault.studies.tuning import tune
+
+    assert scan._ScanTask is _ScanTask and simulation.Event is Event
+    assert campaign._CampaignTask is _CampaignTask and campaign.tune is tune
+
+
+def test_the_decisions_table_links_the_code_not_the_old_names() -> None:
+    """Every file the README's decisions link to is where the decision is coded, not a module
+    kept only for its old name."""
+    from rotorfault.papers.decisions import DECISION_CODE
+
+    old = {f"python/{name.replace('.', '/')}.py" for name in MOVED}
+    stale = sorted({path for paths in DECISION_CODE.values() for path in paths if path in old})
+    assert not stale, stale
