@@ -88,20 +88,30 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
               help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
+@click.option("--spinning", is_flag=True,
+              help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors); "
+                   "--require then accepts a case that hovers statically or by spinning.")
+@click.option("--rotational-drag", "rotational_drag", type=float, default=None,
+              help="With --spinning: the vehicle's rotational damping k_r (N m s), which sets the spin rate (default 0).")
 @_user_errors
-def certify(airframe: str, required: str, json_path: str | None, force: bool) -> None:
+def certify(airframe: str, required: str, json_path: str | None, force: bool, spinning: bool,
+            rotational_drag: float | None) -> None:
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
     not at all; the ACAI (facet margin), the thrust-to-weight left and which axes an allocator must
-    drop."""
+    drop; with --spinning, beside it, the best relaxed hover (Mueller and D'Andrea)."""
     import json
 
+    from ..flight import Drag
     from ..studies.certify import certify as certify_airframe, rows_for_display
     from .._util.output import write_text
 
+    if rotational_drag is not None and not spinning:
+        raise click.UsageError("--rotational-drag: describes the relaxed hover; give it with --spinning")
+    drag = None if rotational_drag is None else Drag(rotational_n_m_s=rotational_drag)
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
     frame = Airframe.load(airframe)
-    cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count))
+    cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count), spinning=spinning, drag=drag)
     text = json.dumps(cert.to_dict(), indent=2) + "\n"
     if json_path == "-":
         click.echo(text, nl=False)
@@ -110,17 +120,19 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool) ->
         kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
         table = Table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
-            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
+            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops", "relaxed hover") else "right")
         styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
         console.print(table)
         if json_path is not None:
             write_text(json_path, text)
-    failing = cert.failing(required)
+    failing = cert.failing_spinning(required) if spinning else cert.failing(required)
     if failing:
         listed = "; ".join(rotor_labels(c.failed) for c in failing)
-        click.echo(f"certificate: FAILED: --require {required}: cannot hover with rotor(s) {listed} failed", err=True)
+        how = " nor spin" if spinning else ""
+        click.echo(f"certificate: FAILED: --require {required}: cannot hover{how} with rotor(s) {listed} failed", err=True)
         sys.exit(3)
     if required != "none" and json_path != "-":
-        console.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
+        how = " (statically or by spinning)" if spinning else ""
+        console.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle{how}")
