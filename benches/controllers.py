@@ -9,7 +9,7 @@ with a saturated error; ``allocated`` LQR on the virtual control followed by the
 allocation (the callback allocates through ``rf.Allocator.allocate``); ``relaxed-hover-feedback``
 the LQR about quad-x's relaxed hover (static hover on a healthy frame), its reduced state and
 outer loop recomputed in numpy by the callback. Ke's and Lanzon's
-controllers fly their own vehicles in their own benches (``ftc_batch.py``, ``lanzon_batch.py``,
+controllers and INDI fly their own vehicles in their own benches (``ftc_batch.py``, ``lanzon_batch.py``,
 each against its law as a Python callback): :data:`OWN_BENCH` names them, and the script checks
 that every registered controller is timed here or there.
 
@@ -32,7 +32,7 @@ from rotorfault.control import registry
 HOVER = (0.0, 0.0, -10.0)
 DT_S = 1.0 / 400.0
 #: Registered controllers timed by their own bench, on their own vehicle.
-OWN_BENCH = {"uniform-passive-ftc": "ftc_batch.py", "lanzon-controller": "lanzon_batch.py"}
+OWN_BENCH = {"uniform-passive-ftc": "ftc_batch.py", "lanzon-controller": "lanzon_batch.py", "indi-controller": "ftc_batch.py"}
 
 
 def laws(sim: rf.Simulator) -> dict[str, tuple[Any, Callable[[float, np.ndarray], np.ndarray]]]:
@@ -63,12 +63,12 @@ def laws(sim: rf.Simulator) -> dict[str, tuple[Any, Callable[[float, np.ndarray]
     relaxed, relaxed_law = _relaxed_hover_law(sim)
 
     return {
-        "relaxed-hover-feedback": (relaxed, relaxed_law),
         "open-loop": (rf.OpenLoop.constant(u_trim), lambda t, x: u_trim),
         "linear-feedback": (lqr, feedback),
         "lti": (lti, feedback),
         "tracking-feedback": (tracking, tracked),
         "allocated": (allocated, allocating),
+        "relaxed-hover-feedback": (relaxed, relaxed_law),
     }
 
 
