@@ -6,8 +6,10 @@ callback in the same run (``docs/adding-a-controller.md``, step 6).
 The laws: ``open-loop`` holds the trim; ``linear-feedback`` is ``rf.lqr_hover``; ``lti`` the same
 gain as a static LTI (``D = -K``); ``tracking-feedback`` the same gain on a constant reference
 with a saturated error; ``allocated`` LQR on the virtual control followed by the active-set
-allocation (the callback allocates through ``rf.Allocator.allocate``). Ke's and Lanzon's
-controllers fly their own vehicles in their own benches (``ftc_batch.py``, ``lanzon_batch.py``,
+allocation (the callback allocates through ``rf.Allocator.allocate``); ``relaxed-hover-feedback``
+the LQR about quad-x's relaxed hover (static hover on a healthy frame), its reduced state and
+outer loop recomputed in numpy by the callback. Ke's and Lanzon's
+controllers and INDI fly their own vehicles in their own benches (``ftc_batch.py``, ``lanzon_batch.py``,
 each against its law as a Python callback): :data:`OWN_BENCH` names them, and the script checks
 that every registered controller is timed here or there.
 
@@ -30,7 +32,7 @@ from rotorfault.control import registry
 HOVER = (0.0, 0.0, -10.0)
 DT_S = 1.0 / 400.0
 #: Registered controllers timed by their own bench, on their own vehicle.
-OWN_BENCH = {"uniform-passive-ftc": "ftc_batch.py", "lanzon-controller": "lanzon_batch.py"}
+OWN_BENCH = {"uniform-passive-ftc": "ftc_batch.py", "lanzon-controller": "lanzon_batch.py", "indi-controller": "ftc_batch.py"}
 
 
 def laws(sim: rf.Simulator) -> dict[str, tuple[Any, Callable[[float, np.ndarray], np.ndarray]]]:
@@ -58,13 +60,45 @@ def laws(sim: rf.Simulator) -> dict[str, tuple[Any, Callable[[float, np.ndarray]
         commands: np.ndarray = allocator.allocate(v_u - v_gain @ (x - v_x)).commands
         return commands
 
+    relaxed, relaxed_law = _relaxed_hover_law(sim)
+
     return {
         "open-loop": (rf.OpenLoop.constant(u_trim), lambda t, x: u_trim),
         "linear-feedback": (lqr, feedback),
         "lti": (lti, feedback),
         "tracking-feedback": (tracking, tracked),
         "allocated": (allocated, allocating),
+        "relaxed-hover-feedback": (relaxed, relaxed_law),
     }
+
+
+def _relaxed_hover_law(sim: rf.Simulator) -> tuple[rf.RelaxedHoverFeedback, Callable[[float, np.ndarray], np.ndarray]]:
+    """``RelaxedHoverFeedback`` about quad-x's best relaxed hover and its law in numpy (the
+    reduced state of ``crates/rfcore/src/control/relaxed_hover.rs``)."""
+    best = rf.relaxed_hover(sim.airframe).best
+    assert best is not None
+    controller = rf.RelaxedHoverFeedback(best, sim.airframe, position=HOVER)
+    n, (e1, e2) = np.asarray(best.spin_axis), np.asarray(best.tangent_basis)
+    rate0, offset, speed = np.asarray(best.body_rate_rad_s), controller.offsets.position_m, controller.offsets.velocity_m_s
+    loop, g, gain, u_trim = controller.outer_loop, sim.airframe.gravity_m_s2, controller.gain, controller.u_trim
+    limit, hover = g * math.tan(loop.max_tilt_rad), np.asarray(HOVER)
+
+    def law(t: float, x: np.ndarray) -> np.ndarray:
+        (cr, cp, cy), (sr, sp, sy) = np.cos(x[6:9]), np.sin(x[6:9])
+        r = np.array([[cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
+                      [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
+                      [-sp, sr * cp, cr * cp]])
+        centre, velocity = x[0:3] - r @ offset - hover, x[3:6] - r @ speed
+        accel = -loop.position_gain_s2 * centre[:2] - loop.velocity_gain_s * velocity[:2]
+        size = float(np.hypot(*accel))
+        if size > limit:
+            accel *= limit / size
+        wanted = np.array([accel[0], accel[1], -g])
+        tilt = r.T @ (wanted / np.linalg.norm(wanted)) - n
+        reduced = np.array([e1 @ tilt, e2 @ tilt, *(x[9:12] - rate0), -centre[2], -velocity[2]])
+        return u_trim - gain @ reduced
+
+    return controller, law
 
 
 def main() -> None:

@@ -44,6 +44,8 @@ from .control import (
     LinearFeedback,
     Lti,
     OpenLoop,
+    RelaxedHoverFeedback,
+    periodic_state,
     TrackingFeedback,
     UniformPassiveFtc,
     hover_trim,
@@ -52,6 +54,7 @@ from .control import (
     lqr_hover_allocated,
 )
 from . import vpp
+from .analysis.relaxed_hover import RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
 from .studies.scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
 from .studies.design import Design, DesignSearch, design_search
 from .flight import (
@@ -101,6 +104,12 @@ __all__ = [
     "LanzonController",
     "ncfsyn",
     "vpp",
+    "RelaxedHoverAnalysis",
+    "RelaxedHoverFeedback",
+    "RelaxedHoverSettings",
+    "RelaxedHoverSolution",
+    "periodic_state",
+    "relaxed_hover",
     "Lti",
     "UniformPassiveFtc",
     "IndiController",

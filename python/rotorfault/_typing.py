@@ -90,6 +90,7 @@ CoreController: TypeAlias = (
     | _rfcore.LanzonController
     | _rfcore.TrackingFeedback
     | _rfcore.IndiController
+    | _rfcore.RelaxedHoverFeedback
 )
 #: Their names: each class name in kebab case (``rotorfault._rfcore.CONTROLLERS``).
 CoreControllerName: TypeAlias = Literal[
@@ -101,6 +102,7 @@ CoreControllerName: TypeAlias = Literal[
     "lanzon-controller",
     "tracking-feedback",
     "indi-controller",
+    "relaxed-hover-feedback",
 ]
 # </controller-registry>
 

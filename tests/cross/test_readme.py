@@ -52,6 +52,11 @@ CLAIMS = [
     # Tilted rotors: the 6-D wrench ACAI the README prints (issue 31: it printed 1.3378).
     ("# True 1.3392 (a convex hull agrees)", "tilted", "bool(tilted.is_fully_actuated)", True, 0),
     ("# True 1.3392 (a convex hull agrees)", "tilted", "float(rf.acai(tilted, axes='wrench'))", 1.3392, 0.5e-4),
+    # Relaxed hover (issue 30).
+    ("# 10 strategies, best first", "analysis", "len(analysis)", 10, 0),
+    ("# 15.22 rad/s, rotors 2, 3, 4 at 2.459 N each, 6.04 N headroom", "best",
+     "(round(best.spin_rate_rad_s, 2), best.carrying, [round(float(f), 3) for f in best.thrust_n[1:]], round(best.thrust_margin_n, 2))",
+     (15.22, [2, 3, 4], [2.459, 2.459, 2.459], 6.04), 0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

@@ -1,5 +1,7 @@
 //! Bindings for the controllability analysis (Du et al.): ACAI, the test procedure, failure
-//! tables. Translation only.
+//! tables; relaxed hover in [`relaxed_hover`]. Translation only.
+
+pub(crate) mod relaxed_hover;
 
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;

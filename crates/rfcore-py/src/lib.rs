@@ -72,6 +72,12 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(analysis::acai_from_matrix, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::controllability, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::failure_table, module)?)?;
+    module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSettings>()?;
+    module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSolution>()?;
+    module.add_class::<analysis::relaxed_hover::PyRelaxedHoverAnalysis>()?;
+    module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover_residual, module)?)?;
+    module.add_class::<control::relaxed_hover::PyRelaxedHoverOuterLoop>()?;
     module.add("RANK_RTOL", rfcore::analysis::RANK_RTOL)?;
     module.add("ZERO_RTOL", rfcore::analysis::ZERO_RTOL)?;
     module.add("DEFAULT_GRAVITY_M_S2", rfcore::DEFAULT_GRAVITY_M_S2)?;

@@ -14,6 +14,7 @@ use nalgebra::{DMatrix, Vector3};
 use rfcore::allocation::active_set::ActiveSetSolver;
 use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{allocate_all, allocate_many, AllocationProblem, Method};
+use rfcore::analysis::relaxed_hover::{relaxed_hover_cancellable, RelaxedHoverSettings};
 use rfcore::analysis::{
     acai_from_matrix_cancellable, failure_table, AcaiFormula, ControlAxes, ControllabilityAnalysis,
     FacetNormals,
@@ -117,7 +118,17 @@ fn analysis_calls_stop() {
     interrupted("acai_from_matrix_cancellable (12 x 22)", |c| {
         acai_from_matrix_cancellable(&b, &[0.0; 22], &[1.0; 22], &[0.0; 12], AcaiFormula::Eq13, c)
     });
+    // 794 branches of carrying rotors (up to 4 of 12 idle), checked once per branch.
+    let search = RelaxedHoverSettings {
+        max_idle_rotors: 4,
+        grid_points: 11,
+        ..Default::default()
+    };
+    interrupted("relaxed_hover_cancellable (12 rotors, up to 4 idle)", |c| {
+        relaxed_hover_cancellable(&ring12, &search, c)
+    });
     let stop = cancelled();
+    assert!(relaxed_hover_cancellable(&ring12, &search, &stop).is_err());
     assert_eq!(
         analysis.acai_batch(&etas[..12], AcaiFormula::Eq13, &stop),
         Err(RfError::Interrupted)

@@ -1,8 +1,9 @@
 """Analysis: what an airframe can do, before anything flies. The :class:`Airframe` (geometry,
 thrust limits, rotor efficiency; other tools' formats in ``_formats``), the ACAI with its two
 named formulas (:mod:`~rotorfault.analysis.acai`: Du's eq. (13) and the facet margin), Du's
-controllability test and failure tables (:mod:`~rotorfault.analysis.controllability`). Mirrors
-the core's ``analysis`` room plus ``airframe``.
+controllability test and failure tables (:mod:`~rotorfault.analysis.controllability`), relaxed
+hover (:mod:`~rotorfault.analysis.relaxed_hover`: Mueller and D'Andrea, flying on by spinning).
+Mirrors the core's ``analysis`` room plus ``airframe``.
 
 May import: the extension module, ``rotorfault._typing`` and ``rotorfault._util``; nothing else
 of the package (every other room builds on this one).
@@ -28,6 +29,7 @@ from .acai import (
 )
 from .airframe import Airframe
 from .controllability import ControllabilityReport, FailureCase, FailureTable, controllability, failure_table
+from .relaxed_hover import RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
 
 __all__ = [
     "ACAI_FORMULAS",
@@ -44,6 +46,9 @@ __all__ = [
     "ControllabilityReport",
     "FailureCase",
     "FailureTable",
+    "RelaxedHoverAnalysis",
+    "RelaxedHoverSettings",
+    "RelaxedHoverSolution",
     "acai",
     "acai_batch",
     "acai_from_matrix",
@@ -52,4 +57,5 @@ __all__ = [
     "failure_table",
     "format_acai",
     "hover_wrench_text",
+    "relaxed_hover",
 ]

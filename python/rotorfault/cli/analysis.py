@@ -136,27 +136,39 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
               help="Axes that must remain after those failures: thrust,roll,pitch,yaw or thrust,roll,pitch (giving up yaw: spinning).")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
+@click.option("--spinning", is_flag=True,
+              help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors); "
+                   "--require then accepts a case that hovers statically or by spinning.")
+@click.option("--rotational-drag", "rotational_drag", type=float, default=None,
+              help="With --spinning: the vehicle's rotational damping k_r (N m s), which sets the spin rate (default 0).")
 @output_options
 @_user_errors
-def certify(airframe: str, required: str, required_axes: str, json_path: str | None, force: bool, output: Output) -> None:
+def certify(airframe: str, required: str, required_axes: str, json_path: str | None, force: bool, spinning: bool,
+            rotational_drag: float | None, output: Output) -> None:
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
     not at all; where the hover wrench lies (inside, on the boundary, outside and how far), the
-    ACAI (facet margin), the thrust-to-weight left and which axes an allocator must drop."""
+    ACAI (facet margin), the thrust-to-weight left and which axes an allocator must drop; with
+    --spinning, beside it, the best relaxed hover (Mueller and D'Andrea)."""
     import json
 
+    from ..flight import Drag
     from ..studies.certify import certify as certify_airframe, parse_axes, rows_for_display
     from .._util.output import write_text
 
     axes = parse_axes("require_axes", required_axes)
+    if rotational_drag is not None and not spinning:
+        raise click.UsageError("--rotational-drag: describes the relaxed hover; give it with --spinning")
+    drag = None if rotational_drag is None else Drag(rotational_n_m_s=rotational_drag)
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
     if json_path == "-" and output.format != "table":
         raise ValueError("json: --json - writes the certificate on standard output; it cannot be combined with --format json or csv")
     frame = load_airframe(airframe)
-    cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count))
+    cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count), spinning=spinning, drag=drag)
     text = json.dumps(cert.to_dict(), indent=2) + "\n"
-    failing = cert.failing(required, axes=axes)
+    failing = cert.failing_spinning(required) if spinning else cert.failing(required, axes=axes)
     named = ", ".join(axes)
+    holds_how = "statically or by spinning" if spinning else f"with {named}"
     fields = {"airframe": cert.airframe, "rotor_count": cert.rotor_count, "fully_actuated": cert.fully_actuated, "require": required,
               "require_axes": list(axes), "requirement_met": not failing, "failing": [list(c.failed) for c in failing]}
 
@@ -165,14 +177,14 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
         kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
         table = out.table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
-            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") or header.startswith("hover wrench") else "right")
+            table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops", "relaxed hover") or header.startswith("hover wrench") else "right")
         styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
         out.print(table)
         out.print(escape(HOVER_WRENCH_NOTE), highlight=False)
         if required != "none" and not failing:
-            out.print(f"certificate: every {required} failure (and fewer) leaves a vehicle that hovers with {named}")
+            out.print(f"certificate: every {required} failure (and fewer) leaves a vehicle that hovers {holds_how}")
 
     if json_path == "-":
         if not output.quiet:
@@ -182,7 +194,11 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
         if json_path is not None:
             write_text(json_path, text)
     if failing:
-        listed = "; ".join(f"{rotor_labels(c.failed)} ({c.hover}, all axes {hover_wrench_text(c.hover_wrench, c.distance)})" for c in failing)
-        click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "
-                   f"with rotor(s) {listed} failed", err=True)
+        if spinning:
+            listed = "; ".join(rotor_labels(c.failed) for c in failing)
+            click.echo(f"certificate: FAILED: --require {required} --spinning: cannot hover nor spin with rotor(s) {listed} failed", err=True)
+        else:
+            listed = "; ".join(f"{rotor_labels(c.failed)} ({c.hover}, all axes {hover_wrench_text(c.hover_wrench, c.distance)})" for c in failing)
+            click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "
+                       f"with rotor(s) {listed} failed", err=True)
         sys.exit(EXIT_REQUIREMENT)

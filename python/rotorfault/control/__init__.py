@@ -15,6 +15,8 @@
 - :mod:`~rotorfault.control.systems`: the linear models as python-control systems
   (:class:`LinearModel`: a ``control.StateSpace`` with named signals and its operating point;
   :func:`lanzon_plant`);
+- :mod:`~rotorfault.control.relaxed_hover`: :class:`RelaxedHoverFeedback` (an LQR about a relaxed
+  hover, Mueller and D'Andrea) and :func:`periodic_state` (where its periodic solution passes);
 - :mod:`~rotorfault.control.riccati`: :func:`design_lqr`, the one LQR (continuous and discrete
   Riccati equations, scipy's solvers on every install) and its checked :class:`LqrDesign`;
 - :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
@@ -48,6 +50,7 @@ from .indi import IndiController, IndiGains
 from .ke import KeGains, UniformPassiveFtc
 from .linear import LinearFeedback, Lti, OpenLoop
 from .lqr import HoverTrim, hover_trim, linearize, lqr_hover, lqr_hover_allocated
+from .relaxed_hover import RelaxedHoverFeedback, RelaxedHoverOuterLoop, periodic_state
 from .riccati import LqrDesign, design_lqr
 from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
@@ -100,6 +103,8 @@ __all__ = [
     "Lti",
     "OpenLoop",
     "PbhTest",
+    "RelaxedHoverFeedback",
+    "RelaxedHoverOuterLoop",
     "TrackingFeedback",
     "UniformPassiveFtc",
     "design_lqr",
@@ -116,7 +121,9 @@ __all__ = [
     "ncfsyn",
     "norms",
     "realisation",
+    "periodic_state",
     "registry",
+    "relaxed_hover",
     "robust",
     "stabilisability",
     "systems",

@@ -1,7 +1,10 @@
 """A controllability certificate for a real vehicle: for every single and double rotor failure,
 can it still hover with all axes, only by giving up yaw, or not at all (``rotorfault certify``),
 where the hover wrench lies (inside, on the boundary, outside and how far), and whether the
-required axes remain (``--require-axes``; default all four: thrust, roll, pitch, yaw).
+required axes remain (``--require-axes``; default all four: thrust, roll, pitch, yaw);
+and, asked for (``spinning=True``), beside that static verdict, whether it survives by spinning:
+the best relaxed hover (Mueller and D'Andrea, :func:`rotorfault.analysis.relaxed_hover`) with its
+thrust margin, spin rate and the rotors that carry it.
 
 The JSON certificate names the hover classes ``all-axes``, ``give-up-yaw`` and ``no`` and the
 ACAI fields ``acai`` and ``acai_give_up_yaw`` (the facet margin, labelled ``ACAI facet-margin``
@@ -31,6 +34,8 @@ from ..allocation.attainable import hover_distances, hover_thrust_margin
 from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
 from ..analysis.controllability import failure_table
+from ..analysis.relaxed_hover import RelaxedHoverSettings, relaxed_hover
+from ..flight.models import Drag, FixedPitchActuator
 
 #: ``all-axes``: hovers with thrust, roll, pitch and yaw; ``give-up-yaw``: only by giving up yaw
 #: (spinning); ``no``: cannot hover.
@@ -63,6 +68,27 @@ def parse_axes(field: str, value: str | tuple[str, ...] | list[str]) -> tuple[Ce
     )
 
 
+#: ``static``: the best relaxed hover is static hover; ``spinning``: a constant spin about a
+#: body-fixed axis; ``no``: no relaxed hover that a linear feedback can hold.
+SpinningHover = Literal["static", "spinning", "no"]
+
+
+@dataclass(frozen=True)
+class RelaxedHoverVerdict:
+    """The best relaxed hover of one failure case (the one with the most thrust margin among those
+    a linear feedback can hold): ``hover`` (:data:`SpinningHover`), ``spin_rate_rad_s`` (0 when
+    static), ``thrust_margin_n`` (headroom: the smallest distance of a carrying rotor's thrust to
+    its upper bound), ``carrying`` (1-based rotor numbers), ``at_spin_rate_limit`` (the margin still
+    grew at the searched limit: with no rotational damping a faster spin always helps). For
+    ``no`` the numbers are NaN and ``carrying`` is empty."""
+
+    hover: SpinningHover
+    spin_rate_rad_s: float
+    thrust_margin_n: float
+    carrying: tuple[int, ...]
+    at_spin_rate_limit: bool
+
+
 @dataclass(frozen=True)
 class CertificateCase:
     failed: tuple[int, ...]
@@ -84,6 +110,8 @@ class CertificateCase:
     #: four axes and giving up yaw (:func:`rotorfault.allocation.hover_wrench_distance`).
     distance: float = 0.0
     distance_give_up_yaw: float = 0.0
+    #: Beside the static verdict: the best relaxed hover (``None``: not asked for).
+    relaxed_hover: RelaxedHoverVerdict | None = None
 
     #: The name before issue 26, for one release.
     acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")
@@ -139,19 +167,49 @@ class Certificate(Tabular):
     def _table_metadata(self) -> dict[str, Any]:
         return {"kind": "certificate", "airframe": self.airframe, "rotor_count": self.rotor_count, "fully_actuated": self.fully_actuated, "formula": FORMULA}
 
+    def failing_spinning(self, required: str) -> list[CertificateCase]:
+        """The cases up to the ``required`` class that cannot hover statically nor by spinning
+        (``ValueError`` if the certificate was made without ``spinning=True``)."""
+        k = FAILURE_CLASSES[required]
+        cases = [c for c in self.cases if len(c.failed) <= k]
+        if any(c.relaxed_hover is None for c in cases):
+            raise ValueError("spinning: the certificate was made without the relaxed hover (certify(..., spinning=True))")
+        return [c for c in cases if c.hover == "no" and c.relaxed_hover is not None and c.relaxed_hover.hover == "no"]
+
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
         for case in out["cases"]:
             for key in ("acai", "acai_give_up_yaw", "thrust_to_weight"):
                 if math.isinf(case[key]):
                     case[key] = None  # JSON has no infinity: rank deficient / undefined
+            spin = case["relaxed_hover"]
+            if spin is not None and spin["hover"] == "no":
+                spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
         return out
 
 
-def certify(airframe: Airframe, *, max_failed: int = 2) -> Certificate:
-    """Every combination of up to ``max_failed`` (default 2) fully failed rotors."""
+def certify(
+    airframe: Airframe,
+    *,
+    max_failed: int = 2,
+    spinning: bool = False,
+    settings: RelaxedHoverSettings | None = None,
+    drag: Drag | None = None,
+    actuator: FixedPitchActuator | None = None,
+) -> Certificate:
+    """Every combination of up to ``max_failed`` (default 2) fully failed rotors. ``spinning``:
+    also the best relaxed hover of each case (:class:`RelaxedHoverVerdict`), computed with
+    ``settings``, ``drag`` and ``actuator`` as :func:`rotorfault.analysis.relaxed_hover` takes
+    them (the vehicle's rotational damping decides the spin rate: without it the best spin is the
+    search limit). Checked before any work."""
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
+    if not isinstance(spinning, bool):
+        raise TypeError(f"spinning: expected True or False, got {type(spinning).__name__}")
+    if not spinning and (settings is not None or drag is not None or actuator is not None):
+        raise ValueError("settings, drag, actuator: describe the relaxed hover; give them with spinning=True")
+    if spinning:
+        relaxed_hover(airframe, settings, drag=drag, actuator=actuator)  # checks them (and is the healthy case)
     table = failure_table(airframe, max_failed=max_failed, formula=FORMULA)
     distances = hover_distances(airframe, [row.failed for row in table])
     full = airframe.is_fully_actuated
@@ -168,15 +226,43 @@ def certify(airframe: Airframe, *, max_failed: int = 2) -> Certificate:
             margin = hover_thrust_margin(airframe.with_failed_rotors(row.failed), give_up_yaw=hover == "give-up-yaw")
             ratio = margin.thrust_to_weight
         distance, distance_give_up_yaw = distances[row.failed]
+        verdict = None
+        if spinning:
+            verdict = _relaxed_hover_verdict(airframe.with_failed_rotors(row.failed), settings, drag, actuator)
         cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop, row.hover,
-                                     row.hover_give_up_yaw, distance, distance_give_up_yaw))
+                                     row.hover_give_up_yaw, distance, distance_give_up_yaw, verdict))
     return Certificate(airframe.name, airframe.rotor_count, full, tuple(cases))
+
+
+def _relaxed_hover_verdict(
+    airframe: Airframe, settings: RelaxedHoverSettings | None, drag: Drag | None, actuator: FixedPitchActuator | None
+) -> RelaxedHoverVerdict:
+    best = relaxed_hover(airframe, settings, drag=drag, actuator=actuator).best
+    if best is None:
+        return RelaxedHoverVerdict("no", math.nan, math.nan, (), False)
+    kind: SpinningHover = "spinning" if best.kind == "spinning" else "static"
+    return RelaxedHoverVerdict(
+        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit)
+    )
+
+
+def describe_relaxed_hover(verdict: RelaxedHoverVerdict | None) -> str:
+    """One cell of the table: ``spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4``."""
+    if verdict is None:
+        return "-"
+    if verdict.hover == "no":
+        return "no"
+    spin = f" {verdict.spin_rate_rad_s:.2f} rad/s{' (search limit)' if verdict.at_spin_rate_limit else ''}," if verdict.hover == "spinning" else ","
+    return f"{verdict.hover}{spin} margin {verdict.thrust_margin_n:.2f} N, rotors {rotor_labels(verdict.carrying)}"
 
 
 def rows_for_display(cert: Certificate) -> tuple[list[str], list[list[str]]]:
     acai_ = acai_label(FORMULA)
     headers = ["failed", "hover", "hover wrench", acai_, f"hover wrench {GIVE_UP_YAW}", f"{acai_} {GIVE_UP_YAW}", "T/W",
                "allocator drops"]
+    spinning = any(c.relaxed_hover is not None for c in cert.cases)
+    if spinning:
+        headers.append("relaxed hover")
 
     def number(x: float) -> str:
         return "undefined" if math.isinf(x) else f"{x:.4f}"
@@ -187,6 +273,7 @@ def rows_for_display(cert: Certificate) -> tuple[list[str], list[list[str]]]:
             hover_wrench_text(c.hover_wrench_give_up_yaw, c.distance_give_up_yaw), number(c.acai_give_up_yaw),
             f"{c.thrust_to_weight:.2f}" if c.hover != "no" else "-",
             "-" if c.drop_axes is None else (", ".join(c.drop_axes) or "nothing"),
+            *([describe_relaxed_hover(c.relaxed_hover)] if spinning else []),
         ]
         for c in cert.cases
     ]

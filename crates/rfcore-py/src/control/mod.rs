@@ -7,6 +7,7 @@ pub(crate) mod indi;
 pub(crate) mod ke;
 pub(crate) mod lanzon;
 pub(crate) mod linear;
+pub(crate) mod relaxed_hover;
 pub(crate) mod tracking;
 
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -28,6 +29,7 @@ use indi::PyIndiController;
 use ke::PyUniformPassiveFtc;
 use lanzon::PyLanzonController;
 use linear::{PyLinearFeedback, PyLti, PyOpenLoop};
+use relaxed_hover::PyRelaxedHoverFeedback;
 use tracking::PyTrackingFeedback;
 
 /// A Python function `f(t, x) -> commands` (x: the 12-element state vector): the slow path.
@@ -128,6 +130,7 @@ controller_registry! {
     LanzonController(PyLanzonController) = "lanzon-controller",
     TrackingFeedback(PyTrackingFeedback) = "tracking-feedback",
     IndiController(PyIndiController) = "indi-controller",
+    RelaxedHoverFeedback(PyRelaxedHoverFeedback) = "relaxed-hover-feedback",
 }
 
 /// The core controller for one run: `None` holds every command at zero.

@@ -14,6 +14,7 @@
 //!   the second-order [`filter`] it differentiates the gyro through.
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
+//! - [`relaxed_hover`]: linear feedback about a relaxed hover (Mueller and D'Andrea's cascade).
 
 use nalgebra::DMatrix;
 
@@ -27,6 +28,7 @@ pub mod indi;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;
+pub mod relaxed_hover;
 pub mod tracking;
 
 pub use allocated::Allocated;

@@ -1,0 +1,336 @@
+//! Linear feedback about a relaxed hover (Mueller and D'Andrea's cascade): an outer loop turns
+//! the position error into the up direction the vehicle should spin about, and a gain `K`
+//! (designed in Python on the analysis's linear model) holds the reduced attitude and altitude:
+//!
+//! `u = u_trim - K [e1.(n_B - n), e2.(n_B - n), omega - omega_0, z, w]`
+//!
+//! with `n_B = R^T u_des` the desired up direction seen from the body (`u_des` = up when the
+//! vehicle is on its set point), `n, e1, e2` the solution's axis and tangent basis, `z, w` the
+//! altitude error (up) and its rate. A spinning vehicle's centre of mass circles at the spin
+//! rate; the outer loop steers the circle's centre, `p - R c_p` (velocity `v - R c_v`) with the
+//! body-fixed offsets `c_p`, `c_v` of the periodic solution, so it does not chase the circle.
+//! Time-invariant in body axes; yaw is not controlled (it turns with the spin).
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::{require_finite_matrix, Controller};
+use crate::error::{require_all_finite, Result, RfError};
+use crate::state::RigidBodyState;
+
+/// States of the reduced model the gain acts on.
+pub const REDUCED_STATES: usize = 7;
+
+/// The outer loop: desired horizontal acceleration `-k_p e - k_d v` of the circle's centre,
+/// limited to `g tan(max_tilt_rad)`, tilts the up direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelaxedHoverOuterLoop {
+    /// `k_p`, 1/s^2.
+    pub position_gain_s2: f64,
+    /// `k_d`, 1/s.
+    pub velocity_gain_s: f64,
+    /// Largest tilt of the desired up direction, rad.
+    pub max_tilt_rad: f64,
+}
+
+impl Default for RelaxedHoverOuterLoop {
+    /// A loop well below the attitude loop's bandwidth: 0.5 rad/s natural frequency, damping 1.
+    fn default() -> Self {
+        RelaxedHoverOuterLoop {
+            position_gain_s2: 0.25,
+            velocity_gain_s: 1.0,
+            max_tilt_rad: 0.2,
+        }
+    }
+}
+
+impl RelaxedHoverOuterLoop {
+    pub fn check(&self) -> Result<()> {
+        for (field, value) in [
+            ("outer_loop.position_gain_s2", self.position_gain_s2),
+            ("outer_loop.velocity_gain_s", self.velocity_gain_s),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(RfError::invalid(
+                    field,
+                    format!("must be finite and >= 0, got {value}"),
+                ));
+            }
+        }
+        let t = self.max_tilt_rad;
+        if !(t > 0.0 && t < std::f64::consts::FRAC_PI_2) {
+            return Err(RfError::invalid(
+                "outer_loop.max_tilt_rad",
+                format!("must lie in (0, pi/2), got {t}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The solution the feedback holds, in body axes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelaxedHoverTrim {
+    /// The up axis `n` (unit) and its tangent basis `e1`, `e2` (`(e1, e2, n)` right-handed).
+    pub axis: [f64; 3],
+    pub e1: [f64; 3],
+    pub e2: [f64; 3],
+    /// `omega_0 = s n`, rad/s.
+    pub body_rate_rad_s: [f64; 3],
+    /// Where the centre of mass sits relative to the circle's centre, and its velocity, both
+    /// body axes (constant along the periodic solution), m and m/s.
+    pub circle_offset_m: [f64; 3],
+    pub circle_velocity_m_s: [f64; 3],
+    pub gravity_m_s2: f64,
+}
+
+/// `u = u_trim - K x` about a relaxed hover, with the outer loop (module docs).
+#[derive(Debug, Clone)]
+pub struct RelaxedHoverFeedback {
+    axis: Vector3<f64>,
+    e1: Vector3<f64>,
+    e2: Vector3<f64>,
+    body_rate: Vector3<f64>,
+    circle_offset: Vector3<f64>,
+    circle_velocity: Vector3<f64>,
+    gravity: f64,
+    u_trim: DVector<f64>,
+    gain: DMatrix<f64>,
+    position: Vector3<f64>,
+    outer: RelaxedHoverOuterLoop,
+}
+
+impl RelaxedHoverFeedback {
+    /// `gain`: commands x 7; `position_m`: the set point (world NED).
+    pub fn new(
+        trim: &RelaxedHoverTrim,
+        u_trim: &[f64],
+        gain: DMatrix<f64>,
+        position_m: [f64; 3],
+        outer: RelaxedHoverOuterLoop,
+    ) -> Result<Self> {
+        for (field, v) in [
+            ("axis", &trim.axis),
+            ("e1", &trim.e1),
+            ("e2", &trim.e2),
+            ("body_rate_rad_s", &trim.body_rate_rad_s),
+            ("circle_offset_m", &trim.circle_offset_m),
+            ("circle_velocity_m_s", &trim.circle_velocity_m_s),
+            ("position_m", &position_m),
+        ] {
+            require_all_finite(field, v)?;
+        }
+        let (n, e1, e2) = (
+            Vector3::from(trim.axis),
+            Vector3::from(trim.e1),
+            Vector3::from(trim.e2),
+        );
+        let frame = nalgebra::Matrix3::from_columns(&[e1, e2, n]);
+        if (frame.transpose() * frame - nalgebra::Matrix3::identity()).amax() > 1e-9
+            || frame.determinant() < 0.0
+        {
+            return Err(RfError::invalid(
+                "axis",
+                "(e1, e2, axis) must be a right-handed orthonormal frame",
+            ));
+        }
+        if !(trim.gravity_m_s2.is_finite() && trim.gravity_m_s2 > 0.0) {
+            return Err(RfError::invalid(
+                "gravity_m_s2",
+                format!("must be finite and > 0, got {}", trim.gravity_m_s2),
+            ));
+        }
+        outer.check()?;
+        require_all_finite("u_trim", u_trim)?;
+        require_finite_matrix("gain", &gain)?;
+        if gain.shape() != (u_trim.len(), REDUCED_STATES) {
+            return Err(RfError::shape(
+                "gain",
+                format!(
+                    "{} x {REDUCED_STATES} (commands x reduced states)",
+                    u_trim.len()
+                ),
+                format!("{} x {}", gain.nrows(), gain.ncols()),
+            ));
+        }
+        Ok(RelaxedHoverFeedback {
+            axis: n,
+            e1,
+            e2,
+            body_rate: Vector3::from(trim.body_rate_rad_s),
+            circle_offset: Vector3::from(trim.circle_offset_m),
+            circle_velocity: Vector3::from(trim.circle_velocity_m_s),
+            gravity: trim.gravity_m_s2,
+            u_trim: DVector::from_column_slice(u_trim),
+            gain,
+            position: Vector3::from(position_m),
+            outer,
+        })
+    }
+
+    /// The reduced state `[a, b, dp, dq, dr, z, w]` the gain acts on (module docs).
+    pub fn reduced_state(&self, measured: &RigidBodyState) -> [f64; REDUCED_STATES] {
+        let r = measured.attitude;
+        let centre = measured.position_m - r * self.circle_offset - self.position;
+        let velocity = measured.velocity_m_s - r * self.circle_velocity;
+        let o = &self.outer;
+        let mut accel = -o.position_gain_s2 * centre.xy() - o.velocity_gain_s * velocity.xy();
+        let limit = self.gravity * o.max_tilt_rad.tan();
+        if accel.norm() > limit {
+            accel *= limit / accel.norm();
+        }
+        let up_wanted = Vector3::new(accel.x, accel.y, -self.gravity).normalize();
+        let n_body = r.inverse() * up_wanted - self.axis;
+        let rate = measured.omega_rad_s - self.body_rate;
+        [
+            self.e1.dot(&n_body),
+            self.e2.dot(&n_body),
+            rate.x,
+            rate.y,
+            rate.z,
+            -centre.z,
+            -velocity.z,
+        ]
+    }
+}
+
+impl Controller for RelaxedHoverFeedback {
+    fn command_count(&self) -> usize {
+        self.u_trim.len()
+    }
+    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        let x = self.reduced_state(measured);
+        for (i, o) in out.iter_mut().enumerate() {
+            let feedback: f64 = (0..REDUCED_STATES).map(|j| self.gain[(i, j)] * x[j]).sum();
+            *o = self.u_trim[i] - feedback;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::UnitQuaternion;
+
+    use super::*;
+
+    fn trim(axis: Vector3<f64>) -> RelaxedHoverTrim {
+        let helper = if axis.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let e1 = helper.cross(&axis).normalize();
+        let e2 = axis.cross(&e1);
+        RelaxedHoverTrim {
+            axis: axis.into(),
+            e1: e1.into(),
+            e2: e2.into(),
+            body_rate_rad_s: (axis * 15.0).into(),
+            circle_offset_m: [0.0; 3],
+            circle_velocity_m_s: [0.0; 3],
+            gravity_m_s2: 9.81,
+        }
+    }
+
+    #[test]
+    fn on_the_solution_the_reduced_state_is_zero_whatever_the_yaw() {
+        let axis = Vector3::new(0.1, -0.2, -0.97).normalize();
+        let c = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap();
+        // An attitude whose inverse maps world up (NED -z) to the axis, then any turn about it.
+        let align = UnitQuaternion::rotation_between(&axis, &Vector3::new(0.0, 0.0, -1.0)).unwrap();
+        for yaw in [0.0, 1.0, 2.5] {
+            let attitude =
+                UnitQuaternion::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw) * align;
+            let state = RigidBodyState {
+                attitude,
+                omega_rad_s: axis * 15.0,
+                ..RigidBodyState::at_rest()
+            };
+            let x = c.reduced_state(&state);
+            assert!(x.iter().all(|v| v.abs() < 1e-12), "{x:?}");
+        }
+    }
+
+    #[test]
+    fn tilt_and_altitude_errors_drive_the_commands() {
+        let axis = Vector3::new(0.0, 0.0, -1.0);
+        let mut gain = DMatrix::zeros(1, 7);
+        gain[(0, 5)] = 2.0; // altitude
+        let mut c = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[3.0],
+            gain,
+            [0.0, 0.0, -10.0],
+            Default::default(),
+        )
+        .unwrap();
+        // 0.5 m below the set point (NED z = -9.5): z error -0.5 up, u = 3 - 2 (-0.5) = 4.
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, -9.5),
+            omega_rad_s: axis * 15.0,
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        c.command(0.0, &state, &mut out).unwrap();
+        assert!((out[0] - 4.0).abs() < 1e-12);
+        // 1 m east of the set point: the wanted up tilts west (towards -east) by atan(k_p / g).
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 1.0, -10.0),
+            ..state
+        };
+        let x = c.reduced_state(&state);
+        let tilt = (x[0] * x[0] + x[1] * x[1]).sqrt();
+        assert!(
+            (tilt - (0.25f64 / 9.81).atan()).abs() < 1e-3 * tilt,
+            "{x:?}"
+        );
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let axis = Vector3::new(0.0, 0.0, -1.0);
+        let err = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 6),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().starts_with("gain"), "{err}");
+        let mut bad = trim(axis);
+        bad.e1 = [1.0, 1.0, 0.0];
+        let err = RelaxedHoverFeedback::new(
+            &bad,
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            Default::default(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().starts_with("axis"), "{err}");
+        let outer = RelaxedHoverOuterLoop {
+            max_tilt_rad: 2.0,
+            ..Default::default()
+        };
+        let err = RelaxedHoverFeedback::new(
+            &trim(axis),
+            &[1.0; 4],
+            DMatrix::zeros(4, 7),
+            [0.0; 3],
+            outer,
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().starts_with("outer_loop.max_tilt_rad"),
+            "{err}"
+        );
+    }
+}

@@ -1,0 +1,220 @@
+"""An LQR about a relaxed hover (Mueller and D'Andrea's cascade), designed here and run in Rust.
+
+The analysis (:func:`rotorfault.relaxed_hover`) gives each solution's linear model, time-invariant
+in body axes: state ``x = [a, b, dp, dq, dr, z, w]`` (the up axis seen from the body,
+``n + a e1 + b e2``; body-rate deviation; altitude up and its rate), input the carrying rotors'
+thrust deviations. :class:`RelaxedHoverFeedback` designs ``K`` on it (continuous-time Riccati equation,
+checked: residual, closed-loop eigenvalues, and the loop sampled at the control period) and runs
+``u = u_trim - K x`` in Rust with an outer loop that tilts the up axis towards the set point
+(:class:`rotorfault._rfcore.RelaxedHoverFeedback`). Idle and failed rotors stay at their trim.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from .. import _rfcore
+from .._util.convert import FloatArray, float_array, real
+from ..analysis.airframe import Airframe, require_airframe
+from ..analysis.relaxed_hover import RelaxedHoverSolution, _three, circle_offsets
+from ..flight.state import State
+from .riccati import CLOSED_LOOP_RTOL, LqrDesign, design_lqr, sampled_spectral_radius
+
+RelaxedHoverOuterLoop = _rfcore.RelaxedHoverOuterLoop
+
+#: The states of a relaxed hover's linear model (module notes), as the LQR's refusals name them.
+LINEAR_STATE_NAMES = ("a", "b", "dp", "dq", "dr", "z", "w")
+
+
+def bryson_weights(solution: RelaxedHoverSolution, airframe: Airframe) -> tuple[FloatArray, FloatArray]:
+    """Default ``(Q, R)`` by Bryson's rule: 0.05 (about 3 degrees) on the up axis, 2 rad/s on the
+    body rates, 0.2 m and 0.5 m/s on altitude, against each carrying rotor's room to move: a
+    tenth of the largest carrying thrust, or less where the rotor is nearer one of its bounds (a
+    rotor carrying 0.03 N above its floor must barely be used to push down; at least a
+    thousandth of the largest thrust)."""
+    scale = np.array([0.05, 0.05, 2.0, 2.0, 2.0, 0.2, 0.5])
+    thrust = np.asarray(solution.thrust_n)
+    largest = float(np.max(np.abs(thrust)))
+    efficiency = np.asarray(airframe.efficiency)
+    room = []
+    for i in (j - 1 for j in solution.carrying):
+        lo, hi = efficiency[i] * airframe.min_thrust_n[i], efficiency[i] * airframe.max_thrust_n[i]
+        room.append(max(min(0.1 * largest, thrust[i] - lo, hi - thrust[i]), 1e-3 * largest))
+    return np.diag(1.0 / scale**2), np.diag(1.0 / np.asarray(room) ** 2)
+
+
+class RelaxedHoverFeedback:
+    """Holds a relaxed hover ``solution`` of ``airframe`` (the airframe it was computed for, with
+    its efficiencies) at ``position`` (world NED): LQR on the solution's linear model with weights
+    ``q`` (7 x 7) and ``r`` (carrying rotors square; default :func:`bryson_weights`), commands in
+    rotor command units (thrust over efficiency), and the outer loop ``outer_loop``.
+    ``linear_drag_n_s_m`` is the simulator's translational drag (it shapes the circle the centre
+    of mass describes, which the outer loop must not chase)."""
+
+    def __init__(
+        self,
+        solution: RelaxedHoverSolution,
+        airframe: Airframe,
+        *,
+        position: npt.ArrayLike = (0.0, 0.0, 0.0),
+        q: npt.ArrayLike | None = None,
+        r: npt.ArrayLike | None = None,
+        outer_loop: RelaxedHoverOuterLoop | None = None,
+        linear_drag_n_s_m: float = 0.0,
+    ) -> None:
+        if not isinstance(solution, RelaxedHoverSolution):
+            raise TypeError(f"solution: expected rotorfault.RelaxedHoverSolution, got {type(solution).__name__}")
+        self.airframe = require_airframe(airframe)
+        if outer_loop is not None and not isinstance(outer_loop, RelaxedHoverOuterLoop):
+            raise TypeError(f"outer_loop: expected RelaxedHoverOuterLoop, got {type(outer_loop).__name__}")
+        if len(solution.thrust_n) != airframe.rotor_count:
+            raise ValueError(
+                f"solution: has {len(solution.thrust_n)} rotors, the airframe {airframe.rotor_count}"
+            )
+        if not solution.stabilizable:
+            raise ValueError(
+                "solution: a linear feedback cannot hold it (a mode that does not decay is out of reach of its "
+                "carrying rotors)"
+            )
+        self.solution = solution
+        self.outer_loop = RelaxedHoverOuterLoop() if outer_loop is None else outer_loop
+        pos = float_array("position", position, 1)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+            raise ValueError("position: expected 3 finite entries (world NED, m)")
+        self.position = pos
+        a = np.asarray(solution.linear_a)
+        b = np.asarray(solution.linear_b)
+        q_default, r_default = bryson_weights(solution, airframe)
+        self.q = q_default if q is None else float_array("q", q, 2)
+        self.r = r_default if r is None else float_array("r", r, 2)
+        if self.q.shape != (7, 7):
+            raise ValueError(f"q: expected 7 x 7 (the reduced states), got {self.q.shape}")
+        if self.r.shape != (b.shape[1], b.shape[1]):
+            raise ValueError(f"r: expected {b.shape[1]} x {b.shape[1]} (the carrying rotors), got {self.r.shape}")
+        self.design: LqrDesign = design_lqr(
+            (a, b), self.q, self.r, state_names=LINEAR_STATE_NAMES, model="the relaxed hover's linear model"
+        )
+        # Commands: a rotor's command is its thrust over its efficiency.
+        efficiency = np.asarray(airframe.efficiency)
+        carrying = [i - 1 for i in solution.carrying]
+        gain = np.zeros((airframe.rotor_count, 7))
+        for row, i in enumerate(carrying):
+            gain[i] = self.design.gain[row] / efficiency[i]
+        self.gain = gain
+        #: The trim commands (the actuators start there).
+        self.u_trim = np.asarray(solution.command_n, dtype=np.float64)
+        self.linear_drag_n_s_m = real("linear_drag_n_s_m", linear_drag_n_s_m)
+        self.offsets = circle_offsets(solution, airframe, linear_drag_n_s_m=self.linear_drag_n_s_m)
+
+    def check_sampled(self, dt_s: float) -> float:
+        """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
+        :func:`rotorfault.control.riccati.sampled_spectral_radius`): ``ValueError`` unless < 1."""
+        dt = real("dt_s", dt_s)
+        if not (dt > 0 and math.isfinite(dt)):
+            raise ValueError(f"dt_s: must be finite and > 0, got {dt}")
+        a = np.asarray(self.solution.linear_a)
+        b = np.asarray(self.solution.linear_b)
+        radius = sampled_spectral_radius(a, b, self.design.gain, dt)
+        if not radius < 1.0 - CLOSED_LOOP_RTOL:
+            raise ValueError(
+                f"sampled loop: the relaxed hover LQR held over dt_s = {dt:g} s (zero-order hold) has spectral "
+                f"radius {radius:.6g} >= 1: shorten dt_s or slow the design (larger r)"
+            )
+        return radius
+
+    def core(self, dt_s: float) -> _rfcore.RelaxedHoverFeedback:
+        self.check_sampled(dt_s)
+        s = self.solution
+        basis = np.asarray(s.tangent_basis)
+        return _rfcore.RelaxedHoverFeedback(
+            axis=_triple(s.spin_axis),
+            e1=_triple(basis[0]),
+            e2=_triple(basis[1]),
+            body_rate_rad_s=_triple(s.body_rate_rad_s),
+            circle_offset_m=_triple(self.offsets.position_m),
+            circle_velocity_m_s=_triple(self.offsets.velocity_m_s),
+            gravity_m_s2=float(self.airframe.gravity_m_s2),
+            u_trim=self.u_trim,
+            gain=np.ascontiguousarray(self.gain),
+            position_m=_triple(self.position),
+            outer_loop=self.outer_loop,
+        )
+
+
+def _triple(v: npt.ArrayLike) -> tuple[float, float, float]:
+    a = np.asarray(v, dtype=np.float64)
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def periodic_state(
+    solution: RelaxedHoverSolution,
+    airframe: Airframe,
+    *,
+    position: npt.ArrayLike = (0.0, 0.0, 0.0),
+    yaw: float = 0.0,
+    linear_drag_n_s_m: float = 0.0,
+) -> State:
+    """A state on the periodic solution whose circle is centred at ``position`` (world NED): the
+    attitude turns the spin axis to world up (then ``yaw`` about it), the body rate is the
+    solution's, position and velocity are on the circle (:func:`circle_offsets`)."""
+    centre = np.asarray(_three("position", position))
+    yaw = real("yaw", yaw)
+    n = np.asarray(solution.spin_axis)
+    rotation = _rotation_between(n, np.array([0.0, 0.0, -1.0]))
+    turn = _axis_angle(np.array([0.0, 0.0, -1.0]), yaw)
+    attitude = turn @ rotation
+    offsets = circle_offsets(solution, airframe, linear_drag_n_s_m=linear_drag_n_s_m)
+    return State(
+        position=centre + attitude @ offsets.position_m,
+        velocity=attitude @ offsets.velocity_m_s,
+        quaternion=_quaternion(attitude),
+        omega=np.asarray(solution.body_rate_rad_s),
+    )
+
+
+def _axis_angle(axis: FloatArray, angle: float) -> FloatArray:
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    result: FloatArray = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    return result
+
+
+def _rotation_between(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The shortest rotation taking unit ``a`` to unit ``b``."""
+    axis = np.cross(a, b)
+    size = float(np.linalg.norm(axis))
+    cosine = float(np.clip(a @ b, -1.0, 1.0))
+    if size < 1e-15:
+        if cosine > 0:
+            return np.eye(3)
+        other = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        axis = np.cross(a, other)
+        return _axis_angle(axis / np.linalg.norm(axis), math.pi)
+    return _axis_angle(axis / size, math.atan2(size, cosine))
+
+
+def _quaternion(r: FloatArray) -> tuple[float, float, float, float]:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
+    trace = float(np.trace(r))
+    candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(candidates))
+    if k == 0:
+        w = 0.5 * math.sqrt(1.0 + trace)
+        q = (w, (r[2, 1] - r[1, 2]) / (4 * w), (r[0, 2] - r[2, 0]) / (4 * w), (r[1, 0] - r[0, 1]) / (4 * w))
+    elif k == 1:
+        x = 0.5 * math.sqrt(1.0 + 2 * r[0, 0] - trace)
+        q = ((r[2, 1] - r[1, 2]) / (4 * x), x, (r[0, 1] + r[1, 0]) / (4 * x), (r[0, 2] + r[2, 0]) / (4 * x))
+    elif k == 2:
+        y = 0.5 * math.sqrt(1.0 + 2 * r[1, 1] - trace)
+        q = ((r[0, 2] - r[2, 0]) / (4 * y), (r[0, 1] + r[1, 0]) / (4 * y), y, (r[1, 2] + r[2, 1]) / (4 * y))
+    else:
+        z = 0.5 * math.sqrt(1.0 + 2 * r[2, 2] - trace)
+        q = ((r[1, 0] - r[0, 1]) / (4 * z), (r[0, 2] + r[2, 0]) / (4 * z), (r[1, 2] + r[2, 1]) / (4 * z), z)
+    norm = math.sqrt(sum(v * v for v in q))
+    sign = 1.0 if q[0] >= 0 else -1.0
+    return (sign * q[0] / norm, sign * q[1] / norm, sign * q[2] / norm, sign * q[3] / norm)
+
+
+__all__ = ["RelaxedHoverFeedback", "RelaxedHoverOuterLoop", "bryson_weights", "periodic_state"]

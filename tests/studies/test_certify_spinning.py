@@ -1,0 +1,88 @@
+"""``certify`` beside the static verdict: survivable by spinning (the best relaxed hover, Mueller
+and D'Andrea), with its margin, spin rate and carrying rotors; the CLI's ``--spinning``."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+from click.testing import CliRunner
+
+import rotorfault as rf
+from rotorfault.cli import cli
+from rotorfault.studies.certify import Certificate, RelaxedHoverVerdict, certify, rows_for_display
+
+#: Ke's vehicle's rotational damping (the ke-hil preset's): it sets the spin rate.
+KE_DRAG = rf.Drag(rotational_n_m_s=2.8e-3)
+
+
+@pytest.fixture(scope="module")
+def ke_certificate() -> Certificate:
+    return certify(rf.Airframe.preset("ke-quadcopter"), spinning=True, drag=KE_DRAG)
+
+
+def test_a_quadrotor_without_a_rotor_survives_by_spinning(ke_certificate: Certificate) -> None:
+    """Static hover is lost with any rotor (Du: ACAI 0 even with yaw given up) but each single
+    failure has a spinning relaxed hover: rotor 1 lost spins at 15.22 rad/s on rotors 2, 3, 4 with
+    6.04 N of headroom (README table); two opposite rotors lost spin level at k_mu m g / k_r."""
+    cases = {c.failed: c for c in ke_certificate.cases}
+    assert cases[()].hover == "all-axes" and cases[()].relaxed_hover == RelaxedHoverVerdict("static", 0.0, cases[()].relaxed_hover.thrust_margin_n, (1, 2, 3, 4), False)  # type: ignore[union-attr]
+    one = cases[(1,)]
+    assert one.hover == "no" and one.relaxed_hover is not None
+    assert one.relaxed_hover.hover == "spinning" and one.relaxed_hover.carrying == (2, 3, 4)
+    assert round(one.relaxed_hover.spin_rate_rad_s, 2) == 15.22 and round(one.relaxed_hover.thrust_margin_n, 2) == 6.04
+    airframe = rf.Airframe.preset("ke-quadcopter")
+    k_mu = abs(float(airframe.effectiveness_matrix()[3, 0]))
+    level = cases[(1, 3)].relaxed_hover
+    assert level is not None and level.hover == "spinning"
+    assert level.spin_rate_rad_s == pytest.approx(k_mu * airframe.mass_kg * airframe.gravity_m_s2 / 2.8e-3, rel=1e-9)
+    # Every verdict is the analysis' best for that failure set (the same numbers, not re-derived).
+    for case in ke_certificate.cases:
+        best = rf.relaxed_hover(airframe.with_failed_rotors(list(case.failed)), drag=KE_DRAG).best
+        verdict = case.relaxed_hover
+        assert verdict is not None
+        if best is None:
+            assert verdict.hover == "no" and math.isnan(verdict.spin_rate_rad_s) and verdict.carrying == ()
+        else:
+            assert (verdict.spin_rate_rad_s, verdict.thrust_margin_n, verdict.carrying) == (
+                best.spin_rate_rad_s, best.thrust_margin_n, tuple(best.carrying))
+    assert ke_certificate.failing("single") and not ke_certificate.failing_spinning("single")
+    headers, rows = rows_for_display(ke_certificate)
+    assert headers[-1] == "relaxed hover"
+    assert rows[1][0] == "1" and rows[1][-1] == "spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4"
+
+
+def test_the_json_has_no_nan_and_the_static_certificate_is_unchanged(ke_certificate: Certificate) -> None:
+    data = ke_certificate.to_dict()
+    json.dumps(data, allow_nan=False)
+    static = certify(rf.Airframe.preset("ke-quadcopter"))
+    assert all(c.relaxed_hover is None for c in static.cases)
+    assert [(c.failed, c.hover, c.acai) for c in static.cases] == [(c.failed, c.hover, c.acai) for c in ke_certificate.cases]
+    with pytest.raises(ValueError, match="^spinning: "):
+        static.failing_spinning("single")
+
+
+def test_bad_input_is_refused_before_any_work() -> None:
+    quad = rf.Airframe.preset("ke-quadcopter")
+    with pytest.raises(TypeError, match="^spinning: "):
+        certify(quad, spinning="yes")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="^settings, drag, actuator: "):
+        certify(quad, drag=KE_DRAG)
+    with pytest.raises(TypeError, match="^drag: "):
+        certify(quad, spinning=True, drag=0.1)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="^settings: rotational_drag_n_m_s given both"):
+        certify(quad, spinning=True, settings=rf.RelaxedHoverSettings(rotational_drag_n_m_s=1e-3), drag=KE_DRAG)
+
+
+def test_cli_spinning() -> None:
+    runner = CliRunner()
+    static = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--require", "single", "--json", "-"])
+    assert static.exit_code == 3, static.output
+    spun = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--require", "single", "--spinning", "--rotational-drag", "2.8e-3",
+                               "--json", "-"])
+    assert spun.exit_code == 0, spun.output
+    one = next(c for c in json.loads(spun.stdout)["cases"] if c["failed"] == [1])
+    assert one["hover"] == "no" and one["relaxed_hover"]["hover"] == "spinning" and one["relaxed_hover"]["carrying"] == [2, 3, 4]
+    wrong = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--rotational-drag", "2.8e-3"])
+    assert wrong.exit_code != 0 and "--rotational-drag" in wrong.output
