@@ -474,9 +474,9 @@ impl LanzonController {
                     - gains.k_d_z * vel[2]
                     - gains.k_i_z * integral[2])
                     .clamp(
-                    -gains.max_vertical_accel_m_s2,
-                    gains.max_vertical_accel_m_s2,
-                );
+                        -gains.max_vertical_accel_m_s2,
+                        gains.max_vertical_accel_m_s2,
+                    );
                 let u3 = m.gravity_m_s2 + m.linear_drag_n_s_m / m.mass_kg * vel[2] + az;
                 let u3 = u3.clamp(
                     m.gravity_m_s2 - gains.max_vertical_accel_m_s2,
@@ -647,6 +647,60 @@ mod tests {
         for (o, e) in out.iter().zip([half, 0.0, half, 0.0]) {
             assert!((o - e).abs() < 1e-12, "{out:?}");
         }
+    }
+
+    #[test]
+    fn integral_action_accumulates_the_error_and_reset_clears_it() {
+        // Held 1 m below the setpoint (NED z = 1 m, setpoint 0): the altitude integral grows by
+        // -1 m x dt per command (paper frame, z up) and raises the spin-rate set point r_d (the
+        // vertical channel: r_d = u~3 d m / k_r); without integral gains, or after a reset, the
+        // set points stay the PD ones.
+        let m = LanzonModel::default();
+        let gains = LanzonOuterLoop {
+            k_i_z: 0.2,
+            ..LanzonOuterLoop::default()
+        };
+        let make = |gains| {
+            LanzonController::new(
+                m,
+                empty(),
+                LanzonReference::Position {
+                    position_ned_m: [0.0, 0.0, 0.0],
+                    gains,
+                },
+            )
+            .unwrap()
+        };
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, 1.0),
+            omega_rad_s: Vector3::new(0.0, 0.0, -m.spin_rate_rad_s()),
+            ..RigidBodyState::at_rest()
+        };
+        let r_d = |c: &mut LanzonController, t: f64| {
+            let mut out = [0.0; 4];
+            c.command(t, &state, &mut out).unwrap();
+            c.set_points(0.0, [0.0, 0.0, -1.0], [0.0; 3])[2]
+        };
+        let (mut pd, mut pid) = (make(LanzonOuterLoop::default()), make(gains));
+        assert_eq!(r_d(&mut pd, 0.0), r_d(&mut pid, 0.0)); // no time has passed yet
+        let (r_pd, r_pid) = (r_d(&mut pd, 0.5), r_d(&mut pid, 0.5));
+        assert!(
+            (pid.integral_m_s[2] + 0.5).abs() < 1e-12,
+            "{:?}",
+            pid.integral_m_s
+        );
+        assert_eq!(pd.integral_m_s, [0.0, 0.0, 0.0]);
+        let expected = 0.2 * 0.5 * m.drag_torque_ratio_m * m.mass_kg / m.rotational_drag_n_m_s;
+        assert!(
+            (r_pid - r_pd - expected).abs() < 1e-12,
+            "{r_pid} {r_pd} {expected}"
+        );
+        pid.reset();
+        assert_eq!(pid.integral_m_s, [0.0, 0.0, 0.0]);
+        assert_eq!(
+            r_d(&mut pid, 1.0),
+            r_d(&mut make(LanzonOuterLoop::default()), 1.0)
+        );
     }
 
     #[test]
