@@ -58,13 +58,13 @@ CASES = {
         interrupted_inside(lambda: rf.failure_table(frame, max_failed=3))
     """,
     "simulate_batch": """
-        sim = rf.Simulator(rf.Airframe.preset("quad-x"), limits=rf.DivergenceLimits(
+        sim = rf.Simulator(rf.Airframe.preset("quad-x"), ground=False, limits=rf.DivergenceLimits(
             max_tilt_rad=np.inf, max_altitude_loss_m=np.inf, max_speed_m_s=np.inf, max_rate_rad_s=np.inf))
         ready()
         interrupted_inside(lambda: rf.simulate_batch(sim, [rf.State()] * 64, 24_000.0, record_every=10**9))
     """,
     "simulate_python_controller": """
-        sim = rf.Simulator(rf.Airframe.preset("quad-x"), limits=rf.DivergenceLimits(
+        sim = rf.Simulator(rf.Airframe.preset("quad-x"), ground=False, limits=rf.DivergenceLimits(
             max_tilt_rad=np.inf, max_altitude_loss_m=np.inf, max_speed_m_s=np.inf, max_rate_rad_s=np.inf))
         ready()
         interrupted_inside(lambda: sim.run(duration_s=24_000.0, controller=lambda t, x: [0.0] * 4, record_every=10**9))
