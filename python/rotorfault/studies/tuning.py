@@ -43,7 +43,7 @@ TUNED_GAINS: dict[str, tuple[float, float]] = {
 WEIGHT_NAMES: dict[str, tuple[int, ...]] = {"w_tau_pq": (1, 2), "w_tau_r": (3,)}
 #: Names searched in log10 coordinates (bounds spanning decades).
 LOG_SCALED = frozenset({"epsilon_s", "k_rotor", "k_rotor_z", "w_tau_pq", "w_tau_r"})
-#: The robust search (:func:`tune_robust`): every gain that acts when a rotor degrades, with
+#: The robust search (:func:`tune_hold`): every gain that acts when a rotor degrades, with
 #: bounds that hold Table IV's values (k_cp: Remark 4's 0.6; the weights: Table IV's 20 and 0.01)
 #: and the rest of the preset fixed (k_vz = 1, k_iz = 0.1, w_f = 1).
 ROBUST_GAINS: dict[str, tuple[float, float]] = {
