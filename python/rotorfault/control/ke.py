@@ -101,7 +101,8 @@ def _ftc_dir() -> Path:
 
 
 def presets() -> list[str]:
-    """Names of the shipped controller presets (``ke-hil``, ``ke-experiment``)."""
+    """Names of the shipped controller presets (``ke-hil``, ``ke-experiment``: Table IV;
+    ``ke-robust``: tuned to hold through partial and total faults, not the paper's)."""
     return sorted(p.stem for p in _ftc_dir().glob("*.toml"))
 
 

@@ -314,7 +314,13 @@ class OuterLoopGains:
     """The outer loop (28)-(31), which the paper leaves to "any simple standard linear control
     technique": PD laws ``z~ = -k_p e - k_d e'`` on the horizontal position (``k_p_xy``, 1/s^2;
     ``k_d_xy``, 1/s) and the altitude (``k_p_z``, ``k_d_z``), the roll/pitch set points limited to
-    ``max_tilt_rad`` and the vertical acceleration to ``max_vertical_accel_m_s2``. Validated in Rust."""
+    ``max_tilt_rad`` and the vertical acceleration to ``max_vertical_accel_m_s2``. Validated in Rust.
+
+    Integral action, not the paper's (default off: ``k_i_xy = k_i_z = 0``, the PD laws as
+    designed): ``z~ = -k_p e - k_d e' - k_i integral(e)`` with ``k_i_xy``, ``k_i_z`` (1/s^3), each
+    axis's integral clamped to ``integral_limit_m_s`` (m s), removes the steady error a constant
+    disturbance or a model error (mass, thrust coefficient) leaves. With the default PD gains the
+    loops stay stable for ``k_i_z < k_p_z k_d_z`` (0.5) and ``k_i_xy < k_p_xy k_d_xy`` (0.175)."""
 
     k_p_xy: float = _DEFAULT_OUTER.k_p_xy
     k_d_xy: float = _DEFAULT_OUTER.k_d_xy
@@ -322,6 +328,9 @@ class OuterLoopGains:
     k_d_z: float = _DEFAULT_OUTER.k_d_z
     max_tilt_rad: float = _DEFAULT_OUTER.max_tilt_rad
     max_vertical_accel_m_s2: float = _DEFAULT_OUTER.max_vertical_accel_m_s2
+    k_i_xy: float = _DEFAULT_OUTER.k_i_xy
+    k_i_z: float = _DEFAULT_OUTER.k_i_z
+    integral_limit_m_s: float = _DEFAULT_OUTER.integral_limit_m_s
 
     def __post_init__(self) -> None:
         # Checked once, at construction, by the core's rules (finite, gains >= 0, tilt in

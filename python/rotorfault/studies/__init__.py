@@ -7,7 +7,8 @@ sample sets (:mod:`~rotorfault.studies.scan`), the spin-assignment design search
 backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
 (:mod:`~rotorfault.studies.storage`: the one Parquet writer, resumable), the engine that joins them
 (:mod:`~rotorfault.studies.engine`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
-tuning (:mod:`~rotorfault.studies.tuning`). The papers' Monte Carlo studies run on the same
+tuning (:mod:`~rotorfault.studies.tuning`, judged for holding through faults by
+:mod:`~rotorfault.studies.hold`). The papers' Monte Carlo studies run on the same
 backends.
 
 May import: ``control``, ``flight``, ``allocation``, ``analysis``, ``plotting`` (on first use),
@@ -19,7 +20,8 @@ from .certify import Certificate, CertificateCase, certify
 from .design import Design, DesignSearch, design_search
 from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
 from .scenario_file import Scenario, load_scenario
-from .tuning import TuningResult, tune, tuning_campaign
+from .hold import FaultCase, HoldCriteria, fault_set
+from .tuning import HoldTuningResult, TuningResult, tune, tune_hold, tuning_campaign
 
 __all__ = [
     "Campaign",
@@ -29,6 +31,9 @@ __all__ = [
     "Design",
     "DesignSearch",
     "EfficiencyScan",
+    "FaultCase",
+    "HoldCriteria",
+    "HoldTuningResult",
     "Scan",
     "Scenario",
     "TuningResult",
@@ -37,11 +42,13 @@ __all__ = [
     "design_search",
     "efficiency_scan",
     "failure_samples",
+    "fault_set",
     "load_scenario",
     "plot_efficiency_scan",
     "read_campaign",
     "read_scan",
     "run_campaign",
     "tune",
+    "tune_hold",
     "tuning_campaign",
 ]

@@ -57,8 +57,10 @@ from .summaries import SUMMARY_FIELDS, Rate, numpy_columns, rates, summarize, wi
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-CampaignController = Literal["ke-hil", "ke-experiment", "lqr"]
-CONTROLLERS: tuple[str, ...] = ("ke-hil", "ke-experiment", "lqr")
+#: The Ke controller presets (Table IV's two columns; ``ke-robust``: tuned to hold through partial
+#: and total faults, :func:`rotorfault.studies.tuning.tune_hold`) and the hover LQR.
+CampaignController = Literal["ke-hil", "ke-experiment", "ke-robust", "lqr"]
+CONTROLLERS: tuple[str, ...] = ("ke-hil", "ke-experiment", "ke-robust", "lqr")
 
 _DEFAULT_CRITERIA = _rfcore.VerdictCriteria()
 
@@ -161,7 +163,7 @@ class Campaign:
             if not isinstance(self.gains, KeGains):
                 raise TypeError(f"gains: expected rotorfault.control.ke.KeGains, got {type(self.gains).__name__}")
             if self.controller == "lqr":
-                raise ValueError("gains: Ke gains apply to the ke-hil and ke-experiment controllers, not lqr")
+                raise ValueError("gains: Ke gains apply to the Ke controllers (ke-hil, ke-experiment, ke-robust), not lqr")
         for name in ("duration_s", "dt_s", "gust_duration_s"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)):

@@ -61,7 +61,10 @@ params_class!(
     k_p_z,
     k_d_z,
     max_tilt_rad,
-    max_vertical_accel_m_s2
+    max_vertical_accel_m_s2,
+    k_i_xy,
+    k_i_z,
+    integral_limit_m_s
 );
 
 /// Lanzon et al.'s controller: `a_k`..`d_k` the discrete loop-shaping controller at the control

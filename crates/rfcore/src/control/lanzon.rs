@@ -205,7 +205,10 @@ fn floor_cos(c: f64) -> f64 {
     }
 }
 
-/// The gentle PD outer loop of (28)-(31); the paper leaves the linear laws open.
+/// The gentle PD outer loop of (28)-(31); the paper leaves the linear laws open. With `k_i_xy`
+/// or `k_i_z` above 0 (not the paper's: it has no integral action, the default) the laws become
+/// PID: the integral of the position error, each axis clamped to `integral_limit_m_s`, removes
+/// the steady error a constant disturbance or a model error (mass, thrust) leaves.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LanzonOuterLoop {
     /// Horizontal position gain, 1/s^2.
@@ -220,6 +223,12 @@ pub struct LanzonOuterLoop {
     pub max_tilt_rad: f64,
     /// Limit on the commanded vertical acceleration, m/s^2.
     pub max_vertical_accel_m_s2: f64,
+    /// Horizontal position-integral gain, 1/s^3 (0: the paper's PD law).
+    pub k_i_xy: f64,
+    /// Altitude-integral gain, 1/s^3 (0: the paper's PD law).
+    pub k_i_z: f64,
+    /// Limit on each axis's position-error integral (anti-windup), m s.
+    pub integral_limit_m_s: f64,
 }
 
 impl Default for LanzonOuterLoop {
@@ -231,6 +240,9 @@ impl Default for LanzonOuterLoop {
             k_d_z: 1.0,
             max_tilt_rad: 0.1,
             max_vertical_accel_m_s2: 3.0,
+            k_i_xy: 0.0,
+            k_i_z: 0.0,
+            integral_limit_m_s: 10.0,
         }
     }
 }
@@ -242,6 +254,8 @@ impl LanzonOuterLoop {
             ("outer_loop.k_d_xy", self.k_d_xy),
             ("outer_loop.k_p_z", self.k_p_z),
             ("outer_loop.k_d_z", self.k_d_z),
+            ("outer_loop.k_i_xy", self.k_i_xy),
+            ("outer_loop.k_i_z", self.k_i_z),
         ] {
             require_finite(field, value)?;
             if value < 0.0 {
@@ -266,6 +280,13 @@ impl LanzonOuterLoop {
             return Err(RfError::invalid(
                 "outer_loop.max_vertical_accel_m_s2",
                 format!("must be > 0, got {}", self.max_vertical_accel_m_s2),
+            ));
+        }
+        require_finite("outer_loop.integral_limit_m_s", self.integral_limit_m_s)?;
+        if self.integral_limit_m_s <= 0.0 {
+            return Err(RfError::invalid(
+                "outer_loop.integral_limit_m_s",
+                format!("must be > 0, got {}", self.integral_limit_m_s),
             ));
         }
         Ok(())
@@ -360,6 +381,10 @@ pub struct LanzonController {
     m0: Matrix3<f64>,
     xi: DVector<f64>,
     xi_next: DVector<f64>,
+    /// The outer loop's position-error integrals (paper frame), m s, and the time of the last
+    /// command (the integration step is the time between commands).
+    integral_m_s: [f64; 3],
+    last_t_s: Option<f64>,
 }
 
 impl LanzonController {
@@ -389,6 +414,8 @@ impl LanzonController {
             reference,
             xi: DVector::zeros(n),
             xi_next: DVector::zeros(n),
+            integral_m_s: [0.0; 3],
+            last_t_s: None,
         })
     }
 
@@ -405,6 +432,27 @@ impl LanzonController {
         (m_inv * (lt - b), m_inv * self.m0)
     }
 
+    /// Integrates the outer loop's position error (paper frame) over the time since the last
+    /// command, each axis clamped to `integral_limit_m_s`; nothing without integral gains.
+    fn integrate(&mut self, t_s: f64, pos: [f64; 3]) {
+        let dt = self.last_t_s.map_or(0.0, |last| (t_s - last).max(0.0));
+        self.last_t_s = Some(t_s);
+        if let LanzonReference::Position {
+            position_ned_m,
+            gains,
+        } = &self.reference
+        {
+            if gains.k_i_xy == 0.0 && gains.k_i_z == 0.0 {
+                return;
+            }
+            let target = [position_ned_m[0], -position_ned_m[1], -position_ned_m[2]];
+            let limit = gains.integral_limit_m_s;
+            for (i, sum) in self.integral_m_s.iter_mut().enumerate() {
+                *sum = (*sum + (pos[i] - target[i]) * dt).clamp(-limit, limit);
+            }
+        }
+    }
+
     /// The inner loop's set points `[phi_d, theta_d, r_d]` for a paper-frame state.
     fn set_points(&self, psi: f64, pos: [f64; 3], vel: [f64; 3]) -> [f64; 3] {
         match &self.reference {
@@ -415,12 +463,20 @@ impl LanzonController {
             } => {
                 let m = &self.model;
                 let target = [position_ned_m[0], -position_ned_m[1], -position_ned_m[2]];
-                let z1 = -gains.k_p_xy * (pos[0] - target[0]) - gains.k_d_xy * vel[0];
-                let z2 = -gains.k_p_xy * (pos[1] - target[1]) - gains.k_d_xy * vel[1];
-                let az = (-gains.k_p_z * (pos[2] - target[2]) - gains.k_d_z * vel[2]).clamp(
-                    -gains.max_vertical_accel_m_s2,
-                    gains.max_vertical_accel_m_s2,
-                );
+                let integral = &self.integral_m_s;
+                let z1 = -gains.k_p_xy * (pos[0] - target[0])
+                    - gains.k_d_xy * vel[0]
+                    - gains.k_i_xy * integral[0];
+                let z2 = -gains.k_p_xy * (pos[1] - target[1])
+                    - gains.k_d_xy * vel[1]
+                    - gains.k_i_xy * integral[1];
+                let az = (-gains.k_p_z * (pos[2] - target[2])
+                    - gains.k_d_z * vel[2]
+                    - gains.k_i_z * integral[2])
+                    .clamp(
+                        -gains.max_vertical_accel_m_s2,
+                        gains.max_vertical_accel_m_s2,
+                    );
                 let u3 = m.gravity_m_s2 + m.linear_drag_n_s_m / m.mass_kg * vel[2] + az;
                 let u3 = u3.clamp(
                     m.gravity_m_s2 - gains.max_vertical_accel_m_s2,
@@ -446,7 +502,7 @@ impl Controller for LanzonController {
         ROTORS
     }
 
-    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         let s = state_vector(measured);
         let (phi, theta, psi) = (s[6], -s[7], -s[8]);
         let (p, q, r) = (s[9], -s[10], -s[11]);
@@ -454,6 +510,7 @@ impl Controller for LanzonController {
         let vel = [s[3], -s[4], -s[5]];
         let m = self.model;
         let r0 = m.spin_rate_rad_s();
+        self.integrate(t_s, pos);
         let [phi_d, theta_d, r_d] = self.set_points(psi, pos, vel);
         let e = [phi_d - phi, theta_d - theta, r_d - r];
         // v = C xi + D e; xi+ = A xi + B e.
@@ -491,6 +548,8 @@ impl Controller for LanzonController {
 
     fn reset(&mut self) {
         self.xi.fill(0.0);
+        self.integral_m_s = [0.0; 3];
+        self.last_t_s = None;
     }
 }
 
@@ -588,6 +647,60 @@ mod tests {
         for (o, e) in out.iter().zip([half, 0.0, half, 0.0]) {
             assert!((o - e).abs() < 1e-12, "{out:?}");
         }
+    }
+
+    #[test]
+    fn integral_action_accumulates_the_error_and_reset_clears_it() {
+        // Held 1 m below the setpoint (NED z = 1 m, setpoint 0): the altitude integral grows by
+        // -1 m x dt per command (paper frame, z up) and raises the spin-rate set point r_d (the
+        // vertical channel: r_d = u~3 d m / k_r); without integral gains, or after a reset, the
+        // set points stay the PD ones.
+        let m = LanzonModel::default();
+        let gains = LanzonOuterLoop {
+            k_i_z: 0.2,
+            ..LanzonOuterLoop::default()
+        };
+        let make = |gains| {
+            LanzonController::new(
+                m,
+                empty(),
+                LanzonReference::Position {
+                    position_ned_m: [0.0, 0.0, 0.0],
+                    gains,
+                },
+            )
+            .unwrap()
+        };
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, 1.0),
+            omega_rad_s: Vector3::new(0.0, 0.0, -m.spin_rate_rad_s()),
+            ..RigidBodyState::at_rest()
+        };
+        let r_d = |c: &mut LanzonController, t: f64| {
+            let mut out = [0.0; 4];
+            c.command(t, &state, &mut out).unwrap();
+            c.set_points(0.0, [0.0, 0.0, -1.0], [0.0; 3])[2]
+        };
+        let (mut pd, mut pid) = (make(LanzonOuterLoop::default()), make(gains));
+        assert_eq!(r_d(&mut pd, 0.0), r_d(&mut pid, 0.0)); // no time has passed yet
+        let (r_pd, r_pid) = (r_d(&mut pd, 0.5), r_d(&mut pid, 0.5));
+        assert!(
+            (pid.integral_m_s[2] + 0.5).abs() < 1e-12,
+            "{:?}",
+            pid.integral_m_s
+        );
+        assert_eq!(pd.integral_m_s, [0.0, 0.0, 0.0]);
+        let expected = 0.2 * 0.5 * m.drag_torque_ratio_m * m.mass_kg / m.rotational_drag_n_m_s;
+        assert!(
+            (r_pid - r_pd - expected).abs() < 1e-12,
+            "{r_pid} {r_pd} {expected}"
+        );
+        pid.reset();
+        assert_eq!(pid.integral_m_s, [0.0, 0.0, 0.0]);
+        assert_eq!(
+            r_d(&mut pid, 1.0),
+            r_d(&mut make(LanzonOuterLoop::default()), 1.0)
+        );
     }
 
     #[test]
