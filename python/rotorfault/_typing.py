@@ -60,6 +60,8 @@ ClaimStatus: TypeAlias = Literal["confirmed", "not confirmed"]
 VppInputs: TypeAlias = Literal["wang", "every-channel"]
 #: Axes a certificate requires to remain after a failure (``rotorfault certify --require-axes``).
 CertifiedAxis: TypeAlias = Literal["thrust", "roll", "pitch", "yaw"]
+#: The direction a circular reference turns, seen from above (:func:`rotorfault.control.tracking.circle_reference`).
+CircleTurn: TypeAlias = Literal["clockwise", "counterclockwise"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: A named sensor suite (:class:`rotorfault.Sensing` ``suite``): motion capture, GNSS with a
@@ -75,7 +77,7 @@ Sensed: TypeAlias = Literal["truth", "paper-noise", "mocap", "gnss", "rtk"]
 #: release's names of two designs (``lqr-hover``: linear-feedback, ``open-loop-hover``: open-loop).
 ScenarioControllerKind: TypeAlias = Literal[
     "none", "open-loop", "linear-feedback", "lti", "allocated", "uniform-passive-ftc", "lanzon-controller",
-    "tracking-feedback", "indi-controller", "lqr-hover", "open-loop-hover",
+    "tracking-feedback", "indi-controller", "relaxed-hover-feedback", "lqr-hover", "open-loop-hover",
 ]
 
 # <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
@@ -134,6 +136,7 @@ __all__ = [
     "FlightOutcome",
     "FlightVerdict",
     "NumberKind",
+    "CircleTurn",
     "ClaimStatus",
     "VppInputs",
     "CertifiedAxis",

@@ -162,7 +162,10 @@ EXIT_CASES = [
     ("acai", [], 2),
     ("failures", ["-a", "quad-x", "-k", "9"], 1),
     ("certify", ["-a", "quad-x", "--require", "single"], 3),
-    ("certify", ["-a", "hexa-ppnnpn", "--require", "single"], 0),
+    # Rotor 5 or 6 lost leaves hover only by giving up yaw: met with the axes that must remain
+    # named (--require-axes), not met with the default (all four).
+    ("certify", ["-a", "hexa-ppnnpn", "--require", "single", "--require-axes", "thrust,roll,pitch"], 0),
+    ("certify", ["-a", "hexa-ppnnpn", "--require", "single"], 3),
     ("certify", ["-a", "hexa-ppnnpn", "--require", "double"], 3),
     ("certify", ["-a", "octo-x", "--require", "single"], 0),
     ("certify", ["-a", "no-such-frame"], 1),
@@ -202,7 +205,11 @@ def test_every_command_has_its_exit_statuses_tested() -> None:
 def test_defaults_work_for_every_preset(preset: str) -> None:
     for name, args in (("acai", []), ("failures", []), ("certify", []), ("scan", ["--step", "0.25"]), ("design", ["--top", "1"])):
         code, _, err = run(name, "-a", preset, *args, "--quiet")
-        assert code == 0, (name, preset, err)
+        # Wang's fixed-pitch layout cannot command yaw apart from roll and pitch even healthy (rank
+        # 10, issue 25): certify's default requirement (the healthy frame hovers with all four
+        # axes) is not met, and says so with status 3.
+        expected = 3 if (name, preset) == ("certify", "wang-fixed-pitch") else 0
+        assert code == expected, (name, preset, err)
 
 
 def test_a_missing_dask_is_named_before_any_work(tmp_path: Path) -> None:

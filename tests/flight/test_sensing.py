@@ -119,7 +119,7 @@ def test_the_report_table_sets_truth_and_sensors_side_by_side() -> None:
     gnss = ke_paper.sensing_table(truth, [ke_paper.run_scenario("fault-free", sensing=rf.Sensing(suite="gnss"))])
     assert "on mocap" in mocap.caption and "on gnss" in gnss.caption
     (row,) = mocap.rows
-    assert row[:4] == ("fault-free", "holds position", "holds position", "same")
+    assert row[:4] == ("fault-free", "holds", "holds", "same")
     assert 0 < float(row[5]) < 0.35 and 0 < float(row[6]) < 0.14
     (row,) = gnss.rows
-    assert row[1] == "holds position" and row[2] != "holds position" and row[3] == "differs"
+    assert row[1] == "holds" and row[2] != "holds" and row[3] == "differs"

@@ -13,16 +13,25 @@ from rotorfault.papers import lanzon, wang
 MOCAP_1KHZ = rf.Sensing(imu_rate_hz=1000.0)
 
 
-@pytest.mark.parametrize(("scenario", "case"), [("A", "a"), ("B", "a"), ("B", "b"), ("B", "c")])
+@pytest.mark.parametrize(("scenario", "case"), [("A", "a"), ("B", "a"), ("B", "c")])
 def test_lanzon_keeps_its_verdict_on_mocap(scenario: str, case: str) -> None:
-    """Measured (final error truth / mocap): A-a level / level; B-a holds 0.000 / 0.003 m; B-b
-    circling 0.48 / 0.93 m; B-c holds 0.003 / 0.014 m."""
+    """Measured (final error truth / mocap): A-a level / level; B-a holds 0.000 / 0.003 m; B-c
+    holds 0.003 / 0.014 m."""
     truth = lanzon.fly(scenario, case)
     sensed = lanzon.fly(scenario, case, sensing=MOCAP_1KHZ)
     assert sensed.trajectory.sensed == "mocap"
     assert sensed.outcome == truth.outcome, (truth.outcome, sensed.outcome)
     if truth.outcome == "holds-position":
         assert sensed.final_error_m is not None and sensed.final_error_m < 0.05
+
+
+def test_lanzon_design_b_in_scenario_b_is_marginal_and_mocap_tips_it_into_circling() -> None:
+    """Design (b), Scenario B, with the install-independent 11-state synthesis (issue 25) holds
+    on the truth, barely (README: 0.403 m); on mocap the estimate's delay and noise tip it into
+    circling. Both verdicts are measured, and the report's side by side shows "differs"."""
+    truth = lanzon.fly("B", "b")
+    sensed = lanzon.fly("B", "b", sensing=MOCAP_1KHZ)
+    assert (truth.outcome, sensed.outcome) == ("holds-position", "circling")
 
 
 def test_lanzon_scenario_a_is_lost_with_the_imu_slower_than_its_loop() -> None:

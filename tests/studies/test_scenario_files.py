@@ -90,9 +90,18 @@ def test_the_hover_lqr_example_is_the_python_flight() -> None:
     assert scenario.metrics(run).outcome == "crashed"
 
 
+def test_the_gnss_example_flies_on_the_receiver_and_drifts_with_it() -> None:
+    """The hover LQR on the GNSS suite (no barometer): the estimate follows the receiver's modelled
+    drift (metres), so the vehicle is not held, and the file says so (README: sensors)."""
+    scenario = load_scenario(EXAMPLES / "quad-x-hover-on-gnss.toml")
+    run = scenario.run()
+    assert run.sensed == "gnss" and run.estimate is not None and not run.events
+    assert scenario.metrics(run).verdict == "drifts"
+
+
 def test_every_example_file_is_flown_here() -> None:
     covered = {*KE_FILES, "lanzon-B-b.toml", "lanzon-B-c.toml", "wang-scenario-1.toml", "wang-scenario-2.toml", "wang-scenario-3.toml",
-               "indi-two-opposite.toml", "quad-x-rotor-failure.toml"}
+               "indi-two-opposite.toml", "quad-x-rotor-failure.toml", "quad-x-hover-on-gnss.toml"}
     assert {p.name for p in EXAMPLES.glob("*.toml")} == covered
 
 

@@ -283,7 +283,7 @@ def campaign_command(
     every = result.survival()[0]
     fields: dict[str, Any] = {
         "mode": "campaign", "runs": campaign.runs, "controller": campaign.controller, "seed": campaign.seed,
-        "survived": every.survived, "survival_rate": every.rate, "survival_low": every.low, "survival_high": every.high,
+        "held": every.held, "survival_rate": every.rate, "survival_low": every.low, "survival_high": every.high,
         "out": out_path, "computed_chunks": result.computed_chunks, "skipped_chunks": result.skipped_chunks, "seconds": result.seconds,
         "plot": plot_path,
     }

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import get_args
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
+from .._typing import CircleTurn
 from .._util.convert import FloatArray, float_array, frozen_array
 from .linear import STATE_DIM, LinearFeedback
 
@@ -108,14 +110,18 @@ def step_reference(
 
 def circle_reference(
     *, radius_m: float, period_s: float, climb_m_s: float = 0.0, yaw_amplitude_rad: float = 0.0, duration_s: float,
-    sample_s: float = 0.05,
+    sample_s: float = 0.05, turn: CircleTurn = "clockwise",
 ) -> tuple[FloatArray, FloatArray]:
     """``(times_s, references)`` for :class:`TrackingFeedback`: a circle of ``radius_m`` flown once
     per ``period_s`` from the origin (north ``R (1 - cos wt)``, east ``R sin wt``), climbing at
     ``climb_m_s``, the heading ``yaw_amplitude_rad sin wt``, with the matching velocities and yaw
-    rate, sampled every ``sample_s`` over ``duration_s`` (Wang's scenario 1)."""
+    rate, sampled every ``sample_s`` over ``duration_s``. ``turn``: seen from above, ``"clockwise"``
+    (north, then east: ``w = 2 pi / period_s``) or ``"counterclockwise"`` (north, then west, the
+    heading mirrored too: ``w`` negated; Wang's scenario 1, whose y axis points left)."""
+    if turn not in get_args(CircleTurn):
+        raise ValueError(f"turn: must be one of {', '.join(get_args(CircleTurn))}, got {turn!r}")
     t = np.arange(0.0, duration_s + sample_s, sample_s)
-    w = 2 * math.pi / period_s
+    w = (1.0 if turn == "clockwise" else -1.0) * 2 * math.pi / period_s
     refs = np.zeros((len(t), STATE_DIM))
     refs[:, 0] = radius_m * (1 - np.cos(w * t))
     refs[:, 1] = radius_m * np.sin(w * t)

@@ -154,12 +154,11 @@ def scenario(number: int, *, duration_s: float = DURATION_S) -> WangScenario:
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration_s: must be > 0 and finite, got {duration}")
     if number == 1:
-        # The circle in Wang's frame (z up, y left), mapped to NED by to_ned. circle_reference writes
-        # its third column as "-climb t" (NED down); in Wang's z-up frame it is "+climb t", hence the
-        # negated climb.
-        t, wang_refs = circle_reference(radius_m=CIRCLE_RADIUS_M, period_s=CIRCLE_PERIOD_S, climb_m_s=-CLIMB_M_S,
-                                        yaw_amplitude_rad=YAW_AMPLITUDE_RAD, duration_s=duration)
-        return WangScenario(1, "scenario 1: circle, climb and yaw, no noise", t, to_ned(wang_refs), None, False)
+        # Wang's circle (his y axis points left, z up) in NED: it turns counterclockwise seen from
+        # above, climbing, the heading mirrored with it (to_ned of Wang's rows; tested).
+        t, refs = circle_reference(radius_m=CIRCLE_RADIUS_M, period_s=CIRCLE_PERIOD_S, climb_m_s=CLIMB_M_S,
+                                   yaw_amplitude_rad=YAW_AMPLITUDE_RAD, duration_s=duration, turn="counterclockwise")
+        return WangScenario(1, "scenario 1: circle, climb and yaw, no noise", t, refs, None, False)
     if number in (2, 3):
         moves = WAYPOINTS if number == 2 else WAYPOINTS[:1]
         # Wang's waypoints and heading in his frame, mapped to NED by to_ned. Scenario 3: "the

@@ -630,11 +630,11 @@ class CampaignResult(Tabular):
         """Survival rates with their 95 % Wilson interval, over all runs and per group (as
         :meth:`table` prints them): one row per group, ``by`` naming the grouping."""
         rows = [
-            {"by": by, "group": r.label, "survived": r.survived, "runs": r.runs, "rate": r.rate, "low": r.low, "high": r.high}
+            {"by": by, "group": r.label, "held": r.held, "runs": r.runs, "rate": r.rate, "low": r.low, "high": r.high}
             for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s")
             for r in self.survival(by, bins=bins)
         ]
-        columns = [("by", "string"), ("group", "string"), ("survived", "int64"), ("runs", "int64"),
+        columns = [("by", "string"), ("group", "string"), ("held", "int64"), ("runs", "int64"),
                    ("rate", "float64"), ("low", "float64"), ("high", "float64")]
         return Records(rows, columns, title=f"survival of {len(self)} runs (95 % Wilson interval)", kind="campaign-survival")
 

@@ -15,15 +15,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, get_args
 
 import numpy as np
 
+from .._typing import VppInputs
 from .._util.convert import FloatArray, float_array, real
 from ..control import Allocated, IndiController, IndiGains, LinearFeedback, Lti, OpenLoop, TrackingFeedback, UniformPassiveFtc
 from ..control import hover_trim, lqr_hover, lqr_hover_allocated
 from ..allocation import Allocator
-from ..flight import RotorFault, Simulator
+from ..flight import FixedPitchActuator, RotorFault, Simulator
 
 Setpoint = tuple[float, tuple[float, float, float]]
 
@@ -152,7 +153,10 @@ def _tracking_feedback(context: Context, p: dict[str, Any]) -> TrackingFeedback:
         speeds = {int(k): real(f"controller.trim_speeds.{k}", v) for k, v in speeds_raw.items()} or None
         failed = tuple(int(k) + 1 for k in np.flatnonzero(context.simulator.airframe.efficiency == 0.0))
         trim = vpp.trim(context.vehicle, failed=failed, speeds=speeds)
-        feedback = vpp.lqr(context.vehicle, trim, dt_s=context.simulator.dt_s)
+        inputs = p.get("inputs", "every-channel")
+        if inputs not in get_args(VppInputs):
+            raise ValueError(f"controller.inputs: must be one of {', '.join(get_args(VppInputs))}, got {inputs!r}")
+        feedback = vpp.lqr(context.vehicle, trim, dt_s=context.simulator.dt_s, inputs=inputs)
     else:
         q, r = _weights(p, context.simulator.command_count)
         feedback = lqr_hover(context.simulator, q=q, r=r, position=tuple(references[0, :3]))
@@ -169,6 +173,24 @@ def _indi_controller(context: Context, p: dict[str, Any]) -> IndiController:
     velocity = _vector("velocity_m_s", p.get("velocity_m_s", (0.0, 0.0, 0.0)), 3)
     return IndiController(context.simulator.airframe, failures=list(context.faults) if told else [], gains=IndiGains(**gains),
                           setpoints=list(context.setpoints), velocity=velocity)
+
+
+def _relaxed_hover_feedback(context: Context, p: dict[str, Any]) -> Any:
+    from ..analysis.relaxed_hover import relaxed_hover
+    from ..control.relaxed_hover import RelaxedHoverFeedback
+
+    _fixed_pitch(context, "relaxed-hover-feedback")
+    sim = context.simulator
+    actuator = sim.actuator
+    assert isinstance(actuator, FixedPitchActuator)  # _fixed_pitch above
+    # The relaxed hover after the file's total failures (the vehicle it will fly once they happen).
+    failed = sorted({f.rotor for f in context.faults if f.efficiency == 0.0})
+    airframe = sim.airframe.with_failed_rotors(failed) if failed else sim.airframe
+    best = relaxed_hover(airframe, drag=sim.drag, actuator=actuator).best
+    if best is None:
+        lost = f"rotor(s) {', '.join(map(str, failed))} failed" if failed else "no rotor failed"
+        raise ValueError(f"controller.kind: relaxed-hover-feedback: {airframe.name} with {lost} has no relaxed hover a linear feedback can hold")
+    return RelaxedHoverFeedback(best, airframe, position=context.setpoint, linear_drag_n_s_m=sim.drag.linear_n_s_m)
 
 
 _WEIGHTS = {"q_diag": "LQR state weights, 12 diagonal entries (default Bryson's rule)",
@@ -188,7 +210,9 @@ BUILDERS: dict[str, Builder] = {
                                   "factor": "gamma / gamma_min", "outer_loop": "hold setpoint_m (default true)",
                                   "outer_loop_gains": "table of OuterLoopGains fields"}, _lanzon_controller, ("lanzon",)),
     "tracking-feedback": Builder({"trim_speeds": "VPP: {rotor = speed} of the trim (default: middle of the feasible range)",
+                                  "inputs": "VPP: the design's inputs, wang (omega_3 held, Wang's) or every-channel (default)",
                                   "error_limit_m": "clip of each position error (default: none)", **_WEIGHTS}, _tracking_feedback),
+    "relaxed-hover-feedback": Builder({}, _relaxed_hover_feedback),
     "indi-controller": Builder({"told": "the controller is told the failures (default true)", "gain_values": "table of IndiGains fields",
                                 "velocity_m_s": "velocity setpoint"}, _indi_controller),
 }

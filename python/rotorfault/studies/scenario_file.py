@@ -35,7 +35,7 @@ flies each and compares the verdict with the paper module's). Schema (every tabl
     # (lanzon-controller); trim_speeds = {3 = 9000.0} (tracking-feedback on a vpp vehicle)
 
     [reference]                  # tracking-feedback: what it follows
-    kind = "circle"              # radius_m, period_s, climb_m_s, yaw_amplitude_rad, sample_s
+    kind = "circle"              # radius_m, period_s, climb_m_s, yaw_amplitude_rad, sample_s, turn
                                  # or "steps": waypoints = [[time_s, north, east, down], ...],
                                  #             yaw_steps = [[time_s, yaw_rad], ...]
 
@@ -79,7 +79,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast, get_args
 
-from .._typing import ScenarioControllerKind
+from .._typing import CircleTurn, ScenarioControllerKind
 from .._util.convert import FloatArray, count, float_array, read_toml, real
 from ..analysis.airframe import Airframe
 from ..control.tracking import circle_reference, step_reference
@@ -103,7 +103,7 @@ _TABLES: dict[str, set[str]] = {
 }
 _VEHICLES: dict[str, set[str]] = {"ke": {"kind", "preset"}, "lanzon": {"kind", "inertia_zz_kg_m2", "limits"}, "vpp": {"kind", "preset", "failed"}}
 _REFERENCES: dict[str, set[str]] = {
-    "circle": {"kind", "radius_m", "period_s", "climb_m_s", "yaw_amplitude_rad", "sample_s"},
+    "circle": {"kind", "radius_m", "period_s", "climb_m_s", "yaw_amplitude_rad", "sample_s", "turn"},
     "steps": {"kind", "waypoints", "yaw_steps"},
 }
 CONTROLLERS: tuple[ScenarioControllerKind, ...] = get_args(ScenarioControllerKind)
@@ -372,11 +372,14 @@ def _reference(data: dict[str, Any], duration_s: float) -> tuple[FloatArray, Flo
     if unknown:
         raise ValueError(f"reference: unknown key(s) {', '.join(sorted(unknown))} for kind {kind}; allowed: {', '.join(sorted(_REFERENCES[kind]))}")
     if kind == "circle":
-        values = {k: real(f"reference.{k}", raw[k]) for k in _REFERENCES["circle"] - {"kind"} if k in raw}
+        values = {k: real(f"reference.{k}", raw[k]) for k in _REFERENCES["circle"] - {"kind", "turn"} if k in raw}
         for key in ("radius_m", "period_s"):
             if key not in values:
                 raise ValueError(f"reference.{key}: required for a circle")
-        return circle_reference(duration_s=duration_s, **values)
+        turn = raw.get("turn", "clockwise")
+        if turn not in get_args(CircleTurn):
+            raise ValueError(f"reference.turn: must be one of {', '.join(get_args(CircleTurn))}, got {turn!r}")
+        return circle_reference(duration_s=duration_s, turn=turn, **values)
     if "waypoints" not in raw:
         raise ValueError("reference.waypoints: required for steps ([[time_s, north, east, down], ...])")
     waypoints = _rows("reference.waypoints", raw["waypoints"], 4, lambda r: (r[0], (r[1], r[2], r[3])))
