@@ -321,6 +321,8 @@ def comparison_rows(cases: list[LayoutCase] | None = None) -> Records:
 
 
 def flights_table(flights: list[WangFlight]) -> list[str]:
+    """The flights as Markdown table lines: outcome, final error and largest error after 15 s (m),
+    largest tilt (rad)."""
     rows = ["| scenario | vehicle | outcome | final error (m) | largest error after 15 s (m) | largest tilt (rad) |",
             "|---|---|---|---|---|---|"]
     for f in flights:
