@@ -219,3 +219,60 @@ def test_readme_terminal_output_is_what_the_command_prints() -> None:
     result = CliRunner().invoke(cli, shlex.split(command)[1:])
     assert result.exit_code == 0, result.output
     assert boxes.sub(" ", shown).split() == result.output.split()
+
+
+def test_readme_design_search_and_wang_tables() -> None:
+    """The numbers the README prints in its prose and tables that come from quick computations:
+    the design search's results and Wang's trim, speed ranges and fixed-pitch comparison, each at
+    the digits printed. (The flights' tables are compared by the paper tests: tests/control/
+    test_ftc.py, tests/papers/, tests/cross/test_normal_numbers.py.)"""
+    import rotorfault as rf
+    from rotorfault import vpp
+    from rotorfault.papers import wang
+
+    text = readme_text()
+
+    def shown(phrase: str) -> None:
+        assert phrase in text, f"README no longer says {phrase!r}"
+
+    hexa = rf.design_search(rf.Airframe.preset("hexa-pnpnpn")).to_pandas().set_index("spins")
+    shown("best **PPNPNN** (Du's PPNNPN mirrored): ACAI 1.1295, controllable after 4 of 6 single failures, 3 of 15 double; "
+          "PNPNPN: 1.4861, ACAI 0 after every single failure (Du Table II), 0 of 6. Giving up yaw, every assignment survives all 6.")
+    assert hexa.index[0] == "PPNPNN" and round(hexa.loc["PPNPNN", "acai_facet_margin"], 4) == 1.1295
+    assert (hexa.loc["PPNPNN", "controllable_single"], hexa.loc["PPNPNN", "controllable_double"]) == (4, 3)
+    assert round(hexa.loc["PNPNPN", "acai_facet_margin"], 4) == 1.4861 and hexa.loc["PNPNPN", "controllable_single"] == 0
+    assert (hexa["controllable_single_give_up_yaw"] == 6).all()
+
+    octo = rf.Airframe.preset("octo-x")
+    ranked = rf.design_search(octo).to_pandas()
+    shown("best **PNPNPNPN**: all 8 single failures (worst ACAI 1.0461) and all 28 double failures (worst 0.1586) "
+          "stay controllable; next PPNNPPNN (8/8, 24/28). With 0.2 m arms PPNNPPNN ranks first (worst single 0.8804).")
+    best, second = ranked.iloc[0], ranked.iloc[1]
+    assert best["spins"] == "PNPNPNPN" and (best["controllable_single"], best["controllable_double"]) == (8, 28)
+    assert (round(best["worst_single_acai_facet_margin"], 4), round(best["worst_double_acai_facet_margin"], 4)) == (1.0461, 0.1586)
+    assert second["spins"] == "PPNNPPNN" and (second["controllable_single"], second["controllable_double"]) == (8, 24)
+    short = rf.design_search(octo, parameter="arm_length_m", values=[0.2]).to_pandas()
+    assert short.iloc[0]["spins"] == "PPNNPPNN" and round(short.iloc[0]["worst_single_acai_facet_margin"], 4) == 0.8804
+
+    vehicle = vpp.preset("wang")
+    trim = vpp.trim(vehicle, failed=(1,), speeds={3: 9000})
+    shown("| omega_2*, alpha_2* at omega_3 = 9000 | 6355, 0.2476 | 6355.12, 0.24760 |")
+    assert (round(float(trim.command[2]), 2), round(float(trim.command[3]), 5)) == (6355.12, 0.24760)
+    speeds = vpp.feasible_speeds(vehicle, failed=(1,))
+    shown("| feasible omega_2 | [6201, 7067] | [6201.74, 7064.23]")
+    shown("| feasible omega_3 | [8782, 10000] | [8783.85, 10000]")
+    assert tuple(round(v, 2) for v in speeds.free_speed_range) == (6201.74, 7064.23)
+    assert (round(speeds.fixed_speed_range[0], 2), round(speeds.fixed_speed_range[1])) == (8783.85, 10000)
+    assert round(speeds.free_torque_range_nm[1], 4) == 2.0012
+
+    cases = {(c.vehicle.split(" (")[0], c.failed): c for c in wang.fixed_pitch_comparison()}
+    shown("| VPP (thrust in [-13, 13] N) | healthy | yes | 12 | yes | none | 2.9528 |")
+    shown("| fixed pitch, standard layout | healthy | yes | 12 | yes | none | 0.7030 |")
+    shown("| fixed pitch, standard layout | failed | no: 15.4 rad/s^2 of yaw left |")
+    assert round(cases["VPP", ()].acai, 4) == 2.9528 and cases["VPP", ()].rank == 12 and cases["VPP", (1,)].rank == 12
+    assert cases["VPP", (1,)].acai == -math.inf
+    sec34 = [c for key, c in cases.items() if key[0].startswith("fixed pitch, Sec. 3.4")]
+    assert sorted(c.rank for c in sec34) == [8, 10]
+    standard = {key[1]: c for key, c in cases.items() if key[0].startswith("fixed pitch, standard")}
+    assert round(standard[()].acai, 4) == 0.7030 and standard[()].rank == 12
+    assert round(standard[(1,)].residual, 1) == 15.4 and standard[(1,)].rank is None
