@@ -33,6 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .atomic import write_text
+
 LOCK_SUFFIX = ".rotorfault-lock"
 
 
@@ -116,8 +118,6 @@ def output_lock(field: str, out: str | os.PathLike[str]) -> Iterator[OutputLock]
     record_path = _record_file(out)
     previous = _read_record(record_path) if record_path.exists() else None
     try:
-        from .output import write_text
-
         record = {
             "pid": os.getpid(),
             "host": socket.gethostname(),
