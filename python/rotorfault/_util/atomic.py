@@ -1,9 +1,7 @@
-"""Atomic file writes: a file is written under a temporary name in the same directory and renamed
-into place only when complete, so an interrupted write never leaves a truncated file under its
-final name. The lowest layer of the package's outputs: it depends on nothing else in the package,
-so both :mod:`rotorfault._util.output` and :mod:`rotorfault._util.lock` (whose holder record it
-writes) build on it without importing each other.
-"""
+"""Atomic file writes: a temporary name in the same directory, renamed into place only when complete,
+so an interrupted write never leaves a truncated file under its final name. The lowest module of
+the package's file handling: :mod:`rotorfault._util.lock` and :mod:`rotorfault._util.output` both
+write through it (it imports neither)."""
 
 from __future__ import annotations
 

@@ -57,6 +57,12 @@ def lock_file(out: str | os.PathLike[str]) -> Path:
     return p.parent / f".{p.name}{LOCK_SUFFIX}"
 
 
+def is_lock_file(name: str) -> bool:
+    """Whether the file ``name`` is an output's lock or its holder record (they stay beside the
+    output after a run: removing a lock file on release would let two writers lock different files)."""
+    return name.startswith(".") and (name.endswith(LOCK_SUFFIX) or name.endswith(LOCK_SUFFIX + ".json"))
+
+
 def _record_file(out: str | os.PathLike[str]) -> Path:
     lock = lock_file(out)
     return lock.with_name(lock.name + ".json")
@@ -137,4 +143,4 @@ def output_lock(field: str, out: str | os.PathLike[str]) -> Iterator[OutputLock]
         lock.release()
 
 
-__all__ = ["LOCK_SUFFIX", "OutputInUse", "OutputLock", "describe_holder", "lock_file", "output_lock"]
+__all__ = ["LOCK_SUFFIX", "OutputInUse", "OutputLock", "describe_holder", "is_lock_file", "lock_file", "output_lock"]

@@ -4,8 +4,7 @@ truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfa
 through :func:`atomic_path`.)
 
 This module depends on nothing else in the package but :mod:`rotorfault._util.atomic` (the
-temporary-name-and-rename writes, re-exported here) and :mod:`rotorfault._util.lock` (one writer
-per output), so every room can use it.
+atomic write) and :mod:`rotorfault._util.lock` (one writer per output), so every room can use it.
 """
 
 from __future__ import annotations

@@ -41,11 +41,10 @@ def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: 
 
 def check_dask(dask: Any) -> None:
     """Checks, before any work or output, that the Dask backend can run here with ``dask`` (a
-    Client, an address or ``"local:N"``): Dask installed (else the one message of
-    :mod:`rotorfault._util.optional`, an ``ImportError`` naming the extra), the argument well
-    formed."""
+    Client, an address or ``"local:N"``): Dask installed, the argument well formed."""
     require_available("backend='dask'", "dask", "distributed")
     from distributed import Client
+
     if dask is None:
         raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
     if isinstance(dask, Client):
