@@ -125,10 +125,34 @@ def read_toml(field: str, path: Any) -> dict[str, Any]:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ValueError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}); expected TOML") from None
+    too_deep = f"{p}: nested too deeply to read (arrays or tables within tables)"
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{p}: not valid TOML: {exc}") from None
     except RecursionError:
-        raise ValueError(f"{p}: nested too deeply to read (arrays or tables within tables)") from None
+        raise ValueError(too_deep) from None
+    # Whether the parser ran out of stack depends on the interpreter's recursion limit (which a
+    # library may raise); the verdict must not: the same depth limit on every install.
+    if _nesting_depth(data) > MAX_TOML_DEPTH:
+        raise ValueError(too_deep)
+    return data
+
+
+#: The deepest nesting of arrays and tables a file this package reads may have (a scenario file
+#: needs four).
+MAX_TOML_DEPTH = 32
+
+
+def _nesting_depth(value: Any) -> int:
+    """How deeply arrays and tables nest in ``value`` (iteratively: no recursion limit)."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if isinstance(item, dict):
+            stack.extend((v, depth + 1) for v in item.values())
+        elif isinstance(item, list):
+            stack.extend((v, depth + 1) for v in item)
+    return deepest
 

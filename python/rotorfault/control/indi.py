@@ -106,7 +106,7 @@ class IndiController:
     learns of it) or :class:`rotorfault.RotorFault` objects of complete losses (told at the fault's
     time). ``gains``: :class:`IndiGains`. The reference: ``setpoints`` ``[(time_s, position)]`` or
     ``[(time_s, position, velocity)]`` (NED; from each time on the position moves at the velocity),
-    or one ``position`` and ``velocity`` (``velocity=(2, 0, 0)``: forward flight at 2 m/s)."""
+    or one ``position`` (NED, m) and ``velocity`` (NED, m/s; ``velocity=(2, 0, 0)`` is forward flight at 2 m/s)."""
 
     def __init__(
         self,

@@ -140,7 +140,7 @@ class UniformPassiveFtc:
     steady deficit of eq. (18)), ``"literal"`` (eq. (18) as printed), ``"full-compensation"``
     (Remark 5, eq. (29)) or ``"baseline"`` (conventional: desired virtual control straight into
     the pseudo-inverse, no estimation, no QP). ``setpoints``: ``[(time_s, (north, east, down))]``
-    held from their time on, or give one ``position``."""
+    held from their time on (NED, m), or give one ``position`` (NED, m)."""
 
     LAWS: tuple[KeLaw, ...] = get_args(KeLaw)
 

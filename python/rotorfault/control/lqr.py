@@ -364,7 +364,7 @@ def lqr_hover(
     yaw: float = 0.0,
 ) -> LinearFeedback:
     """An LQR hover controller (:func:`~rotorfault.control.riccati.design_lqr`) on the
-    linearisation about :func:`hover_trim`. Default weights (Bryson's rule): 1 m position, 1 m/s
+    linearisation about :func:`hover_trim` at ``position`` (NED, m) and ``yaw`` (rad). Default weights (Bryson's rule): 1 m position, 1 m/s
     velocity, 0.1 rad attitude, 1 rad/s rate errors against 10 % of the hover thrust per rotor.
     The returned feedback's ``design`` carries the evidence (Riccati residual, closed-loop
     eigenvalues, the sampled loop at ``simulator.dt_s``, the PBH tests).
@@ -396,7 +396,8 @@ def lqr_hover_allocated(
     The design model is the linearisation of :func:`lqr_hover` with the rotor thrusts replaced by
     ``T = P v`` (``P`` the allocator's weighted pseudo-inverse, which the constrained allocation
     equals while no bound is active), so ``B_v = B P``. ``r`` (rotor units, default as
-    :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. Refuses what
+    :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. The hover held: ``position`` (NED, m)
+    and ``yaw`` (rad), as for :func:`lqr_hover`. Refuses what
     :func:`lqr_hover` refuses. Returns an :class:`~rotorfault.control.Allocated` that runs entirely
     in Rust."""
     if not isinstance(allocator, Allocator):

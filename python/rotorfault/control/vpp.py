@@ -365,7 +365,8 @@ def trim(
 ) -> VppTrim:
     """The hover inputs of ``vehicle`` with the 1-based ``failed`` propellers (module docs).
 
-    ``speeds``: ``{propeller: speed}`` for every healthy propeller of one spin direction (the fixed
+    ``position`` (NED, m) and ``yaw`` (rad): where it hovers.
+    ``speeds``: ``{propeller: speed}`` (rpm, the preset's speed unit) for every healthy propeller of one spin direction (the fixed
     group; Wang: ``{3: 9000}``); default: the failed propeller's spin direction at the middle of its
     feasible range (:func:`feasible_speeds`). The other group shares the balancing speed. Raises
     ``ValueError`` naming the field and bound when no trim exists."""

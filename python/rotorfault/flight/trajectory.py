@@ -42,7 +42,7 @@ def command_columns(command_count: int, rotor_count: int) -> list[str]:
 
 @dataclass(frozen=True)
 class Event:
-    """Why and when a run ended early, with the state (12-vector) at that moment. A ``crashed``
+    """Why and when a run ended early: ``time`` (s), with the state (12-vector) at that moment. A ``crashed``
     event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
     tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise."""
 
@@ -107,7 +107,10 @@ class Estimates:
 
 @dataclass(frozen=True)
 class Trajectory(Tabular):
-    """A run sampled at the control rate. Arrays have one row per control step.
+    """A run sampled at the control rate. Arrays have one row per control step: ``t`` (s),
+    ``position`` (NED, m), ``velocity`` (NED, m/s), ``quaternion``, ``euler`` (Z-Y-X roll, pitch,
+    yaw in rad), ``omega`` (body rates p, q, r in rad/s), ``rotor_command`` and ``rotor_thrust``
+    (N for fixed pitch; speed and pitch channels for variable pitch), ``efficiency`` (0 to 1).
 
     ``to_arrow()`` / ``to_pandas()``: one row per recorded step (``t_s``, the 12 states of
     :data:`STATE_COLUMNS`, the quaternion, the primary axis, each rotor's command, thrust and
@@ -287,7 +290,8 @@ class BatchResult(Tabular):
     to its last recorded step before the divergence and NaN after: its divergence row, at the
     located crossing time, is stacked only when that time is a grid time (never into a row of
     another time); it is always the last row of ``trajectories[i]``, and ``divergence_time[i]``
-    is its time."""
+    is its time. The arrays are :class:`Trajectory`'s with a leading run axis: ``position`` (NED,
+    m), ``velocity`` (NED, m/s), ``omega`` (body rates, rad/s), ``t`` (s)."""
 
     t: FloatArray
     position: FloatArray

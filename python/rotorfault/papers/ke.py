@@ -133,6 +133,7 @@ def scenarios() -> list[KeScenario]:
 
 
 def scenario(name: str) -> KeScenario:
+    """The scenario of :func:`scenarios` called ``name``; ``ValueError`` listing the names otherwise."""
     for s in scenarios():
         if s.name == name:
             return s
@@ -141,6 +142,9 @@ def scenario(name: str) -> KeScenario:
 
 @dataclass
 class ScenarioRun:
+    """One flight of a :class:`KeScenario` with a control ``law``: its trajectory and the
+    verdict on the whole flight (``metrics``, :func:`flight_metrics`)."""
+
     scenario: KeScenario
     law: KeLaw
     trajectory: Trajectory

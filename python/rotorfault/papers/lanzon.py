@@ -64,7 +64,7 @@ LEVEL_SPIN_FRACTION = 0.1
 class LanzonScenario:
     """One of the paper's flights: the initial state in the paper's frame (12-vector (12):
     ``[phi, theta, psi, p, q, r, x, y, z, x', y', z']``, z up) and, for the outer loop, the
-    position setpoint (world NED; ``None``: inner loop only)."""
+    ``position`` setpoint (world NED, m; ``None``: inner loop only)."""
 
     name: str
     description: str
@@ -88,6 +88,7 @@ def scenarios() -> list[LanzonScenario]:
 
 
 def scenario(name: str) -> LanzonScenario:
+    """Scenario ``"A"`` or ``"B"`` of :func:`scenarios`; ``ValueError`` otherwise."""
     for s in scenarios():
         if s.name == name:
             return s
@@ -132,6 +133,7 @@ def design_cases() -> list[DesignCase]:
 
 
 def design_case(label: str) -> DesignCase:
+    """Design case ``"a"``, ``"b"`` or ``"c"`` of :func:`design_cases`; ``ValueError`` otherwise."""
     for c in design_cases():
         if c.label == label:
             return c

@@ -91,6 +91,10 @@ class RelaxedHoverVerdict:
 
 @dataclass(frozen=True)
 class CertificateCase:
+    """One row of a :class:`Certificate`: the 1-based ``failed`` rotors and whether the vehicle
+    still hovers with them failed (``hover``: ``"all-axes"``, ``"give-up-yaw"`` or ``"no"``), with
+    the margins that say so."""
+
     failed: tuple[int, ...]
     hover: Hover
     #: The ACAI (N / N m; the facet margin, negative where hover is infeasible) with all four axes

@@ -240,6 +240,9 @@ def tune(
 #: The tuning campaign of issue 13: every single failure and every stabilisable double failure
 #: of Ke's quadcopter (adjacent side pairs and opposite pairs, both orders) from hover.
 def tuning_campaign(*, runs: int = 200, seed: int = 0, duration_s: float = 25.0) -> Campaign:
+    """The campaign :func:`tune` scores gains on: ``runs`` flights of ``duration_s`` (s) with every
+    single failure and every ordered pair of failures (the first in 1-4 s, the second 4-8 s
+    later), in one chunk; ``seed`` fixes the draws (common random numbers across candidates)."""
     pairs = ((1, 2), (2, 1), (3, 4), (4, 3), (1, 3), (3, 1), (2, 4), (4, 2))
     return Campaign(
         runs=runs, seed=seed, duration_s=duration_s, failures=((1,), (2,), (3,), (4,), *pairs), fault_time_s=(1.0, 4.0), gap_s=(4.0, 8.0),
