@@ -69,7 +69,12 @@ def _as_ss(field: str, system: Any) -> ct.StateSpace:
     if isinstance(system, (ct.TransferFunction,)):
         return ct.ss(system)
     if isinstance(system, (int, float, np.ndarray, list, tuple)):
-        d = np.atleast_2d(np.asarray(system, dtype=np.float64))
+        try:
+            d = np.atleast_2d(np.asarray(system, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise TypeError(f"{field}: expected a static gain of numbers or a python-control system, got {system!r:.60}") from None
+        if d.ndim != 2:
+            raise ValueError(f"{field}: expected a static gain matrix (2-D), got shape {d.shape}")
         return ct.ss(np.zeros((0, 0)), np.zeros((0, d.shape[1])), np.zeros((d.shape[0], 0)), d)
     raise TypeError(f"{field}: expected a python-control StateSpace or TransferFunction, got {type(system).__name__}")
 

@@ -35,7 +35,9 @@ ROUND_EXAMPLES = 50
 TEST_TIMEOUT_S = int(float(os.environ.get("ROTORFAULT_HOSTILE_SECONDS", "30")) + 4 * CALL_LIMIT_S)
 
 #: A refusal names its field: ``field: rule`` (the project's form) or a word the call was given.
-_FIELD_FIRST = re.compile(r"^[^\s:][^:\n]{0,80}:")
+#: ``field: rule``: one or more field names (``a.b[2]``, ``quad_params['mass']``, a file's path),
+#: comma-separated, perhaps with a parenthesis (``position_m[5][2] (rotor 6): ...``), then a colon.
+_FIELD_FIRST = re.compile(r"^[^\s:,]+(?:, [^\s:,]+)*(?: \([^)]*\))?:")
 
 
 def names_a_field(message: str, call: Call) -> bool:
