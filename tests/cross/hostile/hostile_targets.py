@@ -146,6 +146,18 @@ def check_by_simulator(keyword: str) -> Callable[[Any, Call], None]:
     return check
 
 
+def check_by_flight(result: Any, call: Call) -> None:
+    """A rotor fault's values are checked by the core when a flight applies it (flight/faults.py):
+    a short flight accepts it or refuses it naming the fault's field."""
+    from hostile_runner import names_a_field
+
+    simulator = rf.Simulator(rf.Airframe.preset("quad-x"), ground=False)
+    try:
+        simulator.run(rf.State(position=(0.0, 0.0, -10.0)), 0.05, faults=[result])
+    except (ValueError, TypeError) as exc:
+        assert names_a_field(str(exc), call) and "faults[0]" in str(exc), f"the flight refused it naming no field: {exc}"
+
+
 def check_trim(result: Any, call: Call) -> None:
     assert np.isfinite(result.state).all() and np.isfinite(result.command).all() and math.isfinite(result.residual)
 
@@ -449,7 +461,7 @@ def _targets() -> dict[str, Target]:
     t["Simulator"] = Target(with_airframe(lambda d, f: Call(rf.Simulator, (f,), {"dt_s": d(hostile(positive(1e-4, 0.01))), "substeps": d(hostile(st.integers(1, 8), *EDGE_INTS)), "wind": d(vector(3, hostile(number(-10, 10)))), "ground_z_m": d(hostile(number(-1, 1)))}, frozenset({"dt_s", "substeps", "wind", "ground_z_m"}))), lambda r, c: None)
     t["simulate_batch"] = Target(with_airframe(_simulate), check_batch)  # flies an upright frame (the simulator's rule)
     t["State"] = Target(calls(rf.State, position=vector(3, hostile(number(-100, 100))), velocity=vector(3, hostile(number(-10, 10))), quaternion=st.one_of(st.none(), vector(4, hostile(number(-1, 1)))), omega=vector(3, hostile(number(-5, 5)))))
-    t["RotorFault"] = Target(calls(rf.RotorFault, hostile(st.integers(1, 8), *EDGE_INTS), hostile(number(0, 10)), hostile(number(0, 1), 1.5, -0.1)))
+    t["RotorFault"] = Target(calls(rf.RotorFault, hostile(st.integers(1, 8), *EDGE_INTS), hostile(number(0, 10)), hostile(number(0, 1), 1.5, -0.1)), check_by_flight)
     t["Drag"] = Target(calls(rf.Drag, linear_n_s_m=hostile(positive(1e-3, 1)), quadratic_n_s2_m2=hostile(positive(1e-3, 1)), rotational_n_m_s=hostile(positive(1e-4, 1)), rotor_inertia_kg_m2=hostile(positive(1e-7, 1e-3))), check_by_simulator("drag"))
     t["Noise"] = Target(calls(rf.Noise, snr_db=hostile(number(-10, 60)), seed=hostile(st.integers(0, 100), *EDGE_INTS)), check_by_simulator("noise"))
     t["DivergenceLimits"] = Target(calls(rf.DivergenceLimits, max_tilt_rad=hostile(positive(0.1, 3.0)), max_altitude_loss_m=hostile(positive(0.1, 100)), max_speed_m_s=hostile(positive(1, 100)), max_rate_rad_s=hostile(positive(1, 100))), check_by_simulator("limits"))
@@ -517,6 +529,7 @@ def _regressions(t: dict[str, Target]) -> None:
         # A string accepted as ``ours`` and ``tolerance``, failing later in number_rows' arithmetic.
         "number_rows": (Call(lambda: papers.number_rows([papers.PaperNumber("du", "Table 1", "ACAI", 0.0, "x", 1e-6)])),),  # type: ignore[arg-type]
         "PaperNumber": (Call(papers.PaperNumber, ("du", "Table 1", "ACAI", 0.0, 0.0, "x")),),
+        "Noise": (Call(lambda: rf.Simulator(quad, noise=rf.Noise(snr_db=-1e300)), (), {}, frozenset({"snr_db"})),),  # OverflowError
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
         # python-control's unnamed ControlDimension for a b of 0 rows.
