@@ -116,7 +116,7 @@ def output_lock(field: str, out: str | os.PathLike[str]) -> Iterator[OutputLock]
     record_path = _record_file(out)
     previous = _read_record(record_path) if record_path.exists() else None
     try:
-        from .output import write_text
+        from .atomic import write_text
 
         record = {
             "pid": os.getpid(),

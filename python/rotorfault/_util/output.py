@@ -3,8 +3,9 @@ same directory and renamed into place only when complete, so an interrupted run 
 truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfault.plotting.style`,
 through :func:`atomic_path`.)
 
-This module depends on nothing else in the package but :mod:`rotorfault._util.lock` (one writer
-per output), so every room can use it.
+This module depends on nothing else in the package but :mod:`rotorfault._util.atomic` (the
+atomic write, which the lock's record uses too) and :mod:`rotorfault._util.lock` (one writer per
+output), so every room can use it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+
+from .atomic import atomic_path, umask, write_text
 
 #: File types a figure can be saved as (by extension).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -44,38 +47,6 @@ def check_parent(field: str, p: Path) -> None:
         raise ValueError(f"{field}: directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"{field}: directory {str(parent)!r} is not writable")
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yields a temporary name beside ``path``; on success renames it to ``path`` (``os.replace``,
-    atomic on one file system), on any error or interrupt removes it and leaves ``path`` as it was."""
-    final = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else ".")
-    os.close(fd)
-    tmp_path = Path(tmp)
-    os.chmod(tmp_path, 0o666 & ~_umask())  # as an ordinary open() would create it
-    try:
-        yield tmp_path
-        os.replace(tmp_path, final)
-    except BaseException:
-        tmp_path.unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Writes ``text`` (UTF-8) to ``path`` atomically."""
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
 
 
 #: The file that makes a directory a rotorfault output directory (lists its files).
@@ -179,7 +150,7 @@ def _output_directory(path: str | os.PathLike[str], manifest: dict[str, Any]) ->
 
     final = Path(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else "."))
-    os.chmod(tmp, 0o777 & ~_umask())
+    os.chmod(tmp, 0o777 & ~umask())
     old: Path | None = None
     try:
         yield tmp

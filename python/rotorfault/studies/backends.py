@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from .._util.optional import require_available
 from .._util.progress import chunks
 from .storage import ChunkSpec
 
@@ -41,10 +42,10 @@ def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: 
 def check_dask(dask: Any) -> None:
     """Checks, before any work or output, that the Dask backend can run here with ``dask`` (a
     Client, an address or ``"local:N"``): Dask installed, the argument well formed."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise ValueError("backend: 'dask' needs Dask, which is not installed: pip install 'rotorfault[scale]'") from None
+    # The one helper's message and exception (an ImportError naming the extra), as everywhere.
+    require_available("backend='dask'", "dask", "distributed")
+    from distributed import Client
+
     if dask is None:
         raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
     if isinstance(dask, Client):
