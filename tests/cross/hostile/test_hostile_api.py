@@ -15,7 +15,7 @@ import inspect
 import types
 
 import pytest
-from hostile_runner import TEST_TIMEOUT_S, run_target
+from hostile_runner import TEST_TIMEOUT_S, CallTimeout, run_target, time_limit
 from hostile_targets import NOT_CALLED, PRODUCED_BY, TARGETS
 
 ROOMS = ("rotorfault", "rotorfault.analysis", "rotorfault.allocation", "rotorfault.control", "rotorfault.flight", "rotorfault.studies",
@@ -44,16 +44,28 @@ def test_every_public_callable_has_a_strategy() -> None:
 
 
 def test_every_airframe_reader_has_a_strategy() -> None:
-    """The airframe's public constructors from files and other tools are targets too."""
+    """The airframe's public readers and conversions are targets too (``from_toml`` and ``load``
+    read files: the CLI harness hands them TOML and PX4 files through ``--airframe``)."""
+    readers = {f"Airframe.{n}" for n in ("from_toml_str", "from_rotorpy", "with_parameters", "with_efficiency", "to_px4_params")}
+    assert readers <= set(TARGETS), sorted(readers - set(TARGETS))
+
+
+@pytest.mark.timeout(120, method="thread")
+def test_the_call_limit_stops_a_long_rust_call() -> None:
+    """The harness's alarm reaches into the core (the bindings run Python's signal handlers as
+    they poll for Ctrl-C): a call of minutes of work stops with CallTimeout, so a slow call is a
+    failure Hypothesis can shrink instead of a hang."""
+    import numpy as np
+
     import rotorfault as rf
 
-    readers = {f"Airframe.{n}" for n in ("from_toml_str", "from_rotorpy", "with_parameters", "with_efficiency", "to_px4_params")}
-    assert readers <= set(TARGETS)
-    # from_toml and load read files: the CLI harness hands them TOML and PX4 files.
-    assert callable(rf.Airframe.from_toml) and callable(rf.Airframe.load)
+    m = 52
+    ring = rf.Airframe(np.arange(m) * 2 * np.pi / m, [0.3] * m, [1, -1] * (m // 2), [5.0] * m, 2.0, [0.05, 0.05, 0.09], 0.02)
+    with pytest.raises(CallTimeout), time_limit(1.0):
+        rf.acai_batch(ring, np.ones((200_000, m)))  # about 1 ms each: minutes of work
 
 
-@pytest.mark.timeout(TEST_TIMEOUT_S)
+@pytest.mark.timeout(TEST_TIMEOUT_S, method="thread")
 @pytest.mark.parametrize("name", sorted(TARGETS))
 def test_hostile_calls(name: str) -> None:
     counts = run_target(name, TARGETS[name])

@@ -150,7 +150,7 @@ def test_every_command_has_a_strategy() -> None:
     assert sorted(COMMANDS) == sorted(cli.commands), "add a strategy for each new command to tests/cross/hostile/test_hostile_cli.py"
 
 
-@pytest.mark.timeout(TEST_TIMEOUT_S)
+@pytest.mark.timeout(TEST_TIMEOUT_S, method="thread")
 @pytest.mark.parametrize("name", sorted(COMMANDS))
 def test_hostile_invocations(name: str) -> None:
     assert run_target(f"cli {name}", TARGETS[name])["calls"] > 0
