@@ -386,6 +386,12 @@ def _plant() -> st.SearchStrategy[Any]:
     return st.one_of(build(), st.sampled_from(WRONG_TYPES))
 
 
+def _first_order() -> Any:
+    import control as ct
+
+    return ct.ss(-np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)))
+
+
 def _lanzon_design() -> Any:
     return control.lanzon.design(control.lanzon.LanzonVehicle(), crossover_rad_s=30.0)
 
@@ -534,6 +540,10 @@ def _regressions(t: dict[str, Target]) -> None:
         "number_rows": (Call(lambda: papers.number_rows([papers.PaperNumber("du", "Table 1", "ACAI", 0.0, "x", 1e-6)])),),  # type: ignore[arg-type]
         "PaperNumber": (Call(papers.PaperNumber, ("du", "Table 1", "ACAI", 0.0, 0.0, "x")),),
         "Noise": (Call(lambda: rf.Simulator(quad, noise=rf.Noise(snr_db=-1e300)), (), {}, frozenset({"snr_db"})),),  # OverflowError
+        # ||Q|| of a 1e-310 weight underflowed to 0: ZeroDivisionError in the Riccati residual.
+        "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),),
+        # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
+        "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
         # python-control's unnamed ControlDimension for a b of 0 rows.
