@@ -183,6 +183,8 @@ def ncfsyn(
     shaped plant ``Gs = W2 G W1`` at ``gamma = factor * gamma_min`` (``factor > 1``), and the
     plant's controller ``K = W1 Ks W2`` (negative feedback). ``w2`` defaults to the identity."""
     g = _as_ss("plant", plant)
+    if g.ninputs == 0 or g.noutputs == 0:  # LAPACK's own error otherwise (dgges: lwork=0)
+        raise ValueError(f"plant: expected at least one input and one output, got {g.noutputs}x{g.ninputs}")
     w1s = _as_ss("w1", w1)
     factor = real("factor", factor)
     if not np.isfinite(factor) or factor <= 1.0:
