@@ -1,6 +1,7 @@
-"""The atomic write: a file is written under a temporary name in its directory and renamed into
-place only when complete, so an interrupted run never leaves a truncated file under a final name.
-Depends on nothing in the package (the output checks and the lock's record both use it)."""
+"""Atomic file writes: a temporary name in the same directory, renamed into place only when complete,
+so an interrupted write never leaves a truncated file under its final name. The lowest module of
+the package's file handling: :mod:`rotorfault._util.lock` and :mod:`rotorfault._util.output` both
+write through it (it imports neither)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else ".")
     os.close(fd)
     tmp_path = Path(tmp)
-    os.chmod(tmp_path, 0o666 & ~umask())  # as an ordinary open() would create it
+    os.chmod(tmp_path, 0o666 & ~_umask())  # as an ordinary open() would create it
     try:
         yield tmp_path
         os.replace(tmp_path, final)
@@ -28,8 +29,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise
 
 
-def umask() -> int:
-    """The process umask (read without changing it)."""
+def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -44,4 +44,4 @@ def write_text(path: str | os.PathLike[str], text: str) -> None:
             os.fsync(handle.fileno())
 
 
-__all__ = ["atomic_path", "umask", "write_text"]
+__all__ = ["atomic_path", "write_text"]

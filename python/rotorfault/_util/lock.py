@@ -33,6 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .atomic import write_text
+
 LOCK_SUFFIX = ".rotorfault-lock"
 
 
@@ -53,6 +55,12 @@ def lock_file(out: str | os.PathLike[str]) -> Path:
     """The lock file of the output ``out`` (beside it)."""
     p = Path(out).absolute()
     return p.parent / f".{p.name}{LOCK_SUFFIX}"
+
+
+def is_lock_file(name: str) -> bool:
+    """Whether the file ``name`` is an output's lock or its holder record (they stay beside the
+    output after a run: removing a lock file on release would let two writers lock different files)."""
+    return name.startswith(".") and (name.endswith(LOCK_SUFFIX) or name.endswith(LOCK_SUFFIX + ".json"))
 
 
 def _record_file(out: str | os.PathLike[str]) -> Path:
@@ -116,8 +124,6 @@ def output_lock(field: str, out: str | os.PathLike[str]) -> Iterator[OutputLock]
     record_path = _record_file(out)
     previous = _read_record(record_path) if record_path.exists() else None
     try:
-        from .atomic import write_text
-
         record = {
             "pid": os.getpid(),
             "host": socket.gethostname(),
@@ -137,4 +143,4 @@ def output_lock(field: str, out: str | os.PathLike[str]) -> Iterator[OutputLock]
         lock.release()
 
 
-__all__ = ["LOCK_SUFFIX", "OutputInUse", "OutputLock", "describe_holder", "lock_file", "output_lock"]
+__all__ = ["LOCK_SUFFIX", "OutputInUse", "OutputLock", "describe_holder", "is_lock_file", "lock_file", "output_lock"]

@@ -4,8 +4,7 @@ truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfa
 through :func:`atomic_path`.)
 
 This module depends on nothing else in the package but :mod:`rotorfault._util.atomic` (the
-atomic write, which the lock's record uses too) and :mod:`rotorfault._util.lock` (one writer per
-output), so every room can use it.
+atomic write) and :mod:`rotorfault._util.lock` (one writer per output), so every room can use it.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from .atomic import atomic_path, umask, write_text
+from .atomic import _umask, atomic_path, write_text
 
 #: File types a figure can be saved as (by extension).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -150,7 +149,7 @@ def _output_directory(path: str | os.PathLike[str], manifest: dict[str, Any]) ->
 
     final = Path(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else "."))
-    os.chmod(tmp, 0o777 & ~umask())
+    os.chmod(tmp, 0o777 & ~_umask())
     old: Path | None = None
     try:
         yield tmp

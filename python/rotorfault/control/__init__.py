@@ -20,7 +20,11 @@
 - :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
   input moves (:func:`stabilisability`, :func:`detectability`);
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
-  and the loop-shape weight.
+  and the loop-shape weight;
+- :mod:`~rotorfault.control.realisation`: state-space realisations built here (transfer
+  functions, series, balancing, minimal and balanced realisations), the same on every install;
+- :mod:`~rotorfault.control.norms`: the H-infinity norm (:func:`hinf_norm`, continuous and
+  discrete).
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
@@ -49,7 +53,7 @@ from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, registry, robust, systems
+    from . import lanzon, norms, realisation, registry, robust, systems
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
     from .systems import LinearModel, lanzon_plant
@@ -64,6 +68,8 @@ _LAZY = {
     "systems": ("systems", None),
     "LinearModel": ("systems", "LinearModel"),
     "lanzon_plant": ("systems", "lanzon_plant"),
+    "norms": ("norms", None),
+    "realisation": ("realisation", None),
     "LanzonController": ("lanzon", "LanzonController"),
     "NcfsynResult": ("robust", "NcfsynResult"),
     "ncfsyn": ("robust", "ncfsyn"),
@@ -108,6 +114,8 @@ __all__ = [
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "norms",
+    "realisation",
     "registry",
     "robust",
     "stabilisability",

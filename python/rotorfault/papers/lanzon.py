@@ -106,6 +106,18 @@ class DesignCase:
     channel_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
     outer_loop: OuterLoopGains = field(default_factory=OuterLoopGains)
 
+    def __post_init__(self) -> None:
+        crossover = real("crossover_rad_s", self.crossover_rad_s)
+        if not (math.isfinite(crossover) and crossover > 0):
+            raise ValueError(f"crossover_rad_s: must be finite and > 0, got {crossover}")
+        gains = np.asarray(self.channel_gain, dtype=np.float64)
+        if gains.shape != (3,) or not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+            raise ValueError(f"channel_gain: expected 3 finite numbers > 0 (phi, theta, r), got {self.channel_gain}")
+        if not isinstance(self.limits, bool):
+            raise TypeError(f"limits: expected True or False, got {type(self.limits).__name__}")
+        if not isinstance(self.outer_loop, OuterLoopGains):
+            raise TypeError(f"outer_loop: expected OuterLoopGains, got {type(self.outer_loop).__name__}")
+
     def design(self, vehicle: LanzonVehicle) -> LanzonDesign:
         return design(vehicle, crossover_rad_s=self.crossover_rad_s, channel_gain=self.channel_gain)
 
@@ -416,7 +428,7 @@ def monte_carlo(
 #: The columns of :func:`report_rows` and their types.
 REPORT_COLUMNS: tuple[tuple[str, str], ...] = (
     ("scenario", "string"), ("case", "string"), ("case_description", "string"), ("inertia_zz_kg_m2", "float64"),
-    ("crossover_rad_s", "float64"), ("limits", "bool"), ("gamma_min", "float64"), ("gamma", "float64"),
+    ("crossover_rad_s", "float64"), ("limits", "bool"), ("gamma_min", "float64"), ("gamma", "float64"), ("achieved_norm", "float64"),
     ("outcome", "string"), ("outcome_text", "string"), ("lost_at_s", "float64"), ("duration_s", "float64"),
     ("level_after_s", "float64"), ("window_tilt_deg", "float64"), ("window_spin_rad_s", "float64"),
     ("max_altitude_loss_m", "float64"), ("final_error_m", "float64"), ("window_horizontal_error_m", "float64"),
@@ -439,6 +451,7 @@ def report_rows(runs: list[LanzonRun]) -> Records:
             "limits": run.case.limits,
             "gamma_min": run.design.gamma_min,
             "gamma": run.design.gamma,
+            "achieved_norm": run.design.evidence.achieved_norm,
             "outcome": run.outcome,
             "outcome_text": outcome_text(run.outcome, run.lost_at_s),
             "lost_at_s": run.lost_at_s,

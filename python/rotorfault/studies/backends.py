@@ -42,7 +42,6 @@ def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: 
 def check_dask(dask: Any) -> None:
     """Checks, before any work or output, that the Dask backend can run here with ``dask`` (a
     Client, an address or ``"local:N"``): Dask installed, the argument well formed."""
-    # The one helper's message and exception (an ImportError naming the extra), as everywhere.
     require_available("backend='dask'", "dask", "distributed")
     from distributed import Client
 

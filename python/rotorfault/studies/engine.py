@@ -21,7 +21,6 @@ from typing import TYPE_CHECKING, Any
 from .._typing import ScanBackend as Backend
 from .._util.convert import flag
 from .._util.lock import output_lock
-from .._util.optional import require_available
 from .._util.output import check_parent, write_text
 from .._util.progress import progress_bar
 from .backends import ChunkTask, check_dask, dask_client, run_dask, run_local
@@ -113,7 +112,6 @@ def run_chunks(
         raise ValueError(f"backend: must be 'local' or 'dask', got {backend!r}")
     if backend == "dask":
         check_dask(dask)
-        require_available("backend='dask'", "dask", "distributed")
     schema = schema.remove_metadata()
     identity: dict[str, Any] = {
         "kind": kind,
