@@ -197,7 +197,10 @@ def balance(a: FloatArray) -> tuple[FloatArray, FloatArray]:
     matrix and the state scale (``x = T x_balanced``)."""
     from scipy.linalg import matrix_balance  # type: ignore[import-untyped]
 
-    balanced, (scale, _) = matrix_balance(a, permute=False, separate=True)
+    # scipy casts its permutation (unused: permute=False) to int; on entries near 1e-282 that cast
+    # sees a non-finite value and warns. The scaling we use is not affected.
+    with np.errstate(invalid="ignore"):
+        balanced, (scale, _) = matrix_balance(a, permute=False, separate=True)
     return np.asarray(balanced, dtype=np.float64), np.asarray(scale, dtype=np.float64)
 
 

@@ -545,6 +545,8 @@ def _regressions(t: dict[str, Target]) -> None:
         "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),),
         # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
         "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),),
+        # scipy's matrix_balance warned (a cast of its unused permutation) on an entry of 1e-282.
+        "stabilisability": (Call(control.stabilisability, (np.array([[0.0, 0.0], [1.0, 9.947778682040334e-282]]), np.zeros((2, 1)))),),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
         # python-control's unnamed ControlDimension for a b of 0 rows.
