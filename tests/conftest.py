@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 import rotorfault as rf
 
@@ -17,6 +18,11 @@ import rotorfault as rf
 TESTS = Path(__file__).resolve().parent
 if str(TESTS) not in sys.path:
     sys.path.insert(0, str(TESTS))
+
+#: The pre-release run of the hostile-input harness (``--hypothesis-profile=long``, DEVELOPERS.md):
+#: many examples, no deadline; ``tests/cross/hostile/hostile_runner.py`` spreads them over every
+#: target within ``ROTORFAULT_HOSTILE_SECONDS`` per target.
+settings.register_profile("long", max_examples=100_000, deadline=None)
 
 
 @pytest.fixture(scope="session")

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from .._util.convert import float_array, real
+
 #: Used for PX4 imports without ``inertia_kg_m2`` (PX4 keeps no inertia): the ACAI, failure
 #: tables, hover margins and ``certify`` do not depend on it; simulations do.
 PLACEHOLDER_INERTIA_KG_M2 = (0.01, 0.01, 0.02)
@@ -186,23 +188,28 @@ def rotorpy_columns(quad_params: dict[str, Any]) -> dict[str, Any]:
     rotor_pos = quad_params["rotor_pos"]
     if not isinstance(rotor_pos, dict):
         raise TypeError(f"quad_params['rotor_pos']: expected a dict of rotor positions, got {type(rotor_pos).__name__}")
-    flu = np.array([np.asarray(v, dtype=float) for v in rotor_pos.values()], dtype=float)
+    flu = np.array([float_array(f"quad_params['rotor_pos'][{k!r}]", v, 1) for k, v in rotor_pos.items()], dtype=float)
     if flu.ndim != 2 or flu.shape[1] != 3:
         raise ValueError(f"quad_params['rotor_pos']: each position must have 3 entries, got shape {flu.shape}")
-    directions = np.asarray(quad_params["rotor_directions"], dtype=float)
+    directions = float_array("quad_params['rotor_directions']", quad_params["rotor_directions"], 1)
     m = flu.shape[0]
-    k_eta, k_m = float(quad_params["k_eta"]), float(quad_params["k_m"])
+
+    def number(key: str, default: float | None = None) -> float:
+        return real(f"quad_params[{key!r}]", quad_params[key] if default is None else quad_params.get(key, default))
+
+    k_eta, k_m = number("k_eta"), number("k_m")
     if k_eta <= 0.0:
         raise ValueError(f"quad_params['k_eta']: must be > 0, got {k_eta}")
-    speed_max = float(quad_params["rotor_speed_max"])
-    speed_min = float(quad_params.get("rotor_speed_min", 0.0))
+    speed_max = number("rotor_speed_max")
+    speed_min = number("rotor_speed_min", 0.0)
     return {
         "position_m": flu * np.array([1.0, -1.0, -1.0]),
         "spin": -directions,  # +1 in RotorPy: positive yaw moment about z up, a clockwise rotor
-        "max_thrust_n": np.full(m, k_eta * speed_max**2),
-        "min_thrust_n": np.full(m, k_eta * speed_min**2),
-        "mass_kg": float(quad_params["mass"]),
-        "inertia_kg_m2": [float(quad_params[k]) for k in ("Ixx", "Iyy", "Izz")],
+        # Products, not powers: an absurd speed gives an infinite thrust (refused by name), not OverflowError.
+        "max_thrust_n": np.full(m, k_eta * speed_max * speed_max),
+        "min_thrust_n": np.full(m, k_eta * speed_min * speed_min),
+        "mass_kg": number("mass"),
+        "inertia_kg_m2": [number(k) for k in ("Ixx", "Iyy", "Izz")],
         "drag_torque_ratio_m": k_m / k_eta,
         "gravity_m_s2": 9.81,
     }

@@ -28,7 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._util.convert import FloatArray, control_axes, flag, float_array
+from .._util.convert import FloatArray, control_axes, flag, float_array, real
 from .._util.tables import Column, Tabular
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .airframe import Airframe, require_airframe
@@ -241,6 +241,7 @@ EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formu
 def format_acai(value: float, hover: HoverPoint = "inside") -> str:
     """4 decimals like the paper; "undefined" for -inf; a star where the number reads as
     non-negative (eq. (13)'s 0) but the hover wrench lies outside the attainable set."""
+    value = real("value", value)
     if math.isinf(value):
         return "undefined"
     return f"{value:.4f}*" if value >= 0.0 and hover == "outside" else f"{value:.4f}"

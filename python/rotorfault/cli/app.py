@@ -1,7 +1,8 @@
 """The ``rotorfault`` command group and what every command shares: the one-line
 ``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2; a
-missing optional package names its extra), number and rotor-list parsing, and a report command's
-handling of SIGTERM and Ctrl-C. What a command writes, and in which format, is
+missing optional package names its extra), number and rotor-list parsing, Ctrl-C (exit status 130
+with one line; an interrupted ``--out`` output says that ``--resume`` completes it) and a report
+command's handling of SIGTERM. What a command writes, and in which format, is
 :mod:`~rotorfault.cli.output`."""
 
 from __future__ import annotations
@@ -104,7 +105,42 @@ def claim_output(field: str, path: str, *, force: bool) -> Path:
     return click.get_current_context().with_resource(claim_output_directory(field, path, force=force))
 
 
-@click.group()
+#: The exit status of a command stopped by Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
+
+
+class Interrupted(click.ClickException):
+    """Ctrl-C: one line on standard error and exit status 130 (click's own handling prints
+    ``Aborted!`` and exits 1, which a script cannot tell from a failure)."""
+
+    exit_code = EXIT_INTERRUPTED
+
+
+@contextlib.contextmanager
+def resumable_interruptions(out_path: str | None) -> Iterator[None]:
+    """A study's work: Ctrl-C ends the command with :class:`Interrupted`, saying whether the
+    ``--out`` output can be completed (its chunks are written whole, so ``--resume`` can)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        if out_path is None:
+            raise Interrupted("interrupted (Ctrl-C): nothing written") from None
+        raise Interrupted(
+            f"interrupted (Ctrl-C): {out_path} keeps the chunks written; the same command with --resume completes it"
+        ) from None
+
+
+class _Group(click.Group):
+    """The command group: Ctrl-C anywhere in a command is :class:`Interrupted` (exit status 130)."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise Interrupted("interrupted (Ctrl-C)") from None
+
+
+@click.group(cls=_Group)
 @click.version_option(package_name="rotorfault")
 def cli() -> None:
     """rotorfault: will this multirotor stay controllable when rotors degrade or fail?"""
@@ -122,8 +158,8 @@ def _raise_terminated(signum: int, frame: Any) -> None:
 @contextlib.contextmanager
 def _report_interruptions() -> Iterator[None]:
     """A report command's work: SIGTERM becomes an exception (so the temporary report directory
-    is cleaned up) and SIGTERM or Ctrl-C end with a one-line message saying the previous report is
-    unchanged. Outside the main thread (an embedding application) SIGTERM is left alone."""
+    is cleaned up) and SIGTERM (exit status 1) or Ctrl-C (:class:`Interrupted`, 130) end with a
+    one-line message saying the previous report is unchanged. Outside the main thread (an embedding application) SIGTERM is left alone."""
     previous = signal.getsignal(signal.SIGTERM)
     in_main = True
     try:
@@ -135,7 +171,7 @@ def _report_interruptions() -> Iterator[None]:
     except _Terminated:
         raise click.ClickException("terminated (SIGTERM): no report written, the previous one is unchanged") from None
     except KeyboardInterrupt:
-        raise click.ClickException("interrupted: no report written, the previous one is unchanged") from None
+        raise Interrupted("interrupted (Ctrl-C): no report written, the previous one is unchanged") from None
     finally:
         if in_main:
             signal.signal(signal.SIGTERM, previous)

@@ -15,8 +15,8 @@ writes it in the format asked for:
 
 ``--quiet`` writes nothing on standard output (and no progress bar): the exit status is the
 answer. Errors always go to standard error as one line. Exit statuses (:data:`EXIT_CODES`): 0 ok,
-1 error (bad input, a failed computation, an interrupted run), 2 usage (an unknown option, a
-missing argument: click's), 3 a requirement not met (``certify --require``).
+1 error (bad input, a failed computation, SIGTERM), 2 usage (an unknown option, a missing
+argument: click's), 3 a requirement not met (``certify --require``), 130 interrupted by Ctrl-C.
 """
 
 from __future__ import annotations
@@ -44,7 +44,10 @@ FORMATS: tuple[str, ...] = get_args(Format)
 #: that is not an addition raises it.
 SCHEMA_VERSION = 1
 #: The exit statuses of every command.
-EXIT_CODES = {0: "ok", 1: "error (bad input, failed computation, interrupted)", 2: "usage (click)", 3: "requirement not met"}
+EXIT_CODES = {
+    0: "ok", 1: "error (bad input, failed computation, SIGTERM)", 2: "usage (click)", 3: "requirement not met",
+    130: "interrupted (Ctrl-C; an --out output is completed by --resume)",
+}
 EXIT_REQUIREMENT = 3
 
 

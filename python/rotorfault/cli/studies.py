@@ -13,7 +13,7 @@ from .._typing import AcaiFormula
 from .._util.output import check_output_file
 from ..analysis import Airframe, acai_label
 from ..studies.scan import efficiency_scan
-from .app import _user_errors, airframe_option, cli, formula_option, load_airframe, parse_numbers, parse_rotors
+from .app import _user_errors, airframe_option, cli, resumable_interruptions, formula_option, load_airframe, parse_numbers, parse_rotors
 from .output import CommandOutput, Output, Rows, output_options, records
 
 
@@ -101,10 +101,11 @@ def _scan_to_parquet(
         axes[f"efficiency_{r}"] = levels
     if plot_path is not None and (len(swept) != 3 or extra_axes):
         raise ValueError("plot: the Fig. 4 plot needs exactly three swept rotors and no --axis")
-    result = acai_scan(
-        frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
-        backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=output.progress,
-    )
+    with resumable_interruptions(out_path):
+        result = acai_scan(
+            frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
+            backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=output.progress,
+        )
     ok = result.controllable_count(give_up_yaw=give_up_yaw)
     if plot_path is not None:
         result.plot(plot_path, give_up_yaw=give_up_yaw)
@@ -275,9 +276,11 @@ def campaign_command(
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
     if runs is not None:
         campaign = replace(campaign, runs=runs)
-    result = run_campaign(
-        campaign, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address, progress=progress,
-    )
+    with resumable_interruptions(out_path):
+        result = run_campaign(
+            campaign, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address,
+            progress=progress,
+        )
     if plot_path is not None:
         result.plot(plot_path)
     every = result.survival()[0]

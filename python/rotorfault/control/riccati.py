@@ -180,9 +180,19 @@ def riccati_residual(
         terms = [a.T @ x @ a, -x, -(a.T @ x @ b @ gain), q]
     else:
         terms = [a.T @ x, x @ a, -(x @ b @ gain), q]
-    residual = float(np.linalg.norm(sum(terms)))
-    size = sum(float(np.linalg.norm(term)) for term in terms)
-    return residual / size, residual / float(np.linalg.norm(q))
+    residual = _norm(sum(terms))
+    size = sum(_norm(term) for term in terms)
+    q_size = _norm(q)
+    # Q = 0 (allowed: semi-definite) has no relative residual; any residual is then infinitely large.
+    relative_q = residual / q_size if q_size > 0 else (math.inf if residual > 0 else 0.0)
+    return residual / size if size > 0 else 0.0, relative_q
+
+
+def _norm(matrix: Any) -> float:
+    """The Frobenius norm taken on ``matrix`` divided by its largest entry: weights of 1e-170
+    (squares underflow to 0) and 1e300 (squares overflow) get their true norm."""
+    peak = float(np.max(np.abs(matrix), initial=0.0))
+    return 0.0 if peak == 0.0 else peak * float(np.linalg.norm(np.asarray(matrix) / peak))
 
 
 def sampled_spectral_radius(a: npt.ArrayLike, b: npt.ArrayLike, gain: npt.ArrayLike, dt_s: float) -> float:

@@ -197,7 +197,10 @@ def balance(a: FloatArray) -> tuple[FloatArray, FloatArray]:
     matrix and the state scale (``x = T x_balanced``)."""
     from scipy.linalg import matrix_balance  # type: ignore[import-untyped]
 
-    balanced, (scale, _) = matrix_balance(a, permute=False, separate=True)
+    # scipy casts its permutation (unused: permute=False) to int; on entries near 1e-282 that cast
+    # sees a non-finite value and warns. The scaling we use is not affected.
+    with np.errstate(invalid="ignore"):
+        balanced, (scale, _) = matrix_balance(a, permute=False, separate=True)
     return np.asarray(balanced, dtype=np.float64), np.asarray(scale, dtype=np.float64)
 
 
@@ -208,15 +211,23 @@ def equilibrate(matrix: npt.NDArray[np.generic]) -> tuple[npt.NDArray[np.generic
     rows = np.ones(scaled.shape[0])
     cols = np.ones(scaled.shape[1])
     for _ in range(8):
-        r = _inverse_power_of_two(np.linalg.norm(scaled, axis=1))
+        r = _inverse_power_of_two(_norms(scaled, 1))
         scaled *= r[:, None]
-        c = _inverse_power_of_two(np.linalg.norm(scaled, axis=0))
+        c = _inverse_power_of_two(_norms(scaled, 0))
         scaled *= c[None, :]
         rows *= r
         cols *= c
         if np.all(r == 1.0) and np.all(c == 1.0):
             break
     return scaled, rows, cols
+
+
+def _norms(matrix: npt.NDArray[np.generic], axis: int) -> FloatArray:
+    """Euclidean norms along ``axis``, each taken on its vector divided by its largest entry: no
+    overflow for entries of 1e300 (squares would be inf, and the scaling would zero the row)."""
+    peak = np.max(np.abs(matrix), axis=axis, initial=0.0)
+    divisor = np.expand_dims(np.where(peak > 0, peak, 1.0), axis)
+    return np.asarray(peak * np.linalg.norm(matrix / divisor, axis=axis), dtype=np.float64)
 
 
 def _inverse_power_of_two(norms: FloatArray) -> FloatArray:

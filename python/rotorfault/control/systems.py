@@ -25,7 +25,7 @@ import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
 
-from .._util.convert import FloatArray, frozen_array
+from .._util.convert import FloatArray, float_array, frozen_array
 from .._util.deprecation import renamed_attribute
 from .linear import STATE_LABELS, STATE_NAMES
 
@@ -57,12 +57,21 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
         states: Sequence[str] = STATE_NAMES,
         state_descriptions: Sequence[str] = STATE_LABELS,
     ) -> None:
-        am = np.asarray(a, dtype=np.float64)
-        bm = np.asarray(b, dtype=np.float64)
+        am = float_array("a", a, 2)
+        bm = float_array("b", b, 2)
         n, m = bm.shape
+        # Shapes named here, before python-control's own (unnamed) dimension errors.
+        if am.shape != (n, n) or n == 0:
+            raise ValueError(f"a: expected a square matrix with as many rows as b ({n}), got shape {am.shape}")
+        for field, labels, size in (("states", states, n), ("state_descriptions", state_descriptions, n), ("inputs", inputs, m),
+                                    ("command_columns", command_columns, m)):
+            if isinstance(labels, (str, bytes)) or len(labels) != size:
+                raise ValueError(f"{field}: expected {size} entries (the shape of b is {bm.shape})")
         super().__init__(am, bm, np.eye(n), np.zeros((n, m)), states=list(states), inputs=list(inputs),
                          outputs=list(states), name=name)
         self.x_trim: FloatArray = frozen_array("x_trim", x_trim, 1)
+        if self.x_trim.shape != (n,):
+            raise ValueError(f"x_trim: expected {n} states, got {self.x_trim.shape[0]}")
         self.u_trim: FloatArray = frozen_array("u_trim", u_trim, 1)
         self.command_columns: tuple[int, ...] = tuple(int(c) for c in command_columns)
         if input_map is None:
@@ -101,6 +110,8 @@ def lanzon_plant(vehicle: Any) -> ct.StateSpace:
     """``vehicle.plant()`` (:class:`~rotorfault.control.lanzon.LanzonVehicle`: ``(A_r, B_r)`` of
     eq. (26), outputs of (27)) with its signals named (:data:`LANZON_STATES`, ...); the matrices
     are the same."""
+    if not callable(getattr(vehicle, "plant", None)):
+        raise TypeError(f"vehicle: expected a rotorfault.control.lanzon.LanzonVehicle, got {type(vehicle).__name__}")
     plant = vehicle.plant()
     return ct.ss(plant.A, plant.B, plant.C, plant.D, states=list(LANZON_STATES), inputs=list(LANZON_INPUTS),
                  outputs=list(LANZON_OUTPUTS), name="lanzon-plant")

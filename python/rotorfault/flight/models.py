@@ -126,7 +126,13 @@ class Noise:
     seed: int = 0
 
     def _core(self, seed_offset: int = 0) -> _rfcore.SensorNoise:
-        relative = 0.0 if self.snr_db is None else 10.0 ** (-real("noise.snr_db", self.snr_db) / 20.0)
+        relative = 0.0
+        if self.snr_db is not None:
+            snr_db = real("noise.snr_db", self.snr_db)
+            try:
+                relative = 10.0 ** (-snr_db / 20.0)
+            except OverflowError:  # the core refuses what is not finite; a float cannot hold this one
+                raise ValueError(f"noise.snr_db: {snr_db} dB gives a noise scale too large for a float") from None
         if self.std is None:
             absolute = np.zeros(12)
         else:

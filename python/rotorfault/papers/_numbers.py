@@ -23,6 +23,7 @@ from typing import Literal, get_args
 
 from .._typing import ClaimStatus, FlightVerdict, NumberKind
 
+from .._util.convert import real
 from .._util.tables import Records
 
 #: ``pass``: within the tolerance of the printed value; ``differs``: not (the note says why).
@@ -56,6 +57,18 @@ class PaperNumber:
     def __post_init__(self) -> None:
         if self.kind is not None and self.kind not in NUMBER_KINDS:
             raise ValueError(f"kind: must be one of {', '.join(NUMBER_KINDS)} or None, got {self.kind!r}")
+
+    def __post_init__(self) -> None:
+        for name in ("paper", "where", "quantity", "note"):
+            if not isinstance(getattr(self, name), str):
+                raise TypeError(f"{name}: expected a string, got {type(getattr(self, name)).__name__}")
+        for name in ("printed", "ours", "tolerance"):
+            object.__setattr__(self, name, real(name, getattr(self, name)))
+        # ``ours`` may be anything a computation gave (a NaN or an infinity reads "differs").
+        if not math.isfinite(self.printed):
+            raise ValueError(f"printed: must be finite (a number the paper prints), got {self.printed}")
+        if not (math.isfinite(self.tolerance) and self.tolerance >= 0.0):
+            raise ValueError(f"tolerance: must be >= 0 and finite, got {self.tolerance}")
 
     @property
     def difference(self) -> float:
@@ -118,6 +131,11 @@ def number_rows(numbers: Sequence[PaperNumber]) -> Records:
     one per number, with the difference and the status."""
     columns = [("paper", "string"), ("where", "string"), ("quantity", "string"), ("printed", "float64"), ("ours", "float64"),
                ("difference", "float64"), ("tolerance", "float64"), ("status", "string"), ("kind", "string"), ("scored", "bool"), ("note", "string")]
+    if isinstance(numbers, (str, bytes)) or not isinstance(numbers, Sequence):
+        raise TypeError(f"numbers: expected a sequence of PaperNumber, got {type(numbers).__name__}")
+    for i, n in enumerate(numbers):
+        if not isinstance(n, PaperNumber):
+            raise TypeError(f"numbers[{i}]: expected a PaperNumber, got {type(n).__name__}")
     rows = [
         {"paper": n.paper, "where": n.where, "quantity": n.quantity, "printed": n.printed, "ours": n.ours,
          "difference": n.difference, "tolerance": n.tolerance, "status": n.status, "kind": n.kind, "scored": n.scored, "note": n.note}

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._typing import AcaiFormula, ScanBackend as Backend
-from .._util.convert import FloatArray, flag, float_array, real, rotor_numbers
+from .._util.convert import FloatArray, count, flag, float_array, real, rotor_numbers
 from .._util.progress import chunks
 from .._util.tables import Column, Tabular
 from ..analysis.acai import acai_batch
@@ -163,6 +163,8 @@ def plot_efficiency_scan(scan: EfficiencyScan | Scan | str | PathLike[str], path
         scan = read_scan(scan)
     if isinstance(scan, Scan):
         return scan.plot(path)
+    if not isinstance(scan, EfficiencyScan):
+        raise TypeError(f"scan: expected an EfficiencyScan, a Scan or the path of a scan's output, got {type(scan).__name__}")
     if len(scan.rotors) != 3:
         raise ValueError(f"scan: the Fig. 4 plot needs three swept rotors, got {len(scan.rotors)}")
     n = len(scan.levels)
@@ -586,6 +588,16 @@ def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
     (``efficiency_<i>`` columns of 0 and 1), in :func:`rotorfault.failure_table` order."""
     from itertools import combinations
 
+    rotor_count = count("rotor_count", rotor_count)
+    max_failed = count("max_failed", max_failed)
+    if not 1 <= rotor_count:
+        raise ValueError(f"rotor_count: must be >= 1, got {rotor_count}")
+    if max_failed > rotor_count:
+        raise ValueError(f"max_failed: must be at most rotor_count ({rotor_count}), got {max_failed}")
+    # Counted exactly before anything is built: C(n, k) rows of n values each.
+    total = sum(math.comb(rotor_count, k) for k in range(max_failed + 1)) * rotor_count
+    if total > MAX_SCAN_POINTS:
+        raise ValueError(f"max_failed: {total:,} sample values ({rotor_count} rotors, up to {max_failed} failed) exceed the limit of {MAX_SCAN_POINTS:,}")
     rows = [c for k in range(0, max_failed + 1) for c in combinations(range(rotor_count), k)]
     eff = np.ones((len(rows), rotor_count))
     for i, failed in enumerate(rows):

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from .._typing import ScanBackend as Backend
+from .._util.convert import count
 from .._util.progress import progress_bar
 from ..control.ke import KeGains
 from .campaign import Campaign, _pair, run_chunk
@@ -213,7 +214,14 @@ def tune(
         raise TypeError(f"campaign: expected rotorfault.studies.Campaign, got {type(campaign).__name__}")
     if campaign.controller == "lqr":
         raise ValueError("campaign.controller: tuning searches Ke's gains; use ke-hil or ke-experiment")
+    for name, value in (("maxiter", maxiter), ("popsize", popsize)):
+        if count(name, value) < 1:
+            raise ValueError(f"{name}: must be >= 1, got {value}")
+    if bounds is not None and not isinstance(bounds, Mapping):
+        raise TypeError(f"bounds: expected a mapping of Ke gain names to (low, high), got {type(bounds).__name__}")
     space = _space(TUNED_GAINS if bounds is None else bounds)
+    if not space:
+        raise ValueError("bounds: expected at least one Ke gain to tune")
     baseline = campaign.gains or campaign.vehicle().gains
 
     def fly(c: Campaign) -> dict[str, np.ndarray[Any, Any]]:
@@ -244,10 +252,10 @@ def tuning_campaign(*, runs: int = 200, seed: int = 0, duration_s: float = 25.0)
     single failure and every ordered pair of failures (the first in 1-4 s, the second 4-8 s
     later), in one chunk; ``seed`` fixes the draws (common random numbers across candidates)."""
     pairs = ((1, 2), (2, 1), (3, 4), (4, 3), (1, 3), (3, 1), (2, 4), (4, 2))
-    return Campaign(
+    campaign = Campaign(
         runs=runs, seed=seed, duration_s=duration_s, failures=((1,), (2,), (3,), (4,), *pairs), fault_time_s=(1.0, 4.0), gap_s=(4.0, 8.0),
-        chunk_size=max(1, runs),
     )
+    return replace(campaign, chunk_size=campaign.runs)  # runs checked by the Campaign first
 
 
 # -- the hold search: partial and total faults -------------------------------------------------

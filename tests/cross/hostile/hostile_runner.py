@@ -1,0 +1,137 @@
+"""How the hostile-input harness makes each call: under a time limit, in rounds of Hypothesis
+examples until the profile's example count or the target's time budget is spent, counting calls.
+
+- In CI (Hypothesis' default profile, or any profile of fewer than 1,000 examples) each target
+  makes :data:`CI_EXAMPLES` calls, derandomized (the same calls on every run, no database).
+  ``--hypothesis-profile=long`` (registered in ``tests/conftest.py``; the pre-release run,
+  DEVELOPERS.md) runs rounds of random examples until ``max_examples`` calls or
+  ``ROTORFAULT_HOSTILE_SECONDS`` seconds per target (default 30), so an hour covers every target.
+- Each call must return or raise within :data:`CALL_LIMIT_S`: an alarm (SIGALRM) raises
+  :class:`CallTimeout` in the call (long Rust calls run Python's signal handlers as they poll for
+  Ctrl-C), so Hypothesis shrinks a slow call like any failure, each retry under its own alarm. The
+  test's ``pytest-timeout`` (thread method: it leaves SIGALRM to the harness) is the last resort.
+- ``ROTORFAULT_HOSTILE_LOG=path`` appends one JSON line per target: calls made, refusals, results.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import signal
+import sys
+import threading
+import time
+import warnings
+from collections.abc import Iterator
+from hostile_targets import FIELD_WORDS, Call, Target
+from hypothesis import HealthCheck, Phase, given, settings
+
+#: A call that takes longer than this fails: the harness's calls are small (a few rotors, runs
+#: of a second), so this is a hang, not slow work.
+CALL_LIMIT_S = 60.0
+
+
+class CallTimeout(Exception):
+    """Raised in a call that outlives :data:`CALL_LIMIT_S`."""
+
+
+def _expire(signum: int, frame: object) -> None:
+    raise CallTimeout()
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float) -> Iterator[None]:
+    """Raises :class:`CallTimeout` in the main thread after ``seconds`` of wall time."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGALRM, _expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+#: Calls per target in CI.
+CI_EXAMPLES = 6
+#: A profile with at least this many examples is a long run.
+LONG_EXAMPLES = 1000
+#: Examples per round in the long profile (each round is one Hypothesis run with its own seed).
+ROUND_EXAMPLES = 50
+#: The pytest-timeout of one target's test: its budget, then room for Hypothesis to shrink a call
+#: that timed out (each retry stopped by the alarm).
+TEST_TIMEOUT_S = int(float(os.environ.get("ROTORFAULT_HOSTILE_SECONDS", "30")) + 20 * CALL_LIMIT_S)
+
+#: A refusal names its field: ``field: rule`` (the project's form) or a word the call was given.
+#: ``field: rule``: one or more field names (``a.b[2]``, ``quad_params['mass']``, a file's path),
+#: comma-separated, perhaps with a parenthesis (``position_m[5][2] (rotor 6): ...``), then a colon.
+_FIELD_FIRST = re.compile(r"^[^\s:,]+(?:, [^\s:,]+)*(?: \([^)]*\))?:")
+
+
+def names_a_field(message: str, call: Call) -> bool:
+    if _FIELD_FIRST.match(message):
+        return True
+    words = call.words | FIELD_WORDS | set(call.kwargs)
+    return any(word and word in message for word in words)
+
+
+def call_once(name: str, target: Target, call: Call, counts: dict[str, int]) -> None:
+    try:
+        with warnings.catch_warnings(), time_limit(CALL_LIMIT_S):
+            warnings.simplefilter("error")
+            result = call.fn(*call.args, **call.kwargs)
+    except CallTimeout:
+        raise AssertionError(f"{name}: {call!r} did not return within {CALL_LIMIT_S:.0f} s") from None
+    except KeyboardInterrupt:  # never: only the user's Ctrl-C may raise it
+        raise AssertionError(f"{name}: KeyboardInterrupt from {call!r}") from None
+    except (ValueError, TypeError, OSError) as exc:
+        message = " ".join([str(exc), *getattr(exc, "__notes__", ())])
+        assert message.strip(), f"{name}: {type(exc).__name__} without a message from {call!r}"
+        assert names_a_field(message, call), f"{name}: {type(exc).__name__} names no field: {message!r}"
+        counts["refused"] += 1
+    else:
+        target.check(result, call)
+        counts["returned"] += 1
+    finally:
+        counts["calls"] += 1
+
+
+def run_target(name: str, target: Target) -> dict[str, int]:
+    """Runs the target's calls under the loaded profile; returns the counts."""
+    profile = settings.default
+    long = profile.max_examples >= LONG_EXAMPLES
+    total = profile.max_examples if long else CI_EXAMPLES
+    budget_s = float(os.environ.get("ROTORFAULT_HOSTILE_SECONDS", "30"))
+    counts = {"calls": 0, "refused": 0, "returned": 0}
+    started = time.monotonic()
+    round_ = 0
+    try:
+        for case in target.examples:
+            call_once(name, target, case, counts)
+        while counts["calls"] < total:
+            examples = min(ROUND_EXAMPLES, total - counts["calls"])
+
+            # No "explain" phase: it imports libcst, whose DeprecationWarning is an error here.
+            @settings(
+                profile, max_examples=examples, deadline=None, database=None, derandomize=not long,
+                phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.target, Phase.shrink],
+                suppress_health_check=list(HealthCheck),
+            )
+            @given(call=target.calls)
+            def one(call: Call) -> None:
+                call_once(name, target, call, counts)
+
+            before = counts["calls"]
+            one()
+            round_ += 1
+            if counts["calls"] == before or time.monotonic() - started > budget_s:
+                break
+    finally:
+        log = os.environ.get("ROTORFAULT_HOSTILE_LOG")
+        if log:
+            with open(log, "a", encoding="utf-8") as handle:
+                seconds = round(time.monotonic() - started, 1)
+                handle.write(json.dumps({"target": name, **counts, "seconds": seconds, "passed": sys.exc_info()[0] is None}) + "\n")
+    return counts

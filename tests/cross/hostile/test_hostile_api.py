@@ -1,0 +1,72 @@
+"""The hostile-input harness over the public API (issue 27): every public callable of ``rotorfault``
+and of its rooms (their ``__all__``) has a strategy of hostile calls (``hostile_targets.py``), or is
+a result type covered through the call that makes it, or is a Protocol; a new public callable in
+none of these fails :func:`test_every_public_callable_has_a_strategy`, so new API cannot escape.
+
+Each call must raise ``ValueError``/``TypeError``/``OSError`` naming a field, or return a result
+that passes its own checks, within a time limit (``hostile_runner.py``); ``KeyboardInterrupt``,
+any other exception, a NaN or a hang fails. CI runs a few derandomized calls per target; the
+pre-release run is ``--hypothesis-profile=long`` (DEVELOPERS.md)."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import types
+
+import pytest
+from hostile_runner import TEST_TIMEOUT_S, CallTimeout, run_target, time_limit
+from hostile_targets import NOT_CALLED, PRODUCED_BY, TARGETS
+
+ROOMS = ("rotorfault", "rotorfault.analysis", "rotorfault.allocation", "rotorfault.control", "rotorfault.flight", "rotorfault.studies",
+         "rotorfault.papers", "rotorfault.plotting")
+
+
+def public_callables() -> dict[str, object]:
+    found: dict[str, object] = {}
+    for room in ROOMS:
+        module = importlib.import_module(room)
+        for name in getattr(module, "__all__", ()):
+            value = getattr(module, name)
+            if callable(value) and not isinstance(value, types.ModuleType):
+                found.setdefault(name, value)
+    return found
+
+
+def test_every_public_callable_has_a_strategy() -> None:
+    missing = sorted(name for name in public_callables() if name not in TARGETS and name not in PRODUCED_BY and name not in NOT_CALLED)
+    assert missing == [], f"public callables without a hostile strategy (add one to tests/cross/hostile/hostile_targets.py): {missing}"
+    for result_type, producer in PRODUCED_BY.items():
+        assert producer in TARGETS, (result_type, producer)
+    for name, value in public_callables().items():
+        if name in NOT_CALLED:
+            assert inspect.isclass(value) and getattr(value, "_is_protocol", False), name
+
+
+def test_every_airframe_reader_has_a_strategy() -> None:
+    """The airframe's public readers and conversions are targets too (``from_toml`` and ``load``
+    read files: the CLI harness hands them TOML and PX4 files through ``--airframe``)."""
+    readers = {f"Airframe.{n}" for n in ("from_toml_str", "from_rotorpy", "with_parameters", "with_efficiency", "to_px4_params")}
+    assert readers <= set(TARGETS), sorted(readers - set(TARGETS))
+
+
+@pytest.mark.timeout(120, method="thread")
+def test_the_call_limit_stops_a_long_rust_call() -> None:
+    """The harness's alarm reaches into the core (the bindings run Python's signal handlers as
+    they poll for Ctrl-C): a call of minutes of work stops with CallTimeout, so a slow call is a
+    failure Hypothesis can shrink instead of a hang."""
+    import numpy as np
+
+    import rotorfault as rf
+
+    m = 52
+    ring = rf.Airframe(np.arange(m) * 2 * np.pi / m, [0.3] * m, [1, -1] * (m // 2), [5.0] * m, 2.0, [0.05, 0.05, 0.09], 0.02)
+    with pytest.raises(CallTimeout), time_limit(1.0):
+        rf.acai_batch(ring, np.ones((200_000, m)))  # about 1 ms each: minutes of work
+
+
+@pytest.mark.timeout(TEST_TIMEOUT_S, method="thread")
+@pytest.mark.parametrize("name", sorted(TARGETS))
+def test_hostile_calls(name: str) -> None:
+    counts = run_target(name, TARGETS[name])
+    assert counts["calls"] > 0
