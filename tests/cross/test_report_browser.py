@@ -30,6 +30,7 @@ import pytest
 from rotorfault.papers import du as du_paper
 from rotorfault.papers import ke as ke_paper
 from rotorfault.papers import reproduce
+from rotorfault.studies.deciding import DecidingCampaign
 from rotorfault.papers.decisions import decisions
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -131,7 +132,10 @@ def test_page_renders_with_every_image_loaded_and_no_errors(browser_check: dict[
 
 def test_every_table_has_the_expected_rows(browser_check: dict[str, object]) -> None:
     tables = {t["id"]: t["rows"] for t in browser_check["tables"]}  # type: ignore[union-attr]
-    assert tables["summary"] == len(reproduce.PAPERS)
+    assert tables["summary"] == len(reproduce.PAPERS) + len(reproduce.STUDIES)
+    # The deciding campaign: one row per cell, one per (vehicle, fault class) for the best controller.
+    assert tables["campaign-table-1"] == len(DecidingCampaign(runs=1).cells) == 39
+    assert tables["campaign-table-2"] == 13
     assert tables["du-numbers"] == len(du_paper.printed_numbers()) == 14
     assert tables["ke-numbers"] == len(ke_paper.printed_numbers()) == 33
     assert tables["lanzon-numbers"] == 13 + 4  # eq. (26) entries and the loop shape

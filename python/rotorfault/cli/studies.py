@@ -234,7 +234,9 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
 
 @cli.command("campaign")
 @click.argument("campaign_file", type=click.Path(dir_okay=False), required=False)
-@click.option("--runs", type=int, help="Override the file's run count.")
+@click.option("--runs", type=int, help="Override the file's run count (with --suite: runs per cell).")
+@click.option("--suite", type=click.Choice(["deciding"]), help="A named suite instead of a file: deciding = issue 30's grid (vehicle x fault class x controller), --runs per cell (default 1000).")
+@click.option("--seed", type=int, default=0, show_default=True, help="With --suite: the suite's seed.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
 @click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
 @click.option("--quick", is_flag=True, help="With --tune: a small search (12 candidates x 24 scenarios, about a minute).")
@@ -246,7 +248,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
 @output_options
 @_user_errors
 def campaign_command(
-    campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
+    campaign_file: str | None, runs: int | None, suite: str | None, seed: int, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
     resume: bool, dask_address: str | None, force: bool, progress: bool, output: Output,
 ) -> None:
     """Fly a fault campaign (a TOML file of rotorfault.studies.Campaign fields; default: every
@@ -272,6 +274,11 @@ def campaign_command(
             "campaign", {"mode": "tune", "candidates": tuned.candidates, "scenarios": tuned.scenarios},
             [Rows("gains", gains), Rows("scores", scores)], csv_table="gains", human=lambda out: out.print(escape(tuned.table())),
         ))
+        return
+    if suite is not None:
+        if campaign_file is not None or plot_path is not None:
+            raise ValueError("suite: --suite replaces the campaign file and takes no --plot")
+        _suite_command(suite, 1000 if runs is None else runs, seed, out_path, resume, force, dask_address, progress, output)
         return
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
     if runs is not None:
@@ -305,3 +312,20 @@ def campaign_command(
             out.print(f"plot written to {escape(plot_path)}")
 
     output.emit(CommandOutput("campaign", fields, tables, csv_table="survival", human=human))
+
+
+def _suite_command(
+    name: str, runs: int, seed: int, out_path: str | None, resume: bool, force: bool, dask_address: str | None, progress: bool, output: Output,
+) -> None:
+    """``rotorfault campaign --suite NAME``: a named suite (:data:`rotorfault.studies.deciding.SUITES`)."""
+    from ..studies.deciding import SUITES, run_deciding
+
+    suite = SUITES[name](runs, seed)
+    result = run_deciding(suite, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address,
+                          progress=progress)
+    fields: dict[str, Any] = {"mode": "suite", "suite": name, "runs_per_cell": runs, "seed": seed, "cell_count": len(suite.cells),
+                              "runs": suite.total_runs, "seconds": result.seconds, "out": out_path}
+    output.emit(CommandOutput(
+        "campaign", fields, [Rows("cells", result.cell_rows()), Rows("best", result.best())], csv_table="cells",
+        human=lambda out: out.print(escape(result.table())),
+    ))

@@ -57,8 +57,6 @@ class PaperNumber:
     def __post_init__(self) -> None:
         if self.kind is not None and self.kind not in NUMBER_KINDS:
             raise ValueError(f"kind: must be one of {', '.join(NUMBER_KINDS)} or None, got {self.kind!r}")
-
-    def __post_init__(self) -> None:
         for name in ("paper", "where", "quantity", "note"):
             if not isinstance(getattr(self, name), str):
                 raise TypeError(f"{name}: expected a string, got {type(getattr(self, name)).__name__}")

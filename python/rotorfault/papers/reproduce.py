@@ -52,6 +52,14 @@ PAPERS = (
 )
 
 
+#: Studies shown after the papers (same provider protocol); with ``providers`` given (tests), a
+#: study absent from it is left out rather than computed.
+STUDIES = (
+    Paper("campaign", "The campaign that decides: which controller holds which failure", "rotorfault.papers.campaign",
+          "the table vehicle x fault class x controller"),
+)
+
+
 def provider(paper: Paper) -> SectionProvider | None:
     """The paper's ``report_section``, or None when its module is not in the package (an import
     error inside an existing module is raised, not hidden)."""
@@ -431,6 +439,16 @@ def write_reproduce(
                 result.sections.append(not_landed(paper.key, paper.title, paper.module, paper.what))
             else:
                 result.sections.append(chosen(tmp, quick=quick))
+        for study in STUDIES:
+            if providers is not None and study.key not in providers:
+                continue
+            chosen = providers[study.key] if providers is not None else provider(study)
+            if progress is not None:
+                progress(f"{study.key}: {'computing' if chosen is not None else 'not landed yet'}")
+            if chosen is None:
+                result.sections.append(not_landed(study.key, study.title, study.module, study.what))
+            else:
+                result.sections.append(chosen(tmp, quick=quick))
         result.run_time_s = time.perf_counter() - start
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
                       command=shown_command, version=package_version(),
@@ -441,6 +459,6 @@ def write_reproduce(
     return result
 
 
-__all__ = ["BENCH_RESULTS", "BENCH_SCHEMA", "LINK_RULE", "NUMBERS_SCHEMA", "PAPERS", "BenchResult", "Paper", "ReproduceResult", "bench_results", "claim_row",
-           "default_bench_directory", "inline_markdown", "number_row", "provider", "render", "report_numbers", "score", "score_text",
+__all__ = ["BENCH_RESULTS", "BENCH_SCHEMA", "LINK_RULE", "NUMBERS_SCHEMA", "PAPERS", "STUDIES", "BenchResult", "Paper", "ReproduceResult", "bench_results",
+           "claim_row", "default_bench_directory", "inline_markdown", "number_row", "provider", "render", "report_numbers", "score", "score_text",
            "verdict_legend", "write_reproduce"]

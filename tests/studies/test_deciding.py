@@ -1,0 +1,154 @@
+"""The deciding campaign (issue 30): the hold rule at its thresholds, the grid, determinism, the
+core's hold window against full trajectories, and the CLI suite."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from rotorfault.studies import deciding as D
+
+
+def _track(t: np.ndarray, north: np.ndarray, down_offset: np.ndarray) -> np.ndarray:
+    p = np.zeros((len(t), 3))
+    p[:, 0] = np.asarray(D.HOVER_M[0]) + north
+    p[:, 2] = D.HOVER_M[2] + down_offset
+    return p
+
+
+@pytest.mark.parametrize(
+    ("north_m", "down_m", "at_s", "expected"),
+    [
+        (D.HOLD_HORIZONTAL_M, 0.0, 5.0, True),  # exactly at the horizontal threshold: holds
+        (D.HOLD_HORIZONTAL_M + 1e-6, 0.0, 5.0, False),
+        (0.0, D.HOLD_ALTITUDE_M, 9.0, True),  # exactly at the altitude threshold (below)
+        (0.0, -D.HOLD_ALTITUDE_M - 1e-6, 9.0, False),  # above the set point counts too
+        (50.0, 30.0, 4.99, True),  # a large excursion before the settling time is not judged
+    ],
+)
+def test_hold_rule_on_constructed_trajectories(north_m: float, down_m: float, at_s: float, expected: bool) -> None:
+    fault_s = 3.0
+    t = np.round(np.arange(0.0, fault_s + D.AFTER_FAULT_S + 1e-9, 0.01), 9)
+    north = np.where(np.isclose(t, fault_s + at_s), north_m, 0.1)
+    down = np.where(np.isclose(t, fault_s + at_s), down_m, 0.0)
+    altitude, horizontal = D.hold_errors(t, _track(t, north, down), fault_s)
+    verdict = D.holds(["holds-position"], [altitude], [horizontal])[0]
+    assert verdict == expected, (altitude, horizontal)
+
+
+def test_hold_rule_refuses_lost_runs_and_nan() -> None:
+    assert not D.holds(["crashed"], [0.0], [0.0])[0]  # ground contact ends a run as crashed
+    assert not D.holds(["tilt"], [0.0], [0.0])[0]
+    assert not D.holds(["holds-position"], [math.nan], [0.0])[0]
+    assert D.holds(["circling"], [0.5], [2.5])[0]  # the rule is the window's errors, not the verdict's 2 m
+    # A trajectory that ends before the hold window has no hold errors (NaN), so it never holds.
+    assert all(math.isnan(v) for v in D.hold_errors([0.0, 1.0], [[0, 0, -10], [0, 0, -10]], 3.0))
+
+
+def test_grid_composition() -> None:
+    suite = D.DecidingCampaign(runs=2)
+    assert set(D.VEHICLES) == {"ke-quadcopter", "lanzon-quadrotor", "px4-x500", "hexa-pnpnpn", "hexa-ppnnpn"}
+    assert set(D.CONTROLLERS) >= {"uniform-passive-ftc", "lanzon-controller", "indi-controller"}
+    pairs = {(c.vehicle, c.fault_class) for c in suite.cells}
+    # Two opposing rotors on the quadrotors only: 3 quadrotors x 3 classes + 2 hexacopters x 2.
+    assert len(pairs) == 13 and ("hexa-pnpnpn", "two-opposing-hover") not in pairs
+    assert len(suite.cells) == 13 * len(D.CONTROLLERS) and suite.total_runs == 2 * len(suite.cells)
+    assert D.vehicle("ke-quadcopter").opposing_pairs() == ((1, 3), (2, 4))
+    assert D.vehicle("px4-x500").opposing_pairs() == ((1, 2), (3, 4))
+    x500 = D.vehicle("px4-x500").airframe
+    assert x500.rotor_count == 4 and x500.mass_kg == pytest.approx(2.064) and np.allclose(x500.max_thrust_n, 8.54858)
+    # Every run's draws lie in the issue's ranges.
+    for cell in suite.cells[:: len(D.CONTROLLERS)]:
+        for i in range(20):
+            d = D.DecidingCampaign(runs=20).draw(cell, i)
+            assert 0.0 <= d.efficiency <= 1.0 and 0.8 <= d.mass_scale <= 1.2 and 0.8 <= d.lag_scale <= 1.2
+            assert all(0.8 <= s <= 1.0 for s in d.thrust_scale) and 0.8 <= d.drag_torque_scale <= 1.2
+            assert math.hypot(*d.wind_m_s) <= 5.0 and d.duration_s == pytest.approx(d.fault_time_s + D.AFTER_FAULT_S)
+            lo, hi = D.FORWARD_FAULT_S if "forward" in cell.fault_class else D.HOVER_FAULT_S
+            assert lo <= d.fault_time_s <= hi
+            assert len(d.pattern) == (2 if "opposing" in cell.fault_class else 1)
+    # Lanzon's design flies only its own vehicle with rotor 2 failing.
+    lanzon = D.CONTROLLERS["lanzon-controller"]
+    assert lanzon.applies(D.vehicle("lanzon-quadrotor"), (2,)) is None
+    assert lanzon.applies(D.vehicle("lanzon-quadrotor"), (1,)) and lanzon.applies(D.vehicle("ke-quadcopter"), (2,))
+
+
+def test_bad_suites_are_refused_by_field() -> None:
+    with pytest.raises(ValueError, match="runs"):
+        D.DecidingCampaign(runs=0)
+    with pytest.raises(ValueError, match="controllers"):
+        D.DecidingCampaign(controllers=("pid",))
+    with pytest.raises(TypeError, match="vehicles"):
+        D.DecidingCampaign(vehicles="px4-x500")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="seed"):
+        D.DecidingCampaign(seed=1.5)  # type: ignore[arg-type]
+
+
+SMALL = dict(runs=3, vehicles=("hexa-pnpnpn", "lanzon-quadrotor"), fault_classes=("one-rotor-hover",))
+
+
+def test_rows_are_deterministic_by_seed_and_independent_of_the_cut() -> None:
+    suite = D.DecidingCampaign(**SMALL)  # type: ignore[arg-type]
+    whole = D.run_rows(suite, 0, suite.total_runs)
+    cut = [D.run_rows(suite, a, min(a + 4, suite.total_runs)) for a in range(0, suite.total_runs, 4)]
+    for name in ("outcome", "holds", "hold_horizontal_error_m", "efficiency", "failed_rotors"):
+        joined = np.concatenate([c[name] for c in cut])
+        assert np.array_equal(whole[name], joined) if joined.dtype != float else np.array_equal(whole[name], joined, equal_nan=True)
+    other = D.run_rows(D.DecidingCampaign(**{**SMALL, "seed": 1}), 0, suite.total_runs)  # type: ignore[arg-type]
+    assert not np.array_equal(whole["efficiency"], other["efficiency"])
+    # Every controller of one vehicle and fault class flies the same draws (paired comparison).
+    hexa = whole["vehicle"] == "hexa-pnpnpn"
+    by = {c: whole["efficiency"][hexa & (whole["controller"] == c)] for c in D.CONTROLLERS}
+    first = next(iter(by.values()))
+    assert all(np.array_equal(v, first) for v in by.values())
+
+
+def test_core_hold_window_equals_the_full_trajectory() -> None:
+    suite = D.DecidingCampaign(**SMALL)  # type: ignore[arg-type]
+    rows = D.run_rows(suite, 0, suite.total_runs)
+    checked = 0
+    for k, cell in enumerate(suite.cells):
+        for i in range(suite.runs):
+            j = k * suite.runs + i
+            if rows["outcome"][j] in ("not-flown", "design-refused"):
+                continue
+            trajectory, d = suite.refly(cell, i)
+            altitude, horizontal = D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
+            if trajectory.events:  # lost: the row carries no window values
+                assert not rows["holds"][j] and math.isnan(rows["hold_horizontal_error_m"][j])
+            else:
+                assert rows["hold_altitude_error_m"][j] == pytest.approx(altitude, rel=1e-12, abs=1e-12)
+                assert rows["hold_horizontal_error_m"][j] == pytest.approx(horizontal, rel=1e-12, abs=1e-12)
+                assert rows["holds"][j] == (altitude <= D.HOLD_ALTITUDE_M and horizontal <= D.HOLD_HORIZONTAL_M)
+            checked += 1
+    assert checked >= 6
+
+
+def test_the_table_names_each_cell_and_the_best_controllers_miss() -> None:
+    suite = D.DecidingCampaign(**SMALL)  # type: ignore[arg-type]
+    result = D.run_deciding(suite, progress=False)
+    cells = result.cell_rows()
+    assert len(cells) == len(suite.cells)
+    lanzon = [r for r in cells if r["controller"] == "lanzon-controller"]
+    assert all(r["runs"] + r["not_applicable"] == suite.runs for r in lanzon)
+    assert next(r for r in lanzon if r["vehicle"] == "hexa-pnpnpn")["runs"] == 0
+    for b in result.best():
+        assert b["miss"] == pytest.approx(max(0.0, D.TARGET_SHARE - b["share"]))
+    assert "misses the target by" in result.table()
+
+
+def test_tiny_suite_through_the_cli(tmp_path: object) -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    done = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "1", "--format", "json", "--no-progress"])
+    assert done.exit_code == 0, done.output
+    data = json.loads(done.output)
+    assert data["mode"] == "suite" and data["cell_count"] == 39 and data["runs"] == 39
+    assert len(data["cells"]) == 39 and len(data["best"]) == 13
+    bad = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "0"])
+    assert bad.exit_code != 0 and "runs" in bad.output
