@@ -43,6 +43,13 @@ def main() -> None:
     parser.add_argument("--chunk-size", type=int, default=2_000, help="runs per chunk (the unit Dask distributes)")
     parser.add_argument("--rounds", type=int, default=1, help="rounds of (d), interleaved, best of each")
     args = parser.parse_args()
+    if not args.skip_dask:
+        from rotorfault._util.optional import MissingDependency, require_available
+
+        try:  # before any work (--skip-dask leaves the comparison out)
+            require_available("the Dask comparison (--skip-dask leaves it out)", "dask", "distributed")
+        except MissingDependency as exc:
+            raise SystemExit(str(exc)) from None
     runs = args.runs or (2_000 if args.quick else 100_000)
     print(f"rotorfault {rf.__version__}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}")
     c = Campaign(runs=runs, seed=1, duration_s=30.0, chunk_size=args.chunk_size)

@@ -73,7 +73,9 @@ def batch_inputs(rng: np.random.Generator, runs: int = RUNS,
 
 
 def rotorpy_steps_per_s() -> float | None:
-    if importlib.util.find_spec("rotorpy") is None:
+    from rotorfault._util.optional import is_available
+
+    if not is_available("rotorpy"):
         return None
     path = Path(__file__).with_name("simulation_rotorpy.py")
     spec = importlib.util.spec_from_file_location("simulation_rotorpy", path)
@@ -147,7 +149,9 @@ def main() -> None:
           f"{np.median(final_r[np.isfinite(final_r)]):.1f} rad/s")
     peer = rotorpy_steps_per_s()
     if peer is None:
-        print("  RotorPy not installed (pip install '.[bench]'): no peer baseline")
+        from rotorfault._util.optional import install_hint
+
+        print(f"  RotorPy not installed ({install_hint('rotorpy')}): no peer baseline")
     else:
         print(f"  RotorPy 3 SE3 hover (no faults), same run: {peer:,.0f} steps/s -> rotorfault is {rate / peer:,.0f}x")
     indi_rate, indi_single, indi_lost, ke_same_rate = indi_comparison(sim, preset, runs, steps_per_run)

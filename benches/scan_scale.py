@@ -100,6 +100,12 @@ def main() -> None:
     if args.big_child:
         big(args.big, args.big_child)
         return
+    from rotorfault._util.optional import MissingDependency, require_available
+
+    try:  # before any work: part 2 runs on a Dask LocalCluster
+        require_available("the Dask part of this bench", "dask", "distributed")
+    except MissingDependency as exc:
+        raise SystemExit(str(exc)) from None
     frame = rf.Airframe.preset(PRESET)
     axes = grid(args.points)
     total = int(np.prod([len(v) for v in axes.values()]))

@@ -2,7 +2,7 @@
 
 Run:  python benches/simulation_rotorpy.py [--rounds N] [--json PATH]   (about 70 s on a 2-core machine;
       ``--json`` also writes the figures, the machine and the date, read by ``rotorfault reproduce``)
-Needs RotorPy: ``pip install rotorpy`` (or ``pip install -e .[bench]``).
+Needs RotorPy: ``pip install "rotorfault[bench]"`` (said before any work when it is missing).
 
 (a) rotorfault closed loop: ``rf.simulate_batch`` of 1,000 hover runs of the ``quad-x`` preset with
     ``rf.lqr_hover`` (python-control LQR, run in Rust as ``LinearFeedback``), 10 s each at 400 Hz
@@ -241,10 +241,13 @@ def main() -> None:
     rounds = args.rounds
     if rounds < 1:
         parser.error("--rounds: must be >= 1")
-    try:
-        rotorpy_version = importlib.metadata.version("rotorpy")
-    except importlib.metadata.PackageNotFoundError:
-        raise SystemExit("RotorPy is not installed: pip install rotorpy (or pip install -e .[bench])") from None
+    from rotorfault._util.optional import MissingDependency, require_available
+
+    try:  # before any work: the one message of a missing optional package, naming the extra
+        require_available("the RotorPy comparison", "rotorpy")
+    except MissingDependency as exc:
+        raise SystemExit(str(exc)) from None
+    rotorpy_version = importlib.metadata.version("rotorpy")
 
     cores_os = os.cpu_count() or 1
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else cores_os

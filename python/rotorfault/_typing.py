@@ -52,8 +52,13 @@ ImuPart: TypeAlias = Literal["icm-42688-p", "mpu-6000"]
 #: What a controller flies on: the true state, the papers' relative noise on it, or a sensor suite
 #: with the estimator (:attr:`rotorfault.Trajectory.sensed`).
 Sensed: TypeAlias = Literal["truth", "paper-noise", "mocap", "gnss", "rtk"]
-#: Controller of a ``rotorfault simulate`` scenario file.
-ScenarioControllerKind: TypeAlias = Literal["none", "open-loop-hover", "lqr-hover"]
+#: Controller of a ``rotorfault simulate`` scenario file: none, a registered controller by its
+#: registry name (:mod:`rotorfault.studies.scenario_controllers` builds each), or the first
+#: release's names of two designs (``lqr-hover``: linear-feedback, ``open-loop-hover``: open-loop).
+ScenarioControllerKind: TypeAlias = Literal[
+    "none", "open-loop", "linear-feedback", "lti", "allocated", "uniform-passive-ftc", "lanzon-controller",
+    "tracking-feedback", "indi-controller", "lqr-hover", "open-loop-hover",
+]
 
 # <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
 # (`python -m rotorfault.control.registry` prints this block; tests/control/test_registry.py checks it)

@@ -125,3 +125,77 @@ def test_model_defaults_come_from_the_core() -> None:
     v = L.LanzonVehicle()
     for name in ("mass_kg", "inertia_zz_kg_m2", "rotational_drag_n_m_s", "linear_drag_n_s_m"):
         assert getattr(core, name) == getattr(v, name)
+
+
+@pytest.mark.parametrize("field", ["mass_kg", "gravity_m_s2", "inertia_xx_kg_m2", "inertia_zz_kg_m2", "arm_length_m",
+                                   "drag_torque_ratio_m", "rotational_drag_n_m_s", "max_thrust_n", "rate_limit_n_s"])
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan, 0.0, -1.0])
+def test_vehicle_parameters_finite_and_positive(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=rf"^{field}: must be finite and > 0, got"):
+        L.LanzonVehicle(**{field: value})
+
+
+@pytest.mark.parametrize("field", ["mass_kg", "inertia_zz_kg_m2", "arm_length_m", "rotational_drag_n_m_s"])
+@pytest.mark.parametrize("value", [1e-310, 1e300])
+def test_vehicle_scales_in_the_cores_range_at_construction(field: str, value: float) -> None:
+    # Subnormal and absurd scales: refused when the vehicle is built, by the core's rule.
+    with pytest.raises(ValueError, match=rf"^model\.{field}: must lie in \[1e-15, 1e15\]"):
+        L.LanzonVehicle(**{field: value})
+
+
+@pytest.mark.parametrize("field", ["linear_drag_n_s_m", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2"])
+@pytest.mark.parametrize("value", [math.inf, math.nan, -1e-9])
+def test_vehicle_drag_and_rotor_parameters_finite_and_non_negative(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=rf"^{field}: must be finite and >= 0, got"):
+        L.LanzonVehicle(**{field: value})
+
+
+def test_outer_loop_and_design_parameters_are_checked_at_construction() -> None:
+    # The outer loop is checked when built (the core's rules, one source), not when first flown.
+    with pytest.raises(ValueError, match=r"^outer_loop.k_p_xy: must be finite, got inf"):
+        L.OuterLoopGains(k_p_xy=math.inf)
+    with pytest.raises(ValueError, match=r"^outer_loop.max_tilt_rad: must be in \(0, pi/2\)"):
+        L.OuterLoopGains(max_tilt_rad=2.0)
+    with pytest.raises(ValueError, match=r"^outer_loop.max_vertical_accel_m_s2: must be finite"):
+        L.OuterLoopGains(max_vertical_accel_m_s2=math.nan)
+    with pytest.raises(TypeError, match=r"^outer_loop.k_d_z: expected a real number"):
+        L.OuterLoopGains(k_d_z="1")  # type: ignore[arg-type]
+    # design(): every parameter before any work.
+    for kwargs, message in ((dict(crossover_rad_s=math.inf), r"^crossover_rad_s: must be finite and > 0"),
+                            (dict(low_gain_db=math.nan), r"^low_gain_db: must be finite and > 0"),
+                            (dict(rolloff_factor=1.0), r"^rolloff_factor: must be finite and > 1"),
+                            (dict(factor=math.inf), r"^factor: must be finite and > 1"),
+                            (dict(channel_gain=(1.0, math.inf, 1.0)), r"^channel_gain: must be finite and > 0")):
+        with pytest.raises(ValueError, match=message):
+            L.design(**kwargs)  # type: ignore[arg-type]
+    from rotorfault.papers import lanzon as P
+
+    with pytest.raises(ValueError, match=r"^crossover_rad_s: must be finite and > 0"):
+        P.DesignCase("x", "bad", math.nan, True)
+    with pytest.raises(ValueError, match=r"^channel_gain: expected 3 finite numbers > 0"):
+        P.DesignCase("x", "bad", 30.0, True, channel_gain=(1.0, 0.0, 1.0))
+
+
+def test_controller_matrices_the_schur_iteration_cannot_take_are_refused_not_hung() -> None:
+    # Design (c) discretised by Tustin in the realisation python-control's c2d returns: nalgebra's
+    # unbounded Schur iteration never converged on this A_K and the constructor hung (issue 25).
+    # The core now caps the iteration and says so; discretise() gives real Schur coordinates,
+    # which the core takes.
+    import control as ct
+
+    d = L.design(crossover_rad_s=30.0)
+    k = ct.c2d(d.controller, 1e-3, method="tustin")
+    a, b, c, dd = (np.ascontiguousarray(np.asarray(m, dtype=float)) for m in (k.A, k.B, k.C, k.D))
+    with pytest.raises(ValueError, match=r"^A_K: the Schur decomposition \(eigenvalues\) did not converge within its cap of"):
+        _rfcore.LanzonController(model=d.vehicle._core(), a_k=a, b_k=b, c_k=c, d_k=dd, attitude_reference=[0, 0, 2.7])
+    a2, b2, c2, d2 = d.discretise(1e-3)
+    assert np.allclose(np.tril(a2, -2), 0.0, atol=0.0)  # quasi-triangular
+    _rfcore.LanzonController(model=d.vehicle._core(), a_k=a2, b_k=b2, c_k=c2, d_k=d2, attitude_reference=[0, 0, 2.7])
+    # The same controller: the two realisations have the same frequency response.
+    from rotorfault.control.realisation import frequency_response, state_space
+
+    w = np.linspace(0.1, 3000.0, 7)
+    r2 = frequency_response(state_space(a2, b2, c2, d2, 1e-3), w)
+    r1 = frequency_response(state_space(a, b, c, dd, 1e-3), w)
+    for k_ in range(w.size):  # normwise, 1e-9 of the response at that frequency
+        assert np.linalg.norm(r2[k_] - r1[k_], 2) <= 1e-9 * np.linalg.norm(r1[k_], 2)

@@ -71,7 +71,8 @@ def test_hover_and_vpp_designs_agree_with_python_control() -> None:
     failed. Measured residuals: 1.4e-15 and 1.6e-13 of the terms."""
     sim = rf.Simulator(rf.Airframe.preset("quad-x"))
     trim = rf.hover_trim(sim, position=(0, 0, -10))
-    a, b = rf.linearize(sim, trim.state, trim.command)
+    model = rf.linearize(sim, trim)
+    a, b = model.A, model.B
     fb = rf.lqr_hover(sim, position=(0, 0, -10))
     q = np.diag(1.0 / np.array([1.0] * 6 + [0.1] * 3 + [1.0] * 3) ** 2)
     r = np.eye(4) / (0.1 * sim.airframe.hover_thrust_n / 4) ** 2
@@ -82,8 +83,8 @@ def test_hover_and_vpp_designs_agree_with_python_control() -> None:
     model = vpp.linearize(wang, at)
     feedback = vpp.lqr(wang, at, dt_s=1e-3)
     assert feedback.design is not None and feedback.design.residual_rtol < 1e-11
-    r_in = np.diag([1.0 / (1000.0**2 if s.startswith("omega") else 0.05**2) for s in model.inputs])
-    k = np.asarray(ct.lqr(model.a, model.b, np.diag(1.0 / vpp.STATE_SCALE**2), r_in)[0])
+    r_in = np.diag([1.0 / (1000.0**2 if s.startswith("omega") else 0.05**2) for s in model.input_labels])
+    k = np.asarray(ct.lqr(model.A, model.B, np.diag(1.0 / vpp.STATE_SCALE**2), r_in)[0])
     assert _relative(feedback.gain[2:], k) < 1e-9
 
 
@@ -335,9 +336,9 @@ def test_pbh_rank_is_the_cores_rank_rule() -> None:
     fixed = vpp.fixed_pitch(vpp.preset())
     for failed in ((), (1,)):
         model = vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=failed), pitch_fixed=True)
-        test = stabilisability(model.a, model.b)
+        test = stabilisability(model.A, model.B)
         for mode in test.modes:
-            pencil = np.hstack([model.a - mode.eigenvalue.real * np.eye(12), model.b])
+            pencil = np.hstack([model.A - mode.eigenvalue.real * np.eye(12), model.B])
             assert mode.rank == rf._rfcore.scale_free_rank(pencil) == left_null_space(pencil)[0]
     tiny = stabilisability(np.zeros((2, 2)), np.diag([1.0, 1e-12]))
     assert tiny.holds and tiny.modes[0].rank == 2
@@ -373,11 +374,11 @@ def test_python_control_with_slycot_returns_a_non_solution_here() -> None:
     model = vpp.linearize(fixed, vpp.fixed_pitch_trim(fixed, failed=()), pitch_fixed=True)
     q, r = np.diag(1.0 / vpp.STATE_SCALE**2), np.eye(4) / 1000.0**2
     try:
-        k, x, _ = ct.lqr(model.a, model.b, q, r)
+        k, x, _ = ct.lqr(model.A, model.B, q, r)
     except (ValueError, np.linalg.LinAlgError, ArithmeticError, ct.ControlArgument):
         return  # this slycot refuses too: nothing silent to show
     k, x = np.asarray(k), np.asarray(x)
-    residual = model.a.T @ x + x @ model.a - x @ model.b @ k + q
-    assert np.linalg.norm(residual) / np.linalg.norm(q) > 1.0 or np.max(np.linalg.eigvals(model.a - model.b @ k).real) >= 0
+    residual = model.A.T @ x + x @ model.A - x @ model.B @ k + q
+    assert np.linalg.norm(residual) / np.linalg.norm(q) > 1.0 or np.max(np.linalg.eigvals(model.A - model.B @ k).real) >= 0
     with pytest.raises(ValueError, match="^stabilisability"):
-        design_lqr((model.a, model.b), q, r)
+        design_lqr((model.A, model.B), q, r)

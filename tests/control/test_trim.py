@@ -135,7 +135,7 @@ def test_trim_names_the_rotor_that_hover_forces_onto_its_bound(hexa_one_failed: 
 def test_linearize_differentiates_one_sided_into_the_box(hexa_one_failed: rf.Simulator) -> None:
     frame = hexa_one_failed.airframe
     trim = rf.hover_trim(hexa_one_failed, position=SETPOINT)
-    _, b = rf.linearize(hexa_one_failed, trim.state, trim.command)
+    b = rf.linearize(hexa_one_failed, trim).B
     # Analytic thrust columns at level hover: v_d' = -eta_i / m per newton, body rates
     # I^-1 [roll, pitch, yaw rows of B_f] (inertia diagonal, no gyroscopic term at rest). The old
     # central difference across rotor 4's clamp halved its column.
@@ -146,10 +146,10 @@ def test_linearize_differentiates_one_sided_into_the_box(hexa_one_failed: rf.Sim
     # At an upper bound the difference points down into the box.
     quad = rf.Simulator(rf.Airframe.preset("quad-x"))
     x = np.zeros(12)
-    _, b_top = rf.linearize(quad, x, quad.airframe.max_thrust_n)
+    b_top = rf.linearize(quad, (x, quad.airframe.max_thrust_n)).B
     np.testing.assert_allclose(b_top[5], -1 / quad.airframe.mass_kg, rtol=1e-8)
     with pytest.raises(ValueError, match=r"u_trim\[2\]: rotor 3's command 7.0 lies outside its bounds \[0.0, 6.125\]"):
-        rf.linearize(quad, x, [3.0, 3.0, 7.0, 3.0])
+        rf.linearize(quad, (x, [3.0, 3.0, 7.0, 3.0]))
 
 
 def _quad_without_yaw_torque() -> rf.Airframe:
@@ -216,7 +216,7 @@ def test_linearize_matches_the_analytic_euler_rates_within_its_limit(pitch_deg: 
     sim = rf.Simulator(rf.Airframe.preset("quad-x"))
     x = np.zeros(12)
     x[6], x[7], x[9:12] = 0.3, math.radians(pitch_deg), (0.1, 0.2, 0.3)
-    a, _ = rf.linearize(sim, x, np.full(4, 3.0), max_pitch_rad=math.radians(limit_deg))
+    a = rf.linearize(sim, (x, np.full(4, 3.0)), max_pitch_rad=math.radians(limit_deg)).A
     exact = _euler_rate_jacobian(x)
     assert np.abs(a[6:9, 6:8] - exact).max() <= rtol * np.abs(exact).max()
 
@@ -228,7 +228,7 @@ def test_linearize_refuses_pitch_near_the_singularity(pitch: float) -> None:
     x[7], x[9:12] = pitch, (0.1, 0.2, 0.3)
     degrees = f"{math.degrees(pitch):.4f}"
     with pytest.raises(ValueError, match=rf"x_trim\[7\]: pitch {degrees} degrees is beyond the 80-degree limit"):
-        rf.linearize(sim, x, np.full(4, 3.0))
+        rf.linearize(sim, (x, np.full(4, 3.0)))
 
 
 @pytest.mark.parametrize(
@@ -243,7 +243,7 @@ def test_linearize_refuses_pitch_near_the_singularity(pitch: float) -> None:
 def test_linearize_bad_options(kwargs: dict[str, object], error: type[Exception], message: str) -> None:
     sim = rf.Simulator(rf.Airframe.preset("quad-x"))
     with pytest.raises(error, match=message):
-        rf.linearize(sim, np.zeros(12), np.full(4, 3.0), **kwargs)  # type: ignore[arg-type]
+        rf.linearize(sim, (np.zeros(12), np.full(4, 3.0)), **kwargs)  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(

@@ -124,15 +124,15 @@ def test_linearisation_is_the_models_jacobian(wang: vpp.VppVehicle) -> None:
     model = vpp.linearize(wang, trim)
     sim = wang.simulator(failed=(1,))
     f = lambda x, u: sim.state_derivative(x, u)  # noqa: E731
-    for j, col in enumerate(model.columns):
+    for j, col in enumerate(model.command_columns):
         h = 1e-4 * max(1.0, abs(trim.command[col]))
         e = np.zeros(8)
         e[col] = h
         fd = (f(trim.state, trim.command + e) - f(trim.state, trim.command - e)) / (2 * h)
-        np.testing.assert_allclose(model.b[:, j], fd, rtol=1e-6, atol=1e-9 * np.max(np.abs(fd)))
+        np.testing.assert_allclose(model.B[:, j], fd, rtol=1e-6, atol=1e-9 * np.max(np.abs(fd)))
     # Analytic entries (eq. (1)-(4) in our FRD frame, z down): d(p')/d(alpha_3) = l k1 omega_3^2 / Ix
     # (Wang's h3 l / Ix), d(w')/d(alpha_3) = -k1 omega_3^2 / m, d(q')/d(alpha_3) = 0.
-    b = dict(zip(model.inputs, model.b.T))
+    b = dict(zip(model.input_labels, model.B.T))
     assert b["alpha_3"][9] == pytest.approx(0.35 * K1 * 9000.0**2 / 0.03, rel=1e-7)
     assert b["alpha_3"][5] == pytest.approx(-K1 * 9000.0**2, rel=1e-7)
     assert b["alpha_3"][10] == 0.0 and b["omega_3"][9] == 0.0  # alpha_3 = 0: no roll from omega_3
@@ -141,8 +141,8 @@ def test_linearisation_is_the_models_jacobian(wang: vpp.VppVehicle) -> None:
     assert b["omega_2"][5] == pytest.approx(-2 * K1 * trim.speed(2) * trim.pitch(2), rel=1e-7)
     assert b["alpha_2"][5] == pytest.approx(-K1 * trim.speed(2) ** 2, rel=1e-7)
     # A: g couples attitude to velocity (E of Sec. 3.2), drag on the diagonal.
-    assert model.a[3, 7] == pytest.approx(-10.0, rel=1e-9) and model.a[4, 6] == pytest.approx(10.0, rel=1e-9)
-    assert model.a[3, 3] == pytest.approx(-0.25, rel=1e-9)
+    assert model.A[3, 7] == pytest.approx(-10.0, rel=1e-9) and model.A[4, 6] == pytest.approx(10.0, rel=1e-9)
+    assert model.A[3, 3] == pytest.approx(-0.25, rel=1e-9)
 
 
 def test_controllability_vpp_12_fixed_pitch_8(wang: vpp.VppVehicle) -> None:
@@ -182,11 +182,11 @@ def test_healthy_fixed_pitch_names_its_two_uncontrollable_directions(wang: vpp.V
     coefficient = ratio / 0.35 * 0.03 / 0.05
     np.testing.assert_allclose(rate.coefficients[9:], [coefficient, coefficient, -1.0], rtol=1e-6)
     np.testing.assert_allclose(angle.coefficients[6:9], [coefficient, coefficient, -1.0], rtol=1e-6)
-    power = model.b
+    power = model.B
     for _ in range(12):
         for d in (angle, rate):
             assert np.max(np.abs(d.coefficients @ power)) <= 1e-12 * np.max(np.abs(power))
-        power = model.a @ power
+        power = model.A @ power
     assert set(result.uncontrollable_states) == {"phi", "theta", "psi", "p", "q", "r"}
 
 

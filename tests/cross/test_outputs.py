@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from rotorfault._util.lock import is_lock_file
 from rotorfault.cli import cli
 
 QUICK = ["--laws", "feedforward", "--scenarios", "fault-free,one-failure"]
@@ -122,7 +123,7 @@ def test_no_figures_leaves_no_stale_figures(tmp_path: Path) -> None:
     code, _, err = run("ftc-report", "--out", str(out), *QUICK, "--no-figures", "--force")
     assert code == 0, err
     assert sorted(p.name for p in out.iterdir()) == ["ftc-report.csv", "ftc-report.md", "manifest.json"]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no temporary directory left
+    assert sorted(p.name for p in tmp_path.iterdir() if not is_lock_file(p.name)) == ["report"]  # no temporary directory left
 
 
 def _report_command(out: Path, *extra: str) -> list[str]:
@@ -157,7 +158,7 @@ def test_an_interrupted_report_leaves_the_previous_one_intact(tmp_path: Path, si
     else:
         assert after == before, err
         assert "Traceback" not in err and "no report written, the previous one is unchanged" in err, err
-    leftovers = [p.name for p in tmp_path.iterdir() if p.name != "report"]
+    leftovers = [p.name for p in tmp_path.iterdir() if p.name != "report" and not is_lock_file(p.name)]
     assert leftovers == [], leftovers
 
 

@@ -49,6 +49,9 @@ CLAIMS = [
     # INDI fault-tolerant control (issue 30).
     ("# True: one torque axis left, output redefined", "indi", "indi.failure_modes()[1].single_axis", True, 0),
     ("# the spin: about 40 rad/s", "indi", "float(abs(run.omega[run.t > 10, 2]).mean())", 40.0, 1.0),
+    # Tilted rotors: the 6-D wrench ACAI the README prints (issue 31: it printed 1.3378).
+    ("# True 1.3392 (a convex hull agrees)", "tilted", "bool(tilted.is_fully_actuated)", True, 0),
+    ("# True 1.3392 (a convex hull agrees)", "tilted", "float(rf.acai(tilted, axes='wrench'))", 1.3392, 0.5e-4),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "[round(float(v), 12) for v in fall.t]", [0.0, 0.3, 0.6, 0.9, 1.0], 0),
     ("# [0.  0.3 0.6 0.9 1. ]: ends at 1.0 s exactly", "limited", "float(fall.t[-1])", 1.0, 0.0),

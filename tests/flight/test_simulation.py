@@ -361,7 +361,8 @@ def test_variable_pitch_hover_and_reverse_thrust(quad: rf.Airframe) -> None:
 
 
 def test_linearisation_has_the_hover_structure(sim: rf.Simulator, lqr: rf.LinearFeedback) -> None:
-    a, b = rf.linearize(sim, lqr.x_trim, lqr.u_trim)
+    model = rf.linearize(sim, (lqr.x_trim, lqr.u_trim))
+    a, b = model.A, model.B
     # NED/FRD at hover: pitching up tilts thrust backwards, rolling right tilts it east.
     assert a[3, 7] == pytest.approx(-G, rel=1e-6)
     assert a[4, 6] == pytest.approx(G, rel=1e-6)

@@ -76,11 +76,15 @@ def test_our_design_flies_both_scenarios_with_the_limits(runs_printed: dict[tupl
 
 def test_paper_design_with_limits_never_settles_in_scenario_b(runs_printed: dict[tuple[str, str], P.LanzonRun]) -> None:
     # The finding of the three-way table (printed I_zz): (b) stays up but does not reach the
-    # setpoint within 60 s (measured 0.47 m off, oscillating); (c) does (test above).
+    # setpoint within 60 s (measured: circling it on a shrinking circle, 0.31-0.49 m off and 2-3.4
+    # deg of tilt over the last 5 s, mean speed 0.45 m/s, just under Ke's 0.5 m/s "circling"
+    # threshold); (c) does (test above).
     b = runs_printed[("B", "b")]
     assert not b.trajectory.diverged
     assert b.final_error_m is not None and b.final_error_m > 0.1
     assert P.tilt_deg(b.trajectory)[-int(5 / (20e-3)):].max() > 1.0
+    # Still moving round the set point at the end (not settled, whatever the verdict's threshold):
+    assert b.position is not None and b.position.window_mean_horizontal_speed_m_s > 0.3
 
 
 def test_attitude_verdict_of_a_lost_run() -> None:

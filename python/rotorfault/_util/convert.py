@@ -103,3 +103,32 @@ def control_axes(give_up_yaw: Any, axes: Any) -> str:
     if drop_yaw and axes != "thrust-roll-pitch":
         raise ValueError(f"give_up_yaw: contradicts axes={axes!r} (give one of the two)")
     return axes
+
+
+def read_toml(field: str, path: Any) -> dict[str, Any]:
+    """The TOML file ``path`` as a dict; a missing, unreadable, non-UTF-8, malformed or too deeply
+    nested file is a ``ValueError`` naming ``field`` and the file (never a ``RecursionError``)."""
+    import os
+    import tomllib
+    from pathlib import Path
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{field}: expected a file path, got {type(path).__name__}")
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise ValueError(f"{field}: {str(p)!r} does not exist") from None
+    except OSError as exc:
+        raise ValueError(f"{field}: cannot read {str(p)!r}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{p}: not UTF-8 text ({exc.reason} at byte {exc.start}); expected TOML") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{p}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{p}: nested too deeply to read (arrays or tables within tables)") from None
+

@@ -3,7 +3,8 @@ same directory and renamed into place only when complete, so an interrupted run 
 truncated file under a final name. (Figures are drawn and saved by :mod:`rotorfault.plotting.style`,
 through :func:`atomic_path`.)
 
-This module depends on nothing else in the package, so every room can use it.
+This module depends on nothing else in the package but :mod:`rotorfault._util.atomic` (the
+atomic write) and :mod:`rotorfault._util.lock` (one writer per output), so every room can use it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+
+from .atomic import _umask, atomic_path, write_text
 
 #: File types a figure can be saved as (by extension).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
@@ -43,38 +46,6 @@ def check_parent(field: str, p: Path) -> None:
         raise ValueError(f"{field}: directory {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"{field}: directory {str(parent)!r} is not writable")
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yields a temporary name beside ``path``; on success renames it to ``path`` (``os.replace``,
-    atomic on one file system), on any error or interrupt removes it and leaves ``path`` as it was."""
-    final = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent if str(final.parent) else ".")
-    os.close(fd)
-    tmp_path = Path(tmp)
-    os.chmod(tmp_path, 0o666 & ~_umask())  # as an ordinary open() would create it
-    try:
-        yield tmp_path
-        os.replace(tmp_path, final)
-    except BaseException:
-        tmp_path.unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Writes ``text`` (UTF-8) to ``path`` atomically."""
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
 
 
 #: The file that makes a directory a rotorfault output directory (lists its files).
@@ -116,13 +87,63 @@ def check_output_directory(field: str, path: str | os.PathLike[str], *, force: b
     return p
 
 
+def recover_output_directory(path: str | os.PathLike[str]) -> None:
+    """Undoes what an interrupted writer of the output directory ``path`` left beside it (call
+    with its lock held, :func:`rotorfault._util.lock.output_lock`, so every leftover is a dead
+    writer's): a swap cut between its two renames is completed backwards (the previous directory
+    back in place), temporary and replaced directories are removed."""
+    import shutil
+
+    final = Path(path)
+    parent = final.parent if str(final.parent) else Path(".")
+    if not parent.is_dir():
+        return
+    olds = sorted(parent.glob(f".{glob_escape(final.name)}.*.old"), key=lambda p: p.stat().st_mtime)
+    if olds and not final.exists():
+        os.replace(olds.pop(), final)
+    for leftover in [*olds, *parent.glob(f".{glob_escape(final.name)}.*.part")]:
+        shutil.rmtree(leftover, ignore_errors=True) if leftover.is_dir() else leftover.unlink(missing_ok=True)
+
+
+def glob_escape(name: str) -> str:
+    import glob
+
+    return glob.escape(name)
+
+
+@contextlib.contextmanager
+def claim_output_directory(field: str, path: str | os.PathLike[str], *, force: bool = False) -> Iterator[Path]:
+    """The one way a report command holds its output directory: the lock for the whole block (a
+    second writer is refused, naming this one), what an interrupted run left recovered, then
+    :func:`check_output_directory`; all before any work."""
+    from .lock import output_lock
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{field}: expected a directory path, got {type(path).__name__}")
+    check_parent(field, Path(path).absolute())
+    with output_lock(field, path):
+        recover_output_directory(path)
+        yield check_output_directory(field, path, force=force)
+
+
 @contextlib.contextmanager
 def output_directory(path: str | os.PathLike[str], manifest: dict[str, Any]) -> Iterator[Path]:
     """Yields a temporary sibling directory to fill; when the block completes, writes ``manifest``
     (plus ``outputs``: the files present) into it and swaps it in for ``path`` as one unit (the
     previous directory, if any, is removed only after the new one is in place). On any error or
-    interrupt the temporary directory is removed and ``path`` is left as it was. Call
-    :func:`check_output_directory` first."""
+    interrupt the temporary directory is removed and ``path`` is left as it was. The output's lock
+    is held throughout (:func:`rotorfault._util.lock.output_lock`; re-entrant for a caller that
+    holds it already). Call :func:`check_output_directory` (or :func:`claim_output_directory`) first."""
+    from .lock import output_lock
+
+    with output_lock("out", path):
+        recover_output_directory(path)
+        with _output_directory(path, manifest) as tmp:
+            yield tmp
+
+
+@contextlib.contextmanager
+def _output_directory(path: str | os.PathLike[str], manifest: dict[str, Any]) -> Iterator[Path]:
     import json
     import shutil
 
@@ -167,9 +188,11 @@ __all__ = [
     "MANIFEST",
     "atomic_path",
     "check_output_directory",
+    "claim_output_directory",
     "check_output_file",
     "check_parent",
     "output_directory",
+    "recover_output_directory",
     "signals_deferred",
     "write_text",
 ]

@@ -16,6 +16,7 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
 from .._util.convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
+from .._util.tables import Column, Tabular
 from ..analysis.airframe import Airframe
 
 METHODS: tuple[AllocationMethod, ...] = get_args(AllocationMethod)
@@ -30,7 +31,7 @@ Certificate = _rfcore.Certificate
 
 
 @dataclass(frozen=True)
-class Allocation:
+class Allocation(Tabular):
     """The result of :func:`allocate`. For one virtual control ``commands`` is (m,), ``achieved``
     (n,) and ``status`` a string; for N of them (N, m), (N, n) and a tuple of N strings.
 
@@ -39,7 +40,11 @@ class Allocation:
     certify: commands feasible, not proven optimal), ``"unconstrained"`` (pinv) or ``"failed"``
     (clarabel found no solution). ``certificate`` (one per row for a batch): the KKT residuals
     of the commands (:class:`Certificate`). ``solved_by``: ``"active-set"``, ``"clarabel"`` or
-    ``"pinv"``. ``fallbacks``: how many answers the active set's Clarabel fallback produced."""
+    ``"pinv"``. ``fallbacks``: how many answers the active set's Clarabel fallback produced.
+
+    ``to_arrow()`` / ``to_pandas()``: one row per virtual control (``virtual_control_<k>``,
+    ``achieved_<k>``, ``rotor_<i>_command``, the status, the solver and the certificate's
+    residuals), in the problem's units (N and N m for an airframe)."""
 
     commands: FloatArray
     achieved: FloatArray
@@ -62,6 +67,30 @@ class Allocation:
         """``u_c - M T``: what the rotors could not give."""
         out: FloatArray = self.virtual_control - self.achieved
         return out
+
+    def _table_columns(self) -> list[Column]:
+        def rows(value: Any) -> list[Any]:
+            return list(value) if isinstance(value, tuple) else [value]
+
+        virtual, achieved, commands = (np.atleast_2d(a) for a in (self.virtual_control, self.achieved, self.commands))
+        certificates = rows(self.certificate)
+        attained = np.atleast_1d(self.attained)
+        columns: list[Column] = [(f"virtual_control_{k + 1}", "float64", virtual[:, k]) for k in range(virtual.shape[1])]
+        columns += [(f"achieved_{k + 1}", "float64", achieved[:, k]) for k in range(achieved.shape[1])]
+        columns += [(f"rotor_{i + 1}_command", "float64", commands[:, i]) for i in range(commands.shape[1])]
+        return columns + [
+            ("attained", "bool", attained),
+            ("status", "string", rows(self.status)),
+            ("solved_by", "string", rows(self.solved_by)),
+            ("iterations", "int64", rows(self.iterations)),
+            ("certificate_holds", "bool", [c.holds for c in certificates]),
+            ("stationarity", "float64", [c.stationarity for c in certificates]),
+            ("complementarity", "float64", [c.complementarity for c in certificates]),
+            ("bound_violation", "float64", [c.bound_violation for c in certificates]),
+        ]
+
+    def _table_title(self) -> str:
+        return f"allocation: {np.atleast_2d(self.commands).shape[0]} virtual control(s), {self.fallbacks} fallback(s)"
 
 
 class Allocator:

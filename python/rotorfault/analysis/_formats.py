@@ -24,6 +24,7 @@ Conventions (converted here, once):
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,8 @@ PLACEHOLDER_INERTIA_KG_M2 = (0.01, 0.01, 0.02)
 
 _PX4_DEFAULTS = {"PX": 0.0, "PY": 0.0, "PZ": 0.0, "AX": 0.0, "AY": 0.0, "AZ": -1.0, "CT": 6.5, "KM": 0.05}
 _MASS_COMMENT = "# rotorfault mass_kg "
+#: A PX4 parameter name (``param_t`` names are at most 16 characters).
+_PX4_NAME = re.compile(r"[A-Za-z0-9_]{1,16}")
 
 
 def parse_px4_params(text: str, origin: str) -> dict[str, float]:
@@ -41,20 +44,32 @@ def parse_px4_params(text: str, origin: str) -> dict[str, float]:
     line, tab or space separated; ``#`` comments). A ``# rotorfault mass_kg X`` comment (written by
     :func:`to_px4_params`) is returned as ``_MASS_KG``."""
     params: dict[str, float] = {}
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
+    # Lines end at \n only (str.splitlines would also break at form feeds and Unicode separators,
+    # which a line may then not hold: they are refused below as part of a malformed line).
+    for number, raw in enumerate(text.split("\n"), start=1):
+        line = raw.strip(" \t\r")
         if line.startswith(_MASS_COMMENT):
+            if "_MASS_KG" in params:
+                raise ValueError(f"{origin}: line {number}: a second '{_MASS_COMMENT.strip()}' line")
             params["_MASS_KG"] = _number(line[len(_MASS_COMMENT):].strip(), origin, number)
             continue
         if not line or line.startswith("#"):
             continue
         fields = line.split()
-        if len(fields) != 5:
+        if len(fields) != 5 or any(not f.isascii() or not f.isprintable() for f in fields):
             raise ValueError(
                 f"{origin}: line {number}: expected 'vehicle component NAME value type' "
                 f"(QGroundControl's parameter file), got {raw!r}"
             )
-        params[fields[2]] = _number(fields[3], origin, number)
+        name = fields[2]
+        if not _PX4_NAME.fullmatch(name):
+            raise ValueError(f"{origin}: line {number}: {name!r} is not a PX4 parameter name (letters, digits and _, at most 16)")
+        if name in params:
+            raise ValueError(f"{origin}: line {number}: parameter {name} is given twice")
+        for field, what in ((fields[0], "vehicle id"), (fields[1], "component id"), (fields[4], "type")):
+            if not field.isdigit():
+                raise ValueError(f"{origin}: line {number}: the {what} must be a whole number, got {field!r}")
+        params[name] = _number(fields[3], origin, number)
     return params
 
 
@@ -93,7 +108,14 @@ def px4_columns(
             mass_kg = params["_MASS_KG"]
         elif "MPC_THR_HOVER" in params:
             # PX4's normalised collective thrust: 1 is every rotor at CT along body -z.
-            mass_kg = params["MPC_THR_HOVER"] * float(np.sum(ct * -axis[:, 2])) / gravity_m_s2
+            upward = float(np.sum(ct * -axis[:, 2]))
+            mass_kg = params["MPC_THR_HOVER"] * upward / gravity_m_s2 if gravity_m_s2 > 0 else math.nan
+            if not (math.isfinite(mass_kg) and mass_kg > 0 and abs(mass_kg) >= 1e-300):
+                raise ValueError(
+                    f"{origin}: mass_kg: cannot be inferred: MPC_THR_HOVER = {params['MPC_THR_HOVER']:g} of the full upward "
+                    f"thrust {upward:g} N (sum of CT x -AZ; zero for a frame whose rotors push every way, such as an "
+                    f"omnicopter) gives {mass_kg:g} kg; pass mass_kg= (CLI: --mass)"
+                )
         else:
             raise ValueError(
                 f"{origin}: mass_kg: PX4 parameters carry no vehicle mass; pass mass_kg= or keep "
@@ -114,6 +136,11 @@ def px4_columns(
 
 def to_px4_params(airframe: Any, *, vehicle_id: int, component_id: int) -> str:
     """QGroundControl's parameter file for an airframe (see :meth:`Airframe.to_px4_params`)."""
+    for field, value in (("vehicle_id", vehicle_id), ("component_id", component_id)):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TypeError(f"{field}: expected an integer (MAVLink id), got {type(value).__name__}")
+        if not 0 <= value <= 255:
+            raise ValueError(f"{field}: a MAVLink id lies in 0..255, got {value}")
     if np.any(airframe.efficiency != 1.0):
         raise ValueError("efficiency: PX4 parameters have no rotor efficiency; export the healthy airframe")
     lo, hi = airframe.min_thrust_n, airframe.max_thrust_n
@@ -140,7 +167,11 @@ def to_px4_params(airframe: Any, *, vehicle_id: int, component_id: int) -> str:
         put(f"CA_ROTOR{n}_CT", hi[n])
         put(f"CA_ROTOR{n}_KM", w[n])
     put("CA_R_REV", sum(1 << n for n in range(airframe.rotor_count) if lo[n] < 0.0), 6)
-    put("MPC_THR_HOVER", airframe.hover_thrust_n / float(np.sum(hi * -airframe.thrust_axis[:, 2])))
+    upward = float(np.sum(hi * -airframe.thrust_axis[:, 2]))
+    if upward > 0.0:
+        # Without upward thrust (an omnicopter's rotors cancel) PX4's hover thrust means nothing:
+        # the mass comment above carries the mass alone.
+        put("MPC_THR_HOVER", airframe.hover_thrust_n / upward)
     return "\n".join(lines) + "\n"
 
 

@@ -29,6 +29,7 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import FloatArray, control_axes, flag, float_array
+from .._util.tables import Column, Tabular
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .airframe import Airframe, require_airframe
 
@@ -102,12 +103,18 @@ class AcaiValue(float):
 
 
 @dataclass(frozen=True)
-class AcaiBatch:
+class AcaiBatch(Tabular):
     """:func:`acai_batch` with ``with_hover=True``: the ACAIs and where the hover wrench lies for
-    each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient)."""
+    each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient).
+    ``to_arrow()`` / ``to_pandas()``: one row per efficiency vector (``acai_<formula>``,
+    ``hover_code``), in the order given."""
 
     acai: FloatArray
     hover_code: npt.NDArray[np.int8]
+    formula: AcaiFormula = "eq13"
+
+    def _table_columns(self) -> list[Column]:
+        return [(f"acai_{self.formula.replace('-', '_')}", "float64", self.acai), ("hover_code", "int8", self.hover_code)]
 
     @property
     def hover_feasible(self) -> npt.NDArray[np.bool_]:
@@ -180,7 +187,7 @@ def acai_batch(
     names = control_axes(give_up_yaw, axes)
     if flag("with_hover", with_hover):
         core = _rfcore.acai_batch_with_hover(airframe._core, rows, names, _formula(formula))
-        return AcaiBatch(core.acai, core.hover_code)
+        return AcaiBatch(core.acai, core.hover_code, cast(AcaiFormula, _formula(formula)))
     return _rfcore.acai_batch(airframe._core, rows, names, _formula(formula))
 
 

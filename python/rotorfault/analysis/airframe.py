@@ -9,6 +9,7 @@ anticlockwise seen from above, ``-1`` clockwise: Du et al. eqs. (5)-(6) and (17)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from importlib import resources
 from os import PathLike
@@ -96,8 +97,7 @@ class Airframe:
         gravity_m_s2: float = _rfcore.DEFAULT_GRAVITY_M_S2,
         name: str = "custom",
     ) -> None:
-        if not isinstance(name, str):
-            raise TypeError(f"name: expected a string, got {type(name).__name__}")
+        check_label("name", name)
         angles = float_array("arm_angle_rad", arm_angle_rad, 1)
         m = angles.shape[0]
         self._core = _rfcore.Airframe(
@@ -136,8 +136,7 @@ class Airframe:
         straight up). ``spin`` is seen from the side the thrust points to. Rotor i's thrust f then
         gives the force ``f a_i`` and the torque ``f (p_i x a_i - w_i k_i a_i)`` with ``k_i`` its
         ``rotor_drag_torque_ratio_m`` (default: ``drag_torque_ratio_m`` for every rotor)."""
-        if not isinstance(name, str):
-            raise TypeError(f"name: expected a string, got {type(name).__name__}")
+        check_label("name", name)
         signs = _spin_signs(spin)
         m = signs.shape[0]
         position = float_array("position_m", position_m, 2)
@@ -254,6 +253,8 @@ class Airframe:
 
     @classmethod
     def _wrap(cls, core: _rfcore.Airframe) -> Airframe:
+        check_label("name", core.name)
+        check_label("description", core.description)
         airframe = cls.__new__(cls)
         airframe._core = core
         return airframe
@@ -288,14 +289,17 @@ class Airframe:
         return cls._wrap(_rfcore.Airframe.from_toml_str(text, str(path)))
 
     @classmethod
-    def load(cls, spec: str, relative_to: str | PathLike[str] | None = None) -> Airframe:
+    def load(cls, spec: str, relative_to: str | PathLike[str] | None = None, *, mass_kg: float | None = None) -> Airframe:
         """A preset name, or a path to an airframe TOML file (a ``.toml`` name or an existing
-        file; relative paths resolve against ``relative_to`` when given)."""
+        file) or a PX4 ``.params`` file; relative paths resolve against ``relative_to`` when given.
+        ``mass_kg``: the vehicle mass of a PX4 file (PX4 keeps none; see :meth:`from_px4_params`)."""
         if not isinstance(spec, str):
             raise TypeError(f"airframe: expected a preset name or a TOML path, got {type(spec).__name__}")
         path = Path(spec) if relative_to is None else Path(relative_to) / spec
         if spec.endswith(".params"):
-            return cls.from_px4_params(path)
+            return cls.from_px4_params(path, mass_kg=mass_kg)
+        if mass_kg is not None:
+            raise ValueError(f"mass_kg: only a PX4 .params airframe takes its mass separately; {spec!r} carries its own")
         if spec.endswith(".toml") or path.is_file():
             return cls.from_toml(path)
         return cls.preset(spec)
@@ -320,6 +324,70 @@ class Airframe:
         for rotor in rotor_numbers("rotors", rotors, self.rotor_count):
             efficiency[rotor - 1] = 0.0
         return self.with_efficiency(efficiency)
+
+    def with_parameters(
+        self,
+        *,
+        mass_kg: float | None = None,
+        drag_torque_ratio_m: float | None = None,
+        max_thrust_n: npt.ArrayLike | None = None,
+        min_thrust_n: npt.ArrayLike | None = None,
+        arm_length_m: npt.ArrayLike | None = None,
+        spin: Sequence[Spin | str] | npt.ArrayLike | None = None,
+        name: str | None = None,
+    ) -> Airframe:
+        """A copy with only the given parameters changed; every other field (3-D positions,
+        tilted thrust axes, each rotor's own k_mu, reversible bounds, efficiencies, description)
+        is kept exactly, through the exact TOML form. ``drag_torque_ratio_m`` is then every
+        rotor's k_mu (a rotor with its own takes the new value too); ``arm_length_m`` (one per
+        rotor) moves a rotor given by its position radially in the body x-y plane, keeping its
+        direction, height and thrust axis (a rotor on the z axis has no direction: refused).
+        The core checks the values, naming the field."""
+        import tomllib
+
+        doc = tomllib.loads(self.to_toml())
+        rotors = doc["rotor"]
+        m = len(rotors)
+
+        def per_rotor(field: str, value: Any) -> FloatArray:
+            array = float_array(field, value, 1)
+            if array.shape != (m,):
+                raise ValueError(f"{field}: expected {m} values (one per rotor), got {array.shape[0]}")
+            return array
+
+        if mass_kg is not None:
+            doc["mass_kg"] = real("mass_kg", mass_kg)
+        if drag_torque_ratio_m is not None:
+            k = real("drag_torque_ratio_m", drag_torque_ratio_m)
+            doc["drag_torque_ratio_m"] = k
+            for rotor in rotors:
+                if "drag_torque_ratio_m" in rotor:
+                    rotor["drag_torque_ratio_m"] = k
+        for field, value in (("max_thrust_n", max_thrust_n), ("min_thrust_n", min_thrust_n)):
+            if value is not None:
+                for rotor, v in zip(rotors, per_rotor(field, value)):
+                    rotor[field] = float(v)
+        if arm_length_m is not None:
+            for i, (rotor, v) in enumerate(zip(rotors, per_rotor("arm_length_m", arm_length_m))):
+                if "arm_length_m" in rotor:
+                    rotor["arm_length_m"] = float(v)
+                    continue
+                x, y, z = rotor["position_m"]
+                radius = math.hypot(x, y)
+                if radius == 0.0:
+                    raise ValueError(f"arm_length_m[{i}] (rotor {i + 1}): the rotor sits on the body z axis, so it has no arm to lengthen")
+                rotor["position_m"] = [x * (v / radius), y * (v / radius), z]
+        if spin is not None:
+            signs = _spin_signs(spin)
+            if signs.shape != (m,):
+                raise ValueError(f"spin: expected {m} directions (one per rotor), got {signs.shape[0]}")
+            for i, (rotor, w) in enumerate(zip(rotors, signs)):
+                if w not in (1.0, -1.0):
+                    raise ValueError(f"spin[{i}] (rotor {i + 1}): must be +1 (anticlockwise) or -1 (clockwise), got {w}")
+                rotor["spin"] = "ccw" if w > 0 else "cw"
+        if name is not None:
+            doc["name"] = check_label("name", name)
+        return Airframe.from_toml_str(_toml_document(doc), f"airframe {self.name!r} with changed parameters")
 
     def to_toml(self) -> str:
         """The airframe as TOML in the preset schema; :meth:`from_toml_str` reads it back exactly."""
@@ -445,6 +513,64 @@ class Airframe:
     def __reduce__(self) -> tuple[Any, ...]:
         # Pickle (for multiprocessing and Dask) through the exact TOML round trip.
         return (Airframe.from_toml_str, (self.to_toml(), f"pickled airframe {self.name!r}"))
+
+
+#: Unicode categories a label may not hold: control and format characters, line and paragraph
+#: separators (``str.splitlines`` breaks on some of them), so a name written into a file or a
+#: terminal is never more than text.
+_FORBIDDEN_CATEGORIES = ("Cc", "Cf", "Zl", "Zp")
+
+
+def check_label(field: str, value: Any) -> str:
+    """A name or description: a string without control characters (``TypeError``/``ValueError``
+    naming the field and the first offending character)."""
+    import unicodedata
+
+    if not isinstance(value, str):
+        raise TypeError(f"{field}: expected a string, got {type(value).__name__}")
+    for i, ch in enumerate(value):
+        if unicodedata.category(ch) in _FORBIDDEN_CATEGORIES:
+            raise ValueError(f"{field}: must not contain control characters, got U+{ord(ch):04X} at position {i}")
+    return value
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return toml_string(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"value: must be finite, got {value}")
+        return repr(float(value))  # shortest round trip (a NumPy float's repr names its type)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"value: cannot write {type(value).__name__} to TOML")
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: quotes, backslashes and every control character escaped."""
+    out = ['"']
+    for ch in text:
+        code = ord(ch)
+        if ch in ('"', "\\"):
+            out.append("\\" + ch)
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\u{code:04X}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _toml_document(doc: dict[str, Any]) -> str:
+    """The airframe schema's TOML (top-level keys, then ``[[rotor]]`` tables) from its parsed form."""
+    lines = [f"{key} = {_toml_value(value)}" for key, value in doc.items() if key != "rotor"]
+    for rotor in doc["rotor"]:
+        lines += ["", "[[rotor]]", *(f"{key} = {_toml_value(value)}" for key, value in rotor.items())]
+    return "\n".join(lines) + "\n"
 
 
 def require_airframe(value: Any) -> Airframe:

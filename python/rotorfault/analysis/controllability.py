@@ -22,6 +22,7 @@ from .. import _rfcore
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .._util.convert import control_axes, count
 from .._util.deprecation import renamed_attribute
+from .._util.tables import Column, Tabular
 from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, _efficiency, _formula, acai_label, format_acai
 from .airframe import Airframe, require_airframe, rotor_labels
 
@@ -151,10 +152,11 @@ _COLUMNS = (
 )
 
 
-class FailureTable(Sequence[FailureCase]):
+class FailureTable(Sequence[FailureCase], Tabular):
     """Every combination of up to ``max_failed`` failed rotors with rank, ACAI (``formula``) and
-    verdict, with all axes and giving up yaw. Prints as a table; converts with :meth:`to_dicts`
-    and :meth:`to_arrays`."""
+    verdict, with all axes and giving up yaw. Prints as a table; converts with :meth:`to_arrow`
+    and :meth:`to_pandas` (one row per failure combination), :meth:`to_dicts` and
+    :meth:`to_arrays`."""
 
     def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase], *, formula: AcaiFormula = "eq13") -> None:
         self.formula: AcaiFormula = formula
@@ -196,6 +198,39 @@ class FailureTable(Sequence[FailureCase]):
         for column in _COLUMNS:
             arrays[column] = np.array([getattr(row, column) for row in self._cases])
         return arrays
+
+    def _table_columns(self) -> list[Column]:
+        # The ACAI columns are named as a scan's (acai_eq13, acai_facet_margin_give_up_yaw, ...).
+        acai_ = f"acai_{self.formula.replace('-', '_')}"
+        rows = self._cases
+        columns: list[Column] = [
+            ("failed_rotors", "list<int64>", [list(r.failed) for r in rows]),
+            ("failed_count", "int64", [len(r.failed) for r in rows]),
+            ("controllability_rank", "int64", [r.controllability_rank for r in rows]),
+            ("effectiveness_rank", "int64", [r.effectiveness_rank for r in rows]),
+            (acai_, "float64", [r.acai for r in rows]),
+            ("hover", "string", [r.hover for r in rows]),
+            ("controllable", "bool", [r.controllable for r in rows]),
+            ("verdict", "string", [r.verdict for r in rows]),
+            ("effectiveness_rank_give_up_yaw", "int64", [r.effectiveness_rank_give_up_yaw for r in rows]),
+            (f"{acai_}_give_up_yaw", "float64", [r.acai_give_up_yaw for r in rows]),
+            ("hover_give_up_yaw", "string", [r.hover_give_up_yaw for r in rows]),
+            ("controllable_give_up_yaw", "bool", [r.controllable_give_up_yaw for r in rows]),
+            ("verdict_give_up_yaw", "string", [r.verdict_give_up_yaw for r in rows]),
+        ]
+        if rows and rows[0].acai_wrench is not None:
+            columns += [
+                (f"{acai_}_wrench", "float64", [r.acai_wrench for r in rows]),
+                ("hover_wrench", "string", [r.hover_wrench for r in rows]),
+                ("controllable_wrench", "bool", [r.controllable_wrench for r in rows]),
+            ]
+        return columns
+
+    def _table_title(self) -> str:
+        return f"{self.airframe_name}: up to {self.max_failed} failed rotor(s), {acai_label(self.formula)}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "failure-table", "airframe": self.airframe_name, "max_failed": self.max_failed, "formula": self.formula}
 
     def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
         """Headers and formatted cells; the ACAI columns name their formula, the "give-up-yaw"

@@ -4,29 +4,39 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 from rich.markup import escape
-from rich.table import Table
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
 from ..analysis import EQ13_ZERO_NOTE, Airframe, acai_label, controllability, failure_table, format_acai
 from ..analysis.airframe import rotor_labels
-from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers
+from .app import _user_errors, airframe_option, cli, formula_option, load_airframe, mass_option, parse_numbers
+from .output import EXIT_REQUIREMENT, CommandOutput, Output, Rows, output_options, records
 
 
 @cli.command()
+@output_options
 @_user_errors
-def airframes() -> None:
+def airframes(output: Output) -> None:
     """List the preset airframes."""
-    table = Table(title="rotorfault presets")
-    for column in ("name", "rotors", "mass (kg)", "max thrust (N)", "description"):
-        table.add_column(column)
+    rows: list[dict[str, Any]] = []
     for name in Airframe.presets():
         a = Airframe.preset(name)
-        table.add_row(name, str(a.rotor_count), f"{a.mass_kg:g}", f"{a.max_thrust_n.max():g}", escape(a.description))
-    console.print(table)
+        rows.append({"name": name, "rotors": a.rotor_count, "mass_kg": a.mass_kg, "max_thrust_n": float(a.max_thrust_n.max()),
+                     "description": a.description})
+
+    def human(out: Output) -> None:
+        table = out.table(title="rotorfault presets")
+        for column in ("name", "rotors", "mass (kg)", "max thrust (N)", "description"):
+            table.add_column(column)
+        for row in rows:
+            table.add_row(row["name"], str(row["rotors"]), f"{row['mass_kg']:g}", f"{row['max_thrust_n']:g}", escape(row["description"]))
+        out.print(table)
+
+    output.emit(CommandOutput("airframes", tables=[Rows("airframes", rows)], csv_table="airframes", human=human))
 
 
 @cli.command()
@@ -34,62 +44,82 @@ def airframes() -> None:
 @click.option("--efficiency", help="Rotor efficiencies, comma-separated (default: the airframe's own).")
 @click.option("--give-up-yaw", is_flag=True, help="Give up yaw: only thrust, roll and pitch must stay controllable.")
 @formula_option
+@output_options
 @_user_errors
-def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: AcaiFormula) -> None:
+def acai(airframe: str, efficiency: str | None, give_up_yaw: bool, formula: AcaiFormula, output: Output) -> None:
     """Run Du's controllability test and print the ACAI."""
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     efficiencies = None if efficiency is None else parse_numbers("efficiency", efficiency)
     report = controllability(frame, efficiencies, give_up_yaw=give_up_yaw, formula=formula)
-    table = Table(title=f"{escape(frame.name)}: controllability", show_header=False)
-    table.add_column("quantity")
-    table.add_column("value")
-    table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.efficiency))
-    table.add_row("axes", "thrust, roll, pitch (yaw given up)" if give_up_yaw else "thrust, roll, pitch, yaw")
-    table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
-    table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
-    table.add_row(acai_label(formula), format_acai(report.acai, report.hover))
-    style = "green" if report.controllable else "red"
-    table.add_row("verdict", f"[{style}]{report.verdict}[/{style}]")
-    console.print(table)
-    if format_acai(report.acai, report.hover).endswith("*"):
-        console.print(escape(EQ13_ZERO_NOTE))
+    fields = {
+        "airframe": frame.name, "efficiency": list(report.efficiency), "axes": report.axes, "give_up_yaw": report.give_up_yaw,
+        "formula": report.formula, "controllability_rank": report.controllability_rank, "state_dimension": report.state_dimension,
+        "effectiveness_rank": report.effectiveness_rank, "virtual_control_dimension": report.virtual_control_dimension,
+        "acai": float(report.acai), "hover": report.hover, "controllable": report.controllable, "verdict": report.verdict,
+    }
+
+    def human(out: Output) -> None:
+        table = out.table(title=f"{escape(frame.name)}: controllability", show_header=False)
+        table.add_column("quantity")
+        table.add_column("value")
+        table.add_row("efficiency", ", ".join(f"{e:g}" for e in report.efficiency))
+        table.add_row("axes", "thrust, roll, pitch (yaw given up)" if give_up_yaw else "thrust, roll, pitch, yaw")
+        table.add_row("rank C(A, B)", f"{report.controllability_rank} of {report.state_dimension}")
+        table.add_row("rank B_f", f"{report.effectiveness_rank} of {report.virtual_control_dimension}")
+        table.add_row(acai_label(formula), format_acai(report.acai, report.hover))
+        style = "green" if report.controllable else "red"
+        table.add_row("verdict", f"[{style}]{escape(report.verdict)}[/{style}]")
+        out.print(table)
+        if format_acai(report.acai, report.hover).endswith("*"):
+            out.print(escape(EQ13_ZERO_NOTE))
+
+    output.emit(CommandOutput("acai", fields, human=human))
 
 
 @cli.command()
 @airframe_option
 @click.option("--max-failed", "-k", default=1, show_default=True, type=int, help="Largest number of failed rotors.")
 @formula_option
+@output_options
 @_user_errors
-def failures(airframe: str, max_failed: int, formula: AcaiFormula) -> None:
+def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Output) -> None:
     """Every combination of up to K failed rotors: rank, ACAI (all axes and giving up yaw), verdict."""
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     result = failure_table(frame, max_failed=max_failed, formula=formula)
-    headers, rows = result.rows_for_display()
-    table = Table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
-    for header in headers:
-        table.add_column(header, justify="left" if header == "failed" else "right")
-    for case, row in zip(result, rows):
-        style = "green" if case.controllable else ("yellow" if case.controllable_give_up_yaw else "red")
-        table.add_row(*row, style=style)
-    console.print(table)
-    if any(cell.endswith("*") for row in rows for cell in row):
-        console.print(escape(EQ13_ZERO_NOTE))
     survivable = sum(case.controllable for case in result)
     spinning = sum(case.controllable_give_up_yaw and not case.controllable for case in result)
-    console.print(
-        f"{survivable} of {len(result)} cases controllable; {spinning} more only by giving up yaw "
-        "(green: controllable; yellow: only giving up yaw, i.e. thrust, roll and pitch; red: neither)."
-    )
+    fields = {"airframe": frame.name, "max_failed": max_failed, "formula": result.formula, "case_count": len(result),
+              "controllable_count": survivable, "give_up_yaw_only_count": spinning}
+
+    def human(out: Output) -> None:
+        headers, rows = result.rows_for_display()
+        table = out.table(title=f"{escape(frame.name)}: up to {max_failed} failed rotor(s) ({acai_label(formula)}: Du et al. Theorem 3)")
+        for header in headers:
+            table.add_column(header, justify="left" if header == "failed" else "right")
+        for case, row in zip(result, rows):
+            style = "green" if case.controllable else ("yellow" if case.controllable_give_up_yaw else "red")
+            table.add_row(*row, style=style)
+        out.print(table)
+        if any(cell.endswith("*") for row in rows for cell in row):
+            out.print(escape(EQ13_ZERO_NOTE))
+        out.print(
+            f"{survivable} of {len(result)} cases controllable; {spinning} more only by giving up yaw "
+            "(green: controllable; yellow: only giving up yaw, i.e. thrust, roll and pitch; red: neither)."
+        )
+
+    output.emit(CommandOutput("failures", fields, [Rows("cases", records(result))], csv_table="cases", human=human))
 
 
 @cli.command()
 @click.option("--airframe", "-a", required=True, help="Preset name, airframe TOML, or a PX4 .params file.")
+@mass_option
 @click.option("--require", "required", type=click.Choice(["none", "single", "double"]), default="none", show_default=True,
               help="Failure class that must stay hoverable (double includes single); exit status 3 if not.")
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
+@output_options
 @_user_errors
-def certify(airframe: str, required: str, json_path: str | None, force: bool) -> None:
+def certify(airframe: str, required: str, json_path: str | None, force: bool, output: Output) -> None:
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
     not at all; the ACAI (facet margin), the thrust-to-weight left and which axes an allocator must
     drop."""
@@ -100,27 +130,36 @@ def certify(airframe: str, required: str, json_path: str | None, force: bool) ->
 
     if json_path not in (None, "-"):
         check_output_file("--json", json_path, suffixes=(".json",), force=force)
-    frame = Airframe.load(airframe)
+    if json_path == "-" and output.format != "table":
+        raise ValueError("json: --json - writes the certificate on standard output; it cannot be combined with --format json or csv")
+    frame = load_airframe(airframe)
     cert = certify_airframe(frame, max_failed=min(2, frame.rotor_count))
     text = json.dumps(cert.to_dict(), indent=2) + "\n"
-    if json_path == "-":
-        click.echo(text, nl=False)
-    else:
+    failing = cert.failing(required)
+    fields = {"airframe": cert.airframe, "rotor_count": cert.rotor_count, "fully_actuated": cert.fully_actuated, "require": required,
+              "requirement_met": not failing, "failing": [list(c.failed) for c in failing]}
+
+    def human(out: Output) -> None:
         headers, rows = rows_for_display(cert)
         kind = "fully actuated" if cert.fully_actuated else "not fully actuated"
-        table = Table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
+        table = out.table(title=f"{escape(frame.name)}: {frame.rotor_count} rotors, {kind}")
         for header in headers:
             table.add_column(header, justify="left" if header in ("failed", "hover", "allocator drops") else "right")
         styles = {"all-axes": "green", "give-up-yaw": "yellow", "no": "red"}
         for case, row in zip(cert.cases, rows):
             table.add_row(*row, style=styles[case.hover])
-        console.print(table)
+        out.print(table)
+        if required != "none" and not failing:
+            out.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
+
+    if json_path == "-":
+        if not output.quiet:
+            click.echo(text, nl=False)
+    else:
+        output.emit(CommandOutput("certify", fields, [Rows("cases", records(cert))], csv_table="cases", human=human))
         if json_path is not None:
             write_text(json_path, text)
-    failing = cert.failing(required)
     if failing:
         listed = "; ".join(rotor_labels(c.failed) for c in failing)
         click.echo(f"certificate: FAILED: --require {required}: cannot hover with rotor(s) {listed} failed", err=True)
-        sys.exit(3)
-    if required != "none" and json_path != "-":
-        console.print(f"certificate: every {required} failure (and fewer) leaves a hoverable vehicle")
+        sys.exit(EXIT_REQUIREMENT)

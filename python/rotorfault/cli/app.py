@@ -1,6 +1,8 @@
-"""The ``rotorfault`` command group and what every command shares: the console, the one-line
-``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2),
-number and rotor-list parsing, and a report command's handling of SIGTERM and Ctrl-C."""
+"""The ``rotorfault`` command group and what every command shares: the one-line
+``Error: field: rule`` for user errors (exit status 1; click's own usage errors exit with 2; a
+missing optional package names its extra), number and rotor-list parsing, and a report command's
+handling of SIGTERM and Ctrl-C. What a command writes, and in which format, is
+:mod:`~rotorfault.cli.output`."""
 
 from __future__ import annotations
 
@@ -8,15 +10,20 @@ import contextlib
 import functools
 import signal
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any, TypeVar
 
 import click
 from rich.console import Console
 
-from ..analysis import ACAI_FORMULAS
+from .._util.optional import MissingDependency
+from .._util.output import claim_output_directory
+from ..analysis import ACAI_FORMULAS, Airframe
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+#: A rich console on standard output (the table format's on a terminal; commands write through
+#: :class:`rotorfault.cli.output.Output`).
 console = Console()
 
 
@@ -27,7 +34,7 @@ def _user_errors(command: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             return command(*args, **kwargs)
-        except (ValueError, TypeError, OSError, OverflowError) as exc:
+        except (ValueError, TypeError, OSError, OverflowError, ImportError) as exc:
             raise click.ClickException(str(exc).replace("\n", " ")) from None
         except RecursionError:
             raise click.ClickException("input: nested too deeply to read (a TOML file of arrays or tables within tables?)") from None
@@ -60,9 +67,41 @@ formula_option = click.option(
     "(negative where hover is infeasible). Every printed ACAI names its formula.",
 )
 
-airframe_option = click.option(
-    "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`) or a TOML file."
+_MASS_KEY = "rotorfault.mass_kg"
+
+
+def _remember_mass(ctx: click.Context, param: click.Parameter, value: float | None) -> None:
+    ctx.meta[_MASS_KEY] = value
+
+
+#: ``--mass``: the vehicle mass of a PX4 ``.params`` airframe (PX4 keeps none), read by
+#: :func:`load_airframe`.
+mass_option = click.option(
+    "--mass", "mass_kg", type=float, default=None, expose_value=False, callback=_remember_mass, is_eager=True,
+    help="Vehicle mass in kg of a PX4 .params airframe (PX4 keeps none; needed when MPC_THR_HOVER cannot give it).",
 )
+
+
+def airframe_option(command: F) -> F:
+    """``--airframe`` (a preset, a TOML file or a PX4 .params file) and ``--mass``."""
+    command = click.option(
+        "--airframe", "-a", required=True, help="Preset name (see `rotorfault airframes`), a TOML file or a PX4 .params file."
+    )(command)
+    return mass_option(command)
+
+
+def load_airframe(spec: str) -> Airframe:
+    """The airframe ``--airframe`` names, with ``--mass`` for a PX4 file."""
+    ctx = click.get_current_context(silent=True)
+    mass = None if ctx is None else ctx.meta.get(_MASS_KEY)
+    return Airframe.load(spec, mass_kg=mass)
+
+
+def claim_output(field: str, path: str, *, force: bool) -> Path:
+    """Holds the output directory ``path`` until the command ends, checked before any work:
+    its lock (a second writer is refused, naming this one), an interrupted run's leftovers
+    recovered, then the directory checked (:func:`rotorfault._util.output.claim_output_directory`)."""
+    return click.get_current_context().with_resource(claim_output_directory(field, path, force=force))
 
 
 @click.group()

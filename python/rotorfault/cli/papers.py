@@ -9,9 +9,11 @@ from typing import Any, cast
 import click
 from rich.markup import escape
 from rich.table import Table
+from rich.console import Console
 
 from .._typing import KeLaw
-from .app import _report_interruptions, _user_errors, cli, console
+from .app import _report_interruptions, _user_errors, claim_output, cli, console
+from .output import CommandOutput, Output, Rows, output_options
 
 
 @cli.command("ftc-report")
@@ -24,12 +26,12 @@ from .app import _report_interruptions, _user_errors, cli, console
 @click.option("--scenarios", "scenario_names", default=None, help="Only these scenarios (comma-separated names; default: all).")
 @click.option("--no-figures", is_flag=True, help="Only the table (Markdown and CSV); the report has no figures.")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@output_options
 @_user_errors
-def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | None, no_figures: bool, force: bool) -> None:
+def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | None, no_figures: bool, force: bool, output: Output) -> None:
     """Fly every uniform-passive-FTC scenario (Ke et al.) and write a table and figures."""
     from typing import get_args
 
-    from .._util.output import check_output_directory
     from ..control import ke
     from ..papers import ke as ke_paper
 
@@ -45,40 +47,51 @@ def ftc_report(out_dir: str, preset_name: str, laws: str, scenario_names: str | 
         if not names:
             raise ValueError("scenarios: give at least one scenario name")
         scenarios = [ke_paper.scenario(name) for name in names]
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     controller_preset = ke.preset(preset_name)
     with _report_interruptions():
         runs = []
-        console.print(f"flying {len(scenarios) * len(chosen_laws)} runs", highlight=False)
+        output.status(f"flying {len(scenarios) * len(chosen_laws)} runs")
         for law in chosen_laws:
             for sc in scenarios:
                 runs.append(ke_paper.run_scenario(sc, law=cast(KeLaw, law), controller_preset=controller_preset))
-        _print_ftc_table(runs, preset_name)
-        console.print(f"writing the report to {escape(out_dir)}", highlight=False)
+        output.status(f"writing the report to {out_dir}")
         command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault ftc-report"
         path = ke_paper.write_report(runs, out_dir, figures=not no_figures, force=force, command=command)
-    console.print(f"report written to {escape(str(path))}")
+    fields = {"out": str(path), "preset": preset_name, "laws": chosen_laws, "figures": not no_figures}
+
+    def human(out: Output) -> None:
+        _print_ftc_table(runs, preset_name, out.console, out)
+        out.print(f"report written to {escape(str(path))}")
+
+    output.emit(CommandOutput("ftc-report", fields, [Rows("runs", list(ke_paper.report_rows(runs)))], csv_table="runs", human=human))
 
 
 @cli.command("vpp-report")
 @click.option("--out", "out_dir", default="vpp-report", show_default=True, type=click.Path(file_okay=False), help="Directory for the tables and figures (replaced as a whole).")
 @click.option("--quick", is_flag=True, help="20 s flights (a smoke test, not the paper's 60 s).")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@output_options
 @_user_errors
-def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
+def vpp_report(out_dir: str, quick: bool, force: bool, output: Output) -> None:
     """Wang et al.'s VPP quadcopter: the fixed-pitch comparison (hover, controllability,
     stabilisability, ACAI), the feasible trim speeds, and Section 4's three flights with
     propeller 1 failed."""
-    from .._util.output import check_output_directory
     from ..papers import wang as wang_paper
 
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault vpp-report"
     with _report_interruptions():
         path = wang_paper.write_report(out_dir, quick=quick, force=force, command=command)
-    for line in wang_paper.comparison_table():
-        console.print(escape(line), highlight=False, soft_wrap=True)
-    console.print(f"report written to {escape(str(path))}")
+    cases = wang_paper.fixed_pitch_comparison()
+
+    def human(out: Output) -> None:
+        for line in wang_paper.comparison_table(cases):
+            out.print(escape(line), soft_wrap=True)
+        out.print(f"report written to {escape(str(path))}")
+
+    output.emit(CommandOutput("vpp-report", {"out": str(path), "quick": quick}, [Rows("comparison", list(wang_paper.comparison_rows(cases)))],
+                              csv_table="comparison", human=human))
 
 
 @cli.command("lanzon-report")
@@ -87,40 +100,53 @@ def vpp_report(out_dir: str, quick: bool, force: bool) -> None:
 @click.option("--quick", is_flag=True, help="20 s flights and 50 Monte Carlo runs per controller (a smoke test, not the paper's 60 s).")
 @click.option("--no-figures", is_flag=True, help="Only the tables (Markdown and CSV).")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@output_options
 @_user_errors
-def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, force: bool) -> None:
+def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, force: bool, output: Output) -> None:
     """Fly Lanzon et al.'s two flights three ways (paper's design without and with limits, ours),
     for both I_zz values, run the Monte Carlo comparison with Ke's controller, and write a report."""
-    from .._util.output import check_output_directory
     from ..papers import lanzon as lanzon_paper
 
     if mc_runs < 0:
         raise ValueError(f"runs: must be >= 0, got {mc_runs}")
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     duration = 20.0 if quick else None
     runs_per = min(mc_runs, 50) if quick else mc_runs
     with _report_interruptions():
-        console.print("flying scenarios A and B, cases (a), (b), (c), I_zz 1.16e-3 and 1.16e-2: 12 flights", highlight=False)
+        output.status("flying scenarios A and B, cases (a), (b), (c), I_zz 1.16e-3 and 1.16e-2: 12 flights")
         runs = lanzon_paper.three_way(duration_s=duration)
-        for line in lanzon_paper.three_way_table(runs):
-            console.print(escape(line), highlight=False, soft_wrap=True)
         results = []
         if runs_per:
             mc_duration = 20.0 if quick else 60.0
             for controller in ("lanzon", "ke"):
-                results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=True))
-            for line in lanzon_paper.monte_carlo_table(results):
-                console.print(escape(line), highlight=False, soft_wrap=True)
-        console.print(f"writing the report to {escape(out_dir)}", highlight=False)
+                results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=output.progress))
+        output.status(f"writing the report to {out_dir}")
         command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault lanzon-report"
         path = lanzon_paper.write_report(runs, out_dir, monte_carlo_results=results, figures=not no_figures, force=force,
                                          command=command)
-    console.print(f"report written to {escape(str(path))}")
+    monte_carlo = [
+        {"controller": r.controller, "runs": r.runs, "spread": r.spread, "duration_s": r.duration_s, "held_fraction": r.held_fraction,
+         "lost_fraction": r.lost_fraction, "median_final_error_m": r.median_final_error_m, "worst_final_error_m": r.worst_final_error_m}
+        for r in results
+    ]
+
+    def human(out: Output) -> None:
+        for line in lanzon_paper.three_way_table(runs):
+            out.print(escape(line), soft_wrap=True)
+        if results:
+            for line in lanzon_paper.monte_carlo_table(results):
+                out.print(escape(line), soft_wrap=True)
+        out.print(f"report written to {escape(str(path))}")
+
+    output.emit(CommandOutput("lanzon-report", {"out": str(path), "quick": quick, "monte_carlo_runs": runs_per},
+                              [Rows("flights", list(lanzon_paper.report_rows(runs))), Rows("monte_carlo", monte_carlo)],
+                              csv_table="flights", human=human))
 
 
-def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
+def _print_ftc_table(runs: list[Any], preset_name: str, console: Console = console, output: Output | None = None) -> None:
     """The report table on the terminal: one wide table when it fits, otherwise (below 120
-    columns) one narrow table per law with the columns that matter."""
+    columns) one narrow table per law with the columns that matter (``output``: the command's
+    output, for plain tables when not on a terminal)."""
     from rich import box
 
     from ..papers import ke as ke_paper
@@ -141,7 +167,7 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
 
     title = f"uniform passive FTC ({escape(preset_name)}): {len(runs)} flights"
     if console.width >= 120:
-        table = Table(title=title)
+        table = Table(title=title) if output is None else output.table(title=title)
         for column in ("scenario", "law", "Ke", "outcome", "r (rad/s)", "n3z", "max alt. loss (m)", "horiz. max / final (m)"):
             table.add_column(column, justify="left" if column in ("scenario", "law", "outcome", "Ke") else "right")
         for row in rows:
@@ -181,24 +207,38 @@ def _print_ftc_table(runs: list[Any], preset_name: str) -> None:
 @click.option("--quick", is_flag=True, help="Coarser grids and fewer flights (under 2 minutes).")
 @click.option("--benches", "bench_dir", default=None, type=click.Path(file_okay=False), help="Directory of bench results (*.json; default: benches/results of the source tree).")
 @click.option("--force", is_flag=True, help="Replace an existing report in --out.")
+@output_options
 @_user_errors
-def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool) -> None:
+def reproduce(out_dir: str, quick: bool, bench_dir: str | None, force: bool, output: Output) -> None:
     """Reproduce every result of the four papers into one static report (index.html + figures)."""
-    from .._util.output import check_output_directory
     from ..papers import reproduce as reproduce_
 
-    check_output_directory("out", out_dir, force=force)
+    claim_output("out", out_dir, force=force)
     command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault reproduce"
     with _report_interruptions():
         result = reproduce_.write_reproduce(
             out_dir, quick=quick, force=force, command=command, bench_directory=bench_dir,
-            progress=lambda text: console.print(escape(text), highlight=False),
+            progress=output.status,
         )
+    from ..papers import number_rows
+
+    sections, numbers_all, lines = [], [], []
     for section in result.sections:
         numbers = [n for part in [section, *section.parts] for n in part.numbers]
-        state = "not landed yet" if not section.landed else f"{sum(n.status == 'pass' for n in numbers)} of {len(numbers)} printed numbers pass"
+        passed = sum(n.status == "pass" for n in numbers)
+        state = "not landed yet" if not section.landed else f"{passed} of {len(numbers)} printed numbers pass"
         pending = [part.title for part in section.parts if not part.landed]
         if pending:
             state += f"; not landed yet: {', '.join(pending)}"
-        console.print(f"{escape(section.key)}: {escape(state)}", highlight=False)
-    console.print(f"report written to {escape(str(result.path))} in {result.run_time_s:.1f} s")
+        lines.append(f"{section.key}: {state}")
+        sections.append({"key": section.key, "title": section.title, "landed": section.landed, "numbers": len(numbers), "passed": passed,
+                         "not_landed": pending})
+        numbers_all += numbers
+
+    def human(out: Output) -> None:
+        for line in lines:
+            out.print(escape(line))
+        out.print(f"report written to {escape(str(result.path))} in {result.run_time_s:.1f} s")
+
+    output.emit(CommandOutput("reproduce", {"out": str(result.path), "quick": quick, "run_time_s": result.run_time_s},
+                              [Rows("sections", sections), Rows("numbers", list(number_rows(numbers_all)))], csv_table="numbers", human=human))

@@ -8,18 +8,24 @@ from typing import Any
 import click
 import numpy as np
 from rich.markup import escape
-from rich.table import Table
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
 from ..analysis import Airframe, acai_label
 from ..studies.scan import efficiency_scan
-from .app import _user_errors, airframe_option, cli, console, formula_option, parse_numbers, parse_rotors
+from .app import _user_errors, airframe_option, cli, formula_option, load_airframe, parse_numbers, parse_rotors
+from .output import CommandOutput, Output, Rows, output_options, records
+
+
+def default_rotors(frame: Airframe) -> list[int]:
+    """The rotors a scan sweeps when none are named: Du's Fig. 4 choice (1, 2, 5) on an airframe
+    with five or more rotors, else the first three (every preset has at least four)."""
+    return [1, 2, 5] if frame.rotor_count >= 5 else list(range(1, min(3, frame.rotor_count) + 1))
 
 
 @cli.command()
 @airframe_option
-@click.option("--rotors", default="1,2,5", show_default=True, help="Rotors whose efficiency is swept (1-based).")
+@click.option("--rotors", default=None, help="Rotors whose efficiency is swept (1-based; default: 1,2,5 with five or more rotors, else 1,2,3).")
 @click.option("--step", default=0.04, show_default=True, type=float, help="Grid spacing in [0, 1].")
 @click.option("--give-up-yaw", is_flag=True, help="Give up yaw: only thrust, roll and pitch must stay controllable.")
 @formula_option
@@ -30,47 +36,58 @@ from .app import _user_errors, airframe_option, cli, console, formula_option, pa
 @click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
 @click.option("--axis", "extra_axes", multiple=True, help="An airframe parameter axis NAME=v1,v2,... (max_thrust_n, mass_kg, drag_torque_ratio_m, arm_length_m, ...); with --out.")
 @click.option("--chunk-points", default=1 << 20, show_default=True, type=int, help="Points per chunk (memory and resume granularity) with --out.")
+@output_options
 @_user_errors
 def scan(
-    airframe: str, rotors: str, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool,
-    out_path: str | None, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
+    airframe: str, rotors: str | None, step: float, give_up_yaw: bool, formula: AcaiFormula, plot_path: str | None, force: bool,
+    out_path: str | None, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int, output: Output,
 ) -> None:
     """Sweep rotor efficiencies over a grid and report the controllable region (Du Fig. 4)."""
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)
+    frame = load_airframe(airframe)
+    swept = default_rotors(frame) if rotors is None else parse_rotors("rotors", rotors)
     if out_path is not None:
-        _scan_to_parquet(airframe, rotors, step, give_up_yaw, plot_path, force, out_path, resume, dask_address, extra_axes, chunk_points)
+        _scan_to_parquet(frame, swept, step, give_up_yaw, plot_path, force, out_path, resume, dask_address, extra_axes, chunk_points, output)
         return
     if resume or dask_address or extra_axes:
         raise ValueError("out: --resume, --dask and --axis need --out (a Parquet output)")
-    frame = Airframe.load(airframe)
-    swept = parse_rotors("rotors", rotors)
     if plot_path is not None and len(swept) != 3:
         raise ValueError(f"rotors: the Fig. 4 plot needs three swept rotors, got {len(swept)}")
-    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw, formula=formula)
+    result = efficiency_scan(frame, swept, step, give_up_yaw=give_up_yaw, formula=formula, progress=None if output.progress else False)
     finite = result.acai[~(result.acai == -math.inf)]
     misleading = int(np.sum((result.acai >= 0.0) & (result.hover_code < 0)))
-    console.print(
-        f"{escape(frame.name)}: rotors {rotors} swept with step {step:g}: {len(result.acai):,} points, "
-        f"{int(result.controllable.sum()):,} controllable ({100 * result.controllable_fraction:.1f}%), "
-        f"hover feasible at {int(result.hover_feasible.sum()):,}; "
-        f"largest {acai_label(formula)} {finite.max() if finite.size else float('nan'):.4f}"
-    )
-    if misleading:
-        console.print(f"{misleading:,} points where {formula} reads >= 0 although the hover wrench lies outside (see hover_code)")
+    largest = float(finite.max()) if finite.size else math.nan
     if plot_path is not None:
         result.plot(plot_path)
-        console.print(f"plot written to {plot_path}")
+    fields: dict[str, Any] = {
+        "airframe": frame.name, "rotors": list(swept), "step": step, "give_up_yaw": give_up_yaw, "formula": formula,
+        "point_count": len(result.acai), "controllable_count": int(result.controllable.sum()),
+        "controllable_fraction": result.controllable_fraction, "hover_feasible_count": int(result.hover_feasible.sum()),
+        "largest_acai": largest, "misleading_count": misleading, "out": None, "plot": plot_path,
+    }
+    listed = ",".join(map(str, swept))
+
+    def human(out: Output) -> None:
+        out.print(
+            f"{escape(frame.name)}: rotors {listed} swept with step {step:g}: {len(result.acai):,} points, "
+            f"{fields['controllable_count']:,} controllable ({100 * result.controllable_fraction:.1f}%), "
+            f"hover feasible at {fields['hover_feasible_count']:,}; largest {acai_label(formula)} {largest:.4f}"
+        )
+        if misleading:
+            out.print(f"{misleading:,} points where {formula} reads >= 0 although the hover wrench lies outside (see hover_code)")
+        if plot_path is not None:
+            out.print(f"plot written to {escape(plot_path)}")
+
+    output.emit(CommandOutput("scan", fields, [Rows("points", records(result))], csv_table="points", human=human))
 
 
 def _scan_to_parquet(
-    airframe: str, rotors: str, step: float, give_up_yaw: bool, plot_path: str | None, force: bool,
-    out_path: str, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int,
+    frame: Airframe, swept: list[int], step: float, give_up_yaw: bool, plot_path: str | None, force: bool,
+    out_path: str, resume: bool, dask_address: str | None, extra_axes: tuple[str, ...], chunk_points: int, output: Output,
 ) -> None:
     from ..studies.scan import acai_scan
 
-    frame = Airframe.load(airframe)
-    swept = parse_rotors("rotors", rotors)
     if not 0.0 < step <= 1.0 or not math.isclose(round(1.0 / step) * step, 1.0, rel_tol=0.0, abs_tol=1e-9):
         raise ValueError(f"step: must lie in (0, 1] and divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
     levels = np.linspace(0.0, 1.0, int(round(1.0 / step)) + 1)
@@ -86,17 +103,28 @@ def _scan_to_parquet(
         raise ValueError("plot: the Fig. 4 plot needs exactly three swept rotors and no --axis")
     result = acai_scan(
         frame, axes, give_up_yaw=give_up_yaw, out=out_path, resume=resume, force=force,
-        backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=True,
+        backend="dask" if dask_address else "local", dask=dask_address, chunk_points=chunk_points, progress=output.progress,
     )
     ok = result.controllable_count(give_up_yaw=give_up_yaw)
-    console.print(
-        f"{escape(frame.name)}: {result.total:,} points ({result.computed_chunks} chunks computed, {result.skipped_chunks} already written) "
-        f"in {result.seconds:.1f} s; {ok:,} controllable{' giving up yaw' if give_up_yaw else ''} "
-        f"({100 * ok / max(result.total, 1):.1f}%); rows in {escape(out_path)}"
-    )
     if plot_path is not None:
         result.plot(plot_path, give_up_yaw=give_up_yaw)
-        console.print(f"plot written to {plot_path}")
+    fields: dict[str, Any] = {
+        "airframe": frame.name, "rotors": list(swept), "step": step, "give_up_yaw": give_up_yaw, "axes": list(result.names),
+        "point_count": result.total, "controllable_count": ok, "controllable_fraction": ok / max(result.total, 1),
+        "computed_chunks": result.computed_chunks, "skipped_chunks": result.skipped_chunks, "seconds": result.seconds,
+        "out": out_path, "plot": plot_path,
+    }
+
+    def human(out: Output) -> None:
+        out.print(
+            f"{escape(frame.name)}: {result.total:,} points ({result.computed_chunks} chunks computed, {result.skipped_chunks} already written) "
+            f"in {result.seconds:.1f} s; {ok:,} controllable{' giving up yaw' if give_up_yaw else ''} "
+            f"({100 * ok / max(result.total, 1):.1f}%); rows in {escape(out_path)}"
+        )
+        if plot_path is not None:
+            out.print(f"plot written to {escape(plot_path)}")
+
+    output.emit(CommandOutput("scan", fields, human=human))
 
 
 @cli.command()
@@ -108,62 +136,97 @@ def _scan_to_parquet(
     help="ACAI of an infeasible hover: facet-margin (how far outside, negative) or eq13 (Du's 0).",
 )
 @click.option("--top", default=0, type=int, help="Show only the best N designs (per parameter value; 0: all).")
+@output_options
 @_user_errors
-def design(airframe: str, parameter: str | None, values: str | None, formula: AcaiFormula, top: int) -> None:
+def design(airframe: str, parameter: str | None, values: str | None, formula: AcaiFormula, top: int, output: Output) -> None:
     """Rank every spin-direction assignment of the airframe's frame by failure tolerance."""
     from ..studies.design import design_search
 
-    frame = Airframe.load(airframe)
+    frame = load_airframe(airframe)
     numbers = parse_numbers("values", values) if values is not None else None
-    result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
     if top < 0:
         raise ValueError(f"top: must be 0 (all) or a positive count, got {top}")
-    click.echo(result.format(top))
-    for value in dict.fromkeys(d.parameter_value for d in result.designs):
-        best = result.best(value)
-        where = "" if value is None else f" at {parameter} = {value:g}"
-        click.echo(
-            f"best{where}: {best.spins}, controllable after {best.controllable_single} of {len(best.single)} single failures\n"
-            f"  (rotors {', '.join(map(str, best.survivable_single)) or 'none'}), worst single-failure {acai_label(formula)} {best.worst_single:.4f}"
-        )
+    result = design_search(frame, parameter=parameter, values=numbers, formula=formula)
+    rows = [row for row in records(result) if top <= 0 or row["rank"] <= top]
+    best = [result.best(value) for value in dict.fromkeys(d.parameter_value for d in result.designs)]
+    fields = {
+        "airframe": frame.name, "formula": formula, "parameter": parameter,
+        "best": [{"parameter_value": b.parameter_value, "spins": b.spins, "controllable_single": b.controllable_single,
+                  "single_failures": len(b.single), "survivable_single_rotors": list(b.survivable_single), "worst_single_acai": b.worst_single}
+                 for b in best],
+    }
+
+    def human(out: Output) -> None:
+        out.print(escape(result.format(top)))
+        for b in best:
+            where = "" if b.parameter_value is None else f" at {parameter} = {b.parameter_value:g}"
+            out.print(
+                f"best{where}: {b.spins}, controllable after {b.controllable_single} of {len(b.single)} single failures\n"
+                f"  (rotors {', '.join(map(str, b.survivable_single)) or 'none'}), worst single-failure {acai_label(formula)} {b.worst_single:.4f}"
+            )
+
+    output.emit(CommandOutput("design", fields, [Rows("designs", rows)], csv_table="designs", human=human))
 
 
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write the time-history figure (.png, .pdf or .svg).")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
+@output_options
 @_user_errors
-def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
-    """Fly a scenario file (airframe, controller, faults, wind, noise or sensing, duration)."""
+def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Output) -> None:
+    """Fly a scenario file (airframe, controller, faults, wind, noise or sensing, duration) and judge the
+    whole flight (holds position, circling, off station, or how it was lost)."""
     from ..studies.scenario_file import load_scenario
 
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)
     scenario = load_scenario(scenario_file)
     run = scenario.run()
-    altitude = -run.position[:, 2]
-    tilt = np.degrees(np.arccos(np.clip(run.primary_axis[:, 2], -1.0, 1.0)))
-    table = Table(title=f"{escape(scenario.name)}: {escape(scenario.simulator.airframe.name)}, {scenario.controller_kind}")
-    table.add_column("quantity")
-    table.add_column("value", justify="right")
-    table.add_row("simulated", f"{run.t[-1]:.3f} s of {scenario.duration_s:g} s")
-    table.add_row("faults", ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in run.faults) or "none")
-    table.add_row("final position (N, E, alt)", ", ".join(f"{v:.3f}" for v in (*run.position[-1, :2], altitude[-1])))
-    table.add_row("max altitude loss", f"{max(0.0, altitude[0] - altitude.min()):.3f} m")
-    table.add_row("max horizontal excursion", f"{np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max():.3f} m")
-    table.add_row("max tilt", f"{tilt.max():.1f} deg")
-    table.add_row("flew on", run.sensed)
-    if run.estimate is not None:
-        finite = np.isfinite(run.estimate_position_error_m)
-        table.add_row("estimate error, position RMS", f"{1e3 * np.sqrt(np.mean(run.estimate_position_error_m[finite] ** 2)):.3f} mm")
-        table.add_row("estimate error, attitude RMS", f"{np.degrees(np.sqrt(np.mean(run.estimate_attitude_error_rad[finite] ** 2))):.4f} deg")
-        counts = run.estimate.counts
-        table.add_row("gyro clamped", f"{counts.gyro_saturated_samples} of {counts.imu_samples} IMU samples")
-    table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
-    console.print(table)
+    metrics = scenario.metrics(run)
     if plot_path is not None:
         run.plot(plot_path, title=scenario.title, setpoints=scenario.setpoints)
-        console.print(f"plot written to {escape(plot_path)}")
+    altitude = -run.position[:, 2]
+    tilt = np.degrees(np.arccos(np.clip(run.primary_axis[:, 2], -1.0, 1.0)))
+    fields: dict[str, Any] = {
+        "scenario": scenario.name, "airframe": scenario.simulator.airframe.name, "controller": scenario.controller_kind,
+        "duration_s": scenario.duration_s, "simulated_s": float(run.t[-1]),
+        "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in run.faults],
+        "final_position_m": [float(v) for v in run.position[-1]],
+        "max_altitude_loss_m": float(max(0.0, altitude[0] - altitude.min())),
+        "max_horizontal_excursion_m": float(np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
+        "max_tilt_deg": float(tilt.max()),
+        "flew_on": run.sensed,
+        "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
+        "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time, "description": run.events[0].description},
+        "plot": plot_path,
+    }
+
+    def human(out: Output) -> None:
+        table = out.table(title=f"{escape(scenario.name)}: {escape(scenario.simulator.airframe.name)}, {scenario.controller_kind}")
+        table.add_column("quantity")
+        table.add_column("value", justify="right")
+        table.add_row("simulated", f"{run.t[-1]:.3f} s of {scenario.duration_s:g} s")
+        table.add_row("faults", ", ".join(f"rotor {f.rotor} -> {f.efficiency:g} at {f.time:g} s" for f in run.faults) or "none")
+        table.add_row("final position (N, E, alt)", ", ".join(f"{v:.3f}" for v in (*run.position[-1, :2], altitude[-1])))
+        table.add_row("max altitude loss", f"{fields['max_altitude_loss_m']:.3f} m")
+        table.add_row("max horizontal excursion", f"{fields['max_horizontal_excursion_m']:.3f} m")
+        table.add_row("max tilt", f"{tilt.max():.1f} deg")
+        table.add_row("flew on", run.sensed)
+        if run.estimate is not None:
+            finite = np.isfinite(run.estimate_position_error_m)
+            table.add_row("estimate error, position RMS", f"{1e3 * np.sqrt(np.mean(run.estimate_position_error_m[finite] ** 2)):.3f} mm")
+            table.add_row("estimate error, attitude RMS", f"{np.degrees(np.sqrt(np.mean(run.estimate_attitude_error_rad[finite] ** 2))):.4f} deg")
+            counts = run.estimate.counts
+            table.add_row("gyro clamped", f"{counts.gyro_saturated_samples} of {counts.imu_samples} IMU samples")
+        table.add_row("outcome", f"[red]{escape(str(run.events[0]))}[/red]" if run.diverged else "[green]no divergence[/green]")
+        colour = {"holds-position": "green", "circling": "yellow", "off-station": "yellow"}.get(metrics.outcome, "red")
+        table.add_row("verdict (last 5 s)", f"[{colour}]{escape(metrics.outcome_label)}[/{colour}]")
+        out.print(table)
+        if plot_path is not None:
+            out.print(f"plot written to {escape(plot_path)}")
+
+    output.emit(CommandOutput("simulate", fields, [Rows("trajectory", records(run))], csv_table="trajectory", human=human))
 
 
 @cli.command("campaign")
@@ -177,18 +240,20 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool) -> None:
 @click.option("--dask", "dask_address", help="Run the chunks on a Dask cluster: a scheduler address (tcp://host:8786) or local:N.")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file or --out output.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar on standard error.")
+@output_options
 @_user_errors
 def campaign_command(
     campaign_file: str | None, runs: int | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
-    resume: bool, dask_address: str | None, force: bool, progress: bool,
+    resume: bool, dask_address: str | None, force: bool, progress: bool, output: Output,
 ) -> None:
     """Fly a fault campaign (a TOML file of rotorfault.studies.Campaign fields; default: every
     single failure of Ke's quadcopter) and report survival, worst cases and excursions."""
     from dataclasses import replace
 
     from ..studies.campaign import Campaign, run_campaign
-    from ..studies.tuning import tune, tuning_campaign
+    from ..studies.tuning import TUNED_GAINS, tune, tuning_campaign
 
+    progress = progress and output.progress
     if plot_path is not None:
         check_output_file("plot", plot_path, force=force)
     if out_path is None and (resume or dask_address):
@@ -198,7 +263,12 @@ def campaign_command(
             raise ValueError("out: --tune writes no Parquet output")
         base = tuning_campaign(runs=24 if quick else 200)
         tuned = tune(base, maxiter=1 if quick else 9, popsize=1, progress=progress)
-        console.print(escape(tuned.table()))
+        gains = [{"gain": n, "table_iv": float(getattr(tuned.baseline, n)), "tuned": float(getattr(tuned.tuned, n))} for n in TUNED_GAINS]
+        scores = [{"campaign": key, **{k: float(v) for k, v in score.items()}} for key, score in tuned.scores.items()]
+        output.emit(CommandOutput(
+            "campaign", {"mode": "tune", "candidates": tuned.candidates, "scenarios": tuned.scenarios},
+            [Rows("gains", gains), Rows("scores", scores)], csv_table="gains", human=lambda out: out.print(escape(tuned.table())),
+        ))
         return
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
     if runs is not None:
@@ -206,13 +276,27 @@ def campaign_command(
     result = run_campaign(
         campaign, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address, progress=progress,
     )
-    if out_path is not None:
-        console.print(
-            f"{campaign.runs:,} runs ({result.computed_chunks} chunks flown, {result.skipped_chunks} already written) "
-            f"in {result.seconds:.1f} s; rows in {escape(out_path)}",
-            highlight=False,
-        )
-    console.print(escape(result.table()))
     if plot_path is not None:
         result.plot(plot_path)
-        console.print(f"plot written to {escape(plot_path)}")
+    every = result.survival()[0]
+    fields: dict[str, Any] = {
+        "mode": "campaign", "runs": campaign.runs, "controller": campaign.controller, "seed": campaign.seed,
+        "survived": every.survived, "survival_rate": every.rate, "survival_low": every.low, "survival_high": every.high,
+        "out": out_path, "computed_chunks": result.computed_chunks, "skipped_chunks": result.skipped_chunks, "seconds": result.seconds,
+        "plot": plot_path,
+    }
+    tables = [Rows("survival", list(result.survival_table())), Rows("worst", result.worst(5))]
+    if out_path is None:
+        tables.append(Rows("rows", records(result)))
+
+    def human(out: Output) -> None:
+        if out_path is not None:
+            out.print(
+                f"{campaign.runs:,} runs ({result.computed_chunks} chunks flown, {result.skipped_chunks} already written) "
+                f"in {result.seconds:.1f} s; rows in {escape(out_path)}"
+            )
+        out.print(escape(result.table()))
+        if plot_path is not None:
+            out.print(f"plot written to {escape(plot_path)}")
+
+    output.emit(CommandOutput("campaign", fields, tables, csv_table="survival", human=human))

@@ -12,12 +12,19 @@
 - :mod:`~rotorfault.control.lanzon`: Lanzon et al.'s :class:`LanzonController` (robust feedback
   linearisation, H-infinity loop shaping, yaw-synchronised outer loop) and its design;
 - :mod:`~rotorfault.control.lqr`: hover trim, linearisation and LQR hover controllers;
+- :mod:`~rotorfault.control.systems`: the linear models as python-control systems
+  (:class:`LinearModel`: a ``control.StateSpace`` with named signals and its operating point;
+  :func:`lanzon_plant`);
 - :mod:`~rotorfault.control.riccati`: :func:`design_lqr`, the one LQR (continuous and discrete
   Riccati equations, scipy's solvers on every install) and its checked :class:`LqrDesign`;
 - :mod:`~rotorfault.control.stabilisability`: the scale-free PBH tests that name the modes no
   input moves (:func:`stabilisability`, :func:`detectability`);
 - :mod:`~rotorfault.control.robust`: :func:`ncfsyn` (Glover-McFarlane H-infinity loop shaping)
-  and the loop-shape weight.
+  and the loop-shape weight;
+- :mod:`~rotorfault.control.realisation`: state-space realisations built here (transfer
+  functions, series, balancing, minimal and balanced realisations), the same on every install;
+- :mod:`~rotorfault.control.norms`: the H-infinity norm (:func:`hinf_norm`, continuous and
+  discrete).
 
 Anything with ``core(dt_s)`` returning one of the extension's controller objects is a
 :class:`Controller` the simulator runs in Rust; a plain Python callable ``f(t, x) -> commands``
@@ -46,9 +53,10 @@ from .stabilisability import PbhTest, detectability, stabilisability
 from .tracking import TrackingFeedback
 
 if TYPE_CHECKING:
-    from . import lanzon, registry, robust
+    from . import lanzon, norms, realisation, registry, robust, systems
     from .lanzon import LanzonController
     from .robust import NcfsynResult, ncfsyn
+    from .systems import LinearModel, lanzon_plant
 
 #: Names whose modules import python-control and scipy (about 1.5 s): loaded on first use, so
 #: ``import rotorfault`` stays light (tests/cross/test_architecture.py); and the registry, so that
@@ -57,6 +65,11 @@ _LAZY = {
     "registry": ("registry", None),
     "lanzon": ("lanzon", None),
     "robust": ("robust", None),
+    "systems": ("systems", None),
+    "LinearModel": ("systems", "LinearModel"),
+    "lanzon_plant": ("systems", "lanzon_plant"),
+    "norms": ("norms", None),
+    "realisation": ("realisation", None),
     "LanzonController": ("lanzon", "LanzonController"),
     "NcfsynResult": ("robust", "NcfsynResult"),
     "ncfsyn": ("robust", "ncfsyn"),
@@ -81,6 +94,7 @@ __all__ = [
     "KeGains",
     "LanzonController",
     "LinearFeedback",
+    "LinearModel",
     "LqrDesign",
     "NcfsynResult",
     "Lti",
@@ -94,12 +108,16 @@ __all__ = [
     "indi",
     "ke",
     "lanzon",
+    "lanzon_plant",
     "linearize",
     "lqr",
     "lqr_hover",
     "lqr_hover_allocated",
     "ncfsyn",
+    "norms",
+    "realisation",
     "registry",
     "robust",
     "stabilisability",
+    "systems",
 ]

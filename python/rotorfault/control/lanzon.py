@@ -43,12 +43,14 @@ from typing import Any
 import control as ct  # type: ignore[import-untyped]
 import numpy as np
 import numpy.typing as npt
+import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .. import _rfcore
 from .._util.convert import FloatArray, float_array, real
 from ..analysis.airframe import Airframe, require_airframe
 from ..flight import Drag, FixedPitchActuator, Simulator
-from .robust import NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
+from .realisation import state_space
+from .robust import NcfsynEvidence, NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
 
 #: Table 2's initial spin, rad/s: ``k_r = m g d / SPIN_RATE_RAD_S`` reproduces it (the paper
 #: gives no ``k_r``).
@@ -85,15 +87,22 @@ class LanzonVehicle:
     rate_limit_n_s: float = 50.0
 
     def __post_init__(self) -> None:
+        # Checked once, here: every physical parameter finite, and positive where it must be.
         for name in ("mass_kg", "gravity_m_s2", "inertia_xx_kg_m2", "inertia_zz_kg_m2", "arm_length_m",
                      "drag_torque_ratio_m", "rotational_drag_n_m_s", "max_thrust_n", "rate_limit_n_s"):
             value = real(name, getattr(self, name))
-            if not value > 0 or math.isnan(value):
-                raise ValueError(f"{name}: must be > 0, got {value}")
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name}: must be finite and > 0, got {value}")
         for name in ("linear_drag_n_s_m", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2"):
             value = real(name, getattr(self, name))
-            if not value >= 0 or math.isinf(value):
+            if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name}: must be finite and >= 0, got {value}")
+        if not math.isfinite(self.spin_rate_rad_s):
+            raise ValueError(f"rotational_drag_n_m_s: m g d / k_r (the working point's spin) must be finite, "
+                             f"got {self.spin_rate_rad_s} with k_r = {self.rotational_drag_n_m_s}")
+        # ... and the scales the law divides by in the core's accepted range (rfcore::error), here
+        # rather than at the first design or flight.
+        self._core()
 
     @classmethod
     def from_airframe(cls, airframe: Airframe, **overrides: Any) -> LanzonVehicle:
@@ -206,7 +215,7 @@ class LanzonVehicle:
         a, b = self.linearisation()
         c = np.zeros((3, 5))
         c[0, 0] = c[1, 1] = c[2, 4] = 1.0
-        return ct.ss(a, b, c, np.zeros((3, 3)))
+        return state_space(a, b, c, np.zeros((3, 3)))
 
     # -- robust feedback linearisation ------------------------------------------------------------
     def decoupling_matrix(self, x: npt.ArrayLike) -> FloatArray:
@@ -314,6 +323,11 @@ class OuterLoopGains:
     max_tilt_rad: float = _DEFAULT_OUTER.max_tilt_rad
     max_vertical_accel_m_s2: float = _DEFAULT_OUTER.max_vertical_accel_m_s2
 
+    def __post_init__(self) -> None:
+        # Checked once, at construction, by the core's rules (finite, gains >= 0, tilt in
+        # (0, pi/2), acceleration > 0): the error names the field (``outer_loop.k_p_xy: ...``).
+        self._core()
+
     def _core(self) -> _rfcore.LanzonOuterLoop:
         return _rfcore.LanzonOuterLoop(**{f.name: real(f"outer_loop.{f.name}", getattr(self, f.name)) for f in fields(self)})
 
@@ -345,18 +359,33 @@ class LanzonDesign:
         return self.synthesis.stability_margin
 
     @property
+    def evidence(self) -> NcfsynEvidence:
+        """What the synthesis checked before returning (achieved norm on the full shaped plant,
+        gamma_min two ways, closed-loop poles with the plant): :class:`NcfsynEvidence`."""
+        return self.synthesis.evidence
+
+    @property
     def controller(self) -> ct.StateSpace:
         """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``."""
         return self.synthesis.controller
 
     def discretise(self, dt_s: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """``(A, B, C, D)`` of the controller discretised at ``dt_s`` (Tustin, which maps a stable
-        continuous controller to a stable discrete one at any period)."""
+        continuous controller to a stable discrete one at any period), its states in real Schur
+        coordinates (an orthogonal change of the controller's states: ``A`` quasi-triangular,
+        so its eigenvalues are read off, by the core's stability check among others)."""
         dt = real("dt_s", dt_s)
         if not (dt > 0 and math.isfinite(dt)):
             raise ValueError(f"dt_s: must be > 0, got {dt}")
         k = ct.c2d(self.controller, dt, method="tustin")
-        return tuple(np.ascontiguousarray(np.asarray(m, dtype=np.float64)) for m in (k.A, k.B, k.C, k.D))  # type: ignore[return-value]
+        a, b, c, d = (np.asarray(m, dtype=np.float64) for m in (k.A, k.B, k.C, k.D))
+        if a.size:
+            try:
+                a, z = sla.schur(a, output="real")
+            except (np.linalg.LinAlgError, ValueError) as exc:
+                raise ValueError(f"dt_s: the discretised controller has no real Schur form (scipy: {exc})") from None
+            b, c = z.T @ b, c @ z
+        return tuple(np.ascontiguousarray(m) for m in (a, b, c, d))  # type: ignore[return-value]
 
     def plot_loop_shape(self, path: str | None = None) -> Any:
         """Singular values of the RFL plant and of the shaped plant ``G W1`` (Lanzon Fig. 4)."""
@@ -386,6 +415,11 @@ def design(
     gains = float_array("channel_gain", channel_gain, 1)
     if gains.shape != (3,):
         raise ValueError(f"channel_gain: expected 3 entries (phi, theta, r), got {gains.shape[0]}")
+    if not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+        raise ValueError(f"channel_gain: must be finite and > 0, got {gains.tolist()}")
+    factor = real("factor", factor)
+    if not (math.isfinite(factor) and factor > 1):
+        raise ValueError(f"factor: must be finite and > 1 (gamma = factor * gamma_min), got {factor}")
     shape = target_loop_shape(crossover_rad_s, low_gain_db=low_gain_db, rolloff_factor=rolloff_factor)
     plant = vehicle.plant()
     w1 = loop_shape_weight(plant, shape, channel_gain=gains)

@@ -25,11 +25,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol, cast, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array, real
+from .._util.deprecation import warn
 from ..analysis.airframe import Airframe, rotor_labels
 from ..allocation import Allocator
 from ..analysis.acai import acai
@@ -37,6 +39,9 @@ from ..flight import FixedPitchActuator, Simulator, VariablePitchActuator
 from .allocated import Allocated
 from .linear import STATE_DIM, STATE_LABELS, STATE_NAMES, LinearFeedback
 from .riccati import LqrDesign, design_lqr
+
+if TYPE_CHECKING:
+    from .systems import LinearModel
 
 #: A rotor whose hover thrust cannot be moved further than this fraction of its thrust range from
 #: a bound is on that bound (the same relative size as ``ZERO_RTOL`` for the ACAI).
@@ -48,6 +53,11 @@ MAX_PITCH_RAD = math.radians(80.0)
 #: The largest ``max_pitch_rad`` allowed: central differences of the Euler rates stay within 1e-8
 #: (relative) of the analytic derivatives up to 89 degrees, 8e-5 at 89.99 and 430 % at 89.9999.
 PITCH_LIMIT_CAP_RAD = math.radians(89.0)
+
+
+#: Largest ``||f(state, command)||`` a trim may leave (m/s^2 and rad/s^2 together): the presets'
+#: trims leave 1e-13; a trim above this is not an equilibrium and is never returned as one.
+TRIM_RESIDUAL_TOL = 1e-8
 
 
 @dataclass(frozen=True)
@@ -69,6 +79,12 @@ class HoverTrim:
     def saturated(self) -> bool:
         """Whether hover needs a rotor on a thrust bound."""
         return bool(self.saturated_rotors)
+
+    @property
+    def balanced(self) -> bool:
+        """The evidence holds: ``residual`` at most :data:`TRIM_RESIDUAL_TOL` (a returned trim
+        always is: :func:`hover_trim` raises otherwise)."""
+        return bool(self.residual <= TRIM_RESIDUAL_TOL)
 
 
 def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0), yaw: float = 0.0) -> HoverTrim:
@@ -115,6 +131,11 @@ def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0
     x[7] = math.atan2(n, d)  # pitch
     command, saturated = _hover_thrusts(airframe, thrust)
     residual = float(np.linalg.norm(simulator.state_derivative(x, command)))
+    if not residual <= TRIM_RESIDUAL_TOL:
+        raise ValueError(
+            f"trim residual: the hover of {airframe.name} leaves ||f(x, u)|| = {residual:.3g} (at most "
+            f"{TRIM_RESIDUAL_TOL:g}): the thrusts found do not balance the model at this attitude"
+        )
     return HoverTrim(frozen_array("state", x, 1), frozen_array("command", command, 1), residual, saturated)
 
 
@@ -190,25 +211,95 @@ def _command_bounds(simulator: Simulator) -> tuple[FloatArray, FloatArray, list[
     return simulator.airframe.min_thrust_n, simulator.airframe.max_thrust_n, [f"rotor {j + 1}" for j in range(m)]
 
 
+class OperatingPoint(Protocol):
+    """What :func:`linearize` linearises about: a state and a command (:class:`HoverTrim`,
+    :class:`rotorfault.vpp.VppTrim`)."""
+
+    @property
+    def state(self) -> FloatArray: ...
+    @property
+    def command(self) -> FloatArray: ...
+
+
+@overload
 def linearize(
     simulator: Simulator,
-    x_trim: npt.ArrayLike,
+    trim: OperatingPoint | tuple[npt.ArrayLike, npt.ArrayLike],
+    u_trim: None = None,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    step: float = ...,
+    max_pitch_rad: float = ...,
+) -> LinearModel: ...
+@overload
+def linearize(
+    simulator: Simulator,
+    trim: npt.ArrayLike,
     u_trim: npt.ArrayLike,
+    efficiency: npt.ArrayLike | None = None,
+    *,
+    step: float = ...,
+    max_pitch_rad: float = ...,
+) -> tuple[FloatArray, FloatArray]: ...
+def linearize(
+    simulator: Simulator,
+    trim: OperatingPoint | tuple[npt.ArrayLike, npt.ArrayLike] | npt.ArrayLike,
+    u_trim: npt.ArrayLike | None = None,
     efficiency: npt.ArrayLike | None = None,
     *,
     step: float = 1e-6,
     max_pitch_rad: float = MAX_PITCH_RAD,
-) -> tuple[FloatArray, FloatArray]:
-    """``(A, B)`` with ``dx/dt ~ A (x - x_trim) + B (u - u_trim)``, by central differences of the
-    simulator's dynamics (relative step ``step``) with rotor ``efficiency`` (default: the
-    airframe's own).
+) -> LinearModel | tuple[FloatArray, FloatArray]:
+    """The linear model ``dx/dt ~ A (x - x_trim) + B (u - u_trim)`` of the simulator about
+    ``trim``, a python-control ``StateSpace``: ``linearize(simulator, trim)`` with ``trim`` from
+    :func:`hover_trim` (or :func:`rotorfault.vpp.trim`; anything with ``state`` and ``command``,
+    or a pair ``(state, command)``) returns a
+    :class:`~rotorfault.control.systems.LinearModel` (states ``x ... r``, inputs ``thrust_<i>`` or
+    ``omega_<i>``/``alpha_<i>``, outputs the states, and the operating point ``x_trim``,
+    ``u_trim``). ``efficiency``: the rotors' (default: the airframe's own).
 
+    ``A`` and ``B`` are central differences of the simulator's dynamics (relative step ``step``).
     A command on one of its bounds is differentiated one-sidedly into the box (second order), never
     across the clamp; a command outside its bounds is a ``ValueError``. ``|pitch|`` beyond
     ``max_pitch_rad`` (default 80 degrees, at most 89) is a ``ValueError``: the Euler-angle model is
-    singular at 90 degrees (module notes)."""
+    singular at 90 degrees (module notes).
+
+    Deprecated (one release): ``linearize(simulator, x_trim, u_trim[, efficiency])`` with arrays
+    returns the tuple ``(A, B)``."""
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
+    if u_trim is not None:
+        warn("linearize(simulator, x_trim, u_trim) returning (A, B)", "linearize(simulator, trim), a control.StateSpace (.A, .B)")
+        return _jacobians(simulator, cast(Any, trim), u_trim, efficiency, step, max_pitch_rad)
+    point: Any = trim
+    if hasattr(point, "state") and hasattr(point, "command"):
+        x0, u0 = point.state, point.command
+    elif isinstance(point, tuple) and len(point) == 2:
+        x0, u0 = point
+    else:
+        raise TypeError(
+            f"trim: expected a HoverTrim (rotorfault.hover_trim), a VppTrim or a pair (state, command), got {type(trim).__name__}"
+        )
+    a, b = _jacobians(simulator, x0, u0, efficiency, step, max_pitch_rad)
+    return linear_model(simulator, a, b, x0, u0, range(b.shape[1]))
+
+
+def linear_model(simulator: Simulator, a: FloatArray, b: FloatArray, x_trim: npt.ArrayLike, u_trim: npt.ArrayLike, columns: Any) -> LinearModel:
+    """``(a, b)`` of ``simulator`` about ``(x_trim, u_trim)`` as a named
+    :class:`~rotorfault.control.systems.LinearModel`, ``b``'s columns being the command channels
+    ``columns`` (all of them, or a subset: ``b`` then has only those)."""
+    from .systems import LinearModel, input_names
+
+    names = input_names(simulator.command_count, simulator.airframe.rotor_count)
+    kept = list(columns)
+    return LinearModel(a, b, inputs=[names[j] for j in kept], x_trim=x_trim, u_trim=u_trim, command_columns=kept,
+                       name=f"{simulator.airframe.name} linearisation")
+
+
+def _jacobians(
+    simulator: Simulator, x_trim: npt.ArrayLike, u_trim: npt.ArrayLike, efficiency: npt.ArrayLike | None, step: float, max_pitch_rad: float,
+) -> tuple[FloatArray, FloatArray]:
+    """``(A, B)`` by central differences (the rules of :func:`linearize`)."""
     x0 = float_array("x_trim", x_trim, 1)
     u0 = float_array("u_trim", u_trim, 1)
     if x0.shape != (STATE_DIM,):
@@ -285,9 +376,9 @@ def lqr_hover(
     ``simulator.dt_s`` is unstable)."""
     trim = hover_trim(simulator, position=position, yaw=yaw)
     _require_holdable(simulator, trim)
-    a, b = linearize(simulator, trim.state, trim.command)
+    model = linearize(simulator, trim)
     q_state, r_rotor = _bryson_weights(simulator, q, r)
-    design = _lqr_design(simulator, a, b, q_state, r_rotor, "rotor thrusts")
+    design = _lqr_design(simulator, model.A, model.B, q_state, r_rotor, "rotor thrusts")
     return LinearFeedback(design.gain, trim.state, trim.command, design=design)
 
 
@@ -325,7 +416,8 @@ def lqr_hover_allocated(
             f"allocator: has {allocator.actuator_count} actuators, the simulator's airframe {trim.command.shape[0]}"
         )
     _require_holdable(simulator, trim)
-    a, b = linearize(simulator, trim.state, trim.command)
+    model = linearize(simulator, trim)
+    a, b = model.A, model.B
     n = allocator.virtual_dimension
     offset = allocator.allocate(np.zeros(n), method="pinv").commands
     p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
@@ -397,6 +489,7 @@ __all__ = [
     "SATURATION_RTOL",
     "HoverTrim",
     "hover_trim",
+    "linear_model",
     "linearize",
     "lqr_hover",
     "lqr_hover_allocated",

@@ -39,7 +39,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array, real
-from .stabilisability import ComplexArray, PbhTest, balance, detectability, stabilisability
+from .stabilisability import ComplexArray, PbhTest, balance, detectability, stabilisability, system_matrices
 
 #: Largest accepted Riccati residual relative to the equation's terms (:func:`riccati_residual`):
 #: scipy's solutions of the models here leave 1e-16 to 1e-13; of near-uncontrollable random
@@ -104,9 +104,14 @@ def design_lqr(
     model (default False); for a ``StateSpace`` it must agree with ``dt`` if given. ``dt_s``: for a
     continuous design, the control period of the sampled controller that will fly it (checked
     as the zero-order-hold loop); for a discrete one, its sampling period (from ``dt`` when the
-    system has one). ``state_names``, ``state_labels``: name the states in the errors; ``model``:
-    what the plant is, in the errors."""
+    system has one). ``state_names``, ``state_labels``: name the states in the errors (default for
+    a ``StateSpace``: its own state names, and a :class:`~rotorfault.control.systems.LinearModel`'s
+    descriptions); ``model``: what the plant is, in the errors."""
     a, b, is_discrete, period = _plant(plant, discrete, dt_s)
+    if not isinstance(plant, tuple):
+        _, _, own_names, own_labels = system_matrices(plant, "B")
+        state_names = own_names if state_names is None else state_names
+        state_labels = own_labels if state_labels is None else state_labels
     n, m = b.shape
     qm, q_root = _weight("q", q, n, definite=False)
     rm, _ = _weight("r", r, m, definite=True)

@@ -3,12 +3,22 @@ from two Riccati equations, our own implementation (python-control has no Glover
 synthesis and slycot does not wrap SLICOT's sb10id/sb10kd).
 
 - :func:`ncfsyn`: the central controller of the shaped plant ``Gs = W2 G W1`` for
-  ``gamma = factor * gamma_min``, returned as ``K = W1 Ks W2`` (a python-control ``StateSpace``);
+  ``gamma = factor * gamma_min``, returned as ``K = W1 Ks W2`` (a python-control ``StateSpace``)
+  with the evidence checked before it is returned (:class:`NcfsynEvidence`,
+  :func:`check_synthesis`): ``gamma_min`` two ways, the achieved four-block norm on the full,
+  unreduced shaped plant, the closed-loop poles with the original plant and weights;
 - :func:`loop_shape_weight`: a pre-compensator ``W1`` that gives a square plant of full relative
   degree (what robust feedback linearisation produces) a target loop shape ``G W1 = diag(L_i)``,
   with :func:`target_loop_shape` the scalar ``L`` (Lanzon's shape: a low-frequency gain, -20
   dB/decade through the crossover, -40 dB/decade above);
 - :func:`plot_singular_values`: the singular values of a plant and of its shaped plant.
+
+One answer on every install: the weights and the shaped plant are built in state space here
+(:mod:`~rotorfault.control.realisation`; a ``TransferFunction`` argument is realised by our own
+code, never by python-control's slycot-or-scipy conversion), minimal realisations and norms
+(:mod:`~rotorfault.control.norms`) are ours, and the Riccati and Lyapunov equations are
+scipy.linalg's. ``tests/cross/test_robust_install.py`` runs the designs with slycot hidden and
+compares.
 
 Sign convention: the returned controllers are for **negative feedback**, ``u = -K y``
 (python-control's ``feedback(G * K)``), i.e. ``u = K (r - y)``.
@@ -26,6 +36,8 @@ Formulas (Skogestad and Postlethwaite, *Multivariable Feedback Control*, 2nd ed.
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,6 +48,65 @@ import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .._util.convert import FloatArray, real
 from ..plotting.frequency import plot_singular_values
+from .norms import hinf_norm, hinf_norm_below, peak_gain
+from .realisation import (
+    as_state_space,
+    balance_states,
+    frequency_response,
+    minimal_realisation,
+    series,
+    state_space,
+    system_matrices,
+)
+
+#: The synthesis checks' tolerances (stated once; tests break each check against them):
+#: the achieved four-block norm on the full shaped plant may exceed gamma by this fraction
+#: (the norm itself is computed to 1e-9);
+ACHIEVED_NORM_RTOL = 1e-6
+#: gamma_min by the Riccati solutions and by the Hankel formula agree to this, times
+#: gamma_min^2 (the Hankel formula's condition number: d gamma / gamma = gamma^2 h^2 dh / h),
+#: and never worse than GAMMA_MIN_RTOL_CAP (beyond it the Hankel route cannot confirm
+#: gamma_min and the design is refused). Measured on random badly scaled families: at most
+#: 5e-10 gamma_min^2 (poles from 1e-6 to 1e3 rad/s in one plant);
+GAMMA_MIN_RTOL = 1e-8
+GAMMA_MIN_RTOL_CAP = 1e-3
+#: a Riccati solution's residual relative to the size of its terms (measured: below 1e-12 for
+#: gamma_min < 100, at most 4e-8 at gamma_min ~ 1e5 in the random families); a larger one is
+#: not a solution;
+RICCATI_RESIDUAL_RTOL = 1e-6
+#: a mode at or right of the imaginary axis whose PBH measure (left eigenvector against the
+#: unit-normalised input columns, right eigenvector against the unit-normalised output rows, on
+#: the state-balanced realisation) is below this cannot be moved by any controller.
+PBH_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class NcfsynEvidence:
+    """What :func:`ncfsyn` measured before returning, each checked:
+
+    - ``gamma_min_riccati`` (``sqrt(1 + rho(X Z))``) and ``gamma_min_hankel`` (``(1 -
+      ||[N M]||_H^2)^(-1/2)``) agree to ``GAMMA_MIN_RTOL gamma_min^2``;
+    - ``riccati_residual_x``, ``riccati_residual_z``: residuals relative to the size of the
+      equation's terms, below ``RICCATI_RESIDUAL_RTOL``;
+    - ``achieved_norm``: ``||[I; Ks] (I + Gs Ks)^-1 [I, Gs]||_inf`` on the **full, unreduced**
+      shaped plant ``W2 G W1`` (``full_states`` states; the synthesis used ``synthesis_states``),
+      at most ``gamma (1 + ACHIEVED_NORM_RTOL)``;
+    - ``closed_loop_poles``: the loop of the original plant with ``K = W1 Ks W2`` (every state of
+      plant, weights and ``Ks``), all in the open left half-plane (``closed_loop_max_real < 0``).
+    """
+
+    gamma_min_riccati: float
+    gamma_min_hankel: float
+    riccati_residual_x: float
+    riccati_residual_z: float
+    achieved_norm: float
+    full_states: int
+    synthesis_states: int
+    closed_loop_poles: npt.NDArray[np.complex128]
+
+    @property
+    def closed_loop_max_real(self) -> float:
+        return float(np.max(self.closed_loop_poles.real)) if self.closed_loop_poles.size else -math.inf
 
 
 @dataclass(frozen=True)
@@ -43,19 +114,23 @@ class NcfsynResult:
     """The outcome of :func:`ncfsyn`.
 
     ``controller`` is ``K = W1 Ks W2`` for the plant (negative feedback), ``shaped_controller`` is
-    ``Ks`` for the shaped plant ``Gs = W2 G W1`` (negative feedback), ``gamma_min`` the optimal
-    and ``gamma`` the achieved robust-stabilisation level (``gamma = factor * gamma_min``: the
-    four-block norm ``||[I; Ks] (I + Gs Ks)^-1 [I, Gs]||_inf`` is at most ``gamma``),
-    ``stability_margin = 1 / gamma`` (the normalised-coprime-factor uncertainty tolerated).
-    ``x`` and ``z`` are the two Riccati solutions."""
+    ``Ks`` for the shaped plant ``Gs = W2 G W1`` (negative feedback), ``shaped_plant`` the full,
+    unreduced ``W2 G W1`` and ``synthesis_plant`` the minimal realisation the Riccati equations
+    were solved on; ``gamma_min`` the optimal and ``gamma`` the achieved robust-stabilisation
+    level (``gamma = factor * gamma_min``: the four-block norm ``||[I; Ks] (I + Gs Ks)^-1 [I,
+    Gs]||_inf`` is at most ``gamma``), ``stability_margin = 1 / gamma`` (the
+    normalised-coprime-factor uncertainty tolerated). ``x`` and ``z`` are the two Riccati
+    solutions; ``evidence`` what was checked before returning (:class:`NcfsynEvidence`)."""
 
     controller: ct.StateSpace
     shaped_controller: ct.StateSpace
     shaped_plant: ct.StateSpace
+    synthesis_plant: ct.StateSpace
     gamma_min: float
     gamma: float
     x: FloatArray
     z: FloatArray
+    evidence: NcfsynEvidence
 
     @property
     def stability_margin(self) -> float:
@@ -63,182 +138,150 @@ class NcfsynResult:
         return 1.0 / self.gamma
 
 
-def _as_ss(field: str, system: Any) -> ct.StateSpace:
-    if isinstance(system, ct.StateSpace):
-        return system
-    if isinstance(system, (ct.TransferFunction,)):
-        return ct.ss(system)
-    if isinstance(system, (int, float, np.ndarray, list, tuple)):
-        d = np.atleast_2d(np.asarray(system, dtype=np.float64))
-        return ct.ss(np.zeros((0, 0)), np.zeros((0, d.shape[1])), np.zeros((d.shape[0], 0)), d)
-    raise TypeError(f"{field}: expected a python-control StateSpace or TransferFunction, got {type(system).__name__}")
-
-
 def _matrices(system: ct.StateSpace) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     return (np.asarray(system.A, dtype=float), np.asarray(system.B, dtype=float),
             np.asarray(system.C, dtype=float), np.asarray(system.D, dtype=float))
 
 
-def riccati_solutions(plant: ct.StateSpace) -> tuple[FloatArray, FloatArray]:
-    """``(X, Z)``: the stabilising solutions of the control and filter AREs of the normalised
-    coprime factorisation of ``plant`` (module docs). ``ValueError`` if the plant is not
-    stabilisable and detectable (no stabilising solution)."""
+def _care(a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray, name: str) -> tuple[FloatArray, float]:
+    """The stabilising solution of ``A^T X + X A - X B R^-1 B^T X + Q = 0`` with its relative
+    residual; ``ValueError`` naming ``name`` when scipy finds none, the residual is above
+    ``RICCATI_RESIDUAL_RTOL`` or ``A - B R^-1 B^T X`` is not stable."""
+    try:
+        # scipy's balancing casts a NaN scale to an index on extreme entries (a RuntimeWarning);
+        # the residual and closed-loop checks below judge whatever comes back.
+        with np.errstate(invalid="ignore", over="ignore"):
+            x = sla.solve_continuous_are(a, b, q, r)
+        if not np.all(np.isfinite(x)):
+            raise np.linalg.LinAlgError("the solution is not finite")
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"{name}: no stabilising Riccati solution (scipy: {exc}); the shaped plant W2 G W1 "
+                         "has a mode on the imaginary axis that no input moves or no output sees") from None
+    x = (x + x.T) / 2
+    g = b @ np.linalg.solve(r, b.T)
+    terms = float(np.linalg.norm(q) + 2 * np.linalg.norm(a) * np.linalg.norm(x) + np.linalg.norm(x @ g @ x))
+    residual = float(np.linalg.norm(a.T @ x + x @ a - x @ g @ x + q)) / max(terms, 1e-300)
+    if not residual <= RICCATI_RESIDUAL_RTOL:
+        raise ValueError(f"{name}: the Riccati solution's residual is {residual:.3g} of its terms (above "
+                         f"{RICCATI_RESIDUAL_RTOL:g}): the shaped plant is too ill-conditioned for this synthesis")
+    closed = np.linalg.eigvals(a - g @ x)
+    if closed.size and not np.max(closed.real) < 0:
+        raise ValueError(f"{name}: the Riccati solution is not stabilising (closed-loop eigenvalue with real part "
+                         f"{np.max(closed.real):.3g}): the shaped plant is not stabilisable and detectable")
+    return x, residual
+
+
+def _riccati(plant: ct.StateSpace) -> tuple[FloatArray, FloatArray, float, float]:
     a, b, c, d = _matrices(plant)
     s = np.eye(b.shape[1]) + d.T @ d
     r = np.eye(c.shape[0]) + d @ d.T
     ar = a - b @ np.linalg.solve(s, d.T @ c)
-    try:
-        x = sla.solve_continuous_are(ar, b, c.T @ np.linalg.solve(r, c), s)
-        z = sla.solve_continuous_are(ar.T, c.T, b @ np.linalg.solve(s, b.T), r)
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise ValueError(f"plant: no stabilising Riccati solution (is the shaped plant stabilisable and detectable?): {exc}") from None
-    return (x + x.T) / 2, (z + z.T) / 2
+    x, rx = _care(ar, b, c.T @ np.linalg.solve(r, c), s, "control Riccati equation (X)")
+    z, rz = _care(ar.T, c.T, b @ np.linalg.solve(s, b.T), r, "filter Riccati equation (Z)")
+    return x, z, rx, rz
 
 
-def ncf_gamma_min(plant: ct.StateSpace) -> float:
-    """``gamma_min = sqrt(1 + rho(X Z))`` of a (shaped) plant."""
-    x, z = riccati_solutions(plant)
-    return float(np.sqrt(1.0 + max(np.max(np.linalg.eigvals(x @ z).real), 0.0)))
+def riccati_solutions(plant: Any) -> tuple[FloatArray, FloatArray]:
+    """``(X, Z)``: the stabilising solutions of the control and filter AREs of the normalised
+    coprime factorisation of ``plant`` (module docs), each checked (residual, stabilising).
+    ``ValueError`` if the plant is not stabilisable and detectable (no stabilising solution)."""
+    x, z, _, _ = _riccati(as_state_space("plant", plant, static=False, discrete=False))
+    return x, z
 
 
-def _krylov_basis(a: FloatArray, b: FloatArray, rtol: float) -> FloatArray:
-    """Orthonormal basis of the controllable subspace of ``(A, B)`` by block Arnoldi (each new
-    direction orthogonalised twice against the basis; a direction counts when its norm exceeds
-    ``rtol`` times that of ``A`` applied to the basis)."""
-    n = a.shape[0]
-    scale = max(1.0, float(np.linalg.norm(a, 2)))
-    u, sv, _ = np.linalg.svd(b, full_matrices=False)
-    basis = u[:, sv > rtol * max(1.0, float(sv[0]) if sv.size else 1.0)]
-    new = basis
-    while new.shape[1] and basis.shape[1] < n:
-        w = a @ new
-        for _ in range(2):
-            w = w - basis @ (basis.T @ w)
-        u, sv, _ = np.linalg.svd(w, full_matrices=False)
-        keep = sv > rtol * scale
-        new = u[:, keep]
-        if new.shape[1]:
-            for _ in range(2):
-                new = new - basis @ (basis.T @ new)
-            new, _ = np.linalg.qr(new)
-            basis = np.hstack([basis, new])
-    return basis
+def _gamma_from_xz(x: FloatArray, z: FloatArray) -> float:
+    return float(np.sqrt(1.0 + max(float(np.max(np.linalg.eigvals(x @ z).real)), 0.0)))
 
 
-def _require_stabilisable_detectable(system: ct.StateSpace) -> None:
-    """PBH eigenvector test at every eigenvalue with a real part >= 0: no left eigenvector
-    orthogonal to ``B``, no right eigenvector in the kernel of ``C`` (relative to their norms, so
-    that large weight gains do not hide a cancellation)."""
-    a, b, c, _ = _matrices(system)
-    n = a.shape[0]
-    if n == 0:
-        return
-    scale = max(1.0, float(np.linalg.norm(a, 2)))
-    lams, right = np.linalg.eig(a)
-    _, left = np.linalg.eig(a.T)
-    lams_left = np.linalg.eigvals(a.T)
-    for k, lam in enumerate(lams):
-        if lam.real < -1e-9 * scale:
-            continue
-        vr = right[:, k] / np.linalg.norm(right[:, k])
-        j = int(np.argmin(np.abs(lams_left - lam)))
-        vl = left[:, j] / np.linalg.norm(left[:, j])
-        b_norm = max(float(np.linalg.norm(b, 2)), 1e-300)
-        c_norm = max(float(np.linalg.norm(c, 2)), 1e-300)
-        for name, value in (("stabilisable", float(np.linalg.norm(vl @ b)) / b_norm),
-                            ("detectable", float(np.linalg.norm(c @ vr)) / c_norm)):
-            if value <= 1e-9:
-                raise ValueError(
-                    f"plant: the shaped plant W2 G W1 is not {name}: the mode at {lam:.6g} cannot be "
-                    "stabilised (no stabilising Riccati solution; a weight may cancel it)"
-                )
-
-
-def minimal_realisation(system: ct.StateSpace, *, rtol: float = 1e-9) -> ct.StateSpace:
-    """A minimal realisation (controllable, then observable part) by orthogonal projection onto
-    Krylov subspaces; needs no slycot. Removes the modes a weight cancels in ``G W1``."""
-    a, b, c, d = _matrices(system)
-    if a.shape[0] == 0:
-        return system
-    t = _krylov_basis(a, b, rtol)
-    a, b, c = t.T @ a @ t, t.T @ b, c @ t
-    if a.shape[0]:
-        t = _krylov_basis(a.T, c.T, rtol)
-        a, b, c = t.T @ a @ t, t.T @ b, c @ t
-    return ct.ss(a, b, c, d)
-
-
-def ncfsyn(
-    plant: Any,
-    w1: Any,
-    w2: Any = None,
-    factor: float = 1.1,
-) -> NcfsynResult:
-    """Glover-McFarlane loop-shaping synthesis: the central controller robustly stabilising the
-    shaped plant ``Gs = W2 G W1`` at ``gamma = factor * gamma_min`` (``factor > 1``), and the
-    plant's controller ``K = W1 Ks W2`` (negative feedback). ``w2`` defaults to the identity."""
-    g = _as_ss("plant", plant)
-    w1s = _as_ss("w1", w1)
-    factor = real("factor", factor)
-    if not np.isfinite(factor) or factor <= 1.0:
-        raise ValueError(f"factor: must be > 1 (gamma = factor * gamma_min; at 1 the central controller does not exist), got {factor}")
-    if w1s.noutputs != g.ninputs:
-        raise ValueError(f"w1: expected {g.ninputs} outputs (the plant's inputs), got {w1s.noutputs}")
-    w2s = _as_ss("w2", np.eye(g.noutputs) if w2 is None else w2)
-    if w2s.ninputs != g.noutputs:
-        raise ValueError(f"w2: expected {g.noutputs} inputs (the plant's outputs), got {w2s.ninputs}")
-    for field, system in (("plant", g), ("w1", w1s), ("w2", w2s)):
-        if not all(np.all(np.isfinite(m)) for m in _matrices(system)):
-            raise ValueError(f"{field}: matrices must be finite")
-    # The weights may cancel stable plant modes (an inverting W1 does): synthesise on a minimal
-    # realisation, after checking that no mode it drops is on or right of the imaginary axis
-    # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
-    full = ct.series(w1s, g, w2s)
-    _require_stabilisable_detectable(full)
-    gs = minimal_realisation(full)
-    a, b, c, d = _matrices(gs)
+def ncf_gamma_min(plant: Any) -> float:
+    """``gamma_min = sqrt(1 + rho(X Z))`` of a (shaped) plant, on its minimal realisation."""
+    gs = minimal_realisation(as_state_space("plant", plant, static=False, discrete=False), field="plant")
     x, z = riccati_solutions(gs)
-    gamma_min = float(np.sqrt(1.0 + max(np.max(np.linalg.eigvals(x @ z).real), 0.0)))
-    gamma = factor * gamma_min
-    s = np.eye(b.shape[1]) + d.T @ d
-    f = -np.linalg.solve(s, d.T @ c + b.T @ x)
-    n = a.shape[0]
-    lt = ((1.0 - gamma**2) * np.eye(n) + x @ z).T
-    gain = gamma**2 * np.linalg.solve(lt, z @ c.T)
-    ak = a + b @ f + gain @ (c + d @ f)
-    # Negative-feedback form of the positive-feedback central controller: C_K, D_K change sign.
-    ks = ct.ss(ak, gain, -b.T @ x, d.T)
-    k = ct.series(w2s, ks, w1s)
-    return NcfsynResult(controller=k, shaped_controller=ks, shaped_plant=gs,
-                        gamma_min=gamma_min, gamma=gamma, x=x, z=z)
+    return _gamma_from_xz(x, z)
 
 
-def hankel_gamma_min(plant: ct.StateSpace) -> float:
+def hankel_gamma_min(plant: Any, *, field: str = "plant") -> float:
     """``(1 - ||[N M]||_H^2)^(-1/2)`` from the Hankel singular values of the normalised left
-    coprime factors (gramians from two Lyapunov equations): an independent route to ``gamma_min``."""
-    a, b, c, d = _matrices(plant)
-    _, z = riccati_solutions(plant)
+    coprime factors (gramians from two Lyapunov equations): an independent route to ``gamma_min``
+    (it uses ``Z`` for the factorisation but not ``X``). ``field``: the name refusals give it."""
+    gs = minimal_realisation(as_state_space(field, plant, static=False, discrete=False), field=field)
+    a, b, c, d = _matrices(gs)
+    _, z = riccati_solutions(gs)
     r = np.eye(c.shape[0]) + d @ d.T
     h = -(b @ d.T + z @ c.T) @ np.linalg.inv(r)
     ah = a + h @ c
     bnm = np.hstack([b + h @ d, h])
-    p = sla.solve_continuous_lyapunov(ah, -bnm @ bnm.T)
-    q = sla.solve_continuous_lyapunov(ah.T, -c.T @ np.linalg.solve(r, c))
-    hankel = float(np.sqrt(np.max(np.linalg.eigvals(p @ q).real)))
-    return float(1.0 / np.sqrt(1.0 - hankel**2))
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", sla.LinAlgWarning)
+            warnings.simplefilter("error", RuntimeWarning)
+            p = sla.solve_continuous_lyapunov(ah, -bnm @ bnm.T)
+            q = sla.solve_continuous_lyapunov(ah.T, -c.T @ np.linalg.solve(r, c))
+    except (np.linalg.LinAlgError, ValueError, sla.LinAlgWarning, RuntimeWarning) as exc:
+        raise ValueError(f"plant: the gramians of the coprime factors have no solution (scipy: {exc})") from None
+    hankel_sq = float(np.max(np.linalg.eigvals(p @ q).real))
+    if not 0.0 <= hankel_sq < 1.0:
+        raise ValueError(f"plant: the Hankel norm of the normalised coprime factors is {math.sqrt(max(hankel_sq, 0)):.6g}, "
+                         "not in [0, 1): the factorisation is wrong (ill-conditioned shaped plant)")
+    return float(1.0 / np.sqrt(1.0 - hankel_sq))
 
 
-def four_block(plant: ct.StateSpace, controller: ct.StateSpace) -> ct.StateSpace:
+def _pbh_measures(system: ct.StateSpace) -> list[tuple[complex, float, float]]:
+    """``(eigenvalue, input measure, output measure)`` for each mode with real part >= 0 of the
+    state-balanced realisation: the norm of the unit left eigenvector against the unit input
+    columns, of the unit right eigenvector against the unit output rows (0: the mode is hidden)."""
+    balanced, _ = balance_states(system)
+    a, b, c, _ = _matrices(balanced)
+    if a.shape[0] == 0:
+        return []
+    bn = b / np.maximum(np.linalg.norm(b, axis=0), 1e-300)[None, :]
+    cn = c / np.maximum(np.linalg.norm(c, axis=1), 1e-300)[:, None]
+    try:
+        lams, left, right = sla.eig(a, left=True, right=True)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"plant: the eigenvalues of the shaped plant could not be computed (scipy: {exc})") from None
+    scale = max(float(np.max(np.abs(lams))), 1e-300)
+    out = []
+    for k, lam in enumerate(lams):
+        if lam.real < -PBH_RTOL * max(abs(lam), scale * _EPS_SCALE):
+            continue
+        vl = left[:, k] / np.linalg.norm(left[:, k])
+        vr = right[:, k] / np.linalg.norm(right[:, k])
+        out.append((complex(lam), float(np.linalg.norm(vl.conj() @ bn)), float(np.linalg.norm(cn @ vr))))
+    return out
+
+
+_EPS_SCALE = float(np.finfo(float).eps)
+
+
+def _require_stabilisable_detectable(system: ct.StateSpace) -> None:
+    """PBH eigenvector test (scale-free: :func:`_pbh_measures`) at every eigenvalue with a real
+    part >= 0: ``ValueError`` naming the mode when no input moves it or no output sees it."""
+    for lam, to_inputs, to_outputs in _pbh_measures(system):
+        for name, value in (("stabilisable", to_inputs), ("detectable", to_outputs)):
+            if value <= PBH_RTOL:
+                raise ValueError(
+                    f"plant: the shaped plant W2 G W1 is not {name}: the mode at {lam:.6g} cannot be "
+                    f"stabilised (PBH measure {value:.2g}; no stabilising Riccati solution; a weight may cancel it)"
+                )
+
+
+def four_block(plant: Any, controller: Any) -> ct.StateSpace:
     """``[I; K] (I + G K)^-1 [I, G]`` for a negative-feedback ``K`` (inputs: output and input
-    disturbances; outputs: plant output and controller output), as a state-space system."""
-    g = _as_ss("plant", plant)
-    k = _as_ss("controller", controller)
+    disturbances; outputs: plant output and controller output), as a state-space system (states:
+    the plant's, then the controller's)."""
+    g = as_state_space("plant", plant)
+    k = as_state_space("controller", controller)
     ag, bg, cg, dg = _matrices(g)
     ak, bk, ck, dk = _matrices(k)
     ny, nu = dg.shape
+    if dk.shape != (nu, ny):
+        raise ValueError(f"controller: expected {nu} outputs x {ny} inputs (the plant's inputs x outputs), got {dk.shape[0]} x {dk.shape[1]}")
     # Loop: y = G (u + w2) + w1, u = -K y.  Solve the algebraic loop y = cg xg + dg(-ck xk - dk y + w2) + w1.
-    e = np.linalg.inv(np.eye(ny) + dg @ dk)
-    # y = e (cg xg - dg ck xk + dg w2 + w1)
+    try:
+        e = np.linalg.inv(np.eye(ny) + dg @ dk)
+    except np.linalg.LinAlgError:
+        raise ValueError("controller: the loop is not well posed (I + D_G D_K is singular)") from None
     cy = e @ np.hstack([cg, -dg @ ck])
     dy = e @ np.hstack([np.eye(ny), dg])
     cu = -np.hstack([np.zeros((nu, ag.shape[0])), ck]) - dk @ cy
@@ -250,46 +293,124 @@ def four_block(plant: ct.StateSpace, controller: ct.StateSpace) -> ct.StateSpace
     a[:ng, :] += bg @ cu
     a[ng:, :] += bk @ cy
     bw = np.vstack([bg @ (du + np.hstack([np.zeros((nu, ny)), np.eye(nu)])), bk @ dy])
-    return ct.ss(a, bw, np.vstack([cy, cu]), np.vstack([dy, du]))
+    return state_space(a, bw, np.vstack([cy, cu]), np.vstack([dy, du]), g.dt)
 
 
-def hinf_norm_below(system: ct.StateSpace, level: float) -> bool:
-    """``True`` when ``system`` is stable and its H-infinity norm is below ``level`` (the
-    Hamiltonian of the bounded-real lemma has no imaginary-axis eigenvalue; Boyd-Balakrishnan)."""
-    a, b, c, d = _matrices(system)
-    if a.size and np.max(np.linalg.eigvals(a).real) >= 0:
-        return False
-    if np.linalg.norm(d, 2) >= level:
-        return False
-    r = level**2 * np.eye(d.shape[1]) - d.T @ d
-    ri = np.linalg.inv(r)
-    a1 = a + b @ ri @ d.T @ c
-    h = np.block([[a1, b @ ri @ b.T], [-c.T @ (np.eye(d.shape[0]) + d @ ri @ d.T) @ c, -a1.T]])
-    eig = np.linalg.eigvals(h)
-    scale = max(1.0, float(np.max(np.abs(eig))))
-    return bool(np.all(np.abs(eig.real) > 1e-9 * scale))
+def _central_controller(gs: ct.StateSpace, factor: float) -> tuple[ct.StateSpace, float, float, FloatArray, FloatArray, float, float]:
+    a, b, c, d = _matrices(gs)
+    x, z, rx, rz = _riccati(gs)
+    gamma_min = _gamma_from_xz(x, z)
+    gamma = factor * gamma_min
+    s = np.eye(b.shape[1]) + d.T @ d
+    f = -np.linalg.solve(s, d.T @ c + b.T @ x)
+    n = a.shape[0]
+    lt = ((1.0 - gamma**2) * np.eye(n) + x @ z).T
+    try:
+        gain = gamma**2 * np.linalg.solve(lt, z @ c.T)
+    except np.linalg.LinAlgError:
+        raise ValueError(f"factor: {factor} is too close to 1 (the central controller's (1 - gamma^2) I + X Z is singular)") from None
+    ak = a + b @ f + gain @ (c + d @ f)
+    # Negative-feedback form of the positive-feedback central controller: C_K, D_K change sign.
+    ks = state_space(ak, gain, -b.T @ x, d.T)
+    return ks, gamma_min, gamma, x, z, rx, rz
 
 
-def hinf_norm(system: ct.StateSpace, *, rtol: float = 1e-6) -> float:
-    """The H-infinity norm of a stable system by bisection on :func:`hinf_norm_below`."""
-    _, b, c, d = _matrices(system)
-    lo = float(np.linalg.norm(d, 2))
-    w = np.logspace(-3, 5, 400)
-    resp = system(1j * w)
-    resp = np.asarray(resp).reshape(system.noutputs, system.ninputs, -1)
-    lo = max(lo, float(max(np.linalg.svd(resp[:, :, i], compute_uv=False)[0] for i in range(len(w)))))
-    hi = max(2.0 * lo, 1e-12)
-    while not hinf_norm_below(system, hi):
-        hi *= 2.0
-        if hi > 1e12:
-            return float("inf")
-    while hi - lo > rtol * hi:
-        mid = 0.5 * (lo + hi)
-        if hinf_norm_below(system, mid):
-            hi = mid
-        else:
-            lo = mid
-    return hi
+def check_synthesis(
+    plant: ct.StateSpace,
+    w1: ct.StateSpace,
+    w2: ct.StateSpace,
+    shaped_controller: ct.StateSpace,
+    gamma_min: float,
+    gamma: float,
+    *,
+    synthesis_plant: ct.StateSpace | None = None,
+    residuals: tuple[float, float] = (0.0, 0.0),
+) -> NcfsynEvidence:
+    """The checks :func:`ncfsyn` runs before it returns, on the original ``plant`` and weights, in
+    this order: ``gamma_min`` against the Hankel formula (``gamma_min check``), the stability of
+    the loop of ``plant`` with ``K = W1 Ks W2``, every state of plant, weights and controller
+    (``internal-stability check``), the four-block norm of ``shaped_controller`` on the full
+    shaped plant ``W2 G W1`` against ``gamma`` (``achieved-norm check``). ``ValueError`` naming
+    the failed check and its cause; the evidence otherwise. ``synthesis_plant``: the realisation
+    the Riccati equations were solved on (default: the full shaped plant)."""
+    full = series(w1, plant, w2)
+    used = full if synthesis_plant is None else synthesis_plant
+    reduced = used.nstates < full.nstates
+    hankel = hankel_gamma_min(used, field="the synthesis plant (a minimal realisation of W2 G W1)")
+    tol = min(GAMMA_MIN_RTOL * gamma_min**2, GAMMA_MIN_RTOL_CAP)
+    if not abs(hankel - gamma_min) <= tol * gamma_min:
+        raise ValueError(
+            f"gamma_min check: the Riccati value {gamma_min:.12g} and the Hankel formula's {hankel:.12g} differ by "
+            f"{abs(hankel - gamma_min) / gamma_min:.3g} (relative; tolerance {tol:.3g}): at this gamma_min the Riccati "
+            "solutions cannot be confirmed (a gamma_min this large means the shaped plant W2 G W1 is close to having "
+            "a mode no input moves or no output sees: stability margin 1/gamma_min = "
+            f"{1 / gamma_min:.3g})" if gamma_min > 1e2 else
+            f"gamma_min check: the Riccati value {gamma_min:.12g} and the Hankel formula's {hankel:.12g} differ by "
+            f"{abs(hankel - gamma_min) / gamma_min:.3g} (relative; tolerance {tol:.3g}): the Riccati solutions of the "
+            "shaped plant are inaccurate (ill-conditioned W2 G W1)")
+    controller = series(w2, shaped_controller, w1)
+    loop = four_block(plant, controller)
+    try:
+        poles = np.asarray(np.linalg.eigvals(np.asarray(loop.A, dtype=float)), dtype=np.complex128)
+    except np.linalg.LinAlgError as exc:
+        raise ValueError(f"internal-stability check: the closed-loop eigenvalues could not be computed ({exc})") from None
+    if poles.size and not np.max(poles.real) < 0:
+        worst = poles[int(np.argmax(poles.real))]
+        raise ValueError(f"internal-stability check: the loop of the plant with K = W1 Ks W2 has a pole at {worst:.6g} "
+                         "(real part >= 0): the weights cancel an unstable or undamped mode of the plant, or the "
+                         "controller does not stabilise it")
+    achieved = peak_gain(four_block(full, shaped_controller), field="the four-block loop of Ks with W2 G W1")
+    bound = gamma * (1.0 + ACHIEVED_NORM_RTOL)
+    if not achieved.gain <= bound:
+        cause = (f"the realisation the synthesis used ({used.nstates} of the {full.nstates} states) does not "
+                 "represent the full shaped plant" if reduced else
+                 "the central controller's formula lost accuracy (ill-conditioned Riccati solutions)")
+        raise ValueError(f"achieved-norm check: the four-block norm of the controller on the full shaped plant W2 G W1 "
+                         f"is {achieved.gain:.9g} (peak at {achieved.frequency_rad_s:.6g} rad/s), above gamma "
+                         f"(1 + {ACHIEVED_NORM_RTOL:g}) = {bound:.9g}: {cause}")
+    return NcfsynEvidence(gamma_min_riccati=gamma_min, gamma_min_hankel=hankel, riccati_residual_x=residuals[0],
+                          riccati_residual_z=residuals[1], achieved_norm=achieved.gain, full_states=full.nstates,
+                          synthesis_states=used.nstates, closed_loop_poles=poles)
+
+
+def ncfsyn(
+    plant: Any,
+    w1: Any,
+    w2: Any = None,
+    factor: float = 1.1,
+) -> NcfsynResult:
+    """Glover-McFarlane loop-shaping synthesis: the central controller robustly stabilising the
+    shaped plant ``Gs = W2 G W1`` at ``gamma = factor * gamma_min`` (``factor > 1``), and the
+    plant's controller ``K = W1 Ks W2`` (negative feedback). ``w2`` defaults to the identity.
+
+    Continuous time only (a discrete plant is refused: design in continuous time and
+    discretise). The shaped plant is built in state space here and synthesised on its
+    :func:`~rotorfault.control.realisation.minimal_realisation` (which removes only what is
+    hidden relative to its own scale), after a scale-free PBH check that no hidden mode is on or
+    right of the imaginary axis. Before returning, :func:`check_synthesis` runs on the original
+    plant and weights; the result carries its :class:`NcfsynEvidence`."""
+    g = as_state_space("plant", plant, discrete=False)
+    w1s = as_state_space("w1", w1, discrete=False)
+    factor = real("factor", factor)
+    if not np.isfinite(factor) or factor <= 1.0:
+        raise ValueError(f"factor: must be finite and > 1 (gamma = factor * gamma_min; at 1 the central controller does not exist), got {factor}")
+    if w1s.noutputs != g.ninputs:
+        raise ValueError(f"w1: expected {g.ninputs} outputs (the plant's inputs), got {w1s.noutputs}")
+    w2s = as_state_space("w2", np.eye(g.noutputs) if w2 is None else w2, discrete=False)
+    if w2s.ninputs != g.noutputs:
+        raise ValueError(f"w2: expected {g.noutputs} inputs (the plant's outputs), got {w2s.ninputs}")
+    full = series(w1s, g, w2s)
+    if full.nstates == 0:
+        raise ValueError("plant: the shaped plant W2 G W1 is static (no states): there is no loop shape to synthesise")
+    # The weights may cancel stable plant modes (an inverting W1 does): synthesise on a minimal
+    # realisation, after checking that no hidden mode is on or right of the imaginary axis
+    # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
+    _require_stabilisable_detectable(full)
+    gs = minimal_realisation(full, field="the shaped plant W2 G W1")
+    ks, gamma_min, gamma, x, z, rx, rz = _central_controller(gs, factor)
+    evidence = check_synthesis(g, w1s, w2s, ks, gamma_min, gamma, synthesis_plant=gs, residuals=(rx, rz))
+    return NcfsynResult(controller=series(w2s, ks, w1s), shaped_controller=ks, shaped_plant=full, synthesis_plant=gs,
+                        gamma_min=gamma_min, gamma=gamma, x=x, z=z, evidence=evidence)
 
 
 def target_loop_shape(
@@ -297,29 +418,34 @@ def target_loop_shape(
     *,
     low_gain_db: float = 60.0,
     rolloff_factor: float = 10.0,
-) -> ct.TransferFunction:
-    """Lanzon's target loop shape as a scalar transfer function: ``low_gain_db`` at low frequency,
-    -20 dB/decade through ``crossover_rad_s``, -40 dB/decade above ``rolloff_factor *
-    crossover_rad_s``: ``L(s) = wc / (s + wc / 10^(low_gain_db/20)) * wh / (s + wh)``
-    (relative degree 2, ``|L(j wc)|`` about 1)."""
+) -> ct.StateSpace:
+    """Lanzon's target loop shape as a scalar system: ``low_gain_db`` at low frequency, -20
+    dB/decade through ``crossover_rad_s``, -40 dB/decade above ``rolloff_factor *
+    crossover_rad_s``: ``L(s) = wc / (s + wc / 10^(low_gain_db/20)) * wh / (s + wh)`` (relative
+    degree 2, ``|L(j wc)|`` about 1), built in state space here (no transfer-function conversion,
+    whose result differs by install) with the output and its scaled derivative as the states,
+    ``x = [y, y' / wn]``, ``wn = sqrt(wl wh)``: :func:`loop_shape_weight` feeds ``y``, ``y'`` and
+    ``y''`` through the plant's inverse, and as states (not as differences of large states) they
+    carry no cancellation."""
     wc = real("crossover_rad_s", crossover_rad_s)
     gain_db = real("low_gain_db", low_gain_db)
     factor = real("rolloff_factor", rolloff_factor)
     if not np.isfinite(wc) or wc <= 0:
-        raise ValueError(f"crossover_rad_s: must be > 0, got {wc}")
+        raise ValueError(f"crossover_rad_s: must be finite and > 0, got {wc}")
     if not np.isfinite(gain_db) or gain_db <= 0:
-        raise ValueError(f"low_gain_db: must be > 0 (a loop gain above 1 at low frequency), got {gain_db}")
+        raise ValueError(f"low_gain_db: must be finite and > 0 (a loop gain above 1 at low frequency), got {gain_db}")
     if not np.isfinite(factor) or factor <= 1:
-        raise ValueError(f"rolloff_factor: must be > 1 (the -40 dB/decade corner above the crossover), got {factor}")
+        raise ValueError(f"rolloff_factor: must be finite and > 1 (the -40 dB/decade corner above the crossover), got {factor}")
     wl = wc / 10 ** (gain_db / 20)
     wh = factor * wc
-    return ct.tf([wc * wh], np.polymul([1, wl], [1, wh]))
+    wn = math.sqrt(wl * wh)
+    return state_space([[0.0, wn], [-wl * wh / wn, -(wl + wh)]], [[0.0], [wc * wh / wn]], [[1.0, 0.0]], [[0.0]])
 
 
 def relative_degrees(plant: ct.StateSpace) -> tuple[list[int], FloatArray]:
     """Relative degree of each output of a strictly proper plant, and the decoupling matrix
     (row i: ``C_i A^(r_i - 1) B``)."""
-    a, b, c, d = _matrices(plant)
+    a, b, c, d = system_matrices("plant", plant, static=False, discrete=False)
     n = a.shape[0]
     if np.any(d != 0):
         raise ValueError("plant: must be strictly proper (D = 0) for a relative-degree weight")
@@ -360,7 +486,7 @@ def loop_shape_weight(
     Construction: with full relative degree, ``x = T^-1 [y_i, y_i', ..., y_i^(r_i - 1)]`` and
     ``u = Dm^-1 (y^(r) - C_r x)`` (``C_r`` rows ``C_i A^r_i``): ``W1`` runs ``L`` per channel and
     feeds its output and derivatives (realised exactly from ``L``'s state) through that inverse."""
-    g = _as_ss("plant", plant)
+    g = as_state_space("plant", plant, static=False, discrete=False)
     a, _, c, _ = _matrices(g)
     margin = real("margin_rad_s", margin_rad_s)
     if not (margin >= 0 and np.isfinite(margin)):
@@ -379,7 +505,7 @@ def loop_shape_weight(
     gains = np.ones(m) if channel_gain is None else np.asarray(channel_gain, dtype=float)
     if gains.shape != (m,) or not np.all(np.isfinite(gains)) or np.any(gains <= 0):
         raise ValueError(f"channel_gain: expected {m} finite positive numbers, got {gains}")
-    ls = ct.ss(loop_shape) if not isinstance(loop_shape, ct.StateSpace) else loop_shape
+    ls = as_state_space("loop_shape", loop_shape, static=False, discrete=False)
     if ls.ninputs != 1 or ls.noutputs != 1:
         raise ValueError("loop_shape: must be a scalar (SISO) transfer function")
     al, bl, cl, dl = _matrices(ls)
@@ -414,18 +540,24 @@ def loop_shape_weight(
     dw = dmi @ top_dv
     aw = np.kron(np.eye(m), al)
     bw = np.kron(np.eye(m), bl)
-    return ct.ss(aw, bw, cw, dw)
+    return state_space(aw, bw, cw, dw)
 
 
 def singular_values(system: ct.StateSpace, omega: npt.ArrayLike) -> FloatArray:
     """Singular values (columns, descending) of ``system(j omega)`` at each frequency (rows)."""
-    w = np.asarray(omega, dtype=float)
-    resp = np.asarray(system(1j * w)).reshape(system.noutputs, system.ninputs, -1)
-    return np.array([np.linalg.svd(resp[:, :, i], compute_uv=False) for i in range(len(w))])
+    resp = frequency_response(as_state_space("system", system), omega)
+    return np.asarray(np.linalg.svd(resp, compute_uv=False), dtype=np.float64)
 
 
 __all__ = [
+    "ACHIEVED_NORM_RTOL",
+    "GAMMA_MIN_RTOL",
+    "GAMMA_MIN_RTOL_CAP",
+    "PBH_RTOL",
+    "RICCATI_RESIDUAL_RTOL",
+    "NcfsynEvidence",
     "NcfsynResult",
+    "check_synthesis",
     "four_block",
     "hankel_gamma_min",
     "hinf_norm",
@@ -434,6 +566,7 @@ __all__ = [
     "minimal_realisation",
     "ncf_gamma_min",
     "ncfsyn",
+    "peak_gain",
     "plot_singular_values",
     "relative_degrees",
     "riccati_solutions",

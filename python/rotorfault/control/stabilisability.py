@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -105,32 +105,58 @@ class PbhTest:
         return "; ".join(parts)
 
 
+def system_matrices(system: Any, second: str) -> tuple[FloatArray, FloatArray, tuple[str, ...] | None, tuple[str, ...] | None]:
+    """``(A, B)`` (``second="B"``) or ``(A, C)`` of a python-control system, with its state names
+    and, for a :class:`rotorfault.control.systems.LinearModel`, the states' descriptions."""
+    if not (hasattr(system, "A") and hasattr(system, second)):
+        raise TypeError(f"a: expected a matrix and {second.lower()}, or a python-control StateSpace, got {type(system).__name__}")
+    names = getattr(system, "state_labels", None)
+    descriptions = getattr(system, "state_descriptions", None)
+    return (
+        float_array("system.A", system.A, 2), float_array(f"system.{second}", getattr(system, second), 2),
+        None if names is None else tuple(names), None if descriptions is None else tuple(descriptions),
+    )
+
+
+def _from_system(a: Any, other: Any, second: str, names: Sequence[str] | None, labels: Sequence[str] | None) -> tuple[Any, Any, Sequence[str] | None, Sequence[str] | None]:
+    """``(a, other, names, labels)`` with a python-control system given as ``a`` (and ``other``
+    None) unpacked: its matrices, and its state names and descriptions unless given."""
+    if other is not None:
+        return a, other, names, labels
+    am, om, own_names, own_labels = system_matrices(a, second)
+    return am, om, own_names if names is None else names, own_labels if labels is None else labels
+
+
 def stabilisability(
-    a: npt.ArrayLike,
-    b: npt.ArrayLike,
+    a: npt.ArrayLike | Any,
+    b: npt.ArrayLike | None = None,
     *,
     discrete: bool = False,
     state_names: Sequence[str] | None = None,
     state_labels: Sequence[str] | None = None,
 ) -> PbhTest:
-    """The PBH stabilisability test of ``(a, b)`` (module notes). ``state_names`` (default
+    """The PBH stabilisability test of ``(a, b)``, or of a python-control ``StateSpace`` given as
+    ``a`` alone (its ``A``, ``B`` and state names) (module notes). ``state_names`` (default
     ``x1 .. xn``) name the states in the failing modes; ``state_labels`` (optional, e.g.
     ``"yaw rate r"``) describe a mode's leading state."""
+    a, b, state_names, state_labels = _from_system(a, b, "B", state_names, state_labels)
     am, bm = _pair(a, b, "b")
     names, labels = _names(am.shape[0], state_names, state_labels)
     return PbhTest("stabilisability", discrete, am.shape[0], _pbh(am, bm, discrete, names, labels))
 
 
 def detectability(
-    a: npt.ArrayLike,
-    c: npt.ArrayLike,
+    a: npt.ArrayLike | Any,
+    c: npt.ArrayLike | None = None,
     *,
     discrete: bool = False,
     state_names: Sequence[str] | None = None,
     state_labels: Sequence[str] | None = None,
 ) -> PbhTest:
-    """The PBH detectability test of ``(a, c)``: ``(a^T, c^T)`` stabilisable; a failing mode's
+    """The PBH detectability test of ``(a, c)`` (or of a python-control ``StateSpace`` given as
+    ``a`` alone: its ``A``, ``C`` and state names): ``(a^T, c^T)`` stabilisable; a failing mode's
     directions are the states ``v`` with ``(a - lambda I) v = 0`` and ``c v = 0``."""
+    a, c, state_names, state_labels = _from_system(a, c, "C", state_names, state_labels)
     am = float_array("a", a, 2)
     cm = float_array("c", c, 2)
     if cm.shape[1:] != am.shape[:1]:

@@ -11,6 +11,7 @@ later row holds from then), so one table holds setpoint steps and a sampled path
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -66,4 +67,65 @@ class TrackingFeedback:
         return self._core
 
 
-__all__ = ["TrackingFeedback"]
+def _steps(events: list[tuple[float, FloatArray]]) -> tuple[FloatArray, FloatArray]:
+    """A reference table from ``(time, row)`` events: each row holds from its time (a repeated
+    time is the jump)."""
+    times: list[float] = []
+    rows: list[FloatArray] = []
+    for t, row in events:
+        if rows:
+            times.append(t)
+            rows.append(rows[-1])
+        times.append(t)
+        rows.append(row)
+    return np.array(times), np.array(rows)
+
+
+def step_reference(
+    waypoints: Sequence[tuple[float, Sequence[float]]], yaw_steps: Sequence[tuple[float, float]] = ()
+) -> tuple[FloatArray, FloatArray]:
+    """``(times_s, references)`` for :class:`TrackingFeedback`: position steps ``waypoints``
+    (``(time_s, (north, east, down))``, m) and heading steps ``yaw_steps`` (``(time_s, yaw_rad)``;
+    0 before the first), each held until the next (zero velocity and rates), jumps at repeated
+    times. The first waypoint holds from time 0."""
+    moves = [(float(t), np.asarray(p, dtype=np.float64)) for t, p in waypoints]
+    turns = [(float(t), float(y)) for t, y in yaw_steps]
+    if not moves:
+        raise ValueError("waypoints: give at least one (time_s, (north, east, down))")
+    for k, (_, p) in enumerate(moves):
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ValueError(f"waypoints[{k}]: expected a finite (north, east, down), got {p.tolist()}")
+    events: list[tuple[float, FloatArray]] = []
+    for t_s in sorted({t for t, _ in moves} | {0.0} | {t for t, _ in turns}):
+        row = np.zeros(STATE_DIM)
+        reached = [p for s, p in moves if s <= t_s]
+        row[:3] = reached[-1] if reached else moves[0][1]
+        headings = [y for s, y in turns if s <= t_s]
+        row[8] = headings[-1] if headings else 0.0
+        events.append((t_s, row))
+    return _steps(events)
+
+
+def circle_reference(
+    *, radius_m: float, period_s: float, climb_m_s: float = 0.0, yaw_amplitude_rad: float = 0.0, duration_s: float,
+    sample_s: float = 0.05,
+) -> tuple[FloatArray, FloatArray]:
+    """``(times_s, references)`` for :class:`TrackingFeedback`: a circle of ``radius_m`` flown once
+    per ``period_s`` from the origin (north ``R (1 - cos wt)``, east ``R sin wt``), climbing at
+    ``climb_m_s``, the heading ``yaw_amplitude_rad sin wt``, with the matching velocities and yaw
+    rate, sampled every ``sample_s`` over ``duration_s`` (Wang's scenario 1)."""
+    t = np.arange(0.0, duration_s + sample_s, sample_s)
+    w = 2 * math.pi / period_s
+    refs = np.zeros((len(t), STATE_DIM))
+    refs[:, 0] = radius_m * (1 - np.cos(w * t))
+    refs[:, 1] = radius_m * np.sin(w * t)
+    refs[:, 2] = -climb_m_s * t
+    refs[:, 3] = radius_m * w * np.sin(w * t)
+    refs[:, 4] = radius_m * w * np.cos(w * t)
+    refs[:, 5] = -climb_m_s
+    refs[:, 8] = yaw_amplitude_rad * np.sin(w * t)
+    refs[:, 11] = yaw_amplitude_rad * w * np.cos(w * t)
+    return t, refs
+
+
+__all__ = ["TrackingFeedback", "circle_reference", "step_reference"]

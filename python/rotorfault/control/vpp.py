@@ -30,19 +30,25 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._util.convert import FloatArray, float_array, frozen_array, real
+from .._util.convert import FloatArray, float_array, frozen_array, real, rotor_numbers
+from .._util.deprecation import warn
 from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
 from .linear import STATE_NAMES as _STATE_NAMES
+from .lqr import TRIM_RESIDUAL_TOL, linear_model
 from .lqr import linearize as _linearize
 from .riccati import design_lqr
 from .stabilisability import Direction, describe_directions, left_null_space
+
+if TYPE_CHECKING:
+    from .systems import LinearModel
 
 #: Names of the 12 states in rotorfault's order (NED position, velocity, roll/pitch/yaw, body rates)
 #: with Wang's symbols (his y/v are our east position/velocity up to the frame's sign): the
@@ -180,6 +186,12 @@ class VppTrim:
     free_rotors: tuple[int, ...]
     residual: float
 
+    @property
+    def balanced(self) -> bool:
+        """The evidence holds: ``residual`` at most :data:`TRIM_RESIDUAL_TOL` (:func:`trim`
+        raises otherwise; :func:`fixed_pitch_trim` may return an unbalanced frame, and says so here)."""
+        return bool(self.residual <= TRIM_RESIDUAL_TOL)
+
     def speed(self, rotor: int) -> float:
         return float(self.command[2 * (rotor - 1)])
 
@@ -310,7 +322,15 @@ def feasible_speeds(vehicle: VppVehicle, *, failed: Sequence[int] = (1,), fixed_
     group's common speed range, the torque ranges (:class:`FeasibleSpeeds`). Raises
     ``ValueError`` naming the bound when there is none."""
     problem = _Problem(vehicle, failed)
-    fixed, free = problem.groups(None if fixed_rotors is None else tuple(int(i) for i in fixed_rotors))
+    chosen = None
+    if fixed_rotors is not None:
+        chosen = rotor_numbers("fixed_rotors", fixed_rotors, problem.m)
+        bad = [i for i in chosen if i not in problem.healthy]
+        if bad:
+            raise ValueError(f"fixed_rotors: propeller {bad[0]} is failed; give healthy propellers of one spin direction ({list(problem.healthy)})")
+        if not chosen or len(set(chosen)) != len(chosen):
+            raise ValueError(f"fixed_rotors: give each healthy propeller at most once and at least one, got {list(chosen)}")
+    fixed, free = problem.groups(chosen)
     fixed_lo, fixed_hi = problem.interval(fixed)
     free_lo, free_hi = problem.interval(free)
     problem.require_increasing(fixed, fixed_lo, fixed_hi)
@@ -400,6 +420,11 @@ def trim(
     state[0:3] = pos
     state[8] = heading
     residual = float(np.linalg.norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command)))
+    if not residual <= TRIM_RESIDUAL_TOL:
+        raise ValueError(
+            f"trim residual: the trim leaves ||f(x, u)|| = {residual:.3g} (at most {TRIM_RESIDUAL_TOL:g}): "
+            "the speeds found do not balance the model"
+        )
     return VppTrim(
         frozen_array("state", state, 1), frozen_array("command", command, 1), frozen_array("thrust_n", problem.thrust, 1),
         problem.failed, fixed, free, residual,
@@ -456,8 +481,10 @@ def _snap(matrix: FloatArray) -> FloatArray:
 
 @dataclass(frozen=True)
 class VppLinearization:
-    """``dx/dt ~ a (x - x_trim) + b (v - v_trim)`` with ``v`` the healthy channels (``inputs``
-    names them, ``columns`` gives their index in the simulator's command vector)."""
+    """Deprecated (one release): what :func:`linearize` returned before it returned a
+    python-control system (:class:`~rotorfault.control.systems.LinearModel`, whose ``A``, ``B``,
+    ``input_labels`` and ``command_columns`` these are). :func:`controllability` still takes it,
+    warning."""
 
     a: FloatArray
     b: FloatArray
@@ -465,30 +492,42 @@ class VppLinearization:
     columns: tuple[int, ...]
 
 
-def linearize(vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, step: float = 1e-6) -> VppLinearization:
+def linearize(vehicle: VppVehicle, at: VppTrim, *, pitch_fixed: bool = False, step: float = 1e-6) -> LinearModel:
     """The Jacobians of the simulator's own dynamics at ``at``
     (:func:`rotorfault.control.lqr.linearize`: central differences, one-sided at a bound) restricted
-    to the healthy propellers' channels; ``pitch_fixed`` keeps the speeds only (Wang Sec. 3.4: the
-    fixed-pitch quadcopter)."""
+    to the healthy propellers' channels, as a python-control ``StateSpace``
+    (:class:`~rotorfault.control.systems.LinearModel`: states ``x ... r``, inputs ``omega_<i>``,
+    ``alpha_<i>`` of the healthy propellers, ``command_columns`` their place in the simulator's
+    command vector, the operating point ``x_trim``, ``u_trim``); ``pitch_fixed`` keeps the speeds
+    only (Wang Sec. 3.4: the fixed-pitch quadcopter)."""
     if not isinstance(at, VppTrim):
         raise TypeError(f"at: expected a VppTrim, got {type(at).__name__}")
     simulator = vehicle.simulator(failed=at.failed)
-    a, b = _linearize(simulator, at.state, at.command, step=step)
+    full = _linearize(simulator, at, step=step)
     # Central differences leave round-off (about eps |f| / step, 1e-18 here) where the model has
     # an exact zero; a scale-free rank would equilibrate such a row up to unit size and read noise
     # as authority. Entries below ROUNDOFF_RTOL of their column's largest are that noise.
-    a = _snap(a)
-    b = _snap(b)
-    columns, names = [], []
+    a = _snap(full.A)
+    b = _snap(full.B)
+    columns = []
     for i in range(1, vehicle.airframe.rotor_count + 1):
         if i in at.failed:
             continue
         columns.append(2 * (i - 1))
-        names.append(f"omega_{i}")
         if not pitch_fixed:
             columns.append(2 * (i - 1) + 1)
-            names.append(f"alpha_{i}")
-    return VppLinearization(frozen_array("a", a, 2), frozen_array("b", b[:, columns], 2), tuple(names), tuple(columns))
+    return linear_model(simulator, a, b[:, columns], at.state, at.command, columns)
+
+
+def _model_matrices(model: LinearModel | VppLinearization) -> tuple[FloatArray, FloatArray, tuple[str, ...]]:
+    """``(A, B, input names)`` of a model from :func:`linearize` (or, warning, the old
+    :class:`VppLinearization`)."""
+    if isinstance(model, VppLinearization):
+        warn("rotorfault.vpp.VppLinearization", "the python-control system rotorfault.vpp.linearize returns", stacklevel=4)
+        return model.a, model.b, model.inputs
+    if not (hasattr(model, "A") and hasattr(model, "B") and hasattr(model, "input_labels")):
+        raise TypeError(f"model: expected the python-control system of rotorfault.vpp.linearize, got {type(model).__name__}")
+    return np.asarray(model.A, dtype=np.float64), np.asarray(model.B, dtype=np.float64), tuple(model.input_labels)
 
 
 @dataclass(frozen=True)
@@ -509,29 +548,29 @@ class ControllabilityResult:
     basis: FloatArray
 
 
-def controllability(model: VppLinearization, *, input_scale: npt.ArrayLike | None = None) -> ControllabilityResult:
-    """Rank and Kalman decomposition of ``model``. States are scaled by :data:`STATE_SCALE`,
+def controllability(model: LinearModel | VppLinearization, *, input_scale: npt.ArrayLike | None = None) -> ControllabilityResult:
+    """Rank and Kalman decomposition of ``model`` (the python-control system of
+    :func:`linearize`). States are scaled by :data:`STATE_SCALE`,
     inputs by ``input_scale`` (default: 1000 per speed, 0.1 rad per pitch) so one SVD sees
     comparable columns; the rank is also the core's scale-free rank, and the uncontrollable
     directions are the left null space of the same equilibrated matrix (one rank rule)."""
-    if not isinstance(model, VppLinearization):
-        raise TypeError(f"model: expected a VppLinearization, got {type(model).__name__}")
+    model_a, model_b, inputs = _model_matrices(model)
     n = STATE_DIM
     if input_scale is None:
-        su = np.array([1000.0 if name.startswith("omega") else 0.1 for name in model.inputs])
+        su = np.array([1000.0 if name.startswith("omega") else 0.1 for name in inputs])
     else:
         su = float_array("input_scale", input_scale, 1)
-        if su.shape != (len(model.inputs),) or not np.all(np.isfinite(su) & (su > 0)):
-            raise ValueError(f"input_scale: expected {len(model.inputs)} finite entries > 0")
-    a = model.a / STATE_SCALE[:, None] * STATE_SCALE[None, :]
-    b = model.b / STATE_SCALE[:, None] * su[None, :]
+        if su.shape != (len(inputs),) or not np.all(np.isfinite(su) & (su > 0)):
+            raise ValueError(f"input_scale: expected {len(inputs)} finite entries > 0")
+    a = model_a / STATE_SCALE[:, None] * STATE_SCALE[None, :]
+    b = model_b / STATE_SCALE[:, None] * su[None, :]
     blocks = [b]
     for _ in range(n - 1):
         blocks.append(a @ blocks[-1])
     q = np.hstack(blocks)
-    raw = [model.b]
+    raw = [model_b]
     for _ in range(n - 1):
-        raw.append(model.a @ raw[-1])
+        raw.append(model_a @ raw[-1])
     rank = int(_rfcore.scale_free_rank(q))
     plain = int(np.linalg.matrix_rank(np.hstack(raw)))
     own_rank, null = left_null_space(q)
@@ -580,15 +619,15 @@ def lqr(
         raise TypeError(f"pitch_fixed: expected a bool, got {type(pitch_fixed).__name__}")
     model = linearize(vehicle, at, pitch_fixed=pitch_fixed)
     q_state = np.diag(1.0 / STATE_SCALE**2) if q is None else q
-    r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.inputs]) if r is None else r
+    r_in = np.diag([1.0 / (1000.0**2 if name.startswith("omega") else 0.05**2) for name in model.input_labels]) if r is None else r
     kind = "fixed-pitch" if pitch_fixed else "VPP"
     failed = f"propeller(s) {', '.join(map(str, at.failed))} failed" if at.failed else "no propeller failed"
     design = design_lqr(
-        (model.a, model.b), q_state, r_in, dt_s=dt_s, state_names=STATE_NAMES, state_labels=STATE_LABELS,
-        model=f"the {kind} hover model of {vehicle.name} ({failed}; inputs {', '.join(model.inputs)})",
+        model, q_state, r_in, dt_s=dt_s, state_names=STATE_NAMES, state_labels=STATE_LABELS,
+        model=f"the {kind} hover model of {vehicle.name} ({failed}; inputs {', '.join(model.input_labels)})",
     )
     full = np.zeros((2 * vehicle.airframe.rotor_count, STATE_DIM))
-    full[list(model.columns)] = design.gain
+    full[list(model.command_columns)] = design.gain
     return LinearFeedback(full, at.state, at.command, design=design)
 
 

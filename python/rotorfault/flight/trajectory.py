@@ -13,11 +13,31 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import FloatArray
+from .._util.tables import Column, Tabular, arrow_table, pyarrow, schema_metadata
 from .._typing import DivergenceKind, Sensed
 from .faults import RotorFault
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+
+#: The 12 states as table columns (:meth:`Trajectory.to_arrow`), in the state vector's order:
+#: NED position and velocity, Z-Y-X Euler angles, body rates (FRD).
+STATE_COLUMNS: tuple[str, ...] = (
+    "north_m", "east_m", "down_m",
+    "velocity_north_m_s", "velocity_east_m_s", "velocity_down_m_s",
+    "roll_rad", "pitch_rad", "yaw_rad",
+    "roll_rate_rad_s", "pitch_rate_rad_s", "yaw_rate_rad_s",
+)
+
+
+def command_columns(command_count: int, rotor_count: int) -> list[str]:
+    """Names of the command channels: ``rotor_<i>_command_n`` (fixed pitch, one thrust per rotor)
+    or ``rotor_<i>_speed_command`` and ``rotor_<i>_pitch_command_rad`` (variable pitch, interleaved;
+    the speed in the preset's unit)."""
+    if command_count == 2 * rotor_count:
+        return [f"rotor_{j // 2 + 1}_{'pitch_command_rad' if j % 2 else 'speed_command'}" for j in range(command_count)]
+    return [f"rotor_{j + 1}_command_n" for j in range(command_count)]
 
 
 @dataclass(frozen=True)
@@ -86,8 +106,13 @@ class Estimates:
 
 
 @dataclass(frozen=True)
-class Trajectory:
-    """A run sampled at the control rate. Arrays have one row per control step."""
+class Trajectory(Tabular):
+    """A run sampled at the control rate. Arrays have one row per control step.
+
+    ``to_arrow()`` / ``to_pandas()``: one row per recorded step (``t_s``, the 12 states of
+    :data:`STATE_COLUMNS`, the quaternion, the primary axis, each rotor's command, thrust and
+    efficiency, and the measured states ``measured_<state>`` when the run had sensor noise); the
+    events and faults are in the schema's metadata."""
 
     t: FloatArray
     position: FloatArray
@@ -162,6 +187,32 @@ class Trajectory:
             axis=1,
         )
 
+    def _table_columns(self) -> list[Column]:
+        m = self.efficiency.shape[1]
+        states = np.hstack([self.position, self.velocity, self.euler, self.omega])
+        columns: list[Column] = [("t_s", "float64", self.t)]
+        columns += [(name, "float64", states[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+        columns += [(f"quaternion_{c}", "float64", self.quaternion[:, k]) for k, c in enumerate("wxyz")]
+        columns += [(f"primary_axis_{c}", "float64", self.primary_axis[:, k]) for k, c in enumerate(("north", "east", "down"))]
+        names = command_columns(self.rotor_command.shape[1], m)
+        columns += [(name, "float64", self.rotor_command[:, k]) for k, name in enumerate(names)]
+        columns += [(f"rotor_{k + 1}_thrust_n", "float64", self.rotor_thrust[:, k]) for k in range(m)]
+        columns += [(f"rotor_{k + 1}_efficiency", "float64", self.efficiency[:, k]) for k in range(m)]
+        if self.recorded_measurements.shape[1] > 0:
+            columns += [(f"measured_{name}", "float64", self.recorded_measurements[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+        return columns
+
+    def _table_title(self) -> str:
+        end = f"ended: {self.events[0]}" if self.events else "no divergence"
+        return f"trajectory: {len(self.t)} steps to {self.t[-1]:g} s, {end}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {
+            "kind": "trajectory",
+            "events": [{"kind": e.kind, "time_s": e.time, "description": e.description} for e in self.events],
+            "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in self.faults],
+        }
+
     @classmethod
     def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
         events = []
@@ -216,7 +267,7 @@ class Trajectory:
 
 
 @dataclass(frozen=True)
-class BatchResult:
+class BatchResult(Tabular):
     """Runs stacked along axis 0 on one time axis ``t``, the recording grid: the recorded control
     steps (``k dt_s`` for every ``record_every``-th ``k``) and the end, exactly ``duration_s``;
     equal to the ``t`` of every run that does not diverge. A run that diverges fills the rows up
@@ -236,5 +287,22 @@ class BatchResult:
     divergence_time: FloatArray
     trajectories: list[Trajectory]
 
+    def to_arrow(self) -> Any:
+        """Every run's :meth:`Trajectory.to_arrow` rows, one table: a ``run`` column (0-based, the
+        index into ``trajectories``) first, then one row per recorded step of that run (its own
+        times, the divergence row included; no padding)."""
+        pa = pyarrow()
+        tables = []
+        for k, run in enumerate(self.trajectories):
+            table = arrow_table(run._table_columns())
+            tables.append(table.add_column(0, pa.field("run", pa.int64()), pa.array(np.full(table.num_rows, k, dtype=np.int64))))
+        if not tables:
+            return arrow_table([("run", "int64", [])], metadata={"kind": "batch"})
+        meta = {"kind": "batch", "runs": len(tables), "diverged": [bool(d) for d in self.diverged]}
+        return pa.concat_tables(tables).replace_schema_metadata(schema_metadata(meta))
 
-__all__ = ["BatchResult", "Estimates", "Event", "Trajectory"]
+    def _table_title(self) -> str:
+        return f"batch: {len(self.trajectories)} runs, {int(np.sum(self.diverged))} diverged"
+
+
+__all__ = ["STATE_COLUMNS", "BatchResult", "Estimates", "Event", "Trajectory", "command_columns"]

@@ -20,5 +20,6 @@ paper imports another paper; the shared machinery (``_report``, ``_numbers``, ``
 from __future__ import annotations
 
 from . import du, ke
+from ._numbers import PaperNumber, number_rows
 
-__all__ = ["du", "ke"]
+__all__ = ["PaperNumber", "du", "ke", "number_rows"]

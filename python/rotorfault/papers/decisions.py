@@ -83,6 +83,8 @@ DECISION_CODE: dict[str, tuple[str, ...]] = {
     "Lanzon eq. (32)": (_LANZON_RS,),
     "Lanzon Table 1 `I_zz = 1.16e-3`": ("python/rotorfault/presets/lanzon-quadrotor.toml", _LANZON_PAPER),
     "Lanzon's loop-shape weight": ("python/rotorfault/control/robust.py", _LANZON_PY),
+    "loop-shaping realisations and norms (python-control converts and reduces with slycot when installed, otherwise with scipy)": (
+        "python/rotorfault/control/robust.py", "python/rotorfault/control/realisation.py", "python/rotorfault/control/norms.py"),
     "Lanzon design (a) \"without limits\"": (_LANZON_PAPER,),
     "Lanzon's outer loop gains (not in the paper)": (_LANZON_PY, _LANZON_RS),
     "hover trim (`hover_trim`)": (_LQR,),

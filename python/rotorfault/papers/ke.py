@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._typing import KeLaw
+from .._util.tables import Records
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, UniformPassiveFtc, preset, stability_check
 from ..flight import RotorFault, Sensing, State, Trajectory
@@ -195,8 +196,21 @@ def _efficiency_text(values: Any) -> str:
     return " ".join(f"{float(h):g}" for h in values)
 
 
-def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
-    """One record per run. ``efficiency`` is what the run reached (a lost run never had the
+#: The columns of :func:`report_rows` and their types (one name per column everywhere: the CSV,
+#: the terminal table, ``to_arrow()``).
+REPORT_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("scenario", "string"), ("law", "string"), ("efficiency", "string"), ("planned_efficiency", "string"),
+    ("faults_not_reached", "string"), ("ke_stabilizable", "bool"), ("outcome", "string"), ("outcome_label", "string"),
+    ("lost_at_s", "float64"), ("end_s", "float64"), ("window_s", "float64"), ("r_rad_s", "float64"), ("n3z", "float64"),
+    ("rotation_axis", "string"), ("spin_settle_s", "float64"), ("max_altitude_loss_m", "float64"),
+    ("max_horizontal_error_m", "float64"), ("final_horizontal_error_m", "float64"), ("final_altitude_error_m", "float64"),
+    ("window_horizontal_error_m", "float64"), ("window_altitude_error_m", "float64"), ("window_speed_m_s", "float64"),
+)
+
+
+def report_rows(runs: list[ScenarioRun]) -> Records:
+    """One record per run (:data:`REPORT_COLUMNS`; a sequence of dicts with ``to_arrow()`` and
+    ``to_pandas()``). ``efficiency`` is what the run reached (a lost run never had the
     faults after its loss), ``planned_efficiency`` the scenario's; ``None``: not settled (steady
     values) or lost (position values, see ``lost_at_s``)."""
     rows = []
@@ -231,7 +245,7 @@ def report_rows(runs: list[ScenarioRun]) -> list[dict[str, Any]]:
                 "window_speed_m_s": m.window_speed_m_s,
             }
         )
-    return rows
+    return Records(rows, REPORT_COLUMNS, title="Ke et al.: flights", kind="ke-flights")
 
 
 #: Columns that hold a steady value (blank -> "not settled") and a position value over the run

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from .._util.convert import FloatArray, count, real
+from .._util.tables import Column, Records, Tabular
 from ..control.ke import UniformPassiveFtc
 from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
 from ..flight import Noise, RotorFault, Sensing, State, Trajectory, simulate_batch
@@ -104,6 +105,18 @@ class DesignCase:
     limits: bool
     channel_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
     outer_loop: OuterLoopGains = field(default_factory=OuterLoopGains)
+
+    def __post_init__(self) -> None:
+        crossover = real("crossover_rad_s", self.crossover_rad_s)
+        if not (math.isfinite(crossover) and crossover > 0):
+            raise ValueError(f"crossover_rad_s: must be finite and > 0, got {crossover}")
+        gains = np.asarray(self.channel_gain, dtype=np.float64)
+        if gains.shape != (3,) or not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+            raise ValueError(f"channel_gain: expected 3 finite numbers > 0 (phi, theta, r), got {self.channel_gain}")
+        if not isinstance(self.limits, bool):
+            raise TypeError(f"limits: expected True or False, got {type(self.limits).__name__}")
+        if not isinstance(self.outer_loop, OuterLoopGains):
+            raise TypeError(f"outer_loop: expected OuterLoopGains, got {type(self.outer_loop).__name__}")
 
     def design(self, vehicle: LanzonVehicle) -> LanzonDesign:
         return design(vehicle, crossover_rad_s=self.crossover_rad_s, channel_gain=self.channel_gain)
@@ -293,12 +306,13 @@ MonteCarloController = Literal["lanzon", "ke"]
 
 
 @dataclass(frozen=True)
-class MonteCarloResult:
+class MonteCarloResult(Tabular):
     """A Monte Carlo batch: ``runs`` perturbed vehicles (mass, ``I_xx = I_yy``, ``I_zz``,
     ``k_r``, ``I_R`` each scaled by a factor drawn uniformly from ``[1 - spread, 1 + spread]``)
     with sensor noise at ``snr_db``, flown from Scenario B's start to its setpoint for
     ``duration_s``. ``outcomes`` holds Ke's windowed verdict per run, ``final_error_m`` the
-    distance from the setpoint at the end (NaN: lost), ``factors`` the draws (runs x 5)."""
+    distance from the setpoint at the end (NaN: lost), ``factors`` the draws (runs x 5).
+    ``to_arrow()`` / ``to_pandas()``: one row per run (its draws, outcome and final error)."""
 
     controller: str
     runs: int
@@ -329,6 +343,19 @@ class MonteCarloResult:
     def median_final_error_m(self) -> float:
         finite = self.final_error_m[np.isfinite(self.final_error_m)]
         return float(np.median(finite)) if finite.size else math.inf
+
+    def _table_columns(self) -> list[Column]:
+        draws = ("mass_scale", "inertia_xx_scale", "inertia_zz_scale", "rotational_drag_scale", "rotor_inertia_scale")
+        columns: list[Column] = [("run", "int64", np.arange(self.runs, dtype=np.int64))]
+        columns += [(name, "float64", self.factors[:, k]) for k, name in enumerate(draws)]
+        return columns + [("outcome", "string", list(self.outcomes)), ("final_error_m", "float64", self.final_error_m)]
+
+    def _table_title(self) -> str:
+        return f"Monte Carlo: {self.runs} runs of {self.controller}, spread {self.spread:g}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "lanzon-monte-carlo", "controller": self.controller, "spread": self.spread, "snr_db": self.snr_db,
+                "duration_s": self.duration_s, "inertia_zz_kg_m2": self.inertia_zz_kg_m2}
 
     def counts(self) -> dict[str, int]:
         out: dict[str, int] = {}
@@ -400,8 +427,20 @@ def monte_carlo(
 # -- report (rotorfault lanzon-report) -----------------------------------------------------------
 
 
-def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
-    """One record per run of the three-way table."""
+#: The columns of :func:`report_rows` and their types.
+REPORT_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("scenario", "string"), ("case", "string"), ("case_description", "string"), ("inertia_zz_kg_m2", "float64"),
+    ("crossover_rad_s", "float64"), ("limits", "bool"), ("gamma_min", "float64"), ("gamma", "float64"), ("achieved_norm", "float64"),
+    ("outcome", "string"), ("outcome_text", "string"), ("lost_at_s", "float64"), ("duration_s", "float64"),
+    ("level_after_s", "float64"), ("window_tilt_deg", "float64"), ("window_spin_rad_s", "float64"),
+    ("max_altitude_loss_m", "float64"), ("final_error_m", "float64"), ("window_horizontal_error_m", "float64"),
+    ("window_altitude_error_m", "float64"), ("min_thrust_n", "float64"), ("max_thrust_n", "float64"),
+)
+
+
+def report_rows(runs: list[LanzonRun]) -> Records:
+    """One record per run of the three-way table (:data:`REPORT_COLUMNS`; a sequence of dicts with
+    ``to_arrow()`` and ``to_pandas()``)."""
     rows = []
     for run in runs:
         a, p = run.attitude, run.position
@@ -414,6 +453,7 @@ def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
             "limits": run.case.limits,
             "gamma_min": run.design.gamma_min,
             "gamma": run.design.gamma,
+            "achieved_norm": run.design.evidence.achieved_norm,
             "outcome": run.outcome,
             "outcome_text": outcome_text(run.outcome, run.lost_at_s),
             "lost_at_s": run.lost_at_s,
@@ -428,7 +468,7 @@ def report_rows(runs: list[LanzonRun]) -> list[dict[str, Any]]:
             "min_thrust_n": float(np.nanmin(run.trajectory.rotor_thrust[:, [0, 2, 3]])),
             "max_thrust_n": float(np.nanmax(run.trajectory.rotor_thrust)),
         })
-    return rows
+    return Records(rows, REPORT_COLUMNS, title="Lanzon et al.: three-way flights", kind="lanzon-flights")
 
 
 def _num(value: Any, digits: int) -> str:

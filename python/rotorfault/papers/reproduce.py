@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import os
 import re
 import time
@@ -99,13 +100,53 @@ def bench_results(directory: str | os.PathLike[str] | None) -> list[BenchResult]
     for path in sorted(d.glob("*.json")):
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-            if data.get("schema") != BENCH_SCHEMA:
-                raise ValueError(f"schema is {data.get('schema')!r}, expected {BENCH_SCHEMA!r}")
-            out.append(BenchResult(path.name, str(data["bench"]), str(data["title"]), str(data["command"]), str(data["date"]),
-                                   dict(data["machine"]), data.get("reduced"), list(data["figures"])))
-        except (ValueError, KeyError, TypeError) as exc:
+            out.append(_bench_result(path.name, data))
+        except (ValueError, KeyError, TypeError, RecursionError, UnicodeDecodeError) as exc:
             raise ValueError(f"benches: {str(path)!r} is not a bench result ({exc})") from None
     return out
+
+
+def _field(data: Any, key: str, kinds: tuple[type, ...], *, optional: bool = False, where: str = "") -> Any:
+    """``data[key]`` of one of ``kinds`` (None allowed when ``optional``), naming the field."""
+    if not isinstance(data, dict):
+        raise TypeError(f"{where or 'the file'} must be a JSON object")
+    if key not in data:
+        if optional:
+            return None
+        raise KeyError(f"{where}{key} is missing")
+    value = data[key]
+    if value is None and optional:
+        return None
+    if isinstance(value, bool) and bool not in kinds or not isinstance(value, kinds):
+        raise TypeError(f"{where}{key} must be {' or '.join(k.__name__ for k in kinds)}, got {type(value).__name__}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{where}{key} must be finite, got {value}")
+    return value
+
+
+def _bench_result(name: str, data: Any) -> BenchResult:
+    """Every field the page shows, checked when the file is read (before the report's work), so a
+    malformed file is a one-line error naming the field, never a crash after the long work."""
+    if _field(data, "schema", (str,)) != BENCH_SCHEMA:
+        raise ValueError(f"schema is {data.get('schema')!r}, expected {BENCH_SCHEMA!r}")
+    text = {key: _field(data, key, (str,)) for key in ("bench", "title", "command", "date")}
+    machine = _field(data, "machine", (dict,))
+    for key in ("cpu", "system", "python", "rotorfault"):
+        _field(machine, key, (str,), where="machine.")
+    _field(machine, "cpus", (int,), where="machine.")
+    _field(machine, "load_average_1min", (int, float), optional=True, where="machine.")
+    figures = _field(data, "figures", (list,))
+    for k, fig in enumerate(figures):
+        where = f"figures[{k}]."
+        _field(fig, "what", (str,), where=where)
+        _field(fig, "unit", (str,), where=where)
+        _field(fig, "value", (int, float), where=where)
+        for key in ("baseline_value", "ratio"):
+            _field(fig, key, (int, float), optional=True, where=where)
+        for key in ("baseline", "target"):
+            _field(fig, key, (str,), optional=True, where=where)
+    return BenchResult(name, text["bench"], text["title"], text["command"], text["date"], dict(machine),
+                       _field(data, "reduced", (str,), optional=True), list(figures))
 
 
 def _number(value: float | None, unit: str = "") -> str:

@@ -45,8 +45,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._util.convert import FloatArray, real
+from .._util.tables import Records
 from ..control.linear import STATE_LABELS
-from ..control.tracking import TrackingFeedback
+from ..control.tracking import TrackingFeedback, circle_reference, step_reference
 from ..flight import Noise, Sensing, Simulator, State, Trajectory
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
@@ -97,46 +98,19 @@ class WangScenario:
     noisy: bool
 
 
-def _steps(events: list[tuple[float, FloatArray]]) -> tuple[FloatArray, FloatArray]:
-    times: list[float] = []
-    rows: list[FloatArray] = []
-    for t, row in events:
-        if rows:
-            times.append(t)
-            rows.append(rows[-1])
-        times.append(t)
-        rows.append(row)
-    return np.array(times), np.array(rows)
-
-
 def scenario(number: int, *, duration_s: float = DURATION_S) -> WangScenario:
     """Scenario 1, 2 or 3 of Section 4.2 (module docs)."""
     duration = real("duration_s", duration_s)
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration_s: must be > 0 and finite, got {duration}")
     if number == 1:
-        t = np.arange(0.0, duration + 0.05, 0.05)
-        w = 2 * math.pi / CIRCLE_PERIOD_S
-        refs = np.zeros((len(t), 12))
-        refs[:, 0] = CIRCLE_RADIUS_M * (1 - np.cos(w * t))
-        refs[:, 1] = CIRCLE_RADIUS_M * np.sin(w * t)
-        refs[:, 2] = -CLIMB_M_S * t
-        refs[:, 3] = CIRCLE_RADIUS_M * w * np.sin(w * t)
-        refs[:, 4] = CIRCLE_RADIUS_M * w * np.cos(w * t)
-        refs[:, 5] = -CLIMB_M_S
-        refs[:, 8] = YAW_AMPLITUDE_RAD * np.sin(w * t)
-        refs[:, 11] = YAW_AMPLITUDE_RAD * w * np.cos(w * t)
+        t, refs = circle_reference(radius_m=CIRCLE_RADIUS_M, period_s=CIRCLE_PERIOD_S, climb_m_s=CLIMB_M_S,
+                                   yaw_amplitude_rad=YAW_AMPLITUDE_RAD, duration_s=duration)
         return WangScenario(1, "scenario 1: circle, climb and yaw, no noise", t, refs, None, False)
     if number in (2, 3):
-        events: list[tuple[float, FloatArray]] = []
         moves = WAYPOINTS if number == 2 else WAYPOINTS[:1]
-        for t_s in sorted({w[0] for w in moves} | {0.0, YAW_STEP[0]}):
-            row = np.zeros(12)
-            x, y, z = [p for s, p in moves if s <= t_s][-1]
-            row[:3] = (x, y, -z)
-            row[8] = YAW_STEP[1] if t_s >= YAW_STEP[0] else 0.0
-            events.append((t_s, row))
-        times, refs = _steps(events)
+        # Wang's waypoints are (x, y, z up); the reference is NED.
+        times, refs = step_reference([(t_s, (x, y, -z)) for t_s, (x, y, z) in moves], [YAW_STEP])
         if number == 2:
             return WangScenario(2, "scenario 2: waypoints, yaw 0.1 rad from 1 s, 15 dB SNR noise", times, refs, None, True)
         wind = ((0.0, (0.0, 0.0, 0.0)), (WIND_FROM_S, WIND_M_S))
@@ -266,7 +240,7 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
             model = vpp.linearize(vehicle, at, pitch_fixed=frame is not None)
             kalman = vpp.controllability(model)
             test = stabilisability(
-                model.a, model.b, state_names=vpp.STATE_NAMES, state_labels=STATE_LABELS,
+                model.A, model.B, state_names=vpp.STATE_NAMES, state_labels=STATE_LABELS,
             )
             rows.append(LayoutCase(
                 label, failed, at.residual, kalman.rank, test,
@@ -315,6 +289,40 @@ def speed_sweep_table() -> list[str]:
     return rows
 
 
+def flight_rows(flights: list[WangFlight]) -> Records:
+    """One record per flight (a sequence of dicts with ``to_arrow()`` and ``to_pandas()``):
+    ``final_error_m`` and ``max_error_after_settle_m`` are ``None`` for a lost flight."""
+    columns = [("scenario", "int64"), ("vehicle", "string"), ("lost", "bool"), ("lost_at_s", "float64"), ("final_error_m", "float64"),
+               ("max_error_after_settle_m", "float64"), ("max_tilt_rad", "float64")]
+    rows = [
+        {
+            "scenario": f.scenario.number, "vehicle": f.vehicle, "lost": f.lost, "lost_at_s": f.lost_at_s,
+            "final_error_m": None if f.lost else f.final_error_m,
+            "max_error_after_settle_m": None if f.lost or math.isnan(f.max_error_after_s) else f.max_error_after_s,
+            "max_tilt_rad": f.max_tilt_rad,
+        }
+        for f in flights
+    ]
+    return Records(rows, columns, title="Wang et al.: Section 4's flights", kind="wang-flights")
+
+
+def comparison_rows(cases: list[LayoutCase] | None = None) -> Records:
+    """:func:`fixed_pitch_comparison` as records (one per vehicle and propeller state); the rank,
+    stabilisability and directions are ``None`` where the vehicle has no hover at rest."""
+    columns = [("vehicle", "string"), ("failed_rotors", "list<int64>"), ("trim_residual", "float64"), ("hover_at_rest", "bool"),
+               ("controllability_rank", "int64"), ("stabilisable", "bool"), ("uncontrollable_directions", "list<string>"),
+               ("acai_eq13", "float64")]
+    rows = [
+        {
+            "vehicle": c.vehicle, "failed_rotors": list(c.failed), "trim_residual": c.residual, "hover_at_rest": c.at_rest,
+            "controllability_rank": c.rank, "stabilisable": None if c.stabilisability is None else c.stabilisability.holds,
+            "uncontrollable_directions": None if c.uncontrollable is None else list(c.uncontrollable), "acai_eq13": c.acai,
+        }
+        for c in (fixed_pitch_comparison() if cases is None else cases)
+    ]
+    return Records(rows, columns, title="Wang et al.: the fixed-pitch comparison", kind="wang-comparison")
+
+
 def flights_table(flights: list[WangFlight]) -> list[str]:
     rows = ["| scenario | vehicle | outcome | final error (m) | largest error after 15 s (m) | largest tilt (rad) |",
             "|---|---|---|---|---|---|"]
@@ -358,7 +366,7 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
     return out_dir
 
 
-__all__ = ["COMPARISON_NOTE", "LAYOUTS", "PAPER", "REST_RESIDUAL", "LayoutCase", "WangFlight", "WangScenario", "comparison_table", "fixed_pitch_comparison", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
+__all__ = ["COMPARISON_NOTE", "LAYOUTS", "PAPER", "REST_RESIDUAL", "LayoutCase", "WangFlight", "WangScenario", "comparison_rows", "comparison_table", "fixed_pitch_comparison", "flight_rows", "printed_numbers", "report_section", "controller", "flights_table", "fly", "plot_flight",
            "scenario", "speed_sweep_table", "write_report"]
 
 

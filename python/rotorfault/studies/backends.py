@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from .._util.optional import require_available
 from .._util.progress import chunks
 from .storage import ChunkSpec
 
@@ -36,6 +37,28 @@ def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: 
         for first, last in chunks(runs, size, description=description, show=progress):
             results += list(pool.map(run, range(first, last)))
     return results
+
+
+def check_dask(dask: Any) -> None:
+    """Checks, before any work or output, that the Dask backend can run here with ``dask`` (a
+    Client, an address or ``"local:N"``): Dask installed, the argument well formed."""
+    require_available("backend='dask'", "dask", "distributed")
+    from distributed import Client
+
+    if dask is None:
+        raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
+    if isinstance(dask, Client):
+        return
+    if not isinstance(dask, str):
+        raise TypeError(f"dask: expected a distributed.Client, an address or 'local:N', got {type(dask).__name__}")
+    if dask.startswith("local:"):
+        text = dask[len("local:") :]
+        if not (text.isdigit() and int(text) >= 1):
+            raise ValueError(f"dask: 'local:N' needs a positive worker count N, got {dask!r}")
+        if int(text) > 256:
+            raise ValueError(f"dask: 'local:N' starts N worker processes on this machine; at most 256, got {dask!r}")
+    elif "://" not in dask:
+        raise ValueError(f"dask: expected a scheduler address like 'tcp://host:8786' or 'local:N', got {dask!r}")
 
 
 @contextlib.contextmanager
@@ -65,7 +88,7 @@ def dask_client(dask: Client | str) -> Iterator[Client]:
         yield client
 
 
-def run_local(task: ChunkTask, pending: list[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
+def run_local(task: ChunkTask, pending: Iterable[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
     # Two in flight: one computing while the previous is written. Results are accepted in chunk
     # order, so an interrupted local run leaves a prefix (plus at most one) of the chunks.
     in_flight = 2
@@ -89,7 +112,7 @@ def run_local(task: ChunkTask, pending: list[ChunkSpec], accept: Callable[[Chunk
             raise
 
 
-def run_dask(client: Client, task: ChunkTask, pending: list[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
+def run_dask(client: Client, task: ChunkTask, pending: Iterable[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:
     from distributed import as_completed
 
     workers = max(1, len(client.scheduler_info().get("workers", {})))
@@ -97,8 +120,9 @@ def run_dask(client: Client, task: ChunkTask, pending: list[ChunkSpec], accept: 
     it = iter(pending)
     # Retries cover a task that raised on a worker that then died; a killed worker's tasks are
     # rescheduled by Dask itself (up to the scheduler's allowed-failures).
-    submitted = [client.submit(task, spec, pure=False, retries=2) for spec in _take(it, in_flight)]
-    specs = {future.key: spec for future, spec in zip(submitted, pending)}
+    first = _take(it, in_flight)
+    submitted = [client.submit(task, spec, pure=False, retries=2) for spec in first]
+    specs = {future.key: spec for future, spec in zip(submitted, first)}
     queue = as_completed(submitted)  # type: ignore[no-untyped-call]
     try:
         for future in queue:
@@ -126,4 +150,4 @@ def _take(it: Iterator[ChunkSpec], n: int) -> list[ChunkSpec]:
     return out
 
 
-__all__ = ["ChunkTask", "dask_client", "map_runs", "run_dask", "run_local"]
+__all__ = ["ChunkTask", "check_dask", "dask_client", "map_runs", "run_dask", "run_local"]

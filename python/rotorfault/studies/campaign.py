@@ -19,7 +19,6 @@ from __future__ import annotations
 import functools
 import json
 import math
-import tomllib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from os import PathLike
@@ -30,6 +29,8 @@ import numpy as np
 
 from .. import _rfcore
 from .._typing import ScanBackend as Backend
+from .._util.convert import read_toml
+from .._util.tables import Records, Tabular
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Sensing, Simulator, State, Trajectory
@@ -145,6 +146,8 @@ class Campaign:
                 raise TypeError(f"{name}: expected an integer, got {v!r}")
         if self.runs < 1:
             raise ValueError(f"runs: must be >= 1, got {self.runs}")
+        if self.substeps < 1:
+            raise ValueError(f"substeps: must be >= 1 (RK4 steps per control period), got {self.substeps}")
         if not 0 <= self.seed < 2**63:
             raise ValueError(f"seed: must lie in [0, 2**63), got {self.seed}")
         if self.chunk_size < 1:
@@ -162,6 +165,8 @@ class Campaign:
                 raise TypeError(f"{name}: expected a number, got {v!r}")
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}: must be > 0 and finite, got {v}")
+        # The core's rules for one run (step counts), here rather than in the first chunk.
+        _rfcore.SimulationConfig(dt_s=float(self.dt_s), substeps=int(self.substeps), duration_s=float(self.duration_s))
         if isinstance(self.failures, (str, bytes)) or not isinstance(self.failures, (tuple, list)) or not self.failures:
             raise TypeError("failures: expected a non-empty sequence of failure patterns (tuples of 1-based rotors)")
         rotors = rotor_count(self.vehicle().airframe_name)
@@ -215,12 +220,7 @@ class Campaign:
     def from_toml(cls, path: str | Path) -> Campaign:
         """A campaign from a TOML file whose keys are this class's fields (``gains`` a table of
         :class:`KeGains` fields over the preset's)."""
-        text = Path(path).read_text(encoding="utf-8")
-        try:
-            raw = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValueError(f"{path}: not valid TOML: {exc}") from None
-        return cls.from_dict(raw)
+        return cls.from_dict(read_toml("campaign_file", path))
 
     @classmethod
     def from_dict(cls, raw: Mapping[str, Any]) -> Campaign:
@@ -456,12 +456,16 @@ class _CampaignTask:
     campaign: Campaign
 
     def __call__(self, spec: Any) -> Any:
-        from .storage import pyarrow_module
+        return campaign_table(run_chunk(self.campaign, spec.index))
 
-        pa = pyarrow_module()
-        columns = run_chunk(self.campaign, spec.index)
-        schema = campaign_schema()
-        return pa.Table.from_arrays([pa.array(columns[f.name], type=f.type) for f in schema], schema=schema)
+
+def campaign_table(columns: Mapping[str, np.ndarray[Any, Any]]) -> Any:
+    """Campaign rows (:func:`run_chunk`'s NumPy columns) as an Arrow table of :func:`campaign_schema`."""
+    from .storage import pyarrow_module
+
+    pa = pyarrow_module()
+    schema = campaign_schema()
+    return pa.Table.from_arrays([pa.array(columns[f.name], type=f.type) for f in schema], schema=schema)
 
 
 def run_campaign(
@@ -529,9 +533,11 @@ def read_campaign(path: str | PathLike[str]) -> CampaignResult:
 
 
 @dataclass(frozen=True)
-class CampaignResult:
+class CampaignResult(Tabular):
     """A campaign's rows as NumPy columns (:func:`run_chunk`'s, concatenated in run order), in
-    memory or read from the Parquet output ``out`` when first used."""
+    memory or read from the Parquet output ``out`` when first used. ``to_arrow()`` /
+    ``to_pandas()``: one row per run (:func:`campaign_schema`, the same schema as the Parquet
+    output); :meth:`survival_table`: the survival rates as a table."""
 
     campaign: Campaign
     loaded: dict[str, np.ndarray[Any, Any]] | None = field(default=None, repr=False)
@@ -578,6 +584,27 @@ class CampaignResult:
         else:
             raise ValueError(f"by: expected all, first_failed_rotor, failed_rotors or first_fault_s, got {by!r}")
         return rates(ok, groups)
+
+    def to_arrow(self) -> Any:
+        """Every run's row as one ``pyarrow.Table`` (:func:`campaign_schema`)."""
+        if not self.columns:
+            return campaign_schema().empty_table()
+        return campaign_table(self.columns)
+
+    def _table_title(self) -> str:
+        return f"campaign: {len(self)} runs, {self.campaign.controller}"
+
+    def survival_table(self, *, bins: int = 5) -> Records:
+        """Survival rates with their 95 % Wilson interval, over all runs and per group (as
+        :meth:`table` prints them): one row per group, ``by`` naming the grouping."""
+        rows = [
+            {"by": by, "group": r.label, "survived": r.survived, "runs": r.runs, "rate": r.rate, "low": r.low, "high": r.high}
+            for by in ("all", "first_failed_rotor", "failed_rotors", "first_fault_s")
+            for r in self.survival(by, bins=bins)
+        ]
+        columns = [("by", "string"), ("group", "string"), ("survived", "int64"), ("runs", "int64"),
+                   ("rate", "float64"), ("low", "float64"), ("high", "float64")]
+        return Records(rows, columns, title=f"survival of {len(self)} runs (95 % Wilson interval)", kind="campaign-survival")
 
     def worst(self, n: int = 5, *, by: str = "max_horizontal_error_m") -> list[dict[str, Any]]:
         """The ``n`` worst runs: lost runs first (earliest loss first), then the largest ``by``;
@@ -635,6 +662,7 @@ __all__ = [
     "Rate",
     "RunSpec",
     "campaign_schema",
+    "campaign_table",
     "iter_specs",
     "read_campaign",
     "run_campaign",

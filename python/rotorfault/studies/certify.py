@@ -14,6 +14,7 @@ from typing import Any, Literal
 from .._typing import AcaiFormula
 from .._util.convert import count
 from .._util.deprecation import renamed_attribute
+from .._util.tables import Column, Tabular
 from ..allocation.attainable import hover_thrust_margin
 from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label
@@ -46,7 +47,10 @@ class CertificateCase:
 
 
 @dataclass(frozen=True)
-class Certificate:
+class Certificate(Tabular):
+    """The verdicts of :func:`certify`, one case per failure combination; ``to_arrow()`` /
+    ``to_pandas()`` give one row per case, :meth:`to_dict` the JSON document."""
+
     airframe: str
     rotor_count: int
     fully_actuated: bool
@@ -56,6 +60,26 @@ class Certificate:
         """The cases up to the ``required`` class (``none``, ``single``, ``double``) it cannot hover."""
         k = FAILURE_CLASSES[required]
         return [c for c in self.cases if len(c.failed) <= k and c.hover == "no"]
+
+    def _table_columns(self) -> list[Column]:
+        acai_ = f"acai_{FORMULA.replace('-', '_')}"
+        cases = self.cases
+        return [
+            ("failed_rotors", "list<int64>", [list(c.failed) for c in cases]),
+            ("failed_count", "int64", [len(c.failed) for c in cases]),
+            ("hover", "string", [c.hover for c in cases]),
+            (acai_, "float64", [c.acai for c in cases]),
+            (f"{acai_}_give_up_yaw", "float64", [c.acai_give_up_yaw for c in cases]),
+            ("thrust_to_weight", "float64", [c.thrust_to_weight for c in cases]),
+            ("drop_axes", "list<string>", [None if c.drop_axes is None else list(c.drop_axes) for c in cases]),
+        ]
+
+    def _table_title(self) -> str:
+        kind = "fully actuated" if self.fully_actuated else "not fully actuated"
+        return f"certificate of {self.airframe}: {self.rotor_count} rotors, {kind}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "certificate", "airframe": self.airframe, "rotor_count": self.rotor_count, "fully_actuated": self.fully_actuated, "formula": FORMULA}
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)

@@ -28,6 +28,7 @@ import numpy as np
 
 from .._typing import AcaiFormula
 from .._util.convert import float_array
+from .._util.tables import Column, Tabular
 from ..analysis.acai import acai
 from ..analysis.airframe import Airframe, require_airframe
 from ..analysis.controllability import failure_table
@@ -67,14 +68,20 @@ def spin_assignments(rotor_count: int, *, symmetric: bool = True) -> list[str]:
 
 
 def is_regular(airframe: Airframe) -> bool:
-    """Rotors equally spaced round the centre, with equal arms and thrust bounds (the symmetries
-    the search uses hold)."""
+    """Rotors upright, equally spaced round the centre at one height, with equal arms, thrust
+    bounds and k_mu (the symmetries the search uses hold)."""
     m = airframe.rotor_count
     angles = np.sort(np.mod(airframe.arm_angle_rad - airframe.arm_angle_rad[0], 2 * np.pi))
     spaced = np.allclose(angles, np.arange(m) * 2 * np.pi / m, rtol=0.0, atol=1e-9)
-    same = all(np.ptp(v) <= 1e-12 * max(1.0, float(np.max(np.abs(v)))) for v in (airframe.arm_length_m, airframe.max_thrust_n, airframe.min_thrust_n, airframe.efficiency))
+    same = all(
+        np.ptp(v) <= 1e-12 * max(1.0, float(np.max(np.abs(v))))
+        for v in (airframe.arm_length_m, airframe.max_thrust_n, airframe.min_thrust_n, airframe.efficiency,
+                  airframe.rotor_drag_torque_ratio_m, airframe.position_m[:, 2])
+    )
+    # Tilted rotors break the mirror symmetry the classes rely on: every assignment is then ranked.
+    upright = bool(np.all(airframe.thrust_axis == np.array([0.0, 0.0, -1.0])))
     ordered = bool(np.all(np.diff(np.mod(airframe.arm_angle_rad - airframe.arm_angle_rad[0], 2 * np.pi)) > 0))
-    return bool(spaced and same and ordered)
+    return bool(spaced and same and ordered and upright)
 
 
 def with_spins(airframe: Airframe, spins: str) -> Airframe:
@@ -84,11 +91,8 @@ def with_spins(airframe: Airframe, spins: str) -> Airframe:
     if len(spins) != airframe.rotor_count or set(spins) - {"P", "N"}:
         raise ValueError(f"spins: expected {airframe.rotor_count} letters P or N, got {spins!r}")
     signs = np.array([-1.0 if c == "P" else 1.0 for c in spins])
-    return Airframe(
-        airframe.arm_angle_rad, airframe.arm_length_m, signs, airframe.max_thrust_n, airframe.mass_kg, airframe.inertia_kg_m2,
-        airframe.drag_torque_ratio_m, min_thrust_n=airframe.min_thrust_n, efficiency=airframe.efficiency,
-        gravity_m_s2=airframe.gravity_m_s2, name=f"{airframe.name} {spins}",
-    )
+    # Only the spins change: 3-D positions, tilted axes, each rotor's k_mu and the bounds are kept.
+    return airframe.with_parameters(spin=signs, name=f"{airframe.name} {spins}")
 
 
 @dataclass(frozen=True)
@@ -127,8 +131,10 @@ class Design:
 
 
 @dataclass(frozen=True)
-class DesignSearch:
-    """Designs ranked best first (per parameter value when a parameter axis was given)."""
+class DesignSearch(Tabular):
+    """Designs ranked best first (per parameter value when a parameter axis was given);
+    ``to_arrow()`` / ``to_pandas()``: one row per design (its ``rank`` from 1 within its parameter
+    value, the parameter's own column when there is one)."""
 
     airframe: str
     formula: AcaiFormula
@@ -147,6 +153,40 @@ class DesignSearch:
             if (parameter_value is None or d.parameter_value == parameter_value) and (d.spins == spins or spins in _orbit(d.spins)):
                 return d
         raise KeyError(f"no design {spins!r}")
+
+    def _table_columns(self) -> list[Column]:
+        acai_ = f"acai_{self.formula.replace('-', '_')}"
+        designs = self.designs
+        ranks: list[int] = []
+        seen: dict[float | None, int] = {}
+        for d in designs:
+            seen[d.parameter_value] = seen.get(d.parameter_value, 0) + 1
+            ranks.append(seen[d.parameter_value])
+        single = [len(d.single) for d in designs]
+        columns: list[Column] = [(self.parameter, "float64", [d.parameter_value for d in designs])] if self.parameter else []
+        columns += [
+            ("rank", "int64", ranks),
+            ("spins", "string", [d.spins for d in designs]),
+            (acai_, "float64", [d.nominal for d in designs]),
+            ("single_failures", "int64", single),
+            ("controllable_single", "int64", [d.controllable_single for d in designs]),
+            ("survivable_single_rotors", "list<int64>", [list(d.survivable_single) for d in designs]),
+            (f"worst_single_{acai_}", "float64", [d.worst_single for d in designs]),
+            ("double_failures", "int64", [m * (m - 1) // 2 for m in single]),
+            ("controllable_double", "int64", [d.controllable_double for d in designs]),
+            (f"worst_double_{acai_}", "float64", [d.worst_double for d in designs]),
+            ("controllable_single_give_up_yaw", "int64", [d.controllable_single_give_up_yaw for d in designs]),
+            (f"worst_single_{acai_}_give_up_yaw", "float64", [d.worst_single_give_up_yaw for d in designs]),
+            ("controllable_double_give_up_yaw", "int64", [d.controllable_double_give_up_yaw for d in designs]),
+            (f"worst_double_{acai_}_give_up_yaw", "float64", [d.worst_double_give_up_yaw for d in designs]),
+        ]
+        return columns
+
+    def _table_title(self) -> str:
+        return f"{self.airframe} frame: spin assignments, best first (ACAI {self.formula})"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "design-search", "airframe": self.airframe, "formula": self.formula, "parameter": self.parameter}
 
     def rows_for_display(self) -> tuple[list[str], list[list[str]]]:
         headers = (["value"] if self.parameter else []) + [

@@ -9,6 +9,7 @@ bounded by the chunk size times the tasks in flight (two per worker, or two loca
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
@@ -19,9 +20,10 @@ from typing import TYPE_CHECKING, Any
 
 from .._typing import ScanBackend as Backend
 from .._util.convert import flag
-from .._util.output import write_text
+from .._util.lock import output_lock
+from .._util.output import check_parent, write_text
 from .._util.progress import progress_bar
-from .backends import ChunkTask, dask_client, run_dask, run_local
+from .backends import ChunkTask, check_dask, dask_client, run_dask, run_local
 from .storage import (
     CHUNK_PREFIX,
     CHUNK_SUFFIX,
@@ -30,6 +32,8 @@ from .storage import (
     ChunkSpec,
     Schema,
     Table,
+    chunk_count,
+    chunk_spec,
     chunk_specs,
     prepare_output,
     pyarrow_module,
@@ -92,9 +96,7 @@ def run_chunks(
     decide whether an existing output may be resumed. ``metadata`` (JSON-able) is recorded in the
     manifest too but not compared (e.g. the rotorfault version). ``on_chunk_written`` is called
     after each chunk is in place (or gathered)."""
-    pa = pyarrow_module()
-
-    from .. import _rfcore
+    pyarrow_module()  # the install hint before anything else
 
     if not callable(task):
         raise TypeError(f"task: expected a callable returning a pyarrow.Table, got {type(task).__name__}")
@@ -108,8 +110,8 @@ def run_chunks(
     force = flag("force", force)
     if backend not in ("local", "dask"):
         raise ValueError(f"backend: must be 'local' or 'dask', got {backend!r}")
-    if backend == "dask" and dask is None:
-        raise ValueError("dask: backend='dask' needs a distributed.Client, an address or 'local:N'")
+    if backend == "dask":
+        check_dask(dask)
     schema = schema.remove_metadata()
     identity: dict[str, Any] = {
         "kind": kind,
@@ -118,19 +120,40 @@ def run_chunks(
         "total_rows": total_rows,
         "chunk_rows": chunk_rows,
     }
-    specs = chunk_specs(total_rows, chunk_rows)
+    specs = chunk_count(total_rows, chunk_rows)
     out_path: Path | None = None
     done: set[int] = set()
     started = time.perf_counter()
+    held = contextlib.ExitStack()
     if out is not None:
         if not isinstance(out, (str, os.PathLike)):
             raise TypeError(f"out: expected a directory path, got {type(out).__name__}")
         out_path = Path(out)
+        check_parent("out", out_path.absolute())
+        # One writer: the lock is taken before the directory is looked at and held until the
+        # manifest says complete (a second run, --resume or --force is refused, naming this one).
+        held.enter_context(output_lock("out", out_path))
+    with held:
+        return _run(task, specs, identity, out_path, done, started, resume, force, metadata, schema, backend, dask,
+                    progress, description, compression, on_chunk_written, total_rows)
+
+
+def _run(
+    task: ChunkTask, chunks: int, identity: dict[str, Any], out_path: Path | None, done: set[int], started: float,
+    resume: bool, force: bool, metadata: Mapping[str, Any] | None, schema: Schema, backend: Backend, dask: Any,
+    progress: bool | None, description: str, compression: str, on_chunk_written: Callable[[ChunkSpec], None] | None,
+    total_rows: int,
+) -> StreamResult:
+    pa = pyarrow_module()
+
+    from .. import _rfcore
+
+    if out_path is not None:
         done = prepare_output(out_path, identity, resume=resume, force=force)
         manifest = {
             "format": STREAM_FORMAT,
             **identity,
-            "chunks": len(specs),
+            "chunks": chunks,
             "chunk_file": f"{CHUNK_PREFIX}<index, 9 digits>{CHUNK_SUFFIX}",
             "rotorfault_version": _rfcore.__version__,
             "metadata": json.loads(json.dumps(dict(metadata or {}))),
@@ -139,7 +162,9 @@ def run_chunks(
         out_path.mkdir(exist_ok=True)
         write_text(out_path / STREAM_MANIFEST, json.dumps(manifest, indent=2) + "\n")
         file_metadata = {"rotorfault": json.dumps({k: manifest[k] for k in ("kind", "arguments", "rotorfault_version", "total_rows", "chunk_rows")})}
-    pending = [spec for spec in specs if spec.index not in done]
+    # Made one at a time: the plan of a huge job takes no memory.
+    pending = (spec for spec in chunk_specs(total_rows, identity["chunk_rows"]) if spec.index not in done)
+    pending_count = chunks - len(done)
     gathered: dict[int, Table] = {}
 
     def accept(spec: ChunkSpec, table: Any) -> None:
@@ -151,9 +176,9 @@ def run_chunks(
         if on_chunk_written is not None:
             on_chunk_written(spec)
 
-    already = sum(spec.rows for spec in specs if spec.index in done)
+    already = sum(chunk_spec(k, total_rows, identity["chunk_rows"]).rows for k in done)
     with progress_bar(total_rows, description=description, show=progress, default_show=total_rows > 10_000_000, completed=already) as advance:
-        if not pending:
+        if not pending_count:
             pass  # nothing left (a complete output resumed): no cluster is started
         elif backend == "local":
             run_local(task, pending, accept, advance)
@@ -167,7 +192,7 @@ def run_chunks(
         table = None
     else:
         table = pa.concat_tables([gathered[k] for k in sorted(gathered)]) if gathered else schema.empty_table()
-    return StreamResult(table, out_path, total_rows, len(specs), len(pending), len(done), time.perf_counter() - started)
+    return StreamResult(table, out_path, total_rows, chunks, pending_count, len(done), time.perf_counter() - started)
 
 
 __all__ = ["Backend", "ChunkSpec", "ChunkTask", "StreamResult", "run_chunks"]

@@ -6,6 +6,7 @@ values; the ACAI is evaluated at every grid point by the parallel Rust batch.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -18,6 +19,7 @@ import numpy.typing as npt
 from .._typing import AcaiFormula, ScanBackend as Backend
 from .._util.convert import FloatArray, flag, float_array, real, rotor_numbers
 from .._util.progress import chunks
+from .._util.tables import Column, Tabular
 from ..analysis.acai import acai_batch
 from ..analysis.airframe import Airframe, require_airframe
 from .storage import pyarrow_module
@@ -29,11 +31,17 @@ if TYPE_CHECKING:
 CHUNK_POINTS = 1 << 20
 #: Largest grid a scan holds in memory (points, ACAI and efficiencies: about 4 GB for 3 rotors).
 MAX_SCAN_POINTS = 100_000_000
+#: Largest scan streamed to Parquet: row numbers stay far inside int64 and the chunk files
+#: (``chunk-<9 digits>``) stay countable; planning it takes constant memory (chunks are made
+#: one at a time), running it takes as long as it takes.
+MAX_STREAM_POINTS = 10**15
 
 
 @dataclass(frozen=True)
-class EfficiencyScan:
-    """Result of :func:`efficiency_scan`."""
+class EfficiencyScan(Tabular):
+    """Result of :func:`efficiency_scan`; ``to_arrow()`` / ``to_pandas()``: one row per grid point
+    with the columns of :func:`acai_scan` (``efficiency_<rotor>``, ``acai_<formula>``,
+    ``hover_code``, ``controllable``; ``..._give_up_yaw`` when yaw was given up)."""
 
     airframe: str
     #: Swept rotors, 1-based.
@@ -67,6 +75,21 @@ class EfficiencyScan:
     def plot(self, path: str | None = None) -> Figure:
         """Du Fig. 4 style: the controllable points in 3-D and their projections."""
         return plot_efficiency_scan(self, path)
+
+    def _table_columns(self) -> list[Column]:
+        suffix = _column_suffix(self.give_up_yaw)
+        columns: list[Column] = [(f"efficiency_{r}", "float64", self.points[:, k]) for k, r in enumerate(self.rotors)]
+        return columns + [
+            (acai_column(self.formula, self.give_up_yaw), "float64", self.acai),
+            (f"hover_code{suffix}", "int8", self.hover_code),
+            (f"controllable{suffix}", "bool", self.controllable),
+        ]
+
+    def _table_title(self) -> str:
+        return f"{self.airframe}: efficiency scan of rotors {', '.join(map(str, self.rotors))}"
+
+    def _table_metadata(self) -> dict[str, Any]:
+        return {"kind": "efficiency-scan", "airframe": self.airframe, "formula": self.formula, "give_up_yaw": self.give_up_yaw}
 
 
 def efficiency_scan(
@@ -176,29 +199,35 @@ def _axis_name(name: Any, rotor_count: int) -> tuple[str, int | None]:
 
 
 def _variant(base: Airframe, params: Mapping[str, float]) -> Airframe:
-    """``base`` with the parameter axes' values (the core checks them, naming the field)."""
+    """``base`` with the parameter axes' values and nothing else changed (its 3-D positions, thrust
+    axes, reversible bounds, each rotor's k_mu and efficiencies kept: :meth:`Airframe.with_parameters`);
+    the core checks the values, naming the field."""
     if not params:
         return base
-    values: dict[str, Any] = {
-        "max_thrust_n": base.max_thrust_n.copy(),
-        "min_thrust_n": base.min_thrust_n.copy(),
-        "arm_length_m": base.arm_length_m.copy(),
-        "mass_kg": base.mass_kg,
-        "drag_torque_ratio_m": base.drag_torque_ratio_m,
-    }
+    changes: dict[str, Any] = {}
     for name, value in params.items():
         param, rotor = _axis_name(name, base.rotor_count)
-        if rotor is None and param in _PER_ROTOR:
-            values[param][:] = value
-        elif rotor is None:
-            values[param] = float(value)
+        if param in ("mass_kg", "drag_torque_ratio_m"):
+            changes[param] = float(value)
+            continue
+        values = changes.setdefault(param, np.array(getattr(base, param), dtype=np.float64))
+        if rotor is None:
+            values[:] = value
         else:
-            values[param][rotor] = value
-    return Airframe(
-        base.arm_angle_rad, values["arm_length_m"], base.spin_sign, values["max_thrust_n"], values["mass_kg"],
-        base.inertia_kg_m2, values["drag_torque_ratio_m"], min_thrust_n=values["min_thrust_n"],
-        efficiency=base.efficiency, gravity_m_s2=base.gravity_m_s2, name=base.name,
-    )
+            values[rotor] = value
+    return base.with_parameters(**changes)
+
+
+def _check_overlaps(names: Sequence[str], rotor_count: int) -> None:
+    """Two axes on one parameter (``max_thrust_n`` and ``max_thrust_n_2``, or the same rotor
+    written twice) would both set it: refused, naming them."""
+    seen: dict[tuple[str, int | None], str] = {}
+    for name in names:
+        param, rotor = _axis_name(name, rotor_count)
+        clashes = [other for (p, r), other in seen.items() if p == param and (r == rotor or r is None or rotor is None)]
+        if clashes:
+            raise ValueError(f"axes: {clashes[0]!r} and {name!r} both set {param}{'' if rotor is None else f' of rotor {rotor + 1}'}; give one axis per parameter")
+        seen[(param, rotor)] = name
 
 
 def _column_suffix(give_up_yaw: bool) -> str:
@@ -242,8 +271,9 @@ class _ScanTask:
 
     @property
     def total(self) -> int:
+        """Rows, exactly (Python integers: a grid's size never wraps)."""
         if self.levels is not None:
-            return int(np.prod([len(v) for v in self.levels], dtype=np.int64))
+            return math.prod(len(v) for v in self.levels)
         assert self.samples is not None
         return len(self.samples[0])
 
@@ -316,9 +346,12 @@ class _ScanTask:
 
 
 @dataclass(frozen=True)
-class Scan:
+class Scan(Tabular):
     """Result of :func:`acai_scan`: the rows in memory (``table``) or the Parquet output directory
-    (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...)."""
+    (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...).
+    ``to_arrow()`` / ``to_pandas()``: every row, in memory or read whole from Parquet (the same
+    schema either way, :func:`scan_schema`; :meth:`iter_tables` reads a large output chunk by
+    chunk)."""
 
     airframe: str
     names: tuple[str, ...]
@@ -343,6 +376,17 @@ class Scan:
 
         assert self.out is not None
         yield from iter_tables(self.out, cols)
+
+    def to_arrow(self) -> Any:
+        """Every row as one ``pyarrow.Table`` with the scan's schema (:func:`scan_schema`)."""
+        pa = pyarrow_module()
+        schema = scan_schema(self.names, self.formulas, self.give_up_yaw)
+        tables = [t.replace_schema_metadata(None) for t in self.iter_tables()]
+        return pa.concat_tables(tables) if tables else schema.empty_table()
+
+    def _table_title(self) -> str:
+        where = "in memory" if self.out is None else str(self.out)
+        return f"{self.airframe}: scan over {', '.join(self.names)} ({where})"
 
     def column(self, name: str) -> npt.NDArray[Any]:
         """One whole column as a numpy array (reads only that column from Parquet)."""
@@ -458,9 +502,19 @@ def acai_scan(
     if not spec:
         raise ValueError(f"{'axes' if axes is not None else 'samples'}: give at least one axis")
     names = tuple(spec)
-    for name in names:
-        _axis_name(name, airframe.rotor_count)
+    _check_overlaps(names, airframe.rotor_count)
     columns = [_axis_values(n, spec[n]) for n in names]
+    if axes is not None:
+        # The size on Python integers, before anything is built from it.
+        total_points = math.prod(len(c) for c in columns)
+        shape = " x ".join(str(len(c)) for c in columns)
+        limit = MAX_SCAN_POINTS if out is None else MAX_STREAM_POINTS
+        if total_points > limit:
+            where = "the in-memory limit" if out is None else "the limit of a streamed scan"
+            hint = "; stream them to Parquet (out=...)" if out is None and total_points <= MAX_STREAM_POINTS else ""
+            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed {where} of {limit:,}{hint}")
+        if -(-total_points // chunk_points) >= 10**9:
+            raise ValueError(f"chunk_points: {total_points:,} points in chunks of {chunk_points:,} make over 10^9 chunk files; use larger chunks")
     if samples is not None and len({len(c) for c in columns}) != 1:
         raise ValueError(f"samples: every axis needs one value per point, got lengths {[len(c) for c in columns]}")
     _check_axis_values(airframe, names, columns)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeAlias
 
+from .._util.optional import require
 from .._util.output import atomic_path, check_parent
 
 #: ``pyarrow.Table`` / ``pyarrow.Schema`` (pyarrow has no type information: Any to the checker).
@@ -36,7 +37,7 @@ Schema: TypeAlias = Any
 
 
 def pyarrow_module() -> Any:
-    """``pyarrow``, imported on first use, with the install hint when it is missing."""
+    """``pyarrow``, imported on first use (a dependency; the message names it if it is missing)."""
     return _import("pyarrow")
 
 
@@ -46,12 +47,7 @@ def parquet_module() -> Any:
 
 
 def _import(name: str) -> Any:
-    import importlib
-
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        raise ImportError(f"{name} is needed for scans at scale: pip install 'rotorfault[scale]'") from None
+    return require(name, feature="Parquet outputs of scans and campaigns")
 
 #: Name of the manifest inside an output directory.
 STREAM_MANIFEST = "_rotorfault.json"
@@ -74,9 +70,21 @@ class ChunkSpec:
         return self.stop - self.start
 
 
-def chunk_specs(total: int, chunk_rows: int) -> list[ChunkSpec]:
-    """The deterministic chunking of ``total`` rows: chunk ``k`` starts at ``k * chunk_rows``."""
-    return [ChunkSpec(k, start, min(start + chunk_rows, total)) for k, start in enumerate(range(0, total, chunk_rows))]
+def chunk_count(total: int, chunk_rows: int) -> int:
+    """How many chunks ``total`` rows make."""
+    return -(-total // chunk_rows)
+
+
+def chunk_spec(index: int, total: int, chunk_rows: int) -> ChunkSpec:
+    """Chunk ``index`` of the deterministic chunking (:func:`chunk_specs`)."""
+    start = index * chunk_rows
+    return ChunkSpec(index, start, min(start + chunk_rows, total))
+
+
+def chunk_specs(total: int, chunk_rows: int) -> Iterator[ChunkSpec]:
+    """The deterministic chunking of ``total`` rows, one chunk at a time (a plan of 10^12 rows
+    takes no memory): chunk ``k`` starts at ``k * chunk_rows``."""
+    return (chunk_spec(k, total, chunk_rows) for k in range(chunk_count(total, chunk_rows)))
 
 
 def chunk_file_name(index: int) -> str:
@@ -128,8 +136,17 @@ def prepare_output(out: Path, identity: dict[str, Any], *, resume: bool, force: 
     if foreign:
         raise ValueError(f"out: {str(out)!r} holds files that are not part of a rotorfault output ({', '.join(foreign[:5])}); choose a new or empty directory")
     if force:
+        # Recoverable at every step: the manifest is first marked incomplete (so a reader never
+        # takes what is left for a whole output), the chunks go, the manifest last; an interrupted
+        # --force leaves a manifest and some chunks, which --force and --resume both accept.
+        if old.get("complete"):
+            from .._util.output import write_text
+
+            write_text(out / STREAM_MANIFEST, json.dumps({**old, "complete": False}, indent=2) + "\n")
         for entry in out.iterdir():
-            entry.unlink() if not entry.is_dir() else shutil.rmtree(entry)
+            if entry.name != STREAM_MANIFEST:
+                entry.unlink() if not entry.is_dir() else shutil.rmtree(entry)
+        (out / STREAM_MANIFEST).unlink()
         return set()
     same = {k: old.get(k) for k in identity} == identity
     if not same:
@@ -147,7 +164,8 @@ def prepare_output(out: Path, identity: dict[str, Any], *, resume: bool, force: 
 def _complete_chunks(out: Path, identity: Mapping[str, Any]) -> set[int]:
     pq = parquet_module()
 
-    expected = {spec.index: spec.rows for spec in chunk_specs(identity["total_rows"], identity["chunk_rows"])}
+    total, rows = identity["total_rows"], identity["chunk_rows"]
+    count = chunk_count(total, rows)
     done: set[int] = set()
     for entry in out.iterdir():
         name = entry.name
@@ -160,7 +178,8 @@ def _complete_chunks(out: Path, identity: Mapping[str, Any]) -> set[int]:
         try:
             index = int(name[len(CHUNK_PREFIX) : -len(CHUNK_SUFFIX)])
             meta = pq.read_metadata(entry)
-            ok = index in expected and meta.num_rows == expected[index] and meta.schema.to_arrow_schema().remove_metadata().to_string() == identity["schema"]
+            ok = (0 <= index < count and meta.num_rows == chunk_spec(index, total, rows).rows
+                  and meta.schema.to_arrow_schema().remove_metadata().to_string() == identity["schema"])
         except (ValueError, OSError):
             ok = False
         if ok:
@@ -213,6 +232,8 @@ def iter_tables(path: str | os.PathLike[str], columns: list[str] | None = None, 
 __all__ = [
     "STREAM_MANIFEST",
     "ChunkSpec",
+    "chunk_count",
+    "chunk_spec",
     "Schema",
     "Table",
     "chunk_file_name",

@@ -710,16 +710,12 @@ impl ActiveSetSolver {
                     };
                     continue;
                 }
-            } else if let Some(j) = last_released.take() {
-                // Released but cannot move: hold it again.
-                excluded[j] = true;
-                states[j] = if t[j] <= self.scaled.lower[j] {
-                    BoundState::Lower
-                } else {
-                    BoundState::Upper
-                };
-                continue;
             }
+            // Here no step was possible on this free set (the equalities pin it: as many
+            // independent constraint rows as free variables) or the step was full. A released
+            // variable that cannot move stays free and the multipliers decide what else to
+            // release: a tie that needs two variables to move together is only found this way
+            // (holding it again stopped short of the closest optimum, issue 27).
             // Multipliers: nu from C_F^T nu = T_F - T_pref,F; mu_i = (T_i - p_i) - c_i^T nu.
             let mut v = [0.0; ROWS];
             for (j, &i) in free[..k].iter().enumerate() {

@@ -13,6 +13,7 @@ use crate::allocation::clarabel::{
     solve_allocation, solve_prioritized, ClarabelAnswer, ClarabelSettings,
 };
 use crate::allocation::pinv::{checked_pseudo_inverse, WeightedPseudoInverse};
+use crate::allocation::priority::{polish_prioritized, prioritized_certificate};
 use crate::allocation::problem::{check_rows, AllocationProblem, AllocationStatus, SolvedBy};
 use crate::allocation::scaling::{BIG_WORK, N, ROWS, SMALL_WORK};
 use crate::cancel::Cancel;
@@ -189,11 +190,27 @@ impl ActiveSetSolver {
 
 /// Clarabel's answer as an [`Allocation`], with the certificate of its commands.
 fn certified(problem: &AllocationProblem, u_c: &[f64], answer: ClarabelAnswer) -> Allocation {
+    let certificate = ActiveSetSolver::new(problem).certify(u_c, &answer.commands);
+    with_evidence(problem, answer, certificate)
+}
+
+/// Clarabel's answer with `certificate`: its status follows the certificate (Clarabel's
+/// "solved" whose commands do not certify is reduced accuracy, never `Optimal`).
+fn with_evidence(
+    problem: &AllocationProblem,
+    answer: ClarabelAnswer,
+    certificate: Certificate,
+) -> Allocation {
+    let status = match answer.status {
+        AllocationStatus::Optimal if !certificate.holds() => AllocationStatus::AlmostOptimal,
+        AllocationStatus::AlmostOptimal if certificate.holds() => AllocationStatus::Optimal,
+        other => other,
+    };
     Allocation {
         achieved: problem.achieved(&answer.commands),
-        certificate: ActiveSetSolver::new(problem).certify(u_c, &answer.commands),
+        certificate,
         commands: answer.commands,
-        status: answer.status,
+        status,
         iterations: answer.iterations,
         solved_by: SolvedBy::Clarabel,
     }
@@ -240,7 +257,10 @@ pub fn allocate_clarabel_unpolished(
 /// first (e.g. `[[0, 1, 2], [3]]`: thrust and roll/pitch, then yaw with what is left). Stage k
 /// minimises the weighted residual of group k subject to the box and to every earlier group
 /// keeping what its stage achieved (to [`crate::allocation::clarabel::PRIORITY_BAND`]). Rows in
-/// no group are ignored. The problem's regularisation applies to the last stage.
+/// no group are ignored. The problem's regularisation applies to the last stage; among the optima
+/// of the last stage the commands closest to the preferred ones are taken (the tie rule). Clarabel's
+/// answer is polished stage by stage ([`crate::allocation::priority`]) and certified by every
+/// stage's KKT conditions; `Optimal` only when that certificate holds.
 pub fn allocate_prioritized(
     problem: &AllocationProblem,
     u_c: &[f64],
@@ -248,7 +268,33 @@ pub fn allocate_prioritized(
     settings: &ClarabelSettings,
 ) -> Result<Allocation> {
     let answer = solve_prioritized(problem, u_c, priorities, settings)?;
-    Ok(certified(problem, u_c, answer))
+    let tolerance = crate::allocation::active_set::DEFAULT_TOLERANCE;
+    if answer.status != AllocationStatus::Failed {
+        if let Some(polished) = polish_prioritized(problem, u_c, priorities, &answer.commands) {
+            let certificate = prioritized_certificate(
+                problem,
+                u_c,
+                priorities,
+                &polished.commands,
+                Some(&polished.multipliers),
+                tolerance,
+            );
+            if certificate.holds() {
+                return Ok(Allocation {
+                    achieved: problem.achieved(&polished.commands),
+                    commands: polished.commands,
+                    status: AllocationStatus::Optimal,
+                    iterations: answer.iterations,
+                    certificate,
+                    solved_by: SolvedBy::Clarabel,
+                });
+            }
+        }
+    }
+    // Not certified: Clarabel's own answer, whose status follows its (prioritised) certificate.
+    let certificate =
+        prioritized_certificate(problem, u_c, priorities, &answer.commands, None, tolerance);
+    Ok(with_evidence(problem, answer, certificate))
 }
 
 /// The unconstrained [`Allocation`] of `u_c` for `problem` (the one `pinv` was built from).

@@ -8,8 +8,9 @@ use crate::allocation::scaling::{ScaledLeastSquares, N, ROWS};
 /// The KKT residuals of an allocation, dimensionless, in the problem's own scaling: with
 /// `A = [W^(1/2) M; gamma^(1/2) I]` and `b` the matching right-hand side (after the internal
 /// power-of-two scaling), the gradient entry `g_i = a_i^T (A T - b)` is divided by
-/// `|a_i| (|b| + sum_j |a_j| |T_j|)` (a bound on the size of the terms it sums, so it is invariant
-/// to scaling the matrix, the virtual control, the weights or one actuator's gain).
+/// `|a_i| (|b| + sum_j |a_j| max(|T_j|, |T_pref,j|))` (a bound on the size of the terms it sums and
+/// of the steps from the preferred command, so it is invariant to scaling the matrix, the virtual
+/// control, the weights or one actuator's gain).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Certificate {
     /// Largest normalised gradient entry of a variable strictly inside its bounds.
@@ -50,9 +51,12 @@ impl ScaledLeastSquares {
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop)]
     pub(crate) fn gradient(&self, r: &[f64; ROWS], t: &[f64; N], b_norm: f64, g: &mut [f64; N]) {
+        // The commands are reached from `T_pref` (phase 1 starts there, phase 2 moves towards
+        // it), so their rounding is relative to `max(|T|, |T_pref|)`: with `u_c = 0` and a large
+        // preferred command, `|T|` alone made rounding look like a failed optimum (issue 27).
         let mut scale = b_norm;
         for c in 0..self.m {
-            scale += self.column_norms[c] * t[c].abs();
+            scale += self.column_norms[c] * t[c].abs().max(self.preferred[c].abs());
         }
         for i in 0..self.m {
             let col = &self.a[i * ROWS..i * ROWS + self.rows];

@@ -38,6 +38,8 @@
 //! - [`certificate`]: the KKT certificate and how it is computed.
 //! - [`factorisation`]: the pivoted QR and the free-set least-squares step.
 //! - [`scaling`]: the problem in the solver's scaled least-squares form; overflow-free norms.
+//! - [`priority`]: prioritised allocation's stages, its certificate and the polish that makes
+//!   Clarabel's answer exact.
 //! - [`problem`]: the problem, its checks, and the status vocabulary of every answer.
 
 pub mod active_set;
@@ -46,6 +48,7 @@ pub mod certificate;
 pub mod clarabel;
 pub mod factorisation;
 pub mod pinv;
+pub mod priority;
 pub mod problem;
 pub mod scaling;
 

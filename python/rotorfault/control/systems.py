@@ -1,0 +1,97 @@
+"""The linear models of rotorfault as python-control systems.
+
+:class:`LinearModel` is a ``control.StateSpace`` (every python-control function takes it: ``lqr``,
+``feedback``, ``interconnect``, ``step_response``, ``bode``...) with named signals: the states
+``x, y, z, u, v, w, phi, theta, psi, p, q, r`` (:data:`~rotorfault.control.linear.STATE_NAMES`:
+NED position (m) and velocity (m/s), Z-Y-X Euler angles (rad), body rates (rad/s)), the
+outputs the same (``y = x``), the inputs ``thrust_<i>`` (N, fixed pitch) or ``omega_<i>`` and
+``alpha_<i>`` (speed in the preset's unit and pitch in rad, variable pitch), ``i`` the rotor
+number. It also carries the operating point it was taken about (``x_trim``, ``u_trim``: what a
+:class:`~rotorfault.control.LinearFeedback` needs) and, when it keeps only some command channels
+(a VPP with a failed propeller), which ones (``command_columns``).
+
+:func:`lanzon_plant` names the signals of Lanzon et al.'s plant after feedback linearisation.
+
+This module imports python-control, so the package imports it only when a model is built
+(``import rotorfault`` stays light).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import control as ct  # type: ignore[import-untyped]
+import numpy as np
+import numpy.typing as npt
+
+from .._util.convert import FloatArray, frozen_array
+from .._util.deprecation import renamed_attribute
+from .linear import STATE_LABELS, STATE_NAMES
+
+
+class LinearModel(ct.StateSpace):  # type: ignore[misc]
+    """``dx/dt ~ A (x - x_trim) + B (u - u_trim)``, ``y = x``: a python-control ``StateSpace``
+    (continuous) with named states, inputs and outputs (module notes) and its operating point.
+
+    ``x_trim`` (12 states) and ``u_trim`` (every command channel of the simulator) are the point
+    it was taken about; ``command_columns``: the index in the simulator's command vector of each
+    input (all channels, or the healthy ones of a VPP model); ``state_descriptions``: what each
+    state is (``"yaw rate r"``), used in the design checks' messages."""
+
+    def __init__(
+        self,
+        a: npt.ArrayLike,
+        b: npt.ArrayLike,
+        *,
+        inputs: Sequence[str],
+        x_trim: npt.ArrayLike,
+        u_trim: npt.ArrayLike,
+        command_columns: Sequence[int],
+        name: str,
+        states: Sequence[str] = STATE_NAMES,
+        state_descriptions: Sequence[str] = STATE_LABELS,
+    ) -> None:
+        am = np.asarray(a, dtype=np.float64)
+        bm = np.asarray(b, dtype=np.float64)
+        n, m = bm.shape
+        super().__init__(am, bm, np.eye(n), np.zeros((n, m)), states=list(states), inputs=list(inputs),
+                         outputs=list(states), name=name)
+        self.x_trim: FloatArray = frozen_array("x_trim", x_trim, 1)
+        self.u_trim: FloatArray = frozen_array("u_trim", u_trim, 1)
+        self.command_columns: tuple[int, ...] = tuple(int(c) for c in command_columns)
+        self.state_descriptions: tuple[str, ...] = tuple(state_descriptions)
+
+    # The names of ``rotorfault.vpp.VppLinearization``, which this replaces, for one release.
+    a = renamed_attribute("a", "A")
+    b = renamed_attribute("b", "B")
+    inputs = renamed_attribute("inputs", "input_labels")
+    columns = renamed_attribute("columns", "command_columns")
+
+
+def input_names(command_count: int, rotor_count: int) -> list[str]:
+    """The python-control input names of a simulator's command channels: ``thrust_<i>`` for
+    fixed pitch, ``omega_<i>`` and ``alpha_<i>`` (interleaved) for variable pitch."""
+    if command_count == 2 * rotor_count:
+        return [f"{'alpha' if j % 2 else 'omega'}_{j // 2 + 1}" for j in range(command_count)]
+    return [f"thrust_{j + 1}" for j in range(command_count)]
+
+
+#: Lanzon's plant after feedback linearisation (eq. (26)-(27)): states in hat coordinates
+#: (``dr = r - r0``, rad and rad/s, the paper's z-up frame), inputs ``u = [u_f - m g, tau_q,
+#: tau_r - m g d]`` (N, N m), outputs ``[phi, theta, dr]``.
+LANZON_STATES = ("phi", "theta", "p", "q", "dr")
+LANZON_INPUTS = ("du_f", "tau_q", "dtau_r")
+LANZON_OUTPUTS = ("phi", "theta", "dr")
+
+
+def lanzon_plant(vehicle: Any) -> ct.StateSpace:
+    """``vehicle.plant()`` (:class:`~rotorfault.control.lanzon.LanzonVehicle`: ``(A_r, B_r)`` of
+    eq. (26), outputs of (27)) with its signals named (:data:`LANZON_STATES`, ...); the matrices
+    are the same."""
+    plant = vehicle.plant()
+    return ct.ss(plant.A, plant.B, plant.C, plant.D, states=list(LANZON_STATES), inputs=list(LANZON_INPUTS),
+                 outputs=list(LANZON_OUTPUTS), name="lanzon-plant")
+
+
+__all__ = ["LANZON_INPUTS", "LANZON_OUTPUTS", "LANZON_STATES", "LinearModel", "input_names", "lanzon_plant"]
