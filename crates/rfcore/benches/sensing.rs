@@ -3,7 +3,8 @@
 //!
 //! Run from the workspace root with `cargo bench --bench sensing` (add `-- --warm-up-time 1
 //! --measurement-time 3` for a quick run). Before criterion's groups it prints a summary line per
-//! law: the median thread CPU time (7 repetitions; robust on a loaded machine) of one 10 s flight
+//! law: the median thread CPU time (9 repetitions, truth and sensors alternating so both see the
+//! same load; robust on a loaded machine) of one 10 s flight
 //! of `ke-quadcopter` (Ke's rotor lag and drags, 400 Hz control, 4 RK4 substeps) losing rotor 1 at
 //! 2 s, on the truth and on `Sensing::default()` (ICM-42688-P at 500 Hz, OptiTrack at 240 Hz,
 //! DShot rotor speeds, the 15-state error-state Kalman filter), and the ratio of their speeds.
@@ -30,7 +31,7 @@ use rfcore::Cancel;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
-use cpu_time::median_s;
+use cpu_time::median_pair_s;
 
 const DT_S: f64 = 1.0 / 400.0;
 const DURATION_S: f64 = 10.0;
@@ -171,12 +172,15 @@ fn bench_sensing(c: &mut Criterion) {
     let mocap = config(Some(Sensing::default()));
     let steps = (DURATION_S / DT_S) as u64;
     for (name, law) in [("ke", Law::Ke), ("indi", Law::Indi)] {
-        let truth_s = median_s(7, || {
-            black_box(flight(&s, law, &truth));
-        });
-        let mocap_s = median_s(7, || {
-            black_box(flight(&s, law, &mocap));
-        });
+        let (truth_s, mocap_s) = median_pair_s(
+            9,
+            || {
+                black_box(flight(&s, law, &truth));
+            },
+            || {
+                black_box(flight(&s, law, &mocap));
+            },
+        );
         println!(
             "sensing summary, {name}: 10 s flight (4000 control steps, rotor 1 lost at 2 s) on \
              the truth {:.1} ms, on mocap sensors + estimator {:.1} ms; speed / truth speed = {:.2}",

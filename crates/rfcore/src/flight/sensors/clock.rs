@@ -8,6 +8,10 @@
 pub struct SampleClock {
     rate_hz: f64,
     next_index: u64,
+    /// `next_index / rate_hz` and the due tolerance, kept so that the simulator's many "which
+    /// sensor is next" questions per sample cost no division.
+    next_time_s: f64,
+    due_tolerance_s: f64,
 }
 
 impl SampleClock {
@@ -16,6 +20,8 @@ impl SampleClock {
         SampleClock {
             rate_hz,
             next_index: 0,
+            next_time_s: 0.0,
+            due_tolerance_s: 1e-6 * (1.0 / rate_hz),
         }
     }
 
@@ -28,21 +34,24 @@ impl SampleClock {
     }
 
     /// The time of the next sample, s.
+    #[inline]
     pub fn next_time_s(&self) -> f64 {
-        self.next_index as f64 / self.rate_hz
+        self.next_time_s
     }
 
     /// `true` when the next sample is due at or before `t_s`. A sample within a millionth of a
     /// period after `t_s` counts as due, so a simulator time `k dt` that rounds just below a
     /// sample time `j / rate` still takes that sample.
+    #[inline]
     pub fn is_due(&self, t_s: f64) -> bool {
-        self.next_time_s() <= t_s + 1e-6 * self.period_s()
+        self.next_time_s <= t_s + self.due_tolerance_s
     }
 
     /// The time of the sample being taken now; the clock moves to the next one.
     pub fn tick(&mut self) -> f64 {
-        let t = self.next_time_s();
+        let t = self.next_time_s;
         self.next_index += 1;
+        self.next_time_s = self.next_index as f64 / self.rate_hz;
         t
     }
 }

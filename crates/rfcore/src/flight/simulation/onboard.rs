@@ -142,12 +142,12 @@ impl Onboard {
             match which {
                 Next::Position => {
                     let t = s.position.next_sample_time_s();
-                    s.position.sample(&tape.truth_at(vehicle, t).state);
+                    s.position.sample(&tape.state_at(vehicle, t));
                 }
                 Next::Magnetometer => {
                     if let Some(m) = s.magnetometer.as_mut() {
                         let t = m.next_sample_time_s();
-                        let sample = m.sample(&tape.truth_at(vehicle, t).state);
+                        let sample = m.sample(&tape.state_at(vehicle, t));
                         self.estimator.push_magnetometer(&sample);
                     }
                 }
@@ -165,7 +165,7 @@ impl Onboard {
                     while let Some(fix) = s.position.poll(t) {
                         self.estimator.push_position(&fix);
                     }
-                    let sample = s.imu.sample(&tape.truth_at(vehicle, t).imu);
+                    let sample = s.imu.sample(&tape.imu_truth_at(vehicle, t));
                     self.imu_samples += 1;
                     self.gyro_saturated_samples += u64::from(sample.gyro_saturated);
                     self.accel_saturated_samples += u64::from(sample.accel_saturated);

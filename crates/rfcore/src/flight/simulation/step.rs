@@ -6,6 +6,7 @@
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::FaultSchedule;
+use crate::flight::rigid_body::Wrench;
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, Limits, MAX_RATE_STEP};
 use crate::flight::simulation::tape::Tape;
@@ -122,7 +123,17 @@ impl<'a> Integrator<'a> {
     ) {
         if let Some(tape) = self.tape.as_mut() {
             tape.clear();
-            push_node(tape, self.vehicle, self.config, t_s, state, actuators, actuators.state(), efficiency, None);
+            push_node(
+                tape,
+                self.vehicle,
+                self.config,
+                t_s,
+                state,
+                actuators,
+                actuators.state(),
+                efficiency,
+                None,
+            );
         }
     }
 
@@ -226,12 +237,36 @@ impl<'a> Integrator<'a> {
                     totals
                 };
                 if let Some(tape) = self.tape.as_mut() {
-                    let channels = if constant { &self.targets[..] } else { actuators.state() };
-                    push_node(tape, vehicle, config, a, state, actuators, channels, efficiency, Some((&totals[0], &winds[0])));
+                    let channels = if constant {
+                        &self.targets[..]
+                    } else {
+                        actuators.state()
+                    };
+                    push_node(
+                        tape,
+                        vehicle,
+                        config,
+                        a,
+                        state,
+                        actuators,
+                        channels,
+                        efficiency,
+                        Some((&totals[0], &winds[0])),
+                    );
                 }
+                // The first stage's wrench is the tape node's (same state, totals and wind).
+                let mut first: Option<Wrench> = None;
+                let recording = self.tape.is_some();
                 let next = body.rk4_step_nodes(state, len, |node, x| {
-                    vehicle.wrench_from(x, &totals[node], &winds[node])
+                    let wrench = vehicle.wrench_from(x, &totals[node], &winds[node]);
+                    if recording && first.is_none() {
+                        first = Some(wrench);
+                    }
+                    wrench
                 });
+                if let (Some(tape), Some(wrench)) = (self.tape.as_mut(), first) {
+                    tape.share_wrench(wrench);
+                }
                 if !self.limits.within(&next) {
                     // Locate the crossing by re-integrating shorter steps from `state`.
                     let mut channels = vec![0.0; command.len()];
@@ -275,7 +310,17 @@ impl<'a> Integrator<'a> {
             }
         }
         if let Some(tape) = self.tape.as_mut() {
-            push_node(tape, vehicle, config, t_next, state, actuators, actuators.state(), efficiency, None);
+            push_node(
+                tape,
+                vehicle,
+                config,
+                t_next,
+                state,
+                actuators,
+                actuators.state(),
+                efficiency,
+                None,
+            );
         }
         None
     }
@@ -297,7 +342,10 @@ fn push_node(
 ) {
     let (totals, wind) = match known {
         Some((totals, wind)) => (*totals, *wind),
-        None => (rotor_totals(vehicle, actuators, channels, efficiency), config.wind_at(t_s)),
+        None => (
+            rotor_totals(vehicle, actuators, channels, efficiency),
+            config.wind_at(t_s),
+        ),
     };
     let thrust = |i: usize| actuators.output_at(channels, i, efficiency[i]).thrust_n;
     tape.push(t_s, state, &totals, &wind, thrust);

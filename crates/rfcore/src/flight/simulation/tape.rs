@@ -17,10 +17,14 @@
 //! a 10 m/s^2 thrust turning at 40 rad/s) except the rotors' own change within `tau` (actuator
 //! lag), which the node's totals hold: at most `tau / time_constant` of a step change (2.5 % for
 //! Ke's 25 ms lag). Rotor thrusts (for the rotor-speed sensor) are held from the node.
+//!
+//! The dynamics at a node are those of the integrator's first RK4 stage there: the integrator
+//! hands its wrench over ([`Tape::share_wrench`]) instead of the tape evaluating it again.
 
 use nalgebra::Vector3;
 
 use crate::flight::estimation::eskf::exp_quaternion;
+use crate::flight::rigid_body::Wrench;
 use crate::flight::sensors::ImuTruth;
 use crate::flight::vehicle::{RotorTotals, Vehicle};
 use crate::state::RigidBodyState;
@@ -38,6 +42,8 @@ struct Node {
     state: RigidBodyState,
     totals: RotorTotals,
     wind: Vector3<f64>,
+    /// The wrench at the node, when the integrator shared it.
+    wrench: Option<Wrench>,
     rates: Option<Rates>,
 }
 
@@ -50,13 +56,6 @@ pub(crate) struct Tape {
     rotors: usize,
     /// The node the last lookup found (samples come in time order).
     cursor: usize,
-}
-
-/// The truth at a sample time.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Truth {
-    pub state: RigidBodyState,
-    pub imu: ImuTruth,
 }
 
 impl Tape {
@@ -91,9 +90,18 @@ impl Tape {
             state: *state,
             totals: *totals,
             wind: *wind,
+            wrench: None,
             rates: None,
         });
         self.thrust_n.extend((0..self.rotors).map(thrust));
+    }
+
+    /// The wrench of the newest node (`vehicle.wrench_from` at its state, totals and wind), as
+    /// the integrator evaluated it for its first RK4 stage.
+    pub(crate) fn share_wrench(&mut self, wrench: Wrench) {
+        if let Some(node) = self.nodes.last_mut() {
+            node.wrench = Some(wrench);
+        }
     }
 
     /// The index of the last node at or before `t_s` (the first node for an earlier time).
@@ -107,12 +115,14 @@ impl Tape {
         self.cursor
     }
 
-    /// The truth at `t_s` (module docs). The tape must hold a node.
-    pub(crate) fn truth_at(&mut self, vehicle: &Vehicle, t_s: f64) -> Truth {
+    /// The true state at `t_s` (module docs) and the node it extends. The tape must hold a node.
+    fn extend(&mut self, vehicle: &Vehicle, t_s: f64) -> (RigidBodyState, Vector3<f64>, usize) {
         let i = self.locate(t_s);
         let node = &mut self.nodes[i];
         let rates = *node.rates.get_or_insert_with(|| {
-            let wrench = vehicle.wrench_from(&node.state, &node.totals, &node.wind);
+            let wrench = node
+                .wrench
+                .unwrap_or_else(|| vehicle.wrench_from(&node.state, &node.totals, &node.wind));
             let d = vehicle.body().derivative(&node.state, &wrench);
             Rates {
                 acceleration: d.velocity,
@@ -131,12 +141,23 @@ impl Tape {
             attitude,
             omega_rad_s: s.omega_rad_s + alpha * tau,
         };
-        let imu = ImuTruth {
+        (state, alpha, i)
+    }
+
+    /// The true state at `t_s` (for sensors that measure only the state).
+    pub(crate) fn state_at(&mut self, vehicle: &Vehicle, t_s: f64) -> RigidBodyState {
+        self.extend(vehicle, t_s).0
+    }
+
+    /// What an IMU measures at `t_s` (module docs). The tape must hold a node.
+    pub(crate) fn imu_truth_at(&mut self, vehicle: &Vehicle, t_s: f64) -> ImuTruth {
+        let (state, alpha, i) = self.extend(vehicle, t_s);
+        let node = &self.nodes[i];
+        ImuTruth {
             omega_rad_s: state.omega_rad_s,
             angular_acceleration_rad_s2: alpha,
             specific_force_m_s2: vehicle.specific_force(&state, &node.totals, &node.wind),
-        };
-        Truth { state, imu }
+        }
     }
 
     /// The rotor thrusts at `t_s`, N (held from the last node at or before it).
@@ -180,7 +201,8 @@ mod tests {
         let error = |tau: f64| {
             let mut tape = Tape::new(0);
             tape.push(0.0, &start, &totals, &wind, |_| 0.0);
-            let ours = tape.truth_at(&vehicle, tau);
+            let ours = tape.state_at(&vehicle, tau);
+            let ours_imu = tape.imu_truth_at(&vehicle, tau);
             let mut x = start;
             let n = 1000;
             for _ in 0..n {
@@ -190,11 +212,11 @@ mod tests {
             }
             let f = vehicle.specific_force(&x, &totals, &wind);
             [
-                (ours.state.position_m - x.position_m).norm(),
-                (ours.state.velocity_m_s - x.velocity_m_s).norm(),
-                ours.state.attitude.angle_to(&x.attitude),
-                (ours.state.omega_rad_s - x.omega_rad_s).norm(),
-                (ours.imu.specific_force_m_s2 - f).norm(),
+                (ours.position_m - x.position_m).norm(),
+                (ours.velocity_m_s - x.velocity_m_s).norm(),
+                ours.attitude.angle_to(&x.attitude),
+                (ours.omega_rad_s - x.omega_rad_s).norm(),
+                (ours_imu.specific_force_m_s2 - f).norm(),
             ]
         };
         let (big, small) = (error(6e-4), error(3e-4));
