@@ -290,8 +290,10 @@ def three_way(
     jobs = []
     for izz in izz_values:
         v = LanzonVehicle(inertia_zz_kg_m2=real("izz", izz))
+        made: dict[tuple[float, tuple[float, float, float]], LanzonDesign] = {}  # (a) and (b) fly one design
         for cs in cases if cases is not None else design_cases():
-            d = cs.design(v)
+            key = (cs.crossover_rad_s, cs.channel_gain)
+            d = made[key] = made[key] if key in made else cs.design(v)
             for sc in scenarios():
                 jobs.append((sc, cs, v, d))
     with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
@@ -416,16 +418,19 @@ class SweepPoint:
 def rotor_inertia_sweep(
     rotor_inertias: tuple[float, ...] = ROTOR_INERTIAS_FULL, *, izz_values: tuple[float, ...] = IZZ_VALUES,
     cases: tuple[str, ...] = ("b", "c"), duration_s: float | None = None,
+    designs: dict[tuple[float, str], LanzonDesign] | None = None,
 ) -> list[SweepPoint]:
     """Scenario B flown with each design case at each ``I_zz`` and rotor inertia ``I_R`` (the
     design does not depend on ``I_R``: the RFL model (24) has no gyroscopic term, so one design
-    per ``I_zz`` and case is flown on every ``I_R``). Two threads (the core releases the GIL)."""
+    per ``I_zz`` and case is flown on every ``I_R``; ``designs`` may hold them already, keyed by
+    ``(I_zz, case)``). Two threads (the core releases the GIL)."""
     jobs = []
     for izz in izz_values:
         base = LanzonVehicle(inertia_zz_kg_m2=real("izz", izz))
         for label in cases:
             cs = design_case(label)
-            d = cs.design(base)
+            known = None if designs is None else designs.get((base.inertia_zz_kg_m2, label))
+            d = cs.design(base) if known is None else known
             for ir in rotor_inertias:
                 ir = real("rotor_inertia_kg_m2", ir)
                 jobs.append((cs, base.replace(rotor_inertia_kg_m2=ir), d))
@@ -868,7 +873,8 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         section.figures.append(ReportFigure(f"lanzon-paths-{name}.png", f"3-D paths of Scenario {name}'s runs (Lanzon Fig. 8 style)."))
     # 60 s flights in both modes (a 20 s flight still circling is not the verdict of the paper's
     # 60 s flight; most runs at large I_R are lost within seconds): --quick takes fewer I_R.
-    points = rotor_inertia_sweep(ROTOR_INERTIAS_QUICK if quick else ROTOR_INERTIAS_FULL)
+    points = rotor_inertia_sweep(ROTOR_INERTIAS_QUICK if quick else ROTOR_INERTIAS_FULL,
+                                 designs={(r.vehicle.inertia_zz_kg_m2, r.case.label): r.design for r in runs})
     columns, rows = markdown_table(sweep_table(points))
     section.tables.append(ReportTable(
         "Scenario B's verdict against the rotor inertia I_R (the paper prints none; ours is 3e-5 kg m^2), both I_zz, "
