@@ -882,10 +882,12 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         + (f" (--quick: {len(ROTOR_INERTIAS_QUICK)} values; the full report {len(ROTOR_INERTIAS_FULL)})" if quick else ""),
         columns, rows))
     section.notes += ["Where the verdict changes with I_R: " + s for s in verdict_changes(points)]
-    plot_verdict_sweep([{"I_zz": p.inertia_zz_kg_m2, "case": f"({p.case})", "I_R": p.rotor_inertia_kg_m2, "verdict": p.verdict}
-                        for p in points], str(out / "lanzon-rotor-inertia.png"), parameter="I_R",
-                       parameter_label="rotor inertia I_R (kg m^2)", series="case", panel="I_zz",
-                       title="Lanzon scenario B: whole-flight verdict against the rotor inertia I_R")
+    names = {"b": "(b) paper's design, 100 rad/s", "c": "(c) ours, 30 rad/s"}
+    plot_verdict_sweep([{"I_zz (kg m^2)": p.inertia_zz_kg_m2, "design": names.get(p.case, p.case), "I_R": p.rotor_inertia_kg_m2,
+                         "verdict": p.verdict} for p in points], str(out / "lanzon-rotor-inertia.png"), parameter="I_R",
+                       parameter_label="rotor inertia I_R (kg m^2)", series="design", panel="I_zz (kg m^2)",
+                       title="Lanzon scenario B, the paper's limits, 60 s: whole-flight verdict against the rotor inertia I_R",
+                       mark=(LanzonVehicle().rotor_inertia_kg_m2, "our I_R"))
     section.figures.append(ReportFigure("lanzon-rotor-inertia.png", "Scenario B's verdict against I_R, per I_zz and design."))
     for run in runs:
         if run.scenario.name == "B" and run.vehicle.inertia_zz_kg_m2 == IZZ_VALUES[0]:
