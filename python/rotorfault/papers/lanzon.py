@@ -594,7 +594,8 @@ def monte_carlo(
 REPORT_COLUMNS: tuple[tuple[str, str], ...] = (
     ("scenario", "string"), ("case", "string"), ("case_description", "string"), ("inertia_zz_kg_m2", "float64"),
     ("crossover_rad_s", "float64"), ("limits", "bool"), ("gamma_min", "float64"), ("gamma", "float64"),
-    ("achieved_norm", "float64"), ("verdict", "string"), ("outcome", "string"), ("outcome_text", "string"), ("lost_at_s", "float64"), ("duration_s", "float64"),
+    ("achieved_norm", "float64"), ("verdict", "string"), ("outcome", "string"), ("outcome_text", "string"),
+    ("lost_at_s", "float64"), ("duration_s", "float64"),
     ("level_after_s", "float64"), ("window_tilt_deg", "float64"), ("window_spin_rad_s", "float64"),
     ("max_altitude_loss_m", "float64"), ("final_error_m", "float64"), ("window_horizontal_error_m", "float64"),
     ("window_altitude_error_m", "float64"), ("min_thrust_n", "float64"), ("max_thrust_n", "float64"),
