@@ -70,12 +70,16 @@ def plot_primary_axis(runs: Sequence[Any], path: str | None = None, *, tail_s: f
 
 
 def plot_lanzon_paths(runs: Sequence[Any], path: str | None = None) -> Figure:
-    """Lanzon Fig. 8 style: the 3-D paths (paper frame, z up) of Scenario B runs, with the start
-    (circle), the setpoint (star) and any loss (cross). ``runs``:
-    :class:`rotorfault.papers.lanzon.LanzonRun` results. Saved to ``path`` if given."""
+    """Lanzon Fig. 8 style: the 3-D paths (paper frame, z up) of one scenario's runs, with the
+    start (circle), the setpoint (star, when the scenario has one) and any loss (cross). ``runs``:
+    :class:`rotorfault.papers.lanzon.LanzonRun` results, all of the same scenario (a run of
+    another scenario is refused: each scenario gets its own figure). Saved to ``path`` if given."""
 
     if not runs:
         raise ValueError("runs: give at least one run to plot")
+    names = sorted({run.scenario.name for run in runs})
+    if len(names) != 1:
+        raise ValueError(f"runs: one scenario per figure, got scenarios {', '.join(names)} (plot each scenario's runs on their own)")
     fig = new_figure(figsize=(8, 7), layout="constrained")
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     for j, run in enumerate(runs):
@@ -93,7 +97,7 @@ def plot_lanzon_paths(runs: Sequence[Any], path: str | None = None) -> Figure:
     ax.set_zlabel("z, up (m)", fontsize=9)
     ax.tick_params(labelsize=MIN_FONT_PT)
     ax.legend(loc="upper left", fontsize=max(MIN_FONT_PT, 8.5), frameon=False)
-    fig.suptitle("Lanzon scenario B: 3-D path from (5, 5, 5) m to the setpoint (0, 0, 1) m (circle: start)", fontsize=11)
+    fig.suptitle(f"Lanzon scenario {names[0]}: 3-D paths, {runs[0].scenario.description} (circle: start)", fontsize=11)
     return finish(fig, path)
 
 
