@@ -94,7 +94,8 @@ CLAIMS = [
     ("# PPNPNN: Du's PPNNPN, mirrored", "grid", "rf.design_search(hexa).best().spins", "PPNPNN", 0),
     ("give_up_yaw=True).max_thrust_n)  # 17 N", "p", "rf.hover_thrust_margin(ke, efficiency=[1, 1, 0, 1], give_up_yaw=True).max_thrust_n", 17.0, 0.5),
     ("# omega_2* = 6355, alpha_2* = 0.2476", "wang", "round(float(trim.command[2])), round(float(trim.command[3]), 4)", (6355, 0.2476), 0),
-    ("vpp.controllability(vpp.linearize(wang, trim)).rank      # 12", "wang", "vpp.controllability(vpp.linearize(wang, trim)).rank", 12, 0),
+    ('vpp.controllability(vpp.linearize(wang, trim, inputs="wang")).rank      # 12', "wang",
+     'vpp.controllability(vpp.linearize(wang, trim, inputs="wang")).rank', 12, 0),
     ("# 4 chunk files + _rotorfault.json", "small", "sorted(p.name for p in Path('campaign.parquet').iterdir() if p.suffix == '.parquet').__len__()", 4, 0),
     ("# 4 chunk files + _rotorfault.json", "small", "(Path('campaign.parquet') / '_rotorfault.json').is_file()", True, 0),
     # The simulator's time grid, step-size guard and divergence detection (issue 18).
@@ -151,9 +152,11 @@ COMMANDS: list[tuple[str, str | None, int]] = [
     ("rotorfault design -a octo-x --parameter arm_length_m --values 0.2,0.3 --top 3", None, 0),
     ("rotorfault simulate examples/quad-x-rotor-failure.toml --plot failure.png",
      f"rotorfault simulate {ROOT / 'examples' / 'quad-x-rotor-failure.toml'} --plot failure.png --force", 0),
-    ("rotorfault certify --airframe vehicle.params [--require single|double] [--json cert.json|-]",
-     "rotorfault certify --airframe vehicle.params --require single --json cert.json", 0),
-    ("rotorfault certify --airframe vehicle.params [--require single|double] [--json cert.json|-]",
+    ("rotorfault certify --airframe vehicle.params [--require single|double] [--require-axes thrust,roll,pitch[,yaw]] [--json cert.json|-]",
+     "rotorfault certify --airframe vehicle.params --require single --json cert.json", 3),  # only by spinning (README)
+    ("rotorfault certify --airframe vehicle.params [--require single|double] [--require-axes thrust,roll,pitch[,yaw]] [--json cert.json|-]",
+     "rotorfault certify --airframe vehicle.params --require single --require-axes thrust,roll,pitch --json cert2.json", 0),
+    ("rotorfault certify --airframe vehicle.params [--require single|double] [--require-axes thrust,roll,pitch[,yaw]] [--json cert.json|-]",
      "rotorfault certify --airframe vehicle.params --require double --json -", 3),
     ("rotorfault campaign campaign.toml --plot campaign.png", "rotorfault campaign campaign.toml --plot campaign.png --force", 0),
     ("rotorfault campaign campaign.toml --out runs/", None, 0),
@@ -171,6 +174,8 @@ RUN_ELSEWHERE = {
     "rotorfault vpp-report --out DIR [--quick] [--force]": "tests/cli/test_formats.py (--quick), tests/papers/test_wang_flights.py",
     "maturin build --release --out dist/": "tests/cross/test_wheel.py",
     "rotorfault campaign campaign.toml --out runs/ --dask tcp://host:8786": "needs a running cluster: the same code path as --dask local:2 above",
+    "rotorfault campaign --suite deciding --runs N [--out DIR] [--dask ...]": "tests/studies/test_deciding.py (a one-run-per-cell campaign through the CLI)",
+    "rotorfault campaign --suite deciding --runs 1000 --out DIR": "about 10 minutes: benches/deciding_campaign.py; the CLI path is tests/studies/test_deciding.py's",
     "rotorfault campaign --tune [--quick]": "about a minute even with --quick: tests/studies/test_campaign.py runs tune() on a small campaign",
 }
 #: A small campaign file for the README's `rotorfault campaign campaign.toml` lines.

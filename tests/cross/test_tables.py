@@ -204,7 +204,7 @@ def test_streamed_campaign_reads_back_as_the_campaign_in_memory(tmp_path: Path) 
     assert back.schema.equals(table.schema, check_metadata=True) and _equal_nan(back, table)
     survival = memory.survival_table()
     assert survival[0]["by"] == "all" and survival[0]["runs"] == 4
-    assert survival.to_arrow().column_names == ["by", "group", "survived", "runs", "rate", "low", "high"]
+    assert survival.to_arrow().column_names == ["by", "group", "held", "runs", "rate", "low", "high"]
 
 
 def test_without_pandas_to_pandas_names_the_extra_and_arrow_still_works() -> None:

@@ -167,6 +167,19 @@ pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
     })
 }
 
+/// A count for field `field` (an `int`, not a bool, >= 0): anything else is a `TypeError` or a
+/// `ValueError` naming the field, never pyo3's bare overflow of a negative number.
+pub(crate) fn count(field: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    use pyo3::types::{PyBool, PyInt};
+    if value.is_instance_of::<PyBool>() || !value.is_instance_of::<PyInt>() {
+        return Err(PyTypeError::new_err(format!("{field}: expected an int, got {}", value.get_type().name()?)));
+    }
+    let wide: i128 = value
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{field}: must be a count >= 0 that fits in 64 bits")))?;
+    usize::try_from(wide).map_err(|_| PyValueError::new_err(format!("{field}: must be a count >= 0, got {wide}")))
+}
+
 /// The field values of a settings object, by name.
 fn field_values<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Vec<Bound<'py, PyAny>>> {
     fields.iter().map(|f| obj.getattr(*f)).collect()

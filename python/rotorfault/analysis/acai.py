@@ -229,6 +229,12 @@ def hover_wrench_text(hover: HoverPoint, distance: float | None = None) -> str:
     ``"boundary"``, ``"outside 0.2133"`` (``distance``: from the hover wrench to the attainable
     set, in the ACAI's units, :func:`rotorfault.allocation.hover_wrench_distance`; a rank-deficient
     case whose wrench is not attained reads the same), ``"rank-deficient"``."""
+    if not isinstance(hover, str) or hover not in HOVER_WORDS:
+        raise ValueError(f"hover: must be one of {', '.join(HOVER_WORDS)}, got {hover!r}")
+    if distance is not None:
+        distance = real("distance", distance)
+        if not (math.isfinite(distance) and distance >= 0.0):
+            raise ValueError(f"distance: must be finite and >= 0 (N / N m), got {distance}")
     if hover in ("outside", "rank-deficient") and distance is not None and distance > 0.0:
         return f"outside {distance:.4f}"
     return HOVER_WORDS[hover]

@@ -48,7 +48,7 @@ def bryson_weights(solution: RelaxedHoverSolution, airframe: Airframe) -> tuple[
 
 class RelaxedHoverFeedback:
     """Holds a relaxed hover ``solution`` of ``airframe`` (the airframe it was computed for, with
-    its efficiencies) at ``position`` (world NED): LQR on the solution's linear model with weights
+    its efficiencies) at ``position`` (world NED, m): LQR on the solution's linear model with weights
     ``q`` (7 x 7) and ``r`` (carrying rotors square; default :func:`bryson_weights`), commands in
     rotor command units (thrust over efficiency), and the outer loop ``outer_loop``.
     ``linear_drag_n_s_m`` is the simulator's translational drag (it shapes the circle the centre
@@ -157,8 +157,8 @@ def periodic_state(
     yaw: float = 0.0,
     linear_drag_n_s_m: float = 0.0,
 ) -> State:
-    """A state on the periodic solution whose circle is centred at ``position`` (world NED): the
-    attitude turns the spin axis to world up (then ``yaw`` about it), the body rate is the
+    """A state on the periodic solution whose circle is centred at ``position`` (world NED, m): the
+    attitude turns the spin axis to world up (then ``yaw`` about it, rad), the body rate is the
     solution's, position and velocity are on the circle (:func:`circle_offsets`)."""
     centre = np.asarray(_three("position", position))
     yaw = real("yaw", yaw)

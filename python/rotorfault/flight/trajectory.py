@@ -74,7 +74,8 @@ class Estimates:
     ``std`` is one sigma of the filter's 15-element error state per row (position m, velocity
     m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2; the covariance at its fusion
     horizon); ``gyro_saturated`` / ``accel_saturated`` flag rows whose newest IMU sample was
-    clamped at the range; ``counts`` holds the run's totals (IMU samples, clamped samples,
+    clamped at the range; ``position`` (m), ``velocity`` (m/s), ``euler`` (rad) and ``omega`` (body
+    rates, rad/s) are the estimate's; ``counts`` holds the run's totals (IMU samples, clamped samples,
     measurements fused, refused by the innovation gate, late)."""
 
     position: FloatArray

@@ -11,6 +11,7 @@ through the call that makes them (:data:`PRODUCED_BY`); a Protocol is implemente
 from __future__ import annotations
 
 import atexit
+import functools
 import math
 import shutil
 import tempfile
@@ -520,8 +521,73 @@ def _targets() -> dict[str, Target]:
     t["Airframe.with_parameters"] = Target(with_airframe(lambda d, f: Call(f.with_parameters, (), {"mass_kg": d(hostile(positive(0.1, 5))), "arm_length_m": d(hostile(positive(0.05, 1))), "name": d(names())}, frozenset({"mass_kg", "arm_length_m", "name"}))), lambda r, c: _check_frame(r))
     t["Airframe.with_efficiency"] = Target(with_airframe(lambda d, f: Call(f.with_efficiency, (d(efficiencies(f.rotor_count)),), {}, frozenset({"efficiency"}))), lambda r, c: _check_frame(r))
     t["Airframe.to_px4_params"] = Target(with_airframe(lambda d, f: Call(f.to_px4_params, (), {"vehicle_id": d(hostile(st.integers(1, 255), *EDGE_INTS))}, frozenset({"vehicle_id"}))), _check_px4_text)
+    _newer_targets(t)
     _regressions(t)
     return t
+
+
+@functools.lru_cache(maxsize=1)
+def _spinning() -> tuple[Any, rf.Airframe]:
+    """A relaxed hover to build on: Ke's quadcopter without rotor 1, spinning (README)."""
+    quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+    best = rf.relaxed_hover(quad, drag=rf.Drag(rotational_n_m_s=2.8e-3, linear_n_s_m=0.3)).best
+    assert best is not None
+    return best, quad
+
+
+def _check_relaxed_hover(result: Any, call: Call) -> None:
+    for solution in result.solutions:
+        assert math.isfinite(solution.thrust_margin_n) and math.isfinite(solution.spin_rate_rad_s)
+        assert np.isfinite(solution.thrust_n).all()
+
+
+def _newer_targets(t: dict[str, Target]) -> None:
+    """Targets of the API that landed with the relaxed hover, the sensors, the hold tuning and the
+    hover-wrench distance (issues 28-30)."""
+    t["Sensing"] = Target(calls(rf.Sensing, suite=hostile(st.sampled_from(("mocap", "gnss", "rtk")), "lidar", ""),
+                                imu=hostile(st.sampled_from(("icm-42688-p", "mpu-6000")), "x"),
+                                imu_rate_hz=hostile(positive(100, 2000)), position_rate_hz=hostile(positive(10, 240)),
+                                seed=hostile(st.integers(0, 100), *EDGE_INTS)), check_by_simulator("sensing"))
+    t["RelaxedHoverSettings"] = Target(calls(rf.RelaxedHoverSettings, rotational_drag_n_m_s=hostile(positive(1e-4, 1e-2)),
+                                             max_spin_rate_rad_s=hostile(positive(10, 200)), grid_points=hostile(st.sampled_from((11, 13, 21)), *EDGE_INTS),
+                                             max_idle_rotors=hostile(st.integers(0, 2), *EDGE_INTS)))
+    t["relaxed_hover"] = Target(st.builds(
+        lambda frame, failed, drag, grid: Call(rf.relaxed_hover, (frame.with_failed_rotors(failed) if failed else frame,),
+                                               {"settings": rf.RelaxedHoverSettings(grid_points=grid, rotational_drag_n_m_s=drag)},
+                                               frozenset({"settings", "rotational_drag_n_m_s", "grid_points"})),
+        st.sampled_from([rf.Airframe.preset(n) for n in ("quad-x", "ke-quadcopter", "hexa-pnpnpn")]),
+        st.sampled_from(((), (1,), (1, 3))), positive(1e-4, 1e-2), st.sampled_from((11, 13)),
+    ) | calls(rf.relaxed_hover, airframes(), st.one_of(st.none(), st.just("x")), drag=st.one_of(st.none(), st.just(rf.Drag()), st.just(3.0))),
+        _check_relaxed_hover)
+    t["RelaxedHoverOuterLoop"] = Target(calls(control.RelaxedHoverOuterLoop, position_gain_s2=hostile(positive(0.1, 5)),
+                                              velocity_gain_s=hostile(positive(0.1, 5)), max_tilt_rad=hostile(positive(0.05, 1.5))), lambda r, c: None)
+    t["RelaxedHoverFeedback"] = Target(st.builds(
+        lambda position, drag: Call(lambda p, d: rf.RelaxedHoverFeedback(*_spinning(), position=p, linear_drag_n_s_m=d), (position, drag), {},
+                                    frozenset({"position", "linear_drag_n_s_m"})),
+        vector(3, hostile(number(-20, 0))), hostile(number(0.0, 1.0))), lambda r, c: None)
+    t["periodic_state"] = Target(st.builds(
+        lambda position, yaw, drag: Call(lambda p, y, d: rf.periodic_state(*_spinning(), position=p, yaw=y, linear_drag_n_s_m=d),
+                                         (position, yaw, drag), {}, frozenset({"position", "yaw", "linear_drag_n_s_m"})),
+        vector(3, hostile(number(-20, 0))), hostile(number(-3.2, 3.2)), hostile(number(0.0, 1.0))),
+        lambda r, c: no_nan(r.vector if hasattr(r, "vector") else r))
+    t["hover_wrench_distance"] = Target(with_airframe(lambda d, f: Call(rf.hover_wrench_distance, (f,), {"efficiency": d(efficiencies(f.rotor_count)), "give_up_yaw": d(st.booleans())}, frozenset({"efficiency"}))),
+                                        lambda r, c: None if (math.isfinite(r) and r >= 0) else (_ for _ in ()).throw(AssertionError(r)))
+    t["hover_distances"] = Target(with_airframe(lambda d, f: Call(allocation.hover_distances, (f, d(st.sampled_from(([()], [(1,)], [(1, 2)], [(0,)], [(f.rotor_count + 1,)], "x")))), {}, frozenset({"failed"}))))
+    t["hover_wrench_text"] = Target(calls(analysis.hover_wrench_text, hostile(st.sampled_from(("inside", "boundary", "outside", "rank-deficient")), "x", ""),
+                                          st.one_of(st.none(), hostile(number(0.0, 10.0)))), lambda r, c: None)
+    t["FaultCase"] = Target(calls(studies.FaultCase, st.sampled_from(((1,), (1, 3), (), (9,), (0,))), hostile(number(0, 1)),
+                                  time_s=hostile(number(0.0, 10.0)), gap_s=hostile(number(0.0, 5.0))), lambda r, c: None)
+    t["HoldCriteria"] = Target(calls(studies.HoldCriteria, hold_altitude_m=hostile(positive(0.1, 5)), hold_horizontal_m=hostile(positive(0.1, 10)),
+                                     settle_s=hostile(number(0.0, 5.0))), lambda r, c: None)
+    t["fault_set"] = Target(calls(studies.fault_set, st.sampled_from(((1, 2), (), (9,), (0,), "x")), st.sampled_from(((0.0, 0.5), (), (1.5,), (math.nan,))),
+                                  time_s=hostile(number(0.0, 10.0))), lambda r, c: None)
+    # Valid calls stay tiny (one fault, a 1 s flight, one generation of one candidate per gain):
+    # a full tuning is long work, not hostile input.
+    t["tune_hold"] = Target(st.builds(
+        lambda cases, maxiter, popsize, duration: Call(studies.tune_hold, (cases,), {"maxiter": maxiter, "popsize": popsize, "duration_s": duration, "progress": False},
+                                                        frozenset({"cases", "maxiter", "popsize", "duration_s"})),
+        st.sampled_from(([studies.FaultCase((1,), 0.4, time_s=0.2)], [], "x")), hostile(st.integers(1, 1), *EDGE_INTS),
+        hostile(st.integers(1, 1), *EDGE_INTS), hostile(positive(0.5, 1.0), 1e9)), lambda r, c: None)
 
 
 def _regressions(t: dict[str, Target]) -> None:
@@ -552,6 +618,12 @@ def _regressions(t: dict[str, Target]) -> None:
         # python-control's unnamed ControlDimension for a b of 0 rows.
         "LinearModel": (Call(control.LinearModel, (np.zeros((12, 12)), np.zeros((0, 4))), {"inputs": ["a"] * 4, "x_trim": [], "u_trim": [], "command_columns": [0, 1, 2, 3], "name": ""}),),
         # float(None) naming nothing; 1e300 rad/s squared: OverflowError.
+        # A string distance: '>' between str and float; a list as the hover: unhashable; NaN: KeyError.
+        "hover_wrench_text": (Call(analysis.hover_wrench_text, ("outside", "x"), {}, frozenset({"distance"})),
+                              Call(analysis.hover_wrench_text, (["x"],), {}, frozenset({"hover"})),
+                              Call(analysis.hover_wrench_text, (math.nan,), {}, frozenset({"hover"}))),
+        # pyo3's bare OverflowError converting -1 to an unsigned count.
+        "RelaxedHoverSettings": (Call(rf.RelaxedHoverSettings, (), {"max_idle_rotors": -1}, frozenset({"max_idle_rotors"})),),
         "Airframe.from_rotorpy": (Call(rf.Airframe.from_rotorpy, ({**rotorpy, "mass": None},)), Call(rf.Airframe.from_rotorpy, ({**rotorpy, "rotor_speed_max": 1e300},))),
     }
     for name, cases in found.items():
@@ -620,7 +692,8 @@ PRODUCED_BY: dict[str, str] = {
     "FailureTable": "failure_table", "Scan": "acai_scan", "Design": "design_search", "DesignSearch": "design_search",
     "AcaiBatch": "acai_batch", "AcaiValue": "acai", "Certificate": "certify", "CertificateCase": "certify",
     "LqrDesign": "lqr_hover", "NcfsynResult": "ncfsyn", "PbhTest": "stabilisability", "CampaignResult": "run_campaign",
-    "TuningResult": "tune", "Scenario": "load_scenario",
+    "TuningResult": "tune", "Scenario": "load_scenario", "Estimates": "Sensing", "HoldTuningResult": "tune_hold",
+    "RelaxedHoverAnalysis": "relaxed_hover", "RelaxedHoverSolution": "relaxed_hover",
 }
 #: Public callables not called: a Protocol is a type to implement.
 NOT_CALLED: dict[str, str] = {"Controller": "a typing.Protocol: controllers implement it; it is not called"}

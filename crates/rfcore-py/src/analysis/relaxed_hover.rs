@@ -41,9 +41,12 @@ impl PyRelaxedHoverSettings {
         thrust_coefficient_n_s2: Option<f64>,
         max_spin_rate_rad_s: Option<f64>,
         max_circle_radius_m: Option<f64>,
-        max_idle_rotors: Option<usize>,
-        grid_points: Option<usize>,
+        max_idle_rotors: Option<Bound<'_, PyAny>>,
+        grid_points: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
+        let counted = |field: &str, v: Option<Bound<'_, PyAny>>, default: usize| -> PyResult<usize> {
+            v.map_or(Ok(default), |v| crate::convert::count(field, &v))
+        };
         let d = RelaxedHoverSettings::default();
         let inner = RelaxedHoverSettings {
             rotational_drag_n_m_s: rotational_drag_n_m_s.unwrap_or(d.rotational_drag_n_m_s),
@@ -51,8 +54,8 @@ impl PyRelaxedHoverSettings {
             thrust_coefficient_n_s2: thrust_coefficient_n_s2.unwrap_or(d.thrust_coefficient_n_s2),
             max_spin_rate_rad_s: max_spin_rate_rad_s.unwrap_or(d.max_spin_rate_rad_s),
             max_circle_radius_m: max_circle_radius_m.unwrap_or(d.max_circle_radius_m),
-            max_idle_rotors: max_idle_rotors.unwrap_or(d.max_idle_rotors),
-            grid_points: grid_points.unwrap_or(d.grid_points),
+            max_idle_rotors: counted("max_idle_rotors", max_idle_rotors, d.max_idle_rotors)?,
+            grid_points: counted("grid_points", grid_points, d.grid_points)?,
         };
         inner.check().map_err(crate::convert::to_py_err)?;
         Ok(PyRelaxedHoverSettings { inner })
