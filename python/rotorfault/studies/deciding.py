@@ -55,7 +55,7 @@ from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sta
 from ..flight.outcomes import FLYING
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
-from .sampling import gust_profile
+from .sampling import gust_profile, scaled_parts
 
 #: The hold thresholds of the issue, and when the judging starts after the failure.
 HOLD_ALTITUDE_M = 1.0
@@ -366,15 +366,7 @@ class RunDraw:
         return [RotorFault(r, self.fault_time_s, self.thrust_scale[r - 1] * self.efficiency) for r in self.pattern]
 
     def vehicle_parts(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
-        a = v.airframe
-        airframe = Airframe(
-            a.arm_angle_rad, a.arm_length_m, a.spin_sign, a.max_thrust_n, a.mass_kg * self.mass_scale,
-            a.inertia_kg_m2 * np.array(self.inertia_scale), a.drag_torque_ratio_m * self.drag_torque_scale,
-            min_thrust_n=a.min_thrust_n, efficiency=np.array(self.thrust_scale), gravity_m_s2=a.gravity_m_s2,
-            name=f"{a.name} (run {self.index})",
-        )
-        actuator = FixedPitchActuator(time_constant_s=v.rotor_time_constant_s * self.lag_scale)
-        return airframe, actuator, Drag(rotational_n_m_s=v.rotational_drag_n_m_s, linear_n_s_m=v.linear_drag_n_s_m)
+        return scaled_parts(v.airframe, v, self)
 
 
 def hold_errors(t_s: Any, position_m: Any, fault_time_s: float, setpoint_m: Any = HOVER_M) -> tuple[float, float]:

@@ -131,22 +131,28 @@ def draw(campaign: Any, index: int, rotors: int) -> RunSpec:
 def perturbed_vehicle(vehicle: Any, spec: RunSpec) -> tuple[Airframe, FixedPitchActuator, Drag]:
     """The vehicle run ``spec`` flies: ``vehicle`` (an :class:`~rotorfault.control.ke.FtcPreset`)
     with the run's mass, inertia, drag-torque, thrust and lag factors."""
-    a = _airframe(vehicle.airframe_name)
+    return scaled_parts(_airframe(vehicle.airframe_name), vehicle, spec)
+
+
+def scaled_parts(a: Airframe, nominal: Any, draws: Any) -> tuple[Airframe, FixedPitchActuator, Drag]:
+    """Airframe ``a`` with a run's factors (``draws``: ``index``, ``mass_scale``, ``inertia_scale``,
+    ``drag_torque_scale``, ``thrust_scale``, ``lag_scale``), the actuator with the scaled lag of
+    ``nominal.rotor_time_constant_s`` and ``nominal``'s drags: what every campaign's run flies."""
     airframe = Airframe(
         a.arm_angle_rad,
         a.arm_length_m,
         a.spin_sign,
         a.max_thrust_n,
-        a.mass_kg * spec.mass_scale,
-        a.inertia_kg_m2 * np.array(spec.inertia_scale),
-        a.drag_torque_ratio_m * spec.drag_torque_scale,
+        a.mass_kg * draws.mass_scale,
+        a.inertia_kg_m2 * np.array(draws.inertia_scale),
+        a.drag_torque_ratio_m * draws.drag_torque_scale,
         min_thrust_n=a.min_thrust_n,
-        efficiency=np.array(spec.thrust_scale),
+        efficiency=np.array(draws.thrust_scale),
         gravity_m_s2=a.gravity_m_s2,
-        name=f"{a.name} (run {spec.index})",
+        name=f"{a.name} (run {draws.index})",
     )
-    actuator = FixedPitchActuator(time_constant_s=vehicle.rotor_time_constant_s * spec.lag_scale)
-    drag = Drag(rotational_n_m_s=vehicle.rotational_drag_n_m_s, linear_n_s_m=vehicle.linear_drag_n_s_m)
+    actuator = FixedPitchActuator(time_constant_s=nominal.rotor_time_constant_s * draws.lag_scale)
+    drag = Drag(rotational_n_m_s=nominal.rotational_drag_n_m_s, linear_n_s_m=nominal.linear_drag_n_s_m)
     return airframe, actuator, drag
 
 
@@ -173,4 +179,5 @@ def run_sensing(sensing: Sensing | None, spec: RunSpec) -> Sensing | None:
     return None if sensing is None else sensing.replace(seed=(sensing.seed + spec.noise_seed) % 2**64)
 
 
-__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunSpec", "draw", "gust_profile", "perturbed_vehicle", "rotor_count", "run_sensing", "sensor_noise"]
+__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunSpec", "draw", "gust_profile", "perturbed_vehicle",
+           "rotor_count", "run_sensing", "scaled_parts", "sensor_noise"]
