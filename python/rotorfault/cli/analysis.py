@@ -94,10 +94,9 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
     fields = {"airframe": frame.name, "max_failed": max_failed, "formula": result.formula, "case_count": len(result),
               "controllable_count": survivable, "give_up_yaw_only_count": spinning}
 
-    distances = hover_distances(frame, [case.failed for case in result])
-
     def human(out: Output) -> None:
-        headers, rows = result.rows_for_display(distances)
+        # The hover wrench's distances are for the table only (one QP per case): not for --format json/csv.
+        headers, rows = result.rows_for_display(hover_distances(frame, [case.failed for case in result]))
         # Below 120 columns the rank and "ok" columns are left out so that every cell stays whole (the
         # row's colour and the count below say which cases are controllable).
         narrow = out.console.width < 120
