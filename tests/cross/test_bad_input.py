@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
+from rotorfault import _rfcore
 
 GOOD: dict[str, Any] = dict(
     arm_angle_rad=[0.0, 1.0, 2.0, 3.0],
@@ -110,6 +111,18 @@ def test_overflowing_numbers_are_value_errors(ppnnpn: rf.Airframe) -> None:
         rf.failure_table(ppnnpn, max_failed=2**70)
     with pytest.raises(ValueError, match=r"f_min, f_max, g_vec: too large"):
         rf.acai_from_matrix(np.eye(2), [-1e308, -1e308], [1e308, 1e308], [0, 0])
+    # Counts beyond 64 bits or below 0: one conversion in the bindings, a ValueError naming the field.
+    for field in ("substeps", "record_every"):
+        for value in (10**33, -1):
+            with pytest.raises(ValueError, match=rf"^{field}: must be a count"):
+                _rfcore.SimulationConfig(**{field: value})
+    with pytest.raises(ValueError, match=r"^max_iterations: must be a count"):
+        _rfcore.AllocationSettings(max_iterations=2**64)
+    with pytest.raises(ValueError, match=r"^noise.seed: must be a count"):
+        _rfcore.SensorNoise(relative_std=0.0, absolute_std=[0.0] * 12, seed=-1)
+    # The campaign checks its step counts up front through the same conversion (found by the harness).
+    with pytest.raises(ValueError, match=r"^substeps: must be a count"):
+        rf.studies.Campaign(runs=1, substeps=10**33)
     # Large but representable magnitudes are computed, not rounded to zero.
     assert rf.acai_from_matrix(np.eye(2) * 1e300, [0, 0], [1, 1], [0.5e300, 0.5e300]) == pytest.approx(0.5e300, rel=1e-12)
 

@@ -22,7 +22,7 @@ use rfcore::analysis::ControlAxes;
 use rfcore::error::RfError;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, matrix, slice1, slice2, to_py_err};
+use crate::convert::{count, detached, matrix, slice1, slice2, to_py_err};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
@@ -83,9 +83,10 @@ impl PyAllocationSettings {
     #[pyo3(signature = (*, tolerance=None, max_iterations=None, clarabel_tolerance=None))]
     fn new(
         tolerance: Option<f64>,
-        max_iterations: Option<usize>,
+        max_iterations: Option<&Bound<'_, PyAny>>,
         clarabel_tolerance: Option<f64>,
     ) -> PyResult<Self> {
+        let max_iterations = max_iterations.map(|v| count("max_iterations", v)).transpose()?;
         let out = PyAllocationSettings {
             tolerance: tolerance.unwrap_or(ActiveSetSettings::default().tolerance),
             max_iterations,

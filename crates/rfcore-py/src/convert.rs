@@ -177,7 +177,8 @@ pub(crate) fn count(field: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
     let wide: i128 = value
         .extract()
         .map_err(|_| PyValueError::new_err(format!("{field}: must be a count >= 0 that fits in 64 bits")))?;
-    usize::try_from(wide).map_err(|_| PyValueError::new_err(format!("{field}: must be a count >= 0, got {wide}")))
+    usize::try_from(wide)
+        .map_err(|_| PyValueError::new_err(format!("{field}: must be a count in [0, 2**64), got {wide}")))
 }
 
 /// The field values of a settings object, by name.

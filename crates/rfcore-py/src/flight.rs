@@ -22,7 +22,7 @@ use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
 use crate::sensing::PySensing;
 use crate::convert::{
-    detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
+    count, detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
 };
 
 /// Fixed-pitch rotors: first-order lag, rate limit, thrust coefficient for rotor speed.
@@ -310,14 +310,15 @@ pub struct PySensorNoise {
 impl PySensorNoise {
     #[new]
     #[pyo3(signature = (*, relative_std, absolute_std, seed))]
-    fn new(relative_std: f64, absolute_std: [f64; STATE_DIM], seed: u64) -> Self {
-        PySensorNoise {
+    fn new(relative_std: f64, absolute_std: [f64; STATE_DIM], seed: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let seed = count("noise.seed", seed)? as u64;
+        Ok(PySensorNoise {
             inner: SensorNoise {
                 relative_std,
                 absolute_std,
                 seed,
             },
-        }
+        })
     }
     #[getter]
     fn relative_std(&self) -> f64 {
@@ -348,7 +349,7 @@ impl PySimulationConfig {
     #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, sensing=None, record_every=None))]
     fn new(
         dt_s: Option<f64>,
-        substeps: Option<usize>,
+        substeps: Option<&Bound<'_, PyAny>>,
         duration_s: Option<f64>,
         limits: Option<PyRef<'_, PyDivergenceLimits>>,
         ground_z_m: Option<f64>,
@@ -357,9 +358,12 @@ impl PySimulationConfig {
         wind_profile: Option<Vec<(f64, [f64; 3])>>,
         noise: Option<PyRef<'_, PySensorNoise>>,
         sensing: Option<PyRef<'_, PySensing>>,
-        record_every: Option<usize>,
+        record_every: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let d = SimulationConfig::default();
+        // Counts through the one conversion: a huge or negative int is a ValueError naming the field.
+        let substeps = substeps.map(|v| count("substeps", v)).transpose()?;
+        let record_every = record_every.map(|v| count("record_every", v)).transpose()?;
         let ground_z_m = match (ground.unwrap_or(true), ground_z_m) {
             (true, z) => z.or(d.ground_z_m),
             (false, None) => None,

@@ -624,6 +624,8 @@ def _regressions(t: dict[str, Target]) -> None:
                               Call(analysis.hover_wrench_text, (math.nan,), {}, frozenset({"hover"}))),
         # pyo3's bare OverflowError converting -1 to an unsigned count.
         "RelaxedHoverSettings": (Call(rf.RelaxedHoverSettings, (), {"max_idle_rotors": -1}, frozenset({"max_idle_rotors"})),),
+        # pyo3's bare OverflowError converting an int beyond 64 bits (SimulationConfig's substeps).
+        "Campaign": (Call(studies.Campaign, (), {"runs": 1, "duration_s": 1.0, "fault_time_s": (0.2, 0.4), "gap_s": (0.2, 0.3), "substeps": 10**33}, frozenset({"substeps"})),),
         "Airframe.from_rotorpy": (Call(rf.Airframe.from_rotorpy, ({**rotorpy, "mass": None},)), Call(rf.Airframe.from_rotorpy, ({**rotorpy, "rotor_speed_max": 1e300},))),
     }
     for name, cases in found.items():
