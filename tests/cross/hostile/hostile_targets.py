@@ -655,6 +655,12 @@ def _regressions(t: dict[str, Target]) -> None:
                          # (0.0, -0.0): NumPy's uniform() refused -0.0 - 0.0 mid-run, naming no field.
                          Call(studies.run_campaign, (replace(quick, runs=1, efficiency=(0.0, -0.0), fault_time_s=(0.0, -0.0)),))),
         "Campaign": (Call(studies.Campaign, (), {"substeps": 10**21}, frozenset({"substeps"})),),
+        # int('x'): a ValueError naming nothing; rotor 0 accepted by FaultCase.
+        "fault_set": (Call(studies.fault_set, ("x", (0.0, 0.5)), {}, frozenset()), Call(studies.fault_set, ((0,), (0.5,)), {}, frozenset())),
+        # int('x') on the failed sets; an infinite duration reached scipy's map (RuntimeError).
+        "hover_distances": (Call(allocation.hover_distances, (rf.Airframe.preset("hexa-pnpnpn"), "x"), {}, frozenset({"failed"})),),
+        "tune_hold": (Call(studies.tune_hold, ([studies.FaultCase((1,), 0.4, time_s=0.2)],), {"maxiter": 1, "popsize": 1, "duration_s": math.inf, "progress": False},
+                           frozenset({"duration_s"})),),
         "Airframe.from_rotorpy": (Call(rf.Airframe.from_rotorpy, ({**rotorpy, "mass": None},)), Call(rf.Airframe.from_rotorpy, ({**rotorpy, "rotor_speed_max": 1e300},))),
     }
     for name, cases in found.items():
