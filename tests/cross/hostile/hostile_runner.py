@@ -6,10 +6,15 @@ examples until the profile's example count or the target's time budget is spent,
   ``--hypothesis-profile=long`` (registered in ``tests/conftest.py``; the pre-release run,
   DEVELOPERS.md) runs rounds of random examples until ``max_examples`` calls or
   ``ROTORFAULT_HOSTILE_SECONDS`` seconds per target (default 30), so an hour covers every target.
-- Each call must return or raise within :data:`CALL_LIMIT_S`: an alarm (SIGALRM) raises
+- Each call must return or raise within :data:`CALL_LIMIT_S` of CPU time (the process's, every
+  thread's) and :data:`CALL_WALL_LIMIT_S` of wall time: a timer (SIGPROF, SIGALRM) raises
   :class:`CallTimeout` in the call (long Rust calls run Python's signal handlers as they poll for
-  Ctrl-C), so Hypothesis shrinks a slow call like any failure, each retry under its own alarm. The
-  test's ``pytest-timeout`` (thread method: it leaves SIGALRM to the harness) is the last resort.
+  Ctrl-C), so Hypothesis shrinks a slow call like any failure, each retry under its own timers.
+  A busy machine stretches wall time, not CPU time: a campaign of 0.5 s of CPU took 35 s at
+  ``nice 19`` under a load of 24, and a wall-time limit of 60 s failed such a call once and not on
+  Hypothesis' replay (a flaky failure of the long run). A spinning hang uses CPU and meets the
+  first limit; a blocked one (waiting, no CPU) the second. The test's ``pytest-timeout`` (thread
+  method: it leaves the signals to the harness) is the last resort.
 - ``ROTORFAULT_HOSTILE_LOG=path`` appends one JSON line per target: calls made, refusals, results
   and each round's Hypothesis seed. A failure is written there before it propagates, so it can be
   replayed when the run's output is lost or Hypothesis cannot reproduce it (a flaky failure): a
@@ -37,32 +42,40 @@ from dataclasses import dataclass
 from hostile_targets import FIELD_WORDS, Call, Target
 from hypothesis import HealthCheck, Phase, given, seed, settings
 
-#: A call that takes longer than this fails: the harness's calls are small (a few rotors, runs
-#: of a second), so this is a hang, not slow work.
+#: A call that uses more CPU time than this fails: the harness's calls are small (a few rotors,
+#: runs of a second), so this is a hang, not slow work.
 CALL_LIMIT_S = 60.0
+#: A call that waits longer than this (wall time) fails too: a hang that blocks without using the
+#: CPU. Ten times the CPU limit, so that a machine loaded tenfold does not fail a short call.
+CALL_WALL_LIMIT_S = 10 * CALL_LIMIT_S
 
 
 class CallTimeout(Exception):
-    """Raised in a call that outlives :data:`CALL_LIMIT_S`."""
+    """Raised in a call that outlives :data:`CALL_LIMIT_S` of CPU or :data:`CALL_WALL_LIMIT_S`."""
 
 
 def _expire(signum: int, frame: object) -> None:
-    raise CallTimeout()
+    raise CallTimeout("CPU time" if signum == signal.SIGPROF else "wall time")
 
 
 @contextlib.contextmanager
-def time_limit(seconds: float) -> Iterator[None]:
-    """Raises :class:`CallTimeout` in the main thread after ``seconds`` of wall time."""
+def time_limit(cpu_seconds: float, wall_seconds: float | None = None) -> Iterator[None]:
+    """Raises :class:`CallTimeout` in the main thread after ``cpu_seconds`` of the process's CPU
+    time (all threads: ITIMER_PROF) or ``wall_seconds`` (default ten times as long) of wall time."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGALRM, _expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    wall = 10 * cpu_seconds if wall_seconds is None else wall_seconds
+    previous = {sig: signal.signal(sig, _expire) for sig in (signal.SIGPROF, signal.SIGALRM)}
+    signal.setitimer(signal.ITIMER_PROF, cpu_seconds)
+    signal.setitimer(signal.ITIMER_REAL, wall)
     try:
         yield
     finally:
+        signal.setitimer(signal.ITIMER_PROF, 0.0)
         signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 #: Calls per target in CI.
 CI_EXAMPLES = 6
 #: A profile with at least this many examples is a long run.
@@ -70,8 +83,8 @@ LONG_EXAMPLES = 1000
 #: Examples per round in the long profile (each round is one Hypothesis run with its own seed).
 ROUND_EXAMPLES = 50
 #: The pytest-timeout of one target's test: its budget, then room for Hypothesis to shrink a call
-#: that timed out (each retry stopped by the alarm).
-TEST_TIMEOUT_S = int(float(os.environ.get("ROTORFAULT_HOSTILE_SECONDS", "30")) + 20 * CALL_LIMIT_S)
+#: that timed out (each retry stopped by its timers).
+TEST_TIMEOUT_S = int(float(os.environ.get("ROTORFAULT_HOSTILE_SECONDS", "30")) + 2 * CALL_WALL_LIMIT_S + 20 * CALL_LIMIT_S)
 
 #: A refusal names its field: ``field: rule`` (the project's form) or a word the call was given.
 #: ``field: rule``: one or more field names (``a.b[2]``, ``quad_params['mass']``, a file's path),
@@ -103,8 +116,9 @@ def log_line(entry: dict[str, object]) -> None:
     later keeps it."""
     path = os.environ.get("ROTORFAULT_HOSTILE_LOG")
     if path:
+        stamp = {"utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "load_1min": round(os.getloadavg()[0], 1)}
         with open(path, "a", encoding="utf-8") as handle:
-            handle.write(json.dumps(entry, default=repr) + "\n")
+            handle.write(json.dumps({**entry, **stamp}, default=repr) + "\n")
 
 
 @dataclass
@@ -155,11 +169,12 @@ def call_once(name: str, target: Target, call: Call, counts: dict[str, int], rou
 
 def _call_once(name: str, target: Target, call: Call, counts: dict[str, int]) -> None:
     try:
-        with warnings.catch_warnings(), time_limit(CALL_LIMIT_S):
+        with warnings.catch_warnings(), time_limit(CALL_LIMIT_S, CALL_WALL_LIMIT_S):
             warnings.simplefilter("error")
             result = call.fn(*call.args, **call.kwargs)
-    except CallTimeout:
-        raise AssertionError(f"{name}: {call!r} did not return within {CALL_LIMIT_S:.0f} s") from None
+    except CallTimeout as exc:
+        limit = CALL_LIMIT_S if str(exc) == "CPU time" else CALL_WALL_LIMIT_S
+        raise AssertionError(f"{name}: {call!r} did not return within {limit:.0f} s of {exc}") from None
     except KeyboardInterrupt:  # never: only the user's Ctrl-C may raise it
         raise AssertionError(f"{name}: KeyboardInterrupt from {call!r}") from None
     except (ValueError, TypeError, OSError) as exc:

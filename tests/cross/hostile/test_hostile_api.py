@@ -65,6 +65,19 @@ def test_the_call_limit_stops_a_long_rust_call() -> None:
         rf.acai_batch(ring, np.ones((200_000, m)))  # about 1 ms each: minutes of work
 
 
+@pytest.mark.timeout(60, method="thread")
+def test_the_call_limit_counts_cpu_time_and_waiting_separately() -> None:
+    """A call that waits uses no CPU: a starved machine (the long run's flaky failure: a 0.5 s
+    campaign took over 60 s of wall time at nice 10) cannot fail it on the CPU limit; a call that
+    blocks still meets the wall-time limit."""
+    import time
+
+    with time_limit(0.3, 30.0):
+        time.sleep(1.0)  # more wall time than the CPU limit, no CPU
+    with pytest.raises(CallTimeout, match="wall time"), time_limit(30.0, 0.3):
+        time.sleep(5.0)
+
+
 @pytest.mark.timeout(TEST_TIMEOUT_S, method="thread")
 @pytest.mark.parametrize("name", sorted(TARGETS))
 def test_hostile_calls(name: str) -> None:
