@@ -521,11 +521,13 @@ def acai_scan(
         # The size on Python integers, before anything is built from it.
         total_points = math.prod(len(c) for c in columns)
         shape = " x ".join(str(len(c)) for c in columns)
-        if total_points > MAX_STREAM_POINTS:
-            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed the limit of a streamed scan of {MAX_STREAM_POINTS:,}")
+        streamable = total_points <= MAX_STREAM_POINTS
         if out is None:
             check_in_memory("axes", total_points, row_bytes(scan_schema(names, formula_names, give_up_yaw)),
-                            remedy=f"({shape} grid points) stream them to Parquet with out=DIR (CLI: rotorfault scan --out DIR)")
+                            remedy=f"({shape} grid points) stream them to Parquet with out=DIR (CLI: rotorfault scan --out DIR)" if streamable
+                            else f"({shape} grid points) more than a streamed scan takes too ({MAX_STREAM_POINTS:,}): use fewer levels")
+        if not streamable:
+            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed the limit of a streamed scan of {MAX_STREAM_POINTS:,}")
         if -(-total_points // chunk_points) >= 10**9:
             raise ValueError(f"chunk_points: {total_points:,} points in chunks of {chunk_points:,} make over 10^9 chunk files; use larger chunks")
     if samples is not None and len({len(c) for c in columns}) != 1:
