@@ -99,7 +99,7 @@ def test_markup_in_a_name_is_printed_literally(tmp_path: Path) -> None:
     [
         (("failures", "-a", "hexa-ppnnpn", "-k", "99999999999999999999999"), "max_failed: must be at most"),
         (("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2", "--plot", "x.png"), "needs three swept rotors"),
-        (("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2,3,4", "--step", "0.001"), "grid points exceed"),
+        (("scan", "-a", "hexa-pnpnpn", "--rotors", "1,2,3,4", "--step", "0.001"), "exceed the in-memory limit"),
     ],
 )
 def test_more_errors_are_one_line(args: tuple[str, ...], message: str) -> None:

@@ -15,8 +15,8 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._typing import ControlAxes
-from .._util.convert import FloatArray, control_axes, flag, float_array, real
-from ..analysis.airframe import Airframe
+from .._util.convert import FloatArray, control_axes, flag, float_array, real, rotor_numbers
+from ..analysis.airframe import Airframe, require_airframe
 from .allocator import CLARABEL_TOLERANCE, Allocator
 
 if TYPE_CHECKING:
@@ -127,9 +127,13 @@ def hover_distances(airframe: Airframe, failed: Iterable[Sequence[int]]) -> dict
     """:func:`hover_wrench_distance` with all four axes and giving up yaw, for each set of failed
     rotors (numbered from 1) of ``airframe``: what failure tables and certificates print beside
     "outside" (:func:`rotorfault.analysis.acai.hover_wrench_text`)."""
+    airframe = require_airframe(airframe)
+    if isinstance(failed, (str, bytes)) or not isinstance(failed, Iterable):
+        raise TypeError(f"failed: expected a sequence of failed-rotor sets (numbered from 1), got {type(failed).__name__}")
     out = {}
-    for rotors in failed:
-        key = tuple(int(r) for r in rotors)
+    for k, rotors in enumerate(failed):
+        # By name (int('x') was a ValueError naming nothing).
+        key = rotor_numbers(f"failed[{k}]", rotors, airframe.rotor_count)
         frame = airframe.with_failed_rotors(list(key)) if key else airframe
         out[key] = (hover_wrench_distance(frame), hover_wrench_distance(frame, give_up_yaw=True))
     return out

@@ -21,6 +21,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import sys
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from os import PathLike
@@ -78,7 +79,9 @@ def _pair(name: str, value: Any, *, low: float = -math.inf, high: float = math.i
     for v in value:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise TypeError(f"{name}: expected numbers, got {v!r}")
-    lo, hi = float(value[0]), float(value[1])
+    # + 0.0 turns -0.0 into 0.0: (0.0, -0.0) is an empty range, but NumPy's uniform() reads the
+    # sign bit of high - low and refused it mid-campaign, naming no field (issue 27).
+    lo, hi = float(value[0]) + 0.0, float(value[1]) + 0.0
     if not (math.isfinite(lo) and math.isfinite(hi)):
         raise ValueError(f"{name}: must be finite, got ({lo}, {hi})")
     if lo > hi:
@@ -149,6 +152,10 @@ class Campaign:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
                 raise TypeError(f"{name}: expected an integer, got {v!r}")
+            # Counts reach the core as 64-bit integers: 10**21 substeps is refused here by name
+            # (pyo3's bare OverflowError before; issue 27).
+            if v > sys.maxsize:
+                raise ValueError(f"{name}: must be at most {sys.maxsize}, got {v}")
         if self.runs < 1:
             raise ValueError(f"runs: must be >= 1, got {self.runs}")
         if self.substeps < 1:
@@ -519,6 +526,7 @@ def run_campaign(
         dask=dask,
         progress=campaign.runs >= 10_000 if progress is None else progress,
         description=f"{campaign.runs:,} runs in {campaign.chunk_count()} chunks",
+        rows_field="runs",
     )
     columns = None if result.table is None else numpy_columns(result.table)
     return CampaignResult(

@@ -506,7 +506,7 @@ def run_deciding(
         _Task(suite), total_rows=suite.total_runs, chunk_rows=suite.chunk_size, schema=schema(), arguments={"suite": suite.to_dict()},
         kind=KIND, out=out, metadata={"rotorfault_version": _rfcore.__version__}, resume=resume, force=force, backend=backend,
         dask=dask, progress=suite.total_runs >= 2000 if progress is None else progress,
-        description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells",
+        description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells", rows_field="suite",
     )
     if result.table is None:
         from .storage import iter_tables, pyarrow_module

@@ -44,6 +44,47 @@ if TYPE_CHECKING:
     from distributed import Client
 
 
+#: The most a study gathers in memory (``out=None``): 1 GiB of result columns. The machine it
+#: was sized on has 24 GB shared by several jobs, and reading the result (``to_pandas()``, a
+#: campaign's NumPy columns) copies it once more; above this a study streams to Parquet (``out=``,
+#: CLI ``--out``), whose memory is bounded by the chunk size instead.
+MAX_IN_MEMORY_BYTES = 1 << 30
+#: What one string cell is counted as: Arrow's 4-byte offset and its characters, plus the NumPy
+#: copy of 4 bytes per character a campaign's columns keep (its strings are short words and rotor
+#: lists, well under 12 characters).
+STRING_CELL_BYTES = 64
+
+
+def row_bytes(schema: Schema) -> int:
+    """Bytes one row of ``schema`` takes in memory: each fixed-width column's width (a bool
+    counted as NumPy's one byte, not Arrow's bit), a string as :data:`STRING_CELL_BYTES`. A scan
+    over three efficiency axes with both formulas takes 3 x 8 + 2 x 8 + 3 = 43 bytes a row; a
+    campaign's row 472."""
+    pa = pyarrow_module()
+
+    total = 0
+    for f in schema:
+        if pa.types.is_string(f.type) or pa.types.is_large_string(f.type):
+            total += STRING_CELL_BYTES
+        elif pa.types.is_boolean(f.type):
+            total += 1
+        else:
+            total += f.type.bit_width // 8
+    return total
+
+
+def check_in_memory(field: str, rows: int, bytes_per_row: int, *, remedy: str = "stream them to Parquet with out=DIR (CLI: --out DIR)") -> None:
+    """Refuses, naming ``field``, a result of ``rows`` rows of ``bytes_per_row`` bytes that would
+    exceed :data:`MAX_IN_MEMORY_BYTES` (on Python integers: never wraps), before any work."""
+    need = rows * bytes_per_row
+    if need > MAX_IN_MEMORY_BYTES:
+        most = MAX_IN_MEMORY_BYTES // bytes_per_row
+        raise ValueError(
+            f"{field}: {rows:,} rows of {bytes_per_row} bytes ({need / 2**30:,.1f} GiB) exceed the in-memory limit of "
+            f"{MAX_IN_MEMORY_BYTES / 2**30:g} GiB of results ({most:,} rows); {remedy}"
+        )
+
+
 @dataclass(frozen=True)
 class StreamResult:
     """What :func:`run_chunks` did: the in-memory table (``out=None``) or the output directory."""
@@ -88,6 +129,7 @@ def run_chunks(
     description: str = "chunks",
     compression: str = "zstd",
     on_chunk_written: Callable[[ChunkSpec], None] | None = None,
+    rows_field: str = "total_rows",
 ) -> StreamResult:
     """Runs ``task`` over every chunk of ``total_rows`` rows and gathers the tables in memory
     (``out=None``) or streams them to the directory ``out`` (see the module docstring).
@@ -95,7 +137,9 @@ def run_chunks(
     ``arguments`` (JSON-able) identify the job: with ``kind``, the schema and the chunking they
     decide whether an existing output may be resumed. ``metadata`` (JSON-able) is recorded in the
     manifest too but not compared (e.g. the rotorfault version). ``on_chunk_written`` is called
-    after each chunk is in place (or gathered)."""
+    after each chunk is in place (or gathered). Gathered in memory, the rows may take at most
+    :data:`MAX_IN_MEMORY_BYTES` (:func:`row_bytes` of ``schema`` each): more is refused before
+    any work, naming ``rows_field`` (the caller's name for the row count)."""
     pyarrow_module()  # the install hint before anything else
 
     if not callable(task):
@@ -113,6 +157,8 @@ def run_chunks(
     if backend == "dask":
         check_dask(dask)
     schema = schema.remove_metadata()
+    if out is None:
+        check_in_memory(rows_field, total_rows, row_bytes(schema))
     identity: dict[str, Any] = {
         "kind": kind,
         "arguments": json.loads(json.dumps(dict(arguments))),

@@ -15,8 +15,10 @@ slow circle inside the band holds here and is called circling there; the tables 
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -115,6 +117,11 @@ class FaultCase:
     def __post_init__(self) -> None:
         if not isinstance(self.rotors, tuple) or not self.rotors:
             raise TypeError(f"rotors: expected a non-empty tuple of 1-based rotor numbers, got {self.rotors!r}")
+        for r in self.rotors:
+            if isinstance(r, bool) or not isinstance(r, numbers.Integral):
+                raise TypeError(f"rotors: expected 1-based rotor numbers, got {r!r}")
+            if r < 1:
+                raise ValueError(f"rotors: rotors are numbered from 1, got {r}")
         if len(set(self.rotors)) != len(self.rotors):
             raise ValueError(f"rotors: each rotor at most once, got {self.rotors}")
         eff = real("efficiency", self.efficiency)
@@ -154,8 +161,25 @@ def fault_set(
     """A fault set for Ke's robust gains: every single-rotor fault of ``rotors`` at each of
     ``efficiencies``, then every pair of ``pairs`` (e.g. :data:`PAIRS`) failing totally, the first
     fault at ``time_s``. Default: the ``ke-robust`` tuning's 4 rotors x 5 efficiencies."""
-    singles = tuple(FaultCase((int(r),), float(e), time_s) for r in rotors for e in efficiencies)
-    return singles + tuple(FaultCase(tuple(int(r) for r in pair), 0.0, time_s) for pair in pairs)
+    # Each argument read once, by name (int('x') was a ValueError naming nothing); FaultCase
+    # checks the values.
+    rotor_list = [_integer("rotors", r) for r in _sequence("rotors", rotors)]
+    efficiency_list = [real("efficiencies", e) for e in _sequence("efficiencies", efficiencies)]
+    pair_list = [tuple(_integer("pairs", r) for r in _sequence("pairs", pair)) for pair in _sequence("pairs", pairs)]
+    singles = tuple(FaultCase((r,), e, time_s) for r in rotor_list for e in efficiency_list)
+    return singles + tuple(FaultCase(pair, 0.0, time_s) for pair in pair_list)
+
+
+def _sequence(field: str, values: Any) -> list[Any]:
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise TypeError(f"{field}: expected a sequence, got {type(values).__name__}")
+    return list(values)
+
+
+def _integer(field: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{field}: expected 1-based rotor numbers, got {value!r}")
+    return int(value)
 
 
 # -- flying gain sets through the fault set ---------------------------------------------------

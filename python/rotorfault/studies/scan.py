@@ -29,8 +29,11 @@ if TYPE_CHECKING:
 
 #: Points evaluated per batch call; bounds memory and drives the progress bar.
 CHUNK_POINTS = 1 << 20
-#: Largest grid a scan holds in memory (points, ACAI and efficiencies: about 4 GB for 3 rotors).
-MAX_SCAN_POINTS = 100_000_000
+#: Scans held in memory are sized by their bytes, not their points: at most
+#: :data:`rotorfault.studies.engine.MAX_IN_MEMORY_BYTES` (1 GiB) of results, each row's bytes
+#: counted from what it holds (:func:`efficiency_scan`: 8 per swept rotor, 8 for the ACAI, 1 for the
+#: hover code; :func:`acai_scan`: its schema, 43 bytes for three efficiency axes and both formulas,
+#: so at most 24,970,740 points). Larger scans stream to Parquet (``out=``, ``rotorfault scan --out``).
 #: Largest scan streamed to Parquet: row numbers stay far inside int64 and the chunk files
 #: (``chunk-<9 digits>``) stay countable; planning it takes constant memory (chunks are made
 #: one at a time), running it takes as long as it takes.
@@ -119,18 +122,24 @@ def efficiency_scan(
     count = int(round(1.0 / step))
     if not np.isclose(count * step, 1.0, rtol=0.0, atol=1e-9):
         raise ValueError(f"step: must divide 1 evenly (0.04, 0.05, 0.1, ...), got {step}")
-    # The size is checked on integers before anything is allocated.
+    # The size is checked on integers before anything is allocated: per point the swept
+    # efficiencies, the ACAI (float64 each) and the hover code (int8).
+    from .engine import check_in_memory
+
     total = (count + 1) ** len(swept)
-    if total > MAX_SCAN_POINTS:
-        raise ValueError(
-            f"step, rotors: {count + 1}^{len(swept)} = {total:,} grid points exceed the in-memory "
-            f"limit of {MAX_SCAN_POINTS:,}; use a coarser step or fewer rotors"
-        )
+    check_in_memory(
+        "step, rotors", total, 8 * len(swept) + 8 + 1,
+        remedy=f"({count + 1}^{len(swept)} grid points) use a coarser step or fewer rotors, or stream the grid to Parquet "
+        "with acai_scan(..., out=DIR) (CLI: rotorfault scan --out DIR)",
+    )
     levels = np.linspace(0.0, 1.0, count + 1)
     points = np.empty((total, len(swept)))
-    grids = np.meshgrid(*([levels] * len(swept)), indexing="ij")
-    for column, grid in enumerate(grids):
-        points[:, column] = grid.ravel()
+    # Each column broadcast into place (the last rotor fastest): no grid-sized temporaries.
+    grid = points.reshape((count + 1,) * len(swept) + (len(swept),))
+    for column in range(len(swept)):
+        shape = [1] * len(swept)
+        shape[column] = count + 1
+        grid[..., column] = levels.reshape(shape)
     base = airframe.efficiency
     columns = [r - 1 for r in swept]
     result = np.empty(total)
@@ -506,25 +515,29 @@ def acai_scan(
     names = tuple(spec)
     _check_overlaps(names, airframe.rotor_count)
     columns = [_axis_values(n, spec[n]) for n in names]
+    from .engine import check_in_memory, row_bytes
+
     if axes is not None:
         # The size on Python integers, before anything is built from it.
         total_points = math.prod(len(c) for c in columns)
         shape = " x ".join(str(len(c)) for c in columns)
-        limit = MAX_SCAN_POINTS if out is None else MAX_STREAM_POINTS
-        if total_points > limit:
-            where = "the in-memory limit" if out is None else "the limit of a streamed scan"
-            hint = "; stream them to Parquet (out=...)" if out is None and total_points <= MAX_STREAM_POINTS else ""
-            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed {where} of {limit:,}{hint}")
+        streamable = total_points <= MAX_STREAM_POINTS
+        if out is None:
+            check_in_memory("axes", total_points, row_bytes(scan_schema(names, formula_names, give_up_yaw)),
+                            remedy=f"({shape} grid points) stream them to Parquet with out=DIR (CLI: rotorfault scan --out DIR)" if streamable
+                            else f"({shape} grid points) more than a streamed scan takes too ({MAX_STREAM_POINTS:,}): use fewer levels")
+        if not streamable:
+            raise ValueError(f"axes: {shape} = {total_points:,} grid points exceed the limit of a streamed scan of {MAX_STREAM_POINTS:,}")
         if -(-total_points // chunk_points) >= 10**9:
             raise ValueError(f"chunk_points: {total_points:,} points in chunks of {chunk_points:,} make over 10^9 chunk files; use larger chunks")
     if samples is not None and len({len(c) for c in columns}) != 1:
         raise ValueError(f"samples: every axis needs one value per point, got lengths {[len(c) for c in columns]}")
+    if samples is not None and out is None:
+        check_in_memory("samples", len(columns[0]), row_bytes(scan_schema(names, formula_names, give_up_yaw)))
     _check_axis_values(airframe, names, columns)
     levels = tuple(tuple(float(v) for v in c) for c in columns) if axes is not None else None
     task = _ScanTask(airframe.to_toml(), names, levels, tuple(columns) if samples is not None else None, give_up_yaw, formula_names)
     total = task.total
-    if out is None and total > MAX_SCAN_POINTS:
-        raise ValueError(f"axes: {total:,} points exceed the in-memory limit of {MAX_SCAN_POINTS:,}; stream them to Parquet (out=...)")
     if axes is not None:
         axes_arg: dict[str, Any] = {"grid": {n: list(lv) for n, lv in zip(names, levels or ())}}
     else:
@@ -555,6 +568,7 @@ def acai_scan(
         dask=dask,
         progress=progress,
         description=f"{airframe.name}: ACAI over {total:,} points",
+        rows_field="axes" if axes is not None else "samples",
     )
     return Scan(
         airframe.name, names, tuple(columns) if axes is not None else None, give_up_yaw, formula_names, total,
@@ -585,8 +599,11 @@ def read_scan(path: str | PathLike[str]) -> Scan:
 
 def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
     """No failure and every combination of 1..``max_failed`` failed rotors as a sample set for :func:`acai_scan`
-    (``efficiency_<i>`` columns of 0 and 1), in :func:`rotorfault.failure_table` order."""
-    from itertools import combinations
+    (``efficiency_<i>`` columns of 0 and 1), in :func:`rotorfault.failure_table` order.
+
+    At most 1 GiB (:data:`rotorfault.studies.engine.MAX_IN_MEMORY_BYTES`) of columns: 8 bytes per
+    rotor and row, counted before anything is built."""
+    from .engine import check_in_memory
 
     rotor_count = count("rotor_count", rotor_count)
     max_failed = count("max_failed", max_failed)
@@ -595,11 +612,21 @@ def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
     if max_failed > rotor_count:
         raise ValueError(f"max_failed: must be at most rotor_count ({rotor_count}), got {max_failed}")
     # Counted exactly before anything is built: C(n, k) rows of n values each.
-    total = sum(math.comb(rotor_count, k) for k in range(max_failed + 1)) * rotor_count
-    if total > MAX_SCAN_POINTS:
-        raise ValueError(f"max_failed: {total:,} sample values ({rotor_count} rotors, up to {max_failed} failed) exceed the limit of {MAX_SCAN_POINTS:,}")
-    rows = [c for k in range(0, max_failed + 1) for c in combinations(range(rotor_count), k)]
-    eff = np.ones((len(rows), rotor_count))
-    for i, failed in enumerate(rows):
-        eff[i, list(failed)] = 0.0
-    return {f"efficiency_{r + 1}": eff[:, r].copy() for r in range(rotor_count)}
+    sizes = [math.comb(rotor_count, k) for k in range(max_failed + 1)]
+    check_in_memory("max_failed", sum(sizes), 8 * rotor_count,
+                    remedy=f"({rotor_count} rotors, up to {max_failed} failed) give fewer failed rotors")
+    # One row per rotor (each column contiguous), built block by block without listing a
+    # combination: in lexicographic order the k-failure rows whose first failed rotor is ``a`` are
+    # the last C(n - a - 1, k - 1) rows of the (k - 1)-failure block (their failed rotors all
+    # above ``a``) with rotor ``a`` failed too: one slice copy per (k, a), each value written once.
+    eff = np.empty((rotor_count, sum(sizes)))
+    eff[:, 0] = 1.0
+    block_stop = first = 1
+    for k in range(1, max_failed + 1):
+        for a in range(rotor_count - k + 1):
+            width = math.comb(rotor_count - a - 1, k - 1)
+            eff[:, first : first + width] = eff[:, block_stop - width : block_stop]
+            eff[a, first : first + width] = 0.0
+            first += width
+        block_stop = first
+    return {f"efficiency_{r + 1}": eff[r] for r in range(rotor_count)}

@@ -14,6 +14,7 @@ candidate flown on the same runs. Two searches share the driver (:func:`_search`
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .._typing import ScanBackend as Backend
-from .._util.convert import count
+from .._util.convert import count, real
 from .._util.progress import progress_bar
 from ..control.ke import KeGains
 from .campaign import Campaign, _pair, run_chunk
@@ -373,6 +374,9 @@ def tune_hold(
     crit = HoldCriteria() if criteria is None else criteria
     if not isinstance(crit, HoldCriteria):
         raise TypeError(f"criteria: expected HoldCriteria, got {type(crit).__name__}")
+    duration_s = real("duration_s", duration_s)
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise ValueError(f"duration_s: must be finite and > 0, got {duration_s}")
     for case in chosen:  # a bad duration is refused before any search
         if not case.last_fault_s + crit.settle_s < duration_s:
             raise ValueError(f"duration_s: {duration_s:g} s ends before the judging of {case.label} starts")

@@ -65,8 +65,61 @@ def test_the_call_limit_stops_a_long_rust_call() -> None:
         rf.acai_batch(ring, np.ones((200_000, m)))  # about 1 ms each: minutes of work
 
 
+@pytest.mark.timeout(60, method="thread")
+def test_the_call_limit_counts_cpu_time_and_waiting_separately() -> None:
+    """A call that waits uses no CPU: a starved machine (the long run's flaky failure: a 0.5 s
+    campaign took over 60 s of wall time at nice 10) cannot fail it on the CPU limit; a call that
+    blocks still meets the wall-time limit."""
+    import time
+
+    with time_limit(0.3, 30.0):
+        time.sleep(1.0)  # more wall time than the CPU limit, no CPU
+    with pytest.raises(CallTimeout, match="wall time"), time_limit(30.0, 0.3):
+        time.sleep(5.0)
+
+
 @pytest.mark.timeout(TEST_TIMEOUT_S, method="thread")
 @pytest.mark.parametrize("name", sorted(TARGETS))
 def test_hostile_calls(name: str) -> None:
     counts = run_target(name, TARGETS[name])
     assert counts["calls"] > 0
+
+
+def _fails_above_500(n: int) -> int:
+    if n > 500:
+        raise RuntimeError(f"n = {n}")
+    return n
+
+
+def test_a_failure_is_logged_with_what_replays_it(tmp_path, monkeypatch) -> None:
+    """A long run's failure is in the log before it propagates (the call in full, its traceback,
+    the round's seed and Hypothesis' blob), and the logged seed replays the same first call: a
+    failure that Hypothesis cannot reproduce, or whose output is lost, is not lost with it."""
+    import json
+
+    from hypothesis import settings
+    from hypothesis import strategies as st
+
+    from hostile_runner import LONG_EXAMPLES
+    from hostile_targets import Call, Target
+
+    target = Target(st.integers(0, 10**6).map(lambda n: Call(_fails_above_500, (n,))))
+    long = settings(max_examples=LONG_EXAMPLES, deadline=None)
+    log = tmp_path / "hostile.jsonl"
+    monkeypatch.setenv("ROTORFAULT_HOSTILE_LOG", str(log))
+
+    def run() -> list[dict[str, object]]:
+        log.write_text("")
+        with pytest.raises(RuntimeError):
+            run_target("toy", target, long)
+        return [json.loads(line) for line in log.read_text().splitlines()]
+
+    first, ended, summary = run()
+    assert first["event"] == "failure" and first["call"].startswith("_fails_above_500(") and "RuntimeError: n = " in first["traceback"]
+    assert ended["event"] == "round-failed" and ended["seed"] == first["seed"] and ended["first_call"] == first["call"]
+    assert ended["shrunk_call"] == "_fails_above_500(501)"  # shrunk to the boundary
+    assert "@reproduce_failure(" in ended["reproduce_failure"]
+    assert summary["passed"] is False and summary["seeds"] == [first["seed"]]
+    monkeypatch.setenv("ROTORFAULT_HOSTILE_SEED", str(first["seed"]))
+    replayed = run()
+    assert replayed[0]["call"] == first["call"] and replayed[0]["seed"] == first["seed"]

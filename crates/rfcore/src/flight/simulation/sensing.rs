@@ -7,7 +7,7 @@
 //! sensing), the papers' relative noise on the state (`SimulationConfig::noise`, kept to reproduce
 //! the papers' scenarios) or sensors with the estimator (`SimulationConfig::sensing`).
 
-use crate::error::{require_finite, Result, RfError};
+use crate::error::{require_scale, Result, RfError};
 use crate::flight::estimation::EstimatorSettings;
 use crate::flight::sensors::{ImuProfile, SensorSuiteProfile};
 
@@ -159,8 +159,10 @@ impl Sensing {
     }
 }
 
+/// A rate the sensors divide by (their sample period): a scale (`require_scale`: a subnormal
+/// rate's period is infinite, and building the simulator never returned), at most `most`.
 fn rate(field: &str, value: f64, most: f64) -> Result<()> {
-    require_finite(field, value)?;
+    require_scale(field, value, "Hz")?;
     if !(value > 0.0 && value <= most) {
         return Err(RfError::invalid(
             field,
@@ -213,6 +215,21 @@ mod tests {
                 "sensing.position_rate_hz",
                 Sensing {
                     position_rate_hz: Some(-1.0),
+                    ..Sensing::default()
+                },
+            ),
+            // Subnormal rates: an infinite sample period (the simulator never got built).
+            (
+                "sensing.position_rate_hz",
+                Sensing {
+                    position_rate_hz: Some(1e-310),
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.imu_rate_hz",
+                Sensing {
+                    imu_rate_hz: 1e-310,
                     ..Sensing::default()
                 },
             ),
