@@ -384,7 +384,7 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
         airframe, actuator, drag = campaign._vehicle_parts(spec)
         noise = campaign._noise(spec)
         airframes.append(airframe._core)
-        actuators.append(actuator._core())
+        actuators.append(actuator)
         drags.append(drag)
         faults.append([f._packed() for f in spec.faults(campaign)])
         configs.append(
