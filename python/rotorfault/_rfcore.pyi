@@ -3,6 +3,8 @@
 from collections.abc import Sequence
 from typing import Any, ClassVar, Self, final
 
+from typing_extensions import disjoint_base
+
 import numpy as np
 import numpy.typing as npt
 
@@ -993,6 +995,7 @@ class IndiController:
     ) -> IndiController: ...
     def failure_modes(self) -> list[IndiFailureMode]: ...
 
+@disjoint_base
 class FtcPreset:
     def __new__(
         cls,
