@@ -68,3 +68,34 @@ impl VariablePitchPreset {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flight::actuator::Actuators;
+
+    #[test]
+    fn wang_preset_parses_and_holds_the_papers_numbers() {
+        let text = crate::fixtures::preset_text("vpp/wang.toml");
+        let preset = VariablePitchPreset::from_toml_str(&text, "wang").unwrap();
+        assert_eq!(preset.coefficients, [5e-7, 1e-8, 2e-10, 4e-7]);
+        assert_eq!(preset.speed_bounds, (0.0, 10_000.0));
+        assert_eq!(preset.pitch_bounds, (-0.26, 0.26));
+        assert_eq!(preset.lags(), VariablePitchLags::default());
+        let airframe = crate::fixtures::preset(&preset.airframe);
+        assert_eq!(airframe.mass_kg(), 1.0);
+        assert_eq!(airframe.gravity_m_s2(), 10.0);
+        // The thrust box is the propeller's: k1 omega_max^2 alpha_max = 13 N either way.
+        let actuator = preset.actuator(&airframe).unwrap();
+        let mut rotors = Actuators::VariablePitch(actuator);
+        rotors.settle(&[[10_000.0, 0.26]; 4].concat()).unwrap();
+        let most = rotors.output(0, 1.0).thrust_n;
+        assert!((most - airframe.max_thrust_n()[0]).abs() < 1e-12, "{most}");
+        assert!((airframe.min_thrust_n()[0] + most).abs() < 1e-12);
+        let bad = text.replace("linear_drag_n_s_m = 0.25", "linear_drag_n_s_m = -1");
+        let err = VariablePitchPreset::from_toml_str(&bad, "wang").unwrap_err();
+        assert!(err.to_string().starts_with("linear_drag_n_s_m"), "{err}");
+        let unknown = format!("{text}\nextra = 1\n");
+        assert!(VariablePitchPreset::from_toml_str(&unknown, "wang").is_err());
+    }
+}
