@@ -22,7 +22,6 @@ not give); the bounds below are set from those measurements (numbers in the READ
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -139,7 +138,7 @@ def test_tracking_after_a_failure_needs_a_stiffer_outer_loop(runs: dict[str, ke_
     assert 0.5 < soft.position[-1, 1] - soft.position[k, 1] < 3.0
     pre = ke.preset()
     stiff = pre.gains.replace(accel_limit_m_s2=1.0, k_v=0.5)
-    run = ke_paper.run_scenario("tracking-one-failure", controller_preset=dataclasses.replace(pre, gains=stiff))
+    run = ke_paper.run_scenario("tracking-one-failure", controller_preset=pre.replace(gains=stiff))
     assert run.metrics.outcome == "holds-position"
     assert run.metrics.final_horizontal_error_m < 0.5
     assert run.metrics.max_horizontal_error_m < 12.0

@@ -62,7 +62,7 @@ def test_outer_loop_rotation_cancels_the_yaw() -> None:
         state = rf.State(position=(1.0, 0.0, 0.0), euler=(0, 0, -psi), omega=(0, 0, -v.spin_rate_rad_s))
         ctrl = _rfcore.LanzonController(model=v._core(), a_k=np.zeros((0, 0)), b_k=np.zeros((0, 3)),
                                         c_k=np.zeros((3, 0)), d_k=np.zeros((3, 3)),
-                                        position=[0.0, 0.0, 0.0], outer_loop=gains._core())
+                                        position=[0.0, 0.0, 0.0], outer_loop=gains)
         # With D_K = 0 the linear input is zero and the command is alpha(x) at the state: hover.
         out = _rfcore.replay(ctrl, np.zeros(1), np.array([state._packed()]), 4)[0]
         assert out[1] == 0.0
@@ -110,7 +110,7 @@ def test_bad_designs_name_the_field() -> None:
     with pytest.raises(ValueError, match=r"^D_K\[0, 1\]: must be finite"):
         _rfcore.LanzonController(model=m, **{**z, "d_k": np.array([[0, np.inf, 0], [0, 0, 0], [0, 0, 0.0]])})
     with pytest.raises(ValueError, match=r"^outer_loop.max_tilt_rad: must be in"):
-        _rfcore.LanzonController(model=m, position=[0, 0, 0], outer_loop=_rfcore.LanzonOuterLoop(max_tilt_rad=2.0), **z)
+        _rfcore.LanzonController(model=m, position=[0, 0, 0], outer_loop=_rfcore.OuterLoopGains(max_tilt_rad=2.0), **z)
     with pytest.raises(ValueError, match=r"^model.mass_kg: must be > 0"):
         _rfcore.LanzonModel(mass_kg=-1.0)
     with pytest.raises(ValueError, match="position, attitude_reference: give one"):
@@ -240,4 +240,4 @@ def test_integral_gains_are_checked() -> None:
     z = {"a_k": np.zeros((0, 0)), "b_k": np.zeros((0, 3)), "c_k": np.zeros((3, 0)), "d_k": np.zeros((3, 3))}
     for field, bad in (("k_i_z", -0.1), ("k_i_xy", math.nan), ("integral_limit_m_s", 0.0)):
         with pytest.raises(ValueError, match=rf"^outer_loop.{field}"):
-            _rfcore.LanzonController(model=m, position=[0, 0, 0], outer_loop=_rfcore.LanzonOuterLoop(**{field: bad}), **z)
+            _rfcore.LanzonController(model=m, position=[0, 0, 0], outer_loop=_rfcore.OuterLoopGains(**{field: bad}), **z)

@@ -33,7 +33,8 @@ def test_preset_holds_the_papers_numbers_and_documented_choices(wang: vpp.VppVeh
     assert tuple(wang.actuator.pitch_bounds) == (-0.26, 0.26)
     # 10 Hz first-order actuators on both channels (Sec. 4.2), the core's default.
     assert wang.actuator.speed_time_constant_s == pytest.approx(1 / (20 * math.pi), rel=1e-15)
-    assert wang.actuator.pitch_time_constant_s == rf.VariablePitchActuator.pitch_time_constant_s
+    default = rf.VariablePitchActuator(k=wang.coefficients, speed_bounds=(0, 1), pitch_bounds=(0, 1))
+    assert wang.actuator.pitch_time_constant_s == default.pitch_time_constant_s
     assert wang.drag.linear_n_s_m == 0.25
     # Thrust box: k1 omega_max^2 alpha_max = 13 N either way.
     assert np.all(wang.airframe.max_thrust_n == 13.0) and np.all(wang.airframe.min_thrust_n == -13.0)
@@ -259,6 +260,6 @@ def test_vpp_vehicle_is_checked_once_when_built(wang: vpp.VppVehicle, field: str
         if field == "drag":  # Drag is the core's class: its values are checked when it is made
             dataclasses.replace(wang, drag=rf.Drag(**value))  # type: ignore[arg-type]
         elif field.startswith("actuator."):
-            dataclasses.replace(wang, actuator=dataclasses.replace(wang.actuator, **{field.split(".")[1]: value}))
+            dataclasses.replace(wang, actuator=wang.actuator.replace(**{field.split(".")[1]: value}))
         else:
             dataclasses.replace(wang, **{field: value})

@@ -1,6 +1,8 @@
 """Types that cross the Rust/Python boundary once (issue 26): the settings Python users make
-(``KeGains``, ``Drag``, ``DivergenceLimits``) are the extension's classes themselves, validated
-once, by the core, with the core's messages; no Python mirror copies them field by field."""
+(``KeGains``, ``Drag``, ``DivergenceLimits``, the actuators, Lanzon's ``OuterLoopGains``) are the
+extension's classes themselves, validated once, by the core, with the core's messages, and the
+results the core returns (``DirectionalLimit``, ``HoverMargin``, a controller preset) reach users
+as they are; no Python mirror copies them field by field."""
 
 from __future__ import annotations
 
@@ -8,21 +10,27 @@ import dataclasses
 import math
 import pickle
 
+import numpy as np
 import pytest
 
 import rotorfault as rf
 from rotorfault import _rfcore
-from rotorfault.control import ke
+from rotorfault.control import ke, lanzon
 
 SETTINGS = [
     (ke.KeGains, "k_v", 0.5),
     (rf.Drag, "linear_n_s_m", 0.3),
     (rf.DivergenceLimits, "max_tilt_rad", 1.0),
+    (rf.FixedPitchActuator, "time_constant_s", 0.025),
+    (lanzon.OuterLoopGains, "k_i_z", 0.1),
 ]
 
 
 def test_the_public_names_are_the_extension_classes() -> None:
     assert ke.KeGains is _rfcore.KeGains and rf.Drag is _rfcore.Drag and rf.DivergenceLimits is _rfcore.DivergenceLimits
+    assert rf.FixedPitchActuator is _rfcore.FixedPitchActuator and rf.VariablePitchActuator is _rfcore.VariablePitchActuator
+    assert lanzon.OuterLoopGains is _rfcore.OuterLoopGains
+    assert rf.DirectionalLimit is _rfcore.DirectionalLimit and rf.HoverMargin is _rfcore.HoverMargin
     # A preset's gains come out of the core's TOML parser as they are: no conversion.
     assert type(ke.preset("ke-hil").gains) is _rfcore.KeGains
     assert ke.preset("ke-hil").gains == ke.KeGains()  # the core's Default is the ke-hil preset
@@ -86,3 +94,61 @@ def test_a_campaign_with_its_gains_travels_to_a_worker() -> None:
     back = pickle.loads(pickle.dumps(c))
     assert back == c and back.gains == ke.KeGains(k_v=0.25)
     assert Campaign.from_dict(c.to_dict()) == c
+
+
+def test_the_actuators_are_checked_when_made_by_the_cores_rules() -> None:
+    """Before, a bad actuator was accepted and refused by the first simulator: now when it is
+    made, with the message the simulator gave (the core's ``check_parameters``)."""
+    with pytest.raises(ValueError, match="^actuator.time_constant_s: must"):
+        rf.FixedPitchActuator(time_constant_s=-1.0)
+    with pytest.raises(ValueError, match="^actuator.rate_limit_n_s: must be > 0 and normal"):
+        rf.FixedPitchActuator(rate_limit_n_s=0.0)
+    with pytest.raises(ValueError, match="^actuator.k1: must be finite"):
+        rf.VariablePitchActuator(k=(math.nan, 0.0, 0.0, 0.0), speed_bounds=(0, 1), pitch_bounds=(0, 1))
+    with pytest.raises(ValueError, match=r"^actuator.k: expected 4 entries \(k1, k2, k3, k4\), got 3"):
+        rf.VariablePitchActuator(k=(1.0, 0.0, 0.0), speed_bounds=(0, 1), pitch_bounds=(0, 1))
+    with pytest.raises(TypeError, match=r"^actuator.speed_bounds\[1\]: expected a real number, got str"):
+        rf.VariablePitchActuator(k=(1.0, 0.0, 0.0, 0.0), speed_bounds=(0, "1"), pitch_bounds=(0, 1))
+    with pytest.raises(TypeError, match="^actuator.pitch_bounds: required"):
+        rf.VariablePitchActuator(k=(1.0, 0.0, 0.0, 0.0), speed_bounds=(0, 1))
+    with pytest.raises(ValueError, match="^outer_loop.max_tilt_rad: must be in"):
+        lanzon.OuterLoopGains(max_tilt_rad=2.0)
+    with pytest.raises(TypeError, match="^outer_loop.k_d_z: expected a real number, got str"):
+        lanzon.OuterLoopGains(k_d_z="1")  # type: ignore[arg-type]
+
+
+def test_a_variable_pitch_actuator_is_a_frozen_record() -> None:
+    a = rf.VariablePitchActuator(k=np.array([5e-7, 1e-10, 3e-11, 1e-7]), speed_bounds=[0, 10_000], pitch_bounds=(-0.3, 0.3))
+    assert a.k == (5e-7, 1e-10, 3e-11, 1e-7) and a.speed_bounds == (0.0, 10_000.0) and a.speed_to_rad_s == 0.0
+    assert a.speed_time_constant_s == a.pitch_time_constant_s == pytest.approx(1 / (20 * math.pi), rel=1e-15)
+    b = a.replace(pitch_rate_limit_rad_s=5.0)
+    assert b.pitch_rate_limit_rad_s == 5.0 and b != a and pickle.loads(pickle.dumps(b)) == b and hash(b) != hash(a)
+
+
+def test_the_dataclass_positional_form_works_one_release_with_a_warning() -> None:
+    with pytest.warns(DeprecationWarning, match=r"FixedPitchActuator\(time_constant_s=\.\.\., rate_limit_n_s=\.\.\.\)"):
+        a = rf.FixedPitchActuator(0.025, 50.0)
+    assert a == rf.FixedPitchActuator(time_constant_s=0.025, rate_limit_n_s=50.0)
+    with pytest.warns(DeprecationWarning, match="VariablePitchActuator"):
+        v = rf.VariablePitchActuator((1.0, 0.0, 0.0, 0.0), (0, 1), (0, 1), speed_to_rad_s=2.0)
+    assert v == rf.VariablePitchActuator(k=(1.0, 0.0, 0.0, 0.0), speed_bounds=(0, 1), pitch_bounds=(0, 1), speed_to_rad_s=2.0)
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="time_constant_s given by position and by keyword"):
+        rf.FixedPitchActuator(0.025, time_constant_s=0.025)
+
+
+def test_results_reach_users_as_the_core_returns_them() -> None:
+    quad = rf.Airframe.preset("quad-x")
+    margin = rf.hover_thrust_margin(quad)
+    assert type(margin) is _rfcore.HoverMargin and isinstance(margin.commands, np.ndarray)
+    assert margin.thrust_to_weight == margin.max_thrust_n / margin.weight_n
+    limit = rf.max_virtual_control(quad, [1.0, 0.0, 0.0, 0.0])
+    assert type(limit) is _rfcore.DirectionalLimit and limit.commands.shape == (4,)
+    preset = ke.preset("ke-hil")
+    assert isinstance(preset, _rfcore.FtcPreset) and preset.airframe_name == "ke-quadcopter"
+    assert preset.airframe.name == preset.airframe_name and preset.gains == ke.KeGains()
+    stiff = preset.replace(gains=preset.gains.replace(k_v=0.5))
+    assert type(stiff) is ke.FtcPreset and stiff.gains.k_v == 0.5 and stiff != preset and pickle.loads(pickle.dumps(stiff)) == stiff
+    with pytest.raises(ValueError, match="^vehicle.rotor_time_constant_s: must be >= 0"):
+        preset.replace(rotor_time_constant_s=-1.0)
+    with pytest.raises(AttributeError):
+        preset.name = "other"  # type: ignore[misc]

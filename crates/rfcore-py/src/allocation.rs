@@ -456,27 +456,87 @@ pub fn time_allocations<'py>(
     Ok(times.into_pyarray(py))
 }
 
-/// The largest scale along a direction and the commands that reach it.
-#[pyclass(
-    name = "DirectionalLimit",
-    module = "rotorfault._rfcore",
-    frozen,
-    get_all
-)]
+/// The largest scale along a direction and the commands that reach it
+/// (`rotorfault.DirectionalLimit`, from `max_virtual_control`).
+#[pyclass(name = "DirectionalLimit", module = "rotorfault._rfcore", frozen)]
 pub struct PyDirectionalLimit {
     scale: f64,
     commands: Vec<f64>,
     status: &'static str,
 }
 
-/// The largest total thrust with zero torques, against the weight.
-#[pyclass(name = "HoverMargin", module = "rotorfault._rfcore", frozen, get_all)]
+#[pymethods]
+impl PyDirectionalLimit {
+    /// The largest `scale` with `base + scale * direction` attainable.
+    #[getter]
+    fn scale(&self) -> f64 {
+        self.scale
+    }
+    /// Rotor commands that attain it, in the allocator's units (N for thrust).
+    #[getter]
+    fn commands<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.commands.clone().into_pyarray(py)
+    }
+    /// The linear program's status.
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.status
+    }
+    fn __repr__(&self) -> String {
+        format!("DirectionalLimit(scale={}, status={:?})", self.scale, self.status)
+    }
+}
+
+/// The largest total thrust with the controlled torques at zero, against the weight
+/// (`rotorfault.HoverMargin`, from `hover_thrust_margin`).
+#[pyclass(name = "HoverMargin", module = "rotorfault._rfcore", frozen)]
 pub struct PyHoverMargin {
     max_thrust_n: f64,
     weight_n: f64,
     margin_n: f64,
     commands: Option<Vec<f64>>,
     status: &'static str,
+}
+
+#[pymethods]
+impl PyHoverMargin {
+    /// The largest total thrust with the controlled torques at zero, N (`-inf`: zero torque is
+    /// unattainable at any thrust).
+    #[getter]
+    fn max_thrust_n(&self) -> f64 {
+        self.max_thrust_n
+    }
+    /// The weight `m g`, N.
+    #[getter]
+    fn weight_n(&self) -> f64 {
+        self.weight_n
+    }
+    /// `max_thrust_n - weight_n`, N (negative: cannot hover in balance).
+    #[getter]
+    fn margin_n(&self) -> f64 {
+        self.margin_n
+    }
+    /// Rotor thrusts (N) that attain the maximum; `None` when zero torque is unattainable.
+    #[getter]
+    fn commands<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.commands.clone().map(|c| c.into_pyarray(py))
+    }
+    /// The linear program's status.
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.status
+    }
+    /// `max_thrust_n / weight_n`, dimensionless.
+    #[getter]
+    fn thrust_to_weight(&self) -> f64 {
+        self.max_thrust_n / self.weight_n
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "HoverMargin(max_thrust_n={}, weight_n={}, margin_n={}, status={:?})",
+            self.max_thrust_n, self.weight_n, self.margin_n, self.status
+        )
+    }
 }
 
 /// Largest scale along `direction` from `base`: None when `base` is unattainable.

@@ -245,3 +245,141 @@ pub(crate) fn settings_replace<'py>(
     }
     obj.get_type().call((), Some(&kwargs)).map(|o| o.into_any())
 }
+
+/// One settings class used directly from Python: keyword-only, defaults from the core's
+/// `Default`, types checked here (`<prefix>.<field>: expected a real number`), values once by the
+/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`.
+macro_rules! settings_class {
+    (
+        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, prefix = $prefix:literal, check = $check:expr,
+        { $($field:ident => $core_field:ident),+ $(,)? }
+    ) => {
+        $(#[$doc])*
+        #[::pyo3::pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
+        #[derive(Clone)]
+        pub struct $py {
+            pub(crate) inner: $core,
+        }
+
+        impl $py {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),+];
+        }
+
+        $crate::convert::settings_protocol!($py, {
+            #[new]
+            #[pyo3(signature = (*, $($field=None),+))]
+            fn new($($field: Option<::pyo3::Bound<'_, ::pyo3::PyAny>>),+) -> ::pyo3::PyResult<Self> {
+                let d = $core::default();
+                let inner = $core {
+                    $($core_field: match $field {
+                        Some(v) => $crate::convert::real(concat!($prefix, ".", stringify!($field)), &v)?,
+                        None => d.$core_field,
+                    }),+
+                };
+                let check: fn(&$core) -> rfcore::Result<()> = $check;
+                check(&inner).map_err($crate::convert::to_py_err)?;
+                Ok($py { inner })
+            }
+            $(
+                #[getter]
+                fn $field(&self) -> f64 {
+                    self.inner.$core_field
+                }
+            )+
+        });
+    };
+}
+pub(crate) use settings_class;
+
+/// The settings protocol's methods (`FIELDS`, `replace`, repr, equality, hash, pickling) for a
+/// class `$py` with a `FIELDS` constant, after its own methods (the constructor, the getters):
+/// `settings_class!` uses it, and so does a settings class whose constructor is written by hand.
+macro_rules! settings_protocol {
+    ($py:ident, { $($methods:tt)* }) => {
+        #[::pyo3::pymethods]
+        impl $py {
+            $($methods)*
+            /// The field names, in order.
+            #[classattr]
+            #[pyo3(name = "FIELDS")]
+            fn fields() -> Vec<&'static str> {
+                Self::FIELDS.to_vec()
+            }
+            /// A copy with ``changes`` (validated like a new object).
+            #[pyo3(signature = (**changes))]
+            fn replace<'py>(slf: &::pyo3::Bound<'py, Self>, changes: Option<&::pyo3::Bound<'py, ::pyo3::types::PyDict>>) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
+                $crate::convert::settings_replace(::pyo3::Bound::as_any(slf), Self::FIELDS, changes)
+            }
+            fn __repr__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<String> {
+                $crate::convert::settings_repr(::pyo3::Bound::as_any(slf), Self::FIELDS)
+            }
+            fn __eq__(slf: &::pyo3::Bound<'_, Self>, other: &::pyo3::Bound<'_, ::pyo3::PyAny>) -> ::pyo3::PyResult<bool> {
+                $crate::convert::settings_eq(::pyo3::Bound::as_any(slf), other, Self::FIELDS)
+            }
+            fn __hash__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<isize> {
+                $crate::convert::settings_hash(::pyo3::Bound::as_any(slf), Self::FIELDS)
+            }
+            fn __getnewargs_ex__<'py>(slf: &::pyo3::Bound<'py, Self>) -> ::pyo3::PyResult<((), ::pyo3::Bound<'py, ::pyo3::types::PyDict>)> {
+                Ok(((), $crate::convert::settings_kwargs(::pyo3::Bound::as_any(slf), Self::FIELDS)?))
+            }
+        }
+    };
+}
+pub(crate) use settings_protocol;
+
+/// `N` real numbers for field `field` (`names` says what they are, e.g. `"w_f, w_p, w_q, w_r"`):
+/// a sequence of exactly `N`, each a real number (`<field>[k]: expected a real number`); the value
+/// rules are the core's.
+pub(crate) fn fixed_reals<const N: usize>(field: &str, names: &str, value: &Bound<'_, PyAny>) -> PyResult<[f64; N]> {
+    use pyo3::types::PyString;
+    let kind = || value.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+    let not_numbers = || PyTypeError::new_err(format!("{field}: expected {N} numbers ({names}), got {}", kind()));
+    if value.is_instance_of::<PyString>() {
+        return Err(not_numbers());
+    }
+    let items: Vec<Bound<'_, PyAny>> = value.try_iter().map_err(|_| not_numbers())?.collect::<PyResult<_>>()?;
+    if items.len() != N {
+        return Err(PyValueError::new_err(format!("{field}: expected {N} entries ({names}), got {}", items.len())));
+    }
+    let mut out = [0.0; N];
+    for (k, item) in items.iter().enumerate() {
+        out[k] = real(&format!("{field}[{k}]"), item)?;
+    }
+    Ok(out)
+}
+
+/// The positional form of a class that was a Python dataclass (its fields in `fields` order),
+/// kept for one release: each positional value fills its field in `given` (the keywords), with
+/// a `DeprecationWarning` naming the keyword form; a field given both ways is a `TypeError`.
+pub(crate) fn deprecated_positional<'py>(
+    class: &str,
+    fields: &[&str],
+    args: &Bound<'py, PyTuple>,
+    given: &mut [Option<Bound<'py, PyAny>>],
+) -> PyResult<()> {
+    if args.is_empty() {
+        return Ok(());
+    }
+    if args.len() > fields.len() {
+        return Err(PyTypeError::new_err(format!(
+            "{class}: takes at most {} positional arguments (deprecated; give keywords: {}), got {}",
+            fields.len(),
+            fields.join(", "),
+            args.len()
+        )));
+    }
+    let py = args.py();
+    let message = format!(
+        "{class}(positional arguments) is deprecated and will be removed in the next release; use {class}({}=...)",
+        fields[..args.len()].join("=..., ")
+    );
+    let message = std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &message, 2)?;
+    for (k, value) in args.iter().enumerate() {
+        if given[k].is_some() {
+            return Err(PyTypeError::new_err(format!("{class}: {} given by position and by keyword", fields[k])));
+        }
+        given[k] = Some(value);
+    }
+    Ok(())
+}

@@ -5,11 +5,10 @@ use nalgebra::Vector3;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::PyTuple;
 
-use rfcore::flight::actuator::{
-    Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags, VariablePitchPreset,
-};
+use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags};
+use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
     simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
@@ -22,33 +21,74 @@ use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
 use crate::sensing::PySensing;
 use crate::convert::{
-    count, detached, real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, slice1, to_py_err,
+    count, deprecated_positional, detached, fixed_reals, real, settings_class, settings_protocol, slice1,
+    to_py_err,
 };
 
-/// Fixed-pitch rotors: first-order lag, rate limit, thrust coefficient for rotor speed.
+/// A real number for `field`, or `default` when not given.
+fn real_or(field: &str, value: Option<Bound<'_, PyAny>>, default: f64) -> PyResult<f64> {
+    value.map_or(Ok(default), |v| real(field, &v))
+}
+
+/// Rotors commanded in thrust (`rotorfault.FixedPitchActuator`): first-order lag, rate limit
+/// (thrust saturation from the airframe) and the thrust coefficient that gives rotor speed.
+/// Keyword-only; defaults the core's (`Lag::none()`, no rotor speed); the rules the core's
+/// `FixedPitch::check_parameters`, applied here, when it is made.
 #[pyclass(name = "FixedPitchActuator", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
 pub struct PyFixedPitch {
     lag: Lag,
     thrust_coefficient_n_s2: f64,
 }
 
-#[pymethods]
 impl PyFixedPitch {
-    #[new]
-    fn new(time_constant_s: f64, rate_limit_per_s: f64, thrust_coefficient_n_s2: f64) -> Self {
-        PyFixedPitch {
-            lag: Lag {
-                time_constant_s,
-                rate_limit_per_s,
-            },
-            thrust_coefficient_n_s2,
-        }
-    }
+    const FIELDS: &'static [&'static str] = &["time_constant_s", "rate_limit_n_s", "thrust_coefficient_n_s2"];
 }
 
-/// Variable-pitch propellers (Wang et al. eq. (3)); the speed and pitch channels' lags default
-/// to the core's `VariablePitchLags::default()`.
+settings_protocol!(PyFixedPitch, {
+    #[new]
+    #[pyo3(signature = (*args, time_constant_s=None, rate_limit_n_s=None, thrust_coefficient_n_s2=None))]
+    fn new<'py>(
+        args: &Bound<'py, PyTuple>,
+        time_constant_s: Option<Bound<'py, PyAny>>,
+        rate_limit_n_s: Option<Bound<'py, PyAny>>,
+        thrust_coefficient_n_s2: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Self> {
+        let mut given = [time_constant_s, rate_limit_n_s, thrust_coefficient_n_s2];
+        deprecated_positional("FixedPitchActuator", Self::FIELDS, args, &mut given)?;
+        let [time_constant_s, rate_limit_n_s, thrust_coefficient_n_s2] = given;
+        let d = Lag::none();
+        let lag = Lag {
+            time_constant_s: real_or("actuator.time_constant_s", time_constant_s, d.time_constant_s)?,
+            rate_limit_per_s: real_or("actuator.rate_limit_n_s", rate_limit_n_s, d.rate_limit_per_s)?,
+        };
+        let thrust_coefficient_n_s2 = real_or("actuator.thrust_coefficient_n_s2", thrust_coefficient_n_s2, 0.0)?;
+        FixedPitch::check_parameters(&lag, thrust_coefficient_n_s2).map_err(to_py_err)?;
+        Ok(PyFixedPitch { lag, thrust_coefficient_n_s2 })
+    }
+    /// First-order lag of the thrust, s (0: none; Ke Table III: 0.025).
+    #[getter]
+    fn time_constant_s(&self) -> f64 {
+        self.lag.time_constant_s
+    }
+    /// Largest rate of change of a rotor's thrust, N/s (`inf`: none; Lanzon: 50).
+    #[getter]
+    fn rate_limit_n_s(&self) -> f64 {
+        self.lag.rate_limit_per_s
+    }
+    /// `k_f` of `f = k_f omega^2`, N s^2 (0: rotor speed not modelled).
+    #[getter]
+    fn thrust_coefficient_n_s2(&self) -> f64 {
+        self.thrust_coefficient_n_s2
+    }
+});
+
+/// Variable-pitch propellers (`rotorfault.VariablePitchActuator`, Wang et al. eq. (3)):
+/// keyword-only; `k`, `speed_bounds` and `pitch_bounds` required, the rest defaulting to the
+/// core's (`VariablePitchLags::default()`, no rotor speed); the rules the core's
+/// `VariablePitch::check_parameters`, applied here, when it is made.
 #[pyclass(name = "VariablePitchActuator", module = "rotorfault._rfcore", frozen)]
+#[derive(Clone)]
 pub struct PyVariablePitch {
     coefficients: [f64; 4],
     speed_bounds: (f64, f64),
@@ -57,33 +97,72 @@ pub struct PyVariablePitch {
     lags: VariablePitchLags,
 }
 
-#[pymethods]
 impl PyVariablePitch {
+    const FIELDS: &'static [&'static str] = &[
+        "k",
+        "speed_bounds",
+        "pitch_bounds",
+        "speed_to_rad_s",
+        "speed_time_constant_s",
+        "speed_rate_limit_per_s",
+        "pitch_time_constant_s",
+        "pitch_rate_limit_rad_s",
+    ];
+}
+
+fn required<'py>(field: &str, value: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
+    value.ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("{field}: required (no default)")))
+}
+
+fn bounds(field: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<(f64, f64)> {
+    let [lower, upper] = fixed_reals::<2>(field, "lower, upper", &required(field, value)?)?;
+    Ok((lower, upper))
+}
+
+settings_protocol!(PyVariablePitch, {
     #[new]
-    #[pyo3(signature = (coefficients, speed_bounds, pitch_bounds, speed_to_rad_s, *, speed_time_constant_s=None, speed_rate_limit_per_s=None, pitch_time_constant_s=None, pitch_rate_limit_rad_s=None))]
+    #[pyo3(signature = (*args, k=None, speed_bounds=None, pitch_bounds=None, speed_to_rad_s=None, speed_time_constant_s=None, speed_rate_limit_per_s=None, pitch_time_constant_s=None, pitch_rate_limit_rad_s=None))]
     #[allow(clippy::too_many_arguments)]
-    fn new(
-        coefficients: [f64; 4],
-        speed_bounds: (f64, f64),
-        pitch_bounds: (f64, f64),
-        speed_to_rad_s: f64,
-        speed_time_constant_s: Option<f64>,
-        speed_rate_limit_per_s: Option<f64>,
-        pitch_time_constant_s: Option<f64>,
-        pitch_rate_limit_rad_s: Option<f64>,
+    fn new<'py>(
+        args: &Bound<'py, PyTuple>,
+        k: Option<Bound<'py, PyAny>>,
+        speed_bounds: Option<Bound<'py, PyAny>>,
+        pitch_bounds: Option<Bound<'py, PyAny>>,
+        speed_to_rad_s: Option<Bound<'py, PyAny>>,
+        speed_time_constant_s: Option<Bound<'py, PyAny>>,
+        speed_rate_limit_per_s: Option<Bound<'py, PyAny>>,
+        pitch_time_constant_s: Option<Bound<'py, PyAny>>,
+        pitch_rate_limit_rad_s: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
+        let mut given = [
+            k,
+            speed_bounds,
+            pitch_bounds,
+            speed_to_rad_s,
+            speed_time_constant_s,
+            speed_rate_limit_per_s,
+            pitch_time_constant_s,
+            pitch_rate_limit_rad_s,
+        ];
+        deprecated_positional("VariablePitchActuator", Self::FIELDS, args, &mut given)?;
+        let [k, speed_bounds, pitch_bounds, speed_to_rad_s, speed_tau, speed_rate, pitch_tau, pitch_rate] = given;
+        let coefficients = fixed_reals::<4>("actuator.k", "k1, k2, k3, k4", &required("actuator.k", k)?)?;
+        let speed_bounds = bounds("actuator.speed_bounds", speed_bounds)?;
+        let pitch_bounds = bounds("actuator.pitch_bounds", pitch_bounds)?;
+        let speed_to_rad_s = real_or("actuator.speed_to_rad_s", speed_to_rad_s, 0.0)?;
         let d = VariablePitchLags::default();
         let lags = VariablePitchLags {
             speed: Lag {
-                time_constant_s: speed_time_constant_s.unwrap_or(d.speed.time_constant_s),
-                rate_limit_per_s: speed_rate_limit_per_s.unwrap_or(d.speed.rate_limit_per_s),
+                time_constant_s: real_or("actuator.speed_time_constant_s", speed_tau, d.speed.time_constant_s)?,
+                rate_limit_per_s: real_or("actuator.speed_rate_limit_per_s", speed_rate, d.speed.rate_limit_per_s)?,
             },
             pitch: Lag {
-                time_constant_s: pitch_time_constant_s.unwrap_or(d.pitch.time_constant_s),
-                rate_limit_per_s: pitch_rate_limit_rad_s.unwrap_or(d.pitch.rate_limit_per_s),
+                time_constant_s: real_or("actuator.pitch_time_constant_s", pitch_tau, d.pitch.time_constant_s)?,
+                rate_limit_per_s: real_or("actuator.pitch_rate_limit_rad_s", pitch_rate, d.pitch.rate_limit_per_s)?,
             },
         };
-        lags.check().map_err(to_py_err)?;
+        VariablePitch::check_parameters(coefficients, speed_bounds, pitch_bounds, speed_to_rad_s, lags)
+            .map_err(to_py_err)?;
         Ok(PyVariablePitch {
             coefficients,
             speed_bounds,
@@ -92,23 +171,48 @@ impl PyVariablePitch {
             lags,
         })
     }
+    /// `(k1, k2, k3, k4)` of eq. (3), in the speed unit the bounds use.
+    #[getter]
+    fn k(&self) -> (f64, f64, f64, f64) {
+        let [a, b, c, d] = self.coefficients;
+        (a, b, c, d)
+    }
+    /// `(lower, upper)` rotor speed, in the coefficients' speed unit.
+    #[getter]
+    fn speed_bounds(&self) -> (f64, f64) {
+        self.speed_bounds
+    }
+    /// `(lower, upper)` blade pitch, rad.
+    #[getter]
+    fn pitch_bounds(&self) -> (f64, f64) {
+        self.pitch_bounds
+    }
+    /// Speed unit to rad/s for the gyroscopic moment (0: not modelled).
+    #[getter]
+    fn speed_to_rad_s(&self) -> f64 {
+        self.speed_to_rad_s
+    }
+    /// The speed channel's first-order lag, s.
     #[getter]
     fn speed_time_constant_s(&self) -> f64 {
         self.lags.speed.time_constant_s
     }
+    /// The speed channel's rate limit, speed units per second (`inf`: none).
     #[getter]
     fn speed_rate_limit_per_s(&self) -> f64 {
         self.lags.speed.rate_limit_per_s
     }
+    /// The pitch channel's first-order lag, s.
     #[getter]
     fn pitch_time_constant_s(&self) -> f64 {
         self.lags.pitch.time_constant_s
     }
+    /// The pitch channel's rate limit, rad/s (`inf`: none).
     #[getter]
     fn pitch_rate_limit_rad_s(&self) -> f64 {
         self.lags.pitch.rate_limit_per_s
     }
-}
+});
 
 /// A variable-pitch vehicle preset (`presets/vpp/*.toml`), parsed by the core.
 #[pyclass(name = "VariablePitchPreset", module = "rotorfault._rfcore", frozen)]
@@ -177,6 +281,21 @@ impl PyVariablePitchPreset {
     fn linear_drag_n_s_m(&self) -> f64 {
         self.inner.linear_drag_n_s_m
     }
+    /// The actuator the preset describes (`rotorfault.VariablePitchActuator`), checked by the
+    /// rules every one is made by.
+    #[getter]
+    fn actuator(&self) -> PyResult<PyVariablePitch> {
+        let p = &self.inner;
+        VariablePitch::check_parameters(p.coefficients, p.speed_bounds, p.pitch_bounds, p.speed_to_rad_s, p.lags())
+            .map_err(to_py_err)?;
+        Ok(PyVariablePitch {
+            coefficients: p.coefficients,
+            speed_bounds: p.speed_bounds,
+            pitch_bounds: p.pitch_bounds,
+            speed_to_rad_s: p.speed_to_rad_s,
+            lags: p.lags(),
+        })
+    }
 }
 
 #[derive(FromPyObject)]
@@ -204,74 +323,6 @@ pub(crate) fn build_actuators(
             a.lags,
         )?),
     })
-}
-
-/// One settings class used directly from Python: keyword-only, defaults from the core's
-/// `Default`, types checked here (`<prefix>.<field>: expected a real number`), values once by the
-/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`.
-macro_rules! settings_class {
-    (
-        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, prefix = $prefix:literal, check = $check:expr,
-        { $($field:ident => $core_field:ident),+ $(,)? }
-    ) => {
-        $(#[$doc])*
-        #[pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
-        #[derive(Clone)]
-        pub struct $py {
-            pub(crate) inner: $core,
-        }
-
-        impl $py {
-            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),+];
-        }
-
-        #[pymethods]
-        impl $py {
-            #[new]
-            #[pyo3(signature = (*, $($field=None),+))]
-            fn new($($field: Option<Bound<'_, PyAny>>),+) -> PyResult<Self> {
-                let d = $core::default();
-                let inner = $core {
-                    $($core_field: match $field {
-                        Some(v) => real(concat!($prefix, ".", stringify!($field)), &v)?,
-                        None => d.$core_field,
-                    }),+
-                };
-                let check: fn(&$core) -> rfcore::Result<()> = $check;
-                check(&inner).map_err(to_py_err)?;
-                Ok($py { inner })
-            }
-            $(
-                #[getter]
-                fn $field(&self) -> f64 {
-                    self.inner.$core_field
-                }
-            )+
-            /// The field names, in order.
-            #[classattr]
-            #[pyo3(name = "FIELDS")]
-            fn fields() -> Vec<&'static str> {
-                Self::FIELDS.to_vec()
-            }
-            /// A copy with ``changes`` (validated like a new object).
-            #[pyo3(signature = (**changes))]
-            fn replace<'py>(slf: &Bound<'py, Self>, changes: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
-                settings_replace(slf.as_any(), Self::FIELDS, changes)
-            }
-            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-                settings_repr(slf.as_any(), Self::FIELDS)
-            }
-            fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
-                settings_eq(slf.as_any(), other, Self::FIELDS)
-            }
-            fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
-                settings_hash(slf.as_any(), Self::FIELDS)
-            }
-            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-                Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
-            }
-        }
-    };
 }
 
 settings_class!(

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,14 +22,10 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-@dataclass(frozen=True)
-class DirectionalLimit:
-    """The largest ``scale`` with ``base + scale * direction`` attainable, and commands that
-    attain it (:func:`max_virtual_control`)."""
-
-    scale: float
-    commands: FloatArray
-    status: str
+#: The largest ``scale`` with ``base + scale * direction`` attainable, the rotor ``commands``
+#: (float array, N for thrust) that attain it and the linear program's ``status``
+#: (:func:`max_virtual_control`): the core's result, used directly (issue 26: no Python copy).
+DirectionalLimit = _rfcore.DirectionalLimit
 
 
 def max_virtual_control(
@@ -53,26 +48,15 @@ def max_virtual_control(
     result = _rfcore.max_along_direction(
         allocator.matrix, allocator.lower, allocator.upper, d, b, real("tolerance", tolerance)
     )
-    if result is None:
-        return None
-    return DirectionalLimit(result.scale, np.asarray(result.commands), result.status)
+    return result
 
 
-@dataclass(frozen=True)
-class HoverMargin:
-    """:func:`hover_thrust_margin`: the largest total thrust with the controlled torques at zero,
-    the weight, and their difference (negative: cannot hover in balance). ``commands`` attain the
-    maximum; ``None`` (and ``-inf`` thrust) when zero torque is unattainable at any thrust."""
-
-    max_thrust_n: float
-    weight_n: float
-    margin_n: float
-    commands: FloatArray | None
-    status: str
-
-    @property
-    def thrust_to_weight(self) -> float:
-        return self.max_thrust_n / self.weight_n
+#: :func:`hover_thrust_margin`: the largest total thrust with the controlled torques at zero
+#: (``max_thrust_n``, N), the weight (``weight_n``, N), their difference (``margin_n``, N; negative:
+#: cannot hover in balance) and ``thrust_to_weight``; ``commands`` (rotor thrusts, N) attain the
+#: maximum, ``None`` (and ``-inf`` thrust) when zero torque is unattainable at any thrust. The
+#: core's result, used directly (issue 26: no Python copy).
+HoverMargin = _rfcore.HoverMargin
 
 
 def hover_thrust_margin(
@@ -90,9 +74,7 @@ def hover_thrust_margin(
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
     names = control_axes(give_up_yaw, axes)
-    h = _rfcore.hover_thrust_margin(frame._core, names, real("tolerance", tolerance))
-    commands = None if h.commands is None else np.asarray(h.commands)
-    return HoverMargin(h.max_thrust_n, h.weight_n, h.margin_n, commands, h.status)
+    return _rfcore.hover_thrust_margin(frame._core, names, real("tolerance", tolerance))
 
 
 def hover_wrench_distance(airframe: Airframe, efficiency: npt.ArrayLike | None = None, *, give_up_yaw: bool = False) -> float:

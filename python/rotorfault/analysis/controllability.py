@@ -29,7 +29,13 @@ from .airframe import Airframe, require_airframe, rotor_labels
 
 @dataclass(frozen=True)
 class ControllabilityReport:
-    """Outcome of Du's 9-step test for one airframe and efficiency vector."""
+    """Outcome of Du's 9-step test for one airframe and efficiency vector.
+
+    Why it lives in Python (issue 26): it is the core's answer (``_rfcore.ControllabilityReport``:
+    ranks, ACAI, formula, verdict, hover point, read once here and not checked again) joined with
+    the question asked (the airframe's name, the efficiency, the axes), and its printed form
+    shares the ACAI formatting every table and command uses (:func:`format_acai`,
+    :func:`acai_label`), which is Python's; the core keeps no copy of the question to print."""
 
     airframe: str
     efficiency: tuple[float, ...]

@@ -56,22 +56,25 @@ KeGains = _rfcore.KeGains
 dataclass_compat(KeGains)
 
 
-@dataclass(frozen=True)
-class FtcPreset:
+class FtcPreset(_rfcore.FtcPreset):
     """A controller preset file (``presets/ftc/*.toml``): gains and the vehicle values that go with
-    them (rotor lag from Ke Table III, the rotational damping Ke does not give)."""
+    them (rotor lag from Ke Table III, the rotational damping Ke does not give).
 
-    name: str
-    description: str
-    source: str
-    airframe_name: str
-    gains: KeGains
-    rotor_time_constant_s: float
-    rotational_drag_n_m_s: float
-    linear_drag_n_s_m: float
+    The core's preset itself (issue 26: no field-by-field copy): keyword-only, every field required
+    (``name``, ``description``, ``source``, ``airframe_name``, ``gains`` a :class:`KeGains`,
+    ``rotor_time_constant_s`` s, ``rotational_drag_n_m_s`` N m s, ``linear_drag_n_s_m`` N s/m),
+    checked by the core's ``FtcPreset::check`` (the rules a preset file obeys);
+    ``FtcPreset.from_toml_str(text, origin)`` parses a file (``origin`` prefixes error
+    messages). Frozen, comparable, hashable, picklable; ``preset.replace(gains=...)`` gives a
+    checked copy (``dataclasses.replace`` still works, with a ``DeprecationWarning``, for one
+    release). This subclass adds only what reads it in Python: the :class:`~rotorfault.Airframe`
+    preset (:attr:`airframe`) and the :class:`Simulator` the values make."""
+
+    __slots__ = ()
 
     @property
     def airframe(self) -> Airframe:
+        """The airframe preset the gains were designed for (``airframe_name``)."""
         return Airframe.preset(self.airframe_name)
 
     def simulator(
@@ -96,6 +99,9 @@ class FtcPreset:
         )
 
 
+dataclass_compat(FtcPreset)
+
+
 def _ftc_dir() -> Path:
     return Path(str(resources.files("rotorfault") / "presets" / "ftc"))
 
@@ -112,17 +118,7 @@ def preset(name: str = "ke-hil") -> FtcPreset:
         raise TypeError(f"preset: expected a preset name (str), got {type(name).__name__}")
     if name not in presets():
         raise ValueError(f"preset: unknown controller preset {name!r}; available: {', '.join(presets())}")
-    raw = _rfcore.FtcPreset.from_toml_str((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
-    return FtcPreset(
-        raw.name,
-        raw.description,
-        raw.source,
-        raw.airframe,
-        raw.gains,
-        raw.rotor_time_constant_s,
-        raw.rotational_drag_n_m_s,
-        raw.linear_drag_n_s_m,
-    )
+    return FtcPreset.from_toml_str((_ftc_dir() / f"{name}.toml").read_text(encoding="utf-8"), name)
 
 
 # -- the controller ------------------------------------------------------------------------------

@@ -37,7 +37,7 @@ rotation of pi about x: ``phi = roll``, ``theta = -pitch``, ``psi = -yaw``, ``(p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
@@ -47,6 +47,7 @@ import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .. import _rfcore
 from .._util.convert import FloatArray, float_array, real
+from .._util.deprecation import dataclass_compat
 from ..analysis.airframe import Airframe, require_airframe
 from ..flight import Drag, FixedPitchActuator, Simulator
 from .realisation import state_space
@@ -58,9 +59,8 @@ SPIN_RATE_RAD_S = 2.7
 #: The failed rotor of the paper's design (1-based; Section III.A).
 FAILED_ROTOR = 2
 
-#: The core's defaults (Table 1, ``k_r = m g d / 2.7``, ``k_t = 0.1``; outer-loop gains): the one source.
+#: The core's defaults (Table 1, ``k_r = m g d / 2.7``, ``k_t = 0.1``): the one source.
 _DEFAULT_MODEL = _rfcore.LanzonModel()
-_DEFAULT_OUTER = _rfcore.LanzonOuterLoop()
 
 
 @dataclass(frozen=True)
@@ -71,7 +71,15 @@ class LanzonVehicle:
     ``rotor_inertia_kg_m2`` (``I_R``, gyroscopic moment (5), verification model only) to 3e-5
     kg m^2 (a 10-inch propeller with its motor bell), with ``thrust_coefficient_n_s2`` 1e-5 N s^2
     (``f = k_f omega^2``: 5 N at 707 rad/s). ``inertia_zz_kg_m2`` defaults to Table 1's printed
-    1.16e-3 (probably a misprint of 1.16e-2; both are flown in the report)."""
+    1.16e-3 (probably a misprint of 1.16e-2; both are flown in the report).
+
+    Why it lives in Python (issue 26): it is the design-time object of "design in Python, run in
+    Rust", not a copy of a core type. It holds the verification model's values the controller
+    never reads (``I_R``, ``k_f``, the thrust and rate limits, which go to the simulator's
+    :class:`~rotorfault.Airframe`, :class:`~rotorfault.FixedPitchActuator` and
+    :class:`~rotorfault.Drag`) and the RFL algebra the loop-shaping design works on; the eight
+    values the controller flies with cross once, into the core's ``LanzonModel``, whose ``check``
+    they must also pass when the vehicle is made."""
 
     mass_kg: float = _DEFAULT_MODEL.mass_kg
     gravity_m_s2: float = _DEFAULT_MODEL.gravity_m_s2
@@ -309,36 +317,22 @@ class LanzonVehicle:
         )
 
 
-@dataclass(frozen=True)
-class OuterLoopGains:
-    """The outer loop (28)-(31), which the paper leaves to "any simple standard linear control
-    technique": PD laws ``z~ = -k_p e - k_d e'`` on the horizontal position (``k_p_xy``, 1/s^2;
-    ``k_d_xy``, 1/s) and the altitude (``k_p_z``, ``k_d_z``), the roll/pitch set points limited to
-    ``max_tilt_rad`` and the vertical acceleration to ``max_vertical_accel_m_s2``. Validated in Rust.
-
-    Integral action, not the paper's (default off: ``k_i_xy = k_i_z = 0``, the PD laws as
-    designed): ``z~ = -k_p e - k_d e' - k_i integral(e)`` with ``k_i_xy``, ``k_i_z`` (1/s^3), each
-    axis's integral clamped to ``integral_limit_m_s`` (m s), removes the steady error a constant
-    disturbance or a model error (mass, thrust coefficient) leaves. With the default PD gains the
-    loops stay stable for ``k_i_z < k_p_z k_d_z`` (0.5) and ``k_i_xy < k_p_xy k_d_xy`` (0.175)."""
-
-    k_p_xy: float = _DEFAULT_OUTER.k_p_xy
-    k_d_xy: float = _DEFAULT_OUTER.k_d_xy
-    k_p_z: float = _DEFAULT_OUTER.k_p_z
-    k_d_z: float = _DEFAULT_OUTER.k_d_z
-    max_tilt_rad: float = _DEFAULT_OUTER.max_tilt_rad
-    max_vertical_accel_m_s2: float = _DEFAULT_OUTER.max_vertical_accel_m_s2
-    k_i_xy: float = _DEFAULT_OUTER.k_i_xy
-    k_i_z: float = _DEFAULT_OUTER.k_i_z
-    integral_limit_m_s: float = _DEFAULT_OUTER.integral_limit_m_s
-
-    def __post_init__(self) -> None:
-        # Checked once, at construction, by the core's rules (finite, gains >= 0, tilt in
-        # (0, pi/2), acceleration > 0): the error names the field (``outer_loop.k_p_xy: ...``).
-        self._core()
-
-    def _core(self) -> _rfcore.LanzonOuterLoop:
-        return _rfcore.LanzonOuterLoop(**{f.name: real(f"outer_loop.{f.name}", getattr(self, f.name)) for f in fields(self)})
+#: The outer loop (28)-(31), which the paper leaves to "any simple standard linear control
+#: technique": the core's class, used directly (keyword-only; defaults from the core's
+#: ``LanzonOuterLoop::default()``; types checked by the bindings, values once, by the core's
+#: ``check``, when the gains are made, errors naming ``outer_loop.<field>``: finite, gains >= 0,
+#: tilt in (0, pi/2), acceleration and integral limit > 0; frozen, ``replace(**changes)``,
+#: ``FIELDS``). PD laws ``z~ = -k_p e - k_d e'`` on the horizontal position (``k_p_xy``, 1/s^2;
+#: ``k_d_xy``, 1/s) and the altitude (``k_p_z``, ``k_d_z``), the roll/pitch set points limited to
+#: ``max_tilt_rad`` (rad) and the vertical acceleration to ``max_vertical_accel_m_s2`` (m/s^2).
+#:
+#: Integral action, not the paper's (default off: ``k_i_xy = k_i_z = 0``, the PD laws as
+#: designed): ``z~ = -k_p e - k_d e' - k_i integral(e)`` with ``k_i_xy``, ``k_i_z`` (1/s^3), each
+#: axis's integral clamped to ``integral_limit_m_s`` (m s), removes the steady error a constant
+#: disturbance or a model error (mass, thrust coefficient) leaves. With the default PD gains the
+#: loops stay stable for ``k_i_z < k_p_z k_d_z`` (0.5) and ``k_i_xy < k_p_xy k_d_xy`` (0.175).
+OuterLoopGains = _rfcore.OuterLoopGains
+dataclass_compat(OuterLoopGains)
 
 
 @dataclass(frozen=True)
@@ -473,7 +467,7 @@ class LanzonController:
             model=self.design.vehicle._core(), a_k=a, b_k=b, c_k=c, d_k=d,
             attitude_reference=None if self.attitude_reference is None else list(self.attitude_reference),
             position=None if self.position is None else list(self.position),
-            outer_loop=self.outer_loop._core() if self.position is not None else None,
+            outer_loop=self.outer_loop if self.position is not None else None,
         )
 
 

@@ -143,13 +143,8 @@ def preset(name: str = "wang") -> VppVehicle:
     if name not in presets():
         raise ValueError(f"preset: unknown VPP preset {name!r}; available: {', '.join(presets())}")
     raw = _rfcore.VariablePitchPreset.from_toml_str(_vpp_dir().joinpath(f"{name}.toml").read_text(encoding="utf-8"), name)
-    actuator = VariablePitchActuator(
-        k=raw.coefficients, speed_bounds=raw.speed_bounds, pitch_bounds=raw.pitch_bounds,
-        speed_to_rad_s=raw.speed_to_rad_s,
-        speed_time_constant_s=raw.speed_time_constant_s, speed_rate_limit_per_s=raw.speed_rate_limit_per_s,
-        pitch_time_constant_s=raw.pitch_time_constant_s, pitch_rate_limit_rad_s=raw.pitch_rate_limit_rad_s,
-    )
-    return VppVehicle(raw.name, raw.source, Airframe.preset(raw.airframe), actuator, Drag(linear_n_s_m=raw.linear_drag_n_s_m))
+    # The actuator comes out of the core's parser as it is (issue 26: no field-by-field copy).
+    return VppVehicle(raw.name, raw.source, Airframe.preset(raw.airframe), raw.actuator, Drag(linear_n_s_m=raw.linear_drag_n_s_m))
 
 
 def _failed_set(count: int, failed: Sequence[int]) -> tuple[int, ...]:

@@ -4,7 +4,6 @@ pitch), aerodynamic drag, the papers' sensor noise and the sensors with the esti
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,10 +13,6 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._util.convert import count, float_array, real
 from .._util.deprecation import dataclass_compat
-
-#: The core's defaults, read once: the one source of every default below.
-_DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
-
 
 #: Aerodynamic damping and rotor inertia (the papers give none; all default to 0): the core's
 #: class, used directly (keyword-only; defaults from the core's ``Default``; types checked by the
@@ -52,63 +47,34 @@ def sensing_with_offset(sensing: Any, offset: int) -> Any:
     return sensing.replace(seed=sensing.seed + offset)
 
 
-@dataclass(frozen=True)
-class FixedPitchActuator:
-    """Rotors commanded in thrust (N): first-order lag ``time_constant_s`` (Ke Table III: 0.025),
-    rate limit (Lanzon: 50 N/s), thrust saturation from the airframe; ``thrust_coefficient_n_s2``
-    (``f = k_f omega^2``) gives rotor speed for the gyroscopic moment (0: not modelled)."""
-
-    time_constant_s: float = 0.0
-    rate_limit_n_s: float = math.inf
-    thrust_coefficient_n_s2: float = 0.0
-
-    def _core(self) -> Any:
-        return _rfcore.FixedPitchActuator(
-            real("actuator.time_constant_s", self.time_constant_s),
-            real("actuator.rate_limit_n_s", self.rate_limit_n_s),
-            real("actuator.thrust_coefficient_n_s2", self.thrust_coefficient_n_s2),
-        )
+#: Rotors commanded in thrust (N): the core's class, used directly (keyword-only; defaults from the
+#: core's ``Lag::none()``; types checked by the bindings, values once, by the core's
+#: ``FixedPitch::check_parameters``, when it is made; frozen, ``replace(**changes)``, ``FIELDS``):
+#: first-order lag ``time_constant_s`` (s; Ke Table III: 0.025), rate limit ``rate_limit_n_s``
+#: (N/s; Lanzon: 50; ``math.inf``: none), thrust saturation from the airframe;
+#: ``thrust_coefficient_n_s2`` (N s^2, ``f = k_f omega^2``) gives rotor speed for the gyroscopic
+#: moment (0: not modelled). The positional form of the former dataclass still works for one
+#: release, with a ``DeprecationWarning``.
+FixedPitchActuator = _rfcore.FixedPitchActuator
+dataclass_compat(FixedPitchActuator)
 
 
-@dataclass(frozen=True)
-class VariablePitchActuator:
-    """Variable-pitch propellers (Wang et al. eq. (3)), commanded per rotor in speed and pitch
-    (interleaved ``[omega_1, alpha_1, omega_2, ...]``): thrust ``k1 omega^2 alpha``, torque
-    ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``.
-
-    The speed and pitch channels have their own first-order lag and rate limit (a motor's speed
-    loop and a pitch servo are different hardware). Defaults (the core's): Wang's "first-order
-    transfer function ... cut-off frequency 10 Hz" for both, ``time_constant_s = 1 / (2 pi 10)``,
-    and no rate limit (the paper gives none). ``speed_rate_limit_per_s`` is in speed units per
-    second, ``pitch_rate_limit_rad_s`` in rad/s."""
-
-    k: tuple[float, float, float, float]
-    speed_bounds: tuple[float, float]
-    pitch_bounds: tuple[float, float]
-    speed_to_rad_s: float = 0.0
-    speed_time_constant_s: float = _DEFAULT_VPP.speed_time_constant_s
-    speed_rate_limit_per_s: float = _DEFAULT_VPP.speed_rate_limit_per_s
-    pitch_time_constant_s: float = _DEFAULT_VPP.pitch_time_constant_s
-    pitch_rate_limit_rad_s: float = _DEFAULT_VPP.pitch_rate_limit_rad_s
-
-    def _core(self) -> Any:
-        k = float_array("actuator.k", self.k, 1)
-        if k.shape != (4,):
-            raise ValueError(f"actuator.k: expected 4 coefficients (k1..k4), got {k.shape[0]}")
-        speed = float_array("actuator.speed_bounds", self.speed_bounds, 1)
-        pitch = float_array("actuator.pitch_bounds", self.pitch_bounds, 1)
-        if speed.shape != (2,) or pitch.shape != (2,):
-            raise ValueError("actuator.speed_bounds, actuator.pitch_bounds: expected (lower, upper)")
-        return _rfcore.VariablePitchActuator(
-            (float(k[0]), float(k[1]), float(k[2]), float(k[3])),
-            (float(speed[0]), float(speed[1])),
-            (float(pitch[0]), float(pitch[1])),
-            real("actuator.speed_to_rad_s", self.speed_to_rad_s),
-            speed_time_constant_s=real("actuator.speed_time_constant_s", self.speed_time_constant_s),
-            speed_rate_limit_per_s=real("actuator.speed_rate_limit_per_s", self.speed_rate_limit_per_s),
-            pitch_time_constant_s=real("actuator.pitch_time_constant_s", self.pitch_time_constant_s),
-            pitch_rate_limit_rad_s=real("actuator.pitch_rate_limit_rad_s", self.pitch_rate_limit_rad_s),
-        )
+#: Variable-pitch propellers (Wang et al. eq. (3)), commanded per rotor in speed and pitch
+#: (interleaved ``[omega_1, alpha_1, omega_2, ...]``): thrust ``k1 omega^2 alpha``, torque
+#: ``k2 omega^2 + k3 omega^2 alpha^2 + k4 omega alpha``. The core's class, used directly
+#: (keyword-only; ``k`` four coefficients, ``speed_bounds`` and ``pitch_bounds`` ``(lower, upper)``
+#: required; types checked by the bindings, values once, by the core's
+#: ``VariablePitch::check_parameters``, when it is made; frozen, ``replace(**changes)``,
+#: ``FIELDS``). The speed and pitch channels have their own first-order lag and rate limit (a
+#: motor's speed loop and a pitch servo are different hardware). Defaults (the core's
+#: ``VariablePitchLags::default()``): Wang's "first-order transfer function ... cut-off frequency
+#: 10 Hz" for both, ``time_constant_s = 1 / (2 pi 10)`` s, and no rate limit (the paper gives
+#: none). ``speed_rate_limit_per_s`` is in speed units per second, ``pitch_rate_limit_rad_s`` in
+#: rad/s, ``speed_to_rad_s`` converts the speed unit to rad/s for the gyroscopic moment (0: not
+#: modelled). The positional form of the former dataclass still works for one release, with a
+#: ``DeprecationWarning``.
+VariablePitchActuator = _rfcore.VariablePitchActuator
+dataclass_compat(VariablePitchActuator)
 
 
 @dataclass(frozen=True)
@@ -119,7 +85,12 @@ class Noise:
     ``snr_db`` is a per-sample signal-to-noise ratio (Wang et al.'s scenarios use 15 dB; they do
     not say how signal power is measured, and per sample is the causal reading). ``std`` adds an
     absolute floor: 12 values, or 4 (position m, velocity m/s, angle rad, rate rad/s). Seeded and
-    reproducible on every platform; in a batch, run ``i`` uses ``seed + i``."""
+    reproducible on every platform; in a batch, run ``i`` uses ``seed + i``.
+
+    Why it lives in Python (issue 26): it is not a copy of a core type but the papers' way of
+    stating noise (a signal-to-noise ratio in dB, a floor per kind of state), which
+    :meth:`_core` turns into the core's one form, ``SensorNoise`` (a relative and a per-component
+    absolute standard deviation), for each batch chunk's seed; the core checks that form."""
 
     snr_db: float | None = None
     std: npt.ArrayLike | None = None

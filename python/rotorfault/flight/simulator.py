@@ -78,7 +78,6 @@ MAX_RATE_STEP: float = _rfcore.MAX_RATE_STEP
 DEFAULT_START_M = (0.0, 0.0, -10.0)
 
 _DEFAULT_CONFIG = _rfcore.SimulationConfig()
-_DEFAULT_VPP = _rfcore.VariablePitchActuator((0.0, 0.0, 0.0, 0.0), (0.0, 0.0), (0.0, 0.0), 0.0)
 
 
 #: A run ends with an event when it passes one of these (``math.inf``: no limit): the core's class,
@@ -160,7 +159,7 @@ class Simulator:
         self.ground_z_m = config.ground_z_m
         above = State(position=(0.0, 0.0, (self.ground_z_m or 0.0) - 1.0))
         _rfcore.simulate(
-            self.airframe._core, self.actuator._core(), self.drag, None, above._packed(), [],
+            self.airframe._core, self.actuator, self.drag, None, above._packed(), [],
             self.airframe.efficiency, None, config,
         )
 
@@ -220,7 +219,7 @@ class Simulator:
         config = self._config(duration_s, record_every)
         raw = _rfcore.simulate(
             self.airframe._core,
-            self.actuator._core(),
+            self.actuator,
             self.drag,
             core,
             x0._packed(),
@@ -239,7 +238,7 @@ class Simulator:
         eff = self.airframe.efficiency if efficiency is None else float_array("efficiency", efficiency, 1)
         return _rfcore.state_derivative(
             self.airframe._core,
-            self.actuator._core(),
+            self.actuator,
             self.drag,
             list(float_array("x", x, 1)),
             float_array("command", command, 1),
@@ -339,7 +338,7 @@ def simulate_batch(
         starts.append(None if start is None else [float(v) for v in start])
     simulator._config(duration_s, record_every)  # checks the settings before any run
     _check_memory(simulator, n, duration_s, record_every, memory_budget_bytes)
-    actuator, drag = simulator.actuator._core(), simulator.drag
+    actuator, drag = simulator.actuator, simulator.drag
     packed_states = [s._packed() for s in states]
     packed_faults = [[f._packed() for f in fl] for fl in fault_lists]
     # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.

@@ -37,7 +37,7 @@ from .._util.tables import Records, Tabular
 from .._util.deprecation import renamed_attribute
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
-from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Sensing, Simulator, State, Trajectory
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Sensing, Simulator, State, Trajectory, VariablePitchActuator
 from ..flight.outcomes import FLYING, VERDICTS
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
@@ -386,12 +386,13 @@ def run_chunk(campaign: Campaign, chunk_index: int) -> dict[str, np.ndarray[Any,
     start = None if trim is None else [float(v) for v in trim]
     limits = DivergenceLimits()
     x0 = State(position=HOVER_M)._packed()
-    airframes, actuators, drags, configs, faults = [], [], [], [], []
+    airframes, drags, configs, faults = [], [], [], []
+    actuators: list[FixedPitchActuator | VariablePitchActuator] = []
     for spec in specs:
         airframe, actuator, drag = campaign._vehicle_parts(spec)
         noise = campaign._noise(spec)
         airframes.append(airframe._core)
-        actuators.append(actuator._core())
+        actuators.append(actuator)
         drags.append(drag)
         faults.append([f._packed() for f in spec.faults(campaign)])
         configs.append(

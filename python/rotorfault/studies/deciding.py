@@ -455,7 +455,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
             dt_s=DT_S, substeps=SUBSTEPS, duration_s=d.duration_s, limits=limits, wind_m_s=(*d.wind_m_s, 0.0),
             wind_profile=gust_profile(_Gust(d.gust_m_s, d.gust_start_s), GUST_DURATION_S),  # type: ignore[arg-type]
         )
-        runs.append((len(rows) - 1, airframe._core, actuator._core(), drag, controller.core(DT_S),
+        runs.append((len(rows) - 1, airframe._core, actuator, drag, controller.core(DT_S),
                      (x0._packed(), None if trim is None else [float(u) for u in trim], config), [f._packed() for f in faults]))
     if runs:
         batch = _rfcore.simulate_summaries(

@@ -1,13 +1,12 @@
 //! Bindings for Ke et al.'s uniform passive FTC: the controller, its gains and its preset files.
 
-use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyType};
 
-use rfcore::control::ke::{CommandLaw, FtcPreset, KeGains, UniformPassiveFtc};
+use rfcore::control::ke::{CommandLaw, FtcPreset, FtcVehicle, KeGains, UniformPassiveFtc};
 
 use crate::airframe::PyAirframe;
-use crate::convert::{real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err};
+use crate::convert::{fixed_reals, real, settings_protocol, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err};
 
 /// Ke Table IV gains: the one `KeGains` class, used directly from Python (re-exported as
 /// `rotorfault.control.ke.KeGains`). Keyword-only; defaults from the core's `Default` (the `ke-hil`
@@ -93,18 +92,7 @@ gains_class!(
 
 /// The four allocation weights `(w_f, w_p, w_q, w_r)` (values checked by the core).
 fn gain_weights(value: &Bound<'_, PyAny>) -> PyResult<[f64; 4]> {
-    let items: Vec<Bound<'_, PyAny>> = value
-        .try_iter()
-        .map_err(|_| PyTypeError::new_err(format!("weights: expected 4 numbers (w_f, w_p, w_q, w_r), got {}", value.get_type().name().map(|n| n.to_string()).unwrap_or_default())))?
-        .collect::<PyResult<_>>()?;
-    if items.len() != 4 {
-        return Err(PyValueError::new_err(format!("weights: expected 4 entries (w_f, w_p, w_q, w_r), got {}", items.len())));
-    }
-    let mut out = [0.0; 4];
-    for (k, item) in items.iter().enumerate() {
-        out[k] = real(&format!("weights[{k}]"), item)?;
-    }
-    Ok(out)
+    fixed_reals("weights", "w_f, w_p, w_q, w_r", value)
 }
 
 /// The uniform passive fault-tolerant controller (Ke et al.).
@@ -131,19 +119,64 @@ impl PyUniformPassiveFtc {
     }
 }
 
-/// A controller preset file: gains plus the vehicle values Ke does not print.
-#[pyclass(name = "FtcPreset", module = "rotorfault._rfcore", frozen)]
+/// A controller preset: gains plus the vehicle values Ke does not print, as the core holds them
+/// (`rotorfault.control.ke.FtcPreset` subclasses it, adding in Python what reads them: the airframe
+/// object and the simulator). Keyword-only, every field required, checked by the core's
+/// `FtcPreset::check`; `from_toml_str` parses a preset file. Frozen, comparable, hashable,
+/// picklable, `replace(**changes)`, `FIELDS`.
+#[pyclass(name = "FtcPreset", module = "rotorfault._rfcore", frozen, subclass)]
+#[derive(Clone)]
 pub struct PyFtcPreset {
     inner: FtcPreset,
 }
 
-#[pymethods]
 impl PyFtcPreset {
-    /// Parses a preset file; `origin` prefixes error messages.
-    #[staticmethod]
-    fn from_toml_str(text: &str, origin: &str) -> PyResult<Self> {
-        let inner = FtcPreset::from_toml_str(text, origin).map_err(to_py_err)?;
+    const FIELDS: &'static [&'static str] = &[
+        "name",
+        "description",
+        "source",
+        "airframe_name",
+        "gains",
+        "rotor_time_constant_s",
+        "rotational_drag_n_m_s",
+        "linear_drag_n_s_m",
+    ];
+}
+
+settings_protocol!(PyFtcPreset, {
+    #[new]
+    #[pyo3(signature = (*, name, description, source, airframe_name, gains, rotor_time_constant_s, rotational_drag_n_m_s, linear_drag_n_s_m))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        name: String,
+        description: String,
+        source: String,
+        airframe_name: String,
+        gains: PyRef<'_, PyKeGains>,
+        rotor_time_constant_s: Bound<'_, PyAny>,
+        rotational_drag_n_m_s: Bound<'_, PyAny>,
+        linear_drag_n_s_m: Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let inner = FtcPreset {
+            name,
+            description,
+            source,
+            airframe: airframe_name,
+            gains: gains.inner,
+            vehicle: FtcVehicle {
+                rotor_time_constant_s: real("vehicle.rotor_time_constant_s", &rotor_time_constant_s)?,
+                rotational_drag_n_m_s: real("vehicle.rotational_drag_n_m_s", &rotational_drag_n_m_s)?,
+                linear_drag_n_s_m: real("vehicle.linear_drag_n_s_m", &linear_drag_n_s_m)?,
+            },
+        };
+        inner.check().map_err(to_py_err)?;
         Ok(PyFtcPreset { inner })
+    }
+    /// Parses a preset file's `text` (`origin` prefixes error messages) into this class.
+    #[classmethod]
+    fn from_toml_str<'py>(cls: &Bound<'py, PyType>, text: &str, origin: &str) -> PyResult<Bound<'py, PyAny>> {
+        let parsed = Bound::new(cls.py(), PyFtcPreset { inner: FtcPreset::from_toml_str(text, origin).map_err(to_py_err)? })?;
+        cls.call((), Some(&settings_kwargs(parsed.as_any(), Self::FIELDS)?))
     }
     #[getter]
     fn name(&self) -> &str {
@@ -157,8 +190,9 @@ impl PyFtcPreset {
     fn source(&self) -> &str {
         &self.inner.source
     }
+    /// The airframe preset the gains were designed for.
     #[getter]
-    fn airframe(&self) -> &str {
+    fn airframe_name(&self) -> &str {
         &self.inner.airframe
     }
     #[getter]
@@ -167,19 +201,22 @@ impl PyFtcPreset {
             inner: self.inner.gains,
         }
     }
+    /// Rotor first-order lag, s (Ke Table III: 0.025).
     #[getter]
     fn rotor_time_constant_s(&self) -> f64 {
         self.inner.vehicle.rotor_time_constant_s
     }
+    /// Linear rotational damping `k_r`, N m s (not in the paper: sets the steady spin).
     #[getter]
     fn rotational_drag_n_m_s(&self) -> f64 {
         self.inner.vehicle.rotational_drag_n_m_s
     }
+    /// Linear translational drag `k_t`, N s/m (not in the paper).
     #[getter]
     fn linear_drag_n_s_m(&self) -> f64 {
         self.inner.vehicle.linear_drag_n_s_m
     }
-}
+});
 
 impl crate::control::class::ControllerClass for PyUniformPassiveFtc {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {

@@ -8,63 +8,38 @@ use rfcore::control::lanzon::{
     DiscreteController, LanzonController, LanzonModel, LanzonOuterLoop, LanzonReference,
 };
 
-use crate::convert::{matrix, to_py_err};
+use crate::convert::{matrix, settings_class, to_py_err};
 
-macro_rules! params_class {
-    ($py:ident, $pyname:literal, $core:ident, $($name:ident),*) => {
-        #[pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
-        #[derive(Clone)]
-        pub struct $py {
-            pub(crate) inner: $core,
-        }
-
-        #[pymethods]
-        impl $py {
-            #[new]
-            #[pyo3(signature = (*, $($name=None),*))]
-            fn new($($name: Option<f64>),*) -> PyResult<Self> {
-                let d = $core::default();
-                let inner = $core { $($name: $name.unwrap_or(d.$name)),* };
-                inner.check().map_err(to_py_err)?;
-                Ok($py { inner })
-            }
-            $(
-                #[getter]
-                fn $name(&self) -> f64 {
-                    self.inner.$name
-                }
-            )*
-        }
-    };
-}
-
-params_class!(
-    PyLanzonModel,
-    "LanzonModel",
-    LanzonModel,
-    mass_kg,
-    gravity_m_s2,
-    inertia_xx_kg_m2,
-    inertia_zz_kg_m2,
-    arm_length_m,
-    drag_torque_ratio_m,
-    rotational_drag_n_m_s,
-    linear_drag_n_s_m
+settings_class!(
+    /// Lanzon's control model (`rotorfault._rfcore.LanzonModel`): Table 1 plus `k_r`, `k_t`.
+    PyLanzonModel, "LanzonModel", LanzonModel, prefix = "model", check = LanzonModel::check,
+    {
+        mass_kg => mass_kg,
+        gravity_m_s2 => gravity_m_s2,
+        inertia_xx_kg_m2 => inertia_xx_kg_m2,
+        inertia_zz_kg_m2 => inertia_zz_kg_m2,
+        arm_length_m => arm_length_m,
+        drag_torque_ratio_m => drag_torque_ratio_m,
+        rotational_drag_n_m_s => rotational_drag_n_m_s,
+        linear_drag_n_s_m => linear_drag_n_s_m,
+    }
 );
 
-params_class!(
-    PyLanzonOuterLoop,
-    "LanzonOuterLoop",
-    LanzonOuterLoop,
-    k_p_xy,
-    k_d_xy,
-    k_p_z,
-    k_d_z,
-    max_tilt_rad,
-    max_vertical_accel_m_s2,
-    k_i_xy,
-    k_i_z,
-    integral_limit_m_s
+settings_class!(
+    /// The outer loop (28)-(31) (`rotorfault.control.lanzon.OuterLoopGains`): PD (optionally PID)
+    /// position and altitude laws with their limits; defaults the core's, rules its `check`.
+    PyLanzonOuterLoop, "OuterLoopGains", LanzonOuterLoop, prefix = "outer_loop", check = LanzonOuterLoop::check,
+    {
+        k_p_xy => k_p_xy,
+        k_d_xy => k_d_xy,
+        k_p_z => k_p_z,
+        k_d_z => k_d_z,
+        max_tilt_rad => max_tilt_rad,
+        max_vertical_accel_m_s2 => max_vertical_accel_m_s2,
+        k_i_xy => k_i_xy,
+        k_i_z => k_i_z,
+        integral_limit_m_s => integral_limit_m_s,
+    }
 );
 
 /// Lanzon et al.'s controller: `a_k`..`d_k` the discrete loop-shaping controller at the control

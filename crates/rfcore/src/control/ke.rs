@@ -201,8 +201,15 @@ impl FtcPreset {
             origin: origin.to_string(),
             message: e.to_string(),
         })?;
-        preset.gains.check()?;
-        let v = &preset.vehicle;
+        preset.check()?;
+        Ok(preset)
+    }
+
+    /// The gains' rules and the vehicle values non-negative (a file read, or a preset made in
+    /// Python: one rule, one message).
+    pub fn check(&self) -> Result<()> {
+        self.gains.check()?;
+        let v = &self.vehicle;
         for (field, value) in [
             ("vehicle.rotor_time_constant_s", v.rotor_time_constant_s),
             ("vehicle.rotational_drag_n_m_s", v.rotational_drag_n_m_s),
@@ -210,7 +217,7 @@ impl FtcPreset {
         ] {
             require_non_negative(field, value)?;
         }
-        Ok(preset)
+        Ok(())
     }
 }
 

@@ -1,7 +1,8 @@
 //! The flight simulator: one 6-DOF core with pluggable actuator models.
 //!
 //! - [`rigid_body`]: Newton-Euler dynamics with the full inertia tensor and the RK4 step.
-//! - [`actuator`]: fixed-pitch and variable-pitch rotors (lag, rate limit, saturation, efficiency).
+//! - [`actuator`]: fixed-pitch and variable-pitch rotors (lag, rate limit, saturation, efficiency);
+//!   [`vpp_preset`]: the variable-pitch preset files that describe one.
 //! - [`vehicle`]: rotor forces and torques, drag, gyroscopic moment, wind.
 //! - [`model`]: the model as an ODE in the 12-element state vector, for linearisation.
 //! - [`simulation`]: the closed loop with a controller, rotor faults, noise and divergence events.
@@ -22,3 +23,4 @@ pub mod sensors;
 pub mod simulation;
 pub mod summary;
 pub mod vehicle;
+pub mod vpp_preset;
