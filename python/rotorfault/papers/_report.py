@@ -4,10 +4,16 @@ A paper contributes to the reproduce-all report (``rotorfault reproduce``) a
 :class:`ReportSection` of printed numbers (:class:`~rotorfault.papers._numbers.PaperNumber`),
 tables and figures: each paper module provides ``report_section(out, *, quick)``, which writes its
 figures into the directory ``out`` and returns the section; the report imports the modules that
-exist and shows a "not landed yet" section for those that do not. A paper's own report command
-(``ftc-report``, ...) writes its directory through the same functions: :func:`check_report_directory`
-before any work, :func:`report_directory` (built beside the final place, with ``manifest.json``,
-swapped in when complete), :func:`csv_text` and :func:`markdown_table` for its tables."""
+exist and shows a "not landed yet" section for those that do not.
+
+Every report directory (``rotorfault reproduce``, and each paper's own command: ``ftc-report``,
+``lanzon-report``, ``vpp-report``) is written by one writer, :func:`write_report_files`: the
+directory claimed before any work (its lock held, an interrupted run's leftovers recovered, the
+directory checked), the content built in a directory beside it, each text file written atomically,
+``manifest.json`` added and the whole swapped in when complete. A paper hands it the content: its
+figures drawn into the directory it is given and its text files (:class:`MarkdownText`, its
+tables rendered by :func:`markdown_lines`; :class:`CsvTable`, columns named with their units;
+:class:`TextFile`)."""
 
 from __future__ import annotations
 
@@ -15,7 +21,7 @@ import contextlib
 import csv
 import io
 import os
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -74,6 +80,16 @@ def markdown_table(lines: list[str]) -> tuple[tuple[str, ...], tuple[tuple[str, 
     return cells[0], tuple(cells[2:])
 
 
+def markdown_lines(columns: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """A table of text cells as Markdown lines: the header, the separator, one line per row (the
+    inverse of :func:`markdown_table`)."""
+    return [_markdown_row(columns), "|" + "---|" * len(columns), *(_markdown_row(row) for row in rows)]
+
+
+def _markdown_row(cells: Sequence[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
 def not_landed(key: str, title: str, module: str, what: str) -> ReportSection:
     """The section of a paper whose reproduction has not landed yet."""
     return ReportSection(
@@ -112,26 +128,115 @@ def report_directory(out: Path, *, generator: str, command: str | None, default_
         yield tmp
 
 
+@dataclass(frozen=True)
+class MarkdownText:
+    """A Markdown file of a report directory: its ``lines`` (tables from :func:`markdown_lines`),
+    written joined by newlines with a final newline."""
+
+    file: str
+    lines: tuple[str, ...]
+
+    def text(self) -> str:
+        return "\n".join(self.lines) + "\n"
+
+
+@dataclass(frozen=True)
+class CsvTable:
+    """A table of a report directory as the CSV file ``file``: ``columns`` named with their units
+    (``final_error_m``, ``window_tilt_deg``) and ``rows``, one value per column (``None`` is an
+    empty cell; other values as the csv module writes them)."""
+
+    file: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[Any, ...], ...]
+
+    def __post_init__(self) -> None:
+        for k, row in enumerate(self.rows):
+            if len(row) != len(self.columns):
+                raise ValueError(f"rows[{k}]: {len(row)} values for {len(self.columns)} columns in {self.file}")
+
+    @classmethod
+    def from_records(
+        cls, file: str, records: Sequence[Mapping[str, Any]], cell: Callable[[Any, str], Any] | None = None
+    ) -> CsvTable:
+        """One column per key of the first record, one row per record (``cell(record, column)``
+        formats each value; by default the value itself)."""
+        columns = tuple(records[0])
+        return cls(file, columns, tuple(tuple(r[c] if cell is None else cell(r, c) for c in columns) for r in records))
+
+    def text(self) -> str:
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(self.columns)
+        writer.writerows(self.rows)
+        return buffer.getvalue()
+
+
+@dataclass(frozen=True)
+class TextFile:
+    """Any other text file of a report directory (the page, ``numbers.json``), as written."""
+
+    file: str
+    content: str
+
+    def text(self) -> str:
+        return self.content
+
+
+#: A text file a report directory holds (written by :func:`write_report_files`).
+ReportFile = MarkdownText | CsvTable | TextFile
+
+
 def csv_text(rows: Sequence[dict[str, Any]], cell: Callable[[dict[str, Any], str], str] | None = None) -> str:
     """The rows as CSV text, one column per key of the first row (``cell(row, column)`` formats
-    each value; by default ``None`` is empty)."""
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({column: ("" if row[column] is None else row[column]) if cell is None else cell(row, column) for column in row})
-    return buffer.getvalue()
+    each value; by default ``None`` is empty): :meth:`CsvTable.text` of :meth:`CsvTable.from_records`."""
+    return CsvTable.from_records("", rows, cell).text()
+
+
+def write_report_files(
+    out_dir: str | os.PathLike[str],
+    content: Callable[[Path], Sequence[ReportFile]],
+    *,
+    field_name: str,
+    force: bool,
+    generator: str,
+    command: str | None,
+    default_command: str,
+    **manifest: Any,
+) -> Path:
+    """The one writer of a report directory. Before any work: ``out_dir`` claimed (its lock held
+    to the end, a second writer refused naming the first; an interrupted run's leftovers
+    recovered) and checked (new, empty, or with ``force`` a previous report; never a directory
+    holding other files; errors name ``field_name``). Then ``content(tmp)`` fills a directory built
+    beside it (it draws its figures there) and returns its text files, each written atomically;
+    ``manifest.json`` (the files, ``generator``, ``command`` or ``default_command``, the version,
+    ``manifest``) is added and the directory swapped in for ``out_dir`` as a whole. On an error or
+    interrupt ``out_dir`` is left as it was. Returns the directory's path."""
+    from .._util.atomic import write_text
+    from .._util.output import claim_output_directory
+
+    with claim_output_directory(field_name, out_dir, force=force) as out:
+        with report_directory(out, generator=generator, command=command, default_command=default_command, **manifest) as tmp:
+            for item in content(tmp):
+                write_text(tmp / item.file, item.text())
+    return out
 
 
 __all__ = [
+    "CsvTable",
+    "MarkdownText",
+    "ReportFile",
     "ReportFigure",
     "ReportSection",
     "ReportTable",
     "SectionProvider",
+    "TextFile",
     "check_report_directory",
     "csv_text",
+    "markdown_lines",
     "markdown_table",
     "not_landed",
     "package_version",
     "report_directory",
+    "write_report_files",
 ]

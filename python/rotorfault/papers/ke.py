@@ -40,7 +40,7 @@ from ..plotting.paths import plot_primary_axis
 from ._numbers import PaperClaim, PaperNumber
 
 if TYPE_CHECKING:
-    from ._report import ReportSection, ReportTable
+    from ._report import ReportFile, ReportSection, ReportTable
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -305,16 +305,53 @@ def write_report(
     row per run), with ``figures`` the time history of every run of the first law
     (``<scenario>.png``) and the primary-axis paths (``primary-axis.png``), and
     ``manifest.json`` (the files, ``command``, the rotorfault version). The directory is built
-    beside ``out_dir`` and swapped in only when complete: an interrupted report leaves the
+    beside ``out_dir`` and swapped in only when complete (the one report writer,
+    :func:`rotorfault.papers._report.write_report_files`): an interrupted report leaves the
     previous one as it was. An existing report is replaced only with ``force``; a non-empty
     directory that is not a report never. Returns the Markdown file's path."""
-    from ._report import check_report_directory, csv_text, report_directory
+    from ._report import write_report_files
 
-    out = check_report_directory("out_dir", out_dir, force=force)
-    if not runs:
-        raise ValueError("runs: nothing to report (give at least one law and scenario)")
+    def content(tmp: Path) -> list[ReportFile]:
+        if not runs:
+            raise ValueError("runs: nothing to report (give at least one law and scenario)")
+        first_law = runs[0].law
+        if figures:
+            chosen = [run for run in runs if run.law == first_law]
+            for run in chosen:
+                run.plot(str(tmp / f"{run.scenario.name}.png"))
+            plot_primary_axis(chosen, str(tmp / "primary-axis.png"))
+        return _report_files(runs, figures=figures)
+
+    out = write_report_files(
+        out_dir, content, field_name="out_dir", force=force, generator="rotorfault ftc-report (rotorfault.papers.ke.write_report)",
+        command=command, default_command="rotorfault.papers.ke.write_report", laws=sorted({run.law for run in runs}),
+        scenarios=sorted({run.scenario.name for run in runs}),
+    )
+    return out / "ftc-report.md"
+
+
+#: The flights table of ``ftc-report.md``: (column, the report row's column, decimals; None: as text).
+_MARKDOWN_COLUMNS: tuple[tuple[str, str, int | None], ...] = (
+    ("scenario", "scenario", None), ("law", "law", None), ("Ke: stabilisable", "ke_stabilizable", 3),
+    ("verdict", "verdict_label", None), ("efficiency reached", "efficiency", None), ("r (rad/s)", "r_rad_s", 1),
+    ("n3z", "n3z", 3), ("rotation axis (body)", "rotation_axis", 3), ("spin settle (s)", "spin_settle_s", 1),
+    ("max alt. loss (m)", "max_altitude_loss_m", 2), ("max horiz. (m)", "max_horizontal_error_m", 2),
+    ("final horiz. (m)", "final_horizontal_error_m", 2), ("final alt. err. (m)", "final_altitude_error_m", 2),
+)
+
+
+def _report_files(runs: list[ScenarioRun], *, figures: bool = True) -> list[ReportFile]:
+    """The text files of ``rotorfault ftc-report`` for ``runs``: ``ftc-report.csv`` (every
+    column of :func:`report_rows`, six decimals) and ``ftc-report.md`` (the verdicts, the flights
+    table, the stability checks of Table II's health matrices; ``figures``: whether the figures
+    are listed)."""
+    from ._report import CsvTable, MarkdownText, markdown_lines
+
     rows = report_rows(runs)
-    table_csv = csv_text(rows, lambda r, column: cell(r, column, 6))
+    flights = markdown_lines(
+        [name for name, _, _ in _MARKDOWN_COLUMNS],
+        [[r[column] if digits is None else cell(r, column, digits) for _, column, digits in _MARKDOWN_COLUMNS] for r in rows],
+    )
     lines = [
         "# Uniform passive FTC (Ke et al.): scenario report",
         "",
@@ -327,45 +364,22 @@ def write_report(
         "'efficiency reached' is the rotor efficiency at the end of the run (a lost run never had the faults",
         "planned after its loss).",
         "",
-        "| scenario | law | Ke: stabilisable | verdict | efficiency reached | r (rad/s) | n3z | rotation axis (body) "
-        "| spin settle (s) | max alt. loss (m) | max horiz. (m) | final horiz. (m) | final alt. err. (m) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        *flights,
     ]
-    for r in rows:
-        lines.append(
-            f"| {r['scenario']} | {r['law']} | {cell(r, 'ke_stabilizable')} | {r['verdict_label']} | {r['efficiency']} "
-            f"| {cell(r, 'r_rad_s', 1)} | {cell(r, 'n3z', 3)} | {cell(r, 'rotation_axis')} "
-            f"| {cell(r, 'spin_settle_s', 1)} | {cell(r, 'max_altitude_loss_m', 2)} | {cell(r, 'max_horizontal_error_m', 2)} "
-            f"| {cell(r, 'final_horizontal_error_m', 2)} | {cell(r, 'final_altitude_error_m', 2)} |"
-        )
     lines += ["", f"Verdicts counted ({len(rows)} flights): {verdict_count_text(r['verdict'] for r in rows)}."]
     lines += ["", "Stability checks of Section III-D (Table II health matrices, k_rotor = 2):", ""]
-    lines += ["| diag(efficiency) | eig(N) | Re eig(I + k N) > 0 (25) | Re eig(N) > 0 (32) |", "|---|---|---|---|"]
     frame = Airframe.preset("ke-quadcopter")
+    checks = []
     for efficiency in TABLE_II_EFFICIENCY:
         check = stability_check(frame, efficiency)
-        eig = ", ".join(f"{v.real:.4f}" for v in check.eigenvalues)
-        lines.append(
-            f"| diag({', '.join(f'{h:g}' for h in efficiency)}) | {eig} | {check.thrust_feedback} | {check.full_compensation} |"
-        )
-    first_law = runs[0].law
+        checks.append([f"diag({', '.join(f'{h:g}' for h in efficiency)})", ", ".join(f"{v.real:.4f}" for v in check.eigenvalues),
+                       str(check.thrust_feedback), str(check.full_compensation)])
+    lines += markdown_lines(["diag(efficiency)", "eig(N)", "Re eig(I + k N) > 0 (25)", "Re eig(N) > 0 (32)"], checks)
     if figures:
-        lines += ["", f"Figures ({first_law}): `primary-axis.png`, and one time history per scenario (`<scenario>.png`)."]
+        lines += ["", f"Figures ({runs[0].law}): `primary-axis.png`, and one time history per scenario (`<scenario>.png`)."]
     else:
         lines += ["", "No figures (written with --no-figures)."]
-    with report_directory(
-        out, generator="rotorfault ftc-report (rotorfault.papers.ke.write_report)", command=command,
-        default_command="rotorfault.papers.ke.write_report", laws=sorted({run.law for run in runs}),
-        scenarios=sorted({run.scenario.name for run in runs}),
-    ) as tmp:
-        (tmp / "ftc-report.csv").write_text(table_csv, encoding="utf-8")
-        (tmp / "ftc-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        if figures:
-            chosen = [run for run in runs if run.law == first_law]
-            for run in chosen:
-                run.plot(str(tmp / f"{run.scenario.name}.png"))
-            plot_primary_axis(chosen, str(tmp / "primary-axis.png"))
-    return out / "ftc-report.md"
+    return [CsvTable.from_records("ftc-report.csv", rows, lambda r, column: cell(r, column, 6)), MarkdownText("ftc-report.md", tuple(lines))]
 
 
 #: The health matrices of Ke Table II, as their diagonals (rotor efficiencies).

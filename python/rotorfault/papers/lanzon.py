@@ -34,14 +34,16 @@ from ..flight import Noise, RotorFault, Sensing, State, Trajectory, simulate_bat
 from ..plotting.paths import plot_lanzon_paths as plot_paths
 from ..plotting.timeseries import plot_lanzon_flight as plot_flight
 from ..plotting.verdicts import plot_verdict_sweep
-from ..studies.backends import map_runs
+from ..studies.engine import run_chunks
+from ..studies.storage import pyarrow_module
 from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text
 from ..flight.outcomes import OUTCOME_LABELS as OUTCOME_TEXT  # noqa: F401  (the one table of outcome words)
 from ..flight.scenarios import FlightScenario as KeScenario  # a generic flight scenario (no paper imports another)
+from ._report import markdown_lines
 
 if TYPE_CHECKING:
     from ._numbers import PaperClaim
-    from ._report import ReportSection, ReportTable
+    from ._report import ReportFile, ReportSection, ReportTable
     from matplotlib.figure import Figure
 
 # -- scenarios ----------------------------------------------------------------------------------
@@ -406,11 +408,11 @@ def paper_claim(claim: LanzonClaim) -> PaperClaim:
 
 def claims_table(claims: list[LanzonClaim]) -> list[str]:
     """The claims as Markdown lines (claim, flight, measurement, verdict, status, reason)."""
-    lines = ["| where | claim | flight | measurement | verdict | status | reason |", "|---|---|---|---|---|---|---|"]
-    for c in claims:
-        flight = f"{c.design}, I_zz = {c.inertia_zz_kg_m2:g}, I_R = {c.rotor_inertia_kg_m2:g}, {c.duration_s:g} s"
-        lines.append(f"| {c.where} | {c.claim} | {flight} | {c.measurement} | {c.verdict} | {c.status} | {c.reason} |")
-    return lines
+    return markdown_lines(
+        ("where", "claim", "flight", "measurement", "verdict", "status", "reason"),
+        [(c.where, c.claim, f"{c.design}, I_zz = {c.inertia_zz_kg_m2:g}, I_R = {c.rotor_inertia_kg_m2:g}, {c.duration_s:g} s",
+          c.measurement, c.verdict, c.status, c.reason) for c in claims],
+    )
 
 
 # -- the rotor inertia the paper does not print -----------------------------------------------------
@@ -471,12 +473,16 @@ def verdict_changes(points: list[SweepPoint]) -> list[str]:
 
 def sweep_table(points: list[SweepPoint]) -> list[str]:
     """The sweep as Markdown lines: one row per ``I_zz`` and case, one column per ``I_R``."""
+    return markdown_lines(*_sweep_cells(points))
+
+
+def _sweep_cells(points: list[SweepPoint]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
     irs = sorted({p.rotor_inertia_kg_m2 for p in points})
-    lines = ["| I_zz (kg m^2) | case | " + " | ".join(f"I_R = {ir:g}" for ir in irs) + " |", "|---|---|" + "---|" * len(irs)]
+    rows = []
     for izz, case in dict.fromkeys((p.inertia_zz_kg_m2, p.case) for p in points):
         cells = {p.rotor_inertia_kg_m2: p.verdict for p in points if (p.inertia_zz_kg_m2, p.case) == (izz, case)}
-        lines.append(f"| {izz:g} | ({case}) {design_case(case).description} | " + " | ".join(cells.get(ir, "-") for ir in irs) + " |")
-    return lines
+        rows.append((f"{izz:g}", f"({case}) {design_case(case).description}", *(cells.get(ir, "-") for ir in irs)))
+    return ("I_zz (kg m^2)", "case", *(f"I_R = {ir:g}" for ir in irs)), tuple(rows)
 
 
 # -- robustness (Monte Carlo) -------------------------------------------------------------------
@@ -558,8 +564,9 @@ def monte_carlo(
     """Robustness of ``controller`` with rotor 2 dead: ``"lanzon"`` (design ``case``, designed
     once on the nominal vehicle) or ``"ke"`` (Ke's :class:`~rotorfault.UniformPassiveFtc`,
     ``ke-hil`` gains, on the same vehicle with the same limits). Each run's vehicle differs, so
-    each goes to :func:`~rotorfault.simulate_batch` with its own simulator, two at a time on
-    threads (the core releases the GIL); run ``i`` uses noise seed ``seed + i``."""
+    each goes to :func:`~rotorfault.simulate_batch` with its own simulator; the runs go through
+    the study engine (:func:`rotorfault.studies.engine.run_chunks`, the local backend: two chunks
+    at a time on threads, the core releases the GIL); run ``i`` uses noise seed ``seed + i``."""
     if controller not in ("lanzon", "ke"):
         raise ValueError(f"controller: expected 'lanzon' or 'ke', got {controller!r}")
     n = count("runs", runs)
@@ -570,37 +577,84 @@ def monte_carlo(
         raise ValueError(f"spread: must lie in [0, 1), got {spread}")
     nominal = LanzonVehicle(inertia_zz_kg_m2=real("inertia_zz_kg_m2", inertia_zz_kg_m2))
     cs = design_case(case) if isinstance(case, str) else case
-    sc = scenario("B")
-    rng = np.random.default_rng(count("seed", seed))
-    factors = rng.uniform(1 - spread, 1 + spread, size=(n, 5))
-    designed = cs.design(nominal) if controller == "lanzon" else None
-    x0 = sc.initial_state()
-    assert sc.position is not None
-    setpoint = sc.position
+    if not isinstance(cs, DesignCase):
+        raise TypeError(f"case: expected a DesignCase or 'a'/'b'/'c', got {type(case).__name__}")
+    seed = count("seed", seed)
+    duration = real("duration_s", duration_s)
+    # The draws: one generator for the whole batch, row i for run i (as since the study was
+    # written; the campaigns' per-run generators would draw other numbers).
+    factors = np.random.default_rng(seed).uniform(1 - spread, 1 + spread, size=(n, 5))
+    task = _MonteCarloTask(controller, nominal, cs, cs.design(nominal) if controller == "lanzon" else None, factors, snr_db,
+                           seed, duration)
+    # Two runs at a time (the core releases the GIL): two chunks in flight, each at most half the runs.
+    chunk_rows = max(1, min(max(8, n // 50), -(-n // 2)))
+    result = run_chunks(
+        task, total_rows=n, chunk_rows=chunk_rows, schema=_monte_carlo_schema(), kind="lanzon-monte-carlo",
+        arguments={"controller": controller, "runs": n, "spread": spread, "snr_db": None if snr_db is None else real("snr_db", snr_db),
+                   "duration_s": duration,
+                   "inertia_zz_kg_m2": float(inertia_zz_kg_m2), "case": cs.label, "seed": seed},
+        progress=progress, description=f"{n:,} {controller} runs",
+    )
+    assert result.table is not None  # gathered in memory (no ``out``)
+    columns = result.table.to_pydict()
+    return MonteCarloResult(controller, n, spread, snr_db, duration, float(inertia_zz_kg_m2),
+                            tuple(columns["outcome"]), np.array(columns["final_error_m"], dtype=np.float64), factors)
 
-    def one(i: int) -> tuple[str, float]:
-        f = factors[i]
+
+def _monte_carlo_schema() -> Any:
+    """The rows of one Monte Carlo chunk: the run, Ke's windowed verdict code, the final distance
+    from the setpoint (m; NaN: lost)."""
+    pa = pyarrow_module()
+
+    return pa.schema([pa.field("run", pa.int64()), pa.field("outcome", pa.string()), pa.field("final_error_m", pa.float64())])
+
+
+@dataclass(frozen=True)
+class _MonteCarloTask:
+    """The runs of one chunk of :func:`monte_carlo` (the study engine's task): run ``i`` flies the
+    nominal vehicle scaled by ``factors[i]`` (mass, ``I_xx = I_yy``, ``I_zz``, ``k_r``, ``I_R``)
+    with noise seed ``seed + i``, rotor 2 dead, from Scenario B's start to its setpoint."""
+
+    controller: str
+    nominal: LanzonVehicle
+    case: DesignCase
+    designed: LanzonDesign | None
+    factors: FloatArray
+    snr_db: float | None
+    seed: int
+    duration_s: float
+
+    def __call__(self, spec: Any) -> Any:
+        pa = pyarrow_module()
+
+        runs = [self.run(i) for i in range(spec.start, spec.stop)]
+        return pa.Table.from_arrays(
+            [pa.array(range(spec.start, spec.stop), pa.int64()), pa.array([o for o, _ in runs], pa.string()),
+             pa.array([e for _, e in runs], pa.float64())], schema=_monte_carlo_schema())
+
+    def run(self, i: int) -> tuple[str, float]:
+        """Run ``i``: Ke's windowed verdict code and the final distance from the setpoint (NaN: lost)."""
+        sc = scenario("B")
+        assert sc.position is not None
+        nominal, f = self.nominal, self.factors[i]
         v = replace(nominal, mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
                     inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
                     rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
                     rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
-        noise = None if snr_db is None else Noise(snr_db=snr_db, seed=seed + i)
-        sim = v.simulator(limits=cs.limits if controller == "lanzon" else True, noise=noise)
+        noise = None if self.snr_db is None else Noise(snr_db=self.snr_db, seed=self.seed + i)
+        sim = v.simulator(limits=self.case.limits if self.controller == "lanzon" else True, noise=noise)
         ctrl: Any
-        if controller == "lanzon":
-            assert designed is not None
-            ctrl = LanzonController(designed, position=sc.position, outer_loop=cs.outer_loop)
+        if self.controller == "lanzon":
+            assert self.designed is not None
+            ctrl = LanzonController(self.designed, position=sc.position, outer_loop=self.case.outer_loop)
         else:
-            ctrl = UniformPassiveFtc(sim.airframe, gains="ke-hil", position=setpoint)
-        batch = simulate_batch(sim, [x0], duration_s, controllers=[ctrl], faults=[[RotorFault(2, 0.0)]], record_every=20)
+            ctrl = UniformPassiveFtc(sim.airframe, gains="ke-hil", position=sc.position)
+        batch = simulate_batch(sim, [sc.initial_state()], self.duration_s, controllers=[ctrl], faults=[[RotorFault(2, 0.0)]],
+                               record_every=20)
         tr = batch.trajectories[0]
-        m = flight_metrics(tr, replace(_as_ke_scenario(sc), duration_s=duration_s))
+        m = flight_metrics(tr, replace(_as_ke_scenario(sc), duration_s=self.duration_s))
         err = math.nan if tr.diverged else float(np.linalg.norm(tr.position[-1] - np.asarray(sc.position)))
         return m.outcome, err
-
-    results = map_runs(one, n, description=f"{n:,} {controller} runs", progress=progress)
-    return MonteCarloResult(controller, n, spread, snr_db, float(duration_s), float(inertia_zz_kg_m2),
-                            tuple(o for o, _ in results), np.array([e for _, e in results]), factors)
 
 
 # -- report (rotorfault lanzon-report) -----------------------------------------------------------
@@ -667,14 +721,16 @@ def _num(value: Any, digits: int) -> str:
 def three_way_table(runs: list[LanzonRun]) -> list[str]:
     """The three-way table as Markdown lines: one row per ``I_zz`` and case, scenarios A and B side
     by side (A: outcome, tilt below 1 deg after, altitude lost; B: outcome, final error)."""
+    return markdown_lines(*_three_way_cells(runs))
+
+
+def _three_way_cells(runs: list[LanzonRun]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
     by_key: dict[tuple[float, str], dict[str, LanzonRun]] = {}
     for run in runs:
         by_key.setdefault((run.vehicle.inertia_zz_kg_m2, run.case.label), {})[run.scenario.name] = run
-    lines = [
-        "| I_zz (kg m^2) | case | gamma | A: outcome | A: tilt < 1 deg after (s) | A: altitude lost (m) "
-        "| B: outcome | B: final error (m) | B: altitude lost (m) |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
+    columns = ("I_zz (kg m^2)", "case", "gamma", "A: outcome", "A: tilt < 1 deg after (s)", "A: altitude lost (m)",
+               "B: outcome", "B: final error (m)", "B: altitude lost (m)")
+    rows = []
     for (izz, label), pair in by_key.items():
         a, b = pair.get("A"), pair.get("B")
         any_run = a or b
@@ -689,22 +745,24 @@ def three_way_table(runs: list[LanzonRun]) -> list[str]:
             cells += [outcome_text(b.outcome, b.lost_at_s), _num(b.final_error_m, 3), _num(b.attitude.max_altitude_loss_m, 1)]
         else:
             cells += ["-", "-", "-"]
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
+        rows.append(tuple(cells))
+    return columns, tuple(rows)
 
 
 def monte_carlo_table(results: list[MonteCarloResult]) -> list[str]:
     """The robustness comparison as Markdown lines."""
-    lines = [
-        "| controller | runs | I_zz (kg m^2) | holds position | lost | median final error (m) | worst final error (m) | outcomes |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    return markdown_lines(*_monte_carlo_cells(results))
+
+
+def _monte_carlo_cells(results: list[MonteCarloResult]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
     names = {"lanzon": "Lanzon RFL + H-infinity, design (c)", "ke": "Ke uniform passive FTC (ke-hil)"}
+    rows = []
     for r in results:
         outcomes = ", ".join(f"{outcome_text(k)} {v}" for k, v in r.counts().items())
-        lines.append(f"| {names.get(r.controller, r.controller)} | {r.runs} | {r.inertia_zz_kg_m2:g} | {100 * r.held_fraction:.1f} % "
-                     f"| {100 * r.lost_fraction:.1f} % | {_num(r.median_final_error_m, 3)} | {_num(r.worst_final_error_m, 3)} | {outcomes} |")
-    return lines
+        rows.append((names.get(r.controller, r.controller), str(r.runs), f"{r.inertia_zz_kg_m2:g}", f"{100 * r.held_fraction:.1f} %",
+                     f"{100 * r.lost_fraction:.1f} %", _num(r.median_final_error_m, 3), _num(r.worst_final_error_m, 3), outcomes))
+    return ("controller", "runs", "I_zz (kg m^2)", "holds position", "lost", "median final error (m)", "worst final error (m)",
+            "outcomes"), tuple(rows)
 
 
 def write_report(
@@ -721,42 +779,51 @@ def write_report(
     (one row per Monte Carlo run), with ``figures`` one time history per flight
     (``<scenario>-<case>-izz-<value>.png``), the Scenario B paths (``paths-3d.png``) and the loop
     shapes of the paper's and our design (``loop-shape-<case>.png``); and ``manifest.json``.
-    Written beside ``out_dir`` and swapped in when complete; an existing report is replaced only
+    Written beside ``out_dir`` and swapped in when complete (the one report writer,
+    :func:`rotorfault.papers._report.write_report_files`); an existing report is replaced only
     with ``force``."""
-    import csv
-    import io
-    from importlib.metadata import PackageNotFoundError, version
+    from ._report import write_report_files
 
-    from .._util.output import check_output_directory, output_directory
+    def content(tmp: Path) -> list[ReportFile]:
+        if not runs:
+            raise ValueError("runs: nothing to report (fly at least one scenario)")
+        if figures:
+            _draw_report_figures(runs, tmp)
+        return _report_files(runs, monte_carlo_results or [], figures=figures)
 
-    out = check_output_directory("out_dir", out_dir, force=force)
-    if not runs:
-        raise ValueError("runs: nothing to report (fly at least one scenario)")
-    rows = report_rows(runs)
-    try:
-        package_version = version("rotorfault")
-    except PackageNotFoundError:  # pragma: no cover
-        package_version = "unknown"
-    manifest = {
-        "generator": "rotorfault lanzon-report (rotorfault.papers.lanzon.write_report)",
-        "command": command or "rotorfault.papers.lanzon.write_report",
-        "version": package_version,
-    }
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    for r in rows:
-        writer.writerow({k: ("" if v is None else v) for k, v in r.items()})
-    mc = monte_carlo_results or []
-    mc_buffer = io.StringIO()
-    mc_writer = csv.writer(mc_buffer, lineterminator="\n")
-    mc_writer.writerow(["controller", "run", "mass_factor", "inertia_xx_factor", "inertia_zz_factor",
-                        "rotational_drag_factor", "rotor_inertia_factor", "outcome", "final_error_m"])
-    for result in mc:
-        for i in range(result.runs):
-            err = float(result.final_error_m[i])
-            mc_writer.writerow([result.controller, i, *(f"{x:.6f}" for x in result.factors[i]), result.outcomes[i],
-                                f"{err:.6f}" if math.isfinite(err) else ""])
+    out = write_report_files(
+        out_dir, content, field_name="out_dir", force=force,
+        generator="rotorfault lanzon-report (rotorfault.papers.lanzon.write_report)", command=command,
+        default_command="rotorfault.papers.lanzon.write_report",
+    )
+    return out / "lanzon-report.md"
+
+
+def _draw_report_figures(runs: list[LanzonRun], directory: Path) -> None:
+    """The figures of ``rotorfault lanzon-report`` (:func:`write_report`) drawn into ``directory``."""
+    for run in runs:
+        run.plot(str(directory / f"{run.scenario.name}-{run.case.label}-izz-{run.vehicle.inertia_zz_kg_m2:g}.png"))
+    b_runs = [run for run in runs if run.scenario.name == "B"]
+    if b_runs:
+        plot_paths(b_runs, str(directory / "paths-3d.png"))
+    seen: set[str] = set()
+    for run in runs:
+        if run.case.label in ("b", "c") and run.case.label not in seen:
+            seen.add(run.case.label)
+            fig = run.design.plot_loop_shape(str(directory / f"loop-shape-{run.case.label}.png"))
+            del fig
+
+
+#: The columns of ``monte-carlo.csv``: one row per Monte Carlo run, its five factors, verdict and error.
+MONTE_CARLO_CSV_COLUMNS = ("controller", "run", "mass_factor", "inertia_xx_factor", "inertia_zz_factor", "rotational_drag_factor",
+                           "rotor_inertia_factor", "outcome", "final_error_m")
+
+
+def _report_files(runs: list[LanzonRun], mc: list[MonteCarloResult], *, figures: bool) -> list[ReportFile]:
+    """The text files of ``rotorfault lanzon-report``: ``lanzon-report.csv`` (:func:`report_rows`),
+    ``lanzon-report.md`` and, with Monte Carlo results, ``monte-carlo.csv``."""
+    from ._report import CsvTable, MarkdownText
+
     lines = [
         "# Flying a quadrotor on three rotors (Lanzon et al.): report",
         "",
@@ -790,24 +857,13 @@ def write_report(
     if figures:
         lines += ["", "Figures: `<scenario>-<case>-izz-<I_zz>.png` (one per flight), `paths-3d.png`, "
                   "`loop-shape-b.png` (the paper's design), `loop-shape-c.png` (ours)."]
-    with output_directory(out, manifest) as tmp:
-        (tmp / "lanzon-report.csv").write_text(buffer.getvalue(), encoding="utf-8")
-        (tmp / "lanzon-report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        if mc:
-            (tmp / "monte-carlo.csv").write_text(mc_buffer.getvalue(), encoding="utf-8")
-        if figures:
-            for run in runs:
-                run.plot(str(tmp / f"{run.scenario.name}-{run.case.label}-izz-{run.vehicle.inertia_zz_kg_m2:g}.png"))
-            b_runs = [run for run in runs if run.scenario.name == "B"]
-            if b_runs:
-                plot_paths(b_runs, str(tmp / "paths-3d.png"))
-            seen: set[str] = set()
-            for run in runs:
-                if run.case.label in ("b", "c") and run.case.label not in seen:
-                    seen.add(run.case.label)
-                    fig = run.design.plot_loop_shape(str(tmp / f"loop-shape-{run.case.label}.png"))
-                    del fig
-    return out / "lanzon-report.md"
+    files: list[ReportFile] = [CsvTable.from_records("lanzon-report.csv", report_rows(runs)), MarkdownText("lanzon-report.md", tuple(lines))]
+    if mc:
+        files.append(CsvTable("monte-carlo.csv", MONTE_CARLO_CSV_COLUMNS, tuple(
+            (result.controller, i, *(f"{x:.6f}" for x in result.factors[i]), result.outcomes[i],
+             f"{float(result.final_error_m[i]):.6f}" if math.isfinite(float(result.final_error_m[i])) else "")
+            for result in mc for i in range(result.runs))))
+    return files
 
 
 __all__ = [
@@ -892,7 +948,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     is the paper's 60 s; ``--quick`` skips the Monte Carlo and sweeps 6 rotor inertias instead of 9."""
     import time
 
-    from ._report import ReportFigure, ReportSection, ReportTable, markdown_table
+    from ._report import ReportFigure, ReportSection, ReportTable
 
     start = time.perf_counter()
     section = ReportSection("lanzon-flights", "Lanzon's flights (Scenarios A and B, Figs. 6-10)",
@@ -900,7 +956,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     # The paper's 60 s flights in both modes: a verdict is the whole flight's (a 20 s flight of the
     # paper's design still circles where the 60 s one holds), and they cost about 2.5 s in all.
     runs = three_way()
-    columns, rows = markdown_table(three_way_table(runs))
+    columns, rows = _three_way_cells(runs)
     section.tables.append(ReportTable(
         "Three ways, rotor 2 dead (60 s flights)"
         + ": (a) the paper's 100 rad/s design without actuator limits, (b) the same design with the paper's "
@@ -921,7 +977,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     # 60 s flight; most runs at large I_R are lost within seconds): --quick takes fewer I_R.
     points = rotor_inertia_sweep(ROTOR_INERTIAS_QUICK if quick else ROTOR_INERTIAS_FULL,
                                  designs={(r.vehicle.inertia_zz_kg_m2, r.case.label): r.design for r in runs})
-    columns, rows = markdown_table(sweep_table(points))
+    columns, rows = _sweep_cells(points)
     section.tables.append(ReportTable(
         "Scenario B's verdict against the rotor inertia I_R (the paper prints none; ours is 3e-5 kg m^2), both I_zz, "
         "the paper's design (b) and ours (c) with the paper's limits, 60 s flights"
@@ -942,7 +998,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
             section.figures.append(ReportFigure(name, run.title, small=True))
     if not quick:
         results = [monte_carlo(c, runs=200, duration_s=60.0) for c in ("lanzon", "ke")]
-        columns, rows = markdown_table(monte_carlo_table(results))
+        columns, rows = _monte_carlo_cells(results)
         section.tables.append(ReportTable(
             "Robustness, 200 runs each: mass, inertias, k_r, I_R +-20 %, 15 dB sensor noise, Scenario B", columns, rows))
     else:

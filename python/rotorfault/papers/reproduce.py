@@ -416,8 +416,10 @@ def write_reproduce(
     ``force``, a directory that is not a report never. ``bench_directory`` defaults to the source
     results shipped with the package (:func:`default_bench_directory`); ``providers`` overrides the section providers by paper key (None:
     not landed), for tests. ``progress(text)`` is called before each section."""
-    from ._report import check_report_directory, package_version, report_directory
+    from ._report import TextFile, check_report_directory, package_version, write_report_files
 
+    # The directory and the bench files are checked before any work (the writer claims the
+    # directory again, holding its lock to the end).
     out = check_report_directory("out", out_dir, force=force)
     if bench_directory is None:  # the source tree's results, when there are any
         default = default_bench_directory()
@@ -429,8 +431,8 @@ def write_reproduce(
     start = time.perf_counter()
     result = ReproduceResult(out / "index.html")
     shown_command = command or "rotorfault.papers.reproduce.write_reproduce"
-    with report_directory(out, generator="rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)", command=command,
-                          default_command=shown_command, quick=quick) as tmp:
+
+    def content(tmp: Path) -> list[TextFile]:
         for paper in PAPERS:
             chosen = providers[paper.key] if providers is not None and paper.key in providers else provider(paper)
             if progress is not None:
@@ -453,9 +455,12 @@ def write_reproduce(
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
                       command=shown_command, version=package_version(),
                       bench_directory=_shown_path(benches_dir))
-        (tmp / "index.html").write_text(html, encoding="utf-8")
-        (tmp / "numbers.json").write_text(json.dumps(report_numbers(result.sections), indent=1, allow_nan=True) + "\n",
-                                          encoding="utf-8")
+        return [TextFile("index.html", html),
+                TextFile("numbers.json", json.dumps(report_numbers(result.sections), indent=1, allow_nan=True) + "\n")]
+
+    write_report_files(out, content, field_name="out", force=force,
+                       generator="rotorfault reproduce (rotorfault.papers.reproduce.write_reproduce)", command=command,
+                       default_command=shown_command, quick=quick)
     return result
 
 

@@ -77,11 +77,12 @@ from ..flight import Noise, Sensing, Simulator, State, Trajectory
 from ..flight.outcomes import FlightMetrics, flight_metrics, verdict_count_text
 from ..control import vpp
 from ..plotting.timeseries import plot_wang_flights as plot_flight
+from ._report import markdown_lines
 
 if TYPE_CHECKING:
     from ..control.stabilisability import PbhTest
     from ._numbers import PaperClaim, PaperNumber
-    from ._report import ReportSection
+    from ._report import MarkdownText, ReportFile, ReportSection
 
 #: Scenario 1 (a decision: the paper prints no numbers), in Wang's frame (z up).
 CIRCLE_RADIUS_M = 2.0
@@ -367,41 +368,39 @@ def fixed_pitch_comparison() -> list[LayoutCase]:
 def comparison_table(cases: list[LayoutCase] | None = None) -> list[str]:
     """Markdown: :func:`fixed_pitch_comparison` (hover at rest, rank, stabilisable and the modes
     no input moves, the uncontrollable directions, ACAI)."""
+    return markdown_lines(*_comparison_cells(cases))
+
+
+def _comparison_cells(cases: list[LayoutCase] | None = None) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
     from ..analysis.acai import acai_label
 
-    rows = [
-        "| vehicle | propeller 1 | hover at rest | rank | stabilisable (PBH) | uncontrollable directions | "
-        f"{acai_label('eq13')} |",
-        "|---|---|---|---|---|---|---|",
-    ]
+    rows = []
     for c in fixed_pitch_comparison() if cases is None else cases:
         state = "failed" if c.failed else "healthy"
         if not c.at_rest:
-            rows.append(
-                f"| {c.vehicle} | {state} | no (trim residual {c.residual:.3g}) | - | "
-                f"no equilibrium to linearise | - | {c.acai:.4f} |"
-            )
+            rows.append((c.vehicle, state, f"no (trim residual {c.residual:.3g})", "-", "no equilibrium to linearise", "-",
+                         f"{c.acai:.4f}"))
             continue
         assert c.stabilisability is not None and c.uncontrollable is not None
         verdict = "yes" if c.stabilisability.holds else f"no: {c.stabilisability.describe()}"
-        rows.append(
-            f"| {c.vehicle} | {state} | yes | {c.rank} | {verdict} | {'; '.join(c.uncontrollable) or 'none'} | "
-            f"{c.acai:.4f} |"
-        )
-    return rows
+        rows.append((c.vehicle, state, "yes", str(c.rank), verdict, "; ".join(c.uncontrollable) or "none", f"{c.acai:.4f}"))
+    columns = ("vehicle", "propeller 1", "hover at rest", "rank", "stabilisable (PBH)", "uncontrollable directions", acai_label("eq13"))
+    return columns, tuple(rows)
 
 
 def speed_sweep_table() -> list[str]:
     """Markdown: the feasible trim speeds per failed propeller (:func:`rotorfault.vpp.feasible_speeds`)."""
+    return markdown_lines(*_speed_sweep_cells())
+
+
+def _speed_sweep_cells() -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
     wang = vpp.preset("wang")
-    rows = ["| failed | fixed group, speed range | free group, speed range |", "|---|---|---|"]
+    rows = []
     for i in range(1, 5):
         w = vpp.feasible_speeds(wang, failed=(i,))
-        rows.append(
-            f"| {i} | {list(w.fixed_rotors)}: [{w.fixed_speed_range[0]:.1f}, {w.fixed_speed_range[1]:.1f}] | "
-            f"{list(w.free_rotors)}: [{w.free_speed_range[0]:.1f}, {w.free_speed_range[1]:.1f}] |"
-        )
-    return rows
+        rows.append((str(i), f"{list(w.fixed_rotors)}: [{w.fixed_speed_range[0]:.1f}, {w.fixed_speed_range[1]:.1f}]",
+                     f"{list(w.free_rotors)}: [{w.free_speed_range[0]:.1f}, {w.free_speed_range[1]:.1f}]"))
+    return ("failed", "fixed group, speed range", "free group, speed range"), tuple(rows)
 
 
 def flight_rows(flights: list[WangFlight]) -> Records:
@@ -442,17 +441,21 @@ def flights_table(flights: list[WangFlight]) -> list[str]:
     """Markdown: one row per flight: the design, its verdict over the whole window against the
     moving reference, the errors and tilt, each healthy propeller's commanded speed range, and the
     share of the time a pitch or a speed sat at its limit."""
-    rows = ["| scenario | design | verdict | final error (m) | largest error after 15 s (m) | largest tilt (rad) "
-            "| commanded speed range (omega_2; omega_3; omega_4) | pitch at a limit (% of time) | speed at a limit (% of time) |",
-            "|---|---|---|---|---|---|---|---|---|"]
+    return markdown_lines(*_flights_cells(flights))
+
+
+def _flights_cells(flights: list[WangFlight]) -> tuple[tuple[str, ...], tuple[tuple[str, ...], ...]]:
+    rows = []
     for f in flights:
         verdict = f.metrics.verdict_label if f.metrics is not None else ("lost" if f.lost else "flown")
         late = "" if f.lost or math.isnan(f.max_error_after_s) else f"{f.max_error_after_s:.3f}"
         final = "" if f.lost else f"{f.final_error_m:.3f}"
         speeds = "; ".join(f"{lo:,.0f}-{hi:,.0f}" for _, lo, hi in f.speed_range)
-        rows.append(f"| {f.scenario.number} | {DESIGN_LABELS[f.design]} | {verdict} | {final} | {late} | {f.max_tilt_rad:.3f} "
-                    f"| {speeds} | {100 * f.pitch_limit_share:.1f} | {100 * f.speed_limit_share:.1f} |")
-    return rows
+        rows.append((str(f.scenario.number), DESIGN_LABELS[f.design], verdict, final, late, f"{f.max_tilt_rad:.3f}", speeds,
+                     f"{100 * f.pitch_limit_share:.1f}", f"{100 * f.speed_limit_share:.1f}"))
+    columns = ("scenario", "design", "verdict", "final error (m)", "largest error after 15 s (m)", "largest tilt (rad)",
+               "commanded speed range (omega_2; omega_3; omega_4)", "pitch at a limit (% of time)", "speed at a limit (% of time)")
+    return columns, tuple(rows)
 
 
 def fly_all(*, duration_s: float = DURATION_S) -> list[WangFlight]:
@@ -461,17 +464,33 @@ def fly_all(*, duration_s: float = DURATION_S) -> list[WangFlight]:
 
 
 def write_report(out_dir: str, *, quick: bool = False, force: bool = False, command: str | None = None) -> str:
-    """Writes ``out_dir`` atomically (replaced only with ``force``): ``vpp-report.md`` (the
-    fixed-pitch comparison table, the speed sweep, the flights of both designs, the paper's flight
-    claims), one figure per scenario (``scenario-<n>.png``, the paper's design drawn in full, ours
-    dashed) and ``manifest.json``. ``quick``: 20 s flights instead of the paper's 60 s."""
-    from .._util.output import check_output_directory, output_directory, write_text
+    """Writes ``out_dir`` atomically (replaced only with ``force``; the one report writer,
+    :func:`rotorfault.papers._report.write_report_files`): ``vpp-report.md`` (the fixed-pitch
+    comparison table, the speed sweep, the flights of both designs, the paper's flight claims),
+    one figure per scenario (``scenario-<n>.png``, the paper's design drawn in full, ours dashed)
+    and ``manifest.json``. ``quick``: 20 s flights instead of the paper's 60 s."""
+    from ._report import write_report_files
 
-    check_output_directory("out_dir", out_dir, force=force)
-    duration = 20.0 if quick else DURATION_S
-    flights = fly_all(duration_s=duration)
+    def content(tmp: Path) -> list[ReportFile]:
+        duration = 20.0 if quick else DURATION_S
+        flights = fly_all(duration_s=duration)
+        for n in (1, 2, 3):
+            plot_flight([f for f in flights if f.scenario.number == n], str(tmp / f"scenario-{n}.png"))
+        return [_report_text(flights, duration)]
+
+    write_report_files(out_dir, content, field_name="out_dir", force=force,
+                       generator="rotorfault vpp-report (rotorfault.papers.wang.write_report)", command=command,
+                       default_command="rotorfault.papers.wang.write_report", quick=quick)
+    return out_dir
+
+
+def _report_text(flights: list[WangFlight], duration: float) -> MarkdownText:
+    """``vpp-report.md``: the comparison, the speed sweep, the flights flown for ``duration`` s
+    and the paper's flight claims."""
+    from ._report import MarkdownText
+
     claims = flight_claims(flights)
-    lines = [
+    return MarkdownText("vpp-report.md", (
         "# Variable-pitch quadcopters that lose a propeller (Wang et al.): report", "",
         "## The fixed-pitch comparison: hover, controllability, ACAI", "", COMPARISON_NOTE, "",
         *comparison_table(), "",
@@ -479,16 +498,9 @@ def write_report(out_dir: str, *, quick: bool = False, force: bool = False, comm
         f"## Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0)", "",
         *flights_table(flights), "",
         "## The paper's flight claims", "",
-        "| scenario | claim | our measurement | verdict | claim holds | reason |", "|---|---|---|---|---|---|",
-        *(f"| {c.where} | {c.claim} | {c.measurement} | {c.verdict} | {c.status} | {c.reason} |" for c in claims), "",
-    ]
-    manifest = {"generator": "rotorfault vpp-report (rotorfault.papers.wang.write_report)",
-                "command": command or "rotorfault.papers.wang.write_report", "quick": quick}
-    with output_directory(out_dir, manifest) as tmp:
-        write_text(tmp / "vpp-report.md", "\n".join(lines))
-        for n in (1, 2, 3):
-            plot_flight([f for f in flights if f.scenario.number == n], str(tmp / f"scenario-{n}.png"))
-    return out_dir
+        *markdown_lines(("scenario", "claim", "our measurement", "verdict", "claim holds", "reason"),
+                        [(c.where, c.claim, c.measurement, c.verdict, c.status, c.reason) for c in claims]),
+    ))
 
 
 __all__ = ["COMPARISON_NOTE", "DESIGNS", "DESIGN_LABELS", "LAYOUTS", "PAPER", "REST_RESIDUAL", "STEADY_LEAN_RAD", "LayoutCase",
@@ -645,18 +657,17 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     paper's flight claims (``--quick``: 20 s flights)."""
     import time
 
-    from ._report import ReportFigure, ReportSection, ReportTable, markdown_table
+    from ._report import ReportFigure, ReportSection, ReportTable
 
     start = time.perf_counter()
     section = ReportSection("wang", "Wang et al.: variable-pitch quadcopters that lose a propeller",
                             source="rotorfault.papers.wang (rotorfault vpp-report)")
     section.numbers = printed_numbers()
-    for caption, lines in (
+    for caption, (columns, rows) in (
         (f"The fixed-pitch comparison (no fixed-pitch flight): {COMPARISON_NOTE} The 4-axis ACAI's yaw row "
-         "cannot see the VPP's separate torque channel (README decisions).", comparison_table()),
-        ("Feasible trim speeds per failed propeller", speed_sweep_table()),
+         "cannot see the VPP's separate torque channel (README decisions).", _comparison_cells()),
+        ("Feasible trim speeds per failed propeller", _speed_sweep_cells()),
     ):
-        columns, rows = markdown_table(lines)
         section.tables.append(ReportTable(caption, columns, rows))
     duration = 20.0 if quick else DURATION_S
     flights = fly_all(duration_s=duration)
@@ -666,7 +677,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         section.figures.append(ReportFigure(
             name, f"Section 4 scenario {n}: VPP, propeller 1 failed; Wang's design (omega_3 held at 9000) in full, our "
             "variant dashed in the path", small=True))
-    columns, rows = markdown_table(flights_table(flights))
+    columns, rows = _flights_cells(flights)
     section.tables.append(ReportTable(
         f"Section 4's flights ({duration:g} s, VPP, propeller 1 failed from t = 0): the paper's design and our variant; "
         "speeds limited to 10,000 and pitches to +-0.26 rad by the actuator, the share of the time a command sat at "

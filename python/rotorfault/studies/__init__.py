@@ -9,7 +9,7 @@ backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
 (:mod:`~rotorfault.studies.engine`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
 tuning (:mod:`~rotorfault.studies.tuning`, judged for holding through faults by
 :mod:`~rotorfault.studies.hold`). The papers' Monte Carlo studies run on the same
-backends.
+engine.
 
 May import: ``control``, ``flight``, ``allocation``, ``analysis``, ``plotting`` (on first use),
 ``rotorfault._typing`` and ``rotorfault._util``; never ``papers`` or ``cli``.

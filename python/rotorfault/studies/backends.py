@@ -1,6 +1,6 @@
 """Execution backends: where a study's work runs. ``"local"``: a small thread pool on this
 machine (the Rust kernels release the GIL and are parallel themselves; the pool only overlaps
-computing one chunk with writing the previous one, or flies a few runs side by side).
+computing one chunk with writing the previous one, or flies two chunks of runs side by side).
 ``"dask"``: the same picklable tasks on a ``dask.distributed`` cluster (a ``Client``, an address
 ``"tcp://host:port"``, or ``"local:N"`` for a ``LocalCluster`` of N worker processes made for the
 call); Dask schedules, retries and, when a worker dies, recomputes its tasks elsewhere. Results
@@ -10,13 +10,11 @@ come back to the caller in a known order, so the caller stays the only writer.
 from __future__ import annotations
 
 import contextlib
-import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
 from .._util.optional import require_available
-from .._util.progress import chunks
 from .storage import ChunkSpec
 
 if TYPE_CHECKING:
@@ -24,19 +22,6 @@ if TYPE_CHECKING:
 
 #: A chunk's work: rows ``spec.start`` up to ``spec.stop`` of the job, as an Arrow table.
 ChunkTask = Callable[[ChunkSpec], Any]
-R = TypeVar("R")
-
-
-def map_runs(run: Callable[[int], R], runs: int, *, description: str, progress: bool | None, chunk: int | None = None) -> list[R]:
-    """``[run(0), ..., run(runs - 1)]``, two at a time on threads (the core releases the GIL), in
-    pieces of ``chunk`` runs (default ``max(8, runs // 50)``) that drive the progress bar: the
-    local backend for studies whose runs each need their own simulator."""
-    results: list[R] = []
-    size = max(8, runs // 50) if chunk is None else chunk
-    with ThreadPoolExecutor(max_workers=min(2, os.cpu_count() or 1)) as pool:
-        for first, last in chunks(runs, size, description=description, show=progress):
-            results += list(pool.map(run, range(first, last)))
-    return results
 
 
 def check_dask(dask: Any) -> None:
@@ -150,4 +135,4 @@ def _take(it: Iterator[ChunkSpec], n: int) -> list[ChunkSpec]:
     return out
 
 
-__all__ = ["ChunkTask", "check_dask", "dask_client", "map_runs", "run_dask", "run_local"]
+__all__ = ["ChunkTask", "check_dask", "dask_client", "run_dask", "run_local"]
