@@ -445,7 +445,15 @@ class LanzonController:
     loop-shaping controller of ``design`` and, with a ``position`` (world NED, m), the outer loop
     (28)-(31) with the yaw-synchronised rotation; without one, the inner loop holds
     ``attitude_reference`` ``[phi_d, theta_d, r_d]`` (paper frame; default level at the working
-    point's spin). Rotor 2 is the failed rotor (commanded 0)."""
+    point's spin). Rotor 2 is the failed rotor (commanded 0).
+
+    Examples:
+
+        >>> from rotorfault.control import lanzon
+        >>> controller = lanzon.LanzonController(lanzon.design(), position=(0, 0, -1))
+        >>> controller.u_trim.round(4).tolist(), controller.core(1e-3) is not None
+        ([2.4525, 0.0, 2.4525, 0.0], True)
+    """
 
     def __init__(
         self,

@@ -123,7 +123,16 @@ class NcfsynResult:
     level (``gamma = factor * gamma_min``: the four-block norm ``||[I; Ks] (I + Gs Ks)^-1 [I,
     Gs]||_inf`` is at most ``gamma``), ``stability_margin = 1 / gamma`` (the
     normalised-coprime-factor uncertainty tolerated). ``x`` and ``z`` are the two Riccati
-    solutions; ``evidence`` what was checked before returning (:class:`NcfsynEvidence`)."""
+    solutions; ``evidence`` what was checked before returning (:class:`NcfsynEvidence`).
+
+    Examples:
+
+        >>> import control as ct
+        >>> from rotorfault.control import ncfsyn
+        >>> result = ncfsyn(ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]]), ct.ss([[-0.1]], [[1.0]], [[1.0]], [[0.0]]))
+        >>> round(result.gamma, 4), result.evidence.closed_loop_max_real < 0, result.shaped_plant.nstates
+        (1.7898, True, 2)
+    """
 
     controller: ct.StateSpace
     shaped_controller: ct.StateSpace
@@ -394,7 +403,18 @@ def ncfsyn(
     :func:`~rotorfault.control.realisation.minimal_realisation` (which removes only what is
     hidden relative to its own scale), after a scale-free PBH check that no hidden mode is on or
     right of the imaginary axis. Before returning, :func:`check_synthesis` runs on the original
-    plant and weights; the result carries its :class:`NcfsynEvidence`."""
+    plant and weights; the result carries its :class:`NcfsynEvidence`.
+
+    Examples:
+
+        >>> import control as ct
+        >>> import rotorfault as rf
+        >>> plant = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+        >>> weight = ct.ss([[-0.1]], [[1.0]], [[1.0]], [[0.0]])
+        >>> result = rf.ncfsyn(plant, weight)
+        >>> round(result.gamma_min, 4), round(result.stability_margin, 4), result.controller.nstates
+        (1.6271, 0.5587, 3)
+    """
     g = as_state_space("plant", plant, discrete=False)
     w1s = as_state_space("w1", w1, discrete=False)
     factor = real("factor", factor)
