@@ -550,10 +550,12 @@ def read_campaign(path: str | PathLike[str]) -> CampaignResult:
 
         >>> import pathlib, tempfile
         >>> from rotorfault.studies import Campaign, read_campaign, run_campaign
-        >>> out = pathlib.Path(tempfile.mkdtemp()) / "campaign"
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> out = pathlib.Path(folder.name) / "campaign"
         >>> _ = run_campaign(Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5)), out=out)
         >>> read_campaign(out).to_arrow().num_rows
         2
+        >>> folder.cleanup()
     """
     from .storage import read_manifest
 

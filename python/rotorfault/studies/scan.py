@@ -610,10 +610,12 @@ def read_scan(path: str | PathLike[str]) -> Scan:
 
         >>> import tempfile, pathlib
         >>> import rotorfault as rf
-        >>> out = pathlib.Path(tempfile.mkdtemp()) / "scan"
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> out = pathlib.Path(folder.name) / "scan"
         >>> written = rf.acai_scan(rf.Airframe.preset("quad-x"), {"efficiency_1": [0.5, 1.0]}, out=out)
         >>> rf.read_scan(out).total
         2
+        >>> folder.cleanup()
     """
     from .storage import read_manifest
 

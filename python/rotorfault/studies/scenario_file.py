@@ -128,7 +128,8 @@ class Scenario:
 
         >>> import pathlib, tempfile
         >>> from rotorfault.studies import load_scenario
-        >>> path = pathlib.Path(tempfile.mkdtemp()) / "hover.toml"
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> path = pathlib.Path(folder.name) / "hover.toml"
         >>> _ = path.write_text('''
         ... airframe = "quad-x"
         ... duration_s = 1.0
@@ -140,6 +141,7 @@ class Scenario:
         >>> run = load_scenario(path).run()
         >>> run.events, float(run.t[-1])
         ([], 1.0)
+        >>> folder.cleanup()
     """
 
     name: str
@@ -236,7 +238,8 @@ def load_scenario(path: str | Path) -> Scenario:
 
         >>> import pathlib, tempfile
         >>> from rotorfault.studies import load_scenario
-        >>> path = pathlib.Path(tempfile.mkdtemp()) / "hover.toml"
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> path = pathlib.Path(folder.name) / "hover.toml"
         >>> _ = path.write_text('''
         ... airframe = "quad-x"
         ... duration_s = 1.0
@@ -248,6 +251,7 @@ def load_scenario(path: str | Path) -> Scenario:
         >>> scenario = load_scenario(path)
         >>> scenario.controller_kind, scenario.duration_s
         ('lqr-hover', 1.0)
+        >>> folder.cleanup()
     """
     data = read_toml("scenario_file", path)
     path = Path(path)
