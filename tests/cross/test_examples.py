@@ -24,10 +24,6 @@ EXAMPLE_ROOMS = ("rotorfault", "rotorfault.analysis", "rotorfault.flight", "roto
 #: Public classes whose docstrings are not edited here, and why (each is listed by name; a name
 #: that gets an example, or leaves the API, must leave this table: a test checks).
 WITHOUT_EXAMPLE = {
-    # Docstrings written in Rust (crates/rfcore-py): their examples go in with a rebuild of the extension.
-    **{f"rotorfault._rfcore.{name}": "Rust docstring" for name in (
-        "RelaxedHoverAnalysis", "RelaxedHoverSettings", "RelaxedHoverSolution", "IndiGains", "DivergenceLimits",
-        "Drag", "Sensing", "Certificate", "KeGains", "RelaxedHoverOuterLoop")},
     # The Python mirrors of Rust settings and results, whose docstrings another branch rewrites.
     **{name: "mirror class" for name in (
         "rotorfault.flight.models.FixedPitchActuator", "rotorfault.flight.models.VariablePitchActuator",
