@@ -118,7 +118,17 @@ def core_controller_types() -> tuple[type, ...]:
 class Controller(Protocol):
     """What :class:`rotorfault.Simulator` needs from a built-in controller: the Rust object that
     runs it at control period ``dt_s``. A controller that also has a ``u_trim`` attribute (its
-    trim command) starts the actuators there. Re-exported as :class:`rotorfault.control.Controller`."""
+    trim command) starts the actuators there. Re-exported as :class:`rotorfault.control.Controller`.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> def core_of(controller: rf.Controller) -> object:
+        ...     return controller.core(sim.dt_s)
+        >>> type(core_of(rf.lqr_hover(sim))).__name__
+        'LinearFeedback'
+    """
 
     def core(self, dt_s: float) -> CoreController: ...
 

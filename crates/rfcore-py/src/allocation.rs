@@ -100,6 +100,13 @@ impl PyAllocationSettings {
 
 /// The KKT residuals of an allocation in the problem's own scaling and the tolerance they are
 /// held to (see the core's `Certificate`).
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> allocation = rf.allocate(rf.Airframe.preset("quad-x"), [15.0, 0.0, 0.0, 0.0])
+///     >>> allocation.certificate.holds
+///     True
 #[pyclass(
     name = "Certificate",
     module = "rotorfault._rfcore",

@@ -328,6 +328,13 @@ pub(crate) fn build_actuators(
 settings_class!(
     /// Aerodynamic damping and rotor inertia (`rotorfault.Drag`; the papers give none: all 0 by
     /// default).
+    ///
+    /// Examples:
+    ///
+    ///     >>> import rotorfault as rf
+    ///     >>> drag = rf.Drag(linear_n_s_m=0.1)
+    ///     >>> drag.linear_n_s_m, drag.rotational_n_m_s
+    ///     (0.1, 0.0)
     PyDrag, "Drag", Drag, prefix = "drag", check = Drag::check,
     {
         linear_n_s_m => linear_drag_n_s_m,
@@ -340,6 +347,15 @@ settings_class!(
 settings_class!(
     /// Limits past which a run ends with an event (`rotorfault.DivergenceLimits`; `math.inf`: no
     /// limit). Their values are checked with the run's settings (`SimulationConfig`).
+    ///
+    /// Examples:
+    ///
+    ///     >>> import rotorfault as rf
+    ///     >>> limits = rf.DivergenceLimits(max_tilt_rad=1.0)
+    ///     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), limits=limits)
+    ///     >>> run = sim.run(rf.State(position=(0, 0, -100), euler=(1.2, 0, 0)), 0.1)
+    ///     >>> run.events[0].kind
+    ///     'tilt'
     PyDivergenceLimits, "DivergenceLimits", DivergenceLimits, prefix = "limits", check = |_| Ok(()),
     {
         max_tilt_rad => max_tilt_rad,

@@ -16,6 +16,13 @@ use crate::convert::{
 /// the IMU part (`"icm-42688-p"`, `"mpu-6000"`) and its output data rate, the position source's
 /// rate (`None`: the suite's), and the seed of the sensors' random streams (run ``i`` of a batch
 /// uses ``seed + i``). The estimator is matched to the sensors.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> sensing = rf.Sensing(suite="gnss")
+///     >>> sensing.suite, sensing.imu
+///     ('gnss', 'icm-42688-p')
 #[pyclass(name = "Sensing", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PySensing {

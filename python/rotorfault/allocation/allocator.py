@@ -44,7 +44,15 @@ class Allocation(Tabular):
 
     ``to_arrow()`` / ``to_pandas()``: one row per virtual control (``virtual_control_<k>``,
     ``achieved_<k>``, ``rotor_<i>_command``, the status, the solver and the certificate's
-    residuals), in the problem's units (N and N m for an airframe)."""
+    residuals), in the problem's units (N and N m for an airframe).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> a = rf.allocate(rf.Airframe.preset("ke-quadcopter"), [[7.0, 0, 0, 0], [7.0, 0.1, 0, 0]])
+        >>> a.commands.shape, a.status
+        ((2, 4), ('optimal', 'optimal'))
+    """
 
     commands: FloatArray
     achieved: FloatArray
@@ -103,7 +111,15 @@ class Allocator:
     ``give_up_yaw``: with an airframe, drop the yaw row (n = 3). ``tolerance``,
     ``max_iterations``, ``clarabel_tolerance``: the solver settings of the module docs (None:
     the core's defaults); they apply to every allocation of this allocator, also inside
-    :class:`rotorfault.control.Allocated`."""
+    :class:`rotorfault.control.Allocated`.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> allocator = rf.Allocator(rf.Airframe.preset("ke-quadcopter"))
+        >>> allocator.allocate([7.0, 0.0, 0.0, 0.1]).commands.round(4).tolist()
+        [3.256, 0.244, 3.256, 0.244]
+    """
 
     def __init__(
         self,
@@ -257,7 +273,9 @@ def allocate(
     """Rotor commands for ``virtual_control`` (n,) or a batch (N, n). See :class:`Allocator` for
     the arguments and the module docs for the methods and settings. With an airframe and no
     ``bounds``, ``regularization`` or ``preferred``, the prepared problem is kept on the
-    (immutable) airframe, keyed by the weights and settings, so repeated calls are cheap::
+    (immutable) airframe, keyed by the weights and settings, so repeated calls are cheap.
+
+    Examples:
 
         >>> import rotorfault as rf
         >>> ke = rf.Airframe.preset("ke-quadcopter")

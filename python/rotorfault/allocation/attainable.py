@@ -40,7 +40,15 @@ def max_virtual_control(
     """The attainable set along a direction: the largest ``s`` such that some bounded commands
     produce ``base + s * direction`` (``base`` zero by default). ``None`` when no point of that
     line is attainable; ``s`` is negative when ``base`` is not attainable but points behind it
-    are. Solved as a linear program by Clarabel."""
+    are. Solved as a linear program by Clarabel.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> limit = rf.max_virtual_control(rf.Airframe.preset("quad-x"), [1, 0, 0, 0])
+        >>> round(limit.scale, 3), limit.status
+        (24.5, 'optimal')
+    """
     allocator = Allocator(target, bounds=bounds, give_up_yaw=give_up_yaw)
     n = allocator.virtual_dimension
     d = float_array("direction", direction, 1)
@@ -69,7 +77,15 @@ def hover_thrust_margin(
 ) -> HoverMargin:
     """How much balanced thrust an airframe has left, with rotor ``efficiency`` (default the
     airframe's own) applied; ``give_up_yaw`` lets the yaw torque be anything (a spinning vehicle,
-    Ke / Lanzon)."""
+    Ke / Lanzon).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> margin = rf.hover_thrust_margin(rf.Airframe.preset("quad-x"))
+        >>> round(margin.max_thrust_n, 3), round(margin.weight_n, 3), round(margin.margin_n, 3)
+        (24.5, 15.043, 9.457)
+    """
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
@@ -83,7 +99,15 @@ def hover_wrench_distance(airframe: Airframe, efficiency: npt.ArrayLike | None =
     the thrust axis, N m on the torque axes, Du eq. (9)), ``0.0`` when hover is attainable (inside
     or on the boundary). It is the optimum of the allocation QP with unit weights (Ke eq. (33)),
     whose KKT certificate is checked; the facet margin (``formula="facet-margin"``) is a lower
-    bound on it, equal when the nearest point lies inside one facet."""
+    bound on it, equal when the nearest point lies inside one facet.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("quad-x")
+        >>> rf.hover_wrench_distance(quad), round(rf.hover_wrench_distance(quad, [0, 1, 1, 1]), 4)
+        (0.0, 1.2132)
+    """
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
@@ -108,7 +132,16 @@ def hover_wrench_distance(airframe: Airframe, efficiency: npt.ArrayLike | None =
 def hover_distances(airframe: Airframe, failed: Iterable[Sequence[int]]) -> dict[tuple[int, ...], tuple[float, float]]:
     """:func:`hover_wrench_distance` with all four axes and giving up yaw, for each set of failed
     rotors (numbered from 1) of ``airframe``: what failure tables and certificates print beside
-    "outside" (:func:`rotorfault.analysis.acai.hover_wrench_text`)."""
+    "outside" (:func:`rotorfault.analysis.acai.hover_wrench_text`).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.allocation import hover_distances
+        >>> distances = hover_distances(rf.Airframe.preset("quad-x"), [(1,)])
+        >>> {failed: tuple(round(d, 4) for d in pair) for failed, pair in distances.items()}
+        {(1,): (1.2132, 0.7406)}
+    """
     airframe = require_airframe(airframe)
     if isinstance(failed, (str, bytes)) or not isinstance(failed, Iterable):
         raise TypeError(f"failed: expected a sequence of failed-rotor sets (numbered from 1), got {type(failed).__name__}")
@@ -137,7 +170,16 @@ def attainable_slice(
     0]``, the farthest attainable point along ``directions`` evenly spaced directions (one LP
     each). Returns a (directions, 2) array of boundary points, or ``None`` when hover itself is
     unattainable (:func:`hover_thrust_margin` negative). With ``give_up_yaw`` the yaw torque is
-    free (and ``axes`` may not include 3)."""
+    free (and ``axes`` may not include 3).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.allocation import attainable_slice
+        >>> boundary = attainable_slice(rf.Airframe.preset("quad-x"), directions=8)
+        >>> boundary.shape
+        (8, 2)
+    """
     if not isinstance(airframe, Airframe):
         raise TypeError(f"airframe: expected an Airframe, got {type(airframe).__name__}")
     frame = airframe if efficiency is None else airframe.with_efficiency(efficiency)
@@ -183,7 +225,18 @@ def plot_attainable_slices(
     default: healthy and each single rotor failure) and returns the matplotlib figure, saved to
     ``path`` (``.png``, ``.pdf`` or ``.svg``, written atomically) if given; the figure is not
     registered with pyplot. A case whose hover is unattainable is listed in the legend as such.
-    Cases differ in line style and marker as well as colour (readable in greyscale)."""
+    Cases differ in line style and marker as well as colour (readable in greyscale).
+
+    Examples:
+
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import rotorfault as rf
+        >>> from rotorfault.allocation import plot_attainable_slices
+        >>> figure = plot_attainable_slices(rf.Airframe.preset("quad-x"), {"healthy": None, "rotor 1 at 0.5": [0.5, 1, 1, 1]})
+        >>> len(figure.axes)
+        1
+    """
     from ..plotting.attainable import plot_slices
 
     if cases is None:

@@ -52,7 +52,14 @@ GIVE_UP_YAW = "give-up-yaw"
 
 def acai_label(formula: str) -> str:
     """How a printed ACAI names its formula: ``"ACAI eq13"``, ``"ACAI facet-margin"`` (table
-    headers, CLI rows, report captions: one name per formula, the option's own)."""
+    headers, CLI rows, report captions: one name per formula, the option's own).
+
+    Examples:
+
+        >>> from rotorfault.analysis import acai_label
+        >>> acai_label("eq13"), acai_label("facet-margin")
+        ('ACAI eq13', 'ACAI facet-margin')
+    """
     if formula not in ACAI_FORMULAS:
         raise ValueError(f"formula: must be one of {', '.join(ACAI_FORMULAS)}, got {formula!r}")
     return f"ACAI {formula}"
@@ -74,7 +81,15 @@ class AcaiValue(float):
     ``hover`` is ``"inside"``, ``"boundary"``, ``"outside"`` or ``"rank-deficient"``. With
     ``formula="eq13"`` a value of ``0.0`` can come with ``hover == "outside"`` (Du Table III's
     PPNNPN with rotor 5 failed): hover is infeasible although the number reads like a boundary.
-    Such a value prints with a star (``0.0*``)."""
+    Such a value prints with a star (``0.0*``).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> value = rf.acai(rf.Airframe.preset("quad-x"), [0, 1, 1, 1])
+        >>> value.hover, float(value) < 0
+        ('rank-deficient', True)
+    """
 
     hover: HoverPoint
 
@@ -107,7 +122,16 @@ class AcaiBatch(Tabular):
     """:func:`acai_batch` with ``with_hover=True``: the ACAIs and where the hover wrench lies for
     each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient).
     ``to_arrow()`` / ``to_pandas()``: one row per efficiency vector (``acai_<formula>``,
-    ``hover_code``), in the order given."""
+    ``hover_code``), in the order given.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> hexa = rf.Airframe.preset("hexa-ppnnpn")
+        >>> batch = rf.acai_batch(hexa, [[1, 1, 1, 1, 1, 1], [0, 0, 1, 1, 1, 1]], with_hover=True)
+        >>> batch.acai.round(4).tolist(), batch.hover_code.tolist()
+        ([1.1295, -0.2779], [1, -1])
+    """
 
     acai: FloatArray
     hover_code: npt.NDArray[np.int8]
@@ -140,6 +164,15 @@ def acai(
     boundary (within ``ZERO_RTOL``) or, with ``formula="eq13"``, a degenerate outside case
     (``.hover == "outside"``, printed ``0.0*``). Negative: G outside. ``-inf``: rank B_f < n, the
     index is undefined.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> hexa = rf.Airframe.preset("hexa-ppnnpn")
+        >>> round(rf.acai(hexa), 4), rf.acai(hexa).hover
+        (1.1295, 'inside')
+        >>> round(rf.acai(hexa, [0, 1, 1, 1, 1, 1]), 4)
+        0.7221
     """
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
@@ -181,7 +214,15 @@ def acai_batch(
     wrench lies for each row (needed to tell eq. (13)'s outside zeros from boundaries).
 
     A float64 C-contiguous ``efficiencies`` is read in place (no copy) while other Python threads run:
-    do not modify it from another thread during the call."""
+    do not modify it from another thread during the call.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> hexa = rf.Airframe.preset("hexa-ppnnpn")
+        >>> rf.acai_batch(hexa, [[1, 1, 1, 1, 1, 1], [0, 1, 1, 1, 1, 1]]).round(4).tolist()
+        [1.1295, 0.7221]
+    """
     airframe = require_airframe(airframe)
     rows = float_array("efficiencies", efficiencies, 2)
     names = control_axes(give_up_yaw, axes)
@@ -201,7 +242,17 @@ def acai_from_matrix(
 ) -> AcaiValue:
     """ACAI of any effectiveness matrix B (n x m, efficiencies applied), actuator box
     ``[f_min, f_max]`` (length m) and required wrench ``g_vec`` (length n), for any n >= 1, with
-    where ``g_vec`` lies (``.hover``). Facets and rank are decided free of the rows' units."""
+    where ``g_vec`` lies (``.hover``). Facets and rank are decided free of the rows' units.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("quad-x")
+        >>> value = rf.acai_from_matrix(quad.effectiveness_matrix(), quad.min_thrust_n, quad.max_thrust_n,
+        ...                             [quad.mass_kg * quad.gravity_m_s2, 0, 0, 0])
+        >>> round(value, 4) == round(rf.acai(quad), 4)
+        True
+    """
     core = _rfcore.acai_from_matrix(
         float_array("effectiveness_matrix", effectiveness_matrix, 2),
         float_array("f_min", f_min, 1),
@@ -228,7 +279,14 @@ def hover_wrench_text(hover: HoverPoint, distance: float | None = None) -> str:
     """Where the hover wrench lies, for a table cell (:data:`HOVER_WRENCH_NOTE`): ``"inside"``,
     ``"boundary"``, ``"outside 0.2133"`` (``distance``: from the hover wrench to the attainable
     set, in the ACAI's units, :func:`rotorfault.allocation.hover_wrench_distance`; a rank-deficient
-    case whose wrench is not attained reads the same), ``"rank-deficient"``."""
+    case whose wrench is not attained reads the same), ``"rank-deficient"``.
+
+    Examples:
+
+        >>> from rotorfault.analysis import hover_wrench_text
+        >>> hover_wrench_text("inside"), hover_wrench_text("outside", 0.8123)
+        ('inside', 'outside 0.8123')
+    """
     if not isinstance(hover, str) or hover not in HOVER_WORDS:
         raise ValueError(f"hover: must be one of {', '.join(HOVER_WORDS)}, got {hover!r}")
     if distance is not None:
@@ -246,7 +304,14 @@ EQ13_ZERO_NOTE = "* eq. (13) prints 0 here although hover is infeasible (--formu
 
 def format_acai(value: float, hover: HoverPoint = "inside") -> str:
     """4 decimals like the paper; "undefined" for -inf; a star where the number reads as
-    non-negative (eq. (13)'s 0) but the hover wrench lies outside the attainable set."""
+    non-negative (eq. (13)'s 0) but the hover wrench lies outside the attainable set.
+
+    Examples:
+
+        >>> from rotorfault.analysis import format_acai
+        >>> format_acai(1.129472), format_acai(0.0, "boundary")
+        ('1.1295', '0.0000')
+    """
     value = real("value", value)
     if math.isinf(value):
         return "undefined"

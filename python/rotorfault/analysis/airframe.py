@@ -77,6 +77,15 @@ class Airframe:
     efficiency : rotor efficiencies (Du's ``eta_i``) in [0, 1] (default 1: healthy; 0: failed).
     gravity_m_s2 : gravitational acceleration, m/s^2 (default 9.81).
     name : a label used in reports.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> hexa = rf.Airframe.preset("hexa-ppnnpn")
+        >>> hexa.rotor_count, hexa.mass_kg
+        (6, 1.535)
+        >>> hexa.with_efficiency([0, 1, 1, 1, 1, 1]).efficiency.tolist()
+        [0.0, 1.0, 1.0, 1.0, 1.0, 1.0]
     """
 
     __slots__ = ("_core", "_allocators")  # _allocators: rotorfault.allocation's cache (immutable airframe)

@@ -92,7 +92,15 @@ def controllability(
     axes: ControlAxes | None = None,
 ) -> ControllabilityReport:
     """Runs Du's Section IV.B procedure for ``airframe`` with rotor ``efficiency`` (default: the
-    airframe's own)."""
+    airframe's own).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> report = rf.controllability(rf.Airframe.preset("hexa-ppnnpn"), [0, 1, 1, 1, 1, 1])
+        >>> report.controllable, report.verdict, round(report.acai, 4)
+        (True, 'controllable', 0.7221)
+    """
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
     names = control_axes(give_up_yaw, axes)
@@ -295,7 +303,15 @@ def failure_table(
     airframe: Airframe, *, max_failed: int = 1, formula: AcaiFormula = "eq13"
 ) -> FailureTable:
     """Every combination of up to ``max_failed`` fully failed rotors (the other rotors keep the
-    airframe's efficiencies), ordered by number failed, then lexicographically."""
+    airframe's efficiencies), ordered by number failed, then lexicographically.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> table = rf.failure_table(rf.Airframe.preset("quad-x"), max_failed=1)
+        >>> [(case.failed, case.controllable, case.controllable_give_up_yaw) for case in table]
+        [((), True, True), ((1,), False, False), ((2,), False, False), ((3,), False, False), ((4,), False, False)]
+    """
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
     formula_name = _formula(formula)

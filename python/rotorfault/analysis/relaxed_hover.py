@@ -61,7 +61,17 @@ def relaxed_hover(
     """Every relaxed hover solution of ``airframe`` (its efficiencies: a failed rotor has 0),
     best first. The rotational damping ``k_r``, rotor inertia ``I_R`` and thrust coefficient
     ``k_f`` are the simulator's: pass its ``drag`` and ``actuator`` (they fill those settings) or
-    set them in ``settings``, not both."""
+    set them in ``settings``, not both.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+        >>> settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=21)
+        >>> best = rf.relaxed_hover(quad, settings).best
+        >>> round(best.spin_rate_rad_s, 2), best.carrying
+        (15.22, [2, 3, 4])
+    """
     airframe = require_airframe(airframe)
     if settings is None:
         settings = _DEFAULT

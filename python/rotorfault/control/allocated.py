@@ -18,7 +18,19 @@ class Allocated:
     into rotor thrusts within their bounds, warm-started from the previous control step.
 
     The allocator's matrix is what the controller believes; the simulator's rotor efficiency is
-    what happens. Pass an allocator built from a degraded airframe to model a known fault."""
+    what happens. Pass an allocator built from a degraded airframe to model a known fault.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("quad-x")
+        >>> sim = rf.Simulator(quad)
+        >>> weight_n = quad.mass_kg * quad.gravity_m_s2
+        >>> hold = rf.Allocated(rf.OpenLoop([0.0], [[weight_n, 0, 0, 0]]), rf.Allocator(quad))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.5, controller=hold)
+        >>> run.rotor_thrust[-1].round(4).tolist()
+        [3.7608, 3.7608, 3.7607, 3.7608]
+    """
 
     def __init__(self, law: OpenLoop | LinearFeedback | Lti, allocator: Allocator) -> None:
         if not isinstance(law, (OpenLoop, LinearFeedback, Lti)):

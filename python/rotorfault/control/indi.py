@@ -106,7 +106,18 @@ class IndiController:
     learns of it) or :class:`rotorfault.RotorFault` objects of complete losses (told at the fault's
     time). ``gains``: :class:`IndiGains`. The reference: ``setpoints`` ``[(time_s, position)]`` or
     ``[(time_s, position, velocity)]`` (NED; from each time on the position moves at the velocity),
-    or one ``position`` (NED, m) and ``velocity`` (NED, m/s; ``velocity=(2, 0, 0)`` is forward flight at 2 m/s)."""
+    or one ``position`` (NED, m) and ``velocity`` (NED, m/s; ``velocity=(2, 0, 0)`` is forward flight at 2 m/s).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("quad-x")
+        >>> sim = rf.Simulator(quad)
+        >>> indi = rf.IndiController(quad, position=(0, 0, -1))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 1.0, controller=indi)
+        >>> round(float(abs(run.position[-1] - (0, 0, -1)).max()), 3)
+        0.0
+    """
 
     def __init__(
         self,

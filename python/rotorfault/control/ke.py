@@ -136,7 +136,18 @@ class UniformPassiveFtc:
     steady deficit of eq. (18)), ``"literal"`` (eq. (18) as printed), ``"full-compensation"``
     (Remark 5, eq. (29)) or ``"baseline"`` (conventional: desired virtual control straight into
     the pseudo-inverse, no estimation, no QP). ``setpoints``: ``[(time_s, (north, east, down))]``
-    held from their time on (NED, m), or give one ``position`` (NED, m)."""
+    held from their time on (NED, m), or give one ``position`` (NED, m).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> ke = rf.Airframe.preset("ke-quadcopter")
+        >>> sim = rf.Simulator(ke)
+        >>> ftc = rf.UniformPassiveFtc(ke, position=(0, 0, -10))
+        >>> run = sim.run(rf.State(position=(0, 0, -10)), 3.0, controller=ftc, faults=[rf.RotorFault(1, 1.0, efficiency=0.5)])
+        >>> run.events, round(float(abs(run.position[-1] - (0, 0, -10)).max()), 2)
+        ([], 3.34)
+    """
 
     LAWS: tuple[KeLaw, ...] = get_args(KeLaw)
 

@@ -50,7 +50,8 @@ from .._util.convert import FloatArray, float_array, real
 from .._util.deprecation import dataclass_compat
 from ..analysis.airframe import Airframe, require_airframe
 from ..flight import Drag, FixedPitchActuator, Simulator
-from .realisation import state_space
+from .realisation import state_space, with_signals
+from .systems import LANZON_INPUTS, LANZON_OUTPUTS, LANZON_STATES
 from .robust import NcfsynEvidence, NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
 
 #: Table 2's initial spin, rad/s: ``k_r = m g d / SPIN_RATE_RAD_S`` reproduces it (the paper
@@ -223,7 +224,8 @@ class LanzonVehicle:
         a, b = self.linearisation()
         c = np.zeros((3, 5))
         c[0, 0] = c[1, 1] = c[2, 4] = 1.0
-        return state_space(a, b, c, np.zeros((3, 3)))
+        return with_signals(state_space(a, b, c, np.zeros((3, 3))), states=LANZON_STATES, inputs=LANZON_INPUTS,
+                            outputs=LANZON_OUTPUTS, name="lanzon-plant")
 
     # -- robust feedback linearisation ------------------------------------------------------------
     def decoupling_matrix(self, x: npt.ArrayLike) -> FloatArray:
@@ -369,7 +371,9 @@ class LanzonDesign:
 
     @property
     def controller(self) -> ct.StateSpace:
-        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``."""
+        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``,
+        named as the plant's signals: inputs ``phi, theta, dr``, outputs ``du_f, tau_q, dtau_r``
+        (:func:`~rotorfault.control.lanzon_plant`)."""
         return self.synthesis.controller
 
     def discretise(self, dt_s: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -437,7 +441,15 @@ class LanzonController:
     loop-shaping controller of ``design`` and, with a ``position`` (world NED, m), the outer loop
     (28)-(31) with the yaw-synchronised rotation; without one, the inner loop holds
     ``attitude_reference`` ``[phi_d, theta_d, r_d]`` (paper frame; default level at the working
-    point's spin). Rotor 2 is the failed rotor (commanded 0)."""
+    point's spin). Rotor 2 is the failed rotor (commanded 0).
+
+    Examples:
+
+        >>> from rotorfault.control import lanzon
+        >>> controller = lanzon.LanzonController(lanzon.design(), position=(0, 0, -1))
+        >>> controller.u_trim.round(4).tolist(), controller.core(1e-3) is not None
+        ([2.4525, 0.0, 2.4525, 0.0], True)
+    """
 
     def __init__(
         self,

@@ -37,7 +37,18 @@ STATE_LABELS = (
 
 class OpenLoop:
     """A piecewise-constant command schedule: ``commands[k]`` (one per actuator channel) holds
-    from ``times[k]`` until the next time; the first row also before ``times[0]``."""
+    from ``times[k]`` until the next time; the first row also before ``times[0]``.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> hover = rf.hover_trim(sim).command
+        >>> schedule = rf.OpenLoop([0.0, 0.5], [hover, 1.1 * hover])
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 1.0, controller=schedule)
+        >>> bool(run.position[-1, 2] < -1)
+        True
+    """
 
     def __init__(self, times: npt.ArrayLike, commands: npt.ArrayLike) -> None:
         self.times = frozen_array("times", times, 1)
@@ -64,7 +75,19 @@ class LinearFeedback:
     :func:`rotorfault.control.riccati.design_lqr` (see :func:`rotorfault.control.lqr.lqr_hover`).
     ``design``: the checked design the gain came from (an ``LqrDesign`` with its evidence:
     Riccati residual, closed-loop and sampled-loop eigenvalues, PBH tests), None for a gain given
-    by hand."""
+    by hand.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> trim = rf.hover_trim(sim, position=(0, 0, -1))
+        >>> feedback = rf.LinearFeedback(np.zeros((4, 12)), trim.state, trim.command)
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.5, controller=feedback)
+        >>> round(float(abs(run.position[-1] - (0, 0, -1)).max()), 6)
+        0.0
+    """
 
     def __init__(self, gain: npt.ArrayLike, x_trim: npt.ArrayLike, u_trim: npt.ArrayLike, *, design: LqrDesign | None = None) -> None:
         self.gain = frozen_array("gain", gain, 2)
@@ -81,7 +104,19 @@ class Lti:
     """A linear controller driven by the state error ``e = x - x_trim``:
     ``xi' = A xi + B e``, ``u = u_trim + C xi + D e``. With ``dt_s=None`` the matrices are
     continuous-time and are discretised (zero-order hold) at the simulator's control period;
-    otherwise they are discrete at period ``dt_s``, which must equal the simulator's."""
+    otherwise they are discrete at period ``dt_s``, which must equal the simulator's.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> k = rf.lqr_hover(sim, position=(0, 0, -1))
+        >>> static = rf.Lti(np.zeros((1, 1)), np.zeros((1, 12)), np.zeros((4, 1)), -k.gain, k.x_trim, k.u_trim)
+        >>> run = sim.run(rf.State(position=(0.2, 0, -1)), 3.0, controller=static)
+        >>> round(float(run.position[-1, 0]), 3)
+        0.036
+    """
 
     def __init__(
         self,

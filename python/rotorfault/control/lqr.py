@@ -68,7 +68,15 @@ class HoverTrim:
     the roll and pitch that lean the thrust into the wind, yaw as asked); ``command``: rotor
     thrusts (N); ``residual``: ``||f(state, command)||`` of ``Simulator.state_derivative``, the
     size of the acceleration the trim leaves unbalanced; ``saturated_rotors``: the 1-based rotors
-    that every hover solution puts on a thrust bound (empty when an interior trim exists)."""
+    that every hover solution puts on a thrust bound (empty when an interior trim exists).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> trim = rf.hover_trim(rf.Simulator(rf.Airframe.preset("quad-x")), position=(0, 0, -2), yaw=0.5)
+        >>> trim.state[[2, 8]].tolist(), trim.residual < 1e-9
+        ([-2.0, 0.5], True)
+    """
 
     state: FloatArray
     command: FloatArray
@@ -97,7 +105,15 @@ def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0
     efficiency; failed rotors at the in-bounds thrust closest to 0) when it lies strictly inside
     the thrust bounds; otherwise the solution farthest from the bounds (an LP). When every solution
     has a rotor on a bound, those rotors are named in ``saturated_rotors`` (and sit exactly on it).
-    Raises ``ValueError`` when no thrusts within the bounds balance the vehicle."""
+    Raises ``ValueError`` when no thrusts within the bounds balance the vehicle.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> trim = rf.hover_trim(rf.Simulator(rf.Airframe.preset("quad-x")))
+        >>> trim.command.round(4).tolist(), trim.saturated_rotors
+        ([3.7607, 3.7608, 3.7608, 3.7608], ())
+    """
     if not isinstance(simulator, Simulator) or not isinstance(simulator.actuator, FixedPitchActuator):
         raise TypeError("simulator: hover_trim needs a rotorfault.Simulator with fixed-pitch rotors")
     pos = float_array("position", position, 1)
@@ -265,7 +281,16 @@ def linearize(
     singular at 90 degrees (module notes).
 
     Deprecated (one release): ``linearize(simulator, x_trim, u_trim[, efficiency])`` with arrays
-    returns the tuple ``(A, B)``."""
+    returns the tuple ``(A, B)``.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> model = rf.linearize(sim, rf.hover_trim(sim))
+        >>> model.nstates, model.input_labels
+        (12, ['thrust_1', 'thrust_2', 'thrust_3', 'thrust_4'])
+    """
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     if u_trim is not None:
@@ -373,7 +398,15 @@ def lqr_hover(
     no control authority around hover; ``-inf`` when ``rank B_f < 4``), a trim with a rotor on a
     thrust bound, or a design check that fails (a model that is not stabilisable, named by its
     modes; weights that do not see an unstable mode; a gain whose sampled loop at
-    ``simulator.dt_s`` is unstable)."""
+    ``simulator.dt_s`` is unstable).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> feedback = rf.lqr_hover(rf.Simulator(rf.Airframe.preset("quad-x")))
+        >>> feedback.gain.shape, bool(feedback.design.closed_loop_eigenvalues.real.max() < 0)
+        ((4, 12), True)
+    """
     trim = hover_trim(simulator, position=position, yaw=yaw)
     _require_holdable(simulator, trim)
     model = linearize(simulator, trim)
@@ -399,7 +432,18 @@ def lqr_hover_allocated(
     :func:`lqr_hover`) becomes ``P^T r P``. The virtual trim is ``M u_trim``. The hover held: ``position`` (NED, m)
     and ``yaw`` (rad), as for :func:`lqr_hover`. Refuses what
     :func:`lqr_hover` refuses. Returns an :class:`~rotorfault.control.Allocated` that runs entirely
-    in Rust."""
+    in Rust.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("quad-x")
+        >>> sim = rf.Simulator(quad)
+        >>> controller = rf.lqr_hover_allocated(sim, rf.Allocator(quad), position=(0, 0, -1))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 1.0, controller=controller)
+        >>> round(float(abs(run.position[-1] - (0, 0, -1)).max()), 6)
+        0.0
+    """
     if not isinstance(allocator, Allocator):
         raise TypeError(f"allocator: expected a rotorfault.allocation.Allocator, got {type(allocator).__name__}")
     if allocator.virtual_dimension != 4:

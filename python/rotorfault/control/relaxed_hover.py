@@ -52,7 +52,19 @@ class RelaxedHoverFeedback:
     ``q`` (7 x 7) and ``r`` (carrying rotors square; default :func:`bryson_weights`), commands in
     rotor command units (thrust over efficiency), and the outer loop ``outer_loop``.
     ``linear_drag_n_s_m`` is the simulator's translational drag (it shapes the circle the centre
-    of mass describes, which the outer loop must not chase)."""
+    of mass describes, which the outer loop must not chase).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+        >>> drag = rf.Drag(rotational_n_m_s=2.8e-3)
+        >>> solution = rf.relaxed_hover(quad, rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=21)).best
+        >>> hold = rf.RelaxedHoverFeedback(solution, quad, position=(0, 0, -2))
+        >>> run = rf.Simulator(quad, drag=drag).run(rf.periodic_state(solution, quad, position=(0, 0, -2)), 2.0, controller=hold)
+        >>> run.events, round(float(abs(run.position[-1, 2] + 2)), 2)
+        ([], 0.0)
+    """
 
     def __init__(
         self,
@@ -159,7 +171,18 @@ def periodic_state(
 ) -> State:
     """A state on the periodic solution whose circle is centred at ``position`` (world NED, m): the
     attitude turns the spin axis to world up (then ``yaw`` about it, rad), the body rate is the
-    solution's, position and velocity are on the circle (:func:`circle_offsets`)."""
+    solution's, position and velocity are on the circle (:func:`circle_offsets`).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+        >>> settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=21)
+        >>> solution = rf.relaxed_hover(quad, settings).best
+        >>> state = rf.periodic_state(solution, quad, position=(0, 0, -2))
+        >>> round(max(abs(w) for w in state.omega), 2), [round(p, 3) for p in state.position]
+        (14.58, [-0.009, -0.009, -2.0])
+    """
     centre = np.asarray(_three("position", position))
     yaw = real("yaw", yaw)
     n = np.asarray(solution.spin_axis)

@@ -72,7 +72,16 @@ class LqrDesign:
     ``dt_s``: the discrete plant's period, or the control period a continuous design was
     checked at (None: neither given); ``sampled_spectral_radius``: the spectral radius of the
     loop at ``dt_s`` (discrete designs: of ``A - B K``); ``stabilisability``,
-    ``detectability``: the PBH tests."""
+    ``detectability``: the PBH tests.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> from rotorfault.control import design_lqr
+        >>> design = design_lqr((np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]])), np.eye(2), np.eye(1))
+        >>> design.riccati.round(4).tolist(), design.residual_q < 1e-9, design.stabilisability.holds
+        ([[1.7321, 1.0], [1.0, 1.7321]], True, True)
+    """
 
     gain: FloatArray
     riccati: FloatArray
@@ -106,7 +115,16 @@ def design_lqr(
     as the zero-order-hold loop); for a discrete one, its sampling period (from ``dt`` when the
     system has one). ``state_names``, ``state_labels``: name the states in the errors (default for
     a ``StateSpace``: its own state names, and a :class:`~rotorfault.control.systems.LinearModel`'s
-    descriptions); ``model``: what the plant is, in the errors."""
+    descriptions); ``model``: what the plant is, in the errors.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> from rotorfault.control import design_lqr
+        >>> design = design_lqr((np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]])), np.eye(2), np.eye(1))
+        >>> design.gain.round(4).tolist(), np.round(design.closed_loop_eigenvalues.real, 4).tolist()
+        ([[1.0, 1.7321]], [-0.866, -0.866])
+    """
     a, b, is_discrete, period = _plant(plant, discrete, dt_s)
     if not isinstance(plant, tuple):
         _, _, own_names, own_labels = system_matrices(plant, "B")

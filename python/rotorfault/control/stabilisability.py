@@ -75,7 +75,16 @@ class Mode:
 @dataclass(frozen=True)
 class PbhTest:
     """The result of :func:`stabilisability` or :func:`detectability`: every mode that is not
-    stable by the margin (least stable first), with its rank; ``holds`` when each has full rank."""
+    stable by the margin (least stable first), with its rank; ``holds`` when each has full rank.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> from rotorfault.control import stabilisability
+        >>> test = stabilisability(np.diag([1.0, -1.0]), np.array([[1.0], [0.0]]))
+        >>> test.kind, test.state_count, test.holds
+        ('stabilisability', 2, True)
+    """
 
     kind: Literal["stabilisability", "detectability"]
     discrete: bool
@@ -138,7 +147,16 @@ def stabilisability(
     """The PBH stabilisability test of ``(a, b)``, or of a python-control ``StateSpace`` given as
     ``a`` alone (its ``A``, ``B`` and state names) (module notes). ``state_names`` (default
     ``x1 .. xn``) name the states in the failing modes; ``state_labels`` (optional, e.g.
-    ``"yaw rate r"``) describe a mode's leading state."""
+    ``"yaw rate r"``) describe a mode's leading state.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> from rotorfault.control import stabilisability
+        >>> test = stabilisability(np.diag([1.0, -1.0]), np.array([[0.0], [1.0]]))
+        >>> test.holds, [mode.eigenvalue for mode in test.failing]
+        (False, [(1+0j)])
+    """
     a, b, state_names, state_labels = _from_system(a, b, "B", state_names, state_labels)
     am, bm = _pair(a, b, "b")
     names, labels = _names(am.shape[0], state_names, state_labels)
@@ -155,7 +173,15 @@ def detectability(
 ) -> PbhTest:
     """The PBH detectability test of ``(a, c)`` (or of a python-control ``StateSpace`` given as
     ``a`` alone: its ``A``, ``C`` and state names): ``(a^T, c^T)`` stabilisable; a failing mode's
-    directions are the states ``v`` with ``(a - lambda I) v = 0`` and ``c v = 0``."""
+    directions are the states ``v`` with ``(a - lambda I) v = 0`` and ``c v = 0``.
+
+    Examples:
+
+        >>> import numpy as np
+        >>> from rotorfault.control import detectability
+        >>> detectability(np.diag([1.0, -1.0]), np.array([[1.0, 0.0]])).holds
+        True
+    """
     a, c, state_names, state_labels = _from_system(a, c, "C", state_names, state_labels)
     am = float_array("a", a, 2)
     cm = float_array("c", c, 2)

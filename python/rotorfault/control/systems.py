@@ -41,7 +41,19 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
     ``u = u_trim + input_map (v - v_trim)`` (one 1 per column, several for a shared input such as
     Wang's ``omega_2=omega_4``; default: input ``j`` moves channel ``command_columns[j]``);
     ``state_descriptions``: what each state is (``"yaw rate r"``), used in the design checks'
-    messages."""
+    messages.
+
+    Examples:
+
+        >>> import control as ct
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> model = rf.linearize(sim, rf.hover_trim(sim))
+        >>> model.state_labels[:3], model.u_trim.round(4).tolist()
+        (['x', 'y', 'z'], [3.7607, 3.7608, 3.7608, 3.7608])
+        >>> isinstance(model, ct.StateSpace)
+        True
+    """
 
     def __init__(
         self,
@@ -108,13 +120,22 @@ LANZON_OUTPUTS = ("phi", "theta", "dr")
 
 def lanzon_plant(vehicle: Any) -> ct.StateSpace:
     """``vehicle.plant()`` (:class:`~rotorfault.control.lanzon.LanzonVehicle`: ``(A_r, B_r)`` of
-    eq. (26), outputs of (27)) with its signals named (:data:`LANZON_STATES`, ...); the matrices
-    are the same."""
+    eq. (26), outputs of (27)), whose signals are named :data:`LANZON_STATES`,
+    :data:`LANZON_INPUTS` and :data:`LANZON_OUTPUTS` (the loop-shaping design names its weight,
+    controller and shaped plant after them).
+
+    Examples:
+
+        >>> from rotorfault.control import lanzon_plant
+        >>> from rotorfault.control.lanzon import LanzonVehicle
+        >>> plant = lanzon_plant(LanzonVehicle())
+        >>> plant.state_labels, plant.input_labels, plant.output_labels
+        (['phi', 'theta', 'p', 'q', 'dr'], ['du_f', 'tau_q', 'dtau_r'], ['phi', 'theta', 'dr'])
+    """
     if not callable(getattr(vehicle, "plant", None)):
         raise TypeError(f"vehicle: expected a rotorfault.control.lanzon.LanzonVehicle, got {type(vehicle).__name__}")
-    plant = vehicle.plant()
-    return ct.ss(plant.A, plant.B, plant.C, plant.D, states=list(LANZON_STATES), inputs=list(LANZON_INPUTS),
-                 outputs=list(LANZON_OUTPUTS), name="lanzon-plant")
+    plant: ct.StateSpace = vehicle.plant()
+    return plant
 
 
 __all__ = ["LANZON_INPUTS", "LANZON_OUTPUTS", "LANZON_STATES", "LinearModel", "input_names", "lanzon_plant"]

@@ -25,7 +25,21 @@ from .linear import STATE_DIM, LinearFeedback
 
 class TrackingFeedback:
     """``u = u_trim - K sat(x - x_ref(t))`` (module docs). ``error_limit``: 12 entries > 0 or
-    ``inf`` (no limit); ``None``: no limit anywhere (plain feedback on the reference)."""
+    ``inf`` (no limit); ``None``: no limit anywhere (plain feedback on the reference).
+
+    Examples:
+
+        >>> import numpy as np
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> k = rf.lqr_hover(sim, position=(0, 0, -1))
+        >>> references = np.tile(k.x_trim, (2, 1))
+        >>> references[1, 0] = 1.0
+        >>> tracking = rf.TrackingFeedback(k.gain, k.u_trim, times_s=[0.0, 1.0], references=references)
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 4.0, controller=tracking)
+        >>> round(float(run.position[-1, 0]), 2)
+        0.89
+    """
 
     def __init__(
         self,

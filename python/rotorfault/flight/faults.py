@@ -15,7 +15,15 @@ from .._util.convert import real
 @dataclass(frozen=True)
 class RotorFault:
     """Rotor ``rotor`` (1-based) has efficiency ``efficiency`` (0 failed, 1 healthy) from ``time``
-    (s) on. The controller never sees it."""
+    (s) on. The controller never sees it.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> fault = rf.RotorFault(rotor=1, time=2.0, efficiency=0.5)
+        >>> fault
+        RotorFault(rotor=1, time=2.0, efficiency=0.5)
+    """
 
     rotor: int
     time: float

@@ -109,6 +109,15 @@ class Simulator:
     ``ground_z_m`` holds the ground in effect (``None`` without one). The controller flies on the
     true state, on it with the papers' ``noise``, or on ``sensing`` (sensors and the estimator; a
     :data:`rotorfault.Sensing`); one of the two at most.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> controller = rf.lqr_hover(sim, position=(0, 0, -1))
+        >>> run = sim.run(rf.State(position=(0.5, 0, -1)), 3.0, controller=controller)
+        >>> run.events, round(float(run.position[-1, 0]), 3), float(run.t[-1])
+        ([], 0.091, 3.0)
     """
 
     def __init__(
@@ -312,7 +321,17 @@ def simulate_batch(
     (runs done, rate, ETA) on standard error; the runs then go to the core in chunks, with
     identical results. ``memory_budget_bytes`` (default: half the available memory): a batch
     whose recordings would need more is refused up front with the estimate (see
-    :func:`recording_bytes`)."""
+    :func:`recording_bytes`).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> starts = [rf.State(position=(0, 0, -1)), rf.State(position=(0.5, 0, -1))]
+        >>> batch = rf.simulate_batch(sim, starts, 2.0, controllers=rf.lqr_hover(sim), record_every=40)
+        >>> batch.position.shape, batch.diverged.tolist()
+        ((2, 21, 3), [False, False])
+    """
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
     states = list(x0s)

@@ -26,7 +26,15 @@ def _vector3(field_name: str, value: Any) -> tuple[float, float, float]:
 class State:
     """A vehicle state: ``position`` (m, world NED), ``velocity`` (m/s, world), attitude as a unit
     ``quaternion`` (w, x, y, z; body to world) or ``euler`` (roll, pitch, yaw, rad, Z-Y-X), and
-    ``omega`` (body rates, rad/s). Omitted fields are zero / level."""
+    ``omega`` (body rates, rad/s). Omitted fields are zero / level.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> state = rf.State(position=(0, 0, -2), euler=(0.1, 0, 0))
+        >>> state.position, [round(q, 6) for q in state.quaternion]
+        ((0.0, 0.0, -2.0), [0.99875, 0.049979, 0.0, 0.0])
+    """
 
     __slots__ = ("position", "velocity", "quaternion", "omega")
 

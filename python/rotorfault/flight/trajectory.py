@@ -44,7 +44,17 @@ def command_columns(command_count: int, rotor_count: int) -> list[str]:
 class Event:
     """Why and when a run ended early: ``time`` (s), with the state (12-vector) at that moment. A ``crashed``
     event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
-    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise."""
+    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 3.0)
+        >>> event = run.events[0]
+        >>> event.kind, round(event.time, 3), round(event.impact_speed_m_s, 3)
+        ('crashed', 0.452, 4.427)
+    """
 
     time: float
     #: A kebab-case code (``"crashed"``, ``"tilt"``, ``"non-finite-state"``, ...);
@@ -76,7 +86,16 @@ class Estimates:
     horizon); ``gyro_saturated`` / ``accel_saturated`` flag rows whose newest IMU sample was
     clamped at the range; ``position`` (m), ``velocity`` (m/s), ``euler`` (rad) and ``omega`` (body
     rates, rad/s) are the estimate's; ``counts`` holds the run's totals (IMU samples, clamped samples,
-    measurements fused, refused by the innovation gate, late)."""
+    measurements fused, refused by the innovation gate, late).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.2, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+        >>> run.estimate.position.shape == run.position.shape
+        True
+    """
 
     position: FloatArray
     velocity: FloatArray
@@ -116,7 +135,16 @@ class Trajectory(Tabular):
     ``to_arrow()`` / ``to_pandas()``: one row per recorded step (``t_s``, the 12 states of
     :data:`STATE_COLUMNS`, the quaternion, the primary axis, each rotor's command, thrust and
     efficiency, and the measured states ``measured_<state>`` when the run had sensor noise); the
-    events and faults are in the schema's metadata."""
+    events and faults are in the schema's metadata.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.5, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+        >>> run.position.shape, list(run.to_arrow().column_names[:4])
+        ((201, 3), ['t_s', 'north_m', 'east_m', 'down_m'])
+    """
 
     t: FloatArray
     position: FloatArray
@@ -292,7 +320,17 @@ class BatchResult(Tabular):
     located crossing time, is stacked only when that time is a grid time (never into a row of
     another time); it is always the last row of ``trajectories[i]``, and ``divergence_time[i]``
     is its time. The arrays are :class:`Trajectory`'s with a leading run axis: ``position`` (NED,
-    m), ``velocity`` (NED, m/s), ``omega`` (body rates, rad/s), ``t`` (s)."""
+    m), ``velocity`` (NED, m/s), ``omega`` (body rates, rad/s), ``t`` (s).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+        >>> controller = rf.lqr_hover(sim, position=(0, 0, -1))
+        >>> batch = rf.simulate_batch(sim, [rf.State(position=(0, 0, -1))] * 2, 1.0, controllers=controller, record_every=100)
+        >>> batch.t.tolist(), len(batch.trajectories)
+        ([0.0, 0.25, 0.5, 0.75, 1.0], 2)
+    """
 
     t: FloatArray
     position: FloatArray

@@ -43,7 +43,15 @@ KIND_DESCRIPTIONS: dict[str, str] = {
 class PaperNumber:
     """``printed`` (as the paper prints it) beside ``ours``; they agree when
     ``|ours - printed| <= tolerance`` (half a unit in the last printed place, unless stated).
-    ``kind``: what the row is (module docs); only ``reproduced`` rows are scored."""
+    ``kind``: what the row is (module docs); only ``reproduced`` rows are scored.
+
+    Examples:
+
+        >>> from rotorfault.papers import PaperNumber
+        >>> row = PaperNumber("Du", "Table 2", "ACAI, rotor 1 failed", printed=0.7221, ours=0.72213, tolerance=1e-4, kind="reproduced")
+        >>> row.status, row.scored
+        ('pass', True)
+    """
 
     paper: str
     where: str
@@ -126,7 +134,15 @@ def score(numbers: list[PaperNumber]) -> dict[str, int]:
 
 def number_rows(numbers: Sequence[PaperNumber]) -> Records:
     """Printed numbers as records (a sequence of dicts with ``to_arrow()`` and ``to_pandas()``):
-    one per number, with the difference and the status."""
+    one per number, with the difference and the status.
+
+    Examples:
+
+        >>> from rotorfault.papers import PaperNumber, number_rows
+        >>> rows = number_rows([PaperNumber("Du", "Table 2", "ACAI", printed=0.7221, ours=0.72213, tolerance=1e-4, kind="reproduced")])
+        >>> rows
+        <Records printed numbers beside ours: 1 rows x 11 columns>
+    """
     columns = [("paper", "string"), ("where", "string"), ("quantity", "string"), ("printed", "float64"), ("ours", "float64"),
                ("difference", "float64"), ("tolerance", "float64"), ("status", "string"), ("kind", "string"), ("scored", "bool"), ("note", "string")]
     if isinstance(numbers, (str, bytes)) or not isinstance(numbers, Sequence):

@@ -119,6 +119,13 @@ class Campaign:
       seed, so runs differ and the campaign is reproducible;
     - ``mass_rel``, ``inertia_rel``, ``drag_torque_rel``, ``lag_rel``: relative errors (uniform in
       ``1 +- rel``); ``thrust_rel``: each rotor's thrust factor in ``[1 - rel, 1]``.
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign
+        >>> campaign = Campaign(runs=4, duration_s=8.0, failures=((1,),))
+        >>> campaign.chunk_count(), campaign.controller, campaign.fault_time_s
+        (1, 'ke-hil', (2.0, 5.0))
     """
 
     runs: int = 100
@@ -507,7 +514,15 @@ def run_campaign(
     identical to the local backend's. ``progress``: a progress bar (default: from 10,000 runs).
 
     With ``out`` the result reads its rows back from Parquet when first asked for them (a few
-    hundred bytes per run); :func:`read_campaign` opens such an output later."""
+    hundred bytes per run); :func:`read_campaign` opens such an output later.
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign, run_campaign
+        >>> result = run_campaign(Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5)))
+        >>> result.verdict_counts()["drifts"], result.survival()[0].rate
+        (2, 0.0)
+    """
     from .engine import run_chunks
 
     if not isinstance(campaign, Campaign):
@@ -538,7 +553,19 @@ def run_campaign(
 def read_campaign(path: str | PathLike[str]) -> CampaignResult:
     """A campaign written to Parquet by :func:`run_campaign` (``rotorfault campaign --out``):
     the campaign rebuilt from the manifest, the rows read when first asked for; any row can be
-    re-flown with ``result.campaign.refly(row["index"])``."""
+    re-flown with ``result.campaign.refly(row["index"])``.
+
+    Examples:
+
+        >>> import pathlib, tempfile
+        >>> from rotorfault.studies import Campaign, read_campaign, run_campaign
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> out = pathlib.Path(folder.name) / "campaign"
+        >>> _ = run_campaign(Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5)), out=out)
+        >>> read_campaign(out).to_arrow().num_rows
+        2
+        >>> folder.cleanup()
+    """
     from .storage import read_manifest
 
     manifest = read_manifest(path)
@@ -557,7 +584,15 @@ class CampaignResult(Tabular):
     """A campaign's rows as NumPy columns (:func:`run_chunk`'s, concatenated in run order), in
     memory or read from the Parquet output ``out`` when first used. ``to_arrow()`` /
     ``to_pandas()``: one row per run (:func:`campaign_schema`, the same schema as the Parquet
-    output); :meth:`survival_table`: the survival rates as a table."""
+    output); :meth:`survival_table`: the survival rates as a table.
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign, run_campaign
+        >>> result = run_campaign(Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5)))
+        >>> result.to_arrow().num_rows, result.columns["verdict"].tolist()
+        (2, ['drifts', 'drifts'])
+    """
 
     campaign: Campaign
     loaded: dict[str, np.ndarray[Any, Any]] | None = field(default=None, repr=False)

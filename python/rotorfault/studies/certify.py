@@ -93,7 +93,16 @@ class RelaxedHoverVerdict:
 class CertificateCase:
     """One row of a :class:`Certificate`: the 1-based ``failed`` rotors and whether the vehicle
     still hovers with them failed (``hover``: ``"all-axes"``, ``"give-up-yaw"`` or ``"no"``), with
-    the margins that say so."""
+    the margins that say so.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.studies import certify
+        >>> case = certify(rf.Airframe.preset("hexa-ppnnpn"), max_failed=1).cases[1]
+        >>> case.failed, case.hover, round(case.acai, 4), case.hover_wrench
+        ((1,), 'all-axes', 0.7221, 'inside')
+    """
 
     failed: tuple[int, ...]
     hover: Hover
@@ -129,7 +138,16 @@ class CertificateCase:
 @dataclass(frozen=True)
 class Certificate(Tabular):
     """The verdicts of :func:`certify`, one case per failure combination; ``to_arrow()`` /
-    ``to_pandas()`` give one row per case, :meth:`to_dict` the JSON document."""
+    ``to_pandas()`` give one row per case, :meth:`to_dict` the JSON document.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.studies import certify
+        >>> certificate = certify(rf.Airframe.preset("quad-x"), max_failed=1)
+        >>> certificate.rotor_count, len(certificate.failing("single")), certificate.to_arrow().num_rows
+        (4, 4, 5)
+    """
 
     airframe: str
     rotor_count: int
@@ -205,7 +223,16 @@ def certify(
     also the best relaxed hover of each case (:class:`RelaxedHoverVerdict`), computed with
     ``settings``, ``drag`` and ``actuator`` as :func:`rotorfault.analysis.relaxed_hover` takes
     them (the vehicle's rotational damping decides the spin rate: without it the best spin is the
-    search limit). Checked before any work."""
+    search limit). Checked before any work.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.studies import certify
+        >>> certificate = certify(rf.Airframe.preset("hexa-ppnnpn"), max_failed=1)
+        >>> len(certificate.cases), [case.failed for case in certificate.failing("single")]
+        (7, [(5,), (6,)])
+    """
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
     if not isinstance(spinning, bool):

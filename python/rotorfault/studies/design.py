@@ -97,7 +97,15 @@ def with_spins(airframe: Airframe, spins: str) -> Airframe:
 
 @dataclass(frozen=True)
 class Design:
-    """One spin assignment and its ACAIs after failures (``formula``)."""
+    """One spin assignment and its ACAIs after failures (``formula``).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> best = rf.design_search(rf.Airframe.preset("hexa-ppnnpn")).best()
+        >>> best.spins, best.controllable_single, round(best.worst_single, 4)
+        ('PPNPNN', 4, -0.2133)
+    """
 
     spins: str
     #: The parameter axis value (None without one).
@@ -134,7 +142,15 @@ class Design:
 class DesignSearch(Tabular):
     """Designs ranked best first (per parameter value when a parameter axis was given);
     ``to_arrow()`` / ``to_pandas()``: one row per design (its ``rank`` from 1 within its parameter
-    value, the parameter's own column when there is one)."""
+    value, the parameter's own column when there is one).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> search = rf.design_search(rf.Airframe.preset("hexa-ppnnpn"))
+        >>> search.to_arrow().num_rows == len(search.designs), search.formula
+        (True, 'facet-margin')
+    """
 
     airframe: str
     formula: AcaiFormula
@@ -277,7 +293,15 @@ def design_search(
     its own spins are ignored) by failure tolerance (module docstring), optionally for each value
     of one airframe parameter (``parameter``: an axis name of :func:`rotorfault.acai_scan`, e.g.
     ``arm_length_m`` or ``max_thrust_n``). ``formula="facet-margin"`` (default) makes the worst
-    case of an infeasible hover negative (how far outside) instead of eq. (13)'s 0."""
+    case of an infeasible hover negative (how far outside) instead of eq. (13)'s 0.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> search = rf.design_search(rf.Airframe.preset("hexa-ppnnpn"))
+        >>> len(search.designs), search.best().spins
+        (8, 'PPNPNN')
+    """
     airframe = require_airframe(airframe)
     if formula not in ("eq13", "facet-margin"):
         raise ValueError(f"formula: must be 'eq13' or 'facet-margin', got {formula!r}")

@@ -37,7 +37,14 @@ class HoldCriteria:
     changed an efficiency (default 0: the whole flight after the fault) to the end, the
     altitude error within ``hold_altitude_m`` and the horizontal error within
     ``hold_horizontal_m`` of the setpoint, and the run never lost (ground contact or another
-    divergence). Defaults: issue 30's target for Ke's robust gains."""
+    divergence). Defaults: issue 30's target for Ke's robust gains.
+
+    Examples:
+
+        >>> from rotorfault.studies import HoldCriteria
+        >>> HoldCriteria()
+        HoldCriteria(hold_altitude_m=2.0, hold_horizontal_m=5.0, settle_s=0.0)
+    """
 
     hold_altitude_m: float = 2.0
     hold_horizontal_m: float = 5.0
@@ -107,7 +114,14 @@ def post_fault_hold(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M,
 @dataclass(frozen=True)
 class FaultCase:
     """Rotors ``rotors`` (1-based) drop to ``efficiency`` (0: total failure), the first at
-    ``time_s``, each next one ``gap_s`` later."""
+    ``time_s``, each next one ``gap_s`` later.
+
+    Examples:
+
+        >>> from rotorfault.studies import FaultCase
+        >>> FaultCase(rotors=(1, 3), efficiency=0.0)
+        FaultCase(rotors=(1, 3), efficiency=0.0, time_s=2.0, gap_s=2.0)
+    """
 
     rotors: tuple[int, ...]
     efficiency: float
@@ -160,7 +174,15 @@ def fault_set(
 ) -> tuple[FaultCase, ...]:
     """A fault set for Ke's robust gains: every single-rotor fault of ``rotors`` at each of
     ``efficiencies``, then every pair of ``pairs`` (e.g. :data:`PAIRS`) failing totally, the first
-    fault at ``time_s``. Default: the ``ke-robust`` tuning's 4 rotors x 5 efficiencies."""
+    fault at ``time_s``. Default: the ``ke-robust`` tuning's 4 rotors x 5 efficiencies.
+
+    Examples:
+
+        >>> from rotorfault.studies import fault_set
+        >>> cases = fault_set(rotors=(1,), efficiencies=(0.0, 0.5), pairs=[(1, 3)])
+        >>> [(case.rotors, case.efficiency) for case in cases]
+        [((1,), 0.0), ((1,), 0.5), ((1, 3), 0.0)]
+    """
     # Each argument read once, by name (int('x') was a ValueError naming nothing); FaultCase
     # checks the values.
     rotor_list = [_integer("rotors", r) for r in _sequence("rotors", rotors)]

@@ -44,7 +44,15 @@ MAX_STREAM_POINTS = 10**15
 class EfficiencyScan(Tabular):
     """Result of :func:`efficiency_scan`; ``to_arrow()`` / ``to_pandas()``: one row per grid point
     with the columns of :func:`acai_scan` (``efficiency_<rotor>``, ``acai_<formula>``,
-    ``hover_code``, ``controllable``; ``..._give_up_yaw`` when yaw was given up)."""
+    ``hover_code``, ``controllable``; ``..._give_up_yaw`` when yaw was given up).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> scan = rf.efficiency_scan(rf.Airframe.preset("hexa-ppnnpn"), rotors=(1,), step=0.25)
+        >>> scan.to_arrow().column_names, scan.acai.round(4).tolist()
+        (['efficiency_1', 'acai_eq13', 'hover_code', 'controllable'], [0.7221, 0.9559, 1.1295, 1.1295, 1.1295])
+    """
 
     airframe: str
     #: Swept rotors, 1-based.
@@ -108,6 +116,13 @@ def efficiency_scan(
     rotors 1, 2, 5 of the PNPNPN hexacopter with step 0.04: 26^3 = 17,576 points).
 
     ``progress`` shows a progress bar (default: only for scans over 10 million points).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> scan = rf.efficiency_scan(rf.Airframe.preset("hexa-ppnnpn"), rotors=(1, 2), step=0.5)
+        >>> scan.points.shape, round(scan.controllable_fraction, 4)
+        ((9, 2), 0.6667)
     """
     airframe = require_airframe(airframe)
     step = real("step", step)
@@ -165,7 +180,17 @@ def plot_efficiency_scan(scan: EfficiencyScan | Scan | str | PathLike[str], path
     ``.pdf`` or ``.svg``, written atomically) if given.
 
     ``scan`` may also be a :class:`Scan` or the Parquet directory of one (``rotorfault scan
-    --out``): only its verdict column is read, chunk by chunk."""
+    --out``): only its verdict column is read, chunk by chunk.
+
+    Examples:
+
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import rotorfault as rf
+        >>> scan = rf.efficiency_scan(rf.Airframe.preset("hexa-ppnnpn"), rotors=(1, 2, 5), step=0.5)
+        >>> len(rf.plot_efficiency_scan(scan).axes) >= 1
+        True
+    """
     from ..plotting.regions import plot_region
 
     if isinstance(scan, (str, PathLike)):
@@ -362,7 +387,15 @@ class Scan(Tabular):
     (``out``), with what the scan was (``manifest``: axes, airframe TOML, version...).
     ``to_arrow()`` / ``to_pandas()``: every row, in memory or read whole from Parquet (the same
     schema either way, :func:`scan_schema`; :meth:`iter_tables` reads a large output chunk by
-    chunk)."""
+    chunk).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> scan = rf.acai_scan(rf.Airframe.preset("quad-x"), {"efficiency_1": [0.5, 1.0]}, formulas=["eq13"])
+        >>> scan.table.column_names, scan.column("acai_eq13").round(4).tolist()
+        (['efficiency_1', 'acai_eq13', 'hover_code', 'controllable', 'controllability_rank'], [-0.2251, 0.7623])
+    """
 
     airframe: str
     names: tuple[str, ...]
@@ -487,7 +520,15 @@ def acai_scan(
     thrust, roll and pitch only (suffix ``_give_up_yaw``, rank of 6).
 
     ``backend="dask"`` runs the chunks on a ``dask.distributed`` cluster (``dask``: a Client, an
-    address or ``"local:N"``); the rows are identical to the local backend's."""
+    address or ``"local:N"``); the rows are identical to the local backend's.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> scan = rf.acai_scan(rf.Airframe.preset("quad-x"), {"efficiency_1": [0.0, 0.5, 1.0]})
+        >>> scan.total, scan.controllable_count()
+        (3, 1)
+    """
     from .. import _rfcore
     from .engine import run_chunks
 
@@ -577,7 +618,19 @@ def acai_scan(
 
 
 def read_scan(path: str | PathLike[str]) -> Scan:
-    """A scan written to Parquet by :func:`acai_scan` (or ``rotorfault scan --out``), read lazily."""
+    """A scan written to Parquet by :func:`acai_scan` (or ``rotorfault scan --out``), read lazily.
+
+    Examples:
+
+        >>> import tempfile, pathlib
+        >>> import rotorfault as rf
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> out = pathlib.Path(folder.name) / "scan"
+        >>> written = rf.acai_scan(rf.Airframe.preset("quad-x"), {"efficiency_1": [0.5, 1.0]}, out=out)
+        >>> rf.read_scan(out).total
+        2
+        >>> folder.cleanup()
+    """
     from .storage import read_manifest
 
     manifest = read_manifest(path)
@@ -602,7 +655,15 @@ def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
     (``efficiency_<i>`` columns of 0 and 1), in :func:`rotorfault.failure_table` order.
 
     At most 1 GiB (:data:`rotorfault.studies.engine.MAX_IN_MEMORY_BYTES`) of columns: 8 bytes per
-    rotor and row, counted before anything is built."""
+    rotor and row, counted before anything is built.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> samples = rf.failure_samples(4, 1)
+        >>> {name: column.tolist() for name, column in samples.items()}
+        {'efficiency_1': [1.0, 0.0, 1.0, 1.0, 1.0], 'efficiency_2': [1.0, 1.0, 0.0, 1.0, 1.0], 'efficiency_3': [1.0, 1.0, 1.0, 0.0, 1.0], 'efficiency_4': [1.0, 1.0, 1.0, 1.0, 0.0]}
+    """
     from .engine import check_in_memory
 
     rotor_count = count("rotor_count", rotor_count)

@@ -122,7 +122,27 @@ def _table(data: dict[str, Any], name: str) -> dict[str, Any]:
 @dataclass
 class Scenario:
     """A parsed scenario: the simulator, start state, controller (kind and its keys), setpoints,
-    reference and faults."""
+    reference and faults.
+
+    Examples:
+
+        >>> import pathlib, tempfile
+        >>> from rotorfault.studies import load_scenario
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> path = pathlib.Path(folder.name) / "hover.toml"
+        >>> _ = path.write_text('''
+        ... airframe = "quad-x"
+        ... duration_s = 1.0
+        ... [initial]
+        ... position_m = [0.0, 0.0, -10.0]
+        ... [controller]
+        ... kind = "lqr-hover"
+        ... ''')
+        >>> run = load_scenario(path).run()
+        >>> run.events, float(run.t[-1])
+        ([], 1.0)
+        >>> folder.cleanup()
+    """
 
     name: str
     simulator: Simulator
@@ -212,7 +232,27 @@ def _file_keys() -> Iterator[None]:
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Reads and validates a scenario file (errors name the key and the file)."""
+    """Reads and validates a scenario file (errors name the key and the file).
+
+    Examples:
+
+        >>> import pathlib, tempfile
+        >>> from rotorfault.studies import load_scenario
+        >>> folder = tempfile.TemporaryDirectory()
+        >>> path = pathlib.Path(folder.name) / "hover.toml"
+        >>> _ = path.write_text('''
+        ... airframe = "quad-x"
+        ... duration_s = 1.0
+        ... [initial]
+        ... position_m = [0.0, 0.0, -10.0]
+        ... [controller]
+        ... kind = "lqr-hover"
+        ... ''')
+        >>> scenario = load_scenario(path)
+        >>> scenario.controller_kind, scenario.duration_s
+        ('lqr-hover', 1.0)
+        >>> folder.cleanup()
+    """
     data = read_toml("scenario_file", path)
     path = Path(path)
     try:

@@ -67,7 +67,16 @@ ROBUST_GAINS: dict[str, tuple[float, float]] = {
 class TuningResult:
     """Table IV (the campaign's own gains) against the tuned gains, each scored on the tuning
     campaign and on a fresh validation campaign: worst altitude loss and horizontal excursion
-    over the runs, and how many were lost."""
+    over the runs, and how many were lost.
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign, tune
+        >>> campaign = Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5))
+        >>> result = tune(campaign, maxiter=1, popsize=1, bounds={"k_p": (0.5, 2.0)})
+        >>> type(result.tuned).__name__, result.scenarios
+        ('KeGains', 2)
+    """
 
     baseline: KeGains
     tuned: KeGains
@@ -210,7 +219,16 @@ def tune(
     """Robust tuning of Ke's gains: scipy's differential evolution minimises the worst-case
     excursion (lost runs penalised first) over ``campaign``'s runs, every candidate flown on the
     same runs (common random numbers); then Table IV and the tuned gains are both scored on a
-    fresh campaign (``validation_seed``, default ``seed + 1``) they were not tuned on."""
+    fresh campaign (``validation_seed``, default ``seed + 1``) they were not tuned on.
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign, tune
+        >>> campaign = Campaign(runs=2, duration_s=1.0, failures=((1,),), fault_time_s=(0.5, 0.5))
+        >>> result = tune(campaign, maxiter=1, popsize=1, bounds={"k_p": (0.5, 2.0)})
+        >>> result.candidates, sorted(result.scores)
+        (10, ['tuning, Table IV', 'tuning, tuned', 'validation, Table IV', 'validation, tuned'])
+    """
     if not isinstance(campaign, Campaign):
         raise TypeError(f"campaign: expected rotorfault.studies.Campaign, got {type(campaign).__name__}")
     if campaign.controller == "lqr":
@@ -251,7 +269,15 @@ def tune(
 def tuning_campaign(*, runs: int = 200, seed: int = 0, duration_s: float = 25.0) -> Campaign:
     """The campaign :func:`tune` scores gains on: ``runs`` flights of ``duration_s`` (s) with every
     single failure and every ordered pair of failures (the first in 1-4 s, the second 4-8 s
-    later), in one chunk; ``seed`` fixes the draws (common random numbers across candidates)."""
+    later), in one chunk; ``seed`` fixes the draws (common random numbers across candidates).
+
+    Examples:
+
+        >>> from rotorfault.studies import tuning_campaign
+        >>> campaign = tuning_campaign(runs=10)
+        >>> campaign.runs, campaign.duration_s, campaign.controller
+        (10, 25.0, 'ke-hil')
+    """
     pairs = ((1, 2), (2, 1), (3, 4), (4, 3), (1, 3), (3, 1), (2, 4), (4, 2))
     campaign = Campaign(
         runs=runs, seed=seed, duration_s=duration_s, failures=((1,), (2,), (3,), (4,), *pairs), fault_time_s=(1.0, 4.0), gap_s=(4.0, 8.0),
@@ -284,7 +310,16 @@ class HoldCost:
 class HoldTuningResult:
     """:func:`tune_hold`'s answer: the tuned gains, what was searched (``bounds``), how many
     candidates, the seed and the seconds it took, and the baseline (``"paper"``) and tuned
-    gains flown through the fault set side by side (``comparison``)."""
+    gains flown through the fault set side by side (``comparison``).
+
+    Examples:
+
+        >>> from rotorfault.studies import FaultCase, tune_hold
+        >>> result = tune_hold([FaultCase(rotors=(1,), efficiency=0.5, time_s=0.5)], duration_s=1.0, maxiter=1, popsize=1,
+        ...                    bounds={"k_p": (0.5, 2.0)})
+        >>> list(result.bounds), result.seed
+        (['k_p'], 0)
+    """
 
     baseline: KeGains
     tuned: KeGains
@@ -355,7 +390,16 @@ def tune_hold(
     the others stay ``baseline``'s (default the preset's: Table IV). The first population holds
     ``x0`` (default ``baseline``), so the tuned gains score no worse than it. ``backend="dask"``
     evaluates each generation's candidates on a ``dask.distributed`` cluster (``dask``: a Client,
-    an address or ``"local:N"``), ``"local"`` on two threads; both give the same gains."""
+    an address or ``"local:N"``), ``"local"`` on two threads; both give the same gains.
+
+    Examples:
+
+        >>> from rotorfault.studies import FaultCase, tune_hold
+        >>> result = tune_hold([FaultCase(rotors=(1,), efficiency=0.5, time_s=0.5)], duration_s=1.0, maxiter=1, popsize=1,
+        ...                    bounds={"k_p": (0.5, 2.0)})
+        >>> result.candidates, type(result.tuned).__name__
+        (10, 'KeGains')
+    """
     import time
 
     from ..control.ke import preset

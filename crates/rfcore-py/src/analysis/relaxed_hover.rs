@@ -23,6 +23,13 @@ fn rotor_numbers(indices: &[usize]) -> Vec<usize> {
 }
 
 /// What the relaxed hover analysis needs beyond the airframe (defaults: the core's).
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3)
+///     >>> settings.rotational_drag_n_m_s, settings.grid_points
+///     (0.0028, 61)
 #[pyclass(name = "RelaxedHoverSettings", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyRelaxedHoverSettings {
@@ -100,6 +107,15 @@ impl PyRelaxedHoverSettings {
 }
 
 /// One relaxed hover solution, checked (rotor numbers 1-based).
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+///     >>> settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=21)
+///     >>> best = rf.relaxed_hover(quad, settings).best
+///     >>> round(best.spin_rate_rad_s, 2), best.carrying
+///     (15.22, [2, 3, 4])
 #[pyclass(name = "RelaxedHoverSolution", module = "rotorfault._rfcore", frozen)]
 pub struct PyRelaxedHoverSolution {
     inner: RelaxedHoverSolution,
@@ -217,6 +233,15 @@ impl PyRelaxedHoverSolution {
 }
 
 /// Every relaxed hover solution of an airframe, best first.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1])
+///     >>> settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=21)
+///     >>> analysis = rf.relaxed_hover(quad, settings)
+///     >>> len(analysis.solutions) > 0, analysis.best.carrying
+///     (True, [2, 3, 4])
 #[pyclass(name = "RelaxedHoverAnalysis", module = "rotorfault._rfcore", frozen)]
 pub struct PyRelaxedHoverAnalysis {
     solutions: Vec<Py<PyRelaxedHoverSolution>>,

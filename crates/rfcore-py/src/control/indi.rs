@@ -12,6 +12,13 @@ use crate::convert::to_py_err;
 
 /// INDI gains (`rotorfault.IndiGains`); defaults from the core's `Default` (Sun's printed values
 /// where he prints them), rules from its `check`.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> gains = rf.IndiGains(max_tilt_rad=0.5)
+///     >>> gains.max_tilt_rad, gains.yaw
+///     (0.5, 'auto')
 #[pyclass(name = "IndiGains", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyIndiGains {

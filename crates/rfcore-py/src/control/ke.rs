@@ -12,6 +12,13 @@ use crate::convert::{fixed_reals, real, settings_protocol, settings_eq, settings
 /// `rotorfault.control.ke.KeGains`). Keyword-only; defaults from the core's `Default` (the `ke-hil`
 /// preset); types checked here, values once, by the core's `check`, with its messages. Frozen,
 /// comparable, hashable, picklable; `replace(**changes)` gives a validated copy.
+///
+/// Examples:
+///
+///     >>> from rotorfault.control import KeGains
+///     >>> gains = KeGains(k_p=1.5)
+///     >>> gains.k_p
+///     1.5
 #[pyclass(name = "KeGains", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyKeGains {

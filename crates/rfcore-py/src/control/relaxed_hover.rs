@@ -10,6 +10,13 @@ use rfcore::control::relaxed_hover::{
 use crate::convert::{matrix, slice1, to_py_err};
 
 /// The outer position loop (defaults: the core's).
+///
+/// Examples:
+///
+///     >>> from rotorfault.control import RelaxedHoverOuterLoop
+///     >>> loop = RelaxedHoverOuterLoop(max_tilt_rad=0.3)
+///     >>> loop.max_tilt_rad, loop.position_gain_s2 > 0
+///     (0.3, True)
 #[pyclass(name = "RelaxedHoverOuterLoop", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyRelaxedHoverOuterLoop {
