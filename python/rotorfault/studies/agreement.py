@@ -19,6 +19,8 @@ on the vehicle it flies:
   (refused where its ACAI is <= 0: static hover with all four axes lost);
 - ``relaxed-hover-feedback``: the healthy vehicle's hover LQR until the failure, then the LQR about
   the best relaxed hover (the failure-time switch of :class:`rotorfault.control.RelaxedHoverFeedback`);
+  on a vehicle whose healthy hover no LQR holds (``wang-fixed-pitch``: no yaw control even
+  healthy) there is no healthy design and the relaxed hover LQR flies from the start;
 - ``indi-controller``: INDI told of the failed rotors;
 - ``uniform-passive-ftc``: Ke's passive controller with the ``ke-robust`` gains (told nothing);
 - ``lanzon-controller``: Lanzon's design, only on the Lanzon quadrotor with rotor 2 failed.
@@ -203,7 +205,10 @@ def _relaxed(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
     best = relaxed_hover(airframe, drag=_drag(v), actuator=_actuator(v)).best
     if best is None:
         raise ValueError("no relaxed hover a linear feedback can hold")
-    healthy = lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
+    try:
+        healthy = lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
+    except ValueError:  # no healthy-vehicle design (module notes)
+        return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m)
     return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
                                 before_failure=healthy, failure_time_s=FAILURE_TIME_S)
 
