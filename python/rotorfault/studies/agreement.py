@@ -308,7 +308,8 @@ def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignV
             [RotorFault(r, FAILURE_TIME_S, 0.0)._packed() for r in failed], None if trim is None else [float(u) for u in trim], config,
         )):
             args[k].append(value)
-    batch = _rfcore.simulate_summaries(*args, [HOVER_M] * len(pending), _rfcore.VerdictCriteria())
+    batch = _rfcore.simulate_summaries(args[0], args[1], args[2], args[3], args[4], args[5], args[6], args[7],
+                                       [HOVER_M] * len(pending), _rfcore.VerdictCriteria())
     horizontal = np.asarray(batch.window_horizontal_error_m)
     altitude = np.asarray(batch.window_altitude_error_m)
     for j, (index, name, _v, _c) in enumerate(pending):
