@@ -373,7 +373,11 @@ class RelaxedHoverFeedback:
         gain: _F64,
         position_m: tuple[float, float, float],
         outer_loop: RelaxedHoverOuterLoop | None = None,
+        before_failure: LinearFeedback | None = None,
+        failure_time_s: float | None = None,
     ) -> RelaxedHoverFeedback: ...
+    @property
+    def failure_time_s(self) -> float | None: ...
 
 _Actuator = FixedPitchActuator | VariablePitchActuator
 

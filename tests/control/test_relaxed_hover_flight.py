@@ -296,3 +296,57 @@ def test_lanzon_flight_is_the_two_rotor_relaxed_hover() -> None:
     assert abs(spin) == pytest.approx(abs(level.spin_rate_rad_s), rel=1e-3)
     assert relaxed_hover_residual(airframe, spin * axis, axis, thrust, analysis.settings) < 1e-4
     assert analysis.best is not None and analysis.best.carrying == [1, 3, 4]
+
+
+def test_failure_time_switch_flies_the_healthy_design_until_the_failure() -> None:
+    """Ke's quadcopter loses rotor 1 at 2 s: until then the healthy vehicle's hover LQR holds it
+    level and still (within 1 mm and 0.01 rad/s), from then on the relaxed hover LQR spins it up to
+    the solution's rate (within 1 % over the last 5 s of the 20 s after the failure) and holds the
+    circle's centre there within 0.1 m horizontally and 0.02 m in altitude; throughout, the centre of
+    mass stays within the campaign's hold band (1 m altitude, 3 m horizontal). Without the switch the relaxed hover LQR flies the
+    healthy vehicle as if rotor 1 were already lost (it spins before the failure)."""
+    vehicle = VEHICLES[0]
+    healthy_sim = rf.Simulator(rf.Airframe.preset("ke-quadcopter"), drag=vehicle.drag, actuator=vehicle.actuator)
+    hover = rf.control.lqr_hover(healthy_sim, position=(0, 0, -10))
+    best = vehicle.analysis().best
+    assert best is not None
+    failure_s = 2.0
+    switched = RelaxedHoverFeedback(best, vehicle.airframe, position=(0, 0, -10), linear_drag_n_s_m=vehicle.drag.linear_n_s_m,
+                                    before_failure=hover, failure_time_s=failure_s)
+    assert switched.core(healthy_sim.dt_s).failure_time_s == failure_s
+    faults = [rf.RotorFault(1, failure_s, 0.0)]
+    trajectory = healthy_sim.run(rf.State(position=(0, 0, -10)), failure_s + 20.0, controller=switched, faults=faults)
+    assert not trajectory.events, trajectory.events
+    strayed = trajectory.position - np.array([0, 0, -10.0])
+    assert np.max(np.abs(strayed[:, 2])) <= 1.0 and np.max(np.hypot(strayed[:, 0], strayed[:, 1])) <= 3.0
+    before = trajectory.t < failure_s
+    assert np.max(np.abs(trajectory.position[before] - np.array([0, 0, -10.0]))) <= 1e-3
+    assert np.max(np.abs(trajectory.omega[before])) <= 0.01
+    offset = circle_offsets(best, vehicle.airframe, linear_drag_n_s_m=vehicle.drag.linear_n_s_m).position_m
+    centre = trajectory.position - np.einsum("nij,j->ni", trajectory.rotation, offset)
+    late = trajectory.t >= trajectory.t[-1] - 5.0
+    error = centre[late] - np.array([0, 0, -10.0])
+    assert np.max(np.hypot(error[:, 0], error[:, 1])) <= 0.1 and np.max(np.abs(error[:, 2])) <= 0.02
+    spin = np.einsum("ni,i->n", trajectory.omega[late], best.spin_axis)
+    np.testing.assert_allclose(spin, best.spin_rate_rad_s, rtol=0.01)
+    unswitched = RelaxedHoverFeedback(best, vehicle.airframe, position=(0, 0, -10), linear_drag_n_s_m=vehicle.drag.linear_n_s_m)
+    early = healthy_sim.run(rf.State(position=(0, 0, -10)), failure_s + 0.5, controller=unswitched, faults=faults)
+    assert np.max(np.abs(early.omega[early.t < failure_s])) > 1.0
+
+
+def test_failure_time_switch_bad_input() -> None:
+    vehicle = VEHICLES[0]
+    best = vehicle.analysis().best
+    assert best is not None
+    hover = rf.control.lqr_hover(rf.Simulator(rf.Airframe.preset("ke-quadcopter")))
+    with pytest.raises(ValueError, match="before_failure, failure_time_s"):
+        RelaxedHoverFeedback(best, vehicle.airframe, before_failure=hover)
+    with pytest.raises(ValueError, match="before_failure, failure_time_s"):
+        RelaxedHoverFeedback(best, vehicle.airframe, failure_time_s=1.0)
+    with pytest.raises(TypeError, match="before_failure"):
+        RelaxedHoverFeedback(best, vehicle.airframe, before_failure="lqr", failure_time_s=1.0)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="failure_time_s"):
+        RelaxedHoverFeedback(best, vehicle.airframe, before_failure=hover, failure_time_s=-1.0)
+    hexa = rf.control.lqr_hover(rf.Simulator(rf.Airframe.preset("hexa-ppnnpn")))
+    with pytest.raises(ValueError, match="before_failure: commands 6 rotors"):
+        RelaxedHoverFeedback(best, vehicle.airframe, before_failure=hexa, failure_time_s=1.0)

@@ -51,7 +51,7 @@ def test_hold_rule_refuses_lost_runs_and_nan() -> None:
 def test_grid_composition() -> None:
     suite = D.DecidingCampaign(runs=2)
     assert set(D.VEHICLES) == {"ke-quadcopter", "lanzon-quadrotor", "px4-x500", "hexa-pnpnpn", "hexa-ppnnpn"}
-    assert set(D.CONTROLLERS) >= {"uniform-passive-ftc", "lanzon-controller", "indi-controller"}
+    assert set(D.CONTROLLERS) >= {"uniform-passive-ftc", "ke-robust", "lanzon-controller", "indi-controller", "relaxed-hover-feedback"}
     pairs = {(c.vehicle, c.fault_class) for c in suite.cells}
     # Two opposing rotors on the quadrotors only: 3 quadrotors x 3 classes + 2 hexacopters x 2.
     assert len(pairs) == 13 and ("hexa-pnpnpn", "two-opposing-hover") not in pairs
@@ -148,7 +148,8 @@ def test_tiny_suite_through_the_cli(tmp_path: object) -> None:
     done = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "1", "--format", "json", "--no-progress"])
     assert done.exit_code == 0, done.output
     data = json.loads(done.output)
-    assert data["mode"] == "suite" and data["cell_count"] == 39 and data["runs"] == 39
-    assert len(data["cells"]) == 39 and len(data["best"]) == 13
+    cells = 13 * len(D.CONTROLLERS)
+    assert data["mode"] == "suite" and data["cell_count"] == cells and data["runs"] == cells
+    assert len(data["cells"]) == cells and len(data["best"]) == 13
     bad = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "0"])
     assert bad.exit_code != 0 and "runs" in bad.output

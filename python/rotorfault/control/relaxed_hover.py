@@ -7,6 +7,12 @@ thrust deviations. :class:`RelaxedHoverFeedback` designs ``K`` on it (continuous
 checked: residual, closed-loop eigenvalues, and the loop sampled at the control period) and runs
 ``u = u_trim - K x`` in Rust with an outer loop that tilts the up axis towards the set point
 (:class:`rotorfault._rfcore.RelaxedHoverFeedback`). Idle and failed rotors stay at their trim.
+
+A failure-time switch (``before_failure=``, ``failure_time_s=``): before the failure the vehicle is flown
+by the healthy-vehicle design (a hover LQR, :func:`rotorfault.control.lqr_hover` on the healthy
+airframe), from the first control step at or after ``failure_time_s`` by the relaxed hover LQR.
+This is passive fault-tolerant control with the failure (which rotors, how deep) and its time
+known in advance, as a perfect fault detection would report them: the switch is not a detector.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from .._util.convert import FloatArray, float_array, real
 from ..analysis.airframe import Airframe, require_airframe
 from ..analysis.relaxed_hover import RelaxedHoverSolution, _three, circle_offsets
 from ..flight.state import State
+from .linear import LinearFeedback
 from .riccati import CLOSED_LOOP_RTOL, LqrDesign, design_lqr, sampled_spectral_radius
 
 RelaxedHoverOuterLoop = _rfcore.RelaxedHoverOuterLoop
@@ -52,7 +59,10 @@ class RelaxedHoverFeedback:
     ``q`` (7 x 7) and ``r`` (carrying rotors square; default :func:`bryson_weights`), commands in
     rotor command units (thrust over efficiency), and the outer loop ``outer_loop``.
     ``linear_drag_n_s_m`` is the simulator's translational drag (it shapes the circle the centre
-    of mass describes, which the outer loop must not chase).
+    of mass describes, which the outer loop must not chase). ``before_failure`` (a
+    :class:`~rotorfault.control.LinearFeedback`, the healthy vehicle's hover LQR) and
+    ``failure_time_s`` (s, >= 0), given together: ``before_failure`` flies until the failure time, this
+    LQR from then on (the module notes: the failure and its time are known).
 
     Examples:
 
@@ -76,6 +86,8 @@ class RelaxedHoverFeedback:
         r: npt.ArrayLike | None = None,
         outer_loop: RelaxedHoverOuterLoop | None = None,
         linear_drag_n_s_m: float = 0.0,
+        before_failure: LinearFeedback | None = None,
+        failure_time_s: float | None = None,
     ) -> None:
         if not isinstance(solution, RelaxedHoverSolution):
             raise TypeError(f"solution: expected rotorfault.RelaxedHoverSolution, got {type(solution).__name__}")
@@ -120,6 +132,20 @@ class RelaxedHoverFeedback:
         self.u_trim = np.asarray(solution.command_n, dtype=np.float64)
         self.linear_drag_n_s_m = real("linear_drag_n_s_m", linear_drag_n_s_m)
         self.offsets = circle_offsets(solution, airframe, linear_drag_n_s_m=self.linear_drag_n_s_m)
+        if before_failure is not None and not isinstance(before_failure, LinearFeedback):
+            raise TypeError(f"before_failure: expected rotorfault.control.LinearFeedback (a hover LQR), got {type(before_failure).__name__}")
+        if (before_failure is None) != (failure_time_s is None):
+            raise ValueError("before_failure, failure_time_s: give both (the healthy-vehicle design and when it hands over) or neither")
+        if failure_time_s is not None:
+            failure_time_s = real("failure_time_s", failure_time_s)
+            if not (math.isfinite(failure_time_s) and failure_time_s >= 0):
+                raise ValueError(f"failure_time_s: must be finite and >= 0, got {failure_time_s}")
+        if before_failure is not None and before_failure.u_trim.shape != self.u_trim.shape:
+            raise ValueError(f"before_failure: commands {before_failure.u_trim.shape[0]} rotors, the relaxed hover {self.u_trim.shape[0]}")
+        #: The healthy-vehicle design flying until ``failure_time_s`` (s); ``None``: no switch.
+        #: The actuators start at its trim (:func:`rotorfault.flight.simulator.trim_command`).
+        self.before_failure = before_failure
+        self.failure_time_s = failure_time_s
 
     def check_sampled(self, dt_s: float) -> float:
         """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
@@ -153,6 +179,8 @@ class RelaxedHoverFeedback:
             gain=np.ascontiguousarray(self.gain),
             position_m=_triple(self.position),
             outer_loop=self.outer_loop,
+            before_failure=None if self.before_failure is None else self.before_failure.core(dt_s),
+            failure_time_s=self.failure_time_s,
         )
 
 

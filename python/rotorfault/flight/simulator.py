@@ -62,7 +62,9 @@ def core_controller(controller: AnyController, dt_s: float) -> CoreController | 
 
 
 def trim_command(controller: object) -> FloatArray | None:
-    """The trim command a controller holds, if any (the actuators start there)."""
+    """The trim command a controller holds, if any (the actuators start there); a controller
+    flying another design until a known failure (``before_failure``) starts at that one's."""
+    controller = getattr(controller, "before_failure", None) or controller
     u_trim = getattr(controller, "u_trim", None)
     return None if u_trim is None else np.asarray(u_trim, dtype=np.float64)
 

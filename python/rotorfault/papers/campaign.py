@@ -52,8 +52,31 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         "uniform in [0, 1]). Decisions and gaps: rotorfault.studies.deciding's docstring."
         + (" Quick mode: too few runs per cell to decide the 95 % target; the full report flies 1,000." if quick else "")
     )
+    _certify_against_flights(section, quick=quick)
     section.run_time_s = time.perf_counter() - start
     return section
+
+
+def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
+    """Certify's verdict on every single and double failure beside our controllers' flights
+    (:func:`rotorfault.studies.certify_against_flights`): every preset and the imported PX4 x500
+    (``--quick``: Ke's quadcopter's single failures, to stay within the quick report's time)."""
+    from ..flight.outcomes import VERDICT_MEANINGS, WINDOW_S
+    from ..studies import agreement as A
+    from ..studies import deciding as D
+
+    vehicles = [D.vehicle("ke-quadcopter")] if quick else A.preset_vehicles()
+    result = A.certify_against_flights(vehicles, max_failed=1 if quick else 2)
+    n = result.counts()
+    section.tables.append(ReportTable(
+        f"Certify against flights: {n['cases']} {'single' if quick else 'single and double'} failures, {n['agree']} agree. Certified survivable (static "
+        f"hover, or a relaxed hover a linear feedback can hold): {n['survivable']}, held by at least one controller: "
+        f"{n['survivable_held']}; certified not survivable: {n['not_survivable']}, held by a controller: {n['not_survivable_held']}. "
+        f"Each controller told the failure, which comes at {A.FAILURE_TIME_S:g} s from hover; verdict over the last {WINDOW_S:g} s "
+        f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s: holds = {VERDICT_MEANINGS['holds']}. Errors: the window's largest "
+        "horizontal / altitude error.",
+        result.headers(), tuple(result.rows()),
+    ))
 
 
 __all__ = ["FULL_RUNS", "QUICK_RUNS", "report_section"]

@@ -1,7 +1,8 @@
 """Studies: many flights or many evaluations, and what they add up to. ACAI scans over grids and
 sample sets (:mod:`~rotorfault.studies.scan`), the spin-assignment design search
 (:mod:`~rotorfault.studies.design`), a vehicle's controllability certificate
-(:mod:`~rotorfault.studies.certify`), the ``rotorfault simulate`` scenario file
+(:mod:`~rotorfault.studies.certify`) and whether it agrees with flights
+(:mod:`~rotorfault.studies.agreement`), the ``rotorfault simulate`` scenario file
 (:mod:`~rotorfault.studies.scenario_file`), and one Monte Carlo engine split by job: the spec
 (:mod:`~rotorfault.studies.campaign`), sampling (:mod:`~rotorfault.studies.sampling`), execution
 backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
@@ -15,6 +16,7 @@ May import: ``control``, ``flight``, ``allocation``, ``analysis``, ``plotting`` 
 ``rotorfault._typing`` and ``rotorfault._util``; never ``papers`` or ``cli``.
 """
 
+from .agreement import CertifyAgreement, certify_against_flights
 from .campaign import Campaign, CampaignResult, read_campaign, run_campaign
 from .certify import Certificate, CertificateCase, certify
 from .design import Design, DesignSearch, design_search
@@ -28,6 +30,7 @@ __all__ = [
     "CampaignResult",
     "Certificate",
     "CertificateCase",
+    "CertifyAgreement",
     "Design",
     "DesignSearch",
     "EfficiencyScan",
@@ -39,6 +42,7 @@ __all__ = [
     "TuningResult",
     "acai_scan",
     "certify",
+    "certify_against_flights",
     "design_search",
     "efficiency_scan",
     "failure_samples",

@@ -31,7 +31,17 @@ Decisions (gaps of the issue, stated once):
   [0.8, 1.2]; mass, each principal inertia and the motor time constant in [0.8, 1.2];
 - INDI is told a total loss at the moment it happens (perfect fault detection; a partial loss
   reaches it through the measurements, its own rule); Ke's passive
-  controller is told nothing;
+  controller is told nothing (``uniform-passive-ftc``: Table IV's ``ke-hil`` gains; ``ke-robust``:
+  the same controller with the ``ke-robust`` gains, tuned over partial and total faults);
+- the relaxed hover LQR (``relaxed-hover-feedback``) is passive FTC with the failure known in
+  advance: which rotors, their efficiency (nominal: not the run's thrust-coefficient error) and
+  the failure time. Until the failure the healthy vehicle's hover LQR flies it, from the failure
+  on the LQR about the best relaxed hover of the failed vehicle (the failure-time switch of
+  :class:`rotorfault.control.RelaxedHoverFeedback`). Partial losses are designed on a schedule:
+  the efficiency rounded down to a multiple of :data:`EFFICIENCY_STEP` (the design assumes the
+  rotor at most that much weaker than it is; a relaxed hover search per run would dominate the
+  campaign's time); a failure with no relaxed hover a linear feedback can hold is
+  ``design-refused``;
 - Lanzon's controller is designed for rotor 2 already lost (it commands rotor 2 to zero from the
   start; no pre-failure mode) and for plus quadrotors only: its cells are those of the Lanzon
   quadrotor with rotor 2 failing, the rest are marked "not applicable" with the reason.
@@ -79,6 +89,8 @@ GUST_DURATION_S = 2.0
 TOTAL_SHARE = 0.25
 #: The issue's target: the best controller holds in at least this share of a cell's runs.
 TARGET_SHARE = 0.95
+#: The relaxed hover LQR's design schedule over a partial loss's efficiency (module notes).
+EFFICIENCY_STEP = 0.05
 
 
 # -- vehicles ---------------------------------------------------------------------------------
@@ -214,11 +226,64 @@ def _indi(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M)
 
 
-#: The controllers by registry name (:mod:`rotorfault.control.registry`); adding one is one line.
+def _ke_robust(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
+    from ..control.ke import UniformPassiveFtc, preset
+
+    return UniformPassiveFtc(v.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
+
+
+def nominal_drag(v: CampaignVehicle) -> Drag:
+    """The nominal vehicle's drag (what a design may know)."""
+    return Drag(rotational_n_m_s=v.rotational_drag_n_m_s, linear_n_s_m=v.linear_drag_n_s_m)
+
+
+def nominal_actuator(v: CampaignVehicle) -> FixedPitchActuator:
+    return FixedPitchActuator(time_constant_s=v.rotor_time_constant_s)
+
+
+@functools.lru_cache(maxsize=8)
+def _healthy_lqr(name: str) -> Any:
+    from ..control.lqr import lqr_hover
+    from ..flight import Simulator
+
+    v = vehicle(name)
+    sim = Simulator(v.airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=nominal_drag(v), actuator=nominal_actuator(v))
+    return lqr_hover(sim, position=HOVER_M)
+
+
+@functools.lru_cache(maxsize=512)
+def _relaxed_design(name: str, efficiency: tuple[float, ...]) -> Any:
+    from ..analysis.relaxed_hover import relaxed_hover
+
+    v = vehicle(name)
+    airframe = v.airframe.with_efficiency(efficiency)
+    best = relaxed_hover(airframe, drag=nominal_drag(v), actuator=nominal_actuator(v)).best
+    if best is None:
+        failed = [i + 1 for i, e in enumerate(efficiency) if e < 1.0]
+        raise ValueError(f"relaxed hover: {name} with rotor(s) {failed} at efficiency {[efficiency[i - 1] for i in failed]} has none a linear feedback can hold")
+    return airframe, best
+
+
+def _relaxed_hover(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
+    from ..control.relaxed_hover import RelaxedHoverFeedback
+
+    efficiency = [1.0] * v.airframe.rotor_count
+    for f in faults:
+        efficiency[f.rotor - 1] = math.floor(f.efficiency / EFFICIENCY_STEP + 1e-9) * EFFICIENCY_STEP
+    airframe, best = _relaxed_design(v.name, tuple(efficiency))
+    return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
+                                before_failure=_healthy_lqr(v.name), failure_time_s=min(f.time for f in faults))
+
+
+#: The controllers by name: a registry name (:mod:`rotorfault.control.registry`), or a named
+#: variant of a registry controller (``ke-robust``: ``uniform-passive-ftc`` with the ``ke-robust``
+#: gains); adding one is one line.
 CONTROLLERS: dict[str, ControllerEntry] = {
     "uniform-passive-ftc": ControllerEntry(_ke),
+    "ke-robust": ControllerEntry(_ke_robust),
     "lanzon-controller": ControllerEntry(_lanzon, _lanzon_applies),
     "indi-controller": ControllerEntry(_indi, told=True),
+    "relaxed-hover-feedback": ControllerEntry(_relaxed_hover, told=True),
 }
 
 
@@ -299,7 +364,7 @@ class DecidingCampaign:
         sim = Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=drag, wind=(*d.wind_m_s, 0.0),
                         wind_profile=gust_profile(_Gust(d.gust_m_s, d.gust_start_s), GUST_DURATION_S),  # type: ignore[arg-type]
                         actuator=actuator)
-        controller = CONTROLLERS[cell.controller].build(v, d.faults())
+        controller = CONTROLLERS[cell.controller].build(v, d.told_faults())
         return sim.run(_start(cell), d.duration_s, controller=controller, faults=d.faults()), d
 
     def draw(self, cell: Cell, index: int) -> RunDraw:
@@ -364,6 +429,11 @@ class RunDraw:
     def faults(self) -> list[RotorFault]:
         """Each failed rotor drops from its thrust factor to ``factor * efficiency`` at once."""
         return [RotorFault(r, self.fault_time_s, self.thrust_scale[r - 1] * self.efficiency) for r in self.pattern]
+
+    def told_faults(self) -> list[RotorFault]:
+        """What a controller told of the failure knows: the rotors, the time and the nominal
+        efficiency (not the run's thrust-coefficient error)."""
+        return [RotorFault(r, self.fault_time_s, self.efficiency) for r in self.pattern]
 
     def vehicle_parts(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
         return scaled_parts(v.airframe, v, self)
@@ -441,7 +511,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         key = (cell.vehicle, cell.controller)
         try:
             if entry.told or key not in controllers:
-                controllers[key] = entry.build(v, faults)
+                controllers[key] = entry.build(v, d.told_faults())
         except ValueError as exc:
             # The design refuses this failure (e.g. INDI: the rest cannot carry the weight): a run
             # that does not hold, with the reason.

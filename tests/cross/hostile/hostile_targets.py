@@ -528,6 +528,8 @@ def _targets() -> dict[str, Target]:
     t["failure_samples"] = Target(calls(rf.failure_samples, hostile(st.integers(1, 8), *EDGE_INTS), hostile(st.integers(0, 3), *EDGE_INTS)))
     t["design_search"] = Target(with_airframe(lambda d, f: Call(rf.design_search, (f,), {"parameter": d(st.sampled_from((None, "arm_length_m", "mass_kg", "x", "efficiency_1"))), "values": d(st.one_of(st.none(), vector(2, hostile(positive(0.1, 3.0)))))}, frozenset({"parameter", "values"}))))
     t["certify"] = Target(with_airframe(lambda d, f: Call(studies.certify, (f,), {"max_failed": d(hostile(st.integers(0, 2), *EDGE_INTS))}, frozenset({"max_failed"}))))
+    # Valid calls have no vehicles (a full comparison flies minutes); the refusals name their field.
+    t["certify_against_flights"] = Target(st.tuples(st.sampled_from(([], (), ["ke-quadcopter"], [None], "ke-quadcopter", 3)), hostile(st.integers(1, 2), *EDGE_INTS), st.sampled_from((None, [], ["pid"], ["linear-feedback"], "linear-feedback", 1))).map(lambda a: Call(studies.certify_against_flights, (a[0],), {"max_failed": a[1], "controllers": a[2]}, frozenset({"vehicles", "max_failed", "controllers"}))))
     t["Campaign"] = Target(st.composite(_campaign_call)())
     t["run_campaign"] = Target(st.composite(_run_campaign)(), check_campaign)
     t["tuning_campaign"] = Target(calls(studies.tuning_campaign, runs=hostile(st.integers(1, 5), *EDGE_INTS), seed=hostile(st.integers(0, 9), *EDGE_INTS), duration_s=hostile(number(0.5, 2.0))))
@@ -735,6 +737,7 @@ PRODUCED_BY: dict[str, str] = {
     "ControllabilityReport": "controllability", "EfficiencyScan": "efficiency_scan", "FailureCase": "failure_table",
     "FailureTable": "failure_table", "Scan": "acai_scan", "Design": "design_search", "DesignSearch": "design_search",
     "AcaiBatch": "acai_batch", "AcaiValue": "acai", "Certificate": "certify", "CertificateCase": "certify",
+    "CertifyAgreement": "certify_against_flights",
     "LqrDesign": "lqr_hover", "NcfsynResult": "ncfsyn", "PbhTest": "stabilisability", "CampaignResult": "run_campaign",
     "TuningResult": "tune", "Scenario": "load_scenario", "Estimates": "Sensing", "HoldTuningResult": "tune_hold",
     "RelaxedHoverAnalysis": "relaxed_hover", "RelaxedHoverSolution": "relaxed_hover",

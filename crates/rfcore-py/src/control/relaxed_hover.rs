@@ -6,7 +6,10 @@ use pyo3::prelude::*;
 use rfcore::control::relaxed_hover::{
     RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim,
 };
+use rfcore::control::switch::FailureTimeSwitch;
+use rfcore::control::LinearFeedback;
 
+use super::linear::PyLinearFeedback;
 use crate::convert::{matrix, slice1, to_py_err};
 
 /// The outer position loop (defaults: the core's).
@@ -55,17 +58,19 @@ impl PyRelaxedHoverOuterLoop {
     }
 }
 
-/// `u = u_trim - K x` about a relaxed hover, with the outer loop.
+/// `u = u_trim - K x` about a relaxed hover, with the outer loop; with `before_failure` and
+/// `failure_time_s`, the healthy-vehicle design flies until the failure time (a failure-time switch).
 #[pyclass(name = "RelaxedHoverFeedback", module = "rotorfault._rfcore", frozen)]
 pub struct PyRelaxedHoverFeedback {
     pub(crate) inner: RelaxedHoverFeedback,
+    before_failure: Option<(LinearFeedback, f64)>,
 }
 
 #[pymethods]
 impl PyRelaxedHoverFeedback {
     #[new]
     #[pyo3(signature = (*, axis, e1, e2, body_rate_rad_s, circle_offset_m, circle_velocity_m_s, gravity_m_s2,
-                        u_trim, gain, position_m, outer_loop=None))]
+                        u_trim, gain, position_m, outer_loop=None, before_failure=None, failure_time_s=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         axis: [f64; 3],
@@ -79,6 +84,8 @@ impl PyRelaxedHoverFeedback {
         gain: PyReadonlyArray2<'_, f64>,
         position_m: [f64; 3],
         outer_loop: Option<&PyRelaxedHoverOuterLoop>,
+        before_failure: Option<PyRef<'_, PyLinearFeedback>>,
+        failure_time_s: Option<f64>,
     ) -> PyResult<Self> {
         let trim = RelaxedHoverTrim {
             axis,
@@ -98,12 +105,38 @@ impl PyRelaxedHoverFeedback {
             outer,
         )
         .map_err(to_py_err)?;
-        Ok(PyRelaxedHoverFeedback { inner })
+        let before_failure = match (before_failure, failure_time_s) {
+            (None, None) => None,
+            (Some(h), Some(t)) => {
+                // Built once here so that a bad pair is refused at construction, not per run.
+                FailureTimeSwitch::new(Box::new(h.inner.clone()), Box::new(inner.clone()), t)
+                    .map_err(to_py_err)?;
+                Some((h.inner.clone(), t))
+            }
+            _ => {
+                return Err(to_py_err(rfcore::error::RfError::invalid(
+                    "before_failure, failure_time_s",
+                    "give both (the healthy-vehicle design and when it hands over) or neither",
+                )))
+            }
+        };
+        Ok(PyRelaxedHoverFeedback { inner, before_failure })
+    }
+    /// When the healthy-vehicle design hands over, s (`None`: no switch).
+    #[getter]
+    fn failure_time_s(&self) -> Option<f64> {
+        self.before_failure.as_ref().map(|(_, t)| *t)
     }
 }
 
 impl crate::control::class::ControllerClass for PyRelaxedHoverFeedback {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
-        Ok(Box::new(self.inner.clone()))
+        let relaxed = Box::new(self.inner.clone());
+        match &self.before_failure {
+            None => Ok(relaxed),
+            Some((before, t)) => Ok(Box::new(
+                FailureTimeSwitch::new(Box::new(before.clone()), relaxed, *t).map_err(to_py_err)?,
+            )),
+        }
     }
 }

@@ -15,6 +15,7 @@
 //! - [`lanzon`]: Lanzon et al.'s spinning-quadrotor controller (robust feedback linearisation,
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
 //! - [`relaxed_hover`]: linear feedback about a relaxed hover (Mueller and D'Andrea's cascade).
+//! - [`switch`]: one controller before a known failure time, another after it.
 
 use nalgebra::DMatrix;
 
@@ -29,6 +30,7 @@ pub mod ke;
 pub mod lanzon;
 pub mod linear;
 pub mod relaxed_hover;
+pub mod switch;
 pub mod tracking;
 
 pub use allocated::Allocated;

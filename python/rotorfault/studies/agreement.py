@@ -1,0 +1,323 @@
+"""Does ``certify`` agree with flights? (issue 30). For every single and double rotor failure of a
+vehicle, certify's verdict (static hover, or by spinning: :func:`rotorfault.studies.certify.certify`
+with ``spinning=True``, computed with the vehicle's own rotational damping and rotor lag) beside
+short flights of our controllers through that failure, each judged by the one flight verdict
+(:mod:`rotorfault.flight.outcomes`: ``holds``, ``drifts``, ``circles``, ``crashed``, ``diverged``
+over the last :data:`rotorfault.flight.outcomes.WINDOW_S` seconds, thresholds stated there).
+
+The rule: a case certify calls survivable (it hovers statically, ``hover != "no"``, or the relaxed
+hover found a solution a linear feedback can hold: the complement of
+:meth:`~rotorfault.studies.certify.Certificate.failing_spinning`) must be held by at least one
+controller; a case certified not survivable must be held by none. A case agrees when that holds.
+
+How each case is flown (deterministic, nominal vehicle, no wind): from rest at the set point,
+the rotors of the case fail completely at :data:`FAILURE_TIME_S`, the flight ends
+:data:`AFTER_FAILURE_S` later. Every controller is told the failure (which rotors, when), designed
+on the vehicle it flies:
+
+- ``linear-feedback``: the hover LQR (:func:`rotorfault.control.lqr_hover`) of the failed vehicle
+  (refused where its ACAI is <= 0: static hover with all four axes lost);
+- ``relaxed-hover-feedback``: the healthy vehicle's hover LQR until the failure, then the LQR about
+  the best relaxed hover (the failure-time switch of :class:`rotorfault.control.RelaxedHoverFeedback`);
+  on a vehicle whose healthy hover no LQR holds (``wang-fixed-pitch``: no yaw control even
+  healthy) there is no healthy design and the relaxed hover LQR flies from the start;
+- ``indi-controller``: INDI told of the failed rotors;
+- ``uniform-passive-ftc``: Ke's passive controller with the ``ke-robust`` gains (told nothing);
+- ``lanzon-controller``: Lanzon's design, only on the Lanzon quadrotor with rotor 2 failed.
+
+A controller that refuses the design (``design-refused``) or does not apply (``not-applicable``)
+has not held the case.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+import numpy as np
+
+from .. import _rfcore
+from ..analysis.airframe import Airframe, rotor_labels
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Simulator, State
+from ..flight.outcomes import verdict_of
+from ..flight.scenarios import HOVER_M
+from ..flight.simulator import trim_command
+from .certify import RelaxedHoverVerdict, certify, describe_relaxed_hover
+from .deciding import CampaignVehicle, vehicle
+
+#: When the rotors fail, and how long each flight goes on after that (s); the verdict window is
+#: the last :data:`rotorfault.flight.outcomes.WINDOW_S` (5 s) of the flight.
+FAILURE_TIME_S = 1.0
+AFTER_FAILURE_S = 10.0
+#: Control period and RK4 substeps (the deciding campaign's 400 Hz).
+DT_S = 1.0 / 400.0
+SUBSTEPS = 2
+
+
+@dataclass(frozen=True)
+class CaseFlight:
+    """One controller flown through one case: its ``verdict`` (a flight verdict, or
+    ``design-refused`` / ``not-applicable`` with the reason in ``note``) and the largest horizontal
+    and altitude errors over the verdict window (m; NaN when not flown or lost)."""
+
+    controller: str
+    verdict: str
+    note: str = ""
+    horizontal_error_m: float = math.nan
+    altitude_error_m: float = math.nan
+
+    @property
+    def holds(self) -> bool:
+        return self.verdict == "holds"
+
+
+@dataclass(frozen=True)
+class AgreementCase:
+    """One failure case of one vehicle: certify's static verdict (``hover``) and relaxed hover
+    (``spinning``), whether certify calls it survivable, and every controller's flight."""
+
+    vehicle: str
+    failed: tuple[int, ...]
+    hover: str
+    spinning: RelaxedHoverVerdict
+    flights: tuple[CaseFlight, ...]
+
+    @property
+    def survivable(self) -> bool:
+        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold."""
+        return self.hover != "no" or self.spinning.hover != "no"
+
+    @property
+    def held_by(self) -> tuple[str, ...]:
+        return tuple(f.controller for f in self.flights if f.holds)
+
+    @property
+    def agrees(self) -> bool:
+        return self.survivable == bool(self.held_by)
+
+
+@dataclass(frozen=True)
+class CertifyAgreement:
+    """Every case of :func:`certify_against_flights`, in vehicle and certificate order."""
+
+    cases: tuple[AgreementCase, ...]
+    controllers: tuple[str, ...]
+
+    def disagreements(self) -> list[AgreementCase]:
+        return [c for c in self.cases if not c.agrees]
+
+    def counts(self) -> dict[str, int]:
+        """Cases, how many certify calls survivable, how many of those are held, how many not
+        survivable are held (must be 0), and how many agree."""
+        survivable = [c for c in self.cases if c.survivable]
+        refused = [c for c in self.cases if not c.survivable]
+        return {"cases": len(self.cases), "survivable": len(survivable), "survivable_held": sum(bool(c.held_by) for c in survivable),
+                "not_survivable": len(refused), "not_survivable_held": sum(bool(c.held_by) for c in refused),
+                "agree": sum(c.agrees for c in self.cases)}
+
+    def rows(self) -> list[tuple[str, ...]]:
+        """One row per case: vehicle, failed rotors, certify's static verdict, its relaxed hover,
+        survivable, held by, each controller's verdict (with the window errors), agree."""
+        out = []
+        for c in self.cases:
+            verdicts = {f.controller: f for f in c.flights}
+            cells = []
+            for name in self.controllers:
+                f = verdicts.get(name)
+                if f is None:
+                    cells.append("-")
+                elif math.isfinite(f.horizontal_error_m):
+                    cells.append(f"{f.verdict} ({f.horizontal_error_m:.2f} / {f.altitude_error_m:.2f} m)")
+                else:
+                    cells.append(f.verdict)
+            out.append((c.vehicle, rotor_labels(c.failed), c.hover, describe_relaxed_hover(c.spinning),
+                        "yes" if c.survivable else "no", ", ".join(c.held_by) or "none", *cells, "yes" if c.agrees else "NO"))
+        return out
+
+    def headers(self) -> tuple[str, ...]:
+        return ("vehicle", "failed", "certify: static", "certify: relaxed hover", "survivable", "held by",
+                *(f"{n} (horiz / alt error)" for n in self.controllers), "agree")
+
+    def table(self) -> str:
+        n = self.counts()
+        lines = [
+            f"certify against flights: {n['cases']} cases, {n['agree']} agree; certified survivable {n['survivable']} "
+            f"(held by a controller: {n['survivable_held']}); not survivable {n['not_survivable']} (held: {n['not_survivable_held']})",
+            "| " + " | ".join(self.headers()) + " |",
+            "|" + "---|" * len(self.headers()),
+        ]
+        lines += ["| " + " | ".join(r) + " |" for r in self.rows()]
+        return "\n".join(lines)
+
+
+def px4_vehicle(
+    path: str | PathLike[str], *, inertia_kg_m2: Any = None, rotor_time_constant_s: float = 0.0125,
+    rotational_drag_n_m_s: float = 2.8e-3, linear_drag_n_s_m: float = 0.3, name: str | None = None,
+) -> CampaignVehicle:
+    """A vehicle imported from a PX4 parameter file (:meth:`rotorfault.Airframe.from_px4_params`;
+    PX4 keeps no inertia, rotor lag or drag: ``inertia_kg_m2`` (kg m^2, default the importer's
+    placeholder), the rotor time constant (s; default the Gazebo x500's), rotational damping
+    (N m s) and translational drag (N s/m; default the small multirotor's of the ``ke-hil`` preset))."""
+    airframe = Airframe.from_px4_params(path, inertia_kg_m2=inertia_kg_m2, name=name)
+    return CampaignVehicle(airframe.name, airframe, rotor_time_constant_s, rotational_drag_n_m_s, linear_drag_n_s_m)
+
+
+def preset_vehicles() -> list[CampaignVehicle]:
+    """Every shipped airframe preset flown as the deciding campaign flies its vehicles (the
+    ``ke-hil`` preset's rotor lag and drags where a preset has none of its own), and the PX4 x500
+    imported from its parameters."""
+    names = [*Airframe.presets(), "px4-x500"]
+    return [vehicle(n) if n in ("ke-quadcopter", "px4-x500") else _ke_like(n) for n in names]
+
+
+def _ke_like(name: str) -> CampaignVehicle:
+    v = vehicle("ke-quadcopter")
+    return CampaignVehicle(name, Airframe.preset(name), v.rotor_time_constant_s, v.rotational_drag_n_m_s, v.linear_drag_n_s_m)
+
+
+def _drag(v: CampaignVehicle) -> Drag:
+    return Drag(rotational_n_m_s=v.rotational_drag_n_m_s, linear_n_s_m=v.linear_drag_n_s_m)
+
+
+def _actuator(v: CampaignVehicle) -> FixedPitchActuator:
+    return FixedPitchActuator(time_constant_s=v.rotor_time_constant_s)
+
+
+def _simulator(v: CampaignVehicle, airframe: Airframe) -> Simulator:
+    return Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=_drag(v), actuator=_actuator(v))
+
+
+def _lqr(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+    from ..control.lqr import lqr_hover
+
+    return lqr_hover(_simulator(v, v.airframe.with_failed_rotors(failed)), position=HOVER_M)
+
+
+def _relaxed(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+    from ..analysis.relaxed_hover import relaxed_hover
+    from ..control.lqr import lqr_hover
+    from ..control.relaxed_hover import RelaxedHoverFeedback
+
+    airframe = v.airframe.with_failed_rotors(failed)
+    best = relaxed_hover(airframe, drag=_drag(v), actuator=_actuator(v)).best
+    if best is None:
+        raise ValueError("no relaxed hover a linear feedback can hold")
+    try:
+        healthy = lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
+    except ValueError:  # no healthy-vehicle design (module notes)
+        return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m)
+    return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
+                                before_failure=healthy, failure_time_s=FAILURE_TIME_S)
+
+
+def _indi(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+    from ..control import IndiController
+
+    return IndiController(v.airframe, failures=[RotorFault(r, FAILURE_TIME_S, 0.0) for r in failed], position=HOVER_M)
+
+
+def _ke_robust(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+    from ..control.ke import UniformPassiveFtc, preset
+
+    return UniformPassiveFtc(v.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
+
+
+def _lanzon(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+    from .deciding import CONTROLLERS
+
+    if v.name != "lanzon-quadrotor" or failed != (2,):
+        raise LookupError("Lanzon's design: the Lanzon quadrotor with rotor 2 failed only")
+    return CONTROLLERS["lanzon-controller"].build(v, [])
+
+
+#: The controllers flown through every case (registry names), each built for the case's failure.
+CONTROLLERS: dict[str, Callable[[CampaignVehicle, tuple[int, ...]], Any]] = {
+    "linear-feedback": _lqr,
+    "relaxed-hover-feedback": _relaxed,
+    "indi-controller": _indi,
+    "uniform-passive-ftc": _ke_robust,
+    "lanzon-controller": _lanzon,
+}
+
+
+def certify_against_flights(
+    vehicles: Sequence[CampaignVehicle] | None = None, *, max_failed: int = 2, controllers: Sequence[str] | None = None,
+) -> CertifyAgreement:
+    """Certify's verdict on every failure of 1 to ``max_failed`` rotors of each vehicle (default
+    :func:`preset_vehicles`) beside a flight of each controller (default every entry of
+    :data:`CONTROLLERS`) through it (module notes); all flights in one Rust batch."""
+    if vehicles is not None and not isinstance(vehicles, (list, tuple)):
+        raise TypeError(f"vehicles: expected a list of rotorfault.studies.deciding.CampaignVehicle, got {type(vehicles).__name__}")
+    if controllers is not None and not isinstance(controllers, (list, tuple)):
+        raise TypeError(f"controllers: expected a list of controller names, got {type(controllers).__name__}")
+    vehicles = preset_vehicles() if vehicles is None else list(vehicles)
+    for i, v in enumerate(vehicles):
+        if not isinstance(v, CampaignVehicle):
+            raise TypeError(f"vehicles[{i}]: expected rotorfault.studies.deciding.CampaignVehicle, got {type(v).__name__}")
+    if isinstance(max_failed, bool) or not isinstance(max_failed, int):
+        raise TypeError(f"max_failed: expected an integer, got {type(max_failed).__name__}")
+    if not 1 <= max_failed <= 2:
+        raise ValueError(f"max_failed: must be 1 or 2 (single and double failures), got {max_failed!r}")
+    names = tuple(CONTROLLERS) if controllers is None else tuple(controllers)
+    for n in names:
+        if n not in CONTROLLERS:
+            raise ValueError(f"controllers: {n!r} is not one of {', '.join(CONTROLLERS)}")
+    pending: list[tuple[int, str, Any, Any]] = []  # (case index, controller, batch entry, controller object)
+    partial: list[tuple[CampaignVehicle, Any, dict[str, CaseFlight]]] = []
+    for v in vehicles:
+        cert = certify(v.airframe, max_failed=max_failed, spinning=True, drag=_drag(v), actuator=_actuator(v))
+        for case in cert.cases:
+            if not case.failed:
+                continue
+            assert case.relaxed_hover is not None  # spinning=True
+            flights: dict[str, CaseFlight] = {}
+            for name in names:
+                try:
+                    controller = CONTROLLERS[name](v, case.failed)
+                except LookupError as exc:
+                    flights[name] = CaseFlight(name, "not-applicable", str(exc))
+                    continue
+                except ValueError as exc:
+                    flights[name] = CaseFlight(name, "design-refused", str(exc).split("\n")[0][:200])
+                    continue
+                pending.append((len(partial), name, v, controller))
+            partial.append((v, case, flights))
+    _fly(pending, partial)
+    cases = tuple(
+        AgreementCase(v.name, case.failed, case.hover, case.relaxed_hover, tuple(flights[n] for n in names if n in flights))
+        for v, case, flights in partial
+    )
+    return CertifyAgreement(cases, names)
+
+
+def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignVehicle, Any, dict[str, CaseFlight]]]) -> None:
+    if not pending:
+        return
+    limits = DivergenceLimits()
+    duration = FAILURE_TIME_S + AFTER_FAILURE_S
+    args: list[list[Any]] = [[] for _ in range(8)]
+    for index, _name, v, controller in pending:
+        failed = partial[index][1].failed
+        trim = trim_command(controller)
+        config = _rfcore.SimulationConfig(dt_s=DT_S, substeps=SUBSTEPS, duration_s=duration, limits=limits, wind_m_s=(0.0, 0.0, 0.0))
+        for k, value in enumerate((
+            v.airframe._core, _actuator(v)._core(), _drag(v), controller.core(DT_S), State(position=HOVER_M)._packed(),
+            [RotorFault(r, FAILURE_TIME_S, 0.0)._packed() for r in failed], None if trim is None else [float(u) for u in trim], config,
+        )):
+            args[k].append(value)
+    batch = _rfcore.simulate_summaries(args[0], args[1], args[2], args[3], args[4], args[5], args[6], args[7],
+                                       [HOVER_M] * len(pending), _rfcore.VerdictCriteria())
+    horizontal = np.asarray(batch.window_horizontal_error_m)
+    altitude = np.asarray(batch.window_altitude_error_m)
+    for j, (index, name, _v, _c) in enumerate(pending):
+        verdict = verdict_of(batch.outcome[j])
+        lost = verdict in ("crashed", "diverged")
+        partial[index][2][name] = CaseFlight(name, verdict, "" if not lost else f"lost at {float(batch.lost_at_s[j]):.2f} s",
+                                             math.nan if lost else float(horizontal[j]), math.nan if lost else float(altitude[j]))
+
+
+__all__ = ["AFTER_FAILURE_S", "CONTROLLERS", "FAILURE_TIME_S", "AgreementCase", "CaseFlight", "CertifyAgreement",
+           "certify_against_flights", "preset_vehicles", "px4_vehicle"]

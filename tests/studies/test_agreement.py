@@ -1,0 +1,104 @@
+"""certify against flights (issue 30): every single and double failure of Ke's quadcopter and of
+the PX4 quadrotor imported from its parameters, certify's verdict beside a flight of each of our
+controllers (:mod:`rotorfault.studies.agreement`: the failure at 1 s, 10 s after it, verdicts
+from the last 5 s: holds within 2 m horizontally, 1 m in altitude, 0.5 m/s). Where certify says
+survivable some controller holds; where it says not, none does."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rotorfault as rf
+from rotorfault.studies import deciding as D
+from rotorfault.studies.agreement import CONTROLLERS, CertifyAgreement, certify_against_flights, px4_vehicle
+
+DATA = Path(__file__).parents[1] / "data"
+
+
+@pytest.fixture(scope="module")
+def agreement() -> CertifyAgreement:
+    return certify_against_flights([D.vehicle("ke-quadcopter"), px4_vehicle(DATA / "px4-quad-x.params")])
+
+
+def test_no_case_certified_not_survivable_is_held(agreement: CertifyAgreement) -> None:
+    # 4 single and 6 double failures per quadrotor.
+    assert [len(c.failed) for c in agreement.cases].count(1) == 8 and len(agreement.cases) == 20
+    n = agreement.counts()
+    assert n["not_survivable_held"] == 0, agreement.table()
+    # Both answers occur: the comparison is not vacuous.
+    assert 0 < n["survivable"] < n["cases"], agreement.table()
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "Ke's quadcopter without two adjacent rotors (1-2, 1-4, 2-3, 3-4): certify finds a relaxed hover (20.06 rad/s on the "
+    "remaining pair, its up axis 25 degrees off body z) that the relaxed hover LQR holds from the periodic solution (the "
+    "test below), but no controller of ours captures it from hover after the failure: the LQR flips the vehicle (tilt "
+    "event within 0.2 s), INDI refuses the design, Ke's controller diverges"))
+def test_every_case_certified_survivable_is_held(agreement: CertifyAgreement) -> None:
+    n = agreement.counts()
+    assert n["survivable_held"] == n["survivable"], agreement.table()
+
+
+def test_each_disagreement_is_a_capture_certify_does_not_promise(agreement: CertifyAgreement) -> None:
+    """Where certify says survivable and no controller holds it, certify's relaxed hover is right:
+    the relaxed hover LQR started on the periodic solution holds it for 10 s, the circle's centre
+    within 0.1 m horizontally and 0.02 m in altitude of the set point over the last 5 s."""
+    from rotorfault.analysis.relaxed_hover import circle_offsets
+    from rotorfault.control.relaxed_hover import RelaxedHoverFeedback
+    from rotorfault.studies.agreement import _actuator, _drag, _simulator
+
+    vehicles = {"ke-quadcopter": D.vehicle("ke-quadcopter")}
+    disagreements = agreement.disagreements()
+    assert disagreements and all(c.survivable and c.vehicle in vehicles for c in disagreements)
+    for case in disagreements:
+        v = vehicles[case.vehicle]
+        airframe = v.airframe.with_failed_rotors(case.failed)
+        best = rf.relaxed_hover(airframe, drag=_drag(v), actuator=_actuator(v)).best
+        assert best is not None and best.spin_rate_rad_s == pytest.approx(case.spinning.spin_rate_rad_s)
+        controller = RelaxedHoverFeedback(best, airframe, position=(0, 0, -10), linear_drag_n_s_m=v.linear_drag_n_s_m)
+        start = rf.periodic_state(best, airframe, position=(0, 0, -10), linear_drag_n_s_m=v.linear_drag_n_s_m)
+        trajectory = _simulator(v, airframe).run(start, 10.0, controller=controller)
+        assert not trajectory.events, (case.failed, trajectory.events)
+        offset = circle_offsets(best, airframe, linear_drag_n_s_m=v.linear_drag_n_s_m).position_m
+        centre = trajectory.position - np.einsum("nij,j->ni", trajectory.rotation, offset)
+        error = centre[trajectory.t >= 5.0] - np.array([0, 0, -10.0])
+        assert np.max(np.hypot(error[:, 0], error[:, 1])) <= 0.1 and np.max(np.abs(error[:, 2])) <= 0.02, case.failed
+
+
+def test_every_controller_flew_or_says_why(agreement: CertifyAgreement) -> None:
+    for case in agreement.cases:
+        assert [f.controller for f in case.flights] == list(CONTROLLERS)
+        for f in case.flights:
+            assert f.verdict in ("holds", "drifts", "circles", "crashed", "diverged", "design-refused", "not-applicable")
+            assert f.note or f.verdict not in ("design-refused", "not-applicable", "crashed", "diverged")
+            if f.holds:
+                assert f.horizontal_error_m <= 2.0 and f.altitude_error_m <= 1.0
+
+
+def test_the_comparison_can_fail(agreement: CertifyAgreement) -> None:
+    """Without the controllers that fly a spinning vehicle (only the hover LQR, which refuses a
+    quadrotor without a rotor), every survivable-by-spinning case disagrees."""
+    only_lqr = [dataclasses.replace(c, flights=tuple(f for f in c.flights if f.controller == "linear-feedback"))
+                for c in agreement.cases]
+    spinning = [c for c in only_lqr if c.hover == "no" and c.spinning.hover == "spinning"]
+    assert spinning and all(not c.agrees for c in spinning)
+
+
+def test_the_table_shows_each_case(agreement: CertifyAgreement) -> None:
+    table = agreement.table()
+    assert table.count("\n| ke-quadcopter |") == 10 and table.count("\n| px4-quad-x |") == 10
+    assert all(len(r) == len(agreement.headers()) for r in agreement.rows())
+
+
+def test_bad_input_is_refused_by_field() -> None:
+    with pytest.raises(ValueError, match="max_failed"):
+        certify_against_flights([], max_failed=3)
+    with pytest.raises(ValueError, match="controllers"):
+        certify_against_flights([], controllers=["pid"])
+    with pytest.raises(TypeError, match=r"vehicles\[0\]"):
+        certify_against_flights(["ke-quadcopter"])  # type: ignore[list-item]
+    assert certify_against_flights([]).cases == ()
