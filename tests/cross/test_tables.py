@@ -208,6 +208,14 @@ def test_a_sensed_flight_keeps_the_estimate_beside_the_truth(tmp_path: Path) -> 
     back = pq.read_table(path)
     assert back.schema.equals(table.schema, check_metadata=True)
     assert back.equals(table)
+    # A batch flown on sensing stacks each run's estimate columns with its run number.
+    sim = rf.Simulator(QUAD, sensing=rf.Sensing(seed=1))
+    lqr = rf.lqr_hover(rf.Simulator(QUAD), position=(0, 0, -10))
+    batch = rf.simulate_batch(sim, [rf.State(position=(0.1 * i, 0, -10)) for i in range(2)], 0.2, controllers=lqr, record_every=10)
+    stacked = batch.to_arrow()
+    for k, one in enumerate(batch.trajectories):
+        mine = stacked.filter(pa.compute.equal(stacked.column("run"), k)).drop(["run"])
+        assert "estimate_north_m" in mine.column_names and mine.equals(one.to_arrow().replace_schema_metadata(None))
     plain = _flight().to_arrow()
     assert not any(c.startswith("estimate_") or c.endswith("_saturated") for c in plain.column_names)
     assert json.loads(plain.schema.metadata[b"rotorfault"])["sensed"] == "paper-noise"
