@@ -5,6 +5,7 @@ everything else works."""
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Callable
@@ -16,6 +17,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault._util.tables import HTML_ROWS, Records, Tabular
+from rotorfault.flight.trajectory import ERROR_STATE_COLUMNS, STATE_COLUMNS
 from rotorfault.papers import _numbers, du, ke as ke_paper, lanzon as lanzon_paper, wang
 from rotorfault.studies import Campaign, read_campaign, run_campaign
 from rotorfault.studies.certify import certify
@@ -35,6 +37,13 @@ def _flight() -> rf.Trajectory:
     sim = rf.Simulator(QUAD, noise=rf.Noise(snr_db=30.0, seed=1))
     lqr = rf.lqr_hover(sim, position=(0, 0, -10))
     return sim.run(rf.State(position=(0, 0, -10)), 2.0, controller=lqr, faults=[rf.RotorFault(1, 1.0)])
+
+
+def _sensed_flight() -> rf.Trajectory:
+    """The hover LQR on motion capture losing rotor 1: the estimate beside the truth."""
+    sim = rf.Simulator(QUAD, sensing=rf.Sensing(seed=3))
+    lqr = rf.lqr_hover(rf.Simulator(QUAD), position=(0, 0, -10))
+    return sim.run(rf.State(position=(0, 0, -10)), 0.5, controller=lqr, faults=[rf.RotorFault(1, 0.25)])
 
 
 def _ke_rows() -> Any:
@@ -63,6 +72,10 @@ RESULTS: dict[str, tuple[Callable[[], Tabular], int, tuple[str, ...]]] = {
                                        ("arm_length_m", "rank")),
     "trajectory": (_flight, 801, ("t_s", "north_m", "yaw_rate_rad_s", "rotor_1_command_n", "rotor_4_thrust_n", "rotor_1_efficiency",
                                   "measured_down_m")),
+    "sensed trajectory": (_sensed_flight, 201, ("t_s", "north_m", "estimate_north_m", "estimate_yaw_rate_rad_s",
+                                                "estimate_quaternion_w", "estimate_std_down_m",
+                                                "estimate_std_attitude_down_rad", "estimate_std_accel_bias_down_m_s2",
+                                                "gyro_saturated", "accel_saturated")),
     "allocation batch": (lambda: rf.allocate(rf.Airframe.preset("ke-quadcopter"), [[7.0, 0, 0, 0], [40.0, 0, 0, 1.0]]), 2,
                          ("virtual_control_1", "achieved_4", "rotor_1_command", "status", "stationarity")),
     "Ke report rows": (_ke_rows, 1, ("scenario", "outcome", "r_rad_s", "max_altitude_loss_m")),
@@ -165,6 +178,47 @@ def test_a_batch_is_every_runs_trajectory_with_its_run_number() -> None:
         mine = table.filter(pa.compute.equal(table.column("run"), k))
         assert mine.drop(["run"]).equals(run.to_arrow().replace_schema_metadata(None))
     assert table.num_rows == sum(len(run.t) for run in batch.trajectories)
+
+
+def test_a_sensed_flight_keeps_the_estimate_beside_the_truth(tmp_path: Path) -> None:
+    """Every estimate column is the recorded estimate (the same numbers as ``Trajectory.estimate``),
+    the flags are booleans, the metadata says what the controller flew on with the run's counts,
+    and a Parquet file of it reads back with that schema; a run on the truth has no estimate
+    columns."""
+    run = _sensed_flight()
+    e = run.estimate
+    assert e is not None
+    table = run.to_arrow()
+    estimated = np.column_stack([table.column(f"estimate_{name}").to_numpy() for name in STATE_COLUMNS])
+    np.testing.assert_array_equal(estimated, e.vector)
+    truth = np.column_stack([table.column(name).to_numpy() for name in STATE_COLUMNS])
+    np.testing.assert_array_equal(truth, np.hstack([run.position, run.velocity, run.euler, run.omega]))
+    np.testing.assert_array_equal(np.column_stack([table.column(f"estimate_quaternion_{c}").to_numpy() for c in "wxyz"]),
+                                  e.quaternion)
+    np.testing.assert_array_equal(np.column_stack([table.column(f"estimate_std_{name}").to_numpy()
+                                                   for name in ERROR_STATE_COLUMNS]), e.std)
+    assert table.schema.field("gyro_saturated").type == pa.bool_()
+    np.testing.assert_array_equal(table.column("accel_saturated").to_numpy(zero_copy_only=False), e.accel_saturated)
+    meta = json.loads(table.schema.metadata[b"rotorfault"])
+    assert meta["sensed"] == "mocap"
+    assert meta["sensing_counts"]["imu_samples"] == e.counts.imu_samples == 0.5 * 500 + 1
+    assert meta["sensing_counts"]["fused_measurements"] == e.counts.fused_measurements > 0
+    path = tmp_path / "sensed.parquet"
+    pq.write_table(table, path)
+    back = pq.read_table(path)
+    assert back.schema.equals(table.schema, check_metadata=True)
+    assert back.equals(table)
+    # A batch flown on sensing stacks each run's estimate columns with its run number.
+    sim = rf.Simulator(QUAD, sensing=rf.Sensing(seed=1))
+    lqr = rf.lqr_hover(rf.Simulator(QUAD), position=(0, 0, -10))
+    batch = rf.simulate_batch(sim, [rf.State(position=(0.1 * i, 0, -10)) for i in range(2)], 0.2, controllers=lqr, record_every=10)
+    stacked = batch.to_arrow()
+    for k, one in enumerate(batch.trajectories):
+        mine = stacked.filter(pa.compute.equal(stacked.column("run"), k)).drop(["run"])
+        assert "estimate_north_m" in mine.column_names and mine.equals(one.to_arrow().replace_schema_metadata(None))
+    plain = _flight().to_arrow()
+    assert not any(c.startswith("estimate_") or c.endswith("_saturated") for c in plain.column_names)
+    assert json.loads(plain.schema.metadata[b"rotorfault"])["sensed"] == "paper-noise"
 
 
 def test_a_variable_pitch_flight_names_speed_and_pitch_commands() -> None:

@@ -31,6 +31,18 @@ STATE_COLUMNS: tuple[str, ...] = (
 )
 
 
+#: The filter's 15-element error state as table columns (its one-sigma ``Estimates.std`` in
+#: :meth:`Trajectory.to_arrow`, each prefixed ``estimate_std_``): position and velocity (NED), the
+#: attitude error and the gyro and accelerometer biases (body axes FRD: forward, right, down).
+ERROR_STATE_COLUMNS: tuple[str, ...] = (
+    "north_m", "east_m", "down_m",
+    "velocity_north_m_s", "velocity_east_m_s", "velocity_down_m_s",
+    "attitude_forward_rad", "attitude_right_rad", "attitude_down_rad",
+    "gyro_bias_forward_rad_s", "gyro_bias_right_rad_s", "gyro_bias_down_rad_s",
+    "accel_bias_forward_m_s2", "accel_bias_right_m_s2", "accel_bias_down_m_s2",
+)
+
+
 def command_columns(command_count: int, rotor_count: int) -> list[str]:
     """Names of the command channels: ``rotor_<i>_command_n`` (fixed pitch, one thrust per rotor)
     or ``rotor_<i>_speed_command`` and ``rotor_<i>_pitch_command_rad`` (variable pitch, interleaved;
@@ -134,8 +146,11 @@ class Trajectory(Tabular):
 
     ``to_arrow()`` / ``to_pandas()``: one row per recorded step (``t_s``, the 12 states of
     :data:`STATE_COLUMNS`, the quaternion, the primary axis, each rotor's command, thrust and
-    efficiency, and the measured states ``measured_<state>`` when the run had sensor noise); the
-    events and faults are in the schema's metadata.
+    efficiency, and the measured states ``measured_<state>`` when the run had sensor noise; with
+    sensing the estimate beside the truth: ``estimate_<state>``, ``estimate_quaternion_<wxyz>``,
+    the filter's one sigma ``estimate_std_<error state>`` of :data:`ERROR_STATE_COLUMNS` and the
+    ``gyro_saturated`` / ``accel_saturated`` flags); what the controller flew on (``sensed``), the
+    sensing counts, the events and faults are in the schema's metadata.
 
     Examples:
 
@@ -232,6 +247,13 @@ class Trajectory(Tabular):
         columns += [(f"rotor_{k + 1}_efficiency", "float64", self.efficiency[:, k]) for k in range(m)]
         if self.recorded_measurements.shape[1] > 0:
             columns += [(f"measured_{name}", "float64", self.recorded_measurements[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+        if self.estimate is not None:
+            e = self.estimate
+            estimated = e.vector
+            columns += [(f"estimate_{name}", "float64", estimated[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+            columns += [(f"estimate_quaternion_{c}", "float64", e.quaternion[:, k]) for k, c in enumerate("wxyz")]
+            columns += [(f"estimate_std_{name}", "float64", e.std[:, k]) for k, name in enumerate(ERROR_STATE_COLUMNS)]
+            columns += [("gyro_saturated", "bool", e.gyro_saturated), ("accel_saturated", "bool", e.accel_saturated)]
         return columns
 
     def _table_title(self) -> str:
@@ -239,8 +261,18 @@ class Trajectory(Tabular):
         return f"trajectory: {len(self.t)} steps to {self.t[-1]:g} s, {end}"
 
     def _table_metadata(self) -> dict[str, Any]:
+        sensing = {}
+        if self.estimate is not None:
+            c = self.estimate.counts
+            sensing = {"sensing_counts": {
+                "imu_samples": c.imu_samples, "gyro_saturated_samples": c.gyro_saturated_samples,
+                "accel_saturated_samples": c.accel_saturated_samples, "fused_measurements": c.fused_measurements,
+                "rejected_measurements": c.rejected_measurements, "late_measurements": c.late_measurements,
+            }}
         return {
             "kind": "trajectory",
+            "sensed": self.sensed,
+            **sensing,
             "events": [{"kind": e.kind, "time_s": e.time, "description": e.description} for e in self.events],
             "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in self.faults],
         }
@@ -361,4 +393,4 @@ class BatchResult(Tabular):
         return f"batch: {len(self.trajectories)} runs, {int(np.sum(self.diverged))} diverged"
 
 
-__all__ = ["STATE_COLUMNS", "BatchResult", "Estimates", "Event", "Trajectory", "command_columns"]
+__all__ = ["ERROR_STATE_COLUMNS", "STATE_COLUMNS", "BatchResult", "Estimates", "Event", "Trajectory", "command_columns"]
