@@ -15,8 +15,11 @@ beyond it so bounds are active). Timed with ``time.perf_counter`` over many call
     batch binding and its arrays), what every call paid before the single-vector binding (which
     also rebuilt the solver per call: issue 15 measured 9 us and 25 us for (a) and (b) then).
 
-Also printed: the solve alone (timed inside Rust, no Python call), so the call overhead is
-(a) minus it. Targets (issue 15): (a) <= 3 us, (b) <= 6 us.
+Also printed: the solve alone (``ActiveSetSolver::solve_unchecked`` with its certificate, timed
+inside Rust: no Python call, best of 7 runs like the others), so the call overhead is (a) minus
+it, and the ratios (a) / solve and (a') / solve, (a') being (a) with its commands read
+(``Allocator.allocate(u).commands``: the fields are made when read). Targets: (a) <= 3 us, (b) <=
+6 us (issue 15); (a) <= 3x the Rust solve (issue 32).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from _timing import time_per_solve
 WEIGHTS = [1.0, 20.0, 20.0, 0.01]
 TARGET_ALLOCATOR_S = 3e-6
 TARGET_ONE_LINE_S = 6e-6
+TARGET_OVER_RUST = 3.0
 
 
 def per_call(fn: Callable[[], Any], calls: int, runs: int = 7) -> float:
@@ -74,8 +78,9 @@ def main() -> None:
     }
     print(f"\nper call, best of 7 runs (us); ke-quadcopter, W = diag({', '.join(map(str, WEIGHTS))})")
     header = (
-        f"{'virtual control':<16} {'solve (Rust)':>12} {'Allocator':>10} {'rf.allocate':>12} {'(default w)':>12} "
-        f"{'general path':>13} {'clarabel Py':>12} {'Py/Allocator':>13} {'Py/rf.allocate':>15}"
+        f"{'virtual control':<16} {'solve (Rust)':>12} {'Allocator':>10} {'+.commands':>11} {'rf.allocate':>12} "
+        f"{'(default w)':>12} {'general path':>13} {'clarabel Py':>12} {'Allocator/Rust':>15} {'+.commands/Rust':>16} "
+        f"{'Py/Allocator':>13}"
     )
     print(header)
     print("-" * len(header))
@@ -86,20 +91,24 @@ def main() -> None:
         f_exact, _ = allocator.objective(u, exact.commands)
         f_ref, _ = allocator.objective(u, reference)
         assert exact.status == "optimal" and f_exact <= f_ref + 1e-12 * max(f_ref, 1.0), (label, f_exact, f_ref)
-        solve = float(np.median(time_per_solve(allocator, [u], repeats=20_000)))
-        a = per_call(lambda: allocator.allocate(u), 20_000)
+        # The Rust solve and the Python call, interleaved run by run (the machine is shared).
+        solve = a = a_read = float("inf")
+        for _ in range(7):
+            solve = min(solve, float(time_per_solve(allocator, [u], repeats=20_000)[0]))
+            a = min(a, per_call(lambda: allocator.allocate(u), 20_000, runs=1))
+            a_read = min(a_read, per_call(lambda: allocator.allocate(u).commands, 20_000, runs=1))
         b = per_call(lambda: rf.allocate(frame, u, weights=WEIGHTS), 10_000)
         c = per_call(lambda: rf.allocate(frame, u), 10_000)
         e = per_call(lambda: allocator.allocate([u]), 10_000)
         d = per_call(lambda: python_clarabel(allocator.matrix, w, allocator.lower, allocator.upper, np.asarray(u)), 300)
         print(
-            f"{label:<16} {solve * 1e6:>12.2f} {a * 1e6:>10.2f} {b * 1e6:>12.2f} {c * 1e6:>12.2f} "
-            f"{e * 1e6:>13.2f} {d * 1e6:>12.1f} {d / a:>12.0f}x {d / b:>14.0f}x"
+            f"{label:<16} {solve * 1e6:>12.2f} {a * 1e6:>10.2f} {a_read * 1e6:>11.2f} {b * 1e6:>12.2f} {c * 1e6:>12.2f} "
+            f"{e * 1e6:>13.2f} {d * 1e6:>12.1f} {a / solve:>14.2f}x {a_read / solve:>15.2f}x {d / a:>12.0f}x"
         )
-        ok &= a <= TARGET_ALLOCATOR_S and b <= TARGET_ONE_LINE_S
+        ok &= a <= TARGET_ALLOCATOR_S and b <= TARGET_ONE_LINE_S and a / solve <= TARGET_OVER_RUST
     print(
-        f"\ntargets: Allocator.allocate <= {TARGET_ALLOCATOR_S * 1e6:.0f} us, rf.allocate(airframe) <= "
-        f"{TARGET_ONE_LINE_S * 1e6:.0f} us per call: " + ("met" if ok else "NOT met")
+        f"\ntargets: Allocator.allocate <= {TARGET_ALLOCATOR_S * 1e6:.0f} us and <= {TARGET_OVER_RUST:.0f}x the Rust solve, "
+        f"rf.allocate(airframe) <= {TARGET_ONE_LINE_S * 1e6:.0f} us per call: " + ("met" if ok else "NOT met")
     )
 
 

@@ -9,14 +9,14 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyFloat, PyList, PyTuple};
 
-use rfcore::allocation::active_set::{ActiveSetSettings, ActiveSetSolver};
+use rfcore::allocation::active_set::{ActiveSet, ActiveSetSettings, ActiveSetSolver, SolveReport};
 use rfcore::allocation::clarabel::{
     hover_thrust_margin as core_hover_margin, max_along_direction as core_max_along,
     ClarabelSettings,
 };
 use rfcore::allocation::{
-    allocate_all, allocate_many, fallback_count, Allocation, AllocationProblem,
-    Certificate, Method,
+    allocate_all, allocate_many, fallback_count, Allocation, AllocationProblem, Certificate,
+    Method, SolvedBy, MAX_ACTUATORS, MAX_VIRTUAL,
 };
 use rfcore::analysis::ControlAxes;
 use rfcore::error::RfError;
@@ -178,79 +178,95 @@ pub struct PyAllocationProblem {
     settings: PyAllocationSettings,
 }
 
-/// One allocation of one virtual control (the fast path of `Allocator.allocate`).
+/// One allocation of one virtual control (the fast path of `Allocator.allocate`): the solver's
+/// report and fixed-size arrays, no heap allocation; the NumPy arrays are made by the getters,
+/// when read.
 #[pyclass(name = "SingleAllocation", module = "rotorfault._rfcore", frozen)]
 pub struct PySingleAllocation {
-    result: Allocation,
-    virtual_control: Vec<f64>,
+    actuators: usize,
+    axes: usize,
+    commands: [f64; MAX_ACTUATORS],
+    achieved: [f64; MAX_VIRTUAL],
+    virtual_control: [f64; MAX_VIRTUAL],
+    report: SolveReport,
 }
 
 #[pymethods]
 impl PySingleAllocation {
     #[getter]
     fn commands<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.result.commands)
+        PyArray1::from_slice(py, &self.commands[..self.actuators])
     }
     #[getter]
     fn achieved<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.result.achieved)
+        PyArray1::from_slice(py, &self.achieved[..self.axes])
     }
     #[getter]
     fn virtual_control<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.virtual_control)
+        PyArray1::from_slice(py, &self.virtual_control[..self.axes])
     }
     #[getter]
     fn status(&self) -> &'static str {
-        self.result.status.name()
+        self.report.status.name()
     }
     #[getter]
     fn iterations(&self) -> usize {
-        self.result.iterations
+        self.report.iterations
     }
     #[getter]
     fn certificate(&self) -> PyCertificate {
-        self.result.certificate.into()
+        self.report.certificate.into()
     }
     #[getter]
     fn solved_by(&self) -> &'static str {
-        self.result.solved_by.name()
+        self.report.solved_by.name()
+    }
+    /// 1 when the Clarabel fallback produced the commands, else 0.
+    #[getter]
+    fn fallbacks(&self) -> usize {
+        usize::from(self.report.solved_by == SolvedBy::Clarabel)
     }
 }
 
-/// `value` as n floats without conversion: a C-contiguous 1-D float64 array or a list/tuple of
-/// Python floats, with n entries; anything else None (the caller's general path converts and
-/// names the type or shape error).
-fn exact_floats(value: &Bound<'_, PyAny>, n: usize) -> PyResult<Option<Vec<f64>>> {
+/// `value` as n floats without conversion, into `out`: a C-contiguous 1-D float64 array or a
+/// list/tuple of Python floats, with n entries (n <= `out.len()`); false for anything else (the
+/// caller's general path converts and names the type or shape error).
+fn exact_floats(value: &Bound<'_, PyAny>, out: &mut [f64]) -> bool {
+    let n = out.len();
     if let Ok(array) = value.cast::<PyArray1<f64>>() {
         let Ok(view) = array.try_readonly() else {
-            return Ok(None);
+            return false;
         };
-        return Ok(match view.as_slice() {
-            Ok(s) if s.len() == n => Some(s.to_vec()),
-            _ => None,
-        });
+        return match view.as_slice() {
+            Ok(s) if s.len() == n => {
+                out.copy_from_slice(s);
+                true
+            }
+            _ => false,
+        };
     }
-    let items = if let Ok(list) = value.cast::<PyList>() {
-        if list.len() != n {
-            return Ok(None);
+    let from = |item: Bound<'_, PyAny>, slot: &mut f64| match item.cast_exact::<PyFloat>() {
+        Ok(f) => {
+            *slot = f.value();
+            true
         }
-        list.iter().collect::<Vec<_>>()
-    } else if let Ok(tuple) = value.cast::<PyTuple>() {
-        if tuple.len() != n {
-            return Ok(None);
-        }
-        tuple.iter().collect::<Vec<_>>()
-    } else {
-        return Ok(None);
+        Err(_) => false,
     };
-    let mut out = Vec::with_capacity(n);
-    for item in items {
-        match item.cast_exact::<PyFloat>() {
-            Ok(f) => out.push(f.value()),
-            Err(_) => return Ok(None),
-        }
+    if let Ok(list) = value.cast::<PyList>() {
+        list.len() == n
+            && list
+                .iter()
+                .zip(out.iter_mut())
+                .all(|(x, slot)| from(x, slot))
+    } else if let Ok(tuple) = value.cast::<PyTuple>() {
+        tuple.len() == n
+            && tuple
+                .iter()
+                .zip(out.iter_mut())
+                .all(|(x, slot)| from(x, slot))
+    } else {
+        false
     }
-    Ok(Some(out))
 }
 
 #[pymethods]
@@ -289,19 +305,34 @@ impl PyAllocationProblem {
     }
 
     /// The active-set allocation of one virtual control given as exactly n floats (see
-    /// `exact_floats`); None for anything else, so the caller converts it. Values are checked
-    /// by the core (finite entries).
+    /// `exact_floats`); None for anything else, so the caller converts it. The values are checked
+    /// by the core's `ActiveSetSolver::solve` (finite entries; not overflowing once scaled),
+    /// the problem and settings were checked once, when it was built.
     fn allocate_one(
         &self,
         virtual_control: &Bound<'_, PyAny>,
     ) -> PyResult<Option<PySingleAllocation>> {
-        let Some(u_c) = exact_floats(virtual_control, self.inner.virtual_dimension())? else {
+        let (axes, actuators) = (self.inner.virtual_dimension(), self.inner.actuator_count());
+        let mut u_c = [0.0; MAX_VIRTUAL];
+        if !exact_floats(virtual_control, &mut u_c[..axes]) {
             return Ok(None);
-        };
-        let result = self.solver.allocate(&u_c).map_err(to_py_err)?;
+        }
+        let mut commands = [0.0; MAX_ACTUATORS];
+        let mut active = ActiveSet::cold(actuators);
+        let report = self
+            .solver
+            .solve(&u_c[..axes], &mut active, &mut commands[..actuators])
+            .map_err(to_py_err)?;
+        let mut achieved = [0.0; MAX_VIRTUAL];
+        self.inner
+            .achieved_into(&commands[..actuators], &mut achieved[..axes]);
         Ok(Some(PySingleAllocation {
-            result,
+            actuators,
+            axes,
+            commands,
+            achieved,
             virtual_control: u_c,
+            report,
         }))
     }
 

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use crate::airframe::Airframe;
 use crate::allocation::active_set::{ActiveSet, ActiveSetSolver};
+use crate::allocation::scaling::{BIG_WORK, N, ROWS, SMALL_WORK};
 use crate::allocation::{allocate_clarabel, allocate_prioritized};
 use crate::allocation::{check_rows, weighted_pseudo_inverse, AllocationProblem, Method};
 use crate::cancel::Cancel;
@@ -112,4 +113,49 @@ pub fn time_each(
         times.push(start.elapsed().as_secs_f64() / repeats as f64);
     }
     Ok(times)
+}
+
+/// Bench support (benches/allocation.rs): the active set's cold start, phase 1 and phase 2 exactly
+/// as [`ActiveSetSolver::solve_unchecked`] runs them, without the certificate: the baseline
+/// the certified solve is timed against. Its answers carry no evidence, so this is never an
+/// allocation method. `u_c` has n finite entries and `commands` m; returns the iterations
+/// (commands NaN when `u_c` overflows once scaled).
+pub fn solve_uncertified(
+    solver: &ActiveSetSolver,
+    u_c: &[f64],
+    active: &mut ActiveSet,
+    commands: &mut [f64],
+) -> usize {
+    let scaled = &solver.scaled;
+    let m = scaled.m;
+    active.len = m;
+    let mut b = [0.0; ROWS];
+    if !scaled.rhs(u_c, &mut b) {
+        commands[..m].fill(f64::NAN);
+        return 0;
+    }
+    let b_norm = scaled.rhs_norm(&b);
+    let mut g = [0.0; N];
+    let (t, iterations) = if scaled.rows * m <= SMALL_WORK {
+        phases::<SMALL_WORK>(solver, &b, b_norm, active, &mut g)
+    } else {
+        phases::<BIG_WORK>(solver, &b, b_norm, active, &mut g)
+    };
+    commands[..m].copy_from_slice(&t[..m]);
+    iterations
+}
+
+fn phases<const W: usize>(
+    solver: &ActiveSetSolver,
+    b: &[f64; ROWS],
+    b_norm: f64,
+    active: &mut ActiveSet,
+    g: &mut [f64; N],
+) -> ([f64; N], usize) {
+    let (converged, mut iterations, closest, mut t) =
+        solver.start_and_phase1::<W>(b, b_norm, active, g);
+    if converged && solver.tie_rule_needed(closest, &active.states, g) {
+        iterations += solver.phase2::<W>(&mut t, &mut active.states, g);
+    }
+    (t, iterations)
 }

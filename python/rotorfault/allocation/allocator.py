@@ -8,7 +8,8 @@ from __future__ import annotations
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, cast, get_args
+from dataclasses import fields as dataclass_fields
+from typing import TYPE_CHECKING, Any, cast, get_args
 
 import numpy as np
 import numpy.typing as npt
@@ -62,6 +63,19 @@ class Allocation(Tabular):
     certificate: _rfcore.Certificate | tuple[_rfcore.Certificate, ...]
     solved_by: SolvedBy | tuple[SolvedBy, ...]
     fallbacks: int
+
+    if not TYPE_CHECKING:  # (hidden from mypy, so a misspelt field stays a type error)
+
+        def __getattr__(self, name: str) -> Any:
+            """A single active-set answer (:meth:`Allocator.allocate`'s fast path) holds the core's
+            result and makes each field when it is first read, so a caller who reads only the
+            commands pays for no other array; reached only for fields not yet in ``__dict__``."""
+            one = self.__dict__.get(_CORE_RESULT)
+            if one is None or name not in _FIELDS:
+                raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+            value = getattr(one, name)
+            self.__dict__[name] = value
+            return value
 
     @property
     def attained(self) -> bool | np.ndarray[Any, np.dtype[np.bool_]]:
@@ -187,10 +201,15 @@ class Allocator:
         with this allocator's settings."""
         if method == "active-set" and priorities is None:
             # The fast path: n floats as given (a float64 vector, a list or tuple of floats),
-            # one core call; anything else takes the general path below.
+            # one core call that validates them; anything else takes the general path below.
             one = self._core.allocate_one(virtual_control)
             if one is not None:
-                return _single(one)
+                # Built without the dataclass's ``__init__`` (a frozen dataclass sets each field
+                # through ``object.__setattr__``, about twice the cost of the whole solve): the
+                # fields are made from the core's result when read (``Allocation.__getattr__``).
+                out = _new(Allocation)
+                out.__dict__[_CORE_RESULT] = one
+                return out
         if not isinstance(method, str):
             raise TypeError(f"method: expected a string, got {type(method).__name__}")
         if method not in METHODS:
@@ -331,22 +350,11 @@ def _cache_key(
     return (w, give_up_yaw, *settings)
 
 
-def _single(one: _rfcore.SingleAllocation) -> Allocation:
-    """An :class:`Allocation` from the core's single answer, built without the dataclass's
-    ``__init__`` (a frozen dataclass sets each field through ``object.__setattr__``: about twice
-    the cost of the whole solve)."""
-    out = _new(Allocation)
-    solved_by = one.solved_by
-    _setattr(out, "__dict__", {
-        "commands": one.commands, "achieved": one.achieved, "virtual_control": one.virtual_control,
-        "status": one.status, "iterations": one.iterations, "certificate": one.certificate,
-        "solved_by": solved_by, "fallbacks": 1 if solved_by == "clarabel" else 0,
-    })
-    return out
-
-
 _new = object.__new__
-_setattr = object.__setattr__
+#: Where a single answer keeps the core's result (``_rfcore.SingleAllocation``), and the fields
+#: it makes on demand.
+_CORE_RESULT = "_core_result"
+_FIELDS = frozenset(field.name for field in dataclass_fields(Allocation))
 
 
 def _settings(tolerance: Any, max_iterations: Any, clarabel_tolerance: Any) -> _rfcore.AllocationSettings:

@@ -62,7 +62,7 @@ pub enum BoundState {
 /// The set of variables held at bounds: returned by a solve, passed to the next to warm-start it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct ActiveSet {
-    states: [BoundState; N],
+    pub(crate) states: [BoundState; N],
     pub(crate) len: usize,
 }
 
@@ -246,19 +246,20 @@ impl ActiveSetSolver {
         true
     }
 
-    /// [`Self::solve_unchecked`] once `b` is known, with work arrays of `W >= rows * m` entries.
-    /// `Err` when it does not certify and the fallback is on (boxed: the rare path, which
-    /// allocates anyway).
+    /// The cold start (when `active` is all free) and phase 1, from `b` (`b_norm = |b|`), with
+    /// work arrays of `W >= rows * m` entries: (converged, iterations, closest, commands `t`).
+    /// When converged, `g` is the normalised gradient at `t` (phase 1's last release test
+    /// computed it from the residual at `t`): what the certificate and phase 2 need.
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop)]
-    pub(crate) fn solve_from<const W: usize>(
+    pub(crate) fn start_and_phase1<const W: usize>(
         &self,
         b: &[f64; ROWS],
+        b_norm: f64,
         active: &mut ActiveSet,
-        commands: &mut [f64],
-    ) -> std::result::Result<SolveReport, Box<Uncertified>> {
+        g: &mut [f64; N],
+    ) -> (bool, usize, bool, [f64; N]) {
         let m = self.scaled.m;
-        let b_norm = self.scaled.rhs_norm(b);
         let mut t = [0.0; N];
         let cold = active.states[..m].iter().all(|s| *s == BoundState::Free);
         let mut iterations = 0;
@@ -312,9 +313,6 @@ impl ActiveSetSolver {
                 };
             }
         }
-        // Phase 2 is needed only when phase 1's answer is not already the closest of the optima:
-        // it ended elsewhere than on a full step, or a held bound has a zero multiplier (so other
-        // optima may move it).
         let (converged, used, closest) = self.phase1::<W>(
             b,
             b_norm,
@@ -322,28 +320,59 @@ impl ActiveSetSolver {
             &mut active.states,
             self.max_iterations,
             at_minimiser,
+            g,
         );
         iterations += used;
+        (converged, iterations, closest, t)
+    }
+
+    /// Whether phase 2 (the tie rule) may change phase 1's converged answer: only without
+    /// regularisation, and when phase 1's answer is not already the closest of the optima (it
+    /// ended elsewhere than on a full step, or a held bound has a (near-)zero multiplier, so
+    /// other optima may move it).
+    pub(crate) fn tie_rule_needed(
+        &self,
+        closest: bool,
+        states: &[BoundState; N],
+        g: &[f64; N],
+    ) -> bool {
+        self.scaled.root_gamma == 0.0 && (!closest || self.degenerate_held(states, g))
+    }
+
+    /// [`Self::solve_unchecked`] once `b` is known, with work arrays of `W >= rows * m` entries.
+    /// `Err` when it does not certify and the fallback is on (boxed: the rare path, which
+    /// allocates anyway). The certificate of phase 1's answer is read off the gradient phase 1
+    /// ended with; after a phase 2 that moved the commands it is computed afresh at the new ones.
+    pub(crate) fn solve_from<const W: usize>(
+        &self,
+        b: &[f64; ROWS],
+        active: &mut ActiveSet,
+        commands: &mut [f64],
+    ) -> std::result::Result<SolveReport, Box<Uncertified>> {
+        let m = self.scaled.m;
+        let tolerance = self.settings.tolerance;
+        let b_norm = self.scaled.rhs_norm(b);
         let mut g = [0.0; N];
-        let mut certificate =
+        let (converged, mut iterations, closest, mut t) =
+            self.start_and_phase1::<W>(b, b_norm, active, &mut g);
+        let mut certificate = if converged {
+            self.scaled.certificate_from_gradient(&t, &g, tolerance)
+        } else {
             self.scaled
-                .certificate_with(b, b_norm, &t, &mut g, self.settings.tolerance);
-        if converged
-            && self.scaled.root_gamma == 0.0
-            && certificate.holds()
-            && (!closest || self.degenerate_held(&active.states, &g))
-        {
+                .certificate_with(b, b_norm, &t, &mut g, tolerance)
+        };
+        if converged && certificate.holds() && self.tie_rule_needed(closest, &active.states, &g) {
             let before = t;
-            let used = self.phase2::<W>(&mut t, &mut active.states, &g);
-            iterations += used;
-            let mut g2 = [0.0; N];
-            let after =
-                self.scaled
-                    .certificate_with(b, b_norm, &t, &mut g2, self.settings.tolerance);
-            if after.holds() {
-                certificate = after;
-            } else {
-                t = before;
+            iterations += self.phase2::<W>(&mut t, &mut active.states, &g);
+            if t != before {
+                let after = self
+                    .scaled
+                    .certificate_with(b, b_norm, &t, &mut [0.0; N], tolerance);
+                if after.holds() {
+                    certificate = after;
+                } else {
+                    t = before;
+                }
             }
         }
         if certificate.holds() {
@@ -415,6 +444,7 @@ impl ActiveSetSolver {
             &mut active.states,
             self.max_iterations,
             None,
+            &mut [0.0; N],
         );
         let mut g = [0.0; N];
         let mut certificate = self
@@ -462,9 +492,10 @@ impl ActiveSetSolver {
     /// Phase 1 from `t` and `states`; returns (converged, iterations, closest): `closest` when the
     /// answer is a full step of [`Self::lsq_step`], i.e. of the free-set minimisers (held
     /// variables fixed) the one closest to `T_pref`. `at_minimiser`: `t` is already known to be
-    /// a free-set minimiser (and whether it is the closest one).
+    /// a free-set minimiser (and whether it is the closest one). When converged, `g` holds the
+    /// normalised gradient at the returned `t` (from the residual at exactly that `t`).
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
-    #[allow(clippy::needless_range_loop)]
+    #[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
     fn phase1<const W: usize>(
         &self,
         b: &[f64; ROWS],
@@ -473,6 +504,7 @@ impl ActiveSetSolver {
         states: &mut [BoundState; N],
         budget: usize,
         at_minimiser: Option<bool>,
+        g: &mut [f64; N],
     ) -> (bool, usize, bool) {
         let m = self.scaled.m;
         let mut iterations = 0;
@@ -554,8 +586,7 @@ impl ActiveSetSolver {
             }
             minimiser = false;
             // A free-set minimiser: release the held variable with the worst multiplier.
-            let mut g = [0.0; N];
-            self.scaled.gradient(&r, t, b_norm, &mut g);
+            self.scaled.gradient(&r, t, b_norm, g);
             let mut worst = (RELEASE_TOL, usize::MAX);
             for i in 0..m {
                 if states[i] == BoundState::Free
@@ -615,7 +646,7 @@ impl ActiveSetSolver {
     /// `g` is phase 1's normalised gradient. Returns the iterations used.
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop)]
-    fn phase2<const W: usize>(
+    pub(crate) fn phase2<const W: usize>(
         &self,
         t: &mut [f64; N],
         states: &mut [BoundState; N],
@@ -789,6 +820,94 @@ mod tests {
                 "{p:?} vs {expected}"
             );
         }
+    }
+
+    /// A solution broken one way at a time fails its certificate: a multiplier of the wrong sign
+    /// (complementarity), a free variable's gradient entry above the tolerance (stationarity), a
+    /// free or held command moved by 1e-6 of its range (stationarity), a command past its bound
+    /// (bound violation). The solver's own answer holds, and its certificate (read off phase 1's
+    /// gradient) is the one computed afresh.
+    #[test]
+    fn certificate_fails_when_a_multiplier_or_a_command_is_perturbed() {
+        let (l, c) = (0.125, 0.0166);
+        let matrix = DMatrix::from_row_slice(
+            4,
+            4,
+            &[1.0, 1.0, 1.0, 1.0, -l, l, l, -l, l, -l, l, -l, c, c, -c, -c],
+        );
+        let upper = 8.5;
+        let problem =
+            AllocationProblem::new(matrix, &[1.0, 20.0, 20.0, 0.01], &[0.0; 4], &[upper; 4])
+                .unwrap();
+        let solver = ActiveSetSolver::new(&problem);
+        // More thrust and roll torque than the rotors give together: bounds active.
+        let u_c = [30.0, 1.5, -0.2, 0.01];
+        let mut active = ActiveSet::cold(4);
+        let mut commands = [0.0; 4];
+        let report = solver.solve_unchecked(&u_c, &mut active, &mut commands);
+        assert_eq!(report.solved_by, SolvedBy::ActiveSet);
+        assert!(report.certificate.holds(), "{:?}", report.certificate);
+        let mut b = [0.0; ROWS];
+        assert!(solver.scaled.rhs(&u_c, &mut b));
+        let mut t = [0.0; N];
+        t[..4].copy_from_slice(&commands);
+        let tolerance = solver.settings.tolerance;
+        let mut g = [0.0; N];
+        assert_eq!(
+            solver.scaled.certificate(&b, &t, &mut g, tolerance),
+            report.certificate
+        );
+        let states = active.states();
+        let held = (0..4)
+            .find(|&i| states[i] != BoundState::Free && g[i].abs() > 1e-6)
+            .expect("a held rotor with a nonzero multiplier");
+        let free = (0..4)
+            .find(|&i| states[i] == BoundState::Free)
+            .expect("a free rotor");
+        let check = |g: &[f64; N]| solver.scaled.certificate_from_gradient(&t, g, tolerance);
+        let recheck = |t: &[f64; N]| solver.scaled.certificate(&b, t, &mut [0.0; N], tolerance);
+
+        let mut wrong = g;
+        wrong[held] = -wrong[held];
+        let broken = check(&wrong);
+        assert!(!broken.holds(), "{broken:?}");
+        assert_eq!(broken.complementarity, g[held].abs());
+        let mut wrong = g;
+        wrong[free] += 2.0 * tolerance;
+        let broken = check(&wrong);
+        assert!(
+            !broken.holds() && broken.stationarity > tolerance,
+            "{broken:?}"
+        );
+
+        let inward = |x: f64| {
+            if x < 0.5 * upper {
+                1e-6 * upper
+            } else {
+                -1e-6 * upper
+            }
+        };
+        let mut moved = t;
+        moved[free] += inward(t[free]);
+        let broken = recheck(&moved);
+        assert!(
+            !broken.holds() && broken.stationarity > tolerance,
+            "{broken:?}"
+        );
+        let mut moved = t;
+        moved[held] += inward(t[held]);
+        let broken = recheck(&moved);
+        assert!(
+            !broken.holds() && broken.stationarity > tolerance,
+            "{broken:?}"
+        );
+        let mut moved = t;
+        moved[held] -= inward(t[held]);
+        let broken = recheck(&moved);
+        assert!(
+            !broken.holds() && broken.bound_violation > tolerance,
+            "{broken:?}"
+        );
     }
 
     #[test]

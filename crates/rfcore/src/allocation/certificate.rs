@@ -97,6 +97,19 @@ impl ScaledLeastSquares {
         let mut r = [0.0; ROWS];
         self.residual(b, t, &mut r);
         self.gradient(&r, t, b_norm, g);
+        self.certificate_from_gradient(t, g, tolerance)
+    }
+
+    /// The certificate at `t` from its normalised gradient `g` ([`Self::gradient`] of the
+    /// residual at exactly this `t`). The active set's phase 1 ends by computing that gradient
+    /// for its release rule, so the solver's certificate is this comparison only: the same
+    /// numbers as [`Self::certificate`], without a second residual and gradient.
+    pub(crate) fn certificate_from_gradient(
+        &self,
+        t: &[f64; N],
+        g: &[f64; N],
+        tolerance: f64,
+    ) -> Certificate {
         let mut out = Certificate {
             stationarity: 0.0,
             complementarity: 0.0,

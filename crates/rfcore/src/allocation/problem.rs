@@ -214,13 +214,18 @@ impl AllocationProblem {
 
     /// `M T`.
     pub fn achieved(&self, commands: &[f64]) -> Vec<f64> {
-        (0..self.virtual_dimension())
-            .map(|r| {
-                (0..self.actuator_count())
-                    .map(|c| self.matrix[(r, c)] * commands[c])
-                    .sum()
-            })
-            .collect()
+        let mut out = vec![0.0; self.virtual_dimension()];
+        self.achieved_into(commands, &mut out);
+        out
+    }
+
+    /// [`Self::achieved`] into `out` (n entries), without allocating.
+    pub fn achieved_into(&self, commands: &[f64], out: &mut [f64]) {
+        for (r, slot) in out.iter_mut().enumerate().take(self.virtual_dimension()) {
+            *slot = (0..self.actuator_count())
+                .map(|c| self.matrix[(r, c)] * commands[c])
+                .sum();
+        }
     }
 
     /// Objective and KKT residual of any solver's `commands` for `u_c`, after checking both
