@@ -132,7 +132,7 @@ def test_huge_problems_are_refused_quickly() -> None:
         rf.acai_from_matrix(np.ones((200_000, 1)), [0.0], [1.0], np.zeros(200_000))
     with pytest.raises(ValueError, match=r"effectiveness_matrix: .* facet groups, more than"):
         rf.acai_from_matrix(np.ones((12, 40)), np.zeros(40), np.ones(40), np.zeros(12))
-    with pytest.raises(ValueError, match=r"step, rotors: .* grid points exceed"):
+    with pytest.raises(ValueError, match=r"step, rotors: .* exceed the in-memory limit"):
         rf.efficiency_scan(rf.Airframe.preset("hexa-pnpnpn"), rotors=(1, 2, 3, 4), step=0.001)
 
 

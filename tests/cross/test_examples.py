@@ -21,16 +21,9 @@ import pytest
 #: The rooms whose ``__all__`` is the public API an example documents.
 EXAMPLE_ROOMS = ("rotorfault", "rotorfault.analysis", "rotorfault.flight", "rotorfault.allocation",
                  "rotorfault.control", "rotorfault.studies", "rotorfault.papers")
-#: Public classes whose docstrings are not edited here, and why (each is listed by name; a name
-#: that gets an example, or leaves the API, must leave this table: a test checks).
-WITHOUT_EXAMPLE = {
-    # The Python mirrors of Rust settings and results, whose docstrings another branch rewrites.
-    **{name: "mirror class" for name in (
-        "rotorfault.flight.models.FixedPitchActuator", "rotorfault.flight.models.VariablePitchActuator",
-        "rotorfault.flight.models.Noise", "rotorfault.allocation.attainable.DirectionalLimit",
-        "rotorfault.allocation.attainable.HoverMargin", "rotorfault.analysis.controllability.ControllabilityReport",
-        "rotorfault.analysis.controllability.FailureCase", "rotorfault.analysis.controllability.FailureTable")},
-}
+#: Public callables excused from having an example, and why (each listed by name; a name that
+#: gets an example, or leaves the API, must leave this table: a test checks). None now.
+WITHOUT_EXAMPLE: dict[str, str] = {}
 _FLOAT = re.compile(r"-?\d+\.\d+(?:[eE][-+]?\d+)?")
 _EXAMPLES_HEADING = re.compile(r"^\s*Examples:\s*$", re.MULTILINE)
 

@@ -134,7 +134,7 @@ def test_every_table_has_the_expected_rows(browser_check: dict[str, object]) -> 
     tables = {t["id"]: t["rows"] for t in browser_check["tables"]}  # type: ignore[union-attr]
     assert tables["summary"] == len(reproduce.PAPERS) + len(reproduce.STUDIES)
     # The deciding campaign: one row per cell, one per (vehicle, fault class) for the best controller.
-    assert tables["campaign-table-1"] == len(DecidingCampaign(runs=1).cells) == 39
+    assert tables["campaign-table-1"] == len(DecidingCampaign(runs=1).cells) == 65
     assert tables["campaign-table-2"] == 13
     assert tables["du-numbers"] == len(du_paper.printed_numbers()) == 14
     assert tables["ke-numbers"] == len(ke_paper.printed_numbers()) == 33

@@ -496,6 +496,13 @@ pub fn time_allocations<'py>(
 
 /// The largest scale along a direction and the commands that reach it
 /// (`rotorfault.DirectionalLimit`, from `max_virtual_control`).
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> limit = rf.max_virtual_control(rf.Airframe.preset("quad-x"), [1, 0, 0, 0])
+///     >>> round(limit.scale, 3), limit.status, limit.commands.round(3).tolist()
+///     (24.5, 'optimal', [6.125, 6.125, 6.125, 6.125])
 #[pyclass(name = "DirectionalLimit", module = "rotorfault._rfcore", frozen)]
 pub struct PyDirectionalLimit {
     scale: f64,
@@ -527,6 +534,13 @@ impl PyDirectionalLimit {
 
 /// The largest total thrust with the controlled torques at zero, against the weight
 /// (`rotorfault.HoverMargin`, from `hover_thrust_margin`).
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> margin = rf.hover_thrust_margin(rf.Airframe.preset("quad-x"))
+///     >>> round(margin.margin_n, 3), round(margin.thrust_to_weight, 4), margin.status
+///     (9.457, 1.6287, 'optimal')
 #[pyclass(name = "HoverMargin", module = "rotorfault._rfcore", frozen)]
 pub struct PyHoverMargin {
     max_thrust_n: f64,

@@ -34,6 +34,15 @@ fn real_or(field: &str, value: Option<Bound<'_, PyAny>>, default: f64) -> PyResu
 /// (thrust saturation from the airframe) and the thrust coefficient that gives rotor speed.
 /// Keyword-only; defaults the core's (`Lag::none()`, no rotor speed); the rules the core's
 /// `FixedPitch::check_parameters`, applied here, when it is made.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> lagged = rf.FixedPitchActuator(time_constant_s=0.02)
+///     >>> lagged.time_constant_s, lagged.rate_limit_n_s
+///     (0.02, inf)
+///     >>> lagged.replace(rate_limit_n_s=50.0).rate_limit_n_s
+///     50.0
 #[pyclass(name = "FixedPitchActuator", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyFixedPitch {
@@ -87,6 +96,15 @@ settings_protocol!(PyFixedPitch, {
 /// keyword-only; `k`, `speed_bounds` and `pitch_bounds` required, the rest defaulting to the
 /// core's (`VariablePitchLags::default()`, no rotor speed); the rules the core's
 /// `VariablePitch::check_parameters`, applied here, when it is made.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> wang = rf.control.vpp.preset("wang").actuator
+///     >>> wang.speed_bounds, wang.pitch_bounds
+///     ((0.0, 10000.0), (-0.26, 0.26))
+///     >>> rf.VariablePitchActuator(k=wang.k, speed_bounds=(0.0, 8000.0), pitch_bounds=wang.pitch_bounds).speed_bounds
+///     (0.0, 8000.0)
 #[pyclass(name = "VariablePitchActuator", module = "rotorfault._rfcore", frozen)]
 #[derive(Clone)]
 pub struct PyVariablePitch {

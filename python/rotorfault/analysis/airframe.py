@@ -527,7 +527,12 @@ class Airframe:
 #: Unicode categories a label may not hold: control and format characters, line and paragraph
 #: separators (``str.splitlines`` breaks on some of them), so a name written into a file or a
 #: terminal is never more than text.
-_FORBIDDEN_CATEGORIES = ("Cc", "Cf", "Zl", "Zp")
+#: Characters a name or description may not hold: controls, format characters (bidirectional
+#: overrides), line and paragraph separators (each could start a live line or hide text in a
+#: written file), and lone surrogates (no UTF-8 form: no file could hold the name). Unassigned
+#: code points (Cn) are accepted: which ones are unassigned depends on the Unicode version of the
+#: install, and none of them can break a file.
+_FORBIDDEN_CATEGORIES = ("Cc", "Cf", "Cs", "Zl", "Zp")
 
 
 def check_label(field: str, value: Any) -> str:
@@ -539,7 +544,8 @@ def check_label(field: str, value: Any) -> str:
         raise TypeError(f"{field}: expected a string, got {type(value).__name__}")
     for i, ch in enumerate(value):
         if unicodedata.category(ch) in _FORBIDDEN_CATEGORIES:
-            raise ValueError(f"{field}: must not contain control characters, got U+{ord(ch):04X} at position {i}")
+            what = "a lone surrogate (no UTF-8 form)" if unicodedata.category(ch) == "Cs" else "control characters"
+            raise ValueError(f"{field}: must not contain {what}, got U+{ord(ch):04X} at position {i}")
     return value
 
 

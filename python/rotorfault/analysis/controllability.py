@@ -35,7 +35,15 @@ class ControllabilityReport:
     ranks, ACAI, formula, verdict, hover point, read once here and not checked again) joined with
     the question asked (the airframe's name, the efficiency, the axes), and its printed form
     shares the ACAI formatting every table and command uses (:func:`format_acai`,
-    :func:`acai_label`), which is Python's; the core keeps no copy of the question to print."""
+    :func:`acai_label`), which is Python's; the core keeps no copy of the question to print.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> report = rf.controllability(rf.Airframe.preset("hexa-pnpnpn"), efficiency=[1, 1, 1, 1, 1, 0.5])
+        >>> report.controllable, round(float(report.acai), 4), report.controllability_rank
+        (True, 0.743, 8)
+    """
 
     airframe: str
     efficiency: tuple[float, ...]
@@ -125,7 +133,15 @@ def controllability(
 @dataclass(frozen=True)
 class FailureCase:
     """One row of a failure table: rotors (numbered from 1) at efficiency 0 and the verdicts
-    with all four axes and giving up yaw (``..._give_up_yaw``: thrust, roll and pitch only)."""
+    with all four axes and giving up yaw (``..._give_up_yaw``: thrust, roll and pitch only).
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> case = rf.failure_table(rf.Airframe.preset("hexa-pnpnpn"), max_failed=1)[1]
+        >>> case.failed, case.controllable, case.controllable_give_up_yaw, round(case.acai_give_up_yaw, 4)
+        ((1,), False, True, 1.2882)
+    """
 
     failed: tuple[int, ...]
     controllability_rank: int
@@ -170,7 +186,15 @@ class FailureTable(Sequence[FailureCase], Tabular):
     """Every combination of up to ``max_failed`` failed rotors with rank, ACAI (``formula``) and
     verdict, with all axes and giving up yaw. Prints as a table; converts with :meth:`to_arrow`
     and :meth:`to_pandas` (one row per failure combination), :meth:`to_dicts` and
-    :meth:`to_arrays`."""
+    :meth:`to_arrays`.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> table = rf.failure_table(rf.Airframe.preset("hexa-pnpnpn"), max_failed=2)
+        >>> len(table), table.to_arrow().column_names[:3]
+        (22, ['failed_rotors', 'failed_count', 'controllability_rank'])
+    """
 
     def __init__(self, airframe: Airframe, max_failed: int, cases: Sequence[FailureCase], *, formula: AcaiFormula = "eq13") -> None:
         self.formula: AcaiFormula = formula

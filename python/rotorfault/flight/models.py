@@ -90,7 +90,16 @@ class Noise:
     Why it lives in Python (issue 26): it is not a copy of a core type but the papers' way of
     stating noise (a signal-to-noise ratio in dB, a floor per kind of state), which
     :meth:`_core` turns into the core's one form, ``SensorNoise`` (a relative and a per-component
-    absolute standard deviation), for each batch chunk's seed; the core checks that form."""
+    absolute standard deviation), for each batch chunk's seed; the core checks that form.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), noise=rf.Noise(snr_db=15.0, seed=1))
+        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.1)
+        >>> run.measured.shape, bool((run.measured[:, 2] != run.position[:, 2]).all())
+        ((41, 12), True)
+    """
 
     snr_db: float | None = None
     std: npt.ArrayLike | None = None

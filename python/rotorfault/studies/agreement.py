@@ -101,7 +101,17 @@ class AgreementCase:
 
 @dataclass(frozen=True)
 class CertifyAgreement:
-    """Every case of :func:`certify_against_flights`, in vehicle and certificate order."""
+    """Every case of :func:`certify_against_flights`, in vehicle and certificate order.
+
+    Examples:
+
+        >>> from rotorfault.studies import certify_against_flights
+        >>> from rotorfault.studies.agreement import preset_vehicles
+        >>> ke = [v for v in preset_vehicles() if v.name == "ke-quadcopter"]
+        >>> agreement = certify_against_flights(ke, max_failed=1, controllers=["indi-controller"])
+        >>> [(case.failed, case.held_by) for case in agreement.cases][:2]
+        [((1,), ('indi-controller',)), ((2,), ('indi-controller',))]
+    """
 
     cases: tuple[AgreementCase, ...]
     controllers: tuple[str, ...]
@@ -248,7 +258,16 @@ def certify_against_flights(
 ) -> CertifyAgreement:
     """Certify's verdict on every failure of 1 to ``max_failed`` rotors of each vehicle (default
     :func:`preset_vehicles`) beside a flight of each controller (default every entry of
-    :data:`CONTROLLERS`) through it (module notes); all flights in one Rust batch."""
+    :data:`CONTROLLERS`) through it (module notes); all flights in one Rust batch.
+
+    Examples:
+
+        >>> from rotorfault.studies import certify_against_flights
+        >>> from rotorfault.studies.agreement import preset_vehicles
+        >>> ke = [v for v in preset_vehicles() if v.name == "ke-quadcopter"]
+        >>> certify_against_flights(ke, max_failed=1, controllers=["indi-controller"]).counts()
+        {'cases': 4, 'survivable': 4, 'survivable_held': 4, 'not_survivable': 0, 'not_survivable_held': 0, 'agree': 4}
+    """
     if vehicles is not None and not isinstance(vehicles, (list, tuple)):
         raise TypeError(f"vehicles: expected a list of rotorfault.studies.deciding.CampaignVehicle, got {type(vehicles).__name__}")
     if controllers is not None and not isinstance(controllers, (list, tuple)):
@@ -304,7 +323,7 @@ def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignV
         trim = trim_command(controller)
         config = _rfcore.SimulationConfig(dt_s=DT_S, substeps=SUBSTEPS, duration_s=duration, limits=limits, wind_m_s=(0.0, 0.0, 0.0))
         for k, value in enumerate((
-            v.airframe._core, _actuator(v)._core(), _drag(v), controller.core(DT_S), State(position=HOVER_M)._packed(),
+            v.airframe._core, _actuator(v), _drag(v), controller.core(DT_S), State(position=HOVER_M)._packed(),
             [RotorFault(r, FAILURE_TIME_S, 0.0)._packed() for r in failed], None if trim is None else [float(u) for u in trim], config,
         )):
             args[k].append(value)

@@ -146,6 +146,27 @@ impl AllocationProblem {
             "one per actuator",
         )?;
         require_all_finite("preferred", preferred)?;
+        // The solver works on the problem scaled near its largest weight and largest matrix entry
+        // (allocation::scaling), where the regularisation is gamma / (w_max amax(M)^2), rounded
+        // to powers of two (a factor of at most 2^1.5): it must stay a normal number there.
+        if gamma > 0.0 {
+            let w_max = self.weights.iter().fold(0.0f64, |a, &w| a.max(w));
+            let m_max = self.matrix.amax();
+            let w_max = if w_max > 0.0 { w_max } else { 1.0 };
+            let m_max = if m_max > 0.0 { m_max } else { 1.0 };
+            let relative = gamma / w_max / m_max / m_max;
+            if relative < 4.0 * f64::MIN_POSITIVE {
+                return Err(RfError::invalid(
+                    "regularization, weights",
+                    format!(
+                        "the regularisation {gamma:e} relative to the largest weight ({w_max:e}) times the largest \
+                         matrix entry squared ({:e}) is {relative:e}, below the normal floating-point range: \
+                         weights and regularisation span more than the solver's scaling can hold",
+                        m_max * m_max
+                    ),
+                ));
+            }
+        }
         self.regularization = gamma;
         self.preferred = preferred.to_vec();
         Ok(self)

@@ -110,7 +110,7 @@ pub struct Sensing {
 /// The motion-capture suite with the ICM-42688-P at 500 Hz, one of the part's output data rates
 /// (DS-000347, ODR table): the datasheet profile's 1 kHz costs twice the IMU samples and estimator
 /// steps for a controller running at 400 Hz, which sees one estimate per control step either way
-/// (benches/sensing.py measures both).
+/// (crates/rfcore/benches/sensing.rs measures both).
 impl Default for Sensing {
     fn default() -> Self {
         Sensing {
