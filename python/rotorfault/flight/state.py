@@ -66,7 +66,8 @@ class State:
             arr = float_array("quaternion", quaternion, 1)
             if arr.shape != (4,) or not np.all(np.isfinite(arr)):
                 raise ValueError("quaternion: expected 4 finite entries (w, x, y, z)")
-            norm = float(np.linalg.norm(arr))
+            # math.hypot: no overflow of the squares (NumPy 2's norm warned on an entry of 1e300).
+            norm = math.hypot(*(float(v) for v in arr))
             if abs(norm - 1.0) > 1e-6:
                 raise ValueError(f"quaternion: must have unit norm (within 1e-6), got norm {norm}")
             q = tuple(float(v) / norm for v in arr)  # type: ignore[assignment]
