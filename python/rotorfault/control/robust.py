@@ -337,7 +337,8 @@ def check_synthesis(
     residuals: tuple[float, float] = (0.0, 0.0),
 ) -> NcfsynEvidence:
     """The checks :func:`ncfsyn` runs before it returns, on the original ``plant`` and weights, in
-    this order: ``gamma_min`` against the Hankel formula (``gamma_min check``), the stability of
+    this order: ``gamma_min`` at most ``GAMMA_MIN_CONFIRMABLE_MAX`` and against the Hankel formula
+    (``gamma_min check``), the stability of
     the loop of ``plant`` with ``K = W1 Ks W2``, every state of plant, weights and controller
     (``internal-stability check``), the four-block norm of ``shaped_controller`` on the full
     shaped plant ``W2 G W1`` against ``gamma`` (``achieved-norm check``). ``ValueError`` naming
