@@ -102,9 +102,13 @@ def _hidden(rng: np.random.Generator, scale_decades: float) -> tuple[ct.StateSpa
 
 def test_minimal_realisation_removes_hidden_modes_and_nothing_else() -> None:
     # 100 systems with one uncontrollable and one unobservable mode, in units spanning 1e6:
-    # never below the known order, the response unchanged (1e-8 relative), and the hidden modes
-    # removed in at least 97 (measured: 97; the rest keep a mode whose rounding-level coupling
-    # changes the response by 2e-11..2e-9 where it acts, above HIDDEN_MODE_RTOL).
+    # never below the known order, the response unchanged (1e-8 relative; measured at most
+    # 1.7e-11), and the hidden modes removed in all 100. The staircases alone left a mode in 3
+    # (the tuning install) or 6 (numpy 2.4.6, scipy 1.17.1): removing it by the floor pass
+    # disturbed the kept modes by 1e-11..6.5e-10 (rounding, install-dependent), above
+    # HIDDEN_MODE_RTOL. The modal pass decides on the mode's own coupling instead: measured
+    # 8e-19..2e-13 for those modes against at least 2.1e-2 for every genuine mode, and removing
+    # it changes the response by 6e-15..2e-13.
     exact = 0
     for seed in range(100):
         g, order = _hidden(np.random.default_rng(seed), 6.0)
@@ -112,7 +116,19 @@ def test_minimal_realisation_removes_hidden_modes_and_nothing_else() -> None:
         assert order <= reduced.nstates <= order + 2
         exact += reduced.nstates == order
         _close(reduced, g, rtol=1e-8, omega=np.logspace(-6, 6, 40))
-    assert exact >= 97
+    assert exact == 100
+
+
+@pytest.mark.parametrize("units", [1.0, 1e5])
+def test_minimal_realisation_drops_a_mode_by_its_coupling_against_hidden_mode_rtol(units: float) -> None:
+    # 1/(s + 1) + k/(s + 3): the second mode's share of the response is k/3 relative at s = 0
+    # (measured 0.996 k). Kept at k = 1e-10 (above HIDDEN_MODE_RTOL = 1e-11), dropped at k =
+    # 1e-12, whatever the state units.
+    for k, states in ((1e-10, 2), (1e-12, 1)):
+        g = R.state_space([[-1.0, 0.0], [0.0, -3.0]], [[1.0], [k / units]], [[1.0, units]], [[0.0]])
+        reduced = R.minimal_realisation(g)
+        assert reduced.nstates == states
+        _close(reduced, g, rtol=1e-11 if states == 1 else 1e-13, omega=np.logspace(-3, 3, 13))
 
 
 def _wide(seed: int) -> ct.StateSpace:

@@ -366,6 +366,73 @@ def _same_response(full: ct.StateSpace, reduced: ct.StateSpace) -> bool:
         return bool(np.all(np.linalg.norm(r1 - r2, axis=(1, 2)) <= HIDDEN_MODE_RTOL * size))
 
 
+def _modal_couplings(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray, dt: Any) -> tuple[npt.NDArray[np.complex128], FloatArray]:
+    """``(eigenvalues, couplings)``: each mode's share of the frequency response, scale-free: the
+    largest over the probe frequencies of ``||C v|| ||w B|| / |s - lambda|`` (``v``, ``w`` its right
+    and left eigenvectors, ``w v = 1``) relative to ``||G(s)||`` there. ``inf`` when the
+    eigenvectors cannot be computed or the response is zero."""
+    lams, v = np.linalg.eig(a)
+    inf = np.full(lams.shape, math.inf)
+    try:
+        w = np.linalg.inv(v)
+    except np.linalg.LinAlgError:
+        return lams, inf
+    omega = _probe_frequencies(a)
+    system = state_space(a, b, c, d, dt)
+    period = sampling_period(system)
+    s = np.exp(1j * omega * period) if period else 1j * omega
+    with np.errstate(all="ignore"):
+        size = np.linalg.norm(frequency_response(system, omega), axis=(1, 2))
+        residue = np.linalg.norm(c @ v, axis=0) * np.linalg.norm(w @ b, axis=1)
+        share = residue[:, None] / np.abs(s[None, :] - lams[:, None]) / size[None, :]
+        couplings = np.max(np.where(np.isfinite(share), share, math.inf), axis=1)
+    return lams, np.where(np.isfinite(couplings), couplings, inf)
+
+
+def _without_modes(a: FloatArray, b: FloatArray, c: FloatArray, removed: npt.NDArray[np.complex128]) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+    """The realisation without the modes at ``removed`` (closed under conjugation): ordered real
+    Schur form, the kept block decoupled from the removed one by a Sylvester equation, the
+    removed block dropped. ``None`` when the blocks cannot be separated."""
+    scale = max(float(np.max(np.abs(removed))), 1e-300)
+
+    def kept(lam: complex) -> bool:
+        return bool(np.min(np.abs(removed - lam)) > 1e-9 * scale)
+
+    try:
+        t, z, k = sla.schur(a, output="real", sort=kept)
+        if k != a.shape[0] - removed.size:
+            return None
+        x = sla.solve_sylvester(t[:k, :k], -t[k:, k:], -t[:k, k:])
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    bz, cz = z.T @ b, c @ z
+    return t[:k, :k], bz[:k] - x @ bz[k:], cz[:, :k]
+
+
+def _drop_uncoupled_modes(exact: ct.StateSpace) -> ct.StateSpace:
+    """Remove the modes whose coupling (:func:`_modal_couplings`) is below ``HIDDEN_MODE_RTOL``,
+    if removing them leaves the response unchanged to ``HIDDEN_MODE_RTOL``. The staircases can
+    keep an exactly hidden mode whose rounding-level coupling the floor pass cannot remove
+    without disturbing the kept modes by more than that (measured: 6 of the 100 hidden-mode test
+    systems on numpy 2.4.6 / scipy 1.17.1, 3 on the install they were tuned on; the mode's own
+    coupling there: 8e-19..2e-13, a genuine mode's at least 0.16)."""
+    a, b, c, d = _raw_matrices(exact)
+    if a.shape[0] == 0:
+        return exact
+    lams, couplings = _modal_couplings(a, b, c, d, exact.dt)
+    low = couplings <= HIDDEN_MODE_RTOL
+    if not np.any(low) or np.all(low):
+        return exact
+    removed = lams[low]
+    if not np.allclose(np.sort_complex(removed), np.sort_complex(removed.conj())):
+        return exact
+    parts = _without_modes(a, b, c, removed)
+    if parts is None:
+        return exact
+    candidate = state_space(*parts, d, exact.dt)
+    return candidate if _same_response(exact, candidate) else exact
+
+
 def minimal_realisation(system: Any, *, field: str = "system") -> ct.StateSpace:
     """A minimal realisation, in two passes on the :func:`balance_states` system:
 
@@ -376,7 +443,11 @@ def minimal_realisation(system: Any, *, field: str = "system") -> ct.StateSpace:
     2. the same with an absolute floor as well (``k n eps ||A||_F``, ``k`` from 1e7 down to 10):
        it removes such modes, and is accepted only if the frequency response (at 0, at every
        pole's modulus and imaginary part, on a grid spanning them) is unchanged to
-       ``HIDDEN_MODE_RTOL`` relative; the largest floor that passes wins.
+       ``HIDDEN_MODE_RTOL`` relative; the largest floor that passes wins;
+    3. the modes whose own share of the response (residue against the response, scale-free:
+       :func:`_modal_couplings`) is below ``HIDDEN_MODE_RTOL`` are decoupled (ordered Schur form
+       and a Sylvester equation) and dropped, under the same response check: a decision on the
+       mode's measured coupling, not on the rounding the staircase left in the other modes.
 
     No threshold like 1e-9 ||A||: a state is removed only when it is hidden (relative to its own
     scale) or when removing it provably leaves the transfer function as it was."""
@@ -403,6 +474,7 @@ def minimal_realisation(system: Any, *, field: str = "system") -> ct.StateSpace:
             if _same_response(exact, candidate):
                 exact = candidate
                 break
+        exact = _drop_uncoupled_modes(exact)
     change = _response_change(balanced, exact)
     a0, b0, c0, _ = _raw_matrices(sys_)
     if not change <= REALISATION_CHECK_RTOL:

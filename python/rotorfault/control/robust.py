@@ -70,6 +70,16 @@ ACHIEVED_NORM_RTOL = 1e-6
 #: 5e-10 gamma_min^2 (poles from 1e-6 to 1e3 rad/s in one plant);
 GAMMA_MIN_RTOL = 1e-8
 GAMMA_MIN_RTOL_CAP = 1e-3
+#: the largest gamma_min the Hankel route can confirm on every install: 1 - h^2 = 1/gamma_min^2
+#: is found by cancellation from gramians whose rounding (about 1e-12 gamma_min^2 relative on
+#: the random badly scaled families, whatever the realisation: unbalanced, state-balanced,
+#: square-root Cholesky factors) depends on the state units and on LAPACK's last bits. Measured
+#: (seeds 1 and 3, both twins): at most 7.5e-6 at gamma_min <= 6.9e3, 3e-4..0.9 from 1.68e4 up
+#: (1e-2 at 9.99e4 on one twin, 4e-4 on the other). Between, the decision against
+#: GAMMA_MIN_RTOL_CAP would hinge on rounding, so beyond this value the design is refused by the
+#: Riccati gamma_min alone (the same on every install and for every state scaling: twins agree
+#: to 1e-7 at 1.05e4, measured) - a stability margin below 1e-4 is not a usable design anyway.
+GAMMA_MIN_CONFIRMABLE_MAX = 1e4
 #: a Riccati solution's residual relative to the size of its terms (measured: below 1e-12 for
 #: gamma_min < 100, at most 4e-8 at gamma_min ~ 1e5 in the random families); a larger one is
 #: not a solution;
@@ -336,7 +346,8 @@ def check_synthesis(
     residuals: tuple[float, float] = (0.0, 0.0),
 ) -> NcfsynEvidence:
     """The checks :func:`ncfsyn` runs before it returns, on the original ``plant`` and weights, in
-    this order: ``gamma_min`` against the Hankel formula (``gamma_min check``), the stability of
+    this order: ``gamma_min`` at most ``GAMMA_MIN_CONFIRMABLE_MAX`` and against the Hankel formula
+    (``gamma_min check``), the stability of
     the loop of ``plant`` with ``K = W1 Ks W2``, every state of plant, weights and controller
     (``internal-stability check``), the four-block norm of ``shaped_controller`` on the full
     shaped plant ``W2 G W1`` against ``gamma`` (``achieved-norm check``). ``ValueError`` naming
@@ -345,6 +356,12 @@ def check_synthesis(
     full = series(w1, plant, w2)
     used = full if synthesis_plant is None else synthesis_plant
     reduced = used.nstates < full.nstates
+    if not gamma_min <= GAMMA_MIN_CONFIRMABLE_MAX:
+        raise ValueError(
+            f"gamma_min check: the Riccati value {gamma_min:.12g} is above {GAMMA_MIN_CONFIRMABLE_MAX:g}, where the "
+            "Hankel formula's rounding reaches the tolerance and cannot confirm it on every install (a gamma_min this "
+            "large means the shaped plant W2 G W1 is close to having a mode no input moves or no output sees: "
+            f"stability margin 1/gamma_min = {1 / gamma_min:.3g})")
     hankel = hankel_gamma_min(used, field="the synthesis plant (a minimal realisation of W2 G W1)")
     tol = min(GAMMA_MIN_RTOL * gamma_min**2, GAMMA_MIN_RTOL_CAP)
     if not abs(hankel - gamma_min) <= tol * gamma_min:
@@ -573,6 +590,7 @@ __all__ = [
     "ACHIEVED_NORM_RTOL",
     "GAMMA_MIN_RTOL",
     "GAMMA_MIN_RTOL_CAP",
+    "GAMMA_MIN_CONFIRMABLE_MAX",
     "PBH_RTOL",
     "RICCATI_RESIDUAL_RTOL",
     "NcfsynEvidence",
