@@ -37,14 +37,25 @@ if control.exception.slycot_check():
 
 def run_without_slycot(code: str, *, timeout_s: float = 600.0) -> Any:
     """Runs ``code`` with slycot hidden and returns the JSON it printed last."""
-    source = _PRELUDE + "\n" + textwrap.dedent(code)
+    return _run(_PRELUDE + "\n" + textwrap.dedent(code), "slycot-free", timeout_s)
+
+
+def run_with_slycot(code: str, *, timeout_s: float = 600.0) -> Any:
+    """Runs ``code`` in a fresh interpreter as installed (slycot importable, checked) and returns
+    the JSON it printed last: the twin of :func:`run_without_slycot`, so that a comparison of the
+    two differs only by slycot, never by what the test session ran before (its BLAS threads,
+    warnings filters or environment)."""
+    prelude = "import control\nif not control.exception.slycot_check():\n    raise SystemExit('slycot is not installed')\n"
+    return _run(prelude + textwrap.dedent(code), "slycot", timeout_s)
+
+
+def _run(source: str, label: str, timeout_s: float) -> Any:
     done = subprocess.run(
         [sys.executable, "-c", source], capture_output=True, text=True, timeout=timeout_s, check=False
     )
     if done.returncode != 0:
-        raise AssertionError(f"the slycot-free subprocess failed ({done.returncode}):\n{done.stderr[-4000:]}")
+        raise AssertionError(f"the {label} subprocess failed ({done.returncode}):\n{done.stderr[-4000:]}")
     lines = [line for line in done.stdout.splitlines() if line.strip()]
     if not lines:
-        raise AssertionError("the slycot-free subprocess printed nothing")
+        raise AssertionError(f"the {label} subprocess printed nothing")
     return json.loads(lines[-1])
-
