@@ -237,9 +237,9 @@ def equilibrate(matrix: npt.NDArray[np.generic]) -> tuple[npt.NDArray[np.generic
     rows = np.ones(scaled.shape[0])
     cols = np.ones(scaled.shape[1])
     for _ in range(8):
-        r = _inverse_power_of_two(_norms(scaled, 1))
+        r = _bounded(rows, _inverse_power_of_two(_norms(scaled, 1)))
         scaled *= r[:, None]
-        c = _inverse_power_of_two(_norms(scaled, 0))
+        c = _bounded(cols, _inverse_power_of_two(_norms(scaled, 0)))
         scaled *= c[None, :]
         rows *= r
         cols *= c
@@ -254,6 +254,15 @@ def _norms(matrix: npt.NDArray[np.generic], axis: int) -> FloatArray:
     peak = np.max(np.abs(matrix), axis=axis, initial=0.0)
     divisor = np.expand_dims(np.where(peak > 0, peak, 1.0), axis)
     return np.asarray(peak * np.linalg.norm(matrix / divisor, axis=axis), dtype=np.float64)
+
+
+def _bounded(total: FloatArray, step: FloatArray) -> FloatArray:
+    """``step`` (powers of two) cut so that ``total * step`` stays within 2^-1000..2^1000: rounds
+    of scaling a subnormal entry next to a unit one would otherwise push the product past the
+    float range (an overflow the hostile harness found)."""
+    exponent_total = np.log2(total)
+    wanted = np.clip(exponent_total + np.log2(step), -1000, 1000)
+    return np.asarray(np.exp2(wanted - exponent_total), dtype=np.float64)
 
 
 def _inverse_power_of_two(norms: FloatArray) -> FloatArray:

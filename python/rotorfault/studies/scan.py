@@ -127,8 +127,9 @@ def efficiency_scan(
     airframe = require_airframe(airframe)
     step = real("step", step)
     give_up_yaw = flag("give_up_yaw", give_up_yaw)
-    if not 0.0 < step <= 1.0:
-        raise ValueError(f"step: must lie in (0, 1], got {step}")
+    # 1e-9: the divisibility tolerance below (and 1 / step stays finite: 1e-310 overflowed).
+    if not 1e-9 <= step <= 1.0:
+        raise ValueError(f"step: must lie in [1e-9, 1], got {step}")
     swept = rotor_numbers("rotors", rotors, airframe.rotor_count)
     if not swept:
         raise ValueError("rotors: give at least one rotor to sweep")

@@ -636,7 +636,9 @@ def _regressions(t: dict[str, Target]) -> None:
         # ||Q|| of a 1e-310 weight underflowed to 0: ZeroDivisionError in the Riccati residual.
         "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),),
         # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
-        "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),),
+        "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),
+                          # The equilibration's cumulative factors overflowed next to a subnormal entry.
+                          Call(control.detectability, (np.zeros((2, 2)), np.array([[1.0, 1e-310]])))),
         # scipy's matrix_balance warned (a cast of its unused permutation) on an entry of 1e-282.
         "stabilisability": (Call(control.stabilisability, (np.array([[0.0, 0.0], [1.0, 9.947778682040334e-282]]), np.zeros((2, 1)))),),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
@@ -681,6 +683,8 @@ def _regressions(t: dict[str, Target]) -> None:
         "Allocator": (Call(rf.Allocator, (quad,), {"regularization": 1e-9, "weights": [10.0, 1e300, 1.0, 0.1]}, frozenset({"regularization", "weights"})),),
         # NumPy 2's norm overflowed its squares (a RuntimeWarning) on a quaternion entry of 1e300.
         "State": (Call(rf.State, (), {"quaternion": [0.0, 0.0, 0.0, 1e300]}, frozenset({"quaternion"})),),
+        # 1 / 1e-310 overflowed to infinity (OverflowError naming nothing).
+        "efficiency_scan": (Call(rf.efficiency_scan, (rf.Airframe.preset("hexa-pnpnpn"),), {"rotors": [1], "step": 1e-310, "progress": False}, frozenset({"step"})),),
         "Airframe.from_rotorpy": (Call(rf.Airframe.from_rotorpy, ({**rotorpy, "mass": None},)), Call(rf.Airframe.from_rotorpy, ({**rotorpy, "rotor_speed_max": 1e300},))),
     }
     for name, cases in found.items():
