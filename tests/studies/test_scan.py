@@ -49,7 +49,7 @@ def test_plot_writes_png(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
         ({"rotors": ()}, ValueError, "at least one rotor"),
         ({"rotors": (7,)}, ValueError, "rotor numbers run from 1 to 6"),
         ({"rotors": ("1",)}, TypeError, "1-based rotor numbers"),
-        ({"step": 0.0}, ValueError, r"step: must lie in \(0, 1\]"),
+        ({"step": 0.0}, ValueError, r"step: must lie in \[1e-9, 1\]"),
         ({"step": 0.07}, ValueError, "step: must divide 1 evenly"),
         ({"step": "0.1"}, TypeError, "step: expected a real number"),
     ],
