@@ -34,12 +34,11 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use nalgebra::DMatrix;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::allocate_clarabel;
 use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{AllocationProblem, Method, SolvedBy};
-use rfcore::fixtures::{solve_uncertified, time_each, Rng};
+use rfcore::fixtures::{ill_conditioned_allocation, solve_uncertified, time_each, Rng};
 use rfcore::{Airframe, Cancel};
 
 const PROBLEMS: usize = 256;
@@ -161,19 +160,7 @@ fn ill_conditioned(per_k: usize) -> Vec<(AllocationProblem, Vec<f64>)> {
     let mut out = Vec::new();
     for k in 4..=12 {
         for _ in 0..per_k {
-            let m = 4 + rng.below(5);
-            let mut matrix = DMatrix::from_fn(4, m, |_, _| rng.normal());
-            let weak = rng.below(m);
-            for r in 0..4 {
-                matrix[(r, weak)] *= 10f64.powi(-k);
-            }
-            let weights: Vec<f64> = (0..4).map(|_| rng.uniform(0.01, 30.0)).collect();
-            let upper: Vec<f64> = (0..m).map(|_| rng.uniform(1.0, 8.0)).collect();
-            let point: Vec<f64> = upper.iter().map(|&h| rng.uniform(-0.1, 1.1) * h).collect();
-            let u_c: Vec<f64> = (0..4)
-                .map(|r| (0..m).map(|c| matrix[(r, c)] * point[c]).sum())
-                .collect();
-            let p = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper).unwrap();
+            let (p, u_c) = ill_conditioned_allocation(&mut rng, k);
             out.push((p, u_c));
         }
     }

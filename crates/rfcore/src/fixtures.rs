@@ -159,3 +159,25 @@ fn phases<const W: usize>(
     }
     (t, iterations)
 }
+
+/// One problem of the ill-conditioned allocation class: 4 axes, 4 to 8 actuators with
+/// normal entries, one column scaled by `10^-k`, weights in [0.01, 30], bounds [0, 1..8], and a
+/// virtual control made by a point in (or slightly outside) the box, drawn from `rng` (the tests
+/// and the bench draw the same sequence from their own seeds).
+pub fn ill_conditioned_allocation(rng: &mut Rng, k: i32) -> (AllocationProblem, Vec<f64>) {
+    let m = 4 + rng.below(5);
+    let mut matrix = nalgebra::DMatrix::from_fn(4, m, |_, _| rng.normal());
+    let weak = rng.below(m);
+    for r in 0..4 {
+        matrix[(r, weak)] *= 10f64.powi(-k);
+    }
+    let weights: Vec<f64> = (0..4).map(|_| rng.uniform(0.01, 30.0)).collect();
+    let upper: Vec<f64> = (0..m).map(|_| rng.uniform(1.0, 8.0)).collect();
+    let point: Vec<f64> = upper.iter().map(|&h| rng.uniform(-0.1, 1.1) * h).collect();
+    let u_c: Vec<f64> = (0..4)
+        .map(|r| (0..m).map(|c| matrix[(r, c)] * point[c]).sum())
+        .collect();
+    let problem = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper)
+        .expect("the ill-conditioned class is valid by construction");
+    (problem, u_c)
+}

@@ -6,7 +6,7 @@ use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver, BoundState};
 use rfcore::allocation::allocate_clarabel;
 use rfcore::allocation::clarabel::ClarabelSettings;
 use rfcore::allocation::{allocate_pinv, AllocationProblem, AllocationStatus};
-use rfcore::fixtures::Rng;
+use rfcore::fixtures::{ill_conditioned_allocation, Rng};
 
 struct Case {
     problem: AllocationProblem,
@@ -500,19 +500,7 @@ fn ill_conditioned_columns_are_certified_and_exact() {
     let mut worst = 0.0f64;
     for k in 4usize..=12 {
         for trial in 0..200 {
-            let m = 4 + rng.below(5);
-            let mut matrix = DMatrix::from_fn(4, m, |_, _| rng.normal());
-            let weak = rng.below(m);
-            for r in 0..4 {
-                matrix[(r, weak)] *= 10f64.powi(-(k as i32));
-            }
-            let weights: Vec<f64> = (0..4).map(|_| rng.uniform(0.01, 30.0)).collect();
-            let upper: Vec<f64> = (0..m).map(|_| rng.uniform(1.0, 8.0)).collect();
-            let point: Vec<f64> = upper.iter().map(|&h| rng.uniform(-0.1, 1.1) * h).collect();
-            let u_c: Vec<f64> = (0..4)
-                .map(|r| (0..m).map(|c| matrix[(r, c)] * point[c]).sum())
-                .collect();
-            let p = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper).unwrap();
+            let (p, u_c) = ill_conditioned_allocation(&mut rng, k as i32);
             let got = ActiveSetSolver::new(&p).allocate(&u_c).unwrap();
             assert_eq!(got.status, AllocationStatus::Optimal, "k {k} trial {trial}");
             assert!(

@@ -3,10 +3,9 @@
 //! gradient and bounds at the returned commands), on the preset airframes and on the
 //! ill-conditioned class (one column 1e-4..1e-12 of the others, weights 0.01..30).
 
-use nalgebra::DMatrix;
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::{AllocationProblem, SolvedBy};
-use rfcore::fixtures::Rng;
+use rfcore::fixtures::{ill_conditioned_allocation, Rng};
 
 /// Solves `u_c` cold and checks the report's certificate against the recomputed one; returns
 /// whether the answer is the active set's (not the fallback's).
@@ -61,19 +60,7 @@ fn certificate_from_phase_one_equals_the_recomputed_certificate_when_ill_conditi
     let mut rng = Rng(3232);
     for k in 4..=12 {
         for _ in 0..40 {
-            let m = 4 + rng.below(5);
-            let mut matrix = DMatrix::from_fn(4, m, |_, _| rng.normal());
-            let weak = rng.below(m);
-            for r in 0..4 {
-                matrix[(r, weak)] *= 10f64.powi(-k);
-            }
-            let weights: Vec<f64> = (0..4).map(|_| rng.uniform(0.01, 30.0)).collect();
-            let upper: Vec<f64> = (0..m).map(|_| rng.uniform(1.0, 8.0)).collect();
-            let point: Vec<f64> = upper.iter().map(|&h| rng.uniform(-0.1, 1.1) * h).collect();
-            let u_c: Vec<f64> = (0..4)
-                .map(|r| (0..m).map(|c| matrix[(r, c)] * point[c]).sum())
-                .collect();
-            let problem = AllocationProblem::new(matrix, &weights, &vec![0.0; m], &upper).unwrap();
+            let (problem, u_c) = ill_conditioned_allocation(&mut rng, k);
             certificate_is_recomputed_exactly(&ActiveSetSolver::new(&problem), &u_c);
         }
     }
