@@ -69,6 +69,15 @@ CASES = {
         ready()
         interrupted_inside(lambda: sim.run(duration_s=24_000.0, controller=lambda t, x: [0.0] * 4, record_every=10**9))
     """,
+    # One control period of 10^5 s with sensors: 3.2e9 IMU samples and filter steps (hours) between
+    # the simulator's once-per-period checks, so the sensors' loop must check on its own.
+    "simulate_sensed_one_long_period": """
+        sim = rf.Simulator(rf.Airframe.preset("quad-x"), ground=False, dt_s=1e5, substeps=10_000,
+            sensing=rf.Sensing(imu_rate_hz=32_000.0), limits=rf.DivergenceLimits(
+            max_tilt_rad=np.inf, max_altitude_loss_m=np.inf, max_speed_m_s=np.inf, max_rate_rad_s=np.inf))
+        ready()
+        interrupted_inside(lambda: sim.run(duration_s=1e5, controller=lambda t, x: [0.0] * 4))
+    """,
     "allocation_batch": """
         frame = rf.Airframe.preset("ke-quadcopter")
         controls = np.tile([30.0, 0.5, -0.3, 0.2], (2_000_000, 1))

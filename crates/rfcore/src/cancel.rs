@@ -9,7 +9,9 @@
 //!   and the facet enumeration every [`GROUPS_PER_CHECK`] column groups;
 //! - the failure table, allocation batches and replays once per item;
 //! - a run once per control period (at most [`crate::flight::simulation::MAX_SUBSTEPS`] RK4
-//!   steps), so `simulate`, `simulate_batch` and the campaign summaries inside their rayon pools.
+//!   steps), so `simulate`, `simulate_batch` and the campaign summaries inside their rayon pools;
+//!   with sensing also before every sensor sample of the period (one estimator step, ~4 us: a
+//!   period holds `dt_s x imu_rate_hz` of them, unbounded by the substep cap).
 //!
 //! A check is one relaxed atomic load (~1 ns), next to microseconds of work between checks.
 

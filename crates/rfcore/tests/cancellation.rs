@@ -24,7 +24,7 @@ use rfcore::control::{replay, Controller, OpenLoop};
 use rfcore::fixtures::{preset, time_each};
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag};
 use rfcore::flight::simulation::{
-    simulate_batch, simulate_cancellable, BatchRun, SimulationConfig,
+    simulate_batch, simulate_cancellable, BatchRun, Sensing, SimulationConfig, MAX_SUBSTEPS,
 };
 use rfcore::flight::summary::{simulate_summaries, SummaryRun, VerdictCriteria};
 use rfcore::flight::vehicle::{Drag, Vehicle};
@@ -175,6 +175,29 @@ fn flights_stop() {
             c,
         )
     });
+    // One control period of 10^5 s with sensors: 3.2e9 IMU samples and filter steps between the
+    // driver's once-per-period checks (hours), so the sensors' loop checks on its own.
+    let mut sensed = SimulationConfig::new(1e5, MAX_SUBSTEPS, 1e5);
+    sensed.ground_z_m = None;
+    sensed.sensing = Some(Sensing {
+        imu_rate_hz: 32_000.0,
+        ..Sensing::default()
+    });
+    interrupted(
+        "simulate_cancellable, sensed (one period of 3.2e9 IMU samples)",
+        |c| {
+            simulate_cancellable(
+                &vehicle,
+                actuators.clone(),
+                &mut controller,
+                &[1.0; 4],
+                &[],
+                x0,
+                &sensed,
+                c,
+            )
+        },
+    );
     let runs = || -> Vec<BatchRun> {
         (0..8)
             .map(|_| BatchRun {

@@ -1,7 +1,8 @@
 //! The driver: one closed-loop run ([`simulate`], [`simulate_observed`]) checked before any
 //! work, flown control step by control step (measure, command, record, then one
 //! `Integrator::period`), and many runs in parallel ([`simulate_batch`]). Runs check a
-//! [`Cancel`] token once per control period (`*_cancellable`, the batch).
+//! [`Cancel`] token once per control period (`*_cancellable`, the batch) and, with sensing, once
+//! per sensor sample inside the period (`Onboard::catch_up`).
 
 use rayon::prelude::*;
 
@@ -69,7 +70,8 @@ pub fn simulate_cancellable(
 }
 
 /// [`simulate`], showing every control step to `observer` as it is flown, and checking `cancel`
-/// once per control period (at most [`crate::flight::simulation::MAX_SUBSTEPS`] RK4 steps).
+/// once per control period (at most [`crate::flight::simulation::MAX_SUBSTEPS`] RK4 steps) and,
+/// with sensing, before every sensor sample (one filter step) inside it.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_observed(
     vehicle: &Vehicle,
@@ -152,7 +154,7 @@ pub fn simulate_observed(
     if let Some(onboard) = onboard.as_mut() {
         integrator.tape_start(0.0, &state, &actuators, &efficiency);
         if let Some(tape) = integrator.tape() {
-            onboard.catch_up(tape, vehicle, 0.0)?;
+            onboard.catch_up(tape, vehicle, 0.0, cancel)?;
         }
     }
     if let Some(reason) = integrator.limits().reason(&state) {
@@ -264,7 +266,7 @@ pub fn simulate_observed(
             return Ok(trajectory);
         }
         if let (Some(onboard), Some(tape)) = (onboard.as_mut(), integrator.tape()) {
-            onboard.catch_up(tape, vehicle, t_next)?;
+            onboard.catch_up(tape, vehicle, t_next, cancel)?;
         }
     }
     if let (Some(record), Some(onboard)) = (trajectory.sensing.as_mut(), onboard.as_ref()) {
