@@ -15,6 +15,7 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import ControlAxes
 from .._util.convert import FloatArray, control_axes, flag, float_array, real, rotor_numbers
+from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe, require_airframe
 from .allocator import CLARABEL_TOLERANCE, Allocator
 
@@ -124,7 +125,7 @@ def hover_wrench_distance(airframe: Airframe, efficiency: npt.ArrayLike | None =
             f"airframe: the distance of {frame.name}'s hover wrench to its attainable set could not be certified "
             f"(allocation status {answer.status}); report this case"
         )
-    distance = float(np.linalg.norm(np.asarray(answer.achieved) - goal))
+    distance = scaled_norm(np.asarray(answer.achieved) - goal)
     # Attained up to the solver's rounding: within the certificate's tolerance of the wrench's size.
     return 0.0 if distance <= certificate.tolerance * max(1.0, float(goal[0])) else distance
 

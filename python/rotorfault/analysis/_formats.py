@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._util.convert import float_array, real
+from .._util.numeric import scaled_norm
 
 #: Used for PX4 imports without ``inertia_kg_m2`` (PX4 keeps no inertia): the ACAI, failure
 #: tables, hover margins and ``certify`` do not depend on it; simulations do.
@@ -97,7 +98,7 @@ def px4_columns(
     m = int(count)
     get = {key: np.array([params.get(f"CA_ROTOR{n}_{key}", d) for n in range(m)]) for key, d in _PX4_DEFAULTS.items()}
     axis = np.stack([get["AX"], get["AY"], get["AZ"]], axis=1)
-    norms = np.linalg.norm(axis, axis=1)
+    norms = scaled_norm(axis, axis=1)
     for n, norm in enumerate(norms):
         if norm == 0.0:
             raise ValueError(f"{origin}: CA_ROTOR{n}_AX/AY/AZ: the thrust axis of rotor {n + 1} is zero")

@@ -11,6 +11,7 @@ from rich.markup import escape
 
 from .._typing import AcaiFormula
 from .._util.output import check_output_file
+from .._util.numeric import scaled_norm
 from ..analysis import Airframe, acai_label
 from ..studies.scan import efficiency_scan
 from .app import _user_errors, airframe_option, cli, resumable_interruptions, formula_option, load_airframe, parse_numbers, parse_rotors
@@ -196,7 +197,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in run.faults],
         "final_position_m": [float(v) for v in run.position[-1]],
         "max_altitude_loss_m": float(max(0.0, altitude[0] - altitude.min())),
-        "max_horizontal_excursion_m": float(np.linalg.norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
+        "max_horizontal_excursion_m": float(scaled_norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
         "max_tilt_deg": float(tilt.max()), "sensed": run.sensed,
         "verdict": metrics.verdict, "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
         "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time, "description": run.events[0].description},

@@ -32,6 +32,7 @@ import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array, real
 from .._util.deprecation import warn
+from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe, rotor_labels
 from ..allocation import Allocator
 from ..analysis.acai import acai
@@ -138,15 +139,15 @@ def hover_trim(simulator: Simulator, *, position: npt.ArrayLike = (0.0, 0.0, 0.0
             f"wind: the drag of wind {simulator.wind} m/s outweighs gravity along the vertical "
             f"(passive acceleration {passive} m/s^2): no upright hover"
         )
-    thrust = airframe.mass_kg * float(np.linalg.norm(passive))
+    thrust = airframe.mass_kg * scaled_norm(passive)
     # Body z (down) in the world must point along the passive acceleration; undo the heading.
     c, s = math.cos(heading), math.sin(heading)
-    axis = passive / np.linalg.norm(passive)
+    axis = passive / scaled_norm(passive)
     n, e, d = c * axis[0] + s * axis[1], -s * axis[0] + c * axis[1], axis[2]
     x[6] = math.asin(max(-1.0, min(1.0, -e))) + 0.0  # roll (+ 0.0: no -0.0)
     x[7] = math.atan2(n, d)  # pitch
     command, saturated = _hover_thrusts(airframe, thrust)
-    residual = float(np.linalg.norm(simulator.state_derivative(x, command)))
+    residual = scaled_norm(simulator.state_derivative(x, command))
     if not residual <= TRIM_RESIDUAL_TOL:
         raise ValueError(
             f"trim residual: the hover of {airframe.name} leaves ||f(x, u)|| = {residual:.3g} (at most "
@@ -168,7 +169,7 @@ def _hover_thrusts(airframe: Airframe, thrust: float) -> tuple[FloatArray, tuple
     lo, hi = lower[active], upper[active]
     span = hi - lo
     u, *_ = np.linalg.lstsq(b, wrench, rcond=None)
-    if np.linalg.norm(b @ u - wrench) > 1e-9 * thrust:
+    if scaled_norm(b @ u - wrench) > 1e-9 * thrust:
         raise ValueError(
             f"{airframe.name}: no rotor thrusts give {thrust:.6g} N with zero torque (rank B_f < 4 "
             "and the hover wrench outside its range)"

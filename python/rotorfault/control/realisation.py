@@ -36,6 +36,7 @@ import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .._util.convert import FloatArray
+from .._util.numeric import scaled_norm
 
 Matrices = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
 
@@ -246,8 +247,8 @@ def _balancing_scale(a: FloatArray, b: FloatArray, c: FloatArray) -> FloatArray:
     a, b, c = a.copy(), b.copy(), c.copy()
 
     def norms(i: int) -> tuple[float, float]:
-        col = float(np.hypot(np.linalg.norm(np.delete(a[:, i], i)), np.linalg.norm(c[:, i])))
-        row = float(np.hypot(np.linalg.norm(np.delete(a[i, :], i)), np.linalg.norm(b[i, :])))
+        col = float(np.hypot(scaled_norm(np.delete(a[:, i], i)), scaled_norm(c[:, i])))
+        row = float(np.hypot(scaled_norm(np.delete(a[i, :], i)), scaled_norm(b[i, :])))
         return col, row
 
     def scale(i: int, f: float) -> None:
@@ -301,7 +302,7 @@ def controllable_basis(a: FloatArray, b: FloatArray, *, floor: float = 0.0) -> F
     n = a.shape[0]
     if n == 0:
         return np.zeros((0, 0))
-    norms = np.linalg.norm(b, axis=0)
+    norms = scaled_norm(b, axis=0)
     bn = b[:, norms > 0] / norms[norms > 0] if np.any(norms > 0) else np.zeros((n, 0))
     if bn.shape[1] == 0:
         return np.zeros((n, 0))
@@ -362,8 +363,8 @@ def _same_response(full: ct.StateSpace, reduced: ct.StateSpace) -> bool:
         r1, r2 = frequency_response(full, w), frequency_response(reduced, w)
         if not (np.all(np.isfinite(r1)) and np.all(np.isfinite(r2))):
             return False
-        size = np.linalg.norm(r1, axis=(1, 2))
-        return bool(np.all(np.linalg.norm(r1 - r2, axis=(1, 2)) <= HIDDEN_MODE_RTOL * size))
+        size = scaled_norm(r1, axis=(1, 2))
+        return bool(np.all(scaled_norm(r1 - r2, axis=(1, 2)) <= HIDDEN_MODE_RTOL * size))
 
 
 def _modal_couplings(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray, dt: Any) -> tuple[npt.NDArray[np.complex128], FloatArray]:
@@ -382,8 +383,8 @@ def _modal_couplings(a: FloatArray, b: FloatArray, c: FloatArray, d: FloatArray,
     period = sampling_period(system)
     s = np.exp(1j * omega * period) if period else 1j * omega
     with np.errstate(all="ignore"):
-        size = np.linalg.norm(frequency_response(system, omega), axis=(1, 2))
-        residue = np.linalg.norm(c @ v, axis=0) * np.linalg.norm(w @ b, axis=1)
+        size = scaled_norm(frequency_response(system, omega), axis=(1, 2))
+        residue = scaled_norm(c @ v, axis=0) * scaled_norm(w @ b, axis=1)
         share = residue[:, None] / np.abs(s[None, :] - lams[:, None]) / size[None, :]
         couplings = np.max(np.where(np.isfinite(share), share, math.inf), axis=1)
     return lams, np.where(np.isfinite(couplings), couplings, inf)
@@ -462,7 +463,7 @@ def minimal_realisation(system: Any, *, field: str = "system") -> ct.StateSpace:
         # Not rebalanced: balancing a nearly hidden state would spread its rounding-level
         # coupling over both sides (the geometric mean of eps and its other coupling).
         a2, b2, c2 = a1, b1, c1
-        size = a2.shape[0] * _EPS * float(np.linalg.norm(a2))
+        size = a2.shape[0] * _EPS * scaled_norm(a2)
         # A direction's error grows with ||A|| / (the coupling it was found from): rounding can
         # leave a hidden mode coupled far above eps ||A||. Try floors from sqrt(eps) ||A|| down;
         # keep the smallest realisation whose response is unchanged.
@@ -481,8 +482,8 @@ def minimal_realisation(system: Any, *, field: str = "system") -> ct.StateSpace:
         raise ValueError(
             f"{field}: minimal-realisation check: removing the {sys_.nstates - exact.nstates} state(s) the staircase "
             f"found hidden changes the frequency response by {change:.3g} of its size (above "
-            f"{REALISATION_CHECK_RTOL:g}): the system's scales are too far apart (||A|| = {np.linalg.norm(a0):.3g} "
-            f"against ||B|| = {np.linalg.norm(b0):.3g} and ||C|| = {np.linalg.norm(c0):.3g}) for a reliable "
+            f"{REALISATION_CHECK_RTOL:g}): the system's scales are too far apart (||A|| = {scaled_norm(a0):.3g} "
+            f"against ||B|| = {scaled_norm(b0):.3g} and ||C|| = {scaled_norm(c0):.3g}) for a reliable "
             "reduction; rescale its inputs, outputs or time")
     out, _ = balance_states(exact)
     return out
@@ -509,11 +510,11 @@ def _response_change(full: ct.StateSpace, reduced: ct.StateSpace) -> float:
         if not np.any(finite):
             return 0.0
         r1, r2 = r1[finite], r2[finite]
-        size = np.linalg.norm(r1, axis=(1, 2))
+        size = scaled_norm(r1, axis=(1, 2))
         floor = 1e-12 * float(np.max(size))
         if floor == 0.0:
             return 0.0 if np.all(r2 == 0) else math.inf
-        change = np.linalg.norm(r1 - r2, axis=(1, 2)) / np.maximum(size, floor)
+        change = scaled_norm(r1 - r2, axis=(1, 2)) / np.maximum(size, floor)
         return float(np.max(np.where(np.isfinite(change), change, math.inf)))
 
 

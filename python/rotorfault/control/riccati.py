@@ -39,6 +39,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array, real
+from .._util.numeric import scaled_norm
 from .stabilisability import ComplexArray, PbhTest, balance, detectability, stabilisability, system_matrices
 
 #: Largest accepted Riccati residual relative to the equation's terms (:func:`riccati_residual`):
@@ -151,7 +152,7 @@ def design_lqr(
     ab, bb, qb = a / t[:, None] * t[None, :], b / t[:, None], qm * t[:, None] * t[None, :]
     xb, kb, (relative, relative_q) = _refined(ab, bb, qb, rm, _solve(ab, bb, qb, rm, is_discrete), is_discrete)
     if not (math.isfinite(relative) and relative <= RESIDUAL_RTOL):
-        size = float(np.linalg.norm(xb) / np.linalg.norm(qb))
+        size = scaled_norm(xb) / scaled_norm(qb)
         raise ValueError(
             f"riccati residual: the solution of {model}'s Riccati equation leaves a residual of "
             f"{relative:.3g} of its terms ({relative_q:.3g} ||Q||; at most {RESIDUAL_RTOL:g} of the terms "

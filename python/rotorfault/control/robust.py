@@ -47,6 +47,7 @@ import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
 from .._util.convert import FloatArray, real
+from .._util.numeric import scaled_norm
 from ..plotting.frequency import plot_singular_values
 from .norms import hinf_norm, hinf_norm_below, peak_gain
 from .realisation import (
@@ -178,8 +179,8 @@ def _care(a: FloatArray, b: FloatArray, q: FloatArray, r: FloatArray, name: str)
                          "has a mode on the imaginary axis that no input moves or no output sees") from None
     x = (x + x.T) / 2
     g = b @ np.linalg.solve(r, b.T)
-    terms = float(np.linalg.norm(q) + 2 * np.linalg.norm(a) * np.linalg.norm(x) + np.linalg.norm(x @ g @ x))
-    residual = float(np.linalg.norm(a.T @ x + x @ a - x @ g @ x + q)) / max(terms, 1e-300)
+    terms = scaled_norm(q) + 2 * scaled_norm(a) * scaled_norm(x) + scaled_norm(x @ g @ x)
+    residual = scaled_norm(a.T @ x + x @ a - x @ g @ x + q) / max(terms, 1e-300)
     if not residual <= RICCATI_RESIDUAL_RTOL:
         raise ValueError(f"{name}: the Riccati solution's residual is {residual:.3g} of its terms (above "
                          f"{RICCATI_RESIDUAL_RTOL:g}): the shaped plant is too ill-conditioned for this synthesis")
@@ -253,8 +254,8 @@ def _pbh_measures(system: ct.StateSpace) -> list[tuple[complex, float, float]]:
     a, b, c, _ = _matrices(balanced)
     if a.shape[0] == 0:
         return []
-    bn = b / np.maximum(np.linalg.norm(b, axis=0), 1e-300)[None, :]
-    cn = c / np.maximum(np.linalg.norm(c, axis=1), 1e-300)[:, None]
+    bn = b / np.maximum(scaled_norm(b, axis=0), 1e-300)[None, :]
+    cn = c / np.maximum(scaled_norm(c, axis=1), 1e-300)[:, None]
     try:
         lams, left, right = sla.eig(a, left=True, right=True)
     except (np.linalg.LinAlgError, ValueError) as exc:
@@ -264,9 +265,9 @@ def _pbh_measures(system: ct.StateSpace) -> list[tuple[complex, float, float]]:
     for k, lam in enumerate(lams):
         if lam.real < -PBH_RTOL * max(abs(lam), scale * _EPS_SCALE):
             continue
-        vl = left[:, k] / np.linalg.norm(left[:, k])
-        vr = right[:, k] / np.linalg.norm(right[:, k])
-        out.append((complex(lam), float(np.linalg.norm(vl.conj() @ bn)), float(np.linalg.norm(cn @ vr))))
+        vl = left[:, k] / scaled_norm(left[:, k])
+        vr = right[:, k] / scaled_norm(right[:, k])
+        out.append((complex(lam), scaled_norm(vl.conj() @ bn), scaled_norm(cn @ vr)))
     return out
 
 

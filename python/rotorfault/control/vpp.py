@@ -39,6 +39,7 @@ from .. import _rfcore
 from .._typing import VppInputs
 from .._util.convert import FloatArray, float_array, frozen_array, real, rotor_numbers
 from .._util.deprecation import warn
+from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe
 from ..flight import Drag, Simulator, VariablePitchActuator
 from .linear import STATE_DIM, STATE_LABELS, LinearFeedback
@@ -229,7 +230,7 @@ class _Problem:
         rows = airframe.with_efficiency(np.ones(m)).effectiveness_matrix()[:3, healthy]
         target = np.array([weight, 0.0, 0.0])
         f, *_ = np.linalg.lstsq(rows, target, rcond=None)
-        if np.linalg.norm(rows @ f - target) > 1e-9 * weight:
+        if scaled_norm(rows @ f - target) > 1e-9 * weight:
             raise ValueError(
                 f"failed: with propeller(s) {list(self.failed)} failed no thrusts of propellers "
                 f"{[int(i) + 1 for i in healthy]} give {weight:.6g} N with zero roll and pitch torque: no trim"
@@ -416,7 +417,7 @@ def trim(
     state = np.zeros(STATE_DIM)
     state[0:3] = pos
     state[8] = heading
-    residual = float(np.linalg.norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command)))
+    residual = scaled_norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command))
     if not residual <= TRIM_RESIDUAL_TOL:
         raise ValueError(
             f"trim residual: the trim leaves ||f(x, u)|| = {residual:.3g} (at most {TRIM_RESIDUAL_TOL:g}): "
@@ -447,7 +448,7 @@ def fixed_pitch_trim(vehicle: VppVehicle, *, failed: Sequence[int] = (1,), pitch
     command[1::2] = alpha
     command[[2 * (i - 1) for i in problem.failed]] = 0.0
     state = np.zeros(STATE_DIM)
-    residual = float(np.linalg.norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command)))
+    residual = scaled_norm(vehicle.simulator(failed=problem.failed).state_derivative(state, command))
     return VppTrim(
         frozen_array("state", state, 1), frozen_array("command", command, 1), frozen_array("thrust_n", problem.thrust, 1),
         problem.failed, (), problem.healthy, residual,

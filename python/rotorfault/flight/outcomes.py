@@ -39,6 +39,7 @@ import numpy as np
 from .. import _rfcore
 from .._typing import DivergenceKind, FlightOutcome, FlightVerdict
 from .._util.convert import FloatArray, real
+from .._util.numeric import scaled_norm
 
 _CRITERIA = _rfcore.VerdictCriteria()
 #: "holds position": over the last ``window_s`` seconds the horizontal error stays within 2 m
@@ -313,7 +314,7 @@ def flight_metrics(
     )
     last = t >= t[-1] - window_s
     relative = trajectory.velocity - reference_velocity
-    speed = np.linalg.norm(relative, axis=1)
+    speed = scaled_norm(relative, axis=1)
     h_speed = np.hypot(relative[:, 0], relative[:, 1])
     window = (
         float(np.max(horizontal[last])),

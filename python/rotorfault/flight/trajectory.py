@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import FloatArray
+from .._util.numeric import scaled_norm
 from .._util.tables import Column, Tabular, arrow_table, pyarrow, schema_metadata
 from .._typing import DivergenceKind, Sensed
 from .faults import RotorFault
@@ -199,7 +200,7 @@ class Trajectory(Tabular):
     def estimate_position_error_m(self) -> FloatArray:
         """Per row, the distance between the estimated and the true position (m)."""
         e = self._estimate("estimate_position_error_m")
-        out: FloatArray = np.linalg.norm(e.position - self.position, axis=1)
+        out: FloatArray = scaled_norm(e.position - self.position, axis=1)
         return out
 
     def _estimate(self, name: str) -> Estimates:

@@ -60,6 +60,7 @@ from typing import Any
 import numpy as np
 
 from .. import _rfcore
+from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, State
 from ..flight.outcomes import FLYING
@@ -110,8 +111,8 @@ class CampaignVehicle:
         """Pairs of rotors (1-based) mounted opposite each other (positions negatives of each other)."""
         p = self.airframe.position_m[:, :2]
         m = len(p)
-        scale = float(np.max(np.linalg.norm(p, axis=1)))
-        return tuple((i + 1, j + 1) for i in range(m) for j in range(i + 1, m) if np.linalg.norm(p[i] + p[j]) <= 1e-9 * scale)
+        scale = float(np.max(scaled_norm(p, axis=1)))
+        return tuple((i + 1, j + 1) for i in range(m) for j in range(i + 1, m) if scaled_norm(p[i] + p[j]) <= 1e-9 * scale)
 
 
 def _ke_vehicle(name: str) -> CampaignVehicle:
