@@ -449,7 +449,10 @@ def _acai_batch(draw: st.DrawFn, frame: rf.Airframe) -> Call:
 
 def _simulate(draw: st.DrawFn, frame: rf.Airframe) -> Call:
     frame = draw(upright_airframes())
-    sim = rf.Simulator(frame, ground=draw(st.booleans()))
+    # Sometimes on sensors and the estimator (the sensors' loop checks for Ctrl-C on its own).
+    sensing = draw(st.none() | st.builds(rf.Sensing, suite=st.sampled_from(("mocap", "gnss", "rtk")),
+                                         imu_rate_hz=positive(100, 2000), seed=st.integers(0, 100)))
+    sim = rf.Simulator(frame, ground=draw(st.booleans()), sensing=sensing)
     x0s = draw(st.lists(valid_states(), min_size=1, max_size=2))
     kwargs: dict[str, Any] = {}
     if draw(st.booleans()):
