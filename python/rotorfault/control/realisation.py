@@ -71,6 +71,17 @@ def _raw_matrices(system: ct.StateSpace) -> Matrices:
             np.asarray(system.C, dtype=np.float64), np.asarray(system.D, dtype=np.float64))
 
 
+def require_entry_scale(label: str, matrix: FloatArray) -> None:
+    """``ValueError`` starting with ``label`` unless ``matrix``'s largest entry is 0 or lies in
+    [:data:`MIN_ENTRY`, :data:`MAX_ENTRY`] in magnitude (the control room's one scale rule, for
+    systems and for the plants and weights of an LQR design alike)."""
+    largest = float(np.max(np.abs(matrix))) if matrix.size else 0.0
+    if largest != 0.0 and not MIN_ENTRY <= largest <= MAX_ENTRY:
+        raise ValueError(f"{label}'s largest entry must be 0 or lie in [{MIN_ENTRY:g}, {MAX_ENTRY:g}] "
+                         f"in magnitude (the products the norms and Riccati equations form must stay normal "
+                         f"doubles; subnormal and absurd scales are refused), got {largest:g}")
+
+
 def as_state_space(field: str, system: Any, *, static: bool = True, discrete: bool = True) -> ct.StateSpace:
     """``system`` as a ``StateSpace``: a ``StateSpace`` as is, a ``TransferFunction`` by
     :func:`realise_transfer_function`, a number or matrix as a static gain. ``TypeError`` for
@@ -98,11 +109,7 @@ def as_state_space(field: str, system: Any, *, static: bool = True, discrete: bo
     for name, m in (("A", a), ("B", b), ("C", c), ("D", d)):
         if not np.all(np.isfinite(m)):
             raise ValueError(f"{field}: the matrix {name} must be finite (it holds inf or NaN)")
-        largest = float(np.max(np.abs(m))) if m.size else 0.0
-        if largest != 0.0 and not MIN_ENTRY <= largest <= MAX_ENTRY:
-            raise ValueError(f"{field}: the matrix {name}'s largest entry must be 0 or lie in [{MIN_ENTRY:g}, {MAX_ENTRY:g}] "
-                             f"in magnitude (the products the norms and Riccati equations form must stay normal "
-                             f"doubles; subnormal and absurd scales are refused), got {largest:g}")
+        require_entry_scale(f"{field}: the matrix {name}", m)
     if not static and a.shape[0] == 0:
         raise ValueError(f"{field}: a static system (no states); a dynamic system is needed here")
     if not discrete and out.isdtime(strict=True):

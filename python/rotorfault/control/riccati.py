@@ -40,6 +40,7 @@ import numpy.typing as npt
 
 from .._util.convert import FloatArray, float_array, frozen_array, real
 from .._util.numeric import scaled_norm
+from .realisation import require_entry_scale
 from .stabilisability import ComplexArray, PbhTest, balance, detectability, stabilisability, system_matrices
 
 #: Largest accepted Riccati residual relative to the equation's terms (:func:`riccati_residual`):
@@ -271,6 +272,7 @@ def _plant(plant: Any, discrete: bool | None, dt_s: float | None) -> tuple[Float
         if bad.size:
             i, j = bad[0]
             raise ValueError(f"{name}[{i}, {j}]: must be finite, got {matrix[i, j]}")
+        require_entry_scale(name, matrix)
     return a, b, is_discrete, period
 
 
@@ -285,6 +287,8 @@ def _weight(name: str, value: npt.ArrayLike, size: int, *, definite: bool) -> tu
     if bad.size:
         i, j = bad[0]
         raise ValueError(f"{name}[{i}, {j}]: must be finite, got {w[i, j]}")
+    # A subnormal weight (r = 1e-310) made the gain infinite and the residual NaN.
+    require_entry_scale(name, w)
     rule = "positive definite" if definite else "positive semi-definite"
     diagonal = np.diag(w).copy()
     if np.any(diagonal < 0):

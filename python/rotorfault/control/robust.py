@@ -445,6 +445,11 @@ def ncfsyn(
     # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
     _require_stabilisable_detectable(full)
     gs = minimal_realisation(full, field="the shaped plant W2 G W1")
+    if gs.nstates == 0:
+        # Every state hidden (B = 0, C = 0 or a zero weight): scipy's Riccati solver failed on the
+        # empty Hamiltonian with LAPACK's bare "dgges: lwork=0".
+        raise ValueError("plant: the shaped plant W2 G W1 has no state its inputs move and its outputs see (its minimal "
+                         "realisation is static: a zero weight, or B = 0 or C = 0): there is no loop shape to synthesise")
     ks, gamma_min, gamma, x, z, rx, rz = _central_controller(gs, factor)
     evidence = check_synthesis(g, w1s, w2s, ks, gamma_min, gamma, synthesis_plant=gs, residuals=(rx, rz))
     return NcfsynResult(controller=series(w2s, ks, w1s), shaped_controller=ks, shaped_plant=full, synthesis_plant=gs,

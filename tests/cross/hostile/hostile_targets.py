@@ -417,6 +417,13 @@ def _first_order() -> Any:
     return ct.ss(-np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)))
 
 
+def _hidden_first_order() -> Any:
+    """A stable mode nothing moves and nothing sees (B = C = 0)."""
+    import control as ct
+
+    return ct.ss(-np.eye(1), np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1)))
+
+
 def _lanzon_design() -> Any:
     return control.lanzon.design(control.lanzon.LanzonVehicle(), crossover_rad_s=30.0)
 
@@ -631,13 +638,20 @@ def _regressions(t: dict[str, Target]) -> None:
         "lanzon_plant": (Call(control.lanzon_plant, ("x",)),),  # AttributeError
         "plot_efficiency_scan": (Call(rf.plot_efficiency_scan, (None,)),),  # AttributeError
         # numpy's "could not convert string to float"; an empty plant reached LAPACK (dgges: lwork=0).
-        "ncfsyn": (Call(rf.ncfsyn, ((1, "a"), np.eye(1)), {}, frozenset()), Call(rf.ncfsyn, ([], np.zeros((0, 1))), {}, frozenset())),
+        "ncfsyn": (Call(rf.ncfsyn, ((1, "a"), np.eye(1)), {}, frozenset()), Call(rf.ncfsyn, ([], np.zeros((0, 1))), {}, frozenset()),
+                   # Every state hidden (a zero weight; B = C = 0): LAPACK's bare "dgges: lwork=0".
+                   Call(rf.ncfsyn, (_first_order(), np.zeros((1, 1))), {"factor": 1.01}, frozenset()),
+                   Call(rf.ncfsyn, (_hidden_first_order(), np.eye(1)), {"factor": 1.01}, frozenset())),
         # A string accepted as ``ours`` and ``tolerance``, failing later in number_rows' arithmetic.
         "number_rows": (Call(lambda: papers.number_rows([papers.PaperNumber("du", "Table 1", "ACAI", 0.0, "x", 1e-6)])),),  # type: ignore[arg-type]
         "PaperNumber": (Call(papers.PaperNumber, ("du", "Table 1", "ACAI", 0.0, 0.0, "x")),),
         "Noise": (Call(lambda: rf.Simulator(quad, noise=rf.Noise(snr_db=-1e300)), (), {}, frozenset({"snr_db"})),),  # OverflowError
         # ||Q|| of a 1e-310 weight underflowed to 0: ZeroDivisionError in the Riccati residual.
-        "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),),
+        "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),
+                       # r = 1e-310: an infinite gain, then NaN in the Riccati residual (a RuntimeWarning);
+                       # weights and plants are held to the control room's scale rule now.
+                       Call(control.design_lqr, (_first_order(), np.eye(1), np.array([[1e-310]])), {}, frozenset({"r"})),
+                       Call(control.design_lqr, ((np.array([[1e300]]), np.eye(1)), np.eye(1), np.eye(1)), {}, frozenset({"plant A"}))),
         # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
         "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),
                           # The equilibration's cumulative factors overflowed next to a subnormal entry.
