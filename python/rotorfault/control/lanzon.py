@@ -371,7 +371,9 @@ class LanzonDesign:
 
     @property
     def controller(self) -> ct.StateSpace:
-        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``."""
+        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``,
+        named as the plant's signals: inputs ``phi, theta, dr``, outputs ``du_f, tau_q, dtau_r``
+        (:func:`~rotorfault.control.lanzon_plant`)."""
         return self.synthesis.controller
 
     def discretise(self, dt_s: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:

@@ -135,6 +135,12 @@ class NcfsynResult:
     normalised-coprime-factor uncertainty tolerated). ``x`` and ``z`` are the two Riccati
     solutions; ``evidence`` what was checked before returning (:class:`NcfsynEvidence`).
 
+    Signal names: the shaped plant's inputs are W1's, its outputs W2's (the plant's when ``w2`` is
+    the identity); ``controller`` reads the plant's outputs and drives its inputs,
+    ``shaped_controller`` the shaped plant's; states keep their systems' names (prefixed by
+    ``w1.``, ``plant.``, ``w2.`` when two collide), numbered ``ks_i`` and ``gs_i`` for the
+    central controller and the minimal realisation, whose states stand for no single quantity.
+
     Examples:
 
         >>> import control as ct
