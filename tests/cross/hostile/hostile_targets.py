@@ -649,7 +649,7 @@ def _regressions(t: dict[str, Target]) -> None:
         # ||Q|| of a 1e-310 weight underflowed to 0: ZeroDivisionError in the Riccati residual.
         "design_lqr": (Call(control.design_lqr, (_first_order(), np.array([[1e-310]]), np.eye(1) * 0.1), {}, frozenset({"q"})),
                        # r = 1e-310: an infinite gain, then NaN in the Riccati residual (a RuntimeWarning);
-                       # weights and plants are held to the control room's scale rule now.
+                       # refused as subnormal now; a plant of 1e300 by the control room's scale rule.
                        Call(control.design_lqr, (_first_order(), np.eye(1), np.array([[1e-310]])), {}, frozenset({"r"})),
                        Call(control.design_lqr, ((np.array([[1e300]]), np.eye(1)), np.eye(1), np.eye(1)), {}, frozenset({"plant A"}))),
         # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
