@@ -8,7 +8,7 @@ from typing_extensions import disjoint_base
 import numpy as np
 import numpy.typing as npt
 
-from rotorfault._typing import ImuPart, Sensed, SensorSuiteName
+from rotorfault._typing import AcaiFormula, ControlAxes, HoverPoint, ImuPart, Sensed, SensorSuiteName
 
 __version__: str
 RANK_RTOL: float
@@ -117,6 +117,14 @@ def acai_from_matrix(
 @final
 class ControllabilityReport:
     @property
+    def airframe(self) -> str: ...
+    @property
+    def efficiency(self) -> tuple[float, ...]: ...
+    @property
+    def give_up_yaw(self) -> bool: ...
+    @property
+    def axes(self) -> ControlAxes: ...
+    @property
     def state_dimension(self) -> int: ...
     @property
     def controllability_rank(self) -> int: ...
@@ -127,14 +135,32 @@ class ControllabilityReport:
     @property
     def acai(self) -> float: ...
     @property
-    def formula(self) -> str: ...
+    def formula(self) -> AcaiFormula: ...
     @property
     def verdict(self) -> str: ...
     @property
     def controllable(self) -> bool: ...
     @property
-    def hover(self) -> str: ...
+    def hover(self) -> HoverPoint: ...
+    def __eq__(self, value: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]: ...
 
+def _controllability_report(
+    airframe: str,
+    efficiency: Sequence[float],
+    axes: str,
+    state_dimension: int,
+    controllability_rank: int,
+    virtual_control_dimension: int,
+    effectiveness_rank: int,
+    acai: float,
+    formula: str,
+    verdict: str,
+    hover: str,
+) -> ControllabilityReport: ...
+def format_acai(value: float, hover: str) -> str: ...
+def acai_label(formula: str) -> str: ...
 def controllability(
     airframe: Airframe, efficiency: _F64, axes: str, formula: str
 ) -> ControllabilityReport: ...
@@ -836,6 +862,22 @@ class LanzonModel:
     def __eq__(self, value: object, /) -> bool: ...
     def __hash__(self) -> int: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
+
+def check_lanzon_vehicle(
+    *,
+    mass_kg: float,
+    gravity_m_s2: float,
+    inertia_xx_kg_m2: float,
+    inertia_zz_kg_m2: float,
+    arm_length_m: float,
+    drag_torque_ratio_m: float,
+    rotational_drag_n_m_s: float,
+    linear_drag_n_s_m: float,
+    rotor_inertia_kg_m2: float,
+    thrust_coefficient_n_s2: float,
+    max_thrust_n: float,
+    rate_limit_n_s: float,
+) -> None: ...
 
 @final
 class OuterLoopGains:

@@ -36,7 +36,7 @@ def test_failures_main_job() -> None:
     assert "0.0000*" in out and "eq. (13) prints 0 here although hover is infeasible" in out
 
 
-def test_acai_with_efficiency_and_without_yaw() -> None:
+def test_acai_with_efficiency_and_give_up_yaw() -> None:
     code, out, _ = run("acai", "--airframe", "hexa-pnpnpn", "--efficiency", "0,1,1,1,1,1")
     assert code == 0 and "0.0000" in out and "hover wrench on the boundary" in out
     code, out, _ = run("acai", "-a", "hexa-pnpnpn", "--efficiency", "0,1,1,1,1,1", "--give-up-yaw")

@@ -132,22 +132,37 @@ def test_model_defaults_come_from_the_core() -> None:
                                    "drag_torque_ratio_m", "rotational_drag_n_m_s", "max_thrust_n", "rate_limit_n_s"])
 @pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan, 0.0, -1.0])
 def test_vehicle_parameters_finite_and_positive(field: str, value: float) -> None:
-    with pytest.raises(ValueError, match=rf"^{field}: must be finite and > 0, got"):
+    # One validation, the core's LanzonVehicle::check, errors naming vehicle.<field>.
+    rule = "must be finite" if not math.isfinite(value) else "must be > 0"
+    with pytest.raises(ValueError, match=rf"^vehicle\.{field}: {rule}, got"):
         L.LanzonVehicle(**{field: value})
+
+
+@pytest.mark.parametrize("field", ["mass_kg", "linear_drag_n_s_m", "rotational_drag_n_m_s"])
+def test_vehicle_and_core_model_say_the_same_rule(field: str) -> None:
+    # The vehicle's message is the core model's, naming the object the caller made.
+    with pytest.raises(ValueError) as vehicle:
+        L.LanzonVehicle(**{field: -1.0})
+    with pytest.raises(ValueError) as model:
+        _rfcore.LanzonModel(**{field: -1.0})
+    assert str(vehicle.value) == str(model.value).replace("model.", "vehicle.", 1)
+    with pytest.raises(TypeError, match=rf"^vehicle\.{field}: expected a real number"):
+        L.LanzonVehicle(**{field: "1"})
 
 
 @pytest.mark.parametrize("field", ["mass_kg", "inertia_zz_kg_m2", "arm_length_m", "rotational_drag_n_m_s"])
 @pytest.mark.parametrize("value", [1e-310, 1e300])
 def test_vehicle_scales_in_the_cores_range_at_construction(field: str, value: float) -> None:
     # Subnormal and absurd scales: refused when the vehicle is built, by the core's rule.
-    with pytest.raises(ValueError, match=rf"^model\.{field}: must lie in \[1e-15, 1e15\]"):
+    with pytest.raises(ValueError, match=rf"^vehicle\.{field}: must lie in \[1e-15, 1e15\]"):
         L.LanzonVehicle(**{field: value})
 
 
 @pytest.mark.parametrize("field", ["linear_drag_n_s_m", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2"])
 @pytest.mark.parametrize("value", [math.inf, math.nan, -1e-9])
 def test_vehicle_drag_and_rotor_parameters_finite_and_non_negative(field: str, value: float) -> None:
-    with pytest.raises(ValueError, match=rf"^{field}: must be finite and >= 0, got"):
+    rule = "must be finite" if not math.isfinite(value) else "must be >= 0"
+    with pytest.raises(ValueError, match=rf"^vehicle\.{field}: {rule}, got"):
         L.LanzonVehicle(**{field: value})
 
 

@@ -95,3 +95,20 @@ def test_the_decisions_table_links_the_code_not_the_old_names() -> None:
     old = {f"python/{name.replace('.', '/')}.py" for name in MOVED}
     stale = sorted({path for paths in DECISION_CODE.values() for path in paths if path in old})
     assert not stale, stale
+
+
+def test_the_loop_shape_plot_is_the_designs_and_the_plotting_name_warns(tmp_path: object) -> None:
+    # Plotting computes nothing (issue 26): the singular values come from control.robust, drawn by
+    # plotting.frequency.plot_singular_values_db; the old plotting entry point warns and delegates.
+    from pathlib import Path
+
+    from rotorfault.control import lanzon
+    from rotorfault.plotting import frequency
+
+    out = Path(str(tmp_path))
+    design = lanzon.design(lanzon.LanzonVehicle(), crossover_rad_s=30.0)
+    with pytest.warns(DeprecationWarning, match=r"plot_loop_shape .*LanzonDesign\.plot_loop_shape"):
+        old = frequency.plot_loop_shape(design, str(out / "old.png"))
+    new = design.plot_loop_shape(str(out / "new.png"))
+    assert old.axes[0].get_title() == new.axes[0].get_title() and (out / "old.png").is_file()
+    assert [list(line.get_ydata()) for line in old.axes[0].lines] == [list(line.get_ydata()) for line in new.axes[0].lines]

@@ -419,8 +419,8 @@ def test_give_up_yaw_never_smaller(setup: Setup) -> None:
         with_yaw = setup.acai(False, formula)
         event(f"{formula}: 4-axis ACAI inside" if inside(with_yaw) else f"{formula}: vacuous")
         if inside(with_yaw):
-            without_yaw = setup.acai(True, formula)
-            assert without_yaw >= with_yaw - REL_TOL * setup.scale(False)
+            give_up_yaw_acai = setup.acai(True, formula)
+            assert give_up_yaw_acai >= with_yaw - REL_TOL * setup.scale(False)
 
 
 def test_eq13_zero_does_not_mean_on_boundary() -> None:
@@ -461,10 +461,10 @@ def test_give_up_yaw_never_smaller_presets() -> None:
         etas = rng.uniform(0.3, 1.0, (100, airframe.rotor_count))
         for formula in FORMULAS:
             with_yaw = rf.acai_batch(airframe, etas, formula=formula)
-            without_yaw = rf.acai_batch(airframe, etas, give_up_yaw=True, formula=formula)
+            give_up_yaw_acai = rf.acai_batch(airframe, etas, give_up_yaw=True, formula=formula)
             ok = with_yaw >= 0 if formula == "facet-margin" else with_yaw > 0
             checked += int(ok.sum())
-            assert np.all(without_yaw[ok] >= with_yaw[ok] - REL_TOL * scale)
+            assert np.all(give_up_yaw_acai[ok] >= with_yaw[ok] - REL_TOL * scale)
     assert checked >= 300
 
 

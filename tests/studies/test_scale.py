@@ -50,10 +50,10 @@ def test_grid_scan_matches_acai_batch_and_verdicts(pnpnpn: rf.Airframe) -> None:
             np.testing.assert_array_equal(t[name].to_numpy(), rf.acai_batch(pnpnpn, etas, give_up_yaw=yaw, formula=formula))  # type: ignore[arg-type]
     # The verdict column against the core's 9-step report, point by point (every 7th point).
     ok = t["controllable"].to_numpy(zero_copy_only=False)
-    ok_no_yaw = t["controllable_give_up_yaw"].to_numpy(zero_copy_only=False)
+    ok_give_up_yaw = t["controllable_give_up_yaw"].to_numpy(zero_copy_only=False)
     for i in range(0, 216, 7):
         assert ok[i] == rf.controllability(pnpnpn, etas[i]).controllable
-        assert ok_no_yaw[i] == rf.controllability(pnpnpn, etas[i], give_up_yaw=True).controllable
+        assert ok_give_up_yaw[i] == rf.controllability(pnpnpn, etas[i], give_up_yaw=True).controllable
     assert set(t["controllability_rank"].to_numpy()) == {8}
     assert set(t["controllability_rank_give_up_yaw"].to_numpy()) == {6}
     # The same points as the in-memory efficiency_scan.

@@ -7,15 +7,17 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntyped
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use pyo3::types::PyTuple;
+use rfcore::analysis::text::{self, controllability_text};
 use rfcore::analysis::{
     acai_from_matrix_cancellable, failure_table as core_failure_table, AcaiBatch, AcaiFormula,
-    AcaiResult, ControlAxes, ControllabilityAnalysis, ControllabilityReport,
+    AcaiResult, ControlAxes, ControllabilityAnalysis, ControllabilityReport, HoverPoint, Verdict,
 };
 
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, slice1, slice2, to_py_err};
+use crate::convert::{detached, settings_eq, settings_hash, settings_repr, slice1, slice2, to_py_err};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
 fn analysis(
@@ -30,14 +32,76 @@ fn analysis(
     )
 }
 
-/// One controllability report (Du's procedure) as a named result.
+/// Outcome of Du's 9-step test for one airframe and efficiency vector: the core's report, used
+/// directly from Python (re-exported as `rotorfault.ControllabilityReport`; no Python copy). It
+/// carries the question asked (`airframe` the airframe's name, `efficiency` one per rotor, `axes`
+/// and `give_up_yaw`) and the answer: `state_dimension` 2n (8 with yaw, 6 without),
+/// `controllability_rank` rank C(A, B) (Step 1), `virtual_control_dimension` n,
+/// `effectiveness_rank` rank B_f with the efficiencies applied (Step 2), `acai` rho(G, dOmega)
+/// (Steps 3-8; -inf when rank B_f < n; in N and N m), `formula` ("eq13" or "facet-margin": how
+/// `acai` reads when G is outside), `verdict` ("controllable" or "uncontrollable: <reason>", Step
+/// 9), `controllable`, `hover` (where the hover wrench lies; "outside" with `acai == 0` marks eq.
+/// (13)'s misleading 0). Prints as the test's summary (the ACAI named by its formula); frozen,
+/// comparable, hashable, picklable.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> report = rf.controllability(rf.Airframe.preset("hexa-pnpnpn"), efficiency=[1, 1, 1, 1, 1, 0.5])
+///     >>> report.controllable, round(float(report.acai), 4), report.controllability_rank
+///     (True, 0.743, 8)
+///     >>> print(report)
+///     hexa-pnpnpn: efficiency = [1, 1, 1, 1, 1, 0.5], axes = thrust, roll, pitch, yaw
+///       rank C(A, B) = 8 of 8
+///       rank B_f     = 4 of 4
+///       ACAI eq13    = 0.7430
+///       verdict      = controllable
 #[pyclass(name = "ControllabilityReport", module = "rotorfault._rfcore", frozen)]
 pub struct PyControllabilityReport {
+    airframe: String,
     inner: ControllabilityReport,
+}
+
+impl PyControllabilityReport {
+    /// The fields as a dataclass prints them (repr, equality, hash), in this order.
+    const FIELDS: &'static [&'static str] = &[
+        "airframe",
+        "efficiency",
+        "give_up_yaw",
+        "state_dimension",
+        "controllability_rank",
+        "virtual_control_dimension",
+        "effectiveness_rank",
+        "acai",
+        "formula",
+        "verdict",
+        "controllable",
+        "hover",
+        "axes",
+    ];
 }
 
 #[pymethods]
 impl PyControllabilityReport {
+    /// The airframe's name.
+    #[getter]
+    fn airframe(&self) -> &str {
+        &self.airframe
+    }
+    /// The efficiency tested, one per rotor (rotor order).
+    #[getter]
+    fn efficiency<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, &self.inner.efficiency)
+    }
+    /// Thrust, roll and pitch only (`axes == "thrust-roll-pitch"`).
+    #[getter]
+    fn give_up_yaw(&self) -> bool {
+        self.inner.axes == ControlAxes::ThrustRollPitch
+    }
+    #[getter]
+    fn axes(&self) -> &'static str {
+        self.inner.axes.name()
+    }
     #[getter]
     fn state_dimension(&self) -> usize {
         self.inner.state_dimension
@@ -74,10 +138,89 @@ impl PyControllabilityReport {
     fn hover(&self) -> &'static str {
         self.inner.hover.name()
     }
+    fn __str__(&self) -> String {
+        controllability_text(&self.inner, &self.airframe)
+    }
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        settings_repr(slf.as_any(), Self::FIELDS)
+    }
+    fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        settings_eq(slf.as_any(), other, Self::FIELDS)
+    }
+    fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
+        settings_hash(slf.as_any(), Self::FIELDS)
+    }
+    /// Pickled as its fields, read back by `_controllability_report` (a result has no public
+    /// constructor: only the test makes one).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let restore = py.import("rotorfault._rfcore")?.getattr("_controllability_report")?;
+        let r = &self.inner;
+        let state = (
+            self.airframe.clone(),
+            r.efficiency.clone(),
+            r.axes.name(),
+            r.state_dimension,
+            r.controllability_rank,
+            r.virtual_control_dimension,
+            r.effectiveness_rank,
+            r.acai,
+            r.formula.name(),
+            r.verdict.code(),
+            r.hover.name(),
+        )
+            .into_pyobject(py)?;
+        Ok((restore, state))
+    }
 }
 
-fn report(report: ControllabilityReport) -> PyControllabilityReport {
-    PyControllabilityReport { inner: report }
+/// A report read back from its pickled fields (`ControllabilityReport.__reduce__`): the names
+/// are parsed by the core's own parsers.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn _controllability_report(
+    airframe: String,
+    efficiency: Vec<f64>,
+    axes: &str,
+    state_dimension: usize,
+    controllability_rank: usize,
+    virtual_control_dimension: usize,
+    effectiveness_rank: usize,
+    acai: f64,
+    formula: &str,
+    verdict: &str,
+    hover: &str,
+) -> PyResult<PyControllabilityReport> {
+    let inner = ControllabilityReport {
+        axes: ControlAxes::parse("axes", axes).map_err(to_py_err)?,
+        efficiency,
+        state_dimension,
+        controllability_rank,
+        virtual_control_dimension,
+        effectiveness_rank,
+        acai,
+        formula: AcaiFormula::parse(formula).map_err(to_py_err)?,
+        hover: HoverPoint::parse("hover", hover).map_err(to_py_err)?,
+        verdict: Verdict::parse("verdict", verdict).map_err(to_py_err)?,
+    };
+    Ok(PyControllabilityReport { airframe, inner })
+}
+
+fn report(airframe: &PyAirframe, report: ControllabilityReport) -> PyControllabilityReport {
+    PyControllabilityReport { airframe: airframe.inner.name().to_string(), inner: report }
+}
+
+/// How a printed ACAI reads (`rfcore::analysis::text::format_acai`): 4 decimals, `undefined`
+/// for -inf, a star on eq. (13)'s non-negative value when the hover wrench lies outside.
+#[pyfunction]
+pub(crate) fn format_acai(value: f64, hover: &str) -> PyResult<String> {
+    let hover = HoverPoint::parse("hover", hover).map_err(to_py_err)?;
+    Ok(text::format_acai(value, hover))
+}
+
+/// How a printed ACAI names its formula (`ACAI eq13`, `ACAI facet-margin`).
+#[pyfunction]
+pub(crate) fn acai_label(formula: &str) -> PyResult<String> {
+    Ok(text::acai_label(AcaiFormula::parse(formula).map_err(to_py_err)?))
 }
 
 /// An ACAI with where the hover wrench lies (`inside`, `boundary`, `outside`, `rank-deficient`):
@@ -223,7 +366,7 @@ pub(crate) fn controllability<'py>(
     let result = detached(py, |cancel| {
         analysis(airframe, axes, cancel)?.report(efficiency, formula)
     })?;
-    Ok(report(result))
+    Ok(report(airframe, result))
 }
 
 /// One failure-table row: failed rotors (indices from 0; Python numbers them from 1), the report
@@ -252,9 +395,9 @@ pub(crate) fn failure_table<'py>(
         .map(|case| {
             (
                 case.failed,
-                report(case.all_axes),
-                report(case.give_up_yaw),
-                case.wrench.map(report),
+                report(airframe, case.all_axes),
+                report(airframe, case.give_up_yaw),
+                case.wrench.map(|wrench| report(airframe, wrench)),
             )
         })
         .collect())

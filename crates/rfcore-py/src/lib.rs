@@ -45,6 +45,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<allocation::PySingleAllocation>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
+    module.add_function(wrap_pyfunction!(control::lanzon::check_lanzon_vehicle, module)?)?;
     module.add_class::<control::indi::PyIndiGains>()?;
     module.add_class::<control::indi::PyIndiFailureMode>()?;
     // The Rust controllers, declared once in `control::controller_registry!`: each class, and
@@ -72,6 +73,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(analysis::acai_from_matrix, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::controllability, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::failure_table, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::_controllability_report, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::format_acai, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::acai_label, module)?)?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSettings>()?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSolution>()?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverAnalysis>()?;

@@ -62,7 +62,7 @@ def acai_label(formula: str) -> str:
     """
     if formula not in ACAI_FORMULAS:
         raise ValueError(f"formula: must be one of {', '.join(ACAI_FORMULAS)}, got {formula!r}")
-    return f"ACAI {formula}"
+    return _rfcore.acai_label(formula)
 
 
 def _formula(value: Any) -> str:
@@ -313,9 +313,10 @@ def format_acai(value: float, hover: HoverPoint = "inside") -> str:
         ('1.1295', '0.0000')
     """
     value = real("value", value)
-    if math.isinf(value):
-        return "undefined"
-    return f"{value:.4f}*" if value >= 0.0 and hover == "outside" else f"{value:.4f}"
+    if not isinstance(hover, str):
+        raise TypeError(f"hover: expected a str, got {type(hover).__name__}")
+    # The core's formatting: the one every printed ACAI uses (tables, the report, str(report)).
+    return _rfcore.format_acai(value, hover)
 
 
 __all__ = [

@@ -10,7 +10,6 @@ spins, as the controllers of Lanzon et al. and Ke et al. do?
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any, cast, overload
@@ -27,68 +26,13 @@ from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, HOVER_WRENCH_NOTE, _efficiency, _
 from .airframe import Airframe, require_airframe, rotor_labels
 
 
-@dataclass(frozen=True)
-class ControllabilityReport:
-    """Outcome of Du's 9-step test for one airframe and efficiency vector.
-
-    Why it lives in Python (issue 26): it is the core's answer (``_rfcore.ControllabilityReport``:
-    ranks, ACAI, formula, verdict, hover point, read once here and not checked again) joined with
-    the question asked (the airframe's name, the efficiency, the axes), and its printed form
-    shares the ACAI formatting every table and command uses (:func:`format_acai`,
-    :func:`acai_label`), which is Python's; the core keeps no copy of the question to print.
-
-    Examples:
-
-        >>> import rotorfault as rf
-        >>> report = rf.controllability(rf.Airframe.preset("hexa-pnpnpn"), efficiency=[1, 1, 1, 1, 1, 0.5])
-        >>> report.controllable, round(float(report.acai), 4), report.controllability_rank
-        (True, 0.743, 8)
-    """
-
-    airframe: str
-    efficiency: tuple[float, ...]
-    give_up_yaw: bool
-    #: 2n: 8 with yaw, 6 without.
-    state_dimension: int
-    #: rank of C(A, B) (Step 1).
-    controllability_rank: int
-    #: n: 4 with yaw, 3 without.
-    virtual_control_dimension: int
-    #: rank of B_f with efficiencies applied (Step 2).
-    effectiveness_rank: int
-    #: rho(G, dOmega) (Steps 3-8); -inf when rank B_f < n.
-    acai: float
-    #: "eq13" or "facet-margin": how ``acai`` reads when G is outside.
-    formula: AcaiFormula
-    #: "controllable" or "uncontrollable: <reason>" (Du Step 9).
-    verdict: str
-    controllable: bool
-    #: Where the hover wrench lies; ``"outside"`` with ``acai == 0`` marks eq. (13)'s misleading 0.
-    hover: HoverPoint = "inside"
-    #: Which axes were tested (``"wrench"``: force and torque, n = 6).
-    axes: ControlAxes = "thrust-roll-pitch-yaw"
-
-    def __str__(self) -> str:
-        axes = {
-            "thrust-roll-pitch": "thrust, roll, pitch (yaw given up)",
-            "thrust-roll-pitch-yaw": "thrust, roll, pitch, yaw",
-            "wrench": "force and torque (6-D wrench)",
-        }[self.axes]
-        acai = "undefined (-inf)" if math.isinf(self.acai) else format_acai(self.acai, self.hover)
-        if acai.endswith("*"):
-            acai += " (eq. (13) prints 0 although the hover wrench lies outside the attainable set)"
-        efficiency = ", ".join(f"{e:g}" for e in self.efficiency)
-        label = acai_label(self.formula)
-        width = max(len(label), len("rank C(A, B)"))
-        return "\n".join(
-            [
-                f"{self.airframe}: efficiency = [{efficiency}], axes = {axes}",
-                f"  {'rank C(A, B)':<{width}} = {self.controllability_rank} of {self.state_dimension}",
-                f"  {'rank B_f':<{width}} = {self.effectiveness_rank} of {self.virtual_control_dimension}",
-                f"  {label:<{width}} = {acai}",
-                f"  {'verdict':<{width}} = {self.verdict}",
-            ]
-        )
+#: Outcome of Du's 9-step test for one airframe and efficiency vector: the core's report, used
+#: directly (issue 26: no field-by-field copy). It carries the question asked (``airframe``,
+#: ``efficiency``, ``axes``, ``give_up_yaw``) and the core's answer (ranks, ``acai``,
+#: ``formula``, ``verdict``, ``controllable``, ``hover``); it prints with the ACAI formatting every
+#: table and command uses (:func:`format_acai`, :func:`acai_label`, one implementation in the
+#: core). Frozen, comparable, hashable, picklable.
+ControllabilityReport = _rfcore.ControllabilityReport
 
 
 def controllability(
@@ -112,22 +56,7 @@ def controllability(
     airframe = require_airframe(airframe)
     eff = _efficiency(airframe, efficiency)
     names = control_axes(give_up_yaw, axes)
-    core = _rfcore.controllability(airframe._core, eff, names, _formula(formula))
-    return ControllabilityReport(
-        airframe=airframe.name,
-        efficiency=tuple(float(e) for e in eff),
-        give_up_yaw=names == "thrust-roll-pitch",
-        axes=cast(ControlAxes, names),
-        state_dimension=core.state_dimension,
-        controllability_rank=core.controllability_rank,
-        virtual_control_dimension=core.virtual_control_dimension,
-        effectiveness_rank=core.effectiveness_rank,
-        acai=core.acai,
-        formula=cast(AcaiFormula, core.formula),
-        verdict=core.verdict,
-        controllable=core.controllable,
-        hover=cast(HoverPoint, core.hover),
-    )
+    return _rfcore.controllability(airframe._core, eff, names, _formula(formula))
 
 
 @dataclass(frozen=True)
@@ -351,11 +280,11 @@ def failure_table(
             acai_give_up_yaw=yaw_given_up.acai,
             controllable_give_up_yaw=yaw_given_up.controllable,
             verdict_give_up_yaw=yaw_given_up.verdict,
-            hover=cast(HoverPoint, full.hover),
-            hover_give_up_yaw=cast(HoverPoint, yaw_given_up.hover),
+            hover=full.hover,
+            hover_give_up_yaw=yaw_given_up.hover,
             acai_wrench=None if wrench is None else wrench.acai,
             controllable_wrench=None if wrench is None else wrench.controllable,
-            hover_wrench=None if wrench is None else cast(HoverPoint, wrench.hover),
+            hover_wrench=None if wrench is None else wrench.hover,
         )
         for failed, full, yaw_given_up, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
     ]

@@ -37,7 +37,7 @@ rotation of pi about x: ``phi = roll``, ``theta = -pitch``, ``psi = -yaw``, ``(p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
@@ -79,8 +79,10 @@ class LanzonVehicle:
     never reads (``I_R``, ``k_f``, the thrust and rate limits, which go to the simulator's
     :class:`~rotorfault.Airframe`, :class:`~rotorfault.FixedPitchActuator` and
     :class:`~rotorfault.Drag`) and the RFL algebra the loop-shaping design works on; the eight
-    values the controller flies with cross once, into the core's ``LanzonModel``, whose ``check``
-    they must also pass when the vehicle is made."""
+    values the controller flies with cross once, into the core's ``LanzonModel``. All twelve are
+    checked once, by the core's ``LanzonVehicle::check``, when the vehicle is made (errors name
+    ``vehicle.<field>``: scales finite, > 0 and within [1e-15, 1e15]; thrust and rate limits
+    finite and > 0; ``k_t``, ``I_R``, ``k_f`` finite and >= 0)."""
 
     mass_kg: float = _DEFAULT_MODEL.mass_kg
     gravity_m_s2: float = _DEFAULT_MODEL.gravity_m_s2
@@ -96,22 +98,10 @@ class LanzonVehicle:
     rate_limit_n_s: float = 50.0
 
     def __post_init__(self) -> None:
-        # Checked once, here: every physical parameter finite, and positive where it must be.
-        for name in ("mass_kg", "gravity_m_s2", "inertia_xx_kg_m2", "inertia_zz_kg_m2", "arm_length_m",
-                     "drag_torque_ratio_m", "rotational_drag_n_m_s", "max_thrust_n", "rate_limit_n_s"):
-            value = real(name, getattr(self, name))
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name}: must be finite and > 0, got {value}")
-        for name in ("linear_drag_n_s_m", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2"):
-            value = real(name, getattr(self, name))
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name}: must be finite and >= 0, got {value}")
-        if not math.isfinite(self.spin_rate_rad_s):
-            raise ValueError(f"rotational_drag_n_m_s: m g d / k_r (the working point's spin) must be finite, "
-                             f"got {self.spin_rate_rad_s} with k_r = {self.rotational_drag_n_m_s}")
-        # ... and the scales the law divides by in the core's accepted range (rfcore::error), here
-        # rather than at the first design or flight.
-        self._core()
+        # One validation, the core's (``LanzonVehicle::check``), when the vehicle is made: types
+        # and values, errors naming ``vehicle.<field>``; the scales the law divides by in the
+        # core's accepted range, so ``r0 = m g d / k_r`` is finite and positive.
+        _rfcore.check_lanzon_vehicle(**{f.name: getattr(self, f.name) for f in fields(self)})
 
     @classmethod
     def from_airframe(cls, airframe: Airframe, **overrides: Any) -> LanzonVehicle:

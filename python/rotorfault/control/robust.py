@@ -46,9 +46,8 @@ import numpy as np
 import numpy.typing as npt
 import scipy.linalg as sla  # type: ignore[import-untyped]
 
-from .._util.convert import FloatArray, real
+from .._util.convert import FloatArray, float_array, real
 from .._util.numeric import scaled_norm
-from ..plotting.frequency import plot_singular_values
 from .norms import hinf_norm, hinf_norm_below, peak_gain
 from .realisation import (
     as_state_space,
@@ -616,6 +615,26 @@ def singular_values(system: ct.StateSpace, omega: npt.ArrayLike) -> FloatArray:
     """Singular values (columns, descending) of ``system(j omega)`` at each frequency (rows)."""
     resp = frequency_response(as_state_space("system", system), omega)
     return np.asarray(np.linalg.svd(resp, compute_uv=False), dtype=np.float64)
+
+
+def plot_singular_values(
+    plant: ct.StateSpace,
+    shaped: ct.StateSpace,
+    path: str | None = None,
+    *,
+    omega: npt.ArrayLike | None = None,
+    title: str = "",
+    crossover_rad_s: float | None = None,
+) -> Any:
+    """Singular values (dB) of ``plant`` and of the shaped plant ``G W1`` against frequency
+    ``omega`` (rad/s; default 1e-2..1e4), Lanzon's Fig. 4: computed here
+    (:func:`singular_values`), drawn by :mod:`rotorfault.plotting.frequency`. Saved to ``path``
+    if given."""
+    from ..plotting.frequency import plot_singular_values_db
+
+    w = np.logspace(-2, 4, 400) if omega is None else float_array("omega", omega, 1)
+    curves = [(singular_values(plant, w), "G", "--", "0.5"), (singular_values(shaped, w), "G W1", "-", "black")]
+    return plot_singular_values_db(w, curves, path, title=title or "open-loop singular values", crossover_rad_s=crossover_rad_s)
 
 
 __all__ = [

@@ -16,11 +16,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._util.convert import FloatArray
-from ..plotting.frequency import plot_loop_shape
+from ..control.robust import singular_values
+from ..plotting.frequency import plot_singular_values_db
 from ._numbers import PaperNumber
 
 if TYPE_CHECKING:
     from ..control.lanzon import LanzonDesign, LanzonVehicle
+    from matplotlib.figure import Figure
     from ._report import ReportSection
 
 PAPER = "Lanzon et al. (JGCD 2014)"
@@ -298,6 +300,20 @@ def design_table_rows(design_: LanzonDesign, loop: AchievedLoop | None = None) -
         ("guaranteed multivariable gain margin (dB) / phase margin (deg) from Ms",
          f"{loop.gain_margin_db:.2f} / {loop.phase_margin_deg:.1f}"),
         ("coprime-factor stability margin of the shaped loop, by frequency sweep (>= 1/gamma)", f"{loop.stability_margin:.4f}"),
+    )
+
+
+def plot_loop_shape(design_: LanzonDesign, path: str | None = None) -> Figure:
+    """The report's Fig. 4: singular values (dB) of the RFL plant ``G`` and of the shaped plant
+    ``G W1`` of ``design_`` from 1e-2 to 1e5 rad/s, with its target crossover (computed by
+    :func:`~rotorfault.control.robust.singular_values`, drawn by :mod:`rotorfault.plotting`).
+    Saved to ``path`` if given."""
+    omega = np.logspace(-2, 5, 500)
+    curves = [(singular_values(design_.vehicle.plant(), omega), "G (plant after RFL)", "--", "0.5"),
+              (singular_values(design_.synthesis.shaped_plant, omega), "G W1 (shaped plant)", "-", "black")]
+    return plot_singular_values_db(
+        omega, curves, path, title=f"Lanzon loop shape: gamma = {design_.gamma:.3f} (gamma_min {design_.gamma_min:.3f})",
+        crossover_rad_s=design_.crossover_rad_s,
     )
 
 

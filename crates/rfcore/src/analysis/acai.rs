@@ -208,6 +208,27 @@ impl HoverPoint {
         }
     }
 
+    /// Inverse of [`HoverPoint::name`].
+    pub fn parse(field: &str, text: &str) -> Result<Self> {
+        [
+            HoverPoint::Inside,
+            HoverPoint::OnBoundary,
+            HoverPoint::Outside,
+            HoverPoint::RankDeficient,
+        ]
+        .into_iter()
+        .find(|h| h.name() == text)
+        .ok_or_else(|| {
+            RfError::invalid(
+                field,
+                format!(
+                    "must be \"inside\", \"boundary\", \"outside\" or \"rank-deficient\", \
+                     got {text:?}"
+                ),
+            )
+        })
+    }
+
     /// `1` inside, `0` on the boundary, `-1` outside, `-2` rank deficient (a compact column).
     pub fn code(self) -> i8 {
         match self {

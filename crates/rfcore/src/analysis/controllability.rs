@@ -152,12 +152,28 @@ impl Verdict {
             Verdict::HoverOutside => "uncontrollable: hover wrench outside the attainable set",
         }
     }
+
+    /// Inverse of [`Verdict::code`] (a report read back from its printed fields).
+    pub fn parse(field: &str, code: &str) -> Result<Self> {
+        [
+            Verdict::Controllable,
+            Verdict::ModelRankDeficient,
+            Verdict::EffectivenessRankDeficient,
+            Verdict::HoverOnBoundary,
+            Verdict::HoverOutside,
+        ]
+        .into_iter()
+        .find(|v| v.code() == code)
+        .ok_or_else(|| RfError::invalid(field, format!("not a verdict of Du's test, got {code:?}")))
+    }
 }
 
 /// The outcome of the 9-step procedure for one efficiency vector.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ControllabilityReport {
     pub axes: ControlAxes,
+    /// The efficiency vector the test was asked about (one per rotor, in rotor order).
+    pub efficiency: Vec<f64>,
     /// 2n: 8 with yaw, 6 without.
     pub state_dimension: usize,
     /// rank C(A, B) (Step 1).
@@ -305,6 +321,7 @@ impl ControllabilityAnalysis {
         };
         Ok(ControllabilityReport {
             axes: self.axes,
+            efficiency: eta.to_vec(),
             state_dimension: 2 * n,
             controllability_rank: self.controllability_rank,
             virtual_control_dimension: n,

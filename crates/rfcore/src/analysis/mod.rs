@@ -1,7 +1,7 @@
 //! Controllability analysis (Du et al., JGCD 2015): the Available Control Authority Index
 //! ([`acai`]), the 9-step test procedure and failure tables ([`controllability`]), the failure
 //! combinations they enumerate ([`combinations`]), the one rank rule with its capped SVD
-//! ([`rank`]), and relaxed hover (Mueller and D'Andrea: flying on by spinning,
+//! ([`rank`]), their printed forms ([`text`]), and relaxed hover (Mueller and D'Andrea: flying on by spinning,
 //! [`relaxed_hover`]). Depends only on [`crate::airframe`] (and the shared `error` and `cancel`).
 
 pub mod acai;
@@ -9,6 +9,7 @@ pub mod combinations;
 pub mod controllability;
 pub mod rank;
 pub mod relaxed_hover;
+pub mod text;
 
 pub use acai::{
     acai_from_matrix, acai_from_matrix_cancellable, acai_from_matrix_with_hover,

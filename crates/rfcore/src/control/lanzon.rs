@@ -23,7 +23,9 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Schur, Vector3};
 
 use super::{require_finite_matrix, Controller};
-use crate::error::{require_all_finite, require_finite, require_scale, Result, RfError};
+use crate::error::{
+    require_all_finite, require_finite, require_non_negative, require_scale, Result, RfError,
+};
 use crate::state::{state_vector, RigidBodyState};
 
 /// Floor on `|cos(phi)|`, `|cos(theta)|` in the linearising law.
@@ -64,33 +66,67 @@ impl Default for LanzonModel {
     }
 }
 
-impl LanzonModel {
-    /// Every parameter finite and positive (`k_t` may be zero).
+/// The whole vehicle of the paper's design (`rotorfault.control.lanzon.LanzonVehicle`): the
+/// control model plus the verification model's values the controller never reads (they go to the
+/// simulator's airframe, actuator and drag). Checked here, once, when the vehicle is made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LanzonVehicle {
+    pub model: LanzonModel,
+    /// `I_R`, kg m^2 (gyroscopic moment (5)); 0 for none.
+    pub rotor_inertia_kg_m2: f64,
+    /// `k_f` in `f = k_f omega^2`, N s^2; 0 for none.
+    pub thrust_coefficient_n_s2: f64,
+    pub max_thrust_n: f64,
+    pub rate_limit_n_s: f64,
+}
+
+impl LanzonVehicle {
+    /// The model's rules ([`LanzonModel::check_as`]), thrust and rate limits finite and > 0,
+    /// `I_R` and `k_f` finite and >= 0; errors name `vehicle.<field>`.
     pub fn check(&self) -> Result<()> {
+        self.model.check_as("vehicle")?;
+        for (field, value) in [
+            ("vehicle.max_thrust_n", self.max_thrust_n),
+            ("vehicle.rate_limit_n_s", self.rate_limit_n_s),
+        ] {
+            require_finite(field, value)?;
+            if value <= 0.0 {
+                return Err(RfError::invalid(field, format!("must be > 0, got {value}")));
+            }
+        }
+        require_non_negative("vehicle.rotor_inertia_kg_m2", self.rotor_inertia_kg_m2)?;
+        require_non_negative(
+            "vehicle.thrust_coefficient_n_s2",
+            self.thrust_coefficient_n_s2,
+        )
+    }
+}
+
+impl LanzonModel {
+    /// Every parameter finite and positive (`k_t` may be zero); errors name `model.<field>`.
+    pub fn check(&self) -> Result<()> {
+        self.check_as("model")
+    }
+
+    /// [`LanzonModel::check`] with errors naming `<prefix>.<field>` (the object the caller made:
+    /// [`LanzonVehicle::check`] names `vehicle.<field>`).
+    pub fn check_as(&self, prefix: &str) -> Result<()> {
         // Every one is divided by in the law (eq. (9), (20)-(24), r0 = m g d / k_r): scales.
         for (field, value, unit) in [
-            ("model.mass_kg", self.mass_kg, "kg"),
-            ("model.gravity_m_s2", self.gravity_m_s2, "m/s^2"),
-            ("model.inertia_xx_kg_m2", self.inertia_xx_kg_m2, "kg m^2"),
-            ("model.inertia_zz_kg_m2", self.inertia_zz_kg_m2, "kg m^2"),
-            ("model.arm_length_m", self.arm_length_m, "m"),
-            ("model.drag_torque_ratio_m", self.drag_torque_ratio_m, "m"),
-            (
-                "model.rotational_drag_n_m_s",
-                self.rotational_drag_n_m_s,
-                "N m s",
-            ),
+            ("mass_kg", self.mass_kg, "kg"),
+            ("gravity_m_s2", self.gravity_m_s2, "m/s^2"),
+            ("inertia_xx_kg_m2", self.inertia_xx_kg_m2, "kg m^2"),
+            ("inertia_zz_kg_m2", self.inertia_zz_kg_m2, "kg m^2"),
+            ("arm_length_m", self.arm_length_m, "m"),
+            ("drag_torque_ratio_m", self.drag_torque_ratio_m, "m"),
+            ("rotational_drag_n_m_s", self.rotational_drag_n_m_s, "N m s"),
         ] {
-            require_scale(field, value, unit)?;
+            require_scale(&format!("{prefix}.{field}"), value, unit)?;
         }
-        require_finite("model.linear_drag_n_s_m", self.linear_drag_n_s_m)?;
-        if self.linear_drag_n_s_m < 0.0 {
-            return Err(RfError::invalid(
-                "model.linear_drag_n_s_m",
-                format!("must be >= 0, got {}", self.linear_drag_n_s_m),
-            ));
-        }
-        Ok(())
+        require_non_negative(
+            &format!("{prefix}.linear_drag_n_s_m"),
+            self.linear_drag_n_s_m,
+        )
     }
 
     /// `r0 = m g d / k_r`: the spin of the working point, rad/s.
