@@ -20,6 +20,7 @@ use rfcore::allocation::{
 };
 use rfcore::analysis::ControlAxes;
 use rfcore::error::RfError;
+use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
 use crate::convert::{count, detached, matrix, slice1, slice2, to_py_err};
@@ -454,6 +455,12 @@ pub fn allocate<'py>(
     let flat = slice2("virtual_control", &controls)?;
     let rows = controls.shape()[0];
     let results = match method {
+        // One active-set solve is a few microseconds (bounded: `4 m + 20` iterations per phase,
+        // then at most one Clarabel fallback), against about 10 us to hand work to `detached`:
+        // it runs here, holding the GIL, with a token nothing cancels.
+        Method::ActiveSet(_) if rows == 1 => {
+            allocate_all(&problem.solver, flat, &Cancel::new()).map_err(to_py_err)?
+        }
         Method::ActiveSet(_) => {
             let solver = &problem.solver;
             detached(py, |cancel| allocate_all(solver, flat, cancel))?

@@ -136,16 +136,19 @@ pub fn solve_uncertified(
     }
     let b_norm = scaled.rhs_norm(&b);
     let mut g = [0.0; N];
-    let (t, iterations) = if scaled.rows * m <= SMALL_WORK {
-        phases::<SMALL_WORK>(solver, &b, b_norm, active, &mut g)
+    // The same instances as the certified solve (`ActiveSetSolver::solve_unchecked`).
+    let (t, iterations) = if scaled.rows == 4 && scaled.rows * m <= SMALL_WORK {
+        phases::<SMALL_WORK, 4>(solver, &b, b_norm, active, &mut g)
+    } else if scaled.rows * m <= SMALL_WORK {
+        phases::<SMALL_WORK, 0>(solver, &b, b_norm, active, &mut g)
     } else {
-        phases::<BIG_WORK>(solver, &b, b_norm, active, &mut g)
+        phases::<BIG_WORK, 0>(solver, &b, b_norm, active, &mut g)
     };
     commands[..m].copy_from_slice(&t[..m]);
     iterations
 }
 
-fn phases<const W: usize>(
+fn phases<const W: usize, const R: usize>(
     solver: &ActiveSetSolver,
     b: &[f64; ROWS],
     b_norm: f64,
@@ -153,7 +156,7 @@ fn phases<const W: usize>(
     g: &mut [f64; N],
 ) -> ([f64; N], usize) {
     let (converged, mut iterations, closest, mut t) =
-        solver.start_and_phase1::<W>(b, b_norm, active, g);
+        solver.start_and_phase1::<W, R>(b, b_norm, active, g);
     if converged && solver.tie_rule_needed(closest, &active.states, g) {
         iterations += solver.phase2::<W>(&mut t, &mut active.states, g);
     }

@@ -13,7 +13,9 @@
 //!    the step `d = argmin |A_F d - r|` (`r = b - A T`) is computed by a Householder QR of `A_F`
 //!    with column pivoting relative to each column's own norm (never the normal equations, so a
 //!    weight or a rotor 1e9 times weaker than the others still counts); columns dependent to
-//!    [`RANK_TOL`] of their own norm get a zero step. Ratio test: the first variable to reach a
+//!    [`RANK_TOL`] of their own norm get a zero step. The cold start's first step (every
+//!    variable free) uses the factorisation of all columns, which depends on the matrix only and
+//!    is made once per solver. Ratio test: the first variable to reach a
 //!    bound is held. At a free-set minimiser, the held variable whose multiplier (the gradient,
 //!    normalised by its column norm and the residual scale) has the wrong sign by most is
 //!    released. A released variable that would leave the box at once is held again and not
@@ -38,7 +40,9 @@
 
 use crate::allocation::certificate::Certificate;
 pub use crate::allocation::factorisation::RANK_TOL;
-use crate::allocation::factorisation::{apply_q, apply_qt, back_substitute, householder_qr};
+use crate::allocation::factorisation::{
+    apply_q, apply_qt, back_substitute, householder_qr, FreeSetFactor,
+};
 use crate::allocation::problem::{AllocationProblem, AllocationStatus, SolvedBy, MAX_VIRTUAL};
 use crate::allocation::scaling::{ScaledLeastSquares, BIG_WORK, N, ROWS, SMALL_WORK};
 use crate::error::{Result, RfError};
@@ -125,6 +129,9 @@ pub struct ActiveSetSolver {
     pub(crate) scaled: ScaledLeastSquares,
     pub(crate) settings: ActiveSetSettings,
     max_iterations: usize,
+    /// The factorisation of all columns (the cold start's first step), made once here since it
+    /// depends on the matrix only; `None` above [`SMALL_WORK`] entries (then made per solve).
+    all_free: Option<FreeSetFactor<SMALL_WORK>>,
 }
 
 /// What one solve reports besides the commands.
@@ -155,11 +162,19 @@ impl ActiveSetSolver {
     /// Prepares a solver with the given settings (tolerance validated by [`Self::with_tolerance`]).
     pub fn with_settings(problem: &AllocationProblem, settings: ActiveSetSettings) -> Self {
         let m = problem.actuator_count();
+        let scaled = ScaledLeastSquares::new(problem);
+        let all_free = (scaled.rows * m <= SMALL_WORK).then(|| {
+            let free: [usize; N] = std::array::from_fn(|i| i);
+            let mut factor = FreeSetFactor::empty();
+            scaled.factor_free_set::<SMALL_WORK, 0>(&free[..m], &mut factor);
+            factor
+        });
         ActiveSetSolver {
             problem: problem.clone(),
-            scaled: ScaledLeastSquares::new(problem),
+            scaled,
             settings,
             max_iterations: settings.max_iterations.unwrap_or(4 * m + 20).max(1),
+            all_free,
         }
     }
 
@@ -236,9 +251,10 @@ impl ActiveSetSolver {
         let mut d = [0.0; N];
         if self.scaled.rows * m <= SMALL_WORK {
             self.scaled
-                .lsq_step::<SMALL_WORK>(&free[..m], &r, &t, &mut d);
+                .lsq_step::<SMALL_WORK, 0>(&free[..m], &r, &t, &mut d);
         } else {
-            self.scaled.lsq_step::<BIG_WORK>(&free[..m], &r, &t, &mut d);
+            self.scaled
+                .lsq_step::<BIG_WORK, 0>(&free[..m], &r, &t, &mut d);
         }
         for (out, (x, step)) in commands[..m].iter_mut().zip(t.iter().zip(&d)) {
             *out = x + step;
@@ -252,7 +268,7 @@ impl ActiveSetSolver {
     /// computed it from the residual at `t`): what the certificate and phase 2 need.
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop)]
-    pub(crate) fn start_and_phase1<const W: usize>(
+    pub(crate) fn start_and_phase1<const W: usize, const R: usize>(
         &self,
         b: &[f64; ROWS],
         b_norm: f64,
@@ -278,7 +294,13 @@ impl ActiveSetSolver {
                 *f = i;
             }
             let mut d = [0.0; N];
-            let _ = self.scaled.lsq_step::<W>(&free[..m], &r, &t, &mut d);
+            let _ = match &self.all_free {
+                Some(factor) => {
+                    self.scaled
+                        .factored_step::<SMALL_WORK, R>(&free[..m], factor, &r, &t, &mut d)
+                }
+                None => self.scaled.lsq_step::<W, R>(&free[..m], &r, &t, &mut d),
+            };
             iterations += 1;
             let mut inside = true;
             for i in 0..m {
@@ -313,7 +335,7 @@ impl ActiveSetSolver {
                 };
             }
         }
-        let (converged, used, closest) = self.phase1::<W>(
+        let (converged, used, closest) = self.phase1::<W, R>(
             b,
             b_norm,
             &mut t,
@@ -343,7 +365,7 @@ impl ActiveSetSolver {
     /// `Err` when it does not certify and the fallback is on (boxed: the rare path, which
     /// allocates anyway). The certificate of phase 1's answer is read off the gradient phase 1
     /// ended with; after a phase 2 that moved the commands it is computed afresh at the new ones.
-    pub(crate) fn solve_from<const W: usize>(
+    pub(crate) fn solve_from<const W: usize, const R: usize>(
         &self,
         b: &[f64; ROWS],
         active: &mut ActiveSet,
@@ -354,7 +376,7 @@ impl ActiveSetSolver {
         let b_norm = self.scaled.rhs_norm(b);
         let mut g = [0.0; N];
         let (converged, mut iterations, closest, mut t) =
-            self.start_and_phase1::<W>(b, b_norm, active, &mut g);
+            self.start_and_phase1::<W, R>(b, b_norm, active, &mut g);
         let mut certificate = if converged {
             self.scaled.certificate_from_gradient(&t, &g, tolerance)
         } else {
@@ -437,7 +459,7 @@ impl ActiveSetSolver {
             };
         }
         let b_norm = self.scaled.rhs_norm(b);
-        let (_, mut iterations, _) = self.phase1::<BIG_WORK>(
+        let (_, mut iterations, _) = self.phase1::<BIG_WORK, 0>(
             b,
             b_norm,
             &mut t,
@@ -496,7 +518,7 @@ impl ActiveSetSolver {
     /// normalised gradient at the returned `t` (from the residual at exactly that `t`).
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
-    fn phase1<const W: usize>(
+    fn phase1<const W: usize, const R: usize>(
         &self,
         b: &[f64; ROWS],
         b_norm: f64,
@@ -534,7 +556,7 @@ impl ActiveSetSolver {
                     }
                     iterations += 1;
                     let mut d = [0.0; N];
-                    let _ = self.scaled.lsq_step::<W>(&free[..k], &r, t, &mut d);
+                    let _ = self.scaled.lsq_step::<W, R>(&free[..k], &r, t, &mut d);
                     let (alpha, blocking) = self.ratio_test(&free[..k], &d, t);
                     match (blocking, last_released) {
                         (Some((j, _)), Some(released)) if alpha == 0.0 && j == released => {

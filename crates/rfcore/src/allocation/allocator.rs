@@ -107,10 +107,14 @@ impl ActiveSetSolver {
                 solved_by: SolvedBy::ActiveSet,
             };
         }
-        let outcome = if self.scaled.rows * m <= SMALL_WORK {
-            self.solve_from::<SMALL_WORK>(&b, active, commands)
+        // Four rows (four weighted axes, no regularisation: the multirotor's thrust and three
+        // torques) get their own instance, whose small loops the compiler unrolls.
+        let outcome = if self.scaled.rows == 4 && self.scaled.rows * m <= SMALL_WORK {
+            self.solve_from::<SMALL_WORK, 4>(&b, active, commands)
+        } else if self.scaled.rows * m <= SMALL_WORK {
+            self.solve_from::<SMALL_WORK, 0>(&b, active, commands)
         } else {
-            self.solve_from::<BIG_WORK>(&b, active, commands)
+            self.solve_from::<BIG_WORK, 0>(&b, active, commands)
         };
         match outcome {
             Ok(report) => report,

@@ -122,11 +122,13 @@ impl ScaledLeastSquares {
                 continue;
             }
             let (lo, hi, x) = (self.lower[i], self.upper[i], t[i]);
-            let span = (hi - lo).max(lo.abs()).max(hi.abs());
-            let span = if span > 0.0 { span } else { 1.0 };
-            out.bound_violation = out
-                .bound_violation
-                .max((lo - x).max(x - hi).max(0.0) / span);
+            // Only a command outside its bounds has a nonzero violation (the solver's own never
+            // has one): the span and the division are paid only then.
+            if x < lo || x > hi {
+                let span = (hi - lo).max(lo.abs()).max(hi.abs());
+                let span = if span > 0.0 { span } else { 1.0 };
+                out.bound_violation = out.bound_violation.max((lo - x).max(x - hi) / span);
+            }
             if lo == hi {
                 continue;
             }

@@ -24,37 +24,45 @@ impl ScaledLeastSquares {
     /// `A_F P = Q [R11 R12; 0 0]`, then `[R11 R12] = [T11 0] Z` by Householder reflectors from
     /// the right (LAPACK's RZ), so `d = P Z^T [T11^-1 (Q^T r)_1; (Z P^T (T_pref - T)_F)_2]`.
     /// Returns the numerical rank of `A_F`.
-    pub(crate) fn lsq_step<const W: usize>(
+    ///
+    /// `R`: the row count when known at compile time (0: read `self.rows`), so that the loops of
+    /// the common 4-axis problem are unrolled (the same operations in the same order).
+    pub(crate) fn lsq_step<const W: usize, const R: usize>(
         &self,
         free: &[usize],
         r: &[f64; ROWS],
         t: &[f64; N],
         d: &mut [f64; N],
     ) -> usize {
+        let mut factor = FreeSetFactor::<W>::empty();
+        self.factor_free_set::<W, R>(free, &mut factor);
+        self.factored_step::<W, R>(free, &factor, r, t, d)
+    }
+
+    /// The factorisation of [`Self::lsq_step`] on the free columns `free` (it depends on the
+    /// matrix only, not on the residual or the commands).
+    pub(crate) fn factor_free_set<const W: usize, const R: usize>(
+        &self,
+        free: &[usize],
+        f: &mut FreeSetFactor<W>,
+    ) {
+        debug_assert!(R == 0 || R == self.rows);
         let k = free.len();
-        let rows = self.rows;
+        let rows = if R > 0 { R } else { self.rows };
         // A_F packed column-major (leading dimension `rows`).
-        let mut w = [0.0; W];
+        let w = &mut f.w;
         for (j, &i) in free.iter().enumerate() {
             w[j * rows..j * rows + rows].copy_from_slice(&self.a[i * ROWS..i * ROWS + rows]);
         }
-        let mut perm = [0usize; N];
-        let mut tau = [0.0; N];
-        let rank = householder_qr(&mut w, rows, rows, k, &mut perm, &mut tau);
-        let mut y = [0.0; ROWS];
-        y[..rows].copy_from_slice(&r[..rows]);
-        apply_qt(&w, rows, rows, rank, &tau, &mut y);
+        let rank = householder_qr_rows::<R>(w, rows, rows, k, &mut f.perm, &mut f.tau);
+        f.rank = rank;
         if rank == k {
-            back_substitute(&w, rows, rank, &mut y);
-            for j in 0..k {
-                d[free[perm[j]]] = y[j];
-            }
-            return rank;
+            return;
         }
-        // RZ: row i of [R11 R12] (entries i and rank..k) reduced to T11's diagonal entry.
+        // RZ: row i of [R11 R12] (entries i and rank..k) reduced to T11's diagonal entry. It
+        // leaves Q's reflectors (below the diagonal of the first `rank` columns) as they are.
         let (ld, nz) = (rows, k - rank);
-        let mut zv = [0.0; W];
-        let mut ztau = [0.0; N];
+        let (zv, ztau) = (&mut f.zv, &mut f.ztau);
         for i in (0..rank).rev() {
             let x0 = w[i * ld + i];
             let mut sq = x0 * x0;
@@ -93,6 +101,34 @@ impl ScaledLeastSquares {
                 }
             }
         }
+    }
+
+    /// The step of [`Self::lsq_step`] from the factorisation of the same free columns
+    /// ([`Self::factor_free_set`]); returns the rank.
+    pub(crate) fn factored_step<const W: usize, const R: usize>(
+        &self,
+        free: &[usize],
+        f: &FreeSetFactor<W>,
+        r: &[f64; ROWS],
+        t: &[f64; N],
+        d: &mut [f64; N],
+    ) -> usize {
+        debug_assert!(R == 0 || R == self.rows);
+        let k = free.len();
+        let rows = if R > 0 { R } else { self.rows };
+        let (w, perm, rank) = (&f.w, &f.perm, f.rank);
+        let mut y = [0.0; ROWS];
+        y[..rows].copy_from_slice(&r[..rows]);
+        apply_qt_rows::<R>(w, rows, rows, rank, &f.tau, &mut y);
+        if rank == k {
+            back_substitute_rows::<R>(w, rows, rank, &mut y);
+            for j in 0..k {
+                d[free[perm[j]]] = y[j];
+            }
+            return rank;
+        }
+        let (ld, nz) = (rows, k - rank);
+        let (zv, ztau) = (&f.zv, &f.ztau);
         let reflect_z = |i: usize, x: &mut [f64; N]| {
             let v = &zv[i * nz..i * nz + nz];
             let mut dot = x[i];
@@ -114,7 +150,7 @@ impl ScaledLeastSquares {
         for i in (0..rank).rev() {
             reflect_z(i, &mut x);
         }
-        back_substitute(&w, ld, rank, &mut y);
+        back_substitute_rows::<R>(w, ld, rank, &mut y);
         x[..rank].copy_from_slice(&y[..rank]);
         for i in 0..rank {
             reflect_z(i, &mut x);
@@ -123,6 +159,33 @@ impl ScaledLeastSquares {
             d[free[perm[j]]] = x[j];
         }
         rank
+    }
+}
+
+/// The complete orthogonal decomposition of [`ScaledLeastSquares::lsq_step`] for one free set,
+/// in work arrays of `W >= rows * k` entries: the pivoted QR (`w`: R and Q's reflectors, `perm`,
+/// `tau`), then, when the free columns are dependent, the RZ reflectors (`zv`, `ztau`; T11 in
+/// `w`). The active set keeps the one of all columns (its cold start's first step).
+#[derive(Debug, Clone)]
+pub(crate) struct FreeSetFactor<const W: usize> {
+    w: [f64; W],
+    perm: [usize; N],
+    tau: [f64; N],
+    rank: usize,
+    zv: [f64; W],
+    ztau: [f64; N],
+}
+
+impl<const W: usize> FreeSetFactor<W> {
+    pub(crate) fn empty() -> Self {
+        FreeSetFactor {
+            w: [0.0; W],
+            perm: [0; N],
+            tau: [0.0; N],
+            rank: 0,
+            zv: [0.0; W],
+            ztau: [0.0; N],
+        }
     }
 }
 
@@ -142,6 +205,22 @@ pub(crate) fn householder_qr(
     perm: &mut [usize],
     tau: &mut [f64],
 ) -> usize {
+    householder_qr_rows::<0>(a, ld, rows, k, perm, tau)
+}
+
+/// [`householder_qr`] with `ld = rows = R` known at compile time when `R > 0` (its loops
+/// unrolled: the same operations in the same order, so the same results).
+#[inline(always)]
+pub(crate) fn householder_qr_rows<const R: usize>(
+    a: &mut [f64],
+    ld: usize,
+    rows: usize,
+    k: usize,
+    perm: &mut [usize],
+    tau: &mut [f64],
+) -> usize {
+    debug_assert!(R == 0 || (ld == R && rows == R));
+    let (ld, rows) = if R > 0 { (R, R) } else { (ld, rows) };
     // Squared original norms (0: a zero column, never a pivot).
     let mut original = [0.0; ROWS];
     for j in 0..k {
@@ -285,6 +364,21 @@ fn householder_qr_scaled(
 // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
 #[allow(clippy::needless_range_loop)]
 pub(crate) fn apply_qt(a: &[f64], ld: usize, rows: usize, rank: usize, tau: &[f64], y: &mut [f64]) {
+    apply_qt_rows::<0>(a, ld, rows, rank, tau, y);
+}
+
+/// [`apply_qt`] with `ld = rows = R` known at compile time when `R > 0`.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+pub(crate) fn apply_qt_rows<const R: usize>(
+    a: &[f64],
+    ld: usize,
+    rows: usize,
+    rank: usize,
+    tau: &[f64],
+    y: &mut [f64],
+) {
+    let (ld, rows) = if R > 0 { (R, R) } else { (ld, rows) };
     for s in 0..rank {
         reflect(a, ld, rows, s, tau[s], y);
     }
@@ -297,6 +391,7 @@ pub(crate) fn apply_q(a: &[f64], ld: usize, rows: usize, rank: usize, tau: &[f64
     }
 }
 
+#[inline(always)]
 fn reflect(a: &[f64], ld: usize, rows: usize, s: usize, tau: f64, y: &mut [f64]) {
     let mut dot = y[s];
     for r in s + 1..rows {
@@ -311,11 +406,74 @@ fn reflect(a: &[f64], ld: usize, rows: usize, s: usize, tau: f64, y: &mut [f64])
 
 /// Solves `R z = y[..rank]` in place (R upper triangular in `a`).
 pub(crate) fn back_substitute(a: &[f64], ld: usize, rank: usize, y: &mut [f64]) {
+    back_substitute_rows::<0>(a, ld, rank, y);
+}
+
+/// [`back_substitute`] with `ld = R` known at compile time when `R > 0`.
+#[inline(always)]
+pub(crate) fn back_substitute_rows<const R: usize>(
+    a: &[f64],
+    ld: usize,
+    rank: usize,
+    y: &mut [f64],
+) {
+    let ld = if R > 0 { R } else { ld };
     for i in (0..rank).rev() {
         let mut v = y[i];
         for j in i + 1..rank {
             v -= a[j * ld + i] * y[j];
         }
         y[i] = v / a[i * ld + i];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::allocation::scaling::{BIG_WORK, SMALL_WORK};
+    use crate::fixtures::{ill_conditioned_allocation, Rng};
+
+    /// The step from a factorisation made beforehand (the solver's all-free factor) and from
+    /// the 4-row instance equals the step of the general code, bit for bit: the same
+    /// operations on the same numbers, in the same order (the solver's answers depend on it).
+    #[test]
+    fn stored_factor_and_four_row_instance_give_the_general_step_exactly() {
+        let mut rng = Rng(32);
+        for case in 0..200 {
+            let (problem, _) = ill_conditioned_allocation(&mut rng, (case % 13) as i32);
+            let scaled = ScaledLeastSquares::new(&problem);
+            assert_eq!(scaled.rows, 4);
+            let m = scaled.m;
+            let mut r = [0.0; ROWS];
+            let mut t = [0.0; N];
+            for x in &mut r[..4] {
+                *x = rng.normal();
+            }
+            for x in &mut t[..m] {
+                *x = rng.uniform(0.0, 2.0);
+            }
+            // All columns, then a random subset of at least one.
+            let all: Vec<usize> = (0..m).collect();
+            let some: Vec<usize> = (0..m).filter(|_| rng.below(3) > 0).collect();
+            for free in [all, some] {
+                if free.is_empty() {
+                    continue;
+                }
+                let mut general = [0.0; N];
+                let rank = scaled.lsq_step::<BIG_WORK, 0>(&free, &r, &t, &mut general);
+                let mut factor = FreeSetFactor::<SMALL_WORK>::empty();
+                scaled.factor_free_set::<SMALL_WORK, 0>(&free, &mut factor);
+                let mut stored = [0.0; N];
+                let stored_rank =
+                    scaled.factored_step::<SMALL_WORK, 4>(&free, &factor, &r, &t, &mut stored);
+                let mut unrolled = [0.0; N];
+                scaled.lsq_step::<SMALL_WORK, 4>(&free, &r, &t, &mut unrolled);
+                assert_eq!(stored_rank, rank);
+                for i in 0..m {
+                    assert_eq!(stored[i].to_bits(), general[i].to_bits(), "case {case}");
+                    assert_eq!(unrolled[i].to_bits(), general[i].to_bits(), "case {case}");
+                }
+            }
+        }
     }
 }
