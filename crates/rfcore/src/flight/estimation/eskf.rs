@@ -55,7 +55,7 @@ pub(crate) struct Kinematics {
     pub imu_position_m: Vector3<f64>,
 }
 
-/// A state's inputs at one time (those of [`NominalState::propagate_from`]): the corrected body
+/// A state's inputs at one time (those of `NominalState::propagate_from`): the corrected body
 /// rate and specific force and the world-frame acceleration `R f + g`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Inputs {
@@ -109,21 +109,8 @@ impl NominalState {
     /// The state at `t1` from the state at `t0`, both within `[a.time_s, b.time_s]`: rotation by
     /// the exact exponential of the midpoint rate, velocity by the trapezoid of the world-frame
     /// acceleration and position by its exact double integral (both exact when the world-frame
-    /// acceleration is linear in time over the step); with the step's linearisation.
-    #[inline]
-    pub(crate) fn propagate(
-        &self,
-        a: &ImuSample,
-        b: &ImuSample,
-        t0: f64,
-        t1: f64,
-        kin: &Kinematics,
-    ) -> (NominalState, Step) {
-        let (next, step, _) = self.propagate_from(None, a, b, t0, t1, kin);
-        (next, step)
-    }
-
-    /// [`NominalState::propagate`], with this state's inputs at `t0` when the caller has them
+    /// acceleration is linear in time over the step); with the step's linearisation. With this
+    /// state's inputs at `t0` when the caller has them
     /// (`start`, used when its time is `t0`: the end inputs of the step that produced this
     /// state, unchanged since), and the new state's inputs at `t1`. A chain of steps then
     /// evaluates each time's inputs once, with the same values: the inputs interpolated at a
