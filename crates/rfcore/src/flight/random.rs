@@ -78,6 +78,7 @@ impl Gaussian {
         Gaussian::new(stream_seed(seed, stream))
     }
 
+    #[inline]
     fn next_u64(&mut self) -> u64 {
         self.state = self.state.wrapping_add(GOLDEN_GAMMA);
         mix(self.state)
@@ -88,17 +89,35 @@ impl Gaussian {
         ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
     }
 
-    /// A standard normal sample (module docs).
+    /// A standard normal sample (module docs): the common case (one word, one comparison)
+    /// inlined, the wedge and tail in `sample_rejected`.
+    #[inline]
     pub fn sample(&mut self) -> f64 {
         let z = ziggurat();
+        let (layer, u) = self.layer_and_uniform();
+        if u.abs() < z.ratio[layer] {
+            return u * z.x[layer];
+        }
+        self.sample_rejected(z, layer, u)
+    }
+
+    /// The layer from the low 7 bits of a word and a uniform in [-1, 1) from its top 53 (below
+    /// 2^53 the word converts to f64 exactly through i64, one instruction; the scale is a power
+    /// of two, exact).
+    #[inline]
+    fn layer_and_uniform(&mut self) -> (usize, f64) {
+        let bits = self.next_u64();
+        let layer = (bits & 0x7F) as usize;
+        let top = (bits >> 11) as i64 as f64;
+        (layer, 2.0 * (top * (1.0 / (1u64 << 53) as f64)) - 1.0)
+    }
+
+    /// The rest of the ziggurat after the box test failed for `layer` and `u`: the tail or
+    /// the wedge, then fresh words until one is accepted.
+    #[cold]
+    #[inline(never)]
+    fn sample_rejected(&mut self, z: &Ziggurat, mut layer: usize, mut u: f64) -> f64 {
         loop {
-            let bits = self.next_u64();
-            let layer = (bits & 0x7F) as usize;
-            // Uniform in [-1, 1) from the top 53 bits.
-            let u = 2.0 * ((bits >> 11) as f64 / (1u64 << 53) as f64) - 1.0;
-            if u.abs() < z.ratio[layer] {
-                return u * z.x[layer];
-            }
             if layer == 0 {
                 // Beyond R: x = R + e with e exponential, accepted with exp(-e^2 / 2).
                 loop {
@@ -116,10 +135,15 @@ impl Gaussian {
             if f1 + self.uniform() * (f0 - f1) < 1.0 {
                 return x;
             }
+            (layer, u) = self.layer_and_uniform();
+            if u.abs() < z.ratio[layer] {
+                return u * z.x[layer];
+            }
         }
     }
 
     /// Three independent standard normal samples.
+    #[inline]
     pub fn vector3(&mut self) -> Vector3<f64> {
         let x = self.sample();
         let y = self.sample();

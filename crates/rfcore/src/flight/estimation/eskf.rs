@@ -55,6 +55,16 @@ pub(crate) struct Kinematics {
     pub imu_position_m: Vector3<f64>,
 }
 
+/// A state's inputs at one time (those of `NominalState::propagate_from`): the corrected body
+/// rate and specific force and the world-frame acceleration `R f + g`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Inputs {
+    pub time_s: f64,
+    pub rate: Vector3<f64>,
+    pub force: Vector3<f64>,
+    pub acceleration: Vector3<f64>,
+}
+
 /// The linearisation of one propagation step (for the covariance).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Step {
@@ -99,24 +109,36 @@ impl NominalState {
     /// The state at `t1` from the state at `t0`, both within `[a.time_s, b.time_s]`: rotation by
     /// the exact exponential of the midpoint rate, velocity by the trapezoid of the world-frame
     /// acceleration and position by its exact double integral (both exact when the world-frame
-    /// acceleration is linear in time over the step); with the step's linearisation.
+    /// acceleration is linear in time over the step); with the step's linearisation. With this
+    /// state's inputs at `t0` when the caller has them
+    /// (`start`, used when its time is `t0`: the end inputs of the step that produced this
+    /// state, unchanged since), and the new state's inputs at `t1`. A chain of steps then
+    /// evaluates each time's inputs once, with the same values: the inputs interpolated at a
+    /// sample's own time are that sample (`lerp` at 0 and 1 is exact), and the world-frame
+    /// acceleration at `t1` is the next step's at its `t0` (same attitude, same force).
     #[inline]
-    pub(crate) fn propagate(
+    pub(crate) fn propagate_from(
         &self,
+        start: Option<&Inputs>,
         a: &ImuSample,
         b: &ImuSample,
         t0: f64,
         t1: f64,
         kin: &Kinematics,
-    ) -> (NominalState, Step) {
+    ) -> (NominalState, Step, Inputs) {
         let dt = t1 - t0;
-        let (rate0, force0) = self.inputs(a, b, t0, kin);
+        let (rate0, force0, acc0) = match start {
+            Some(s) if s.time_s == t0 => (s.rate, s.force, s.acceleration),
+            _ => {
+                let (rate, force) = self.inputs(a, b, t0, kin);
+                (rate, force, self.attitude * force + kin.gravity_m_s2)
+            }
+        };
         let (rate1, force1) = self.inputs(a, b, t1, kin);
         // The rate is linear in time within an interval: its midpoint value is the mean.
         let increment = exp_quaternion(&((rate0 + rate1) * (0.5 * dt)));
         let mut attitude = self.attitude * increment;
         attitude.renormalize_fast();
-        let acc0 = self.attitude * force0 + kin.gravity_m_s2;
         let acc1 = attitude * force1 + kin.gravity_m_s2;
         let next = NominalState {
             position_m: self.position_m
@@ -135,7 +157,13 @@ impl NominalState {
             rate_end: rate1,
             force_end: force1,
         };
-        (next, step)
+        let end = Inputs {
+            time_s: t1,
+            rate: rate1,
+            force: force1,
+            acceleration: acc1,
+        };
+        (next, step, end)
     }
 
     /// Adds the error estimate `dx` (attitude on the right: `q Exp(dtheta)`).
@@ -296,7 +324,12 @@ pub(crate) fn update_block(
     noise_var: &Vector3<f64>,
     gate: f64,
 ) -> (Fusion, ErrorVector) {
-    let columns = p.fixed_view::<ERROR_DIM, 3>(0, block).into_owned();
+    // The block's three columns are contiguous in the column-major storage: copied as one slice
+    // (a view's `into_owned` copies element by element through an iterator).
+    let mut columns = SMatrix::<f64, ERROR_DIM, 3>::zeros();
+    columns
+        .as_mut_slice()
+        .copy_from_slice(&p.as_slice()[block * ERROR_DIM..(block + 3) * ERROR_DIM]);
     let pht: SMatrix<f64, ERROR_DIM, 3> = match h {
         None => columns,
         Some(h) => columns * h.transpose(),
@@ -330,21 +363,40 @@ pub(crate) fn update_block(
             *d -= x * a + y * b + z * c;
         }
     }
+    mirror_lower(data);
+    (Fusion::Fused, pht * s_inv_r)
+}
+
+/// Copies the lower triangle of the column-major `ERROR_DIM` square `data` onto the upper.
+fn mirror_lower(data: &mut [f64]) {
     for j in 1..ERROR_DIM {
         for i in 0..j {
             data[j * ERROR_DIM + i] = data[i * ERROR_DIM + j];
         }
     }
-    (Fusion::Fused, pht * s_inv_r)
 }
 
-/// The covariance after injecting `dtheta` (attitude reset `G = I - [dtheta / 2]x`).
+/// The covariance after injecting `dtheta` (attitude reset `G = I - [dtheta / 2]x`):
+/// `P <- G' P G'^T` with `G'` the identity outside the attitude block. On the column-major
+/// storage: the attitude rows of every column (a contiguous triple) by `G`, then the attitude
+/// columns (three contiguous columns) combined by `G^T`, in place.
 pub(crate) fn reset_covariance(p: &mut Covariance, dtheta: &Vector3<f64>) {
     let g = Matrix3::identity() - skew(&(dtheta * 0.5));
-    let rows = g * p.fixed_view::<3, ERROR_DIM>(ATT, 0);
-    p.fixed_view_mut::<3, ERROR_DIM>(ATT, 0).copy_from(&rows);
-    let cols = p.fixed_view::<ERROR_DIM, 3>(0, ATT) * g.transpose();
-    p.fixed_view_mut::<ERROR_DIM, 3>(0, ATT).copy_from(&cols);
+    let data = p.as_mut_slice();
+    for column in data.chunks_exact_mut(ERROR_DIM) {
+        let x = Vector3::new(column[ATT], column[ATT + 1], column[ATT + 2]);
+        let y = g * x;
+        column[ATT..ATT + 3].copy_from_slice(y.as_slice());
+    }
+    let attitude_columns = &mut data[ATT * ERROR_DIM..(ATT + 3) * ERROR_DIM];
+    let (c0, rest) = attitude_columns.split_at_mut(ERROR_DIM);
+    let (c1, c2) = rest.split_at_mut(ERROR_DIM);
+    for r in 0..ERROR_DIM {
+        let (a, b, c) = (c0[r], c1[r], c2[r]);
+        c0[r] = g[(0, 0)] * a + g[(0, 1)] * b + g[(0, 2)] * c;
+        c1[r] = g[(1, 0)] * a + g[(1, 1)] * b + g[(1, 2)] * c;
+        c2[r] = g[(2, 0)] * a + g[(2, 1)] * b + g[(2, 2)] * c;
+    }
 }
 
 #[cfg(test)]
@@ -424,6 +476,25 @@ mod tests {
         let rhs = UnitQuaternion::from_scaled_axis(phi)
             * UnitQuaternion::from_scaled_axis(right_jacobian(&phi) * d);
         assert!(lhs.angle_to(&rhs) < 1e-11, "{}", lhs.angle_to(&rhs));
+    }
+
+    #[test]
+    fn reset_is_the_dense_congruence() {
+        // Against G' P G'^T with G' the 15 x 15 identity carrying G = I - [dtheta / 2]x on the
+        // attitude block.
+        let p0 = random_covariance(11);
+        let dtheta = Vector3::new(0.02, -0.05, 0.1);
+        let mut g = Covariance::identity();
+        g.fixed_view_mut::<3, 3>(ATT, ATT)
+            .copy_from(&(Matrix3::identity() - skew(&(dtheta * 0.5))));
+        let expected = g * p0 * g.transpose();
+        let mut p = p0;
+        reset_covariance(&mut p, &dtheta);
+        assert!(
+            (p - expected).amax() < 1e-14 * expected.amax(),
+            "{}",
+            (p - expected).amax()
+        );
     }
 
     #[test]

@@ -8,7 +8,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::error::{Result, RfError};
 use crate::flight::estimation::eskf::{
-    propagate_covariance, reset_covariance, skew, update_block, Block, Covariance, Fusion,
+    propagate_covariance, reset_covariance, skew, update_block, Block, Covariance, Fusion, Inputs,
     Kinematics, NominalState, ProcessNoise, Step, ACCEL_BIAS, ATT, GYRO_BIAS, POS, VEL,
 };
 use crate::flight::estimation::EstimatorSettings;
@@ -67,6 +67,9 @@ pub struct Estimator {
     covariance: Covariance,
     horizon_time_s: f64,
     horizon_sample: Option<ImuSample>,
+    /// The horizon state's inputs at the horizon time, from the step that reached it (`None`
+    /// after a fusion changed the state): the next step starts from them.
+    horizon_inputs: Option<Inputs>,
     /// Steps since `covariance_time_s` not yet applied to the covariance.
     block: Option<Block>,
     covariance_time_s: f64,
@@ -80,6 +83,8 @@ pub struct Estimator {
     pending: VecDeque<Pending>,
     // The output predictor at the newest sample.
     output: NominalState,
+    /// The output state's inputs at the newest sample (as `horizon_inputs`).
+    output_inputs: Option<Inputs>,
     newest: Option<ImuSample>,
     gyro_filtered: Vector3<f64>,
     counts: FusionCounts,
@@ -125,6 +130,7 @@ impl Estimator {
             covariance,
             horizon_time_s: f64::NAN,
             horizon_sample: None,
+            horizon_inputs: None,
             block: None,
             covariance_time_s: f64::NAN,
             rate_mean: Vector3::zeros(),
@@ -134,6 +140,7 @@ impl Estimator {
             buffer: VecDeque::new(),
             pending: VecDeque::new(),
             output: start,
+            output_inputs: None,
             newest: None,
             gyro_filtered: Vector3::zeros(),
             counts: FusionCounts::default(),
@@ -173,16 +180,16 @@ impl Estimator {
         if corrected || self.buffer.is_empty() {
             self.replay_output();
         } else {
-            self.output = self
-                .output
-                .propagate(
-                    &previous,
-                    sample,
-                    previous.time_s,
-                    sample.time_s,
-                    &self.kinematics,
-                )
-                .0;
+            let (output, _, end) = self.output.propagate_from(
+                self.output_inputs.as_ref(),
+                &previous,
+                sample,
+                previous.time_s,
+                sample.time_s,
+                &self.kinematics,
+            );
+            self.output = output;
+            self.output_inputs = Some(end);
         }
         self.filter_gyro(sample, sample.time_s - previous.time_s);
         Ok(())
@@ -206,8 +213,7 @@ impl Estimator {
 
     /// The estimate at the newest IMU sample (the initial state before the first).
     pub fn estimate(&self) -> Estimate {
-        let (time_s, gyro_rad_s, accel_m_s2, gyro_saturated, accel_saturated) = match &self.newest
-        {
+        let (time_s, gyro_rad_s, accel_m_s2, gyro_saturated, accel_saturated) = match &self.newest {
             Some(s) => {
                 let rate = s.gyro_rad_s - self.output.gyro_bias_rad_s;
                 let r = &self.kinematics.imu_position_m;
@@ -293,6 +299,7 @@ impl Estimator {
         self.track_clamping(sample);
         self.gyro_filtered = sample.gyro_rad_s;
         self.output = self.horizon;
+        self.output_inputs = None;
     }
 
     fn queue(&mut self, valid_at_s: f64, measurement: Measurement) {
@@ -346,8 +353,16 @@ impl Estimator {
         if t_s <= t0 {
             return;
         }
-        let (state, step) = self.horizon.propagate(&a, next, t0, t_s, &self.kinematics);
+        let (state, step, end) = self.horizon.propagate_from(
+            self.horizon_inputs.as_ref(),
+            &a,
+            next,
+            t0,
+            t_s,
+            &self.kinematics,
+        );
         self.horizon = state;
+        self.horizon_inputs = Some(end);
         self.horizon_time_s = t_s;
         match self.block.as_mut() {
             Some(block) => block.extend(&step),
@@ -501,6 +516,7 @@ impl Estimator {
             }
             Fusion::Fused => {
                 self.horizon.inject(&dx);
+                self.horizon_inputs = None;
                 reset_covariance(&mut self.covariance, &dx.fixed_rows::<3>(ATT).into_owned());
                 self.counts.fused += 1;
                 true
@@ -511,15 +527,20 @@ impl Estimator {
     /// The output predictor recomputed: the horizon carried through every buffered sample.
     fn replay_output(&mut self) {
         let mut x = self.horizon;
+        let mut inputs = self.horizon_inputs;
         if let Some(mut a) = self.horizon_sample {
             let mut t0 = self.horizon_time_s;
             for b in &self.buffer {
-                x = x.propagate(&a, b, t0, b.time_s, &self.kinematics).0;
+                let (next, _, end) =
+                    x.propagate_from(inputs.as_ref(), &a, b, t0, b.time_s, &self.kinematics);
+                x = next;
+                inputs = Some(end);
                 a = *b;
                 t0 = b.time_s;
             }
         }
         self.output = x;
+        self.output_inputs = inputs;
     }
 
     fn filter_gyro(&mut self, sample: &ImuSample, dt_s: f64) {
