@@ -374,7 +374,12 @@ class TrackingFeedback:
 @final
 class RelaxedHoverOuterLoop:
     def __new__(
-        cls, *, position_gain_s2: float | None = None, velocity_gain_s: float | None = None, max_tilt_rad: float | None = None
+        cls,
+        *,
+        position_gain_s2: float | None = None,
+        velocity_gain_s: float | None = None,
+        max_tilt_rad: float | None = None,
+        integral_gain_s3: float | None = None,
     ) -> RelaxedHoverOuterLoop: ...
     @property
     def position_gain_s2(self) -> float: ...
@@ -382,6 +387,8 @@ class RelaxedHoverOuterLoop:
     def velocity_gain_s(self) -> float: ...
     @property
     def max_tilt_rad(self) -> float: ...
+    @property
+    def integral_gain_s3(self) -> float: ...
 
 @final
 class RelaxedHoverFeedback:

@@ -14,7 +14,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault.studies import deciding as D
-from rotorfault.studies.agreement import CONTROLLERS, CertifyAgreement, certify_against_flights, px4_vehicle
+from rotorfault.studies.agreement import CONTROLLERS, CaseFlight, CertifyAgreement, certify_against_flights, px4_vehicle
 
 DATA = Path(__file__).parents[1] / "data"
 
@@ -102,3 +102,45 @@ def test_bad_input_is_refused_by_field() -> None:
     with pytest.raises(TypeError, match=r"vehicles\[0\]"):
         certify_against_flights(["ke-quadcopter"])  # type: ignore[list-item]
     assert certify_against_flights([]).cases == ()
+
+
+def test_a_spin_up_that_holds_its_place_for_10_s_is_flown_to_the_end() -> None:
+    """Wang's VPP quadcopter without the opposing rotors 1 and 3: INDI keeps it upright on rotors 2
+    and 4 (5 N each) within micrometres, but nothing balances their drag torque except the
+    rotational damping, so the yaw rate climbs towards k_mu m g / k_r = 0.077 x 10 / 2.8e-3 =
+    275 rad/s with the time constant J_z / k_r = 17.9 s: not settled 10 s after the failure
+    (mean yaw rate 93.7 rad/s over the window, which once counted as a hold of a case certify
+    calls not survivable). Flown on, it passes the simulator's 200 rad/s body-rate limit 23.2 s
+    after the failure. Certify is right: its relaxed hover finds exactly that asymptote, upright
+    with 5 N on each rotor, once the spin-rate search reaches past it, and none within the
+    200 rad/s it searches by default (the simulator's limit)."""
+    from types import SimpleNamespace
+
+    from rotorfault.studies.agreement import _drag, _fly, _indi, preset_vehicles
+
+    v = next(v for v in preset_vehicles() if v.name == "wang-vpp")
+    flights: dict[str, object] = {}
+    _fly([(0, "indi-controller", v, _indi(v, (1, 3)))], [(v, SimpleNamespace(failed=(1, 3)), flights)])  # type: ignore[list-item]
+    flight = flights["indi-controller"]
+    assert isinstance(flight, CaseFlight)
+    assert flight.verdict == "diverged" and "spin not settled" in flight.note and "(body-rate)" in flight.note, flight
+    lost_at = float(flight.note.split("lost at ")[1].split(" s")[0])
+    # 1 s + J_z / k_r ln(275 / (275 - 200)) = 1 + 17.86 x 1.299 = 24.2 s (first-order spin-up).
+    assert lost_at == pytest.approx(1.0 + 0.05 / 2.8e-3 * np.log(275.0 / 75.0), abs=0.05)
+    airframe = v.airframe.with_failed_rotors((1, 3))
+    assert rf.relaxed_hover(airframe, drag=_drag(v)).solutions == []
+    wide = rf.RelaxedHoverSettings(rotational_drag_n_m_s=v.rotational_drag_n_m_s, max_spin_rate_rad_s=400.0)
+    [solution] = rf.relaxed_hover(airframe, wide).solutions
+    assert abs(solution.spin_rate_rad_s) == pytest.approx(0.077 * 1.0 * 10.0 / 2.8e-3, rel=1e-9)
+    # The analysis' residual check: 1e-9 of the weight (10 N).
+    assert solution.thrust_n == pytest.approx([0.0, 5.0, 0.0, 5.0], abs=1e-8)
+    # Flown open loop from the periodic state (the body-rate limit raised past it): the centre stays
+    # within 1 cm per second for 2 s, as every relaxed hover flown in tests/control.
+    from rotorfault.studies.agreement import _actuator
+
+    sim = rf.Simulator(airframe, drag=_drag(v), actuator=_actuator(v), limits=rf.DivergenceLimits(max_rate_rad_s=400.0))
+    start = rf.periodic_state(solution, airframe, position=(0, 0, -10), linear_drag_n_s_m=v.linear_drag_n_s_m)
+    run = sim.run(start, 2.0, controller=rf.OpenLoop.constant(solution.command_n))
+    assert not run.events
+    drift = np.linalg.norm(run.position - run.position[0], axis=1)
+    assert np.all(drift[1:] <= 0.01 * run.t[1:])

@@ -73,8 +73,9 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
         f"hover, or a relaxed hover a linear feedback can hold): {n['survivable']}, held by at least one controller: "
         f"{n['survivable_held']}; certified not survivable: {n['not_survivable']}, held by a controller: {n['not_survivable_held']}. "
         f"Each controller told the failure, which comes at {A.FAILURE_TIME_S:g} s from hover; verdict over the last {WINDOW_S:g} s "
-        f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s: holds = {VERDICT_MEANINGS['holds']}. Errors: the window's largest "
-        "horizontal / altitude error.",
+        f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s (a run holding its place with its spin not settled by then flown on to "
+        f"{A.FAILURE_TIME_S + A.SETTLE_AFTER_FAILURE_S:g} s, that verdict standing): holds = {VERDICT_MEANINGS['holds']}. Errors: the "
+        "window's largest horizontal / altitude error.",
         result.headers(), tuple(result.rows()),
     ))
 

@@ -29,17 +29,19 @@ pub struct PyRelaxedHoverOuterLoop {
 #[pymethods]
 impl PyRelaxedHoverOuterLoop {
     #[new]
-    #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None))]
+    #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None, integral_gain_s3=None))]
     fn new(
         position_gain_s2: Option<f64>,
         velocity_gain_s: Option<f64>,
         max_tilt_rad: Option<f64>,
+        integral_gain_s3: Option<f64>,
     ) -> PyResult<Self> {
         let d = RelaxedHoverOuterLoop::default();
         let inner = RelaxedHoverOuterLoop {
             position_gain_s2: position_gain_s2.unwrap_or(d.position_gain_s2),
             velocity_gain_s: velocity_gain_s.unwrap_or(d.velocity_gain_s),
             max_tilt_rad: max_tilt_rad.unwrap_or(d.max_tilt_rad),
+            integral_gain_s3: integral_gain_s3.unwrap_or(d.integral_gain_s3),
         };
         inner.check().map_err(to_py_err)?;
         Ok(PyRelaxedHoverOuterLoop { inner })
@@ -55,6 +57,11 @@ impl PyRelaxedHoverOuterLoop {
     #[getter]
     fn max_tilt_rad(&self) -> f64 {
         self.inner.max_tilt_rad
+    }
+    /// `k_i` on the circle centre's horizontal error, 1/s^3 (0: no integral action).
+    #[getter]
+    fn integral_gain_s3(&self) -> f64 {
+        self.inner.integral_gain_s3
     }
 }
 

@@ -10,6 +10,11 @@
 //! rate; the outer loop steers the circle's centre, `p - R c_p` (velocity `v - R c_v`) with the
 //! body-fixed offsets `c_p`, `c_v` of the periodic solution, so it does not chase the circle.
 //! Time-invariant in body axes; yaw is not controlled (it turns with the spin).
+//!
+//! Integral action (`integral_gain_s3 > 0`): the outer loop adds `-k_i \int e dt` of the
+//! centre's horizontal error, so a constant force (wind on the drag, a thrust error) leaves no
+//! steady horizontal offset. Anti-windup: the integral is frozen while the wanted acceleration is
+//! at its tilt limit, and its own share is kept within that limit.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -20,8 +25,8 @@ use crate::state::RigidBodyState;
 /// States of the reduced model the gain acts on.
 pub const REDUCED_STATES: usize = 7;
 
-/// The outer loop: desired horizontal acceleration `-k_p e - k_d v` of the circle's centre,
-/// limited to `g tan(max_tilt_rad)`, tilts the up direction.
+/// The outer loop: desired horizontal acceleration `-k_p e - k_d v - k_i \int e dt` of the
+/// circle's centre, limited to `g tan(max_tilt_rad)`, tilts the up direction.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RelaxedHoverOuterLoop {
     /// `k_p`, 1/s^2.
@@ -30,6 +35,9 @@ pub struct RelaxedHoverOuterLoop {
     pub velocity_gain_s: f64,
     /// Largest tilt of the desired up direction, rad.
     pub max_tilt_rad: f64,
+    /// `k_i`, 1/s^3: integral action on the centre's horizontal error (0: none, the default, so
+    /// the designs flown so far are unchanged).
+    pub integral_gain_s3: f64,
 }
 
 impl Default for RelaxedHoverOuterLoop {
@@ -39,6 +47,7 @@ impl Default for RelaxedHoverOuterLoop {
             position_gain_s2: 0.25,
             velocity_gain_s: 1.0,
             max_tilt_rad: 0.2,
+            integral_gain_s3: 0.0,
         }
     }
 }
@@ -48,6 +57,7 @@ impl RelaxedHoverOuterLoop {
         for (field, value) in [
             ("outer_loop.position_gain_s2", self.position_gain_s2),
             ("outer_loop.velocity_gain_s", self.velocity_gain_s),
+            ("outer_loop.integral_gain_s3", self.integral_gain_s3),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(RfError::invalid(
@@ -97,6 +107,9 @@ pub struct RelaxedHoverFeedback {
     gain: DMatrix<f64>,
     position: Vector3<f64>,
     outer: RelaxedHoverOuterLoop,
+    /// `\int e dt` of the centre's horizontal error (m s) and when it was last advanced.
+    integral_m_s: nalgebra::Vector2<f64>,
+    integrated_to_s: Option<f64>,
 }
 
 impl RelaxedHoverFeedback {
@@ -164,20 +177,66 @@ impl RelaxedHoverFeedback {
             gain,
             position: Vector3::from(position_m),
             outer,
+            integral_m_s: nalgebra::Vector2::zeros(),
+            integrated_to_s: None,
         })
+    }
+
+    /// The centre's horizontal error (m) and velocity (m/s) in world axes.
+    fn centre_error(&self, measured: &RigidBodyState) -> (Vector3<f64>, Vector3<f64>) {
+        let r = measured.attitude;
+        let centre = measured.position_m - r * self.circle_offset - self.position;
+        let velocity = measured.velocity_m_s - r * self.circle_velocity;
+        (centre, velocity)
+    }
+
+    /// The wanted horizontal acceleration and whether it is at the tilt limit.
+    fn wanted_accel(
+        &self,
+        centre: &Vector3<f64>,
+        velocity: &Vector3<f64>,
+    ) -> (nalgebra::Vector2<f64>, bool) {
+        let o = &self.outer;
+        let mut accel = -o.position_gain_s2 * centre.xy()
+            - o.velocity_gain_s * velocity.xy()
+            - o.integral_gain_s3 * self.integral_m_s;
+        let limit = self.gravity * o.max_tilt_rad.tan();
+        let saturated = accel.norm() > limit;
+        if saturated {
+            accel *= limit / accel.norm();
+        }
+        (accel, saturated)
+    }
+
+    /// Advances the integral to `t_s` (rectangle rule over the time since the last call; frozen
+    /// while the wanted acceleration is at its limit, and its share kept within the limit).
+    fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
+        let k_i = self.outer.integral_gain_s3;
+        let previous = self.integrated_to_s.replace(t_s);
+        let (Some(previous), true) = (previous, k_i > 0.0) else {
+            return;
+        };
+        let dt = t_s - previous;
+        let (centre, velocity) = self.centre_error(measured);
+        if dt.is_nan()
+            || dt <= 0.0
+            || !centre.iter().all(|v| v.is_finite())
+            || self.wanted_accel(&centre, &velocity).1
+        {
+            return;
+        }
+        self.integral_m_s += dt * centre.xy();
+        let limit = self.gravity * self.outer.max_tilt_rad.tan() / k_i;
+        if self.integral_m_s.norm() > limit {
+            self.integral_m_s *= limit / self.integral_m_s.norm();
+        }
     }
 
     /// The reduced state `[a, b, dp, dq, dr, z, w]` the gain acts on (module docs).
     pub fn reduced_state(&self, measured: &RigidBodyState) -> [f64; REDUCED_STATES] {
         let r = measured.attitude;
-        let centre = measured.position_m - r * self.circle_offset - self.position;
-        let velocity = measured.velocity_m_s - r * self.circle_velocity;
-        let o = &self.outer;
-        let mut accel = -o.position_gain_s2 * centre.xy() - o.velocity_gain_s * velocity.xy();
-        let limit = self.gravity * o.max_tilt_rad.tan();
-        if accel.norm() > limit {
-            accel *= limit / accel.norm();
-        }
+        let (centre, velocity) = self.centre_error(measured);
+        let (accel, _) = self.wanted_accel(&centre, &velocity);
         let up_wanted = Vector3::new(accel.x, accel.y, -self.gravity).normalize();
         let n_body = r.inverse() * up_wanted - self.axis;
         let rate = measured.omega_rad_s - self.body_rate;
@@ -197,13 +256,18 @@ impl Controller for RelaxedHoverFeedback {
     fn command_count(&self) -> usize {
         self.u_trim.len()
     }
-    fn command(&mut self, _t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.integrate(t_s, measured);
         let x = self.reduced_state(measured);
         for (i, o) in out.iter_mut().enumerate() {
             let feedback: f64 = (0..REDUCED_STATES).map(|j| self.gain[(i, j)] * x[j]).sum();
             *o = self.u_trim[i] - feedback;
         }
         Ok(())
+    }
+    fn reset(&mut self) {
+        self.integral_m_s = nalgebra::Vector2::zeros();
+        self.integrated_to_s = None;
     }
 }
 
@@ -291,6 +355,49 @@ mod tests {
             (tilt - (0.25f64 / 9.81).atan()).abs() < 1e-3 * tilt,
             "{x:?}"
         );
+    }
+
+    #[test]
+    fn the_integral_of_a_constant_error_tilts_further_and_winds_no_further_than_the_limit() {
+        let axis = Vector3::new(0.0, 0.0, -1.0);
+        let outer = RelaxedHoverOuterLoop {
+            integral_gain_s3: 0.1,
+            ..Default::default()
+        };
+        let mut c =
+            RelaxedHoverFeedback::new(&trim(axis), &[3.0], DMatrix::zeros(1, 7), [0.0; 3], outer)
+                .unwrap();
+        // 0.1 m east, at rest: k_p e = 0.025 m/s^2, below the tilt limit (9.81 tan 0.2).
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.1, 0.0),
+            omega_rad_s: axis * 15.0,
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        for k in 0..=400 {
+            c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
+        }
+        // After 1 s: integral 0.1 m s; accel -(0.25 x 0.1 + 0.1 x 0.1) = -0.035 m/s^2 east.
+        let tilt = |x: [f64; 7]| (x[0] * x[0] + x[1] * x[1]).sqrt();
+        // The reduced state is the chord's tangent part: the sine of the tilt.
+        let want = 0.035 / 0.035f64.hypot(9.81);
+        assert!(
+            (tilt(c.reduced_state(&state)) - want).abs() < 1e-9,
+            "{}",
+            tilt(c.reduced_state(&state))
+        );
+        // Far off (saturated): the integral is frozen.
+        let far = RigidBodyState {
+            position_m: Vector3::new(0.0, 100.0, 0.0),
+            ..state
+        };
+        let before = c.integral_m_s;
+        c.command(1.0025, &far, &mut out).unwrap();
+        assert_eq!(c.integral_m_s, before);
+        // reset: no integral, and the first call after it only sets the time base.
+        c.reset();
+        c.command(5.0, &state, &mut out).unwrap();
+        assert_eq!(c.integral_m_s, nalgebra::Vector2::zeros());
     }
 
     #[test]
