@@ -636,7 +636,6 @@ def simulate_batch(
     efficiency: _F64,
     settles: list[list[float] | None],
     config: SimulationConfig,
-    lanes: str,
 ) -> list[Trajectory]: ...
 def state_derivative(
     airframe: Airframe,

@@ -30,9 +30,6 @@ SolvedBy: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 Spin: TypeAlias = Literal["cw", "ccw"]
 #: Command law of Ke's uniform passive FTC (:class:`rotorfault.control.UniformPassiveFtc`).
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
-#: How :func:`rotorfault.simulate_batch` steps its runs: ``"auto"`` four runs per SIMD register where
-#: the batch allows it (same results bit for bit), ``"scalar"`` one run at a time.
-BatchLanes: TypeAlias = Literal["auto", "scalar"]
 #: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
 DivergenceKind: TypeAlias = Literal[
     "crashed", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"

@@ -11,7 +11,7 @@ use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch, Variab
 use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
-    simulate_batch_lanes as core_batch, BatchLanes, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
+    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
     RotorFault, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
@@ -810,17 +810,7 @@ pub fn simulate_batch<'py>(
     efficiency: PyReadonlyArray1<'py, f64>,
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
-    lanes: &str,
 ) -> PyResult<Vec<PyTrajectory>> {
-    let lanes = match lanes {
-        "auto" => BatchLanes::Auto,
-        "scalar" => BatchLanes::Scalar,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "lanes: expected one of auto, scalar, got {other:?}"
-            )))
-        }
-    };
     let (vehicle, actuators, count) = vehicle_and_actuators(airframe, &actuator, &drag, None)?;
     if controllers.len() != x0s.len()
         || fault_lists.len() != x0s.len()
@@ -847,7 +837,7 @@ pub fn simulate_batch<'py>(
         })
         .collect::<PyResult<_>>()?;
     let results = detached(py, |cancel| {
-        core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel, lanes)
+        core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
     Ok(results
         .into_iter()

@@ -19,13 +19,13 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any, TypeAlias, cast, get_args
+from typing import Any, TypeAlias, cast
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._typing import BatchLanes, Controller, CoreController, core_controller_types
+from .._typing import Controller, CoreController, core_controller_types
 from .._util.convert import FloatArray, count, flag, float_array, real
 from .._util.deprecation import dataclass_compat
 from .._util.progress import chunks
@@ -313,7 +313,6 @@ def simulate_batch(
     record_every: int = 1,
     progress: bool | None = None,
     memory_budget_bytes: int | None = None,
-    lanes: BatchLanes = "auto",
 ) -> BatchResult:
     """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
     every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
@@ -324,10 +323,7 @@ def simulate_batch(
     (runs done, rate, ETA) on standard error; the runs then go to the core in chunks, with
     identical results. ``memory_budget_bytes`` (default: half the available memory): a batch
     whose recordings would need more is refused up front with the estimate (see
-    :func:`recording_bytes`). ``lanes``: ``"auto"`` (default) flies groups of four runs in one
-    AVX2 register where the batch allows it (Rust controllers, no sensor noise or sensing, constant
-    wind, fixed-pitch rotors without a rate limit, no quadratic drag or rotor inertia; runs grouped
-    by equal fault times), with results equal bit for bit to ``"scalar"``, one run at a time.
+    :func:`recording_bytes`).
 
     Examples:
 
@@ -340,10 +336,6 @@ def simulate_batch(
     """
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
-    if not isinstance(lanes, str):
-        raise TypeError(f"lanes: expected one of {', '.join(get_args(BatchLanes))}, got {type(lanes).__name__}")
-    if lanes not in get_args(BatchLanes):
-        raise ValueError(f"lanes: expected one of {', '.join(get_args(BatchLanes))}, got {lanes!r}")
     states = list(x0s)
     n = len(states)
     for s in states:
@@ -384,7 +376,6 @@ def simulate_batch(
             simulator.airframe.efficiency,
             starts[first:last],
             simulator._config(duration_s, record_every, seed_offset=first),
-            lanes,
         )
     trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
     # The common recording grid (the core's record_times, bit-identical to a completed run's t).

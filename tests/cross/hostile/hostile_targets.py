@@ -470,8 +470,6 @@ def _simulate(draw: st.DrawFn, frame: rf.Airframe) -> Call:
         kwargs["initial_command"] = draw(vector(frame.rotor_count, hostile(number(0, 5))))
     if draw(st.booleans()):
         kwargs["memory_budget_bytes"] = draw(hostile(st.integers(10**3, 10**8), *EDGE_INTS))
-    if draw(st.booleans()):
-        kwargs["lanes"] = draw(st.sampled_from(("auto", "scalar", "simd", "", 4, None)))
     duration = draw(hostile(number(0.0, 1.0), 1e9, 1e300))
     return Call(rf.simulate_batch, (sim, x0s, duration), kwargs, frozenset(kwargs) | {"duration_s", "x0s"})
 

@@ -4,6 +4,8 @@
 //! [`Cancel`] token once per control period (`*_cancellable`, the batch) and, with sensing, once
 //! per sensor sample inside the period (`Onboard::catch_up`).
 
+use rayon::prelude::*;
+
 use crate::cancel::Cancel;
 use crate::control::Controller;
 use crate::error::{Result, RfError};
@@ -82,21 +84,51 @@ pub fn simulate_observed(
     observer: &mut dyn StepObserver,
     cancel: &Cancel,
 ) -> Result<Trajectory> {
-    let mut schedule = check_run(
-        vehicle,
-        &actuators,
-        controller,
-        initial_efficiency,
-        faults,
-        &x0,
-        config,
-    )?;
+    config.check()?;
     let m = vehicle.rotor_count();
+    if actuators.rotor_count() != m {
+        return Err(RfError::shape(
+            "actuator",
+            format!("{m} rotors"),
+            actuators.rotor_count().to_string(),
+        ));
+    }
     let count = actuators.channels() * m;
+    if controller.command_count() != count {
+        return Err(RfError::shape(
+            "controller",
+            format!(
+                "{count} commands ({} per rotor x {m} rotors)",
+                actuators.channels()
+            ),
+            controller.command_count().to_string(),
+        ));
+    }
+    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
+    let mut schedule = FaultSchedule::new(faults, m)?;
+    if !x0.is_finite() {
+        return Err(RfError::invalid("x0", "must be finite"));
+    }
+    check_step_size(config, &actuators, &x0)?;
+    config.check_start("x0", &x0)?;
+
     let steps = config.steps();
     let every = config.record_every;
     let rows = steps / every + 3;
-    let mut trajectory = empty_trajectory(config, count, m);
+    let mut trajectory = Trajectory {
+        t_s: Vec::with_capacity(rows),
+        states: Vec::with_capacity(rows),
+        commands: Vec::with_capacity(rows * count),
+        thrust_n: Vec::with_capacity(rows * m),
+        efficiency: Vec::with_capacity(rows * m),
+        measured: Vec::with_capacity(if config.noise.is_some() {
+            rows * STATE_DIM
+        } else {
+            0
+        }),
+        divergence: None,
+        sensing: None,
+    };
     controller.reset();
     let mut efficiency = initial_efficiency.to_vec();
     let mut command = vec![0.0; count];
@@ -173,15 +205,17 @@ pub fn simulate_observed(
                 rotor_thrust_n: onboard.rotor_thrust(),
             }
         } else if reads_samples {
-            truth_samples(
-                vehicle,
-                &actuators,
-                &efficiency,
-                config,
-                t,
-                (&state, &measured),
-                &mut rotor_thrust,
-            )
+            for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
+                *thrust = actuators.output(i, efficiency[i]).thrust_n;
+            }
+            let totals = rotor_totals(vehicle, &actuators, actuators.state(), &efficiency);
+            let wind = config.wind_at(t);
+            ControllerInput {
+                state: &measured,
+                gyro_rad_s: Some(measured.omega_rad_s),
+                specific_force_m_s2: Some(vehicle.specific_force(&state, &totals, &wind)),
+                rotor_thrust_n: Some(&rotor_thrust),
+            }
         } else {
             ControllerInput::state_only(&measured)
         };
@@ -241,93 +275,9 @@ pub fn simulate_observed(
     Ok(trajectory)
 }
 
-/// An empty trajectory with room for the run's rows.
-pub(super) fn empty_trajectory(config: &SimulationConfig, count: usize, m: usize) -> Trajectory {
-    let rows = config.steps() / config.record_every + 3;
-    Trajectory {
-        t_s: Vec::with_capacity(rows),
-        states: Vec::with_capacity(rows),
-        commands: Vec::with_capacity(rows * count),
-        thrust_n: Vec::with_capacity(rows * m),
-        efficiency: Vec::with_capacity(rows * m),
-        measured: Vec::with_capacity(if config.noise.is_some() {
-            rows * STATE_DIM
-        } else {
-            0
-        }),
-        divergence: None,
-        sensing: None,
-    }
-}
-
-/// The raw samples of the truth for a controller that reads them (no sensing): the rotors'
-/// thrusts (written to `rotor_thrust`), the measured rates and the specific force at `t_s`.
-pub(super) fn truth_samples<'a>(
-    vehicle: &Vehicle,
-    actuators: &Actuators,
-    efficiency: &[f64],
-    config: &SimulationConfig,
-    t_s: f64,
-    (state, measured): (&RigidBodyState, &'a RigidBodyState),
-    rotor_thrust: &'a mut [f64],
-) -> ControllerInput<'a> {
-    for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
-        *thrust = actuators.output(i, efficiency[i]).thrust_n;
-    }
-    let totals = rotor_totals(vehicle, actuators, actuators.state(), efficiency);
-    let wind = config.wind_at(t_s);
-    ControllerInput {
-        state: measured,
-        gyro_rad_s: Some(measured.omega_rad_s),
-        specific_force_m_s2: Some(vehicle.specific_force(state, &totals, &wind)),
-        rotor_thrust_n: Some(rotor_thrust),
-    }
-}
-
-/// The checks of one run before any work (those of [`simulate_observed`]); its fault schedule.
-pub(super) fn check_run(
-    vehicle: &Vehicle,
-    actuators: &Actuators,
-    controller: &dyn Controller,
-    initial_efficiency: &[f64],
-    faults: &[RotorFault],
-    x0: &RigidBodyState,
-    config: &SimulationConfig,
-) -> Result<FaultSchedule> {
-    config.check()?;
-    let m = vehicle.rotor_count();
-    if actuators.rotor_count() != m {
-        return Err(RfError::shape(
-            "actuator",
-            format!("{m} rotors"),
-            actuators.rotor_count().to_string(),
-        ));
-    }
-    let count = actuators.channels() * m;
-    if controller.command_count() != count {
-        return Err(RfError::shape(
-            "controller",
-            format!(
-                "{count} commands ({} per rotor x {m} rotors)",
-                actuators.channels()
-            ),
-            controller.command_count().to_string(),
-        ));
-    }
-    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
-    let schedule = FaultSchedule::new(faults, m)?;
-    if !x0.is_finite() {
-        return Err(RfError::invalid("x0", "must be finite"));
-    }
-    check_step_size(config, actuators, x0)?;
-    config.check_start("x0", x0)?;
-
-    Ok(schedule)
-}
-
 /// Ends a run with `divergence`: its row (NaN commands; NaN measurements with sensor noise, a
 /// NaN estimate with sensing), shown to the observer and recorded with the event.
-pub(super) fn end_with(
+fn end_with(
     trajectory: &mut Trajectory,
     observer: &mut dyn StepObserver,
     divergence: Divergence,
@@ -355,4 +305,56 @@ pub(super) fn end_with(
         .extend(std::iter::repeat_n(f64::NAN, count));
     observer.step(time_s, &state, &vec![f64::NAN; count], efficiency);
     trajectory.divergence = Some(divergence);
+}
+
+/// One run of a batch: its own controller, initial state and faults.
+pub struct BatchRun {
+    pub controller: Box<dyn Controller>,
+    /// Actuator start for this run (settled), or `None` to keep the batch's actuator state.
+    pub initial_command: Option<Vec<f64>>,
+    pub x0: RigidBodyState,
+    pub faults: Vec<RotorFault>,
+}
+
+/// Many runs in parallel (rayon); results in input order. With sensor noise or sensing, run `i`
+/// uses seed `seed + i`, so runs are independent and the batch is reproducible. Every run checks
+/// `cancel` once per control period.
+pub fn simulate_batch(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    initial_efficiency: &[f64],
+    runs: Vec<BatchRun>,
+    config: &SimulationConfig,
+    cancel: &Cancel,
+) -> Result<Vec<Trajectory>> {
+    config.check()?;
+    for (i, run) in runs.iter().enumerate() {
+        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
+    }
+    runs.into_par_iter()
+        .enumerate()
+        .map(|(i, mut run)| {
+            let mut own = config.clone();
+            if let Some(noise) = own.noise.as_mut() {
+                noise.seed = noise.seed.wrapping_add(i as u64);
+            }
+            if let Some(sensing) = own.sensing.as_mut() {
+                sensing.seed = sensing.seed.wrapping_add(i as u64);
+            }
+            let mut actuators = actuators.clone();
+            if let Some(command) = &run.initial_command {
+                actuators.settle(command)?;
+            }
+            simulate_cancellable(
+                vehicle,
+                actuators,
+                run.controller.as_mut(),
+                initial_efficiency,
+                &run.faults,
+                run.x0,
+                &own,
+                cancel,
+            )
+        })
+        .collect()
 }
