@@ -36,7 +36,7 @@ from .storage import ChunkSpec, pyarrow_module
 RECORDING_KIND = "rotorfault-recording"
 #: Bytes of columns a chunk of runs aims at when ``chunk_runs`` is not given (two chunks are in
 #: flight while a third is written, so a batch costs a few times this).
-CHUNK_BYTES = 16 * 2**20
+CHUNK_BYTES = 4 * 2**20
 
 
 @dataclass(frozen=True)
