@@ -252,6 +252,9 @@ def test_python_control_systems_and_their_timebase() -> None:
         (np.eye(3), [[1.0]], r"^q: expected a 2x2 matrix, got shape \(3, 3\)"),
         (np.eye(2), [[math.nan]], r"^r\[0, 0\]: must be finite, got nan"),
         (np.eye(2), np.ones((2, 2)), r"^r: expected a 1x1 matrix"),
+        # Found by the long hostile run: a subnormal R overflowed the gain into a NaN warning.
+        (np.eye(2), [[1e-310]], r"^r\[0, 0\]: 1e-310 is subnormal \(nonzero and below 2.23e-308"),
+        (np.diag([1.0, 5e-324]), [[1.0]], r"^q\[1, 1\]: 4.94e-324 is subnormal"),
     ],
 )
 def test_weights_are_checked(q: Any, r: Any, message: str) -> None:

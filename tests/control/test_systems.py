@@ -117,3 +117,51 @@ def test_lanzons_plant_with_named_signals() -> None:
     a, b = vehicle.linearisation()
     assert np.array_equal(plant.A, a) and np.array_equal(plant.B, b)
     assert np.array_equal(plant.C, vehicle.plant().C)
+
+
+def test_lanzons_loop_shaping_design_names_every_signal() -> None:
+    """The weight, the shaped plant, the synthesis plant and both controllers of Lanzon's design
+    carry named signals, chained consistently: the controller reads the plant's outputs and drives
+    its inputs; W1 reads the shaped inputs and drives the plant's inputs."""
+    from rotorfault.control.lanzon import LanzonVehicle, design
+    from rotorfault.control.systems import LANZON_INPUTS, LANZON_OUTPUTS, LANZON_STATES
+
+    d = design(LanzonVehicle())
+    plant = d.vehicle.plant()
+    assert (plant.state_labels, plant.input_labels, plant.output_labels) == (
+        list(LANZON_STATES), list(LANZON_INPUTS), list(LANZON_OUTPUTS))
+    shaped_inputs = [f"shaped_{u}" for u in LANZON_INPUTS]
+    assert d.w1.input_labels == shaped_inputs and d.w1.output_labels == list(LANZON_INPUTS)
+    assert d.w1.state_labels == [f"w1_{i + 1}" for i in range(d.w1.nstates)]
+    s = d.synthesis
+    assert s.controller.input_labels == list(LANZON_OUTPUTS) and s.controller.output_labels == list(LANZON_INPUTS)
+    assert s.controller.state_labels == s.shaped_controller.state_labels + d.w1.state_labels
+    assert s.shaped_controller.input_labels == list(LANZON_OUTPUTS) and s.shaped_controller.output_labels == shaped_inputs
+    assert s.shaped_plant.state_labels == d.w1.state_labels + list(LANZON_STATES)
+    assert s.shaped_plant.input_labels == shaped_inputs and s.shaped_plant.output_labels == list(LANZON_OUTPUTS)
+    assert s.synthesis_plant.state_labels == [f"gs_{i + 1}" for i in range(s.synthesis_plant.nstates)]
+    assert s.synthesis_plant.input_labels == shaped_inputs
+    # Names only: the matrices are those of the unnamed series connection.
+    from rotorfault.control.realisation import series
+
+    k = series(s.shaped_controller, d.w1)
+    assert np.array_equal(np.asarray(k.A), np.asarray(s.controller.A))
+
+
+def test_ncfsyn_names_unnamed_systems_by_role() -> None:
+    """A plant and weight with python-control's default labels: the shaped plant's colliding state
+    names are prefixed by their role, the controller keeps the plant's signal names."""
+    import control as ct
+
+    from rotorfault.control import ncfsyn
+
+    plant = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    weight = ct.ss([[-0.1]], [[1.0]], [[1.0]], [[0.0]])
+    result = ncfsyn(plant, weight)
+    assert result.shaped_plant.state_labels == ["w1.x[0]", "plant.x[0]"]
+    assert result.controller.input_labels == plant.output_labels
+    assert result.controller.output_labels == plant.input_labels
+    with pytest.raises(ValueError, match="states: expected 1 names, got 2"):
+        from rotorfault.control.realisation import with_signals
+
+        with_signals(plant, states=["a", "b"])

@@ -50,7 +50,8 @@ from .._util.convert import FloatArray, float_array, real
 from .._util.deprecation import dataclass_compat
 from ..analysis.airframe import Airframe, require_airframe
 from ..flight import Drag, FixedPitchActuator, Simulator
-from .realisation import state_space
+from .realisation import state_space, with_signals
+from .systems import LANZON_INPUTS, LANZON_OUTPUTS, LANZON_STATES
 from .robust import NcfsynEvidence, NcfsynResult, loop_shape_weight, ncfsyn, target_loop_shape
 
 #: Table 2's initial spin, rad/s: ``k_r = m g d / SPIN_RATE_RAD_S`` reproduces it (the paper
@@ -223,7 +224,8 @@ class LanzonVehicle:
         a, b = self.linearisation()
         c = np.zeros((3, 5))
         c[0, 0] = c[1, 1] = c[2, 4] = 1.0
-        return state_space(a, b, c, np.zeros((3, 3)))
+        return with_signals(state_space(a, b, c, np.zeros((3, 3))), states=LANZON_STATES, inputs=LANZON_INPUTS,
+                            outputs=LANZON_OUTPUTS, name="lanzon-plant")
 
     # -- robust feedback linearisation ------------------------------------------------------------
     def decoupling_matrix(self, x: npt.ArrayLike) -> FloatArray:
@@ -369,7 +371,9 @@ class LanzonDesign:
 
     @property
     def controller(self) -> ct.StateSpace:
-        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``."""
+        """The continuous controller ``K = W1 Ks`` from the errors ``[phi, theta, r]`` to ``v``,
+        named as the plant's signals: inputs ``phi, theta, dr``, outputs ``du_f, tau_q, dtau_r``
+        (:func:`~rotorfault.control.lanzon_plant`)."""
         return self.synthesis.controller
 
     def discretise(self, dt_s: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:

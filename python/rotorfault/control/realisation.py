@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
@@ -63,6 +64,44 @@ def state_space(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike, d: npt.Arr
         b_ = np.zeros((0, d_.shape[1]))
         c_ = np.zeros((d_.shape[0], 0))
     return ct.ss(a_, b_, c_, d_, dt, remove_useless_states=False)
+
+
+def with_signals(
+    system: ct.StateSpace,
+    *,
+    states: Sequence[str] | None = None,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+    name: str | None = None,
+) -> ct.StateSpace:
+    """``system`` (the same matrices and sampling period) with its states, inputs and outputs
+    named (``None``: keep the system's own labels)."""
+    a, b, c, d = _raw_matrices(system)
+    labels = {"states": states, "inputs": inputs, "outputs": outputs}
+    sizes = {"states": a.shape[0], "inputs": d.shape[1], "outputs": d.shape[0]}
+    own = {"states": system.state_labels, "inputs": system.input_labels, "outputs": system.output_labels}
+    named = {}
+    for field, given in labels.items():
+        chosen = list(own[field] if given is None else given)
+        if len(chosen) != sizes[field]:
+            raise ValueError(f"{field}: expected {sizes[field]} names, got {len(chosen)}")
+        named[field] = chosen
+    return ct.ss(a, b, c, d, system.dt, remove_useless_states=False, name=name or system.name, **named)
+
+
+def signal_names(prefix: str, count: int) -> list[str]:
+    """``prefix_1`` ... ``prefix_count``: the states of a weight or controller, which stand for no
+    physical quantity of their own."""
+    return [f"{prefix}_{i + 1}" for i in range(count)]
+
+
+def stacked_state_names(*parts: tuple[str, ct.StateSpace]) -> list[str]:
+    """The state names of systems connected in series (states stacked in this order): their own
+    names when they are unique, otherwise each prefixed by its role (``"w1.x[0]"``)."""
+    names = [label for _, system in parts for label in system.state_labels]
+    if len(set(names)) == len(names):
+        return names
+    return [f"{role}.{label}" for role, system in parts for label in system.state_labels]
 
 
 def _raw_matrices(system: ct.StateSpace) -> Matrices:
@@ -560,6 +599,9 @@ __all__ = [
     "realise_transfer_function",
     "sampling_period",
     "series",
+    "signal_names",
+    "stacked_state_names",
     "state_space",
     "system_matrices",
+    "with_signals",
 ]

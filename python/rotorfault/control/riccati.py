@@ -210,6 +210,8 @@ def _norm(matrix: Any) -> float:
     """The Frobenius norm taken on ``matrix`` divided by its largest entry: weights of 1e-170
     (squares underflow to 0) and 1e300 (squares overflow) get their true norm."""
     peak = float(np.max(np.abs(matrix), initial=0.0))
+    if not math.isfinite(peak):  # an overflowed term: the residual check then refuses by name
+        return peak
     return 0.0 if peak == 0.0 else peak * float(np.linalg.norm(np.asarray(matrix) / peak))
 
 
@@ -291,6 +293,13 @@ def _weight(name: str, value: npt.ArrayLike, size: int, *, definite: bool) -> tu
         raise ValueError(f"{name}[{i}, {i}]: must be >= 0 ({name} must be {rule}), got {diagonal[i]}")
     if not np.any(diagonal > 0):
         raise ValueError(f"{name}: all zero on the diagonal" + (": the cost must weigh some state" if not definite else f" ({name} must be {rule})"))
+    # A subnormal weight (nonzero, below the smallest normal double) overflows R^-1 and the gain:
+    # refused by name rather than carried into the solver (long hostile run, 2026-11-28).
+    tiny = (diagonal > 0) & (diagonal < np.finfo(np.float64).tiny)
+    if np.any(tiny):
+        i = int(np.flatnonzero(tiny)[0])
+        raise ValueError(f"{name}[{i}, {i}]: {diagonal[i]:.3g} is subnormal (nonzero and below "
+                         f"{np.finfo(np.float64).tiny:.3g}, the smallest normal double): scale the weights up")
     zero = diagonal == 0
     if definite and np.any(zero):
         raise ValueError(f"{name}[{int(np.flatnonzero(zero)[0])}, {int(np.flatnonzero(zero)[0])}]: 0 ({name} must be {rule})")

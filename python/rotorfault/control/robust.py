@@ -55,8 +55,11 @@ from .realisation import (
     frequency_response,
     minimal_realisation,
     series,
+    signal_names,
+    stacked_state_names,
     state_space,
     system_matrices,
+    with_signals,
 )
 
 #: The synthesis checks' tolerances (stated once; tests break each check against them):
@@ -131,6 +134,12 @@ class NcfsynResult:
     Gs]||_inf`` is at most ``gamma``), ``stability_margin = 1 / gamma`` (the
     normalised-coprime-factor uncertainty tolerated). ``x`` and ``z`` are the two Riccati
     solutions; ``evidence`` what was checked before returning (:class:`NcfsynEvidence`).
+
+    Signal names: the shaped plant's inputs are W1's, its outputs W2's (the plant's when ``w2`` is
+    the identity); ``controller`` reads the plant's outputs and drives its inputs,
+    ``shaped_controller`` the shaped plant's; states keep their systems' names (prefixed by
+    ``w1.``, ``plant.``, ``w2.`` when two collide), numbered ``ks_i`` and ``gs_i`` for the
+    central controller and the minimal realisation, whose states stand for no single quantity.
 
     Examples:
 
@@ -312,7 +321,10 @@ def four_block(plant: Any, controller: Any) -> ct.StateSpace:
     a[:ng, :] += bg @ cu
     a[ng:, :] += bk @ cy
     bw = np.vstack([bg @ (du + np.hstack([np.zeros((nu, ny)), np.eye(nu)])), bk @ dy])
-    return state_space(a, bw, np.vstack([cy, cu]), np.vstack([dy, du]), g.dt)
+    loop = state_space(a, bw, np.vstack([cy, cu]), np.vstack([dy, du]), g.dt)
+    return with_signals(loop, states=stacked_state_names(("plant", g), ("controller", k)),
+                        inputs=[f"disturbance_{label}" for label in (*g.output_labels, *g.input_labels)],
+                        outputs=[*g.output_labels, *g.input_labels], name="four-block")
 
 
 def _central_controller(gs: ct.StateSpace, factor: float) -> tuple[ct.StateSpace, float, float, FloatArray, FloatArray, float, float]:
@@ -436,7 +448,10 @@ def ncfsyn(
     w2s = as_state_space("w2", np.eye(g.noutputs) if w2 is None else w2, discrete=False)
     if w2s.ninputs != g.noutputs:
         raise ValueError(f"w2: expected {g.noutputs} inputs (the plant's outputs), got {w2s.ninputs}")
-    full = series(w1s, g, w2s)
+    if w2 is None:
+        w2s = with_signals(w2s, inputs=g.output_labels, outputs=g.output_labels, name="w2")
+    full = with_signals(series(w1s, g, w2s), states=stacked_state_names(("w1", w1s), ("plant", g), ("w2", w2s)),
+                        inputs=w1s.input_labels, outputs=w2s.output_labels, name="shaped-plant")
     if full.nstates == 0:
         raise ValueError("plant: the shaped plant W2 G W1 is static (no states): there is no loop shape to synthesise")
     # The weights may cancel stable plant modes (an inverting W1 does): synthesise on a minimal
@@ -444,9 +459,17 @@ def ncfsyn(
     # (such a cancellation leaves the closed loop unstable or undamped whatever Ks does).
     _require_stabilisable_detectable(full)
     gs = minimal_realisation(full, field="the shaped plant W2 G W1")
+    # The minimal realisation's states are combinations of the shaped plant's: numbered, not named.
+    gs = with_signals(gs, states=signal_names("gs", gs.nstates), inputs=full.input_labels, outputs=full.output_labels,
+                      name="synthesis-plant")
     ks, gamma_min, gamma, x, z, rx, rz = _central_controller(gs, factor)
+    # Negative feedback: the controllers read the (shaped) plant's outputs and drive its inputs.
+    ks = with_signals(ks, states=signal_names("ks", ks.nstates), inputs=full.output_labels, outputs=full.input_labels,
+                      name="shaped-controller")
     evidence = check_synthesis(g, w1s, w2s, ks, gamma_min, gamma, synthesis_plant=gs, residuals=(rx, rz))
-    return NcfsynResult(controller=series(w2s, ks, w1s), shaped_controller=ks, shaped_plant=full, synthesis_plant=gs,
+    controller = with_signals(series(w2s, ks, w1s), states=stacked_state_names(("w2", w2s), ("ks", ks), ("w1", w1s)),
+                              inputs=g.output_labels, outputs=g.input_labels, name="controller")
+    return NcfsynResult(controller=controller, shaped_controller=ks, shaped_plant=full, synthesis_plant=gs,
                         gamma_min=gamma_min, gamma=gamma, x=x, z=z, evidence=evidence)
 
 
@@ -476,7 +499,8 @@ def target_loop_shape(
     wl = wc / 10 ** (gain_db / 20)
     wh = factor * wc
     wn = math.sqrt(wl * wh)
-    return state_space([[0.0, wn], [-wl * wh / wn, -(wl + wh)]], [[0.0], [wc * wh / wn]], [[1.0, 0.0]], [[0.0]])
+    shape = state_space([[0.0, wn], [-wl * wh / wn, -(wl + wh)]], [[0.0], [wc * wh / wn]], [[1.0, 0.0]], [[0.0]])
+    return with_signals(shape, states=["y", "dy_per_wn"], inputs=["v"], outputs=["y"], name="loop-shape")
 
 
 def relative_degrees(plant: ct.StateSpace) -> tuple[list[int], FloatArray]:
@@ -577,7 +601,9 @@ def loop_shape_weight(
     dw = dmi @ top_dv
     aw = np.kron(np.eye(m), al)
     bw = np.kron(np.eye(m), bl)
-    return state_space(aw, bw, cw, dw)
+    # W1 drives the plant's inputs from the shaped plant's (one loop shape L per channel).
+    return with_signals(state_space(aw, bw, cw, dw), states=signal_names("w1", aw.shape[0]),
+                        inputs=[f"shaped_{label}" for label in g.input_labels], outputs=g.input_labels, name="w1")
 
 
 def singular_values(system: ct.StateSpace, omega: npt.ArrayLike) -> FloatArray:

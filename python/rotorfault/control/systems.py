@@ -120,8 +120,9 @@ LANZON_OUTPUTS = ("phi", "theta", "dr")
 
 def lanzon_plant(vehicle: Any) -> ct.StateSpace:
     """``vehicle.plant()`` (:class:`~rotorfault.control.lanzon.LanzonVehicle`: ``(A_r, B_r)`` of
-    eq. (26), outputs of (27)) with its signals named (:data:`LANZON_STATES`, ...); the matrices
-    are the same.
+    eq. (26), outputs of (27)), whose signals are named :data:`LANZON_STATES`,
+    :data:`LANZON_INPUTS` and :data:`LANZON_OUTPUTS` (the loop-shaping design names its weight,
+    controller and shaped plant after them).
 
     Examples:
 
@@ -133,9 +134,8 @@ def lanzon_plant(vehicle: Any) -> ct.StateSpace:
     """
     if not callable(getattr(vehicle, "plant", None)):
         raise TypeError(f"vehicle: expected a rotorfault.control.lanzon.LanzonVehicle, got {type(vehicle).__name__}")
-    plant = vehicle.plant()
-    return ct.ss(plant.A, plant.B, plant.C, plant.D, states=list(LANZON_STATES), inputs=list(LANZON_INPUTS),
-                 outputs=list(LANZON_OUTPUTS), name="lanzon-plant")
+    plant: ct.StateSpace = vehicle.plant()
+    return plant
 
 
 __all__ = ["LANZON_INPUTS", "LANZON_OUTPUTS", "LANZON_STATES", "LinearModel", "input_names", "lanzon_plant"]
