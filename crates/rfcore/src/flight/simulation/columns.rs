@@ -305,3 +305,58 @@ pub fn simulate_batch_columns<T: Sample>(
     out.records = records;
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector3;
+
+    use super::*;
+    use crate::control::ZeroCommand;
+    use crate::flight::actuator::{FixedPitch, Lag};
+    use crate::flight::simulation::simulate_batch;
+    use crate::flight::vehicle::Drag;
+    use crate::state::RigidBodyState;
+
+    fn runs() -> Vec<BatchRun> {
+        // Falling from 1 m and 50 m: the first crashes between two grid times of record_every 7.
+        [1.0, 50.0]
+            .iter()
+            .map(|&h| BatchRun {
+                controller: Box::new(ZeroCommand { count: 4 }),
+                initial_command: None,
+                x0: RigidBodyState { position_m: Vector3::new(0.0, 0.0, -h), ..RigidBodyState::at_rest() },
+                faults: vec![],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn columns_hold_the_per_run_rows_and_f32_rounds_them() {
+        let airframe = crate::fixtures::preset("quad-x");
+        let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
+        let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let mut config = SimulationConfig::new(0.0025, 2, 0.6);
+        config.record_every = 7;
+        let never = Cancel::never();
+        let per_run = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
+        let wide = simulate_batch_columns::<f64>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
+        let narrow = simulate_batch_columns::<f32>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
+        let slot = wide.grid_rows + 1;
+        assert!(wide.records[0].off_grid_row);
+        assert_eq!(wide.records[1].grid_rows, wide.grid_rows);
+        for (i, run) in per_run.iter().enumerate() {
+            let record = &wide.records[i];
+            assert_eq!(record.divergence, run.divergence);
+            for (j, state) in run.states.iter().enumerate() {
+                let at = if j < record.grid_rows { j } else { wide.grid_rows };
+                let row = |c: &Column<f64>| c.values[(i * slot + at) * c.width..(i * slot + at + 1) * c.width].to_vec();
+                assert_eq!(row(&wide.position_m), state.position_m.as_slice());
+                assert_eq!(row(&wide.omega_rad_s), state.omega_rad_s.as_slice());
+                assert_eq!(row(&wide.efficiency), &run.efficiency[j * 4..(j + 1) * 4]);
+            }
+        }
+        for (a, b) in narrow.position_m.values.iter().zip(&wide.position_m.values) {
+            assert!(a.to_bits() == (*b as f32).to_bits() || (a.is_nan() && b.is_nan()));
+        }
+    }
+}
