@@ -62,6 +62,9 @@ VppInputs: TypeAlias = Literal["wang", "every-channel"]
 CertifiedAxis: TypeAlias = Literal["thrust", "roll", "pitch", "yaw"]
 #: The direction a circular reference turns, seen from above (:func:`rotorfault.control.tracking.circle_reference`).
 CircleTurn: TypeAlias = Literal["clockwise", "counterclockwise"]
+#: How a batch's recording stores its values (:func:`rotorfault.simulate_batch` ``dtype``): double
+#: precision, or single (half the memory; each value rounded to nearest).
+RecordingDtype: TypeAlias = Literal["float64", "float32"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: A named sensor suite (:class:`rotorfault.Sensing` ``suite``): motion capture, GNSS with a
@@ -139,6 +142,7 @@ __all__ = [
     "ControlAxes",
     "AllocationMethod",
     "AllocationStatus",
+    "RecordingDtype",
     "Controller",
     "CoreController",
     "CoreControllerName",

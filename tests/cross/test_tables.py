@@ -164,7 +164,7 @@ def test_records_keep_their_rows_and_refuse_other_keys() -> None:
     with pytest.raises(ValueError, match=r"rows\[0\]: keys differ"):
         Records([{"a_m": 1.0}], [("a_m", "float64"), ("b", "string")])
     with pytest.raises(ValueError, match="unknown column type"):
-        Records([], [("a", "float32")])
+        Records([], [("a", "float16")])
 
 
 def test_a_batch_is_every_runs_trajectory_with_its_run_number() -> None:

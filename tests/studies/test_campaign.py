@@ -189,7 +189,7 @@ def test_a_batch_too_large_for_memory_is_refused_up_front() -> None:
     p = ke.preset("ke-hil")
     sim = p.simulator()
     controller = ke.UniformPassiveFtc(p.airframe, position=(0, 0, -10))
-    with pytest.raises(ValueError, match=r"^memory_budget_bytes: recording 10,000 runs of 10 s .* needs about 2\d\.\d\d GiB.*record_every.*summaries"):
+    with pytest.raises(ValueError, match=r"^memory_budget_bytes: recording 10,000 runs of 10 s .* needs about 9\.2\d GiB.*record_every.*summaries"):
         rf.simulate_batch(sim, [rf.State()] * 10_000, 10.0, controllers=controller, memory_budget_bytes=2**30)
     # Thinned to 1 Hz the same batch fits.
     from rotorfault.flight.simulator import recording_bytes

@@ -12,7 +12,7 @@ use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
     simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
-    RotorFault, SensorNoise, SimulationConfig, Trajectory,
+    Divergence, RotorFault, SensingRecord, SensorNoise, SimulationConfig, Trajectory,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
@@ -672,29 +672,39 @@ impl PyTrajectory {
     /// late; else `None`.
     #[getter]
     fn sensing_counts(&self) -> Option<PySensingCounts> {
-        self.run.sensing.as_ref().map(|r| PySensingCounts {
+        self.run.sensing.as_ref().map(PySensingCounts::from)
+    }
+    #[getter]
+    fn divergence(&self) -> Option<PyDivergence> {
+        self.run.divergence.map(PyDivergence::from)
+    }
+}
+
+impl From<Divergence> for PyDivergence {
+    fn from(d: Divergence) -> Self {
+        let impact = d.impact();
+        PyDivergence {
+            time_s: d.time_s,
+            reason: d.reason.name(),
+            description: d.reason.describe(),
+            state: state_vector(&d.state),
+            impact_speed_m_s: impact.map(|i| i.speed_m_s),
+            impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
+            impact_tilt_rad: impact.map(|i| i.tilt_rad),
+        }
+    }
+}
+
+impl From<&SensingRecord> for PySensingCounts {
+    fn from(r: &SensingRecord) -> Self {
+        PySensingCounts {
             imu_samples: r.imu_samples,
             gyro_saturated_samples: r.gyro_saturated_samples,
             accel_saturated_samples: r.accel_saturated_samples,
             fused_measurements: r.fusion.fused,
             rejected_measurements: r.fusion.rejected,
             late_measurements: r.fusion.late,
-        })
-    }
-    #[getter]
-    fn divergence(&self) -> Option<PyDivergence> {
-        self.run.divergence.map(|d| {
-            let impact = d.impact();
-            PyDivergence {
-                time_s: d.time_s,
-                reason: d.reason.name(),
-                description: d.reason.describe(),
-                state: state_vector(&d.state),
-                impact_speed_m_s: impact.map(|i| i.speed_m_s),
-                impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
-                impact_tilt_rad: impact.map(|i| i.tilt_rad),
-            }
-        })
+        }
     }
 }
 
@@ -796,6 +806,45 @@ pub fn simulate<'py>(
     Ok(PyTrajectory { run })
 }
 
+/// A batch's vehicle, actuators, initial efficiency and runs, checked (one entry per run).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn batch_runs(
+    airframe: &PyAirframe,
+    actuator: &ActuatorArg<'_>,
+    drag: &PyDrag,
+    controllers: &[Option<ControllerArg<'_>>],
+    x0s: &[[f64; 13]],
+    fault_lists: &[Vec<(usize, f64, f64)>],
+    settles: Vec<Option<Vec<f64>>>,
+    efficiency: &PyReadonlyArray1<'_, f64>,
+) -> PyResult<(Vehicle, Actuators, Vec<f64>, Vec<BatchRun>)> {
+    let (vehicle, actuators, count) = vehicle_and_actuators(airframe, actuator, drag, None)?;
+    if controllers.len() != x0s.len()
+        || fault_lists.len() != x0s.len()
+        || settles.len() != x0s.len()
+    {
+        return Err(PyValueError::new_err(
+            "runs: controllers, initial states, fault lists and initial commands must have one entry per run",
+        ));
+    }
+    let efficiency = slice1("efficiency", efficiency)?.to_vec();
+    let runs: Vec<BatchRun> = controllers
+        .iter()
+        .zip(x0s)
+        .zip(fault_lists)
+        .zip(settles)
+        .map(|(((c, x0), f), settle)| {
+            Ok(BatchRun {
+                controller: boxed(c.as_ref(), count)?,
+                initial_command: settle,
+                x0: RigidBodyState::from_packed(x0),
+                faults: faults(f),
+            })
+        })
+        .collect::<PyResult<_>>()?;
+    Ok((vehicle, actuators, efficiency, runs))
+}
+
 /// Many runs in parallel; each item of `controllers`, `x0s` and `fault_lists` is one run.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
@@ -811,31 +860,9 @@ pub fn simulate_batch<'py>(
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
 ) -> PyResult<Vec<PyTrajectory>> {
-    let (vehicle, actuators, count) = vehicle_and_actuators(airframe, &actuator, &drag, None)?;
-    if controllers.len() != x0s.len()
-        || fault_lists.len() != x0s.len()
-        || settles.len() != x0s.len()
-    {
-        return Err(PyValueError::new_err(
-            "runs: controllers, initial states, fault lists and initial commands must have one entry per run",
-        ));
-    }
-    let efficiency = slice1("efficiency", &efficiency)?.to_vec();
+    let (vehicle, actuators, efficiency, runs) =
+        batch_runs(airframe, &actuator, &drag, &controllers, &x0s, &fault_lists, settles, &efficiency)?;
     let config = &config.inner;
-    let runs: Vec<BatchRun> = controllers
-        .iter()
-        .zip(&x0s)
-        .zip(&fault_lists)
-        .zip(settles)
-        .map(|(((c, x0), f), settle)| {
-            Ok(BatchRun {
-                controller: boxed(c.as_ref(), count)?,
-                initial_command: settle,
-                x0: RigidBodyState::from_packed(x0),
-                faults: faults(f),
-            })
-        })
-        .collect::<PyResult<_>>()?;
     let results = detached(py, |cancel| {
         core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;

@@ -11,6 +11,7 @@ mod analysis;
 mod control;
 mod convert;
 mod flight;
+mod recording;
 mod sensing;
 mod summary;
 
@@ -64,6 +65,8 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(flight::simulate, module)?)?;
     module.add_function(wrap_pyfunction!(flight::simulate_batch, module)?)?;
     module.add_function(wrap_pyfunction!(flight::state_derivative, module)?)?;
+    module.add_class::<recording::PyBatchColumns>()?;
+    module.add_function(wrap_pyfunction!(recording::simulate_batch_columns, module)?)?;
     module.add_class::<summary::PyVerdictCriteria>()?;
     module.add_class::<summary::PySummaryBatch>()?;
     module.add_function(wrap_pyfunction!(summary::simulate_summaries, module)?)?;

@@ -24,7 +24,7 @@ from .optional import require, require_available
 
 #: Column types, by the names :func:`arrow_type` maps to pyarrow types (strings, so that declaring
 #: a schema imports nothing).
-COLUMN_TYPES = ("float64", "int64", "int8", "bool", "string", "list<int64>", "list<string>", "list<float64>")
+COLUMN_TYPES = ("float64", "float32", "int64", "int8", "bool", "string", "list<int64>", "list<string>", "list<float64>", "list<float32>")
 #: Rows a notebook shows (half from the start, half from the end; the caption gives the count).
 HTML_ROWS = 20
 
@@ -37,7 +37,7 @@ def pyarrow() -> Any:
 def arrow_type(name: str) -> Any:
     """The pyarrow type of a column type name of :data:`COLUMN_TYPES`."""
     pa = pyarrow()
-    scalar = {"float64": pa.float64(), "int64": pa.int64(), "int8": pa.int8(), "bool": pa.bool_(), "string": pa.string()}
+    scalar = {"float64": pa.float64(), "float32": pa.float32(), "int64": pa.int64(), "int8": pa.int8(), "bool": pa.bool_(), "string": pa.string()}
     if name in scalar:
         return scalar[name]
     if name.startswith("list<") and name.endswith(">") and name[5:-1] in scalar:

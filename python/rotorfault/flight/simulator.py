@@ -19,13 +19,14 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any, TypeAlias, cast
+from dataclasses import dataclass
+from typing import Any, TypeAlias, cast, get_args
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
-from .._typing import Controller, CoreController, core_controller_types
+from .._typing import Controller, CoreController, RecordingDtype, core_controller_types
 from .._util.convert import FloatArray, count, flag, float_array, real
 from .._util.deprecation import dataclass_compat
 from .._util.progress import chunks
@@ -33,7 +34,7 @@ from ..analysis.airframe import Airframe, require_airframe
 from .faults import RotorFault, _faults
 from .models import Drag, FixedPitchActuator, Noise, Sensing, VariablePitchActuator, sensing_with_offset
 from .state import State, _vector3
-from .trajectory import BatchResult, Event, Trajectory  # noqa: F401  (Event: the old rotorfault.simulation name)
+from .trajectory import BatchResult, Event, RunViews, Trajectory  # noqa: F401  (Event: the old rotorfault.simulation name)
 
 #: A controller the simulator flies: a built-in one (anything with ``core(dt_s)``, see
 #: :class:`rotorfault.control.Controller`), a Python callable ``f(t, x) -> commands`` (the slow
@@ -258,21 +259,39 @@ class Simulator:
         )
 
 
-#: Bytes one recorded row costs, measured: the core's row, the Python trajectory's arrays and the
-#: stacked batch arrays (a 10 s quadcopter run at 400 Hz: about 2.4 MB), per rotor and fixed.
-ROW_BYTES_FIXED = 8 * (1 + 13 + 19 + 12 + 12)
-ROW_BYTES_PER_ROTOR = 8 * (3 + 2 + 3 + 2)
+#: Values one recorded row holds per run in a batch's columns (:func:`simulate_batch`): position,
+#: velocity, quaternion, Euler angles, body rates and primary axis (19), then per command channel
+#: one and per rotor two (thrust, efficiency); sensor noise adds the 12 measured states, sensing
+#: the 31 of the estimate (13 packed, 3 Euler angles, 15 sigmas) and two flags. Each run's slot
+#: has one row more than the recording grid (an off-grid divergence row).
+ROW_VALUES_FIXED = 19
+ROW_VALUES_NOISE = 12
+ROW_VALUES_SENSING = 31
 
 
-def recording_bytes(simulator: Simulator, runs: int, duration_s: float, record_every: int = 1) -> int:
-    """Estimated peak memory of a :func:`simulate_batch` of ``runs`` runs: recorded rows times
-    the bytes each costs (the core's row, the Python arrays, the stacked copies)."""
+def recording_bytes(simulator: Simulator, runs: int, duration_s: float, record_every: int = 1, dtype: RecordingDtype = "float64") -> int:
+    """Memory the columns of a :func:`simulate_batch` of ``runs`` runs take (bytes): slots of
+    recorded rows times the values of a row (:data:`ROW_VALUES_FIXED` and the command, thrust and
+    efficiency channels, sensor noise, sensing) times 8 bytes (``float64``) or 4 (``float32``)."""
     steps = math.ceil(duration_s / simulator.dt_s - 1e-9)
     rows = steps // max(record_every, 1) + 3
-    noise = 12 * 8 if simulator.noise is not None else 0
-    # The core's estimate row (13 + 15 + 2) and the Python arrays of it (13 + 12 + 15 + 2).
-    sensing = 8 * 72 if simulator.sensing is not None else 0
-    return int(runs * rows * (ROW_BYTES_FIXED + ROW_BYTES_PER_ROTOR * simulator.airframe.rotor_count + noise + sensing))
+    values = ROW_VALUES_FIXED + simulator.command_count + 2 * simulator.airframe.rotor_count
+    values += ROW_VALUES_NOISE if simulator.noise is not None else 0
+    values += ROW_VALUES_SENSING if simulator.sensing is not None else 0
+    flags = 2 if simulator.sensing is not None else 0
+    return int(runs * rows * (values * _ITEM_BYTES[dtype] + flags))
+
+
+_ITEM_BYTES = {"float64": 8, "float32": 4}
+
+
+def check_dtype(dtype: Any) -> RecordingDtype:
+    """``dtype`` checked: one of :data:`rotorfault._typing.RecordingDtype`."""
+    if not isinstance(dtype, str):
+        raise TypeError(f"dtype: expected a string ('float64' or 'float32'), got {type(dtype).__name__}")
+    if dtype not in get_args(RecordingDtype):
+        raise ValueError(f"dtype: must be 'float64' or 'float32', got {dtype!r}")
+    return cast(RecordingDtype, dtype)
 
 
 def available_memory_bytes() -> int:
@@ -287,17 +306,18 @@ def available_memory_bytes() -> int:
     return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
 
 
-def _check_memory(simulator: Simulator, runs: int, duration_s: float, record_every: int, budget: int | None) -> None:
+def _check_memory(simulator: Simulator, runs: int, duration_s: float, record_every: int, budget: int | None, dtype: RecordingDtype) -> None:
     if budget is None:
         budget = available_memory_bytes() // 2
     else:
         budget = count("memory_budget_bytes", budget)
-    need = recording_bytes(simulator, runs, duration_s, record_every)
+    need = recording_bytes(simulator, runs, duration_s, record_every, dtype)
     if need > budget:
         raise ValueError(
             f"memory_budget_bytes: recording {runs:,} runs of {duration_s:g} s with record_every={record_every} "
             f"needs about {need / 2**30:.2f} GiB, more than the budget of {budget / 2**30:.2f} GiB "
             f"(default: half the available memory): record less (record_every), fewer runs per call, "
+            f"float32 storage (dtype), stream the runs to Parquet (rotorfault.studies.record_batch), "
             f"or keep per-run summaries only (rotorfault.studies.run_campaign)"
         )
 
@@ -313,17 +333,23 @@ def simulate_batch(
     record_every: int = 1,
     progress: bool | None = None,
     memory_budget_bytes: int | None = None,
+    dtype: RecordingDtype = "float64",
 ) -> BatchResult:
     """Many runs in parallel (Rust threads, GIL released). ``controllers`` is one controller for
     every run or a sequence with one per run; ``faults`` one fault list per run. Python callables
     cannot run in a batch (they would serialise on the GIL). ``record_every`` thins what is
     recorded (every n-th control step, plus the last and any divergence): large batches need it
     to keep memory bounded; the stacked arrays then sit on the thinned grid ``BatchResult.t``
-    (times, not step indices; see :class:`BatchResult`). ``progress=True`` shows a progress bar
+    (times, not step indices; see :class:`BatchResult`). ``dtype``: ``"float64"`` (default) or
+    ``"float32"`` (half the memory; every value rounded to nearest). The core records into one
+    buffer per signal for the whole batch, handed to NumPy without a copy
+    (:attr:`BatchResult.columns`); the stacked arrays are views of it and each run's
+    :class:`Trajectory` is built on demand from views. ``progress=True`` shows a progress bar
     (runs done, rate, ETA) on standard error; the runs then go to the core in chunks, with
     identical results. ``memory_budget_bytes`` (default: half the available memory): a batch
     whose recordings would need more is refused up front with the estimate (see
-    :func:`recording_bytes`).
+    :func:`recording_bytes`); a batch larger than memory streams to Parquet with
+    :func:`rotorfault.studies.record_batch`.
 
     Examples:
 
@@ -334,8 +360,70 @@ def simulate_batch(
         >>> batch.position.shape, batch.diverged.tolist()
         ((2, 21, 3), [False, False])
     """
+    batch = prepare_batch(simulator, x0s, duration_s, controllers=controllers, faults=faults,
+                          initial_command=initial_command, record_every=record_every, dtype=dtype)
+    _check_memory(simulator, batch.runs, batch.duration_s, batch.record_every, memory_budget_bytes, batch.dtype)
+    return batch.fly(0, batch.runs, progress=progress)
+
+
+@dataclass(frozen=True)
+class PreparedBatch:
+    """A batch's runs checked and packed for the core (:func:`prepare_batch`), flown a slice
+    of runs at a time by :meth:`fly` (run ``i`` keeps its seeds, ``seed + i``, in any slice)."""
+
+    simulator: Simulator
+    duration_s: float
+    record_every: int
+    dtype: RecordingDtype
+    cores: list[CoreController | None]
+    starts: list[list[float] | None]
+    packed_states: list[Any]
+    packed_faults: list[list[Any]]
+    fault_lists: list[tuple[RotorFault, ...]]
+
+    @property
+    def runs(self) -> int:
+        return len(self.cores)
+
+    def fly(self, first: int, last: int, *, progress: bool | None = None) -> BatchResult:
+        """Runs ``first .. last - 1`` recorded into columns (``progress``: in chunks, with a bar)."""
+        sim, n = self.simulator, last - first
+        # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.
+        size = max(n, 1) if not progress else max(8 * (os.cpu_count() or 1), n // 100)
+        parts: list[Any] = []
+        for a, b in chunks(n, size, description=f"{n:,} runs", show=progress):
+            a, b = first + a, first + b
+            parts.append(_rfcore.simulate_batch_columns(
+                sim.airframe._core, sim.actuator, sim.drag, self.cores[a:b], self.packed_states[a:b],
+                self.packed_faults[a:b], sim.airframe.efficiency, self.starts[a:b],
+                sim._config(self.duration_s, self.record_every, seed_offset=a), self.dtype,
+            ))
+        grid = sim._config(self.duration_s, self.record_every).record_times()
+        if not parts:  # no runs
+            parts.append(_rfcore.simulate_batch_columns(
+                sim.airframe._core, sim.actuator, sim.drag, [], [], [], sim.airframe.efficiency, [],
+                sim._config(self.duration_s, self.record_every), self.dtype,
+            ))
+        columns = parts[0] if len(parts) == 1 else _JoinedColumns(parts, n, len(grid))
+        return BatchResult._from_columns(grid, columns, tuple(self.fault_lists[first:last]))
+
+
+def prepare_batch(
+    simulator: Simulator,
+    x0s: Sequence[State],
+    duration_s: float,
+    *,
+    controllers: AnyController | Sequence[AnyController] = None,
+    faults: Sequence[Iterable[RotorFault] | None] | None = None,
+    initial_command: npt.ArrayLike | None = None,
+    record_every: int = 1,
+    dtype: RecordingDtype = "float64",
+) -> PreparedBatch:
+    """Every check of :func:`simulate_batch` but the memory budget, before any run: the runs
+    packed for the core."""
     if not isinstance(simulator, Simulator):
         raise TypeError(f"simulator: expected rotorfault.Simulator, got {type(simulator).__name__}")
+    dtype = check_dtype(dtype)
     states = list(x0s)
     n = len(states)
     for s in states:
@@ -353,65 +441,43 @@ def simulate_batch(
             raise TypeError("controllers: Python callables cannot run in a batch; use Simulator.run")
         cores.append(cast(CoreController | None, core))
     # Each run's actuators start at initial_command, else at its own controller's trim.
-    starts = []
+    starts: list[list[float] | None] = []
     for c in per_run:
         start = simulator._start(c, initial_command)
         starts.append(None if start is None else [float(v) for v in start])
+    record_every = count("record_every", record_every)
     simulator._config(duration_s, record_every)  # checks the settings before any run
-    _check_memory(simulator, n, duration_s, record_every, memory_budget_bytes)
-    actuator, drag = simulator.actuator, simulator.drag
-    packed_states = [s._packed() for s in states]
-    packed_faults = [[f._packed() for f in fl] for fl in fault_lists]
-    # Chunks of a few runs per thread keep the bar moving and cost nothing measurable.
-    size = n if not progress else max(8 * (os.cpu_count() or 1), n // 100)
-    raws: list[_rfcore.Trajectory] = []
-    for first, last in chunks(n, size, description=f"{n:,} runs", show=progress):
-        raws += _rfcore.simulate_batch(
-            simulator.airframe._core,
-            actuator,
-            drag,
-            cores[first:last],
-            packed_states[first:last],
-            packed_faults[first:last],
-            simulator.airframe.efficiency,
-            starts[first:last],
-            simulator._config(duration_s, record_every, seed_offset=first),
-        )
-    trajectories = [Trajectory._from_core(raw, fl) for raw, fl in zip(raws, fault_lists)]
-    # The common recording grid (the core's record_times, bit-identical to a completed run's t).
-    # A run's rows are a prefix of it but for a divergence row, which is stacked only when its
-    # time is the next grid time: a crossing located between two grid times stays in its
-    # Trajectory, never in a row of another time.
-    grid = simulator._config(duration_s, record_every).record_times()
-    stacked = []
-    for tr in trajectories:
-        rows = len(tr.t)
-        if rows and not (rows <= len(grid) and tr.t[rows - 1] == grid[rows - 1]):
-            rows -= 1
-        if not np.array_equal(tr.t[:rows], grid[:rows]):
-            raise RuntimeError("internal: a run's recorded times left the recording grid")
-        stacked.append(rows)
-
-    def stack(name: str) -> FloatArray:
-        arrays = [getattr(tr, name) for tr in trajectories]
-        shape = (n, len(grid), *arrays[0].shape[1:]) if arrays else (0, len(grid))
-        out = np.full(shape, np.nan)
-        for i, (a, rows) in enumerate(zip(arrays, stacked)):
-            out[i, :rows] = a[:rows]
-        return out
-
-    return BatchResult(
-        t=grid,
-        position=stack("position"),
-        velocity=stack("velocity"),
-        euler=stack("euler"),
-        omega=stack("omega"),
-        rotor_thrust=stack("rotor_thrust"),
-        efficiency=stack("efficiency"),
-        diverged=np.array([tr.diverged for tr in trajectories], dtype=bool),
-        divergence_time=np.array([tr.events[0].time if tr.events else np.nan for tr in trajectories]),
-        trajectories=trajectories,
+    return PreparedBatch(
+        simulator, duration_s, record_every, dtype, cores, starts, [s._packed() for s in states],
+        [[f._packed() for f in fl] for fl in fault_lists], fault_lists,
     )
+
+
+#: The per-signal arrays of :class:`rotorfault._rfcore.BatchColumns` (runs on axis 0).
+_BLOCKS = ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust", "efficiency",
+           "measured", "estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated",
+           "rows_on_grid", "off_grid_row")
+
+
+class _JoinedColumns:
+    """The columns of a batch sent to the core in chunks (``progress=True``): each chunk's
+    arrays copied into one preallocated array per signal, so the whole batch costs its columns
+    plus one chunk."""
+
+    def __init__(self, parts: list[Any], runs: int, grid_rows: int) -> None:
+        self.grid_rows = grid_rows
+        for name in _BLOCKS:
+            first = getattr(parts[0], name)
+            out = np.empty((runs, *first.shape[1:]), dtype=first.dtype)
+            at = 0
+            for part in parts:
+                block = getattr(part, name)
+                out[at : at + len(block)] = block
+                at += len(block)
+            setattr(self, name, out)
+        self.divergences = [d for part in parts for d in part.divergences]
+        self.sensing_counts = [c for part in parts for c in part.sensing_counts]
+        self.sensed = [s for part in parts for s in part.sensed]
 
 
 __all__ = [

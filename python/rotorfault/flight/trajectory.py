@@ -4,9 +4,10 @@ the :class:`Event` that ended it early, if any) and the :class:`BatchResult` of 
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, cast, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -138,6 +139,22 @@ class Estimates:
         return np.hstack([self.position, self.velocity, self.euler, self.omega])
 
 
+def _events(d: _rfcore.Divergence | None) -> list[Event]:
+    """The event a core divergence makes (none without one)."""
+    if d is None:
+        return []
+    return [Event(d.time_s, cast(DivergenceKind, d.reason), d.description, np.asarray(d.state),
+                  d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad)]
+
+
+def _estimates(packed: FloatArray, euler: FloatArray, std: FloatArray, gyro: Any, accel: Any, counts: _rfcore.SensingCounts) -> Estimates:
+    """The estimate of a run from its packed rows (position, velocity, quaternion, body rates)."""
+    return Estimates(
+        position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10],
+        euler=euler, omega=packed[:, 10:13], std=std, gyro_saturated=gyro, accel_saturated=accel, counts=counts,
+    )
+
+
 @dataclass(frozen=True)
 class Trajectory(Tabular):
     """A run sampled at the control rate. Arrays have one row per control step: ``t`` (s),
@@ -238,22 +255,24 @@ class Trajectory(Tabular):
     def _table_columns(self) -> list[Column]:
         m = self.efficiency.shape[1]
         states = np.hstack([self.position, self.velocity, self.euler, self.omega])
+        # A float32 recording (simulate_batch dtype) keeps its width in the table; time is float64.
+        value_type = "float32" if self.position.dtype == np.float32 else "float64"
         columns: list[Column] = [("t_s", "float64", self.t)]
-        columns += [(name, "float64", states[:, k]) for k, name in enumerate(STATE_COLUMNS)]
-        columns += [(f"quaternion_{c}", "float64", self.quaternion[:, k]) for k, c in enumerate("wxyz")]
-        columns += [(f"primary_axis_{c}", "float64", self.primary_axis[:, k]) for k, c in enumerate(("north", "east", "down"))]
+        columns += [(name, value_type, states[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+        columns += [(f"quaternion_{c}", value_type, self.quaternion[:, k]) for k, c in enumerate("wxyz")]
+        columns += [(f"primary_axis_{c}", value_type, self.primary_axis[:, k]) for k, c in enumerate(("north", "east", "down"))]
         names = command_columns(self.rotor_command.shape[1], m)
-        columns += [(name, "float64", self.rotor_command[:, k]) for k, name in enumerate(names)]
-        columns += [(f"rotor_{k + 1}_thrust_n", "float64", self.rotor_thrust[:, k]) for k in range(m)]
-        columns += [(f"rotor_{k + 1}_efficiency", "float64", self.efficiency[:, k]) for k in range(m)]
+        columns += [(name, value_type, self.rotor_command[:, k]) for k, name in enumerate(names)]
+        columns += [(f"rotor_{k + 1}_thrust_n", value_type, self.rotor_thrust[:, k]) for k in range(m)]
+        columns += [(f"rotor_{k + 1}_efficiency", value_type, self.efficiency[:, k]) for k in range(m)]
         if self.recorded_measurements.shape[1] > 0:
-            columns += [(f"measured_{name}", "float64", self.recorded_measurements[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+            columns += [(f"measured_{name}", value_type, self.recorded_measurements[:, k]) for k, name in enumerate(STATE_COLUMNS)]
         if self.estimate is not None:
             e = self.estimate
             estimated = e.vector
-            columns += [(f"estimate_{name}", "float64", estimated[:, k]) for k, name in enumerate(STATE_COLUMNS)]
-            columns += [(f"estimate_quaternion_{c}", "float64", e.quaternion[:, k]) for k, c in enumerate("wxyz")]
-            columns += [(f"estimate_std_{name}", "float64", e.std[:, k]) for k, name in enumerate(ERROR_STATE_COLUMNS)]
+            columns += [(f"estimate_{name}", value_type, estimated[:, k]) for k, name in enumerate(STATE_COLUMNS)]
+            columns += [(f"estimate_quaternion_{c}", value_type, e.quaternion[:, k]) for k, c in enumerate("wxyz")]
+            columns += [(f"estimate_std_{name}", value_type, e.std[:, k]) for k, name in enumerate(ERROR_STATE_COLUMNS)]
             columns += [("gyro_saturated", "bool", e.gyro_saturated), ("accel_saturated", "bool", e.accel_saturated)]
         return columns
 
@@ -280,22 +299,11 @@ class Trajectory(Tabular):
 
     @classmethod
     def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
-        events = []
-        d = raw.divergence
-        if d is not None:
-            kind = cast(DivergenceKind, d.reason)
-            events.append(Event(d.time_s, kind, d.description, np.asarray(d.state),
-                                d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad))
         estimate = None
         packed, vector, std, counts = raw.estimate_state, raw.estimate_vector, raw.estimate_std, raw.sensing_counts
         if packed is not None and vector is not None and std is not None and counts is not None:
-            estimate = Estimates(
-                position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10],
-                euler=vector[:, 6:9], omega=packed[:, 10:13], std=std,
-                gyro_saturated=np.asarray(raw.gyro_saturated, dtype=bool),
-                accel_saturated=np.asarray(raw.accel_saturated, dtype=bool),
-                counts=counts,
-            )
+            estimate = _estimates(packed, vector[:, 6:9], std, np.asarray(raw.gyro_saturated, dtype=bool),
+                                  np.asarray(raw.accel_saturated, dtype=bool), counts)
         return cls(
             t=raw.t,
             position=raw.position,
@@ -308,7 +316,7 @@ class Trajectory(Tabular):
             rotor_thrust=raw.thrust,
             efficiency=raw.efficiency,
             recorded_measurements=raw.measured,
-            events=events,
+            events=_events(raw.divergence),
             faults=faults,
             sensed=raw.sensed,
             estimate=estimate,
@@ -344,6 +352,90 @@ class _Setpoints:
     setpoints: tuple[tuple[float, npt.ArrayLike], ...]
 
 
+class RunViews(Sequence[Trajectory]):
+    """A batch's runs as :class:`Trajectory` objects, each built when asked for from views of the
+    batch's columns (no copy; a run whose divergence row lies between two grid times joins that
+    row to its grid rows, a copy of that run alone). Indexing, slicing, ``len`` and iteration
+    work as on a list; the arrays are read-only (they are the batch's)."""
+
+    def __init__(self, grid: FloatArray, columns: Any, faults: tuple[tuple[RotorFault, ...], ...]) -> None:
+        self._grid = grid
+        self._columns = columns
+        self._faults = faults
+
+    def __len__(self) -> int:
+        return len(self._faults)
+
+    @overload
+    def __getitem__(self, index: int) -> Trajectory: ...
+    @overload
+    def __getitem__(self, index: slice) -> list[Trajectory]: ...
+    def __getitem__(self, index: int | slice) -> Trajectory | list[Trajectory]:
+        if isinstance(index, slice):
+            return [self._run(i) for i in range(*index.indices(len(self)))]
+        i = operator.index(index)
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"run {i} out of range for a batch of {len(self)} runs")
+        return self._run(i % len(self))
+
+    def _run(self, i: int) -> Trajectory:
+        c = self._columns
+        k, off, last = int(c.rows_on_grid[i]), bool(c.off_grid_row[i]), c.grid_rows
+
+        def rows(block: Any) -> Any:
+            if not off:
+                return block[i, :k]
+            return np.concatenate([block[i, :k], block[i, last : last + 1]])
+
+        divergence = c.divergences[i]
+        t = self._grid[:k] if not off else np.append(self._grid[:k], divergence.time_s)
+        estimate = None
+        counts = c.sensing_counts[i]
+        if counts is not None:
+            estimate = _estimates(rows(c.estimate_state), rows(c.estimate_euler), rows(c.estimate_std),
+                                  rows(c.gyro_saturated), rows(c.accel_saturated), counts)
+        return Trajectory(
+            t=t, position=rows(c.position), velocity=rows(c.velocity), quaternion=rows(c.quaternion),
+            euler=rows(c.euler), omega=rows(c.omega), primary_axis=rows(c.primary_axis),
+            rotor_command=rows(c.command), rotor_thrust=rows(c.thrust), efficiency=rows(c.efficiency),
+            recorded_measurements=rows(c.measured), events=_events(divergence), faults=self._faults[i],
+            sensed=cast(Sensed, c.sensed[i]), estimate=estimate,
+        )
+
+    def _flat(self) -> tuple[Trajectory, np.ndarray[Any, np.dtype[np.int64]]]:
+        """Every run's rows one after another, as one :class:`Trajectory` (its arrays only), and
+        the run each row belongs to: what a table of the whole batch is made of, gathered per
+        signal without a per-run object."""
+        c = self._columns
+        n, slot = len(self), c.grid_rows + 1
+        counts = np.asarray(c.rows_on_grid, dtype=np.int64) + np.asarray(c.off_grid_row, dtype=np.int64)
+        run = np.repeat(np.arange(n, dtype=np.int64), counts)
+        starts = np.cumsum(counts) - counts
+        within = np.arange(len(run), dtype=np.int64) - np.repeat(starts, counts)
+        # A run's off-grid divergence row is its last row, kept in the slot's last row.
+        off_row = np.repeat(np.asarray(c.off_grid_row, dtype=bool), counts) & (within == np.repeat(counts - 1, counts))
+        slot_row = np.where(off_row, c.grid_rows, within)
+        flat_index = run * slot + slot_row
+        times = np.append(self._grid, np.nan)[slot_row]
+        divergence_times = np.array([np.nan if d is None else d.time_s for d in c.divergences])
+        times[off_row] = divergence_times[run[off_row]]
+
+        def rows(block: Any) -> Any:
+            return block.reshape(n * slot, *block.shape[2:])[flat_index]
+
+        estimate = None
+        if any(x is not None for x in c.sensing_counts):
+            estimate = _estimates(rows(c.estimate_state), rows(c.estimate_euler), rows(c.estimate_std),
+                                  rows(c.gyro_saturated), rows(c.accel_saturated), c.sensing_counts[0])
+        flat = Trajectory(
+            t=times, position=rows(c.position), velocity=rows(c.velocity), quaternion=rows(c.quaternion),
+            euler=rows(c.euler), omega=rows(c.omega), primary_axis=rows(c.primary_axis),
+            rotor_command=rows(c.command), rotor_thrust=rows(c.thrust), efficiency=rows(c.efficiency),
+            recorded_measurements=rows(c.measured), estimate=estimate,
+        )
+        return flat, run
+
+
 @dataclass(frozen=True)
 class BatchResult(Tabular):
     """Runs stacked along axis 0 on one time axis ``t``, the recording grid: the recorded control
@@ -353,7 +445,11 @@ class BatchResult(Tabular):
     located crossing time, is stacked only when that time is a grid time (never into a row of
     another time); it is always the last row of ``trajectories[i]``, and ``divergence_time[i]``
     is its time. The arrays are :class:`Trajectory`'s with a leading run axis: ``position`` (NED,
-    m), ``velocity`` (NED, m/s), ``omega`` (body rates, rad/s), ``t`` (s).
+    m), ``velocity`` (NED, m/s), ``omega`` (body rates, rad/s), ``t`` (s); from
+    :func:`~rotorfault.simulate_batch` they are read-only views of the batch's columns
+    (``columns``: one array per signal, ``runs x (grid rows + 1) x width``, the last row of a
+    run's slot holding a divergence row off the grid), and ``trajectories`` builds each run's
+    :class:`Trajectory` from views when asked (:class:`RunViews`).
 
     Examples:
 
@@ -374,24 +470,53 @@ class BatchResult(Tabular):
     efficiency: FloatArray
     diverged: np.ndarray[Any, np.dtype[np.bool_]]
     divergence_time: FloatArray
-    trajectories: list[Trajectory]
+    trajectories: Sequence[Trajectory]
+    #: The core's columns (:class:`rotorfault._rfcore.BatchColumns`), or ``None`` for a batch
+    #: assembled from trajectories.
+    columns: Any = None
+
+    @classmethod
+    def _from_columns(cls, grid: FloatArray, columns: Any, faults: tuple[tuple[RotorFault, ...], ...]) -> BatchResult:
+        for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust",
+                     "efficiency", "measured", "estimate_state", "estimate_euler", "estimate_std",
+                     "gyro_saturated", "accel_saturated"):
+            getattr(columns, name).flags.writeable = False  # views of it are handed out
+        g = len(grid)
+        return cls(
+            t=grid,
+            position=columns.position[:, :g],
+            velocity=columns.velocity[:, :g],
+            euler=columns.euler[:, :g],
+            omega=columns.omega[:, :g],
+            rotor_thrust=columns.thrust[:, :g],
+            efficiency=columns.efficiency[:, :g],
+            diverged=np.array([d is not None for d in columns.divergences], dtype=bool),
+            divergence_time=np.array([np.nan if d is None else d.time_s for d in columns.divergences]),
+            trajectories=RunViews(grid, columns, faults),
+            columns=columns,
+        )
 
     def to_arrow(self) -> Any:
         """Every run's :meth:`Trajectory.to_arrow` rows, one table: a ``run`` column (0-based, the
         index into ``trajectories``) first, then one row per recorded step of that run (its own
         times, the divergence row included; no padding)."""
         pa = pyarrow()
-        tables = []
-        for k, run in enumerate(self.trajectories):
-            table = arrow_table(run._table_columns())
-            tables.append(table.add_column(0, pa.field("run", pa.int64()), pa.array(np.full(table.num_rows, k, dtype=np.int64))))
-        if not tables:
+        if not len(self.trajectories):
             return arrow_table([("run", "int64", [])], metadata={"kind": "batch"})
-        meta = {"kind": "batch", "runs": len(tables), "diverged": [bool(d) for d in self.diverged]}
+        meta = {"kind": "batch", "runs": len(self.trajectories), "diverged": [bool(d) for d in self.diverged]}
+        if isinstance(self.trajectories, RunViews):
+            flat, run = self.trajectories._flat()
+            table = arrow_table(flat._table_columns())
+            table = table.add_column(0, pa.field("run", pa.int64()), pa.array(run))
+            return table.replace_schema_metadata(schema_metadata(meta))
+        tables = []
+        for k, one in enumerate(self.trajectories):
+            table = arrow_table(one._table_columns())
+            tables.append(table.add_column(0, pa.field("run", pa.int64()), pa.array(np.full(table.num_rows, k, dtype=np.int64))))
         return pa.concat_tables(tables).replace_schema_metadata(schema_metadata(meta))
 
     def _table_title(self) -> str:
         return f"batch: {len(self.trajectories)} runs, {int(np.sum(self.diverged))} diverged"
 
 
-__all__ = ["ERROR_STATE_COLUMNS", "STATE_COLUMNS", "BatchResult", "Estimates", "Event", "Trajectory", "command_columns"]
+__all__ = ["ERROR_STATE_COLUMNS", "STATE_COLUMNS", "BatchResult", "Estimates", "Event", "RunViews", "Trajectory", "command_columns"]

@@ -7,7 +7,8 @@ sample sets (:mod:`~rotorfault.studies.scan`), the spin-assignment design search
 (:mod:`~rotorfault.studies.campaign`), sampling (:mod:`~rotorfault.studies.sampling`), execution
 backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
 (:mod:`~rotorfault.studies.storage`: the one Parquet writer, resumable), the engine that joins them
-(:mod:`~rotorfault.studies.engine`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
+(:mod:`~rotorfault.studies.engine`), recorded batches streamed to Parquet
+(:mod:`~rotorfault.studies.recording`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
 tuning (:mod:`~rotorfault.studies.tuning`, judged for holding through faults by
 :mod:`~rotorfault.studies.hold`). The papers' Monte Carlo studies run on the same
 engine.
@@ -22,6 +23,7 @@ from .certify import Certificate, CertificateCase, certify
 from .design import Design, DesignSearch, design_search
 from .scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, failure_samples, plot_efficiency_scan, read_scan
 from .scenario_file import Scenario, load_scenario
+from .recording import record_batch
 from .hold import FaultCase, HoldCriteria, fault_set
 from .tuning import HoldTuningResult, TuningResult, tune, tune_hold, tuning_campaign
 
@@ -50,6 +52,7 @@ __all__ = [
     "load_scenario",
     "plot_efficiency_scan",
     "read_campaign",
+    "record_batch",
     "read_scan",
     "run_campaign",
     "tune",

@@ -470,8 +470,39 @@ def _simulate(draw: st.DrawFn, frame: rf.Airframe) -> Call:
         kwargs["initial_command"] = draw(vector(frame.rotor_count, hostile(number(0, 5))))
     if draw(st.booleans()):
         kwargs["memory_budget_bytes"] = draw(hostile(st.integers(10**3, 10**8), *EDGE_INTS))
+    if draw(st.booleans()):
+        kwargs["dtype"] = draw(hostile(st.sampled_from(("float64", "float32")), "float16", "", "FLOAT32"))
     duration = draw(hostile(number(0.0, 1.0), 1e9, 1e300))
     return Call(rf.simulate_batch, (sim, x0s, duration), kwargs, frozenset(kwargs) | {"duration_s", "x0s"})
+
+
+_RECORDINGS = iter(range(10**9))
+
+
+def _record_batch(draw: st.DrawFn, frame: rf.Airframe) -> Call:
+    frame = draw(upright_airframes())
+    sim = rf.Simulator(frame)
+    x0s = draw(st.lists(valid_states(), min_size=0, max_size=2))
+    fresh = SCRATCH / f"recording-{next(_RECORDINGS)}"
+    kwargs: dict[str, Any] = {"out": draw(st.sampled_from((fresh, fresh, "/nonexistent/dir/runs", 3, None)))}
+    if draw(st.booleans()):
+        kwargs["record_every"] = draw(hostile(st.integers(1, 50), *EDGE_INTS))
+    if draw(st.booleans()):
+        kwargs["dtype"] = draw(hostile(st.sampled_from(("float64", "float32")), "float16", ""))
+    if draw(st.booleans()):
+        kwargs["chunk_runs"] = draw(hostile(st.integers(1, 3), *EDGE_INTS))
+    duration = draw(hostile(number(0.0, 0.5), 1e9, 1e300))
+    return Call(studies.record_batch, (sim, x0s, duration), kwargs, frozenset(kwargs) | {"duration_s", "x0s"})
+
+
+def check_recording(result: Any, call: Call) -> None:
+    import pyarrow.parquet as pq
+
+    assert result.total_rows == len(call.args[1])
+    if result.total_rows:
+        table = pq.read_table(result.out)
+        assert table.num_rows == result.total_rows
+        assert np.isfinite(np.concatenate(table.column("t_s").to_numpy())).all()
 
 
 def _linear_model() -> st.SearchStrategy[Call]:
@@ -543,6 +574,7 @@ def _targets() -> dict[str, Target]:
     t["certify_against_flights"] = Target(st.tuples(st.sampled_from(([], (), ["ke-quadcopter"], [None], "ke-quadcopter", 3)), hostile(st.integers(1, 2), *EDGE_INTS), st.sampled_from((None, [], ["pid"], ["linear-feedback"], "linear-feedback", 1))).map(lambda a: Call(studies.certify_against_flights, (a[0],), {"max_failed": a[1], "controllers": a[2]}, frozenset({"vehicles", "max_failed", "controllers"}))))
     t["Campaign"] = Target(st.composite(_campaign_call)())
     t["run_campaign"] = Target(st.composite(_run_campaign)(), check_campaign)
+    t["record_batch"] = Target(with_airframe(_record_batch), check_recording)
     t["tuning_campaign"] = Target(calls(studies.tuning_campaign, runs=hostile(st.integers(1, 5), *EDGE_INTS), seed=hostile(st.integers(0, 9), *EDGE_INTS), duration_s=hostile(number(0.5, 2.0))))
     # Small counts or refused ones: maxiter=10**9 is a valid request for a very long search.
     t["tune"] = Target(st.tuples(hostile(st.integers(0, 1), -1, 2**63), hostile(st.integers(1, 2), 0, -1, 2**63), st.sampled_from((None, {"k_p": (0.5, 2.0)}, {"x": (0, 1)}, {"k_p": (2.0, 1.0)}))).map(_tune))

@@ -333,28 +333,40 @@ pub fn simulate_batch(
     }
     runs.into_par_iter()
         .enumerate()
-        .map(|(i, mut run)| {
-            let mut own = config.clone();
-            if let Some(noise) = own.noise.as_mut() {
-                noise.seed = noise.seed.wrapping_add(i as u64);
-            }
-            if let Some(sensing) = own.sensing.as_mut() {
-                sensing.seed = sensing.seed.wrapping_add(i as u64);
-            }
-            let mut actuators = actuators.clone();
-            if let Some(command) = &run.initial_command {
-                actuators.settle(command)?;
-            }
-            simulate_cancellable(
-                vehicle,
-                actuators,
-                run.controller.as_mut(),
-                initial_efficiency,
-                &run.faults,
-                run.x0,
-                &own,
-                cancel,
-            )
-        })
+        .map(|(i, run)| fly_batch_run(i, run, vehicle, actuators, initial_efficiency, config, cancel))
         .collect()
+}
+
+/// Run `i` of a batch (its seeds shifted by `i`, its actuators settled at its own start): the
+/// one rule of [`simulate_batch`] and the columnar recording.
+pub(crate) fn fly_batch_run(
+    i: usize,
+    mut run: BatchRun,
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    initial_efficiency: &[f64],
+    config: &SimulationConfig,
+    cancel: &Cancel,
+) -> Result<Trajectory> {
+    let mut own = config.clone();
+    if let Some(noise) = own.noise.as_mut() {
+        noise.seed = noise.seed.wrapping_add(i as u64);
+    }
+    if let Some(sensing) = own.sensing.as_mut() {
+        sensing.seed = sensing.seed.wrapping_add(i as u64);
+    }
+    let mut actuators = actuators.clone();
+    if let Some(command) = &run.initial_command {
+        actuators.settle(command)?;
+    }
+    simulate_cancellable(
+        vehicle,
+        actuators,
+        run.controller.as_mut(),
+        initial_efficiency,
+        &run.faults,
+        run.x0,
+        &own,
+        cancel,
+    )
 }

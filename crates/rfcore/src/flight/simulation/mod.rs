@@ -30,6 +30,7 @@
 //! vehicle) when `h |omega|` grows past it during the run.
 //!
 //! # Layout (one concept per file; imports run down this list, never back up)
+//! - [`columns`]: a batch recorded into one buffer per signal, runs filling their slots.
 //! - [`driver`]: one run and a batch of runs: checks, then control step by control step.
 //! - `onboard`: one run's sensors and estimator, fed from the tape after every period.
 //! - [`step`]: one control period of body and actuators (RK4 substeps, faults, divergence
@@ -42,6 +43,7 @@
 //! - [`noise`]: the papers' sensor noise on what the controller sees.
 //! - [`divergence`]: divergence limits, reasons and events, and how a crossing is located.
 
+pub mod columns;
 pub mod config;
 pub mod divergence;
 pub mod driver;
@@ -57,6 +59,7 @@ mod tape;
 mod tests;
 
 pub use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
+pub use columns::{simulate_batch_columns, BatchColumns, Column, RunRecord, Sample};
 pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS};
 pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
 pub use driver::{simulate, simulate_batch, simulate_cancellable, simulate_observed, BatchRun};
