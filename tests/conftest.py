@@ -19,6 +19,8 @@ TESTS = Path(__file__).resolve().parent
 if str(TESTS) not in sys.path:
     sys.path.insert(0, str(TESTS))
 
+from quick_report import QuickReport, build_quick_report  # noqa: E402  (a helper module of tests/)
+
 #: The pre-release run of the hostile-input harness (``--hypothesis-profile=long``, DEVELOPERS.md):
 #: many examples, no deadline; ``tests/cross/hostile/hostile_runner.py`` spreads them over every
 #: target within ``ROTORFAULT_HOSTILE_SECONDS`` per target.
@@ -33,3 +35,11 @@ def pnpnpn() -> rf.Airframe:
 @pytest.fixture(scope="session")
 def ppnnpn() -> rf.Airframe:
     return rf.Airframe.preset("hexa-ppnnpn")
+
+
+
+@pytest.fixture(scope="session")
+def quick_report(tmp_path_factory: pytest.TempPathFactory) -> QuickReport:
+    """The quick report, built once per test session and shared by the tests that read it (the
+    browser check, the JSON schema): each build flies every paper's quick flights."""
+    return build_quick_report(tmp_path_factory.mktemp("reproduce") / "report")

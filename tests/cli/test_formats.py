@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quick_report import QuickReport
 from click.testing import CliRunner
 
 import rotorfault as rf
@@ -66,7 +67,7 @@ def commands(workdir: Path) -> dict[str, list[list[str]]]:
         "ftc-report": [["--scenarios", "fault-free", "--laws", "feedforward", "--no-figures", "--out", str(workdir / "ftc")]],
         "vpp-report": [["--quick", "--out", str(workdir / "vpp")]],
         "lanzon-report": [["--quick", "--runs", "2", "--no-figures", "--out", str(workdir / "lanzon")]],
-        "reproduce": [["--quick", "--out", str(workdir / "report")]],
+        # reproduce: the session's one quick report (``quick_report``, built with --format json).
     }
 
 
@@ -84,8 +85,8 @@ def test_every_command_has_format_and_quiet() -> None:
 
 
 @pytest.fixture(scope="module")
-def json_outputs(workdir: Path) -> dict[str, list[dict[str, Any]]]:
-    out: dict[str, list[dict[str, Any]]] = {}
+def json_outputs(workdir: Path, quick_report: QuickReport) -> dict[str, list[dict[str, Any]]]:
+    out: dict[str, list[dict[str, Any]]] = {"reproduce": [quick_report.document]}
     for name, variants in commands(workdir).items():
         for args in variants:
             code, stdout, stderr = run(name, *args, "--format", "json", "--force") if name in ("ftc-report", "vpp-report", "lanzon-report", "reproduce") \

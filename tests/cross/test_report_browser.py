@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from quick_report import QuickReport
 
 from rotorfault.papers import du as du_paper
 from rotorfault.papers import ke as ke_paper
@@ -83,15 +84,12 @@ def _browser(chromium: str, profile: Path, *args: str) -> subprocess.CompletedPr
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("reproduce") / "report"
-    done = subprocess.run([sys.executable, "-m", "rotorfault", "reproduce", "--quick", "--out", str(out)],
-                          capture_output=True, text=True, timeout=600, check=False)
-    assert done.returncode == 0, done.stderr
-    assert "report written to" in done.stdout
-    # The per-paper score lines count the reproduced rows only (Du's and Ke's are all reproduced).
-    assert "du: 14 of 14 reproduced numbers pass" in done.stdout and "ke: 33 of 33 reproduced numbers pass" in done.stdout
-    return out
+def report(quick_report: QuickReport) -> Path:
+    assert quick_report.document["out"] == str(quick_report.out / "index.html")
+    # The per-paper scores count the reproduced rows only (Du's and Ke's are all reproduced).
+    scores = {s["key"]: (s["passed"], s["reproduced"]) for s in quick_report.document["sections"]}
+    assert scores["du"] == (14, 14) and scores["ke"] == (33, 33), scores
+    return quick_report.out
 
 
 @pytest.fixture(scope="module")

@@ -105,3 +105,11 @@ def test_failure_samples_are_the_rows_of_the_row_by_row_construction(rotor_count
 def test_failure_samples_too_large_for_memory_are_refused_by_count() -> None:
     with pytest.raises(ValueError, match=r"^max_failed: 8,656,937 rows of 240 bytes .* \(30 rotors, up to 8 failed\) give fewer failed rotors"):
         failure_samples(30, 8)
+
+
+def test_failure_samples_of_a_billion_rotors_are_refused_at_once() -> None:
+    """Found by the long hostile run: the count summed C(1e9, k) for every k up to 1e9 first."""
+    with pytest.raises(ValueError, match=r"^max_failed: at least 1 rows of 8,?000,?000,?000 bytes"):
+        failure_samples(10**9, 10**9)
+    with pytest.raises(ValueError, match=r"^max_failed: at least 1,000,001 rows of 8000000 bytes"):
+        failure_samples(10**6, 10**6)

@@ -73,14 +73,16 @@ def row_bytes(schema: Schema) -> int:
     return total
 
 
-def check_in_memory(field: str, rows: int, bytes_per_row: int, *, remedy: str = "stream them to Parquet with out=DIR (CLI: --out DIR)") -> None:
+def check_in_memory(field: str, rows: int, bytes_per_row: int, *, remedy: str = "stream them to Parquet with out=DIR (CLI: --out DIR)",
+                    at_least: bool = False) -> None:
     """Refuses, naming ``field``, a result of ``rows`` rows of ``bytes_per_row`` bytes that would
-    exceed :data:`MAX_IN_MEMORY_BYTES` (on Python integers: never wraps), before any work."""
+    exceed :data:`MAX_IN_MEMORY_BYTES` (on Python integers: never wraps), before any work.
+    ``at_least``: ``rows`` is a lower bound (the count was stopped once past the limit)."""
     need = rows * bytes_per_row
     if need > MAX_IN_MEMORY_BYTES:
         most = MAX_IN_MEMORY_BYTES // bytes_per_row
         raise ValueError(
-            f"{field}: {rows:,} rows of {bytes_per_row} bytes ({need / 2**30:,.1f} GiB) exceed the in-memory limit of "
+            f"{field}: {'at least ' if at_least else ''}{rows:,} rows of {bytes_per_row} bytes ({need / 2**30:,.1f} GiB) exceed the in-memory limit of "
             f"{MAX_IN_MEMORY_BYTES / 2**30:g} GiB of results ({most:,} rows); {remedy}"
         )
 

@@ -673,15 +673,24 @@ def failure_samples(rotor_count: int, max_failed: int) -> dict[str, FloatArray]:
         raise ValueError(f"rotor_count: must be >= 1, got {rotor_count}")
     if max_failed > rotor_count:
         raise ValueError(f"max_failed: must be at most rotor_count ({rotor_count}), got {max_failed}")
-    # Counted exactly before anything is built: C(n, k) rows of n values each.
-    sizes = [math.comb(rotor_count, k) for k in range(max_failed + 1)]
-    check_in_memory("max_failed", sum(sizes), 8 * rotor_count,
+    # Counted before anything is built: C(n, k) rows of n values each, summed k by k and stopped
+    # as soon as the sum is past the limit (C(1e9, k) for every k up to 1e9 never ends: long
+    # hostile run, 2026-11-28).
+    from .engine import MAX_IN_MEMORY_BYTES
+
+    total = size = 0
+    for k in range(max_failed + 1):
+        size = 1 if k == 0 else size * (rotor_count - k + 1) // k
+        total += size
+        if total * 8 * rotor_count > MAX_IN_MEMORY_BYTES:
+            break
+    check_in_memory("max_failed", total, 8 * rotor_count, at_least=k < max_failed,
                     remedy=f"({rotor_count} rotors, up to {max_failed} failed) give fewer failed rotors")
     # One row per rotor (each column contiguous), built block by block without listing a
     # combination: in lexicographic order the k-failure rows whose first failed rotor is ``a`` are
     # the last C(n - a - 1, k - 1) rows of the (k - 1)-failure block (their failed rotors all
     # above ``a``) with rotor ``a`` failed too: one slice copy per (k, a), each value written once.
-    eff = np.empty((rotor_count, sum(sizes)))
+    eff = np.empty((rotor_count, total))
     eff[:, 0] = 1.0
     block_stop = first = 1
     for k in range(1, max_failed + 1):
