@@ -213,6 +213,8 @@ def periodic_state(
     """
     centre = np.asarray(_three("position", position))
     yaw = real("yaw", yaw)
+    if not math.isfinite(yaw):  # long hostile run: inf reached math.sin as a bare domain error
+        raise ValueError(f"yaw: must be finite (rad), got {yaw}")
     n = np.asarray(solution.spin_axis)
     rotation = _rotation_between(n, np.array([0.0, 0.0, -1.0]))
     turn = _axis_angle(np.array([0.0, 0.0, -1.0]), yaw)

@@ -666,7 +666,9 @@ def _regressions(t: dict[str, Target]) -> None:
     rotorpy = quad.to_rotorpy()
     found = {
         # A float count: TypeError from combinations() naming nothing; 10**6 rotors: C(n, 2) rows built in memory.
-        "failure_samples": (Call(rf.failure_samples, (1, math.nan), {}, frozenset({"max_failed"})), Call(rf.failure_samples, (10**6, 2), {}, frozenset())),
+        "failure_samples": (Call(rf.failure_samples, (1, math.nan), {}, frozenset({"max_failed"})), Call(rf.failure_samples, (10**6, 2), {}, frozenset()),
+                            Call(rf.failure_samples, (10**9, 10**9), {}, frozenset({"max_failed"}))),  # counted C(1e9, k) for every k
+        "periodic_state": (Call(lambda: rf.periodic_state(*_spinning(), yaw=math.inf), (), {}, frozenset({"yaw"})),),  # math domain error
         "format_acai": (Call(analysis.format_acai, ("x",)),),  # float formatting's TypeError, no field
         "lanzon_plant": (Call(control.lanzon_plant, ("x",)),),  # AttributeError
         "plot_efficiency_scan": (Call(rf.plot_efficiency_scan, (None,)),),  # AttributeError
