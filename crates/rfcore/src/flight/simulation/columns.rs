@@ -19,7 +19,7 @@ use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::Divergence;
-use crate::flight::simulation::driver::{fly_batch_run, BatchRun};
+use crate::flight::simulation::driver::{check_batch, fly_batch_run, BatchRun};
 use crate::flight::simulation::recording::{SensingRecord, Trajectory};
 use crate::flight::vehicle::Vehicle;
 use crate::state::{state_vector, STATE_DIM};
@@ -214,10 +214,7 @@ pub fn simulate_batch_columns<T: Sample>(
     config: &SimulationConfig,
     cancel: &Cancel,
 ) -> Result<BatchColumns<T>> {
-    config.check()?;
-    for (i, run) in runs.iter().enumerate() {
-        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
-    }
+    check_batch(config, &runs)?;
     let n = runs.len();
     let m = vehicle.rotor_count();
     let count = actuators.channels() * m;

@@ -327,14 +327,20 @@ pub fn simulate_batch(
     config: &SimulationConfig,
     cancel: &Cancel,
 ) -> Result<Vec<Trajectory>> {
-    config.check()?;
-    for (i, run) in runs.iter().enumerate() {
-        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
-    }
+    check_batch(config, &runs)?;
     runs.into_par_iter()
         .enumerate()
         .map(|(i, run)| fly_batch_run(i, run, vehicle, actuators, initial_efficiency, config, cancel))
         .collect()
+}
+
+/// A batch's checks before any run: the settings, then each run's start (named `x0s[i]`).
+pub(crate) fn check_batch(config: &SimulationConfig, runs: &[BatchRun]) -> Result<()> {
+    config.check()?;
+    for (i, run) in runs.iter().enumerate() {
+        config.check_start(&format!("x0s[{i}]"), &run.x0)?;
+    }
+    Ok(())
 }
 
 /// Run `i` of a batch (its seeds shifted by `i`, its actuators settled at its own start): the
