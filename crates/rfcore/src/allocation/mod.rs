@@ -47,6 +47,8 @@ pub mod allocator;
 pub mod certificate;
 pub mod clarabel;
 pub mod factorisation;
+#[cfg(test)]
+mod factorisation_tests;
 pub mod pinv;
 pub mod priority;
 pub mod problem;
