@@ -23,9 +23,14 @@ import pytest
 
 PRELUDE = textwrap.dedent(
     """
+    import signal
     import sys
     import numpy as np
     import rotorfault as rf
+
+    # Python's own SIGINT handler even when this test runs in a background job, whose children
+    # start with SIGINT ignored (POSIX shells without job control), so Python installs none.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def ring(m):
         angles = np.arange(m) * 2 * np.pi / m
