@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import public_api
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,17 +44,7 @@ API_PAGES = {"analysis": ("rotorfault.analysis",), "flight": ("rotorfault.flight
 
 def public_callables() -> list[tuple[str, str, Any]]:
     """(room, name, object) for every function and class in a room's ``__all__``, each object once."""
-    seen: set[int] = set()
-    found = []
-    for room in ROOMS:
-        module = importlib.import_module(room)
-        for name in module.__all__:
-            obj = getattr(module, name)
-            if inspect.ismodule(obj) or not callable(obj) or id(obj) in seen:
-                continue
-            seen.add(id(obj))
-            found.append((room, name, obj))
-    return found
+    return public_api.public_callables(ROOMS)
 
 
 def own_docstring(obj: Any) -> str:

@@ -11,11 +11,11 @@ are small (each well under a second once the package and python-control are impo
 from __future__ import annotations
 
 import doctest
-import importlib
 import inspect
 import re
 from typing import Any
 
+import public_api
 import pytest
 
 #: The rooms whose ``__all__`` is the public API an example documents.
@@ -30,17 +30,7 @@ _EXAMPLES_HEADING = re.compile(r"^\s*Examples:\s*$", re.MULTILINE)
 
 def public_objects() -> list[tuple[str, Any]]:
     """(where it is defined, object) for every function and class of the rooms' ``__all__``, each once."""
-    seen: set[int] = set()
-    found = []
-    for room in EXAMPLE_ROOMS:
-        module = importlib.import_module(room)
-        for name in module.__all__:
-            obj = getattr(module, name)
-            if inspect.ismodule(obj) or not callable(obj) or id(obj) in seen:
-                continue
-            seen.add(id(obj))
-            found.append((f"{obj.__module__}.{obj.__qualname__}", obj))
-    return found
+    return [(f"{obj.__module__}.{obj.__qualname__}", obj) for _, _, obj in public_api.public_callables(EXAMPLE_ROOMS)]
 
 
 def own_docstring(obj: Any) -> str:
