@@ -440,7 +440,7 @@ impl Airframe {
         let k_mu = self.drag_torque_ratio_m;
         DMatrix::from_fn(4, self.rotor_count(), |row, i| {
             let r = &self.rotors[i];
-            match r.placement {
+            flushed(match r.placement {
                 // Du's eq. (5) verbatim, so planar airframes give today's bits.
                 RotorPlacement::Planar {
                     arm_angle_rad,
@@ -459,7 +459,7 @@ impl Airframe {
                         column[2 + row]
                     }
                 }
-            }
+            })
         })
     }
 
@@ -485,8 +485,8 @@ impl Airframe {
                 0.0,
                 0.0,
                 -1.0,
-                -arm_length_m * arm_angle_rad.sin(),
-                arm_length_m * arm_angle_rad.cos(),
+                flushed(-arm_length_m * arm_angle_rad.sin()),
+                flushed(arm_length_m * arm_angle_rad.cos()),
                 k,
             ],
             RotorPlacement::General {
@@ -496,9 +496,9 @@ impl Airframe {
                 a[0],
                 a[1],
                 a[2],
-                p[1] * a[2] - p[2] * a[1] - k * a[0],
-                p[2] * a[0] - p[0] * a[2] - k * a[1],
-                p[0] * a[1] - p[1] * a[0] - k * a[2],
+                flushed(p[1] * a[2] - p[2] * a[1] - k * a[0]),
+                flushed(p[2] * a[0] - p[0] * a[2] - k * a[1]),
+                flushed(p[0] * a[1] - p[1] * a[0] - k * a[2]),
             ],
         }
     }
@@ -519,6 +519,7 @@ impl Airframe {
         for (i, rotor) in self.rotors.iter().enumerate() {
             b.column_mut(i).scale_mut(rotor.efficiency);
         }
+        b.apply(|x| *x = flushed(*x));
         b
     }
 
@@ -583,7 +584,21 @@ impl Airframe {
         for (i, rotor) in self.rotors.iter().enumerate() {
             b.column_mut(i).scale_mut(rotor.efficiency);
         }
+        b.apply(|x| *x = flushed(*x));
         b
+    }
+}
+
+/// `x`, or 0 when it is subnormal: an entry of an effectiveness or wrench matrix below 2.2e-308
+/// (an arm angle of 1e-309 rad, an efficiency of 1e-310) has no precision left and is zero at the
+/// precision of every other entry, while the allocation and rank tests refuse a subnormal as a
+/// scale (`matrix[r, c]: must be 0 or a normal number`, a matrix the user never wrote). Normal
+/// entries keep their bits.
+fn flushed(x: f64) -> f64 {
+    if x.is_subnormal() {
+        0.0
+    } else {
+        x
     }
 }
 

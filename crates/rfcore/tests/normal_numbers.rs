@@ -235,6 +235,40 @@ fn allocation_problems_refuse_subnormal_scales() {
     .unwrap();
 }
 
+/// An airframe whose moment arm or efficiency leaves a subnormal entry in its matrices (an arm
+/// angle of 1e-309 rad: found by the long hostile run, the allocator then refused `matrix[1, 0]`,
+/// a matrix the user never wrote) reads that entry as 0; normal entries keep their bits.
+#[test]
+fn an_airframe_matrix_has_no_subnormal_entry() {
+    let text = preset_text("quad-x.toml");
+    let tilted = text.replacen("arm_angle_deg = 45", "arm_angle_deg = -6.4e-308", 1);
+    let frame = Airframe::from_toml_str(&tilted, "quad-x").unwrap();
+    let healthy = Airframe::from_toml_str(&text, "quad-x").unwrap();
+    let faint = healthy.with_efficiency(&[SUBNORMAL, 1.0, 1.0, 1.0]).unwrap();
+    for (name, b) in [
+        ("effectiveness", frame.effectiveness_matrix()),
+        ("nominal effectiveness", frame.nominal_effectiveness_matrix()),
+        ("wrench", frame.wrench_matrix()),
+        ("faint effectiveness", faint.effectiveness_matrix()),
+        ("faint wrench", faint.wrench_matrix()),
+    ] {
+        assert!(b.iter().all(|x| !x.is_subnormal()), "{name}: {b}");
+    }
+    // The arm angle of -1.1e-309 rad: roll arm 0 (was -0.275 x sin(angle), subnormal), pitch arm 0.275.
+    let b = frame.effectiveness_matrix();
+    assert_eq!((b[(1, 0)], b[(2, 0)]), (0.0, 0.275));
+    assert_eq!(faint.effectiveness_matrix().column(0).iter().filter(|x| **x != 0.0).count(), 0);
+    // Normal entries unchanged, bit for bit.
+    let columns = 1..4;
+    for c in columns {
+        assert_eq!(
+            frame.effectiveness_matrix().column(c),
+            healthy.effectiveness_matrix().column(c)
+        );
+    }
+    AllocationProblem::new(b, &[1.0; 4], &[0.0; 4], &[1.0; 4]).unwrap();
+}
+
 #[test]
 fn the_rank_svd_refuses_infinity_and_stops_at_its_cap() {
     // The matrix the subnormal mass produced (built by hand: that airframe is refused now).

@@ -310,7 +310,7 @@ def _balancing_scale(a: FloatArray, b: FloatArray, c: FloatArray) -> FloatArray:
             col, row = norms(i)
             if col == 0.0 or row == 0.0:
                 continue
-            f = 2.0 ** round(0.5 * np.log2(row / col))
+            f = _power_of_two(0.5 * _log2_ratio(row, col))
             if f == 1.0 or col * f + row / f >= 0.95 * (col + row):
                 continue
             scale(i, f)
@@ -324,9 +324,22 @@ def _balancing_scale(a: FloatArray, b: FloatArray, c: FloatArray) -> FloatArray:
             col, row = norms(i)
             if (col == 0.0) != (row == 0.0):
                 side = col if col > 0.0 else row
-                f = 2.0 ** round(np.log2(typical / side))
+                f = _power_of_two(_log2_ratio(typical, side))
                 scale(i, f if col > 0.0 else 1.0 / f)
     return t
+
+
+def _log2_ratio(x: float, y: float) -> float:
+    """``log2(x / y)`` for positive ``x``, ``y``, also where the quotient over- or underflows
+    (1e300 / 1e-310: the hostile harness found ``round(inf)``)."""
+    ratio = x / y
+    return float(np.log2(ratio)) if 0.0 < ratio < math.inf else float(np.log2(x) - np.log2(y))
+
+
+def _power_of_two(exponent: float) -> float:
+    """``2^round(exponent)``, the exponent kept within +-1000 so that the scale and its inverse
+    are finite (a state scaled by 2^1000 is balanced as far as double precision allows)."""
+    return float(np.ldexp(1.0, int(np.clip(round(exponent), -1000, 1000))))
 
 
 def balance_states(system: ct.StateSpace) -> tuple[ct.StateSpace, FloatArray]:

@@ -659,6 +659,18 @@ def _newer_targets(t: dict[str, Target]) -> None:
         hostile(st.integers(1, 1), *EDGE_INTS), hostile(positive(0.5, 1.0), 1e9)), lambda r, c: None)
 
 
+def _seen_subnormally() -> Any:
+    """Two integrators nothing moves, the second seen through 1e-310."""
+    import control as ct
+
+    return ct.ss(np.zeros((2, 2)), np.zeros((2, 1)), np.array([[1.0, 1e-310]]), np.zeros((1, 1)))
+
+
+def _tiny_angle() -> rf.Airframe:
+    return rf.Airframe([-1.1125369292536e-309, math.pi / 2, math.pi, 3 * math.pi / 2], [0.2] * 4, ["cw", "ccw", "cw", "ccw"], [8.0] * 4,
+                       1.0, [0.01, 0.01, 0.02], 0.02)
+
+
 def _regressions(t: dict[str, Target]) -> None:
     """The harness's findings, each fixed and kept here as an explicit case (issue 27)."""
     quad = rf.Airframe.preset("quad-x")
@@ -676,7 +688,13 @@ def _regressions(t: dict[str, Target]) -> None:
         "ncfsyn": (Call(rf.ncfsyn, ((1, "a"), np.eye(1)), {}, frozenset()), Call(rf.ncfsyn, ([], np.zeros((0, 1))), {}, frozenset()),
                    # Every state hidden (a zero weight; B = C = 0): LAPACK's bare "dgges: lwork=0".
                    Call(rf.ncfsyn, (_first_order(), np.zeros((1, 1))), {"factor": 1.01}, frozenset()),
-                   Call(rf.ncfsyn, (_hidden_first_order(), np.eye(1)), {"factor": 1.01}, frozenset())),
+                   Call(rf.ncfsyn, (_hidden_first_order(), np.eye(1)), {"factor": 1.01}, frozenset()),
+                   # C = [1, 1e-310]: the balancing's ratio 0.5 / 1e-310 overflowed to inf, round(inf) (long run, 2026-11-28).
+                   Call(lambda: rf.ncfsyn(_seen_subnormally(),
+                                          np.eye(1), factor=1.01), (), {}, frozenset({"plant"}))),
+        # An arm angle of 1e-309 rad left a subnormal in the effectiveness matrix, which the allocator
+        # refused as "matrix[1, 0]" (a matrix the user never wrote; long run, 2026-11-28).
+        "lqr_hover_allocated": (Call(lambda: rf.lqr_hover_allocated(rf.Simulator(_tiny_angle()), rf.Allocator(_tiny_angle())), (), {}, frozenset()),),
         # A string accepted as ``ours`` and ``tolerance``, failing later in number_rows' arithmetic.
         "number_rows": (Call(lambda: papers.number_rows([papers.PaperNumber("du", "Table 1", "ACAI", 0.0, "x", 1e-6)])),),  # type: ignore[arg-type]
         "PaperNumber": (Call(papers.PaperNumber, ("du", "Table 1", "ACAI", 0.0, 0.0, "x")),),
