@@ -115,6 +115,17 @@ def test_bad_toml_file_is_one_line(tmp_path: Path) -> None:
     assert code == 1 and "broken.toml" in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("text", ["\x1e", "a = 1\u2028", "\x1b[2J = 1"])
+def test_a_file_quoted_in_an_error_cannot_break_its_line(tmp_path: Path, text: str) -> None:
+    """The TOML parser quotes the offending line; a record separator in it split the message
+    for any reader using Python's line rule (long hostile run), and a terminal escape would act."""
+    path = tmp_path / "broken.toml"
+    path.write_text(text, encoding="utf-8")
+    code, _, err = run("acai", "--airframe", str(path))
+    assert code == 1 and err.startswith("Error: ") and len(err.strip().splitlines()) == 1, err
+    assert "\x1b" not in err and "\x1e" not in err
+
+
 def test_installed_console_script() -> None:
     script = Path(sys.executable).parent / "rotorfault"
     command = [str(script)] if script.exists() else [sys.executable, "-m", "rotorfault"]

@@ -138,5 +138,8 @@ def test_bad_input() -> None:
         tune_hold([])
     with pytest.raises(ValueError, match="^maxiter"):
         tune_hold((ROTOR_2_AT_40,), maxiter=-1)
+    # popsize 10^6 was accepted and flew on (long hostile run): refused with the count.
+    with pytest.raises(ValueError, match=r"^maxiter, popsize: \(maxiter \+ 1\) x popsize x 12 gains = 24,000,000 candidates"):
+        tune_hold((ROTOR_2_AT_40,), maxiter=1, popsize=10**6)
     with pytest.raises(TypeError, match="^trajectory"):
         post_fault_hold("trajectory")  # type: ignore[arg-type]

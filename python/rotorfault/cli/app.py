@@ -36,13 +36,22 @@ def _user_errors(command: F) -> F:
         try:
             return command(*args, **kwargs)
         except (ValueError, TypeError, OSError, OverflowError, ImportError) as exc:
-            raise click.ClickException(str(exc).replace("\n", " ")) from None
+            raise click.ClickException(one_line(str(exc))) from None
         except RecursionError:
             raise click.ClickException("input: nested too deeply to read (a TOML file of arrays or tables within tables?)") from None
         except MemoryError:
             raise click.ClickException("out of memory: ask for a smaller problem") from None
 
     return wrapper  # type: ignore[return-value]
+
+
+def one_line(text: str) -> str:
+    """``text`` as one line of plain text: every line boundary Python knows (``\\n``, ``\\r``, and
+    also ``\\x1c``-``\\x1e``, ``\\x85``, ``\\u2028``, which a TOML parser's message may quote from
+    the file: the long hostile run found ``\\x1e``) becomes a space, and any other control
+    character (a terminal escape, say) is shown escaped."""
+    joined = " ".join(text.splitlines())
+    return "".join(c if c.isprintable() or c == " " else c.encode("unicode_escape").decode("ascii") for c in joined)
 
 
 def parse_numbers(field: str, text: str) -> list[float]:

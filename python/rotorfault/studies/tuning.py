@@ -174,6 +174,12 @@ class _PointCost:
 Mapper = Callable[[Callable[[np.ndarray[Any, Any]], float], list[np.ndarray[Any, Any]]], list[float]]
 
 
+#: Most candidates one search flies, ``(maxiter + 1) x popsize x gains`` (scipy's differential
+#: evolution): far above any search worth running (the defaults fly a few hundred), below one that
+#: would run for days (popsize 10^6 was accepted and ran on; hostile harness).
+MAX_CANDIDATES = 100_000
+
+
 def _search(
     cost: Callable[[KeGains], float], baseline: KeGains, space: dict[str, tuple[float, float]], *, maxiter: int, popsize: int,
     seed: int, progress: bool | None, description: str, x0: KeGains | None = None, mapper: Mapper | None = None,
@@ -187,9 +193,12 @@ def _search(
     for name, value in (("maxiter", maxiter), ("popsize", popsize), ("seed", seed)):
         if isinstance(value, bool) or not isinstance(value, int) or value < (0 if name != "popsize" else 1):
             raise ValueError(f"{name}: must be an integer >= {0 if name != 'popsize' else 1}, got {value!r}")
+    total = (maxiter + 1) * popsize * len(space)
+    if total > MAX_CANDIDATES:
+        raise ValueError(f"maxiter, popsize: (maxiter + 1) x popsize x {len(space)} gains = {total:,} candidates, more than the "
+                         f"{MAX_CANDIDATES:,} one search flies (each candidate is a flight per fault case)")
     point_cost = _PointCost(baseline, dict(space), cost)
     evaluations = [0]
-    total = (maxiter + 1) * popsize * len(space)
     bounds = [(float(np.log10(lo)), float(np.log10(hi))) if n in LOG_SCALED else (lo, hi) for n, (lo, hi) in space.items()]
     with progress_bar(total, description=description.format(total=total), show=progress) as advance:
 
