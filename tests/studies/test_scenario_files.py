@@ -157,3 +157,21 @@ def test_bad_controller_tables_name_the_key(tmp_path: Path, text: str, message: 
     assert message in str(info.value) and str(path) in str(info.value)
 
 
+
+
+@pytest.mark.parametrize(
+    ("controller", "message"),
+    [
+        ('kind = "indi-controller"\ntold = nan', "controller.told: must be a finite number, got nan"),
+        ('kind = "uniform-passive-ftc"\ngain_values = { k_p = inf }', "controller.gain_values.k_p: must be a finite number, got inf"),
+        ('kind = "linear-feedback"\nq_diag = [1, 1, nan]', r"controller.q_diag\[2\]: must be a finite number, got nan"),
+        ('kind = "linear-feedback"\ntold = true', "unknown key"),
+        ('kind = "lanzon-controller"', "flies a \\[vehicle\\] of kind lanzon"),
+    ],
+)
+def test_a_controller_table_is_refused_when_the_file_is_read(tmp_path: Path, controller: str, message: str) -> None:
+    """Found by the long hostile run: ``told = nan`` was read into the scenario and refused only
+    when the controller was designed for a run."""
+    path = _file(tmp_path, f'airframe = "ke-quadcopter"\nduration_s = 2.0\n[controller]\n{controller}\n')
+    with pytest.raises(ValueError, match=message):
+        load_scenario(path)

@@ -223,22 +223,43 @@ COMMON_KEYS = {"kind": "the controller (a registry name, none, or an alias)", "s
 ALIASES = {"lqr-hover": "linear-feedback", "open-loop-hover": "open-loop"}
 
 
-def build(kind: str, context: Context, parameters: Mapping[str, Any]) -> Any:
-    """The controller ``kind`` (a registry name or an alias; ``"none"``: None) for ``context``,
-    with ``parameters`` (the ``[controller]`` table without the common keys)."""
+def check(kind: str, vehicle_kind: str, parameters: Mapping[str, Any]) -> None:
+    """What :func:`build` refuses without designing anything, so that a scenario file is refused
+    when it is read: unknown keys, a controller for another kind of vehicle, and a number that is
+    not finite anywhere in the table (no controller parameter is NaN or infinite)."""
     if kind == "none":
         if parameters:
             raise ValueError(f"controller: kind none takes no parameters, got {', '.join(sorted(parameters))}")
-        return None
-    name = ALIASES.get(kind, kind)
-    builder = BUILDERS[name]
+        return
+    builder = BUILDERS[ALIASES.get(kind, kind)]
     unknown = set(parameters) - set(builder.keys)
     if unknown:
         allowed = ", ".join(sorted({*builder.keys, *COMMON_KEYS})) or "none"
         raise ValueError(f"controller: unknown key(s) {', '.join(sorted(unknown))} for {kind}; allowed: {allowed}")
-    if builder.vehicles and context.vehicle_kind not in builder.vehicles:
+    if builder.vehicles and vehicle_kind not in builder.vehicles:
         raise ValueError(f"controller.kind: {kind} flies a [vehicle] of kind {' or '.join(builder.vehicles)} (its design needs that model)")
-    return builder.build(context, dict(parameters))
+    for key, value in parameters.items():
+        _require_finite(f"controller.{key}", value)
+
+
+def _require_finite(field: str, value: Any) -> None:
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{field}: must be a finite number, got {value}")
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _require_finite(f"{field}.{k}", v)
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _require_finite(f"{field}[{i}]", v)
+
+
+def build(kind: str, context: Context, parameters: Mapping[str, Any]) -> Any:
+    """The controller ``kind`` (a registry name or an alias; ``"none"``: None) for ``context``,
+    with ``parameters`` (the ``[controller]`` table without the common keys)."""
+    check(kind, context.vehicle_kind, parameters)
+    if kind == "none":
+        return None
+    return BUILDERS[ALIASES.get(kind, kind)].build(context, dict(parameters))
 
 
 def kinds() -> tuple[str, ...]:
@@ -251,4 +272,4 @@ def check_registry(names: Sequence[str]) -> list[str]:
     return [n for n in names if n not in BUILDERS]
 
 
-__all__ = ["ALIASES", "BUILDERS", "COMMON_KEYS", "Builder", "Context", "build", "check_registry", "kinds"]
+__all__ = ["ALIASES", "BUILDERS", "COMMON_KEYS", "Builder", "Context", "build", "check", "check_registry", "kinds"]

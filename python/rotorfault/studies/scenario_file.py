@@ -316,6 +316,8 @@ def _parse(data: dict[str, Any], path: Path) -> Scenario:
     for k, fault in enumerate(faults):
         if not 0.0 <= fault.time < duration_s:
             raise ValueError(f"fault[{k}].time_s: must lie in [0, duration_s) = [0, {duration_s:g}) s, got {fault.time:g}")
+    # The controller table refused now, not when the controller is designed for a run.
+    scenario_controllers.check(kind, kind_vehicle, parameters)
     reference = _reference(data, duration_s)
     if reference is not None and kind != "tracking-feedback":
         raise ValueError(f"reference: only a tracking-feedback controller follows a reference, not {kind}")
