@@ -1,18 +1,22 @@
 //! The speed of closed-loop flights on sensors against the same flights on the truth, both in
-//! one run (issue 29: flying on sensors at >= 50 % of the truth-state speed).
+//! one run (issue 29: flying on sensors at >= 50 % of the truth-state speed). Every controller the
+//! project flies on sensors (Ke, Lanzon, Wang's LQR, the hover LQR and INDI, with their designs
+//! from Python) is timed by `python benches/sensing.py`; this bench times the two Rust-built laws
+//! and is the one to profile (`perf record` on `--profile-time`).
 //!
 //! Run from the workspace root with `cargo bench --bench sensing` (add `-- --warm-up-time 1
 //! --measurement-time 3` for a quick run). Before criterion's groups it prints a summary line per
-//! law: the median thread CPU time (9 repetitions, truth and sensors alternating so both see the
-//! same load; robust on a loaded machine) of one 10 s flight
-//! of `ke-quadcopter` (Ke's rotor lag and drags, 400 Hz control, 4 RK4 substeps) losing rotor 1 at
-//! 2 s, on the truth and on `Sensing::default()` (ICM-42688-P at 500 Hz, OptiTrack at 240 Hz,
-//! DShot rotor speeds, the 15-state error-state Kalman filter), and the ratio of their speeds.
-//! INDI, which also reads the raw gyro, accelerometer and rotor speeds, spins beyond the gyro's
-//! range after the loss (the estimator's clamping path runs); Ke's passive law reads the state.
+//! law: a batch of 16 flights of 10 s of `ke-quadcopter` (Ke's rotor lag and drags, 400 Hz
+//! control, 4 RK4 substeps) losing rotor 1 at 2 s (`simulate_batch`, rayon), on the truth and on
+//! `Sensing::default()` (ICM-42688-P at 500 Hz, OptiTrack at 240 Hz, DShot rotor speeds, the
+//! 15-state error-state Kalman filter), the median of 9 batches each, truth and sensors
+//! alternating so both see the same load, in process CPU time (`clock_gettime`, ns resolution;
+//! a batch is 60-200 ms of it) and in wall time, and the ratio of their speeds. INDI, which also
+//! reads the raw gyro, accelerometer and rotor speeds, spins beyond the gyro's range after the
+//! loss (the estimator's clamping path runs); Ke's passive law reads the state.
 //!
-//! - `closed_loop/{ke,indi}/{truth,mocap}`: a batch of 4 such flights (`simulate_batch`, rayon),
-//!   throughput in control steps.
+//! - `closed_loop/{ke,indi}/{truth,mocap}`: a batch of 4 such flights, throughput in control
+//!   steps.
 
 use std::hint::black_box;
 
@@ -22,16 +26,14 @@ use rfcore::control::indi::{DetectedFailure, IndiController, IndiGains, Setpoint
 use rfcore::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use rfcore::control::Controller;
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag};
-use rfcore::flight::simulation::{
-    simulate, simulate_batch, BatchRun, RotorFault, Sensing, SimulationConfig,
-};
+use rfcore::flight::simulation::{simulate_batch, BatchRun, RotorFault, Sensing, SimulationConfig};
 use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::RigidBodyState;
 use rfcore::Cancel;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
-use cpu_time::median_pair_s;
+use cpu_time::median_pair;
 
 const DT_S: f64 = 1.0 / 400.0;
 const DURATION_S: f64 = 10.0;
@@ -121,29 +123,8 @@ fn config(sensing: Option<Sensing>) -> SimulationConfig {
     c
 }
 
-fn flight(s: &Setup, law: Law, config: &SimulationConfig) -> usize {
-    let (mut c, hover) = controller(law);
-    let mut actuators = s.actuators.clone();
-    actuators.settle(&hover).expect("settle");
-    let run = simulate(
-        &s.vehicle,
-        actuators,
-        c.as_mut(),
-        &[1.0; 4],
-        &s.faults,
-        s.start,
-        config,
-    )
-    .expect("flight");
-    assert!(
-        run.divergence.is_none(),
-        "the benched flight must not diverge"
-    );
-    run.states.len()
-}
-
-fn batch(s: &Setup, law: Law, config: &SimulationConfig) -> usize {
-    let runs = (0..4)
+fn batch(s: &Setup, law: Law, config: &SimulationConfig, runs: usize) -> usize {
+    let runs = (0..runs)
         .map(|_| {
             let (controller, hover) = controller(law);
             BatchRun {
@@ -163,6 +144,10 @@ fn batch(s: &Setup, law: Law, config: &SimulationConfig) -> usize {
         &Cancel::never(),
     )
     .expect("batch");
+    assert!(
+        runs.iter().all(|r| r.divergence.is_none()),
+        "the benched flights must not diverge"
+    );
     runs.iter().map(|r| r.states.len()).sum()
 }
 
@@ -171,22 +156,27 @@ fn bench_sensing(c: &mut Criterion) {
     let truth = config(None);
     let mocap = config(Some(Sensing::default()));
     let steps = (DURATION_S / DT_S) as u64;
+    const SUMMARY_RUNS: usize = 16;
     for (name, law) in [("ke", Law::Ke), ("indi", Law::Indi)] {
-        let (truth_s, mocap_s) = median_pair_s(
+        let (truth_t, mocap_t) = median_pair(
             9,
             || {
-                black_box(flight(&s, law, &truth));
+                black_box(batch(&s, law, &truth, SUMMARY_RUNS));
             },
             || {
-                black_box(flight(&s, law, &mocap));
+                black_box(batch(&s, law, &mocap, SUMMARY_RUNS));
             },
         );
         println!(
-            "sensing summary, {name}: 10 s flight (4000 control steps, rotor 1 lost at 2 s) on \
-             the truth {:.1} ms, on mocap sensors + estimator {:.1} ms; speed / truth speed = {:.2}",
-            truth_s * 1e3,
-            mocap_s * 1e3,
-            truth_s / mocap_s
+            "sensing summary, {name}: batch of {SUMMARY_RUNS} flights of 10 s (4000 control steps \
+             each, rotor 1 lost at 2 s), CPU time on the truth {:.1} ms, on mocap sensors + \
+             estimator {:.1} ms: speed / truth speed = {:.2} (wall {:.1} / {:.1} ms: {:.2})",
+            truth_t.cpu_s * 1e3,
+            mocap_t.cpu_s * 1e3,
+            truth_t.cpu_s / mocap_t.cpu_s,
+            truth_t.wall_s * 1e3,
+            mocap_t.wall_s * 1e3,
+            truth_t.wall_s / mocap_t.wall_s
         );
     }
 
@@ -195,10 +185,10 @@ fn bench_sensing(c: &mut Criterion) {
     group.sample_size(10);
     for (name, law) in [("ke", Law::Ke), ("indi", Law::Indi)] {
         group.bench_function(format!("{name}/truth"), |b| {
-            b.iter(|| batch(&s, law, &truth))
+            b.iter(|| batch(&s, law, &truth, 4))
         });
         group.bench_function(format!("{name}/mocap"), |b| {
-            b.iter(|| batch(&s, law, &mocap))
+            b.iter(|| batch(&s, law, &mocap, 4))
         });
     }
     group.finish();
