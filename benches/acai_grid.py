@@ -24,7 +24,8 @@ Variants (all compute Du's Theorem 3 / eq. (13) with the box [0, K] and G = [m g
 Both NumPy variants are checked against the Rust values on the grid (1e-9 absolute where finite,
 identical -inf pattern) before anything is timed.
 
-Threads: (a) uses every core rayon sees; NumPy's batched SVD is a single-threaded loop over
+Threads: (a) uses every core rayon sees, and on x86-64 with AVX2 evaluates 8 points per pass in 4-wide
+registers (`analysis::facet_lanes`, the same values bit for bit as the scalar path); NumPy's batched SVD is a single-threaded loop over
 matrices, and the matmuls in (c) are too small to gain much from BLAS threads. Environment
 variables such as OPENBLAS_CORETYPE / OPENBLAS_L2_SIZE / OPENBLAS_NUM_THREADS are deliberately left
 as the environment sets them (this script neither sets nor clears them): the figures in
@@ -53,6 +54,7 @@ ATOL = 1e-9
 RTOL = rf.RANK_RTOL
 TARGET_RUST_EVALS_PER_S = 2_000_000
 TARGET_RATIO_VS_B = 50.0
+TARGET_RATIO_VS_C = 15.0  # issue 32: the facet evaluation in SIMD lanes over points
 LARGE_N = 1_000_000
 ROUNDS = 8
 
@@ -192,6 +194,15 @@ def check(name: str, got: np.ndarray, ref: np.ndarray) -> float:
     return worst
 
 
+def avx2() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as handle:
+            flags = next((line for line in handle if line.startswith("flags")), "")
+    except OSError:
+        return "unknown"
+    return "yes" if " avx2" in flags else "no (the portable form runs)"
+
+
 def verdict(ok: bool) -> str:
     return "PASS" if ok else "MISS"
 
@@ -223,6 +234,7 @@ def main() -> None:
           + f", os.cpu_count() = {cores_os}, usable cores = {cores_avail}")
     print(f"python {platform.python_version()}, numpy {np.__version__}, rotorfault {rf.__version__}")
     print(f"thread/BLAS env (left as-is): {env or 'none set'}")
+    print(f"CPU has AVX2 (the Rust facet kernel's 4-lane form, chosen at run time): {avx2()}")
     load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print()
     controllable = np.count_nonzero(rust > 0.0)
@@ -264,6 +276,8 @@ def main() -> None:
     ratio_c = median["c"] / t_rust
     print(f"target: Rust >= {TARGET_RUST_EVALS_PER_S:,} evals/s: {rust_rate:,.0f} -> {verdict(rust_rate >= TARGET_RUST_EVALS_PER_S)}")
     print(f"target: Rust >= {TARGET_RATIO_VS_B:g}x NumPy (b): {ratio_b:.1f}x -> {verdict(ratio_b >= TARGET_RATIO_VS_B)}")
+    print(f"target: Rust >= {TARGET_RATIO_VS_C:g}x NumPy (c), the same algorithm: {ratio_c:.1f}x -> "
+          f"{verdict(ratio_c >= TARGET_RATIO_VS_C)} (from the minima: {min(samples['c']) / min(samples['a']):.1f}x)")
     print(f"split:  algorithm (b)/(c) = {median['b'] / median['c']:.1f}x, "
           f"language + {cores_avail} threads (c)/(a) = {ratio_c:.1f}x")
     print()
@@ -289,7 +303,7 @@ def main() -> None:
         figure("rotorfault.acai_batch, Fig. 4 grid", rust_rate, "evaluations/s", baseline="NumPy, the paper's per-point procedure (batched SVD)",
                baseline_value=n / median["b"], ratio=ratio_b, target=f">= {TARGET_RUST_EVALS_PER_S:,.0f}/s and >= {TARGET_RATIO_VS_B:g}x"),
         figure("rotorfault.acai_batch, Fig. 4 grid, time", t_rust * 1e3, "ms", baseline="NumPy with rotorfault's algorithm (normals once per geometry)",
-               baseline_value=median["c"] * 1e3, ratio=ratio_c),
+               baseline_value=median["c"] * 1e3, ratio=ratio_c, target=f">= {TARGET_RATIO_VS_C:g}x"),
         figure(f"rotorfault.acai_batch, {LARGE_N:,} random efficiency vectors", LARGE_N / t_big, "evaluations/s"),
     ])
 

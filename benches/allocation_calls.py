@@ -15,6 +15,12 @@ beyond it so bounds are active). Timed with ``time.perf_counter`` over many call
     batch binding and its arrays), what every call paid before the single-vector binding (which
     also rebuilt the solver per call: issue 15 measured 9 us and 25 us for (a) and (b) then).
 
+The floor of the call (issue 32): ``AllocationProblem.allocate_one_floor(u)``, a core method that
+takes the same argument and builds the same result object without the solve, so (floor) is what
+any call of this shape costs from Python; (core) is ``allocate_one(u)`` called on the core object
+directly (the floor plus the solve), and (a) - (core) is the Python wrapper (``Allocator.allocate``'s
+checks and its ``Allocation``). The lowest ratio this call shape can reach is (floor + solve) / solve.
+
 Also printed: the solve alone (``ActiveSetSolver::solve_unchecked`` with its certificate, timed
 inside Rust: no Python call, best of 7 runs like the others), so the call overhead is (a) minus
 it, and the ratios (a) / solve and (a') / solve, (a') being (a) with its commands read
@@ -85,6 +91,7 @@ def main() -> None:
     print(header)
     print("-" * len(header))
     ok = True
+    floors: dict[str, tuple[float, float, float, float]] = {}
     for label, u in cases.items():
         exact = allocator.allocate(u)
         reference = python_clarabel(allocator.matrix, w, allocator.lower, allocator.upper, np.asarray(u))
@@ -92,11 +99,15 @@ def main() -> None:
         f_ref, _ = allocator.objective(u, reference)
         assert exact.status == "optimal" and f_exact <= f_ref + 1e-12 * max(f_ref, 1.0), (label, f_exact, f_ref)
         # The Rust solve and the Python call, interleaved run by run (the machine is shared).
-        solve = a = a_read = float("inf")
+        solve = a = a_read = floor = core_call = float("inf")
+        core = allocator._core
         for _ in range(7):
             solve = min(solve, float(time_per_solve(allocator, [u], repeats=20_000)[0]))
             a = min(a, per_call(lambda: allocator.allocate(u), 20_000, runs=1))
             a_read = min(a_read, per_call(lambda: allocator.allocate(u).commands, 20_000, runs=1))
+            floor = min(floor, per_call(lambda: core.allocate_one_floor(u), 20_000, runs=1))
+            core_call = min(core_call, per_call(lambda: core.allocate_one(u), 20_000, runs=1))
+        floors[label] = (solve, floor, core_call, a)
         b = per_call(lambda: rf.allocate(frame, u, weights=WEIGHTS), 10_000)
         c = per_call(lambda: rf.allocate(frame, u), 10_000)
         e = per_call(lambda: allocator.allocate([u]), 10_000)
@@ -106,6 +117,11 @@ def main() -> None:
             f"{e * 1e6:>13.2f} {d * 1e6:>12.1f} {a / solve:>14.2f}x {a_read / solve:>15.2f}x {d / a:>12.0f}x"
         )
         ok &= a <= TARGET_ALLOCATOR_S and b <= TARGET_ONE_LINE_S and a / solve <= TARGET_OVER_RUST
+    print("\nwhere the time of (a) goes (us per call; the floor: the same argument in and result object out, no solve):")
+    print(f"{'virtual control':<16} {'solve':>7} {'floor':>7} {'core call':>10} {'wrapper':>8} {'(a)':>7} {'(a)/solve':>10} {'best possible':>14}")
+    for label, (solve, floor, core_call, a) in floors.items():
+        print(f"{label:<16} {solve * 1e6:7.3f} {floor * 1e6:7.3f} {core_call * 1e6:10.3f} {(a - core_call) * 1e6:8.3f} "
+              f"{a * 1e6:7.3f} {a / solve:9.2f}x {(floor + solve) / solve:13.2f}x")
     print(
         f"\ntargets: Allocator.allocate <= {TARGET_ALLOCATOR_S * 1e6:.0f} us and <= {TARGET_OVER_RUST:.0f}x the Rust solve, "
         f"rf.allocate(airframe) <= {TARGET_ONE_LINE_S * 1e6:.0f} us per call: " + ("met" if ok else "NOT met")

@@ -331,6 +331,18 @@ def test_dask_local_n_address(tmp_path: Path, pnpnpn: rf.Airframe) -> None:
     assert result.table.equals(acai_scan(pnpnpn, _grid((1, 2))).table)
 
 
+def test_local_n_workers_share_the_cores(monkeypatch: pytest.MonkeyPatch) -> None:
+    """"local:N" gives each worker process its share of the cores for the Rust batches (N pools
+    of every core would fight over them: benches/scale_out.py); a value the caller set is kept."""
+    from rotorfault.studies.backends import worker_env
+
+    monkeypatch.delenv("RAYON_NUM_THREADS", raising=False)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda _pid: set(range(8)), raising=False)
+    assert [worker_env(n) for n in (1, 2, 3, 16)] == [{"RAYON_NUM_THREADS": v} for v in ("8", "4", "2", "1")]
+    monkeypatch.setenv("RAYON_NUM_THREADS", "3")
+    assert worker_env(2) == {}
+
+
 # -- design search ------------------------------------------------------------------------------
 
 

@@ -15,8 +15,8 @@ use rfcore::allocation::clarabel::{
     ClarabelSettings,
 };
 use rfcore::allocation::{
-    allocate_all, allocate_many, fallback_count, Allocation, AllocationProblem, Certificate,
-    Method, SolvedBy, MAX_ACTUATORS, MAX_VIRTUAL,
+    allocate_all, allocate_many, fallback_count, Allocation, AllocationProblem, AllocationStatus,
+    Certificate, Method, SolvedBy, MAX_ACTUATORS, MAX_VIRTUAL,
 };
 use rfcore::analysis::ControlAxes;
 use rfcore::error::RfError;
@@ -335,6 +335,35 @@ impl PyAllocationProblem {
             virtual_control: u_c,
             report,
         }))
+    }
+
+    /// The call floor of `allocate_one`, for `benches/allocation_calls.py`: the same argument
+    /// extraction and the same result object, without the solve. Not an allocation: the
+    /// commands are zero and the report says `iteration-limit` with a certificate that fails.
+    fn allocate_one_floor(&self, virtual_control: &Bound<'_, PyAny>) -> Option<PySingleAllocation> {
+        let (axes, actuators) = (self.inner.virtual_dimension(), self.inner.actuator_count());
+        let mut u_c = [0.0; MAX_VIRTUAL];
+        if !exact_floats(virtual_control, &mut u_c[..axes]) {
+            return None;
+        }
+        Some(PySingleAllocation {
+            actuators,
+            axes,
+            commands: [0.0; MAX_ACTUATORS],
+            achieved: [0.0; MAX_VIRTUAL],
+            virtual_control: u_c,
+            report: SolveReport {
+                status: AllocationStatus::IterationLimit,
+                iterations: 0,
+                certificate: Certificate {
+                    stationarity: f64::INFINITY,
+                    complementarity: f64::INFINITY,
+                    bound_violation: f64::INFINITY,
+                    tolerance: 0.0,
+                },
+                solved_by: SolvedBy::ActiveSet,
+            },
+        })
     }
 
     /// The bounds after folding in a rate limit (see `AllocationProblem::rate_limited`).

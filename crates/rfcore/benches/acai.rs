@@ -21,7 +21,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use rfcore::analysis::{AcaiFormula, ControlAxes, ControllabilityAnalysis, FacetNormals};
+use rfcore::analysis::{AcaiFormula, ControlAxes, ControllabilityAnalysis, FacetNormals, LanePath};
 use rfcore::{Airframe, Cancel};
 
 /// Du's Fig. 4 grid: eta1, eta2, eta5 (1-based) in {0, 0.04, ..., 1}, the other rotors at 1.
@@ -125,6 +125,43 @@ fn bench_acai(c: &mut Criterion) {
                 .unwrap()
         })
     });
+
+    // The facet evaluation over the grid on one thread: the scalar path row by row, then the
+    // lanes kernel in each compiled form this CPU runs (the batch's path). Ratios: scalar / lanes.
+    let (normals, f_min, f_max, g) = hot_path(&hexa);
+    let mut eq13 = vec![0.0; rows];
+    let mut margin = vec![0.0; rows];
+    group.bench_function("rows_scalar/fig4-grid", |b| {
+        b.iter(|| {
+            for (out, eta) in eq13.iter_mut().zip(grid.chunks_exact(6)) {
+                *out = normals.evaluate(black_box(eta), &f_min, &f_max, &g).eq13;
+            }
+            black_box(&eq13);
+        })
+    });
+    for path in [LanePath::Portable, LanePath::Avx2] {
+        if !path.is_available() {
+            continue;
+        }
+        normals.evaluate_rows(&grid, &f_min, &f_max, &g, path, &mut eq13, &mut margin);
+        assert_eq!(eq13, values, "{path:?}");
+        group.bench_function(
+            format!("rows_lanes_{path:?}/fig4-grid").to_lowercase(),
+            |b| {
+                b.iter(|| {
+                    normals.evaluate_rows(
+                        black_box(&grid),
+                        &f_min,
+                        &f_max,
+                        &g,
+                        path,
+                        &mut eq13,
+                        &mut margin,
+                    );
+                })
+            },
+        );
+    }
 
     group.finish();
 }

@@ -10,6 +10,7 @@ come back to the caller in a known order, so the caller stays the only writer.
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
@@ -64,13 +65,24 @@ def dask_client(dask: Client | str) -> Iterator[Client]:
             workers = 0
         if workers < 1:
             raise ValueError(f"dask: 'local:N' needs a positive worker count N, got {dask!r}")
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, Client(cluster) as client:  # type: ignore[no-untyped-call]
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0", env=worker_env(workers)) as cluster, Client(cluster) as client:  # type: ignore[no-untyped-call]
             yield client
         return
     if "://" not in dask:
         raise ValueError(f"dask: expected a scheduler address like 'tcp://host:8786' or 'local:N', got {dask!r}")
     with Client(dask) as client:  # type: ignore[no-untyped-call]
         yield client
+
+
+def worker_env(workers: int) -> dict[str, str]:
+    """The environment of ``"local:N"``'s worker processes: each runs the Rust batches on its share
+    of this machine's cores (``RAYON_NUM_THREADS``), so N workers do not start N pools of every
+    core each and fight over them (measured in ``benches/scale_out.py``). A value the caller set
+    is kept. Thread counts never change a result (every run is computed alone)."""
+    if "RAYON_NUM_THREADS" in os.environ:
+        return {}
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return {"RAYON_NUM_THREADS": str(max(1, cores // workers))}
 
 
 def run_local(task: ChunkTask, pending: Iterable[ChunkSpec], accept: Callable[[ChunkSpec, Any], None], advance: Callable[[int], None]) -> None:

@@ -83,6 +83,8 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::analysis::combinations::{binomial, Combinations};
+use crate::analysis::cross_product::generalized_cross_product;
+use crate::analysis::facet_lanes::{evaluate_rows, FacetTable, LanePath};
 use crate::cancel::{rows_per_check, Cancel, GROUPS_PER_CHECK};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
@@ -544,8 +546,8 @@ impl FacetNormals {
     ) -> Result<Vec<f64>> {
         self.check_batch(etas, f_min, f_max, g)?;
         let mut acai = vec![0.0; etas.len() / self.m];
-        self.for_each_row(etas, &mut acai, cancel, |eta, out| {
-            *out = self.evaluate(eta, f_min, f_max, g).get(formula);
+        self.for_each_block(etas, f_min, f_max, g, &mut acai, cancel, |values, out| {
+            *out = values.get(formula);
         })?;
         Ok(acai)
     }
@@ -562,31 +564,118 @@ impl FacetNormals {
     ) -> Result<AcaiBatch> {
         self.check_batch(etas, f_min, f_max, g)?;
         let mut rows = vec![(0.0, HoverPoint::Inside); etas.len() / self.m];
-        self.for_each_row(etas, &mut rows, cancel, |eta, out| {
-            let values = self.evaluate(eta, f_min, f_max, g);
+        self.for_each_block(etas, f_min, f_max, g, &mut rows, cancel, |values, out| {
             *out = (values.get(formula), values.hover());
         })?;
         let (acai, hover) = rows.into_iter().unzip();
         Ok(AcaiBatch { acai, hover })
     }
 
-    /// Runs `row(eta, out)` for every row of `etas` into `out` (one entry per row), in parallel
-    /// blocks of at most [`ROWS_PER_BLOCK`] rows and at most [`rows_per_check`] rows, checking
-    /// `cancel` before each block.
-    fn for_each_row<T: Send>(
+    /// Each group's `xi_j . G` and zero threshold: what [`FacetNormals::evaluate`] forms per
+    /// point but does not depend on the efficiencies (same expressions, so the same bits).
+    fn per_group_constants(&self, f_min: &[f64], f_max: &[f64], g: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (n, m) = (self.n, self.m);
+        let coarse_zero = ZERO_RTOL
+            * ((0..m)
+                .map(|k| self.column_norms[k] * 0.5 * (f_min[k].abs() + f_max[k].abs()))
+                .sum::<f64>()
+                + scaled_norm(g.iter()));
+        let along_g: Vec<f64> = self
+            .normals
+            .chunks_exact(n)
+            .map(|normal| dot(normal, g))
+            .collect();
+        let zero_snap = self
+            .abs_projections
+            .chunks_exact(m)
+            .zip(&along_g)
+            .map(|(abs_projections, along)| {
+                let size: f64 = abs_projections
+                    .iter()
+                    .zip(f_min.iter().zip(f_max))
+                    .map(|(p, (lo, hi))| p * 0.5 * (lo.abs() + hi.abs()))
+                    .sum::<f64>()
+                    + along.abs();
+                // |d| <= coarse and |d| <= ZERO_RTOL size, as `evaluate` tests it.
+                coarse_zero.min(ZERO_RTOL * size)
+            })
+            .collect();
+        (along_g, zero_snap)
+    }
+
+    /// [`FacetNormals::evaluate`] for every row of `etas` (row-major, `m` per row) into `eq13` and
+    /// `facet_margin` (one per row) on one thread, through the lanes kernel in the compiled form
+    /// `path` (bit for bit the same values). Unchecked like `evaluate`; the batches' hot path.
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_rows(
         &self,
         etas: &[f64],
+        f_min: &[f64],
+        f_max: &[f64],
+        g: &[f64],
+        path: LanePath,
+        eq13: &mut [f64],
+        facet_margin: &mut [f64],
+    ) {
+        let (along_g, zero_snap) = self.per_group_constants(f_min, f_max, g);
+        let table = self.table(&along_g, &zero_snap, f_min, f_max);
+        evaluate_rows(&table, etas, eq13, facet_margin, path);
+    }
+
+    fn table<'a>(
+        &'a self,
+        along_g: &'a [f64],
+        zero_snap: &'a [f64],
+        f_min: &'a [f64],
+        f_max: &'a [f64],
+    ) -> FacetTable<'a> {
+        FacetTable {
+            m: self.m,
+            groups: &self.groups,
+            group_size: self.n - 1,
+            projections: &self.projections,
+            abs_projections: &self.abs_projections,
+            along_g,
+            zero_snap,
+            f_min,
+            f_max,
+        }
+    }
+
+    /// Evaluates every row of `etas` on the lanes kernel ([`facet_lanes`]) and hands each row's
+    /// values to `row(values, out)` (one `out` per row), in parallel blocks of at most
+    /// [`ROWS_PER_BLOCK`] rows and at most [`rows_per_check`] rows, checking `cancel` before each.
+    #[allow(clippy::too_many_arguments)]
+    fn for_each_block<T: Send>(
+        &self,
+        etas: &[f64],
+        f_min: &[f64],
+        f_max: &[f64],
+        g: &[f64],
         out: &mut [T],
         cancel: &Cancel,
-        row: impl Fn(&[f64], &mut T) + Sync,
+        row: impl Fn(AcaiValues, &mut T) + Sync,
     ) -> Result<()> {
+        let (along_g, zero_snap) = self.per_group_constants(f_min, f_max, g);
+        let table = self.table(&along_g, &zero_snap, f_min, f_max);
+        let path = LanePath::detect();
         let block = rows_per_check(self.group_count() * self.m).min(ROWS_PER_BLOCK);
         out.par_chunks_mut(block)
             .zip(etas.par_chunks(block * self.m))
             .try_for_each(|(out, etas)| {
                 cancel.check()?;
-                for (o, eta) in out.iter_mut().zip(etas.chunks_exact(self.m)) {
-                    row(eta, o);
+                let mut eq13 = [0.0; ROWS_PER_BLOCK];
+                let mut facet_margin = [0.0; ROWS_PER_BLOCK];
+                let rows = out.len();
+                evaluate_rows(
+                    &table,
+                    etas,
+                    &mut eq13[..rows],
+                    &mut facet_margin[..rows],
+                    path,
+                );
+                for ((o, &eq13), &facet_margin) in out.iter_mut().zip(&eq13).zip(&facet_margin) {
+                    row(AcaiValues { eq13, facet_margin }, o);
                 }
                 Ok(())
             })
@@ -693,81 +782,12 @@ pub fn acai_from_matrix_cancellable(
         .result(formula))
 }
 
-/// Writes into `xi` the generalised cross product of the columns `group` (n - 1 of them) of `b`:
-/// `xi_r = (-1)^r det(B_group without row r)`, orthogonal to every column of the group, with norm
-/// the (n-1)-volume they span.
-fn generalized_cross_product(b: &DMatrix<f64>, group: &[usize], minor: &mut [f64], xi: &mut [f64]) {
-    let n = xi.len();
-    let d = n - 1;
-    for (skip, component) in xi.iter_mut().enumerate() {
-        for (row_out, r) in (0..n).filter(|&r| r != skip).enumerate() {
-            for (c, &k) in group.iter().enumerate() {
-                minor[row_out * d + c] = b[(r, k)];
-            }
-        }
-        let sign = if skip % 2 == 0 { 1.0 } else { -1.0 };
-        *component = sign * determinant(&mut minor[..d * d], d);
-    }
-}
-
-/// Determinant of a row-major `d x d` matrix: closed forms up to 3 x 3, partial-pivoting
-/// elimination beyond (the buffer is overwritten).
-fn determinant(a: &mut [f64], d: usize) -> f64 {
-    match d {
-        0 => 1.0,
-        1 => a[0],
-        2 => a[0] * a[3] - a[1] * a[2],
-        3 => {
-            a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
-                + a[2] * (a[3] * a[7] - a[4] * a[6])
-        }
-        _ => {
-            let mut det = 1.0;
-            for col in 0..d {
-                let pivot = (col..d)
-                    .max_by(|&x, &y| a[x * d + col].abs().total_cmp(&a[y * d + col].abs()))
-                    .unwrap_or(col);
-                if a[pivot * d + col] == 0.0 {
-                    return 0.0;
-                }
-                if pivot != col {
-                    for c in 0..d {
-                        a.swap(pivot * d + c, col * d + c);
-                    }
-                    det = -det;
-                }
-                let p = a[col * d + col];
-                det *= p;
-                for r in col + 1..d {
-                    let factor = a[r * d + col] / p;
-                    for c in col..d {
-                        a[r * d + c] -= factor * a[col * d + c];
-                    }
-                }
-            }
-            det
-        }
-    }
-}
+#[cfg(test)]
+mod lanes_tests;
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn cross_product_is_orthogonal_in_five_dimensions() {
-        let b = DMatrix::from_fn(5, 4, |r, c| {
-            ((r * 7 + c * 3) % 5) as f64 + 0.1 * (r as f64) - 0.3 * c as f64
-        });
-        let mut minor = vec![0.0; 16];
-        let mut xi = vec![0.0; 5];
-        generalized_cross_product(&b, &[0, 1, 2, 3], &mut minor, &mut xi);
-        assert!(xi.iter().any(|v| v.abs() > 1e-6));
-        for c in 0..4 {
-            let dot: f64 = (0..5).map(|r| xi[r] * b[(r, c)]).sum();
-            assert!(dot.abs() < 1e-12, "column {c}: {dot}");
-        }
-    }
 
     #[test]
     fn box_in_one_dimension_is_distance_to_nearest_end() {
@@ -947,15 +967,5 @@ mod tests {
         let tall = DMatrix::from_element(200_000, 1, 1.0);
         let err = FacetNormals::new(&tall).unwrap_err();
         assert!(err.to_string().contains("at most 12 rows"), "{err}");
-    }
-
-    #[test]
-    fn determinant_by_elimination_matches_closed_form() {
-        let m = [
-            2.0, -1.0, 0.5, 3.0, 1.0, 4.0, -2.0, 0.0, 1.5, 2.5, -1.0, 0.0, 1.0, 0.0, 2.0, 1.0,
-        ];
-        let expected = DMatrix::from_row_slice(4, 4, &m).determinant();
-        let mut a = m;
-        assert!((determinant(&mut a, 4) - expected).abs() < 1e-12);
     }
 }

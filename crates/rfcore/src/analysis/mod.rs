@@ -7,6 +7,8 @@
 pub mod acai;
 pub mod combinations;
 pub mod controllability;
+mod cross_product;
+pub mod facet_lanes;
 pub mod rank;
 pub mod relaxed_hover;
 pub mod text;
@@ -20,4 +22,5 @@ pub use controllability::{
     failure_table, is_fully_actuated, ControlAxes, ControllabilityAnalysis, ControllabilityReport,
     FailureCase, Verdict,
 };
+pub use facet_lanes::LanePath;
 pub use rank::{numerical_rank, scale_free_rank, svd_iteration_cap};
