@@ -19,12 +19,15 @@ the failure and that flight's verdict stands (a quadrotor without two opposing r
 spins up towards k_mu m g / k_r, 275 rad/s on Wang's frames, past the simulator's 200 rad/s
 body-rate limit 23 s after the failure, while holding its place within micrometres at 10 s).
 Every controller is told the failure (which rotors, when), designed
-on the vehicle it flies:
+on the vehicle it flies (each builder gets a ``FlightCase``: the vehicle, the failed rotors,
+certify's own best relaxed hover of the case, and the healthy vehicle's hover LQR, designed once
+per vehicle):
 
 - ``linear-feedback``: the hover LQR (:func:`rotorfault.control.lqr_hover`) of the failed vehicle
   (refused where its ACAI is <= 0: static hover with all four axes lost);
 - ``relaxed-hover-feedback``: the healthy vehicle's hover LQR until the failure, then the LQR about
-  the best relaxed hover (the failure-time switch of :class:`rotorfault.control.RelaxedHoverFeedback`);
+  the best relaxed hover, the one certify found (the failure-time switch of
+  :class:`rotorfault.control.RelaxedHoverFeedback`);
   on a vehicle whose healthy hover no LQR holds (``wang-fixed-pitch``: no yaw control even
   healthy) there is no healthy design and the relaxed hover LQR flies from the start;
 - ``indi-controller``: INDI told of the failed rotors;
@@ -37,6 +40,7 @@ has not held the case.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -51,6 +55,7 @@ from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sim
 from ..flight.outcomes import verdict_of
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
+from ..analysis.relaxed_hover import RelaxedHoverSolution
 from .certify import RelaxedHoverVerdict, certify, describe_relaxed_hover
 from .deciding import CampaignVehicle, vehicle
 
@@ -209,51 +214,71 @@ def _simulator(v: CampaignVehicle, airframe: Airframe) -> Simulator:
     return Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=_drag(v), actuator=_actuator(v))
 
 
-def _lqr(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+@dataclass(frozen=True)
+class FlightCase:
+    """One failure case as a controller's builder sees it: the ``vehicle``, its ``failed`` rotors
+    (1-based), ``relaxed_hover`` (certify's best relaxed hover of the failed vehicle, ``None``
+    where none a linear feedback can hold) and ``healthy_lqr`` (the healthy vehicle's hover LQR,
+    designed at most once per vehicle; it returns ``None`` where no LQR holds the healthy hover)."""
+
+    vehicle: CampaignVehicle
+    failed: tuple[int, ...]
+    relaxed_hover: RelaxedHoverSolution | None
+    healthy_lqr: Callable[[], Any]
+
+
+def _healthy_lqr(v: CampaignVehicle) -> Any:
     from ..control.lqr import lqr_hover
 
-    return lqr_hover(_simulator(v, v.airframe.with_failed_rotors(failed)), position=HOVER_M)
+    try:
+        return lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
+    except ValueError:  # no healthy-vehicle design (module notes)
+        return None
 
 
-def _relaxed(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
-    from ..analysis.relaxed_hover import relaxed_hover
+def _lqr(case: FlightCase) -> Any:
     from ..control.lqr import lqr_hover
+
+    v = case.vehicle
+    return lqr_hover(_simulator(v, v.airframe.with_failed_rotors(case.failed)), position=HOVER_M)
+
+
+def _relaxed(case: FlightCase) -> Any:
     from ..control.relaxed_hover import RelaxedHoverFeedback
 
-    airframe = v.airframe.with_failed_rotors(failed)
-    best = relaxed_hover(airframe, drag=_drag(v), actuator=_actuator(v)).best
+    v, best = case.vehicle, case.relaxed_hover
     if best is None:
         raise ValueError("no relaxed hover a linear feedback can hold")
-    try:
-        healthy = lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
-    except ValueError:  # no healthy-vehicle design (module notes)
+    airframe = v.airframe.with_failed_rotors(case.failed)
+    healthy = case.healthy_lqr()
+    if healthy is None:
         return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m)
     return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
                                 before_failure=healthy, failure_time_s=FAILURE_TIME_S)
 
 
-def _indi(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _indi(case: FlightCase) -> Any:
     from ..control import IndiController
 
-    return IndiController(v.airframe, failures=[RotorFault(r, FAILURE_TIME_S, 0.0) for r in failed], position=HOVER_M)
+    return IndiController(case.vehicle.airframe, failures=[RotorFault(r, FAILURE_TIME_S, 0.0) for r in case.failed], position=HOVER_M)
 
 
-def _ke_robust(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _ke_robust(case: FlightCase) -> Any:
     from ..control.ke import UniformPassiveFtc, preset
 
-    return UniformPassiveFtc(v.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
+    return UniformPassiveFtc(case.vehicle.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
 
 
-def _lanzon(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _lanzon(case: FlightCase) -> Any:
     from .deciding import CONTROLLERS
 
-    if v.name != "lanzon-quadrotor" or failed != (2,):
+    if case.vehicle.name != "lanzon-quadrotor" or case.failed != (2,):
         raise LookupError("Lanzon's design: the Lanzon quadrotor with rotor 2 failed only")
-    return CONTROLLERS["lanzon-controller"].build(v, [])
+    return CONTROLLERS["lanzon-controller"].build(case.vehicle, [])
 
 
 #: The controllers flown through every case (registry names), each built for the case's failure.
-CONTROLLERS: dict[str, Callable[[CampaignVehicle, tuple[int, ...]], Any]] = {
+CONTROLLERS: dict[str, Callable[[FlightCase], Any]] = {
     "linear-feedback": _lqr,
     "relaxed-hover-feedback": _relaxed,
     "indi-controller": _indi,
@@ -297,14 +322,16 @@ def certify_against_flights(
     partial: list[tuple[CampaignVehicle, Any, dict[str, CaseFlight]]] = []
     for v in vehicles:
         cert = certify(v.airframe, max_failed=max_failed, spinning=True, drag=_drag(v), actuator=_actuator(v))
+        healthy_lqr = functools.cache(functools.partial(_healthy_lqr, v))  # one design per vehicle
         for case in cert.cases:
             if not case.failed:
                 continue
             assert case.relaxed_hover is not None  # spinning=True
             flights: dict[str, CaseFlight] = {}
+            built = FlightCase(v, case.failed, case.relaxed_hover.solution, healthy_lqr)
             for name in names:
                 try:
-                    controller = CONTROLLERS[name](v, case.failed)
+                    controller = CONTROLLERS[name](built)
                 except LookupError as exc:
                     flights[name] = CaseFlight(name, "not-applicable", str(exc))
                     continue
