@@ -44,9 +44,14 @@ def test_a_quadrotor_without_a_rotor_survives_by_spinning(ke_certificate: Certif
         assert verdict is not None
         if best is None:
             assert verdict.hover == "no" and math.isnan(verdict.spin_rate_rad_s) and verdict.carrying == ()
+            assert verdict.solution is None
         else:
             assert (verdict.spin_rate_rad_s, verdict.thrust_margin_n, verdict.carrying) == (
                 best.spin_rate_rad_s, best.thrust_margin_n, tuple(best.carrying))
+            # The verdict carries the solution itself (what the relaxed hover LQR is designed on).
+            assert verdict.solution is not None and list(verdict.solution.thrust_n) == list(best.thrust_n)
+            assert list(verdict.solution.body_rate_rad_s) == list(best.body_rate_rad_s)
+            assert [list(r) for r in verdict.solution.linear_a] == [list(r) for r in best.linear_a]
     assert ke_certificate.failing("single") and not ke_certificate.failing_spinning("single")
     headers, rows = rows_for_display(ke_certificate)
     assert headers[-1] == "relaxed hover"
@@ -56,6 +61,8 @@ def test_a_quadrotor_without_a_rotor_survives_by_spinning(ke_certificate: Certif
 def test_the_json_has_no_nan_and_the_static_certificate_is_unchanged(ke_certificate: Certificate) -> None:
     data = ke_certificate.to_dict()
     json.dumps(data, allow_nan=False)
+    assert all("solution" not in c["relaxed_hover"] for c in data["cases"])
+    assert ke_certificate.cases[1].relaxed_hover.solution is not None  # type: ignore[union-attr]  # kept on the object
     static = certify(rf.Airframe.preset("ke-quadcopter"))
     assert all(c.relaxed_hover is None for c in static.cases)
     assert [(c.failed, c.hover, c.acai) for c in static.cases] == [(c.failed, c.hover, c.acai) for c in ke_certificate.cases]

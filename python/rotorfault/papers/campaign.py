@@ -75,7 +75,10 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
         f"Each controller told the failure, which comes at {A.FAILURE_TIME_S:g} s from hover; verdict over the last {WINDOW_S:g} s "
         f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s (a run holding its place with its spin not settled by then flown on to "
         f"{A.FAILURE_TIME_S + A.SETTLE_AFTER_FAILURE_S:g} s, that verdict standing): holds = {VERDICT_MEANINGS['holds']}. Errors: the "
-        "window's largest horizontal / altitude error.",
+        "window's largest horizontal / altitude error; a lost flight: when, why, and its peak rotor command against the limit. "
+        "Where certify says survivable and nothing holds (two adjacent rotors lost), the relaxed hover exists but no controller of "
+        "ours, nor a search over the rotor thrusts, enters it from hover within the simulator's 90 degrees of tilt: "
+        "rotorfault.studies.agreement's notes.",
         result.headers(), tuple(result.rows()),
     ))
 

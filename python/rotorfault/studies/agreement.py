@@ -19,12 +19,15 @@ the failure and that flight's verdict stands (a quadrotor without two opposing r
 spins up towards k_mu m g / k_r, 275 rad/s on Wang's frames, past the simulator's 200 rad/s
 body-rate limit 23 s after the failure, while holding its place within micrometres at 10 s).
 Every controller is told the failure (which rotors, when), designed
-on the vehicle it flies:
+on the vehicle it flies (each builder gets a ``FlightCase``: the vehicle, the failed rotors,
+certify's own best relaxed hover of the case, and the healthy vehicle's hover LQR, designed once
+per vehicle):
 
 - ``linear-feedback``: the hover LQR (:func:`rotorfault.control.lqr_hover`) of the failed vehicle
   (refused where its ACAI is <= 0: static hover with all four axes lost);
 - ``relaxed-hover-feedback``: the healthy vehicle's hover LQR until the failure, then the LQR about
-  the best relaxed hover (the failure-time switch of :class:`rotorfault.control.RelaxedHoverFeedback`);
+  the best relaxed hover, the one certify found (the failure-time switch of
+  :class:`rotorfault.control.RelaxedHoverFeedback`);
   on a vehicle whose healthy hover no LQR holds (``wang-fixed-pitch``: no yaw control even
   healthy) there is no healthy design and the relaxed hover LQR flies from the start;
 - ``indi-controller``: INDI told of the failed rotors;
@@ -32,11 +35,37 @@ on the vehicle it flies:
 - ``lanzon-controller``: Lanzon's design, only on the Lanzon quadrotor with rotor 2 failed.
 
 A controller that refuses the design (``design-refused``) or does not apply (``not-applicable``)
-has not held the case.
+has not held the case. A lost flight's cell says when and why it was lost and the largest rotor
+command it asked for against the rotors' limit (and how long a rotor was saturated).
+
+The remaining disagreement: two adjacent rotors lost (measured on ``ke-quadcopter``, rotors 1-2,
+1-4, 2-3, 3-4; the failure at 1 s). Certify finds a relaxed hover (20.06 rad/s on the remaining
+pair, its up axis 25 degrees off body z) that the relaxed hover LQR holds when started on the
+periodic solution, but no controller captures it from hover: ``relaxed-hover-feedback`` asks for
+20.9 N (1-2, 3-4) or 18.4 N (1-4, 2-3) against the 8.5 N limit and is lost to tilt (past the
+simulator's 90 degrees) at 1.15 s, ``uniform-passive-ftc`` at 1.23 s, INDI refuses the design (it
+flies a hover with zero roll and pitch torque, which this pair cannot make), the hover LQR
+refuses it. The cause is the geometry, not the gains. The remaining pair sits on one side of the
+frame, so every thrust it makes rolls the vehicle, at least 0.0884 N m per newton of total thrust
+(arm 0.125 m), while its yaw moment is at most k_mu = 0.0166 N m per newton: 5.3 times less,
+9.9 times less in angular acceleration (J_z / J_x = 0.0104 / 0.0056). In the relaxed hover that
+roll moment is balanced by the gyroscopic moment of the 18.2 rad/s spin ((J_z - J_x) w_z w_xy);
+from hover there is no spin to balance it, and a lower thrust scales the roll and the yaw
+moments alike. Measured: the relaxed hover LQR with the default weights and with R 10^4 times
+larger (gains 64 times smaller) and the relaxed hover's trim command held open loop all pass 90
+degrees of tilt 0.15-0.16 s after leaving hover (``tests/studies/test_agreement.py``); a search
+over piecewise-constant thrusts of the pair (6 steps over 0.6 s, 0 to 8.5 N each, rotor lag
+ignored, L-BFGS-B from 4 starts, the tilt kept below 87 degrees) spun the vehicle up to at most
+0.42 rad/s, against the 18.2 rad/s the relaxed hover needs. No capture that stays below 90
+degrees was found (one through an inverted attitude the simulator ends as ``diverged``).
+Certify's "survivable by spinning" says a holdable relaxed hover exists, not that it can be
+entered from hover; it is kept as it is, and the disagreement stands (Mueller and D'Andrea
+validate two adjacent propellers lost in simulation only).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -51,6 +80,7 @@ from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sim
 from ..flight.outcomes import verdict_of
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
+from ..analysis.relaxed_hover import RelaxedHoverSolution
 from .certify import RelaxedHoverVerdict, certify, describe_relaxed_hover
 from .deciding import CampaignVehicle, vehicle
 
@@ -150,6 +180,8 @@ class CertifyAgreement:
                     cells.append("-")
                 elif math.isfinite(f.horizontal_error_m):
                     cells.append(f"{f.verdict} ({f.horizontal_error_m:.2f} / {f.altitude_error_m:.2f} m)")
+                elif f.verdict in ("crashed", "diverged"):
+                    cells.append(f"{f.verdict} ({f.note})")  # when, why, and the peak command against the limit
                 else:
                     cells.append(f.verdict)
             out.append((c.vehicle, rotor_labels(c.failed), c.hover, describe_relaxed_hover(c.spinning),
@@ -209,51 +241,71 @@ def _simulator(v: CampaignVehicle, airframe: Airframe) -> Simulator:
     return Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=_drag(v), actuator=_actuator(v))
 
 
-def _lqr(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+@dataclass(frozen=True)
+class FlightCase:
+    """One failure case as a controller's builder sees it: the ``vehicle``, its ``failed`` rotors
+    (1-based), ``relaxed_hover`` (certify's best relaxed hover of the failed vehicle, ``None``
+    where none a linear feedback can hold) and ``healthy_lqr`` (the healthy vehicle's hover LQR,
+    designed at most once per vehicle; it returns ``None`` where no LQR holds the healthy hover)."""
+
+    vehicle: CampaignVehicle
+    failed: tuple[int, ...]
+    relaxed_hover: RelaxedHoverSolution | None
+    healthy_lqr: Callable[[], Any]
+
+
+def _healthy_lqr(v: CampaignVehicle) -> Any:
     from ..control.lqr import lqr_hover
 
-    return lqr_hover(_simulator(v, v.airframe.with_failed_rotors(failed)), position=HOVER_M)
+    try:
+        return lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
+    except ValueError:  # no healthy-vehicle design (module notes)
+        return None
 
 
-def _relaxed(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
-    from ..analysis.relaxed_hover import relaxed_hover
+def _lqr(case: FlightCase) -> Any:
     from ..control.lqr import lqr_hover
+
+    v = case.vehicle
+    return lqr_hover(_simulator(v, v.airframe.with_failed_rotors(case.failed)), position=HOVER_M)
+
+
+def _relaxed(case: FlightCase) -> Any:
     from ..control.relaxed_hover import RelaxedHoverFeedback
 
-    airframe = v.airframe.with_failed_rotors(failed)
-    best = relaxed_hover(airframe, drag=_drag(v), actuator=_actuator(v)).best
+    v, best = case.vehicle, case.relaxed_hover
     if best is None:
         raise ValueError("no relaxed hover a linear feedback can hold")
-    try:
-        healthy = lqr_hover(_simulator(v, v.airframe), position=HOVER_M)
-    except ValueError:  # no healthy-vehicle design (module notes)
+    airframe = v.airframe.with_failed_rotors(case.failed)
+    healthy = case.healthy_lqr()
+    if healthy is None:
         return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m)
     return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
                                 before_failure=healthy, failure_time_s=FAILURE_TIME_S)
 
 
-def _indi(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _indi(case: FlightCase) -> Any:
     from ..control import IndiController
 
-    return IndiController(v.airframe, failures=[RotorFault(r, FAILURE_TIME_S, 0.0) for r in failed], position=HOVER_M)
+    return IndiController(case.vehicle.airframe, failures=[RotorFault(r, FAILURE_TIME_S, 0.0) for r in case.failed], position=HOVER_M)
 
 
-def _ke_robust(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _ke_robust(case: FlightCase) -> Any:
     from ..control.ke import UniformPassiveFtc, preset
 
-    return UniformPassiveFtc(v.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
+    return UniformPassiveFtc(case.vehicle.airframe, gains=preset("ke-robust").gains, position=HOVER_M)
 
 
-def _lanzon(v: CampaignVehicle, failed: tuple[int, ...]) -> Any:
+def _lanzon(case: FlightCase) -> Any:
     from .deciding import CONTROLLERS
 
-    if v.name != "lanzon-quadrotor" or failed != (2,):
+    if case.vehicle.name != "lanzon-quadrotor" or case.failed != (2,):
         raise LookupError("Lanzon's design: the Lanzon quadrotor with rotor 2 failed only")
-    return CONTROLLERS["lanzon-controller"].build(v, [])
+    return CONTROLLERS["lanzon-controller"].build(case.vehicle, [])
 
 
 #: The controllers flown through every case (registry names), each built for the case's failure.
-CONTROLLERS: dict[str, Callable[[CampaignVehicle, tuple[int, ...]], Any]] = {
+CONTROLLERS: dict[str, Callable[[FlightCase], Any]] = {
     "linear-feedback": _lqr,
     "relaxed-hover-feedback": _relaxed,
     "indi-controller": _indi,
@@ -297,14 +349,16 @@ def certify_against_flights(
     partial: list[tuple[CampaignVehicle, Any, dict[str, CaseFlight]]] = []
     for v in vehicles:
         cert = certify(v.airframe, max_failed=max_failed, spinning=True, drag=_drag(v), actuator=_actuator(v))
+        healthy_lqr = functools.cache(functools.partial(_healthy_lqr, v))  # one design per vehicle
         for case in cert.cases:
             if not case.failed:
                 continue
             assert case.relaxed_hover is not None  # spinning=True
             flights: dict[str, CaseFlight] = {}
+            built = FlightCase(v, case.failed, case.relaxed_hover.solution, healthy_lqr)
             for name in names:
                 try:
-                    controller = CONTROLLERS[name](v, case.failed)
+                    controller = CONTROLLERS[name](built)
                 except LookupError as exc:
                     flights[name] = CaseFlight(name, "not-applicable", str(exc))
                     continue
@@ -351,7 +405,7 @@ def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignV
     # whose verdict stands.
     again = [j for j, verdict in enumerate(verdicts) if verdict == "holds" and math.isnan(steady[j])]
     longer = _batch([pending[j] for j in again], partial, SETTLE_AFTER_FAILURE_S) if again else None
-    for j, (index, name, _v, _c) in enumerate(pending):
+    for j, (index, name, v, _c) in enumerate(pending):
         source, row, note = batch, j, ""
         if longer is not None and j in again:
             source, row = longer, again.index(j)
@@ -362,6 +416,10 @@ def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignV
             note += f"lost at {float(source.lost_at_s[row]):.2f} s"
             cause = source.cause[row]
             note += f" ({cause})" if cause else ""
+            # What the controller asked of the rotors on the way (module notes: the entry into a
+            # relaxed hover that certify does not check).
+            note += (f", peak command {float(source.peak_command[row]):.1f} N against the {max(v.airframe.max_thrust_n):g} N limit"
+                     f" (saturated {float(source.saturated_s[row]):.2f} s)")
         partial[index][2][name] = CaseFlight(
             name, verdict, note.rstrip("; "),
             math.nan if lost else float(np.asarray(source.window_horizontal_error_m)[row]),

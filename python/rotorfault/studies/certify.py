@@ -23,7 +23,7 @@ does not.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal, get_args
 
 from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
@@ -34,7 +34,7 @@ from ..allocation.attainable import hover_distances, hover_thrust_margin
 from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
 from ..analysis.controllability import failure_table
-from ..analysis.relaxed_hover import RelaxedHoverSettings, relaxed_hover
+from ..analysis.relaxed_hover import RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
 from ..flight.models import Drag, FixedPitchActuator
 
 #: ``all-axes``: hovers with thrust, roll, pitch and yaw; ``give-up-yaw``: only by giving up yaw
@@ -80,13 +80,17 @@ class RelaxedHoverVerdict:
     static), ``thrust_margin_n`` (headroom: the smallest distance of a carrying rotor's thrust to
     its upper bound), ``carrying`` (1-based rotor numbers), ``at_spin_rate_limit`` (the margin still
     grew at the searched limit: with no rotational damping a faster spin always helps). For
-    ``no`` the numbers are NaN and ``carrying`` is empty."""
+    ``no`` the numbers are NaN and ``carrying`` is empty. ``solution``: the relaxed hover itself
+    (:class:`rotorfault.analysis.relaxed_hover.RelaxedHoverSolution`, with its linear model: what
+    a feedback about it is designed on, so the search is not run twice; ``None`` for ``no``); not
+    compared, not in :meth:`Certificate.to_dict` (the numbers above say it)."""
 
     hover: SpinningHover
     spin_rate_rad_s: float
     thrust_margin_n: float
     carrying: tuple[int, ...]
     at_spin_rate_limit: bool
+    solution: RelaxedHoverSolution | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -199,12 +203,16 @@ class Certificate(Tabular):
         return [c for c in cases if c.hover == "no" and c.relaxed_hover is not None and c.relaxed_hover.hover == "no"]
 
     def to_dict(self) -> dict[str, Any]:
-        out = asdict(self)
+        # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
+        out = asdict(replace(self, cases=tuple(
+            c if c.relaxed_hover is None else replace(c, relaxed_hover=replace(c.relaxed_hover, solution=None)) for c in self.cases)))
         for case in out["cases"]:
             for key in ("acai", "acai_give_up_yaw", "thrust_to_weight"):
                 if math.isinf(case[key]):
                     case[key] = None  # JSON has no infinity: rank deficient / undefined
             spin = case["relaxed_hover"]
+            if spin is not None:
+                del spin["solution"]
             if spin is not None and spin["hover"] == "no":
                 spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
         return out
@@ -239,8 +247,8 @@ def certify(
         raise TypeError(f"spinning: expected True or False, got {type(spinning).__name__}")
     if not spinning and (settings is not None or drag is not None or actuator is not None):
         raise ValueError("settings, drag, actuator: describe the relaxed hover; give them with spinning=True")
-    if spinning:
-        relaxed_hover(airframe, settings, drag=drag, actuator=actuator)  # checks them (and is the healthy case)
+    # Checks settings, drag and actuator before any work; it is the healthy case's verdict below.
+    healthy = _relaxed_hover_verdict(airframe, settings, drag, actuator) if spinning else None
     table = failure_table(airframe, max_failed=max_failed, formula=FORMULA)
     distances = hover_distances(airframe, [row.failed for row in table])
     full = airframe.is_fully_actuated
@@ -257,8 +265,8 @@ def certify(
             margin = hover_thrust_margin(airframe.with_failed_rotors(row.failed), give_up_yaw=hover == "give-up-yaw")
             ratio = margin.thrust_to_weight
         distance, distance_give_up_yaw = distances[row.failed]
-        verdict = None
-        if spinning:
+        verdict = healthy
+        if spinning and row.failed:
             verdict = _relaxed_hover_verdict(airframe.with_failed_rotors(row.failed), settings, drag, actuator)
         cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop, row.hover,
                                      row.hover_give_up_yaw, distance, distance_give_up_yaw, verdict))
@@ -273,7 +281,7 @@ def _relaxed_hover_verdict(
         return RelaxedHoverVerdict("no", math.nan, math.nan, (), False)
     kind: SpinningHover = "spinning" if best.kind == "spinning" else "static"
     return RelaxedHoverVerdict(
-        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit)
+        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best
     )
 
 

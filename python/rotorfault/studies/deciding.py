@@ -60,6 +60,7 @@ from typing import Any
 import numpy as np
 
 from .. import _rfcore
+from .._util.memo import computed_once
 from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, State
@@ -199,7 +200,7 @@ def _ke(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     return UniformPassiveFtc(v.airframe, gains=preset("ke-hil").gains, position=HOVER_M)
 
 
-@functools.lru_cache(maxsize=4)
+@computed_once
 def _lanzon_design(name: str) -> Any:
     from ..control.lanzon import LanzonVehicle, design
 
@@ -242,7 +243,7 @@ def nominal_actuator(v: CampaignVehicle) -> FixedPitchActuator:
     return FixedPitchActuator(time_constant_s=v.rotor_time_constant_s)
 
 
-@functools.lru_cache(maxsize=8)
+@computed_once
 def _healthy_lqr(name: str) -> Any:
     from ..control.lqr import lqr_hover
     from ..flight import Simulator
@@ -252,17 +253,15 @@ def _healthy_lqr(name: str) -> Any:
     return lqr_hover(sim, position=HOVER_M)
 
 
-@functools.lru_cache(maxsize=512)
+@computed_once  # the schedule bounds the keys: vehicles x patterns x efficiency steps
 def _relaxed_design(name: str, efficiency: tuple[float, ...]) -> Any:
+    """The failed vehicle and its best relaxed hover (``None``: none a linear feedback holds; kept
+    too, so a refused design is not searched again for every run that draws it)."""
     from ..analysis.relaxed_hover import relaxed_hover
 
     v = vehicle(name)
     airframe = v.airframe.with_efficiency(efficiency)
-    best = relaxed_hover(airframe, drag=nominal_drag(v), actuator=nominal_actuator(v)).best
-    if best is None:
-        failed = [i + 1 for i, e in enumerate(efficiency) if e < 1.0]
-        raise ValueError(f"relaxed hover: {name} with rotor(s) {failed} at efficiency {[efficiency[i - 1] for i in failed]} has none a linear feedback can hold")
-    return airframe, best
+    return airframe, relaxed_hover(airframe, drag=nominal_drag(v), actuator=nominal_actuator(v)).best
 
 
 def _relaxed_hover(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
@@ -272,6 +271,9 @@ def _relaxed_hover(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     for f in faults:
         efficiency[f.rotor - 1] = math.floor(f.efficiency / EFFICIENCY_STEP + 1e-9) * EFFICIENCY_STEP
     airframe, best = _relaxed_design(v.name, tuple(efficiency))
+    if best is None:
+        failed = [i + 1 for i, e in enumerate(efficiency) if e < 1.0]
+        raise ValueError(f"relaxed hover: {v.name} with rotor(s) {failed} at efficiency {[efficiency[i - 1] for i in failed]} has none a linear feedback can hold")
     return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
                                 before_failure=_healthy_lqr(v.name), failure_time_s=min(f.time for f in faults))
 
