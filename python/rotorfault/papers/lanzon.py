@@ -637,10 +637,10 @@ class _MonteCarloTask:
         sc = scenario("B")
         assert sc.position is not None
         nominal, f = self.nominal, self.factors[i]
-        v = replace(nominal, mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
-                    inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
-                    rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
-                    rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
+        v = nominal.replace(mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
+                            inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
+                            rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
+                            rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
         noise = None if self.snr_db is None else Noise(snr_db=self.snr_db, seed=self.seed + i)
         sim = v.simulator(limits=self.case.limits if self.controller == "lanzon" else True, noise=noise)
         ctrl: Any
