@@ -86,49 +86,41 @@ impl From<Divergence> for PyDivergence {
     }
 }
 
-/// A run's sensor counts (`Trajectory.sensing_counts`); keyword-only from Python (pickling).
-#[pyclass(name = "SensingCounts", module = "rotorfault._rfcore", frozen, get_all)]
-pub struct PySensingCounts {
-    imu_samples: u64,
-    gyro_saturated_samples: u64,
-    accel_saturated_samples: u64,
-    fused_measurements: u64,
-    rejected_measurements: u64,
-    late_measurements: u64,
-}
-
-impl PySensingCounts {
-    const FIELDS: &'static [&'static str] = &[
-        "imu_samples", "gyro_saturated_samples", "accel_saturated_samples", "fused_measurements",
-        "rejected_measurements", "late_measurements",
-    ];
-}
-
-#[pymethods]
-impl PySensingCounts {
-    #[new]
-    #[pyo3(signature = (*, imu_samples, gyro_saturated_samples, accel_saturated_samples, fused_measurements, rejected_measurements, late_measurements))]
-    fn new(
-        imu_samples: u64,
-        gyro_saturated_samples: u64,
-        accel_saturated_samples: u64,
-        fused_measurements: u64,
-        rejected_measurements: u64,
-        late_measurements: u64,
-    ) -> Self {
-        PySensingCounts {
-            imu_samples,
-            gyro_saturated_samples,
-            accel_saturated_samples,
-            fused_measurements,
-            rejected_measurements,
-            late_measurements,
+/// The sensor counts class from one list of its fields (each a `u64`).
+macro_rules! counts_class {
+    ($($name:ident),+ $(,)?) => {
+        /// A run's sensor counts (`Trajectory.sensing_counts`); keyword-only from Python (pickling).
+        #[pyclass(name = "SensingCounts", module = "rotorfault._rfcore", frozen, get_all)]
+        pub struct PySensingCounts {
+            $($name: u64),+
         }
-    }
-    fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-        Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
-    }
+
+        impl PySensingCounts {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($name)),+];
+        }
+
+        #[pymethods]
+        impl PySensingCounts {
+            #[new]
+            #[pyo3(signature = (*, $($name),+))]
+            fn new($($name: u64),+) -> Self {
+                PySensingCounts { $($name),+ }
+            }
+            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
+                Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
+            }
+        }
+    };
 }
+
+counts_class!(
+    imu_samples,
+    gyro_saturated_samples,
+    accel_saturated_samples,
+    fused_measurements,
+    rejected_measurements,
+    late_measurements,
+);
 
 impl From<&SensingRecord> for PySensingCounts {
     fn from(r: &SensingRecord) -> Self {
