@@ -358,6 +358,30 @@ def test_detectability_names_state_directions() -> None:
     np.testing.assert_allclose(c @ direction.coefficients, 0.0, atol=1e-15)
 
 
+def test_detectability_of_a_pair_balancing_would_overflow() -> None:
+    """A with an entry of 1e300 is balanced by scales down to 2^-1000, which divide C^T's rows
+    past the float range; B's columns are shifted by a power of two instead (rank and left null
+    space unchanged). Analytic answer: O = [C; CA] = [[0, 1e300], [1e600, 1e300]] has rank 2,
+    so the pair is observable, hence detectable; no warning on the way."""
+    import warnings
+
+    from rotorfault.control.stabilisability import _rows_divided
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        test = detectability(np.array([[0.0, 0.0], [1e300, 1.0]]), np.array([[0.0, 1e300]]))
+    assert test.holds and test.failing == ()
+    # Exact, and the plain quotient wherever nothing overflows.
+    rng = np.random.default_rng(7)
+    b = rng.normal(size=(5, 3)) * np.exp2(rng.integers(-50, 50, size=(5, 3)))
+    scale = np.exp2(rng.integers(-40, 40, size=5)).astype(float)
+    assert np.array_equal(_rows_divided(b, scale), b / scale[:, None])
+    shifted = _rows_divided(np.array([[1e300, 3.0], [1.0, 1.0]]), np.array([2.0**-1000, 1.0]))
+    # Column 1 (3 x 2^1000 would pass 2^1000) shifted by 2^-2; column 0 keeps its ratio exactly.
+    assert np.all(np.isfinite(shifted)) and shifted[:, 1].tolist() == [3.0 * 2.0**998, 0.25]
+    assert shifted[0, 0] * 2.0**-1000 / shifted[1, 0] == 1e300
+
+
 def test_discrete_stabilisability_tests_the_unit_circle() -> None:
     """Discrete: |lambda| >= 1 needs an input (a mode at 0.5 does not, one at -1 does)."""
     a = np.diag([0.5, -1.0])

@@ -265,6 +265,24 @@ def _bounded(total: FloatArray, step: FloatArray) -> FloatArray:
     return np.asarray(np.exp2(wanted - exponent_total), dtype=np.float64)
 
 
+def _rows_divided(b: FloatArray, scale: FloatArray) -> FloatArray:
+    """``diag(scale)^-1 b`` for powers of two ``scale``, with a column whose quotient would overflow
+    shifted down by a power of two first: a column scale of ``B`` changes neither the rank of
+    ``[A - lambda I, B]`` nor its left null space, and balancing an ``A`` with entries near 1e300
+    can divide a row of ``B`` by 2^-1000 (an overflow the hostile harness found). Exact, and the
+    plain quotient wherever nothing overflows."""
+    mantissa, exponent = np.frexp(b)
+    exponent = exponent - np.round(np.log2(scale)).astype(exponent.dtype)[:, None]
+    peak = np.max(np.where(mantissa != 0, exponent, np.iinfo(exponent.dtype).min), axis=0)
+    shift = np.where(peak > _MAX_EXPONENT, peak - _MAX_EXPONENT, 0)
+    return np.asarray(np.ldexp(mantissa, exponent - shift[None, :]), dtype=np.float64)
+
+
+#: Largest binary exponent a column of the divided ``B`` may reach (2^1000, well inside float range,
+#: so the pencil's norms stay finite).
+_MAX_EXPONENT = 1000
+
+
 def _inverse_power_of_two(norms: FloatArray) -> FloatArray:
     out = np.ones_like(norms)
     ok = (norms > 0) & np.isfinite(norms)
@@ -306,7 +324,7 @@ def _pbh(
 ) -> tuple[Mode, ...]:
     n = a.shape[0]
     balanced, scale = balance(a)
-    b_balanced = b / scale[:, None]
+    b_balanced = _rows_divided(b, scale)
     size = float(np.linalg.norm(balanced, 1))
     tol = STABLE_RTOL * (max(1.0, size) if discrete else size)
     eigenvalues = np.linalg.eigvals(balanced).astype(np.complex128)
