@@ -505,6 +505,17 @@ class Sensing:
 
 @final
 class SensingCounts:
+    def __new__(
+        cls,
+        *,
+        imu_samples: int,
+        gyro_saturated_samples: int,
+        accel_saturated_samples: int,
+        fused_measurements: int,
+        rejected_measurements: int,
+        late_measurements: int,
+    ) -> SensingCounts: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     @property
     def imu_samples(self) -> int: ...
     @property
@@ -555,6 +566,18 @@ class SimulationConfig:
 
 @final
 class Divergence:
+    def __new__(
+        cls,
+        *,
+        time_s: float,
+        reason: str,
+        description: str,
+        state: Sequence[float],
+        impact_speed_m_s: float | None = None,
+        impact_vertical_speed_m_s: float | None = None,
+        impact_tilt_rad: float | None = None,
+    ) -> Divergence: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     @property
     def time_s(self) -> float: ...
     @property
@@ -615,8 +638,31 @@ class BatchColumns:
     @property
     def sensed(self) -> list[str]: ...
 
-@final
+@disjoint_base
 class Trajectory:
+    def __new__(
+        cls,
+        *,
+        t: npt.NDArray[Any],
+        position: npt.NDArray[Any],
+        velocity: npt.NDArray[Any],
+        quaternion: npt.NDArray[Any],
+        euler: npt.NDArray[Any],
+        omega: npt.NDArray[Any],
+        primary_axis: npt.NDArray[Any],
+        rotor_command: npt.NDArray[Any],
+        rotor_thrust: npt.NDArray[Any],
+        efficiency: npt.NDArray[Any],
+        recorded_measurements: npt.NDArray[Any],
+        sensed: str | None = None,
+        divergence: Divergence | None = None,
+        estimate_state: npt.NDArray[Any] | None = None,
+        estimate_euler: npt.NDArray[Any] | None = None,
+        estimate_std: npt.NDArray[Any] | None = None,
+        gyro_saturated: npt.NDArray[np.bool_] | None = None,
+        accel_saturated: npt.NDArray[np.bool_] | None = None,
+        sensing_counts: SensingCounts | None = None,
+    ) -> Self: ...
     @property
     def t(self) -> _F64: ...
     @property
@@ -632,29 +678,33 @@ class Trajectory:
     @property
     def primary_axis(self) -> _F64: ...
     @property
-    def command(self) -> _F64: ...
+    def rotor_command(self) -> _F64: ...
     @property
-    def thrust(self) -> _F64: ...
+    def rotor_thrust(self) -> _F64: ...
     @property
     def efficiency(self) -> _F64: ...
     @property
-    def measured(self) -> _F64: ...
+    def recorded_measurements(self) -> _F64: ...
     @property
     def sensed(self) -> Sensed: ...
     @property
+    def divergence(self) -> Divergence | None: ...
+    @property
+    def diverged(self) -> bool: ...
+    @property
     def estimate_state(self) -> _F64 | None: ...
     @property
-    def estimate_vector(self) -> _F64 | None: ...
+    def estimate_euler(self) -> _F64 | None: ...
     @property
     def estimate_std(self) -> _F64 | None: ...
     @property
-    def gyro_saturated(self) -> list[bool] | None: ...
+    def gyro_saturated(self) -> npt.NDArray[np.bool_] | None: ...
     @property
-    def accel_saturated(self) -> list[bool] | None: ...
+    def accel_saturated(self) -> npt.NDArray[np.bool_] | None: ...
     @property
     def sensing_counts(self) -> SensingCounts | None: ...
-    @property
-    def divergence(self) -> Divergence | None: ...
+    FIELDS: ClassVar[list[str]]
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
 
 # <controller-registry> derived from the registry of crates/rfcore-py/src/control/mod.rs
 _Controller = OpenLoop | LinearFeedback | Lti | Allocated | UniformPassiveFtc | LanzonController | TrackingFeedback | IndiController | RelaxedHoverFeedback
@@ -928,21 +978,55 @@ class LanzonModel:
     def __hash__(self) -> int: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
 
-def check_lanzon_vehicle(
-    *,
-    mass_kg: float,
-    gravity_m_s2: float,
-    inertia_xx_kg_m2: float,
-    inertia_zz_kg_m2: float,
-    arm_length_m: float,
-    drag_torque_ratio_m: float,
-    rotational_drag_n_m_s: float,
-    linear_drag_n_s_m: float,
-    rotor_inertia_kg_m2: float,
-    thrust_coefficient_n_s2: float,
-    max_thrust_n: float,
-    rate_limit_n_s: float,
-) -> None: ...
+@disjoint_base
+class LanzonVehicle:
+    def __new__(
+        cls,
+        *,
+        mass_kg: float | None = None,
+        gravity_m_s2: float | None = None,
+        inertia_xx_kg_m2: float | None = None,
+        inertia_zz_kg_m2: float | None = None,
+        arm_length_m: float | None = None,
+        drag_torque_ratio_m: float | None = None,
+        rotational_drag_n_m_s: float | None = None,
+        linear_drag_n_s_m: float | None = None,
+        rotor_inertia_kg_m2: float | None = None,
+        thrust_coefficient_n_s2: float | None = None,
+        max_thrust_n: float | None = None,
+        rate_limit_n_s: float | None = None,
+    ) -> Self: ...
+    @property
+    def mass_kg(self) -> float: ...
+    @property
+    def gravity_m_s2(self) -> float: ...
+    @property
+    def inertia_xx_kg_m2(self) -> float: ...
+    @property
+    def inertia_zz_kg_m2(self) -> float: ...
+    @property
+    def arm_length_m(self) -> float: ...
+    @property
+    def drag_torque_ratio_m(self) -> float: ...
+    @property
+    def rotational_drag_n_m_s(self) -> float: ...
+    @property
+    def linear_drag_n_s_m(self) -> float: ...
+    @property
+    def rotor_inertia_kg_m2(self) -> float: ...
+    @property
+    def thrust_coefficient_n_s2(self) -> float: ...
+    @property
+    def max_thrust_n(self) -> float: ...
+    @property
+    def rate_limit_n_s(self) -> float: ...
+    @property
+    def model(self) -> LanzonModel: ...
+    FIELDS: ClassVar[list[str]]
+    def replace(self, **changes: Any) -> Self: ...
+    def __eq__(self, value: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
 
 @final
 class OuterLoopGains:

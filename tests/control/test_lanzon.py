@@ -236,7 +236,7 @@ def test_integral_action_removes_the_steady_error_of_a_mass_error() -> None:
     0.1 g / k_p_z = 1.96 m (measured 1.964 m); with integral action the error vanishes
     (measured 3e-6 m)."""
     assert L.OuterLoopGains().k_i_xy == L.OuterLoopGains().k_i_z == 0.0  # the paper's loop is the default
-    heavy = dataclasses.replace(L.LanzonVehicle(), mass_kg=0.55)
+    heavy = L.LanzonVehicle().replace(mass_kg=0.55)
     pd = _hold_5_m(heavy, L.OuterLoopGains(), 60.0)
     assert np.abs(pd[:, 2]).min() == pytest.approx(0.1 * 9.81 / 0.5, rel=0.01)
     assert np.abs(_hold_5_m(heavy, PID, 60.0)[:, 2]).max() < 1e-3

@@ -23,6 +23,7 @@ SETTINGS = [
     (rf.DivergenceLimits, "max_tilt_rad", 1.0),
     (rf.FixedPitchActuator, "time_constant_s", 0.025),
     (lanzon.OuterLoopGains, "k_i_z", 0.1),
+    (lanzon.LanzonVehicle, "mass_kg", 0.6),
 ]
 
 
@@ -30,6 +31,12 @@ def test_the_public_names_are_the_extension_classes() -> None:
     assert ke.KeGains is _rfcore.KeGains and rf.Drag is _rfcore.Drag and rf.DivergenceLimits is _rfcore.DivergenceLimits
     assert rf.FixedPitchActuator is _rfcore.FixedPitchActuator and rf.VariablePitchActuator is _rfcore.VariablePitchActuator
     assert lanzon.OuterLoopGains is _rfcore.OuterLoopGains
+    # Lanzon's vehicle: the core's, its defaults the core's LanzonVehicle::default() (no Python
+    # literal); the subclass adds only the RFL algebra and the simulator.
+    assert issubclass(lanzon.LanzonVehicle, _rfcore.LanzonVehicle) and lanzon.LanzonVehicle.__slots__ == ()
+    core_vehicle = _rfcore.LanzonVehicle()
+    assert [getattr(lanzon.LanzonVehicle(), f) for f in _rfcore.LanzonVehicle.FIELDS] == [getattr(core_vehicle, f) for f in core_vehicle.FIELDS]
+    assert lanzon.LanzonVehicle().model == _rfcore.LanzonModel()
     assert rf.DirectionalLimit is _rfcore.DirectionalLimit and rf.HoverMargin is _rfcore.HoverMargin
     # A preset's gains come out of the core's TOML parser as they are: no conversion.
     assert type(ke.preset("ke-hil").gains) is _rfcore.KeGains
@@ -152,3 +159,34 @@ def test_results_reach_users_as_the_core_returns_them() -> None:
         preset.replace(rotor_time_constant_s=-1.0)
     with pytest.raises(AttributeError):
         preset.name = "other"  # type: ignore[misc]
+
+
+def test_a_trajectory_is_the_cores_made_once_and_not_copied() -> None:
+    """``rf.Trajectory`` subclasses the core's trajectory (issue 26: no field-by-field mirror):
+    the simulator's arrays are made once and reach users by reference; the constructor's shapes
+    are checked by the core, naming the field; old keyword construction and pickling work."""
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+    run = sim.run(rf.State(position=(0, 0, -1)), 0.6, faults=[rf.RotorFault(rotor=1, time=0.1, efficiency=0.5)])
+    assert isinstance(run, _rfcore.Trajectory) and type(run) is rf.Trajectory
+    assert run.position is run.position and run.diverged and run.events[0].kind == "crashed"
+    same = rf.Trajectory(**{f: getattr(run, f) for f in run.FIELDS})
+    assert same.position is run.position and same.divergence is run.divergence
+    back = pickle.loads(pickle.dumps(run))
+    assert type(back) is rf.Trajectory and back.faults == run.faults and back.events[0].time == run.events[0].time
+    np.testing.assert_array_equal(back.position, run.position)
+    with pytest.raises(AttributeError):
+        run.faults = ()  # type: ignore[misc]
+    n = len(run.t)
+    fields = {f: getattr(run, f) for f in run.FIELDS if f != "divergence"}
+    event = rf.Event(0.45, "tilt", "tilt beyond the limit", np.zeros(12))
+    made = rf.Trajectory(**fields, events=[event])
+    assert made.diverged and made.events[0].kind == "tilt" and made.events[0].time == 0.45
+    with pytest.raises(ValueError, match=rf"^velocity: expected {n} rows \(one per time in t\)"):
+        rf.Trajectory(**{**fields, "velocity": np.zeros((n + 1, 3))})
+    with pytest.raises(ValueError, match="^quaternion: expected 4 columns"):
+        rf.Trajectory(**{**fields, "quaternion": np.zeros((n, 3))})
+    with pytest.raises(TypeError, match="^position: expected a NumPy array, got list"):
+        rf.Trajectory(**{**fields, "position": [[0.0, 0.0, 0.0]] * n})
+    with pytest.raises(ValueError, match="^events: a run ends at most once"):
+        rf.Trajectory(**fields, events=[event, event])
+    assert repr(run).startswith(f"Trajectory({n} rows to ") and "crashed at" in repr(run)

@@ -17,7 +17,7 @@ use rfcore::analysis::{
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, settings_eq, settings_hash, settings_repr, slice1, slice2, to_py_err};
+use crate::convert::{detached, slice1, slice2, to_py_err, value_protocol};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
 fn analysis(
@@ -81,8 +81,7 @@ impl PyControllabilityReport {
     ];
 }
 
-#[pymethods]
-impl PyControllabilityReport {
+value_protocol!(PyControllabilityReport, {
     /// The airframe's name.
     #[getter]
     fn airframe(&self) -> &str {
@@ -141,15 +140,6 @@ impl PyControllabilityReport {
     fn __str__(&self) -> String {
         controllability_text(&self.inner, &self.airframe)
     }
-    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        settings_repr(slf.as_any(), Self::FIELDS)
-    }
-    fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
-        settings_eq(slf.as_any(), other, Self::FIELDS)
-    }
-    fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
-        settings_hash(slf.as_any(), Self::FIELDS)
-    }
     /// Pickled as its fields, read back by `_controllability_report` (a result has no public
     /// constructor: only the test makes one).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
@@ -171,7 +161,7 @@ impl PyControllabilityReport {
             .into_pyobject(py)?;
         Ok((restore, state))
     }
-}
+});
 
 /// A report read back from its pickled fields (`ControllabilityReport.__reduce__`): the names
 /// are parsed by the core's own parsers.

@@ -248,14 +248,17 @@ pub(crate) fn settings_replace<'py>(
 
 /// One settings class used directly from Python: keyword-only, defaults from the core's
 /// `Default`, types checked here (`<prefix>.<field>: expected a real number`), values once by the
-/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`.
+/// core's `check`; frozen, comparable, hashable, picklable, `replace(**changes)`, `FIELDS`. A
+/// field may sit deeper in the core's struct (`mass_kg => model.mass_kg`); `pyclass = subclass` lets a
+/// Python class extend it (methods only: the values stay the core's); `methods = { ... }` adds
+/// the class's own methods.
 macro_rules! settings_class {
     (
-        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, prefix = $prefix:literal, check = $check:expr,
-        { $($field:ident => $core_field:ident),+ $(,)? }
+        $(#[$doc:meta])* $py:ident, $pyname:literal, $core:ident, $(pyclass = $flag:ident,)? prefix = $prefix:literal, check = $check:expr,
+        { $($field:ident => $($core_field:ident).+),+ $(,)? } $(, methods = { $($methods:tt)* })?
     ) => {
         $(#[$doc])*
-        #[::pyo3::pyclass(name = $pyname, module = "rotorfault._rfcore", frozen)]
+        #[::pyo3::pyclass(name = $pyname, module = "rotorfault._rfcore", frozen $(, $flag)?)]
         #[derive(Clone)]
         pub struct $py {
             pub(crate) inner: $core,
@@ -269,13 +272,12 @@ macro_rules! settings_class {
             #[new]
             #[pyo3(signature = (*, $($field=None),+))]
             fn new($($field: Option<::pyo3::Bound<'_, ::pyo3::PyAny>>),+) -> ::pyo3::PyResult<Self> {
-                let d = $core::default();
-                let inner = $core {
-                    $($core_field: match $field {
-                        Some(v) => $crate::convert::real(concat!($prefix, ".", stringify!($field)), &v)?,
-                        None => d.$core_field,
-                    }),+
-                };
+                let mut inner = $core::default();
+                $(
+                    if let Some(v) = $field {
+                        inner.$($core_field).+ = $crate::convert::real(concat!($prefix, ".", stringify!($field)), &v)?;
+                    }
+                )+
                 let check: fn(&$core) -> rfcore::Result<()> = $check;
                 check(&inner).map_err($crate::convert::to_py_err)?;
                 Ok($py { inner })
@@ -283,21 +285,44 @@ macro_rules! settings_class {
             $(
                 #[getter]
                 fn $field(&self) -> f64 {
-                    self.inner.$core_field
+                    self.inner.$($core_field).+
                 }
             )+
+            $($($methods)*)?
         });
     };
 }
 pub(crate) use settings_class;
 
-/// The settings protocol's methods (`FIELDS`, `replace`, repr, equality, hash, pickling) for a
-/// class `$py` with a `FIELDS` constant, after its own methods (the constructor, the getters):
-/// `settings_class!` uses it, and so does a settings class whose constructor is written by hand.
-macro_rules! settings_protocol {
+/// A value's methods (repr, equality, hash, all over its `FIELDS`) for a class `$py` with a
+/// `FIELDS` constant, after its own methods: one `#[pymethods]` block, so that no class writes
+/// the three delegations again (`settings_protocol!` adds the settings' copy and pickling).
+macro_rules! value_protocol {
     ($py:ident, { $($methods:tt)* }) => {
         #[::pyo3::pymethods]
         impl $py {
+            $($methods)*
+            fn __repr__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<String> {
+                $crate::convert::settings_repr(::pyo3::Bound::as_any(slf), Self::FIELDS)
+            }
+            fn __eq__(slf: &::pyo3::Bound<'_, Self>, other: &::pyo3::Bound<'_, ::pyo3::PyAny>) -> ::pyo3::PyResult<bool> {
+                $crate::convert::settings_eq(::pyo3::Bound::as_any(slf), other, Self::FIELDS)
+            }
+            fn __hash__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<isize> {
+                $crate::convert::settings_hash(::pyo3::Bound::as_any(slf), Self::FIELDS)
+            }
+        }
+    };
+}
+pub(crate) use value_protocol;
+
+/// The settings protocol's methods (`FIELDS`, `replace`, pickling, and `value_protocol!`'s repr,
+/// equality, hash) for a class `$py` with a `FIELDS` constant, after its own methods (the
+/// constructor, the getters): `settings_class!` uses it, and so does a settings class whose
+/// constructor is written by hand.
+macro_rules! settings_protocol {
+    ($py:ident, { $($methods:tt)* }) => {
+        $crate::convert::value_protocol!($py, {
             $($methods)*
             /// The field names, in order.
             #[classattr]
@@ -310,19 +335,10 @@ macro_rules! settings_protocol {
             fn replace<'py>(slf: &::pyo3::Bound<'py, Self>, changes: Option<&::pyo3::Bound<'py, ::pyo3::types::PyDict>>) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
                 $crate::convert::settings_replace(::pyo3::Bound::as_any(slf), Self::FIELDS, changes)
             }
-            fn __repr__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<String> {
-                $crate::convert::settings_repr(::pyo3::Bound::as_any(slf), Self::FIELDS)
-            }
-            fn __eq__(slf: &::pyo3::Bound<'_, Self>, other: &::pyo3::Bound<'_, ::pyo3::PyAny>) -> ::pyo3::PyResult<bool> {
-                $crate::convert::settings_eq(::pyo3::Bound::as_any(slf), other, Self::FIELDS)
-            }
-            fn __hash__(slf: &::pyo3::Bound<'_, Self>) -> ::pyo3::PyResult<isize> {
-                $crate::convert::settings_hash(::pyo3::Bound::as_any(slf), Self::FIELDS)
-            }
             fn __getnewargs_ex__<'py>(slf: &::pyo3::Bound<'py, Self>) -> ::pyo3::PyResult<((), ::pyo3::Bound<'py, ::pyo3::types::PyDict>)> {
                 Ok(((), $crate::convert::settings_kwargs(::pyo3::Bound::as_any(slf), Self::FIELDS)?))
             }
-        }
+        });
     };
 }
 pub(crate) use settings_protocol;

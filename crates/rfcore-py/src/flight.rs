@@ -2,7 +2,7 @@
 //! `simulate_batch` and the state derivative for linearisation. Translation only.
 
 use nalgebra::Vector3;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -12,13 +12,14 @@ use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
     simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
-    Divergence, RotorFault, SensingRecord, SensorNoise, SimulationConfig, Trajectory,
+    RotorFault, SensorNoise, SimulationConfig,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
-use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
+use rfcore::state::{RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
+use crate::trajectory::PyTrajectory;
 use crate::sensing::PySensing;
 use crate::convert::{
     count, deprecated_positional, detached, fixed_reals, real, settings_class, settings_protocol, slice1,
@@ -530,184 +531,6 @@ fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {
         .collect()
 }
 
-/// Why and when a run ended early, with the 12-element state vector at that moment; for a
-/// `crashed` run, the impact (speed, speed into the ground, tilt), else `None`.
-#[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen, get_all)]
-pub struct PyDivergence {
-    time_s: f64,
-    reason: &'static str,
-    description: &'static str,
-    state: [f64; STATE_DIM],
-    impact_speed_m_s: Option<f64>,
-    impact_vertical_speed_m_s: Option<f64>,
-    impact_tilt_rad: Option<f64>,
-}
-
-/// A run's sensor counts (`Trajectory.sensing_counts`).
-#[pyclass(name = "SensingCounts", module = "rotorfault._rfcore", frozen, get_all)]
-pub struct PySensingCounts {
-    imu_samples: u64,
-    gyro_saturated_samples: u64,
-    accel_saturated_samples: u64,
-    fused_measurements: u64,
-    rejected_measurements: u64,
-    late_measurements: u64,
-}
-
-/// A recorded run: one row per recorded control step; arrays are built on access.
-#[pyclass(name = "Trajectory", module = "rotorfault._rfcore", frozen)]
-pub struct PyTrajectory {
-    run: Trajectory,
-}
-
-type Array2<'py> = PyResult<Bound<'py, PyArray2<f64>>>;
-
-impl PyTrajectory {
-    fn rows<'py>(&self, py: Python<'py>, values: Vec<f64>) -> Array2<'py> {
-        let n = self.run.t_s.len();
-        let cols = values.len().checked_div(n).unwrap_or(0);
-        Ok(values.into_pyarray(py).reshape([n, cols])?)
-    }
-
-    fn per_state<const N: usize>(&self, f: impl Fn(&RigidBodyState) -> [f64; N]) -> Vec<f64> {
-        self.run.states.iter().flat_map(f).collect()
-    }
-}
-
-#[pymethods]
-impl PyTrajectory {
-    #[getter]
-    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.run.t_s.clone().into_pyarray(py)
-    }
-    #[getter]
-    fn position<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.per_state(|s| s.position_m.into()))
-    }
-    #[getter]
-    fn velocity<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.per_state(|s| s.velocity_m_s.into()))
-    }
-    #[getter]
-    fn quaternion<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(
-            py,
-            self.per_state(|s| {
-                let q = s.attitude.quaternion();
-                [q.w, q.i, q.j, q.k]
-            }),
-        )
-    }
-    #[getter]
-    fn euler<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.per_state(|s| s.euler_rad()))
-    }
-    #[getter]
-    fn omega<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.per_state(|s| s.omega_rad_s.into()))
-    }
-    #[getter]
-    fn primary_axis<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.per_state(|s| s.primary_axis().into()))
-    }
-    #[getter]
-    fn command<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.run.commands.clone())
-    }
-    #[getter]
-    fn thrust<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.run.thrust_n.clone())
-    }
-    #[getter]
-    fn efficiency<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.run.efficiency.clone())
-    }
-    #[getter]
-    fn measured<'py>(&self, py: Python<'py>) -> Array2<'py> {
-        self.rows(py, self.run.measured.clone())
-    }
-    /// What the controller flew on: `"truth"`, `"paper-noise"` or the sensor suite's name.
-    #[getter]
-    fn sensed(&self) -> &'static str {
-        self.run.sensed()
-    }
-    /// With sensing, the estimate the controller saw per row (N x 13: position, velocity,
-    /// quaternion w x y z, body rates); else `None`.
-    #[getter]
-    fn estimate_state<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        self.run.sensing.as_ref().map(|r| {
-            let values = r.rows.iter().flat_map(|row| row.state.to_packed()).collect();
-            self.rows(py, values)
-        }).transpose()
-    }
-    /// With sensing, the estimate as the 12-element state vector per row (Euler angles); else
-    /// `None`.
-    #[getter]
-    fn estimate_vector<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        self.run.sensing.as_ref().map(|r| {
-            let values = r.rows.iter().flat_map(|row| state_vector(&row.state)).collect();
-            self.rows(py, values)
-        }).transpose()
-    }
-    /// With sensing, one sigma of the estimator's error state per row (N x 15: position m,
-    /// velocity m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2); else `None`.
-    #[getter]
-    fn estimate_std<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
-        self.run.sensing.as_ref().map(|r| {
-            let values = r.rows.iter().flat_map(|row| row.std).collect();
-            self.rows(py, values)
-        }).transpose()
-    }
-    /// With sensing, per row: the newest IMU sample's gyroscope (accelerometer) was clamped.
-    #[getter]
-    fn gyro_saturated(&self) -> Option<Vec<bool>> {
-        self.run.sensing.as_ref().map(|r| r.rows.iter().map(|row| row.gyro_saturated).collect())
-    }
-    #[getter]
-    fn accel_saturated(&self) -> Option<Vec<bool>> {
-        self.run.sensing.as_ref().map(|r| r.rows.iter().map(|row| row.accel_saturated).collect())
-    }
-    /// With sensing, counts over the whole run: IMU samples, those with the gyroscope
-    /// (accelerometer) clamped, and the estimator's measurements fused, refused by its gate and
-    /// late; else `None`.
-    #[getter]
-    fn sensing_counts(&self) -> Option<PySensingCounts> {
-        self.run.sensing.as_ref().map(PySensingCounts::from)
-    }
-    #[getter]
-    fn divergence(&self) -> Option<PyDivergence> {
-        self.run.divergence.map(PyDivergence::from)
-    }
-}
-
-impl From<Divergence> for PyDivergence {
-    fn from(d: Divergence) -> Self {
-        let impact = d.impact();
-        PyDivergence {
-            time_s: d.time_s,
-            reason: d.reason.name(),
-            description: d.reason.describe(),
-            state: state_vector(&d.state),
-            impact_speed_m_s: impact.map(|i| i.speed_m_s),
-            impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
-            impact_tilt_rad: impact.map(|i| i.tilt_rad),
-        }
-    }
-}
-
-impl From<&SensingRecord> for PySensingCounts {
-    fn from(r: &SensingRecord) -> Self {
-        PySensingCounts {
-            imu_samples: r.imu_samples,
-            gyro_saturated_samples: r.gyro_saturated_samples,
-            accel_saturated_samples: r.accel_saturated_samples,
-            fused_measurements: r.fusion.fused,
-            rejected_measurements: r.fusion.rejected,
-            late_measurements: r.fusion.late,
-        }
-    }
-}
-
 /// The vehicle, its actuators (settled at `settle` when given) and the command count.
 fn vehicle_and_actuators(
     airframe: &PyAirframe,
@@ -803,7 +626,7 @@ pub fn simulate<'py>(
             })?
         }
     };
-    Ok(PyTrajectory { run })
+    PyTrajectory::from_run(py, run)
 }
 
 /// A batch's vehicle, actuators, initial efficiency and runs, checked (one entry per run).
@@ -866,10 +689,7 @@ pub fn simulate_batch<'py>(
     let results = detached(py, |cancel| {
         core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
-    Ok(results
-        .into_iter()
-        .map(|run| PyTrajectory { run })
-        .collect())
+    results.into_iter().map(|run| PyTrajectory::from_run(py, run)).collect()
 }
 
 /// d/dt of the 12-element state vector with the actuators settled at `command` (no lag): the

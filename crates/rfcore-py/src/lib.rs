@@ -14,6 +14,7 @@ mod flight;
 mod recording;
 mod sensing;
 mod summary;
+mod trajectory;
 
 use pyo3::prelude::*;
 
@@ -33,9 +34,9 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<flight::PySensorNoise>()?;
     module.add_class::<flight::PySimulationConfig>()?;
     module.add_class::<sensing::PySensing>()?;
-    module.add_class::<flight::PySensingCounts>()?;
-    module.add_class::<flight::PyTrajectory>()?;
-    module.add_class::<flight::PyDivergence>()?;
+    module.add_class::<trajectory::PySensingCounts>()?;
+    module.add_class::<trajectory::PyTrajectory>()?;
+    module.add_class::<trajectory::PyDivergence>()?;
     module.add_class::<control::ke::PyKeGains>()?;
     module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;
@@ -46,7 +47,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<allocation::PySingleAllocation>()?;
     module.add_class::<control::lanzon::PyLanzonModel>()?;
     module.add_class::<control::lanzon::PyLanzonOuterLoop>()?;
-    module.add_function(wrap_pyfunction!(control::lanzon::check_lanzon_vehicle, module)?)?;
+    module.add_class::<control::lanzon::PyLanzonVehicle>()?;
     module.add_class::<control::indi::PyIndiGains>()?;
     module.add_class::<control::indi::PyIndiFailureMode>()?;
     // The Rust controllers, declared once in `control::controller_registry!`: each class, and

@@ -12,7 +12,8 @@ use rfcore::flight::simulation::{simulate_batch_columns as core_columns, BatchCo
 use crate::airframe::PyAirframe;
 use crate::control::ControllerArg;
 use crate::convert::detached;
-use crate::flight::{batch_runs, ActuatorArg, PyDivergence, PyDrag, PySensingCounts, PySimulationConfig};
+use crate::flight::{batch_runs, ActuatorArg, PyDrag, PySimulationConfig};
+use crate::trajectory::{PyDivergence, PySensingCounts};
 
 /// A batch's recording, one array per signal (`runs x (grid_rows + 1) x width`; see
 /// `rotorfault.flight.trajectory.BatchResult`): slot row `j < grid_rows` is the run's row at the
@@ -123,3 +124,4 @@ pub fn simulate_batch_columns<'py>(
         to_python(py, columns)
     }
 }
+

@@ -4,13 +4,11 @@
 
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyInt, PyString};
+use pyo3::types::{PyBool, PyInt, PyString};
 
 use rfcore::flight::simulation::{ImuPart, Sensing, SuiteName};
 
-use crate::convert::{
-    real, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err,
-};
+use crate::convert::{real, settings_protocol, to_py_err};
 
 /// What the controller flies on with sensors: the sensor suite (`"mocap"`, `"gnss"`, `"rtk"`),
 /// the IMU part (`"icm-42688-p"`, `"mpu-6000"`) and its output data rate, the position source's
@@ -59,8 +57,7 @@ fn seed(value: &Bound<'_, PyAny>) -> PyResult<u64> {
     })
 }
 
-#[pymethods]
-impl PySensing {
+settings_protocol!(PySensing, {
     #[new]
     #[pyo3(signature = (*, suite=None, imu=None, imu_rate_hz=None, position_rate_hz=None, seed=None))]
     fn new(
@@ -135,30 +132,4 @@ impl PySensing {
     fn imus() -> Vec<&'static str> {
         ImuPart::ALL.iter().map(|s| s.name()).collect()
     }
-    /// The field names, in order.
-    #[classattr]
-    #[pyo3(name = "FIELDS")]
-    fn fields() -> Vec<&'static str> {
-        Self::FIELDS.to_vec()
-    }
-    /// A copy with ``changes`` (validated like a new object).
-    #[pyo3(signature = (**changes))]
-    fn replace<'py>(
-        slf: &Bound<'py, Self>,
-        changes: Option<&Bound<'py, PyDict>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        settings_replace(slf.as_any(), Self::FIELDS, changes)
-    }
-    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        settings_repr(slf.as_any(), Self::FIELDS)
-    }
-    fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
-        settings_eq(slf.as_any(), other, Self::FIELDS)
-    }
-    fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
-        settings_hash(slf.as_any(), Self::FIELDS)
-    }
-    fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-        Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
-    }
-}
+});

@@ -37,7 +37,7 @@ rotation of pi about x: ``phi = roll``, ``theta = -pitch``, ``psi = -yaw``, ``(p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
@@ -60,48 +60,37 @@ SPIN_RATE_RAD_S = 2.7
 #: The failed rotor of the paper's design (1-based; Section III.A).
 FAILED_ROTOR = 2
 
-#: The core's defaults (Table 1, ``k_r = m g d / 2.7``, ``k_t = 0.1``): the one source.
-_DEFAULT_MODEL = _rfcore.LanzonModel()
-
-
-@dataclass(frozen=True)
-class LanzonVehicle:
+class LanzonVehicle(_rfcore.LanzonVehicle):
     """The quadrotor of Lanzon et al. with rotor 2 failed: Table 1 values plus the three the paper
     does not give. ``rotational_drag_n_m_s`` (``k_r``) defaults to ``m g d / 2.7``, so the steady
     spin is Table 2's 2.7 rad/s; ``linear_drag_n_s_m`` (``k_t``) to 0.1 N s/m and
     ``rotor_inertia_kg_m2`` (``I_R``, gyroscopic moment (5), verification model only) to 3e-5
     kg m^2 (a 10-inch propeller with its motor bell), with ``thrust_coefficient_n_s2`` 1e-5 N s^2
-    (``f = k_f omega^2``: 5 N at 707 rad/s). ``inertia_zz_kg_m2`` defaults to Table 1's printed
-    1.16e-3 (probably a misprint of 1.16e-2; both are flown in the report).
+    (``f = k_f omega^2``: 5 N at 707 rad/s), ``max_thrust_n`` 5 N and ``rate_limit_n_s`` 50 N/s.
+    ``inertia_zz_kg_m2`` defaults to Table 1's printed 1.16e-3 (probably a misprint of 1.16e-2;
+    both are flown in the report).
 
-    Why it lives in Python (issue 26): it is the design-time object of "design in Python, run in
-    Rust", not a copy of a core type. It holds the verification model's values the controller
-    never reads (``I_R``, ``k_f``, the thrust and rate limits, which go to the simulator's
-    :class:`~rotorfault.Airframe`, :class:`~rotorfault.FixedPitchActuator` and
-    :class:`~rotorfault.Drag`) and the RFL algebra the loop-shaping design works on; the eight
-    values the controller flies with cross once, into the core's ``LanzonModel``. All twelve are
-    checked once, by the core's ``LanzonVehicle::check``, when the vehicle is made (errors name
-    ``vehicle.<field>``: scales finite, > 0 and within [1e-15, 1e15]; thrust and rate limits
-    finite and > 0; ``k_t``, ``I_R``, ``k_f`` finite and >= 0)."""
+    The core's vehicle itself (issue 26: types cross the boundary once): keyword-only, every
+    default from the core's ``LanzonVehicle::default()``, all twelve values checked once, by the
+    core's ``LanzonVehicle::check``, when the vehicle is made (errors name ``vehicle.<field>``:
+    scales finite, > 0 and within [1e-15, 1e15]; thrust and rate limits finite and > 0; ``k_t``,
+    ``I_R``, ``k_f`` finite and >= 0). Frozen, comparable, hashable, picklable;
+    ``vehicle.replace(mass_kg=0.6)`` gives a checked copy and ``LanzonVehicle.FIELDS`` the names
+    (``dataclasses.replace`` and ``dataclasses.fields`` still work, with a
+    ``DeprecationWarning``, for one release); ``model`` is the core's ``LanzonModel`` the
+    controller flies with. This subclass adds what the design reads in Python ("design in
+    Python, run in Rust"): the RFL algebra the loop-shaping design works on and the simulator of
+    the verification model.
 
-    mass_kg: float = _DEFAULT_MODEL.mass_kg
-    gravity_m_s2: float = _DEFAULT_MODEL.gravity_m_s2
-    inertia_xx_kg_m2: float = _DEFAULT_MODEL.inertia_xx_kg_m2
-    inertia_zz_kg_m2: float = _DEFAULT_MODEL.inertia_zz_kg_m2
-    arm_length_m: float = _DEFAULT_MODEL.arm_length_m
-    drag_torque_ratio_m: float = _DEFAULT_MODEL.drag_torque_ratio_m
-    rotational_drag_n_m_s: float = _DEFAULT_MODEL.rotational_drag_n_m_s
-    linear_drag_n_s_m: float = _DEFAULT_MODEL.linear_drag_n_s_m
-    rotor_inertia_kg_m2: float = 3e-5
-    thrust_coefficient_n_s2: float = 1e-5
-    max_thrust_n: float = 5.0
-    rate_limit_n_s: float = 50.0
+    Examples:
 
-    def __post_init__(self) -> None:
-        # One validation, the core's (``LanzonVehicle::check``), when the vehicle is made: types
-        # and values, errors naming ``vehicle.<field>``; the scales the law divides by in the
-        # core's accepted range, so ``r0 = m g d / k_r`` is finite and positive.
-        _rfcore.check_lanzon_vehicle(**{f.name: getattr(self, f.name) for f in fields(self)})
+        >>> from rotorfault.control.lanzon import LanzonVehicle
+        >>> v = LanzonVehicle()
+        >>> round(v.spin_rate_rad_s, 6), v.max_thrust_n, v.replace(mass_kg=0.6).mass_kg
+        (2.7, 5.0, 0.6)
+    """
+
+    __slots__ = ()
 
     @classmethod
     def from_airframe(cls, airframe: Airframe, **overrides: Any) -> LanzonVehicle:
@@ -126,10 +115,6 @@ class LanzonVehicle:
         )
         values.update(overrides)
         return cls(**values)
-
-    def replace(self, **changes: Any) -> LanzonVehicle:
-        """A copy with some fields changed (e.g. a perturbed mass)."""
-        return replace(self, **changes)
 
     # -- derived quantities ---------------------------------------------------------------------
     @property
@@ -301,12 +286,10 @@ class LanzonVehicle:
         return np.array([(uf - 2 * tq / l + tr / d) / 4, 0.0, (uf + 2 * tq / l + tr / d) / 4, (2 * uf - 2 * tr / d) / 4])
 
     def _core(self) -> _rfcore.LanzonModel:
-        return _rfcore.LanzonModel(
-            mass_kg=self.mass_kg, gravity_m_s2=self.gravity_m_s2, inertia_xx_kg_m2=self.inertia_xx_kg_m2,
-            inertia_zz_kg_m2=self.inertia_zz_kg_m2, arm_length_m=self.arm_length_m,
-            drag_torque_ratio_m=self.drag_torque_ratio_m, rotational_drag_n_m_s=self.rotational_drag_n_m_s,
-            linear_drag_n_s_m=self.linear_drag_n_s_m,
-        )
+        return self.model
+
+
+dataclass_compat(LanzonVehicle)
 
 
 #: The outer loop (28)-(31), which the paper leaves to "any simple standard linear control

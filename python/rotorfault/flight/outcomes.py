@@ -270,6 +270,19 @@ def effective_fault_times(trajectory: Any) -> list[float]:
     return times
 
 
+def scoring_window(trajectory: Any, window_s: Any) -> tuple[float, FloatArray]:
+    """``(window_s, t)`` of a flight about to be scored: the window (s) a real number > 0, the
+    trajectory's times at least 2 samples (``ValueError`` naming the field otherwise); every
+    scoring of a whole flight (:func:`flight_metrics`, a paper's own metrics) checks them here."""
+    window = real("window_s", window_s)
+    if not window > 0:
+        raise ValueError(f"window_s: must be > 0, got {window}")
+    t: FloatArray = trajectory.t
+    if len(t) < 2:
+        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    return window, t
+
+
 def flight_metrics(
     trajectory: Any,
     scenario_: Any = None,
@@ -283,12 +296,7 @@ def flight_metrics(
     trajectory's times, the speed then judged relative to the reference's velocity (a setpoint
     is a reference at rest: the same verdict). Fault times come from the trajectory's own faults
     (what it was flown with), not from the scenario."""
-    window_s = real("window_s", window_s)
-    if not window_s > 0:
-        raise ValueError(f"window_s: must be > 0, got {window_s}")
-    t = trajectory.t
-    if len(t) < 2:
-        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    window_s, t = scoring_window(trajectory, window_s)
     if (scenario_ is None) == (reference is None):
         raise ValueError("reference: give a scenario with setpoints or a reference (positions, velocities), not both or neither")
     if trajectory.diverged:

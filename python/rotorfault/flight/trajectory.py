@@ -7,16 +7,17 @@ import math
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, cast, overload
+from typing import TYPE_CHECKING, Any, ClassVar, Self, cast, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import FloatArray
+from .._util.deprecation import dataclass_compat
 from .._util.numeric import scaled_norm
 from .._util.tables import Column, Tabular, arrow_table, pyarrow, schema_metadata
-from .._typing import DivergenceKind, Sensed
+from .._typing import DivergenceKind
 from .faults import RotorFault
 
 if TYPE_CHECKING:
@@ -147,20 +148,44 @@ def _events(d: _rfcore.Divergence | None) -> list[Event]:
                   d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad)]
 
 
-def _estimates(packed: FloatArray, euler: FloatArray, std: FloatArray, gyro: Any, accel: Any, counts: _rfcore.SensingCounts) -> Estimates:
-    """The estimate of a run from its packed rows (position, velocity, quaternion, body rates)."""
-    return Estimates(
-        position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10],
-        euler=euler, omega=packed[:, 10:13], std=std, gyro_saturated=gyro, accel_saturated=accel, counts=counts,
-    )
+def _divergence(events: Sequence[Event]) -> _rfcore.Divergence | None:
+    """The core's divergence of a run constructed with ``events`` (at most one: a run ends once)."""
+    if len(events) > 1:
+        raise ValueError(f"events: a run ends at most once, got {len(events)} events")
+    if not events:
+        return None
+    e = events[0]
+    if not isinstance(e, Event):
+        raise TypeError(f"events: expected rotorfault.Event items, got {type(e).__name__}")
+    return _rfcore.Divergence(time_s=e.time, reason=e.kind, description=e.description, state=list(np.asarray(e.state, dtype=float)),
+                              impact_speed_m_s=e.impact_speed_m_s, impact_vertical_speed_m_s=e.impact_vertical_speed_m_s,
+                              impact_tilt_rad=e.impact_tilt_rad)
 
 
-@dataclass(frozen=True)
-class Trajectory(Tabular):
+def _estimate_fields(e: Estimates) -> dict[str, Any]:
+    """The core's estimate fields of an :class:`Estimates` (the constructor's old ``estimate=``)."""
+    return {
+        "estimate_state": np.hstack([e.position, e.velocity, e.quaternion, e.omega]), "estimate_euler": e.euler,
+        "estimate_std": e.std, "gyro_saturated": e.gyro_saturated, "accel_saturated": e.accel_saturated,
+        "sensing_counts": e.counts,
+    }
+
+
+class Trajectory(_rfcore.Trajectory, Tabular):
     """A run sampled at the control rate. Arrays have one row per control step: ``t`` (s),
     ``position`` (NED, m), ``velocity`` (NED, m/s), ``quaternion``, ``euler`` (Z-Y-X roll, pitch,
-    yaw in rad), ``omega`` (body rates p, q, r in rad/s), ``rotor_command`` and ``rotor_thrust``
-    (N for fixed pitch; speed and pitch channels for variable pitch), ``efficiency`` (0 to 1).
+    yaw in rad), ``omega`` (body rates p, q, r in rad/s), ``primary_axis`` (body z in the world
+    frame, Ke's n3), ``rotor_command`` and ``rotor_thrust`` (N for fixed pitch; speed and pitch
+    channels for variable pitch), ``efficiency`` (0 to 1, faults included),
+    ``recorded_measurements`` (the core's sensor readings, empty without noise; see
+    :attr:`measured`); ``sensed`` says what the controller flew on (``"truth"``,
+    ``"paper-noise"`` or the sensor suite's name), ``events`` why it ended early, ``faults`` the
+    faults it flew, ``estimate`` (with sensing) the estimate beside the truth.
+
+    The core's trajectory itself (issue 26: no field-by-field copy): the arrays are made once, by
+    the simulator or by the keyword-only constructor (the core's fields, shapes checked there;
+    ``events``, ``faults`` and ``estimate`` as before), and this subclass adds only what reads
+    them in Python: the derived arrays, the table, the plot. Frozen; picklable.
 
     ``to_arrow()`` / ``to_pandas()``: one row per recorded step (``t_s``, the 12 states of
     :data:`STATE_COLUMNS`, the quaternion, the primary axis, each rotor's command, thrust and
@@ -179,30 +204,60 @@ class Trajectory(Tabular):
         ((201, 3), ['t_s', 'north_m', 'east_m', 'down_m'])
     """
 
-    t: FloatArray
-    position: FloatArray
-    velocity: FloatArray
-    quaternion: FloatArray
-    euler: FloatArray
-    omega: FloatArray
-    #: Body z in the world frame (Ke's n3).
-    primary_axis: FloatArray
-    rotor_command: FloatArray
-    rotor_thrust: FloatArray
-    #: Rotor efficiencies applied by the simulator at each step (faults included).
-    efficiency: FloatArray
-    #: Sensor readings as recorded by the core (empty without noise); see :attr:`measured`.
-    recorded_measurements: FloatArray
-    events: list[Event] = field(default_factory=list)
-    faults: tuple[RotorFault, ...] = ()
-    #: What the controller flew on: ``"truth"``, ``"paper-noise"`` or the sensor suite's name.
-    sensed: Sensed = "truth"
-    #: With sensing, the estimate beside the truth (else ``None``).
-    estimate: Estimates | None = None
+    __slots__ = ("faults",)
+
+    #: The rotor faults the run flew (as given to :meth:`~rotorfault.Simulator.run`).
+    faults: tuple[RotorFault, ...]
+    #: The constructor's keywords: the core's fields and ``faults``.
+    FIELDS: ClassVar[list[str]] = [*_rfcore.Trajectory.FIELDS, "faults"]
+
+    def __new__(
+        cls,
+        *,
+        events: Sequence[Event] | None = None,
+        faults: Sequence[RotorFault] = (),
+        estimate: Estimates | None = None,
+        **core: Any,
+    ) -> Self:
+        if events is not None:
+            core["divergence"] = _divergence(events)
+        if estimate is not None:
+            core.update(_estimate_fields(estimate))
+        self = super().__new__(cls, **core)
+        object.__setattr__(self, "faults", tuple(faults))
+        return self
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"Trajectory is frozen: cannot set {name}")
+
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]:
+        return (), {name: getattr(self, name) for name in self.FIELDS}
+
+    def __getstate__(self) -> None:
+        return None  # everything is in the constructor's arguments
+
+    @classmethod
+    def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
+        """The simulator's run as this class: its arrays pass by reference, not copied."""
+        return cls(**{name: getattr(raw, name) for name in raw.FIELDS}, faults=faults)
 
     @property
-    def diverged(self) -> bool:
-        return bool(self.events)
+    def events(self) -> list[Event]:
+        """Why and when the run ended early: one :class:`Event`, or none."""
+        return _events(self.divergence)
+
+    @property
+    def estimate(self) -> Estimates | None:
+        """With sensing, the estimate beside the truth (else ``None``)."""
+        packed, euler, std, gyro, accel, counts = (self.estimate_state, self.estimate_euler, self.estimate_std,
+                                                   self.gyro_saturated, self.accel_saturated, self.sensing_counts)
+        if packed is None or euler is None or std is None or counts is None:
+            return None
+        return Estimates(
+            position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10], euler=euler,
+            omega=packed[:, 10:13], std=std, gyro_saturated=np.asarray(gyro, dtype=bool),
+            accel_saturated=np.asarray(accel, dtype=bool), counts=counts,
+        )
 
     @property
     def estimate_attitude_error_rad(self) -> FloatArray:
@@ -221,21 +276,23 @@ class Trajectory(Tabular):
         return out
 
     def _estimate(self, name: str) -> Estimates:
-        if self.estimate is None:
+        estimate = self.estimate
+        if estimate is None:
             raise ValueError(f"{name}: the run flew on {self.sensed}, without sensing there is no estimate")
-        return self.estimate
+        return estimate
 
     @property
     def measured(self) -> FloatArray:
         """What the controller saw: the 12-element state vector per step (with sensor noise; with
         sensing the estimate; otherwise the true state, built on demand). The divergence row is
         NaN."""
-        if self.estimate is not None:
-            return self.estimate.vector
+        estimate = self.estimate
+        if estimate is not None:
+            return estimate.vector
         if self.recorded_measurements.shape[1] > 0:
             return self.recorded_measurements
         measured = np.hstack([self.position, self.velocity, self.euler, self.omega])
-        if self.events:
+        if self.diverged:
             measured[-1] = np.nan  # no command was computed at the divergence
         return measured
 
@@ -267,8 +324,8 @@ class Trajectory(Tabular):
         columns += [(f"rotor_{k + 1}_efficiency", value_type, self.efficiency[:, k]) for k in range(m)]
         if self.recorded_measurements.shape[1] > 0:
             columns += [(f"measured_{name}", value_type, self.recorded_measurements[:, k]) for k, name in enumerate(STATE_COLUMNS)]
-        if self.estimate is not None:
-            e = self.estimate
+        e = self.estimate
+        if e is not None:
             estimated = e.vector
             columns += [(f"estimate_{name}", value_type, estimated[:, k]) for k, name in enumerate(STATE_COLUMNS)]
             columns += [(f"estimate_quaternion_{c}", value_type, e.quaternion[:, k]) for k, c in enumerate("wxyz")]
@@ -277,13 +334,14 @@ class Trajectory(Tabular):
         return columns
 
     def _table_title(self) -> str:
-        end = f"ended: {self.events[0]}" if self.events else "no divergence"
+        events = self.events
+        end = f"ended: {events[0]}" if events else "no divergence"
         return f"trajectory: {len(self.t)} steps to {self.t[-1]:g} s, {end}"
 
     def _table_metadata(self) -> dict[str, Any]:
         sensing = {}
-        if self.estimate is not None:
-            c = self.estimate.counts
+        c = self.sensing_counts
+        if c is not None:
             sensing = {"sensing_counts": {
                 "imu_samples": c.imu_samples, "gyro_saturated_samples": c.gyro_saturated_samples,
                 "accel_saturated_samples": c.accel_saturated_samples, "fused_measurements": c.fused_measurements,
@@ -296,31 +354,6 @@ class Trajectory(Tabular):
             "events": [{"kind": e.kind, "time_s": e.time, "description": e.description} for e in self.events],
             "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in self.faults],
         }
-
-    @classmethod
-    def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
-        estimate = None
-        packed, vector, std, counts = raw.estimate_state, raw.estimate_vector, raw.estimate_std, raw.sensing_counts
-        if packed is not None and vector is not None and std is not None and counts is not None:
-            estimate = _estimates(packed, vector[:, 6:9], std, np.asarray(raw.gyro_saturated, dtype=bool),
-                                  np.asarray(raw.accel_saturated, dtype=bool), counts)
-        return cls(
-            t=raw.t,
-            position=raw.position,
-            velocity=raw.velocity,
-            quaternion=raw.quaternion,
-            euler=raw.euler,
-            omega=raw.omega,
-            primary_axis=raw.primary_axis,
-            rotor_command=raw.command,
-            rotor_thrust=raw.thrust,
-            efficiency=raw.efficiency,
-            recorded_measurements=raw.measured,
-            events=_events(raw.divergence),
-            faults=faults,
-            sensed=raw.sensed,
-            estimate=estimate,
-        )
 
     def plot(
         self,
@@ -343,6 +376,9 @@ class Trajectory(Tabular):
         if setpoints and len(self.t) >= 2:
             verdict = flight_metrics(self, _Setpoints(tuple(setpoints))).verdict_label
         return plot_trajectory(self, path, title=title, setpoints=setpoints, verdict=verdict)
+
+
+dataclass_compat(Trajectory)
 
 
 @dataclass(frozen=True)
@@ -389,18 +425,29 @@ class RunViews(Sequence[Trajectory]):
 
         divergence = c.divergences[i]
         t = self._grid[:k] if not off else np.append(self._grid[:k], divergence.time_s)
-        estimate = None
-        counts = c.sensing_counts[i]
-        if counts is not None:
-            estimate = _estimates(rows(c.estimate_state), rows(c.estimate_euler), rows(c.estimate_std),
-                                  rows(c.gyro_saturated), rows(c.accel_saturated), counts)
         return Trajectory(
-            t=t, position=rows(c.position), velocity=rows(c.velocity), quaternion=rows(c.quaternion),
-            euler=rows(c.euler), omega=rows(c.omega), primary_axis=rows(c.primary_axis),
-            rotor_command=rows(c.command), rotor_thrust=rows(c.thrust), efficiency=rows(c.efficiency),
-            recorded_measurements=rows(c.measured), events=_events(divergence), faults=self._faults[i],
-            sensed=cast(Sensed, c.sensed[i]), estimate=estimate,
+            t=t, **self._signals(rows), divergence=divergence, faults=self._faults[i], sensed=c.sensed[i],
+            **(self._estimate_signals(rows, c.sensing_counts[i]) if c.sensing_counts[i] is not None else {}),
         )
+
+    def _signals(self, rows: Any) -> dict[str, Any]:
+        """The core trajectory's arrays of a run (or of every run, flat) by ``rows`` of each column."""
+        c = self._columns
+        return {
+            "position": rows(c.position), "velocity": rows(c.velocity), "quaternion": rows(c.quaternion),
+            "euler": rows(c.euler), "omega": rows(c.omega), "primary_axis": rows(c.primary_axis),
+            "rotor_command": rows(c.command), "rotor_thrust": rows(c.thrust), "efficiency": rows(c.efficiency),
+            "recorded_measurements": rows(c.measured),
+        }
+
+    def _estimate_signals(self, rows: Any, counts: _rfcore.SensingCounts) -> dict[str, Any]:
+        """The core trajectory's estimate fields by ``rows`` of each column (a run with sensing)."""
+        c = self._columns
+        return {
+            "estimate_state": rows(c.estimate_state), "estimate_euler": rows(c.estimate_euler),
+            "estimate_std": rows(c.estimate_std), "gyro_saturated": rows(c.gyro_saturated),
+            "accel_saturated": rows(c.accel_saturated), "sensing_counts": counts,
+        }
 
     def _flat(self) -> tuple[Trajectory, np.ndarray[Any, np.dtype[np.int64]]]:
         """Every run's rows one after another, as one :class:`Trajectory` (its arrays only), and
@@ -423,16 +470,8 @@ class RunViews(Sequence[Trajectory]):
         def rows(block: Any) -> Any:
             return block.reshape(n * slot, *block.shape[2:])[flat_index]
 
-        estimate = None
-        if any(x is not None for x in c.sensing_counts):
-            estimate = _estimates(rows(c.estimate_state), rows(c.estimate_euler), rows(c.estimate_std),
-                                  rows(c.gyro_saturated), rows(c.accel_saturated), c.sensing_counts[0])
-        flat = Trajectory(
-            t=times, position=rows(c.position), velocity=rows(c.velocity), quaternion=rows(c.quaternion),
-            euler=rows(c.euler), omega=rows(c.omega), primary_axis=rows(c.primary_axis),
-            rotor_command=rows(c.command), rotor_thrust=rows(c.thrust), efficiency=rows(c.efficiency),
-            recorded_measurements=rows(c.measured), estimate=estimate,
-        )
+        sensing = next((x for x in c.sensing_counts if x is not None), None)
+        flat = Trajectory(t=times, **self._signals(rows), **(self._estimate_signals(rows, sensing) if sensing is not None else {}))
         return flat, run
 
 

@@ -36,7 +36,7 @@ from ..plotting.timeseries import plot_lanzon_flight as plot_flight
 from ..plotting.verdicts import plot_verdict_sweep
 from ..studies.engine import run_chunks
 from ..studies.storage import pyarrow_module
-from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text
+from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text, scoring_window
 from ..flight.outcomes import OUTCOME_LABELS as OUTCOME_TEXT  # noqa: F401  (the one table of outcome words)
 from ..flight.scenarios import FlightScenario as KeScenario  # a generic flight scenario (no paper imports another)
 from ._report import markdown_lines
@@ -178,12 +178,7 @@ def tilt_deg(trajectory: Trajectory) -> FloatArray:
 
 def attitude_metrics(trajectory: Trajectory, spin_setpoint_rad_s: float, *, window_s: float = WINDOW_S) -> AttitudeMetrics:
     """Scores Scenario A's question on ``trajectory`` (see :class:`AttitudeMetrics`)."""
-    window_s = real("window_s", window_s)
-    if not window_s > 0:
-        raise ValueError(f"window_s: must be > 0, got {window_s}")
-    t = trajectory.t
-    if len(t) < 2:
-        raise ValueError(f"trajectory: needs at least 2 samples to be scored, got {len(t)}")
+    window_s, t = scoring_window(trajectory, window_s)
     if trajectory.diverged:
         e = trajectory.events[0]
         return AttitudeMetrics(e.kind, None, None, None, None, None, float(e.time), window_s)
@@ -637,10 +632,10 @@ class _MonteCarloTask:
         sc = scenario("B")
         assert sc.position is not None
         nominal, f = self.nominal, self.factors[i]
-        v = replace(nominal, mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
-                    inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
-                    rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
-                    rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
+        v = nominal.replace(mass_kg=nominal.mass_kg * f[0], inertia_xx_kg_m2=nominal.inertia_xx_kg_m2 * f[1],
+                            inertia_zz_kg_m2=nominal.inertia_zz_kg_m2 * f[2],
+                            rotational_drag_n_m_s=nominal.rotational_drag_n_m_s * f[3],
+                            rotor_inertia_kg_m2=nominal.rotor_inertia_kg_m2 * f[4])
         noise = None if self.snr_db is None else Noise(snr_db=self.snr_db, seed=self.seed + i)
         sim = v.simulator(limits=self.case.limits if self.controller == "lanzon" else True, noise=noise)
         ctrl: Any

@@ -557,6 +557,9 @@ def _targets() -> dict[str, Target]:
     t["IndiGains"] = Target(calls(rf.IndiGains, k_p_xy=hostile(positive(0.1, 5)), max_tilt_rad=hostile(positive(0.1, 1.5)), filter_frequency_rad_s=hostile(positive(1, 100))))
     t["KeGains"] = Target(calls(control.KeGains, k_p=hostile(positive(0.1, 5)), epsilon_s=hostile(positive(1e-3, 1)), weights=st.one_of(st.none(), vector(3, hostile(positive(0.1, 10))))))
     t["LanzonController"] = Target(st.tuples(vector(3, hostile(number(-5, 0))), st.one_of(st.none(), vector(3, hostile(number(-1, 1))))).map(lambda a: Call(rf.LanzonController, (lanzon_design(),), {"position": a[0], "attitude_reference": a[1]}, frozenset({"position", "attitude_reference"}))), lambda r, c: None)
+    # Lanzon's vehicle is the core's class (issue 26): its defaults and checks are the core's.
+    t["LanzonVehicle"] = Target(calls(control.lanzon.LanzonVehicle, mass_kg=hostile(positive(0.1, 2)), inertia_zz_kg_m2=hostile(positive(1e-3, 0.1)),
+                                      rotor_inertia_kg_m2=hostile(positive(1e-6, 1e-3)), rate_limit_n_s=hostile(positive(1, 100))))
     t["lanzon_plant"] = Target(st.one_of(st.just(control.lanzon.LanzonVehicle()), st.sampled_from(WRONG_TYPES)).map(lambda v: Call(control.lanzon_plant, (v,), {}, frozenset({"vehicle"}))))
     t["ncfsyn"] = Target(st.tuples(_plant(), st.one_of(st.just(np.eye(1)), _small_matrix(1, 1)), hostile(positive(1.01, 2.0), 1.0)).map(lambda a: Call(rf.ncfsyn, (a[0], a[1]), {"factor": a[2]}, frozenset({"plant", "w1", "w2", "factor"}))), lambda r, c: _check_ncfsyn(r))
     t["design_lqr"] = Target(st.tuples(_plant(), st.one_of(st.none(), _small_matrix(1, 1)), hostile(positive(0.1, 10))).map(lambda a: _design_lqr(*a)), check_lqr)

@@ -1,12 +1,12 @@
 //! Bindings for Ke et al.'s uniform passive FTC: the controller, its gains and its preset files.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyType};
+use pyo3::types::PyType;
 
 use rfcore::control::ke::{CommandLaw, FtcPreset, FtcVehicle, KeGains, UniformPassiveFtc};
 
 use crate::airframe::PyAirframe;
-use crate::convert::{fixed_reals, real, settings_protocol, settings_eq, settings_hash, settings_kwargs, settings_replace, settings_repr, to_py_err};
+use crate::convert::{fixed_reals, real, settings_kwargs, settings_protocol, to_py_err};
 
 /// Ke Table IV gains: the one `KeGains` class, used directly from Python (re-exported as
 /// `rotorfault.control.ke.KeGains`). Keyword-only; defaults from the core's `Default` (the `ke-hil`
@@ -27,11 +27,12 @@ pub struct PyKeGains {
 
 macro_rules! gains_class {
     ($($name:ident),*) => {
-        /// The field names, in order (`weights` last).
-        const KE_GAIN_FIELDS: &[&str] = &[$(stringify!($name),)* "weights"];
-
-        #[pymethods]
         impl PyKeGains {
+            /// The field names, in order (`weights` last).
+            const FIELDS: &'static [&'static str] = &[$(stringify!($name),)* "weights"];
+        }
+
+        settings_protocol!(PyKeGains, {
             #[new]
             #[pyo3(signature = (*, $($name=None,)* weights=None))]
             fn new($($name: Option<Bound<'_, PyAny>>,)* weights: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
@@ -55,30 +56,7 @@ macro_rules! gains_class {
                 let [a, b, c, e] = self.inner.weights;
                 (a, b, c, e)
             }
-            /// The field names, in order.
-            #[classattr]
-            #[pyo3(name = "FIELDS")]
-            fn fields() -> Vec<&'static str> {
-                KE_GAIN_FIELDS.to_vec()
-            }
-            /// A copy with ``changes`` (validated like a new object).
-            #[pyo3(signature = (**changes))]
-            fn replace<'py>(slf: &Bound<'py, Self>, changes: Option<&Bound<'py, PyDict>>) -> PyResult<Bound<'py, PyAny>> {
-                settings_replace(slf.as_any(), KE_GAIN_FIELDS, changes)
-            }
-            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-                settings_repr(slf.as_any(), KE_GAIN_FIELDS)
-            }
-            fn __eq__(slf: &Bound<'_, Self>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
-                settings_eq(slf.as_any(), other, KE_GAIN_FIELDS)
-            }
-            fn __hash__(slf: &Bound<'_, Self>) -> PyResult<isize> {
-                settings_hash(slf.as_any(), KE_GAIN_FIELDS)
-            }
-            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-                Ok(((), settings_kwargs(slf.as_any(), KE_GAIN_FIELDS)?))
-            }
-        }
+        });
     };
 }
 

@@ -9,7 +9,7 @@ use rfcore::control::lanzon::{
     LanzonVehicle,
 };
 
-use crate::convert::{matrix, real, settings_class, to_py_err};
+use crate::convert::{matrix, settings_class, to_py_err};
 
 settings_class!(
     /// Lanzon's control model (`rotorfault._rfcore.LanzonModel`): Table 1 plus `k_r`, `k_t`.
@@ -26,46 +26,35 @@ settings_class!(
     }
 );
 
-/// Checks the whole vehicle of `rotorfault.control.lanzon.LanzonVehicle` (its one validation:
-/// types here, `vehicle.<field>: expected a real number`; values by the core's
-/// `LanzonVehicle::check`, errors naming `vehicle.<field>`).
-#[pyfunction]
-#[pyo3(signature = (*, mass_kg, gravity_m_s2, inertia_xx_kg_m2, inertia_zz_kg_m2, arm_length_m,
-    drag_torque_ratio_m, rotational_drag_n_m_s, linear_drag_n_s_m, rotor_inertia_kg_m2,
-    thrust_coefficient_n_s2, max_thrust_n, rate_limit_n_s))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn check_lanzon_vehicle(
-    mass_kg: Bound<'_, PyAny>,
-    gravity_m_s2: Bound<'_, PyAny>,
-    inertia_xx_kg_m2: Bound<'_, PyAny>,
-    inertia_zz_kg_m2: Bound<'_, PyAny>,
-    arm_length_m: Bound<'_, PyAny>,
-    drag_torque_ratio_m: Bound<'_, PyAny>,
-    rotational_drag_n_m_s: Bound<'_, PyAny>,
-    linear_drag_n_s_m: Bound<'_, PyAny>,
-    rotor_inertia_kg_m2: Bound<'_, PyAny>,
-    thrust_coefficient_n_s2: Bound<'_, PyAny>,
-    max_thrust_n: Bound<'_, PyAny>,
-    rate_limit_n_s: Bound<'_, PyAny>,
-) -> PyResult<()> {
-    let vehicle = LanzonVehicle {
-        model: LanzonModel {
-            mass_kg: real("vehicle.mass_kg", &mass_kg)?,
-            gravity_m_s2: real("vehicle.gravity_m_s2", &gravity_m_s2)?,
-            inertia_xx_kg_m2: real("vehicle.inertia_xx_kg_m2", &inertia_xx_kg_m2)?,
-            inertia_zz_kg_m2: real("vehicle.inertia_zz_kg_m2", &inertia_zz_kg_m2)?,
-            arm_length_m: real("vehicle.arm_length_m", &arm_length_m)?,
-            drag_torque_ratio_m: real("vehicle.drag_torque_ratio_m", &drag_torque_ratio_m)?,
-            rotational_drag_n_m_s: real("vehicle.rotational_drag_n_m_s", &rotational_drag_n_m_s)?,
-            linear_drag_n_s_m: real("vehicle.linear_drag_n_s_m", &linear_drag_n_s_m)?,
-        },
-        rotor_inertia_kg_m2: real("vehicle.rotor_inertia_kg_m2", &rotor_inertia_kg_m2)?,
-        thrust_coefficient_n_s2: real("vehicle.thrust_coefficient_n_s2", &thrust_coefficient_n_s2)?,
-        max_thrust_n: real("vehicle.max_thrust_n", &max_thrust_n)?,
-        rate_limit_n_s: real("vehicle.rate_limit_n_s", &rate_limit_n_s)?,
-    };
-    vehicle.check().map_err(to_py_err)
-}
+settings_class!(
+    /// The whole vehicle of Lanzon et al.'s design (`rotorfault.control.lanzon.LanzonVehicle`
+    /// subclasses it, adding the RFL algebra in Python): the control model plus the verification
+    /// model's values. Keyword-only; defaults the core's `LanzonVehicle::default()`; types checked
+    /// here (`vehicle.<field>: expected a real number`), values once by the core's
+    /// `LanzonVehicle::check` (errors naming `vehicle.<field>`).
+    PyLanzonVehicle, "LanzonVehicle", LanzonVehicle, pyclass = subclass, prefix = "vehicle", check = LanzonVehicle::check,
+    {
+        mass_kg => model.mass_kg,
+        gravity_m_s2 => model.gravity_m_s2,
+        inertia_xx_kg_m2 => model.inertia_xx_kg_m2,
+        inertia_zz_kg_m2 => model.inertia_zz_kg_m2,
+        arm_length_m => model.arm_length_m,
+        drag_torque_ratio_m => model.drag_torque_ratio_m,
+        rotational_drag_n_m_s => model.rotational_drag_n_m_s,
+        linear_drag_n_s_m => model.linear_drag_n_s_m,
+        rotor_inertia_kg_m2 => rotor_inertia_kg_m2,
+        thrust_coefficient_n_s2 => thrust_coefficient_n_s2,
+        max_thrust_n => max_thrust_n,
+        rate_limit_n_s => rate_limit_n_s,
+    },
+    methods = {
+        /// What the controller flies with: the control model (the core's `LanzonModel`).
+        #[getter]
+        fn model(&self) -> PyLanzonModel {
+            PyLanzonModel { inner: self.inner.model }
+        }
+    }
+);
 
 settings_class!(
     /// The outer loop (28)-(31) (`rotorfault.control.lanzon.OuterLoopGains`): PD (optionally PID)

@@ -80,6 +80,22 @@ pub struct LanzonVehicle {
     pub rate_limit_n_s: f64,
 }
 
+/// The paper's vehicle (Table 1, [`LanzonModel::default`]) with the verification model's values
+/// the paper does not give: `I_R` 3e-5 kg m^2 (a 10-inch propeller with its motor bell), `k_f`
+/// 1e-5 N s^2 (5 N at 707 rad/s), thrust limit 5 N, rate limit 50 N/s (Section II.B). The one
+/// source of these defaults (Python reads them through the bindings).
+impl Default for LanzonVehicle {
+    fn default() -> Self {
+        LanzonVehicle {
+            model: LanzonModel::default(),
+            rotor_inertia_kg_m2: 3e-5,
+            thrust_coefficient_n_s2: 1e-5,
+            max_thrust_n: 5.0,
+            rate_limit_n_s: 50.0,
+        }
+    }
+}
+
 impl LanzonVehicle {
     /// The model's rules ([`LanzonModel::check_as`]), thrust and rate limits finite and > 0,
     /// `I_R` and `k_f` finite and >= 0; errors name `vehicle.<field>`.
