@@ -86,6 +86,10 @@ class LinearModel(ct.StateSpace):  # type: ignore[misc]
             raise ValueError(f"x_trim: expected {n} states, got {self.x_trim.shape[0]}")
         self.u_trim: FloatArray = frozen_array("u_trim", u_trim, 1)
         self.command_columns: tuple[int, ...] = tuple(int(c) for c in command_columns)
+        channels = self.u_trim.shape[0]
+        outside = [c for c in self.command_columns if not 0 <= c < channels]
+        if outside:  # an IndexError in the input map below otherwise (hostile harness: u_trim=[])
+            raise ValueError(f"command_columns: each must index one of u_trim's {channels} channels, got {outside[0]}")
         if input_map is None:
             selection = np.zeros((self.u_trim.shape[0], m))
             selection[list(self.command_columns), list(range(m))] = 1.0

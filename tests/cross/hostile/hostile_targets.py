@@ -719,7 +719,11 @@ def _regressions(t: dict[str, Target]) -> None:
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
         # python-control's unnamed ControlDimension for a b of 0 rows.
-        "LinearModel": (Call(control.LinearModel, (np.zeros((12, 12)), np.zeros((0, 4))), {"inputs": ["a"] * 4, "x_trim": [], "u_trim": [], "command_columns": [0, 1, 2, 3], "name": ""}),),
+        "LinearModel": (Call(control.LinearModel, (np.zeros((12, 12)), np.zeros((0, 4))), {"inputs": ["a"] * 4, "x_trim": [], "u_trim": [], "command_columns": [0, 1, 2, 3], "name": ""}),
+                        # u_trim without channels for the command columns: an IndexError (long run, 2026-11-28).
+                        Call(control.LinearModel, (np.zeros((12, 12)), np.zeros((12, 4))), {"inputs": ["a"] * 4, "x_trim": [0.0] * 12, "u_trim": [],
+                                                                                            "command_columns": [0, 1, 2, 3], "name": ""},
+                             frozenset({"command_columns"}))),
         # float(None) naming nothing; 1e300 rad/s squared: OverflowError.
         # A string distance: '>' between str and float; a list as the hover: unhashable; NaN: KeyError.
         "hover_wrench_text": (Call(analysis.hover_wrench_text, ("outside", "x"), {}, frozenset({"distance"})),
