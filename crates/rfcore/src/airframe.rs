@@ -437,29 +437,17 @@ impl Airframe {
     /// A general rotor contributes its upward force `-a_z` and the torques of
     /// [`Airframe::nominal_wrench_matrix`]; lateral force is not one of these axes.
     pub fn nominal_effectiveness_matrix(&self) -> DMatrix<f64> {
-        let k_mu = self.drag_torque_ratio_m;
+        // From the wrench column: for a planar rotor `-(-1) = 1` and Du's eq. (5) torques, the
+        // same bits as writing eq. (5) out.
+        let columns: Vec<[f64; 6]> = (0..self.rotor_count())
+            .map(|i| self.wrench_column(i))
+            .collect();
         DMatrix::from_fn(4, self.rotor_count(), |row, i| {
-            let r = &self.rotors[i];
-            flushed(match r.placement {
-                // Du's eq. (5) verbatim, so planar airframes give today's bits.
-                RotorPlacement::Planar {
-                    arm_angle_rad,
-                    arm_length_m,
-                } => match row {
-                    0 => 1.0,
-                    1 => -arm_length_m * arm_angle_rad.sin(),
-                    2 => arm_length_m * arm_angle_rad.cos(),
-                    _ => r.spin.yaw_sign() * r.drag_torque_ratio_m.unwrap_or(k_mu),
-                },
-                RotorPlacement::General { .. } => {
-                    let column = self.wrench_column(i);
-                    if row == 0 {
-                        -column[2]
-                    } else {
-                        column[2 + row]
-                    }
-                }
-            })
+            if row == 0 {
+                -columns[i][2]
+            } else {
+                columns[i][2 + row]
+            }
         })
     }
 
@@ -477,7 +465,7 @@ impl Airframe {
     fn wrench_column(&self, i: usize) -> [f64; 6] {
         let r = &self.rotors[i];
         let k = r.spin.yaw_sign() * self.rotor_drag_torque_ratio_m(i);
-        match r.placement {
+        let column = match r.placement {
             RotorPlacement::Planar {
                 arm_angle_rad,
                 arm_length_m,
@@ -485,8 +473,8 @@ impl Airframe {
                 0.0,
                 0.0,
                 -1.0,
-                flushed(-arm_length_m * arm_angle_rad.sin()),
-                flushed(arm_length_m * arm_angle_rad.cos()),
+                -arm_length_m * arm_angle_rad.sin(),
+                arm_length_m * arm_angle_rad.cos(),
                 k,
             ],
             RotorPlacement::General {
@@ -496,11 +484,12 @@ impl Airframe {
                 a[0],
                 a[1],
                 a[2],
-                flushed(p[1] * a[2] - p[2] * a[1] - k * a[0]),
-                flushed(p[2] * a[0] - p[0] * a[2] - k * a[1]),
-                flushed(p[0] * a[1] - p[1] * a[0] - k * a[2]),
+                p[1] * a[2] - p[2] * a[1] - k * a[0],
+                p[2] * a[0] - p[0] * a[2] - k * a[1],
+                p[0] * a[1] - p[1] * a[0] - k * a[2],
             ],
-        }
+        };
+        column.map(flushed)
     }
 
     /// The full 6 x m effectiveness matrix without efficiencies: rows force `(F_x, F_y, F_z)` (N
@@ -515,12 +504,17 @@ impl Airframe {
 
     /// [`Airframe::nominal_wrench_matrix`] with column i scaled by eta_i.
     pub fn wrench_matrix(&self) -> DMatrix<f64> {
-        let mut b = self.nominal_wrench_matrix();
+        self.with_efficiencies(self.nominal_wrench_matrix())
+    }
+
+    /// `nominal` (one column per rotor) with column i scaled by eta_i: the one place every
+    /// effectiveness matrix of the crate takes its efficiencies, a subnormal product read as 0.
+    pub fn with_efficiencies(&self, mut nominal: DMatrix<f64>) -> DMatrix<f64> {
         for (i, rotor) in self.rotors.iter().enumerate() {
-            b.column_mut(i).scale_mut(rotor.efficiency);
+            nominal.column_mut(i).scale_mut(rotor.efficiency);
         }
-        b.apply(|x| *x = flushed(*x));
-        b
+        nominal.apply(|x| *x = flushed(*x));
+        nominal
     }
 
     /// The force and torque the rotors must supply to hover level, body FRD:
@@ -580,12 +574,7 @@ impl Airframe {
 
     /// B_f of Du eq. (5): the nominal matrix with column i scaled by eta_i.
     pub fn effectiveness_matrix(&self) -> DMatrix<f64> {
-        let mut b = self.nominal_effectiveness_matrix();
-        for (i, rotor) in self.rotors.iter().enumerate() {
-            b.column_mut(i).scale_mut(rotor.efficiency);
-        }
-        b.apply(|x| *x = flushed(*x));
-        b
+        self.with_efficiencies(self.nominal_effectiveness_matrix())
     }
 }
 

@@ -267,6 +267,34 @@ fn an_airframe_matrix_has_no_subnormal_entry() {
         );
     }
     AllocationProblem::new(b, &[1.0; 4], &[0.0; 4], &[1.0; 4]).unwrap();
+    // Every axes' matrix takes its efficiencies there too (hover_thrust_margin's path).
+    for axes in [
+        ControlAxes::ThrustRollPitchYaw,
+        ControlAxes::ThrustRollPitch,
+        ControlAxes::Wrench,
+    ] {
+        assert!(axes.matrix(&faint).iter().all(|x| !x.is_subnormal()));
+    }
+    // A general rotor whose thrust axis has a subnormal component.
+    let s = std::f64::consts::FRAC_1_SQRT_2 * 0.25;
+    let general = Airframe::from_general_columns(
+        "general",
+        &[s, s, 0.0, -s, s, 0.0, -s, -s, 0.0, s, -s, 0.0],
+        &[SUBNORMAL, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0],
+        &[1.0, -1.0, 1.0, -1.0],
+        None,
+        &[8.0; 4],
+        &[0.0; 4],
+        &[1.0; 4],
+        1.0,
+        &[0.01, 0.01, 0.02],
+        0.02,
+        9.81,
+    )
+    .unwrap();
+    let wrench = ControlAxes::Wrench.matrix(&general);
+    assert!(wrench.iter().all(|x| !x.is_subnormal()), "{wrench}");
+    assert_eq!(wrench[(0, 0)], 0.0);
 }
 
 #[test]

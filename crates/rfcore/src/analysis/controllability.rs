@@ -86,11 +86,7 @@ impl ControlAxes {
 
     /// The n x m matrix with the airframe's efficiencies applied.
     pub fn matrix(self, airframe: &Airframe) -> DMatrix<f64> {
-        let mut b = self.nominal_matrix(airframe);
-        for (i, eta) in airframe.efficiency().into_iter().enumerate() {
-            b.column_mut(i).scale_mut(eta);
-        }
-        b
+        airframe.with_efficiencies(self.nominal_matrix(airframe))
     }
 
     /// What hovering level asks of these axes: `[m g, 0, 0(, 0)]`, or `[0, 0, -m g, 0, 0, 0]`.
