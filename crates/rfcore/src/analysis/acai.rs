@@ -84,7 +84,7 @@ use rayon::prelude::*;
 
 use crate::analysis::combinations::{binomial, Combinations};
 use crate::analysis::cross_product::generalized_cross_product;
-use crate::analysis::facet_lanes::{evaluate_rows, FacetTable, LanePath};
+use crate::analysis::facet_lanes::{evaluate_rows, FacetTable, LanePath, LANES};
 use crate::cancel::{rows_per_check, Cancel, GROUPS_PER_CHECK};
 use crate::error::{require_all_finite, require_entries, require_finite, Result, RfError};
 
@@ -659,7 +659,11 @@ impl FacetNormals {
         let (along_g, zero_snap) = self.per_group_constants(f_min, f_max, g);
         let table = self.table(&along_g, &zero_snap, f_min, f_max);
         let path = LanePath::detect();
-        let block = rows_per_check(self.group_count() * self.m).min(ROWS_PER_BLOCK);
+        // Whole passes of LANES rows: a large table's check interval (a few rows) would otherwise
+        // pad each block to a pass and run up to 8 times the work.
+        let block = rows_per_check(self.group_count() * self.m)
+            .next_multiple_of(LANES)
+            .min(ROWS_PER_BLOCK);
         out.par_chunks_mut(block)
             .zip(etas.par_chunks(block * self.m))
             .try_for_each(|(out, etas)| {
@@ -706,6 +710,7 @@ impl FacetNormals {
 
 /// Rows of an ACAI batch per parallel block (rayon groups blocks further), small enough to share
 /// a batch among many threads (the batch used `with_min_len(256)` before blocks existed).
+/// A multiple of [`LANES`].
 const ROWS_PER_BLOCK: usize = 256;
 
 /// Airframes with at most this many rotors evaluate without touching the heap.

@@ -105,7 +105,6 @@ struct Scratch {
     half_range: Vec<[f64; LANES]>,
     centre_thrust: Vec<[f64; LANES]>,
     working: Vec<[bool; LANES]>,
-    padded: Vec<f64>,
 }
 
 #[inline(always)]
@@ -115,7 +114,6 @@ fn evaluate_rows_lanes(table: &FacetTable<'_>, etas: &[f64], eq13: &mut [f64], m
         half_range: vec![[0.0; LANES]; m],
         centre_thrust: vec![[0.0; LANES]; m],
         working: vec![[false; LANES]; m],
-        padded: Vec::new(),
     };
     let full = etas.len() / m / LANES * LANES;
     for start in (0..full).step_by(LANES) {
@@ -127,9 +125,7 @@ fn evaluate_rows_lanes(table: &FacetTable<'_>, etas: &[f64], eq13: &mut [f64], m
     let tail = eq13.len() - full;
     if tail > 0 {
         // The last rows padded with healthy rotors; the padding's values are dropped.
-        let mut padded = std::mem::take(&mut scratch.padded);
-        padded.clear();
-        padded.extend_from_slice(&etas[full * m..]);
+        let mut padded = etas[full * m..].to_vec();
         padded.resize(LANES * m, 1.0);
         let (e, f) = pass(table, &padded, &mut scratch);
         eq13[full..].copy_from_slice(&e[..tail]);
