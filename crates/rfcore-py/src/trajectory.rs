@@ -27,14 +27,18 @@ pub struct PyDivergence {
     impact_tilt_rad: Option<f64>,
 }
 
-/// A finite real number for `field` (`None` stays `None`).
-fn finite(field: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
-    let Some(value) = value else { return Ok(None) };
-    let x = real(field, &value)?;
+/// A finite real number for `field`.
+fn finite_real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let x = real(field, value)?;
     if !x.is_finite() {
         return Err(PyValueError::new_err(format!("{field}: must be finite, got {x}")));
     }
-    Ok(Some(x))
+    Ok(x)
+}
+
+/// [`finite_real`], `None` staying `None`.
+fn finite(field: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
+    value.map(|v| finite_real(field, &v)).transpose()
 }
 
 impl PyDivergence {
@@ -60,7 +64,7 @@ impl PyDivergence {
         impact_tilt_rad: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         Ok(PyDivergence {
-            time_s: finite("time_s", Some(time_s))?.unwrap_or(f64::NAN),
+            time_s: finite_real("time_s", &time_s)?,
             reason,
             description,
             state,
@@ -223,46 +227,50 @@ impl PyTrajectory {
         "sensing_counts",
     ];
 
-    /// The core's record as arrays, each made once.
+    /// The core's record as arrays, each made once (the record's own vectors moved, not copied).
     pub(crate) fn from_run(py: Python<'_>, run: Trajectory) -> PyResult<Self> {
         let n = run.t_s.len();
+        let sensed = run.sensed().to_string();
         let table = |values: Vec<f64>| -> PyResult<Py<PyAny>> {
             let cols = values.len().checked_div(n).unwrap_or(0);
             Ok(values.into_pyarray(py).reshape([n, cols])?.into_any().unbind())
         };
-        let per_state = |f: &dyn Fn(&RigidBodyState) -> Vec<f64>| table(run.states.iter().flat_map(f).collect());
+        let states = &run.states;
+        let per_state = |f: fn(&RigidBodyState) -> [f64; 3]| table(rows(states, f));
         let sensing = run.sensing.as_ref();
-        let estimate = |f: &dyn Fn(&EstimateRow) -> Vec<f64>| {
-            sensing.map(|r| table(r.rows.iter().flat_map(f).collect())).transpose()
-        };
-        let flags = |f: &dyn Fn(&EstimateRow) -> bool| {
+        let flags = |f: fn(&EstimateRow) -> bool| {
             sensing.map(|r| r.rows.iter().map(f).collect::<Vec<bool>>().into_pyarray(py).into_any().unbind())
         };
         Ok(PyTrajectory {
-            t: run.t_s.clone().into_pyarray(py).into_any().unbind(),
-            position: per_state(&|s| s.position_m.as_slice().to_vec())?,
-            velocity: per_state(&|s| s.velocity_m_s.as_slice().to_vec())?,
-            quaternion: per_state(&|s| {
+            position: per_state(|s| s.position_m.into())?,
+            velocity: per_state(|s| s.velocity_m_s.into())?,
+            quaternion: table(rows(states, |s| {
                 let q = s.attitude.quaternion();
-                vec![q.w, q.i, q.j, q.k]
-            })?,
-            euler: per_state(&|s| s.euler_rad().to_vec())?,
-            omega: per_state(&|s| s.omega_rad_s.as_slice().to_vec())?,
-            primary_axis: per_state(&|s| s.primary_axis().as_slice().to_vec())?,
-            rotor_command: table(run.commands.clone())?,
-            rotor_thrust: table(run.thrust_n.clone())?,
-            efficiency: table(run.efficiency.clone())?,
-            recorded_measurements: table(run.measured.clone())?,
-            sensed: run.sensed().to_string(),
-            divergence: run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?,
-            estimate_state: estimate(&|row| row.state.to_packed().to_vec())?,
-            estimate_euler: estimate(&|row| row.state.euler_rad().to_vec())?,
-            estimate_std: estimate(&|row| row.std.to_vec())?,
-            gyro_saturated: flags(&|row| row.gyro_saturated),
-            accel_saturated: flags(&|row| row.accel_saturated),
+                [q.w, q.i, q.j, q.k]
+            }))?,
+            euler: per_state(|s| s.euler_rad())?,
+            omega: per_state(|s| s.omega_rad_s.into())?,
+            primary_axis: per_state(|s| s.primary_axis().into())?,
+            estimate_state: sensing.map(|r| table(rows(&r.rows, |row| row.state.to_packed()))).transpose()?,
+            estimate_euler: sensing.map(|r| table(rows(&r.rows, |row| row.state.euler_rad()))).transpose()?,
+            estimate_std: sensing.map(|r| table(rows(&r.rows, |row| row.std))).transpose()?,
+            gyro_saturated: flags(|row| row.gyro_saturated),
+            accel_saturated: flags(|row| row.accel_saturated),
             sensing_counts: sensing.map(|r| Py::new(py, PySensingCounts::from(r))).transpose()?,
+            t: run.t_s.into_pyarray(py).into_any().unbind(),
+            rotor_command: table(run.commands)?,
+            rotor_thrust: table(run.thrust_n)?,
+            efficiency: table(run.efficiency)?,
+            recorded_measurements: table(run.measured)?,
+            sensed,
+            divergence: run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?,
         })
     }
+}
+
+/// `f` of every row, flattened row-major (no allocation per row).
+fn rows<R, const N: usize>(rows: &[R], f: impl Fn(&R) -> [f64; N]) -> Vec<f64> {
+    rows.iter().flat_map(f).collect()
 }
 
 #[pymethods]
