@@ -60,7 +60,7 @@ def test_outer_loop_rotation_cancels_the_yaw() -> None:
     gains = L.OuterLoopGains(k_p_xy=0.3, k_d_xy=0.0, k_p_z=0.0, k_d_z=0.0, max_tilt_rad=1.0)
     for psi in (0.0, 0.7, 2.5, -1.9):
         state = rf.State(position=(1.0, 0.0, 0.0), euler=(0, 0, -psi), omega=(0, 0, -v.spin_rate_rad_s))
-        ctrl = _rfcore.LanzonController(model=v._core(), a_k=np.zeros((0, 0)), b_k=np.zeros((0, 3)),
+        ctrl = _rfcore.LanzonController(model=v.model, a_k=np.zeros((0, 0)), b_k=np.zeros((0, 3)),
                                         c_k=np.zeros((3, 0)), d_k=np.zeros((3, 3)),
                                         position=[0.0, 0.0, 0.0], outer_loop=gains)
         # With D_K = 0 the linear input is zero and the command is alpha(x) at the state: hover.
@@ -101,7 +101,7 @@ def test_scenario_b_reaches_the_setpoint_with_limits() -> None:
 
 def test_bad_designs_name_the_field() -> None:
     v = L.LanzonVehicle()
-    m = v._core()
+    m = v.model
     z = dict(a_k=np.zeros((0, 0)), b_k=np.zeros((0, 3)), c_k=np.zeros((3, 0)), d_k=np.zeros((3, 3)))
     with pytest.raises(ValueError, match=r"^A_K: the discretised controller must be stable"):
         _rfcore.LanzonController(model=m, **{**z, "a_k": np.eye(1) * 1.01, "b_k": np.zeros((1, 3)), "c_k": np.zeros((3, 1))})
@@ -203,10 +203,10 @@ def test_controller_matrices_the_schur_iteration_cannot_take_are_refused_not_hun
     k = ct.c2d(d.controller, 1e-3, method="tustin")
     a, b, c, dd = (np.ascontiguousarray(np.asarray(m, dtype=float)) for m in (k.A, k.B, k.C, k.D))
     with pytest.raises(ValueError, match=r"^A_K: the Schur decomposition \(eigenvalues\) did not converge within its cap of"):
-        _rfcore.LanzonController(model=d.vehicle._core(), a_k=a, b_k=b, c_k=c, d_k=dd, attitude_reference=[0, 0, 2.7])
+        _rfcore.LanzonController(model=d.vehicle.model, a_k=a, b_k=b, c_k=c, d_k=dd, attitude_reference=[0, 0, 2.7])
     a2, b2, c2, d2 = d.discretise(1e-3)
     assert np.allclose(np.tril(a2, -2), 0.0, atol=0.0)  # quasi-triangular
-    _rfcore.LanzonController(model=d.vehicle._core(), a_k=a2, b_k=b2, c_k=c2, d_k=d2, attitude_reference=[0, 0, 2.7])
+    _rfcore.LanzonController(model=d.vehicle.model, a_k=a2, b_k=b2, c_k=c2, d_k=d2, attitude_reference=[0, 0, 2.7])
     # The same controller: the two realisations have the same frequency response.
     from rotorfault.control.realisation import frequency_response, state_space
 

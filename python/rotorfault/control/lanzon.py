@@ -285,9 +285,6 @@ class LanzonVehicle(_rfcore.LanzonVehicle):
         l, d = self.arm_length_m, self.drag_torque_ratio_m
         return np.array([(uf - 2 * tq / l + tr / d) / 4, 0.0, (uf + 2 * tq / l + tr / d) / 4, (2 * uf - 2 * tr / d) / 4])
 
-    def _core(self) -> _rfcore.LanzonModel:
-        return self.model
-
 
 dataclass_compat(LanzonVehicle)
 
@@ -449,7 +446,7 @@ class LanzonController:
     def core(self, dt_s: float) -> _rfcore.LanzonController:
         a, b, c, d = self.design.discretise(dt_s)
         return _rfcore.LanzonController(
-            model=self.design.vehicle._core(), a_k=a, b_k=b, c_k=c, d_k=d,
+            model=self.design.vehicle.model, a_k=a, b_k=b, c_k=c, d_k=d,
             attitude_reference=None if self.attitude_reference is None else list(self.attitude_reference),
             position=None if self.position is None else list(self.position),
             outer_loop=self.outer_loop if self.position is not None else None,
