@@ -694,7 +694,9 @@ def _regressions(t: dict[str, Target]) -> None:
                    Call(rf.ncfsyn, (_hidden_first_order(), np.eye(1)), {"factor": 1.01}, frozenset()),
                    # C = [1, 1e-310]: the balancing's ratio 0.5 / 1e-310 overflowed to inf, round(inf) (long run, 2026-11-28).
                    Call(lambda: rf.ncfsyn(_seen_subnormally(),
-                                          np.eye(1), factor=1.01), (), {}, frozenset({"plant"}))),
+                                          np.eye(1), factor=1.01), (), {}, frozenset({"plant"})),
+                   # gamma = 1e300 * gamma_min: gamma**2 raised a bare OverflowError (long run, 2026-11-28).
+                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"}))),
         # An arm angle of 1e-309 rad left a subnormal in the effectiveness matrix, which the allocator
         # refused as "matrix[1, 0]" (a matrix the user never wrote; long run, 2026-11-28).
         "lqr_hover_allocated": (Call(lambda: rf.lqr_hover_allocated(rf.Simulator(_tiny_angle()), rf.Allocator(_tiny_angle())), (), {}, frozenset()),),
