@@ -126,8 +126,9 @@ class AgreementCase:
 
     @property
     def survivable(self) -> bool:
-        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold."""
-        return self.hover != "no" or self.spinning.hover != "no"
+        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold that is
+        not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`)."""
+        return self.hover != "no" or self.spinning.reachable_from_hover
 
     @property
     def held_by(self) -> tuple[str, ...]:
