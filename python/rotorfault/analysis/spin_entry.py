@@ -55,9 +55,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _rfcore
 from .._util.convert import real
 from .airframe import Airframe, require_airframe
-from .relaxed_hover import FixedPitchActuatorLike, RelaxedHoverSettings, RelaxedHoverSolution, _rfcore, _vehicle_settings
+from .relaxed_hover import FixedPitchActuatorLike, RelaxedHoverSettings, RelaxedHoverSolution, _vehicle_settings
 
 #: The tilt the entry must stay below (rad): the simulator's divergence limit (module notes).
 ENTRY_TILT_LIMIT_RAD = math.pi / 2

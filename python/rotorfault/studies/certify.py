@@ -231,8 +231,8 @@ class Certificate(Tabular):
                 del spin["solution"]
             if spin is not None and spin["hover"] == "no":
                 spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
-            entry = None if spin is None else spin["entry_from_hover"]
-            for key, value in (entry or {}).items():
+            entry: dict[str, Any] = {} if spin is None or spin["entry_from_hover"] is None else spin["entry_from_hover"]
+            for key, value in entry.items():
                 if isinstance(value, float) and math.isinf(value):
                     entry[key] = None  # JSON has no infinity: the bound never reaches the limit
         return out
