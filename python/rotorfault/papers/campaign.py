@@ -74,7 +74,7 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
     unreachable = [f"{c.vehicle} {rotor_labels(c.failed)}" for c in result.cases if c.spinning.hover == "spinning" and not c.survivable]
     section.tables.append(ReportTable(
         f"Certify against flights: {n['cases']} {'single' if quick else 'single and double'} failures, {n['agree']} agree. Certified survivable (static "
-        f"hover, or a relaxed hover a linear feedback can hold): {n['survivable']}, held by at least one controller: "
+        f"hover, or a relaxed hover a linear feedback can hold, its entry from hover not excluded): {n['survivable']}, held by at least one controller: "
         f"{n['survivable_held']}; certified not survivable: {n['not_survivable']}, held by a controller: {n['not_survivable_held']}. "
         f"Each controller told the failure, which comes at {A.FAILURE_TIME_S:g} s from hover; verdict over the last {WINDOW_S:g} s "
         f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s (a run holding its place with its spin not settled by then flown on to "
