@@ -2,11 +2,13 @@
 the PX4 quadrotor imported from its parameters, certify's verdict beside a flight of each of our
 controllers (:mod:`rotorfault.studies.agreement`: the failure at 1 s, 10 s after it, verdicts
 from the last 5 s: holds within 2 m horizontally, 1 m in altitude, 0.5 m/s). Where certify says
-survivable some controller holds; where it says not, none does."""
+survivable some controller holds; where it says not (including a spin it proves cannot be entered
+from hover), none does."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +16,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault.studies import deciding as D
-from rotorfault.studies.agreement import CONTROLLERS, CaseFlight, CertifyAgreement, certify_against_flights, px4_vehicle
+from rotorfault.studies.agreement import CONTROLLERS, AgreementCase, CaseFlight, CertifyAgreement, certify_against_flights, px4_vehicle
 
 DATA = Path(__file__).parents[1] / "data"
 
@@ -33,32 +35,31 @@ def test_no_case_certified_not_survivable_is_held(agreement: CertifyAgreement) -
     assert 0 < n["survivable"] < n["cases"], agreement.table()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "Ke's quadcopter without two adjacent rotors (1-2, 1-4, 2-3, 3-4): certify finds a relaxed hover (20.06 rad/s on the "
-    "remaining pair, its up axis 25 degrees off body z) that the relaxed hover LQR holds from the periodic solution (the "
-    "test below), but no controller of ours captures it from hover after the failure (failure at 1 s): "
-    "relaxed-hover-feedback commands a peak of 20.9 N (1-2, 3-4) / 18.4 N (1-4, 2-3) against the 8.5 N rotor limit and is "
-    "lost to tilt (past 90 degrees) at 1.15 s; uniform-passive-ftc (ke-robust) is lost to tilt at 1.23 s (peak 8.5 N, "
-    "saturated 0.22 s); INDI refuses the design (no hover with zero roll and pitch torque); the hover LQR refuses it. "
-    "Why no gain choice helps: the remaining pair is on one side of the frame (module notes, and the test "
-    "test_the_remaining_pair_rolls_over_before_it_can_spin)"))
 def test_every_case_certified_survivable_is_held(agreement: CertifyAgreement) -> None:
+    """Where certify says survivable (static hover, or a spin not excluded from hover), some
+    controller holds. Ke's quadcopter without two adjacent rotors used to fail this (certify
+    promised the relaxed hover, nothing entered it): certify now says "spinning solution exists,
+    not reachable from hover" there (the test below), and no controller holds it."""
     n = agreement.counts()
-    assert n["survivable_held"] == n["survivable"], agreement.table()
+    assert n["survivable_held"] == n["survivable"] and n["agree"] == n["cases"], agreement.table()
 
 
-def test_each_disagreement_is_a_capture_certify_does_not_promise(agreement: CertifyAgreement) -> None:
-    """Where certify says survivable and no controller holds it, certify's relaxed hover is right:
-    the relaxed hover LQR started on the periodic solution holds it for 10 s, the circle's centre
+def _unreachable(agreement: CertifyAgreement) -> list[AgreementCase]:
+    return [c for c in agreement.cases if c.spinning.hover == "spinning" and not c.survivable]
+
+
+def test_a_spin_certify_calls_unreachable_exists(agreement: CertifyAgreement) -> None:
+    """Where certify says the spin is not reachable from hover, the spin itself is real: the
+    relaxed hover LQR started on the periodic solution holds it for 10 s, the circle's centre
     within 0.1 m horizontally and 0.02 m in altitude of the set point over the last 5 s."""
     from rotorfault.analysis.relaxed_hover import circle_offsets
     from rotorfault.control.relaxed_hover import RelaxedHoverFeedback
     from rotorfault.studies.agreement import _simulator
 
     vehicles = {"ke-quadcopter": D.vehicle("ke-quadcopter")}
-    disagreements = agreement.disagreements()
-    assert disagreements and all(c.survivable and c.vehicle in vehicles for c in disagreements)
-    for case in disagreements:
+    unreachable = _unreachable(agreement)
+    assert {(c.vehicle, c.failed) for c in unreachable} == {("ke-quadcopter", f) for f in ((1, 2), (1, 4), (2, 3), (3, 4))}
+    for case in unreachable:
         v = vehicles[case.vehicle]
         airframe = v.airframe.with_failed_rotors(case.failed)
         best = case.spinning.solution  # certify's own: the one the relaxed hover LQR was designed on
@@ -74,23 +75,25 @@ def test_each_disagreement_is_a_capture_certify_does_not_promise(agreement: Cert
 
 
 def test_the_remaining_pair_rolls_over_before_it_can_spin(agreement: CertifyAgreement) -> None:
-    """The disagreements are the entry into the relaxed hover, not the relaxed hover: the two
-    rotors left after losing two adjacent ones sit on one side of the frame, so every thrust they
-    make rolls the vehicle (moment >= 0.0884 N m per N of total thrust, arm 0.125 m) while their
-    yaw moment is at most k_mu = 0.0166 N m per N: 5.3 times less, 9.9 times less in angular
-    acceleration (J_z / J_x = 1.86). The relaxed hover balances that roll moment with the
-    gyroscopic moment of its 18.2 rad/s spin; from hover there is no spin. Flown from rest, level,
-    the relaxed hover LQR with the default weights and with R 10^4 times larger (gains about 60
-    times smaller), and the relaxed hover's own trim command held open loop, all tilt past 90
-    degrees (the simulator's limit) within 0.16 s: no choice of gains captures it."""
+    """Why the spin cannot be entered (certify's evidence, :func:`rotorfault.analysis.entry_from_hover`):
+    the two rotors left after losing two adjacent ones sit on one side of the frame, so every
+    thrust they make rolls the vehicle (moment >= 0.0884 N m per N, arm 0.125 m) while their yaw
+    moment is at most k_mu = 0.0166 N m per N: 5.3 times less, 9.89 times less in angular
+    acceleration (J_z / J_x = 1.86). The relaxed hover balances that roll with the gyroscopic
+    moment of its 18.19 rad/s spin (body z); from hover the tilt passes 90 degrees by 2.33 rad/s.
+    Flown from rest, level, the relaxed hover LQR with the default weights and with R 10^4 times
+    larger (gains about 60 times smaller), and the relaxed hover's own trim command held open loop,
+    all tilt past 90 degrees (the simulator's limit) within 0.16 s: no choice of gains captures it."""
     from rotorfault.control.relaxed_hover import RelaxedHoverFeedback, bryson_weights
     from rotorfault.studies.agreement import _simulator
 
     v = D.vehicle("ke-quadcopter")
-    disagreements = agreement.disagreements()
-    assert {c.failed for c in disagreements} == {(1, 2), (1, 4), (2, 3), (3, 4)}
     matrix = np.asarray(v.airframe.effectiveness_matrix())
-    for case in disagreements:
+    for case in _unreachable(agreement):
+        entry = case.spinning.entry_from_hover
+        assert entry is not None and not entry.reachable
+        assert round(entry.roll_to_yaw_ratio, 2) == 9.89 and round(entry.spin_rate_needed_rad_s, 2) == 18.19
+        assert entry.spin_rate_at_tilt_limit_rad_s < entry.spin_rate_needed_rad_s / 7
         left = [i for i in range(4) if i + 1 not in case.failed]
         roll_pitch, yaw = matrix[1:3][:, left], matrix[3, left]
         # Each remaining rotor's moment in the pair's common direction: the same sign for both.
@@ -111,6 +114,50 @@ def test_the_remaining_pair_rolls_over_before_it_can_spin(agreement: CertifyAgre
             assert [e.kind for e in run.events] == ["tilt"] and run.events[0].time < 0.16, (case.failed, controller, run.events)
 
 
+def test_without_the_entry_condition_the_agreement_fails(agreement: CertifyAgreement) -> None:
+    """The agreement depends on the entry condition and on its threshold being the simulator's
+    90 degrees, not a looser one: certify without it (the periodic solution alone, as before), or
+    with the tilt limit at 180 degrees (past what the bound can prove on Ke's pair, 125 degrees),
+    calls the four adjacent pairs survivable again and no controller holds them."""
+    from rotorfault.analysis import entry_from_hover
+    from rotorfault.studies.agreement import _actuator, _drag
+
+    v = D.vehicle("ke-quadcopter")
+    for loosen in ("no entry condition", "tilt limit 180 deg"):
+        cases = []
+        for c in agreement.cases:
+            if c.spinning.hover == "spinning":
+                solution = c.spinning.solution
+                assert solution is not None
+                entry = None if loosen == "no entry condition" or c.vehicle != v.name else entry_from_hover(
+                    v.airframe.with_failed_rotors(c.failed), solution, drag=_drag(v), actuator=_actuator(v), tilt_limit_rad=math.pi)
+                c = dataclasses.replace(c, spinning=dataclasses.replace(c.spinning, entry_from_hover=entry))
+            cases.append(c)
+        loose = CertifyAgreement(tuple(cases), agreement.controllers)
+        assert {c.failed for c in loose.disagreements()} == {(1, 2), (1, 4), (2, 3), (3, 4)}, loosen
+        assert loose.counts()["survivable_held"] == loose.counts()["survivable"] - 4
+
+
+def test_a_pair_that_yaws_more_than_it_rolls_enters_the_spin() -> None:
+    """The independent check: Ke's quadcopter with rotors that yaw more than they roll (k_mu
+    0.08 m instead of 0.0166, arm 0.06 m instead of 0.125, rotational damping 0.01 N m s) without
+    rotors 1 and 2. The bound proves nothing there (roll/yaw 0.985, at most 0.22 rad of tilt
+    before a 14 rad/s spin), certify calls it survivable by spinning, and the relaxed hover LQR,
+    switched on at the failure from level hover, enters the spin and holds it: the condition flips
+    with the geometry, and the flight agrees. Ke's own quadcopter (the test above) flips back."""
+    base = D.vehicle("ke-quadcopter")
+    airframe = base.airframe.with_parameters(drag_torque_ratio_m=0.08, arm_length_m=[0.06] * 4, name="ke-yaws-more")
+    v = D.CampaignVehicle("ke-yaws-more", airframe, base.rotor_time_constant_s, 0.01, base.linear_drag_n_s_m)
+    one = certify_against_flights([v], max_failed=2, controllers=["relaxed-hover-feedback"])
+    case = next(c for c in one.cases if c.failed == (1, 2))
+    entry = case.spinning.entry_from_hover
+    assert case.hover == "no" and case.spinning.hover == "spinning" and entry is not None and entry.reachable
+    assert round(entry.roll_to_yaw_ratio, 3) == 0.985 and entry.tilt_before_spin_rad < 0.25
+    assert case.survivable and case.held_by == ("relaxed-hover-feedback",), one.table()
+    adjacent = [c for c in one.cases if c.failed in ((1, 2), (1, 4), (2, 3), (3, 4))]
+    assert all(c.survivable and c.held_by for c in adjacent), one.table()
+
+
 def test_every_controller_flew_or_says_why(agreement: CertifyAgreement) -> None:
     for case in agreement.cases:
         assert [f.controller for f in case.flights] == list(CONTROLLERS)
@@ -126,7 +173,7 @@ def test_the_comparison_can_fail(agreement: CertifyAgreement) -> None:
     quadrotor without a rotor), every survivable-by-spinning case disagrees."""
     only_lqr = [dataclasses.replace(c, flights=tuple(f for f in c.flights if f.controller == "linear-feedback"))
                 for c in agreement.cases]
-    spinning = [c for c in only_lqr if c.hover == "no" and c.spinning.hover == "spinning"]
+    spinning = [c for c in only_lqr if c.hover == "no" and c.spinning.hover == "spinning" and c.survivable]
     assert spinning and all(not c.agrees for c in spinning)
 
 

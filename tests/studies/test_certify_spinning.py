@@ -56,11 +56,19 @@ def test_a_quadrotor_without_a_rotor_survives_by_spinning(ke_certificate: Certif
     headers, rows = rows_for_display(ke_certificate)
     assert headers[-1] == "relaxed hover"
     assert rows[1][0] == "1" and rows[1][-1] == "spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4"
+    assert rows[5][0] == "1, 2" and rows[5][-1] == (
+        "spinning solution exists, not reachable from hover: 20.06 rad/s, margin 3.07 N, rotors 3, 4; tilt >= 126 deg before the "
+        "18.19 rad/s spin, at most 2.33 rad/s by 90 deg (roll/yaw 9.89)")
 
 
 def test_the_json_has_no_nan_and_the_static_certificate_is_unchanged(ke_certificate: Certificate) -> None:
     data = ke_certificate.to_dict()
     json.dumps(data, allow_nan=False)
+    cases = {tuple(c["failed"]): c["relaxed_hover"] for c in data["cases"]}
+    # The entry's evidence: infinity (the bound never reaches the tilt limit) as null.
+    assert cases[(1,)]["entry_from_hover"]["reachable"] and cases[(1,)]["entry_from_hover"]["spin_rate_at_tilt_limit_rad_s"] is None
+    assert not cases[(1, 2)]["entry_from_hover"]["reachable"] and cases[()]["entry_from_hover"] is None
+    assert [c.failed for c in ke_certificate.failing_spinning("double")] == [(1, 2), (1, 4), (2, 3), (3, 4)]
     assert all("solution" not in c["relaxed_hover"] for c in data["cases"])
     assert ke_certificate.cases[1].relaxed_hover.solution is not None  # type: ignore[union-attr]  # kept on the object
     static = certify(rf.Airframe.preset("ke-quadcopter"))
@@ -86,10 +94,17 @@ def test_cli_spinning() -> None:
     runner = CliRunner()
     static = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--require", "single", "--json", "-"])
     assert static.exit_code == 3, static.output
-    spun = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--require", "single", "--spinning", "--rotational-drag", "2.8e-3",
+    # Every single failure survives by spinning; of the double ones, the two adjacent rotors have a
+    # spin that cannot be entered from hover (tests/analysis/test_spin_entry.py): those fail.
+    spun = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--require", "double", "--spinning", "--rotational-drag", "2.8e-3",
                                "--json", "-"])
-    assert spun.exit_code == 0, spun.output
-    one = next(c for c in json.loads(spun.stdout)["cases"] if c["failed"] == [1])
+    assert spun.exit_code == 3, spun.output
+    assert spun.stderr.strip() == ("certificate: FAILED: --require double --spinning: cannot hover nor enter a spin from hover with rotor(s) "
+                                   + "; ".join(f"{p} (spinning solution exists, not reachable from hover)" for p in ("1, 2", "1, 4", "2, 3", "3, 4"))
+                                   + " failed"), spun.stderr
+    cases = {tuple(c["failed"]): c for c in json.loads(spun.stdout)["cases"]}
+    one = cases[(1,)]
     assert one["hover"] == "no" and one["relaxed_hover"]["hover"] == "spinning" and one["relaxed_hover"]["carrying"] == [2, 3, 4]
+    assert not cases[(1, 2)]["relaxed_hover"]["entry_from_hover"]["reachable"]
     wrong = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--rotational-drag", "2.8e-3"])
     assert wrong.exit_code != 0 and "--rotational-drag" in wrong.output

@@ -2,7 +2,8 @@
 thrust limits, rotor efficiency; other tools' formats in ``_formats``), the ACAI with its two
 named formulas (:mod:`~rotorfault.analysis.acai`: Du's eq. (13) and the facet margin), Du's
 controllability test and failure tables (:mod:`~rotorfault.analysis.controllability`), relaxed
-hover (:mod:`~rotorfault.analysis.relaxed_hover`: Mueller and D'Andrea, flying on by spinning).
+hover (:mod:`~rotorfault.analysis.relaxed_hover`: Mueller and D'Andrea, flying on by spinning) and
+whether it can be entered from hover (:mod:`~rotorfault.analysis.spin_entry`).
 Mirrors the core's ``analysis`` room plus ``airframe``.
 
 May import: the extension module, ``rotorfault._typing`` and ``rotorfault._util``; nothing else
@@ -30,9 +31,11 @@ from .acai import (
 from .airframe import Airframe
 from .controllability import ControllabilityReport, FailureCase, FailureTable, controllability, failure_table
 from .relaxed_hover import RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
+from .spin_entry import ENTRY_TILT_LIMIT_RAD, EntryFromHover, entry_from_hover
 
 __all__ = [
     "ACAI_FORMULAS",
+    "ENTRY_TILT_LIMIT_RAD",
     "EQ13_ZERO_NOTE",
     "FORMULA_DESCRIPTIONS",
     "GIVE_UP_YAW",
@@ -44,6 +47,7 @@ __all__ = [
     "AcaiValue",
     "Airframe",
     "ControllabilityReport",
+    "EntryFromHover",
     "FailureCase",
     "FailureTable",
     "RelaxedHoverAnalysis",
@@ -54,6 +58,7 @@ __all__ = [
     "acai_from_matrix",
     "acai_label",
     "controllability",
+    "entry_from_hover",
     "failure_table",
     "format_acai",
     "hover_wrench_text",

@@ -73,6 +73,15 @@ def relaxed_hover(
         (15.22, [2, 3, 4])
     """
     airframe = require_airframe(airframe)
+    settings = _vehicle_settings(settings, drag, actuator)
+    return _rfcore.relaxed_hover(airframe._core, settings)
+
+
+def _vehicle_settings(
+    settings: RelaxedHoverSettings | None, drag: _rfcore.Drag | None, actuator: FixedPitchActuatorLike | None
+) -> RelaxedHoverSettings:
+    """``settings`` (default :class:`RelaxedHoverSettings`) with the vehicle's rotor parameters from
+    ``drag`` and ``actuator`` (given once), each checked by type first."""
     if settings is None:
         settings = _DEFAULT
     if not isinstance(settings, RelaxedHoverSettings):
@@ -100,7 +109,7 @@ def relaxed_hover(
         if actuator is not None:
             values["thrust_coefficient_n_s2"] = real("actuator.thrust_coefficient_n_s2", actuator.thrust_coefficient_n_s2)
         settings = RelaxedHoverSettings(**values)
-    return _rfcore.relaxed_hover(airframe._core, settings)
+    return settings
 
 
 def relaxed_hover_residual(

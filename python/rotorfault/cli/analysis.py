@@ -136,8 +136,9 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
 @click.option("--json", "json_path", default=None, help="Also write the certificate as JSON to this file ('-': stdout only).")
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
 @click.option("--spinning", is_flag=True,
-              help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors); "
-                   "--require then accepts a case that hovers statically or by spinning.")
+              help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors) and whether "
+                   "the spin can be entered from hover; --require then accepts a case that hovers statically or by a spin "
+                   "not excluded from hover.")
 @click.option("--rotational-drag", "rotational_drag", type=float, default=None,
               help="With --spinning: the vehicle's rotational damping k_r (N m s), which sets the spin rate (default 0).")
 @output_options
@@ -147,7 +148,8 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
     """For every single and double rotor failure: hover with all axes, only by giving up yaw, or
     not at all; where the hover wrench lies (inside, on the boundary, outside and how far), the
     ACAI (facet margin), the thrust-to-weight left and which axes an allocator must drop; with
-    --spinning, beside it, the best relaxed hover (Mueller and D'Andrea)."""
+    --spinning, beside it, the best relaxed hover (Mueller and D'Andrea) and whether it can be
+    entered from hover ("spinning solution exists, not reachable from hover" where not)."""
     import json
 
     from ..flight import Drag
@@ -194,8 +196,11 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
             write_text(json_path, text)
     if failing:
         if spinning:
-            listed = "; ".join(rotor_labels(c.failed) for c in failing)
-            click.echo(f"certificate: FAILED: --require {required} --spinning: cannot hover nor spin with rotor(s) {listed} failed", err=True)
+            listed = "; ".join(rotor_labels(c.failed) + (" (spinning solution exists, not reachable from hover)"
+                                                         if c.relaxed_hover is not None and c.relaxed_hover.hover == "spinning" else "")
+                               for c in failing)
+            click.echo(f"certificate: FAILED: --require {required} --spinning: cannot hover nor enter a spin from hover with rotor(s) "
+                       f"{listed} failed", err=True)
         else:
             listed = "; ".join(f"{rotor_labels(c.failed)} ({c.hover}, all axes {hover_wrench_text(c.hover_wrench, c.distance)})" for c in failing)
             click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "

@@ -5,6 +5,7 @@ fault class against the 95 % target, and how many runs stand behind each cell. C
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
@@ -61,6 +62,8 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
     """Certify's verdict on every single and double failure beside our controllers' flights
     (:func:`rotorfault.studies.certify_against_flights`): every preset and the imported PX4 x500
     (``--quick``: Ke's quadcopter's single failures, to stay within the quick report's time)."""
+    from ..analysis import ENTRY_TILT_LIMIT_RAD
+    from ..analysis.airframe import rotor_labels
     from ..flight.outcomes import VERDICT_MEANINGS, WINDOW_S
     from ..studies import agreement as A
     from ..studies import deciding as D
@@ -68,17 +71,19 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
     vehicles = [D.vehicle("ke-quadcopter")] if quick else A.preset_vehicles()
     result = A.certify_against_flights(vehicles, max_failed=1 if quick else 2)
     n = result.counts()
+    unreachable = [f"{c.vehicle} {rotor_labels(c.failed)}" for c in result.cases if c.spinning.hover == "spinning" and not c.survivable]
     section.tables.append(ReportTable(
         f"Certify against flights: {n['cases']} {'single' if quick else 'single and double'} failures, {n['agree']} agree. Certified survivable (static "
-        f"hover, or a relaxed hover a linear feedback can hold): {n['survivable']}, held by at least one controller: "
+        f"hover, or a relaxed hover a linear feedback can hold, its entry from hover not excluded): {n['survivable']}, held by at least one controller: "
         f"{n['survivable_held']}; certified not survivable: {n['not_survivable']}, held by a controller: {n['not_survivable_held']}. "
         f"Each controller told the failure, which comes at {A.FAILURE_TIME_S:g} s from hover; verdict over the last {WINDOW_S:g} s "
         f"of {A.FAILURE_TIME_S + A.AFTER_FAILURE_S:g} s (a run holding its place with its spin not settled by then flown on to "
         f"{A.FAILURE_TIME_S + A.SETTLE_AFTER_FAILURE_S:g} s, that verdict standing): holds = {VERDICT_MEANINGS['holds']}. Errors: the "
         "window's largest horizontal / altitude error; a lost flight: when, why, and its peak rotor command against the limit. "
-        "Where certify says survivable and nothing holds (two adjacent rotors lost), the relaxed hover exists but no controller of "
-        "ours, nor a search over the rotor thrusts, enters it from hover within the simulator's 90 degrees of tilt: "
-        "rotorfault.studies.agreement's notes.",
+        f"A spinning relaxed hover counts as survivable only where its entry from hover is not excluded "
+        f"(rotorfault.analysis.entry_from_hover: the remaining rotors' roll/pitch-to-yaw ratio bounds the tilt reached before the "
+        f"spin; limit {math.degrees(ENTRY_TILT_LIMIT_RAD):g} degrees, the simulator's). Spinning solution exists, not reachable "
+        f"from hover: {'; '.join(unreachable) or 'none of these cases'}. rotorfault.studies.agreement's notes.",
         result.headers(), tuple(result.rows()),
     ))
 

@@ -6,7 +6,8 @@ short flights of our controllers through that failure, each judged by the one fl
 over the last :data:`rotorfault.flight.outcomes.WINDOW_S` seconds, thresholds stated there).
 
 The rule: a case certify calls survivable (it hovers statically, ``hover != "no"``, or the relaxed
-hover found a solution a linear feedback can hold: the complement of
+hover found a solution a linear feedback can hold that
+:func:`rotorfault.analysis.entry_from_hover` does not exclude from hover: the complement of
 :meth:`~rotorfault.studies.certify.Certificate.failing_spinning`) must be held by at least one
 controller; a case certified not survivable must be held by none. A case agrees when that holds.
 
@@ -38,29 +39,26 @@ A controller that refuses the design (``design-refused``) or does not apply (``n
 has not held the case. A lost flight's cell says when and why it was lost and the largest rotor
 command it asked for against the rotors' limit (and how long a rotor was saturated).
 
-The remaining disagreement: two adjacent rotors lost (measured on ``ke-quadcopter``, rotors 1-2,
-1-4, 2-3, 3-4; the failure at 1 s). Certify finds a relaxed hover (20.06 rad/s on the remaining
-pair, its up axis 25 degrees off body z) that the relaxed hover LQR holds when started on the
-periodic solution, but no controller captures it from hover: ``relaxed-hover-feedback`` asks for
-20.9 N (1-2, 3-4) or 18.4 N (1-4, 2-3) against the 8.5 N limit and is lost to tilt (past the
-simulator's 90 degrees) at 1.15 s, ``uniform-passive-ftc`` at 1.23 s, INDI refuses the design (it
-flies a hover with zero roll and pitch torque, which this pair cannot make), the hover LQR
-refuses it. The cause is the geometry, not the gains. The remaining pair sits on one side of the
-frame, so every thrust it makes rolls the vehicle, at least 0.0884 N m per newton of total thrust
-(arm 0.125 m), while its yaw moment is at most k_mu = 0.0166 N m per newton: 5.3 times less,
-9.9 times less in angular acceleration (J_z / J_x = 0.0104 / 0.0056). In the relaxed hover that
-roll moment is balanced by the gyroscopic moment of the 18.2 rad/s spin ((J_z - J_x) w_z w_xy);
-from hover there is no spin to balance it, and a lower thrust scales the roll and the yaw
-moments alike. Measured: the relaxed hover LQR with the default weights and with R 10^4 times
-larger (gains 64 times smaller) and the relaxed hover's trim command held open loop all pass 90
-degrees of tilt 0.15-0.16 s after leaving hover (``tests/studies/test_agreement.py``); a search
-over piecewise-constant thrusts of the pair (6 steps over 0.6 s, 0 to 8.5 N each, rotor lag
-ignored, L-BFGS-B from 4 starts, the tilt kept below 87 degrees) spun the vehicle up to at most
-0.42 rad/s, against the 18.2 rad/s the relaxed hover needs. No capture that stays below 90
-degrees was found (one through an inverted attitude the simulator ends as ``diverged``).
-Certify's "survivable by spinning" says a holdable relaxed hover exists, not that it can be
-entered from hover; it is kept as it is, and the disagreement stands (Mueller and D'Andrea
-validate two adjacent propellers lost in simulation only).
+Two adjacent rotors lost (measured on ``ke-quadcopter``, rotors 1-2, 1-4, 2-3, 3-4; the failure at
+1 s) was the disagreement: a relaxed hover exists (20.06 rad/s on the remaining pair, its up axis
+25 degrees off body z) and the relaxed hover LQR holds it when started on the periodic solution,
+but no controller captures it from hover: ``relaxed-hover-feedback`` asks for 20.9 N (1-2, 3-4)
+or 18.4 N (1-4, 2-3) against the 8.5 N limit and is lost to tilt (past the simulator's 90 degrees)
+at 1.15 s, ``uniform-passive-ftc`` at 1.23 s, INDI and the hover LQR refuse the design. The cause
+is the geometry, not the gains: the pair sits on one side of the frame, every newton rolls the
+vehicle by at least 0.0884 N m while it yaws it by at most 0.0166 N m (9.89 times less in angular
+acceleration); in the relaxed hover the roll is balanced by the gyroscopic moment of the
+18.19 rad/s spin, which does not exist at hover. Certify now checks that entry
+(:func:`rotorfault.analysis.entry_from_hover`: the tilt is at least 126 degrees before the spin is
+reached, the spin at most 2.33 rad/s by 90 degrees) and says "spinning solution exists, not
+reachable from hover": the four cases are certified not survivable and agree. The condition is
+checked independently (``tests/studies/test_agreement.py``): on Ke's quadcopter with rotors that
+yaw more than they roll (k_mu 0.08 m, arm 0.06 m, k_r 0.01 N m s) it excludes nothing and the
+relaxed hover LQR does enter the spin from hover; certify without it, or with a 180-degree tilt
+limit, disagrees again on the four pairs. It is an obstruction, not a promise: where it excludes
+nothing the flights decide (the Wang quadrotors without two adjacent rotors, roll/yaw 5.36, and
+the hexacopters without two adjacent rotors, whose remaining rotors include an opposite pair that
+yaws without tilting one way, are not excluded and not held: the README's table).
 """
 
 from __future__ import annotations
@@ -126,8 +124,9 @@ class AgreementCase:
 
     @property
     def survivable(self) -> bool:
-        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold."""
-        return self.hover != "no" or self.spinning.hover != "no"
+        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold that is
+        not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`)."""
+        return self.hover != "no" or self.spinning.reachable_from_hover
 
     @property
     def held_by(self) -> tuple[str, ...]:
@@ -417,7 +416,7 @@ def _fly(pending: list[tuple[int, str, Any, Any]], partial: list[tuple[CampaignV
             cause = source.cause[row]
             note += f" ({cause})" if cause else ""
             # What the controller asked of the rotors on the way (module notes: the entry into a
-            # relaxed hover that certify does not check).
+            # relaxed hover, which certify's entry condition bounds).
             note += (f", peak command {float(source.peak_command[row]):.1f} N against the {max(v.airframe.max_thrust_n):g} N limit"
                      f" (saturated {float(source.saturated_s[row]):.2f} s)")
         partial[index][2][name] = CaseFlight(

@@ -4,7 +4,10 @@ where the hover wrench lies (inside, on the boundary, outside and how far), and 
 required axes remain (``--require-axes``; default all four: thrust, roll, pitch, yaw);
 and, asked for (``spinning=True``), beside that static verdict, whether it survives by spinning:
 the best relaxed hover (Mueller and D'Andrea, :func:`rotorfault.analysis.relaxed_hover`) with its
-thrust margin, spin rate and the rotors that carry it.
+thrust margin, spin rate and the rotors that carry it, and whether that spin can be entered from
+hover after the failure (:func:`rotorfault.analysis.entry_from_hover`: an obstruction proving that
+the tilt passes 90 degrees before the spin is reached; where it holds, certify says "spinning
+solution exists, not reachable from hover" and the case is not survivable).
 
 The JSON certificate names the hover classes ``all-axes``, ``give-up-yaw`` and ``no`` and the
 ACAI fields ``acai`` and ``acai_give_up_yaw`` (the facet margin, labelled ``ACAI facet-margin``
@@ -35,6 +38,7 @@ from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
 from ..analysis.controllability import failure_table
 from ..analysis.relaxed_hover import RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
+from ..analysis.spin_entry import EntryFromHover, entry_from_hover
 from ..flight.models import Drag, FixedPitchActuator
 
 #: ``all-axes``: hovers with thrust, roll, pitch and yaw; ``give-up-yaw``: only by giving up yaw
@@ -83,7 +87,9 @@ class RelaxedHoverVerdict:
     ``no`` the numbers are NaN and ``carrying`` is empty. ``solution``: the relaxed hover itself
     (:class:`rotorfault.analysis.relaxed_hover.RelaxedHoverSolution`, with its linear model: what
     a feedback about it is designed on, so the search is not run twice; ``None`` for ``no``); not
-    compared, not in :meth:`Certificate.to_dict` (the numbers above say it)."""
+    compared, not in :meth:`Certificate.to_dict` (the numbers above say it). ``entry_from_hover``:
+    for a spinning solution, whether it can be entered from hover after the failure, with the
+    numbers that decide it (:class:`rotorfault.analysis.EntryFromHover`; ``None`` otherwise)."""
 
     hover: SpinningHover
     spin_rate_rad_s: float
@@ -91,6 +97,15 @@ class RelaxedHoverVerdict:
     carrying: tuple[int, ...]
     at_spin_rate_limit: bool
     solution: RelaxedHoverSolution | None = field(default=None, compare=False, repr=False)
+    entry_from_hover: EntryFromHover | None = None
+
+    @property
+    def reachable_from_hover(self) -> bool:
+        """Survivable by this relaxed hover: static, or spinning and not excluded from hover by
+        :func:`rotorfault.analysis.entry_from_hover`."""
+        if self.hover == "spinning":
+            return self.entry_from_hover is None or self.entry_from_hover.reachable
+        return self.hover == "static"
 
 
 @dataclass(frozen=True)
@@ -194,13 +209,14 @@ class Certificate(Tabular):
         return {"kind": "certificate", "airframe": self.airframe, "rotor_count": self.rotor_count, "fully_actuated": self.fully_actuated, "formula": FORMULA}
 
     def failing_spinning(self, required: str) -> list[CertificateCase]:
-        """The cases up to the ``required`` class that cannot hover statically nor by spinning
-        (``ValueError`` if the certificate was made without ``spinning=True``)."""
+        """The cases up to the ``required`` class that cannot hover statically nor by a spin
+        entered from hover (a spinning solution that is not reachable from hover fails;
+        ``ValueError`` if the certificate was made without ``spinning=True``)."""
         k = FAILURE_CLASSES[required]
         cases = [c for c in self.cases if len(c.failed) <= k]
         if any(c.relaxed_hover is None for c in cases):
             raise ValueError("spinning: the certificate was made without the relaxed hover (certify(..., spinning=True))")
-        return [c for c in cases if c.hover == "no" and c.relaxed_hover is not None and c.relaxed_hover.hover == "no"]
+        return [c for c in cases if c.hover == "no" and c.relaxed_hover is not None and not c.relaxed_hover.reachable_from_hover]
 
     def to_dict(self) -> dict[str, Any]:
         # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
@@ -215,6 +231,10 @@ class Certificate(Tabular):
                 del spin["solution"]
             if spin is not None and spin["hover"] == "no":
                 spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
+            entry: dict[str, Any] = {} if spin is None or spin["entry_from_hover"] is None else spin["entry_from_hover"]
+            for key, value in entry.items():
+                if isinstance(value, float) and math.isinf(value):
+                    entry[key] = None  # JSON has no infinity: the bound never reaches the limit
         return out
 
 
@@ -231,7 +251,9 @@ def certify(
     also the best relaxed hover of each case (:class:`RelaxedHoverVerdict`), computed with
     ``settings``, ``drag`` and ``actuator`` as :func:`rotorfault.analysis.relaxed_hover` takes
     them (the vehicle's rotational damping decides the spin rate: without it the best spin is the
-    search limit). Checked before any work.
+    search limit), and for a spinning one whether it is reachable from hover
+    (:func:`rotorfault.analysis.entry_from_hover`, with the same rotor parameters). Checked before
+    any work.
 
     Examples:
 
@@ -280,19 +302,27 @@ def _relaxed_hover_verdict(
     if best is None:
         return RelaxedHoverVerdict("no", math.nan, math.nan, (), False)
     kind: SpinningHover = "spinning" if best.kind == "spinning" else "static"
+    entry = entry_from_hover(airframe, best, settings, drag=drag, actuator=actuator) if kind == "spinning" else None
     return RelaxedHoverVerdict(
-        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best
+        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry
     )
 
 
 def describe_relaxed_hover(verdict: RelaxedHoverVerdict | None) -> str:
-    """One cell of the table: ``spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4``."""
+    """One cell of the table: ``spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4``; a spin
+    that cannot be entered from hover says so, with the numbers that decide it."""
     if verdict is None:
         return "-"
     if verdict.hover == "no":
         return "no"
     spin = f" {verdict.spin_rate_rad_s:.2f} rad/s{' (search limit)' if verdict.at_spin_rate_limit else ''}," if verdict.hover == "spinning" else ","
-    return f"{verdict.hover}{spin} margin {verdict.thrust_margin_n:.2f} N, rotors {rotor_labels(verdict.carrying)}"
+    text = f"{spin} margin {verdict.thrust_margin_n:.2f} N, rotors {rotor_labels(verdict.carrying)}"
+    entry = verdict.entry_from_hover
+    if entry is None or entry.reachable:
+        return verdict.hover + text
+    return (f"spinning solution exists, not reachable from hover:{text.rstrip(',')}; tilt >= {math.degrees(entry.tilt_before_spin_rad):.0f} deg "
+            f"before the {entry.spin_rate_needed_rad_s:.2f} rad/s spin, at most {entry.spin_rate_at_tilt_limit_rad_s:.2f} rad/s by "
+            f"{math.degrees(entry.tilt_limit_rad):.0f} deg (roll/yaw {entry.roll_to_yaw_ratio:.2f})")
 
 
 def rows_for_display(cert: Certificate) -> tuple[list[str], list[list[str]]]:

@@ -606,6 +606,24 @@ def _spinning() -> tuple[Any, rf.Airframe]:
     return best, quad
 
 
+@functools.lru_cache(maxsize=1)
+def _adjacent() -> tuple[Any, rf.Airframe]:
+    """A relaxed hover that cannot be entered from hover: Ke's quadcopter without rotors 1 and 2."""
+    quad = rf.Airframe.preset("ke-quadcopter").with_failed_rotors([1, 2])
+    best = rf.relaxed_hover(quad, drag=rf.Drag(rotational_n_m_s=2.8e-3)).best
+    assert best is not None
+    return best, quad
+
+
+def _check_entry(result: Any, call: Call) -> None:
+    assert isinstance(result.reachable, bool)
+    numbers = [result.tilt_limit_rad, result.spin_rate_needed_rad_s, result.spin_up_time_s, result.roll_to_yaw_ratio,
+               result.tilt_before_spin_rad, result.spin_rate_at_tilt_limit_rad_s]
+    assert not any(math.isnan(x) for x in numbers) and all(x >= 0 for x in numbers), result
+    # "Not reachable" only with its proof: the tilt bound past the limit (or no yaw that way at all).
+    assert result.reachable or result.tilt_before_spin_rad >= result.tilt_limit_rad or result.spin_up_time_s == math.inf, result
+
+
 def _check_relaxed_hover(result: Any, call: Call) -> None:
     for solution in result.solutions:
         assert math.isfinite(solution.thrust_margin_n) and math.isfinite(solution.spin_rate_rad_s)
@@ -637,6 +655,13 @@ def _newer_targets(t: dict[str, Target]) -> None:
         lambda position, drag: Call(lambda p, d: rf.RelaxedHoverFeedback(*_spinning(), position=p, linear_drag_n_s_m=d), (position, drag), {},
                                     frozenset({"position", "linear_drag_n_s_m"})),
         vector(3, hostile(number(-20, 0))), hostile(number(0.0, 1.0))), lambda r, c: None)
+    t["entry_from_hover"] = Target(st.builds(
+        lambda which, limit, drag: Call(lambda w, lim, d: analysis.entry_from_hover(*(_spinning() if w == "single" else _adjacent())[::-1],
+                                                                                  tilt_limit_rad=lim, drag=d),
+                                        (which, limit, drag), {}, frozenset({"tilt_limit_rad", "drag", "solution"})),
+        st.sampled_from(("single", "adjacent")), hostile(positive(0.1, 3.1)),
+        st.sampled_from((None, rf.Drag(rotational_n_m_s=2.8e-3), rf.Drag(rotor_inertia_kg_m2=1e-6), 3.0)))
+        | calls(analysis.entry_from_hover, airframes(), st.sampled_from((None, "x", 1.0))), _check_entry)
     t["periodic_state"] = Target(st.builds(
         lambda position, yaw, drag: Call(lambda p, y, d: rf.periodic_state(*_spinning(), position=p, yaw=y, linear_drag_n_s_m=d),
                                          (position, yaw, drag), {}, frozenset({"position", "yaw", "linear_drag_n_s_m"})),
@@ -848,7 +873,7 @@ PRODUCED_BY: dict[str, str] = {
     "CertifyAgreement": "certify_against_flights",
     "LqrDesign": "lqr_hover", "NcfsynResult": "ncfsyn", "PbhTest": "stabilisability", "CampaignResult": "run_campaign",
     "TuningResult": "tune", "Scenario": "load_scenario", "Estimates": "Sensing", "HoldTuningResult": "tune_hold",
-    "RelaxedHoverAnalysis": "relaxed_hover", "RelaxedHoverSolution": "relaxed_hover",
+    "RelaxedHoverAnalysis": "relaxed_hover", "RelaxedHoverSolution": "relaxed_hover", "EntryFromHover": "entry_from_hover",
 }
 #: Public callables not called: a Protocol is a type to implement.
 NOT_CALLED: dict[str, str] = {"Controller": "a typing.Protocol: controllers implement it; it is not called"}
