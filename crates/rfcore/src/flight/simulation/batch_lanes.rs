@@ -56,7 +56,9 @@ impl BatchLanes {
 }
 
 /// Runs per group: one AVX2 register of `f64`.
-const WIDTH: usize = F64x4::WIDTH;
+const WIDTH: usize = Group::WIDTH;
+/// The lane type of a group.
+type Group = F64x4;
 
 /// One run of a group, ready to fly.
 pub(super) struct Lane {
@@ -176,6 +178,9 @@ fn lanes_possible(
         && VehicleLanes::<f64>::new(vehicle, &config.wind_m_s).is_some()
 }
 
+/// A run's fault times, sorted, as bits (the key runs group by).
+type FaultTimes = Vec<u64>;
+
 /// Groups of four runs with equal fault times; the rest scalar (module docs).
 pub(super) fn plan(
     vehicle: &Vehicle,
@@ -194,7 +199,7 @@ pub(super) fn plan(
             .collect();
     }
     // Filling groups, keyed by the sorted fault times' bits.
-    let mut filling: Vec<(Vec<u64>, Vec<(usize, Lane)>)> = Vec::new();
+    let mut filling: Vec<(FaultTimes, Vec<(usize, Lane)>)> = Vec::new();
     for (i, run) in runs.into_iter().enumerate() {
         let lane = match ready(vehicle, actuators, initial_efficiency, run, config) {
             Ok(lane) => lane,
@@ -226,6 +231,8 @@ pub(super) fn plan(
 
 /// Run `run` checked and set up for a lane, or given back for the scalar simulator (a check
 /// fails, so it reports the error; or it starts beyond a limit).
+// The run handed back is moved once per run, not per step: its size costs nothing.
+#[allow(clippy::result_large_err)]
 fn ready(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -287,7 +294,7 @@ fn fly_group(
             return unsafe { fly_group_avx2(vehicle, actuators, group, config, cancel) };
         }
     }
-    fly_group_lanes::<F64x4>(vehicle, actuators, group, config, cancel)
+    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel)
 }
 
 /// [`fly_group_lanes`] compiled for AVX2 and FMA (Rust contracts no `a * b + c`, so FMA
@@ -301,7 +308,7 @@ unsafe fn fly_group_avx2(
     config: &SimulationConfig,
     cancel: &Cancel,
 ) -> Result<Vec<(usize, Trajectory)>> {
-    fly_group_lanes::<F64x4>(vehicle, actuators, group, config, cancel)
+    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel)
 }
 
 /// The control loop of [`crate::flight::simulation::simulate_observed`] for `L::WIDTH` runs.
@@ -555,14 +562,21 @@ impl<L: Lanes> Period<L> {
                     totals[node] = self.totals(&self.nodes[node]);
                 }
                 let next = model.rk4_step(body, len, &totals);
+                let (n3z, speed2, rate2) = next.limit_parts();
                 for (i, (_, lane)) in group.iter_mut().enumerate() {
                     if !active[i] {
                         continue;
                     }
-                    let after = next.get(i);
-                    if lane.limits.within(&after) {
+                    let position = next.position_m.map(|p| p.lane(i));
+                    if lane.limits.within_parts(
+                        n3z.lane(i),
+                        position,
+                        speed2.lane(i),
+                        rate2.lane(i),
+                    ) {
                         continue;
                     }
+                    let after = next.get(i);
                     self.load_channels(i, &mut lane.actuators);
                     let divergence = located_divergence(
                         vehicle,
