@@ -13,7 +13,7 @@
 //! - `ke`: Ke's uniform passive FTC on the ke-quadcopter preset with drag and 25 ms lag, rotor 1
 //!   lost at 2 s (the `sensing` bench's flight, truth-fed).
 
-use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use rfcore::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use rfcore::control::{Controller, LinearFeedback};
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag};
@@ -22,7 +22,7 @@ use rfcore::flight::simulation::{
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
 use rfcore::state::{RigidBodyState, STATE_DIM};
-use rfcore::{Airframe, Cancel};
+use rfcore::Cancel;
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -32,29 +32,6 @@ const DT_S: f64 = 1.0 / 400.0;
 const DURATION_S: f64 = 10.0;
 const RUNS: usize = 8;
 const REPS: usize = 9;
-
-fn hover_gain(airframe: &Airframe) -> DMatrix<f64> {
-    let (m, g) = (airframe.mass_kg(), airframe.gravity_m_s2());
-    let [jx, jy, jz] = airframe.inertia_kg_m2();
-    let mut gw = DMatrix::<f64>::zeros(4, STATE_DIM);
-    gw[(0, 2)] = -m * 16.0;
-    gw[(0, 5)] = -m * 7.2;
-    gw[(1, 1)] = jx * 400.0 * 4.0 / g;
-    gw[(1, 4)] = jx * 400.0 * 3.6 / g;
-    gw[(1, 6)] = jx * 400.0;
-    gw[(1, 9)] = jx * 36.0;
-    gw[(2, 0)] = -jy * 400.0 * 4.0 / g;
-    gw[(2, 3)] = -jy * 400.0 * 3.6 / g;
-    gw[(2, 7)] = jy * 400.0;
-    gw[(2, 10)] = jy * 36.0;
-    gw[(3, 8)] = jz * 100.0;
-    gw[(3, 11)] = jz * 18.0;
-    let pinv = airframe
-        .effectiveness_matrix()
-        .pseudo_inverse(1e-12)
-        .expect("pseudo-inverse");
-    pinv * gw
-}
 
 fn start(k: usize) -> RigidBodyState {
     let x = |i: usize| ((k * 5 + i) as f64 * 0.77).sin();
@@ -85,7 +62,7 @@ fn lqr_case() -> Case {
     let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
     let mut x_trim = [0.0; STATE_DIM];
     x_trim[2] = -10.0;
-    let law = LinearFeedback::new(&x_trim, &[hover; 4], hover_gain(&airframe)).expect("gain");
+    let law = LinearFeedback::new(&x_trim, &[hover; 4], rfcore::fixtures::hover_gain(&airframe)).expect("gain");
     Case {
         name: "lqr",
         vehicle: Vehicle::new(&airframe, Drag::default()).expect("vehicle"),

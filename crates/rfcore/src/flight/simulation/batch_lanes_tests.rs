@@ -2,7 +2,7 @@
 //! 1e-12 relative): hover LQR-style feedback and Ke's FTC, with rotor lag, saturation, faults
 //! between substeps, divergence and non-finite commands in some lanes and not others.
 
-use nalgebra::{DMatrix, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 
 use super::*;
 use crate::airframe::Airframe;
@@ -58,28 +58,15 @@ fn assert_same(lanes: &[Trajectory], scalar: &[Trajectory]) {
 /// matrix (the closed-loop benches' gain), `u = u_trim - K (x - x_trim)`.
 fn hover_feedback(airframe: &Airframe, altitude_m: f64) -> LinearFeedback {
     let (m, g) = (airframe.mass_kg(), airframe.gravity_m_s2());
-    let [jx, jy, jz] = airframe.inertia_kg_m2();
-    let mut gw = DMatrix::<f64>::zeros(4, STATE_DIM);
-    gw[(0, 2)] = -m * 16.0;
-    gw[(0, 5)] = -m * 7.2;
-    gw[(1, 1)] = jx * 400.0 * 4.0 / g;
-    gw[(1, 4)] = jx * 400.0 * 3.6 / g;
-    gw[(1, 6)] = jx * 400.0;
-    gw[(1, 9)] = jx * 36.0;
-    gw[(2, 0)] = -jy * 400.0 * 4.0 / g;
-    gw[(2, 3)] = -jy * 400.0 * 3.6 / g;
-    gw[(2, 7)] = jy * 400.0;
-    gw[(2, 10)] = jy * 36.0;
-    gw[(3, 8)] = jz * 100.0;
-    gw[(3, 11)] = jz * 18.0;
-    let pinv = airframe
-        .effectiveness_matrix()
-        .pseudo_inverse(1e-12)
-        .unwrap();
     let mut x_trim = [0.0; STATE_DIM];
     x_trim[2] = -altitude_m;
     let hover = m * g / airframe.rotor_count() as f64;
-    LinearFeedback::new(&x_trim, &vec![hover; airframe.rotor_count()], pinv * gw).unwrap()
+    LinearFeedback::new(
+        &x_trim,
+        &vec![hover; airframe.rotor_count()],
+        crate::fixtures::hover_gain(airframe),
+    )
+    .unwrap()
 }
 
 /// A controller whose commands turn NaN from `after_s` on (a broken law ends only its lane).
