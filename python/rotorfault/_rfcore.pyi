@@ -743,6 +743,7 @@ def simulate_batch_columns(
     settles: list[list[float] | None],
     config: SimulationConfig,
     dtype: str,
+    lanes: str,
 ) -> BatchColumns: ...
 def state_derivative(
     airframe: Airframe,

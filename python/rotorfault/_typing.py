@@ -65,6 +65,9 @@ CircleTurn: TypeAlias = Literal["clockwise", "counterclockwise"]
 #: How a batch's recording stores its values (:func:`rotorfault.simulate_batch` ``dtype``): double
 #: precision, or single (half the memory; each value rounded to nearest).
 RecordingDtype: TypeAlias = Literal["float64", "float32"]
+#: How :func:`rotorfault.simulate_batch` steps its runs: ``"auto"`` four runs per SIMD register
+#: where the batch allows it (same results bit for bit), ``"scalar"`` one run at a time.
+BatchLanes: TypeAlias = Literal["auto", "scalar"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: A named sensor suite (:class:`rotorfault.Sensing` ``suite``): motion capture, GNSS with a
@@ -143,6 +146,7 @@ __all__ = [
     "AllocationMethod",
     "AllocationStatus",
     "RecordingDtype",
+    "BatchLanes",
     "Controller",
     "CoreController",
     "CoreControllerName",

@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use rfcore::flight::simulation::{simulate_batch_columns as core_columns, BatchColumns, Column, Sample};
+use rfcore::flight::simulation::{simulate_batch_columns as core_columns, BatchColumns, BatchLanes, Column, Sample};
 
 use crate::airframe::PyAirframe;
 use crate::control::ControllerArg;
@@ -107,20 +107,30 @@ pub fn simulate_batch_columns<'py>(
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
     dtype: &str,
+    lanes: &str,
 ) -> PyResult<PyBatchColumns> {
     if dtype != "float64" && dtype != "float32" {
         return Err(PyValueError::new_err(format!(
             "dtype: must be 'float64' or 'float32', got {dtype:?}"
         )));
     }
+    let lanes = match lanes {
+        "auto" => BatchLanes::Auto,
+        "scalar" => BatchLanes::Scalar,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "lanes: must be 'auto' or 'scalar', got {other:?}"
+            )))
+        }
+    };
     let (vehicle, actuators, efficiency, runs) =
         batch_runs(airframe, &actuator, &drag, &controllers, &x0s, &fault_lists, settles, &efficiency)?;
     let config = &config.inner;
     if dtype == "float32" {
-        let columns = detached(py, |cancel| core_columns::<f32>(&vehicle, &actuators, &efficiency, runs, config, cancel))?;
+        let columns = detached(py, |cancel| core_columns::<f32>(&vehicle, &actuators, &efficiency, runs, config, cancel, lanes))?;
         to_python(py, columns)
     } else {
-        let columns = detached(py, |cancel| core_columns::<f64>(&vehicle, &actuators, &efficiency, runs, config, cancel))?;
+        let columns = detached(py, |cancel| core_columns::<f64>(&vehicle, &actuators, &efficiency, runs, config, cancel, lanes))?;
         to_python(py, columns)
     }
 }

@@ -51,47 +51,6 @@ fn config() -> SimulationConfig {
     SimulationConfig::new(CONTROL_DT_S, SUBSTEPS, DURATION_S)
 }
 
-/// A hover gain by hand: the desired wrench change is a diagonal PD on the state error
-/// (altitude; roll / pitch / yaw, with the horizontal position loop closed through the attitude
-/// set-point, roll <- east, pitch <- -north, as thrust tilts in NED/FRD), mapped to rotor thrusts
-/// by the pseudo-inverse of the 4 x m effectiveness matrix (rows T, L, M, N).
-/// Returns K (m x 12) for `u = u_trim - K (x - x_trim)`.
-fn hover_gain(airframe: &Airframe) -> DMatrix<f64> {
-    let m = airframe.mass_kg();
-    let g = airframe.gravity_m_s2();
-    let [jx, jy, jz] = airframe.inertia_kg_m2();
-    // Altitude: omega_n = 4 rad/s, zeta = 0.9; attitude: omega_n = 20 rad/s; position (outer): 2 rad/s.
-    let (kp_z, kd_z) = (16.0, 7.2);
-    let (kp_att, kd_att) = (400.0, 36.0);
-    let (kp_yaw, kd_yaw) = (100.0, 18.0);
-    let (kp_xy, kd_xy) = (4.0, 3.6);
-    // Wrench change dw = -G e (e = x - x_trim), columns in the order of `state_vector`:
-    // [n, e, d, vn, ve, vd, roll, pitch, yaw, p, q, r].
-    let mut gw = DMatrix::<f64>::zeros(4, STATE_DIM);
-    // Thrust (up): more when below the target (d error > 0) or sinking (vd > 0).
-    gw[(0, 2)] = -m * kp_z;
-    gw[(0, 5)] = -m * kd_z;
-    // Roll torque: L = Jx (kp (roll_d - roll) - kd p), roll_d = -(kp_xy e_e + kd_xy e_ve) / g.
-    gw[(1, 1)] = jx * kp_att * kp_xy / g;
-    gw[(1, 4)] = jx * kp_att * kd_xy / g;
-    gw[(1, 6)] = jx * kp_att;
-    gw[(1, 9)] = jx * kd_att;
-    // Pitch torque: M = Jy (kp (pitch_d - pitch) - kd q), pitch_d = +(kp_xy e_n + kd_xy e_vn) / g.
-    gw[(2, 0)] = -jy * kp_att * kp_xy / g;
-    gw[(2, 3)] = -jy * kp_att * kd_xy / g;
-    gw[(2, 7)] = jy * kp_att;
-    gw[(2, 10)] = jy * kd_att;
-    // Yaw torque.
-    gw[(3, 8)] = jz * kp_yaw;
-    gw[(3, 11)] = jz * kd_yaw;
-    let pinv = airframe
-        .effectiveness_matrix()
-        .pseudo_inverse(1e-12)
-        .expect("pseudo-inverse of the effectiveness matrix");
-    // u = u_trim + pinv dw = u_trim - (pinv G) e.
-    pinv * gw
-}
-
 fn bench_simulation(c: &mut Criterion) {
     let airframe = quad_x();
     let rotors = airframe.rotor_count();
@@ -141,7 +100,7 @@ fn bench_simulation(c: &mut Criterion) {
     // -- closed loop: LinearFeedback ------------------------------------------------------------
     let mut x_trim = [0.0; STATE_DIM];
     x_trim[2] = target.z;
-    let feedback = LinearFeedback::new(&x_trim, &u_trim, hover_gain(&airframe)).expect("gain");
+    let feedback = LinearFeedback::new(&x_trim, &u_trim, rfcore::fixtures::hover_gain(&airframe)).expect("gain");
     // A perturbed start about the hover point: 0.5 m/s north, 0.3 m/s up, 3 deg roll, 5 deg yaw.
     let perturbed = RigidBodyState {
         velocity_m_s: Vector3::new(0.5, 0.0, -0.3),

@@ -472,6 +472,12 @@ def _simulate(draw: st.DrawFn, frame: rf.Airframe) -> Call:
         kwargs["memory_budget_bytes"] = draw(hostile(st.integers(10**3, 10**8), *EDGE_INTS))
     if draw(st.booleans()):
         kwargs["dtype"] = draw(hostile(st.sampled_from(("float64", "float32")), "float16", "", "FLOAT32"))
+    if draw(st.booleans()):
+        kwargs["lanes"] = draw(hostile(st.sampled_from(("auto", "scalar")), "simd", "", "AUTO", 4))
+        # Four runs or more make a group of SIMD lanes (equal fault times: one list for all).
+        x0s = x0s + draw(st.lists(valid_states(), min_size=3, max_size=4))
+        if "faults" in kwargs:
+            kwargs["faults"] = [kwargs["faults"][0]] * len(x0s)
     duration = draw(hostile(number(0.0, 1.0), 1e9, 1e300))
     return Call(rf.simulate_batch, (sim, x0s, duration), kwargs, frozenset(kwargs) | {"duration_s", "x0s"})
 

@@ -209,6 +209,13 @@ impl FixedPitch {
     }
 }
 
+impl FixedPitch {
+    /// `w_i k_mu` per rotor: reaction torque per newton of thrust, signed (m).
+    pub(crate) fn torque_per_thrust_m(&self) -> &[f64] {
+        &self.torque_per_thrust_m
+    }
+}
+
 /// The speed and pitch channels' own lags (a motor's speed loop and a servo are different
 /// hardware). Default: Wang et al. Sec. 4.2, "a first-order transfer function ... cut-off
 /// frequency 10 Hz" for both, no rate limit (the paper gives none).

@@ -3,6 +3,7 @@
 //! - [`rigid_body`]: Newton-Euler dynamics with the full inertia tensor and the RK4 step.
 //! - [`actuator`]: fixed-pitch and variable-pitch rotors (lag, rate limit, saturation, efficiency);
 //!   [`vpp_preset`]: the variable-pitch preset files that describe one.
+//! - [`lanes`]: the RK4 step and vehicle wrench over SIMD lanes (several vehicles at once).
 //! - [`vehicle`]: rotor forces and torques, drag, gyroscopic moment, wind.
 //! - [`model`]: the model as an ODE in the 12-element state vector, for linearisation.
 //! - [`simulation`]: the closed loop with a controller, rotor faults, noise and divergence events.
@@ -16,6 +17,7 @@
 pub mod actuator;
 pub mod estimation;
 pub mod fault_schedule;
+pub mod lanes;
 pub mod model;
 pub mod random;
 pub mod rigid_body;

@@ -82,6 +82,16 @@ impl RigidBody {
         &self.inertia_kg_m2
     }
 
+    /// `J^-1`, as the derivative uses it (the SIMD lanes need the same bits).
+    pub(crate) fn inertia_inverse(&self) -> &Matrix3<f64> {
+        &self.inertia_inverse
+    }
+
+    /// `1 / mass`, as the derivative uses it.
+    pub(crate) fn inverse_mass(&self) -> f64 {
+        self.inverse_mass
+    }
+
     /// The time derivative of `state` under `wrench` (Newton-Euler).
     #[inline]
     pub fn derivative(&self, state: &RigidBodyState, wrench: &Wrench) -> StateDerivative {

@@ -87,6 +87,22 @@ impl Vehicle {
         &self.body
     }
 
+    /// The drag and rotor-inertia terms of the wrench.
+    pub(crate) fn aero(&self) -> &Drag {
+        &self.aero
+    }
+
+    /// Gravity, m/s^2 (the weight is `mass * gravity` along world +z).
+    pub(crate) fn gravity_m_s2(&self) -> f64 {
+        self.gravity_m_s2
+    }
+
+    /// Replaces the body (tests of a full inertia tensor; airframes give principal ones).
+    #[cfg(test)]
+    pub(crate) fn set_body_for_tests(&mut self, body: RigidBody) {
+        self.body = body;
+    }
+
     pub fn rotor_count(&self) -> usize {
         self.rotor_xy_m.len()
     }

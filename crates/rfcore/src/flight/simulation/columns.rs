@@ -19,7 +19,8 @@ use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::Divergence;
-use crate::flight::simulation::driver::{check_batch, fly_batch_run, BatchRun};
+use crate::flight::simulation::batch_lanes::{plan, BatchLanes};
+use crate::flight::simulation::driver::{check_batch, BatchRun};
 use crate::flight::simulation::recording::{SensingRecord, Trajectory};
 use crate::flight::vehicle::Vehicle;
 use crate::state::{state_vector, STATE_DIM};
@@ -204,8 +205,8 @@ fn fill<T: Sample>(
     })
 }
 
-/// [`simulate_batch`](super::simulate_batch) recorded into columns of `T` (see the module
-/// docs): the same runs, seeds and rows, without a [`Trajectory`] per run.
+/// [`simulate_batch_lanes`](super::simulate_batch_lanes) recorded into columns of `T` (see the
+/// module docs): the same runs, seeds and rows, without a [`Trajectory`] per run.
 pub fn simulate_batch_columns<T: Sample>(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -213,6 +214,7 @@ pub fn simulate_batch_columns<T: Sample>(
     runs: Vec<BatchRun>,
     config: &SimulationConfig,
     cancel: &Cancel,
+    lanes: BatchLanes,
 ) -> Result<BatchColumns<T>> {
     check_batch(config, &runs)?;
     let n = runs.len();
@@ -290,16 +292,36 @@ pub fn simulate_batch_columns<T: Sample>(
             gyro_saturated, accel_saturated,
         });
     }
-    let records = runs
+    // Each plan (one run, or a group of four in SIMD lanes) takes its runs' slots.
+    let plans = plan(vehicle, actuators, initial_efficiency, runs, config, lanes);
+    let mut run_slots: Vec<Option<Slot<'_, T>>> = run_slots.into_iter().map(Some).collect();
+    let mut work = Vec::with_capacity(plans.len());
+    for plan in plans {
+        let mut slots = Vec::new();
+        for i in plan.indices() {
+            let Some(slot) = run_slots.get_mut(i).and_then(Option::take) else {
+                return Err(RfError::invalid("runs", "internal: a run's slot was taken twice"));
+            };
+            slots.push(slot);
+        }
+        work.push((plan, slots));
+    }
+    let flown = work
         .into_par_iter()
-        .zip(run_slots.into_par_iter())
-        .enumerate()
-        .map(|(i, (run, mut slot))| {
-            let trajectory = fly_batch_run(i, run, vehicle, actuators, initial_efficiency, config, cancel)?;
-            fill(trajectory, &mut slot, &grid, (count, m))
+        .map(|(plan, slots)| {
+            let trajectories = plan.fly(vehicle, actuators, initial_efficiency, config, cancel)?;
+            trajectories
+                .into_iter()
+                .zip(slots)
+                .map(|((i, trajectory), mut slot)| Ok((i, fill(trajectory, &mut slot, &grid, (count, m))?)))
+                .collect::<Result<Vec<_>>>()
         })
         .collect::<Result<Vec<_>>>()?;
-    out.records = records;
+    let mut records: Vec<Option<RunRecord>> = (0..n).map(|_| None).collect();
+    for (i, record) in flown.into_iter().flatten() {
+        records[i] = Some(record);
+    }
+    out.records = records.into_iter().flatten().collect();
     Ok(out)
 }
 
@@ -336,8 +358,8 @@ mod tests {
         config.record_every = 7;
         let never = Cancel::never();
         let per_run = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
-        let wide = simulate_batch_columns::<f64>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
-        let narrow = simulate_batch_columns::<f32>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
+        let wide = simulate_batch_columns::<f64>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never, BatchLanes::Auto).unwrap();
+        let narrow = simulate_batch_columns::<f32>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never, BatchLanes::Auto).unwrap();
         let slot = wide.grid_rows + 1;
         assert!(wide.records[0].off_grid_row);
         assert_eq!(wide.records[1].grid_rows, wide.grid_rows);

@@ -158,13 +158,26 @@ impl Limits {
         let q = s.attitude.quaternion();
         // n3z, the z component of body z in the world frame.
         let n3z = q.w * q.w - q.i * q.i - q.j * q.j + q.k * q.k;
+        self.within_parts(
+            n3z,
+            s.position_m.into(),
+            s.velocity_m_s.norm_squared(),
+            s.omega_rad_s.norm_squared(),
+        )
+    }
+
+    /// [`Limits::within`] from what it compares: `n3z` (`w^2 - x^2 - y^2 + z^2` of the
+    /// attitude), the position and the squared norms of velocity and body rate (nalgebra's
+    /// `(x^2 + y^2) + z^2`); the SIMD lanes compute these four at once.
+    #[inline]
+    pub(crate) fn within_parts(&self, n3z: f64, position_m: [f64; 3], speed2: f64, rate2: f64) -> bool {
         n3z >= self.min_n3z
-            && s.position_m.z <= self.ground_z_m
-            && self.start_altitude_m + s.position_m.z <= self.limits.max_altitude_loss_m
-            && s.velocity_m_s.norm_squared() <= self.max_speed2
-            && s.omega_rad_s.norm_squared() <= self.max_rate2
-            && s.position_m.x.is_finite()
-            && s.position_m.y.is_finite()
+            && position_m[2] <= self.ground_z_m
+            && self.start_altitude_m + position_m[2] <= self.limits.max_altitude_loss_m
+            && speed2 <= self.max_speed2
+            && rate2 <= self.max_rate2
+            && position_m[0].is_finite()
+            && position_m[1].is_finite()
     }
 
     /// How far past each limit the state is (positive: beyond), in the order of precedence

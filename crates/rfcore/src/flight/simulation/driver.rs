@@ -4,8 +4,6 @@
 //! [`Cancel`] token once per control period (`*_cancellable`, the batch) and, with sensing, once
 //! per sensor sample inside the period (`Onboard::catch_up`).
 
-use rayon::prelude::*;
-
 use crate::cancel::Cancel;
 use crate::control::Controller;
 use crate::error::{Result, RfError};
@@ -84,51 +82,21 @@ pub fn simulate_observed(
     observer: &mut dyn StepObserver,
     cancel: &Cancel,
 ) -> Result<Trajectory> {
-    config.check()?;
+    let mut schedule = check_run(
+        vehicle,
+        &actuators,
+        controller,
+        initial_efficiency,
+        faults,
+        &x0,
+        config,
+    )?;
     let m = vehicle.rotor_count();
-    if actuators.rotor_count() != m {
-        return Err(RfError::shape(
-            "actuator",
-            format!("{m} rotors"),
-            actuators.rotor_count().to_string(),
-        ));
-    }
     let count = actuators.channels() * m;
-    if controller.command_count() != count {
-        return Err(RfError::shape(
-            "controller",
-            format!(
-                "{count} commands ({} per rotor x {m} rotors)",
-                actuators.channels()
-            ),
-            controller.command_count().to_string(),
-        ));
-    }
-    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
-    let mut schedule = FaultSchedule::new(faults, m)?;
-    if !x0.is_finite() {
-        return Err(RfError::invalid("x0", "must be finite"));
-    }
-    check_step_size(config, &actuators, &x0)?;
-    config.check_start("x0", &x0)?;
-
     let steps = config.steps();
     let every = config.record_every;
     let rows = steps / every + 3;
-    let mut trajectory = Trajectory {
-        t_s: Vec::with_capacity(rows),
-        states: Vec::with_capacity(rows),
-        commands: Vec::with_capacity(rows * count),
-        thrust_n: Vec::with_capacity(rows * m),
-        efficiency: Vec::with_capacity(rows * m),
-        measured: Vec::with_capacity(if config.noise.is_some() {
-            rows * STATE_DIM
-        } else {
-            0
-        }),
-        divergence: None,
-        sensing: None,
-    };
+    let mut trajectory = empty_trajectory(config, count, m);
     controller.reset();
     let mut efficiency = initial_efficiency.to_vec();
     let mut command = vec![0.0; count];
@@ -205,17 +173,15 @@ pub fn simulate_observed(
                 rotor_thrust_n: onboard.rotor_thrust(),
             }
         } else if reads_samples {
-            for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
-                *thrust = actuators.output(i, efficiency[i]).thrust_n;
-            }
-            let totals = rotor_totals(vehicle, &actuators, actuators.state(), &efficiency);
-            let wind = config.wind_at(t);
-            ControllerInput {
-                state: &measured,
-                gyro_rad_s: Some(measured.omega_rad_s),
-                specific_force_m_s2: Some(vehicle.specific_force(&state, &totals, &wind)),
-                rotor_thrust_n: Some(&rotor_thrust),
-            }
+            truth_samples(
+                vehicle,
+                &actuators,
+                &efficiency,
+                config,
+                t,
+                (&state, &measured),
+                &mut rotor_thrust,
+            )
         } else {
             ControllerInput::state_only(&measured)
         };
@@ -275,9 +241,93 @@ pub fn simulate_observed(
     Ok(trajectory)
 }
 
+/// An empty trajectory with room for the run's rows.
+pub(super) fn empty_trajectory(config: &SimulationConfig, count: usize, m: usize) -> Trajectory {
+    let rows = config.steps() / config.record_every + 3;
+    Trajectory {
+        t_s: Vec::with_capacity(rows),
+        states: Vec::with_capacity(rows),
+        commands: Vec::with_capacity(rows * count),
+        thrust_n: Vec::with_capacity(rows * m),
+        efficiency: Vec::with_capacity(rows * m),
+        measured: Vec::with_capacity(if config.noise.is_some() {
+            rows * STATE_DIM
+        } else {
+            0
+        }),
+        divergence: None,
+        sensing: None,
+    }
+}
+
+/// The raw samples of the truth for a controller that reads them (no sensing): the rotors'
+/// thrusts (written to `rotor_thrust`), the measured rates and the specific force at `t_s`.
+pub(super) fn truth_samples<'a>(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    efficiency: &[f64],
+    config: &SimulationConfig,
+    t_s: f64,
+    (state, measured): (&RigidBodyState, &'a RigidBodyState),
+    rotor_thrust: &'a mut [f64],
+) -> ControllerInput<'a> {
+    for (i, thrust) in rotor_thrust.iter_mut().enumerate() {
+        *thrust = actuators.output(i, efficiency[i]).thrust_n;
+    }
+    let totals = rotor_totals(vehicle, actuators, actuators.state(), efficiency);
+    let wind = config.wind_at(t_s);
+    ControllerInput {
+        state: measured,
+        gyro_rad_s: Some(measured.omega_rad_s),
+        specific_force_m_s2: Some(vehicle.specific_force(state, &totals, &wind)),
+        rotor_thrust_n: Some(rotor_thrust),
+    }
+}
+
+/// The checks of one run before any work (those of [`simulate_observed`]); its fault schedule.
+pub(super) fn check_run(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    controller: &dyn Controller,
+    initial_efficiency: &[f64],
+    faults: &[RotorFault],
+    x0: &RigidBodyState,
+    config: &SimulationConfig,
+) -> Result<FaultSchedule> {
+    config.check()?;
+    let m = vehicle.rotor_count();
+    if actuators.rotor_count() != m {
+        return Err(RfError::shape(
+            "actuator",
+            format!("{m} rotors"),
+            actuators.rotor_count().to_string(),
+        ));
+    }
+    let count = actuators.channels() * m;
+    if controller.command_count() != count {
+        return Err(RfError::shape(
+            "controller",
+            format!(
+                "{count} commands ({} per rotor x {m} rotors)",
+                actuators.channels()
+            ),
+            controller.command_count().to_string(),
+        ));
+    }
+    crate::airframe::check_efficiency("efficiency", initial_efficiency, m)?;
+    let schedule = FaultSchedule::new(faults, m)?;
+    if !x0.is_finite() {
+        return Err(RfError::invalid("x0", "must be finite"));
+    }
+    check_step_size(config, actuators, x0)?;
+    config.check_start("x0", x0)?;
+
+    Ok(schedule)
+}
+
 /// Ends a run with `divergence`: its row (NaN commands; NaN measurements with sensor noise, a
 /// NaN estimate with sensing), shown to the observer and recorded with the event.
-fn end_with(
+pub(super) fn end_with(
     trajectory: &mut Trajectory,
     observer: &mut dyn StepObserver,
     divergence: Divergence,
@@ -314,24 +364,6 @@ pub struct BatchRun {
     pub initial_command: Option<Vec<f64>>,
     pub x0: RigidBodyState,
     pub faults: Vec<RotorFault>,
-}
-
-/// Many runs in parallel (rayon); results in input order. With sensor noise or sensing, run `i`
-/// uses seed `seed + i`, so runs are independent and the batch is reproducible. Every run checks
-/// `cancel` once per control period.
-pub fn simulate_batch(
-    vehicle: &Vehicle,
-    actuators: &Actuators,
-    initial_efficiency: &[f64],
-    runs: Vec<BatchRun>,
-    config: &SimulationConfig,
-    cancel: &Cancel,
-) -> Result<Vec<Trajectory>> {
-    check_batch(config, &runs)?;
-    runs.into_par_iter()
-        .enumerate()
-        .map(|(i, run)| fly_batch_run(i, run, vehicle, actuators, initial_efficiency, config, cancel))
-        .collect()
 }
 
 /// A batch's checks before any run: the settings, then each run's start (named `x0s[i]`).

@@ -31,7 +31,8 @@
 //!
 //! # Layout (one concept per file; imports run down this list, never back up)
 //! - [`columns`]: a batch recorded into one buffer per signal, runs filling their slots.
-//! - [`driver`]: one run and a batch of runs: checks, then control step by control step.
+//! - [`batch_lanes`]: a batch of runs in parallel, four at a time in SIMD lanes (same results).
+//! - [`driver`]: one run (checks, then control step by control step) and a batch run's rule.
 //! - `onboard`: one run's sensors and estimator, fed from the tape after every period.
 //! - [`step`]: one control period of body and actuators (RK4 substeps, faults, divergence
 //!   check), and the step-size check.
@@ -43,6 +44,7 @@
 //! - [`noise`]: the papers' sensor noise on what the controller sees.
 //! - [`divergence`]: divergence limits, reasons and events, and how a crossing is located.
 
+pub mod batch_lanes;
 pub mod columns;
 pub mod config;
 pub mod divergence;
@@ -59,10 +61,13 @@ mod tape;
 mod tests;
 
 pub use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
+pub use batch_lanes::{simulate_batch, simulate_batch_lanes, BatchLanes};
 pub use columns::{simulate_batch_columns, BatchColumns, Column, RunRecord, Sample};
-pub use config::{SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS};
+pub use config::{
+    SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS,
+};
 pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
-pub use driver::{simulate, simulate_batch, simulate_cancellable, simulate_observed, BatchRun};
+pub use driver::{simulate, simulate_cancellable, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
 pub use recording::{EstimateRow, SensingRecord, StepObserver, Trajectory};
 pub use sensing::{ImuPart, Sensing, SuiteName};

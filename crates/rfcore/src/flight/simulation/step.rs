@@ -268,33 +268,17 @@ impl<'a> Integrator<'a> {
                     tape.share_wrench(wrench);
                 }
                 if !self.limits.within(&next) {
-                    // Locate the crossing by re-integrating shorter steps from `state`.
-                    let mut channels = vec![0.0; command.len()];
-                    let mut step = |l: f64| {
-                        let (mid, fin) = (a + 0.5 * l, a + l);
-                        let mut tot = [RotorTotals::default(); 3];
-                        for (node, elapsed) in [0.0, 0.5 * l, l].into_iter().enumerate() {
-                            actuators.response(&self.targets, elapsed, &mut channels);
-                            tot[node] = rotor_totals(vehicle, actuators, &channels, efficiency);
-                        }
-                        let w = [
-                            config.wind_at(a),
-                            config.wind_at(mid),
-                            config.wind_before(fin),
-                        ];
-                        body.rk4_step_nodes(state, l, |node, x| {
-                            vehicle.wrench_from(x, &tot[node], &w[node])
-                        })
-                    };
-                    let (elapsed, reason) = self.limits.locate(len, &next, &mut step);
-                    let at = if elapsed == len { next } else { step(elapsed) };
-                    actuators.response(&self.targets, elapsed, &mut channels);
-                    actuators.set_state(&channels);
-                    return Some(Divergence {
-                        time_s: a + elapsed,
-                        reason,
-                        state: at,
-                    });
+                    return Some(located_divergence(
+                        vehicle,
+                        config,
+                        &self.limits,
+                        actuators,
+                        &self.targets,
+                        efficiency,
+                        state,
+                        (a, len),
+                        next,
+                    ));
                 }
                 *state = next;
                 actuators.set_state(if constant {
@@ -323,6 +307,51 @@ impl<'a> Integrator<'a> {
             );
         }
         None
+    }
+}
+
+/// The divergence within the interval `[a, a + len]` (`interval`) whose RK4 step from `state`
+/// ended at `next`, beyond a limit of `limits`: the crossing located by re-integrating shorter
+/// steps from `state` with the channels from `actuators` under `targets`; leaves `actuators` at
+/// the crossing.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn located_divergence(
+    vehicle: &Vehicle,
+    config: &SimulationConfig,
+    limits: &Limits,
+    actuators: &mut Actuators,
+    targets: &[f64],
+    efficiency: &[f64],
+    state: &RigidBodyState,
+    (a, len): (f64, f64),
+    next: RigidBodyState,
+) -> Divergence {
+    let body = vehicle.body();
+    let mut channels = vec![0.0; targets.len()];
+    let mut step = |l: f64| {
+        let (mid, fin) = (a + 0.5 * l, a + l);
+        let mut tot = [RotorTotals::default(); 3];
+        for (node, elapsed) in [0.0, 0.5 * l, l].into_iter().enumerate() {
+            actuators.response(targets, elapsed, &mut channels);
+            tot[node] = rotor_totals(vehicle, actuators, &channels, efficiency);
+        }
+        let w = [
+            config.wind_at(a),
+            config.wind_at(mid),
+            config.wind_before(fin),
+        ];
+        body.rk4_step_nodes(state, l, |node, x| {
+            vehicle.wrench_from(x, &tot[node], &w[node])
+        })
+    };
+    let (elapsed, reason) = limits.locate(len, &next, &mut step);
+    let at = if elapsed == len { next } else { step(elapsed) };
+    actuators.response(targets, elapsed, &mut channels);
+    actuators.set_state(&channels);
+    Divergence {
+        time_s: a + elapsed,
+        reason,
+        state: at,
     }
 }
 

@@ -1,0 +1,343 @@
+//! The lanes fly what the scalar simulator flies, bit for bit (a stricter check than the issue's
+//! 1e-12 relative): hover LQR-style feedback and Ke's FTC, with rotor lag, saturation, faults
+//! between substeps, divergence and non-finite commands in some lanes and not others.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::*;
+use crate::airframe::Airframe;
+use crate::cancel::Cancel;
+use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
+use crate::control::{Controller, LinearFeedback};
+use crate::flight::actuator::{Actuators, FixedPitch, Lag};
+use crate::flight::fault_schedule::RotorFault;
+use crate::flight::vehicle::{Drag, Vehicle};
+use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
+
+/// Every recorded number of a trajectory as bits (NaN rows compare too), and the events.
+fn bits(t: &Trajectory) -> (Vec<u64>, Option<DivergenceReason>) {
+    let mut out: Vec<u64> = Vec::new();
+    let state = |s: &RigidBodyState| {
+        let q = s.attitude.quaternion().coords;
+        let all = s
+            .position_m
+            .iter()
+            .chain(&s.velocity_m_s)
+            .chain(q.iter())
+            .chain(&s.omega_rad_s);
+        all.map(|v| v.to_bits()).collect::<Vec<u64>>()
+    };
+    for s in &t.states {
+        out.extend(state(s));
+    }
+    for v in t
+        .t_s
+        .iter()
+        .chain(&t.commands)
+        .chain(&t.thrust_n)
+        .chain(&t.efficiency)
+    {
+        out.push(v.to_bits());
+    }
+    out.extend([t.t_s.len(), t.commands.len(), t.thrust_n.len()].map(|n| n as u64));
+    if let Some(d) = &t.divergence {
+        out.push(d.time_s.to_bits());
+        out.extend(state(&d.state));
+    }
+    (out, t.divergence.map(|d| d.reason))
+}
+
+fn assert_same(lanes: &[Trajectory], scalar: &[Trajectory]) {
+    assert_eq!(lanes.len(), scalar.len());
+    for (i, (a, b)) in lanes.iter().zip(scalar).enumerate() {
+        assert!(bits(a) == bits(b), "run {i}: lanes and scalar differ");
+    }
+}
+
+/// A diagonal PD on the hover state mapped through the pseudo-inverse of the effectiveness
+/// matrix (the closed-loop benches' gain), `u = u_trim - K (x - x_trim)`.
+fn hover_feedback(airframe: &Airframe, altitude_m: f64) -> LinearFeedback {
+    let (m, g) = (airframe.mass_kg(), airframe.gravity_m_s2());
+    let mut x_trim = [0.0; STATE_DIM];
+    x_trim[2] = -altitude_m;
+    let hover = m * g / airframe.rotor_count() as f64;
+    LinearFeedback::new(
+        &x_trim,
+        &vec![hover; airframe.rotor_count()],
+        crate::fixtures::hover_gain(airframe),
+    )
+    .unwrap()
+}
+
+/// A controller whose commands turn NaN from `after_s` on (a broken law ends only its lane).
+struct NanAfter {
+    law: LinearFeedback,
+    after_s: f64,
+}
+
+impl Controller for NanAfter {
+    fn command_count(&self) -> usize {
+        self.law.command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.law.command(t_s, measured, out)?;
+        if t_s >= self.after_s {
+            out[1] = f64::NAN;
+        }
+        Ok(())
+    }
+}
+
+fn start(k: usize) -> RigidBodyState {
+    let x = |i: usize| ((k * 5 + i) as f64 * 0.77).sin();
+    RigidBodyState {
+        position_m: Vector3::new(0.3 * x(0), 0.3 * x(1), -10.0 + 0.2 * x(2)),
+        velocity_m_s: Vector3::new(0.5 * x(3), 0.4 * x(4), 0.3 * x(5)),
+        attitude: UnitQuaternion::from_euler_angles(0.1 * x(6), 0.1 * x(7), 0.3 * x(8)),
+        omega_rad_s: Vector3::new(0.2 * x(9), 0.1 * x(10), 0.1 * x(11)),
+    }
+}
+
+fn both(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    runs: impl Fn() -> Vec<BatchRun>,
+    config: &SimulationConfig,
+) -> (Vec<Trajectory>, Vec<Trajectory>) {
+    let fly = |lanes| {
+        simulate_batch_lanes(
+            vehicle,
+            actuators,
+            &[1.0; 4],
+            runs(),
+            config,
+            &Cancel::never(),
+            lanes,
+        )
+        .unwrap()
+    };
+    (fly(BatchLanes::Auto), fly(BatchLanes::Scalar))
+}
+
+#[test]
+fn lanes_fly_the_scalar_hover_feedback_batch_bit_for_bit() {
+    let airframe = crate::fixtures::preset("quad-x");
+    let vehicle = Vehicle::new(
+        &airframe,
+        Drag {
+            linear_drag_n_s_m: 0.2,
+            ..Drag::default()
+        },
+    )
+    .unwrap();
+    let lag = Lag {
+        time_constant_s: 0.02,
+        rate_limit_per_s: f64::INFINITY,
+    };
+    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 0.0).unwrap());
+    let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+    let mut config = SimulationConfig::new(0.0025, 2, 2.5);
+    config.record_every = 3;
+    config.wind_m_s = Vector3::new(0.5, -0.2, 0.0);
+    // 11 runs: runs 0-3 and 8 share a fault time between substeps (three groups' worth of
+    // lanes with the fault-free runs, one left for the scalar path); run 2 loses a rotor
+    // (diverges), run 6 starts far off (saturates), run 5's law breaks at 0.6 s.
+    let runs = || -> Vec<BatchRun> {
+        (0..11)
+            .map(|k| {
+                let law = hover_feedback(&airframe, 10.0);
+                let faults = if k < 4 || k == 8 {
+                    vec![RotorFault {
+                        rotor: k % 4,
+                        time_s: 0.30013,
+                        efficiency: if k == 2 { 0.0 } else { 0.6 },
+                    }]
+                } else {
+                    vec![]
+                };
+                let mut x0 = start(k);
+                if k == 6 {
+                    x0.position_m.z = -7.0;
+                    x0.velocity_m_s.z = 2.0;
+                }
+                let controller: Box<dyn Controller> = if k == 5 {
+                    Box::new(NanAfter { law, after_s: 0.6 })
+                } else {
+                    Box::new(law)
+                };
+                BatchRun {
+                    controller,
+                    initial_command: Some(vec![hover; 4]),
+                    x0,
+                    faults,
+                }
+            })
+            .collect()
+    };
+    let plans = plan(
+        &vehicle,
+        &actuators,
+        &[1.0; 4],
+        runs(),
+        &config,
+        BatchLanes::Auto,
+    );
+    let groups = plans.iter().filter(|p| matches!(p, Plan::Group(_))).count();
+    assert_eq!(
+        (groups, plans.len()),
+        (2, 5),
+        "two groups of four, three runs scalar"
+    );
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    // The cases the batch was built to hold.
+    assert!(lanes[2].divergence.is_some(), "a dead rotor diverges");
+    assert_eq!(
+        lanes[5].divergence.map(|d| d.reason),
+        Some(DivergenceReason::NonFiniteCommand)
+    );
+    let max = airframe.max_thrust_n();
+    assert!(
+        lanes[6]
+            .commands
+            .chunks(4)
+            .any(|c| c.iter().zip(&max).any(|(u, m)| u > m)),
+        "run 6 saturates"
+    );
+    assert!(lanes[0].efficiency.contains(&0.6), "the fault acts");
+    assert!(lanes.iter().filter(|t| t.divergence.is_none()).count() >= 8);
+}
+
+#[test]
+fn lanes_fly_the_scalar_ke_ftc_batch_bit_for_bit() {
+    let airframe = crate::fixtures::preset("ke-quadcopter");
+    let drag = Drag {
+        linear_drag_n_s_m: 0.3,
+        rotational_drag_n_m_s: 2.8e-3,
+        ..Drag::default()
+    };
+    let vehicle = Vehicle::new(&airframe, drag).unwrap();
+    let lag = Lag {
+        time_constant_s: 0.025,
+        rate_limit_per_s: f64::INFINITY,
+    };
+    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 0.0).unwrap());
+    let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+    let config = SimulationConfig::new(0.0025, 4, 1.5);
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| {
+                let ke = UniformPassiveFtc::new(
+                    &airframe,
+                    KeGains::default(),
+                    CommandLaw::default(),
+                    vec![(0.0, [0.0, 0.0, -10.0])],
+                    0.0025,
+                )
+                .unwrap();
+                BatchRun {
+                    controller: Box::new(ke),
+                    initial_command: Some(vec![hover; 4]),
+                    x0: start(k),
+                    faults: vec![RotorFault {
+                        rotor: k % 2,
+                        time_s: 0.5,
+                        efficiency: 0.0,
+                    }],
+                }
+            })
+            .collect()
+    };
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    assert!(
+        lanes.iter().all(|t| t.divergence.is_none()),
+        "Ke's FTC holds one dead rotor"
+    );
+}
+
+#[test]
+fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
+    // Through `truth_samples`, the one function both paths use.
+    struct Sampler(LinearFeedback);
+    impl Controller for Sampler {
+        fn command_count(&self) -> usize {
+            4
+        }
+        fn command(&mut self, t: f64, s: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+            self.0.command(t, s, out)
+        }
+        fn command_with(
+            &mut self,
+            t: f64,
+            input: &ControllerInput<'_>,
+            out: &mut [f64],
+        ) -> Result<()> {
+            self.0.command(t, input.state, out)?;
+            let f = input.specific_force_m_s2.unwrap();
+            out[0] += 1e-3 * f.z + 1e-3 * input.rotor_thrust_n.unwrap()[3];
+            Ok(())
+        }
+        fn reads_samples(&self) -> bool {
+            true
+        }
+    }
+    let airframe = crate::fixtures::preset("quad-x");
+    let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
+    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+    let config = SimulationConfig::new(0.0025, 2, 0.5);
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| BatchRun {
+                controller: Box::new(Sampler(hover_feedback(&airframe, 10.0))),
+                initial_command: None,
+                x0: start(k),
+                faults: vec![],
+            })
+            .collect()
+    };
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+}
+
+#[test]
+fn scalar_setting_and_unsupported_batches_fly_every_run_scalar() {
+    let airframe = crate::fixtures::preset("quad-x");
+    let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
+    let lagged = |rate| {
+        Actuators::FixedPitch(
+            FixedPitch::new(
+                &airframe,
+                Lag {
+                    time_constant_s: 0.02,
+                    rate_limit_per_s: rate,
+                },
+                0.0,
+            )
+            .unwrap(),
+        )
+    };
+    let config = SimulationConfig::new(0.0025, 2, 0.1);
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| BatchRun {
+                controller: Box::new(hover_feedback(&airframe, 10.0)),
+                initial_command: None,
+                x0: start(k),
+                faults: vec![],
+            })
+            .collect()
+    };
+    let scalar_only = |actuators: &Actuators, lanes| {
+        plan(&vehicle, actuators, &[1.0; 4], runs(), &config, lanes)
+            .iter()
+            .all(|p| matches!(p, Plan::Scalar(..)))
+    };
+    assert!(!scalar_only(&lagged(f64::INFINITY), BatchLanes::Auto));
+    assert!(scalar_only(&lagged(f64::INFINITY), BatchLanes::Scalar));
+    assert!(
+        scalar_only(&lagged(50.0), BatchLanes::Auto),
+        "a rate limit is not in the lanes"
+    );
+    assert_eq!(BatchLanes::Scalar.name(), "scalar");
+}
