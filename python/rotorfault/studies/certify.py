@@ -23,7 +23,7 @@ does not.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any, Literal, get_args
 
 from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
@@ -204,17 +204,16 @@ class Certificate(Tabular):
 
     def to_dict(self) -> dict[str, Any]:
         # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
-        out = asdict(replace(self, cases=tuple(
-            c if c.relaxed_hover is None else replace(c, relaxed_hover=replace(c.relaxed_hover, solution=None)) for c in self.cases)))
-        for case in out["cases"]:
+        out = asdict(replace(self, cases=tuple(replace(c, relaxed_hover=None) for c in self.cases)))
+        for case, given in zip(out["cases"], self.cases):
             for key in ("acai", "acai_give_up_yaw", "thrust_to_weight"):
                 if math.isinf(case[key]):
                     case[key] = None  # JSON has no infinity: rank deficient / undefined
-            spin = case["relaxed_hover"]
+            spin = given.relaxed_hover
             if spin is not None:
-                del spin["solution"]
-            if spin is not None and spin["hover"] == "no":
-                spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
+                case["relaxed_hover"] = {f.name: getattr(spin, f.name) for f in fields(spin) if f.name != "solution"}
+                if spin.hover == "no":
+                    case["relaxed_hover"] |= {"spin_rate_rad_s": None, "thrust_margin_n": None}  # JSON has no NaN
         return out
 
 
