@@ -266,3 +266,37 @@ def test_an_indi_failure_mode_is_the_cores_numbering_rotors_from_1() -> None:
     assert one.failed == (1,) and one.healthy == (2, 3, 4) and healthy.failed == () and len(one.hover_thrust_n) == 4
     assert one == c.failure_modes()[1] and hash(one) == hash(c.failure_modes()[1]) and one != healthy
     assert repr(one).startswith("IndiFailureMode(failed=(1,), healthy=(2, 3, 4), ")
+
+
+def test_the_estimates_are_the_cores_views_of_the_run() -> None:
+    """``Trajectory.estimate`` is the core's ``Estimates`` (a Python dataclass before), its parts
+    views of the run's estimate fields; keyword construction and pickling work as before."""
+    from rotorfault.flight import Estimates
+
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
+    run = sim.run(rf.State(position=(0, 0, -1)), 0.1, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+    e = run.estimate
+    assert Estimates is _rfcore.Estimates and type(e) is Estimates and e.state is run.estimate_state
+    assert np.shares_memory(e.position, run.estimate_state) and np.shares_memory(e.attitude_std_rad, run.estimate_std)
+    np.testing.assert_array_equal(e.vector, np.hstack([e.position, e.velocity, e.euler, e.omega]))
+    np.testing.assert_array_equal(e.quaternion, run.estimate_state[:, 6:10])
+    np.testing.assert_array_equal(e.velocity_std_m_s, run.estimate_std[:, 3:6])
+    back = pickle.loads(pickle.dumps(e))
+    np.testing.assert_array_equal(back.state, e.state)
+    assert back.counts.__getnewargs_ex__() == e.counts.__getnewargs_ex__()
+    fields = {f: getattr(run, f) for f in _rfcore.Trajectory.FIELDS if f not in _ESTIMATE_FIELDS}
+    again = rf.Trajectory(**fields, estimate=e)
+    np.testing.assert_array_equal(again.estimate.state, e.state)
+    n = len(run.t)
+    parts = {f: getattr(e, f) for f in Estimates.FIELDS}
+    with pytest.raises(ValueError, match=rf"^velocity: expected {n} rows \(one per time in t\)"):
+        Estimates(**{**parts, "velocity": np.zeros((n + 1, 3))})
+    with pytest.raises(ValueError, match="^std: expected 15 columns"):
+        Estimates(**{**parts, "std": np.zeros((n, 12))})
+
+
+_ESTIMATE_FIELDS = ("estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated", "sensing_counts")
+
+
+def test_a_divergence_prints_as_the_readme_shows() -> None:
+    assert repr(rf.Divergence(time_s=0.5, kind="tilt", state=np.zeros(12))) == "Divergence(time_s=0.5, kind='tilt')"

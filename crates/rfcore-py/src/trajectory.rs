@@ -5,7 +5,7 @@
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyType};
+use pyo3::types::{PyDict, PySlice, PyType};
 
 use rfcore::flight::simulation::{Divergence, DivergenceReason, EstimateRow, SensingRecord, Trajectory};
 use rfcore::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
@@ -172,7 +172,7 @@ pickle_protocol!(PyDivergence, {
     }
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
         let this = slf.get();
-        Ok(format!("{}(time_s={:?}, kind={:?})", slf.get_type().name()?, this.time_s, this.kind.name()))
+        Ok(format!("{}(time_s={:?}, kind='{}')", slf.get_type().name()?, this.time_s, this.kind.name()))
     }
     /// `crashed at t = <s> s: hit the ground at <speed> m/s (<down> m/s down), tilted <deg> deg`,
     /// or `diverged at t = <s> s: <description>`.
@@ -241,6 +241,158 @@ impl From<&SensingRecord> for PySensingCounts {
         }
     }
 }
+
+/// What the estimator gave the controller, one row per recorded control step beside the truth of
+/// the same row (a run with `rotorfault.Sensing`; `Trajectory.estimate`): the estimate at the
+/// newest IMU sample carried to the control time; the divergence row is NaN (no command was
+/// computed). The core's record used directly (no Python copy): `state` packs the estimate
+/// (position m, velocity m/s, quaternion `w x y z`, body rates rad/s; 13 columns), read as
+/// `position`, `velocity`, `quaternion`, `omega` (views), with `euler` (rad), `std` (one sigma of
+/// the filter's 15-element error state: position m, velocity m/s, attitude rad, gyro bias rad/s,
+/// accelerometer bias m/s^2, at its fusion horizon; `position_std_m`, `velocity_std_m_s`,
+/// `attitude_std_rad` are its blocks), `gyro_saturated` / `accel_saturated` (rows whose newest IMU
+/// sample was clamped at the range) and `counts` (the run's totals: IMU samples, clamped samples,
+/// measurements fused, refused by the innovation gate, late). Keyword-only from Python (the
+/// estimate's parts, as before); frozen; picklable.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
+///     >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.2, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+///     >>> run.estimate.position.shape == run.position.shape
+///     True
+#[pyclass(name = "Estimates", module = "rotorfault._rfcore", frozen)]
+pub struct PyEstimates {
+    state: Py<PyAny>,
+    euler: Py<PyAny>,
+    std: Py<PyAny>,
+    gyro_saturated: Py<PyAny>,
+    accel_saturated: Py<PyAny>,
+    counts: Py<PySensingCounts>,
+}
+
+/// Columns `from..to` of a table (a view).
+fn columns<'py>(table: &Bound<'py, PyAny>, from: isize, to: isize) -> PyResult<Bound<'py, PyAny>> {
+    let py = table.py();
+    table.get_item((PySlice::full(py), PySlice::new(py, from, to, 1)))
+}
+
+impl PyEstimates {
+    const FIELDS: &'static [&'static str] = &[
+        "position", "velocity", "quaternion", "euler", "omega", "std", "gyro_saturated", "accel_saturated", "counts",
+    ];
+}
+
+pickle_protocol!(PyEstimates, {
+    #[new]
+    #[pyo3(signature = (*, position, velocity, quaternion, euler, omega, std, gyro_saturated, accel_saturated, counts))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        position: Bound<'_, PyAny>,
+        velocity: Bound<'_, PyAny>,
+        quaternion: Bound<'_, PyAny>,
+        euler: Bound<'_, PyAny>,
+        omega: Bound<'_, PyAny>,
+        std: Bound<'_, PyAny>,
+        gyro_saturated: Bound<'_, PyAny>,
+        accel_saturated: Bound<'_, PyAny>,
+        counts: Py<PySensingCounts>,
+    ) -> PyResult<Self> {
+        shaped("position", &position, 2, None, &[3])?;
+        let rows = Some(position.len()?);
+        for (field, value, ndim, width) in [
+            ("velocity", &velocity, 2, 3),
+            ("quaternion", &quaternion, 2, 4),
+            ("euler", &euler, 2, 3),
+            ("omega", &omega, 2, 3),
+            ("std", &std, 2, 15),
+            ("gyro_saturated", &gyro_saturated, 1, 1),
+            ("accel_saturated", &accel_saturated, 1, 1),
+        ] {
+            shaped(field, value, ndim, rows, &[width])?;
+        }
+        let packed = py.import("numpy")?.getattr("hstack")?.call1(([position, velocity, quaternion, omega],))?;
+        Ok(PyEstimates {
+            state: packed.unbind(),
+            euler: euler.unbind(),
+            std: std.unbind(),
+            gyro_saturated: gyro_saturated.unbind(),
+            accel_saturated: accel_saturated.unbind(),
+            counts,
+        })
+    }
+    /// The estimate packed per row (13: position, velocity, quaternion `w x y z`, body rates).
+    #[getter]
+    fn state(&self, py: Python<'_>) -> Py<PyAny> {
+        self.state.clone_ref(py)
+    }
+    /// NED position, m (a view of `state`).
+    #[getter]
+    fn position<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 0, 3)
+    }
+    /// NED velocity, m/s (a view of `state`).
+    #[getter]
+    fn velocity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 3, 6)
+    }
+    /// Attitude quaternion `w x y z` (a view of `state`).
+    #[getter]
+    fn quaternion<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 6, 10)
+    }
+    /// Body rates p, q, r, rad/s (a view of `state`).
+    #[getter]
+    fn omega<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 10, 13)
+    }
+    /// Z-Y-X Euler angles roll, pitch, yaw, rad.
+    #[getter]
+    fn euler(&self, py: Python<'_>) -> Py<PyAny> {
+        self.euler.clone_ref(py)
+    }
+    /// One sigma of the filter's 15-element error state per row.
+    #[getter]
+    fn std(&self, py: Python<'_>) -> Py<PyAny> {
+        self.std.clone_ref(py)
+    }
+    #[getter]
+    fn gyro_saturated(&self, py: Python<'_>) -> Py<PyAny> {
+        self.gyro_saturated.clone_ref(py)
+    }
+    #[getter]
+    fn accel_saturated(&self, py: Python<'_>) -> Py<PyAny> {
+        self.accel_saturated.clone_ref(py)
+    }
+    /// The run's sensor totals.
+    #[getter]
+    fn counts(&self, py: Python<'_>) -> Py<PySensingCounts> {
+        self.counts.clone_ref(py)
+    }
+    /// One sigma of the position, m (columns 0-2 of `std`).
+    #[getter]
+    fn position_std_m<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 0, 3)
+    }
+    /// One sigma of the velocity, m/s (columns 3-5 of `std`).
+    #[getter]
+    fn velocity_std_m_s<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 3, 6)
+    }
+    /// One sigma of the attitude error, rad (columns 6-8 of `std`).
+    #[getter]
+    fn attitude_std_rad<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 6, 9)
+    }
+    /// The 12-element state vector per row (position, velocity, Euler angles, body rates).
+    #[getter]
+    fn vector<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let parts = [self.position(py)?, self.velocity(py)?, self.euler.bind(py).clone(), self.omega(py)?];
+        py.import("numpy")?.getattr("hstack")?.call1((parts,))
+    }
+});
 
 /// One run sampled at the control rate, the one trajectory type (`rotorfault.Trajectory`
 /// subclasses it, adding what reads it in Python: tables, plots, derived arrays). Its arrays are
@@ -495,6 +647,29 @@ pickle_protocol!(PyTrajectory, {
     #[getter]
     fn diverged(&self) -> bool {
         self.divergence.is_some()
+    }
+    /// With sensing, the estimate beside the truth (`Estimates`, views of this run's estimate
+    /// fields); else `None`.
+    #[getter]
+    fn estimate(&self, py: Python<'_>) -> Option<PyEstimates> {
+        let (Some(state), Some(euler), Some(std), Some(gyro), Some(accel), Some(counts)) = (
+            &self.estimate_state,
+            &self.estimate_euler,
+            &self.estimate_std,
+            &self.gyro_saturated,
+            &self.accel_saturated,
+            &self.sensing_counts,
+        ) else {
+            return None;
+        };
+        Some(PyEstimates {
+            state: state.clone_ref(py),
+            euler: euler.clone_ref(py),
+            std: std.clone_ref(py),
+            gyro_saturated: gyro.clone_ref(py),
+            accel_saturated: accel.clone_ref(py),
+            counts: counts.clone_ref(py),
+        })
     }
     /// `Trajectory(<rows> rows to <end> s, <how it ended>)`: the arrays are too long to print.
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {

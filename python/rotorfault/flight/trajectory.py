@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Self, overload
 
 import numpy as np
@@ -94,54 +94,9 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-@dataclass(frozen=True)
-class Estimates:
-    """What the estimator gave the controller, one row per recorded control step beside the
-    truth of the same row (a run with :data:`rotorfault.Sensing`): the estimate at the newest IMU
-    sample carried to the control time. The divergence row is NaN (no command was computed).
-
-    ``std`` is one sigma of the filter's 15-element error state per row (position m, velocity
-    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2; the covariance at its fusion
-    horizon); ``gyro_saturated`` / ``accel_saturated`` flag rows whose newest IMU sample was
-    clamped at the range; ``position`` (m), ``velocity`` (m/s), ``euler`` (rad) and ``omega`` (body
-    rates, rad/s) are the estimate's; ``counts`` holds the run's totals (IMU samples, clamped samples,
-    measurements fused, refused by the innovation gate, late).
-
-    Examples:
-
-        >>> import rotorfault as rf
-        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
-        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.2, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
-        >>> run.estimate.position.shape == run.position.shape
-        True
-    """
-
-    position: FloatArray
-    velocity: FloatArray
-    quaternion: FloatArray
-    euler: FloatArray
-    omega: FloatArray
-    std: FloatArray
-    gyro_saturated: np.ndarray[Any, np.dtype[np.bool_]]
-    accel_saturated: np.ndarray[Any, np.dtype[np.bool_]]
-    counts: _rfcore.SensingCounts
-
-    @property
-    def position_std_m(self) -> FloatArray:
-        return self.std[:, 0:3]
-
-    @property
-    def velocity_std_m_s(self) -> FloatArray:
-        return self.std[:, 3:6]
-
-    @property
-    def attitude_std_rad(self) -> FloatArray:
-        return self.std[:, 6:9]
-
-    @property
-    def vector(self) -> FloatArray:
-        """The 12-element state vector per row (position, velocity, Euler angles, body rates)."""
-        return np.hstack([self.position, self.velocity, self.euler, self.omega])
+#: What the estimator gave the controller beside the truth (``Trajectory.estimate``, a run with
+#: :data:`rotorfault.Sensing`): the core's class, used directly (see its page).
+Estimates = _rfcore.Estimates
 
 
 def _divergence(events: Sequence[Divergence]) -> Divergence | None:
@@ -156,12 +111,11 @@ def _divergence(events: Sequence[Divergence]) -> Divergence | None:
 
 
 def _estimate_fields(e: Estimates) -> dict[str, Any]:
-    """The core's estimate fields of an :class:`Estimates` (the constructor's old ``estimate=``)."""
-    return {
-        "estimate_state": np.hstack([e.position, e.velocity, e.quaternion, e.omega]), "estimate_euler": e.euler,
-        "estimate_std": e.std, "gyro_saturated": e.gyro_saturated, "accel_saturated": e.accel_saturated,
-        "sensing_counts": e.counts,
-    }
+    """The core's estimate fields of an :data:`Estimates` (the constructor's old ``estimate=``)."""
+    if not isinstance(e, _rfcore.Estimates):
+        raise TypeError(f"estimate: expected rotorfault.flight.Estimates, got {type(e).__name__}")
+    return {"estimate_state": e.state, "estimate_euler": e.euler, "estimate_std": e.std, "gyro_saturated": e.gyro_saturated,
+            "accel_saturated": e.accel_saturated, "sensing_counts": e.counts}
 
 
 class Trajectory(_rfcore.Trajectory, Tabular):
@@ -233,19 +187,6 @@ class Trajectory(_rfcore.Trajectory, Tabular):
     def events(self) -> list[Divergence]:
         """Why and when the run ended early: its :data:`Divergence`, or none."""
         return [] if self.divergence is None else [self.divergence]
-
-    @property
-    def estimate(self) -> Estimates | None:
-        """With sensing, the estimate beside the truth (else ``None``)."""
-        packed, euler, std, gyro, accel, counts = (self.estimate_state, self.estimate_euler, self.estimate_std,
-                                                   self.gyro_saturated, self.accel_saturated, self.sensing_counts)
-        if packed is None or euler is None or std is None or counts is None:
-            return None
-        return Estimates(
-            position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10], euler=euler,
-            omega=packed[:, 10:13], std=std, gyro_saturated=np.asarray(gyro, dtype=bool),
-            accel_saturated=np.asarray(accel, dtype=bool), counts=counts,
-        )
 
     @property
     def estimate_attitude_error_rad(self) -> FloatArray:
