@@ -18,6 +18,14 @@ use crate::convert::{deprecated, fixed_reals, pickle_protocol, read_only, real};
 /// and, for a `crashed` run, the impact (speed, speed into the ground, tilt; else `None`), by the
 /// core's `Divergence::impact`. Made by the simulator, or keyword-only from Python (a
 /// constructed run's event): `time_s` finite, `kind` one of the core's, `state` 12 numbers.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+///     >>> event = sim.run(rf.State(position=(0, 0, -1)), 3.0).divergence
+///     >>> event.kind, round(event.time_s, 3), round(event.impact_speed_m_s, 3)
+///     ('crashed', 0.452, 4.427)
 #[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen)]
 pub struct PyDivergence {
     time_s: f64,

@@ -54,19 +54,8 @@ def command_columns(command_count: int, rotor_count: int) -> list[str]:
 
 
 #: Why and when a run ended early (``Trajectory.divergence``; ``Trajectory.events`` lists it):
-#: the core's class, used directly. ``time_s`` (s), ``kind`` (a kebab-case code: ``"crashed"``,
-#: ``"tilt"``, ``"non-finite-state"``, ...), ``state`` (the 12-vector at that moment); derived from
-#: them: ``description`` (the kind in words) and, for a ``crashed`` run, the impact: speed (m/s),
-#: speed into the ground (m/s, down) and tilt (rad, body z from vertical); ``None`` otherwise.
-#:
-#: Examples:
-#:
-#:     >>> import rotorfault as rf
-#:     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
-#:     >>> run = sim.run(rf.State(position=(0, 0, -1)), 3.0)
-#:     >>> event = run.divergence
-#:     >>> event.kind, round(event.time_s, 3), round(event.impact_speed_m_s, 3)
-#:     ('crashed', 0.452, 4.427)
+#: the core's class, used directly (see its page: ``time_s``, ``kind``, ``state``, and what is
+#: derived from them, the description and a crash's impact).
 Divergence = _rfcore.Divergence
 
 
