@@ -433,6 +433,9 @@ def tune_hold(
     for case in chosen:  # a bad duration is refused before any search
         if not case.last_fault_s + crit.settle_s < duration_s:
             raise ValueError(f"duration_s: {duration_s:g} s ends before the judging of {case.label} starts")
+    # The simulator's own run settings, built once here: a duration past its step limit is refused
+    # by name now, not from inside the search's worker threads (where scipy hid it; long hostile run).
+    preset(vehicle).simulator()._config(duration_s)
     cost = HoldCost(chosen, crit, vehicle, float(duration_s))
     description = f"hold tuning: {{total}} candidates x {len(chosen)} faults"
     started = time.perf_counter()

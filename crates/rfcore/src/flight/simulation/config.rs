@@ -113,7 +113,7 @@ impl SimulationConfig {
             return Err(RfError::invalid(
                 "duration_s, dt_s",
                 format!(
-                    "duration_s / dt_s = {steps} control steps exceed the limit of {MAX_CONTROL_STEPS} \
+                    "duration_s / dt_s = {steps:.3e} control steps exceed the limit of {MAX_CONTROL_STEPS} \
                      (every step is recorded): shorten the run or lengthen dt"
                 ),
             ));
@@ -122,7 +122,7 @@ impl SimulationConfig {
             return Err(RfError::invalid(
                 "substeps",
                 format!(
-                    "{steps} control steps x {} substeps exceed the limit of {MAX_RK4_STEPS} RK4 steps per run",
+                    "{steps:.3e} control steps x {} substeps exceed the limit of {MAX_RK4_STEPS} RK4 steps per run",
                     self.substeps
                 ),
             ));
