@@ -59,9 +59,9 @@ from .studies.scan import EfficiencyScan, Scan, acai_scan, efficiency_scan, fail
 from .studies.design import Design, DesignSearch, design_search
 from .flight import (
     BatchResult,
+    Divergence,
     DivergenceLimits,
     Drag,
-    Event,
     FixedPitchActuator,
     MAX_RATE_STEP,
     Noise,
@@ -93,6 +93,10 @@ def __getattr__(name: str) -> object:
         value = getattr(control, name)
         globals()[name] = value
         return value
+    if name == "Event":  # the old name of Divergence: warns (flight.trajectory)
+        from .flight import trajectory
+
+        return trajectory.Event
     if name in _MOVED_MODULES:
         import importlib
 
@@ -128,7 +132,7 @@ __all__ = [
     "BatchResult",
     "DivergenceLimits",
     "Drag",
-    "Event",
+    "Divergence",
     "FixedPitchActuator",
     "LinearFeedback",
     "Noise",

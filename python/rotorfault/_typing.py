@@ -30,7 +30,7 @@ SolvedBy: TypeAlias = Literal["active-set", "clarabel", "pinv"]
 Spin: TypeAlias = Literal["cw", "ccw"]
 #: Command law of Ke's uniform passive FTC (:class:`rotorfault.control.UniformPassiveFtc`).
 KeLaw: TypeAlias = Literal["feedforward", "literal", "full-compensation", "baseline"]
-#: Why a simulated run ended early (:class:`rotorfault.Event` ``kind``).
+#: Why a simulated run ended early (:data:`rotorfault.Divergence` ``kind``).
 DivergenceKind: TypeAlias = Literal[
     "crashed", "non-finite-state", "non-finite-command", "tilt", "altitude-loss", "speed", "body-rate", "step-size"
 ]

@@ -163,7 +163,7 @@ def test_fig7_adjacent_pair_is_not_stabilisable(runs: dict[str, ke_paper.Scenari
     # It falls its 10 m to the ground at 12.34 s (issue #28; without a ground it fell 15.5 m and
     # tilted past 90 degrees at 13.11 s).
     assert run.metrics.outcome == "crashed"
-    assert tr.events[0].time == pytest.approx(12.336, abs=1e-3) and tr.position[-1, 2] == pytest.approx(0.0, abs=1e-9)
+    assert tr.events[0].time_s == pytest.approx(12.336, abs=1e-3) and tr.position[-1, 2] == pytest.approx(0.0, abs=1e-9)
     assert run.metrics.r_rad_s is None  # no steady state to report
     second = run.scenario.faults[-1].time
     r_at_second = abs(tr.omega[np.searchsorted(tr.t, second), 2])
@@ -184,7 +184,7 @@ def test_the_two_orders_are_mirror_images(runs: dict[str, ke_paper.ScenarioRun],
 def test_baseline_controller_loses_the_vehicle_after_one_failure() -> None:
     run = ke_paper.run_scenario("one-failure", law="baseline")
     assert run.trajectory.diverged
-    assert run.trajectory.events[0].time < 2.5  # 0.4 s after the failure
+    assert run.trajectory.events[0].time_s < 2.5  # 0.4 s after the failure
     hover = ke_paper.run_scenario("fault-free", law="baseline")
     assert not hover.trajectory.diverged
 
@@ -290,7 +290,7 @@ def test_experiment_gains_tip_past_horizontal_then_recover() -> None:
     n3z = 0.44."""
     lost = ke_paper.run_scenario("one-failure", controller_preset="ke-experiment")
     assert lost.metrics.outcome == "tilt"
-    assert lost.trajectory.events[0].time < 2.6
+    assert lost.trajectory.events[0].time_s < 2.6
     pre = ke.preset("ke-experiment")
     sim = pre.simulator(limits=rf.DivergenceLimits(max_tilt_rad=3.2))
     c = rf.UniformPassiveFtc(KE, gains=pre.gains, position=(0, 0, -10))

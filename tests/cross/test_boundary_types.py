@@ -172,15 +172,15 @@ def test_a_trajectory_is_the_cores_made_once_and_not_copied() -> None:
     same = rf.Trajectory(**{f: getattr(run, f) for f in run.FIELDS})
     assert same.position is run.position and same.divergence is run.divergence
     back = pickle.loads(pickle.dumps(run))
-    assert type(back) is rf.Trajectory and back.faults == run.faults and back.events[0].time == run.events[0].time
+    assert type(back) is rf.Trajectory and back.faults == run.faults and back.events[0].time_s == run.events[0].time_s
     np.testing.assert_array_equal(back.position, run.position)
     with pytest.raises(AttributeError):
         run.faults = ()  # type: ignore[misc]
     n = len(run.t)
     fields = {f: getattr(run, f) for f in run.FIELDS if f != "divergence"}
-    event = rf.Event(0.45, "tilt", "tilt beyond the limit", np.zeros(12))
+    event = rf.Divergence(time_s=0.45, kind="tilt", state=np.zeros(12))
     made = rf.Trajectory(**fields, events=[event])
-    assert made.diverged and made.events[0].kind == "tilt" and made.events[0].time == 0.45
+    assert made.diverged and made.events[0].kind == "tilt" and made.events[0].time_s == 0.45
     with pytest.raises(ValueError, match=rf"^velocity: expected {n} rows \(one per time in t\)"):
         rf.Trajectory(**{**fields, "velocity": np.zeros((n + 1, 3))})
     with pytest.raises(ValueError, match="^quaternion: expected 4 columns"):
@@ -190,3 +190,113 @@ def test_a_trajectory_is_the_cores_made_once_and_not_copied() -> None:
     with pytest.raises(ValueError, match="^events: a run ends at most once"):
         rf.Trajectory(**fields, events=[event, event])
     assert repr(run).startswith(f"Trajectory({n} rows to ") and "crashed at" in repr(run)
+
+
+def test_a_divergence_is_the_cores_and_derives_what_follows_from_its_kind_and_state() -> None:
+    """``rf.Divergence`` is the core's class (the old ``Event`` was a Python copy of it): it
+    stores the time, the kind and the state; the description and the impact are derived (the
+    core's ``Divergence::impact``), so they cannot disagree with them."""
+    assert rf.Divergence is _rfcore.Divergence and rf.Divergence.FIELDS == ["time_s", "kind", "state"]
+    run = rf.Simulator(rf.Airframe.preset("quad-x")).run(rf.State(position=(0, 0, -1)), 3.0)
+    d = run.divergence
+    assert run.events == [d] and d.kind == "crashed" and d.description == "hit the ground"
+    assert d.impact_speed_m_s == float(np.linalg.norm(d.state[3:6])) and d.impact_vertical_speed_m_s == d.state[5]
+    assert str(d).startswith(f"crashed at t = {d.time_s:.4f} s: hit the ground at {d.impact_speed_m_s:.2f} m/s")
+    back = pickle.loads(pickle.dumps(d))
+    assert (back.time_s, back.kind, back.impact_tilt_rad) == (d.time_s, d.kind, d.impact_tilt_rad)
+    np.testing.assert_array_equal(back.state, d.state)
+    velocity_down = np.zeros(12)
+    velocity_down[5] = 5.6
+    made = rf.Divergence(time_s=2.3, kind="crashed", state=velocity_down)
+    assert (made.impact_speed_m_s, made.impact_vertical_speed_m_s, made.impact_tilt_rad) == (5.6, 5.6, 0.0)
+    tilt = rf.Divergence(time_s=1.0, kind="tilt", state=np.zeros(12))
+    assert tilt.impact_speed_m_s is None and str(tilt) == "diverged at t = 1.0000 s: tilt beyond the limit"
+    with pytest.raises(ValueError, match="^kind: expected one of crashed, non-finite-state, .*, got \"lost\""):
+        rf.Divergence(time_s=1.0, kind="lost", state=np.zeros(12))
+    with pytest.raises(TypeError, match="^kind: expected a string, got int"):
+        rf.Divergence(time_s=1.0, kind=3, state=np.zeros(12))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^state: expected 12 entries"):
+        rf.Divergence(time_s=1.0, kind="tilt", state=np.zeros(3))
+    with pytest.raises(ValueError, match="^time_s: must be finite"):
+        rf.Divergence(time_s=math.nan, kind="tilt", state=np.zeros(12))
+
+
+def test_the_old_event_names_work_one_release_with_a_warning() -> None:
+    """``rf.Event(time, kind, description, state, impact...)``, ``.time``, ``.reason`` and the
+    stored ``description`` / impact arguments: warned, and checked against what is derived."""
+    state = np.zeros(12)
+    state[5] = 5.6
+    with pytest.warns(DeprecationWarning, match="rotorfault.Event is deprecated"):
+        event_type = rf.Event  # type: ignore[attr-defined]
+    with pytest.warns(DeprecationWarning) as caught:
+        old = event_type(2.3, "crashed", "hit the ground", state, impact_speed_m_s=5.6)
+    assert {str(w.message).split(" is deprecated")[0] for w in caught} == {"Divergence(description=...)", "Divergence(impact_speed_m_s=...)"}
+    assert type(old) is rf.Divergence and isinstance(old, event_type) and old.impact_speed_m_s == 5.6
+    with pytest.warns(DeprecationWarning, match=r"Divergence\.time is deprecated.*Divergence\.time_s"):
+        assert old.time == 2.3  # type: ignore[attr-defined]
+    with pytest.warns(DeprecationWarning, match=r"Divergence\.reason is deprecated.*Divergence\.kind"):
+        assert old.reason == "crashed"  # type: ignore[attr-defined]
+    with pytest.warns(DeprecationWarning, match=r"Divergence\(reason=\.\.\.\)"):
+        assert rf.Divergence(time_s=1.0, reason="tilt", state=np.zeros(12)).kind == "tilt"
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="^impact_speed_m_s: derived from state as 5.6, got 4.0"):
+        rf.Divergence(time_s=2.3, kind="crashed", state=state, impact_speed_m_s=4.0)
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="^impact_tilt_rad: only a crashed run has an impact"):
+        rf.Divergence(time_s=2.3, kind="tilt", state=state, impact_tilt_rad=0.1)
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match='^description: derived from kind "tilt"'):
+        rf.Divergence(time_s=2.3, kind="tilt", state=state, description="hit the ground")
+
+
+def test_the_batch_columns_carry_the_trajectorys_names_and_the_old_ones_warn() -> None:
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+    batch = rf.simulate_batch(sim, [rf.State(position=(0, 0, -1))], 0.05, controllers=rf.lqr_hover(sim, position=(0, 0, -1)))
+    columns = batch.columns
+    run = batch.trajectories[0]
+    for old, new in (("command", "rotor_command"), ("thrust", "rotor_thrust"), ("measured", "recorded_measurements")):
+        np.testing.assert_array_equal(getattr(columns, new)[0, : len(run.t)], getattr(run, new))
+        with pytest.warns(DeprecationWarning, match=rf"BatchColumns\.{old} is deprecated.*BatchColumns\.{new}"):
+            assert getattr(columns, old) is getattr(columns, new)
+
+
+def test_an_indi_failure_mode_is_the_cores_numbering_rotors_from_1() -> None:
+    from rotorfault.control.indi import IndiFailureMode
+
+    c = rf.IndiController(rf.Airframe.preset("ke-quadcopter"), failures=[rf.RotorFault(1, 2.0)], position=(0, 0, -10))
+    healthy, one = c.failure_modes()
+    assert IndiFailureMode is _rfcore.IndiFailureMode and type(one) is IndiFailureMode
+    assert one.failed == (1,) and one.healthy == (2, 3, 4) and healthy.failed == () and len(one.hover_thrust_n) == 4
+    assert one == c.failure_modes()[1] and hash(one) == hash(c.failure_modes()[1]) and one != healthy
+    assert repr(one).startswith("IndiFailureMode(failed=(1,), healthy=(2, 3, 4), ")
+
+
+def test_the_estimates_are_the_cores_views_of_the_run() -> None:
+    """``Trajectory.estimate`` is the core's ``Estimates`` (a Python dataclass before), its parts
+    views of the run's estimate fields; keyword construction and pickling work as before."""
+    from rotorfault.flight import Estimates
+
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
+    run = sim.run(rf.State(position=(0, 0, -1)), 0.1, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+    e = run.estimate
+    assert Estimates is _rfcore.Estimates and type(e) is Estimates and e.state is run.estimate_state
+    assert np.shares_memory(e.position, run.estimate_state) and np.shares_memory(e.attitude_std_rad, run.estimate_std)
+    np.testing.assert_array_equal(e.vector, np.hstack([e.position, e.velocity, e.euler, e.omega]))
+    np.testing.assert_array_equal(e.quaternion, run.estimate_state[:, 6:10])
+    np.testing.assert_array_equal(e.velocity_std_m_s, run.estimate_std[:, 3:6])
+    back = pickle.loads(pickle.dumps(e))
+    np.testing.assert_array_equal(back.state, e.state)
+    assert back.counts.__getnewargs_ex__() == e.counts.__getnewargs_ex__()
+    fields = {f: getattr(run, f) for f in _rfcore.Trajectory.FIELDS if f not in _ESTIMATE_FIELDS}
+    again = rf.Trajectory(**fields, estimate=e)
+    np.testing.assert_array_equal(again.estimate.state, e.state)
+    n = len(run.t)
+    parts = {f: getattr(e, f) for f in Estimates.FIELDS}
+    with pytest.raises(ValueError, match=rf"^velocity: expected {n} rows \(one per time in t\)"):
+        Estimates(**{**parts, "velocity": np.zeros((n + 1, 3))})
+    with pytest.raises(ValueError, match="^std: expected 15 columns"):
+        Estimates(**{**parts, "std": np.zeros((n, 12))})
+
+
+_ESTIMATE_FIELDS = ("estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated", "sensing_counts")
+
+
+def test_a_divergence_prints_as_the_readme_shows() -> None:
+    assert repr(rf.Divergence(time_s=0.5, kind="tilt", state=np.zeros(12))) == "Divergence(time_s=0.5, kind='tilt')"

@@ -41,16 +41,16 @@ def test_a_free_fall_crashes_at_the_analytic_time_and_speed(quad: rf.Airframe, g
     tr = _fall(sim, height_m)
     event = tr.events[0]
     assert event.kind == "crashed" and event.description == "hit the ground"
-    assert event.time == pytest.approx(math.sqrt(2 * height_m / G), abs=1e-9)
+    assert event.time_s == pytest.approx(math.sqrt(2 * height_m / G), abs=1e-9)
     assert event.impact_speed_m_s == pytest.approx(math.sqrt(2 * G * height_m), abs=1e-9)
     assert event.impact_vertical_speed_m_s == pytest.approx(math.sqrt(2 * G * height_m), abs=1e-9)
     assert event.impact_tilt_rad == pytest.approx(0.0, abs=1e-12)
     # The recorded run ends at the contact: its last row is the event, at the plane.
-    assert tr.t[-1] == event.time and tr.t[-2] < event.time
+    assert tr.t[-1] == event.time_s and tr.t[-2] < event.time_s
     assert 0.0 <= tr.position[-1, 2] - sim.ground_z_m < 1e-9  # type: ignore[operator]
     np.testing.assert_array_equal(tr.position[-1], event.state[:3])
     assert np.all(np.isnan(tr.rotor_command[-1])) and np.all(np.isnan(tr.measured[-1]))
-    assert str(event).startswith(f"crashed at t = {event.time:.4f} s: hit the ground at ")
+    assert str(event).startswith(f"crashed at t = {event.time_s:.4f} s: hit the ground at ")
 
 
 @settings(max_examples=25, deadline=None, derandomize=True)
@@ -64,7 +64,7 @@ def test_impact_speed_and_attitude_of_any_free_fall(height_m: float, horizontal_
     event = _fall(sim, height_m, horizontal_m_s=horizontal_m_s, roll_rad=roll_rad).events[0]
     vertical = math.sqrt(2 * G * height_m)
     assert event.kind == "crashed"
-    assert event.time == pytest.approx(math.sqrt(2 * height_m / G), abs=1e-9)
+    assert event.time_s == pytest.approx(math.sqrt(2 * height_m / G), abs=1e-9)
     assert event.impact_vertical_speed_m_s == pytest.approx(vertical, abs=1e-9)
     assert event.impact_speed_m_s == pytest.approx(math.hypot(horizontal_m_s, vertical), abs=1e-9)
     assert event.impact_tilt_rad == pytest.approx(abs(roll_rad), abs=1e-9)
@@ -104,8 +104,8 @@ def test_a_batch_crashes_exactly_like_single_runs(quad: rf.Airframe) -> None:
         tr = batch.trajectories[i]
         np.testing.assert_array_equal(tr.t, single.t)
         np.testing.assert_array_equal(tr.position, single.position)
-        assert [(e.kind, e.time, e.impact_speed_m_s, e.state.tolist()) for e in tr.events] == [
-            (e.kind, e.time, e.impact_speed_m_s, e.state.tolist()) for e in single.events]
+        assert [(e.kind, e.time_s, e.impact_speed_m_s, e.state.tolist()) for e in tr.events] == [
+            (e.kind, e.time_s, e.impact_speed_m_s, e.state.tolist()) for e in single.events]
     assert batch.divergence_time[0] == pytest.approx(math.sqrt(2 * 2.0 / G), abs=1e-9)
     assert batch.divergence_time[2] == pytest.approx(math.sqrt(2 * 3.0 / G), abs=1e-9)
     assert batch.trajectories[2].events[0].impact_speed_m_s == pytest.approx(math.hypot(2.0, math.sqrt(2 * G * 3.0)), abs=1e-9)
@@ -143,6 +143,6 @@ def test_a_scenario_file_sets_the_ground(tmp_path: Path) -> None:
     path = tmp_path / "drop.toml"
     path.write_text('airframe = "quad-x"\nduration_s = 3.0\nground_z_m = -6.0\n[controller]\nkind = "none"\n')
     event = load_scenario(path).run().events[0]
-    assert event.kind == "crashed" and event.time == pytest.approx(math.sqrt(2 * 4.0 / G), abs=1e-9)
+    assert event.kind == "crashed" and event.time_s == pytest.approx(math.sqrt(2 * 4.0 / G), abs=1e-9)
     path.write_text('airframe = "quad-x"\nduration_s = 3.0\nground = false\n[controller]\nkind = "none"\n')
     assert not load_scenario(path).run().diverged

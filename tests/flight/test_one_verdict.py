@@ -42,11 +42,12 @@ def test_each_outcome_has_one_verdict_and_the_thresholds_are_stated() -> None:
     assert verdicts == ["holds", "drifts", "circles"]
     m = outcomes.flight_metrics(away, _Setpoint())
     assert m.verdict_label == "drifts (window: 14.40 m off, 0.00 m in altitude, up to 0.00 m/s)" and m.cause is None
-    crash = rf.Event(2.3, "crashed", "hit the ground", np.zeros(12), impact_speed_m_s=5.6, impact_vertical_speed_m_s=5.5,
-                     impact_tilt_rad=0.1)
+    falling = np.zeros(12)
+    falling[5] = 5.6  # 5.6 m/s down at the impact
+    crash = rf.Divergence(time_s=2.3, kind="crashed", state=falling)
     lost = outcomes.flight_metrics(_trajectory(2.3, lambda t: np.tile([0, 0, -10.0], (len(t), 1)), [crash]), _Setpoint())
     assert (lost.verdict, lost.cause, lost.verdict_label) == ("crashed", "crashed", "crashed at 2.30 s (5.6 m/s)")
-    tilt = rf.Event(1.52, "tilt", "tilt beyond the limit", np.zeros(12))
+    tilt = rf.Divergence(time_s=1.52, kind="tilt", state=np.zeros(12))
     gone = outcomes.flight_metrics(_trajectory(1.52, lambda t: np.tile([0, 0, -10.0], (len(t), 1)), [tilt]), _Setpoint())
     assert (gone.verdict, gone.cause, gone.verdict_label) == ("diverged", "tilt", "diverged (tilt) at 1.52 s")
     meanings = outcomes.VERDICT_MEANINGS

@@ -77,9 +77,9 @@ def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: 
     tr = sim.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
     assert tr.diverged
     event = tr.events[0]
-    assert event.kind == "crashed" and 1.0 < event.time < 10.0
+    assert event.kind == "crashed" and 1.0 < event.time_s < 10.0
     assert str(event).startswith("crashed at t = ") and event.state.shape == (12,)
-    assert tr.t[-1] == pytest.approx(event.time)
+    assert tr.t[-1] == pytest.approx(event.time_s)
     # At the ground (z = 0), with the impact read off the state there.
     assert 0.0 < tr.position[-1, 2] < 1e-9 and event.state[2] == tr.position[-1, 2]
     assert event.impact_speed_m_s == pytest.approx(float(np.linalg.norm(event.state[3:6])), rel=1e-12)
@@ -88,7 +88,7 @@ def test_rotor_failure_under_lqr_is_reported_not_raised(sim: rf.Simulator, lqr: 
     # Without the ground the same flight goes on through the plane until it tilts past 90 degrees.
     free = rf.Simulator(sim.airframe, dt_s=sim.dt_s, substeps=sim.substeps, ground=False)
     lost = free.run(rf.State(position=(0, 0, -10)), 10.0, controller=lqr, faults=[rf.RotorFault(rotor=1, time=1.0)])
-    assert lost.events[0].kind == "tilt" and lost.events[0].time > event.time and lost.position[-1, 2] > 0
+    assert lost.events[0].kind == "tilt" and lost.events[0].time_s > event.time_s and lost.position[-1, 2] > 0
     assert lost.events[0].impact_speed_m_s is None and "tilt" in str(lost.events[0])
     before, after = np.searchsorted(tr.t, [0.5, 1.5])
     np.testing.assert_array_equal(tr.efficiency[before], [1, 1, 1, 1])
@@ -220,12 +220,12 @@ def test_a_python_controller_returning_nan_ends_the_run_with_an_event(sim: rf.Si
     assert tr.diverged
     event = tr.events[0]
     assert event.kind == "non-finite-command" and "controller" in event.description
-    assert event.time == pytest.approx(0.1, abs=1e-12) and tr.t[-1] == event.time
+    assert event.time_s == pytest.approx(0.1, abs=1e-12) and tr.t[-1] == event.time_s
     assert np.isnan(tr.rotor_command[-1, 0]) and np.all(tr.rotor_command[-1, 1:] == 3.0)
     assert np.all(np.isfinite(tr.rotor_command[:-1]))
     # An infinite command is a divergence too; a wrong count stays the controller's error.
     tr = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=lambda t, x: [math.inf] * 4)
-    assert tr.events[0].kind == "non-finite-command" and tr.events[0].time == 0.0
+    assert tr.events[0].kind == "non-finite-command" and tr.events[0].time_s == 0.0
 
 
 def test_batch_time_axis_is_the_recorded_times(quad: rf.Airframe) -> None:

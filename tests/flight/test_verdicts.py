@@ -42,7 +42,7 @@ def trajectory(
         eff[t >= f.time, f.rotor - 1] = f.efficiency
     events = []
     if lost_at is not None:
-        events.append(rf.Event(lost_at, "tilt", "tilt beyond the limit", np.zeros(12)))
+        events.append(rf.Divergence(time_s=lost_at, kind="tilt", state=np.zeros(12)))
     return rf.Trajectory(
         t=t, position=pos, velocity=vel, quaternion=quat, euler=np.zeros((n, 3)), omega=omega,
         primary_axis=np.tile([0.0, 0, 1], (n, 1)), rotor_command=np.ones((n, 4)), rotor_thrust=np.ones((n, 4)),

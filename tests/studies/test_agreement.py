@@ -111,7 +111,7 @@ def test_the_remaining_pair_rolls_over_before_it_can_spin(agreement: CertifyAgre
                            RelaxedHoverFeedback(best, airframe, position=(0, 0, -10), linear_drag_n_s_m=v.linear_drag_n_s_m, r=r * 1e4),
                            rf.OpenLoop.constant(best.command_n)):
             run = sim.run(rf.State(position=(0, 0, -10)), 1.0, controller=controller)
-            assert [e.kind for e in run.events] == ["tilt"] and run.events[0].time < 0.16, (case.failed, controller, run.events)
+            assert [e.kind for e in run.events] == ["tilt"] and run.events[0].time_s < 0.16, (case.failed, controller, run.events)
 
 
 def test_without_the_entry_condition_the_agreement_fails(agreement: CertifyAgreement) -> None:

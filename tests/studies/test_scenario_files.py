@@ -66,7 +66,7 @@ def test_wang_examples_fly_the_papers_flights(number: int) -> None:
     run = scenario.run()
     paper = wang_paper.fly(number)
     _same_flight(run, paper.trajectory)
-    lost = run.events[0].time if run.events else None
+    lost = run.events[0].time_s if run.events else None
     assert lost == paper.lost_at_s
 
 

@@ -316,13 +316,13 @@ macro_rules! value_protocol {
 }
 pub(crate) use value_protocol;
 
-/// The settings protocol's methods (`FIELDS`, `replace`, pickling, and `value_protocol!`'s repr,
-/// equality, hash) for a class `$py` with a `FIELDS` constant, after its own methods (the
-/// constructor, the getters): `settings_class!` uses it, and so does a settings class whose
-/// constructor is written by hand.
-macro_rules! settings_protocol {
-    ($py:ident, { $($methods:tt)* }) => {
-        $crate::convert::value_protocol!($py, {
+/// The keyword protocol's methods (`FIELDS`, and pickling through the keyword-only constructor:
+/// `__getnewargs_ex__` gives every field by name) for a class `$py` with a `FIELDS` constant, after
+/// its own methods: the one pickling of every class whose constructor takes its fields by
+/// keyword. `then = value_protocol` hands the methods on to that macro (one `#[pymethods]` block).
+macro_rules! pickle_protocol {
+    ($py:ident, { $($methods:tt)* } $(, then = $next:ident)?) => {
+        $crate::convert::pickle_protocol!(@emit $py, [$($next)?], {
             $($methods)*
             /// The field names, in order.
             #[classattr]
@@ -330,15 +330,37 @@ macro_rules! settings_protocol {
             fn fields() -> Vec<&'static str> {
                 Self::FIELDS.to_vec()
             }
+            fn __getnewargs_ex__<'py>(slf: &::pyo3::Bound<'py, Self>) -> ::pyo3::PyResult<((), ::pyo3::Bound<'py, ::pyo3::types::PyDict>)> {
+                Ok(((), $crate::convert::settings_kwargs(::pyo3::Bound::as_any(slf), Self::FIELDS)?))
+            }
+        });
+    };
+    (@emit $py:ident, [], { $($methods:tt)* }) => {
+        #[::pyo3::pymethods]
+        impl $py {
+            $($methods)*
+        }
+    };
+    (@emit $py:ident, [$next:ident], { $($methods:tt)* }) => {
+        $crate::convert::$next!($py, { $($methods)* });
+    };
+}
+pub(crate) use pickle_protocol;
+
+/// The settings protocol's methods (`replace`, `pickle_protocol!`'s `FIELDS` and pickling, and
+/// `value_protocol!`'s repr, equality, hash) for a class `$py` with a `FIELDS` constant, after its
+/// own methods (the constructor, the getters): `settings_class!` uses it, and so does a settings
+/// class whose constructor is written by hand.
+macro_rules! settings_protocol {
+    ($py:ident, { $($methods:tt)* }) => {
+        $crate::convert::pickle_protocol!($py, {
+            $($methods)*
             /// A copy with ``changes`` (validated like a new object).
             #[pyo3(signature = (**changes))]
             fn replace<'py>(slf: &::pyo3::Bound<'py, Self>, changes: Option<&::pyo3::Bound<'py, ::pyo3::types::PyDict>>) -> ::pyo3::PyResult<::pyo3::Bound<'py, ::pyo3::PyAny>> {
                 $crate::convert::settings_replace(::pyo3::Bound::as_any(slf), Self::FIELDS, changes)
             }
-            fn __getnewargs_ex__<'py>(slf: &::pyo3::Bound<'py, Self>) -> ::pyo3::PyResult<((), ::pyo3::Bound<'py, ::pyo3::types::PyDict>)> {
-                Ok(((), $crate::convert::settings_kwargs(::pyo3::Bound::as_any(slf), Self::FIELDS)?))
-            }
-        });
+        }, then = value_protocol);
     };
 }
 pub(crate) use settings_protocol;
@@ -362,6 +384,14 @@ pub(crate) fn fixed_reals<const N: usize>(field: &str, names: &str, value: &Boun
         out[k] = real(&format!("{field}[{k}]"), item)?;
     }
     Ok(out)
+}
+
+/// Warns (`DeprecationWarning`) that `old` is deprecated in favour of `new`, in the words of
+/// `rotorfault._util.deprecation.warn` (removed after one release).
+pub(crate) fn deprecated(py: Python<'_>, old: &str, new: &str) -> PyResult<()> {
+    let message = format!("{old} is deprecated and will be removed in the next release; use {new}");
+    let message = std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &message, 1)
 }
 
 /// The positional form of a class that was a Python dataclass (its fields in `fields` order),

@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyDict, PyTuple, PyType};
 
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags};
 use rfcore::flight::vpp_preset::VariablePitchPreset;
@@ -549,8 +549,10 @@ fn vehicle_and_actuators(
     Ok((vehicle, actuators, count))
 }
 
-/// One closed-loop run.
+/// One closed-loop run, as a `trajectory_type` (default `Trajectory`; a Python subclass gets the
+/// `extra` keywords too), made once.
 #[pyfunction]
+#[pyo3(signature = (airframe, actuator, drag, controller, x0, fault_list, efficiency, settle, config, *, trajectory_type=None, extra=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate<'py>(
     py: Python<'py>,
@@ -563,7 +565,9 @@ pub fn simulate<'py>(
     efficiency: PyReadonlyArray1<'py, f64>,
     settle: Option<PyReadonlyArray1<'py, f64>>,
     config: PyRef<'py, PySimulationConfig>,
-) -> PyResult<PyTrajectory> {
+    trajectory_type: Option<Bound<'py, PyType>>,
+    extra: Option<Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyAny>> {
     let (vehicle, actuators, count) =
         vehicle_and_actuators(airframe, &actuator, &drag, settle.as_ref())?;
     let efficiency = slice1("efficiency", &efficiency)?.to_vec();
@@ -626,7 +630,7 @@ pub fn simulate<'py>(
             })?
         }
     };
-    PyTrajectory::from_run(py, run)
+    PyTrajectory::from_run(py, run, trajectory_type.as_ref(), extra.as_ref())
 }
 
 /// A batch's vehicle, actuators, initial efficiency and runs, checked (one entry per run).
@@ -682,14 +686,14 @@ pub fn simulate_batch<'py>(
     efficiency: PyReadonlyArray1<'py, f64>,
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
-) -> PyResult<Vec<PyTrajectory>> {
+) -> PyResult<Vec<Bound<'py, PyAny>>> {
     let (vehicle, actuators, efficiency, runs) =
         batch_runs(airframe, &actuator, &drag, &controllers, &x0s, &fault_lists, settles, &efficiency)?;
     let config = &config.inner;
     let results = detached(py, |cancel| {
         core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
-    results.into_iter().map(|run| PyTrajectory::from_run(py, run)).collect()
+    results.into_iter().map(|run| PyTrajectory::from_run(py, run, None, None)).collect()
 }
 
 /// d/dt of the 12-element state vector with the actuators settled at `command` (no lag): the

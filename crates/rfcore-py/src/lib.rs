@@ -37,6 +37,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<trajectory::PySensingCounts>()?;
     module.add_class::<trajectory::PyTrajectory>()?;
     module.add_class::<trajectory::PyDivergence>()?;
+    module.add_class::<trajectory::PyEstimates>()?;
     module.add_class::<control::ke::PyKeGains>()?;
     module.add_class::<control::ke::PyFtcPreset>()?;
     module.add_class::<flight::PyVariablePitch>()?;

@@ -11,7 +11,7 @@ use rfcore::flight::simulation::{simulate_batch_columns as core_columns, BatchCo
 
 use crate::airframe::PyAirframe;
 use crate::control::ControllerArg;
-use crate::convert::detached;
+use crate::convert::{deprecated, detached};
 use crate::flight::{batch_runs, ActuatorArg, PyDrag, PySimulationConfig};
 use crate::trajectory::{PyDivergence, PySensingCounts};
 
@@ -19,7 +19,8 @@ use crate::trajectory::{PyDivergence, PySensingCounts};
 /// `rotorfault.flight.trajectory.BatchResult`): slot row `j < grid_rows` is the run's row at the
 /// `j`-th grid time (NaN after its last), the last slot row an off-grid divergence row (else
 /// NaN). Per run: rows on the grid, whether it has an off-grid row, its divergence, its sensing
-/// counts and what it flew on.
+/// counts and what it flew on. The signals have `Trajectory`'s names (`rotor_command`,
+/// `rotor_thrust`, `recorded_measurements`; the old `command`, `thrust`, `measured` warn).
 #[pyclass(name = "BatchColumns", module = "rotorfault._rfcore", frozen, get_all)]
 pub struct PyBatchColumns {
     grid_rows: usize,
@@ -29,10 +30,10 @@ pub struct PyBatchColumns {
     euler: Py<PyAny>,
     omega: Py<PyAny>,
     primary_axis: Py<PyAny>,
-    command: Py<PyAny>,
-    thrust: Py<PyAny>,
+    rotor_command: Py<PyAny>,
+    rotor_thrust: Py<PyAny>,
     efficiency: Py<PyAny>,
-    measured: Py<PyAny>,
+    recorded_measurements: Py<PyAny>,
     estimate_state: Py<PyAny>,
     estimate_euler: Py<PyAny>,
     estimate_std: Py<PyAny>,
@@ -43,6 +44,29 @@ pub struct PyBatchColumns {
     divergences: Vec<Option<Py<PyDivergence>>>,
     sensing_counts: Vec<Option<Py<PySensingCounts>>>,
     sensed: Vec<&'static str>,
+}
+
+/// The old names of three signals, kept one release (`DeprecationWarning`).
+#[pymethods]
+impl PyBatchColumns {
+    /// Deprecated name of `rotor_command`.
+    #[getter]
+    fn command(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        deprecated(py, "BatchColumns.command", "BatchColumns.rotor_command")?;
+        Ok(self.rotor_command.clone_ref(py))
+    }
+    /// Deprecated name of `rotor_thrust`.
+    #[getter]
+    fn thrust(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        deprecated(py, "BatchColumns.thrust", "BatchColumns.rotor_thrust")?;
+        Ok(self.rotor_thrust.clone_ref(py))
+    }
+    /// Deprecated name of `recorded_measurements`.
+    #[getter]
+    fn measured(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        deprecated(py, "BatchColumns.measured", "BatchColumns.recorded_measurements")?;
+        Ok(self.recorded_measurements.clone_ref(py))
+    }
 }
 
 fn block<T: Sample + numpy::Element>(py: Python<'_>, column: Column<T>, runs: usize, slot_rows: usize) -> PyResult<Py<PyAny>> {
@@ -66,10 +90,10 @@ fn to_python<T: Sample + numpy::Element>(py: Python<'_>, c: BatchColumns<T>) -> 
         euler: block(py, c.euler_rad, n, slot)?,
         omega: block(py, c.omega_rad_s, n, slot)?,
         primary_axis: block(py, c.primary_axis, n, slot)?,
-        command: block(py, c.command, n, slot)?,
-        thrust: block(py, c.thrust_n, n, slot)?,
+        rotor_command: block(py, c.rotor_command, n, slot)?,
+        rotor_thrust: block(py, c.rotor_thrust_n, n, slot)?,
         efficiency: block(py, c.efficiency, n, slot)?,
-        measured: block(py, c.measured, n, slot)?,
+        recorded_measurements: block(py, c.recorded_measurements, n, slot)?,
         estimate_state: block(py, c.estimate_packed, n, slot)?,
         estimate_euler: block(py, c.estimate_euler_rad, n, slot)?,
         estimate_std: block(py, c.estimate_std, n, slot)?,

@@ -2,29 +2,35 @@
 //! `rotorfault.Trajectory`), its `Divergence` and its `SensingCounts`. Translation and shape
 //! checks only; the record is the core's (`rfcore::flight::simulation::Trajectory`).
 
-use numpy::{IntoPyArray, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PySlice, PyType};
 
-use rfcore::flight::simulation::{Divergence, EstimateRow, SensingRecord, Trajectory};
-use rfcore::state::{state_vector, RigidBodyState, STATE_DIM};
+use rfcore::flight::simulation::{Divergence, DivergenceReason, EstimateRow, SensingRecord, Trajectory};
+use rfcore::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
 
-use crate::convert::{real, settings_kwargs};
+use crate::convert::{deprecated, fixed_reals, pickle_protocol, read_only, real};
 
-/// Why and when a run ended early, with the 12-element state vector at that moment; for a
-/// `crashed` run, the impact (speed, speed into the ground, tilt), else `None`. Made by the
-/// simulator, or keyword-only from Python (a constructed run's event): `time_s` and the impact
-/// finite, `state` 12 numbers.
-#[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen, get_all)]
+/// Why and when a run ended early: `time_s`, the `kind` (kebab-case: `crashed`, `tilt`, ...) and
+/// the 12-element state vector at that moment (`rotorfault.Divergence`: the core's, used directly;
+/// no Python copy). What follows from them is derived, not stored: the `description` of the kind
+/// and, for a `crashed` run, the impact (speed, speed into the ground, tilt; else `None`), by the
+/// core's `Divergence::impact`. Made by the simulator, or keyword-only from Python (a
+/// constructed run's event): `time_s` finite, `kind` one of the core's, `state` 12 numbers.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+///     >>> event = sim.run(rf.State(position=(0, 0, -1)), 3.0).divergence
+///     >>> event.kind, round(event.time_s, 3), round(event.impact_speed_m_s, 3)
+///     ('crashed', 0.452, 4.427)
+#[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen)]
 pub struct PyDivergence {
     time_s: f64,
-    reason: String,
-    description: String,
+    kind: DivergenceReason,
     state: [f64; STATE_DIM],
-    impact_speed_m_s: Option<f64>,
-    impact_vertical_speed_m_s: Option<f64>,
-    impact_tilt_rad: Option<f64>,
 }
 
 /// A finite real number for `field`.
@@ -36,57 +42,166 @@ fn finite_real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
     Ok(x)
 }
 
-/// [`finite_real`], `None` staying `None`.
-fn finite(field: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<Option<f64>> {
-    value.map(|v| finite_real(field, &v)).transpose()
-}
+/// How far a deprecated impact argument may lie from the derived impact (m/s or rad): a pickle of
+/// the release that stored them carries the tilt computed from the quaternion, this one derives
+/// it from the Euler angles of `state` (the same angle to rounding).
+const IMPACT_AGREEMENT: f64 = 1e-6;
 
 impl PyDivergence {
-    const FIELDS: &'static [&'static str] = &[
-        "time_s", "reason", "description", "state", "impact_speed_m_s", "impact_vertical_speed_m_s", "impact_tilt_rad",
-    ];
-}
+    const FIELDS: &'static [&'static str] = &["time_s", "kind", "state"];
 
-#[pymethods]
-impl PyDivergence {
-    fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-        Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
+    /// The core's divergence (the state from its vector): what the derived fields read.
+    fn core(&self) -> Divergence {
+        Divergence { time_s: self.time_s, reason: self.kind, state: state_from_vector(&self.state) }
     }
+
+    /// The kind named `name`, or a `ValueError` listing the kinds.
+    fn kind_named(field: &str, name: &str) -> PyResult<DivergenceReason> {
+        DivergenceReason::from_name(name).ok_or_else(|| {
+            let kinds: Vec<&str> = DivergenceReason::ALL.iter().map(|k| k.name()).collect();
+            PyValueError::new_err(format!("{field}: expected one of {}, got {name:?}", kinds.join(", ")))
+        })
+    }
+
+    /// A deprecated argument that is now derived: it must say what the derivation says.
+    fn agrees(&self, py: Python<'_>, field: &str, given: Option<Bound<'_, PyAny>>, derived: Option<f64>) -> PyResult<()> {
+        let Some(given) = given else { return Ok(()) };
+        deprecated(py, &format!("Divergence({field}=...)"), &format!("Divergence.{field}, derived from kind and state"))?;
+        let value = finite_real(field, &given)?;
+        match derived {
+            None => Err(PyValueError::new_err(format!(
+                "{field}: only a crashed run has an impact, this one is {}, got {value:?}",
+                self.kind.name()
+            ))),
+            Some(d) if (value - d).abs() > IMPACT_AGREEMENT => Err(PyValueError::new_err(format!(
+                "{field}: derived from state as {d:?}, got {value:?} (they must agree within {IMPACT_AGREEMENT:?})"
+            ))),
+            Some(_) => Ok(()),
+        }
+    }
+}
+
+pickle_protocol!(PyDivergence, {
     #[new]
-    #[pyo3(signature = (*, time_s, reason, description, state, impact_speed_m_s=None, impact_vertical_speed_m_s=None, impact_tilt_rad=None))]
+    #[pyo3(signature = (*, time_s, kind=None, state, description=None, impact_speed_m_s=None,
+        impact_vertical_speed_m_s=None, impact_tilt_rad=None, reason=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
+        py: Python<'_>,
         time_s: Bound<'_, PyAny>,
-        reason: String,
-        description: String,
-        state: [f64; STATE_DIM],
+        kind: Option<Bound<'_, PyAny>>,
+        state: Bound<'_, PyAny>,
+        description: Option<Bound<'_, PyAny>>,
         impact_speed_m_s: Option<Bound<'_, PyAny>>,
         impact_vertical_speed_m_s: Option<Bound<'_, PyAny>>,
         impact_tilt_rad: Option<Bound<'_, PyAny>>,
+        reason: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        Ok(PyDivergence {
+        let (field, kind) = match (kind, reason) {
+            (Some(_), Some(_)) => return Err(PyTypeError::new_err("Divergence: give kind or the deprecated reason, not both")),
+            (None, None) => return Err(PyTypeError::new_err("kind: required (the kind of divergence: crashed, tilt, ...)")),
+            (Some(kind), None) => ("kind", kind),
+            (None, Some(reason)) => {
+                deprecated(py, "Divergence(reason=...)", "Divergence(kind=...)")?;
+                ("reason", reason)
+            }
+        };
+        let name: String = kind
+            .extract()
+            .map_err(|_| PyTypeError::new_err(format!("{field}: expected a string, got {}", kind.get_type().name().map(|n| n.to_string()).unwrap_or_default())))?;
+        let this = PyDivergence {
             time_s: finite_real("time_s", &time_s)?,
-            reason,
-            description,
-            state,
-            impact_speed_m_s: finite("impact_speed_m_s", impact_speed_m_s)?,
-            impact_vertical_speed_m_s: finite("impact_vertical_speed_m_s", impact_vertical_speed_m_s)?,
-            impact_tilt_rad: finite("impact_tilt_rad", impact_tilt_rad)?,
-        })
+            kind: Self::kind_named(field, &name)?,
+            state: fixed_reals::<STATE_DIM>("state", "the 12-element state vector", &state)?,
+        };
+        if let Some(description) = description {
+            deprecated(py, "Divergence(description=...)", "Divergence.description, derived from kind")?;
+            let text: String = description.extract().map_err(|_| PyTypeError::new_err("description: expected a string"))?;
+            if text != this.kind.describe() {
+                return Err(PyValueError::new_err(format!(
+                    "description: derived from kind {:?} as {:?}, got {text:?}",
+                    this.kind.name(),
+                    this.kind.describe()
+                )));
+            }
+        }
+        let impact = this.core().impact();
+        this.agrees(py, "impact_speed_m_s", impact_speed_m_s, impact.map(|i| i.speed_m_s))?;
+        this.agrees(py, "impact_vertical_speed_m_s", impact_vertical_speed_m_s, impact.map(|i| i.vertical_speed_m_s))?;
+        this.agrees(py, "impact_tilt_rad", impact_tilt_rad, impact.map(|i| i.tilt_rad))?;
+        Ok(this)
     }
-}
+    /// When the run ended, s.
+    #[getter]
+    fn time_s(&self) -> f64 {
+        self.time_s
+    }
+    /// Why: a kebab-case code (`"crashed"`, `"tilt"`, `"non-finite-state"`, ...).
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.kind.name()
+    }
+    /// The 12-element state vector when the run ended (read-only).
+    #[getter]
+    fn state<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        read_only(py, self.state.to_vec())
+    }
+    /// The kind in words.
+    #[getter]
+    fn description(&self) -> &'static str {
+        self.kind.describe()
+    }
+    /// A crashed run's speed at contact, m/s (else `None`).
+    #[getter]
+    fn impact_speed_m_s(&self) -> Option<f64> {
+        self.core().impact().map(|i| i.speed_m_s)
+    }
+    /// A crashed run's speed into the ground (NED down), m/s (else `None`).
+    #[getter]
+    fn impact_vertical_speed_m_s(&self) -> Option<f64> {
+        self.core().impact().map(|i| i.vertical_speed_m_s)
+    }
+    /// A crashed run's tilt at contact (body z from vertical), rad (else `None`).
+    #[getter]
+    fn impact_tilt_rad(&self) -> Option<f64> {
+        self.core().impact().map(|i| i.tilt_rad)
+    }
+    /// Deprecated name of `time_s` (the `Event`'s).
+    #[getter]
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        deprecated(py, "Divergence.time", "Divergence.time_s")?;
+        Ok(self.time_s)
+    }
+    /// Deprecated name of `kind` (the core's `Divergence`'s before it was used directly).
+    #[getter]
+    fn reason(&self, py: Python<'_>) -> PyResult<&'static str> {
+        deprecated(py, "Divergence.reason", "Divergence.kind")?;
+        Ok(self.kind.name())
+    }
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let this = slf.get();
+        Ok(format!("{}(time_s={:?}, kind='{}')", slf.get_type().name()?, this.time_s, this.kind.name()))
+    }
+    /// `crashed at t = <s> s: hit the ground at <speed> m/s (<down> m/s down), tilted <deg> deg`,
+    /// or `diverged at t = <s> s: <description>`.
+    fn __str__(&self) -> String {
+        match self.core().impact() {
+            Some(i) => format!(
+                "crashed at t = {:.4} s: {} at {:.2} m/s ({:.2} m/s down), tilted {:.1} deg",
+                self.time_s,
+                self.kind.describe(),
+                i.speed_m_s,
+                i.vertical_speed_m_s,
+                i.tilt_rad.to_degrees()
+            ),
+            None => format!("diverged at t = {:.4} s: {}", self.time_s, self.kind.describe()),
+        }
+    }
+});
 
 impl From<Divergence> for PyDivergence {
     fn from(d: Divergence) -> Self {
-        let impact = d.impact();
-        PyDivergence {
-            time_s: d.time_s,
-            reason: d.reason.name().to_string(),
-            description: d.reason.describe().to_string(),
-            state: state_vector(&d.state),
-            impact_speed_m_s: impact.map(|i| i.speed_m_s),
-            impact_vertical_speed_m_s: impact.map(|i| i.vertical_speed_m_s),
-            impact_tilt_rad: impact.map(|i| i.tilt_rad),
-        }
+        PyDivergence { time_s: d.time_s, kind: d.reason, state: state_vector(&d.state) }
     }
 }
 
@@ -103,17 +218,13 @@ macro_rules! counts_class {
             const FIELDS: &'static [&'static str] = &[$(stringify!($name)),+];
         }
 
-        #[pymethods]
-        impl PySensingCounts {
+        pickle_protocol!(PySensingCounts, {
             #[new]
             #[pyo3(signature = (*, $($name),+))]
             fn new($($name: u64),+) -> Self {
                 PySensingCounts { $($name),+ }
             }
-            fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-                Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
-            }
-        }
+        });
     };
 }
 
@@ -138,6 +249,158 @@ impl From<&SensingRecord> for PySensingCounts {
         }
     }
 }
+
+/// What the estimator gave the controller, one row per recorded control step beside the truth of
+/// the same row (a run with `rotorfault.Sensing`; `Trajectory.estimate`): the estimate at the
+/// newest IMU sample carried to the control time; the divergence row is NaN (no command was
+/// computed). The core's record used directly (no Python copy): `state` packs the estimate
+/// (position m, velocity m/s, quaternion `w x y z`, body rates rad/s; 13 columns), read as
+/// `position`, `velocity`, `quaternion`, `omega` (views), with `euler` (rad), `std` (one sigma of
+/// the filter's 15-element error state: position m, velocity m/s, attitude rad, gyro bias rad/s,
+/// accelerometer bias m/s^2, at its fusion horizon; `position_std_m`, `velocity_std_m_s`,
+/// `attitude_std_rad` are its blocks), `gyro_saturated` / `accel_saturated` (rows whose newest IMU
+/// sample was clamped at the range) and `counts` (the run's totals: IMU samples, clamped samples,
+/// measurements fused, refused by the innovation gate, late). Keyword-only from Python (the
+/// estimate's parts, as before); frozen; picklable.
+///
+/// Examples:
+///
+///     >>> import rotorfault as rf
+///     >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
+///     >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.2, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
+///     >>> run.estimate.position.shape == run.position.shape
+///     True
+#[pyclass(name = "Estimates", module = "rotorfault._rfcore", frozen)]
+pub struct PyEstimates {
+    state: Py<PyAny>,
+    euler: Py<PyAny>,
+    std: Py<PyAny>,
+    gyro_saturated: Py<PyAny>,
+    accel_saturated: Py<PyAny>,
+    counts: Py<PySensingCounts>,
+}
+
+/// Columns `from..to` of a table (a view).
+fn columns<'py>(table: &Bound<'py, PyAny>, from: isize, to: isize) -> PyResult<Bound<'py, PyAny>> {
+    let py = table.py();
+    table.get_item((PySlice::full(py), PySlice::new(py, from, to, 1)))
+}
+
+impl PyEstimates {
+    const FIELDS: &'static [&'static str] = &[
+        "position", "velocity", "quaternion", "euler", "omega", "std", "gyro_saturated", "accel_saturated", "counts",
+    ];
+}
+
+pickle_protocol!(PyEstimates, {
+    #[new]
+    #[pyo3(signature = (*, position, velocity, quaternion, euler, omega, std, gyro_saturated, accel_saturated, counts))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        position: Bound<'_, PyAny>,
+        velocity: Bound<'_, PyAny>,
+        quaternion: Bound<'_, PyAny>,
+        euler: Bound<'_, PyAny>,
+        omega: Bound<'_, PyAny>,
+        std: Bound<'_, PyAny>,
+        gyro_saturated: Bound<'_, PyAny>,
+        accel_saturated: Bound<'_, PyAny>,
+        counts: Py<PySensingCounts>,
+    ) -> PyResult<Self> {
+        shaped("position", &position, 2, None, &[3])?;
+        let rows = Some(position.len()?);
+        for (field, value, ndim, width) in [
+            ("velocity", &velocity, 2, 3),
+            ("quaternion", &quaternion, 2, 4),
+            ("euler", &euler, 2, 3),
+            ("omega", &omega, 2, 3),
+            ("std", &std, 2, 15),
+            ("gyro_saturated", &gyro_saturated, 1, 1),
+            ("accel_saturated", &accel_saturated, 1, 1),
+        ] {
+            shaped(field, value, ndim, rows, &[width])?;
+        }
+        let packed = py.import("numpy")?.getattr("hstack")?.call1(([position, velocity, quaternion, omega],))?;
+        Ok(PyEstimates {
+            state: packed.unbind(),
+            euler: euler.unbind(),
+            std: std.unbind(),
+            gyro_saturated: gyro_saturated.unbind(),
+            accel_saturated: accel_saturated.unbind(),
+            counts,
+        })
+    }
+    /// The estimate packed per row (13: position, velocity, quaternion `w x y z`, body rates).
+    #[getter]
+    fn state(&self, py: Python<'_>) -> Py<PyAny> {
+        self.state.clone_ref(py)
+    }
+    /// NED position, m (a view of `state`).
+    #[getter]
+    fn position<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 0, 3)
+    }
+    /// NED velocity, m/s (a view of `state`).
+    #[getter]
+    fn velocity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 3, 6)
+    }
+    /// Attitude quaternion `w x y z` (a view of `state`).
+    #[getter]
+    fn quaternion<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 6, 10)
+    }
+    /// Body rates p, q, r, rad/s (a view of `state`).
+    #[getter]
+    fn omega<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.state.bind(py), 10, 13)
+    }
+    /// Z-Y-X Euler angles roll, pitch, yaw, rad.
+    #[getter]
+    fn euler(&self, py: Python<'_>) -> Py<PyAny> {
+        self.euler.clone_ref(py)
+    }
+    /// One sigma of the filter's 15-element error state per row.
+    #[getter]
+    fn std(&self, py: Python<'_>) -> Py<PyAny> {
+        self.std.clone_ref(py)
+    }
+    #[getter]
+    fn gyro_saturated(&self, py: Python<'_>) -> Py<PyAny> {
+        self.gyro_saturated.clone_ref(py)
+    }
+    #[getter]
+    fn accel_saturated(&self, py: Python<'_>) -> Py<PyAny> {
+        self.accel_saturated.clone_ref(py)
+    }
+    /// The run's sensor totals.
+    #[getter]
+    fn counts(&self, py: Python<'_>) -> Py<PySensingCounts> {
+        self.counts.clone_ref(py)
+    }
+    /// One sigma of the position, m (columns 0-2 of `std`).
+    #[getter]
+    fn position_std_m<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 0, 3)
+    }
+    /// One sigma of the velocity, m/s (columns 3-5 of `std`).
+    #[getter]
+    fn velocity_std_m_s<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 3, 6)
+    }
+    /// One sigma of the attitude error, rad (columns 6-8 of `std`).
+    #[getter]
+    fn attitude_std_rad<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        columns(self.std.bind(py), 6, 9)
+    }
+    /// The 12-element state vector per row (position, velocity, Euler angles, body rates).
+    #[getter]
+    fn vector<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let parts = [self.position(py)?, self.velocity(py)?, self.euler.bind(py).clone(), self.omega(py)?];
+        py.import("numpy")?.getattr("hstack")?.call1((parts,))
+    }
+});
 
 /// One run sampled at the control rate, the one trajectory type (`rotorfault.Trajectory`
 /// subclasses it, adding what reads it in Python: tables, plots, derived arrays). Its arrays are
@@ -227,44 +490,69 @@ impl PyTrajectory {
         "sensing_counts",
     ];
 
-    /// The core's record as arrays, each made once (the record's own vectors moved, not copied).
-    pub(crate) fn from_run(py: Python<'_>, run: Trajectory) -> PyResult<Self> {
+    /// The core's record as the constructor's keywords, each array made once (the record's own
+    /// vectors moved, not copied).
+    fn record_kwargs(py: Python<'_>, run: Trajectory) -> PyResult<Bound<'_, PyDict>> {
         let n = run.t_s.len();
-        let sensed = run.sensed().to_string();
         let table = |values: Vec<f64>| -> PyResult<Py<PyAny>> {
             let cols = values.len().checked_div(n).unwrap_or(0);
             Ok(values.into_pyarray(py).reshape([n, cols])?.into_any().unbind())
         };
         let states = &run.states;
         let per_state = |f: fn(&RigidBodyState) -> [f64; 3]| table(rows(states, f));
-        let sensing = run.sensing.as_ref();
-        let flags = |f: fn(&EstimateRow) -> bool| {
-            sensing.map(|r| r.rows.iter().map(f).collect::<Vec<bool>>().into_pyarray(py).into_any().unbind())
-        };
-        Ok(PyTrajectory {
-            position: per_state(|s| s.position_m.into())?,
-            velocity: per_state(|s| s.velocity_m_s.into())?,
-            quaternion: table(rows(states, |s| {
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("sensed", run.sensed())?;
+        kwargs.set_item("position", per_state(|s| s.position_m.into())?)?;
+        kwargs.set_item("velocity", per_state(|s| s.velocity_m_s.into())?)?;
+        kwargs.set_item(
+            "quaternion",
+            table(rows(states, |s| {
                 let q = s.attitude.quaternion();
                 [q.w, q.i, q.j, q.k]
             }))?,
-            euler: per_state(|s| s.euler_rad())?,
-            omega: per_state(|s| s.omega_rad_s.into())?,
-            primary_axis: per_state(|s| s.primary_axis().into())?,
-            estimate_state: sensing.map(|r| table(rows(&r.rows, |row| row.state.to_packed()))).transpose()?,
-            estimate_euler: sensing.map(|r| table(rows(&r.rows, |row| row.state.euler_rad()))).transpose()?,
-            estimate_std: sensing.map(|r| table(rows(&r.rows, |row| row.std))).transpose()?,
-            gyro_saturated: flags(|row| row.gyro_saturated),
-            accel_saturated: flags(|row| row.accel_saturated),
-            sensing_counts: sensing.map(|r| Py::new(py, PySensingCounts::from(r))).transpose()?,
-            t: run.t_s.into_pyarray(py).into_any().unbind(),
-            rotor_command: table(run.commands)?,
-            rotor_thrust: table(run.thrust_n)?,
-            efficiency: table(run.efficiency)?,
-            recorded_measurements: table(run.measured)?,
-            sensed,
-            divergence: run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?,
-        })
+        )?;
+        kwargs.set_item("euler", per_state(|s| s.euler_rad())?)?;
+        kwargs.set_item("omega", per_state(|s| s.omega_rad_s.into())?)?;
+        kwargs.set_item("primary_axis", per_state(|s| s.primary_axis().into())?)?;
+        if let Some(r) = run.sensing.as_ref() {
+            let flags = |f: fn(&EstimateRow) -> bool| r.rows.iter().map(f).collect::<Vec<bool>>().into_pyarray(py);
+            kwargs.set_item("estimate_state", table(rows(&r.rows, |row| row.state.to_packed()))?)?;
+            kwargs.set_item("estimate_euler", table(rows(&r.rows, |row| row.state.euler_rad()))?)?;
+            kwargs.set_item("estimate_std", table(rows(&r.rows, |row| row.std))?)?;
+            kwargs.set_item("gyro_saturated", flags(|row| row.gyro_saturated))?;
+            kwargs.set_item("accel_saturated", flags(|row| row.accel_saturated))?;
+            kwargs.set_item("sensing_counts", Py::new(py, PySensingCounts::from(r))?)?;
+        }
+        kwargs.set_item("rotor_command", table(run.commands)?)?;
+        kwargs.set_item("rotor_thrust", table(run.thrust_n)?)?;
+        kwargs.set_item("efficiency", table(run.efficiency)?)?;
+        kwargs.set_item("recorded_measurements", table(run.measured)?)?;
+        kwargs.set_item("divergence", run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?)?;
+        kwargs.set_item("t", run.t_s.into_pyarray(py))?;
+        Ok(kwargs)
+    }
+
+    /// The core's record as one `trajectory_type` (`Trajectory` or a Python subclass of it, which
+    /// gets `extra` keywords too): made once, by the type's constructor (one shape check).
+    pub(crate) fn from_run<'py>(
+        py: Python<'py>,
+        run: Trajectory,
+        trajectory_type: Option<&Bound<'py, PyType>>,
+        extra: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let base = py.get_type::<PyTrajectory>();
+        let cls = trajectory_type.unwrap_or(&base);
+        if !cls.is_subclass(&base)? {
+            return Err(PyTypeError::new_err(format!(
+                "trajectory_type: expected a subclass of rotorfault._rfcore.Trajectory, got {}",
+                cls.name()?
+            )));
+        }
+        let kwargs = Self::record_kwargs(py, run)?;
+        if let Some(extra) = extra {
+            kwargs.update(extra.as_mapping())?;
+        }
+        cls.call((), Some(&kwargs))
     }
 }
 
@@ -273,8 +561,7 @@ fn rows<R, const N: usize>(rows: &[R], f: impl Fn(&R) -> [f64; N]) -> Vec<f64> {
     rows.iter().flat_map(f).collect()
 }
 
-#[pymethods]
-impl PyTrajectory {
+pickle_protocol!(PyTrajectory, {
     #[new]
     #[pyo3(signature = (*, t, position, velocity, quaternion, euler, omega, primary_axis, rotor_command,
         rotor_thrust, efficiency, recorded_measurements, sensed=None, divergence=None,
@@ -369,11 +656,28 @@ impl PyTrajectory {
     fn diverged(&self) -> bool {
         self.divergence.is_some()
     }
-    /// The field names, in order (the constructor's keywords).
-    #[classattr]
-    #[pyo3(name = "FIELDS")]
-    fn fields() -> Vec<&'static str> {
-        Self::FIELDS.to_vec()
+    /// With sensing, the estimate beside the truth (`Estimates`, views of this run's estimate
+    /// fields); else `None`.
+    #[getter]
+    fn estimate(&self, py: Python<'_>) -> Option<PyEstimates> {
+        let (Some(state), Some(euler), Some(std), Some(gyro), Some(accel), Some(counts)) = (
+            &self.estimate_state,
+            &self.estimate_euler,
+            &self.estimate_std,
+            &self.gyro_saturated,
+            &self.accel_saturated,
+            &self.sensing_counts,
+        ) else {
+            return None;
+        };
+        Some(PyEstimates {
+            state: state.clone_ref(py),
+            euler: euler.clone_ref(py),
+            std: std.clone_ref(py),
+            gyro_saturated: gyro.clone_ref(py),
+            accel_saturated: accel.clone_ref(py),
+            counts: counts.clone_ref(py),
+        })
     }
     /// `Trajectory(<rows> rows to <end> s, <how it ended>)`: the arrays are too long to print.
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
@@ -386,12 +690,9 @@ impl PyTrajectory {
             None => "no divergence".to_string(),
             Some(d) => {
                 let d = d.get();
-                format!("{} at {} s", d.reason, d.time_s)
+                format!("{} at {} s", d.kind.name(), d.time_s)
             }
         };
         Ok(format!("{}({end}, {ended}, sensed={:?})", slf.get_type().name()?, this.sensed))
     }
-    fn __getnewargs_ex__<'py>(slf: &Bound<'py, Self>) -> PyResult<((), Bound<'py, PyDict>)> {
-        Ok(((), settings_kwargs(slf.as_any(), Self::FIELDS)?))
-    }
-}
+});

@@ -200,7 +200,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
         "max_horizontal_excursion_m": float(scaled_norm(run.position[:, :2] - run.position[0, :2], axis=1).max()),
         "max_tilt_deg": float(tilt.max()), "sensed": run.sensed,
         "verdict": metrics.verdict, "outcome": metrics.outcome, "lost_at_s": metrics.lost_at_s,
-        "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time, "description": run.events[0].description},
+        "event": None if not run.events else {"kind": run.events[0].kind, "time_s": run.events[0].time_s, "description": run.events[0].description},
         "plot": plot_path,
     }
 

@@ -22,7 +22,6 @@ or the noisy body rates with sensor noise).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,36 +37,11 @@ IndiGains = _rfcore.IndiGains
 
 
 
-@dataclass(frozen=True)
-class IndiFailureMode:
-    """How the controller flies one set of failed rotors (1-based rotor numbers), decided at
-    construction: whether yaw is held or given up (the vehicle spins), whether one roll/pitch
-    torque axis is left (two opposing rotors of a quadrotor: the output is redefined), and then the
-    zero dynamics ``eta'' = a r^2 eta - ...`` (stable when ``a < 0``, with the damping ratio
-    ``zero_dynamics_damping``)."""
-
-    failed: tuple[int, ...]
-    healthy: tuple[int, ...]
-    yaw_controlled: bool
-    single_axis: bool
-    #: The controlled output direction (single axis only), body x-y plane.
-    output_direction: tuple[float, float] | None
-    #: The primary axis in the body frame.
-    primary_axis: tuple[float, float, float]
-    zero_dynamics_a: float | None
-    zero_dynamics_damping: float | None
-    #: Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
-    hover_thrust_n: tuple[float, ...]
-
-    @classmethod
-    def _from_core(cls, core: _rfcore.IndiFailureMode) -> IndiFailureMode:
-        direction = core.output_direction
-        x, y, z = core.primary_axis
-        return cls(
-            tuple(k + 1 for k in core.failed), tuple(k + 1 for k in core.healthy), core.yaw_controlled,
-            core.single_axis, None if direction is None else (direction[0], direction[1]), (x, y, z),
-            core.zero_dynamics_a, core.zero_dynamics_damping, tuple(core.hover_thrust_n),
-        )
+#: How the controller flies one set of failed rotors (rotors numbered from 1), decided at
+#: construction: the core's class, used directly (its fields: ``failed``, ``healthy``,
+#: ``yaw_controlled``, ``single_axis``, ``output_direction``, ``primary_axis``,
+#: ``zero_dynamics_a``, ``zero_dynamics_damping``, ``hover_thrust_n`` in N).
+IndiFailureMode = _rfcore.IndiFailureMode
 
 
 def _vector(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
@@ -154,7 +128,7 @@ class IndiController:
             )
         self.setpoints = tuple(parsed)
         # Validates everything now.
-        self._modes = [IndiFailureMode._from_core(m) for m in self.core(1.0 / 400.0).failure_modes()]
+        self._modes = self.core(1.0 / 400.0).failure_modes()
 
     def core(self, dt_s: float) -> _rfcore.IndiController:
         return _rfcore.IndiController(

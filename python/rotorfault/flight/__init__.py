@@ -15,15 +15,24 @@ from .faults import RotorFault
 from .models import Drag, FixedPitchActuator, Noise, Sensing, VariablePitchActuator
 from .simulator import MAX_RATE_STEP, DivergenceLimits, Simulator, simulate_batch
 from .state import State
-from .trajectory import BatchResult, Estimates, Event, Trajectory
+from .trajectory import BatchResult, Divergence, Estimates, Trajectory
+
+
+def __getattr__(name: str) -> object:
+    if name == "Event":  # the old name of Divergence: warns (flight.trajectory)
+        from . import trajectory
+
+        return trajectory.Event
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "MAX_RATE_STEP",
     "BatchResult",
     "DivergenceLimits",
     "Drag",
+    "Divergence",
     "Estimates",
-    "Event",
     "FixedPitchActuator",
     "Noise",
     "RotorFault",

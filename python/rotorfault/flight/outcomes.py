@@ -301,7 +301,7 @@ def flight_metrics(
         raise ValueError("reference: give a scenario with setpoints or a reference (positions, velocities), not both or neither")
     if trajectory.diverged:
         event = trajectory.events[0]
-        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time),
+        return FlightMetrics(event.kind, None, None, None, None, None, None, None, None, window_s, lost_at_s=float(event.time_s),
                              impact_speed_m_s=getattr(event, "impact_speed_m_s", None))
     if reference is None:
         setpoint = _setpoint_track(scenario_, t)

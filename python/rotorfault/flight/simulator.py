@@ -34,7 +34,7 @@ from ..analysis.airframe import Airframe, require_airframe
 from .faults import RotorFault, _faults
 from .models import Drag, FixedPitchActuator, Noise, Sensing, VariablePitchActuator, sensing_with_offset
 from .state import State, _vector3
-from .trajectory import BatchResult, Event, RunViews, Trajectory  # noqa: F401  (Event: the old rotorfault.simulation name)
+from .trajectory import BatchResult, RunViews, Trajectory
 
 #: A controller the simulator flies: a built-in one (anything with ``core(dt_s)``, see
 #: :class:`rotorfault.control.Controller`), a Python callable ``f(t, x) -> commands`` (the slow
@@ -229,7 +229,8 @@ class Simulator:
         core = core_controller(controller, self.dt_s)
         start = self._start(controller, initial_command)
         config = self._config(duration_s, record_every)
-        raw = _rfcore.simulate(
+        # Made once, as this Trajectory: the core's record goes straight to its constructor.
+        run: Trajectory = _rfcore.simulate(
             self.airframe._core,
             self.actuator,
             self.drag,
@@ -239,8 +240,10 @@ class Simulator:
             self.airframe.efficiency,
             start,
             config,
+            trajectory_type=Trajectory,
+            extra={"faults": fault_list},
         )
-        return Trajectory._from_core(raw, fault_list)
+        return run
 
     def state_derivative(self, x: npt.ArrayLike, command: npt.ArrayLike, efficiency: npt.ArrayLike | None = None) -> FloatArray:
         """d/dt of the 12-element state vector with the actuators settled at ``command`` (clamped to
@@ -472,8 +475,8 @@ def prepare_batch(
 
 
 #: The per-signal arrays of :class:`rotorfault._rfcore.BatchColumns` (runs on axis 0).
-_BLOCKS = ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust", "efficiency",
-           "measured", "estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated",
+_BLOCKS = ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
+           "efficiency", "recorded_measurements", "estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated",
            "rows_on_grid", "off_grid_row")
 
 
@@ -496,6 +499,14 @@ class _JoinedColumns:
         self.divergences = [d for part in parts for d in part.divergences]
         self.sensing_counts = [c for part in parts for c in part.sensing_counts]
         self.sensed = [s for part in parts for s in part.sensed]
+
+
+def __getattr__(name: str) -> object:
+    if name == "Event":  # the old rotorfault.simulation name of Divergence: warns (flight.trajectory)
+        from . import trajectory
+
+        return trajectory.Event
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = [

@@ -1,23 +1,21 @@
 """What a flight returns: the :class:`Trajectory` of one run (sampled at the control rate, with
-the :class:`Event` that ended it early, if any) and the :class:`BatchResult` of many."""
+the :data:`Divergence` that ended it early, if any) and the :class:`BatchResult` of many."""
 
 from __future__ import annotations
 
-import math
 import operator
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar, Self, cast, overload
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar, Self, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
 from .._util.convert import FloatArray
-from .._util.deprecation import dataclass_compat
+from .._util.deprecation import dataclass_compat, warn
 from .._util.numeric import scaled_norm
 from .._util.tables import Column, Tabular, arrow_table, pyarrow, schema_metadata
-from .._typing import DivergenceKind
 from .faults import RotorFault
 
 if TYPE_CHECKING:
@@ -55,120 +53,58 @@ def command_columns(command_count: int, rotor_count: int) -> list[str]:
     return [f"rotor_{j + 1}_command_n" for j in range(command_count)]
 
 
-@dataclass(frozen=True)
-class Event:
-    """Why and when a run ended early: ``time`` (s), with the state (12-vector) at that moment. A ``crashed``
-    event (the ground) also has the impact: speed (m/s), speed into the ground (m/s, down) and
-    tilt (rad, body z from vertical; the whole attitude is in ``state``); ``None`` otherwise.
-
-    Examples:
-
-        >>> import rotorfault as rf
-        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"))
-        >>> run = sim.run(rf.State(position=(0, 0, -1)), 3.0)
-        >>> event = run.events[0]
-        >>> event.kind, round(event.time, 3), round(event.impact_speed_m_s, 3)
-        ('crashed', 0.452, 4.427)
-    """
-
-    time: float
-    #: A kebab-case code (``"crashed"``, ``"tilt"``, ``"non-finite-state"``, ...);
-    #: ``description`` is the human-readable text.
-    kind: DivergenceKind
-    description: str
-    state: FloatArray
-    impact_speed_m_s: float | None = None
-    impact_vertical_speed_m_s: float | None = None
-    impact_tilt_rad: float | None = None
-
-    def __str__(self) -> str:
-        if self.kind == "crashed" and self.impact_speed_m_s is not None:
-            return (
-                f"crashed at t = {self.time:.4f} s: {self.description} at {self.impact_speed_m_s:.2f} m/s "
-                f"({self.impact_vertical_speed_m_s:.2f} m/s down), tilted {math.degrees(self.impact_tilt_rad or 0.0):.1f} deg"
-            )
-        return f"diverged at t = {self.time:.4f} s: {self.description}"
+#: Why and when a run ended early (``Trajectory.divergence``; ``Trajectory.events`` lists it):
+#: the core's class, used directly (see its page: ``time_s``, ``kind``, ``state``, and what is
+#: derived from them, the description and a crash's impact).
+Divergence = _rfcore.Divergence
 
 
-@dataclass(frozen=True)
-class Estimates:
-    """What the estimator gave the controller, one row per recorded control step beside the
-    truth of the same row (a run with :data:`rotorfault.Sensing`): the estimate at the newest IMU
-    sample carried to the control time. The divergence row is NaN (no command was computed).
+class _EventType(type):
+    """An old ``Event`` is any :data:`Divergence` (``isinstance`` keeps answering as before)."""
 
-    ``std`` is one sigma of the filter's 15-element error state per row (position m, velocity
-    m/s, attitude rad, gyro bias rad/s, accelerometer bias m/s^2; the covariance at its fusion
-    horizon); ``gyro_saturated`` / ``accel_saturated`` flag rows whose newest IMU sample was
-    clamped at the range; ``position`` (m), ``velocity`` (m/s), ``euler`` (rad) and ``omega`` (body
-    rates, rad/s) are the estimate's; ``counts`` holds the run's totals (IMU samples, clamped samples,
-    measurements fused, refused by the innovation gate, late).
-
-    Examples:
-
-        >>> import rotorfault as rf
-        >>> sim = rf.Simulator(rf.Airframe.preset("quad-x"), sensing=rf.Sensing(suite="mocap"))
-        >>> run = sim.run(rf.State(position=(0, 0, -1)), 0.2, controller=rf.lqr_hover(sim, position=(0, 0, -1)))
-        >>> run.estimate.position.shape == run.position.shape
-        True
-    """
-
-    position: FloatArray
-    velocity: FloatArray
-    quaternion: FloatArray
-    euler: FloatArray
-    omega: FloatArray
-    std: FloatArray
-    gyro_saturated: np.ndarray[Any, np.dtype[np.bool_]]
-    accel_saturated: np.ndarray[Any, np.dtype[np.bool_]]
-    counts: _rfcore.SensingCounts
-
-    @property
-    def position_std_m(self) -> FloatArray:
-        return self.std[:, 0:3]
-
-    @property
-    def velocity_std_m_s(self) -> FloatArray:
-        return self.std[:, 3:6]
-
-    @property
-    def attitude_std_rad(self) -> FloatArray:
-        return self.std[:, 6:9]
-
-    @property
-    def vector(self) -> FloatArray:
-        """The 12-element state vector per row (position, velocity, Euler angles, body rates)."""
-        return np.hstack([self.position, self.velocity, self.euler, self.omega])
+    def __instancecheck__(cls, obj: Any) -> bool:
+        return isinstance(obj, _rfcore.Divergence)
 
 
-def _events(d: _rfcore.Divergence | None) -> list[Event]:
-    """The event a core divergence makes (none without one)."""
-    if d is None:
-        return []
-    return [Event(d.time_s, cast(DivergenceKind, d.reason), d.description, np.asarray(d.state),
-                  d.impact_speed_m_s, d.impact_vertical_speed_m_s, d.impact_tilt_rad)]
+class _Event(metaclass=_EventType):
+    """The old ``rotorfault.Event`` (a Python copy of the core's divergence), kept one release
+    behind a warning: its constructor ``Event(time, kind, description, state, impact_...)`` makes a
+    :data:`Divergence` (the description and the impact, now derived from the kind and the state,
+    must agree with them)."""
+
+    def __new__(cls, time: float, kind: str, description: str | None = None, state: Any = None, **impact: Any) -> Divergence:  # type: ignore[misc]
+        return _rfcore.Divergence(time_s=time, kind=kind, state=state, description=description, **impact)
 
 
-def _divergence(events: Sequence[Event]) -> _rfcore.Divergence | None:
-    """The core's divergence of a run constructed with ``events`` (at most one: a run ends once)."""
+def __getattr__(name: str) -> Any:
+    if name == "Event":
+        warn("rotorfault.Event", "rotorfault.Divergence (keywords: time_s, kind, state)")
+        return _Event
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+#: What the estimator gave the controller beside the truth (``Trajectory.estimate``, a run with
+#: :data:`rotorfault.Sensing`): the core's class, used directly (see its page).
+Estimates = _rfcore.Estimates
+
+
+def _divergence(events: Sequence[Divergence]) -> Divergence | None:
+    """The divergence of a run constructed with ``events`` (at most one: a run ends once)."""
     if len(events) > 1:
         raise ValueError(f"events: a run ends at most once, got {len(events)} events")
     if not events:
         return None
-    e = events[0]
-    if not isinstance(e, Event):
-        raise TypeError(f"events: expected rotorfault.Event items, got {type(e).__name__}")
-    return _rfcore.Divergence(time_s=e.time, reason=e.kind, description=e.description, state=list(np.asarray(e.state, dtype=float)),
-                              impact_speed_m_s=e.impact_speed_m_s, impact_vertical_speed_m_s=e.impact_vertical_speed_m_s,
-                              impact_tilt_rad=e.impact_tilt_rad)
+    if not isinstance(events[0], _rfcore.Divergence):
+        raise TypeError(f"events: expected rotorfault.Divergence items, got {type(events[0]).__name__}")
+    return events[0]
 
 
 def _estimate_fields(e: Estimates) -> dict[str, Any]:
-    """The core's estimate fields of an :class:`Estimates` (the constructor's old ``estimate=``)."""
-    return {
-        "estimate_state": np.hstack([e.position, e.velocity, e.quaternion, e.omega]), "estimate_euler": e.euler,
-        "estimate_std": e.std, "gyro_saturated": e.gyro_saturated, "accel_saturated": e.accel_saturated,
-        "sensing_counts": e.counts,
-    }
+    """The core's estimate fields of an :data:`Estimates` (the constructor's old ``estimate=``)."""
+    if not isinstance(e, _rfcore.Estimates):
+        raise TypeError(f"estimate: expected rotorfault.flight.Estimates, got {type(e).__name__}")
+    return {"estimate_state": e.state, "estimate_euler": e.euler, "estimate_std": e.std, "gyro_saturated": e.gyro_saturated,
+            "accel_saturated": e.accel_saturated, "sensing_counts": e.counts}
 
 
 class Trajectory(_rfcore.Trajectory, Tabular):
@@ -214,7 +150,7 @@ class Trajectory(_rfcore.Trajectory, Tabular):
     def __new__(
         cls,
         *,
-        events: Sequence[Event] | None = None,
+        events: Sequence[Divergence] | None = None,
         faults: Sequence[RotorFault] = (),
         estimate: Estimates | None = None,
         **core: Any,
@@ -236,28 +172,10 @@ class Trajectory(_rfcore.Trajectory, Tabular):
     def __getstate__(self) -> None:
         return None  # everything is in the constructor's arguments
 
-    @classmethod
-    def _from_core(cls, raw: _rfcore.Trajectory, faults: tuple[RotorFault, ...]) -> Trajectory:
-        """The simulator's run as this class: its arrays pass by reference, not copied."""
-        return cls(**{name: getattr(raw, name) for name in raw.FIELDS}, faults=faults)
-
     @property
-    def events(self) -> list[Event]:
-        """Why and when the run ended early: one :class:`Event`, or none."""
-        return _events(self.divergence)
-
-    @property
-    def estimate(self) -> Estimates | None:
-        """With sensing, the estimate beside the truth (else ``None``)."""
-        packed, euler, std, gyro, accel, counts = (self.estimate_state, self.estimate_euler, self.estimate_std,
-                                                   self.gyro_saturated, self.accel_saturated, self.sensing_counts)
-        if packed is None or euler is None or std is None or counts is None:
-            return None
-        return Estimates(
-            position=packed[:, 0:3], velocity=packed[:, 3:6], quaternion=packed[:, 6:10], euler=euler,
-            omega=packed[:, 10:13], std=std, gyro_saturated=np.asarray(gyro, dtype=bool),
-            accel_saturated=np.asarray(accel, dtype=bool), counts=counts,
-        )
+    def events(self) -> list[Divergence]:
+        """Why and when the run ended early: its :data:`Divergence`, or none."""
+        return [] if self.divergence is None else [self.divergence]
 
     @property
     def estimate_attitude_error_rad(self) -> FloatArray:
@@ -351,7 +269,7 @@ class Trajectory(_rfcore.Trajectory, Tabular):
             "kind": "trajectory",
             "sensed": self.sensed,
             **sensing,
-            "events": [{"kind": e.kind, "time_s": e.time, "description": e.description} for e in self.events],
+            "events": [{"kind": e.kind, "time_s": e.time_s, "description": e.description} for e in self.events],
             "faults": [{"rotor": f.rotor, "time_s": f.time, "efficiency": f.efficiency} for f in self.faults],
         }
 
@@ -436,8 +354,8 @@ class RunViews(Sequence[Trajectory]):
         return {
             "position": rows(c.position), "velocity": rows(c.velocity), "quaternion": rows(c.quaternion),
             "euler": rows(c.euler), "omega": rows(c.omega), "primary_axis": rows(c.primary_axis),
-            "rotor_command": rows(c.command), "rotor_thrust": rows(c.thrust), "efficiency": rows(c.efficiency),
-            "recorded_measurements": rows(c.measured),
+            "rotor_command": rows(c.rotor_command), "rotor_thrust": rows(c.rotor_thrust), "efficiency": rows(c.efficiency),
+            "recorded_measurements": rows(c.recorded_measurements),
         }
 
     def _estimate_signals(self, rows: Any, counts: _rfcore.SensingCounts) -> dict[str, Any]:
@@ -516,8 +434,8 @@ class BatchResult(Tabular):
 
     @classmethod
     def _from_columns(cls, grid: FloatArray, columns: Any, faults: tuple[tuple[RotorFault, ...], ...]) -> BatchResult:
-        for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust",
-                     "efficiency", "measured", "estimate_state", "estimate_euler", "estimate_std",
+        for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
+                     "efficiency", "recorded_measurements", "estimate_state", "estimate_euler", "estimate_std",
                      "gyro_saturated", "accel_saturated"):
             getattr(columns, name).flags.writeable = False  # views of it are handed out
         g = len(grid)
@@ -527,7 +445,7 @@ class BatchResult(Tabular):
             velocity=columns.velocity[:, :g],
             euler=columns.euler[:, :g],
             omega=columns.omega[:, :g],
-            rotor_thrust=columns.thrust[:, :g],
+            rotor_thrust=columns.rotor_thrust[:, :g],
             efficiency=columns.efficiency[:, :g],
             diverged=np.array([d is not None for d in columns.divergences], dtype=bool),
             divergence_time=np.array([np.nan if d is None else d.time_s for d in columns.divergences]),
@@ -558,4 +476,4 @@ class BatchResult(Tabular):
         return f"batch: {len(self.trajectories)} runs, {int(np.sum(self.diverged))} diverged"
 
 
-__all__ = ["ERROR_STATE_COLUMNS", "STATE_COLUMNS", "BatchResult", "Estimates", "Event", "RunViews", "Trajectory", "command_columns"]
+__all__ = ["ERROR_STATE_COLUMNS", "STATE_COLUMNS", "BatchResult", "Divergence", "Estimates", "RunViews", "Trajectory", "command_columns"]

@@ -181,7 +181,7 @@ def attitude_metrics(trajectory: Trajectory, spin_setpoint_rad_s: float, *, wind
     window_s, t = scoring_window(trajectory, window_s)
     if trajectory.diverged:
         e = trajectory.events[0]
-        return AttitudeMetrics(e.kind, None, None, None, None, None, float(e.time), window_s)
+        return AttitudeMetrics(e.kind, None, None, None, None, None, float(e.time_s), window_s)
     tilt = tilt_deg(trajectory)
     spin = -trajectory.omega[:, 2]  # paper frame r (z up)
     last = t >= t[-1] - window_s
@@ -327,7 +327,7 @@ def _measurement(run: LanzonRun) -> str:
     if e is not None:
         speed = float(np.linalg.norm(run.trajectory.velocity[-1])) if len(run.trajectory.t) else math.nan
         where = "hit the ground" if e.kind == "crashed" else f"lost ({e.kind})"
-        return f"{where} at {float(e.time):.2f} s ({speed:.1f} m/s)"
+        return f"{where} at {float(e.time_s):.2f} s ({speed:.1f} m/s)"
     a, p = run.attitude, run.position
     if p is None:
         return (f"over the last {a.window_s:g} s: tilt <= {a.window_tilt_deg:.2f} deg, mean spin {a.window_spin_rad_s:.2f} rad/s "

@@ -287,7 +287,7 @@ def fly(
     reference = np.array([law.reference(t) for t in run.t])
     error = np.linalg.norm(run.position - reference[:, :3], axis=1)
     late = run.t >= settle_s
-    lost = run.events[0].time if run.events else None
+    lost = run.events[0].time_s if run.events else None
     metrics = flight_metrics(run, reference=(reference[:, :3], reference[:, 3:6]))
     pitch_share, speed_share, ranges = _limit_shares(vehicle, run)
     return WangFlight(

@@ -72,7 +72,7 @@ def plot_trajectory(
         for fault in tr.faults:
             ax.axvline(fault.time, color="0.35", linestyle=(0, (4, 2)), lw=1.0, label=None)
         for event in tr.events:
-            ax.axvline(event.time, color="black", linestyle="-", lw=2.0, alpha=0.5)
+            ax.axvline(event.time_s, color="black", linestyle="-", lw=2.0, alpha=0.5)
         legend_outside(ax)
     if estimate is not None:
         _plot_estimate_error(axes[-1], tr)
@@ -87,7 +87,7 @@ def plot_trajectory(
         )
     if tr.events:
         e = tr.events[0]
-        lines.append(f"lost at t = {e.time:.2f} s (thick line): {e.description}")
+        lines.append(f"lost at t = {e.time_s:.2f} s (thick line): {e.description}")
     elif len(tr.t):
         lines.append(f"flown for {tr.t[-1]:g} s" + ("" if verdict else " (no setpoint given: no verdict)"))
     if verdict:
@@ -167,7 +167,7 @@ def plot_lanzon_flight(run: Any, path: str | None = None) -> Figure:
         ax.grid(True, alpha=0.3)
         ax.tick_params(labelsize=9)
         for event in tr.events:
-            ax.axvline(event.time, color="black", lw=2.0, alpha=0.5)
+            ax.axvline(event.time_s, color="black", lw=2.0, alpha=0.5)
         legend_outside(ax)
     axes[-1].set_xlabel("time (s)", fontsize=10)
     lost = run.lost_at_s

@@ -26,7 +26,7 @@ does not.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any, Literal, get_args
 
 from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
@@ -220,21 +220,21 @@ class Certificate(Tabular):
 
     def to_dict(self) -> dict[str, Any]:
         # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
-        out = asdict(replace(self, cases=tuple(
-            c if c.relaxed_hover is None else replace(c, relaxed_hover=replace(c.relaxed_hover, solution=None)) for c in self.cases)))
-        for case in out["cases"]:
+        out = asdict(replace(self, cases=tuple(replace(c, relaxed_hover=None) for c in self.cases)))
+        for case, given in zip(out["cases"], self.cases):
             for key in ("acai", "acai_give_up_yaw", "thrust_to_weight"):
                 if math.isinf(case[key]):
                     case[key] = None  # JSON has no infinity: rank deficient / undefined
-            spin = case["relaxed_hover"]
+            spin = given.relaxed_hover
             if spin is not None:
-                del spin["solution"]
-            if spin is not None and spin["hover"] == "no":
-                spin["spin_rate_rad_s"] = spin["thrust_margin_n"] = None  # JSON has no NaN
-            entry: dict[str, Any] = {} if spin is None or spin["entry_from_hover"] is None else spin["entry_from_hover"]
-            for key, value in entry.items():
-                if isinstance(value, float) and math.isinf(value):
-                    entry[key] = None  # JSON has no infinity: the bound never reaches the limit
+                verdict = {f.name: getattr(spin, f.name) for f in fields(spin) if f.name != "solution"}
+                if spin.hover == "no":
+                    verdict |= {"spin_rate_rad_s": None, "thrust_margin_n": None}  # JSON has no NaN
+                if spin.entry_from_hover is not None:
+                    # JSON has no infinity: inf means the bound never reaches the limit
+                    verdict["entry_from_hover"] = {k: None if isinstance(v, float) and math.isinf(v) else v
+                                                   for k, v in asdict(spin.entry_from_hover).items()}
+                case["relaxed_hover"] = verdict
         return out
 
 

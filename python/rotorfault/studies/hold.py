@@ -99,7 +99,7 @@ def post_fault_hold(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M,
     start = (faults[0] if faults else 0.0) + crit.settle_s
     if trajectory.events:
         event = trajectory.events[0]
-        return PostFaultHold(False, start, None, None, float(event.time), event.kind)
+        return PostFaultHold(False, start, None, None, float(event.time_s), event.kind)
     if trajectory.t[-1] < start:
         raise ValueError(f"trajectory: the run ends at {trajectory.t[-1]:g} s, before its judging starts ({start:g} s)")
     error = trajectory.position[trajectory.t >= start] - point

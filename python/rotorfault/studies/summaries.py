@@ -56,7 +56,7 @@ def summarize(trajectory: Trajectory, setpoint: Sequence[float] = HOVER_M, *, up
     if upper is not None:
         saturated = np.any(finite & (command >= np.asarray(upper)), axis=1)
     fault_times = effective_fault_times(trajectory)
-    lost = trajectory.events[0].time if trajectory.events else math.nan
+    lost = trajectory.events[0].time_s if trajectory.events else math.nan
     nan = math.nan
 
     def none(v: float | None) -> float:

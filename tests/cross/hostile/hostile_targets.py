@@ -872,7 +872,7 @@ TARGETS: dict[str, Target] = _targets()
 #: Result types users receive: covered through the call that makes them (its target's check).
 PRODUCED_BY: dict[str, str] = {
     "Allocation": "allocate", "DirectionalLimit": "max_virtual_control", "HoverMargin": "hover_thrust_margin",
-    "BatchResult": "simulate_batch", "Event": "simulate_batch", "Trajectory": "simulate_batch", "HoverTrim": "hover_trim",
+    "BatchResult": "simulate_batch", "Divergence": "simulate_batch", "Trajectory": "simulate_batch", "HoverTrim": "hover_trim",
     "ControllabilityReport": "controllability", "EfficiencyScan": "efficiency_scan", "FailureCase": "failure_table",
     "FailureTable": "failure_table", "Scan": "acai_scan", "Design": "design_search", "DesignSearch": "design_search",
     "AcaiBatch": "acai_batch", "AcaiValue": "acai", "Certificate": "certify", "CertificateCase": "certify",

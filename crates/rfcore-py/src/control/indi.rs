@@ -1,14 +1,16 @@
 //! Bindings for the INDI fault-tolerant controller (Sun et al.): its gains and the controller, with
-//! how it flies each failure set. Rotor indices are 0-based here (the Python layer converts).
+//! how it flies each failure set. The controller's rotor indices are 0-based here (the Python
+//! layer converts); a failure mode names its rotors from 1.
 
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use rfcore::control::indi::{
     DetectedFailure, FailureMode, IndiController, IndiGains, Setpoint, YawMode,
 };
 
 use crate::airframe::PyAirframe;
-use crate::convert::to_py_err;
+use crate::convert::{to_py_err, value_protocol};
 
 /// INDI gains (`rotorfault.IndiGains`); defaults from the core's `Default` (Sun's printed values
 /// where he prints them), rules from its `check`.
@@ -93,42 +95,77 @@ indi_gains!(
     min_yaw_authority
 );
 
-/// How the controller flies one failure set (`FailureMode` of the core), rotor indices 0-based.
-#[pyclass(
-    name = "IndiFailureMode",
-    module = "rotorfault._rfcore",
-    frozen,
-    get_all
-)]
+/// How the controller flies one set of failed rotors (`rotorfault.control.indi.IndiFailureMode`:
+/// the core's `FailureMode`, used directly; no Python copy), decided at construction: the failed
+/// and healthy rotors (numbered from 1, as wherever a rotor is named), whether yaw is held or given
+/// up (the vehicle spins), whether one roll/pitch torque axis is left (two opposing rotors of a
+/// quadrotor: the output is redefined, along `output_direction` in the body x-y plane), the
+/// primary axis in the body frame, then the zero dynamics `eta'' = a r^2 eta - ...` (stable when
+/// `a < 0`, with the damping ratio `zero_dynamics_damping`) and the thrusts holding the weight
+/// with zero roll and pitch torque (N, one per rotor). Frozen, comparable, hashable.
+#[pyclass(name = "IndiFailureMode", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiFailureMode {
-    failed: Vec<usize>,
-    healthy: Vec<usize>,
-    yaw_controlled: bool,
-    single_axis: bool,
-    output_direction: Option<[f64; 2]>,
-    primary_axis: [f64; 3],
-    /// `a` of the zero dynamics (one torque axis left only).
-    zero_dynamics_a: Option<f64>,
-    /// Their damping ratio (`None` when unstable or not applicable).
-    zero_dynamics_damping: Option<f64>,
-    hover_thrust_n: Vec<f64>,
+    inner: FailureMode,
 }
 
-impl From<FailureMode> for PyIndiFailureMode {
-    fn from(m: FailureMode) -> Self {
-        PyIndiFailureMode {
-            failed: m.failed,
-            healthy: m.healthy,
-            yaw_controlled: m.yaw_controlled,
-            single_axis: m.single_axis,
-            output_direction: m.output_direction,
-            primary_axis: m.primary_axis,
-            zero_dynamics_a: m.zero_dynamics.map(|(a, _)| a),
-            zero_dynamics_damping: m.zero_dynamics.and_then(|(_, zeta)| zeta),
-            hover_thrust_n: m.hover_thrust_n,
-        }
-    }
+impl PyIndiFailureMode {
+    const FIELDS: &'static [&'static str] = &[
+        "failed", "healthy", "yaw_controlled", "single_axis", "output_direction", "primary_axis",
+        "zero_dynamics_a", "zero_dynamics_damping", "hover_thrust_n",
+    ];
 }
+
+/// 0-based rotor indices as rotor numbers (from 1).
+fn numbered<'py>(py: Python<'py>, rotors: &[usize]) -> PyResult<Bound<'py, PyTuple>> {
+    PyTuple::new(py, rotors.iter().map(|k| k + 1))
+}
+
+value_protocol!(PyIndiFailureMode, {
+    /// The failed rotors, numbered from 1.
+    #[getter]
+    fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        numbered(py, &self.inner.failed)
+    }
+    /// The healthy rotors, numbered from 1.
+    #[getter]
+    fn healthy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        numbered(py, &self.inner.healthy)
+    }
+    #[getter]
+    fn yaw_controlled(&self) -> bool {
+        self.inner.yaw_controlled
+    }
+    #[getter]
+    fn single_axis(&self) -> bool {
+        self.inner.single_axis
+    }
+    /// The controlled output direction (single axis only), body x-y plane.
+    #[getter]
+    fn output_direction(&self) -> Option<(f64, f64)> {
+        self.inner.output_direction.map(|[x, y]| (x, y))
+    }
+    /// The primary axis in the body frame.
+    #[getter]
+    fn primary_axis(&self) -> (f64, f64, f64) {
+        let [x, y, z] = self.inner.primary_axis;
+        (x, y, z)
+    }
+    /// `a` of the zero dynamics (one torque axis left only).
+    #[getter]
+    fn zero_dynamics_a(&self) -> Option<f64> {
+        self.inner.zero_dynamics.map(|(a, _)| a)
+    }
+    /// Their damping ratio (`None` when unstable or not applicable).
+    #[getter]
+    fn zero_dynamics_damping(&self) -> Option<f64> {
+        self.inner.zero_dynamics.and_then(|(_, zeta)| zeta)
+    }
+    /// Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
+    #[getter]
+    fn hover_thrust_n<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, &self.inner.hover_thrust_n)
+    }
+});
 
 /// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`
@@ -172,7 +209,7 @@ impl PyIndiController {
         self.inner
             .failure_modes()
             .into_iter()
-            .map(PyIndiFailureMode::from)
+            .map(|inner| PyIndiFailureMode { inner })
             .collect()
     }
 }

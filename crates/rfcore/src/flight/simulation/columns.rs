@@ -76,7 +76,7 @@ pub struct RunRecord {
     pub sensed: &'static str,
 }
 
-/// The batch's columns (the truth always; `measured` with sensor noise, the `estimate_*`
+/// The batch's columns (the truth always; `recorded_measurements` with sensor noise, the `estimate_*`
 /// columns and the saturation flags with sensing, else empty) and one [`RunRecord`] per run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BatchColumns<T> {
@@ -91,11 +91,13 @@ pub struct BatchColumns<T> {
     pub euler_rad: Column<T>,
     pub omega_rad_s: Column<T>,
     pub primary_axis: Column<T>,
-    pub command: Column<T>,
-    pub thrust_n: Column<T>,
+    /// The commands (N per rotor for fixed pitch; speed and pitch interleaved for variable pitch).
+    pub rotor_command: Column<T>,
+    /// The rotors' produced thrusts, N.
+    pub rotor_thrust_n: Column<T>,
     pub efficiency: Column<T>,
     /// The 12-element measured state vector (with sensor noise; width 0 without).
-    pub measured: Column<T>,
+    pub recorded_measurements: Column<T>,
     /// The estimate packed (position, velocity, quaternion w x y z, body rates; width 13).
     pub estimate_packed: Column<T>,
     /// The estimate's Z-Y-X Euler angles (width 3).
@@ -115,10 +117,10 @@ struct Slot<'a, T> {
     euler_rad: &'a mut [T],
     omega_rad_s: &'a mut [T],
     primary_axis: &'a mut [T],
-    command: &'a mut [T],
-    thrust_n: &'a mut [T],
+    rotor_command: &'a mut [T],
+    rotor_thrust_n: &'a mut [T],
     efficiency: &'a mut [T],
-    measured: &'a mut [T],
+    recorded_measurements: &'a mut [T],
     estimate_packed: &'a mut [T],
     estimate_euler_rad: &'a mut [T],
     estimate_std: &'a mut [T],
@@ -181,11 +183,11 @@ fn fill<T: Sample>(
         put(slot.euler_rad, 3, at, s.euler_rad());
         put(slot.omega_rad_s, 3, at, s.omega_rad_s.into());
         put(slot.primary_axis, 3, at, s.primary_axis().into());
-        put_slice(slot.command, count, at, &run.commands[j * count..(j + 1) * count]);
-        put_slice(slot.thrust_n, m, at, &run.thrust_n[j * m..(j + 1) * m]);
+        put_slice(slot.rotor_command, count, at, &run.commands[j * count..(j + 1) * count]);
+        put_slice(slot.rotor_thrust_n, m, at, &run.thrust_n[j * m..(j + 1) * m]);
         put_slice(slot.efficiency, m, at, &run.efficiency[j * m..(j + 1) * m]);
         if !run.measured.is_empty() {
-            put_slice(slot.measured, STATE_DIM, at, &run.measured[j * STATE_DIM..(j + 1) * STATE_DIM]);
+            put_slice(slot.recorded_measurements, STATE_DIM, at, &run.measured[j * STATE_DIM..(j + 1) * STATE_DIM]);
         }
         if let Some(row) = sensing_rows.as_ref().and_then(|r| r.get(j)) {
             put(slot.estimate_packed, 13, at, row.state.to_packed());
@@ -235,10 +237,10 @@ pub fn simulate_batch_columns<T: Sample>(
         euler_rad: Column::new(n, slot_rows, 3),
         omega_rad_s: Column::new(n, slot_rows, 3),
         primary_axis: Column::new(n, slot_rows, 3),
-        command: Column::new(n, slot_rows, count),
-        thrust_n: Column::new(n, slot_rows, m),
+        rotor_command: Column::new(n, slot_rows, count),
+        rotor_thrust_n: Column::new(n, slot_rows, m),
         efficiency: Column::new(n, slot_rows, m),
-        measured: Column::new(n, slot_rows, noise),
+        recorded_measurements: Column::new(n, slot_rows, noise),
         estimate_packed: Column::new(n, slot_rows, packed),
         estimate_euler_rad: Column::new(n, slot_rows, euler),
         estimate_std: Column::new(n, slot_rows, std),
@@ -249,8 +251,8 @@ pub fn simulate_batch_columns<T: Sample>(
     let w = |c: &Column<T>| slot_rows * c.width;
     let lens = [
         w(&out.position_m), w(&out.velocity_m_s), w(&out.quaternion), w(&out.euler_rad),
-        w(&out.omega_rad_s), w(&out.primary_axis), w(&out.command), w(&out.thrust_n),
-        w(&out.efficiency), w(&out.measured), w(&out.estimate_packed),
+        w(&out.omega_rad_s), w(&out.primary_axis), w(&out.rotor_command), w(&out.rotor_thrust_n),
+        w(&out.efficiency), w(&out.recorded_measurements), w(&out.estimate_packed),
         w(&out.estimate_euler_rad), w(&out.estimate_std),
     ];
     let mut position = slots(&mut out.position_m.values, n, lens[0]).into_iter();
@@ -259,10 +261,10 @@ pub fn simulate_batch_columns<T: Sample>(
     let mut euler_rad = slots(&mut out.euler_rad.values, n, lens[3]).into_iter();
     let mut omega = slots(&mut out.omega_rad_s.values, n, lens[4]).into_iter();
     let mut axis = slots(&mut out.primary_axis.values, n, lens[5]).into_iter();
-    let mut command = slots(&mut out.command.values, n, lens[6]).into_iter();
-    let mut thrust = slots(&mut out.thrust_n.values, n, lens[7]).into_iter();
+    let mut command = slots(&mut out.rotor_command.values, n, lens[6]).into_iter();
+    let mut thrust = slots(&mut out.rotor_thrust_n.values, n, lens[7]).into_iter();
     let mut efficiency = slots(&mut out.efficiency.values, n, lens[8]).into_iter();
-    let mut measured = slots(&mut out.measured.values, n, lens[9]).into_iter();
+    let mut measured = slots(&mut out.recorded_measurements.values, n, lens[9]).into_iter();
     let mut est_packed = slots(&mut out.estimate_packed.values, n, lens[10]).into_iter();
     let mut est_euler = slots(&mut out.estimate_euler_rad.values, n, lens[11]).into_iter();
     let mut est_std = slots(&mut out.estimate_std.values, n, lens[12]).into_iter();
@@ -276,7 +278,7 @@ pub fn simulate_batch_columns<T: Sample>(
         else {
             return Err(RfError::invalid("runs", "internal: a column has too few slots"));
         };
-        let (Some(primary_axis), Some(command), Some(thrust_n), Some(efficiency), Some(measured)) =
+        let (Some(primary_axis), Some(rotor_command), Some(rotor_thrust_n), Some(efficiency), Some(recorded_measurements)) =
             (axis.next(), command.next(), thrust.next(), efficiency.next(), measured.next())
         else {
             return Err(RfError::invalid("runs", "internal: a column has too few slots"));
@@ -287,8 +289,8 @@ pub fn simulate_batch_columns<T: Sample>(
             return Err(RfError::invalid("runs", "internal: a column has too few slots"));
         };
         run_slots.push(Slot {
-            position_m, velocity_m_s, quaternion, euler_rad, omega_rad_s, primary_axis, command,
-            thrust_n, efficiency, measured, estimate_packed, estimate_euler_rad, estimate_std,
+            position_m, velocity_m_s, quaternion, euler_rad, omega_rad_s, primary_axis, rotor_command,
+            rotor_thrust_n, efficiency, recorded_measurements, estimate_packed, estimate_euler_rad, estimate_std,
             gyro_saturated, accel_saturated,
         });
     }

@@ -51,6 +51,23 @@ pub enum DivergenceReason {
 }
 
 impl DivergenceReason {
+    /// Every reason, in declaration order (what [`DivergenceReason::from_name`] accepts).
+    pub const ALL: [DivergenceReason; 8] = [
+        DivergenceReason::Crashed,
+        DivergenceReason::NonFinite,
+        DivergenceReason::NonFiniteCommand,
+        DivergenceReason::Tilt,
+        DivergenceReason::AltitudeLoss,
+        DivergenceReason::Speed,
+        DivergenceReason::BodyRate,
+        DivergenceReason::StepSize,
+    ];
+
+    /// The reason whose [`DivergenceReason::name`] is `name`.
+    pub fn from_name(name: &str) -> Option<DivergenceReason> {
+        Self::ALL.into_iter().find(|r| r.name() == name)
+    }
+
     /// A short identifier (`"tilt"`, `"non-finite-command"`, ...).
     pub fn name(self) -> &'static str {
         match self {
