@@ -514,6 +514,7 @@ class SensingCounts:
         fused_measurements: int,
         rejected_measurements: int,
         late_measurements: int,
+        thinned_measurements: int,
     ) -> SensingCounts: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     @property
@@ -528,6 +529,8 @@ class SensingCounts:
     def rejected_measurements(self) -> int: ...
     @property
     def late_measurements(self) -> int: ...
+    @property
+    def thinned_measurements(self) -> int: ...
 
 @final
 class SimulationConfig:
