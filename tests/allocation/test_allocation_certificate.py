@@ -205,6 +205,20 @@ def test_settings_bad_input() -> None:
             rf.allocate(ke, [7.0, 0, 0, 0], **{field: value})
 
 
+def test_iteration_bounds_are_capped_where_ctrl_c_cannot_reach() -> None:
+    """No solver polls Ctrl-C inside one solve, so ``max_iterations`` has a ceiling (10,000, about
+    0.15 s of Clarabel on 16 actuators) instead of a silent clamp to 2^32 - 1 (issue 27); the
+    ceiling itself is accepted and solves, and the rule is the same for the active set."""
+    ke = rf.Airframe.preset("ke-quadcopter")
+    for limit in (10_001, 2**40):
+        for method in ("active-set", "clarabel"):
+            with pytest.raises(ValueError, match=r"^max_iterations: must be in 1\.\.=10000 .*, got " + str(limit)):
+                rf.allocate(ke, [7.0, 0.1, 0.0, 0.0], method=method, max_iterations=limit)
+    for method in ("active-set", "clarabel"):
+        capped = rf.allocate(ke, [7.0, 0.1, 0.0, 0.0], method=method, max_iterations=10_000)
+        assert capped.status == "optimal" and capped.certificate.holds
+
+
 def test_max_iterations_bounds_the_active_set() -> None:
     """``max_iterations`` bounds each active-set phase too: one iteration cannot solve a problem
     with saturated rotors; without the fallback's help the answer is not certified, with it the

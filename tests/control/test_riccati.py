@@ -382,6 +382,28 @@ def test_detectability_of_a_pair_balancing_would_overflow() -> None:
     assert shifted[0, 0] * 2.0**-1000 / shifted[1, 0] == 1e300
 
 
+def test_pbh_tests_refuse_a_subnormal_entry_and_see_the_smallest_normal_one() -> None:
+    """An oscillator seen through C = [0, c]: O = [C; CA] = [[0, c], [-c, 0]] has rank 2 for any
+    c != 0, so the pair is detectable. c = 1e-300 is seen (the scaling lifts it); c = 1e-310 lies
+    beyond the 2^+-1000 scaling and read as 0 (not detectable, wrong) after an overflow warning in
+    the complex pencil's norms (long hostile run, 2026-11-28): it is refused by name instead. The
+    norms are exact for a complex column whose peak is subnormal (a power-of-two scaling)."""
+    import warnings
+
+    from rotorfault.control.stabilisability import _norms
+
+    oscillator = np.array([[0.0, 1.0], [-1.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert detectability(oscillator, [[0.0, 1e-300]]).holds
+        with pytest.raises(ValueError, match=r"^c: an entry of 1e-310 is subnormal"):
+            detectability(oscillator, [[0.0, 1e-310]])
+        with pytest.raises(ValueError, match=r"^b: an entry of -4.94e-324 is subnormal"):
+            stabilisability(oscillator, [[0.0], [-5e-324]])
+        column = np.array([[3e-310 + 4e-310j], [0.0]])
+        assert _norms(column, 0)[0] == abs(3e-310 + 4e-310j)
+
+
 def test_discrete_stabilisability_tests_the_unit_circle() -> None:
     """Discrete: |lambda| >= 1 needs an input (a mode at 0.5 does not, one at -1 does)."""
     a = np.diag([0.5, -1.0])

@@ -132,6 +132,9 @@ def test_bad_input_names_the_field() -> None:
     g = _plants()[0]
     with pytest.raises(ValueError, match="factor: must be finite and > 1"):
         ncfsyn(g, np.eye(2), factor=1.0)
+    # gamma^2 must be a float (a factor of 1e300 raised a bare OverflowError; long hostile run).
+    with pytest.raises(ValueError, match=r"^factor: gamma = factor \* gamma_min = 1e\+300 \* [0-9.]+ must be at most 1e\+150"):
+        ncfsyn(g, np.eye(2), factor=1e300)
     with pytest.raises(ValueError, match="w1: expected 2 outputs"):
         ncfsyn(g, np.eye(3))
     with pytest.raises(TypeError, match="plant: expected"):

@@ -59,9 +59,7 @@ impl PyAllocationSettings {
             .tolerance(self.clarabel_tolerance)
             .map_err(|e| to_py_err(rename(e, "tolerance", "clarabel_tolerance")))?;
         if let Some(limit) = self.max_iterations {
-            settings = settings
-                .max_iterations(u32::try_from(limit).unwrap_or(u32::MAX))
-                .map_err(to_py_err)?;
+            settings = settings.max_iterations(limit).map_err(to_py_err)?;
         }
         Ok(settings)
     }

@@ -833,3 +833,19 @@ fn permutation_invariance_and_all_paths_agree() {
         }
     }
 }
+
+/// No solver polls the cancel token inside one solve: the iteration bound has a ceiling, the same
+/// for both solvers, refused by name above it (a user's 10^9 was accepted, and 2^32 clamped).
+#[test]
+fn iteration_bounds_have_one_ceiling() {
+    use rfcore::allocation::MAX_ITERATIONS;
+    let problem = AllocationProblem::new(ke_matrix(), &[1.0; 4], &[0.0; 4], &[8.5; 4]).unwrap();
+    let solver = ActiveSetSolver::new(&problem);
+    assert!(solver.clone().with_max_iterations(MAX_ITERATIONS).is_ok());
+    let refused = solver.with_max_iterations(MAX_ITERATIONS + 1).unwrap_err();
+    assert!(refused.to_string().contains("max_iterations"), "{refused}");
+    let clarabel = ClarabelSettings::default();
+    assert!(clarabel.max_iterations(MAX_ITERATIONS).is_ok());
+    assert!(clarabel.max_iterations(MAX_ITERATIONS + 1).is_err());
+    assert!(clarabel.max_iterations(0).is_err());
+}

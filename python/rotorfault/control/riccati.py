@@ -195,13 +195,19 @@ def riccati_residual(
     The check reads the first: relative to ``Q`` alone, a correct solution of a near-uncontrollable
     problem shows the rounding of terms far larger than ``Q`` (a coupling of 1e-4 gives
     ``||X|| = 1e8 ||Q||`` and 5e-4 ``||Q||``; README decisions)."""
-    if discrete:
-        terms = [a.T @ x @ a, -x, -(a.T @ x @ b @ gain), q]
-    else:
-        terms = [a.T @ x, x @ a, -(x @ b @ gain), q]
-    residual = _norm(sum(terms))
+    # A diverged Newton step can overflow a product: the term is then inf (or nan), which _norm
+    # passes on and design_lqr's finite-residual check refuses by name, so numpy's warning adds nothing.
+    with np.errstate(over="ignore", invalid="ignore"):
+        if discrete:
+            terms = [a.T @ x @ a, -x, -(a.T @ x @ b @ gain), q]
+        else:
+            terms = [a.T @ x, x @ a, -(x @ b @ gain), q]
+        total = sum(terms)
+    residual = _norm(total)
     size = sum(_norm(term) for term in terms)
     q_size = _norm(q)
+    if not (math.isfinite(residual) and math.isfinite(size)):  # an overflowed term: no digits left
+        return math.inf, math.inf
     # Q = 0 (allowed: semi-definite) has no relative residual; any residual is then infinitely large.
     relative_q = residual / q_size if q_size > 0 else (math.inf if residual > 0 else 0.0)
     return residual / size if size > 0 else 0.0, relative_q

@@ -327,11 +327,19 @@ def four_block(plant: Any, controller: Any) -> ct.StateSpace:
                         outputs=[*g.output_labels, *g.input_labels], name="four-block")
 
 
+#: Largest ``gamma`` the central controller is built at: ``gamma^2`` (1e300) stays a float beside
+#: ``X Z``. Far above any useful design: the tolerated perturbation ``1 / gamma`` is then 1e-150.
+MAX_GAMMA = 1e150
+
+
 def _central_controller(gs: ct.StateSpace, factor: float) -> tuple[ct.StateSpace, float, float, FloatArray, FloatArray, float, float]:
     a, b, c, d = _matrices(gs)
     x, z, rx, rz = _riccati(gs)
     gamma_min = _gamma_from_xz(x, z)
     gamma = factor * gamma_min
+    if not gamma <= MAX_GAMMA:  # gamma^2 below must stay a float (a factor of 1e300 overflowed it)
+        raise ValueError(f"factor: gamma = factor * gamma_min = {factor:g} * {gamma_min:.6g} must be at most {MAX_GAMMA:g} "
+                         "(the central controller needs gamma^2 as a float; a factor of 1.05-1.5 is the usual choice)")
     s = np.eye(b.shape[1]) + d.T @ d
     f = -np.linalg.solve(s, d.T @ c + b.T @ x)
     n = a.shape[0]

@@ -203,6 +203,12 @@ def _pair(a: npt.ArrayLike, b: npt.ArrayLike, b_name: str) -> tuple[FloatArray, 
     for name, m in (("a", am), (b_name, bm)):
         if not np.all(np.isfinite(m)):
             raise ValueError(f"{name}: must be finite")
+        # The scale-free rank scales by at most 2^+-1000, which cannot lift a subnormal entry to
+        # the others' level: C = [0, 1e-310] of an oscillator read as not detectable (it is).
+        tiny = m[(m != 0) & (np.abs(m) < np.finfo(np.float64).tiny)]
+        if tiny.size:
+            raise ValueError(f"{name}: an entry of {tiny[0]:.3g} is subnormal (nonzero and below "
+                             f"{np.finfo(np.float64).tiny:.3g}, the smallest normal double): rescale the states or write 0")
     return am, bm
 
 
@@ -249,11 +255,19 @@ def equilibrate(matrix: npt.NDArray[np.generic]) -> tuple[npt.NDArray[np.generic
 
 
 def _norms(matrix: npt.NDArray[np.generic], axis: int) -> FloatArray:
-    """Euclidean norms along ``axis``, each taken on its vector divided by its largest entry: no
-    overflow for entries of 1e300 (squares would be inf, and the scaling would zero the row)."""
+    """Euclidean norms along ``axis``, each taken on its vector scaled to entries below 1 by a
+    power of two: no overflow for entries of 1e300 (squares would be inf, and the scaling would
+    zero the row), none for subnormal ones."""
     peak = np.max(np.abs(matrix), axis=axis, initial=0.0)
-    divisor = np.expand_dims(np.where(peak > 0, peak, 1.0), axis)
-    return np.asarray(peak * np.linalg.norm(matrix / divisor, axis=axis), dtype=np.float64)
+    # Divided by the power of two at or above the peak, by exponent (exact): a complex entry divided
+    # by a subnormal peak overflowed inside numpy's complex division (long run, 2026-11-28).
+    _, exponent = np.frexp(np.where(peak > 0, peak, 1.0))
+    shift = -np.expand_dims(exponent, axis)
+    if np.iscomplexobj(matrix):
+        unit = np.ldexp(matrix.real, shift) + 1j * np.ldexp(matrix.imag, shift)
+    else:
+        unit = np.ldexp(np.asarray(matrix, dtype=np.float64), shift)
+    return np.asarray(np.ldexp(np.linalg.norm(unit, axis=axis), exponent), dtype=np.float64)
 
 
 def _bounded(total: FloatArray, step: FloatArray) -> FloatArray:

@@ -694,7 +694,9 @@ def _regressions(t: dict[str, Target]) -> None:
                    Call(rf.ncfsyn, (_hidden_first_order(), np.eye(1)), {"factor": 1.01}, frozenset()),
                    # C = [1, 1e-310]: the balancing's ratio 0.5 / 1e-310 overflowed to inf, round(inf) (long run, 2026-11-28).
                    Call(lambda: rf.ncfsyn(_seen_subnormally(),
-                                          np.eye(1), factor=1.01), (), {}, frozenset({"plant"}))),
+                                          np.eye(1), factor=1.01), (), {}, frozenset({"plant"})),
+                   # gamma = 1e300 * gamma_min: gamma**2 raised a bare OverflowError (long run, 2026-11-28).
+                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"}))),
         # An arm angle of 1e-309 rad left a subnormal in the effectiveness matrix, which the allocator
         # refused as "matrix[1, 0]" (a matrix the user never wrote; long run, 2026-11-28).
         "lqr_hover_allocated": (Call(lambda: rf.lqr_hover_allocated(rf.Simulator(_tiny_angle()), rf.Allocator(_tiny_angle())), (), {}, frozenset()),),
@@ -707,13 +709,18 @@ def _regressions(t: dict[str, Target]) -> None:
                        # r = 1e-310: an infinite gain, then NaN in the Riccati residual (a RuntimeWarning);
                        # refused as subnormal now; a plant of 1e300 by the control room's scale rule.
                        Call(control.design_lqr, (_first_order(), np.eye(1), np.array([[1e-310]])), {}, frozenset({"r"})),
-                       Call(control.design_lqr, ((np.array([[1e300]]), np.eye(1)), np.eye(1), np.eye(1)), {}, frozenset({"plant A"}))),
+                       Call(control.design_lqr, ((np.array([[1e300]]), np.eye(1)), np.eye(1), np.eye(1)), {}, frozenset({"plant A"})),
+                       # Q / R = 1e301: a Newton step's X B K overflowed in the residual (a RuntimeWarning; long run, 2026-11-28).
+                       Call(control.design_lqr, (_first_order(), np.array([[1e300]]), np.array([[0.1]])), {}, frozenset({"q", "r"}))),
         # Row norms of 1e300 entries overflowed (a RuntimeWarning, and the balancing zeroed the row).
         "detectability": (Call(control.detectability, (np.zeros((2, 2)), np.array([[0.0, 1e300]]))),
                           # The equilibration's cumulative factors overflowed next to a subnormal entry.
                           Call(control.detectability, (np.zeros((2, 2)), np.array([[1.0, 1e-310]]))),
                           # Balancing an A of 1e300 divided a row of C^T by 2^-1000: overflow (long run, 2026-11-28).
-                          Call(control.detectability, (np.array([[0.0, 0.0], [1e300, 1.0]]), np.array([[0.0, 1e300]])))),
+                          Call(control.detectability, (np.array([[0.0, 0.0], [1e300, 1.0]]), np.array([[0.0, 1e300]]))),
+                          # A complex pencil column divided by its subnormal peak overflowed, and the
+                          # subnormal entry (beyond the 2^+-1000 scaling) read as 0: not detectable (long run, 2026-11-28).
+                          Call(control.detectability, (np.array([[0.0, 1.0], [-1.0, 0.0]]), np.array([[0.0, 1e-310]])), {}, frozenset({"c"}))),
         # scipy's matrix_balance warned (a cast of its unused permutation) on an entry of 1e-282.
         "stabilisability": (Call(control.stabilisability, (np.array([[0.0, 0.0], [1.0, 9.947778682040334e-282]]), np.zeros((2, 1)))),),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int

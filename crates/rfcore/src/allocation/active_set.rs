@@ -43,7 +43,9 @@ pub use crate::allocation::factorisation::RANK_TOL;
 use crate::allocation::factorisation::{
     apply_q, apply_qt, back_substitute, householder_qr, FreeSetFactor,
 };
-use crate::allocation::problem::{AllocationProblem, AllocationStatus, SolvedBy, MAX_VIRTUAL};
+use crate::allocation::problem::{
+    require_iteration_bound, AllocationProblem, AllocationStatus, SolvedBy, MAX_VIRTUAL,
+};
 use crate::allocation::scaling::{ScaledLeastSquares, BIG_WORK, N, ROWS, SMALL_WORK};
 use crate::error::{Result, RfError};
 
@@ -96,7 +98,7 @@ pub struct ActiveSetSettings {
 }
 
 impl ActiveSetSettings {
-    /// The rules: `tolerance > 0` and finite, `max_iterations >= 1` when given.
+    /// The rules: `tolerance > 0` and finite, `max_iterations` in 1..=[`crate::allocation::MAX_ITERATIONS`] when given.
     pub fn check(&self) -> Result<()> {
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(RfError::invalid(
@@ -104,8 +106,8 @@ impl ActiveSetSettings {
                 format!("must be > 0 and finite, got {}", self.tolerance),
             ));
         }
-        if self.max_iterations == Some(0) {
-            return Err(RfError::invalid("max_iterations", "must be >= 1, got 0"));
+        if let Some(limit) = self.max_iterations {
+            require_iteration_bound(limit)?;
         }
         Ok(())
     }
@@ -178,11 +180,9 @@ impl ActiveSetSolver {
         }
     }
 
-    /// Replaces the iteration bound per phase (at least 1).
+    /// Replaces the iteration bound per phase (1..=[`crate::allocation::MAX_ITERATIONS`]).
     pub fn with_max_iterations(mut self, max_iterations: usize) -> Result<Self> {
-        if max_iterations == 0 {
-            return Err(RfError::invalid("max_iterations", "must be >= 1, got 0"));
-        }
+        require_iteration_bound(max_iterations)?;
         self.max_iterations = max_iterations;
         self.settings.max_iterations = Some(max_iterations);
         Ok(self)

@@ -19,7 +19,7 @@ use clarabel::solver::{
 use nalgebra::DMatrix;
 
 use crate::airframe::Airframe;
-use crate::allocation::problem::{AllocationProblem, AllocationStatus};
+use crate::allocation::problem::{require_iteration_bound, AllocationProblem, AllocationStatus};
 use crate::analysis::controllability::ControlAxes;
 use crate::error::{require_all_finite, require_entries, Result, RfError};
 
@@ -56,11 +56,9 @@ impl ClarabelSettings {
         self.tolerance = tolerance;
         Ok(self)
     }
-    pub fn max_iterations(mut self, max_iterations: u32) -> Result<Self> {
-        if max_iterations == 0 {
-            return Err(RfError::invalid("max_iterations", "must be >= 1, got 0"));
-        }
-        self.max_iterations = max_iterations;
+    pub fn max_iterations(mut self, max_iterations: usize) -> Result<Self> {
+        require_iteration_bound(max_iterations)?;
+        self.max_iterations = max_iterations as u32; // <= MAX_ITERATIONS, so it fits
         Ok(self)
     }
 

@@ -61,4 +61,6 @@ pub use allocator::{
 pub use certificate::Certificate;
 pub use pinv::{weighted_pseudo_inverse, WeightedPseudoInverse};
 pub(crate) use problem::check_rows;
-pub use problem::{AllocationProblem, AllocationStatus, SolvedBy, MAX_ACTUATORS, MAX_VIRTUAL};
+pub use problem::{
+    AllocationProblem, AllocationStatus, SolvedBy, MAX_ACTUATORS, MAX_ITERATIONS, MAX_VIRTUAL,
+};
