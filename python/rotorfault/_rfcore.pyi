@@ -515,6 +515,7 @@ class SensingCounts:
         fused_measurements: int,
         rejected_measurements: int,
         late_measurements: int,
+        thinned_measurements: int,
     ) -> SensingCounts: ...
     FIELDS: ClassVar[list[str]]
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
@@ -530,6 +531,8 @@ class SensingCounts:
     def rejected_measurements(self) -> int: ...
     @property
     def late_measurements(self) -> int: ...
+    @property
+    def thinned_measurements(self) -> int: ...
 
 @final
 class SimulationConfig:

@@ -13,10 +13,9 @@ from rotorfault.papers import lanzon, wang
 MOCAP_1KHZ = rf.Sensing(imu_rate_hz=1000.0)
 
 
-@pytest.mark.parametrize(("scenario", "case"), [("A", "a"), ("B", "a"), ("B", "c")])
+@pytest.mark.parametrize(("scenario", "case"), [("B", "a"), ("B", "c")])
 def test_lanzon_keeps_its_verdict_on_mocap(scenario: str, case: str) -> None:
-    """Measured (final error truth / mocap): A-a level / level; B-a holds 0.000 / 0.003 m; B-c
-    holds 0.003 / 0.014 m."""
+    """Measured (final error truth / mocap): B-a holds 0.000 / 0.002 m; B-c holds 0.003 / 0.010 m."""
     truth = lanzon.fly(scenario, case)
     sensed = lanzon.fly(scenario, case, sensing=MOCAP_1KHZ)
     assert sensed.trajectory.sensed == "mocap"
@@ -34,12 +33,14 @@ def test_lanzon_design_b_in_scenario_b_is_marginal_and_mocap_tips_it_into_circli
     assert (truth.outcome, sensed.outcome) == ("holds-position", "circling")
 
 
-def test_lanzon_scenario_a_is_lost_with_the_imu_slower_than_its_loop() -> None:
-    """The physics the sensors bring: with the IMU at 500 Hz under Lanzon's 1 kHz loop, design
-    (a) in Scenario A (the spinning vehicle levelling from a tilt) is lost by tilt, where the
-    truth and a 1 kHz IMU level it."""
+def test_lanzon_design_a_in_scenario_a_is_lost_by_tilt_on_mocap() -> None:
+    """Design (a) in Scenario A (the spinning vehicle levelling from a tilt) levels on the truth
+    and is lost by tilt on 1 kHz mocap (seed 0). The case is marginal on sensors: over seeds 0-5,
+    1 kHz mocap gave tilt 4, body-rate 1, level 1 and the IMU at 500 Hz level 3, tilt 1,
+    body-rate 1, crashed 1. Before the estimator fused at most one fix per 10 ms (every 240 Hz fix
+    fused, 30 % less attitude error), seed 0 levelled at 1 kHz and tilted at 500 Hz."""
     assert lanzon.fly("A", "a").outcome == "level"
-    assert lanzon.fly("A", "a", sensing=rf.Sensing()).outcome == "tilt"
+    assert lanzon.fly("A", "a", sensing=MOCAP_1KHZ).outcome == "tilt"
 
 
 @pytest.mark.parametrize("number", [1, 2, 3])
@@ -59,8 +60,9 @@ def test_wang_lqr_flies_on_mocap(number: int) -> None:
 
 
 def test_lanzon_report_table_flags_a_verdict_that_sensing_changes() -> None:
+    # Seed 0 (previous test): A-a tilts on 1 kHz mocap and levels with the IMU at 500 Hz.
     truth = [lanzon.fly("A", "a")]
-    same = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=lanzon.MOCAP_AT_LOOP_RATE)])
-    slow_imu = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=rf.Sensing())])
+    lost = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=lanzon.MOCAP_AT_LOOP_RATE)])
+    same = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=rf.Sensing())])
+    assert lost.rows[0][3:6] == ("level", "tilt", "differs")
     assert same.rows[0][3:6] == ("level", "level", "same")
-    assert slow_imu.rows[0][3:6] == ("level", "tilt", "differs")

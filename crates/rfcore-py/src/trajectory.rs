@@ -235,6 +235,7 @@ counts_class!(
     fused_measurements,
     rejected_measurements,
     late_measurements,
+    thinned_measurements,
 );
 
 impl From<&SensingRecord> for PySensingCounts {
@@ -246,6 +247,7 @@ impl From<&SensingRecord> for PySensingCounts {
             fused_measurements: r.fusion.fused,
             rejected_measurements: r.fusion.rejected,
             late_measurements: r.fusion.late,
+            thinned_measurements: r.fusion.thinned,
         }
     }
 }

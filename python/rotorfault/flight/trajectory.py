@@ -264,6 +264,7 @@ class Trajectory(_rfcore.Trajectory, Tabular):
                 "imu_samples": c.imu_samples, "gyro_saturated_samples": c.gyro_saturated_samples,
                 "accel_saturated_samples": c.accel_saturated_samples, "fused_measurements": c.fused_measurements,
                 "rejected_measurements": c.rejected_measurements, "late_measurements": c.late_measurements,
+                "thinned_measurements": c.thinned_measurements,
             }}
         return {
             "kind": "trajectory",

@@ -32,13 +32,16 @@ pub struct Estimate {
     pub accel_saturated: bool,
 }
 
-/// Measurements fused, refused by the innovation gate, or dropped as late (valid before the
-/// fusion horizon when they arrived).
+/// Measurements fused, refused by the innovation gate, dropped as late (valid before the
+/// fusion horizon when they arrived), and position fixes left out by the fusion-rate limit
+/// (`EstimatorSettings::position_fusion_period_s`; each counts its position, velocity and
+/// attitude once).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FusionCounts {
     pub fused: u64,
     pub rejected: u64,
     pub late: u64,
+    pub thinned: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -89,6 +92,8 @@ pub struct Estimator {
     gyro_filtered: Vector3<f64>,
     counts: FusionCounts,
     saturated_samples: u64,
+    /// The fusion slot (`position_fusion_period_s`) of the newest position fix taken.
+    fix_slot: f64,
 }
 
 impl Estimator {
@@ -145,6 +150,7 @@ impl Estimator {
             gyro_filtered: Vector3::zeros(),
             counts: FusionCounts::default(),
             saturated_samples: 0,
+            fix_slot: f64::NAN,
         })
     }
 
@@ -196,8 +202,18 @@ impl Estimator {
     }
 
     /// Queues a position source's measurement (position, and velocity and attitude where it has
-    /// them) for fusion at its time of validity.
+    /// them) for fusion at its time of validity, unless a fix of the same fusion slot was taken
+    /// (`position_fusion_period_s`: then it is counted as thinned).
     pub fn push_position(&mut self, sample: &PositionSample) {
+        let period = self.settings.position_fusion_period_s;
+        if period > 0.0 {
+            let slot = (sample.valid_at_s / period).floor();
+            if slot == self.fix_slot {
+                self.counts.thinned += 1;
+                return;
+            }
+            self.fix_slot = slot;
+        }
         self.queue(sample.valid_at_s, Measurement::Position(sample.position_m));
         if let Some(v) = sample.velocity_m_s {
             self.queue(sample.valid_at_s, Measurement::Velocity(v));

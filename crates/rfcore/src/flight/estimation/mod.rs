@@ -35,7 +35,9 @@
 //! the aiding measurements teach the bias state the excess.
 //!
 //! # Measurements
-//! Each fused at its time of validity, gated on the normalised innovation squared:
+//! Each fused at its time of validity, gated on the normalised innovation squared; a position
+//! source's fixes at most one per `position_fusion_period_s` slot (10 ms: EKF2's one
+//! external-vision fix per filter update; the others are counted as thinned):
 //!
 //! | measurement | residual | Jacobian (block) |
 //! |---|---|---|

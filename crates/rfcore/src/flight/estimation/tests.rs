@@ -814,7 +814,44 @@ fn a_measurement_older_than_the_horizon_is_counted_late_not_fused() {
         FusionCounts {
             fused: 1,
             rejected: 0,
-            late: 1
+            late: 1,
+            thinned: 0
         }
     );
+}
+
+#[test]
+fn position_fixes_are_fused_at_most_once_per_fusion_slot() {
+    // 10 ms slots: of fixes valid at 11, 14 and 19 ms only the first is taken, the next slot's
+    // at 21 ms is taken again; without the limit all four are fused.
+    let motion = AnalyticMotion::hover();
+    let fly = |period_s: f64| {
+        let settings = EstimatorSettings {
+            position_fusion_period_s: period_s,
+            ..EstimatorSettings::default()
+        };
+        let mut estimator = Estimator::new(settings, &motion.state_at(0.0)).unwrap();
+        let mut imu = crate::flight::sensors::Imu::new(ImuProfile::default(), 2).unwrap();
+        for k in 0..=40 {
+            let t = k as f64 * 1e-3;
+            for valid_at_s in [0.011, 0.014, 0.019, 0.021] {
+                if (valid_at_s - t).abs() < 1e-9 {
+                    estimator.push_position(&crate::flight::sensors::PositionSample {
+                        valid_at_s,
+                        arrives_at_s: t,
+                        position_m: motion.state_at(valid_at_s).position_m,
+                        velocity_m_s: None,
+                        attitude: None,
+                    });
+                }
+            }
+            let s = imu.sample(&motion.imu_truth_at(t));
+            estimator.push_imu(&s).unwrap();
+        }
+        estimator.counts()
+    };
+    let limited = fly(0.01);
+    assert_eq!((limited.fused, limited.thinned), (2, 2), "{limited:?}");
+    let every = fly(0.0);
+    assert_eq!((every.fused, every.thinned), (4, 0), "{every:?}");
 }
