@@ -36,7 +36,7 @@ from rotorfault.control import ke  # noqa: E402
 RUNS = 16
 DURATION_S = 10.0
 TARGET_RATIO = 3.0
-COLUMNS = ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust", "efficiency",
+COLUMNS = ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust", "efficiency",
            "rows_on_grid", "off_grid_row")
 
 

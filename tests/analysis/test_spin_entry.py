@@ -103,6 +103,26 @@ def test_the_rotors_angular_momentum_counts() -> None:
     assert huge.reachable and huge.spin_rate_needed_rad_s == 0.0
 
 
+def test_nothing_is_excluded_outside_the_derivations_assumptions() -> None:
+    """The bound needs thrusts that cannot reverse, J_x = J_y and no rotor inertia (module notes).
+    A review's counterexample: Ke's quadcopter with reversible rotors (-8.5..8.5 N) spins up twice
+    as fast (T3 = -T4 both yaw the same way) and no direction c bounds the tilt: it was excluded
+    with the fixed-pitch numbers. Each assumption broken alone lifts the exclusion."""
+    airframe, best = _best([1, 2])
+    assert not entry_from_hover(airframe, best, drag=KE_DRAG).reachable
+    reversible = airframe.with_parameters(min_thrust_n=[-8.5] * 4)
+    entry = entry_from_hover(reversible, best, drag=KE_DRAG)
+    assert entry.reachable and entry.spin_up_time_s == pytest.approx(
+        entry_from_hover(airframe, best, drag=KE_DRAG).spin_up_time_s / 2, rel=1e-12)
+    from rotorfault.analysis.spin_entry import _within_assumptions
+
+    live = np.array([False, False, True, True])
+    assert _within_assumptions(airframe, np.array([0.0056, 0.0056, 0.0104]), live, 0.0)
+    assert not _within_assumptions(airframe, np.array([0.0056, 0.0057, 0.0104]), live, 0.0)
+    spinning_rotors = rf.Drag(rotational_n_m_s=2.8e-3, rotor_inertia_kg_m2=1e-6)
+    assert entry_from_hover(airframe, best, drag=spinning_rotors, actuator=rf.FixedPitchActuator(thrust_coefficient_n_s2=1.3e-5)).reachable
+
+
 def test_bad_input_is_refused_by_field() -> None:
     airframe, best = _best([1, 2])
     with pytest.raises(TypeError, match="^solution: "):

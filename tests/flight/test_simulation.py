@@ -336,7 +336,7 @@ def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: r
               for i in range(9)]
     auto, scalar = (rf.simulate_batch(sim, starts, 1.5, controllers=lqr, faults=faults, record_every=2, lanes=lanes)
                     for lanes in ("auto", "scalar"))
-    for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "command", "thrust",
+    for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
                  "efficiency", "rows_on_grid", "off_grid_row"):
         np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)
     np.testing.assert_array_equal(auto.divergence_time, scalar.divergence_time)

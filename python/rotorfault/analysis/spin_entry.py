@@ -1,9 +1,17 @@
 """Can a vehicle enter its spinning relaxed hover from hover? (issue 30). A relaxed hover
 (:func:`rotorfault.analysis.relaxed_hover`) is a periodic solution a linear feedback holds; it
 says nothing of how the vehicle gets there after the failure, level and not yet spinning. This
-module's test is an *obstruction*: it proves, for a stated tilt limit, that no thrust history of
-the remaining rotors spins the vehicle up to the solution's yaw rate before the tilt passes the
-limit; where it proves nothing, entry is not excluded (it is not promised either).
+module's test is an *obstruction*: a bound, under the assumptions below, that no thrust history of
+the remaining rotors spins the vehicle up to the solution's yaw rate before the tilt passes a
+stated limit; where it excludes nothing, entry is not promised either.
+
+Assumptions (outside them nothing is excluded): thrusts that cannot reverse, ``J_x = J_y``, no
+rotor inertia. Neglected within them (a review's list, not yet bounded): the tilt read as the
+planar sum of the roll/pitch angles (a bending path reaches less true tilt than its projection:
+two 1.11 rad legs at right angles project to 90 degrees, tilt 78.6), and rotational damping,
+which on Ke's quadcopter acts faster on roll (``J_x / k_r`` 2 s) than on yaw (3.7 s), lowering the
+ratio by about 7 % over 0.3 s. Where the bound excludes entry with a wide margin (Ke's
+quadcopter: at most 2.33 rad/s by 90 degrees against 18.19 needed) these do not decide it.
 
 The argument (body axes FRD, principal inertia ``J``; rotor ``i``'s roll/pitch angular
 acceleration per newton ``G_i = (L_i / J_x, M_i / J_y)``, its yaw angular acceleration per newton
@@ -44,8 +52,8 @@ The tilt limit: 90 degrees, the simulator's (``rotorfault.DivergenceLimits().max
 past it a flight is lost), :data:`ENTRY_TILT_LIMIT_RAD`. The threshold is the physics' own, not
 fitted: the bound is checked against flights on every preset (``tests/studies/test_agreement.py``),
 on a Ke quadcopter whose rotors yaw more than they roll (``k_mu`` 0.08 m, arm 0.06 m), where it
-proves nothing and the relaxed hover LQR does enter the spin from hover, and on Ke's own, where it
-proves the obstruction and no controller enters.
+excludes nothing and the relaxed hover LQR does enter the spin from hover, and on Ke's own, where it
+excludes entry and no controller enters.
 """
 
 from __future__ import annotations
@@ -70,7 +78,7 @@ STEPS = 4000
 @dataclass(frozen=True)
 class EntryFromHover:
     """The evidence of :func:`entry_from_hover` (module notes): ``reachable`` is ``False`` only
-    where the bound proves that the tilt passes ``tilt_limit_rad`` before the spin reaches
+    where the bound (under its assumptions) shows that the tilt passes ``tilt_limit_rad`` before the spin reaches
     ``spin_rate_needed_rad_s``; ``True`` says the bound excludes nothing.
 
     - ``spin_rate_needed_rad_s``: the body-z rate of the relaxed hover, less what the rotors'
@@ -150,6 +158,9 @@ def entry_from_hover(
     if solution.kind == "static" or needed == 0.0:
         return EntryFromHover(True, limit, needed, 0.0, 0.0, 0.0, math.inf)
     live = np.any(wrench != 0.0, axis=0)
+    if not _within_assumptions(airframe, inertia, live, settings.rotor_inertia_kg_m2):
+        reach = _alpha(airframe, wrench, inertia, live, sign)
+        return EntryFromHover(True, limit, needed, needed / reach if reach > 0.0 else math.inf, 0.0, 0.0, math.inf)
     accel = wrench[3:6, live] / inertia[:, None]
     roll_pitch, yaw = accel[:2], accel[2]
     alpha = float(np.sum(np.maximum(0.0, sign * yaw) * np.asarray(airframe.max_thrust_n, dtype=float)[live]))
@@ -180,6 +191,26 @@ def entry_from_hover(
     at = int(np.searchsorted(tilt, limit))
     spin_at_limit = math.sqrt(2.0 * alpha * float(psi[at])) if at < STEPS else math.inf
     return EntryFromHover(not tilt_before >= limit, limit, needed, spin_up, rho, tilt_before, spin_at_limit)
+
+
+def _within_assumptions(airframe: Airframe, inertia: np.ndarray, live: np.ndarray, rotor_inertia_kg_m2: float) -> bool:
+    """The obstruction's derivation holds (module notes): the remaining rotors' thrusts cannot
+    reverse (``W_i >= 0``), ``J_x = J_y`` (else ``(J_x - J_y) p q / J_z`` adds a yaw acceleration
+    ``alpha`` does not bound) and no rotor inertia (its gyroscopic moment turns the roll/pitch
+    rates by an angle the yaw angle does not bound). Elsewhere nothing is excluded (a reviewer's
+    counterexample: Ke's quadcopter with reversible rotors spins up twice as fast)."""
+    reversible = bool(np.any(np.asarray(airframe.min_thrust_n, dtype=float)[live] < 0.0))
+    symmetric = abs(inertia[0] - inertia[1]) <= 1e-12 * max(inertia[0], inertia[1])
+    return not reversible and symmetric and rotor_inertia_kg_m2 == 0.0
+
+
+def _alpha(airframe: Airframe, wrench: np.ndarray, inertia: np.ndarray, live: np.ndarray, sign: float) -> float:
+    """The largest yaw angular acceleration in the direction ``sign`` (rad/s^2), each live
+    rotor's thrust anywhere within its bounds (reversible rotors included)."""
+    yaw = sign * wrench[5, live] / inertia[2]
+    high = np.asarray(airframe.max_thrust_n, dtype=float)[live]
+    low = np.asarray(airframe.min_thrust_n, dtype=float)[live]
+    return float(np.sum(np.maximum(yaw * high, yaw * low)))
 
 
 def _ratio(size: np.ndarray, phi: np.ndarray, yaw: np.ndarray) -> np.ndarray:

@@ -855,3 +855,33 @@ fn position_fixes_are_fused_at_most_once_per_fusion_slot() {
     let every = fly(0.0);
     assert_eq!((every.fused, every.thinned), (4, 0), "{every:?}");
 }
+
+/// Fixes at exactly the slot rate (100 Hz, valid at k / 100 s) each own a slot: none is thinned,
+/// though k / 100 / 0.01 falls just under k for k = 29, 47, 57, ... (a reviewer counted 125 of 1000
+/// fixes thinned in 10 s with a plain floor). Thinned fixes count their measurements.
+#[test]
+fn fixes_at_the_slot_rate_are_all_fused() {
+    let settings = EstimatorSettings {
+        position_fusion_period_s: 0.01,
+        ..EstimatorSettings::default()
+    };
+    let motion = AnalyticMotion::hover();
+    let mut estimator = Estimator::new(settings, &motion.state_at(0.0)).unwrap();
+    let fix = |valid_at_s: f64, attitude: bool| crate::flight::sensors::PositionSample {
+        valid_at_s,
+        arrives_at_s: valid_at_s,
+        position_m: motion.state_at(0.0).position_m,
+        velocity_m_s: None,
+        attitude: attitude.then(nalgebra::UnitQuaternion::identity),
+    };
+    let floored = (1..1000)
+        .filter(|&k| ((k as f64 / 100.0) / 0.01).floor() < k as f64)
+        .count();
+    assert!(floored > 100, "the case the tolerance is for: {floored}");
+    for k in 1..1000 {
+        estimator.push_position(&fix(k as f64 / 100.0, false));
+    }
+    assert_eq!(estimator.counts().thinned, 0);
+    estimator.push_position(&fix(999.0 / 100.0 + 0.004, true));
+    assert_eq!(estimator.counts().thinned, 2, "position and attitude");
+}
