@@ -705,6 +705,13 @@ def _tiny_angle() -> rf.Airframe:
                        1.0, [0.01, 0.01, 0.02], 0.02)
 
 
+def _by_position() -> rf.Airframe:
+    """A hexacopter given by rotor positions (no arm lengths), rotor 1 on the x axis (y = 0)."""
+    position = [[0.3 * math.cos(math.pi * i / 3), 0.3 * math.sin(math.pi * i / 3), 0.0] for i in range(6)]
+    return rf.Airframe.from_rotors(position_m=position, spin=["ccw", "cw"] * 3, max_thrust_n=[8.0] * 6, mass_kg=1.0,
+                                   inertia_kg_m2=[0.03, 0.03, 0.05], drag_torque_ratio_m=0.02, name="by-position")
+
+
 def _regressions(t: dict[str, Target]) -> None:
     """The harness's findings, each fixed and kept here as an explicit case (issue 27)."""
     quad = rf.Airframe.preset("quad-x")
@@ -754,6 +761,8 @@ def _regressions(t: dict[str, Target]) -> None:
                           Call(control.detectability, (np.array([[0.0, 1.0], [-1.0, 0.0]]), np.array([[0.0, 1e-310]])), {}, frozenset({"c"}))),
         # scipy's matrix_balance warned (a cast of its unused permutation) on an entry of 1e-282.
         "stabilisability": (Call(control.stabilisability, (np.array([[0.0, 0.0], [1.0, 9.947778682040334e-282]]), np.zeros((2, 1)))),),
+        # A tilted frame's rotors are given by position: arm_length_m = inf scaled 0 * inf (a warning) before the loader refused it (long run, 2026-11-28).
+        "design_search": (Call(lambda: rf.design_search(_by_position(), parameter="arm_length_m", values=[math.inf]), (), {}, frozenset({"arm_length_m", "values"})),),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
 
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
