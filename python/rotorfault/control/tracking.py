@@ -19,7 +19,7 @@ import numpy.typing as npt
 
 from .. import _rfcore
 from .._typing import CircleTurn
-from .._util.convert import FloatArray, float_array, frozen_array
+from .._util.convert import FloatArray, float_array, frozen_array, real
 from .linear import STATE_DIM, LinearFeedback
 
 
@@ -108,6 +108,13 @@ def step_reference(
     turns = [(float(t), float(y)) for t, y in yaw_steps]
     if not moves:
         raise ValueError("waypoints: give at least one (time_s, (north, east, down))")
+    for name, times in (("waypoints", [t for t, _ in moves]), ("yaw_steps", [t for t, _ in turns])):
+        for k, t_s in enumerate(times):
+            if not (math.isfinite(t_s) and t_s >= 0.0):
+                raise ValueError(f"{name}[{k}]: the time must be >= 0 and finite, got {t_s}")
+    for k, (_, y) in enumerate(turns):
+        if not math.isfinite(y):
+            raise ValueError(f"yaw_steps[{k}]: the heading must be finite, got {y}")
     for k, (_, p) in enumerate(moves):
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise ValueError(f"waypoints[{k}]: expected a finite (north, east, down), got {p.tolist()}")
@@ -134,6 +141,13 @@ def circle_reference(
     heading mirrored too: ``w`` negated; Wang's scenario 1, whose y axis points left)."""
     if turn not in get_args(CircleTurn):
         raise ValueError(f"turn: must be one of {', '.join(get_args(CircleTurn))}, got {turn!r}")
+    # Checked before any arithmetic: a period of 0 divided by zero, a NaN radius gave NaN rows.
+    for name, value, rule in (("radius_m", radius_m, "> 0"), ("period_s", period_s, "> 0"), ("climb_m_s", climb_m_s, "any"),
+                              ("yaw_amplitude_rad", yaw_amplitude_rad, "any"), ("duration_s", duration_s, "> 0"), ("sample_s", sample_s, "> 0")):
+        if not math.isfinite(real(name, value)) or (rule == "> 0" and not value > 0.0):
+            raise ValueError(f"{name}: must be {'> 0 and ' if rule == '> 0' else ''}finite, got {value}")
+    if duration_s / sample_s > 1e7:
+        raise ValueError(f"sample_s: {duration_s:g} s / {sample_s:g} s exceeds 10,000,000 reference rows")
     t = np.arange(0.0, duration_s + sample_s, sample_s)
     w = (1.0 if turn == "clockwise" else -1.0) * 2 * math.pi / period_s
     refs = np.zeros((len(t), STATE_DIM))

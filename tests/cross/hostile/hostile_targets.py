@@ -705,6 +705,12 @@ def _tiny_angle() -> rf.Airframe:
                        1.0, [0.01, 0.01, 0.02], 0.02)
 
 
+def _scenario_with(extra: str) -> str:
+    """Wang's scenario 1 (examples/) without its reference, plus ``extra`` TOML."""
+    base = (Path(__file__).parents[3] / "examples" / "wang-scenario-1.toml").read_text()
+    return base.split("[reference]")[0] + extra
+
+
 def _by_position() -> rf.Airframe:
     """A hexacopter given by rotor positions (no arm lengths), rotor 1 on the x axis (y = 0)."""
     position = [[0.3 * math.cos(math.pi * i / 3), 0.3 * math.sin(math.pi * i / 3), 0.0] for i in range(6)]
@@ -763,6 +769,12 @@ def _regressions(t: dict[str, Target]) -> None:
         "stabilisability": (Call(control.stabilisability, (np.array([[0.0, 0.0], [1.0, 9.947778682040334e-282]]), np.zeros((2, 1)))),),
         # A tilted frame's rotors are given by position: arm_length_m = inf scaled 0 * inf (a warning) before the loader refused it (long run, 2026-11-28).
         "design_search": (Call(lambda: rf.design_search(_by_position(), parameter="arm_length_m", values=[math.inf]), (), {}, frozenset({"arm_length_m", "values"})),),
+        # A circle of period 0 (ZeroDivisionError) or NaN radius (NaN reference rows), a fault of NaN
+        # efficiency carried in the scenario until flown (long run, 2026-11-28).
+        "load_scenario": tuple(Call(studies.load_scenario, (str(scratch_file(_scenario_with(extra), ".toml")),), {}, frozenset({word}))
+                               for extra, word in (('[reference]\nkind = "circle"\nradius_m = 2.0\nperiod_s = 0.0\n', "period_s"),
+                                                   ('[reference]\nkind = "circle"\nradius_m = nan\nperiod_s = 20.0\n', "radius_m"),
+                                                   ("[[fault]]\nrotor = 1\ntime_s = 1.0\nefficiency = nan\n", "efficiency"))),
         "tuning_campaign": (Call(studies.tuning_campaign, (), {"runs": "x"}),),  # '>' between str and int
 
         "tune": (Call(studies.tune, (quick,), {"maxiter": "x"}), Call(studies.tune, (quick,), {"popsize": 0}), Call(studies.tune, (quick,), {"bounds": {}})),
