@@ -378,13 +378,13 @@ class Airframe:
                     rotor[field] = float(v)
         if arm_length_m is not None:
             for i, (rotor, v) in enumerate(zip(rotors, per_rotor("arm_length_m", arm_length_m))):
-                # Checked here, not only by the loader: a rotor given by position is scaled by
-                # v / radius first, and inf * 0 warned before any refusal (long hostile run).
+                if "arm_length_m" in rotor:
+                    rotor["arm_length_m"] = float(v)  # the loader's rule checks it
+                    continue
+                # A rotor given by position is scaled by v / radius before the loader sees it: inf * 0
+                # warned before any refusal (long hostile run), so the value is checked first here.
                 if not (math.isfinite(v) and v > 0.0):
                     raise ValueError(f"arm_length_m[{i}] (rotor {i + 1}): must be > 0 and finite, got {v}")
-                if "arm_length_m" in rotor:
-                    rotor["arm_length_m"] = float(v)
-                    continue
                 x, y, z = rotor["position_m"]
                 radius = math.hypot(x, y)
                 if radius == 0.0:

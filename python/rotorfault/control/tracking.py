@@ -142,10 +142,12 @@ def circle_reference(
     if turn not in get_args(CircleTurn):
         raise ValueError(f"turn: must be one of {', '.join(get_args(CircleTurn))}, got {turn!r}")
     # Checked before any arithmetic: a period of 0 divided by zero, a NaN radius gave NaN rows.
-    for name, value, rule in (("radius_m", radius_m, "> 0"), ("period_s", period_s, "> 0"), ("climb_m_s", climb_m_s, "any"),
-                              ("yaw_amplitude_rad", yaw_amplitude_rad, "any"), ("duration_s", duration_s, "> 0"), ("sample_s", sample_s, "> 0")):
-        if not math.isfinite(real(name, value)) or (rule == "> 0" and not value > 0.0):
-            raise ValueError(f"{name}: must be {'> 0 and ' if rule == '> 0' else ''}finite, got {value}")
+    for name, value in (("radius_m", radius_m), ("period_s", period_s), ("duration_s", duration_s), ("sample_s", sample_s)):
+        if not (math.isfinite(real(name, value)) and value > 0.0):
+            raise ValueError(f"{name}: must be > 0 and finite, got {value}")
+    for name, value in (("climb_m_s", climb_m_s), ("yaw_amplitude_rad", yaw_amplitude_rad)):
+        if not math.isfinite(real(name, value)):
+            raise ValueError(f"{name}: must be finite, got {value}")
     if duration_s / sample_s > 1e7:
         raise ValueError(f"sample_s: {duration_s:g} s / {sample_s:g} s exceeds 10,000,000 reference rows")
     t = np.arange(0.0, duration_s + sample_s, sample_s)

@@ -12,6 +12,7 @@ use crate::flight::estimation::eskf::{
     Kinematics, NominalState, ProcessNoise, Step, ACCEL_BIAS, ATT, GYRO_BIAS, POS, VEL,
 };
 use crate::flight::estimation::EstimatorSettings;
+use crate::flight::sensors::clock::PERIOD_TOLERANCE;
 use crate::flight::sensors::{ImuSample, MagnetometerSample, PositionSample};
 use crate::state::RigidBodyState;
 
@@ -31,10 +32,6 @@ pub struct Estimate {
     pub gyro_saturated: bool,
     pub accel_saturated: bool,
 }
-
-/// Fraction of a fusion slot by which a fix's time of validity may fall short of the slot's start
-/// and still count in it (rounding of `k / rate_hz`; the sensors' clocks' rule).
-const SLOT_TOLERANCE: f64 = 1e-6;
 
 /// Measurements fused, refused by the innovation gate, dropped as late (valid before the
 /// fusion horizon when they arrived), and position fixes left out by the fusion-rate limit
@@ -214,7 +211,7 @@ impl Estimator {
             // A fix on a slot boundary (k / rate_hz) can divide to just under the whole number
             // (0.29 / 0.01 = 28.999999999999996): a millionth of a period of tolerance, as the
             // sensors' clocks use, keeps it in its own slot (else 1 fix in 8 at 100 Hz thinned).
-            let slot = (sample.valid_at_s / period + SLOT_TOLERANCE).floor();
+            let slot = (sample.valid_at_s / period + PERIOD_TOLERANCE).floor();
             if slot == self.fix_slot {
                 // Counted per measurement, as `fused`, `rejected` and `late` are.
                 self.counts.thinned += 1

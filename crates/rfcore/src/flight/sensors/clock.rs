@@ -3,6 +3,11 @@
 //! when the time falls on the integration grid, the latest grid state otherwise: sample-and-hold),
 //! so any rate works with any control period; none has to divide another.
 
+/// Fraction of a period by which a time computed as `k / rate_hz` may fall short of the grid
+/// point it stands for (rounding) and still count as on it: when a sample is due, and which fusion
+/// slot a fix belongs to (`crate::flight::estimation`).
+pub const PERIOD_TOLERANCE: f64 = 1e-6;
+
 /// Sample times `k / rate_hz`, k = 0, 1, 2, ... (computed from k, so they never drift).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SampleClock {
@@ -21,7 +26,7 @@ impl SampleClock {
             rate_hz,
             next_index: 0,
             next_time_s: 0.0,
-            due_tolerance_s: 1e-6 * (1.0 / rate_hz),
+            due_tolerance_s: PERIOD_TOLERANCE * (1.0 / rate_hz),
         }
     }
 
