@@ -7,7 +7,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PySlice, PyType};
 
-use rfcore::flight::simulation::{Divergence, DivergenceReason, EstimateRow, SensingRecord, Trajectory};
+use rfcore::flight::simulation::{Divergence, DivergenceKind, EstimateRow, SensingRecord, Trajectory};
 use rfcore::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
 
 use crate::convert::{deprecated, fixed_reals, pickle_protocol, read_only, real};
@@ -29,7 +29,7 @@ use crate::convert::{deprecated, fixed_reals, pickle_protocol, read_only, real};
 #[pyclass(name = "Divergence", module = "rotorfault._rfcore", frozen)]
 pub struct PyDivergence {
     time_s: f64,
-    kind: DivergenceReason,
+    kind: DivergenceKind,
     state: [f64; STATE_DIM],
 }
 
@@ -52,13 +52,13 @@ impl PyDivergence {
 
     /// The core's divergence (the state from its vector): what the derived fields read.
     fn core(&self) -> Divergence {
-        Divergence { time_s: self.time_s, reason: self.kind, state: state_from_vector(&self.state) }
+        Divergence { time_s: self.time_s, kind: self.kind, state: state_from_vector(&self.state) }
     }
 
     /// The kind named `name`, or a `ValueError` listing the kinds.
-    fn kind_named(field: &str, name: &str) -> PyResult<DivergenceReason> {
-        DivergenceReason::from_name(name).ok_or_else(|| {
-            let kinds: Vec<&str> = DivergenceReason::ALL.iter().map(|k| k.name()).collect();
+    fn kind_named(field: &str, name: &str) -> PyResult<DivergenceKind> {
+        DivergenceKind::from_name(name).ok_or_else(|| {
+            let kinds: Vec<&str> = DivergenceKind::ALL.iter().map(|k| k.name()).collect();
             PyValueError::new_err(format!("{field}: expected one of {}, got {name:?}", kinds.join(", ")))
         })
     }
@@ -201,7 +201,7 @@ pickle_protocol!(PyDivergence, {
 
 impl From<Divergence> for PyDivergence {
     fn from(d: Divergence) -> Self {
-        PyDivergence { time_s: d.time_s, kind: d.reason, state: state_vector(&d.state) }
+        PyDivergence { time_s: d.time_s, kind: d.kind, state: state_vector(&d.state) }
     }
 }
 
@@ -525,10 +525,10 @@ impl PyTrajectory {
             kwargs.set_item("accel_saturated", flags(|row| row.accel_saturated))?;
             kwargs.set_item("sensing_counts", Py::new(py, PySensingCounts::from(r))?)?;
         }
-        kwargs.set_item("rotor_command", table(run.commands)?)?;
-        kwargs.set_item("rotor_thrust", table(run.thrust_n)?)?;
+        kwargs.set_item("rotor_command", table(run.rotor_command)?)?;
+        kwargs.set_item("rotor_thrust", table(run.rotor_thrust_n)?)?;
         kwargs.set_item("efficiency", table(run.efficiency)?)?;
-        kwargs.set_item("recorded_measurements", table(run.measured)?)?;
+        kwargs.set_item("recorded_measurements", table(run.recorded_measurements)?)?;
         kwargs.set_item("divergence", run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?)?;
         kwargs.set_item("t", run.t_s.into_pyarray(py))?;
         Ok(kwargs)

@@ -238,7 +238,7 @@ fn describe(case: &Case, o: &Outcome) -> String {
     let lost = o
         .trajectory
         .divergence
-        .map(|d| format!(", lost at {:.2} s ({})", d.time_s, d.reason.name()))
+        .map(|d| format!(", lost at {:.2} s ({})", d.time_s, d.kind.name()))
         .unwrap_or_default();
     let failed: Vec<String> = case.failed.iter().map(|r| (r + 1).to_string()).collect();
     format!(
@@ -301,7 +301,7 @@ fn indi_holds_every_vehicle_and_failure_but_lanzons_at_hover_and_at_2_m_s() {
             })
             .unwrap();
         let d = outcomes[k].trajectory.divergence.unwrap();
-        assert_eq!(d.reason.name(), "tilt");
+        assert_eq!(d.kind.name(), "tilt");
         d.time_s - FAULT_S
     };
     assert!((lost(&[1]) - 0.69).abs() < 0.05, "{}", lost(&[1]));
@@ -590,7 +590,7 @@ fn the_one_step_prediction_of_the_angular_acceleration_matches_the_simulator() {
                 continue;
             }
             // Instant rotors produce the commands from step k on (failed ones: 0, as commanded).
-            let commanded = &tr.commands[k * 4..(k + 1) * 4];
+            let commanded = &tr.rotor_command[k * 4..(k + 1) * 4];
             let actual =
                 simulator_angular_acceleration(&vehicle, &tr.states[k], commanded, &yaw_ratio);
             let predicted = recording.steps[k].angular_acceleration_predicted;

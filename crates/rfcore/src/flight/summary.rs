@@ -36,7 +36,7 @@ use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::RotorFault;
 use crate::flight::simulation::{
-    simulate_observed, DivergenceReason, SimulationConfig, StepObserver,
+    simulate_observed, DivergenceKind, SimulationConfig, StepObserver,
 };
 use crate::flight::vehicle::Vehicle;
 use crate::state::RigidBodyState;
@@ -91,7 +91,7 @@ pub enum Outcome {
     HoldsPosition,
     Circling,
     OffStation,
-    Lost(DivergenceReason),
+    Lost(DivergenceKind),
 }
 
 /// The one verdict on a whole run (`rotorfault.flight.outcomes`): only `Holds` is a success.
@@ -105,7 +105,7 @@ pub enum Verdict {
     Circles,
     /// Hit the ground.
     Crashed,
-    /// Lost another way (the divergence reason says how).
+    /// Lost another way (the divergence kind says how).
     Diverged,
 }
 
@@ -130,7 +130,7 @@ impl Outcome {
             Outcome::HoldsPosition => "holds-position",
             Outcome::Circling => "circling",
             Outcome::OffStation => "off-station",
-            Outcome::Lost(reason) => reason.name(),
+            Outcome::Lost(kind) => kind.name(),
         }
     }
 
@@ -141,15 +141,15 @@ impl Outcome {
             Outcome::HoldsPosition => Verdict::Holds,
             Outcome::Circling => Verdict::Circles,
             Outcome::OffStation => Verdict::Drifts,
-            Outcome::Lost(DivergenceReason::Crashed) => Verdict::Crashed,
+            Outcome::Lost(DivergenceKind::Crashed) => Verdict::Crashed,
             Outcome::Lost(_) => Verdict::Diverged,
         }
     }
 
-    /// How a lost run was lost (the divergence reason's code), `None` for a run flown to the end.
+    /// How a lost run was lost (the divergence kind's code), `None` for a run flown to the end.
     pub fn cause(self) -> Option<&'static str> {
         match self {
-            Outcome::Lost(reason) => Some(reason.name()),
+            Outcome::Lost(kind) => Some(kind.name()),
             _ => None,
         }
     }
@@ -266,7 +266,7 @@ impl SummaryObserver {
     /// faults at t = 0) and its end time.
     pub fn finish(
         self,
-        divergence: Option<(f64, DivergenceReason)>,
+        divergence: Option<(f64, DivergenceKind)>,
         faults: &[RotorFault],
         initial_efficiency: &[f64],
         end_s: f64,
@@ -298,8 +298,8 @@ impl SummaryObserver {
             saturated_s: self.saturated_s,
             flown_s: end_s,
         };
-        if let Some((time_s, reason)) = divergence {
-            summary.outcome = Outcome::Lost(reason);
+        if let Some((time_s, kind)) = divergence {
+            summary.outcome = Outcome::Lost(kind);
             summary.lost_at_s = time_s;
             if let Some(&first) = first_fault.first() {
                 summary.time_to_loss_s = time_s - first;
@@ -501,7 +501,7 @@ pub fn simulate_summary(
         .get(..m)
         .unwrap_or(&run.initial_efficiency);
     Ok(observer.finish(
-        trajectory.divergence.map(|d| (d.time_s, d.reason)),
+        trajectory.divergence.map(|d| (d.time_s, d.kind)),
         &run.faults,
         start_efficiency,
         end,
@@ -561,7 +561,7 @@ mod tests {
         // 10 m of free fall reach the ground at sqrt(20 / g) s, before the 20 m limit.
         let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default(), &crate::Cancel::never()).unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
-        assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::Crashed));
+        assert_eq!(s.outcome, Outcome::Lost(DivergenceKind::Crashed));
         assert_eq!(s.outcome.name(), "crashed");
         assert_eq!(s.outcome.verdict(), Verdict::Crashed);
         assert_eq!(s.outcome.cause(), Some("crashed"));
@@ -582,7 +582,7 @@ mod tests {
         .unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         let expected = (40.0 / g).sqrt();
-        assert_eq!(s.outcome, Outcome::Lost(DivergenceReason::AltitudeLoss));
+        assert_eq!(s.outcome, Outcome::Lost(DivergenceKind::AltitudeLoss));
         assert_eq!(s.outcome.verdict().name(), "diverged");
         assert_eq!(s.outcome.cause(), Some("altitude-loss"));
         assert!((s.lost_at_s - expected).abs() < 1e-12);

@@ -27,7 +27,7 @@ use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::FaultSchedule;
 use crate::flight::lanes::{BodyLanes, F64x4, Lanes, TotalsLanes, VehicleLanes};
 use crate::flight::simulation::config::SimulationConfig;
-use crate::flight::simulation::divergence::{Divergence, DivergenceReason, Limits};
+use crate::flight::simulation::divergence::{Divergence, DivergenceKind, Limits};
 use crate::flight::simulation::driver::{
     check_batch, check_run, empty_trajectory, end_with, fly_batch_run, truth_samples, BatchRun,
 };
@@ -262,7 +262,7 @@ fn ready(
     let limits = Limits::new(&config.limits, config.ground_z_m, -run.x0.position_m.z, h);
     let mut efficiency = initial_efficiency.to_vec();
     schedule.apply_due(0.0, &mut efficiency);
-    if limits.reason(&run.x0).is_some() {
+    if limits.exceeded(&run.x0).is_some() {
         return Err(run);
     }
     let m = vehicle.rotor_count();
@@ -363,12 +363,12 @@ fn fly_group_lanes<L: Lanes>(
             if records(k, config.record_every, steps) || !finite {
                 let trajectory = &mut lane.trajectory;
                 trajectory.push_step(t, &state, &lane.efficiency, &lane.actuators, None);
-                trajectory.commands.extend_from_slice(command);
+                trajectory.rotor_command.extend_from_slice(command);
             }
             if !finite {
                 lane.trajectory.divergence = Some(Divergence {
                     time_s: t,
-                    reason: DivergenceReason::NonFiniteCommand,
+                    kind: DivergenceKind::NonFiniteCommand,
                     state,
                 });
                 active[i] = false;

@@ -15,7 +15,7 @@ use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
 
 /// Every recorded number of a trajectory as bits (NaN rows compare too), and the events.
-fn bits(t: &Trajectory) -> (Vec<u64>, Option<DivergenceReason>) {
+fn bits(t: &Trajectory) -> (Vec<u64>, Option<DivergenceKind>) {
     let mut out: Vec<u64> = Vec::new();
     let state = |s: &RigidBodyState| {
         let q = s.attitude.quaternion().coords;
@@ -33,18 +33,18 @@ fn bits(t: &Trajectory) -> (Vec<u64>, Option<DivergenceReason>) {
     for v in t
         .t_s
         .iter()
-        .chain(&t.commands)
-        .chain(&t.thrust_n)
+        .chain(&t.rotor_command)
+        .chain(&t.rotor_thrust_n)
         .chain(&t.efficiency)
     {
         out.push(v.to_bits());
     }
-    out.extend([t.t_s.len(), t.commands.len(), t.thrust_n.len()].map(|n| n as u64));
+    out.extend([t.t_s.len(), t.rotor_command.len(), t.rotor_thrust_n.len()].map(|n| n as u64));
     if let Some(d) = &t.divergence {
         out.push(d.time_s.to_bits());
         out.extend(state(&d.state));
     }
-    (out, t.divergence.map(|d| d.reason))
+    (out, t.divergence.map(|d| d.kind))
 }
 
 fn assert_same(lanes: &[Trajectory], scalar: &[Trajectory]) {
@@ -193,13 +193,13 @@ fn lanes_fly_the_scalar_hover_feedback_batch_bit_for_bit() {
     // The cases the batch was built to hold.
     assert!(lanes[2].divergence.is_some(), "a dead rotor diverges");
     assert_eq!(
-        lanes[5].divergence.map(|d| d.reason),
-        Some(DivergenceReason::NonFiniteCommand)
+        lanes[5].divergence.map(|d| d.kind),
+        Some(DivergenceKind::NonFiniteCommand)
     );
     let max = airframe.max_thrust_n();
     assert!(
         lanes[6]
-            .commands
+            .rotor_command
             .chunks(4)
             .any(|c| c.iter().zip(&max).any(|(u, m)| u > m)),
         "run 6 saturates"

@@ -183,11 +183,11 @@ fn fill<T: Sample>(
         put(slot.euler_rad, 3, at, s.euler_rad());
         put(slot.omega_rad_s, 3, at, s.omega_rad_s.into());
         put(slot.primary_axis, 3, at, s.primary_axis().into());
-        put_slice(slot.rotor_command, count, at, &run.commands[j * count..(j + 1) * count]);
-        put_slice(slot.rotor_thrust_n, m, at, &run.thrust_n[j * m..(j + 1) * m]);
+        put_slice(slot.rotor_command, count, at, &run.rotor_command[j * count..(j + 1) * count]);
+        put_slice(slot.rotor_thrust_n, m, at, &run.rotor_thrust_n[j * m..(j + 1) * m]);
         put_slice(slot.efficiency, m, at, &run.efficiency[j * m..(j + 1) * m]);
-        if !run.measured.is_empty() {
-            put_slice(slot.recorded_measurements, STATE_DIM, at, &run.measured[j * STATE_DIM..(j + 1) * STATE_DIM]);
+        if !run.recorded_measurements.is_empty() {
+            put_slice(slot.recorded_measurements, STATE_DIM, at, &run.recorded_measurements[j * STATE_DIM..(j + 1) * STATE_DIM]);
         }
         if let Some(row) = sensing_rows.as_ref().and_then(|r| r.get(j)) {
             put(slot.estimate_packed, 13, at, row.state.to_packed());

@@ -40,7 +40,7 @@ pub struct SimulationConfig {
     pub limits: DivergenceLimits,
     /// The ground plane: world NED `z = ground_z_m` (default [`DEFAULT_GROUND_Z_M`]); `None`: no
     /// ground. The vehicle's centre of mass below it (`position[2] > ground_z_m`) is contact,
-    /// which ends the run as [`crate::flight::simulation::DivergenceReason::Crashed`] at the
+    /// which ends the run as [`crate::flight::simulation::DivergenceKind::Crashed`] at the
     /// located time. There is no ground reaction (no landing, no take-off): a run must start above
     /// the ground. The vehicle's extent below its centre of mass (landing gear, a tilted arm) is
     /// not modelled; raise the plane by it (`ground_z_m - extent`) to count it.

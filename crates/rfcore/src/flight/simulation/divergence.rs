@@ -1,6 +1,6 @@
 //! Divergence: the limits past which a run is declared diverged ([`DivergenceLimits`]), why a run
-//! ended early ([`DivergenceReason`], [`Divergence`]; contact with the ground is one of them,
-//! [`DivergenceReason::Crashed`], with its [`Impact`]), and how a crossing is found: the cheap
+//! ended early ([`DivergenceKind`], [`Divergence`]; contact with the ground is one of them,
+//! [`DivergenceKind::Crashed`], with its [`Impact`]), and how a crossing is found: the cheap
 //! check after every RK4 substep and the bisection that locates the crossing within it (`Limits`).
 
 use crate::state::RigidBodyState;
@@ -35,7 +35,7 @@ impl Default for DivergenceLimits {
 
 /// Why a run ended early.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DivergenceReason {
+pub enum DivergenceKind {
     /// The centre of mass reached the ground plane ([`crate::flight::simulation::SimulationConfig::ground_z_m`]).
     Crashed,
     NonFinite,
@@ -50,48 +50,48 @@ pub enum DivergenceReason {
     StepSize,
 }
 
-impl DivergenceReason {
-    /// Every reason, in declaration order (what [`DivergenceReason::from_name`] accepts).
-    pub const ALL: [DivergenceReason; 8] = [
-        DivergenceReason::Crashed,
-        DivergenceReason::NonFinite,
-        DivergenceReason::NonFiniteCommand,
-        DivergenceReason::Tilt,
-        DivergenceReason::AltitudeLoss,
-        DivergenceReason::Speed,
-        DivergenceReason::BodyRate,
-        DivergenceReason::StepSize,
+impl DivergenceKind {
+    /// Every kind, in declaration order (what [`DivergenceKind::from_name`] accepts).
+    pub const ALL: [DivergenceKind; 8] = [
+        DivergenceKind::Crashed,
+        DivergenceKind::NonFinite,
+        DivergenceKind::NonFiniteCommand,
+        DivergenceKind::Tilt,
+        DivergenceKind::AltitudeLoss,
+        DivergenceKind::Speed,
+        DivergenceKind::BodyRate,
+        DivergenceKind::StepSize,
     ];
 
-    /// The reason whose [`DivergenceReason::name`] is `name`.
-    pub fn from_name(name: &str) -> Option<DivergenceReason> {
+    /// The kind whose [`DivergenceKind::name`] is `name`.
+    pub fn from_name(name: &str) -> Option<DivergenceKind> {
         Self::ALL.into_iter().find(|r| r.name() == name)
     }
 
     /// A short identifier (`"tilt"`, `"non-finite-command"`, ...).
     pub fn name(self) -> &'static str {
         match self {
-            DivergenceReason::Crashed => "crashed",
-            DivergenceReason::NonFinite => "non-finite-state",
-            DivergenceReason::NonFiniteCommand => "non-finite-command",
-            DivergenceReason::Tilt => "tilt",
-            DivergenceReason::AltitudeLoss => "altitude-loss",
-            DivergenceReason::Speed => "speed",
-            DivergenceReason::BodyRate => "body-rate",
-            DivergenceReason::StepSize => "step-size",
+            DivergenceKind::Crashed => "crashed",
+            DivergenceKind::NonFinite => "non-finite-state",
+            DivergenceKind::NonFiniteCommand => "non-finite-command",
+            DivergenceKind::Tilt => "tilt",
+            DivergenceKind::AltitudeLoss => "altitude-loss",
+            DivergenceKind::Speed => "speed",
+            DivergenceKind::BodyRate => "body-rate",
+            DivergenceKind::StepSize => "step-size",
         }
     }
 
     pub fn describe(self) -> &'static str {
         match self {
-            DivergenceReason::Crashed => "hit the ground",
-            DivergenceReason::NonFinite => "state became non-finite",
-            DivergenceReason::NonFiniteCommand => "the controller produced a non-finite command",
-            DivergenceReason::Tilt => "tilt beyond the limit",
-            DivergenceReason::AltitudeLoss => "altitude loss beyond the limit",
-            DivergenceReason::Speed => "speed beyond the limit",
-            DivergenceReason::BodyRate => "body rate beyond the limit",
-            DivergenceReason::StepSize => {
+            DivergenceKind::Crashed => "hit the ground",
+            DivergenceKind::NonFinite => "state became non-finite",
+            DivergenceKind::NonFiniteCommand => "the controller produced a non-finite command",
+            DivergenceKind::Tilt => "tilt beyond the limit",
+            DivergenceKind::AltitudeLoss => "altitude loss beyond the limit",
+            DivergenceKind::Speed => "speed beyond the limit",
+            DivergenceKind::BodyRate => "body rate beyond the limit",
+            DivergenceKind::StepSize => {
                 "body rate too fast for the RK4 substep (numerical): use more substeps"
             }
         }
@@ -103,7 +103,7 @@ impl DivergenceReason {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Divergence {
     pub time_s: f64,
-    pub reason: DivergenceReason,
+    pub kind: DivergenceKind,
     pub state: RigidBodyState,
 }
 
@@ -120,9 +120,9 @@ pub struct Impact {
 }
 
 impl Divergence {
-    /// The impact of a [`DivergenceReason::Crashed`] run (`None` for any other reason).
+    /// The impact of a [`DivergenceKind::Crashed`] run (`None` for any other kind).
     pub fn impact(&self) -> Option<Impact> {
-        (self.reason == DivergenceReason::Crashed).then(|| Impact {
+        (self.kind == DivergenceKind::Crashed).then(|| Impact {
             speed_m_s: self.state.velocity_m_s.norm(),
             vertical_speed_m_s: self.state.velocity_m_s.z,
             tilt_rad: self.state.primary_axis().z.clamp(-1.0, 1.0).acos(),
@@ -199,32 +199,32 @@ impl Limits {
 
     /// How far past each limit the state is (positive: beyond), in the order of precedence
     /// (the ground first: a vehicle that hits it crashed, whatever else it did at that instant).
-    fn exceedances(&self, s: &RigidBodyState) -> [(DivergenceReason, f64); 6] {
+    fn exceedances(&self, s: &RigidBodyState) -> [(DivergenceKind, f64); 6] {
         let l = &self.limits;
         let rate = s.omega_rad_s.norm();
         [
-            (DivergenceReason::Crashed, s.position_m.z - self.ground_z_m),
+            (DivergenceKind::Crashed, s.position_m.z - self.ground_z_m),
             (
-                DivergenceReason::Tilt,
+                DivergenceKind::Tilt,
                 s.primary_axis().z.clamp(-1.0, 1.0).acos() - l.max_tilt_rad,
             ),
             (
-                DivergenceReason::AltitudeLoss,
+                DivergenceKind::AltitudeLoss,
                 self.start_altitude_m + s.position_m.z - l.max_altitude_loss_m,
             ),
             (
-                DivergenceReason::Speed,
+                DivergenceKind::Speed,
                 s.velocity_m_s.norm() - l.max_speed_m_s,
             ),
-            (DivergenceReason::BodyRate, rate - l.max_rate_rad_s),
-            (DivergenceReason::StepSize, rate - self.step_rate_rad_s),
+            (DivergenceKind::BodyRate, rate - l.max_rate_rad_s),
+            (DivergenceKind::StepSize, rate - self.step_rate_rad_s),
         ]
     }
 
     /// The first limit `s` is beyond, if any.
-    pub(crate) fn reason(&self, s: &RigidBodyState) -> Option<DivergenceReason> {
+    pub(crate) fn exceeded(&self, s: &RigidBodyState) -> Option<DivergenceKind> {
         if !s.is_finite() {
-            return Some(DivergenceReason::NonFinite);
+            return Some(DivergenceKind::NonFinite);
         }
         self.exceedances(s)
             .into_iter()
@@ -234,20 +234,20 @@ impl Limits {
 
     /// Where within an interval of length `len` a limit is first crossed: `step(l)` integrates
     /// `l` from the interval's start (within the limits) to a state, and the end state is
-    /// beyond. Returns the elapsed time and the reason: the smallest bisected crossing over the
+    /// beyond. Returns the elapsed time and the kind: the smallest bisected crossing over the
     /// limits the end state exceeds (the end itself when it is non-finite).
     pub(crate) fn locate(
         &self,
         len: f64,
         end: &RigidBodyState,
         mut step: impl FnMut(f64) -> RigidBodyState,
-    ) -> (f64, DivergenceReason) {
+    ) -> (f64, DivergenceKind) {
         if !end.is_finite() {
-            return (len, DivergenceReason::NonFinite);
+            return (len, DivergenceKind::NonFinite);
         }
-        let mut best = (len, DivergenceReason::NonFinite);
+        let mut best = (len, DivergenceKind::NonFinite);
         let mut found = false;
-        for (i, (reason, excess)) in self.exceedances(end).into_iter().enumerate() {
+        for (i, (kind, excess)) in self.exceedances(end).into_iter().enumerate() {
             if excess <= 0.0 {
                 continue;
             }
@@ -274,7 +274,7 @@ impl Limits {
                 }
             }
             if !found || hi < best.0 {
-                best = (hi, reason);
+                best = (hi, kind);
                 found = true;
             }
         }

@@ -10,7 +10,7 @@ use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
 use crate::flight::fault_schedule::{FaultSchedule, RotorFault};
 use crate::flight::simulation::config::SimulationConfig;
-use crate::flight::simulation::divergence::{Divergence, DivergenceReason};
+use crate::flight::simulation::divergence::{Divergence, DivergenceKind};
 use crate::flight::simulation::noise::Gaussian;
 use crate::flight::simulation::onboard::{nan_row, Onboard};
 use crate::flight::simulation::recording::{records, NoObserver, StepObserver, Trajectory};
@@ -125,10 +125,10 @@ pub fn simulate_observed(
             onboard.catch_up(tape, vehicle, 0.0, cancel)?;
         }
     }
-    if let Some(reason) = integrator.limits().reason(&state) {
+    if let Some(kind) = integrator.limits().exceeded(&state) {
         let divergence = Divergence {
             time_s: 0.0,
-            reason,
+            kind,
             state,
         };
         end_with(
@@ -192,7 +192,7 @@ pub fn simulate_observed(
         if records(k, every, steps) || !finite {
             let row = config.noise.map(|_| &measured_vector);
             trajectory.push_step(t, &state, &efficiency, &actuators, row);
-            trajectory.commands.extend_from_slice(&command);
+            trajectory.rotor_command.extend_from_slice(&command);
             if let (Some(record), Some(onboard), Some(estimate)) =
                 (trajectory.sensing.as_mut(), onboard.as_ref(), &estimate)
             {
@@ -202,7 +202,7 @@ pub fn simulate_observed(
         if !finite {
             trajectory.divergence = Some(Divergence {
                 time_s: t,
-                reason: DivergenceReason::NonFiniteCommand,
+                kind: DivergenceKind::NonFiniteCommand,
                 state,
             });
             break;
@@ -247,10 +247,10 @@ pub(super) fn empty_trajectory(config: &SimulationConfig, count: usize, m: usize
     Trajectory {
         t_s: Vec::with_capacity(rows),
         states: Vec::with_capacity(rows),
-        commands: Vec::with_capacity(rows * count),
-        thrust_n: Vec::with_capacity(rows * m),
+        rotor_command: Vec::with_capacity(rows * count),
+        rotor_thrust_n: Vec::with_capacity(rows * m),
         efficiency: Vec::with_capacity(rows * m),
-        measured: Vec::with_capacity(if config.noise.is_some() {
+        recorded_measurements: Vec::with_capacity(if config.noise.is_some() {
             rows * STATE_DIM
         } else {
             0
@@ -351,7 +351,7 @@ pub(super) fn end_with(
         config.noise.map(|_| &nan_row),
     );
     trajectory
-        .commands
+        .rotor_command
         .extend(std::iter::repeat_n(f64::NAN, count));
     observer.step(time_s, &state, &vec![f64::NAN; count], efficiency);
     trajectory.divergence = Some(divergence);

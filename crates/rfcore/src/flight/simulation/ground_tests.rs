@@ -62,8 +62,8 @@ fn a_free_fall_hits_the_ground_at_the_analytic_time_and_speed() {
         );
         let run = fall(x0, &config).unwrap();
         let event = run.divergence.expect("a free fall reaches the ground");
-        assert_eq!(event.reason, DivergenceReason::Crashed);
-        assert_eq!(event.reason.name(), "crashed");
+        assert_eq!(event.kind, DivergenceKind::Crashed);
+        assert_eq!(event.kind.name(), "crashed");
         let time = (2.0 * height_m / g).sqrt();
         let vertical = (2.0 * g * height_m).sqrt();
         let impact = event.impact().unwrap();
@@ -95,7 +95,7 @@ fn a_free_fall_hits_the_ground_at_the_analytic_time_and_speed() {
         // The recorded run ends at the contact: its last row is the event, with NaN commands.
         assert_eq!(*run.t_s.last().unwrap(), event.time_s);
         assert_eq!(*run.states.last().unwrap(), event.state);
-        assert!(run.commands[run.commands.len() - 4..]
+        assert!(run.rotor_command[run.rotor_command.len() - 4..]
             .iter()
             .all(|c| c.is_nan()));
         assert!(run.t_s[run.t_s.len() - 2] < event.time_s);
@@ -122,8 +122,8 @@ fn without_a_ground_the_fall_goes_through_the_plane() {
     assert_eq!(grounded.ground_z_m, Some(DEFAULT_GROUND_Z_M));
     let crashed = fall(above(0.0, 10.0, Vector3::zeros(), 0.0), &grounded).unwrap();
     assert_eq!(
-        crashed.divergence.unwrap().reason,
-        DivergenceReason::Crashed
+        crashed.divergence.unwrap().kind,
+        DivergenceKind::Crashed
     );
 }
 
@@ -156,13 +156,13 @@ fn the_ground_comes_before_a_larger_altitude_loss_limit_and_after_a_smaller_one(
     let mut config = SimulationConfig::new(0.0025, 1, 5.0);
     config.limits.max_altitude_loss_m = 10.5;
     let run = fall(above(0.0, 10.0, Vector3::zeros(), 0.0), &config).unwrap();
-    assert_eq!(run.divergence.unwrap().reason, DivergenceReason::Crashed);
+    assert_eq!(run.divergence.unwrap().kind, DivergenceKind::Crashed);
     config.limits.max_altitude_loss_m = 9.5;
     let event = fall(above(0.0, 10.0, Vector3::zeros(), 0.0), &config)
         .unwrap()
         .divergence
         .unwrap();
-    assert_eq!(event.reason, DivergenceReason::AltitudeLoss);
+    assert_eq!(event.kind, DivergenceKind::AltitudeLoss);
     assert!((event.time_s - (19.0 / g).sqrt()).abs() < 1e-9);
     assert!(event.impact().is_none());
 }
@@ -194,18 +194,18 @@ fn a_batch_crashes_exactly_like_single_runs() {
         assert_eq!(run.divergence, single.divergence);
         // Bit for bit (the crash row's commands are NaN, which `==` never equals).
         let bits = |c: &[f64]| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&run.commands), bits(&single.commands));
+        assert_eq!(bits(&run.rotor_command), bits(&single.rotor_command));
     }
-    let reasons: Vec<_> = batch
+    let kinds: Vec<_> = batch
         .iter()
-        .map(|r| r.divergence.map(|d| d.reason))
+        .map(|r| r.divergence.map(|d| d.kind))
         .collect();
     assert_eq!(
-        reasons,
+        kinds,
         [
-            Some(DivergenceReason::Crashed),
+            Some(DivergenceKind::Crashed),
             None,
-            Some(DivergenceReason::Crashed)
+            Some(DivergenceKind::Crashed)
         ]
     );
 }

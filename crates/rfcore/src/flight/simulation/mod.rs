@@ -26,7 +26,7 @@
 //! `h |omega| = 0.25` loses 1.7e-6 of its amplitude and 8e-6 rad of phase per step (0.5: 1.1e-4
 //! and 2.4e-4; 1: 6e-3), and near 2.8 RK4 is unstable (a torque-free spin diverges). A run is refused when the substep `h = dt /
 //! substeps` times the fastest rate it knows of, `max(|omega_0|, 1 / time_constant)`, exceeds
-//! [`MAX_RATE_STEP`], and it ends with [`DivergenceReason::StepSize`] (a numerical cause, not the
+//! [`MAX_RATE_STEP`], and it ends with [`DivergenceKind::StepSize`] (a numerical cause, not the
 //! vehicle) when `h |omega|` grows past it during the run.
 //!
 //! # Layout (one concept per file; imports run down this list, never back up)
@@ -42,7 +42,7 @@
 //!   the step observer.
 //! - [`sensing`]: which sensors (a named suite) the controller flies on.
 //! - [`noise`]: the papers' sensor noise on what the controller sees.
-//! - [`divergence`]: divergence limits, reasons and events, and how a crossing is located.
+//! - [`divergence`]: divergence limits, kinds and events, and how a crossing is located.
 
 pub mod batch_lanes;
 pub mod columns;
@@ -66,7 +66,7 @@ pub use columns::{simulate_batch_columns, BatchColumns, Column, RunRecord, Sampl
 pub use config::{
     SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS,
 };
-pub use divergence::{Divergence, DivergenceLimits, DivergenceReason, Impact, MAX_RATE_STEP};
+pub use divergence::{Divergence, DivergenceLimits, DivergenceKind, Impact, MAX_RATE_STEP};
 pub use driver::{simulate, simulate_cancellable, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
 pub use recording::{EstimateRow, SensingRecord, StepObserver, Trajectory};

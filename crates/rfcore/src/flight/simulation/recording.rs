@@ -22,15 +22,15 @@ pub struct Trajectory {
     pub t_s: Vec<f64>,
     pub states: Vec<RigidBodyState>,
     /// Commands applied from this step on (`command_count` per row).
-    pub commands: Vec<f64>,
+    pub rotor_command: Vec<f64>,
     /// Thrust each rotor produces at this step, after efficiency (m per row), N.
-    pub thrust_n: Vec<f64>,
+    pub rotor_thrust_n: Vec<f64>,
     /// Health of each rotor at this row's time (m per row): a fault between two rows acts from
     /// its own time and first shows in the row after it.
     pub efficiency: Vec<f64>,
     /// What the controller saw with sensor noise: the 12-element state vector (12 per row);
     /// empty without noise (the controller then saw exactly `states`).
-    pub measured: Vec<f64>,
+    pub recorded_measurements: Vec<f64>,
     pub divergence: Option<Divergence>,
     /// With sensing: the estimate the controller flew on, one row per recorded row.
     pub sensing: Option<SensingRecord>,
@@ -71,7 +71,7 @@ impl Trajectory {
     pub fn sensed(&self) -> &'static str {
         match &self.sensing {
             Some(record) => record.name,
-            None if !self.measured.is_empty() => "paper-noise",
+            None if !self.recorded_measurements.is_empty() => "paper-noise",
             None => "truth",
         }
     }
@@ -89,10 +89,10 @@ impl Trajectory {
         self.t_s.push(t_s);
         self.states.push(*state);
         self.efficiency.extend_from_slice(efficiency);
-        self.thrust_n
+        self.rotor_thrust_n
             .extend((0..efficiency.len()).map(|i| actuators.output(i, efficiency[i]).thrust_n));
         if let Some(row) = measured {
-            self.measured.extend_from_slice(row);
+            self.recorded_measurements.extend_from_slice(row);
         }
     }
 }

@@ -344,13 +344,13 @@ pub(super) fn located_divergence(
             vehicle.wrench_from(x, &tot[node], &w[node])
         })
     };
-    let (elapsed, reason) = limits.locate(len, &next, &mut step);
+    let (elapsed, kind) = limits.locate(len, &next, &mut step);
     let at = if elapsed == len { next } else { step(elapsed) };
     actuators.response(targets, elapsed, &mut channels);
     actuators.set_state(&channels);
     Divergence {
         time_s: a + elapsed,
-        reason,
+        kind,
         state: at,
     }
 }

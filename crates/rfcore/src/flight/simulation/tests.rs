@@ -110,7 +110,7 @@ fn no_thrust_is_free_fall_until_the_altitude_limit() {
     )
     .unwrap();
     let event = run.divergence.unwrap();
-    assert_eq!(event.reason, DivergenceReason::AltitudeLoss);
+    assert_eq!(event.kind, DivergenceKind::AltitudeLoss);
     // 20 m of free fall take sqrt(40 / g) s. The crossing is located within its substep
     // (issue #18: it used to be reported at the next control step, up to dt = 2.5 ms late;
     // the located time can be ~1e-15 s early by rounding).
@@ -146,16 +146,16 @@ fn open_loop_rotor_failure_tumbles_and_is_reported() {
     let event = run
         .divergence
         .expect("a vehicle that loses a rotor in open loop tumbles");
-    assert_eq!(event.reason, DivergenceReason::Tilt);
+    assert_eq!(event.kind, DivergenceKind::Tilt);
     assert!(event.time_s > 1.0 && event.time_s < 3.0, "{}", event.time_s);
     // Health is recorded: 1 before the fault, 0 after.
     let row = |t: f64| (t / 0.0025).round() as usize * 4;
     assert_eq!(run.efficiency[row(0.5)], 1.0);
     assert_eq!(run.efficiency[row(1.2)], 0.0);
-    assert_eq!(run.thrust_n[row(1.2)], 0.0);
-    assert_eq!(run.commands.len(), run.t_s.len() * 4);
+    assert_eq!(run.rotor_thrust_n[row(1.2)], 0.0);
+    assert_eq!(run.rotor_command.len(), run.t_s.len() * 4);
     assert!(
-        run.measured.is_empty(),
+        run.recorded_measurements.is_empty(),
         "no noise, no separate measurements"
     );
 }
@@ -510,7 +510,7 @@ fn simulation_fault_acts_at_its_own_time_not_the_next_substep() {
     // Health rows: full at 0.25 s, halved from the row after the fault (0.30 s).
     assert_eq!(&run.efficiency[5 * 4..6 * 4], &[1.0; 4]);
     assert_eq!(&run.efficiency[6 * 4..7 * 4], &[0.5; 4]);
-    assert_eq!(run.thrust_n[6 * 4], 0.5 * f);
+    assert_eq!(run.rotor_thrust_n[6 * 4], 0.5 * f);
 }
 
 #[test]
@@ -630,8 +630,8 @@ fn simulation_ends_with_a_step_size_divergence_when_rates_outgrow_the_substep() 
     )
     .unwrap();
     let event = run.divergence.expect("the spin-up outgrows h = 0.01 s");
-    assert_eq!(event.reason, DivergenceReason::StepSize);
-    assert_eq!(event.reason.name(), "step-size");
+    assert_eq!(event.kind, DivergenceKind::StepSize);
+    assert_eq!(event.kind.name(), "step-size");
     // r = (4 k_mu d / Jz) t reaches MAX_RATE_STEP / h = 25 rad/s at t = 25 Jz / (4 k_mu d).
     let jz = airframe.inertia_kg_m2()[2];
     let k_mu = airframe.drag_torque_ratio_m();
@@ -668,7 +668,7 @@ fn simulation_locates_a_limit_crossing_within_the_substep() {
     )
     .unwrap();
     let event = run.divergence.unwrap();
-    assert_eq!(event.reason, DivergenceReason::Tilt);
+    assert_eq!(event.kind, DivergenceKind::Tilt);
     let quarter = std::f64::consts::FRAC_PI_4;
     assert!((event.time_s - quarter).abs() < 1e-7, "{}", event.time_s);
     let tilt = event.state.primary_axis().z.acos();
@@ -677,7 +677,7 @@ fn simulation_locates_a_limit_crossing_within_the_substep() {
     assert_eq!(run.t_s.len(), 5, "{:?}", run.t_s);
     assert_eq!(*run.t_s.last().unwrap(), event.time_s);
     assert_eq!(*run.states.last().unwrap(), event.state);
-    assert!(run.commands[4 * 4..].iter().all(|c| c.is_nan()));
+    assert!(run.rotor_command[4 * 4..].iter().all(|c| c.is_nan()));
     // A body rate that grows through its limit inside a substep.
     let mut cfg = SimulationConfig::new(0.05, 1, 60.0);
     cfg.limits.max_rate_rad_s = 0.3;
@@ -695,7 +695,7 @@ fn simulation_locates_a_limit_crossing_within_the_substep() {
     )
     .unwrap();
     let event = run.divergence.unwrap();
-    assert_eq!(event.reason, DivergenceReason::BodyRate);
+    assert_eq!(event.kind, DivergenceKind::BodyRate);
     let expected =
         0.3 * airframe.inertia_kg_m2()[2] / (4.0 * airframe.drag_torque_ratio_m() * 0.01);
     assert!(
