@@ -161,6 +161,32 @@ def test_results_reach_users_as_the_core_returns_them() -> None:
         preset.name = "other"  # type: ignore[misc]
 
 
+def test_an_acai_is_a_float_holding_the_cores_result() -> None:
+    """``AcaiValue`` stays a float (arithmetic, comparison, ``isinstance``) but copies no field:
+    it holds the core's ``AcaiResult`` as returned and reads ``hover`` through it; a value made
+    from Python is checked by the core's parser, with its message; pickles keep the old form, so
+    a pickle written before this change (protocol 2, below) loads."""
+    from rotorfault.analysis import AcaiValue
+
+    value = rf.acai(rf.Airframe.preset("hexa-ppnnpn").with_failed_rotors([5]))
+    core = value._core
+    assert type(core) is _rfcore.AcaiResult and (core.acai, core.hover) == (0.0, "outside") and rf.acai(rf.Airframe.preset("quad-x"))._core.hover_feasible
+    assert isinstance(value, float) and value + 1.0 == 1.0 and value < 0.5 and repr(value) == str(value) == "0.0*"
+    assert value.hover == "outside" and not value.hover_feasible and not hasattr(value, "__dict__")
+    with pytest.raises(AttributeError):
+        value.hover = "inside"  # type: ignore[misc]
+    old = b"\x80\x02crotorfault.analysis.acai\nAcaiValue\nq\x00G\x00\x00\x00\x00\x00\x00\x00\x00X\x07\x00\x00\x00outsideq\x01\x86q\x02Rq\x03."
+    assert pickle.dumps(value, protocol=2) == old
+    back = pickle.loads(old)
+    assert type(back) is AcaiValue and back == value and back.hover == "outside" and repr(back) == "0.0*"
+    made = AcaiValue(1.25, "boundary")
+    assert made._core == _rfcore.AcaiResult(1.25, "boundary") and made.hover_feasible and repr(made) == "1.25"
+    with pytest.raises(ValueError, match=r'^hover: must be "inside", "boundary", "outside" or "rank-deficient", got "above"'):
+        AcaiValue(1.0, "above")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="^hover: expected a str, got int"):
+        AcaiValue(1.0, 1)  # type: ignore[arg-type]
+
+
 def test_a_trajectory_is_the_cores_made_once_and_not_copied() -> None:
     """``rf.Trajectory`` subclasses the core's trajectory (issue 26: no field-by-field mirror):
     the simulator's arrays are made once and reach users by reference; the constructor's shapes

@@ -214,14 +214,26 @@ pub(crate) fn acai_label(formula: &str) -> PyResult<String> {
 }
 
 /// An ACAI with where the hover wrench lies (`inside`, `boundary`, `outside`, `rank-deficient`):
-/// an eq. (13) value is not a distance when the hover point is outside.
+/// an eq. (13) value is not a distance when the hover point is outside. Python's `AcaiValue` (a
+/// float) holds one and reads `hover` through it: the result crosses the boundary once.
 #[pyclass(name = "AcaiResult", module = "rotorfault._rfcore", frozen)]
 pub struct PyAcaiResult {
     inner: AcaiResult,
 }
 
-#[pymethods]
 impl PyAcaiResult {
+    /// The fields as a dataclass prints them (repr, equality, hash), in this order.
+    const FIELDS: &'static [&'static str] = &["acai", "hover"];
+}
+
+value_protocol!(PyAcaiResult, {
+    /// A result from its two fields (`AcaiValue(value, hover)` and its pickles): the hover point
+    /// is parsed by the core's own parser.
+    #[new]
+    fn new(acai: f64, hover: &str) -> PyResult<Self> {
+        let hover = HoverPoint::parse("hover", hover).map_err(to_py_err)?;
+        Ok(PyAcaiResult { inner: AcaiResult { acai, hover } })
+    }
     #[getter]
     fn acai(&self) -> f64 {
         self.inner.acai
@@ -230,7 +242,12 @@ impl PyAcaiResult {
     fn hover(&self) -> &'static str {
         self.inner.hover.name()
     }
-}
+    /// The hover wrench is attainable (inside or on the boundary).
+    #[getter]
+    fn hover_feasible(&self) -> bool {
+        self.inner.hover.is_attainable()
+    }
+});
 
 /// A batch of ACAIs with the hover point of each row as a code (1 inside, 0 on the boundary,
 /// -1 outside, -2 rank deficient: `HoverPoint::code`).

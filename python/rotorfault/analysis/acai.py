@@ -81,7 +81,9 @@ class AcaiValue(float):
     ``hover`` is ``"inside"``, ``"boundary"``, ``"outside"`` or ``"rank-deficient"``. With
     ``formula="eq13"`` a value of ``0.0`` can come with ``hover == "outside"`` (Du Table III's
     PPNNPN with rotor 5 failed): hover is infeasible although the number reads like a boundary.
-    Such a value prints with a star (``0.0*``).
+    Such a value prints with a star (``0.0*``). The float holds the core's result as it is
+    (``_rfcore.AcaiResult``, validated by the core) and reads ``hover`` through it: no copied
+    fields.
 
     Examples:
 
@@ -91,30 +93,42 @@ class AcaiValue(float):
         ('rank-deficient', True)
     """
 
-    hover: HoverPoint
+    __slots__ = ("_core",)
+    _core: _rfcore.AcaiResult
 
     def __new__(cls, value: float, hover: HoverPoint) -> AcaiValue:
+        if not isinstance(hover, str):
+            raise TypeError(f"hover: expected a str, got {type(hover).__name__}")
         obj = super().__new__(cls, value)
-        obj.hover = hover
+        obj._core = _rfcore.AcaiResult(float(obj), hover)
         return obj
+
+    @property
+    def hover(self) -> HoverPoint:
+        """Where the hover wrench lies: ``"inside"``, ``"boundary"``, ``"outside"`` or
+        ``"rank-deficient"``."""
+        return cast(HoverPoint, self._core.hover)
 
     @property
     def hover_feasible(self) -> bool:
         """The hover wrench is attainable (inside or on the boundary)."""
-        return self.hover in ("inside", "boundary")
+        return self._core.hover_feasible
 
     def __repr__(self) -> str:
         text = float.__repr__(self)
-        return text + "*" if self.hover == "outside" and self >= 0.0 else text
+        return text + "*" if self._core.hover == "outside" and self >= 0.0 else text
 
     __str__ = __repr__
 
     def __reduce__(self) -> tuple[type[AcaiValue], tuple[float, HoverPoint]]:
+        # The two fields, as every release has pickled them (old pickles load, new ones load in old releases).
         return (AcaiValue, (float(self), self.hover))
 
     @classmethod
     def _from_core(cls, core: _rfcore.AcaiResult) -> AcaiValue:
-        return cls(core.acai, cast(HoverPoint, core.hover))
+        obj = super().__new__(cls, core.acai)
+        obj._core = core
+        return obj
 
 
 @dataclass(frozen=True)
