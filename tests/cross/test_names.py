@@ -8,13 +8,19 @@
   headers; the old ``..._without_yaw`` attributes warn for one release.
 - **The two ACAI formulas**: every printed ACAI names its formula (``ACAI eq13``, ``ACAI
   facet-margin``).
+- **The core's names are the public ones**: a run's divergence is a ``Divergence`` with its
+  ``kind`` (``DivergenceKind``) in Rust as in Python, and the core's ``Trajectory`` records
+  ``rotor_command``, ``rotor_thrust_n`` and ``recorded_measurements`` (the unit in the Rust name,
+  as ``t_s`` beside Python's ``t``).
 """
 
 from __future__ import annotations
 
 import json
 import math
-from typing import Any
+import re
+from pathlib import Path
+from typing import Any, get_args
 
 import numpy as np
 import pytest
@@ -220,3 +226,26 @@ def test_every_paper_labels_flights_with_the_one_verdict_table() -> None:
     assert [outcomes.verdict_of(c) for c in ("holds-position", "circling", "off-station", "crashed", "tilt", "step-size")] == [
         "holds", "circles", "drifts", "crashed", "diverged", "diverged"]
     assert set(outcomes.VERDICT_MEANINGS) == set(outcomes.VERDICTS)
+
+
+def _pub_fields(source: str, struct: str) -> list[str]:
+    body = re.search(r"pub struct " + struct + r" \{(.*?)\n\}", source, re.S)
+    assert body, struct
+    return re.findall(r"^\s*pub (\w+):", body.group(1), re.M)
+
+
+def test_the_core_names_a_divergence_and_a_trajectory_as_python_does() -> None:
+    from rotorfault._typing import DivergenceKind
+
+    core = Path(__file__).resolve().parents[2] / "crates" / "rfcore" / "src"
+    divergence = (core / "flight" / "simulation" / "divergence.rs").read_text(encoding="utf-8")
+    assert _pub_fields(divergence, "Divergence") == list(rf.Divergence.FIELDS)
+    kinds = re.search(r"pub fn name\(self\) -> &'static str \{(.*?)\n    \}", divergence, re.S)
+    assert "pub enum DivergenceKind {" in divergence and kinds
+    assert tuple(re.findall(r'=> "([a-z-]+)"', kinds.group(1))) == get_args(DivergenceKind)
+    assert not [f for f in core.rglob("*.rs") if "DivergenceReason" in f.read_text(encoding="utf-8")]
+    recording = (core / "flight" / "simulation" / "recording.rs").read_text(encoding="utf-8")
+    # The rows Python splits into columns (states) or sensing fields (sensing) have no one name there.
+    rust = [re.sub(r"_(s|n)$", "", f) for f in _pub_fields(recording, "Trajectory") if f not in ("states", "sensing")]
+    assert rust == ["t", "rotor_command", "rotor_thrust", "efficiency", "recorded_measurements", "divergence"]
+    assert set(rust) <= set(rf.Trajectory.FIELDS)
