@@ -128,6 +128,24 @@ def test_verdicts_cover_the_whole_flight(short_runs: list[lanzon.LanzonRun]) -> 
     assert by[("B", lanzon.IZZ_PROBABLE)] == "diverged"
 
 
+def test_only_the_attitude_outcomes_are_judged_by_the_paper() -> None:
+    """Scenario A's ``level`` / ``not-level`` are this paper's question; every position outcome
+    and divergence kind gets the verdict of ``flight.outcomes`` (one table, not a copy here)."""
+    from types import SimpleNamespace
+    from typing import get_args
+
+    from rotorfault._typing import DivergenceKind, FlightOutcome
+    from rotorfault.flight.outcomes import verdict_of
+
+    def verdict(outcome: str) -> str:
+        return lanzon.flight_verdict(SimpleNamespace(outcome=outcome))  # type: ignore[arg-type]
+
+    assert (verdict("level"), verdict("not-level")) == ("holds", "drifts")
+    for outcome in get_args(FlightOutcome) + get_args(DivergenceKind):
+        assert verdict(outcome) == verdict_of(outcome), outcome
+    assert verdict("circling") == "circles" and verdict("tilt") == "diverged"
+
+
 def test_claims_are_confirmed_only_when_the_flight_holds(short_runs: list[lanzon.LanzonRun]) -> None:
     claims = lanzon.flight_claims(short_runs)
     assert len(claims) == 4 and {c.where for c in claims} == {w for w, _ in lanzon.CLAIMS.values()}

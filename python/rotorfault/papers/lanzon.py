@@ -28,6 +28,7 @@ import numpy as np
 
 from .._util.convert import FloatArray, count, real
 from .._util.tables import Column, Records, Tabular
+from .._typing import FlightVerdict
 from ..control.ke import UniformPassiveFtc
 from ..control.lanzon import LanzonController, LanzonDesign, LanzonVehicle, OuterLoopGains, design
 from ..flight import Noise, RotorFault, Sensing, State, Trajectory, simulate_batch
@@ -36,7 +37,7 @@ from ..plotting.timeseries import plot_lanzon_flight as plot_flight
 from ..plotting.verdicts import plot_verdict_sweep
 from ..studies.engine import run_chunks
 from ..studies.storage import pyarrow_module
-from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text, scoring_window
+from ..flight.outcomes import HOLD_BAND_M, HOLD_SPEED_M_S, WINDOW_S, FlightMetrics, flight_metrics, outcome_text, scoring_window, verdict_of
 from ..flight.outcomes import OUTCOME_LABELS as OUTCOME_TEXT  # noqa: F401  (the one table of outcome words)
 from ..flight.scenarios import FlightScenario as KeScenario  # a generic flight scenario (no paper imports another)
 from ._report import markdown_lines
@@ -311,14 +312,16 @@ def three_way(
 #: 0.5 m/s and turning; ``off-station`` neither), Scenario A's the attitude verdict (``level``:
 #: tilt below 1 deg and spin within 10 % of m g d / k_r over the last 5 s); ``crashed`` is ground
 #: contact; every other loss (tilt, speed, ...) is ``diverged``.
-_VERDICT_OF_OUTCOME = {"holds-position": "holds", "level": "holds", "circling": "circles", "off-station": "drifts",
-                       "not-level": "drifts", "crashed": "crashed"}
+#: Scenario A's own question (level and spinning): its two attitude outcomes as verdicts; every
+#: other outcome is a flight's, judged by ``flight.outcomes.verdict_of`` (the one table).
+_VERDICT_OF_ATTITUDE: dict[str, FlightVerdict] = {"level": "holds", "not-level": "drifts"}
 
 
-def flight_verdict(run: LanzonRun) -> str:
+def flight_verdict(run: LanzonRun) -> FlightVerdict:
     """The whole flight's verdict (``holds``, ``drifts``, ``circles``, ``crashed``,
-    ``diverged``: see ``_VERDICT_OF_OUTCOME``)."""
-    return _VERDICT_OF_OUTCOME.get(run.outcome, "diverged")
+    ``diverged``): Scenario A's ``level`` holds and ``not-level`` drifts; a position outcome or
+    a divergence kind by :func:`~rotorfault.flight.outcomes.verdict_of`."""
+    return _VERDICT_OF_ATTITUDE.get(run.outcome) or verdict_of(run.outcome)
 
 
 def _measurement(run: LanzonRun) -> str:
