@@ -121,10 +121,7 @@ fn without_a_ground_the_fall_goes_through_the_plane() {
     grounded.ground_z_m = SimulationConfig::default().ground_z_m;
     assert_eq!(grounded.ground_z_m, Some(DEFAULT_GROUND_Z_M));
     let crashed = fall(above(0.0, 10.0, Vector3::zeros(), 0.0), &grounded).unwrap();
-    assert_eq!(
-        crashed.divergence.unwrap().kind,
-        DivergenceKind::Crashed
-    );
+    assert_eq!(crashed.divergence.unwrap().kind, DivergenceKind::Crashed);
 }
 
 #[test]
@@ -196,10 +193,7 @@ fn a_batch_crashes_exactly_like_single_runs() {
         let bits = |c: &[f64]| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&run.rotor_command), bits(&single.rotor_command));
     }
-    let kinds: Vec<_> = batch
-        .iter()
-        .map(|r| r.divergence.map(|d| d.kind))
-        .collect();
+    let kinds: Vec<_> = batch.iter().map(|r| r.divergence.map(|d| d.kind)).collect();
     assert_eq!(
         kinds,
         [
