@@ -273,3 +273,31 @@ def test_bad_arguments() -> None:
         relaxed_hover_residual(quad, [0, 0, 0], [0, 0, -2], [3.0] * 4)
     with pytest.raises(ValueError, match="thrust_n"):
         relaxed_hover_residual(quad, [0, 0, 0], [0, 0, -1], [3.0] * 3)
+
+
+def test_a_perturbed_hexacopter_with_a_weak_rotor_keeps_every_thrust_within_its_bound() -> None:
+    """Run 18 of the deciding campaign's hexa-ppnnpn one-rotor-hover draws (mass, inertia and
+    drag-torque ratio perturbed, every rotor's thrust factor below 1, rotor 6 at 22 %): the
+    search's last momentum update left a candidate 0.67 N above rotor 1's bound, and the bounds
+    check refused the whole analysis at grid_points 61 and 81 (41 passed). Now a candidate above
+    a bound is no relaxed hover; the grids agree on the margin."""
+    import numpy as np
+
+    import rotorfault as rf
+
+    p = rf.Airframe.preset("hexa-ppnnpn")
+    airframe = rf.Airframe(
+        p.arm_angle_rad, p.arm_length_m, p.spin_sign, p.max_thrust_n, 1.7938941927291043,
+        np.array([0.044491707407674656, 0.03872806568714513, 0.05583145635022616]), 0.1120644106396252,
+        min_thrust_n=p.min_thrust_n, gravity_m_s2=p.gravity_m_s2,
+        efficiency=np.array([0.9127368989042429, 0.8611405459526587, 0.8020537556573658, 0.8500989107148705, 0.9179771905510096,
+                             0.22204279214404496]),
+    )
+    margins = []
+    for grid_points in (61, 81):
+        best = rf.relaxed_hover(airframe, rf.RelaxedHoverSettings(rotational_drag_n_m_s=2.8e-3, grid_points=grid_points)).best
+        assert best is not None and best.kind == "spinning"
+        upper = airframe.efficiency * airframe.max_thrust_n
+        assert np.all(np.asarray(best.thrust_n) <= upper + 1e-9 * upper.max())
+        margins.append(best.thrust_margin_n)
+    assert margins[0] == pytest.approx(1.3600121013200157, rel=1e-9) and margins[1] == pytest.approx(margins[0], rel=1e-9)

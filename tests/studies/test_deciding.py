@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -140,16 +141,118 @@ def test_the_table_names_each_cell_and_the_best_controllers_miss() -> None:
     assert "misses the target by" in result.table()
 
 
-def test_tiny_suite_through_the_cli(tmp_path: object) -> None:
+def test_tiny_suite_through_the_cli() -> None:
     from click.testing import CliRunner
 
     from rotorfault.cli import cli
 
-    done = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "1", "--format", "json", "--no-progress"])
+    done = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "1", "--no-certify", "--format", "json", "--no-progress"])
     assert done.exit_code == 0, done.output
     data = json.loads(done.output)
     cells = 13 * len(D.CONTROLLERS)
     assert data["mode"] == "suite" and data["cell_count"] == cells and data["runs"] == cells
     assert len(data["cells"]) == cells and len(data["best"]) == 13
+    assert data["certified"] is False and "decision" not in data  # flown without certify: no decision
     bad = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--runs", "0"])
     assert bad.exit_code != 0 and "runs" in bad.output
+
+
+def test_a_dataset_flown_without_certify_is_decided_by_reading_it(tmp_path: Path) -> None:
+    """``--read`` certifies the rows of an existing dataset after the fact (its suite from the
+    manifest), without flying: the same cells, and the decision."""
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    out = tmp_path / "runs"
+    flown = D.run_deciding(D.DecidingCampaign(**X500, certify=False), out=out, progress=False)  # type: ignore[arg-type]
+    read = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--read", str(out), "--format", "json", "--no-progress"])
+    assert read.exit_code == 0, read.output
+    data = json.loads(read.output)
+    assert data["certified"] is True and data["certify_seconds"] > 0 and data["runs"] == 4
+    assert [c["held"] for c in data["cells"]] == [r["held"] for r in flown.cell_rows()]
+    (d,) = data["decision"]
+    assert d["runs"] == 4 and d["survivable"] + d["not_survivable"] + d["check_failed"] == 4
+    bad = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--read", str(out), "--out", str(tmp_path / "x")])
+    assert bad.exit_code != 0 and "read" in bad.output
+
+
+# -- certify per run and the decision --------------------------------------------------------
+
+
+X500 = dict(runs=4, vehicles=("px4-x500",), fault_classes=("one-rotor-hover",), controllers=("ke-robust",))
+
+
+def test_certify_run_is_certify_on_the_runs_own_failed_vehicle() -> None:
+    """The verdict is certify_survival on the run's perturbed vehicle with the failed rotor at its
+    thrust factor times the drawn efficiency, the same for every controller of the draw."""
+    from rotorfault.studies.certify import certify_survival
+
+    suite = D.DecidingCampaign(runs=4, vehicles=("px4-x500",), fault_classes=("one-rotor-hover",))
+    cells = suite.cells
+    for i in range(suite.runs):
+        d = suite.draw(cells[0], i)
+        airframe, actuator, drag = d.failed_vehicle(D.vehicle("px4-x500"))
+        (r,) = d.pattern
+        assert airframe.efficiency[r - 1] == d.thrust_scale[r - 1] * d.efficiency
+        assert airframe.mass_kg == pytest.approx(D.vehicle("px4-x500").airframe.mass_kg * d.mass_scale, rel=1e-15)
+        direct = certify_survival(airframe, drag=drag, actuator=actuator)
+        verdict = D.certify_run(suite, cells[0], i)
+        assert verdict.certified == direct.survival and verdict.static_hover == direct.hover
+        assert all(D.certify_run(suite, c, i) is verdict for c in cells)  # cached per draw, not per controller
+
+
+def test_certified_while_flying_equals_certified_after_the_fact() -> None:
+    flying = D.run_rows(D.DecidingCampaign(**X500), 0, 4)  # type: ignore[arg-type]
+    later_suite = D.DecidingCampaign(**X500, certify=False)  # type: ignore[arg-type]
+    bare = D.run_rows(later_suite, 0, 4)
+    assert set(bare["certified"].tolist()) == {""}
+    later = D.certify_rows(later_suite, bare)
+    for name in ("certified", "certified_static_hover", "certify_note"):
+        assert later[name].tolist() == flying[name].tolist()
+    assert np.array_equal(later["certified_spin_rad_s"], flying["certified_spin_rad_s"], equal_nan=True)
+    assert set(flying["certified"].tolist()) <= set(D.CERTIFIED)
+    # A row another suite drew is refused, naming the row.
+    other = dict(bare, efficiency=bare["efficiency"] + 1e-9)
+    with pytest.raises(ValueError, match="row 0 .* was not drawn by this suite"):
+        D.certify_rows(later_suite, other)
+
+
+def _constructed() -> D.DecidingResult:
+    """Four draws, two controllers; certify: static, spinning, not survivable, spinning; Ke holds
+    runs 0 and 2, INDI runs 0 and 1 (by hand: 3 survivable, INDI best with 2 of 3, run 3 held by
+    nobody, run 2 not survivable and held by Ke)."""
+    suite = D.DecidingCampaign(runs=4, vehicles=("px4-x500",), fault_classes=("one-rotor-hover",),
+                               controllers=("ke-robust", "indi-controller"), certify=False)
+    certified = ["static-hover", "spinning", "not-survivable", "spinning"] * 2
+    columns = {
+        "vehicle": np.array(["px4-x500"] * 8, dtype=object), "fault_class": np.array(["one-rotor-hover"] * 8, dtype=object),
+        "controller": np.array(["ke-robust"] * 4 + ["indi-controller"] * 4, dtype=object), "index": np.array([0, 1, 2, 3] * 2),
+        "certified": np.array(certified, dtype=object), "certified_static_hover": np.array(["all-axes", "no", "no", "no"] * 2, dtype=object),
+        "holds": np.array([True, False, True, False, True, True, False, False]), "failed_rotors": np.array(["1"] * 8, dtype=object),
+        "efficiency": np.full(8, 0.5), "wind_speed_m_s": np.full(8, 1.0),
+    }
+    return D.DecidingResult(suite, columns)
+
+
+def _check_decision(result: D.DecidingResult) -> None:
+    (d,) = result.decision()
+    assert (d["runs"], d["survivable"], d["static_hover"], d["spinning"], d["not_survivable"]) == (4, 3, 1, 2, 1)
+    assert (d["controller"], d["held"]) == ("indi-controller", 2) and d["share"] == pytest.approx(2 / 3)
+    assert d["miss"] == pytest.approx(D.TARGET_SHARE - 2 / 3) and d["low"] < 2 / 3 < d["high"]
+    assert (d["all_fail"], d["not_survivable_held"]) == (1, 1)
+    assert [(r["index"], r["held_by"]) for r in result.contradictions()] == [(2, "ke-robust")]
+
+
+def test_the_decision_counts_by_hand_and_a_broken_rule_is_caught(monkeypatch: pytest.MonkeyPatch) -> None:
+    result = _constructed()
+    _check_decision(result)
+    # Break the rule (judge the target over every run, as best() does): the check fails.
+    monkeypatch.setattr(D, "SURVIVABLE", D.CERTIFIED)
+    with pytest.raises(AssertionError):
+        _check_decision(result)
+    monkeypatch.undo()
+    # Rows without the verdict have no decision.
+    bare = D.DecidingResult(result.suite, {**result.columns, "certified": np.array([""] * 8, dtype=object)})
+    with pytest.raises(ValueError, match="certified"):
+        bare.decision()

@@ -5,15 +5,138 @@ fault class against the 95 % target, and how many runs stand behind each cell. C
 
 from __future__ import annotations
 
+import json
 import math
 import time
+from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from ._report import ReportSection, ReportTable
 
 #: Runs per cell: the full report (the issue's 1,000) and ``--quick`` (a smoke test of the table).
 FULL_RUNS = 1000
 QUICK_RUNS = 6
+#: The recorded full run (``benches/deciding_record.py``): shown beside the live table, labelled.
+RECORD = "deciding_full_run.json"
+RECORD_CELL_KEYS = ("vehicle", "fault_class", "controller", "runs", "not_applicable", "held", "share", "refused", "lost")
+RECORD_DECISION_KEYS = ("vehicle", "fault_class", "runs", "survivable", "static_hover", "spinning", "not_survivable", "check_failed",
+                        "controller", "held", "share", "low", "high", "miss", "all_fail", "not_survivable_held")
+
+
+def recorded_full_run() -> dict[str, Any]:
+    """The committed record of the full campaign (``bench_results/deciding_full_run.json``), checked
+    against the code: its cells are the suite's cells (same vehicles, fault classes, controllers,
+    in order, the suite's runs each), its decision rows the suite's (vehicle, fault class) pairs
+    with counts that add up; a mismatch is a ``ValueError`` naming the field (a stale record)."""
+    path = resources.files("rotorfault.papers").joinpath("bench_results", RECORD)
+    return check_record(json.loads(path.read_text(encoding="utf-8")))
+
+
+def check_record(data: dict[str, Any]) -> dict[str, Any]:
+    """:func:`recorded_full_run`'s checks on a record already read (``data``, returned as is)."""
+    from ..studies import deciding as D
+
+    run = data.get("campaign")
+    if not isinstance(run, dict):
+        raise ValueError(f"{RECORD}: campaign is missing")
+    for key in ("command", "commit", "flown", "flown_on", "flight_seconds", "suite", "cells", "certified", "decision", "contradictions"):
+        if key not in run:
+            raise ValueError(f"{RECORD}: campaign.{key} is missing")
+    suite = D.DecidingCampaign.from_dict(run["suite"])
+    cells = run["cells"]
+    if [(c["vehicle"], c["fault_class"], c["controller"]) for c in cells] != [(c.vehicle, c.fault_class, c.controller) for c in suite.cells]:
+        raise ValueError(f"{RECORD}: campaign.cells are not the suite's cells (vehicles, fault classes, controllers, order)")
+    for k, c in enumerate(cells):
+        if set(c) != set(RECORD_CELL_KEYS):
+            raise ValueError(f"{RECORD}: campaign.cells[{k}] has fields {sorted(c)}, expected {sorted(RECORD_CELL_KEYS)}")
+        if c["runs"] + c["not_applicable"] != suite.runs or not 0 <= c["held"] <= c["runs"] or c["lost"] + c["refused"] > c["runs"]:
+            raise ValueError(f"{RECORD}: campaign.cells[{k}] counts do not add up to {suite.runs} runs")
+    pairs = list(dict.fromkeys((c.vehicle, c.fault_class) for c in suite.cells))
+    decision = run["decision"]
+    if [(d["vehicle"], d["fault_class"]) for d in decision] != pairs:
+        raise ValueError(f"{RECORD}: campaign.decision rows are not the suite's vehicle and fault class pairs")
+    held = {(c["vehicle"], c["fault_class"], c["controller"]): c["held"] for c in cells}
+    for k, d in enumerate(decision):
+        if set(d) != set(RECORD_DECISION_KEYS):
+            raise ValueError(f"{RECORD}: campaign.decision[{k}] has fields {sorted(d)}, expected {sorted(RECORD_DECISION_KEYS)}")
+        if (d["static_hover"] + d["spinning"] != d["survivable"] or d["survivable"] + d["not_survivable"] + d["check_failed"] != d["runs"]
+                or d["runs"] > suite.runs or not 0 <= d["held"] <= d["survivable"] or d["all_fail"] > d["survivable"] - d["held"]
+                or d["held"] > held[(d["vehicle"], d["fault_class"], d["controller"])]):
+            raise ValueError(f"{RECORD}: campaign.decision[{k}] counts do not add up")
+        if d["survivable"] and not math.isclose(d["share"], d["held"] / d["survivable"], rel_tol=1e-12):
+            raise ValueError(f"{RECORD}: campaign.decision[{k}].share is not held / survivable")
+    return data
+
+
+def _recorded_tables(section: ReportSection) -> None:
+    """The recorded full run beside the live table, labelled with what was run, when, on which commit."""
+    from ..studies import deciding as D
+
+    data = recorded_full_run()
+    run = data["campaign"]
+    cert = run["certified"]
+    label = (f"Recorded full run (not flown by this report): `{run['command']}` on commit {run['commit']}, flown {run['flown']} "
+             f"({run['flown_on']}), {run['flight_seconds']:.1f} s; certify per run: {cert['how']} on commit {cert['commit']} "
+             f"({cert['draws']:,} draws, {cert['seconds']:.0f} s of certify")
+    label += f", {cert['seconds'] / cert['draws_timed']:.2f} s per draw)." if cert["draws_timed"] else ")."
+    section.tables.append(ReportTable(
+        f"{label} Hold share per cell over all runs (whatever certify says of them).",
+        ("vehicle", "fault class", "controller", "held", "hold share", "lost", "design refused"),
+        tuple((c["vehicle"], c["fault_class"], c["controller"], f"{c['held']}/{c['runs']}" if c["runs"] else "not applicable",
+               f"{100 * c['share']:.1f} %" if c["runs"] else "", str(c["lost"]) if c["runs"] else "", str(c["refused"]) if c["runs"] else "")
+              for c in run["cells"]),
+    ))
+    section.tables.append(ReportTable(
+        f"{label} The decision: per vehicle and fault class, the runs certify calls survivable on the run's own vehicle and fault "
+        f"(static hover / spinning), the best controller's hold share over them (95 % Wilson interval; a run its controller does not "
+        f"apply to counts as not held) against the target (>= {100 * D.TARGET_SHARE:.0f} %), the survivable runs no controller holds "
+        f"(target 0) and the runs certified not survivable that a controller holds ({len(run['contradictions'])} listed in the record).",
+        ("vehicle", "fault class", "certified survivable (static / spinning)", "not survivable", "check failed", "best controller",
+         "holds (95 % CI)", "misses the target by", "all fail", "not survivable, held"),
+        tuple(_decision_row(d) for d in run["decision"]),
+    ))
+    if run["contradictions"]:
+        section.tables.append(ReportTable(
+            f"{label} Runs certified not survivable that a controller holds (a certify error or a hold-rule gap): "
+            f"{run.get('contradictions_why', '')}",
+            ("vehicle", "fault class", "run", "failed rotors", "efficiency", "static class", "wind (m/s)", "held by"),
+            tuple((r["vehicle"], r["fault_class"], str(r["index"]), r["failed_rotors"], f"{r['efficiency']:.3f}", r["static_hover"],
+                   f"{r['wind_speed_m_s']:.1f}", r["held_by"]) for r in run["contradictions"]),
+        ))
+    misses = {(m["vehicle"], m["fault_class"]): m for m in run.get("misses", [])}
+    rows = []
+    for d in run["decision"]:
+        m = misses.get((d["vehicle"], d["fault_class"]))
+        if m is None:
+            continue
+        outcomes = ", ".join(f"{n} {k}" for k, n in sorted(m["outcomes"].items(), key=lambda kv: -kv[1]))
+        bins = ", ".join(f"{b['efficiency']}: {b['missed']}/{b['survivable']}" for b in m["by_efficiency"])
+        lost = m["lost_after_failure_median_s"]
+        tilt = m["peak_tilt_median_deg"]
+        others = ", ".join(f"{k} {n}" for k, n in m["held_by_another"].items() if n) or "none"
+        rows.append((f"{d['vehicle']} {d['fault_class']}", f"{d['controller']}: {100 * d['miss']:.1f} points short "
+                     f"({d['held']}/{d['survivable']})", f"{m['missed']} not held: {outcomes}; by efficiency (not held / survivable) {bins}; "
+                     f"wind median {m['wind_median_m_s']:.1f} m/s (all {m['wind_median_all_m_s']:.1f}); lost "
+                     f"{'-' if lost is None else f'{lost:.1f} s'} after the failure (median), peak tilt {'-' if tilt is None else f'{tilt:.0f} deg'}; "
+                     f"held instead by {others}; certify's spin at its search limit (200 rad/s) in {m.get('spin_at_search_limit', 0)}",
+                     m.get("why", "")))
+    if rows:
+        section.tables.append(ReportTable(
+            f"{label} Where the target is missed after the certify split: which cell, by how much, the measurement (the survivable runs "
+            "the best controller does not hold) and why.",
+            ("cell", "best controller, miss", "measurement", "why"), tuple(rows),
+        ))
+
+
+def _decision_row(d: dict[str, Any]) -> tuple[str, ...]:
+    if d["survivable"] == 0:
+        holds, miss = "-", "no survivable run"
+    else:
+        holds = f"{d['held']}/{d['survivable']} = {100 * d['share']:.1f} % [{100 * d['low']:.1f}, {100 * d['high']:.1f}]"
+        miss = "met" if d["miss"] == 0 else f"{100 * d['miss']:.1f} points"
+    return (d["vehicle"], d["fault_class"], f"{d['survivable']} ({d['static_hover']} / {d['spinning']})", str(d["not_survivable"]),
+            str(d["check_failed"]), d["controller"], holds, miss, str(d["all_fail"]), str(d["not_survivable_held"]))
 
 
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
@@ -46,6 +169,15 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         tuple((b["vehicle"], b["fault_class"], b["controller"], f"{100 * b['share']:.1f} %",
                "met" if b["miss"] == 0 else f"{100 * b['miss']:.1f} points") for b in result.best()),
     ))
+    section.tables.append(ReportTable(
+        f"The decision from this report's own {runs} runs per cell: certify on each run's own vehicle and fault, the best controller "
+        f"over the runs certified survivable against the target (>= {100 * D.TARGET_SHARE:.0f} %), survivable runs no controller holds, "
+        "runs certified not survivable that a controller holds",
+        ("vehicle", "fault class", "certified survivable (static / spinning)", "not survivable", "check failed", "best controller",
+         "holds (95 % CI)", "misses the target by", "all fail", "not survivable, held"),
+        tuple(_decision_row(d) for d in result.decision()),
+    ))
+    _recorded_tables(section)
     section.notes.append(
         f"{suite.total_runs:,} rows ({len(suite.cells)} cells x {runs}) in {result.seconds:.1f} s. Each controller is designed on the "
         "nominal vehicle; every run flies a vehicle with mass, inertia, thrust and drag-torque coefficients and motor time constant "
@@ -88,4 +220,4 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
     ))
 
 
-__all__ = ["FULL_RUNS", "QUICK_RUNS", "report_section"]
+__all__ = ["FULL_RUNS", "QUICK_RUNS", "RECORD", "check_record", "recorded_full_run", "report_section"]

@@ -308,6 +308,70 @@ def _relaxed_hover_verdict(
     )
 
 
+#: How a vehicle as it is (its efficiencies: a failed rotor's drawn share of thrust) survives:
+#: ``static-hover`` (hovers at rest with all four axes, or its best relaxed hover is static),
+#: ``spinning`` (a relaxed hover a linear feedback can hold, its entry from hover not excluded) or
+#: ``not-survivable``.
+Survival = Literal["static-hover", "spinning", "not-survivable"]
+
+
+@dataclass(frozen=True)
+class SurvivalVerdict:
+    """:func:`certify_survival`'s answer: ``survival`` (:data:`Survival`), the static class of the
+    vehicle as it is (``hover``: ``all-axes``, ``give-up-yaw``, ``no``) and the relaxed hover
+    verdict that decided a vehicle without all-axes static hover (``None`` where static hover
+    with all four axes decided: the search is not run)."""
+
+    survival: Survival
+    hover: Hover
+    relaxed_hover: RelaxedHoverVerdict | None
+
+    @property
+    def survivable(self) -> bool:
+        return self.survival != "not-survivable"
+
+
+def certify_survival(
+    airframe: Airframe,
+    *,
+    settings: RelaxedHoverSettings | None = None,
+    drag: Drag | None = None,
+    actuator: FixedPitchActuator | None = None,
+) -> SurvivalVerdict:
+    """Certify's verdict on one vehicle as it is, with its efficiencies (a partial loss: the
+    rotor's efficiency; a total one: 0), not a list of failure combinations: static hover with
+    all four axes (Du's ACAI facet margin > 0) is ``static-hover`` and ends there; otherwise the
+    best relaxed hover (as :func:`certify` with ``spinning=True`` computes it, same ``settings``,
+    ``drag``, ``actuator``) decides: static, spinning and not excluded from hover
+    (:func:`rotorfault.analysis.entry_from_hover`), or ``not-survivable``. A static hover that
+    exists only by giving up yaw is not enough alone: its yaw torque is not balanced, so it
+    survives only where a relaxed hover (a constant spin) holds it.
+
+    Examples:
+
+        >>> import rotorfault as rf
+        >>> from rotorfault.studies.certify import certify_survival
+        >>> quad = rf.Airframe.preset("ke-quadcopter")
+        >>> certify_survival(quad.with_efficiency([1, 0.9, 1, 1])).survival
+        'static-hover'
+        >>> verdict = certify_survival(quad.with_failed_rotors([1]), drag=rf.Drag(rotational_n_m_s=2.8e-3))
+        >>> verdict.survival, verdict.hover, round(verdict.relaxed_hover.spin_rate_rad_s, 2)
+        ('spinning', 'no', 15.22)
+    """
+    airframe = require_airframe(airframe)
+    row = failure_table(airframe, max_failed=0, formula=FORMULA)[0]
+    hover: Hover = "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
+    if hover == "all-axes":
+        return SurvivalVerdict("static-hover", hover, None)
+    verdict = _relaxed_hover_verdict(airframe, settings, drag, actuator)
+    survival: Survival = "not-survivable"
+    if verdict.hover == "static":
+        survival = "static-hover"
+    elif verdict.reachable_from_hover:
+        survival = "spinning"
+    return SurvivalVerdict(survival, hover, verdict)
+
+
 def describe_relaxed_hover(verdict: RelaxedHoverVerdict | None) -> str:
     """One cell of the table: ``spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4``; a spin
     that cannot be entered from hover says so, with the numbers that decide it."""

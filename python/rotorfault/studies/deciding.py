@@ -42,6 +42,14 @@ Decisions (gaps of the issue, stated once):
   rotor at most that much weaker than it is; a relaxed hover search per run would dominate the
   campaign's time); a failure with no relaxed hover a linear feedback can hold is
   ``design-refused``;
+- certify per run (the issue's target is "where certify says survivable"): each run's own vehicle
+  after its failure (perturbed mass, inertia, thrust and torque coefficients, rotor lag; the failed
+  rotors at their thrust factor times the drawn efficiency) is certified by
+  :func:`rotorfault.studies.certify.certify_survival` (static hover with all four axes, else the
+  best relaxed hover, spinning only where its entry from hover is not excluded), once per draw
+  (every controller of a vehicle and fault class flies the same draws); wind and gusts are the
+  flight's, not certify's. :meth:`DecidingResult.decision` judges the target over the runs
+  certified survivable; :func:`read_deciding` certifies an existing dataset without flying;
 - Lanzon's controller is designed for rotor 2 already lost (it commands rotor 2 to zero from the
   start; no pre-failure mode) and for plus quadrotors only: its cells are those of the Lanzon
   quadrotor with rotor 2 failing, the rest are marked "not applicable" with the reason.
@@ -313,6 +321,9 @@ class DecidingCampaign:
     fault_classes: tuple[str, ...] = tuple(FAULT_CLASSES)
     controllers: tuple[str, ...] = tuple(CONTROLLERS)
     chunk_size: int = 100
+    #: Certify each run's own vehicle and fault while flying (:func:`certify_run`; the column
+    #: ``certified``); without it the column is empty and :func:`certify_rows` adds it afterwards.
+    certify: bool = True
     _cells: tuple[Cell, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -320,6 +331,8 @@ class DecidingCampaign:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
                 raise TypeError(f"{name}: expected an integer, got {v!r}")
+        if not isinstance(self.certify, bool):
+            raise TypeError(f"certify: expected True or False, got {self.certify!r}")
         if self.runs < 1:
             raise ValueError(f"runs: must be >= 1, got {self.runs}")
         if self.chunk_size < 1:
@@ -354,7 +367,17 @@ class DecidingCampaign:
 
     def to_dict(self) -> dict[str, Any]:
         return {"runs": self.runs, "seed": self.seed, "vehicles": list(self.vehicles), "fault_classes": list(self.fault_classes),
-                "controllers": list(self.controllers), "chunk_size": self.chunk_size}
+                "controllers": list(self.controllers), "chunk_size": self.chunk_size, "certify": self.certify}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> DecidingCampaign:
+        """The suite of :meth:`to_dict` (a dataset's manifest; one written before ``certify``
+        existed reads as ``certify=False``: its rows carry no verdict)."""
+        known = {"runs", "seed", "vehicles", "fault_classes", "controllers", "chunk_size", "certify"}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"suite: unknown field(s) {', '.join(unknown)}")
+        return cls(**{"certify": False, **data})
 
     def refly(self, cell: Cell, index: int) -> tuple[Any, RunDraw]:
         """Run ``index`` of ``cell`` flown again in full (every control step recorded) and its
@@ -372,9 +395,15 @@ class DecidingCampaign:
 
     def draw(self, cell: Cell, index: int) -> RunDraw:
         """Run ``index`` of ``cell``: the same for every controller of that vehicle and fault class."""
+        return self.draw_of(self.seed, cell, index)
+
+    @staticmethod
+    def draw_of(seed: int, cell: Cell, index: int) -> RunDraw:
+        """:meth:`draw` for a suite of ``seed`` (what a draw depends on: the seed, the cell's
+        vehicle, fault class and draw key, the index)."""
         v = vehicle(cell.vehicle)
         fc = FAULT_CLASSES[cell.fault_class]
-        rng = np.random.default_rng((self.seed, cell.draw_key, index))
+        rng = np.random.default_rng((seed, cell.draw_key, index))
         patterns = fc.patterns(v)
         pattern = patterns[int(rng.integers(len(patterns)))]
         t_fault = float(rng.uniform(*(FORWARD_FAULT_S if fc.forward else HOVER_FAULT_S)))
@@ -441,6 +470,15 @@ class RunDraw:
     def vehicle_parts(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
         return scaled_parts(v.airframe, v, self)
 
+    def failed_vehicle(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
+        """The run's vehicle after its failure (what it must survive): its perturbed parts with
+        each failed rotor at its thrust factor times the drawn efficiency (:meth:`faults`)."""
+        airframe, actuator, drag = self.vehicle_parts(v)
+        efficiency = np.array(self.thrust_scale, dtype=np.float64)
+        for f in self.faults():
+            efficiency[f.rotor - 1] = f.efficiency
+        return airframe.with_efficiency(efficiency), actuator, drag
+
 
 def hold_errors(t_s: Any, position_m: Any, fault_time_s: float, setpoint_m: Any = HOVER_M) -> tuple[float, float]:
     """Largest altitude and horizontal errors from ``SETTLE_S`` after ``fault_time_s`` to the end of
@@ -470,15 +508,136 @@ def holds(outcome: Any, window_altitude_m: Any, window_horizontal_m: Any) -> np.
         return np.isin(np.asarray(outcome), FLYING) & (alt <= HOLD_ALTITUDE_M) & (hor <= HOLD_HORIZONTAL_M)
 
 
+# -- certify per run ----------------------------------------------------------------------------
+
+#: certify's verdict on a run (:func:`certify_run`): the three of
+#: :data:`rotorfault.studies.certify.Survival`, or ``check-failed`` when the relaxed hover search
+#: refused its own answer (the reason in ``certify_note``): counted apart, never as either side.
+CERTIFIED = ("static-hover", "spinning", "not-survivable", "check-failed")
+SURVIVABLE = ("static-hover", "spinning")
+
+
+@dataclass(frozen=True)
+class RunCertificate:
+    """certify on one run's own vehicle and fault (:func:`certify_run`): ``certified`` (one of
+    :data:`CERTIFIED`), the static class of the failed vehicle (``static_hover``: ``all-axes``,
+    ``give-up-yaw``, ``no``), the relaxed hover's spin rate (rad/s; NaN when static hover decided
+    or none exists) and ``note`` (why a check failed)."""
+
+    certified: str
+    static_hover: str
+    spin_rate_rad_s: float = math.nan
+    note: str = ""
+
+
+@functools.lru_cache(maxsize=1 << 16)  # per draw, not per controller: the cells of one draw key share it
+def _certificate(seed: int, draw_key: int, vehicle_name: str, fault_class: str, index: int) -> RunCertificate:
+    from .certify import certify_survival
+
+    d = DecidingCampaign.draw_of(seed, Cell(vehicle_name, fault_class, "", draw_key), index)
+    airframe, actuator, drag = d.failed_vehicle(vehicle(vehicle_name))
+    try:
+        verdict = certify_survival(airframe, drag=drag, actuator=actuator)
+    except ValueError as exc:
+        # The search's own check refused its answer: a verdict we cannot give, said so.
+        return RunCertificate("check-failed", "", math.nan, str(exc)[:300])
+    spin = verdict.relaxed_hover.spin_rate_rad_s if verdict.relaxed_hover is not None else math.nan
+    return RunCertificate(verdict.survival, verdict.hover, float(spin), "")
+
+
+def certify_run(suite: DecidingCampaign, cell: Cell, index: int) -> RunCertificate:
+    """certify's verdict on run ``index`` of ``cell``: on that run's own vehicle (its perturbed
+    mass, inertia, thrust and torque coefficients, rotor lag) with the failed rotors at their
+    drawn efficiency (:meth:`RunDraw.failed_vehicle`), by
+    :func:`rotorfault.studies.certify.certify_survival`. The same for every controller of the
+    cell's vehicle and fault class (cached per draw). Wind and gusts are not certify's question."""
+    return _certificate(suite.seed, cell.draw_key, cell.vehicle, cell.fault_class, index)
+
+
+def certify_rows(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]], *, progress: bool = False) -> dict[str, np.ndarray[Any, Any]]:
+    """``columns`` (rows of ``suite``, e.g. a dataset flown without the verdict) with the certify
+    columns filled, without flying: each row's draw is drawn again from the seed and its index
+    and checked against the row (failed rotors, fault time, efficiency, mass scale: a dataset of
+    another suite or code is refused, naming the row), then certified once per draw."""
+    out = dict(columns)
+    n = len(columns["vehicle"])
+    cells = {(c.vehicle, c.fault_class): c for c in suite.cells}
+    verdicts: list[RunCertificate] = []
+    keys = list(zip(columns["vehicle"].tolist(), columns["fault_class"].tolist(), columns["index"].tolist()))
+    drawn: dict[tuple[str, str, int], RunCertificate] = {}
+    bar = None
+    if progress:
+        from rich.progress import Progress
+
+        bar = Progress(transient=True)
+        bar.start()
+        task = bar.add_task("certify", total=len(set(keys)))
+    try:
+        for k, key in enumerate(keys):
+            if key not in drawn:
+                cell = cells.get(key[:2])
+                if cell is None:
+                    raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}) is not a cell of the suite")
+                d = suite.draw(cell, int(key[2]))
+                recorded = (columns["failed_rotors"][k], float(columns["fault_time_s"][k]), float(columns["efficiency"][k]), float(columns["mass_scale"][k]))
+                if recorded != ("-".join(map(str, d.pattern)), d.fault_time_s, d.efficiency, d.mass_scale):
+                    raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
+                                     f"recorded {recorded}, drawn {(d.pattern, d.fault_time_s, d.efficiency, d.mass_scale)}")
+                drawn[key] = certify_run(suite, cell, int(key[2]))
+                if bar is not None:
+                    bar.advance(task)
+            verdicts.append(drawn[key])
+    finally:
+        if bar is not None:
+            bar.stop()
+    out["certified"] = np.array([v.certified for v in verdicts], dtype=object)
+    out["certified_static_hover"] = np.array([v.static_hover for v in verdicts], dtype=object)
+    out["certified_spin_rad_s"] = np.array([v.spin_rate_rad_s for v in verdicts], dtype=np.float64).reshape(n)
+    out["certify_note"] = np.array([v.note for v in verdicts], dtype=object)
+    return out
+
+
+def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: bool = False) -> DecidingResult:
+    """A deciding campaign's Parquet dataset (``run_deciding(..., out=path)``) read back, its
+    suite from the manifest; ``certify``: rows without the verdict (flown with ``certify=False``
+    or before it existed) certified after the fact (:func:`certify_rows`), timed in
+    ``certify_seconds``."""
+    import time
+
+    from .storage import iter_tables, pyarrow_module, read_manifest
+    from .summaries import numpy_columns
+
+    manifest = read_manifest(path)
+    if manifest.get("kind") != KIND:
+        raise ValueError(f"path: {path} is not a deciding campaign (kind {manifest.get('kind')!r}, expected {KIND!r})")
+    suite = DecidingCampaign.from_dict(manifest["arguments"]["suite"])
+    columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(path))))
+    seconds = 0.0
+    if "certified" not in columns or (certify and not suite.certify):
+        if not certify:
+            columns = {**columns, **{name: np.full(len(columns["vehicle"]), "" if kind == "string" else math.nan, dtype=object if kind == "string" else np.float64)
+                                     for name, kind in _CERTIFY_COLUMNS}}
+        else:
+            start = time.perf_counter()
+            columns = certify_rows(suite, columns, progress=progress)
+            seconds = time.perf_counter() - start
+    return DecidingResult(suite, columns, certify_seconds=seconds)
+
+
 # -- execution ----------------------------------------------------------------------------------
 
 KIND = "rotorfault-deciding-campaign"
+#: certify's verdict per run (:func:`certify_run`; empty strings and NaN where not certified).
+_CERTIFY_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("certified", "string"), ("certified_static_hover", "string"), ("certified_spin_rad_s", "float64"), ("certify_note", "string"),
+)
 _COLUMNS: tuple[tuple[str, str], ...] = (
     ("vehicle", "string"), ("fault_class", "string"), ("controller", "string"), ("index", "int64"),
     ("failed_rotors", "string"), ("fault_time_s", "float64"), ("efficiency", "float64"), ("wind_speed_m_s", "float64"),
     ("gust_peak_m_s", "float64"), ("mass_scale", "float64"), ("applicable", "bool"), ("note", "string"), ("outcome", "string"),
     ("holds", "bool"), ("hold_altitude_error_m", "float64"), ("hold_horizontal_error_m", "float64"), ("lost_at_s", "float64"),
     ("steady_spin_rad_s", "float64"), ("peak_tilt_rad", "float64"),
+    *_CERTIFY_COLUMNS,
 )
 
 
@@ -506,7 +665,12 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         row = {"vehicle": cell.vehicle, "fault_class": cell.fault_class, "controller": cell.controller, "index": d.index,
                "failed_rotors": "-".join(map(str, d.pattern)), "fault_time_s": d.fault_time_s, "efficiency": d.efficiency,
                "wind_speed_m_s": math.hypot(*d.wind_m_s), "gust_peak_m_s": math.hypot(*d.gust_m_s), "mass_scale": d.mass_scale,
-               "applicable": note is None, "note": note or "", "outcome": "not-flown", "holds": False}
+               "applicable": note is None, "note": note or "", "outcome": "not-flown", "holds": False,
+               "certified": "", "certified_static_hover": "", "certify_note": ""}
+        if suite.certify:
+            verdict = certify_run(suite, cell, d.index)
+            row.update(certified=verdict.certified, certified_static_hover=verdict.static_hover,
+                       certified_spin_rad_s=verdict.spin_rate_rad_s, certify_note=verdict.note)
         rows.append(row)
         if note is not None:
             continue
@@ -600,6 +764,8 @@ class DecidingResult:
     suite: DecidingCampaign
     columns: Mapping[str, np.ndarray[Any, Any]]
     seconds: float = 0.0
+    #: Time to certify the rows after the fact (:func:`read_deciding`; 0 when flown with them).
+    certify_seconds: float = 0.0
 
     def cell_rows(self) -> list[dict[str, Any]]:
         """One row per cell: hold share (with its 95 % Wilson interval), worst hold-window
@@ -635,8 +801,9 @@ class DecidingResult:
         return out
 
     def best(self) -> list[dict[str, Any]]:
-        """Per (vehicle, fault class): the controller with the highest hold share and its miss of
-        :data:`TARGET_SHARE` (0 when met)."""
+        """Per (vehicle, fault class): the controller with the highest hold share over *all* runs
+        (whatever certify says of them) and its miss of :data:`TARGET_SHARE` (0 when met); the
+        issue's target is judged by :meth:`decision`, over the runs certified survivable."""
         best: dict[tuple[str, str], dict[str, Any]] = {}
         for r in self.cell_rows():
             if r["runs"] == 0:
@@ -646,6 +813,98 @@ class DecidingResult:
                 best[key] = r
         return [{"vehicle": k[0], "fault_class": k[1], "controller": r["controller"], "share": r["share"],
                  "miss": max(0.0, TARGET_SHARE - r["share"])} for k, r in best.items()]
+
+    def decision(self) -> list[dict[str, Any]]:
+        """The issue's decision per (vehicle, fault class), from the rows' certify verdicts
+        (``certified``): the runs certify calls survivable (static hover or spinning) and how they
+        split; the best controller over those runs (its hold share, with the 95 % Wilson interval:
+        a run its controller does not apply to counts as not held, so every controller is judged
+        on the same runs) and its miss of :data:`TARGET_SHARE` (0 when met); ``all_fail``: runs
+        certified survivable that no controller holds (the target: 0); ``not_survivable_held``:
+        runs certified not survivable that some controller holds (a certify error or a hold-rule
+        gap: :meth:`contradictions` lists them); ``check_failed``: runs certify could not judge.
+        ``ValueError`` when the rows carry no verdict (flown with ``certify=False``:
+        :func:`certify_rows`)."""
+        from .summaries import wilson_interval
+
+        c = self.columns
+        certified = c.get("certified")
+        if certified is None or np.any(certified == ""):
+            raise ValueError("certified: the rows carry no certify verdict; certify them first (certify_rows, read_deciding)")
+        out = []
+        for key in dict.fromkeys((cell.vehicle, cell.fault_class) for cell in self.suite.cells):
+            controllers = [cell.controller for cell in self.suite.cells if (cell.vehicle, cell.fault_class) == key]
+            pair = (c["vehicle"] == key[0]) & (c["fault_class"] == key[1])
+            # One verdict per draw: the first controller's rows stand for the draws.
+            first = pair & (c["controller"] == controllers[0])
+            index = c["index"][first]
+            verdict = dict(zip(index.tolist(), certified[first].tolist()))
+            survivable_runs = {i for i, v in verdict.items() if v in SURVIVABLE}
+            held: dict[str, set[int]] = {}
+            for name in controllers:
+                rows = pair & (c["controller"] == name)
+                held[name] = set(c["index"][rows & c["holds"].astype(bool)].tolist())
+            n = len(survivable_runs)
+            shares = {name: len(held[name] & survivable_runs) for name in controllers}
+            best = max(controllers, key=lambda name: shares[name])  # the first of equals, in the suite's order
+            won = shares[best]
+            lo, hi = wilson_interval(won, n) if n else (math.nan, math.nan)
+            share = won / n if n else math.nan
+            anyone = set().union(*held.values())
+            counts = {v: sum(1 for x in verdict.values() if x == v) for v in CERTIFIED}
+            out.append({
+                "vehicle": key[0], "fault_class": key[1], "runs": len(verdict), "survivable": n,
+                "static_hover": counts["static-hover"], "spinning": counts["spinning"], "not_survivable": counts["not-survivable"],
+                "check_failed": counts["check-failed"], "controller": best, "held": won, "share": share, "low": lo, "high": hi,
+                "miss": max(0.0, TARGET_SHARE - share) if n else math.nan,
+                "all_fail": len(survivable_runs - anyone),
+                "not_survivable_held": sum(1 for i, v in verdict.items() if v == "not-survivable" and i in anyone),
+            })
+        return out
+
+    def contradictions(self, limit: int = 50) -> list[dict[str, Any]]:
+        """Runs certified not survivable that some controller holds (at most ``limit``, in row
+        order): the run's draw, certify's static class, and who held it."""
+        c = self.columns
+        out: list[dict[str, Any]] = []
+        rows = np.flatnonzero((c["certified"] == "not-survivable") & c["holds"].astype(bool))
+        seen: dict[tuple[str, str, int], dict[str, Any]] = {}
+        for k in rows.tolist():
+            key = (str(c["vehicle"][k]), str(c["fault_class"][k]), int(c["index"][k]))
+            if key not in seen:
+                if len(seen) == limit:
+                    continue
+                seen[key] = {"vehicle": key[0], "fault_class": key[1], "index": key[2], "failed_rotors": str(c["failed_rotors"][k]),
+                             "efficiency": float(c["efficiency"][k]), "static_hover": str(c["certified_static_hover"][k]),
+                             "wind_speed_m_s": float(c["wind_speed_m_s"][k]), "held_by": []}
+                out.append(seen[key])
+            seen[key]["held_by"].append(str(c["controller"][k]))
+        for r in out:
+            r["held_by"] = ", ".join(r["held_by"])
+        return out
+
+    def decision_table(self) -> str:
+        """:meth:`decision` as Markdown (and the contradictions, if any)."""
+        lines = [f"the decision: the best controller over the runs certify calls survivable (target >= {100 * TARGET_SHARE:.0f} %), "
+                 "and the runs certified survivable that no controller holds (target 0):",
+                 "| vehicle | fault class | survivable (static / spinning) | not survivable | check failed | best | holds (95 % CI) "
+                 "| misses the target by | all fail | not survivable, held |", "|---|---|---|---|---|---|---|---|---|---|"]
+        for d in self.decision():
+            if d["survivable"] == 0:
+                verdict, miss = "-", "no survivable run"
+            else:
+                verdict = f"{d['held']}/{d['survivable']} = {100 * d['share']:.1f} % [{100 * d['low']:.1f}, {100 * d['high']:.1f}]"
+                miss = "met" if d["miss"] == 0 else f"{100 * d['miss']:.1f} points"
+            lines.append(f"| {d['vehicle']} | {d['fault_class']} | {d['survivable']} ({d['static_hover']} / {d['spinning']}) | "
+                         f"{d['not_survivable']} | {d['check_failed']} | {d['controller']} | {verdict} | {miss} | {d['all_fail']} | "
+                         f"{d['not_survivable_held']} |")
+        bad = self.contradictions()
+        if bad:
+            lines += ["", "runs certified not survivable that a controller holds:", "| vehicle | fault class | run | rotors | efficiency | "
+                      "static class | wind (m/s) | held by |", "|---|---|---|---|---|---|---|---|"]
+            lines += [f"| {r['vehicle']} | {r['fault_class']} | {r['index']} | {r['failed_rotors']} | {r['efficiency']:.3f} | "
+                      f"{r['static_hover']} | {r['wind_speed_m_s']:.1f} | {r['held_by']} |" for r in bad]
+        return "\n".join(lines)
 
     def table(self) -> str:
         lines = [
@@ -663,12 +922,20 @@ class DecidingResult:
                 f"[{100 * r['low']:.1f}, {100 * r['high']:.1f}] | {r['lost']} | {r['refused']} | {r['worst_altitude_m']:.2f} / {r['worst_horizontal_m']:.2f} "
                 f"| {r['spin_rad_s']:.1f} |"
             )
-        lines += ["", f"best controller per vehicle and fault class (target >= {100 * TARGET_SHARE:.0f} %):",
+        lines += ["", f"best controller per vehicle and fault class over all runs (target >= {100 * TARGET_SHARE:.0f} %):",
                   "| vehicle | fault class | best | holds | misses the target by |", "|---|---|---|---|---|"]
         for b in self.best():
             miss = "met" if b["miss"] == 0 else f"{100 * b['miss']:.1f} points"
             lines.append(f"| {b['vehicle']} | {b['fault_class']} | {b['controller']} | {100 * b['share']:.1f} % | {miss} |")
+        if self.certified:
+            lines += ["", self.decision_table()]
         return "\n".join(lines)
+
+    @property
+    def certified(self) -> bool:
+        """Whether every row carries certify's verdict (:meth:`decision` needs it)."""
+        c = self.columns.get("certified")
+        return c is not None and not np.any(c == "")
 
 
 #: Named suites for ``rotorfault campaign --suite``.
@@ -679,5 +946,6 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 __all__ = [
     "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SUITES", "VEHICLES", "CampaignVehicle",
-    "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunDraw", "hold_errors", "holds", "run_deciding", "run_rows",
+    "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
+    "certify_rows", "certify_run", "hold_errors", "holds", "read_deciding", "run_deciding", "run_rows",
 ]

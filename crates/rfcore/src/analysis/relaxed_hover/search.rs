@@ -376,7 +376,9 @@ impl<'a> Branch<'a> {
             h = h_new;
         }
         let (n, s, f) = found?;
-        Some((self.candidate(n, s, &f), (point[0], point[1])))
+        // The last momentum update can move the optimum above a rotor's bound (the margin
+        // checked at the start of the step was the previous momentum's): no relaxed hover.
+        (self.margin_of(&f) >= 0.0).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
     }
 
     /// Nelder-Mead stops near, not on, a kinked optimum, where several carrying rotors share the
@@ -493,7 +495,8 @@ impl<'a> Branch<'a> {
                         break;
                     };
                     let h_new = self.momentum(&f);
-                    result = Some((self.candidate(n, s, &f), (point[0], point[1])));
+                    // Within the bounds only (as in the volume search: the momentum moved).
+                    result = (self.margin_of(&f) >= 0.0).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
                     let size = h.norm().max(h_new.norm());
                     if self.k() == self.rank || size == 0.0 || (h_new - h).norm() <= 1e-13 * size {
                         break;

@@ -1,0 +1,201 @@
+"""The full deciding campaign's record for the report (issue 30): the per-cell counts of a
+flown ``rotorfault campaign --suite deciding --runs 1000 --out DIR`` dataset and the decision
+over the runs certify calls survivable, as one bench result
+(``python/rotorfault/papers/bench_results/deciding_full_run.json``, schema ``rotorfault-bench/1``
+with a ``campaign`` object), so the report shows the full run beside its live ``--quick`` table.
+
+Run (after the flight; the lead's idle machine):
+
+    rotorfault campaign --suite deciding --runs 1000 --out DIR --format json > out.json
+    python benches/deciding_record.py DIR --out-json out.json --commit $(git rev-parse --short HEAD) \\
+        --json python/rotorfault/papers/bench_results/deciding_full_run.json
+
+A dataset flown with certify's verdict per run is read as it is; one without it (flown before
+the verdict existed, or ``--no-certify``) is certified here, after the fact, per draw
+(``rotorfault.studies.deciding.certify_rows``). ``--certified FILE`` (JSON lines ``vehicle``,
+``fault_class``, ``index``, ``certified``, ``static_hover``, ``spin``, ``note``, ``seconds``) takes
+verdicts computed earlier (the same ``certify_run``) and restricts the decision to the run
+indices certified for every vehicle and fault class: the record then says it is a sample.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+import numpy as np  # noqa: E402
+from _results import add_json_option, figure, write  # noqa: E402
+
+from rotorfault.studies import deciding as D  # noqa: E402
+from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
+from rotorfault.studies.summaries import numpy_columns  # noqa: E402
+
+CELL_KEYS = ("vehicle", "fault_class", "controller", "runs", "not_applicable", "held", "share", "refused", "lost")
+
+
+def _ranges(indices: list[int]) -> list[list[int]]:
+    out: list[list[int]] = []
+    for i in indices:
+        if out and out[-1][1] == i:
+            out[-1][1] = i + 1
+        else:
+            out.append([i, i + 1])
+    return out
+
+
+def _finite(value: object) -> object:
+    """JSON has no NaN: a share over no runs is null."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return None if math.isnan(value) else float(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+SPIN_LIMIT_RAD_S = 200.0  # RelaxedHoverSettings().max_spin_rate_rad_s, certify's search limit
+EFFICIENCY_BINS = ((0.0, 0.0), (0.0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.0))
+
+
+def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
+    """For every cell that misses the target: the survivable runs its best controller does not
+    hold, by outcome, by efficiency (a total loss apart), by wind, when lost and how far tilted,
+    and which other controller holds them."""
+    out = []
+    for d in decision:
+        if not d["survivable"] or d["miss"] == 0:
+            continue
+        pair = (c["vehicle"] == d["vehicle"]) & (c["fault_class"] == d["fault_class"])
+        best = pair & (c["controller"] == d["controller"]) & np.isin(c["certified"], D.SURVIVABLE)
+        missed = best & ~c["holds"].astype(bool)
+        eff = c["efficiency"]
+        bins = []
+        for lo, hi in EFFICIENCY_BINS:
+            inside = (eff == 0.0) if hi == 0.0 else ((eff > lo) & (eff <= hi) if lo == 0.0 else (eff > lo) & (eff <= hi))
+            bins.append({"efficiency": "0 (total)" if hi == 0.0 else f"({lo:g}, {hi:g}]", "survivable": int(np.sum(best & inside)),
+                         "missed": int(np.sum(missed & inside))})
+        lost_after = (c["lost_at_s"] - c["fault_time_s"])[missed]
+        lost_after = lost_after[np.isfinite(lost_after)]
+        tilt = c["peak_tilt_rad"][missed]
+        tilt = tilt[np.isfinite(tilt)]
+        alive = missed & np.isfinite(c["hold_altitude_error_m"])
+        wind = c["wind_speed_m_s"]
+        others = {}
+        index = set(c["index"][missed].tolist())
+        for name in dict.fromkeys(c["controller"][pair].tolist()):
+            if name != d["controller"]:
+                rows = pair & (c["controller"] == name) & np.isin(c["index"], list(index)) & c["holds"].astype(bool)
+                others[name] = int(np.sum(rows))
+        outcomes: dict[str, int] = {}
+        for o in c["outcome"][missed].tolist():
+            outcomes[o] = outcomes.get(o, 0) + 1
+        static: dict[str, int] = {}
+        for o in c["certified_static_hover"][missed].tolist():
+            static[o or "-"] = static.get(o or "-", 0) + 1
+        out.append({
+            "vehicle": d["vehicle"], "fault_class": d["fault_class"], "controller": d["controller"], "missed": int(np.sum(missed)),
+            "survivable": int(np.sum(best)), "outcomes": outcomes, "static_hover": static,
+            "spinning": int(np.sum(missed & (c["certified"] == "spinning"))), "by_efficiency": bins,
+            # certify's spin at the search's limit (no rotational damping: the margin still grows there)
+            "spin_at_search_limit": int(np.sum(missed & (np.abs(c["certified_spin_rad_s"]) >= 0.99 * SPIN_LIMIT_RAD_S))),
+            "wind_median_m_s": float(np.median(wind[missed])) if missed.any() else None,
+            "wind_median_all_m_s": float(np.median(wind[best])) if best.any() else None,
+            "lost_after_failure_median_s": float(np.median(lost_after)) if len(lost_after) else None,
+            "peak_tilt_median_deg": float(np.degrees(np.median(tilt))) if len(tilt) else None,
+            "not_lost": int(np.sum(alive)),
+            "not_lost_altitude_error_median_m": float(np.median(c["hold_altitude_error_m"][alive])) if alive.any() else None,
+            "not_lost_horizontal_error_median_m": float(np.median(c["hold_horizontal_error_m"][alive])) if alive.any() else None,
+            "held_by_another": others, "why": why.get(f"{d['vehicle']}/{d['fault_class']}", ""),
+        })
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("dataset", help="the suite's --out directory")
+    parser.add_argument("--out-json", required=True, help="the flight's `--format json` output (its time)")
+    parser.add_argument("--commit", required=True, help="the commit the campaign was flown on")
+    parser.add_argument("--flown", default=None, help="when it was flown (ISO 8601; default: the manifest's modification time)")
+    parser.add_argument("--flown-on", default="idle 2-core machine, fat LTO", help="the machine it was flown on")
+    parser.add_argument("--certified", nargs="*", default=[], help="JSON lines of verdicts computed earlier (module notes)")
+    parser.add_argument("--why", default=None, help="JSON: {\"vehicle/fault_class\": reason} for the cells that miss the target")
+    parser.add_argument("--certify-commit", default=None, help="the commit that certified the runs (default: --commit)")
+    add_json_option(parser)
+    args = parser.parse_args()
+
+    flight = json.loads(Path(args.out_json).read_text(encoding="utf-8"))
+    manifest_path = Path(args.dataset) / "_rotorfault.json"
+    flown = args.flown or datetime.datetime.fromtimestamp(manifest_path.stat().st_mtime, datetime.timezone.utc).isoformat(timespec="seconds")
+    suite = D.DecidingCampaign.from_dict(read_manifest(args.dataset)["arguments"]["suite"])
+    columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
+    full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
+    cells = [{k: r[k] for k in CELL_KEYS} for r in full.cell_rows()]
+
+    keys = list(zip(columns["vehicle"].tolist(), columns["fault_class"].tolist(), columns["index"].tolist()))
+    cached: dict[tuple[str, str, int], dict] = {}
+    for name in args.certified:
+        for line in Path(name).read_text(encoding="utf-8").splitlines():
+            r = json.loads(line)
+            cached[(r["vehicle"], r["fault_class"], int(r["index"]))] = r
+    if "certified" in columns and suite.certify:
+        rows, indices, seconds, timed = columns, list(range(suite.runs)), 0.0, 0
+        note = "certified while flying"
+    else:
+        pairs = sorted({k[:2] for k in keys})
+        indices = sorted(set.intersection(*({i for (v, f, i) in cached if (v, f) == p} for p in pairs))) if cached else list(range(suite.runs))
+        mask = np.isin(columns["index"], indices)
+        subset = {k: v[mask] for k, v in columns.items()}
+        if cached:
+            def from_cache(s: D.DecidingCampaign, cell: D.Cell, index: int) -> D.RunCertificate:
+                r = cached[(cell.vehicle, cell.fault_class, index)]
+                return D.RunCertificate(r["certified"], r["static_hover"], math.nan if r["spin"] is None else float(r["spin"]), r["note"])
+
+            D.certify_run = from_cache  # type: ignore[assignment]
+        start = time.perf_counter()
+        rows = D.certify_rows(suite, subset)
+        seconds = sum(r["seconds"] for r in cached.values()) if cached else time.perf_counter() - start
+        timed = len(cached) if cached else len(indices) * len(pairs)
+        note = "certified after the fact" + (f", a sample: run indices {_ranges(indices)} of every vehicle and fault class" if len(indices) < suite.runs else "")
+    result = D.DecidingResult(suite, rows)
+    decision = result.decision()
+    why = json.loads(Path(args.why).read_text(encoding="utf-8")) if args.why else {}
+    per_draw = seconds / timed if timed else math.nan
+    figures = [
+        figure("deciding campaign, 1,000 runs per cell: flight wall time", float(flight["seconds"]), "s", target="< 900"),
+        figure("deciding campaign: flown runs/s", suite.total_runs / float(flight["seconds"]), "runs/s"),
+    ]
+    if timed:
+        figures.append(figure("certify per run after the fact: time per draw", per_draw, "s"))
+    record_extra = {
+        "campaign": {
+            "command": f"rotorfault campaign --suite deciding --runs {suite.runs} --out DIR --format json",
+            "commit": args.commit, "flown": flown, "flown_on": args.flown_on, "flight_seconds": float(flight["seconds"]),
+            "suite": suite.to_dict(), "cells": cells,
+            "certified": {"how": note, "commit": args.certify_commit or args.commit, "indices": _ranges(indices),
+                          "draws": len(indices) * len({k[:2] for k in keys}), "seconds": seconds, "draws_timed": timed},
+            "decision": decision, "contradictions": result.contradictions(), "contradictions_why": why.get("contradictions", ""),
+            "misses": misses(rows, decision, why),
+        }
+    }
+    print(result.decision_table())
+    if args.json_path:
+        write(args.json_path, "deciding_full_run", "The full deciding campaign (issue 30): per-cell counts and the decision", figures,
+              reduced=None if len(indices) == suite.runs else f"the decision over a sample of certified runs ({len(indices)} of {suite.runs} per cell)")
+        path = Path(args.json_path)
+        data = json.loads(path.read_text(encoding="utf-8"))
+        data.update(_finite(record_extra))
+        path.write_text(json.dumps(data, indent=2, allow_nan=False, default=float) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
