@@ -417,6 +417,13 @@ def _first_order() -> Any:
     return ct.ss(-np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)))
 
 
+def _barely_moved_unstable() -> Any:
+    """An unstable mode the input barely moves (B = 1e-10): gamma_min 2.3e10, above the limit."""
+    import control as ct
+
+    return ct.ss(np.array([[1.0, 0.0], [0.0, -2.0]]), np.array([[1e-10], [1.0]]), np.array([[1.0, 1.0]]), np.zeros((1, 1)))
+
+
 def _hidden_first_order() -> Any:
     """A stable mode nothing moves and nothing sees (B = C = 0)."""
     import control as ct
@@ -740,7 +747,9 @@ def _regressions(t: dict[str, Target]) -> None:
                    Call(lambda: rf.ncfsyn(_seen_subnormally(),
                                           np.eye(1), factor=1.01), (), {}, frozenset({"plant"})),
                    # gamma = 1e300 * gamma_min: gamma**2 raised a bare OverflowError (long run, 2026-11-28).
-                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"}))),
+                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"})),
+                   # gamma_min 2.3e10 with a factor of 1e140: the refusal blamed factor, not the plant's gamma_min.
+                   Call(rf.ncfsyn, (_barely_moved_unstable(), np.eye(1)), {"factor": 1e140}, frozenset({"gamma_min"}))),
         # An arm angle of 1e-309 rad left a subnormal in the effectiveness matrix, which the allocator
         # refused as "matrix[1, 0]" (a matrix the user never wrote; long run, 2026-11-28).
         "lqr_hover_allocated": (Call(lambda: rf.lqr_hover_allocated(rf.Simulator(_tiny_angle()), rf.Allocator(_tiny_angle())), (), {}, frozenset()),),
