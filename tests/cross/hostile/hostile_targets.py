@@ -567,6 +567,13 @@ def _targets() -> dict[str, Target]:
     t["Allocated"] = Target(st.sampled_from(("ke-quadcopter", "quad-x", "hexa-pnpnpn")).map(lambda p: rf.Simulator(rf.Airframe.preset(p))).map(lambda s: Call(rf.Allocated, (rf.lqr_hover(s), rf.Allocator(s.airframe)), {}, frozenset())), lambda r, c: None)
     t["UniformPassiveFtc"] = Target(st.tuples(airframe_args(), st.sampled_from(("ke-hil", "ke-experiment", "x", "")), st.sampled_from(("feedforward", "baseline", "literal", "x")), vector(3, hostile(number(-20, 0)))).map(lambda a: Call(rf.UniformPassiveFtc, (a[0],), {"gains": a[1], "law": a[2], "position": a[3]}, frozenset({"gains", "law", "position"}))), lambda r, c: None)
     t["IndiController"] = Target(st.tuples(airframe_args(), st.lists(st.tuples(hostile(st.integers(1, 6), 0, 99), hostile(number(0, 5))), max_size=2), vector(3, hostile(number(-20, 0)))).map(lambda a: Call(rf.IndiController, (a[0],), {"failures": a[1], "position": a[2]}, frozenset({"failures", "position"}))), lambda r, c: None)
+    # The failure mode's keyword constructor (pickling's): hostile rotors, thrusts and axes.
+    t["IndiFailureMode"] = Target(calls(
+        control.indi.IndiFailureMode, failed=st.lists(hostile(st.integers(1, 4), 0, 99), max_size=2),
+        healthy=st.lists(hostile(st.integers(1, 4), 0, 99), max_size=4), yaw_controlled=st.booleans(), single_axis=st.booleans(),
+        output_direction=st.one_of(st.none(), vector(2, hostile(number(-1, 1)))), primary_axis=vector(3, hostile(number(-1, 1))),
+        zero_dynamics_a=st.one_of(st.none(), hostile(number(-2, 2))), zero_dynamics_damping=st.one_of(st.none(), hostile(number(0, 2))),
+        hover_thrust_n=vector(4, hostile(number(0, 5)))))
     t["IndiGains"] = Target(calls(rf.IndiGains, k_p_xy=hostile(positive(0.1, 5)), max_tilt_rad=hostile(positive(0.1, 1.5)), filter_frequency_rad_s=hostile(positive(1, 100))))
     t["KeGains"] = Target(calls(control.KeGains, k_p=hostile(positive(0.1, 5)), epsilon_s=hostile(positive(1e-3, 1)), weights=st.one_of(st.none(), vector(3, hostile(positive(0.1, 10))))))
     t["LanzonController"] = Target(st.tuples(vector(3, hostile(number(-5, 0))), st.one_of(st.none(), vector(3, hostile(number(-1, 1))))).map(lambda a: Call(rf.LanzonController, (lanzon_design(),), {"position": a[0], "attitude_reference": a[1]}, frozenset({"position", "attitude_reference"}))), lambda r, c: None)
