@@ -107,7 +107,8 @@ indi_gains!(
 /// quadrotor: the output is redefined, along `output_direction` in the body x-y plane), the
 /// primary axis in the body frame, then the zero dynamics `eta'' = a r^2 eta - ...` (stable when
 /// `a < 0`, with the damping ratio `zero_dynamics_damping`) and the thrusts holding the weight
-/// with zero roll and pitch torque (N, one per rotor). Frozen, comparable, hashable.
+/// with zero roll and pitch torque (N, one per rotor). Frozen, comparable, hashable, picklable
+/// (keyword-only constructor from these fields, checked: what pickling calls).
 #[pyclass(name = "IndiFailureMode", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiFailureMode {
     inner: FailureMode,
