@@ -467,3 +467,24 @@ def test_rate_limit_folds_into_the_bounds(ke: rf.Airframe) -> None:
     assert np.all(np.abs(got.commands - previous) <= 0.125 + 1e-12)
     with pytest.raises(ValueError, match=r"^max_change\[0\]"):
         allocator.rate_limited(previous, [-1.0, 0, 0, 0])
+
+
+def test_a_setting_the_method_does_not_read_is_refused_not_dropped() -> None:
+    """``tolerance=1e-3`` with ``method="clarabel"`` or ``"pinv"`` returned a certificate held to
+    1e-9 (those methods certify at DEFAULT_TOLERANCE), and ``"pinv"`` dropped ``max_iterations``
+    and ``clarabel_tolerance``: each is refused, naming it; what a method reads still works, and
+    the defaults given explicitly are no loss."""
+    quad = rf.Airframe.preset("quad-x")
+    u = [15.0, 0.1, 0.0, 0.0]
+    for method in ("clarabel", "pinv"):
+        with pytest.raises(ValueError, match=f"^tolerance: method='{method}' holds its certificate to DEFAULT_TOLERANCE"):
+            rf.allocate(quad, u, method=method, tolerance=1e-3)
+    with pytest.raises(ValueError, match="^tolerance: method='clarabel'"):
+        rf.allocate(quad, u, method="clarabel", priorities=[[0, 1, 2], [3]], tolerance=1e-3)
+    with pytest.raises(ValueError, match='^max_iterations: method="pinv" does not iterate, got 5'):
+        rf.allocate(quad, u, method="pinv", max_iterations=5)
+    with pytest.raises(ValueError, match='^clarabel_tolerance: method="pinv" does not call Clarabel'):
+        rf.Allocator(quad, clarabel_tolerance=1e-6).allocate(u, method="pinv")
+    assert rf.allocate(quad, u, tolerance=1e-3).certificate.tolerance == 1e-3
+    assert rf.allocate(quad, u, method="clarabel", max_iterations=50, clarabel_tolerance=1e-8).status == "optimal"
+    assert rf.allocate(quad, u, method="pinv", tolerance=rf.allocation.DEFAULT_TOLERANCE).status == "unconstrained"

@@ -160,3 +160,23 @@ def test_the_given_up_yaw_weight_trades_spin_for_altitude_on_a_hexacopter():
     assert 30.0 < measured[1e-4][2] < math.radians(2000) and measured[1e-4][0] < 0.01
     assert 0.3 < measured[1e-2][0] < 0.5 and measured[1e-2][2] < measured[1e-4][2]
     assert all(h < 0.01 for _, h, _ in measured.values())
+
+
+def test_a_failure_mode_made_from_its_fields_checks_them() -> None:
+    """``IndiFailureMode``'s keyword constructor (what pickling calls) refuses what the core's
+    failure modes never are, naming the field: rotor 0, a rotor twice, a thrust per rotor missing,
+    a non-finite number, a damping without zero dynamics."""
+    mode = rf.IndiController(rf.Airframe.preset("hexa-ppnnpn"), failures=[(1, 1.0)]).failure_modes()[1]
+    fields = {f: getattr(mode, f) for f in mode.FIELDS}
+    assert rf.control.indi.IndiFailureMode(**fields) == mode
+    for change, message in (
+        ({"failed": (0,)}, r"^failed\[0\]: rotors are numbered from 1, got 0"),
+        ({"failed": (2,)}, r"^failed, healthy: each of rotors 1..=6 once, got rotor 2 twice"),
+        ({"hover_thrust_n": mode.hover_thrust_n[:5]}, r"^hover_thrust_n: one per rotor \(6\), got 5"),
+        ({"primary_axis": (0.0, math.nan, 1.0)}, r"^primary_axis\[1\]: must be finite, got NaN"),
+        ({"primary_axis": (0.0, 1.0)}, r"^primary_axis: expected 3 entries, got 2"),
+        ({"zero_dynamics_damping": 0.5}, r"^zero_dynamics_damping: given without zero_dynamics_a"),
+        ({"zero_dynamics_a": math.inf}, r"^zero_dynamics_a: must be finite, got inf"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            rf.control.indi.IndiFailureMode(**{**fields, **change})

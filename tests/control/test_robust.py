@@ -137,6 +137,17 @@ def test_bad_input_names_the_field() -> None:
         ncfsyn(g, np.eye(2), factor=1e300)
     with pytest.raises(ValueError, match="w1: expected 2 outputs"):
         ncfsyn(g, np.eye(3))
+
+
+def test_a_huge_gamma_min_is_blamed_on_the_plant_not_the_factor() -> None:
+    """An unstable mode the input barely moves (B = 1e-10) makes gamma_min 2.3e10: above the
+    confirmable limit whatever the factor, so the refusal names gamma_min at factor 1.1 and at a
+    factor whose product overflows gamma's limit (it blamed ``factor`` there before); the factor
+    is blamed only on a plant whose own gamma_min is fine (the test above)."""
+    weak = ct.ss(np.array([[1.0, 0.0], [0.0, -2.0]]), np.array([[1e-10], [1.0]]), np.array([[1.0, 1.0]]), np.zeros((1, 1)))
+    for factor in (1.1, 1e140):
+        with pytest.raises(ValueError, match=r"^gamma_min check: the Riccati value 2327\d+ is above 10000"):
+            ncfsyn(weak, 1, 1, factor=factor)
     with pytest.raises(TypeError, match="plant: expected"):
         ncfsyn("G", np.eye(2))
     with pytest.raises(ValueError, match="crossover_rad_s: must be finite and > 0"):

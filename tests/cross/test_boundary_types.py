@@ -272,6 +272,30 @@ def test_the_old_event_names_work_one_release_with_a_warning() -> None:
         rf.Divergence(time_s=2.3, kind="tilt", state=state, description="hit the ground")
 
 
+def test_the_old_event_takes_its_dataclass_positional_order_with_the_impact() -> None:
+    """The old dataclass's order ``Event(time, kind, description, state, impact_speed_m_s,
+    impact_vertical_speed_m_s, impact_tilt_rad)`` by position: each value reaches its own field
+    (checked against what is derived, warned), ``None`` impacts (the old default) give none, and
+    one positional value too many is a ``TypeError`` (it raised a bare signature error before)."""
+    state = np.zeros(12)
+    state[5] = 5.6
+    with pytest.warns(DeprecationWarning, match="rotorfault.Event is deprecated"):
+        event_type = rf.Event  # type: ignore[attr-defined]
+    with pytest.warns(DeprecationWarning) as caught:
+        old = event_type(2.3, "crashed", "hit the ground", state, 5.6, 5.6, 0.0)
+    assert {str(w.message).split(" is deprecated")[0] for w in caught} == {
+        "Divergence(description=...)", "Divergence(impact_speed_m_s=...)", "Divergence(impact_vertical_speed_m_s=...)",
+        "Divergence(impact_tilt_rad=...)"}
+    assert type(old) is rf.Divergence and (old.time_s, old.kind, old.impact_speed_m_s, old.impact_tilt_rad) == (2.3, "crashed", 5.6, 0.0)
+    with pytest.warns(DeprecationWarning):
+        tilt = event_type(1.0, "tilt", "tilt beyond the limit", np.zeros(12), None, None, None)
+    assert tilt.kind == "tilt" and tilt.impact_speed_m_s is None
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="^impact_vertical_speed_m_s: derived from state as 5.6, got 1.0"):
+        event_type(2.3, "crashed", "hit the ground", state, 5.6, 1.0, 0.0)
+    with pytest.raises(TypeError, match="positional"):
+        event_type(2.3, "crashed", "hit the ground", state, 5.6, 5.6, 0.0, 1.0)
+
+
 def test_the_batch_columns_carry_the_trajectorys_names_and_the_old_ones_warn() -> None:
     sim = rf.Simulator(rf.Airframe.preset("quad-x"))
     batch = rf.simulate_batch(sim, [rf.State(position=(0, 0, -1))], 0.05, controllers=rf.lqr_hover(sim, position=(0, 0, -1)))

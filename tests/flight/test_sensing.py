@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
+from rotorfault import _rfcore
 from rotorfault.papers import ke as ke_paper
 
 
@@ -123,3 +124,26 @@ def test_the_report_table_sets_truth_and_sensors_side_by_side() -> None:
     assert 0 < float(row[5]) < 0.35 and 0 < float(row[6]) < 0.14
     (row,) = gnss.rows
     assert row[1] == "holds" and row[2] != "holds" and row[3] == "differs"
+
+
+#: A ``SensingCounts`` pickled (protocol 4) by the release before fixes were thinned: six fields by
+#: keyword (``pickle_protocol!``'s ``__getnewargs_ex__``), no ``thinned_measurements``.
+OLD_COUNTS_PICKLE = (
+    b"\x80\x04\x95\xbe\x00\x00\x00\x00\x00\x00\x00\x8c\x12rotorfault._rfcore\x94\x8c\rSensingCounts\x94\x93\x94)}\x94("
+    b"\x8c\x0bimu_samples\x94M\x90\x01\x8c\x16gyro_saturated_samples\x94K\x01\x8c\x17accel_saturated_samples\x94K\x02"
+    b"\x8c\x12fused_measurements\x94K\x1e\x8c\x15rejected_measurements\x94K\x03\x8c\x11late_measurements\x94K\x04u\x92\x94."
+)
+
+
+def test_counts_pickled_before_thinning_existed_load_with_none_thinned() -> None:
+    """The field added later has the default its docstring gives (0: that release fused every
+    fix); the fields a pickle carries are kept as they were; the new layout round-trips."""
+    counts = pickle.loads(OLD_COUNTS_PICKLE)
+    assert type(counts) is _rfcore.SensingCounts
+    assert [getattr(counts, f) for f in counts.FIELDS] == [400, 1, 2, 30, 3, 4, 0]
+    assert counts.FIELDS[-1] == "thinned_measurements"
+    back = pickle.loads(pickle.dumps(counts))
+    assert [getattr(back, f) for f in back.FIELDS] == [400, 1, 2, 30, 3, 4, 0]
+    with pytest.raises(TypeError, match="late_measurements"):
+        type(counts)(imu_samples=1, gyro_saturated_samples=0, accel_saturated_samples=0, fused_measurements=0,
+                     rejected_measurements=0)  # the fields every release had stay required

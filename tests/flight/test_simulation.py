@@ -478,3 +478,30 @@ def test_a_substep_too_long_for_the_motion_is_refused_or_ends_the_run(quad: rf.A
     event = tr.events[0]
     assert event.kind == "step-size" and "substeps" in event.description
     assert np.linalg.norm(event.state[9:12]) == pytest.approx(5.0, abs=1e-9)
+
+
+def test_extra_keywords_may_not_replace_a_recorded_field() -> None:
+    """``extra=`` (the keywords a ``Trajectory`` subclass adds, e.g. ``faults``) was merged over
+    the record, so ``extra={"position": ...}`` replaced the flown positions: a recorded field's
+    name is refused, naming it, before the run (the controller is never called)."""
+    from rotorfault import _rfcore
+
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+    calls = []
+
+    def controller(t: float, x: np.ndarray) -> np.ndarray:
+        calls.append(t)
+        return np.full(4, 4.0)
+
+    def run(extra: dict) -> object:
+        return _rfcore.simulate(sim.airframe._core, sim.actuator, sim.drag, controller, rf.State(position=(0, 0, -1))._packed(),
+                                [], sim.airframe.efficiency, None, sim._config(0.05), trajectory_type=rf.Trajectory, extra=extra)
+
+    for name in ("position", "t", "sensing_counts", "divergence"):
+        with pytest.raises(ValueError, match=f'^extra: "{name}" is a field the run records'):
+            run({"faults": [], name: np.zeros((1, 3))})
+    with pytest.raises(TypeError, match="^extra: names must be strings, got int"):
+        run({1: 2})
+    assert calls == []
+    flown = run({"faults": []})
+    assert calls and tuple(flown.faults) == () and len(flown.t) == len(flown.position)

@@ -23,7 +23,7 @@ use rfcore::error::RfError;
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{count, detached, matrix, slice1, slice2, to_py_err};
+use crate::convert::{count, detached, matrix, pickle_protocol, slice1, slice2, to_py_err};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
@@ -47,6 +47,8 @@ pub struct PyAllocationSettings {
 }
 
 impl PyAllocationSettings {
+    const FIELDS: &'static [&'static str] = &["tolerance", "max_iterations", "clarabel_tolerance"];
+
     fn active(&self) -> ActiveSetSettings {
         ActiveSetSettings {
             tolerance: self.tolerance,
@@ -76,8 +78,7 @@ fn rename(error: RfError, from: &str, to: &str) -> RfError {
     }
 }
 
-#[pymethods]
-impl PyAllocationSettings {
+pickle_protocol!(PyAllocationSettings, {
     #[new]
     #[pyo3(signature = (*, tolerance=None, max_iterations=None, clarabel_tolerance=None))]
     fn new(
@@ -95,7 +96,7 @@ impl PyAllocationSettings {
         out.clarabel()?;
         Ok(out)
     }
-}
+});
 
 /// The KKT residuals of an allocation in the problem's own scaling and the tolerance they are
 /// held to (see the core's `Certificate`).
@@ -292,7 +293,7 @@ impl PyAllocationProblem {
         .map_err(to_py_err)?;
         let settings = *settings;
         Ok(PyAllocationProblem {
-            solver: ActiveSetSolver::with_settings(&inner, settings.active()),
+            solver: ActiveSetSolver::with_settings(&inner, settings.active()).map_err(to_py_err)?,
             inner,
             settings,
         })

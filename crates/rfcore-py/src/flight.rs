@@ -392,8 +392,11 @@ pub struct PySensorNoise {
     pub(crate) inner: SensorNoise,
 }
 
-#[pymethods]
 impl PySensorNoise {
+    const FIELDS: &'static [&'static str] = &["relative_std", "absolute_std", "seed"];
+}
+
+crate::convert::pickle_protocol!(PySensorNoise, {
     #[new]
     #[pyo3(signature = (*, relative_std, absolute_std, seed))]
     fn new(relative_std: f64, absolute_std: [f64; STATE_DIM], seed: &Bound<'_, PyAny>) -> PyResult<Self> {
@@ -418,7 +421,7 @@ impl PySensorNoise {
     fn seed(&self) -> u64 {
         self.inner.seed
     }
-}
+});
 
 /// Timing, limits, ground, wind, noise and recording of a run; defaults are the core's
 /// (`SimulationConfig::default`), the rules its `check`. The ground: `ground_z_m` (world NED,
@@ -428,8 +431,14 @@ pub struct PySimulationConfig {
     pub(crate) inner: SimulationConfig,
 }
 
-#[pymethods]
 impl PySimulationConfig {
+    const FIELDS: &'static [&'static str] = &[
+        "dt_s", "substeps", "duration_s", "limits", "ground_z_m", "ground", "wind_m_s", "wind_profile", "noise",
+        "sensing", "record_every",
+    ];
+}
+
+crate::convert::pickle_protocol!(PySimulationConfig, {
     #[new]
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (*, dt_s=None, substeps=None, duration_s=None, limits=None, ground_z_m=None, ground=None, wind_m_s=None, wind_profile=None, noise=None, sensing=None, record_every=None))]
@@ -519,7 +528,22 @@ impl PySimulationConfig {
     fn record_times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         self.inner.record_times().into_pyarray(py)
     }
-}
+    /// Whether the run has a ground plane (`ground_z_m` is not None).
+    #[getter]
+    fn ground(&self) -> bool {
+        self.inner.ground_z_m.is_some()
+    }
+    /// The wind's time profile: `(time_s, wind_m_s)` points (NED, m/s).
+    #[getter]
+    fn wind_profile(&self) -> Vec<(f64, [f64; 3])> {
+        self.inner.wind_profile.iter().map(|(t, w)| (*t, (*w).into())).collect()
+    }
+    /// The sensor noise (`None`: the truth, or `sensing`).
+    #[getter]
+    fn noise(&self) -> Option<PySensorNoise> {
+        self.inner.noise.map(|inner| PySensorNoise { inner })
+    }
+});
 
 fn faults(list: &[(usize, f64, f64)]) -> Vec<RotorFault> {
     list.iter()
@@ -568,6 +592,7 @@ pub fn simulate<'py>(
     trajectory_type: Option<Bound<'py, PyType>>,
     extra: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    PyTrajectory::check_extra(extra.as_ref())?; // before the run, not after it
     let (vehicle, actuators, count) =
         vehicle_and_actuators(airframe, &actuator, &drag, settle.as_ref())?;
     let efficiency = slice1("efficiency", &efficiency)?.to_vec();

@@ -16,7 +16,7 @@ use rfcore::state::RigidBodyState;
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, ControllerArg};
-use crate::convert::{detached, to_py_err};
+use crate::convert::{detached, pickle_protocol, to_py_err};
 use crate::flight::{build_actuators, ActuatorArg, PyDrag, PySimulationConfig};
 
 /// The verdict thresholds; defaults are the core's (`VerdictCriteria::default`).
@@ -25,8 +25,12 @@ pub struct PyVerdictCriteria {
     pub(crate) inner: VerdictCriteria,
 }
 
-#[pymethods]
 impl PyVerdictCriteria {
+    const FIELDS: &'static [&'static str] =
+        &["window_s", "hold_horizontal_m", "hold_altitude_m", "hold_speed_m_s", "circling_turn_rad"];
+}
+
+pickle_protocol!(PyVerdictCriteria, {
     #[new]
     #[pyo3(signature = (*, window_s=None, hold_horizontal_m=None, hold_altitude_m=None, hold_speed_m_s=None, circling_turn_rad=None))]
     fn new(
@@ -67,7 +71,7 @@ impl PyVerdictCriteria {
     fn circling_turn_rad(&self) -> f64 {
         self.inner.circling_turn_rad
     }
-}
+});
 
 /// Summaries of a batch, one entry per run in input order, as columns.
 #[pyclass(name = "SummaryBatch", module = "rotorfault._rfcore", frozen)]

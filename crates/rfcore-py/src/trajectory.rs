@@ -205,24 +205,29 @@ impl From<Divergence> for PyDivergence {
     }
 }
 
-/// The sensor counts class from one list of its fields (each a `u64`).
+/// The sensor counts class from one list of its fields (each a `u64`): first the fields every
+/// release has had (required), then each added field with the default an older pickle loads with
+/// (a pickle gives the fields of its own release by keyword, so an added field needs one).
 macro_rules! counts_class {
-    ($($name:ident),+ $(,)?) => {
+    ($($name:ident),+ ; $($added:ident = $default:literal),* $(,)?) => {
         /// A run's sensor counts (`Trajectory.sensing_counts`); keyword-only from Python (pickling).
+        /// `thinned_measurements` is 0 when not given: a pickle made before fixes were thinned
+        /// (that release fused every fix).
         #[pyclass(name = "SensingCounts", module = "rotorfault._rfcore", frozen, get_all)]
         pub struct PySensingCounts {
-            $($name: u64),+
+            $($name: u64,)+
+            $($added: u64,)*
         }
 
         impl PySensingCounts {
-            const FIELDS: &'static [&'static str] = &[$(stringify!($name)),+];
+            const FIELDS: &'static [&'static str] = &[$(stringify!($name),)+ $(stringify!($added),)*];
         }
 
         pickle_protocol!(PySensingCounts, {
             #[new]
-            #[pyo3(signature = (*, $($name),+))]
-            fn new($($name: u64),+) -> Self {
-                PySensingCounts { $($name),+ }
+            #[pyo3(signature = (*, $($name,)+ $($added = $default,)*))]
+            fn new($($name: u64,)+ $($added: u64,)*) -> Self {
+                PySensingCounts { $($name,)+ $($added,)* }
             }
         });
     };
@@ -234,8 +239,8 @@ counts_class!(
     accel_saturated_samples,
     fused_measurements,
     rejected_measurements,
-    late_measurements,
-    thinned_measurements,
+    late_measurements;
+    thinned_measurements = 0,
 );
 
 impl From<&SensingRecord> for PySensingCounts {
@@ -534,8 +539,29 @@ impl PyTrajectory {
         Ok(kwargs)
     }
 
+    /// `extra`'s names (the keywords a Python subclass of `Trajectory` adds): strings that are not
+    /// a field the run records (`FIELDS`), which they would replace. Checked before the run.
+    pub(crate) fn check_extra(extra: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        for key in extra.map(|e| e.keys()).into_iter().flatten() {
+            let Ok(name) = key.extract::<String>() else {
+                return Err(PyTypeError::new_err(format!(
+                    "extra: names must be strings, got {}",
+                    key.get_type().name()?
+                )));
+            };
+            if Self::FIELDS.contains(&name.as_str()) {
+                return Err(PyValueError::new_err(format!(
+                    "extra: {name:?} is a field the run records (a keyword of extra may not replace it; recorded: {})",
+                    Self::FIELDS.join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// The core's record as one `trajectory_type` (`Trajectory` or a Python subclass of it, which
-    /// gets `extra` keywords too): made once, by the type's constructor (one shape check).
+    /// gets `extra` keywords too, none a recorded field): made once, by the type's constructor
+    /// (one shape check).
     pub(crate) fn from_run<'py>(
         py: Python<'py>,
         run: Trajectory,
@@ -550,6 +576,7 @@ impl PyTrajectory {
                 cls.name()?
             )));
         }
+        Self::check_extra(extra)?;
         let kwargs = Self::record_kwargs(py, run)?;
         if let Some(extra) = extra {
             kwargs.update(extra.as_mapping())?;

@@ -80,7 +80,7 @@ pub fn time_each(
     check_rows(problem, controls)?;
     let n = problem.virtual_dimension();
     let solver = match method {
-        Method::ActiveSet(settings) => ActiveSetSolver::with_settings(problem, *settings),
+        Method::ActiveSet(settings) => ActiveSetSolver::with_settings(problem, *settings)?,
         _ => ActiveSetSolver::new(problem),
     };
     let pinv = weighted_pseudo_inverse(problem);

@@ -791,7 +791,7 @@ fn permutation_invariance_and_all_paths_agree() {
             usize::from(single.solved_by == SolvedBy::Clarabel)
         );
         // Reusable solver, warm-started from an unrelated solve.
-        let solver = ActiveSetSolver::with_settings(p, ActiveSetSettings::default());
+        let solver = ActiveSetSolver::with_settings(p, ActiveSetSettings::default()).unwrap();
         let mut active = ActiveSet::cold(m);
         let mut t = vec![0.0; m];
         solver

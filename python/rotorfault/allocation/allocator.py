@@ -214,6 +214,7 @@ class Allocator:
             raise TypeError(f"method: expected a string, got {type(method).__name__}")
         if method not in METHODS:
             raise ValueError(f"method: expected one of {', '.join(map(repr, METHODS))}, got {method!r}")
+        _require_used_settings(self.settings, method)
         if isinstance(virtual_control, (str, bytes)):
             raise TypeError(f"virtual_control: expected an array of numbers, got {type(virtual_control).__name__}")
         try:
@@ -322,6 +323,22 @@ def allocate(
             clarabel_tolerance=clarabel_tolerance,
         )
     return allocator.allocate(virtual_control, method=method, priorities=priorities)
+
+
+def _require_used_settings(settings: _rfcore.AllocationSettings, method: str) -> None:
+    """A setting the method does not read is refused, not dropped: ``"pinv"`` has no iterations
+    and no Clarabel, and ``"pinv"`` and ``"clarabel"`` hold their certificates to
+    :data:`DEFAULT_TOLERANCE` (``tolerance=1e-3`` gave a certificate held to 1e-9)."""
+    unused = []
+    if method != "active-set" and settings.tolerance != DEFAULT_TOLERANCE:
+        unused.append(f"tolerance: method={method!r} holds its certificate to DEFAULT_TOLERANCE = {DEFAULT_TOLERANCE:g} "
+                      f"(only \"active-set\" takes another), got {settings.tolerance:g}")
+    if method == "pinv" and settings.max_iterations is not None:
+        unused.append(f"max_iterations: method=\"pinv\" does not iterate, got {settings.max_iterations}")
+    if method == "pinv" and settings.clarabel_tolerance != CLARABEL_TOLERANCE:
+        unused.append(f"clarabel_tolerance: method=\"pinv\" does not call Clarabel, got {settings.clarabel_tolerance:g}")
+    if unused:
+        raise ValueError(unused[0])
 
 
 _CACHE_SIZE = 32

@@ -336,6 +336,9 @@ def _central_controller(gs: ct.StateSpace, factor: float) -> tuple[ct.StateSpace
     a, b, c, d = _matrices(gs)
     x, z, rx, rz = _riccati(gs)
     gamma_min = _gamma_from_xz(x, z)
+    # The plant's own gamma_min first: above the confirmable limit no factor helps, so the refusal
+    # names it, not factor (a factor of 1e140 on such a plant blamed the factor).
+    _require_confirmable(gamma_min)
     gamma = factor * gamma_min
     if not gamma <= MAX_GAMMA:  # gamma^2 below must stay a float (a factor of 1e300 overflowed it)
         raise ValueError(f"factor: gamma = factor * gamma_min = {factor:g} * {gamma_min:.6g} must be at most {MAX_GAMMA:g} "
@@ -352,6 +355,17 @@ def _central_controller(gs: ct.StateSpace, factor: float) -> tuple[ct.StateSpace
     # Negative-feedback form of the positive-feedback central controller: C_K, D_K change sign.
     ks = state_space(ak, gain, -b.T @ x, d.T)
     return ks, gamma_min, gamma, x, z, rx, rz
+
+
+def _require_confirmable(gamma_min: float) -> None:
+    """The ``gamma_min check``'s first rule: the shaped plant's optimal gamma at most
+    ``GAMMA_MIN_CONFIRMABLE_MAX`` (a property of the plant and the weights, whatever the factor)."""
+    if not gamma_min <= GAMMA_MIN_CONFIRMABLE_MAX:
+        raise ValueError(
+            f"gamma_min check: the Riccati value {gamma_min:.12g} is above {GAMMA_MIN_CONFIRMABLE_MAX:g}, where the "
+            "Hankel formula's rounding reaches the tolerance and cannot confirm it on every install (a gamma_min this "
+            "large means the shaped plant W2 G W1 is close to having a mode no input moves or no output sees: "
+            f"stability margin 1/gamma_min = {1 / gamma_min:.3g})")
 
 
 def check_synthesis(
@@ -376,12 +390,7 @@ def check_synthesis(
     full = series(w1, plant, w2)
     used = full if synthesis_plant is None else synthesis_plant
     reduced = used.nstates < full.nstates
-    if not gamma_min <= GAMMA_MIN_CONFIRMABLE_MAX:
-        raise ValueError(
-            f"gamma_min check: the Riccati value {gamma_min:.12g} is above {GAMMA_MIN_CONFIRMABLE_MAX:g}, where the "
-            "Hankel formula's rounding reaches the tolerance and cannot confirm it on every install (a gamma_min this "
-            "large means the shaped plant W2 G W1 is close to having a mode no input moves or no output sees: "
-            f"stability margin 1/gamma_min = {1 / gamma_min:.3g})")
+    _require_confirmable(gamma_min)
     hankel = hankel_gamma_min(used, field="the synthesis plant (a minimal realisation of W2 G W1)")
     tol = min(GAMMA_MIN_RTOL * gamma_min**2, GAMMA_MIN_RTOL_CAP)
     if not abs(hankel - gamma_min) <= tol * gamma_min:

@@ -68,11 +68,24 @@ class _EventType(type):
 
 class _Event(metaclass=_EventType):
     """The old ``rotorfault.Event`` (a Python copy of the core's divergence), kept one release
-    behind a warning: its constructor ``Event(time, kind, description, state, impact_...)`` makes a
-    :data:`Divergence` (the description and the impact, now derived from the kind and the state,
-    must agree with them)."""
+    behind a warning: its constructor ``Event(time, kind, description, state, impact_speed_m_s,
+    impact_vertical_speed_m_s, impact_tilt_rad)`` (the old dataclass's order, by position or keyword)
+    makes a :data:`Divergence` (the description and the impact, now derived from the kind and the
+    state, must agree with them; ``None``, the old default, gives none)."""
 
-    def __new__(cls, time: float, kind: str, description: str | None = None, state: Any = None, **impact: Any) -> Divergence:  # type: ignore[misc]
+    def __new__(  # type: ignore[misc]
+        cls,
+        time: float,
+        kind: str,
+        description: str | None = None,
+        state: Any = None,
+        impact_speed_m_s: float | None = None,
+        impact_vertical_speed_m_s: float | None = None,
+        impact_tilt_rad: float | None = None,
+    ) -> Divergence:
+        given = {"impact_speed_m_s": impact_speed_m_s, "impact_vertical_speed_m_s": impact_vertical_speed_m_s,
+                 "impact_tilt_rad": impact_tilt_rad}
+        impact: dict[str, Any] = {name: value for name, value in given.items() if value is not None}
         return _rfcore.Divergence(time_s=time, kind=kind, state=state, description=description, **impact)
 
 

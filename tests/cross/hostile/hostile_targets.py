@@ -417,6 +417,13 @@ def _first_order() -> Any:
     return ct.ss(-np.eye(1), np.ones((1, 1)), np.ones((1, 1)), np.zeros((1, 1)))
 
 
+def _barely_moved_unstable() -> Any:
+    """An unstable mode the input barely moves (B = 1e-10): gamma_min 2.3e10, above the limit."""
+    import control as ct
+
+    return ct.ss(np.array([[1.0, 0.0], [0.0, -2.0]]), np.array([[1e-10], [1.0]]), np.array([[1.0, 1.0]]), np.zeros((1, 1)))
+
+
 def _hidden_first_order() -> Any:
     """A stable mode nothing moves and nothing sees (B = C = 0)."""
     import control as ct
@@ -560,6 +567,13 @@ def _targets() -> dict[str, Target]:
     t["Allocated"] = Target(st.sampled_from(("ke-quadcopter", "quad-x", "hexa-pnpnpn")).map(lambda p: rf.Simulator(rf.Airframe.preset(p))).map(lambda s: Call(rf.Allocated, (rf.lqr_hover(s), rf.Allocator(s.airframe)), {}, frozenset())), lambda r, c: None)
     t["UniformPassiveFtc"] = Target(st.tuples(airframe_args(), st.sampled_from(("ke-hil", "ke-experiment", "x", "")), st.sampled_from(("feedforward", "baseline", "literal", "x")), vector(3, hostile(number(-20, 0)))).map(lambda a: Call(rf.UniformPassiveFtc, (a[0],), {"gains": a[1], "law": a[2], "position": a[3]}, frozenset({"gains", "law", "position"}))), lambda r, c: None)
     t["IndiController"] = Target(st.tuples(airframe_args(), st.lists(st.tuples(hostile(st.integers(1, 6), 0, 99), hostile(number(0, 5))), max_size=2), vector(3, hostile(number(-20, 0)))).map(lambda a: Call(rf.IndiController, (a[0],), {"failures": a[1], "position": a[2]}, frozenset({"failures", "position"}))), lambda r, c: None)
+    # The failure mode's keyword constructor (pickling's): hostile rotors, thrusts and axes.
+    t["IndiFailureMode"] = Target(calls(
+        control.indi.IndiFailureMode, failed=st.lists(hostile(st.integers(1, 4), 0, 99), max_size=2),
+        healthy=st.lists(hostile(st.integers(1, 4), 0, 99), max_size=4), yaw_controlled=st.booleans(), single_axis=st.booleans(),
+        output_direction=st.one_of(st.none(), vector(2, hostile(number(-1, 1)))), primary_axis=vector(3, hostile(number(-1, 1))),
+        zero_dynamics_a=st.one_of(st.none(), hostile(number(-2, 2))), zero_dynamics_damping=st.one_of(st.none(), hostile(number(0, 2))),
+        hover_thrust_n=vector(4, hostile(number(0, 5)))))
     t["IndiGains"] = Target(calls(rf.IndiGains, k_p_xy=hostile(positive(0.1, 5)), max_tilt_rad=hostile(positive(0.1, 1.5)), filter_frequency_rad_s=hostile(positive(1, 100))))
     t["KeGains"] = Target(calls(control.KeGains, k_p=hostile(positive(0.1, 5)), epsilon_s=hostile(positive(1e-3, 1)), weights=st.one_of(st.none(), vector(3, hostile(positive(0.1, 10))))))
     t["LanzonController"] = Target(st.tuples(vector(3, hostile(number(-5, 0))), st.one_of(st.none(), vector(3, hostile(number(-1, 1))))).map(lambda a: Call(rf.LanzonController, (lanzon_design(),), {"position": a[0], "attitude_reference": a[1]}, frozenset({"position", "attitude_reference"}))), lambda r, c: None)
@@ -740,7 +754,9 @@ def _regressions(t: dict[str, Target]) -> None:
                    Call(lambda: rf.ncfsyn(_seen_subnormally(),
                                           np.eye(1), factor=1.01), (), {}, frozenset({"plant"})),
                    # gamma = 1e300 * gamma_min: gamma**2 raised a bare OverflowError (long run, 2026-11-28).
-                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"}))),
+                   Call(rf.ncfsyn, (_first_order(), np.eye(1)), {"factor": 1e300}, frozenset({"factor"})),
+                   # gamma_min 2.3e10 with a factor of 1e140: the refusal blamed factor, not the plant's gamma_min.
+                   Call(rf.ncfsyn, (_barely_moved_unstable(), np.eye(1)), {"factor": 1e140}, frozenset({"gamma_min"}))),
         # An arm angle of 1e-309 rad left a subnormal in the effectiveness matrix, which the allocator
         # refused as "matrix[1, 0]" (a matrix the user never wrote; long run, 2026-11-28).
         "lqr_hover_allocated": (Call(lambda: rf.lqr_hover_allocated(rf.Simulator(_tiny_angle()), rf.Allocator(_tiny_angle())), (), {}, frozenset()),),

@@ -36,8 +36,11 @@ pub struct PyRelaxedHoverSettings {
     pub(crate) inner: RelaxedHoverSettings,
 }
 
-#[pymethods]
 impl PyRelaxedHoverSettings {
+    const FIELDS: &'static [&'static str] = &["rotational_drag_n_m_s", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2", "max_spin_rate_rad_s", "max_circle_radius_m", "max_idle_rotors", "grid_points"];
+}
+
+crate::convert::pickle_protocol!(PyRelaxedHoverSettings, {
     #[new]
     #[pyo3(signature = (*, rotational_drag_n_m_s=None, rotor_inertia_kg_m2=None, thrust_coefficient_n_s2=None,
                         max_spin_rate_rad_s=None, max_circle_radius_m=None, max_idle_rotors=None, grid_points=None))]
@@ -104,7 +107,7 @@ impl PyRelaxedHoverSettings {
             s.max_circle_radius_m, s.max_idle_rotors, s.grid_points
         )
     }
-}
+});
 
 /// One relaxed hover solution, checked (rotor numbers 1-based).
 ///

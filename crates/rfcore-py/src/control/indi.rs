@@ -2,6 +2,7 @@
 //! how it flies each failure set. The controller's rotor indices are 0-based here (the Python
 //! layer converts); a failure mode names its rotors from 1.
 
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -10,7 +11,7 @@ use rfcore::control::indi::{
 };
 
 use crate::airframe::PyAirframe;
-use crate::convert::{to_py_err, value_protocol};
+use crate::convert::{pickle_protocol, real, to_py_err};
 
 /// INDI gains (`rotorfault.IndiGains`); defaults from the core's `Default` (Sun's printed values
 /// where he prints them), rules from its `check`.
@@ -29,8 +30,12 @@ pub struct PyIndiGains {
 
 macro_rules! indi_gains {
     ($($name:ident),*) => {
-        #[pymethods]
         impl PyIndiGains {
+            const FIELDS: &'static [&'static str] =
+                &[$(stringify!($name),)* "weights", "model_coupling", "yaw"];
+        }
+
+        pickle_protocol!(PyIndiGains, {
             #[new]
             #[pyo3(signature = (*, $($name=None,)* weights=None, model_coupling=None, yaw=None))]
             #[allow(clippy::too_many_arguments)] // keyword-only, one per gain
@@ -68,7 +73,7 @@ macro_rules! indi_gains {
             fn yaw(&self) -> &'static str {
                 self.inner.yaw.name()
             }
-        }
+        });
     };
 }
 
@@ -102,7 +107,8 @@ indi_gains!(
 /// quadrotor: the output is redefined, along `output_direction` in the body x-y plane), the
 /// primary axis in the body frame, then the zero dynamics `eta'' = a r^2 eta - ...` (stable when
 /// `a < 0`, with the damping ratio `zero_dynamics_damping`) and the thrusts holding the weight
-/// with zero roll and pitch torque (N, one per rotor). Frozen, comparable, hashable.
+/// with zero roll and pitch torque (N, one per rotor). Frozen, comparable, hashable, picklable
+/// (keyword-only constructor from these fields, checked: what pickling calls).
 #[pyclass(name = "IndiFailureMode", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiFailureMode {
     inner: FailureMode,
@@ -120,7 +126,123 @@ fn numbered<'py>(py: Python<'py>, rotors: &[usize]) -> PyResult<Bound<'py, PyTup
     PyTuple::new(py, rotors.iter().map(|k| k + 1))
 }
 
-value_protocol!(PyIndiFailureMode, {
+/// Rotor numbers (from 1) as the core's 0-based indices; `field[k]` names a 0.
+fn indices(field: &str, rotors: &[usize]) -> PyResult<Vec<usize>> {
+    rotors
+        .iter()
+        .enumerate()
+        .map(|(k, &rotor)| {
+            rotor.checked_sub(1).ok_or_else(|| {
+                PyValueError::new_err(format!("{field}[{k}]: rotors are numbered from 1, got 0"))
+            })
+        })
+        .collect()
+}
+
+/// `values` as finite floats, `field[k]` naming the first that is not.
+fn finite(field: &str, values: &[Bound<'_, PyAny>]) -> PyResult<Vec<f64>> {
+    values
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let x = real(&format!("{field}[{k}]"), v)?;
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                Err(PyValueError::new_err(format!("{field}[{k}]: must be finite, got {x}")))
+            }
+        })
+        .collect()
+}
+
+pickle_protocol!(PyIndiFailureMode, {
+    /// A failure mode from its fields (what pickling gives back; `IndiController.failure_modes`
+    /// makes them): rotors numbered from 1, each rotor failed or healthy once, one hover thrust
+    /// per rotor, finite numbers; `zero_dynamics_damping` only with `zero_dynamics_a`.
+    #[new]
+    #[pyo3(signature = (*, failed, healthy, yaw_controlled, single_axis, output_direction, primary_axis,
+        zero_dynamics_a, zero_dynamics_damping, hover_thrust_n))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        failed: Vec<usize>,
+        healthy: Vec<usize>,
+        yaw_controlled: bool,
+        single_axis: bool,
+        output_direction: Option<Vec<Bound<'_, PyAny>>>,
+        primary_axis: Vec<Bound<'_, PyAny>>,
+        zero_dynamics_a: Option<Bound<'_, PyAny>>,
+        zero_dynamics_damping: Option<Bound<'_, PyAny>>,
+        hover_thrust_n: Vec<Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let failed = indices("failed", &failed)?;
+        let healthy = indices("healthy", &healthy)?;
+        let rotors = failed.len() + healthy.len();
+        let mut seen = vec![false; rotors];
+        for &k in failed.iter().chain(&healthy) {
+            match seen.get_mut(k) {
+                Some(s) if !*s => *s = true,
+                _ => {
+                    return Err(PyValueError::new_err(format!(
+                        "failed, healthy: each of rotors 1..={rotors} once, got rotor {} {}",
+                        k + 1,
+                        if k < rotors { "twice" } else { "out of range" }
+                    )))
+                }
+            }
+        }
+        let hover_thrust_n = finite("hover_thrust_n", &hover_thrust_n)?;
+        if hover_thrust_n.len() != rotors {
+            return Err(PyValueError::new_err(format!(
+                "hover_thrust_n: one per rotor ({rotors}), got {}",
+                hover_thrust_n.len()
+            )));
+        }
+        let pair = |field: &str, values: &[f64], n: usize| -> PyResult<()> {
+            if values.len() == n {
+                Ok(())
+            } else {
+                Err(PyValueError::new_err(format!("{field}: expected {n} entries, got {}", values.len())))
+            }
+        };
+        let axis = finite("primary_axis", &primary_axis)?;
+        pair("primary_axis", &axis, 3)?;
+        let output_direction = match output_direction {
+            Some(d) => {
+                let d = finite("output_direction", &d)?;
+                pair("output_direction", &d, 2)?;
+                Some([d[0], d[1]])
+            }
+            None => None,
+        };
+        let scalar = |field: &str, v: Option<Bound<'_, PyAny>>| -> PyResult<Option<f64>> {
+            v.map(|v| match real(field, &v)? {
+                x if x.is_finite() => Ok(x),
+                x => Err(PyValueError::new_err(format!("{field}: must be finite, got {x}"))),
+            })
+            .transpose()
+        };
+        let zero_dynamics = match (scalar("zero_dynamics_a", zero_dynamics_a)?, scalar("zero_dynamics_damping", zero_dynamics_damping)?) {
+            (Some(a), zeta) => Some((a, zeta)),
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(PyValueError::new_err(
+                    "zero_dynamics_damping: given without zero_dynamics_a (a damping ratio of no zero dynamics)",
+                ))
+            }
+        };
+        Ok(PyIndiFailureMode {
+            inner: FailureMode {
+                failed,
+                healthy,
+                yaw_controlled,
+                single_axis,
+                output_direction,
+                primary_axis: [axis[0], axis[1], axis[2]],
+                zero_dynamics,
+                hover_thrust_n,
+            },
+        })
+    }
     /// The failed rotors, numbered from 1.
     #[getter]
     fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
@@ -165,7 +287,7 @@ value_protocol!(PyIndiFailureMode, {
     fn hover_thrust_n<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         PyTuple::new(py, &self.inner.hover_thrust_n)
     }
-});
+}, then = value_protocol);
 
 /// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`

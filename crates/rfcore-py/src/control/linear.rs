@@ -1,16 +1,29 @@
 //! Bindings for the linear laws: open loop, state feedback, discrete LTI.
 
-use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use rfcore::control::linear::{LinearFeedback, Lti, OpenLoop};
 
 use crate::convert::{matrix, slice1, to_py_err};
 
+/// A copy of a constructor's array (what pickling gives back: the values the law was made from,
+/// whatever happens to the caller's array afterwards).
+fn copy1<'py>(py: Python<'py>, a: &PyReadonlyArray1<'py, f64>) -> Bound<'py, PyAny> {
+    a.as_array().to_owned().into_pyarray(py).into_any()
+}
+
+fn copy2<'py>(py: Python<'py>, a: &PyReadonlyArray2<'py, f64>) -> Bound<'py, PyAny> {
+    a.as_array().to_owned().into_pyarray(py).into_any()
+}
+
 /// A piecewise-constant command schedule.
 #[pyclass(name = "OpenLoop", module = "rotorfault._rfcore", frozen)]
 pub struct PyOpenLoop {
     pub(crate) inner: OpenLoop,
+    /// The constructor's arguments (copies), for pickling.
+    args: Py<PyTuple>,
 }
 
 #[pymethods]
@@ -25,7 +38,13 @@ impl PyOpenLoop {
             matrix("commands", &commands)?,
         )
         .map_err(to_py_err)?;
-        Ok(PyOpenLoop { inner })
+        let py = times_s.py();
+        let args = PyTuple::new(py, [copy1(py, &times_s), copy2(py, &commands)])?.unbind();
+        Ok(PyOpenLoop { inner, args })
+    }
+    /// Pickled as the arrays it was made from.
+    fn __getnewargs__(&self, py: Python<'_>) -> Py<PyTuple> {
+        self.args.clone_ref(py)
     }
 }
 
@@ -33,6 +52,8 @@ impl PyOpenLoop {
 #[pyclass(name = "LinearFeedback", module = "rotorfault._rfcore", frozen)]
 pub struct PyLinearFeedback {
     pub(crate) inner: LinearFeedback,
+    /// The constructor's arguments (copies), for pickling.
+    args: Py<PyTuple>,
 }
 
 #[pymethods]
@@ -49,7 +70,13 @@ impl PyLinearFeedback {
             matrix("gain", &gain)?,
         )
         .map_err(to_py_err)?;
-        Ok(PyLinearFeedback { inner })
+        let py = gain.py();
+        let args = PyTuple::new(py, [copy1(py, &x_trim), copy1(py, &u_trim), copy2(py, &gain)])?.unbind();
+        Ok(PyLinearFeedback { inner, args })
+    }
+    /// Pickled as the arrays it was made from.
+    fn __getnewargs__(&self, py: Python<'_>) -> Py<PyTuple> {
+        self.args.clone_ref(py)
     }
 }
 
@@ -57,6 +84,8 @@ impl PyLinearFeedback {
 #[pyclass(name = "Lti", module = "rotorfault._rfcore", frozen)]
 pub struct PyLti {
     pub(crate) inner: Lti,
+    /// The constructor's arguments (copies), for pickling.
+    args: Py<PyTuple>,
 }
 
 #[pymethods]
@@ -79,7 +108,17 @@ impl PyLti {
             slice1("u_trim", &u_trim)?,
         )
         .map_err(to_py_err)?;
-        Ok(PyLti { inner })
+        let py = a.py();
+        let args = PyTuple::new(
+            py,
+            [copy2(py, &a), copy2(py, &b), copy2(py, &c), copy2(py, &d), copy1(py, &x_trim), copy1(py, &u_trim)],
+        )?
+        .unbind();
+        Ok(PyLti { inner, args })
+    }
+    /// Pickled as the arrays it was made from.
+    fn __getnewargs__(&self, py: Python<'_>) -> Py<PyTuple> {
+        self.args.clone_ref(py)
     }
 }
 

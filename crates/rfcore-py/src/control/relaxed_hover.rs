@@ -26,8 +26,11 @@ pub struct PyRelaxedHoverOuterLoop {
     pub(crate) inner: RelaxedHoverOuterLoop,
 }
 
-#[pymethods]
 impl PyRelaxedHoverOuterLoop {
+    const FIELDS: &'static [&'static str] = &["position_gain_s2", "velocity_gain_s", "max_tilt_rad", "integral_gain_s3"];
+}
+
+crate::convert::pickle_protocol!(PyRelaxedHoverOuterLoop, {
     #[new]
     #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None, integral_gain_s3=None))]
     fn new(
@@ -63,7 +66,7 @@ impl PyRelaxedHoverOuterLoop {
     fn integral_gain_s3(&self) -> f64 {
         self.inner.integral_gain_s3
     }
-}
+});
 
 /// `u = u_trim - K x` about a relaxed hover, with the outer loop; with `before_failure` and
 /// `failure_time_s`, the healthy-vehicle design flies until the failure time (a failure-time switch).

@@ -158,11 +158,18 @@ pub(crate) struct Uncertified {
 impl ActiveSetSolver {
     /// Prepares a solver with the default [`ActiveSetSettings`].
     pub fn new(problem: &AllocationProblem) -> Self {
-        Self::with_settings(problem, ActiveSetSettings::default())
+        Self::prepare(problem, ActiveSetSettings::default())
     }
 
-    /// Prepares a solver with the given settings (tolerance validated by [`Self::with_tolerance`]).
-    pub fn with_settings(problem: &AllocationProblem, settings: ActiveSetSettings) -> Self {
+    /// Prepares a solver with the given settings, checked first by [`ActiveSetSettings::check`]
+    /// (a refusal names the field and the rule; nothing is clamped).
+    pub fn with_settings(problem: &AllocationProblem, settings: ActiveSetSettings) -> Result<Self> {
+        settings.check()?;
+        Ok(Self::prepare(problem, settings))
+    }
+
+    /// The solver for settings that hold their rules (the defaults, or checked by the caller).
+    fn prepare(problem: &AllocationProblem, settings: ActiveSetSettings) -> Self {
         let m = problem.actuator_count();
         let scaled = ScaledLeastSquares::new(problem);
         let all_free = (scaled.rows * m <= SMALL_WORK).then(|| {
@@ -175,7 +182,7 @@ impl ActiveSetSolver {
             problem: problem.clone(),
             scaled,
             settings,
-            max_iterations: settings.max_iterations.unwrap_or(4 * m + 20).max(1),
+            max_iterations: settings.max_iterations.unwrap_or(4 * m + 20),
             all_free,
         }
     }

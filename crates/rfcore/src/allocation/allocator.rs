@@ -352,6 +352,8 @@ impl Method {
         active: ActiveSetSettings,
         settings: ClarabelSettings,
     ) -> Result<Self> {
+        active.check()?;
+        settings.check()?;
         match (name, priorities) {
             ("active-set", None) => Ok(Method::ActiveSet(active)),
             ("pinv", None) => Ok(Method::Pinv),
@@ -406,7 +408,7 @@ pub fn allocate_many(
     let n = problem.virtual_dimension();
     match method {
         Method::ActiveSet(settings) => allocate_all(
-            &ActiveSetSolver::with_settings(problem, *settings),
+            &ActiveSetSolver::with_settings(problem, *settings)?,
             controls,
             cancel,
         ),
@@ -501,6 +503,43 @@ mod tests {
         assert!(err.to_string().starts_with("lower[0]"), "{err}");
         let err = allocate_pinv(&p, &[1.0, f64::NAN, 0.0, 0.0]).unwrap_err();
         assert!(err.to_string().starts_with("virtual_control[1]"), "{err}");
+    }
+
+    #[test]
+    fn settings_are_checked_not_clamped() {
+        // An iteration bound of 0 was clamped to 1 by `with_settings`, and Clarabel's public
+        // fields reached the solver unchecked (review of issue 27).
+        let p = quad();
+        let zero = ActiveSetSettings {
+            max_iterations: Some(0),
+            ..ActiveSetSettings::default()
+        };
+        let err = ActiveSetSolver::with_settings(&p, zero).unwrap_err();
+        assert!(err.to_string().starts_with("max_iterations: must be in 1..="), "{err}");
+        let nan = ActiveSetSettings {
+            tolerance: f64::NAN,
+            ..ActiveSetSettings::default()
+        };
+        let err = ActiveSetSolver::with_settings(&p, nan).unwrap_err();
+        assert!(err.to_string().starts_with("tolerance: must be > 0 and finite"), "{err}");
+        let u = [7.0, 0.0, 0.0, 0.0];
+        for (settings, field) in [
+            (ClarabelSettings { tolerance: -1.0, max_iterations: 200 }, "tolerance: must be > 0"),
+            (ClarabelSettings { tolerance: 1e-10, max_iterations: 0 }, "max_iterations: must be in 1..="),
+        ] {
+            assert!(settings.check().unwrap_err().to_string().starts_with(field));
+            let err = allocate_clarabel(&p, &u, &settings).unwrap_err();
+            assert!(err.to_string().starts_with(field), "{err}");
+            let err = Method::parse("clarabel", None, ActiveSetSettings::default(), settings).unwrap_err();
+            assert!(err.to_string().starts_with(field), "{err}");
+            let method = Method::Clarabel(settings);
+            let err = allocate_many(&p, &method, &u, &Cancel::never()).unwrap_err();
+            assert!(err.to_string().starts_with(field), "{err}");
+        }
+        let err = Method::parse("active-set", None, zero, ClarabelSettings::default()).unwrap_err();
+        assert!(err.to_string().starts_with("max_iterations"), "{err}");
+        let err = allocate_many(&p, &Method::ActiveSet(zero), &u, &Cancel::never()).unwrap_err();
+        assert!(err.to_string().starts_with("max_iterations"), "{err}");
     }
 
     #[test]

@@ -46,13 +46,20 @@ impl Default for ClarabelSettings {
 }
 
 impl ClarabelSettings {
-    pub fn tolerance(mut self, tolerance: f64) -> Result<Self> {
-        if !(tolerance.is_finite() && tolerance > 0.0) {
+    /// The rules: `tolerance > 0` and finite, `max_iterations` in
+    /// 1..=[`crate::allocation::MAX_ITERATIONS`]. The fields are public, so every solve checks
+    /// them again before Clarabel sees them (two comparisons).
+    pub fn check(&self) -> Result<()> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(RfError::invalid(
                 "tolerance",
-                format!("must be > 0 and finite, got {tolerance}"),
+                format!("must be > 0 and finite, got {}", self.tolerance),
             ));
         }
+        require_iteration_bound(self.max_iterations as usize)
+    }
+    pub fn tolerance(mut self, tolerance: f64) -> Result<Self> {
+        ClarabelSettings { tolerance, ..self }.check()?;
         self.tolerance = tolerance;
         Ok(self)
     }
@@ -63,6 +70,7 @@ impl ClarabelSettings {
     }
 
     fn build(&self) -> Result<DefaultSettings<f64>> {
+        self.check()?;
         DefaultSettingsBuilder::default()
             .verbose(false)
             .max_iter(self.max_iterations)
