@@ -79,7 +79,7 @@ from ..flight.outcomes import verdict_of
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
 from ..analysis.relaxed_hover import RelaxedHoverSolution
-from .certify import RelaxedHoverVerdict, certify, describe_relaxed_hover
+from .certify import RelaxedHoverVerdict, certify, describe_relaxed_hover, survives
 from .deciding import CampaignVehicle, vehicle
 
 #: When the rotors fail, and how long each flight goes on after that (s); the verdict window is
@@ -126,7 +126,7 @@ class AgreementCase:
     def survivable(self) -> bool:
         """Certify's answer: static hover, or a relaxed hover a linear feedback can hold that is
         not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`)."""
-        return self.hover != "no" or self.spinning.reachable_from_hover
+        return survives(self.hover, self.spinning)
 
     @property
     def held_by(self) -> tuple[str, ...]:

@@ -216,7 +216,7 @@ class Certificate(Tabular):
         cases = [c for c in self.cases if len(c.failed) <= k]
         if any(c.relaxed_hover is None for c in cases):
             raise ValueError("spinning: the certificate was made without the relaxed hover (certify(..., spinning=True))")
-        return [c for c in cases if c.hover == "no" and c.relaxed_hover is not None and not c.relaxed_hover.reachable_from_hover]
+        return [c for c in cases if not survives(c.hover, c.relaxed_hover)]
 
     def to_dict(self) -> dict[str, Any]:
         # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
@@ -309,7 +309,7 @@ def _relaxed_hover_verdict(
 
 
 #: How a vehicle as it is (its efficiencies: a failed rotor's drawn share of thrust) survives:
-#: ``static-hover`` (hovers at rest with all four axes, or its best relaxed hover is static),
+#: ``static-hover`` (hovers at rest: with all four axes, giving up yaw, or its best relaxed hover is static),
 #: ``spinning`` (a relaxed hover a linear feedback can hold, its entry from hover not excluded) or
 #: ``not-survivable``.
 Survival = Literal["static-hover", "spinning", "not-survivable"]
@@ -343,9 +343,11 @@ def certify_survival(
     all four axes (Du's ACAI facet margin > 0) is ``static-hover`` and ends there; otherwise the
     best relaxed hover (as :func:`certify` with ``spinning=True`` computes it, same ``settings``,
     ``drag``, ``actuator``) decides: static, spinning and not excluded from hover
-    (:func:`rotorfault.analysis.entry_from_hover`), or ``not-survivable``. A static hover that
-    exists only by giving up yaw is not enough alone: its yaw torque is not balanced, so it
-    survives only where a relaxed hover (a constant spin) holds it.
+    (:func:`rotorfault.analysis.entry_from_hover`); failing both, a static hover that gives up
+    yaw is ``static-hover`` too (``hover`` says ``give-up-yaw``), or ``not-survivable``. The
+    survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
+    :func:`rotorfault.studies.certify_against_flights` apply (:func:`survives`): a static hover
+    (with or without yaw) or a relaxed hover reachable from hover.
 
     Examples:
 
@@ -369,7 +371,16 @@ def certify_survival(
         survival = "static-hover"
     elif verdict.reachable_from_hover:
         survival = "spinning"
+    elif hover == "give-up-yaw":
+        survival = "static-hover"
     return SurvivalVerdict(survival, hover, verdict)
+
+
+def survives(hover: Hover, relaxed_hover: RelaxedHoverVerdict | None) -> bool:
+    """Certify's one rule for "survivable": a static hover, with all four axes or giving up yaw
+    (``hover`` not ``"no"``), or a relaxed hover a linear feedback can hold whose entry from hover
+    is not excluded (:attr:`RelaxedHoverVerdict.reachable_from_hover`)."""
+    return hover != "no" or (relaxed_hover is not None and relaxed_hover.reachable_from_hover)
 
 
 def describe_relaxed_hover(verdict: RelaxedHoverVerdict | None) -> str:
