@@ -17,7 +17,7 @@ use rfcore::analysis::{
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, slice1, slice2, to_py_err, value_protocol};
+use crate::convert::{detached, pickle_protocol, slice1, slice2, to_py_err, value_protocol};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
 fn analysis(
@@ -226,7 +226,7 @@ impl PyAcaiResult {
     const FIELDS: &'static [&'static str] = &["acai", "hover"];
 }
 
-value_protocol!(PyAcaiResult, {
+pickle_protocol!(PyAcaiResult, {
     /// A result from its two fields (`AcaiValue(value, hover)` and its pickles): the hover point
     /// is parsed by the core's own parser.
     #[new]
@@ -247,7 +247,7 @@ value_protocol!(PyAcaiResult, {
     fn hover_feasible(&self) -> bool {
         self.inner.hover.is_attainable()
     }
-});
+}, then = value_protocol);
 
 /// A batch of ACAIs with the hover point of each row as a code (1 inside, 0 on the boundary,
 /// -1 outside, -2 rank deficient: `HoverPoint::code`).

@@ -1,6 +1,6 @@
 //! Bindings for the linear laws: open loop, state feedback, discrete LTI.
 
-use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -10,12 +10,18 @@ use crate::convert::{matrix, slice1, to_py_err};
 
 /// A copy of a constructor's array (what pickling gives back: the values the law was made from,
 /// whatever happens to the caller's array afterwards).
+/// Read-only, so a caller changing `__getnewargs__()`'s arrays cannot make a pickle that loads
+/// other values than the live law flies.
 fn copy1<'py>(py: Python<'py>, a: &PyReadonlyArray1<'py, f64>) -> Bound<'py, PyAny> {
-    a.as_array().to_owned().into_pyarray(py).into_any()
+    let array = a.as_array().to_owned().into_pyarray(py);
+    array.readwrite().make_nonwriteable();
+    array.into_any()
 }
 
 fn copy2<'py>(py: Python<'py>, a: &PyReadonlyArray2<'py, f64>) -> Bound<'py, PyAny> {
-    a.as_array().to_owned().into_pyarray(py).into_any()
+    let array = a.as_array().to_owned().into_pyarray(py);
+    array.readwrite().make_nonwriteable();
+    array.into_any()
 }
 
 /// A piecewise-constant command schedule.

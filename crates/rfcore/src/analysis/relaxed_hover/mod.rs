@@ -93,6 +93,10 @@ use static_hover::static_hover;
 /// Largest scaled equation residual a returned solution may have.
 pub const RESIDUAL_TOLERANCE: f64 = 1e-9;
 
+/// How far past a rotor's thrust bound (relative to the largest bound or the weight) a solution may
+/// sit and pass the bounds check; the searches keep a candidate by the same rule.
+pub(crate) const BOUND_TOLERANCE: f64 = 1e-9;
+
 /// Static hover (no spin) or a spinning relaxed hover.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum HoverKind {
@@ -351,7 +355,7 @@ fn finish(
         ));
     }
     let scale = bound_scale(model);
-    let tol = 1e-9 * scale;
+    let tol = BOUND_TOLERANCE * scale;
     for (i, &x) in f.iter().enumerate() {
         if x < model.lower[i] - tol || x > model.upper[i] + tol {
             return Err(RfError::invalid(

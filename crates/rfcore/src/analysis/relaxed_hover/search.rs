@@ -265,6 +265,12 @@ impl<'a> Branch<'a> {
             .fold(self.model.weight_n(), |a, b| a.max(b.abs()))
     }
 
+    /// The bounds check's slack (`BOUND_TOLERANCE`): a candidate a rounding error past a bound
+    /// passes the final check, so the searches keep it too.
+    fn bound_slack(&self) -> f64 {
+        super::BOUND_TOLERANCE * self.bound_scale()
+    }
+
     /// The unique thrusts for `v` when the carrying rotors are exactly as many as the rank
     /// (least squares in the range of `M` otherwise: the point nearest to consistency).
     fn unique_thrusts(&self, headroom: &Headroom, v: &[f64; 4]) -> Option<Vec<f64>> {
@@ -378,7 +384,7 @@ impl<'a> Branch<'a> {
         let (n, s, f) = found?;
         // The last momentum update can move the optimum above a rotor's bound (the margin
         // checked at the start of the step was the previous momentum's): no relaxed hover.
-        (self.margin_of(&f) >= 0.0).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
+        (self.margin_of(&f) >= -self.bound_slack()).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
     }
 
     /// Nelder-Mead stops near, not on, a kinked optimum, where several carrying rotors share the
@@ -496,7 +502,7 @@ impl<'a> Branch<'a> {
                     };
                     let h_new = self.momentum(&f);
                     // Within the bounds only (as in the volume search: the momentum moved).
-                    result = (self.margin_of(&f) >= 0.0).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
+                    result = (self.margin_of(&f) >= -self.bound_slack()).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
                     let size = h.norm().max(h_new.norm());
                     if self.k() == self.rank || size == 0.0 || (h_new - h).norm() <= 1e-13 * size {
                         break;
