@@ -442,3 +442,16 @@ def test_plants_in_the_control_rooms_scale(which: str, value: float) -> None:
     plant[which] = np.array([[value]])
     with pytest.raises(ValueError, match=rf"^{which}'s largest entry must be 0 or lie in \[1e-50, 1e\+50\]"):
         design_lqr((plant["plant A"], plant["plant B"]), np.eye(1), np.eye(1))
+
+
+def test_the_allocated_lqr_takes_an_allocator_with_its_own_solver_settings() -> None:
+    """The design reads the allocator's pseudo-inverse map (which reads no solver setting): an
+    allocator made with non-default settings designs the same gain as a default one (the rule
+    that refuses a setting a method does not read is for a user's ``method="pinv"``, not this)."""
+    sim = rf.Simulator(rf.Airframe.preset("quad-x"))
+    default = rf.lqr_hover_allocated(sim, rf.Allocator(sim.airframe))
+    for settings in ({"max_iterations": 50}, {"tolerance": 1e-8}, {"clarabel_tolerance": 1e-9}):
+        law = rf.lqr_hover_allocated(sim, rf.Allocator(sim.airframe, **settings))  # type: ignore[arg-type]
+        np.testing.assert_array_equal(law.law.gain, default.law.gain)
+    with pytest.raises(ValueError, match='^max_iterations: method="pinv" does not iterate'):
+        rf.Allocator(sim.airframe, max_iterations=50).allocate(np.zeros(4), method="pinv")

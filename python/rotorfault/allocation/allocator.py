@@ -190,6 +190,14 @@ class Allocator:
     def virtual_dimension(self) -> int:
         return int(self.matrix.shape[0])
 
+    def _pinv_commands(self, virtual_controls: np.ndarray) -> np.ndarray:
+        """The pseudo-inverse's commands (N, m) for rows of virtual controls (N, n), whatever this
+        allocator's solver settings (the pseudo-inverse reads none of them): the linear map a
+        design on the virtual control needs (:func:`rotorfault.lqr_hover_allocated`), not a
+        user's request for ``method="pinv"``, so the unused-settings rule does not apply."""
+        rows = np.ascontiguousarray(virtual_controls, dtype=np.float64)
+        return np.asarray(_rfcore.allocate(self._core, rows, "pinv", None).commands)
+
     def allocate(
         self,
         virtual_control: npt.ArrayLike,

@@ -465,8 +465,8 @@ def lqr_hover_allocated(
     model = linearize(simulator, trim)
     a, b = model.A, model.B
     n = allocator.virtual_dimension
-    offset = allocator.allocate(np.zeros(n), method="pinv").commands
-    p = allocator.allocate(np.eye(n), method="pinv").commands.T - offset[:, None]
+    offset = allocator._pinv_commands(np.zeros((1, n)))[0]
+    p = allocator._pinv_commands(np.eye(n)).T - offset[:, None]
     q_state, r_rotor = _bryson_weights(simulator, q, r)
     r_virtual = p.T @ r_rotor @ p
     v_trim = allocator.matrix @ trim.command
