@@ -33,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import numpy as np  # noqa: E402
 from _results import add_json_option, figure, write  # noqa: E402
 
+from rotorfault.analysis import RelaxedHoverSettings  # noqa: E402
 from rotorfault.studies import deciding as D  # noqa: E402
 from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
 from rotorfault.studies.summaries import numpy_columns  # noqa: E402
@@ -63,7 +64,7 @@ def _finite(value: object) -> object:
     return value
 
 
-SPIN_LIMIT_RAD_S = 200.0  # RelaxedHoverSettings().max_spin_rate_rad_s, certify's search limit
+SPIN_LIMIT_RAD_S = RelaxedHoverSettings().max_spin_rate_rad_s  # certify's search limit
 EFFICIENCY_BINS = ((0.0, 0.0), (0.0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.0))
 
 
@@ -73,7 +74,7 @@ def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
     and which other controller holds them."""
     out = []
     for d in decision:
-        if not d["survivable"] or d["miss"] == 0:
+        if not d["survivable"] or D.target_verdict(d) == "met":
             continue
         pair = (c["vehicle"] == d["vehicle"]) & (c["fault_class"] == d["fault_class"])
         best = pair & (c["controller"] == d["controller"]) & np.isin(c["certified"], D.SURVIVABLE)

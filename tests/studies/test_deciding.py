@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import rotorfault as rf
 from rotorfault.studies import deciding as D
 
 
@@ -221,11 +222,20 @@ def test_certify_run_and_certify_against_flights_apply_one_rule() -> None:
     assert not survives("no", verdict.relaxed_hover) and not survives("no", None)
 
 
+@pytest.mark.parametrize(("field", "given"), [("settings", {"settings": 42}), ("drag", {"drag": "junk"}), ("actuator", {"actuator": [1]})])
+def test_certify_survival_checks_its_arguments_before_static_hover_decides(field: str, given: dict) -> None:
+    from rotorfault.studies.certify import certify_survival
+
+    with pytest.raises(TypeError, match=f"^{field}: expected"):
+        certify_survival(rf.Airframe.preset("ke-quadcopter"), **given)
+
+
 def test_certified_while_flying_equals_certified_after_the_fact() -> None:
     flying = D.run_rows(D.DecidingCampaign(**X500), 0, 4)  # type: ignore[arg-type]
     later_suite = D.DecidingCampaign(**X500, certify=False)  # type: ignore[arg-type]
     bare = D.run_rows(later_suite, 0, 4)
     assert set(bare["certified"].tolist()) == {""}
+    D._certificate.cache_clear()  # certified again, not read back from the flight's cache
     later = D.certify_rows(later_suite, bare)
     for name in ("certified", "certified_static_hover", "certify_note"):
         assert later[name].tolist() == flying[name].tolist()

@@ -71,6 +71,7 @@ def check_record(data: dict[str, Any]) -> dict[str, Any]:
 
 def _recorded_tables(section: ReportSection) -> None:
     """The recorded full run beside the live table, labelled with what was run, when, on which commit."""
+    from ..analysis import RelaxedHoverSettings
     from ..studies import deciding as D
 
     data = recorded_full_run()
@@ -94,7 +95,7 @@ def _recorded_tables(section: ReportSection) -> None:
         f"(target 0) and the runs certified not survivable that a controller holds ({len(run['contradictions'])} listed in the record).",
         ("vehicle", "fault class", "certified survivable (static / spinning)", "not survivable", "check failed", "best controller",
          "holds (95 % CI)", "misses the target by", "all fail", "not survivable, held"),
-        tuple(_decision_row(d) for d in run["decision"]),
+        tuple(D.decision_cells(d) for d in run["decision"]),
     ))
     if run["contradictions"]:
         section.tables.append(ReportTable(
@@ -115,11 +116,10 @@ def _recorded_tables(section: ReportSection) -> None:
         lost = m["lost_after_failure_median_s"]
         tilt = m["peak_tilt_median_deg"]
         others = ", ".join(f"{k} {n}" for k, n in m["held_by_another"].items() if n) or "none"
-        rows.append((f"{d['vehicle']} {d['fault_class']}", f"{d['controller']}: {100 * d['miss']:.1f} points short "
-                     f"({d['held']}/{d['survivable']})", f"{m['missed']} not held: {outcomes}; by efficiency (not held / survivable) {bins}; "
+        rows.append((f"{d['vehicle']} {d['fault_class']}", f"{d['controller']} ({d['held']}/{d['survivable']}): {D.target_verdict(d)}", f"{m['missed']} not held: {outcomes}; by efficiency (not held / survivable) {bins}; "
                      f"wind median {m['wind_median_m_s']:.1f} m/s (all {m['wind_median_all_m_s']:.1f}); lost "
                      f"{'-' if lost is None else f'{lost:.1f} s'} after the failure (median), peak tilt {'-' if tilt is None else f'{tilt:.0f} deg'}; "
-                     f"held instead by {others}; certify's spin at its search limit (200 rad/s) in {m.get('spin_at_search_limit', 0)}",
+                     f"held instead by {others}; certify's spin at its search limit ({RelaxedHoverSettings().max_spin_rate_rad_s:g} rad/s) in {m.get('spin_at_search_limit', 0)}",
                      m.get("why", "")))
     if rows:
         section.tables.append(ReportTable(
@@ -127,16 +127,6 @@ def _recorded_tables(section: ReportSection) -> None:
             "the best controller does not hold) and why.",
             ("cell", "best controller, miss", "measurement", "why"), tuple(rows),
         ))
-
-
-def _decision_row(d: dict[str, Any]) -> tuple[str, ...]:
-    if d["survivable"] == 0:
-        holds, miss = "-", "no survivable run"
-    else:
-        holds = f"{d['held']}/{d['survivable']} = {100 * d['share']:.1f} % [{100 * d['low']:.1f}, {100 * d['high']:.1f}]"
-        miss = "met" if d["miss"] == 0 else f"{100 * d['miss']:.1f} points"
-    return (d["vehicle"], d["fault_class"], f"{d['survivable']} ({d['static_hover']} / {d['spinning']})", str(d["not_survivable"]),
-            str(d["check_failed"]), d["controller"], holds, miss, str(d["all_fail"]), str(d["not_survivable_held"]))
 
 
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
@@ -175,7 +165,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         "runs certified not survivable that a controller holds",
         ("vehicle", "fault class", "certified survivable (static / spinning)", "not survivable", "check failed", "best controller",
          "holds (95 % CI)", "misses the target by", "all fail", "not survivable, held"),
-        tuple(_decision_row(d) for d in result.decision()),
+        tuple(D.decision_cells(d) for d in result.decision()),
     ))
     _recorded_tables(section)
     section.notes.append(

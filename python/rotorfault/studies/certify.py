@@ -38,6 +38,7 @@ from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
 from ..analysis.controllability import failure_table
 from ..analysis.relaxed_hover import RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
+from ..analysis.relaxed_hover import _vehicle_settings as vehicle_settings
 from ..analysis.spin_entry import EntryFromHover, entry_from_hover
 from ..flight.models import Drag, FixedPitchActuator
 
@@ -361,6 +362,8 @@ def certify_survival(
         ('spinning', 'no', 15.22)
     """
     airframe = require_airframe(airframe)
+    # Checked before any work, also where static hover decides and the search does not run.
+    vehicle_settings(settings, drag, actuator)
     row = failure_table(airframe, max_failed=0, formula=FORMULA)[0]
     hover: Hover = "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
     if hover == "all-axes":
