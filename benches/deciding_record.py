@@ -24,6 +24,7 @@ import argparse
 import datetime
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -156,14 +157,12 @@ def main() -> None:
         indices = sorted(set.intersection(*({i for (v, f, i) in cached if (v, f) == p} for p in pairs))) if cached else list(range(suite.runs))
         mask = np.isin(columns["index"], indices)
         subset = {k: v[mask] for k, v in columns.items()}
-        if cached:
-            def from_cache(s: D.DecidingCampaign, cell: D.Cell, index: int) -> D.RunCertificate:
-                r = cached[(cell.vehicle, cell.fault_class, index)]
-                return D.RunCertificate(r["certified"], r["static_hover"], math.nan if r["spin"] is None else float(r["spin"]), r["note"])
+        def from_cache(s: D.DecidingCampaign, cell: D.Cell, index: int) -> D.RunCertificate:
+            r = cached[(cell.vehicle, cell.fault_class, index)]
+            return D.RunCertificate(r["certified"], r["static_hover"], math.nan if r["spin"] is None else float(r["spin"]), r["note"])
 
-            D.certify_run = from_cache  # type: ignore[assignment]
         start = time.perf_counter()
-        rows = D.certify_rows(suite, subset)
+        rows = D.certify_rows(suite, subset, verdict_of=from_cache if cached else None)
         seconds = sum(r["seconds"] for r in cached.values()) if cached else time.perf_counter() - start
         timed = len(cached) if cached else len(indices) * len(pairs)
         note = "certified after the fact" + (f", a sample: run indices {_ranges(indices)} of every vehicle and fault class" if len(indices) < suite.runs else "")
@@ -195,7 +194,10 @@ def main() -> None:
         path = Path(args.json_path)
         data = json.loads(path.read_text(encoding="utf-8"))
         data.update(_finite(record_extra))
-        path.write_text(json.dumps(data, indent=2, allow_nan=False, default=float) + "\n", encoding="utf-8")
+        # One writer, atomic: the campaign part replaces the file whole, never half written.
+        partial = path.with_name(path.name + ".partial")
+        partial.write_text(json.dumps(data, indent=2, allow_nan=False, default=float) + "\n", encoding="utf-8")
+        os.replace(partial, path)
 
 
 if __name__ == "__main__":

@@ -34,9 +34,11 @@ Settings (on :class:`Allocator` and :func:`allocate`, keyword-only, defaults fro
 ``tolerance`` the certificate tolerance; ``max_iterations`` the iteration bound of each active-set
 phase (default ``4 m + 20``) and Clarabel's iteration limit (default 200), at most 10,000 (a
 solve does not poll Ctrl-C, so the ceiling bounds how long it can keep it waiting: about 0.15 s);
-``clarabel_tolerance`` Clarabel's own duality-gap and feasibility tolerance. A setting the method
-does not read is refused when it allocates, not dropped: ``"pinv"`` and ``"clarabel"`` hold their
-certificates to :data:`DEFAULT_TOLERANCE`, and ``"pinv"`` neither iterates nor calls Clarabel.
+``clarabel_tolerance`` Clarabel's own duality-gap and feasibility tolerance, read by
+``method="clarabel"`` (the active set's own fallback to Clarabel keeps fixed settings, 1e-12 and 400
+iterations, and does not read it: a known gap, not refused yet). A setting the method does not read
+is refused when it allocates, not dropped: ``"pinv"`` and ``"clarabel"`` hold their certificates
+to :data:`DEFAULT_TOLERANCE`, and ``"pinv"`` neither iterates nor calls Clarabel.
 
 Accuracy: the active-set solver and the pseudo-inverse solve the scaled least-squares problem
 ``min |W^(1/2) (M T - u_c)|`` by a Householder QR (never the normal equations ``M^T W M``), with

@@ -93,7 +93,7 @@ class AcaiValue(float):
         ('rank-deficient', True)
     """
 
-    __slots__ = ("_core",)
+    __slots__ = ("_core", "__weakref__")  # weak references kept working (the float had them before the slot)
     _core: _rfcore.AcaiResult
 
     def __new__(cls, value: float, hover: HoverPoint) -> AcaiValue:

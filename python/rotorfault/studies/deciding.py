@@ -576,7 +576,10 @@ def certify_run(suite: DecidingCampaign, cell: Cell, index: int) -> RunCertifica
     return _certificate(suite.seed, cell.draw_key, cell.vehicle, cell.fault_class, index)
 
 
-def certify_rows(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]], *, progress: bool = False) -> dict[str, np.ndarray[Any, Any]]:
+def certify_rows(
+    suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]], *, progress: bool = False,
+    verdict_of: Callable[[DecidingCampaign, Cell, int], RunCertificate] | None = None,
+) -> dict[str, np.ndarray[Any, Any]]:
     """``columns`` (rows of ``suite``, e.g. a dataset flown without the verdict) with the certify
     columns filled, without flying: each row's draw is drawn again from the seed and its index
     and checked against the row (failed rotors, fault time, efficiency, mass scale: a dataset of
@@ -605,7 +608,7 @@ def certify_rows(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, 
                 if recorded != ("-".join(map(str, d.pattern)), d.fault_time_s, d.efficiency, d.mass_scale):
                     raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
                                      f"recorded {recorded}, drawn {(d.pattern, d.fault_time_s, d.efficiency, d.mass_scale)}")
-                drawn[key] = certify_run(suite, cell, int(key[2]))
+                drawn[key] = (verdict_of or certify_run)(suite, cell, int(key[2]))
                 if bar is not None:
                     bar.advance(task)
             verdicts.append(drawn[key])
