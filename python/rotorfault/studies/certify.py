@@ -379,7 +379,7 @@ def certify_survival(
     return SurvivalVerdict(survival, hover, verdict)
 
 
-def survives(hover: Hover, relaxed_hover: RelaxedHoverVerdict | None) -> bool:
+def survives(hover: Hover | str, relaxed_hover: RelaxedHoverVerdict | None) -> bool:
     """Certify's one rule for "survivable": a static hover, with all four axes or giving up yaw
     (``hover`` not ``"no"``), or a relaxed hover a linear feedback can hold whose entry from hover
     is not excluded (:attr:`RelaxedHoverVerdict.reachable_from_hover`)."""
