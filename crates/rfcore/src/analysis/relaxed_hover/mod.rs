@@ -87,15 +87,11 @@ use crate::error::{require_all_finite, Result, RfError};
 pub use linear::LINEAR_STATES;
 pub use settings::RelaxedHoverSettings;
 use model::{Model, V3};
-use search::{Branch, Candidate, SPIN_FLOOR_FRACTION};
+use search::{Branch, Candidate, BOUND_TOLERANCE, SPIN_FLOOR_FRACTION};
 use static_hover::static_hover;
 
 /// Largest scaled equation residual a returned solution may have.
 pub const RESIDUAL_TOLERANCE: f64 = 1e-9;
-
-/// How far past a rotor's thrust bound (relative to the largest bound or the weight) a solution may
-/// sit and pass the bounds check; the searches keep a candidate by the same rule.
-pub(crate) const BOUND_TOLERANCE: f64 = 1e-9;
 
 /// Static hover (no spin) or a spinning relaxed hover.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -37,6 +37,10 @@ const SPIN_SAMPLES: usize = 48;
 /// below it the solution is static hover (reported as such).
 pub(crate) const SPIN_FLOOR_FRACTION: f64 = 1e-4;
 
+/// How far past a rotor's thrust bound (relative to the largest bound or the weight) a solution may
+/// sit and pass the bounds check (`mod.rs`); the searches keep a candidate by the same rule.
+pub(crate) const BOUND_TOLERANCE: f64 = 1e-9;
+
 /// A point the search found, before the final check.
 #[derive(Debug, Clone)]
 pub(crate) struct Candidate {
@@ -268,7 +272,7 @@ impl<'a> Branch<'a> {
     /// The bounds check's slack (`BOUND_TOLERANCE`): a candidate a rounding error past a bound
     /// passes the final check, so the searches keep it too.
     fn bound_slack(&self) -> f64 {
-        super::BOUND_TOLERANCE * self.bound_scale()
+        BOUND_TOLERANCE * self.bound_scale()
     }
 
     /// The unique thrusts for `v` when the carrying rotors are exactly as many as the rank
