@@ -35,11 +35,11 @@ import numpy as np  # noqa: E402
 from _results import add_json_option, figure, write  # noqa: E402
 
 from rotorfault.analysis import RelaxedHoverSettings  # noqa: E402
+from rotorfault.papers.campaign import RECORD_CELL_KEYS  # noqa: E402  (the record's keys, checked there)
 from rotorfault.studies import deciding as D  # noqa: E402
 from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
 from rotorfault.studies.summaries import numpy_columns  # noqa: E402
 
-CELL_KEYS = ("vehicle", "fault_class", "controller", "runs", "not_applicable", "held", "share", "refused", "lost")
 
 
 def _ranges(indices: list[int]) -> list[list[int]]:
@@ -141,7 +141,7 @@ def main() -> None:
     suite = D.DecidingCampaign.from_dict(read_manifest(args.dataset)["arguments"]["suite"])
     columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
     full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
-    cells = [{k: r[k] for k in CELL_KEYS} for r in full.cell_rows()]
+    cells = [{k: r[k] for k in RECORD_CELL_KEYS} for r in full.cell_rows()]
 
     keys = list(zip(columns["vehicle"].tolist(), columns["fault_class"].tolist(), columns["index"].tolist()))
     cached: dict[tuple[str, str, int], dict] = {}

@@ -60,7 +60,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from importlib import resources
 from os import PathLike
 from typing import Any
@@ -373,7 +373,7 @@ class DecidingCampaign:
     def from_dict(cls, data: Mapping[str, Any]) -> DecidingCampaign:
         """The suite of :meth:`to_dict` (a dataset's manifest; one written before ``certify``
         existed reads as ``certify=False``: its rows carry no verdict)."""
-        known = {"runs", "seed", "vehicles", "fault_classes", "controllers", "chunk_size", "certify"}
+        known = {f.name for f in fields(cls) if f.init}
         unknown = sorted(set(data) - known)
         if unknown:
             raise ValueError(f"suite: unknown field(s) {', '.join(unknown)}")
@@ -852,10 +852,10 @@ class DecidingResult:
         :func:`certify_rows`)."""
         from .summaries import wilson_interval
 
-        c = self.columns
-        certified = c.get("certified")
-        if certified is None or np.any(certified == ""):
+        if not self.certified:
             raise ValueError("certified: the rows carry no certify verdict; certify them first (certify_rows, read_deciding)")
+        c = self.columns
+        certified = c["certified"]
         out = []
         for key in dict.fromkeys((cell.vehicle, cell.fault_class) for cell in self.suite.cells):
             controllers = [cell.controller for cell in self.suite.cells if (cell.vehicle, cell.fault_class) == key]
