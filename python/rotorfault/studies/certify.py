@@ -277,7 +277,7 @@ def certify(
     full = airframe.is_fully_actuated
     cases = []
     for row in table:
-        hover: Hover = "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
+        hover = _static_class(row)
         drop: tuple[str, ...] | None
         if hover == "no":
             drop, ratio = None, 0.0
@@ -294,6 +294,11 @@ def certify(
         cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop, row.hover,
                                      row.hover_give_up_yaw, distance, distance_give_up_yaw, verdict))
     return Certificate(airframe.name, airframe.rotor_count, full, tuple(cases))
+
+
+def _static_class(row: Any) -> Hover:
+    """A failure-table row's static hover class: with all four axes, only by giving up yaw, or not."""
+    return "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
 
 
 def _relaxed_hover_verdict(
@@ -365,7 +370,7 @@ def certify_survival(
     # Checked before any work, also where static hover decides and the search does not run.
     vehicle_settings(settings, drag, actuator)
     row = failure_table(airframe, max_failed=0, formula=FORMULA)[0]
-    hover: Hover = "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
+    hover = _static_class(row)
     if hover == "all-axes":
         return SurvivalVerdict("static-hover", hover, None)
     verdict = _relaxed_hover_verdict(airframe, settings, drag, actuator)

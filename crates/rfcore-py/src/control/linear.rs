@@ -6,16 +6,14 @@ use pyo3::types::PyTuple;
 
 use rfcore::control::linear::{LinearFeedback, Lti, OpenLoop};
 
-use crate::convert::{matrix, slice1, to_py_err};
+use crate::convert::{matrix, read_only, slice1, to_py_err};
 
 /// A copy of a constructor's array (what pickling gives back: the values the law was made from,
 /// whatever happens to the caller's array afterwards).
 /// Read-only, so a caller changing `__getnewargs__()`'s arrays cannot make a pickle that loads
 /// other values than the live law flies.
 fn copy1<'py>(py: Python<'py>, a: &PyReadonlyArray1<'py, f64>) -> Bound<'py, PyAny> {
-    let array = a.as_array().to_owned().into_pyarray(py);
-    array.readwrite().make_nonwriteable();
-    array.into_any()
+    read_only(py, a.as_array().to_vec()).into_any()
 }
 
 fn copy2<'py>(py: Python<'py>, a: &PyReadonlyArray2<'py, f64>) -> Bound<'py, PyAny> {

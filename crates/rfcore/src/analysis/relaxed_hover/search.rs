@@ -269,10 +269,10 @@ impl<'a> Branch<'a> {
             .fold(self.model.weight_n(), |a, b| a.max(b.abs()))
     }
 
-    /// The bounds check's slack (`BOUND_TOLERANCE`): a candidate a rounding error past a bound
-    /// passes the final check, so the searches keep it too.
-    fn bound_slack(&self) -> f64 {
-        BOUND_TOLERANCE * self.bound_scale()
+    /// Within the bounds up to the bounds check's own slack (`BOUND_TOLERANCE`): a candidate a
+    /// rounding error past a bound passes the final check, so the searches keep it too.
+    fn within_bounds(&self, f: &[f64]) -> bool {
+        self.margin_of(f) >= -BOUND_TOLERANCE * self.bound_scale()
     }
 
     /// The unique thrusts for `v` when the carrying rotors are exactly as many as the rank
@@ -388,7 +388,7 @@ impl<'a> Branch<'a> {
         let (n, s, f) = found?;
         // The last momentum update can move the optimum above a rotor's bound (the margin
         // checked at the start of the step was the previous momentum's): no relaxed hover.
-        (self.margin_of(&f) >= -self.bound_slack()).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
+        self.within_bounds(&f).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
     }
 
     /// Nelder-Mead stops near, not on, a kinked optimum, where several carrying rotors share the
@@ -506,7 +506,7 @@ impl<'a> Branch<'a> {
                     };
                     let h_new = self.momentum(&f);
                     // Within the bounds only (as in the volume search: the momentum moved).
-                    result = (self.margin_of(&f) >= -self.bound_slack()).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
+                    result = self.within_bounds(&f).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
                     let size = h.norm().max(h_new.norm());
                     if self.k() == self.rank || size == 0.0 || (h_new - h).norm() <= 1e-13 * size {
                         break;
