@@ -3,14 +3,24 @@
 //! AVX2 register; each run's own controller, limits, faults and recording stay per run.
 //!
 //! # What flies in lanes, what falls back
-//! A run flies in lanes when the batch has no sensor noise, no sensing and no wind profile
-//! (constant wind is fine), fixed-pitch actuators without a rate limit (a first-order lag or
+//! A run flies in lanes when the batch has no sensor noise and no wind profile (constant wind is
+//! fine), fixed-pitch actuators without a rate limit (a first-order lag or
 //! none), no quadratic drag and no rotor inertia, and its checks pass; four such runs form a
 //! group when their fault times are the same (the rotors and efficiencies may differ: the
 //! intervals split at the same times). Every other run, and the runs left over when a set of
 //! equal fault times does not fill a group, fly with the scalar simulator
 //! ([`crate::flight::simulation::simulate_cancellable`]). [`BatchLanes::Scalar`] flies them all
 //! with it.
+//!
+//! # Sensing in lanes
+//! With sensing (`SimulationConfig::sensing`) only the truth flies in lanes: each run keeps its
+//! own sensors and estimator ([`Onboard`], scalar, like its controller), fed from its own tape
+//! of the period's nodes, which the group writes as the scalar integrator does (each RK4
+//! interval's start with the rotor totals the interval starts from, then the period's end).
+//! The tape's nodes are the scalar ones bit for bit (the lanes' states are, and the totals and
+//! rotor thrusts come from the scalar functions on the lane's channels), so are the sensor
+//! samples, the estimates and the commands; the tape evaluates a node's wrench itself where the
+//! scalar integrator shares its first RK4 stage's (the same function of the same inputs).
 //!
 //! # Why the results are the scalar ones
 //! Lane `i` computes what the scalar period ([`crate::flight::simulation::step`]) computes, in
@@ -31,8 +41,10 @@ use crate::flight::simulation::divergence::{Divergence, DivergenceKind, Limits};
 use crate::flight::simulation::driver::{
     check_batch, check_run, empty_trajectory, end_with, fly_batch_run, truth_samples, BatchRun,
 };
+use crate::flight::simulation::onboard::Onboard;
 use crate::flight::simulation::recording::{records, NoObserver, Trajectory};
-use crate::flight::simulation::step::located_divergence;
+use crate::flight::simulation::step::{located_divergence, push_node, rotor_totals};
+use crate::flight::simulation::tape::Tape;
 use crate::flight::vehicle::Vehicle;
 use crate::state::ControllerInput;
 
@@ -68,6 +80,8 @@ pub(super) struct Lane {
     schedule: FaultSchedule,
     limits: Limits,
     trajectory: Trajectory,
+    /// The run's sensors and estimator and their tape, with sensing (module docs).
+    onboard: Option<(Onboard, Tape)>,
 }
 
 /// Where each run of a batch goes.
@@ -171,7 +185,6 @@ fn lanes_possible(
 ) -> bool {
     lanes == BatchLanes::Auto
         && config.noise.is_none()
-        && config.sensing.is_none()
         && config.wind_profile.is_empty()
         && matches!(actuators, Actuators::FixedPitch(_))
         && actuators.lags()[0].rate_limit_per_s == f64::INFINITY
@@ -201,7 +214,7 @@ pub(super) fn plan(
     // Filling groups, keyed by the sorted fault times' bits.
     let mut filling: Vec<(FaultTimes, Vec<(usize, Lane)>)> = Vec::new();
     for (i, run) in runs.into_iter().enumerate() {
-        let lane = match ready(vehicle, actuators, initial_efficiency, run, config) {
+        let lane = match ready(i, vehicle, actuators, initial_efficiency, run, config) {
             Ok(lane) => lane,
             Err(run) => {
                 plans.push(Plan::Scalar(i, run));
@@ -234,6 +247,7 @@ pub(super) fn plan(
 // The run handed back is moved once per run, not per step: its size costs nothing.
 #[allow(clippy::result_large_err)]
 fn ready(
+    index: usize,
     vehicle: &Vehicle,
     actuators: &Actuators,
     initial_efficiency: &[f64],
@@ -266,7 +280,23 @@ fn ready(
         return Err(run);
     }
     let m = vehicle.rotor_count();
-    let trajectory = empty_trajectory(config, own.channels() * m, m);
+    let mut trajectory = empty_trajectory(config, own.channels() * m, m);
+    let onboard = match &config.sensing {
+        Some(sensing) => {
+            // Run `index` of the batch: seed shifted by it (`fly_batch_run`'s rule).
+            let mut own_sensing = *sensing;
+            own_sensing.seed = own_sensing.seed.wrapping_add(index as u64);
+            let reads_samples = run.controller.reads_samples();
+            let Ok((onboard, tape)) = Onboard::new(&own_sensing, &run.x0, &own, reads_samples)
+            else {
+                return Err(run);
+            };
+            let rows = config.steps() / config.record_every + 3;
+            trajectory.sensing = Some(onboard.record(rows));
+            Some((onboard, tape))
+        }
+        None => None,
+    };
     Ok(Lane {
         run,
         actuators: own,
@@ -274,6 +304,7 @@ fn ready(
         schedule,
         limits,
         trajectory,
+        onboard,
     })
 }
 
@@ -330,6 +361,24 @@ fn fly_group_lanes<L: Lanes>(
     for (i, (_, lane)) in group.iter_mut().enumerate() {
         body.set(i, &lane.run.x0);
         lane.run.controller.reset();
+        // The scalar driver's start: the tape's first node, the sensors' samples at 0.
+        if let Some((onboard, tape)) = lane.onboard.as_mut() {
+            tape.clear();
+            let x0 = lane.run.x0;
+            let channels = lane.actuators.state();
+            push_node(
+                tape,
+                vehicle,
+                config,
+                0.0,
+                &x0,
+                &lane.actuators,
+                channels,
+                &lane.efficiency,
+                None,
+            );
+            onboard.catch_up(tape, vehicle, 0.0, cancel)?;
+        }
     }
     let mut active = [true; WIDTH];
     let mut commands = vec![0.0; count * WIDTH];
@@ -345,7 +394,23 @@ fn fly_group_lanes<L: Lanes>(
             let state = body.get(i);
             let command = &mut commands[i * count..(i + 1) * count];
             let controller = lane.run.controller.as_mut();
-            let input = if controller.reads_samples() {
+            // With sensing: the estimate, and the sensors' samples for a controller that reads
+            // them (the scalar driver's rule).
+            let onboard = lane.onboard.as_ref().map(|(onboard, _)| onboard);
+            let estimate = onboard.map(|o| o.estimate(t));
+            let measured = estimate.map_or(state, |e| e.state);
+            let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard) {
+                if controller.reads_samples() {
+                    ControllerInput {
+                        state: &measured,
+                        gyro_rad_s: Some(estimate.gyro_rad_s),
+                        specific_force_m_s2: Some(estimate.accel_m_s2),
+                        rotor_thrust_n: onboard.rotor_thrust(),
+                    }
+                } else {
+                    ControllerInput::state_only(&measured)
+                }
+            } else if controller.reads_samples() {
                 truth_samples(
                     vehicle,
                     &lane.actuators,
@@ -364,6 +429,11 @@ fn fly_group_lanes<L: Lanes>(
                 let trajectory = &mut lane.trajectory;
                 trajectory.push_step(t, &state, &lane.efficiency, &lane.actuators, None);
                 trajectory.rotor_command.extend_from_slice(command);
+                if let (Some(record), Some(onboard), Some(estimate)) =
+                    (trajectory.sensing.as_mut(), onboard, &estimate)
+                {
+                    record.rows.push(onboard.row(estimate));
+                }
             }
             if !finite {
                 lane.trajectory.divergence = Some(Divergence {
@@ -388,10 +458,23 @@ fn fly_group_lanes<L: Lanes>(
             &mut group,
             &mut active,
         );
+        for (i, (_, lane)) in group.iter_mut().enumerate() {
+            if let (true, Some((onboard, tape))) = (active[i], lane.onboard.as_mut()) {
+                onboard.catch_up(tape, vehicle, t_next, cancel)?;
+            }
+        }
     }
     Ok(group
         .into_iter()
-        .map(|(i, lane)| (i, lane.trajectory))
+        .map(|(i, mut lane)| {
+            // The run's counts (a run that diverged has them already, unchanged since).
+            if let (Some(record), Some((onboard, _))) =
+                (lane.trajectory.sensing.as_mut(), lane.onboard.as_ref())
+            {
+                onboard.finish(record);
+            }
+            (i, lane.trajectory)
+        })
         .collect())
 }
 
@@ -533,6 +616,14 @@ impl<L: Lanes> Period<L> {
         let half_decay = actuators.decay(0.5 * h)[0];
         let decays = [1.0, half_decay, half_decay * half_decay];
         let mut start_totals: Option<TotalsLanes<L>> = None;
+        let sensing = config.sensing.is_some();
+        if sensing {
+            for (_, lane) in group.iter_mut() {
+                if let Some((_, tape)) = lane.onboard.as_mut() {
+                    tape.clear();
+                }
+            }
+        }
         for s in 0..config.substeps {
             let mut a = t + s as f64 * h;
             let b = if s + 1 == config.substeps {
@@ -560,6 +651,9 @@ impl<L: Lanes> Period<L> {
                     };
                     self.respond(node, elapsed, decay);
                     totals[node] = self.totals(&self.nodes[node]);
+                }
+                if sensing {
+                    self.push_nodes(vehicle, config, a, body, group, active);
                 }
                 let next = model.rk4_step(body, len, &totals);
                 let (n3z, speed2, rate2) = next.limit_parts();
@@ -596,7 +690,7 @@ impl<L: Lanes> Period<L> {
                         &lane.efficiency,
                         &lane.actuators,
                         config,
-                        None,
+                        lane.onboard.as_ref().map(|(onboard, _)| onboard),
                     );
                     active[i] = false;
                 }
@@ -617,7 +711,62 @@ impl<L: Lanes> Period<L> {
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if active[i] {
                 self.load_channels(i, &mut lane.actuators);
+                // The period's end node (the scalar integrator's last).
+                if let Some((_, tape)) = lane.onboard.as_mut() {
+                    push_node(
+                        tape,
+                        vehicle,
+                        config,
+                        t_next,
+                        &body.get(i),
+                        &lane.actuators,
+                        lane.actuators.state(),
+                        &lane.efficiency,
+                        None,
+                    );
+                }
             }
+        }
+    }
+
+    /// Each active lane's tape node at the start `a_s` of an RK4 interval: the lane's state and
+    /// the channels the interval starts from (the targets for instant rotors, as the scalar
+    /// integrator's `constant` case), with the rotor totals from them and the constant wind.
+    #[inline(never)]
+    fn push_nodes(
+        &mut self,
+        vehicle: &Vehicle,
+        config: &SimulationConfig,
+        a_s: f64,
+        body: &BodyLanes<L>,
+        group: &mut [(usize, Lane)],
+        active: &[bool; WIDTH],
+    ) {
+        let source = if self.time_constant_s > 0.0 {
+            &self.channel_lanes
+        } else {
+            &self.target_lanes
+        };
+        for (i, (_, lane)) in group.iter_mut().enumerate() {
+            let (true, Some((_, tape))) = (active[i], lane.onboard.as_mut()) else {
+                continue;
+            };
+            for (x, c) in self.channel_buffer.iter_mut().zip(source) {
+                *x = c.lane(i);
+            }
+            let channels = &self.channel_buffer;
+            let totals = rotor_totals(vehicle, &lane.actuators, channels, &lane.efficiency);
+            push_node(
+                tape,
+                vehicle,
+                config,
+                a_s,
+                &body.get(i),
+                &lane.actuators,
+                channels,
+                &lane.efficiency,
+                Some((&totals, &config.wind_m_s)),
+            );
         }
     }
 }

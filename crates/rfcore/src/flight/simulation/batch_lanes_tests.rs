@@ -1,6 +1,7 @@
 //! The lanes fly what the scalar simulator flies, bit for bit (a stricter check than the issue's
 //! 1e-12 relative): hover LQR-style feedback and Ke's FTC, with rotor lag, saturation, faults
-//! between substeps, divergence and non-finite commands in some lanes and not others.
+//! between substeps, divergence and non-finite commands in some lanes and not others; on the
+//! truth and on sensors with the estimator (every estimate row and count too).
 
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -11,6 +12,7 @@ use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use crate::control::{Controller, LinearFeedback};
 use crate::flight::actuator::{Actuators, FixedPitch, Lag};
 use crate::flight::fault_schedule::RotorFault;
+use crate::flight::simulation::sensing::Sensing;
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
 
@@ -40,6 +42,27 @@ fn bits(t: &Trajectory) -> (Vec<u64>, Option<DivergenceKind>) {
         out.push(v.to_bits());
     }
     out.extend([t.t_s.len(), t.rotor_command.len(), t.rotor_thrust_n.len()].map(|n| n as u64));
+    // With sensing: every estimate row (the estimate, its sigmas, the clamping flags) and the
+    // run's counts.
+    if let Some(record) = &t.sensing {
+        for row in &record.rows {
+            out.extend(state(&row.state));
+            out.extend(row.std.iter().map(|v| v.to_bits()));
+            out.extend([row.gyro_saturated, row.accel_saturated].map(u64::from));
+        }
+        let f = record.fusion;
+        out.extend([
+            record.rows.len() as u64,
+            record.imu_samples,
+            record.gyro_saturated_samples,
+            record.accel_saturated_samples,
+            f.fused,
+            f.rejected,
+            f.late,
+            f.thinned,
+        ]);
+    }
+    out.push(u64::from(t.sensing.is_some()));
     if let Some(d) = &t.divergence {
         out.push(d.time_s.to_bits());
         out.extend(state(&d.state));
@@ -275,7 +298,10 @@ fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
         ) -> Result<()> {
             self.0.command(t, input.state, out)?;
             let f = input.specific_force_m_s2.unwrap();
-            out[0] += 1e-3 * f.z + 1e-3 * input.rotor_thrust_n.unwrap()[3];
+            let gyro = input.gyro_rad_s.unwrap();
+            // On sensors no rotor-speed reading has arrived before the sensor's latency.
+            let thrust = input.rotor_thrust_n.map_or(0.0, |r| r[3]);
+            out[0] += 1e-3 * f.z + 1e-3 * thrust + 1e-3 * gyro.x;
             Ok(())
         }
         fn reads_samples(&self) -> bool {
@@ -285,7 +311,7 @@ fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
     let airframe = crate::fixtures::preset("quad-x");
     let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
     let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
-    let config = SimulationConfig::new(0.0025, 2, 0.5);
+    let mut config = SimulationConfig::new(0.0025, 2, 0.5);
     let runs = || -> Vec<BatchRun> {
         (0..4)
             .map(|k| BatchRun {
@@ -298,6 +324,93 @@ fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
     };
     let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
     assert_same(&lanes, &scalar);
+    // On sensors (instant rotors: the tape's nodes carry the targets), the sensors' samples.
+    config.sensing = Some(Sensing {
+        seed: 3,
+        ..Sensing::default()
+    });
+    assert!(plan(&vehicle, &actuators, &[1.0; 4], runs(), &config, BatchLanes::Auto)
+        .iter()
+        .all(|p| matches!(p, Plan::Group(_))));
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    let record = lanes[0].sensing.as_ref().unwrap();
+    assert!(record.imu_samples > 200 && record.fusion.fused > 0, "{record:?}");
+}
+
+#[test]
+fn lanes_fly_the_scalar_sensed_batch_bit_for_bit() {
+    // On sensors and the estimator: lag, a fault between substeps (one lane loses a rotor and
+    // diverges), a law that breaks, constant wind; each run's own sensor seed.
+    let airframe = crate::fixtures::preset("quad-x");
+    let vehicle = Vehicle::new(
+        &airframe,
+        Drag {
+            linear_drag_n_s_m: 0.2,
+            ..Drag::default()
+        },
+    )
+    .unwrap();
+    let lag = Lag {
+        time_constant_s: 0.02,
+        rate_limit_per_s: f64::INFINITY,
+    };
+    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 0.0).unwrap());
+    let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+    let mut config = SimulationConfig::new(0.0025, 2, 1.5);
+    config.record_every = 3;
+    config.wind_m_s = Vector3::new(0.5, -0.2, 0.0);
+    config.sensing = Some(Sensing {
+        seed: 11,
+        ..Sensing::default()
+    });
+    let runs = || -> Vec<BatchRun> {
+        (0..8)
+            .map(|k| {
+                let law = hover_feedback(&airframe, 10.0);
+                let faults = if k < 4 {
+                    vec![RotorFault {
+                        rotor: k % 4,
+                        time_s: 0.30013,
+                        efficiency: if k == 2 { 0.0 } else { 0.6 },
+                    }]
+                } else {
+                    vec![]
+                };
+                let controller: Box<dyn Controller> = if k == 5 {
+                    Box::new(NanAfter { law, after_s: 0.6 })
+                } else {
+                    Box::new(law)
+                };
+                BatchRun {
+                    controller,
+                    initial_command: Some(vec![hover; 4]),
+                    x0: start(k),
+                    faults,
+                }
+            })
+            .collect()
+    };
+    let plans = plan(
+        &vehicle,
+        &actuators,
+        &[1.0; 4],
+        runs(),
+        &config,
+        BatchLanes::Auto,
+    );
+    assert!(plans.iter().all(|p| matches!(p, Plan::Group(_))), "two groups");
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    assert!(lanes[2].divergence.is_some(), "a dead rotor diverges");
+    assert_eq!(
+        lanes[5].divergence.map(|d| d.kind),
+        Some(DivergenceKind::NonFiniteCommand)
+    );
+    assert!(lanes.iter().filter(|t| t.divergence.is_none()).count() >= 6);
+    // Each run its own seed: the estimates differ between runs flown from the same start.
+    let row = |t: &Trajectory| t.sensing.as_ref().unwrap().rows[5].state.position_m;
+    assert_ne!(row(&lanes[4]), row(&lanes[6]));
 }
 
 #[test]

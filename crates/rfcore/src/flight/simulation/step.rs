@@ -358,7 +358,7 @@ pub(super) fn located_divergence(
 /// One node of `tape`: `state` at `t_s` with the channels at `channels` (rotor totals and wind
 /// as given, else computed there).
 #[allow(clippy::too_many_arguments)]
-fn push_node(
+pub(super) fn push_node(
     tape: &mut Tape,
     vehicle: &Vehicle,
     config: &SimulationConfig,
