@@ -17,8 +17,8 @@
 //! own sensors and estimator ([`Onboard`], scalar, like its controller), fed from its own tape
 //! of the period's nodes, which the group writes as the scalar integrator does (each RK4
 //! interval's start with the rotor totals the interval starts from, then the period's end).
-//! The tape's nodes are the scalar ones bit for bit (the lanes' states are, and the totals and
-//! rotor thrusts come from the scalar functions on the lane's channels), so are the sensor
+//! The tape's nodes are the scalar ones bit for bit (the lanes' states and rotor sums are, and
+//! the rotor thrusts come from the scalar function on the lane's channels), so are the sensor
 //! samples, the estimates and the commands; the tape evaluates a node's wrench itself where the
 //! scalar integrator shares its first RK4 stage's (the same function of the same inputs).
 //!
@@ -29,6 +29,7 @@
 //! non-finite commands). A lane that diverges locates its crossing with the scalar code and
 //! stops; the others go on.
 
+use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::cancel::Cancel;
@@ -43,9 +44,9 @@ use crate::flight::simulation::driver::{
 };
 use crate::flight::simulation::onboard::Onboard;
 use crate::flight::simulation::recording::{records, NoObserver, Trajectory};
-use crate::flight::simulation::step::{located_divergence, push_node, rotor_totals};
+use crate::flight::simulation::step::{located_divergence, push_node};
 use crate::flight::simulation::tape::Tape;
-use crate::flight::vehicle::Vehicle;
+use crate::flight::vehicle::{RotorTotals, Vehicle};
 use crate::state::ControllerInput;
 
 /// How a batch steps its runs: `Auto` flies groups of four in SIMD lanes where it can (AVX2
@@ -653,7 +654,7 @@ impl<L: Lanes> Period<L> {
                     totals[node] = self.totals(&self.nodes[node]);
                 }
                 if sensing {
-                    self.push_nodes(vehicle, config, a, body, group, active);
+                    self.push_nodes(vehicle, config, a, body, &totals[0], group, active);
                 }
                 let next = model.rk4_step(body, len, &totals);
                 let (n3z, speed2, rate2) = next.limit_parts();
@@ -731,7 +732,10 @@ impl<L: Lanes> Period<L> {
 
     /// Each active lane's tape node at the start `a_s` of an RK4 interval: the lane's state and
     /// the channels the interval starts from (the targets for instant rotors, as the scalar
-    /// integrator's `constant` case), with the rotor totals from them and the constant wind.
+    /// integrator's `constant` case), with the interval's rotor totals there (`totals`: the
+    /// scalar `rotor_totals` bit for bit; the net rotor spin left at zero, which the lanes'
+    /// vehicles, without rotor inertia, never read) and the constant wind.
+    #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn push_nodes(
         &mut self,
@@ -739,6 +743,7 @@ impl<L: Lanes> Period<L> {
         config: &SimulationConfig,
         a_s: f64,
         body: &BodyLanes<L>,
+        totals: &TotalsLanes<L>,
         group: &mut [(usize, Lane)],
         active: &[bool; WIDTH],
     ) {
@@ -755,7 +760,11 @@ impl<L: Lanes> Period<L> {
                 *x = c.lane(i);
             }
             let channels = &self.channel_buffer;
-            let totals = rotor_totals(vehicle, &lane.actuators, channels, &lane.efficiency);
+            let totals = RotorTotals {
+                thrust_n: totals.thrust_n.lane(i),
+                torque_body_nm: Vector3::from_fn(|k, _| totals.torque_body_nm[k].lane(i)),
+                spin_rad_s: 0.0,
+            };
             push_node(
                 tape,
                 vehicle,
