@@ -324,12 +324,17 @@ def test_a_controller_producing_nan_ends_the_run_with_an_event(sim: rf.Simulator
     assert tr.diverged and tr.events[0].kind == "non-finite-command"
 
 
-def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: rf.LinearFeedback) -> None:
+@pytest.mark.parametrize("sensing", [None, rf.Sensing(seed=5)], ids=["truth", "mocap"])
+def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: rf.LinearFeedback,
+                                                       sensing: rf.Sensing | None) -> None:
     """``lanes="auto"`` (four runs per AVX2 register, issue 32) records exactly what
     ``lanes="scalar"`` records, in every column: lagged rotors, a fault between substeps in one
     group (a dead rotor: that lane leaves its register when it diverges), a group without
-    faults and a run left over; a bad setting is refused naming the field."""
-    sim = rf.Simulator(quad, dt_s=1 / 400, substeps=2, actuator=rf.FixedPitchActuator(time_constant_s=0.02))
+    faults and a run left over; on the truth and on sensors with the estimator (the truth in
+    the lanes, each run's sensors and estimator per run: every estimate column and count too);
+    a bad setting is refused naming the field."""
+    sim = rf.Simulator(quad, dt_s=1 / 400, substeps=2, actuator=rf.FixedPitchActuator(time_constant_s=0.02),
+                       sensing=sensing)
     starts = [rf.State(position=(0.1 * i, -0.05 * i, -10), velocity=(0.2, 0, 0.1 * i), euler=(0.03 * i, -0.02, 0.1))
               for i in range(9)]
     faults = [[rf.RotorFault(rotor=1 + i % 4, time=0.30013, efficiency=0.0 if i == 1 else 0.5)] if i < 4 else []
@@ -339,6 +344,12 @@ def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: r
     for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
                  "efficiency", "rows_on_grid", "off_grid_row"):
         np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)
+    if sensing is not None:
+        for name in ("estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated"):
+            np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)
+        counts = [[c.__getnewargs_ex__() for c in b.columns.sensing_counts if c] for b in (auto, scalar)]
+        assert counts[0] == counts[1] and len(counts[0]) == 9
+        assert all(c.imu_samples > 0 for c in auto.columns.sensing_counts if c)
     np.testing.assert_array_equal(auto.divergence_time, scalar.divergence_time)
     assert auto.diverged.tolist() == scalar.diverged.tolist()
     assert auto.efficiency[1, -1, 1] == 0.0 or auto.diverged[1]  # the faults acted

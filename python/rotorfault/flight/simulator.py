@@ -363,10 +363,11 @@ def simulate_batch(
     whose recordings would need more is refused up front with the estimate (see
     :func:`recording_bytes`); a batch larger than memory streams to Parquet with
     :func:`rotorfault.studies.record_batch`. ``lanes``: ``"auto"`` (default) flies groups of four
-    runs in one AVX2 register where the batch allows it (Rust controllers, no sensor noise or
-    sensing, constant wind, fixed-pitch rotors without a rate limit, no quadratic drag or rotor
-    inertia; runs grouped by equal fault times), with results equal bit for bit to
-    ``"scalar"``, one run at a time.
+    runs in one AVX2 register where the batch allows it (Rust controllers, no sensor noise,
+    constant wind, fixed-pitch rotors without a rate limit, no quadratic drag or rotor inertia;
+    runs grouped by equal fault times; on sensors the truth flies in the lanes and each run's
+    sensors and estimator per run), with results equal bit for bit to ``"scalar"``, one run at
+    a time.
 
     Examples:
 
