@@ -329,13 +329,23 @@ fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
         seed: 3,
         ..Sensing::default()
     });
-    assert!(plan(&vehicle, &actuators, &[1.0; 4], runs(), &config, BatchLanes::Auto)
-        .iter()
-        .all(|p| matches!(p, Plan::Group(_))));
+    assert!(plan(
+        &vehicle,
+        &actuators,
+        &[1.0; 4],
+        runs(),
+        &config,
+        BatchLanes::Auto
+    )
+    .iter()
+    .all(|p| matches!(p, Plan::Group(_))));
     let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
     assert_same(&lanes, &scalar);
     let record = lanes[0].sensing.as_ref().unwrap();
-    assert!(record.imu_samples > 200 && record.fusion.fused > 0, "{record:?}");
+    assert!(
+        record.imu_samples > 200 && record.fusion.fused > 0,
+        "{record:?}"
+    );
 }
 
 #[test]
@@ -399,7 +409,10 @@ fn lanes_fly_the_scalar_sensed_batch_bit_for_bit() {
         &config,
         BatchLanes::Auto,
     );
-    assert!(plans.iter().all(|p| matches!(p, Plan::Group(_))), "two groups");
+    assert!(
+        plans.iter().all(|p| matches!(p, Plan::Group(_))),
+        "two groups"
+    );
     let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
     assert_same(&lanes, &scalar);
     assert!(lanes[2].divergence.is_some(), "a dead rotor diverges");
