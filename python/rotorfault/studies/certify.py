@@ -99,6 +99,9 @@ class RelaxedHoverVerdict:
     at_spin_rate_limit: bool
     solution: RelaxedHoverSolution | None = field(default=None, compare=False, repr=False)
     entry_from_hover: EntryFromHover | None = None
+    #: The vehicle has rotational damping (``k_r > 0``): the yaw balance ``n . tau = k_r s``
+    #: pins the spin rate (without it, nothing does).
+    damped: bool = True
 
     @property
     def reachable_from_hover(self) -> bool:
@@ -110,13 +113,14 @@ class RelaxedHoverVerdict:
 
     @property
     def steady(self) -> bool:
-        """A steady state the vehicle can settle in: static, or a spin below the search's limit.
-        A best spin at the limit (``at_spin_rate_limit``) is the search's bound, not an
-        equilibrium the physics selects: its margin still grows with the spin rate, which only a
-        vehicle without rotational damping (``k_r = 0``) allows (with damping the yaw balance
-        ``n . tau = k_r s`` caps the spin), and nothing there holds the spin rate: the yaw rate
-        runs up to the limit, which is also the simulator's body-rate limit."""
-        return self.hover == "static" or (self.hover == "spinning" and not self.at_spin_rate_limit)
+        """A steady state the vehicle can settle in: static, or a spin whose rate the physics
+        pins. With rotational damping (:attr:`damped`) the yaw balance ``n . tau(f) = k_r s``
+        pins it, also at the search's limit. Without (``k_r = 0``) the balance is ``n . tau(f) =
+        0`` whatever the rate, and a best spin at the limit (``at_spin_rate_limit``) is the
+        search's bound, not an equilibrium: its margin still grows with the rate and nothing
+        holds the rate (the yaw rate runs up to the limit, also the simulator's body-rate
+        limit); not steady."""
+        return self.hover == "static" or (self.hover == "spinning" and not (self.at_spin_rate_limit and not self.damped))
 
     @property
     def survivable(self) -> bool:
@@ -325,8 +329,10 @@ def _relaxed_hover_verdict(
         return RelaxedHoverVerdict("no", math.nan, math.nan, (), False)
     kind: SpinningHover = "spinning" if best.kind == "spinning" else "static"
     entry = entry_from_hover(airframe, best, settings, drag=drag, actuator=actuator) if kind == "spinning" else None
+    damped = vehicle_settings(settings, drag, actuator).rotational_drag_n_m_s > 0.0
     return RelaxedHoverVerdict(
-        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry
+        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry,
+        damped,
     )
 
 

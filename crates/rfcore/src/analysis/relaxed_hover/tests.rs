@@ -426,3 +426,26 @@ fn edge_cases_give_answers_not_panics() {
     let err = relaxed_hover(&floating, &RelaxedHoverSettings::default()).unwrap_err();
     assert!(err.to_string().starts_with("gravity_m_s2"), "{err}");
 }
+
+/// The certify path (`best_relaxed_hover_cancellable`, which skips carrying sets whose margin
+/// bound is below the best holdable margin found) returns the full analysis's best, to the bit,
+/// and searches fewer strategies where the bound prunes (Ke's quadcopter with rotor 4 partly
+/// lost: the two-rotor carrying sets cannot beat the three-rotor spin).
+#[test]
+fn best_only_search_returns_the_full_analysis_best() {
+    let mut pruned_somewhere = false;
+    for (name, efficiency) in [
+        ("ke-quadcopter", [1.0, 1.0, 1.0, 0.3]),
+        ("ke-quadcopter", [0.5, 1.0, 0.5, 1.0]),
+        ("lanzon-quadrotor", [0.8, 0.9, 0.9, 0.0]),
+        ("quad-x", [1.0, 0.6, 1.0, 1.0]),
+    ] {
+        let a = preset(name).with_efficiency(&efficiency).unwrap();
+        let full = relaxed_hover(&a, &ke()).unwrap();
+        let best = best_relaxed_hover_cancellable(&a, &ke(), &Cancel::never()).unwrap();
+        check(&best);
+        assert_eq!(full.best(), best.best(), "{name} {efficiency:?}");
+        pruned_somewhere |= best.solutions.len() < full.solutions.len();
+    }
+    assert!(pruned_somewhere, "the bound never pruned: the test does not exercise it");
+}
