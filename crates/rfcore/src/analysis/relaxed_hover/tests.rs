@@ -83,9 +83,15 @@ fn two_opposing_rotors_spin_level_at_the_damping_rate() {
         "{best:?}"
     );
     assert_eq!(best.carrying, vec![1, 3]);
+    // Relative to the weight, as the spin rate above: the curve search stops on this kinked
+    // optimum (the two headrooms equal) to about 1e-10 of the weight (1.0e-9 N of 7.2 N here;
+    // it was an absolute 1e-9 N, met by 1.4e-12 N before h39's faster search and missed by
+    // 4.9e-11 N after it: rounding, not a different solution).
     assert!(
-        (best.thrust_n[1] - 0.5 * weight).abs() < 1e-9
-            && (best.thrust_n[3] - 0.5 * weight).abs() < 1e-9
+        (best.thrust_n[1] - 0.5 * weight).abs() < 1e-9 * weight
+            && (best.thrust_n[3] - 0.5 * weight).abs() < 1e-9 * weight,
+        "{:?}",
+        best.thrust_n
     );
     assert!(
         (best.spin_axis[2] + 1.0).abs() < 1e-12,
