@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
 import rotorfault as rf
 from rotorfault.cli import cli
-from rotorfault.studies.certify import Certificate, RelaxedHoverVerdict, certify, rows_for_display
+from rotorfault.studies.certify import Certificate, RelaxedHoverVerdict, certify, certify_survival, rows_for_display, survives
 
 #: Ke's vehicle's rotational damping (the ke-hil preset's): it sets the spin rate.
 KE_DRAG = rf.Drag(rotational_n_m_s=2.8e-3)
@@ -56,7 +58,9 @@ def test_a_quadrotor_without_a_rotor_survives_by_spinning(ke_certificate: Certif
     headers, rows = rows_for_display(ke_certificate)
     assert headers[-1] == "relaxed hover"
     assert rows[1][0] == "1" and rows[1][-1] == "spinning 15.22 rad/s, margin 6.04 N, rotors 2, 3, 4"
-    assert rows[5][0] == "1, 2" and rows[5][-1] == (
+    # Rotors 1 and 2 lost: two mirror spins (+-20.06 rad/s) with the same margin; the search
+    # resolves their rates to ~1e-8, so which one the tie-break (the slower) names is not fixed.
+    assert rows[5][0] == "1, 2" and rows[5][-1].replace("-20.06", "20.06") == (
         "spinning solution exists, not reachable from hover: 20.06 rad/s, margin 3.07 N, rotors 3, 4; tilt >= 126 deg before the "
         "18.19 rad/s spin, at most 2.33 rad/s by 90 deg (roll/yaw 9.89)")
 
@@ -108,3 +112,42 @@ def test_cli_spinning() -> None:
     assert not cases[(1, 2)]["relaxed_hover"]["entry_from_hover"]["reachable"]
     wrong = runner.invoke(cli, ["certify", "-a", "ke-quadcopter", "--rotational-drag", "2.8e-3"])
     assert wrong.exit_code != 0 and "--rotational-drag" in wrong.output
+
+
+def _x500_rotor_1_at(efficiency: float, rotational_drag_n_m_s: float, max_spin_rate_rad_s: float = 200.0) -> Any:
+    from rotorfault.studies import deciding
+
+    v = deciding.vehicle("px4-x500")
+    settings = rf.RelaxedHoverSettings(rotational_drag_n_m_s=rotational_drag_n_m_s, max_spin_rate_rad_s=max_spin_rate_rad_s,
+                                       thrust_coefficient_n_s2=deciding.nominal_actuator(v).thrust_coefficient_n_s2)
+    airframe = v.airframe.with_efficiency([efficiency, 1.0, 1.0, 1.0])
+    return v.airframe, certify_survival(airframe, settings=settings)
+
+
+def test_giving_up_yaw_survives_only_by_a_steady_spin() -> None:
+    """The PX4 x500 with rotor 1 at 40 %: Du's static hover exists only by giving up yaw. Damped
+    (k_r = 0.01 N m s), the yaw moment left settles the vehicle in a steady spin: the relaxed hover
+    about the thrust axis, its yaw balance n . tau(f) = k_r s checked here from the airframe's own
+    effectiveness matrix (independent of the search), survivable. Undamped (the imported model,
+    k_r = 0), n . tau(f) = 0 for every spin rate and the margin still grows with the spin: the best
+    spin is the search's limit, wherever the limit is put (200 or 400 rad/s), so no spin rate is a
+    steady state the vehicle settles in: not survivable, where before it counted as a static hover."""
+    nominal, damped = _x500_rotor_1_at(0.4, 1e-2)
+    assert damped.hover == "give-up-yaw" and damped.survival == "spinning"
+    spin = damped.relaxed_hover
+    assert spin is not None and spin.steady and spin.survivable and not spin.at_spin_rate_limit
+    assert spin.solution is not None
+    torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(spin.solution.thrust_n)
+    yaw_about_axis = float(np.asarray(spin.solution.spin_axis) @ torque)
+    assert yaw_about_axis == pytest.approx(1e-2 * spin.spin_rate_rad_s, rel=1e-9)
+    assert survives("give-up-yaw", spin)
+    for limit in (200.0, 400.0):
+        _, undamped = _x500_rotor_1_at(0.4, 0.0, limit)
+        assert undamped.hover == "give-up-yaw" and undamped.survival == "not-survivable"
+        at_limit = undamped.relaxed_hover
+        assert at_limit is not None and at_limit.hover == "spinning" and at_limit.at_spin_rate_limit
+        assert abs(at_limit.spin_rate_rad_s) == pytest.approx(limit, rel=1e-6)
+        assert not at_limit.steady and not survives("give-up-yaw", at_limit)
+        assert at_limit.solution is not None
+        torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(at_limit.solution.thrust_n)
+        assert abs(float(np.asarray(at_limit.solution.spin_axis) @ torque)) < 1e-9 * float(np.max(np.abs(torque)))

@@ -57,11 +57,15 @@ def relaxed_hover(
     *,
     drag: _rfcore.Drag | None = None,
     actuator: FixedPitchActuatorLike | None = None,
+    best_only: bool = False,
 ) -> RelaxedHoverAnalysis:
     """Every relaxed hover solution of ``airframe`` (its efficiencies: a failed rotor has 0),
     best first. The rotational damping ``k_r``, rotor inertia ``I_R`` and thrust coefficient
     ``k_f`` are the simulator's: pass its ``drag`` and ``actuator`` (they fill those settings) or
-    set them in ``settings``, not both.
+    set them in ``settings``, not both. ``best_only``: only what decides ``.best`` (the same
+    solution, several times faster on quadrotors): carrying sets whose thrust margin cannot reach
+    the best holdable one already found are not searched, so ``solutions`` may list fewer
+    strategies.
 
     Examples:
 
@@ -73,8 +77,10 @@ def relaxed_hover(
         (15.22, [2, 3, 4])
     """
     airframe = require_airframe(airframe)
+    if not isinstance(best_only, bool):
+        raise TypeError(f"best_only: expected True or False, got {type(best_only).__name__}")
     settings = _vehicle_settings(settings, drag, actuator)
-    return _rfcore.relaxed_hover(airframe._core, settings)
+    return _rfcore.relaxed_hover(airframe._core, settings, best_only)
 
 
 def _vehicle_settings(

@@ -99,6 +99,9 @@ class RelaxedHoverVerdict:
     at_spin_rate_limit: bool
     solution: RelaxedHoverSolution | None = field(default=None, compare=False, repr=False)
     entry_from_hover: EntryFromHover | None = None
+    #: The vehicle has rotational damping (``k_r > 0``): the yaw balance ``n . tau = k_r s``
+    #: pins the spin rate (without it, nothing does).
+    damped: bool = True
 
     @property
     def reachable_from_hover(self) -> bool:
@@ -107,6 +110,23 @@ class RelaxedHoverVerdict:
         if self.hover == "spinning":
             return self.entry_from_hover is None or self.entry_from_hover.reachable
         return self.hover == "static"
+
+    @property
+    def steady(self) -> bool:
+        """A steady state the vehicle can settle in: static, or a spin whose rate the physics
+        pins. With rotational damping (:attr:`damped`) the yaw balance ``n . tau(f) = k_r s``
+        pins it, also at the search's limit. Without (``k_r = 0``) the balance is ``n . tau(f) =
+        0`` whatever the rate, and a best spin at the limit (``at_spin_rate_limit``) is the
+        search's bound, not an equilibrium: its margin still grows with the rate and nothing
+        holds the rate (the yaw rate runs up to the limit, also the simulator's body-rate
+        limit); not steady."""
+        return self.hover == "static" or (self.hover == "spinning" and not (self.at_spin_rate_limit and not self.damped))
+
+    @property
+    def survivable(self) -> bool:
+        """Survivable by this relaxed hover: a steady state (:attr:`steady`) not excluded from
+        hover (:attr:`reachable_from_hover`)."""
+        return self.steady and self.reachable_from_hover
 
 
 @dataclass(frozen=True)
@@ -304,20 +324,23 @@ def _static_class(row: Any) -> Hover:
 def _relaxed_hover_verdict(
     airframe: Airframe, settings: RelaxedHoverSettings | None, drag: Drag | None, actuator: FixedPitchActuator | None
 ) -> RelaxedHoverVerdict:
-    best = relaxed_hover(airframe, settings, drag=drag, actuator=actuator).best
+    best = relaxed_hover(airframe, settings, drag=drag, actuator=actuator, best_only=True).best
     if best is None:
         return RelaxedHoverVerdict("no", math.nan, math.nan, (), False)
     kind: SpinningHover = "spinning" if best.kind == "spinning" else "static"
     entry = entry_from_hover(airframe, best, settings, drag=drag, actuator=actuator) if kind == "spinning" else None
+    damped = vehicle_settings(settings, drag, actuator).rotational_drag_n_m_s > 0.0
     return RelaxedHoverVerdict(
-        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry
+        kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry,
+        damped,
     )
 
 
 #: How a vehicle as it is (its efficiencies: a failed rotor's drawn share of thrust) survives:
-#: ``static-hover`` (hovers at rest: with all four axes, giving up yaw, or its best relaxed hover is static),
-#: ``spinning`` (a relaxed hover a linear feedback can hold, its entry from hover not excluded) or
-#: ``not-survivable``.
+#: ``static-hover`` (hovers at rest: with all four axes, or its best relaxed hover is static),
+#: ``spinning`` (a relaxed hover a linear feedback can hold, below the search's spin-rate limit, its
+#: entry from hover not excluded) or ``not-survivable`` (a static hover that only gives up yaw
+#: included: :func:`survives` says why).
 Survival = Literal["static-hover", "spinning", "not-survivable"]
 
 
@@ -348,12 +371,12 @@ def certify_survival(
     rotor's efficiency; a total one: 0), not a list of failure combinations: static hover with
     all four axes (Du's ACAI facet margin > 0) is ``static-hover`` and ends there; otherwise the
     best relaxed hover (as :func:`certify` with ``spinning=True`` computes it, same ``settings``,
-    ``drag``, ``actuator``) decides: static, spinning and not excluded from hover
-    (:func:`rotorfault.analysis.entry_from_hover`); failing both, a static hover that gives up
-    yaw is ``static-hover`` too (``hover`` says ``give-up-yaw``), or ``not-survivable``. The
-    survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
-    :func:`rotorfault.studies.certify_against_flights` apply (:func:`survives`): a static hover
-    (with or without yaw) or a relaxed hover reachable from hover.
+    ``drag``, ``actuator``) decides: static, or spinning below the search's spin-rate limit and
+    not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`); failing both,
+    ``not-survivable``, also where a static hover gives up yaw (``hover`` says ``give-up-yaw``):
+    the yaw moment left settles only in a steady spin, which the search finds where one exists.
+    The survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
+    :func:`rotorfault.studies.certify_against_flights` apply (:func:`survives`).
 
     Examples:
 
@@ -377,18 +400,24 @@ def certify_survival(
     survival: Survival = "not-survivable"
     if verdict.hover == "static":
         survival = "static-hover"
-    elif verdict.reachable_from_hover:
+    elif verdict.survivable:
         survival = "spinning"
-    elif hover == "give-up-yaw":
-        survival = "static-hover"
     return SurvivalVerdict(survival, hover, verdict)
 
 
 def survives(hover: Hover | str, relaxed_hover: RelaxedHoverVerdict | None) -> bool:
-    """Certify's one rule for "survivable": a static hover, with all four axes or giving up yaw
-    (``hover`` not ``"no"``), or a relaxed hover a linear feedback can hold whose entry from hover
-    is not excluded (:attr:`RelaxedHoverVerdict.reachable_from_hover`)."""
-    return hover != "no" or (relaxed_hover is not None and relaxed_hover.reachable_from_hover)
+    """Certify's one rule for "survivable": a static hover with all four axes (``hover ==
+    "all-axes"``), or a relaxed hover a linear feedback can hold that is a steady state and whose
+    entry from hover is not excluded (:attr:`RelaxedHoverVerdict.survivable`: static, or a spin
+    below the search's spin-rate limit).
+
+    A static hover that only exists by giving up yaw (``"give-up-yaw"``) is not survivable by
+    itself: it leaves a yaw moment ``tau_z`` that nothing balances at rest, so the yaw rate grows
+    until the rotational damping balances it (``k_r r = tau_z``): that steady spin is a relaxed
+    hover (about the thrust axis, with the same thrusts), which the search finds on a damped
+    vehicle; without damping (``k_r = 0``, e.g. a model imported without it) the yaw rate grows
+    without bound and the case survives only if the search finds another steady relaxed hover."""
+    return hover == "all-axes" or (relaxed_hover is not None and relaxed_hover.survivable)
 
 
 def describe_relaxed_hover(verdict: RelaxedHoverVerdict | None) -> str:

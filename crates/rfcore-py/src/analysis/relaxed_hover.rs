@@ -6,6 +6,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::prelude::*;
 
 use rfcore::analysis::relaxed_hover::{
+    best_relaxed_hover_cancellable as core_best_relaxed_hover,
     relaxed_hover_cancellable as core_relaxed_hover, relaxed_hover_residual as core_residual,
     RelaxedHoverAnalysis, RelaxedHoverSettings, RelaxedHoverSolution,
 };
@@ -301,13 +302,21 @@ fn analysis(py: Python<'_>, result: RelaxedHoverAnalysis) -> PyResult<PyRelaxedH
 
 /// Every relaxed hover solution of `airframe` (efficiencies included), GIL released.
 #[pyfunction]
+#[pyo3(signature = (airframe, settings, best_only=false))]
 pub(crate) fn relaxed_hover(
     py: Python<'_>,
     airframe: &PyAirframe,
     settings: &PyRelaxedHoverSettings,
+    best_only: bool,
 ) -> PyResult<PyRelaxedHoverAnalysis> {
     let (frame, s) = (airframe.inner.clone(), settings.inner);
-    let result = detached(py, move |cancel| core_relaxed_hover(&frame, &s, cancel))?;
+    let result = detached(py, move |cancel| {
+        if best_only {
+            core_best_relaxed_hover(&frame, &s, cancel)
+        } else {
+            core_relaxed_hover(&frame, &s, cancel)
+        }
+    })?;
     analysis(py, result)
 }
 

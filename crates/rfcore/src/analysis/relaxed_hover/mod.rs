@@ -195,60 +195,78 @@ pub fn relaxed_hover_cancellable(
     settings: &RelaxedHoverSettings,
     cancel: &Cancel,
 ) -> Result<RelaxedHoverAnalysis> {
+    search_all(airframe, settings, cancel, false)
+}
+
+/// What decides [`RelaxedHoverAnalysis::best`], faster: the branches are searched by number of
+/// idle rotors (none, then one, ...) and a branch is skipped when no solution of it can have the
+/// margin of the best holdable solution already found ([`margin_bound`]: the carrying rotors'
+/// headroom if their thrusts just carry the weight). `best()` is the full analysis's (same
+/// candidates in the same order up to the skipped ones, which cannot come first); `solutions`
+/// lists fewer strategies. Used by certify, which reads only the best.
+pub fn best_relaxed_hover_cancellable(
+    airframe: &Airframe,
+    settings: &RelaxedHoverSettings,
+    cancel: &Cancel,
+) -> Result<RelaxedHoverAnalysis> {
+    search_all(airframe, settings, cancel, true)
+}
+
+fn search_all(
+    airframe: &Airframe,
+    settings: &RelaxedHoverSettings,
+    cancel: &Cancel,
+    best_only: bool,
+) -> Result<RelaxedHoverAnalysis> {
     settings.check()?;
     cancel.check()?;
     let model = Model::new(airframe, settings)?;
     let mut found: Vec<Candidate> = static_hover(&model, settings);
     let working = model.working.clone();
-    let branches: Vec<Vec<usize>> = (0..=settings
+    let largest_idle = settings
         .max_idle_rotors
-        .min(working.len().saturating_sub(1)))
-        .flat_map(|size| headroom::combinations(working.len(), size))
-        .map(|idle| idle.iter().map(|&j| working[j]).collect())
-        .collect();
-    cancel.check()?;
-    let spinning: Vec<Vec<Candidate>> = branches
-        .par_iter()
-        .map(|idle: &Vec<usize>| -> Result<Vec<Candidate>> {
-            cancel.check()?;
-            let free: Vec<usize> = working
+        .min(working.len().saturating_sub(1));
+    // The bound holds only where every thrust is >= 0 (rotors that cannot push down).
+    let prunable = best_only && working.iter().all(|&i| model.lower[i] >= 0.0);
+    for size in 0..=largest_idle {
+        let mut branches: Vec<Vec<usize>> = headroom::combinations(working.len(), size)
+            .into_iter()
+            .map(|idle| idle.iter().map(|&j| working[j]).collect())
+            .collect();
+        if prunable && size > 0 {
+            let solutions = solutions_of(&model, settings, &found)?;
+            let best = solutions
                 .iter()
-                .copied()
-                .filter(|i| !idle.contains(i))
-                .collect();
-            Ok(match Branch::new(&model, settings, free, idle.clone()) {
-                None => Vec::new(),
-                Some(branch) => branch
-                    .spinning()
-                    .into_iter()
-                    .map(|(candidate, chart_point)| branch.polish(candidate, chart_point))
-                    .collect(),
+                .filter(|s| s.linear.stabilizable)
+                .map(|s| s.thrust_margin_n)
+                .fold(f64::NEG_INFINITY, f64::max);
+            // Skipped only when clearly below (the merge and ranking compare margins to 1e-9).
+            let below = best - 1e-6 * bound_scale(&model);
+            branches.retain(|idle| margin_bound(&model, idle) >= below);
+        }
+        cancel.check()?;
+        let spinning: Vec<Vec<Candidate>> = branches
+            .par_iter()
+            .map(|idle: &Vec<usize>| -> Result<Vec<Candidate>> {
+                cancel.check()?;
+                let free: Vec<usize> = working
+                    .iter()
+                    .copied()
+                    .filter(|i| !idle.contains(i))
+                    .collect();
+                Ok(match Branch::new(&model, settings, free, idle.clone()) {
+                    None => Vec::new(),
+                    Some(branch) => branch
+                        .spinning()
+                        .into_iter()
+                        .map(|(candidate, chart_point)| branch.polish(candidate, chart_point))
+                        .collect(),
+                })
             })
-        })
-        .collect::<Result<_>>()?;
-    found.extend(spinning.into_iter().flatten());
-    let floor = 2.0 * SPIN_FLOOR_FRACTION * settings.max_spin_rate_rad_s;
-    let mut solutions: Vec<RelaxedHoverSolution> = Vec::new();
-    for candidate in found {
-        if candidate.spin_rate_rad_s != 0.0 && candidate.spin_rate_rad_s.abs() <= floor {
-            continue; // the static limit of a spinning family: reported as static hover
-        }
-        let solution = finish(&model, settings, &candidate)?;
-        if solution.kind == HoverKind::Spinning
-            && solution.circle_radius_m > settings.max_circle_radius_m * (1.0 + 1e-9)
-        {
-            continue; // outside the definition (only possible with tilted rotors)
-        }
-        if solutions.iter().any(|s| same(&model, s, &solution)) {
-            continue;
-        }
-        // One solution per strategy (carrying rotors, kind, spin direction): its best.
-        match solutions.iter().position(|s| same_strategy(s, &solution)) {
-            Some(i) if better(&model, &solution, &solutions[i]) => solutions[i] = solution,
-            Some(_) => {}
-            None => solutions.push(solution),
-        }
+            .collect::<Result<_>>()?;
+        found.extend(spinning.into_iter().flatten());
     }
+    let mut solutions = solutions_of(&model, settings, &found)?;
     solutions.sort_by(|a, b| {
         if better(&model, a, b) {
             std::cmp::Ordering::Less
@@ -264,6 +282,67 @@ pub fn relaxed_hover_cancellable(
         solutions,
         settings: *settings,
     })
+}
+
+/// The candidates checked and measured ([`finish`]), the static limits of spinning families
+/// and circles too large left out, equal ones merged and one kept per strategy (its best), in
+/// the candidates' order.
+fn solutions_of(
+    model: &Model,
+    settings: &RelaxedHoverSettings,
+    found: &[Candidate],
+) -> Result<Vec<RelaxedHoverSolution>> {
+    let floor = 2.0 * SPIN_FLOOR_FRACTION * settings.max_spin_rate_rad_s;
+    let mut solutions: Vec<RelaxedHoverSolution> = Vec::new();
+    for candidate in found {
+        if candidate.spin_rate_rad_s != 0.0 && candidate.spin_rate_rad_s.abs() <= floor {
+            continue; // the static limit of a spinning family: reported as static hover
+        }
+        let solution = finish(model, settings, candidate)?;
+        if solution.kind == HoverKind::Spinning
+            && solution.circle_radius_m > settings.max_circle_radius_m * (1.0 + 1e-9)
+        {
+            continue; // outside the definition (only possible with tilted rotors)
+        }
+        if solutions.iter().any(|s| same(model, s, &solution)) {
+            continue;
+        }
+        // One solution per strategy (carrying rotors, kind, spin direction): its best.
+        match solutions.iter().position(|s| same_strategy(s, &solution)) {
+            Some(i) if better(model, &solution, &solutions[i]) => solutions[i] = solution,
+            Some(_) => {}
+            None => solutions.push(solution),
+        }
+    }
+    Ok(solutions)
+}
+
+/// An upper bound on the thrust margin of any solution of the branch that idles `idle` (every
+/// thrust >= 0): the rotors that carry, `C` (some of the branch's free rotors, the rest at ~0),
+/// lift `n . sum a_i f_i = m g - n . F_idle >= m g - |F_idle|` with `n . a_i <= 1`, so
+/// `sum_C f_i >= m g - |F_idle|` (C empty only when the idle rotors carry it: not bounded); with `f_i <= f_max,i - t`, `t <= (sum_C f_max,i - m g +
+/// |F_idle|) / |C|`, the largest over the subsets `C` (the bounds check's slack added).
+fn margin_bound(model: &Model, idle: &[usize]) -> f64 {
+    let free: Vec<usize> = model
+        .working
+        .iter()
+        .copied()
+        .filter(|i| !idle.contains(i))
+        .collect();
+    let idle_force: V3 = idle.iter().map(|&i| model.axis[i] * model.lower[i]).sum();
+    let need = model.weight_n() - idle_force.norm();
+    let slack = BOUND_TOLERANCE * bound_scale(model) * (model.rotor_count() as f64 + 1.0);
+    if need <= slack || free.len() > 20 {
+        // The idle rotors alone could carry it (C empty), or too many subsets: search it.
+        return f64::INFINITY;
+    }
+    let mut bound = f64::NEG_INFINITY;
+    for mask in 1u64..(1u64 << free.len()) {
+        let members = (0..free.len()).filter(|b| mask & (1 << b) != 0);
+        let (sum, count) = members.fold((0.0, 0usize), |(s, c), b| (s + model.upper[free[b]], c + 1));
+        bound = bound.max((sum - need) / count as f64);
+    }
+    bound + slack
 }
 
 /// The scaled residual of a proposed solution ([`Model`]): `up` the body axis pointing up,

@@ -1,7 +1,7 @@
 //! Small numerical tools of the relaxed hover search: the spin-axis chart, Nelder-Mead, real
 //! roots of a quadratic and a minimum-norm Gauss-Newton step.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dim, Matrix, OMatrix, SMatrix};
 
 use super::model::{tangent_basis, V3};
 
@@ -246,16 +246,60 @@ pub(crate) fn symmetric_pinv(h: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
         return DMatrix::zeros(0, 0);
     }
     let symmetric = (h + h.transpose()) * 0.5;
-    let eig = symmetric.symmetric_eigen();
-    let largest = eig.eigenvalues.amax();
-    let inverse = eig.eigenvalues.map(|l| {
-        if largest > 0.0 && l > rtol * largest {
-            1.0 / l
-        } else {
-            0.0
+    // The search's Newton steps invert 2x2 to 4x4 matrices thousands of times per analysis: the
+    // same eigen-decomposition on a fixed-size matrix (no allocation), the same numbers.
+    match n {
+        2 => fixed_pinv2(&symmetric, rtol),
+        3 => fixed_pinv3(&symmetric, rtol),
+        4 => fixed_pinv4(&symmetric, rtol),
+        _ => {
+            let eig = symmetric.symmetric_eigen();
+            pinv_from(&eig.eigenvalues, &eig.eigenvectors, rtol)
         }
-    });
-    &eig.eigenvectors * DMatrix::from_diagonal(&inverse) * eig.eigenvectors.transpose()
+    }
+}
+
+/// [`symmetric_pinv`] of an `N x N` matrix through `nalgebra`'s fixed-size types (one
+/// function per size: the eigen-decomposition needs a concrete dimension).
+macro_rules! fixed_pinv {
+    ($name:ident, $n:literal) => {
+        fn $name(symmetric: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
+            let fixed: SMatrix<f64, $n, $n> = symmetric.fixed_view::<$n, $n>(0, 0).into_owned();
+            let eig = fixed.symmetric_eigen();
+            let inverse = pinv_from(&eig.eigenvalues, &eig.eigenvectors, rtol);
+            DMatrix::from_fn($n, $n, |r, c| inverse[(r, c)])
+        }
+    };
+}
+fixed_pinv!(fixed_pinv2, 2);
+fixed_pinv!(fixed_pinv3, 3);
+fixed_pinv!(fixed_pinv4, 4);
+
+/// `V diag(1 / l) V^T` over the eigenvalues `l` above `rtol` times the largest.
+fn pinv_from<R, C, S1, S2>(
+    eigenvalues: &Matrix<f64, R, nalgebra::U1, S1>,
+    eigenvectors: &Matrix<f64, R, C, S2>,
+    rtol: f64,
+) -> OMatrix<f64, R, R>
+where
+    R: Dim,
+    C: Dim,
+    S1: nalgebra::RawStorage<f64, R, nalgebra::U1>,
+    S2: nalgebra::RawStorage<f64, R, C>,
+    nalgebra::DefaultAllocator: nalgebra::allocator::Allocator<R, R>,
+{
+    let largest = eigenvalues.amax();
+    let n = eigenvalues.len();
+    let (rows, _) = eigenvalues.shape_generic();
+    OMatrix::<f64, R, R>::from_fn_generic(rows, rows, |r, c| {
+        let mut sum = 0.0;
+        for k in 0..n {
+            let l = eigenvalues[k];
+            let inverse = if largest > 0.0 && l > rtol * largest { 1.0 / l } else { 0.0 };
+            sum += eigenvectors[(r, k)] * inverse * eigenvectors[(c, k)];
+        }
+        sum
+    })
 }
 
 /// The minimum-norm least-squares solution of `J x = r` (J^+ r).

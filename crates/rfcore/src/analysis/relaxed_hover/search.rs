@@ -50,12 +50,23 @@ pub(crate) struct Candidate {
     pub thrust_n: Vec<f64>,
 }
 
+/// What a rotor does in a branch: carries (its index among the carrying rotors), idles at its
+/// lower bound, or is off (failed: no thrust).
+#[derive(Debug, Clone, Copy)]
+enum Role {
+    Carrying(usize),
+    Idle,
+    Off,
+}
+
 /// One carrying set with the rest held at their lower bounds.
 pub(crate) struct Branch<'a> {
     model: &'a Model,
     settings: &'a RelaxedHoverSettings,
     free: Vec<usize>,
     idle: Vec<usize>,
+    /// What each rotor (all m, in rotor order) does in this branch.
+    role: Vec<Role>,
     idle_force: V3,
     idle_torque: V3,
     common_axis: Option<V3>,
@@ -79,6 +90,13 @@ impl<'a> Branch<'a> {
         if free.is_empty() {
             return None;
         }
+        let role = (0..model.rotor_count())
+            .map(|i| match free.iter().position(|&j| j == i) {
+                Some(c) => Role::Carrying(c),
+                None if idle.contains(&i) => Role::Idle,
+                None => Role::Off,
+            })
+            .collect();
         let idle_force: V3 = idle.iter().map(|&i| model.axis[i] * model.lower[i]).sum();
         let idle_torque: V3 = idle.iter().map(|&i| model.torque[i] * model.lower[i]).sum();
         let lower: Vec<f64> = free.iter().map(|&i| model.lower[i]).collect();
@@ -121,6 +139,7 @@ impl<'a> Branch<'a> {
             settings,
             free,
             idle,
+            role,
             idle_force,
             idle_torque,
             common_axis,
@@ -616,30 +635,39 @@ impl<'a> Branch<'a> {
                 return None;
             }
             let headroom = self.headroom(&n);
-            let mut best: Option<(Vec<f64>, f64)> = None;
+            // The right side is v(s) = v0 + s v1 + s^2 v2 and least squares is linear, so the
+            // thrusts are f(s) = f0 + s f1 + s^2 f2: three solves per grid point, not one per
+            // sampled spin rate.
+            let t = self.thrust_rhs(&n)?;
+            let (c2, c1, c0) = self.torque_terms(&n, &h_ref);
+            let f0 = headroom.least_squares(&[t, c0.x, c0.y, c0.z])?;
+            let f1 = headroom.least_squares(&[0.0, c1.x, c1.y, c1.z])?;
+            let f2 = headroom.least_squares(&[0.0, c2.x, c2.y, c2.z])?;
+            let thrusts = |s: f64, f: &mut [f64]| {
+                for (c, x) in f.iter_mut().enumerate() {
+                    *x = f0[c] + s * (f1[c] + s * f2[c]);
+                }
+            };
+            let mut f = vec![0.0; self.k()];
+            let mut best: Option<(f64, f64)> = None;
             for sign in [1.0, -1.0] {
                 for j in 0..SPIN_SAMPLES {
                     let s = sign
                         * low
                         * ((high / low).ln() * j as f64 / (SPIN_SAMPLES - 1) as f64).exp();
-                    let Some(v) = self.rhs(&n, s, &h_ref) else {
-                        continue;
-                    };
-                    let Some(f) = headroom.least_squares(&v) else {
-                        continue;
-                    };
-                    let Some(r) = self.residual_vector(&[x, y, s], &f) else {
-                        continue;
-                    };
-                    let size = r.norm();
-                    if best.as_ref().is_none_or(|b| size < b.1) {
-                        let mut z = vec![x, y, s];
-                        z.extend(f);
-                        best = Some((z, size));
+                    thrusts(s, &mut f);
+                    let r = self.residual_at(&n, s, &f);
+                    let size = r.iter().map(|e| e * e).sum::<f64>().sqrt();
+                    if best.is_none_or(|b| size < b.1) {
+                        best = Some((s, size));
                     }
                 }
             }
-            best
+            let (s, size) = best?;
+            thrusts(s, &mut f);
+            let mut z = vec![x, y, s];
+            z.extend(f);
+            Some((z, size))
         };
         let starts: Vec<Option<(Vec<f64>, f64)>> = grid
             .iter()
@@ -738,19 +766,35 @@ impl<'a> Branch<'a> {
     /// Scaled residual of `z = [x, y, s]` and the carrying thrusts `f` (the whole model).
     fn residual_vector(&self, z: &[f64], f: &[f64]) -> Option<DVector<f64>> {
         let n = self.chart.direction(z[0], z[1])?;
+        Some(DVector::from_row_slice(&self.residual_at(&n, z[2], f)))
+    }
+
+    /// [`Branch::residual_vector`] at up axis `n` and spin `s`, without allocating: the search's
+    /// inner loop (every grid point, every sampled spin rate, every Newton step) is this call.
+    /// The sums run over the rotors in rotor order, as [`Model::force`] and its siblings do on
+    /// [`Branch::full_thrust`], so the numbers are theirs to the last bit.
+    fn residual_at(&self, n: &V3, s: f64, f: &[f64]) -> [f64; 4] {
         let m = self.model;
-        let full = self.full_thrust(f);
-        let force = m.force(&full);
-        let h = m.rotor_momentum(&full);
-        let omega = n * z[2];
-        let torque = m.rotor_torque(&full) - m.required_torque(&omega, &h);
+        let (mut force, mut torque, mut h) = (V3::zeros(), V3::zeros(), V3::zeros());
+        for (i, role) in self.role.iter().enumerate() {
+            let thrust = match role {
+                Role::Carrying(c) => f[*c],
+                Role::Idle => m.lower[i],
+                Role::Off => 0.0,
+            };
+            force += m.axis[i] * thrust;
+            torque += m.torque[i] * thrust;
+            h += m.momentum[i] * thrust.max(0.0).sqrt();
+        }
+        let omega = n * s;
+        let torque = torque - m.required_torque(&omega, &h);
         let weight = m.weight_n();
-        Some(DVector::from_vec(vec![
+        [
             (n.dot(&force) - weight) / weight,
             torque.x / m.torque_scale,
             torque.y / m.torque_scale,
             torque.z / m.torque_scale,
-        ]))
+        ]
     }
 
     /// Variable scales of `z = [x, y, s, f...]` for Newton: chart 1, spin `max(|s|, 1)`, thrust
