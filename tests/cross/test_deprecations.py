@@ -132,3 +132,14 @@ def test_the_old_names_of_the_one_draw_record_warn() -> None:
     with pytest.warns(DeprecationWarning, match=r"RunDraw\.pattern is deprecated.*RunDraw\.failed"):
         assert d.pattern == d.failed
     assert isinstance(campaign.Campaign(runs=2).sample(0), sampling.RunDraw)
+
+
+def test_the_lanzon_report_names_moved_to_its_report_module_warn() -> None:
+    """Lanzon's report (``write_report``, ``report_section``, its tables) is
+    ``papers.lanzon_report`` (issue 26: a paper module holds its parameters, scenarios, claims and
+    studies): the old names in ``papers.lanzon`` warn and give the same objects."""
+    from rotorfault.papers import lanzon, lanzon_report
+
+    for name in ("write_report", "report_section", "report_rows", "three_way_table", "monte_carlo_table", "sensing_table"):
+        with pytest.warns(DeprecationWarning, match=rf"papers\.lanzon\.{name} is deprecated.*papers\.lanzon_report\.{name}"):
+            assert getattr(lanzon, name) is getattr(lanzon_report, name)
