@@ -353,7 +353,7 @@ def certify_survival(
     yaw is ``static-hover`` too (``hover`` says ``give-up-yaw``), or ``not-survivable``. The
     survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
     :func:`rotorfault.studies.certify_against_flights` apply (:func:`survives`): a static hover
-    (with or without yaw) or a relaxed hover reachable from hover.
+    (with yaw, or giving up yaw) or a relaxed hover reachable from hover.
 
     Examples:
 
