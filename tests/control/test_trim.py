@@ -163,10 +163,10 @@ def _quad_without_yaw_torque() -> rf.Airframe:
     ("frame", "message"),
     [
         (lambda: rf.Airframe.preset("hexa-pnpnpn").with_failed_rotors([1]),
-         r"LQR cannot hold this hover: ACAI = 0 <= 0 .*; hover needs rotor\(s\) 4 on a thrust bound \(0 N\)"),
+         r"LQR cannot hold this hover: ACAI eq13 = 0 <= 0 .*; hover needs rotor\(s\) 4 on a thrust bound \(0 N\)"),
         (lambda: rf.Airframe.preset("hexa-pnpnpn").with_failed_rotors([1, 4]),
-         r"LQR cannot hold this hover: ACAI = -inf <= 0 \(rank B_f < 4"),
-        (_quad_without_yaw_torque, r"LQR cannot hold this hover: ACAI = -inf <= 0 \(rank B_f < 4"),
+         r"LQR cannot hold this hover: ACAI eq13 = -inf <= 0 \(rank B_f < 4"),
+        (_quad_without_yaw_torque, r"LQR cannot hold this hover: ACAI eq13 = -inf <= 0 \(rank B_f < 4"),
     ],
 )
 def test_lqr_refuses_a_hover_it_cannot_hold(frame: object, message: str) -> None:

@@ -350,3 +350,57 @@ _ESTIMATE_FIELDS = ("estimate_state", "estimate_euler", "estimate_std", "gyro_sa
 
 def test_a_divergence_prints_as_the_readme_shows() -> None:
     assert repr(rf.Divergence(time_s=0.5, kind="tilt", state=np.zeros(12))) == "Divergence(time_s=0.5, kind='tilt')"
+
+
+def test_batch_results_hold_the_cores_result_and_read_through_it() -> None:
+    """``AcaiBatch`` and ``Allocation`` keep the core's batch in their one slot (no copied fields):
+    each field is read from it, the same object on every read (a change a caller makes stays, as
+    with the dataclasses they were), with the dataclasses' repr, equality and frozenness."""
+    hexa = rf.Airframe.preset("hexa-ppnnpn")
+    batch = rf.acai_batch(hexa, [[1, 1, 1, 1, 1, 1], [0, 0, 1, 1, 1, 1]], with_hover=True)
+    assert type(batch._core) is _rfcore.AcaiBatch and not hasattr(batch, "__dict__")
+    assert batch.acai is batch.acai and batch.acai is batch._core.acai and batch.hover_code.dtype == np.int8
+    assert batch.acai.flags.writeable and batch.formula == "eq13" and batch == batch
+    assert repr(batch) == "AcaiBatch(acai=array([ 1.12947199, -0.27791389]), hover_code=array([ 1, -1], dtype=int8), formula='eq13')"
+    back = pickle.loads(pickle.dumps(batch))
+    np.testing.assert_array_equal(back.acai, batch.acai)
+    np.testing.assert_array_equal(back.hover_code, batch.hover_code)
+    assert back.formula == "eq13" and back.hover_code.dtype == np.int8
+    with pytest.raises(AttributeError):
+        batch.formula = "facet-margin"  # type: ignore[misc]
+
+    quad = rf.Airframe.preset("ke-quadcopter")
+    one, rows = rf.allocate(quad, [7.0, 0.0, 0.0, 0.1]), rf.allocate(quad, np.array([[7.0, 0, 0, 0], [7.0, 0.1, 0, 0]]))
+    by_clarabel = rf.allocate(quad, np.array([7.0, 0.0, 0.0, 0.1]), method="clarabel")
+    assert type(one._core) is _rfcore.SingleAllocation and type(rows._core) is _rfcore.AllocationBatch
+    for a in (one, rows, by_clarabel):
+        assert not hasattr(a, "__dict__") and a.commands is a.commands and a == a
+        assert a.commands.flags.writeable and a.commands.dtype == np.float64
+    assert one.commands.shape == (4,) and one.status == "optimal" and isinstance(one.iterations, int)
+    assert by_clarabel.commands.shape == (4,) and by_clarabel.virtual_control.tolist() == [7.0, 0.0, 0.0, 0.1]
+    assert by_clarabel.solved_by == "clarabel" and by_clarabel.fallbacks == 0
+    assert rows.commands.shape == (2, 4) and rows.status == ("optimal", "optimal") and len(rows.certificate) == 2
+    assert repr(one).startswith("Allocation(commands=array([3.2560241, 0.2439759, 3.2560241, 0.2439759]), achieved=")
+    with pytest.raises(TypeError, match="made by allocate"):
+        rf.allocation.Allocation()
+
+
+def test_an_acai_batch_is_checked_once_by_the_core() -> None:
+    """Made from its fields (``dataclasses.replace``, old pickles), an ``AcaiBatch`` is checked by
+    the core: one known hover code per value, a known formula."""
+    from rotorfault.analysis import AcaiBatch
+
+    assert AcaiBatch([1.0, -2.0], [1, -1], "facet-margin").hover_code.tolist() == [1, -1]
+    with pytest.raises(ValueError, match=r"^hover_code\[0\]: must be a hover code"):
+        AcaiBatch([1.0], [5])
+    with pytest.raises(ValueError, match=r"^hover_code: expected one code per ACAI \(1\), got 2"):
+        AcaiBatch([1.0], [1, 1])
+    with pytest.raises(TypeError, match="^hover_code: expected a 1-D array of integer codes"):
+        AcaiBatch([1.0], [0.5])
+    with pytest.raises(ValueError, match='^formula: must be "eq13" or "facet-margin"'):
+        AcaiBatch([1.0], [1], "eq12")  # type: ignore[arg-type]
+    old = AcaiBatch.__new__(AcaiBatch)  # what loading a pickle of the old dataclass does
+    old.__setstate__({"acai": np.array([0.5]), "hover_code": np.array([0], dtype=np.int8), "formula": "eq13"})
+    assert old.acai.tolist() == [0.5] and old.hover_code.tolist() == [0]
+    with pytest.warns(DeprecationWarning):
+        assert dataclasses.replace(old, formula="facet-margin").formula == "facet-margin"

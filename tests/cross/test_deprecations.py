@@ -115,3 +115,31 @@ def test_the_loop_shape_plot_is_the_designs_and_the_plotting_name_warns(tmp_path
     new = design.plot_loop_shape(str(out / "new.png"))
     assert old.axes[0].get_title() == new.axes[0].get_title() and (out / "old.png").is_file()
     assert [list(line.get_ydata()) for line in old.axes[0].lines] == [list(line.get_ydata()) for line in new.axes[0].lines]
+
+
+def test_the_old_names_of_the_one_draw_record_warn() -> None:
+    """``RunSpec`` (the campaign's) and ``RunDraw`` (the deciding campaign's) are one record,
+    ``studies.sampling.RunDraw``: the old name and the deciding draw's ``pattern`` warn."""
+    from rotorfault.studies import campaign, deciding, sampling
+
+    assert deciding.RunDraw is sampling.RunDraw and campaign.RunDraw is sampling.RunDraw
+    for module in (campaign, sampling):
+        with pytest.warns(DeprecationWarning, match=r"RunSpec is deprecated.*sampling\.RunDraw"):
+            assert module.RunSpec is sampling.RunDraw
+    suite = deciding.DecidingCampaign(runs=2)
+    d = suite.draw(suite.cells[0], 1)
+    assert d == deciding.DecidingCampaign.draw_of(suite.seed, suite.cells[0], 1) and d.fault_time_s == d.fault_times_s[0]
+    with pytest.warns(DeprecationWarning, match=r"RunDraw\.pattern is deprecated.*RunDraw\.failed"):
+        assert d.pattern == d.failed
+    assert isinstance(campaign.Campaign(runs=2).sample(0), sampling.RunDraw)
+
+
+def test_the_lanzon_report_names_moved_to_its_report_module_warn() -> None:
+    """Lanzon's report (``write_report``, ``report_section``, its tables) is
+    ``papers.lanzon_report`` (issue 26: a paper module holds its parameters, scenarios, claims and
+    studies): the old names in ``papers.lanzon`` warn and give the same objects."""
+    from rotorfault.papers import lanzon, lanzon_report
+
+    for name in ("write_report", "report_section", "report_rows", "three_way_table", "monte_carlo_table", "sensing_table"):
+        with pytest.warns(DeprecationWarning, match=rf"papers\.lanzon\.{name} is deprecated.*papers\.lanzon_report\.{name}"):
+            assert getattr(lanzon, name) is getattr(lanzon_report, name)

@@ -34,6 +34,7 @@ def _run() -> rf.Trajectory:
 
 #: One instance of each constructed class, with values other than the defaults where there are any.
 EXAMPLES: dict[str, Callable[[], Any]] = {
+    "AcaiBatch": lambda: _rfcore.AcaiBatch(np.array([0.25, -1.0]), np.array([0, -1], dtype=np.int8), "facet-margin"),
     "AcaiResult": lambda: _rfcore.AcaiResult(0.25, "boundary"),
     "AllocationSettings": lambda: _rfcore.AllocationSettings(tolerance=1e-8, max_iterations=30, clarabel_tolerance=1e-9),
     "Divergence": lambda: rf.Divergence(time_s=1.5, kind="tilt", state=np.arange(12.0)),

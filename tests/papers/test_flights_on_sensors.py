@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 import rotorfault as rf
-from rotorfault.papers import lanzon, wang
+from rotorfault.papers import lanzon, lanzon_report, wang
 
 MOCAP_1KHZ = rf.Sensing(imu_rate_hz=1000.0)
 
@@ -63,7 +63,7 @@ def test_wang_lqr_flies_on_mocap(number: int) -> None:
 def test_lanzon_report_table_flags_a_verdict_that_sensing_changes() -> None:
     # Previous test: A-a crashes on 1 kHz mocap with seed 0 and levels with seed 1.
     truth = [lanzon.fly("A", "a")]
-    lost = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=lanzon.MOCAP_AT_LOOP_RATE)])
-    same = lanzon.sensing_table(truth, [lanzon.fly("A", "a", sensing=rf.Sensing(imu_rate_hz=1000.0, seed=1))])
+    lost = lanzon_report.sensing_table(truth, [lanzon.fly("A", "a", sensing=lanzon.MOCAP_AT_LOOP_RATE)])
+    same = lanzon_report.sensing_table(truth, [lanzon.fly("A", "a", sensing=rf.Sensing(imu_rate_hz=1000.0, seed=1))])
     assert lost.rows[0][3:6] == ("level", "crashed", "differs")
     assert same.rows[0][3:6] == ("level", "level", "same")

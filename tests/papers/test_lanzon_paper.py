@@ -16,7 +16,7 @@ from click.testing import CliRunner
 import rotorfault as rf
 from rotorfault.cli import cli
 from rotorfault.control import lanzon as L
-from rotorfault.papers import lanzon as P
+from rotorfault.papers import lanzon as P, lanzon_report as R
 
 
 def test_scenarios_are_tables_2_and_3() -> None:
@@ -119,7 +119,7 @@ def test_report_directory(tmp_path: Path, runs_printed: dict[tuple[str, str], P.
     runs = list(runs_printed.values())
     mc = P.monte_carlo("lanzon", runs=2, duration_s=2.0)
     out = tmp_path / "report"
-    path = P.write_report(runs, out, monte_carlo_results=[mc], command="test")
+    path = R.write_report(runs, out, monte_carlo_results=[mc], command="test")
     text = path.read_text(encoding="utf-8")
     assert "| 0.00116 | (c) our design (30 rad/s), paper's limits |" in text
     rows = list(csv.DictReader((out / "lanzon-report.csv").read_text(encoding="utf-8").splitlines()))
@@ -130,7 +130,7 @@ def test_report_directory(tmp_path: Path, runs_printed: dict[tuple[str, str], P.
         assert name in manifest["outputs"]
         assert (out / name).stat().st_size > 10_000
     with pytest.raises(ValueError, match="holds a previous output; pass --force"):
-        P.write_report(runs, out)
+        R.write_report(runs, out)
 
 
 def test_cli_lanzon_report_checks_before_flying(tmp_path: Path) -> None:

@@ -19,7 +19,7 @@ import pytest
 
 from rotorfault.control.lanzon import LanzonVehicle, design
 from rotorfault.papers._numbers import score
-from rotorfault.papers import lanzon, lanzon_checks
+from rotorfault.papers import lanzon, lanzon_checks, lanzon_report
 
 
 def _no_linearisation(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -100,12 +100,12 @@ def test_another_low_gain_fails_the_printed_row() -> None:
 def test_the_report_scores_only_reproduced_rows(tmp_path: Path) -> None:
     from rotorfault.papers._report import ReportSection
 
-    original = lanzon.report_section
+    original = lanzon_report.report_section
     try:
-        lanzon.report_section = lambda out, quick=False: ReportSection("lanzon-flights", "stub")  # type: ignore[assignment]
+        lanzon_report.report_section = lambda out, quick=False: ReportSection("lanzon-flights", "stub")  # type: ignore[assignment]
         section = lanzon_checks.report_section(tmp_path, quick=True)
     finally:
-        lanzon.report_section = original  # type: ignore[assignment]
+        lanzon_report.report_section = original  # type: ignore[assignment]
     # 2 eq. (26) closed-loop rows and 4 loop-shape rows scored (kind reproduced), the 13
     # Jacobian-at-0 entries beside them as consistency rows (not scored).
     assert score(section.numbers) == {"reproduced": 6, "passed": 4, "differs": 2, "input": 0, "consistency": 13, "unclassified": 0}

@@ -71,7 +71,7 @@ def test_grid_composition() -> None:
             assert math.hypot(*d.wind_m_s) <= 5.0 and d.duration_s == pytest.approx(d.fault_time_s + D.AFTER_FAULT_S)
             lo, hi = D.FORWARD_FAULT_S if "forward" in cell.fault_class else D.HOVER_FAULT_S
             assert lo <= d.fault_time_s <= hi
-            assert len(d.pattern) == (2 if "opposing" in cell.fault_class else 1)
+            assert len(d.failed) == (2 if "opposing" in cell.fault_class else 1)
     # Lanzon's design flies only its own vehicle with rotor 2 failing.
     lanzon = D.CONTROLLERS["lanzon-controller"]
     assert lanzon.applies(D.vehicle("lanzon-quadrotor"), (2,)) is None
@@ -194,7 +194,7 @@ def test_certify_run_is_certify_on_the_runs_own_failed_vehicle() -> None:
     for i in range(suite.runs):
         d = suite.draw(cells[0], i)
         airframe, actuator, drag = d.failed_vehicle(D.vehicle("px4-x500"))
-        (r,) = d.pattern
+        (r,) = d.failed
         assert airframe.efficiency[r - 1] == d.thrust_scale[r - 1] * d.efficiency
         assert airframe.mass_kg == pytest.approx(D.vehicle("px4-x500").airframe.mass_kg * d.mass_scale, rel=1e-15)
         direct = certify_survival(airframe, drag=drag, actuator=actuator)

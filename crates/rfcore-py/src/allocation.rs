@@ -2,12 +2,15 @@
 //! queries. Translation only.
 
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
     PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
+use std::sync::OnceLock;
+
 use pyo3::prelude::*;
 use pyo3::types::{PyFloat, PyList, PyTuple};
+use pyo3::IntoPyObjectExt;
 
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSettings, ActiveSetSolver, SolveReport};
 use rfcore::allocation::clarabel::{
@@ -86,7 +89,9 @@ pickle_protocol!(PyAllocationSettings, {
         max_iterations: Option<&Bound<'_, PyAny>>,
         clarabel_tolerance: Option<f64>,
     ) -> PyResult<Self> {
-        let max_iterations = max_iterations.map(|v| count("max_iterations", v)).transpose()?;
+        let max_iterations = max_iterations
+            .map(|v| count("max_iterations", v))
+            .transpose()?;
         let out = PyAllocationSettings {
             tolerance: tolerance.unwrap_or(ActiveSetSettings::default().tolerance),
             max_iterations,
@@ -189,21 +194,50 @@ pub struct PySingleAllocation {
     achieved: [f64; MAX_VIRTUAL],
     virtual_control: [f64; MAX_VIRTUAL],
     report: SolveReport,
+    arrays: Arrays,
+}
+
+/// The NumPy arrays of a result, made when first read and then kept: a field read twice is one
+/// object (a caller's change to it stays, as it did when Python kept the fields).
+#[derive(Default)]
+struct Arrays {
+    commands: OnceLock<Py<PyAny>>,
+    achieved: OnceLock<Py<PyAny>>,
+    virtual_control: OnceLock<Py<PyAny>>,
+}
+
+/// `cell`'s array, made by `make` on the first read.
+fn kept<'py>(
+    py: Python<'py>,
+    cell: &OnceLock<Py<PyAny>>,
+    make: impl FnOnce() -> PyResult<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    if let Some(array) = cell.get() {
+        return Ok(array.bind(py).clone());
+    }
+    let array = make()?.unbind();
+    Ok(cell.get_or_init(|| array).bind(py).clone())
 }
 
 #[pymethods]
 impl PySingleAllocation {
     #[getter]
-    fn commands<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.commands[..self.actuators])
+    fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.commands, || {
+            Ok(PyArray1::from_slice(py, &self.commands[..self.actuators]).into_any())
+        })
     }
     #[getter]
-    fn achieved<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.achieved[..self.axes])
+    fn achieved<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.achieved, || {
+            Ok(PyArray1::from_slice(py, &self.achieved[..self.axes]).into_any())
+        })
     }
     #[getter]
-    fn virtual_control<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.virtual_control[..self.axes])
+    fn virtual_control<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.virtual_control, || {
+            Ok(PyArray1::from_slice(py, &self.virtual_control[..self.axes]).into_any())
+        })
     }
     #[getter]
     fn status(&self) -> &'static str {
@@ -333,6 +367,7 @@ impl PyAllocationProblem {
             achieved,
             virtual_control: u_c,
             report,
+            arrays: Arrays::default(),
         }))
     }
 
@@ -362,6 +397,7 @@ impl PyAllocationProblem {
                 },
                 solved_by: SolvedBy::ActiveSet,
             },
+            arrays: Arrays::default(),
         })
     }
 
@@ -406,59 +442,101 @@ fn method(
     Method::parse(name, priorities, settings.active(), settings.clarabel()?).map_err(to_py_err)
 }
 
-/// Allocations of N virtual controls: commands (N x m), achieved (N x n), statuses, iterations.
+/// Allocations of N virtual controls (Python's `Allocation` holds one and reads every field
+/// through it): commands (N x m), achieved (N x n), the virtual controls (N x n), statuses,
+/// iterations, certificates, solvers, the fallback count. `single` (one virtual control given as
+/// a vector): the arrays are vectors and the per-row fields single values, not tuples.
 #[pyclass(name = "AllocationBatch", module = "rotorfault._rfcore", frozen)]
 pub struct PyAllocationBatch {
     rows: usize,
     fallbacks: usize,
     results: Vec<Allocation>,
+    controls: Vec<f64>,
     actuators: usize,
     axes: usize,
+    single: bool,
+    arrays: Arrays,
 }
 
 impl PyAllocationBatch {
+    /// The rows of one field as an (N, `cols`) array, or its one row as a vector when `single`.
     fn matrix<'py>(
         &self,
         py: Python<'py>,
         cols: usize,
+        values: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if self.single {
+            return Ok(values.into_pyarray(py).into_any());
+        }
+        numpy::ndarray::Array2::from_shape_vec((self.rows, cols), values)
+            .map(|a| a.into_pyarray(py).into_any())
+            .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
+    }
+
+    fn column<'py>(
+        &self,
+        cols: usize,
         row: impl Fn(&Allocation) -> &[f64],
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let values: Vec<f64> = self
+        py: Python<'py>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let values = self
             .results
             .iter()
             .flat_map(|a| row(a).iter().copied())
             .collect();
-        numpy::ndarray::Array2::from_shape_vec((self.rows, cols), values)
-            .map(|a| a.into_pyarray(py))
-            .map_err(|e| PyValueError::new_err(format!("internal shape error: {e}")))
+        self.matrix(py, cols, values)
+    }
+
+    /// One value per row: the value itself when `single`, else a tuple.
+    fn per_row<'py, T: IntoPyObject<'py> + Clone>(
+        &self,
+        py: Python<'py>,
+        value: impl Fn(&Allocation) -> T,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        match (self.single, self.results.first()) {
+            (true, Some(one)) => value(one).into_bound_py_any(py),
+            _ => PyTuple::new(py, self.results.iter().map(value)).map(|t| t.into_any()),
+        }
     }
 }
 
 #[pymethods]
 impl PyAllocationBatch {
     #[getter]
-    fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.matrix(py, self.actuators, |a| &a.commands)
+    fn commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.commands, || {
+            self.column(self.actuators, |a| &a.commands, py)
+        })
     }
     #[getter]
-    fn achieved<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.matrix(py, self.axes, |a| &a.achieved)
+    fn achieved<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.achieved, || {
+            self.column(self.axes, |a| &a.achieved, py)
+        })
+    }
+    /// The virtual controls allocated, as given (checked by the core).
+    #[getter]
+    fn virtual_control<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        kept(py, &self.arrays.virtual_control, || {
+            self.matrix(py, self.axes, self.controls.clone())
+        })
     }
     #[getter]
-    fn statuses(&self) -> Vec<&'static str> {
-        self.results.iter().map(|a| a.status.name()).collect()
+    fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.per_row(py, |a| a.status.name())
     }
     #[getter]
-    fn iterations(&self) -> Vec<usize> {
-        self.results.iter().map(|a| a.iterations).collect()
+    fn iterations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.per_row(py, |a| a.iterations)
     }
     #[getter]
-    fn certificates(&self) -> Vec<PyCertificate> {
-        self.results.iter().map(|a| a.certificate.into()).collect()
+    fn certificate<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.per_row(py, |a| PyCertificate::from(a.certificate))
     }
     #[getter]
-    fn solved_by(&self) -> Vec<&'static str> {
-        self.results.iter().map(|a| a.solved_by.name()).collect()
+    fn solved_by<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.per_row(py, |a| a.solved_by.name())
     }
     /// How many answers the active-set method's Clarabel fallback produced (0 for the other
     /// methods).
@@ -469,19 +547,26 @@ impl PyAllocationBatch {
 }
 
 /// Allocates every row of `controls` (N x n) with the problem's settings: commands (N x m),
-/// achieved (N x n), statuses, iterations, certificates, methods, fallback count.
+/// achieved (N x n), statuses, iterations, certificates, methods, fallback count. `single`: one
+/// virtual control given as a vector (one row; the result reads as one allocation).
 #[pyfunction]
-#[pyo3(signature = (problem, controls, method_name, priorities))]
+#[pyo3(signature = (problem, controls, method_name, priorities, single=false))]
 pub fn allocate<'py>(
     py: Python<'py>,
     problem: &PyAllocationProblem,
     controls: PyReadonlyArray2<'py, f64>,
     method_name: &str,
     priorities: Option<Vec<Vec<usize>>>,
+    single: bool,
 ) -> PyResult<PyAllocationBatch> {
     let method = method(problem, method_name, priorities)?;
     let flat = slice2("virtual_control", &controls)?;
     let rows = controls.shape()[0];
+    if single && rows != 1 {
+        return Err(PyValueError::new_err(format!(
+            "virtual_control: single: expected one row, got {rows}"
+        )));
+    }
     let results = match method {
         // One active-set solve is a few microseconds (bounded: `4 m + 20` iterations per phase,
         // then at most one Clarabel fallback), against about 10 us to hand work to `detached`:
@@ -506,8 +591,11 @@ pub fn allocate<'py>(
         rows,
         fallbacks,
         results,
+        controls: flat.to_vec(),
         actuators: problem.inner.actuator_count(),
         axes: problem.inner.virtual_dimension(),
+        single,
+        arrays: Arrays::default(),
     })
 }
 
@@ -563,7 +651,10 @@ impl PyDirectionalLimit {
         self.status
     }
     fn __repr__(&self) -> String {
-        format!("DirectionalLimit(scale={}, status={:?})", self.scale, self.status)
+        format!(
+            "DirectionalLimit(scale={}, status={:?})",
+            self.scale, self.status
+        )
     }
 }
 

@@ -3,7 +3,12 @@
 
 pub(crate) mod relaxed_hover;
 
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use std::sync::OnceLock;
+
+use numpy::{
+    IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -142,8 +147,13 @@ value_protocol!(PyControllabilityReport, {
     }
     /// Pickled as its fields, read back by `_controllability_report` (a result has no public
     /// constructor: only the test makes one).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let restore = py.import("rotorfault._rfcore")?.getattr("_controllability_report")?;
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let restore = py
+            .import("rotorfault._rfcore")?
+            .getattr("_controllability_report")?;
         let r = &self.inner;
         let state = (
             self.airframe.clone(),
@@ -196,7 +206,10 @@ pub(crate) fn _controllability_report(
 }
 
 fn report(airframe: &PyAirframe, report: ControllabilityReport) -> PyControllabilityReport {
-    PyControllabilityReport { airframe: airframe.inner.name().to_string(), inner: report }
+    PyControllabilityReport {
+        airframe: airframe.inner.name().to_string(),
+        inner: report,
+    }
 }
 
 /// How a printed ACAI reads (`rfcore::analysis::text::format_acai`): 4 decimals, `undefined`
@@ -210,7 +223,9 @@ pub(crate) fn format_acai(value: f64, hover: &str) -> PyResult<String> {
 /// How a printed ACAI names its formula (`ACAI eq13`, `ACAI facet-margin`).
 #[pyfunction]
 pub(crate) fn acai_label(formula: &str) -> PyResult<String> {
-    Ok(text::acai_label(AcaiFormula::parse(formula).map_err(to_py_err)?))
+    Ok(text::acai_label(
+        AcaiFormula::parse(formula).map_err(to_py_err)?,
+    ))
 }
 
 /// An ACAI with where the hover wrench lies (`inside`, `boundary`, `outside`, `rank-deficient`):
@@ -226,48 +241,127 @@ impl PyAcaiResult {
     const FIELDS: &'static [&'static str] = &["acai", "hover"];
 }
 
-pickle_protocol!(PyAcaiResult, {
-    /// A result from its two fields (`AcaiValue(value, hover)` and its pickles): the hover point
-    /// is parsed by the core's own parser.
-    #[new]
-    fn new(acai: f64, hover: &str) -> PyResult<Self> {
-        let hover = HoverPoint::parse("hover", hover).map_err(to_py_err)?;
-        Ok(PyAcaiResult { inner: AcaiResult { acai, hover } })
-    }
-    #[getter]
-    fn acai(&self) -> f64 {
-        self.inner.acai
-    }
-    #[getter]
-    fn hover(&self) -> &'static str {
-        self.inner.hover.name()
-    }
-    /// The hover wrench is attainable (inside or on the boundary).
-    #[getter]
-    fn hover_feasible(&self) -> bool {
-        self.inner.hover.is_attainable()
-    }
-}, then = value_protocol);
+pickle_protocol!(
+    PyAcaiResult,
+    {
+        /// A result from its two fields (`AcaiValue(value, hover)` and its pickles): the hover point
+        /// is parsed by the core's own parser.
+        #[new]
+        fn new(acai: f64, hover: &str) -> PyResult<Self> {
+            let hover = HoverPoint::parse("hover", hover).map_err(to_py_err)?;
+            Ok(PyAcaiResult {
+                inner: AcaiResult { acai, hover },
+            })
+        }
+        #[getter]
+        fn acai(&self) -> f64 {
+            self.inner.acai
+        }
+        #[getter]
+        fn hover(&self) -> &'static str {
+            self.inner.hover.name()
+        }
+        /// The hover wrench is attainable (inside or on the boundary).
+        #[getter]
+        fn hover_feasible(&self) -> bool {
+            self.inner.hover.is_attainable()
+        }
+    },
+    then = value_protocol
+);
 
-/// A batch of ACAIs with the hover point of each row as a code (1 inside, 0 on the boundary,
-/// -1 outside, -2 rank deficient: `HoverPoint::code`).
+/// A batch of ACAIs in one formula with the hover point of each row as a code (1 inside, 0 on
+/// the boundary, -1 outside, -2 rank deficient: `HoverPoint::code`). Python's `AcaiBatch` holds
+/// one and reads every field through it: the result crosses the boundary once. The NumPy arrays
+/// are made from the core's result when first read and then kept, so a field is one object.
 #[pyclass(name = "AcaiBatch", module = "rotorfault._rfcore", frozen)]
 pub struct PyAcaiBatch {
     inner: AcaiBatch,
+    formula: AcaiFormula,
+    acai_array: OnceLock<Py<PyArray1<f64>>>,
+    hover_code_array: OnceLock<Py<PyArray1<i8>>>,
 }
 
-#[pymethods]
 impl PyAcaiBatch {
+    /// The fields as a dataclass prints them (repr, pickling), in this order.
+    const FIELDS: &'static [&'static str] = &["acai", "hover_code", "formula"];
+
+    fn from_core(inner: AcaiBatch, formula: AcaiFormula) -> Self {
+        PyAcaiBatch {
+            inner,
+            formula,
+            acai_array: OnceLock::new(),
+            hover_code_array: OnceLock::new(),
+        }
+    }
+}
+
+/// The hover codes of a batch: an int8 array as the batch gives them, else any sequence of
+/// integers (a user's list, an int64 array); each code is checked by the core's `from_code`.
+fn hover_codes(value: &Bound<'_, PyAny>) -> PyResult<Vec<HoverPoint>> {
+    let codes: Vec<i64> = match value.extract::<PyReadonlyArray1<'_, i8>>() {
+        Ok(array) => array.as_array().iter().map(|&c| i64::from(c)).collect(),
+        Err(_) => value.extract::<Vec<i64>>().map_err(|_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "hover_code: expected a sequence of integer codes (1, 0, -1, -2)",
+            )
+        })?,
+    };
+    codes
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| HoverPoint::from_code(&format!("hover_code[{k}]"), c).map_err(to_py_err))
+        .collect()
+}
+
+pickle_protocol!(PyAcaiBatch, {
+    /// A batch from its three fields (`AcaiBatch(acai, hover_code, formula)` and its pickles):
+    /// one hover code per ACAI, each a code of `HoverPoint`, the formula by its name.
+    #[new]
+    #[pyo3(signature = (acai, hover_code, formula="eq13"))]
+    fn new(
+        acai: PyReadonlyArray1<'_, f64>,
+        hover_code: &Bound<'_, PyAny>,
+        formula: &str,
+    ) -> PyResult<Self> {
+        let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
+        let acai = slice1("acai", &acai)?.to_vec();
+        let hover = hover_codes(hover_code)?;
+        if hover.len() != acai.len() {
+            return Err(PyValueError::new_err(format!(
+                "hover_code: expected one code per ACAI ({}), got {}",
+                acai.len(),
+                hover.len()
+            )));
+        }
+        Ok(PyAcaiBatch::from_core(AcaiBatch { acai, hover }, formula))
+    }
     #[getter]
     fn acai<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.acai.clone().into_pyarray(py)
+        self.acai_array
+            .get_or_init(|| PyArray1::from_slice(py, &self.inner.acai).unbind())
+            .bind(py)
+            .clone()
     }
     #[getter]
     fn hover_code<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i8>> {
-        let codes: Vec<i8> = self.inner.hover.iter().map(|h| h.code()).collect();
-        codes.into_pyarray(py)
+        self.hover_code_array
+            .get_or_init(|| {
+                let codes: Vec<i8> = self.inner.hover.iter().map(|h| h.code()).collect();
+                codes.into_pyarray(py).unbind()
+            })
+            .bind(py)
+            .clone()
     }
-}
+    /// The formula of every value (`eq13` or `facet-margin`).
+    #[getter]
+    fn formula(&self) -> &'static str {
+        self.formula.name()
+    }
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        crate::convert::settings_repr(slf.as_any(), Self::FIELDS)
+    }
+});
 
 /// ACAI of `airframe` with efficiencies `efficiency` (Du Theorem 3), with the hover point.
 #[pyfunction]
@@ -312,7 +406,7 @@ pub(crate) fn acai_batch_with_hover(
     let inner = detached(py, |cancel| {
         analysis(airframe, axes, cancel)?.acai_batch_with_hover(flat, formula, cancel)
     })?;
-    Ok(PyAcaiBatch { inner })
+    Ok(PyAcaiBatch::from_core(inner, formula))
 }
 
 /// ACAI for every row of `efficiencies` (N x m), in parallel.
@@ -415,7 +509,10 @@ pub(crate) fn failure_table<'py>(
 /// largest counted. For a controllability matrix with speeds of 1e4 and pitches of 0.1 side by
 /// side, where a plain SVD threshold reads the small units as zeros.
 #[pyfunction]
-pub(crate) fn scale_free_rank(py: Python<'_>, matrix: PyReadonlyArray2<'_, f64>) -> PyResult<usize> {
+pub(crate) fn scale_free_rank(
+    py: Python<'_>,
+    matrix: PyReadonlyArray2<'_, f64>,
+) -> PyResult<usize> {
     let m = crate::convert::matrix("matrix", &matrix)?;
     if m.iter().any(|v| !v.is_finite()) {
         return Err(PyValueError::new_err("matrix: must be finite"));

@@ -513,3 +513,30 @@ fn failure_tables_flag_every_infeasible_hover() {
     // The figures of issue #19.
     assert_eq!((infeasible, bare_zero), (104, 72));
 }
+
+/// A batch's compact column reads back: every hover point from its code, any other code refused
+/// naming the field (Python's `AcaiBatch(acai, hover_code)` and its pickles go through it).
+#[test]
+fn hover_codes_read_back_and_other_codes_are_refused() {
+    for hover in [
+        HoverPoint::Inside,
+        HoverPoint::OnBoundary,
+        HoverPoint::Outside,
+        HoverPoint::RankDeficient,
+    ] {
+        assert_eq!(
+            HoverPoint::from_code("hover_code", i64::from(hover.code())).unwrap(),
+            hover
+        );
+    }
+    for bad in [2, -3, 300, i64::MIN] {
+        let message = HoverPoint::from_code("hover_code[4]", bad)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.starts_with("hover_code[4]: must be a hover code")
+                && message.ends_with(&format!("got {bad}")),
+            "{message}"
+        );
+    }
+}

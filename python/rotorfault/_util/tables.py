@@ -118,6 +118,8 @@ class Tabular:
     A subclass gives :meth:`_table_columns` (and may give :meth:`_table_title` and
     :meth:`_table_metadata`), or overrides :meth:`to_arrow` when it holds an Arrow table."""
 
+    __slots__ = ()  # a subclass over a core result keeps only its slot (``_util.core_result``)
+
     def _table_columns(self) -> Sequence[Column]:
         raise NotImplementedError(f"{type(self).__name__} gives no columns")
 

@@ -7,9 +7,7 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
-from dataclasses import fields as dataclass_fields
-from typing import TYPE_CHECKING, Any, cast, get_args
+from typing import Any, cast, get_args
 
 import numpy as np
 import numpy.typing as npt
@@ -17,6 +15,8 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import AllocationMethod, AllocationStatus, ControlAxes, SolvedBy
 from .._util.convert import FloatArray, control_axes, count, flag, float_array, frozen_array, real
+from .._util.core_result import CoreResult
+from .._util.deprecation import dataclass_compat
 from .._util.tables import Column, Tabular
 from ..analysis.airframe import Airframe
 
@@ -31,8 +31,7 @@ CLARABEL_TOLERANCE: float = _DEFAULTS.clarabel_tolerance
 Certificate = _rfcore.Certificate
 
 
-@dataclass(frozen=True)
-class Allocation(Tabular):
+class Allocation(CoreResult, Tabular):
     """The result of :func:`allocate`. For one virtual control ``commands`` is (m,), ``achieved``
     (n,) and ``status`` a string; for N of them (N, m), (N, n) and a tuple of N strings.
 
@@ -42,6 +41,11 @@ class Allocation(Tabular):
     (clarabel found no solution). ``certificate`` (one per row for a batch): the KKT residuals
     of the commands (:class:`Certificate`). ``solved_by``: ``"active-set"``, ``"clarabel"`` or
     ``"pinv"``. ``fallbacks``: how many answers the active set's Clarabel fallback produced.
+
+    It holds the core's result (``_rfcore.SingleAllocation`` for one active-set answer,
+    ``_rfcore.AllocationBatch`` otherwise) and reads every field through it: no copied fields,
+    and an array is made when first read (a caller who reads only the commands pays for no
+    other array).
 
     ``to_arrow()`` / ``to_pandas()``: one row per virtual control (``virtual_control_<k>``,
     ``achieved_<k>``, ``rotor_<i>_command``, the status, the solver and the certificate's
@@ -55,27 +59,52 @@ class Allocation(Tabular):
         ((2, 4), ('optimal', 'optimal'))
     """
 
-    commands: FloatArray
-    achieved: FloatArray
-    virtual_control: FloatArray
-    status: AllocationStatus | tuple[AllocationStatus, ...]
-    iterations: int | tuple[int, ...]
-    certificate: _rfcore.Certificate | tuple[_rfcore.Certificate, ...]
-    solved_by: SolvedBy | tuple[SolvedBy, ...]
-    fallbacks: int
+    __slots__ = ()
+    FIELDS = ("commands", "achieved", "virtual_control", "status", "iterations", "certificate", "solved_by", "fallbacks")
+    _core: _rfcore.SingleAllocation | _rfcore.AllocationBatch
 
-    if not TYPE_CHECKING:  # (hidden from mypy, so a misspelt field stays a type error)
+    def __init__(self) -> None:
+        raise TypeError("Allocation: made by allocate() or Allocator.allocate(), not constructed")
 
-        def __getattr__(self, name: str) -> Any:
-            """A single active-set answer (:meth:`Allocator.allocate`'s fast path) holds the core's
-            result and makes each field when it is first read, so a caller who reads only the
-            commands pays for no other array; reached only for fields not yet in ``__dict__``."""
-            one = self.__dict__.get(_CORE_RESULT)
-            if one is None or name not in _FIELDS:
-                raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-            value = getattr(one, name)
-            self.__dict__[name] = value
-            return value
+    @property
+    def commands(self) -> FloatArray:
+        """Rotor commands, (m,) or (N, m), in the problem's units (N for an airframe)."""
+        return self._core.commands
+
+    @property
+    def achieved(self) -> FloatArray:
+        """What the commands produce, ``M T``: (n,) or (N, n)."""
+        return self._core.achieved
+
+    @property
+    def virtual_control(self) -> FloatArray:
+        """The virtual control(s) allocated, (n,) or (N, n)."""
+        return self._core.virtual_control
+
+    @property
+    def status(self) -> AllocationStatus | tuple[AllocationStatus, ...]:
+        """The solver's status (a tuple of one per row for a batch)."""
+        return cast("AllocationStatus | tuple[AllocationStatus, ...]", self._core.status)
+
+    @property
+    def iterations(self) -> int | tuple[int, ...]:
+        """Iterations of the solver (a tuple of one per row for a batch)."""
+        return self._core.iterations
+
+    @property
+    def certificate(self) -> _rfcore.Certificate | tuple[_rfcore.Certificate, ...]:
+        """The KKT residuals of the commands (a tuple of one per row for a batch)."""
+        return self._core.certificate
+
+    @property
+    def solved_by(self) -> SolvedBy | tuple[SolvedBy, ...]:
+        """Which solver gave the commands (a tuple of one per row for a batch)."""
+        return cast("SolvedBy | tuple[SolvedBy, ...]", self._core.solved_by)
+
+    @property
+    def fallbacks(self) -> int:
+        """How many answers the active set's Clarabel fallback produced."""
+        return self._core.fallbacks
 
     @property
     def attained(self) -> bool | np.ndarray[Any, np.dtype[np.bool_]]:
@@ -212,11 +241,7 @@ class Allocator:
             # one core call that validates them; anything else takes the general path below.
             one = self._core.allocate_one(virtual_control)
             if one is not None:
-                # Built without the dataclass's ``__init__`` (a frozen dataclass sets each field
-                # through ``object.__setattr__``, about twice the cost of the whole solve): the
-                # fields are made from the core's result when read (``Allocation.__getattr__``).
-                out = _new(Allocation)
-                out.__dict__[_CORE_RESULT] = one
+                out: Allocation = Allocation._from_core(one)
                 return out
         if not isinstance(method, str):
             raise TypeError(f"method: expected a string, got {type(method).__name__}")
@@ -241,19 +266,9 @@ class Allocator:
                 f"(rows of the allocation matrix), got {rows.shape[1]}"
             )
         groups = None if priorities is None else _priorities(priorities)
-        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups)
-        commands, achieved, iterations = batch.commands, batch.achieved, batch.iterations
-        statuses = cast(list[AllocationStatus], batch.statuses)
-        certificates, solved_by = batch.certificates, cast(list[SolvedBy], batch.solved_by)
-        if ndim == 1:
-            return Allocation(
-                commands[0], achieved[0], rows[0], statuses[0], iterations[0], certificates[0], solved_by[0],
-                batch.fallbacks,
-            )
-        return Allocation(
-            commands, achieved, rows, tuple(statuses), tuple(iterations), tuple(certificates), tuple(solved_by),
-            batch.fallbacks,
-        )
+        batch = _rfcore.allocate(self._core, np.ascontiguousarray(rows), method, groups, ndim == 1)
+        result: Allocation = Allocation._from_core(batch)
+        return result
 
     def rate_limited(self, previous: npt.ArrayLike, max_change: float | npt.ArrayLike) -> Allocator:
         """A copy whose bounds also keep each command within ``max_change`` (a number or one per
@@ -375,11 +390,7 @@ def _cache_key(
     return (w, give_up_yaw, *settings)
 
 
-_new = object.__new__
-#: Where a single answer keeps the core's result (``_rfcore.SingleAllocation``), and the fields
-#: it makes on demand.
-_CORE_RESULT = "_core_result"
-_FIELDS = frozenset(field.name for field in dataclass_fields(Allocation))
+dataclass_compat(Allocation)
 
 
 def _settings(tolerance: Any, max_iterations: Any, clarabel_tolerance: Any) -> _rfcore.AllocationSettings:

@@ -21,13 +21,14 @@ for thrust, roll and pitch only (n = 3).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any, Literal, cast, get_args, overload
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _rfcore
+from .._util.core_result import CoreResult
+from .._util.deprecation import dataclass_compat
 from .._util.convert import FloatArray, control_axes, flag, float_array, real
 from .._util.tables import Column, Tabular
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
@@ -131,12 +132,15 @@ class AcaiValue(float):
         return obj
 
 
-@dataclass(frozen=True)
-class AcaiBatch(Tabular):
+class AcaiBatch(CoreResult, Tabular):
     """:func:`acai_batch` with ``with_hover=True``: the ACAIs and where the hover wrench lies for
     each row, as codes (:data:`HOVER_CODES`: 1 inside, 0 boundary, -1 outside, -2 rank deficient).
     ``to_arrow()`` / ``to_pandas()``: one row per efficiency vector (``acai_<formula>``,
     ``hover_code``), in the order given.
+
+    It holds the core's batch (``_rfcore.AcaiBatch``) and reads every field through it (no
+    copied fields); ``AcaiBatch(acai, hover_code, formula)`` makes one from its fields, checked
+    by the core (one code per value, each a code of :data:`HOVER_CODES`, a known formula).
 
     Examples:
 
@@ -147,9 +151,27 @@ class AcaiBatch(Tabular):
         ([1.1295, -0.2779], [1, -1])
     """
 
-    acai: FloatArray
-    hover_code: npt.NDArray[np.int8]
-    formula: AcaiFormula = "eq13"
+    __slots__ = ()
+    FIELDS = ("acai", "hover_code", "formula")
+    _core: _rfcore.AcaiBatch
+
+    def __init__(self, acai: npt.ArrayLike, hover_code: npt.ArrayLike, formula: AcaiFormula = "eq13") -> None:
+        self._core = _rfcore.AcaiBatch(float_array("acai", acai, 1), _hover_codes(hover_code), _formula(formula))
+
+    @property
+    def acai(self) -> FloatArray:
+        """The ACAI of each row, in :attr:`formula` (N / N m)."""
+        return self._core.acai
+
+    @property
+    def hover_code(self) -> npt.NDArray[np.int8]:
+        """Where the hover wrench lies for each row (:data:`HOVER_CODES`)."""
+        return self._core.hover_code
+
+    @property
+    def formula(self) -> AcaiFormula:
+        """The formula of every value: ``"eq13"`` or ``"facet-margin"``."""
+        return cast(AcaiFormula, self._core.formula)
 
     def _table_columns(self) -> list[Column]:
         return [(f"acai_{self.formula.replace('-', '_')}", "float64", self.acai), ("hover_code", "int8", self.hover_code)]
@@ -157,6 +179,24 @@ class AcaiBatch(Tabular):
     @property
     def hover_feasible(self) -> npt.NDArray[np.bool_]:
         return self.hover_code >= 0
+
+    def __reduce__(self) -> tuple[type[AcaiBatch], tuple[FloatArray, npt.NDArray[np.int8], str]]:
+        return (AcaiBatch, (self.acai, self.hover_code, self.formula))
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # A pickle of the dataclass this class was (its fields as a dict) loads into the core's batch.
+        self._core = _rfcore.AcaiBatch(state["acai"], state["hover_code"], state.get("formula", "eq13"))
+
+
+dataclass_compat(AcaiBatch)
+
+
+def _hover_codes(value: Any) -> Any:
+    """Types and shape here (integers, one dimension); the codes' values are the core's check."""
+    codes = np.asarray(value)
+    if codes.ndim != 1 or not (codes.size == 0 or np.issubdtype(codes.dtype, np.integer)):
+        raise TypeError(f"hover_code: expected a 1-D array of integer codes, got dtype {codes.dtype} with {codes.ndim} dimensions")
+    return codes if codes.dtype == np.int8 else codes.astype(np.int64).tolist()
 
 
 def _efficiency(airframe: Airframe, efficiency: npt.ArrayLike | None) -> FloatArray:
@@ -242,7 +282,8 @@ def acai_batch(
     names = control_axes(give_up_yaw, axes)
     if flag("with_hover", with_hover):
         core = _rfcore.acai_batch_with_hover(airframe._core, rows, names, _formula(formula))
-        return AcaiBatch(core.acai, core.hover_code, cast(AcaiFormula, _formula(formula)))
+        out: AcaiBatch = AcaiBatch._from_core(core)
+        return out
     return _rfcore.acai_batch(airframe._core, rows, names, _formula(formula))
 
 

@@ -105,7 +105,7 @@ def vpp_report(out_dir: str, quick: bool, force: bool, output: Output) -> None:
 def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, force: bool, output: Output) -> None:
     """Fly Lanzon et al.'s two flights three ways (paper's design without and with limits, ours),
     for both I_zz values, run the Monte Carlo comparison with Ke's controller, and write a report."""
-    from ..papers import lanzon as lanzon_paper
+    from ..papers import lanzon as lanzon_paper, lanzon_report as lanzon_paper_report
 
     if mc_runs < 0:
         raise ValueError(f"runs: must be >= 0, got {mc_runs}")
@@ -122,7 +122,7 @@ def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, for
                 results.append(lanzon_paper.monte_carlo(controller, runs=runs_per, duration_s=mc_duration, progress=output.progress))
         output.status(f"writing the report to {out_dir}")
         command = "rotorfault " + " ".join(sys.argv[1:]) if sys.argv[1:] else "rotorfault lanzon-report"
-        path = lanzon_paper.write_report(runs, out_dir, monte_carlo_results=results, figures=not no_figures, force=force,
+        path = lanzon_paper_report.write_report(runs, out_dir, monte_carlo_results=results, figures=not no_figures, force=force,
                                          command=command)
     monte_carlo = [
         {"controller": r.controller, "runs": r.runs, "spread": r.spread, "duration_s": r.duration_s, "held_fraction": r.held_fraction,
@@ -131,15 +131,15 @@ def lanzon_report(out_dir: str, mc_runs: int, quick: bool, no_figures: bool, for
     ]
 
     def human(out: Output) -> None:
-        for line in lanzon_paper.three_way_table(runs):
+        for line in lanzon_paper_report.three_way_table(runs):
             out.print(escape(line), soft_wrap=True)
         if results:
-            for line in lanzon_paper.monte_carlo_table(results):
+            for line in lanzon_paper_report.monte_carlo_table(results):
                 out.print(escape(line), soft_wrap=True)
         out.print(f"report written to {escape(str(path))}")
 
     output.emit(CommandOutput("lanzon-report", {"out": str(path), "quick": quick, "monte_carlo_runs": runs_per},
-                              [Rows("flights", list(lanzon_paper.report_rows(runs))), Rows("monte_carlo", monte_carlo)],
+                              [Rows("flights", list(lanzon_paper_report.report_rows(runs))), Rows("monte_carlo", monte_carlo)],
                               csv_table="flights", human=human))
 
 

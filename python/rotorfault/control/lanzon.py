@@ -37,7 +37,7 @@ rotation of pi about x: ``phi = roll``, ``theta = -pitch``, ``psi = -yaw``, ``(p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import control as ct  # type: ignore[import-untyped]
@@ -406,6 +406,35 @@ def design(
                         w1=w1, synthesis=synthesis)
 
 
+@dataclass(frozen=True)
+class DesignCase:
+    """One way of flying: the loop shape of :func:`design` (its crossover and channel gains),
+    whether the simulator has the paper's actuator limits, and the outer-loop gains (the paper's
+    three cases: :func:`rotorfault.papers.lanzon.design_cases`)."""
+
+    label: str
+    description: str
+    crossover_rad_s: float
+    limits: bool
+    channel_gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    outer_loop: OuterLoopGains = field(default_factory=OuterLoopGains)
+
+    def __post_init__(self) -> None:
+        crossover = real("crossover_rad_s", self.crossover_rad_s)
+        if not (math.isfinite(crossover) and crossover > 0):
+            raise ValueError(f"crossover_rad_s: must be finite and > 0, got {crossover}")
+        gains = np.asarray(self.channel_gain, dtype=np.float64)
+        if gains.shape != (3,) or not np.all(np.isfinite(gains)) or np.any(gains <= 0):
+            raise ValueError(f"channel_gain: expected 3 finite numbers > 0 (phi, theta, r), got {self.channel_gain}")
+        if not isinstance(self.limits, bool):
+            raise TypeError(f"limits: expected True or False, got {type(self.limits).__name__}")
+        if not isinstance(self.outer_loop, OuterLoopGains):
+            raise TypeError(f"outer_loop: expected OuterLoopGains, got {type(self.outer_loop).__name__}")
+
+    def design(self, vehicle: LanzonVehicle) -> LanzonDesign:
+        return design(vehicle, crossover_rad_s=self.crossover_rad_s, channel_gain=self.channel_gain)
+
+
 class LanzonController:
     """Lanzon et al.'s controller, run in Rust: robust feedback linearisation, the discretised
     loop-shaping controller of ``design`` and, with a ``position`` (world NED, m), the outer loop
@@ -463,6 +492,7 @@ def _three(name: str, value: npt.ArrayLike) -> FloatArray:
 __all__ = [
     "FAILED_ROTOR",
     "SPIN_RATE_RAD_S",
+    "DesignCase",
     "LanzonController",
     "LanzonDesign",
     "LanzonVehicle",

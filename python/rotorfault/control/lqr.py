@@ -35,7 +35,7 @@ from .._util.deprecation import warn
 from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe, rotor_labels
 from ..allocation import Allocator
-from ..analysis.acai import acai
+from ..analysis.acai import acai, acai_label
 from ..flight import FixedPitchActuator, Simulator, VariablePitchActuator
 from .allocated import Allocated
 from .linear import STATE_DIM, STATE_LABELS, STATE_NAMES, LinearFeedback
@@ -489,7 +489,7 @@ def _require_holdable(simulator: Simulator, trim: HoverTrim) -> None:
     index = float(acai(airframe))
     if not index > 0:
         why = "rank B_f < 4: some axis has no control at all" if index == -math.inf else "no control authority margin around hover"
-        reasons.append(f"ACAI = {index:.6g} <= 0 ({why})")
+        reasons.append(f"{acai_label('eq13')} = {index:.6g} <= 0 ({why})")
     if trim.saturated_rotors:
         bounds = [
             f"{trim.command[i - 1]:.6g} N" for i in trim.saturated_rotors

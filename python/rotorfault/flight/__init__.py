@@ -2,7 +2,8 @@
 :class:`Simulator`, :func:`simulate_batch`, the divergence limits), the vehicle state, the actuator,
 drag and noise models, the sensors a controller may fly on (:data:`Sensing`), rotor faults, the trajectory a run returns, named flight scenarios
 (:mod:`~rotorfault.flight.scenarios`) and the verdict on a whole flight
-(:mod:`~rotorfault.flight.outcomes`: holds position, circling, off station, or lost). Mirrors the
+(:mod:`~rotorfault.flight.outcomes`: holds position, circling, off station, or lost;
+:mod:`~rotorfault.flight.attitude`: level and spinning, for a flight without a position loop). Mirrors the
 core's ``flight`` room.
 
 May import: ``rotorfault.analysis`` (the airframe), ``rotorfault._typing``, ``rotorfault._util``

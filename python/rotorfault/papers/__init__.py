@@ -5,6 +5,8 @@ the verdicts, engines and figures they use live in the rooms below.
 - :mod:`~rotorfault.papers.ke`: Ke et al., uniform passive FTC (``rotorfault ftc-report``);
 - :mod:`~rotorfault.papers.du`: Du et al., controllability and the ACAI;
 - :mod:`~rotorfault.papers.lanzon_checks`: Lanzon et al.'s eq. (26) and loop shape (imported on use);
+  :mod:`~rotorfault.papers.lanzon`: its flights, claims and studies, and
+  :mod:`~rotorfault.papers.lanzon_report`: their report (``rotorfault lanzon-report``);
 - :mod:`~rotorfault.papers.reproduce`: every paper in one report (``rotorfault reproduce``; imported
   on use), each paper a section provider (``report_section``), with
   :mod:`~rotorfault.papers.decisions` (the README's decisions table, linked to the code), every

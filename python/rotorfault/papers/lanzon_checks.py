@@ -319,8 +319,9 @@ def plot_loop_shape(design_: LanzonDesign, path: str | None = None) -> Figure:
 
 def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     """Lanzon's part of ``rotorfault reproduce``: eq. (26) and the loop shape beside ours, the
-    loop-shape figure, and the flights from :mod:`rotorfault.papers.lanzon` when that module is in
-    the package (otherwise a "not landed yet" part)."""
+    loop-shape figure, and the flights from :mod:`rotorfault.papers.lanzon` (their report part,
+    :mod:`rotorfault.papers.lanzon_report`) when that module is in the package (otherwise a "not
+    landed yet" part)."""
     import importlib
     import time
 
@@ -346,9 +347,9 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     plot_loop_shape(ours, str(out / "lanzon-loop-shape.png"))
     section.figures.append(ReportFigure("lanzon-loop-shape.png", "Singular values of the plant after RFL and of the shaped plant (Lanzon Fig. 4 style)."))
     try:
-        flights_module = importlib.import_module("rotorfault.papers.lanzon")
+        flights_module = importlib.import_module("rotorfault.papers.lanzon_report")
     except ModuleNotFoundError as exc:
-        if exc.name != "rotorfault.papers.lanzon":
+        if exc.name not in ("rotorfault.papers.lanzon", "rotorfault.papers.lanzon_report"):
             raise
         flights_module = None
     provider = getattr(flights_module, "report_section", None)

@@ -11,7 +11,7 @@ backends (:mod:`~rotorfault.studies.backends`: threads or Dask), storage
 (:mod:`~rotorfault.studies.recording`), summaries (:mod:`~rotorfault.studies.summaries`) and robust
 tuning (:mod:`~rotorfault.studies.tuning`, judged for holding through faults by
 :mod:`~rotorfault.studies.hold`). The papers' Monte Carlo studies run on the same
-engine.
+engine (Lanzon's robustness study: :mod:`~rotorfault.studies.lanzon_robustness`).
 
 May import: ``control``, ``flight``, ``allocation``, ``analysis``, ``plotting`` (on first use),
 ``rotorfault._typing`` and ``rotorfault._util``; never ``papers`` or ``cli``.

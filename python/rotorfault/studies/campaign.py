@@ -34,7 +34,7 @@ from .. import _rfcore
 from .._typing import ScanBackend as Backend
 from .._util.convert import read_toml
 from .._util.tables import Records, Tabular
-from .._util.deprecation import renamed_attribute
+from .._util.deprecation import renamed_attribute, warn
 from ..analysis.airframe import Airframe
 from ..control.ke import FtcPreset, KeGains, UniformPassiveFtc, preset
 from ..flight import DivergenceLimits, Drag, FixedPitchActuator, Noise, Sensing, Simulator, State, Trajectory, VariablePitchActuator
@@ -45,7 +45,7 @@ from .sampling import (
     GUST_POINTS,
     RAMP_STEPS,
     FailureSet,
-    RunSpec,
+    RunDraw,
     draw,
     gust_profile,
     perturbed_vehicle,
@@ -329,14 +329,14 @@ class Campaign:
 
     # -- sampling -----------------------------------------------------------------------------
 
-    def sample(self, index: int) -> RunSpec:
+    def sample(self, index: int) -> RunDraw:
         """Run ``index``'s draws (:func:`rotorfault.studies.sampling.draw`: the same whatever else
         is drawn, one generator per run)."""
         return draw(self, index, rotor_count(self.vehicle().airframe_name))
 
     # -- one run, fully ------------------------------------------------------------------------
 
-    def simulator(self, spec: RunSpec) -> Simulator:
+    def simulator(self, spec: RunDraw) -> Simulator:
         """The simulator run ``spec`` flies: the perturbed vehicle in its wind and noise."""
         airframe, actuator, drag = self._vehicle_parts(spec)
         return Simulator(
@@ -358,16 +358,16 @@ class Campaign:
         controller = self.controller_object() if controller is None else controller
         return self.simulator(spec).run(State(position=HOVER_M), self.duration_s, controller=controller, faults=spec.faults(self))
 
-    def _vehicle_parts(self, spec: RunSpec) -> tuple[Airframe, FixedPitchActuator, Drag]:
+    def _vehicle_parts(self, spec: RunDraw) -> tuple[Airframe, FixedPitchActuator, Drag]:
         return perturbed_vehicle(self.vehicle(), spec)
 
-    def _gust_profile(self, spec: RunSpec) -> list[tuple[float, tuple[float, float, float]]]:
+    def _gust_profile(self, spec: RunDraw) -> list[tuple[float, tuple[float, float, float]]]:
         return gust_profile(spec, self.gust_duration_s)
 
-    def _noise(self, spec: RunSpec) -> Noise | None:
+    def _noise(self, spec: RunDraw) -> Noise | None:
         return sensor_noise(self.noise_std, spec)
 
-    def _sensing(self, spec: RunSpec) -> Sensing | None:
+    def _sensing(self, spec: RunDraw) -> Sensing | None:
         return run_sensing(self.sensing, spec)
 
 
@@ -725,7 +725,14 @@ class CampaignResult(Tabular):
         )
 
 
-def iter_specs(campaign: Campaign) -> Iterator[RunSpec]:
+def __getattr__(name: str) -> Any:
+    if name == "RunSpec":  # the old name of the one draw record (studies.sampling)
+        warn("rotorfault.studies.campaign.RunSpec", "rotorfault.studies.sampling.RunDraw")
+        return RunDraw
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def iter_specs(campaign: Campaign) -> Iterator[RunDraw]:
     for i in range(campaign.runs):
         yield campaign.sample(i)
 
@@ -743,7 +750,7 @@ __all__ = [
     "CampaignResult",
     "FailureSet",
     "Rate",
-    "RunSpec",
+    "RunDraw",
     "campaign_schema",
     "campaign_table",
     "iter_specs",

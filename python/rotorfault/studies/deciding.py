@@ -75,7 +75,7 @@ from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sta
 from ..flight.outcomes import FLYING
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
-from .sampling import gust_profile, scaled_parts
+from .sampling import RunDraw, gust_profile
 
 #: The hold thresholds of the issue, and when the judging starts after the failure.
 HOLD_ALTITUDE_M = 1.0
@@ -388,7 +388,7 @@ class DecidingCampaign:
         from ..flight import Simulator
 
         sim = Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=drag, wind=(*d.wind_m_s, 0.0),
-                        wind_profile=gust_profile(_Gust(d.gust_m_s, d.gust_start_s), GUST_DURATION_S),  # type: ignore[arg-type]
+                        wind_profile=gust_profile(d, GUST_DURATION_S),
                         actuator=actuator)
         controller = CONTROLLERS[cell.controller].build(v, d.told_faults())
         return sim.run(_start(cell), d.duration_s, controller=controller, faults=d.faults()), d
@@ -419,7 +419,7 @@ class DecidingCampaign:
             return float(rng.uniform(1 - RELATIVE, 1 + RELATIVE))
 
         return RunDraw(
-            index=index, pattern=pattern, fault_time_s=t_fault, efficiency=efficiency,
+            index=index, seed=seed, failed=pattern, fault_times_s=(t_fault,) * len(pattern), efficiency=efficiency, ramp_s=0.0,
             wind_m_s=(wind * math.cos(wind_dir), wind * math.sin(wind_dir)),
             gust_m_s=(gust * math.cos(gust_dir), gust * math.sin(gust_dir)), gust_start_s=gust_start,
             mass_scale=scale(), inertia_scale=(scale(), scale(), scale()),
@@ -428,56 +428,10 @@ class DecidingCampaign:
         )
 
 
-@dataclass(frozen=True)
-class _Gust:
-    gust_m_s: tuple[float, float]
-    gust_start_s: float
-
-
 def _start(cell: Cell) -> State:
     """At the set point, level; moving north at 2 m/s in the forward-flight classes."""
     forward = FAULT_CLASSES[cell.fault_class].forward
     return State(position=HOVER_M, velocity=(FORWARD_SPEED_M_S, 0.0, 0.0) if forward else (0.0, 0.0, 0.0))
-
-
-@dataclass(frozen=True)
-class RunDraw:
-    """One run's draws (:meth:`DecidingCampaign.draw`)."""
-
-    index: int
-    pattern: tuple[int, ...]
-    fault_time_s: float
-    efficiency: float
-    wind_m_s: tuple[float, float]
-    gust_m_s: tuple[float, float]
-    gust_start_s: float
-    mass_scale: float
-    inertia_scale: tuple[float, float, float]
-    thrust_scale: tuple[float, ...]
-    drag_torque_scale: float
-    lag_scale: float
-    duration_s: float
-
-    def faults(self) -> list[RotorFault]:
-        """Each failed rotor drops from its thrust factor to ``factor * efficiency`` at once."""
-        return [RotorFault(r, self.fault_time_s, self.thrust_scale[r - 1] * self.efficiency) for r in self.pattern]
-
-    def told_faults(self) -> list[RotorFault]:
-        """What a controller told of the failure knows: the rotors, the time and the nominal
-        efficiency (not the run's thrust-coefficient error)."""
-        return [RotorFault(r, self.fault_time_s, self.efficiency) for r in self.pattern]
-
-    def vehicle_parts(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
-        return scaled_parts(v.airframe, v, self)
-
-    def failed_vehicle(self, v: CampaignVehicle) -> tuple[Airframe, FixedPitchActuator, Drag]:
-        """The run's vehicle after its failure (what it must survive): its perturbed parts with
-        each failed rotor at its thrust factor times the drawn efficiency (:meth:`faults`)."""
-        airframe, actuator, drag = self.vehicle_parts(v)
-        efficiency = np.array(self.thrust_scale, dtype=np.float64)
-        for f in self.faults():
-            efficiency[f.rotor - 1] = f.efficiency
-        return airframe.with_efficiency(efficiency), actuator, drag
 
 
 def hold_errors(t_s: Any, position_m: Any, fault_time_s: float, setpoint_m: Any = HOVER_M) -> tuple[float, float]:
@@ -605,9 +559,9 @@ def certify_rows(
                     raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}) is not a cell of the suite")
                 d = suite.draw(cell, int(key[2]))
                 recorded = (columns["failed_rotors"][k], float(columns["fault_time_s"][k]), float(columns["efficiency"][k]), float(columns["mass_scale"][k]))
-                if recorded != ("-".join(map(str, d.pattern)), d.fault_time_s, d.efficiency, d.mass_scale):
+                if recorded != ("-".join(map(str, d.failed)), d.fault_time_s, d.efficiency, d.mass_scale):
                     raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
-                                     f"recorded {recorded}, drawn {(d.pattern, d.fault_time_s, d.efficiency, d.mass_scale)}")
+                                     f"recorded {recorded}, drawn {(d.failed, d.fault_time_s, d.efficiency, d.mass_scale)}")
                 drawn[key] = (verdict_of or certify_run)(suite, cell, int(key[2]))
                 if bar is not None:
                     bar.advance(task)
@@ -686,9 +640,9 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         v = vehicle(cell.vehicle)
         d = suite.draw(cell, k % suite.runs)
         entry = CONTROLLERS[cell.controller]
-        note = entry.applies(v, d.pattern)
+        note = entry.applies(v, d.failed)
         row = {"vehicle": cell.vehicle, "fault_class": cell.fault_class, "controller": cell.controller, "index": d.index,
-               "failed_rotors": "-".join(map(str, d.pattern)), "fault_time_s": d.fault_time_s, "efficiency": d.efficiency,
+               "failed_rotors": "-".join(map(str, d.failed)), "fault_time_s": d.fault_time_s, "efficiency": d.efficiency,
                "wind_speed_m_s": math.hypot(*d.wind_m_s), "gust_peak_m_s": math.hypot(*d.gust_m_s), "mass_scale": d.mass_scale,
                "applicable": note is None, "note": note or "", "outcome": "not-flown", "holds": False,
                "certified": "", "certified_static_hover": "", "certify_note": ""}
@@ -715,7 +669,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         trim = trim_command(controller)
         config = _rfcore.SimulationConfig(
             dt_s=DT_S, substeps=SUBSTEPS, duration_s=d.duration_s, limits=limits, wind_m_s=(*d.wind_m_s, 0.0),
-            wind_profile=gust_profile(_Gust(d.gust_m_s, d.gust_start_s), GUST_DURATION_S),  # type: ignore[arg-type]
+            wind_profile=gust_profile(d, GUST_DURATION_S),
         )
         runs.append((len(rows) - 1, airframe._core, actuator, drag, controller.core(DT_S),
                      (x0._packed(), None if trim is None else [float(u) for u in trim], config), [f._packed() for f in faults]))

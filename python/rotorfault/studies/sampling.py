@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis.airframe import Airframe
+from .._util.deprecation import renamed_attribute, warn
 from ..flight import Drag, FixedPitchActuator, Noise, RotorFault, Sensing
 
 #: Steps of a ramped failure's staircase.
@@ -45,8 +46,25 @@ def rotor_count(airframe_name: str) -> int:
 
 
 @dataclass(frozen=True)
-class RunSpec:
-    """One run's draws (:func:`draw`, :meth:`Campaign.sample <rotorfault.studies.campaign.Campaign.sample>`)."""
+class RunDraw:
+    """One run's draws, the one record of every campaign: what run ``index`` flies (:func:`draw`
+    for a :class:`~rotorfault.studies.campaign.Campaign`,
+    :meth:`~rotorfault.studies.deciding.DecidingCampaign.draw` for the deciding campaign).
+
+    ``failed``: the rotors that fail (numbered from 1), in order, each at its time in
+    ``fault_times_s`` (s) to ``efficiency`` times its thrust factor (``thrust_scale``, one per
+    rotor), at once or over ``ramp_s`` (s); the wind (m/s, north and east), a ``1 - cos`` gust of
+    peak ``gust_m_s`` from ``gust_start_s`` (s); the vehicle's factors (mass, inertia, drag
+    torque, rotor lag); ``seed`` the campaign's seed, ``duration_s`` the run's length (s) and
+    ``noise_seed`` the run's sensor-noise seed (None: the campaign draws no noise).
+
+    Examples:
+
+        >>> from rotorfault.studies import Campaign
+        >>> d = Campaign(runs=4, seed=1).sample(2)
+        >>> d.index, len(d.failed) == len(d.fault_times_s), d.duration_s
+        (2, True, 30.0)
+    """
 
     index: int
     seed: int
@@ -62,7 +80,15 @@ class RunSpec:
     thrust_scale: tuple[float, ...]
     drag_torque_scale: float
     lag_scale: float
-    noise_seed: int
+    duration_s: float
+    noise_seed: int | None = None
+
+    @property
+    def fault_time_s(self) -> float:
+        """The first failure's time, s."""
+        return self.fault_times_s[0]
+
+    pattern = renamed_attribute("pattern", "failed")
 
     def faults(self, campaign: Any = None) -> list[RotorFault]:
         """The fault schedule: each failed rotor drops from its thrust factor to ``factor *
@@ -80,8 +106,33 @@ class RunSpec:
                 out.append(RotorFault(rotor, t + self.ramp_s * k / RAMP_STEPS, level))
         return out
 
+    def told_faults(self) -> list[RotorFault]:
+        """What a controller told of the failure knows: the rotors, the times and the nominal
+        efficiency (not the run's thrust-coefficient error)."""
+        return [RotorFault(r, t, self.efficiency) for r, t in zip(self.failed, self.fault_times_s)]
 
-def draw(campaign: Any, index: int, rotors: int) -> RunSpec:
+    def vehicle_parts(self, vehicle: Any) -> tuple[Airframe, FixedPitchActuator, Drag]:
+        """``vehicle`` (its ``airframe`` and nominal lag and drags) with this run's factors."""
+        return scaled_parts(vehicle.airframe, vehicle, self)
+
+    def failed_vehicle(self, vehicle: Any) -> tuple[Airframe, FixedPitchActuator, Drag]:
+        """The run's vehicle after its failure (what it must survive): its perturbed parts with
+        each failed rotor at its thrust factor times the drawn efficiency (:meth:`faults`)."""
+        airframe, actuator, drag = self.vehicle_parts(vehicle)
+        efficiency = np.array(self.thrust_scale, dtype=np.float64)
+        for f in self.faults():
+            efficiency[f.rotor - 1] = f.efficiency
+        return airframe.with_efficiency(efficiency), actuator, drag
+
+
+def __getattr__(name: str) -> Any:
+    if name == "RunSpec":  # the campaign's old name of the one draw record
+        warn("rotorfault.studies.sampling.RunSpec", "rotorfault.studies.sampling.RunDraw")
+        return RunDraw
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def draw(campaign: Any, index: int, rotors: int) -> RunDraw:
     """Run ``index``'s draws from ``campaign`` (a :class:`~rotorfault.studies.campaign.Campaign`)
     for a vehicle of ``rotors`` rotors: the same whatever else is drawn (one generator per
     run, seeded by ``(seed, index)``)."""
@@ -109,7 +160,7 @@ def draw(campaign: Any, index: int, rotors: int) -> RunSpec:
     def scale(rel: float) -> float:
         return float(rng.uniform(1 - rel, 1 + rel))
 
-    return RunSpec(
+    return RunDraw(
         index=index,
         seed=campaign.seed,
         failed=pattern,
@@ -124,11 +175,12 @@ def draw(campaign: Any, index: int, rotors: int) -> RunSpec:
         thrust_scale=tuple(float(v) for v in rng.uniform(1 - campaign.thrust_rel, 1.0, size=m)),
         drag_torque_scale=scale(campaign.drag_torque_rel),
         lag_scale=scale(campaign.lag_rel),
+        duration_s=float(campaign.duration_s),
         noise_seed=int(rng.integers(2**63)),
     )
 
 
-def perturbed_vehicle(vehicle: Any, spec: RunSpec) -> tuple[Airframe, FixedPitchActuator, Drag]:
+def perturbed_vehicle(vehicle: Any, spec: RunDraw) -> tuple[Airframe, FixedPitchActuator, Drag]:
     """The vehicle run ``spec`` flies: ``vehicle`` (an :class:`~rotorfault.control.ke.FtcPreset`)
     with the run's mass, inertia, drag-torque, thrust and lag factors."""
     return scaled_parts(_airframe(vehicle.airframe_name), vehicle, spec)
@@ -156,7 +208,7 @@ def scaled_parts(a: Airframe, nominal: Any, draws: Any) -> tuple[Airframe, Fixed
     return airframe, actuator, drag
 
 
-def gust_profile(spec: RunSpec, gust_duration_s: float) -> list[tuple[float, tuple[float, float, float]]]:
+def gust_profile(spec: RunDraw, gust_duration_s: float) -> list[tuple[float, tuple[float, float, float]]]:
     """The run's ``1 - cos`` gust as a wind profile of :data:`GUST_POINTS` points (none without a gust)."""
     if spec.gust_m_s == (0.0, 0.0):
         return []
@@ -168,16 +220,22 @@ def gust_profile(spec: RunSpec, gust_duration_s: float) -> list[tuple[float, tup
     return points
 
 
-def sensor_noise(noise_std: tuple[float, float, float, float] | None, spec: RunSpec) -> Noise | None:
+def sensor_noise(noise_std: tuple[float, float, float, float] | None, spec: RunDraw) -> Noise | None:
     """The run's sensor noise (its own seed), or None without ``noise_std``."""
-    return None if noise_std is None else Noise(std=noise_std, seed=spec.noise_seed)
+    return None if noise_std is None else Noise(std=noise_std, seed=_noise_seed(spec))
 
 
-def run_sensing(sensing: Sensing | None, spec: RunSpec) -> Sensing | None:
+def run_sensing(sensing: Sensing | None, spec: RunDraw) -> Sensing | None:
     """The run's sensing: the campaign's with its seed plus the run's drawn seed (mod 2**64), or
     None without sensing."""
-    return None if sensing is None else sensing.replace(seed=(sensing.seed + spec.noise_seed) % 2**64)
+    return None if sensing is None else sensing.replace(seed=(sensing.seed + _noise_seed(spec)) % 2**64)
 
 
-__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunSpec", "draw", "gust_profile", "perturbed_vehicle",
+def _noise_seed(spec: RunDraw) -> int:
+    if spec.noise_seed is None:
+        raise ValueError(f"noise_seed: run {spec.index} drew no sensor-noise seed (its campaign flies without noise)")
+    return spec.noise_seed
+
+
+__all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunDraw", "draw", "gust_profile", "perturbed_vehicle",
            "rotor_count", "run_sensing", "scaled_parts", "sensor_noise"]

@@ -210,25 +210,44 @@ impl HoverPoint {
         }
     }
 
+    /// Every hover point, in code order (parsers look names and codes up here).
+    const ALL: [HoverPoint; 4] = [
+        HoverPoint::Inside,
+        HoverPoint::OnBoundary,
+        HoverPoint::Outside,
+        HoverPoint::RankDeficient,
+    ];
+
     /// Inverse of [`HoverPoint::name`].
     pub fn parse(field: &str, text: &str) -> Result<Self> {
-        [
-            HoverPoint::Inside,
-            HoverPoint::OnBoundary,
-            HoverPoint::Outside,
-            HoverPoint::RankDeficient,
-        ]
-        .into_iter()
-        .find(|h| h.name() == text)
-        .ok_or_else(|| {
-            RfError::invalid(
-                field,
-                format!(
-                    "must be \"inside\", \"boundary\", \"outside\" or \"rank-deficient\", \
+        Self::ALL
+            .into_iter()
+            .find(|h| h.name() == text)
+            .ok_or_else(|| {
+                RfError::invalid(
+                    field,
+                    format!(
+                        "must be \"inside\", \"boundary\", \"outside\" or \"rank-deficient\", \
                      got {text:?}"
-                ),
-            )
-        })
+                    ),
+                )
+            })
+    }
+
+    /// The hover point of a code (`code`'s inverse); any other value is refused, naming `field`.
+    pub fn from_code(field: &str, code: i64) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|h| i64::from(h.code()) == code)
+            .ok_or_else(|| {
+                RfError::invalid(
+                    field,
+                    format!(
+                        "must be a hover code (1 inside, 0 boundary, -1 outside, \
+                     -2 rank-deficient), got {code}"
+                    ),
+                )
+            })
     }
 
     /// `1` inside, `0` on the boundary, `-1` outside, `-2` rank deficient (a compact column).
