@@ -396,6 +396,7 @@ class RelaxedHoverOuterLoop:
         velocity_gain_s: float | None = None,
         max_tilt_rad: float | None = None,
         integral_gain_s3: float | None = None,
+        altitude_integral_gain_s: float | None = None,
     ) -> RelaxedHoverOuterLoop: ...
     FIELDS: ClassVar[list[str]]
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
@@ -407,6 +408,8 @@ class RelaxedHoverOuterLoop:
     def max_tilt_rad(self) -> float: ...
     @property
     def integral_gain_s3(self) -> float: ...
+    @property
+    def altitude_integral_gain_s(self) -> float: ...
 
 @final
 class RelaxedHoverFeedback:

@@ -8,7 +8,9 @@
 
 use nalgebra::Vector3;
 
-use rfcore::control::indi::{DetectedFailure, IndiController, IndiGains, IndiStep, Setpoint};
+use rfcore::control::indi::{
+    DetectedFailure, IndiController, IndiGains, IndiStep, Setpoint, YawMode,
+};
 use rfcore::control::Controller;
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag};
 use rfcore::flight::simulation::{simulate, RotorFault, SimulationConfig, Trajectory};
@@ -362,6 +364,33 @@ fn the_mismatch_correction_removes_the_offset_of_an_undetected_partial_loss() {
         with.holds() && with.window_horizontal_m < 0.01,
         "{}",
         describe(&case, &with)
+    );
+}
+
+/// A partial loss the controller is not told of, on a rotor whose loss takes the yaw authority
+/// (hexa-ppnnpn, rotor 5 at 5 %): holding yaw (`YawMode::Hold`, the law before the saturation
+/// priorities) saturates the rotors and gives up thrust, and the vehicle sinks; with the
+/// priorities (`YawMode::Auto`: thrust and attitude first once the rotors saturate) it spins and holds.
+#[test]
+fn saturated_rotors_give_up_yaw_before_thrust_on_an_undetected_partial_loss() {
+    let case = Case {
+        efficiency: 0.05,
+        told_after_s: None,
+        ..Case::total("hexa-ppnnpn", &[4], 0.0)
+    };
+    let held_yaw = fly_with(
+        &case,
+        IndiGains {
+            yaw: YawMode::Hold,
+            ..IndiGains::default()
+        },
+    );
+    assert!(!held_yaw.holds(), "{}", describe(&case, &held_yaw));
+    let prioritised = fly(&case);
+    assert!(
+        prioritised.holds() && prioritised.spin_rad_s > 5.0,
+        "{}",
+        describe(&case, &prioritised)
     );
 }
 

@@ -11,6 +11,9 @@ its equations and decisions are documented in ``crates/rfcore/src/control/indi/m
   allocation over the remaining rotors.
 - **An active controller**: it is told which rotors failed and when (``failures``: the time a
   detector reports it). Partial losses it is not told of reach it through the measurements.
+- Priorities once the rotors saturate (``yaw="auto"``, the default): thrust and reduced attitude
+  first, yaw with what is left (Sun et al.), so a nearly dead rotor it is not told of makes it spin
+  rather than sink; ``yaw="hold"`` keeps yaw's weight (the law before that rule).
 - With two opposing rotors of a quadrotor gone, only one attitude output can be controlled; Sun's
   output redefinition keeps the rest (the zero dynamics) stable when ``J_z > J_xy``
   (:meth:`IndiController.failure_modes` reports their damping).

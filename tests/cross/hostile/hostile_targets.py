@@ -670,7 +670,8 @@ def _newer_targets(t: dict[str, Target]) -> None:
         _check_relaxed_hover)
     t["RelaxedHoverOuterLoop"] = Target(calls(control.RelaxedHoverOuterLoop, position_gain_s2=hostile(positive(0.1, 5)),
                                               velocity_gain_s=hostile(positive(0.1, 5)), max_tilt_rad=hostile(positive(0.05, 1.5)),
-                                              integral_gain_s3=hostile(positive(0.01, 0.2))), lambda r, c: None)
+                                              integral_gain_s3=hostile(positive(0.01, 0.2)),
+                                              altitude_integral_gain_s=hostile(positive(0.01, 1.0))), lambda r, c: None)
     t["RelaxedHoverFeedback"] = Target(st.builds(
         lambda position, drag: Call(lambda p, d: rf.RelaxedHoverFeedback(*_spinning(), position=p, linear_drag_n_s_m=d), (position, drag), {},
                                     frozenset({"position", "linear_drag_n_s_m"})),

@@ -27,17 +27,24 @@ pub struct PyRelaxedHoverOuterLoop {
 }
 
 impl PyRelaxedHoverOuterLoop {
-    const FIELDS: &'static [&'static str] = &["position_gain_s2", "velocity_gain_s", "max_tilt_rad", "integral_gain_s3"];
+    const FIELDS: &'static [&'static str] = &[
+        "position_gain_s2",
+        "velocity_gain_s",
+        "max_tilt_rad",
+        "integral_gain_s3",
+        "altitude_integral_gain_s",
+    ];
 }
 
 crate::convert::pickle_protocol!(PyRelaxedHoverOuterLoop, {
     #[new]
-    #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None, integral_gain_s3=None))]
+    #[pyo3(signature = (*, position_gain_s2=None, velocity_gain_s=None, max_tilt_rad=None, integral_gain_s3=None, altitude_integral_gain_s=None))]
     fn new(
         position_gain_s2: Option<f64>,
         velocity_gain_s: Option<f64>,
         max_tilt_rad: Option<f64>,
         integral_gain_s3: Option<f64>,
+        altitude_integral_gain_s: Option<f64>,
     ) -> PyResult<Self> {
         let d = RelaxedHoverOuterLoop::default();
         let inner = RelaxedHoverOuterLoop {
@@ -45,6 +52,8 @@ crate::convert::pickle_protocol!(PyRelaxedHoverOuterLoop, {
             velocity_gain_s: velocity_gain_s.unwrap_or(d.velocity_gain_s),
             max_tilt_rad: max_tilt_rad.unwrap_or(d.max_tilt_rad),
             integral_gain_s3: integral_gain_s3.unwrap_or(d.integral_gain_s3),
+            altitude_integral_gain_s: altitude_integral_gain_s
+                .unwrap_or(d.altitude_integral_gain_s),
         };
         inner.check().map_err(to_py_err)?;
         Ok(PyRelaxedHoverOuterLoop { inner })
@@ -65,6 +74,11 @@ crate::convert::pickle_protocol!(PyRelaxedHoverOuterLoop, {
     #[getter]
     fn integral_gain_s3(&self) -> f64 {
         self.inner.integral_gain_s3
+    }
+    /// `k_z` on the altitude error, 1/s (0: no integral action).
+    #[getter]
+    fn altitude_integral_gain_s(&self) -> f64 {
+        self.inner.altitude_integral_gain_s
     }
 });
 
@@ -130,7 +144,10 @@ impl PyRelaxedHoverFeedback {
                 )))
             }
         };
-        Ok(PyRelaxedHoverFeedback { inner, before_failure })
+        Ok(PyRelaxedHoverFeedback {
+            inner,
+            before_failure,
+        })
     }
     /// When the healthy-vehicle design hands over, s (`None`: no switch).
     #[getter]

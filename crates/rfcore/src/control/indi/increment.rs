@@ -9,12 +9,15 @@ use crate::allocation::{AllocationProblem, MAX_ACTUATORS};
 /// `g`, `k = lower.len()`), the smallest `dT` among equal optima. When the weighted rows have full
 /// row rank and no more rows than columns, the unconstrained optimum is the minimum-norm solution
 /// `G_w^T (G_w G_w^T)^-1 b_w` (four rows at most: a Cholesky of at most 4 x 4); inside the bounds it
-/// is also the bounded optimum (every KKT multiplier zero) and is returned as is. Otherwise, the
-/// active-set solver of [`crate::allocation`] (warm-started from `active`) decides. NaN when the
-/// problem is not finite (the simulator then reports a non-finite command).
+/// is also the bounded optimum (every KKT multiplier zero) and is returned as is. Otherwise (the
+/// rotors saturate), the active-set solver of [`crate::allocation`] (warm-started from `active`)
+/// decides with `saturated_weights` (the priorities once the rotors saturate: yaw after thrust
+/// and attitude, module docs step 5). NaN when the problem is not finite (the simulator then
+/// reports a non-finite command).
 pub(super) fn incremental_allocation(
     g: &[[f64; MAX_ACTUATORS]; 4],
     weights: &[f64; 4],
+    saturated_weights: &[f64; 4],
     b: &[f64; 4],
     lower: &[f64],
     upper: &[f64],
@@ -34,7 +37,7 @@ pub(super) fn incremental_allocation(
         }
     }
     let matrix = DMatrix::from_fn(4, k, |r, c| g[r][c]);
-    if let Ok(problem) = AllocationProblem::new(matrix, weights, lower, upper) {
+    if let Ok(problem) = AllocationProblem::new(matrix, saturated_weights, lower, upper) {
         ActiveSetSolver::new(&problem).solve_unchecked(b, active, &mut out[..k]);
     }
     out
@@ -185,7 +188,7 @@ mod tests {
             let (g, b) = random_problem(&mut rng, k);
             let (lo, hi) = (-0.5, 0.7);
             let mut active = ActiveSet::cold(k);
-            let x = incremental_allocation(&g, &w, &b, &vec![lo; k], &vec![hi; k], &mut active);
+            let x = incremental_allocation(&g, &w, &w, &b, &vec![lo; k], &vec![hi; k], &mut active);
             assert!(
                 x[..k].iter().all(|v| (lo..=hi).contains(v)),
                 "{trial}: {:?}",
@@ -204,6 +207,7 @@ mod tests {
         let mut active = ActiveSet::cold(3);
         let x = incremental_allocation(
             &g,
+            &[1.0; 4],
             &[1.0; 4],
             &[f64::NAN; 4],
             &[-1.0; 3],

@@ -37,6 +37,13 @@
 //!    among equal optima (Sun's pseudo-inverse): the minimum-norm solution when it lies within the
 //!    bounds, else the exact active-set solver of [`crate::allocation`], warm-started. The command
 //!    is `T = base + dT`, the failed rotors 0.
+//!    **Priorities when the rotors saturate** (the minimum-norm solution leaves the bounds): with
+//!    [`YawMode::Auto`], the yaw row then takes its given-up weight (below): thrust and reduced
+//!    attitude first, yaw with what is left, as Sun et al. prioritise it. A rotor that lost most
+//!    of its thrust without the controller being told (a partial loss) otherwise has the law hold
+//!    yaw at the cost of thrust: hexa-ppnnpn with rotor 5 at 5 % sank and crashed; with the
+//!    priorities it gives up yaw, spins and holds (`tests/indi.rs`). [`YawMode::Hold`] keeps
+//!    `weights` when saturated (the law before this rule).
 //!
 //! # The incremental base
 //! `base = T_f + d`: `T_f` the filtered thrusts the rotors produce (in step with `omega'_f`), and
@@ -573,6 +580,7 @@ impl IndiController {
         let increment = incremental_allocation(
             &g_rows,
             &mode.weights,
+            &mode.saturated_weights,
             &b,
             &lower[..k],
             &upper[..k],
@@ -755,8 +763,10 @@ mod tests {
             })
             .collect();
         let times: Vec<f64> = (0..300).map(|k| k as f64 * DT).collect();
-        let first = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
-        let second = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+        let first =
+            crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+        let second =
+            crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
         assert_eq!(first, second);
         assert!(first.iter().all(|v| v.is_finite()));
     }

@@ -45,6 +45,9 @@ pub(super) struct Mode {
     /// Thrust-row entry of each healthy rotor (N per N).
     pub(super) thrust: Vec<f64>,
     pub(super) weights: [f64; 4],
+    /// The weights once the rotors saturate: yaw at its given-up weight when [`YawMode::Auto`]
+    /// holds it (thrust and reduced attitude first, module docs step 5); `weights` otherwise.
+    pub(super) saturated_weights: [f64; 4],
     /// Rows of the attitude outputs after the redefinition (identity, or `c` and `c_perp`).
     pub(super) rotation: [[f64; 2]; 2],
     pub(super) primary_axis: Vector3<f64>,
@@ -236,14 +239,19 @@ impl Mode {
         if single_axis {
             weights[2] = 0.0;
         }
+        // Only rotors beyond those the thrust and attitude rows use have authority to spare.
+        let used = if single_axis { 2 } else { 3 };
+        let given_up_weight = if healthy.len() > used {
+            gains.given_up_yaw_weight
+        } else {
+            0.0
+        };
         if !yaw_controlled {
-            // Only rotors beyond those the thrust and attitude rows use have authority to spare.
-            let used = if single_axis { 2 } else { 3 };
-            weights[3] = if healthy.len() > used {
-                gains.given_up_yaw_weight
-            } else {
-                0.0
-            };
+            weights[3] = given_up_weight;
+        }
+        let mut saturated_weights = weights;
+        if gains.yaw == YawMode::Auto {
+            saturated_weights[3] = saturated_weights[3].min(given_up_weight);
         }
         Ok(Mode {
             info: FailureMode {
@@ -259,6 +267,7 @@ impl Mode {
             angular,
             thrust,
             weights,
+            saturated_weights,
             rotation,
             primary_axis,
             lower,
