@@ -26,7 +26,7 @@ use rfcore::error::RfError;
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{count, detached, matrix, pickle_protocol, slice1, slice2, to_py_err};
+use crate::convert::{count, detached, kept, matrix, pickle_protocol, slice1, slice2, to_py_err};
 
 type BoundsPair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 
@@ -204,19 +204,6 @@ struct Arrays {
     commands: OnceLock<Py<PyAny>>,
     achieved: OnceLock<Py<PyAny>>,
     virtual_control: OnceLock<Py<PyAny>>,
-}
-
-/// `cell`'s array, made by `make` on the first read.
-fn kept<'py>(
-    py: Python<'py>,
-    cell: &OnceLock<Py<PyAny>>,
-    make: impl FnOnce() -> PyResult<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyAny>> {
-    if let Some(array) = cell.get() {
-        return Ok(array.bind(py).clone());
-    }
-    let array = make()?.unbind();
-    Ok(cell.get_or_init(|| array).bind(py).clone())
 }
 
 #[pymethods]

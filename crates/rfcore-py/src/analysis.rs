@@ -22,7 +22,7 @@ use rfcore::analysis::{
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, pickle_protocol, slice1, slice2, to_py_err, value_protocol};
+use crate::convert::{detached, kept, pickle_protocol, slice1, slice2, to_py_err, value_protocol};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
 fn analysis(
@@ -337,21 +337,15 @@ pickle_protocol!(PyAcaiBatch, {
         Ok(PyAcaiBatch::from_core(AcaiBatch { acai, hover }, formula))
     }
     #[getter]
-    fn acai<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.acai_array
-            .get_or_init(|| PyArray1::from_slice(py, &self.inner.acai).unbind())
-            .bind(py)
-            .clone()
+    fn acai<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        kept(py, &self.acai_array, || Ok(PyArray1::from_slice(py, &self.inner.acai)))
     }
     #[getter]
-    fn hover_code<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i8>> {
-        self.hover_code_array
-            .get_or_init(|| {
-                let codes: Vec<i8> = self.inner.hover.iter().map(|h| h.code()).collect();
-                codes.into_pyarray(py).unbind()
-            })
-            .bind(py)
-            .clone()
+    fn hover_code<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i8>>> {
+        kept(py, &self.hover_code_array, || {
+            let codes: Vec<i8> = self.inner.hover.iter().map(|h| h.code()).collect();
+            Ok(codes.into_pyarray(py))
+        })
     }
     /// The formula of every value (`eq13` or `facet-margin`).
     #[getter]

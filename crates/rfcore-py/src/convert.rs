@@ -429,3 +429,18 @@ pub(crate) fn deprecated_positional<'py>(
     }
     Ok(())
 }
+
+/// `cell`'s object, made by `make` on the first read and kept. Made outside the lock: making a
+/// Python object can run the garbage collector and release the GIL, and a second thread waiting
+/// on the lock while holding the GIL would deadlock (pyo3's warning about `OnceLock`).
+pub fn kept<'py, T>(
+    py: Python<'py>,
+    cell: &OnceLock<Py<T>>,
+    make: impl FnOnce() -> PyResult<Bound<'py, T>>,
+) -> PyResult<Bound<'py, T>> {
+    if let Some(object) = cell.get() {
+        return Ok(object.bind(py).clone());
+    }
+    let object = make()?.unbind();
+    Ok(cell.get_or_init(|| object).bind(py).clone())
+}
