@@ -8,7 +8,8 @@ use crate::error::{require_finite, Result, RfError};
 pub enum YawMode {
     /// Hold it while the remaining rotors have the yaw authority ([`IndiGains::min_yaw_authority`]),
     /// give it up otherwise; while held, it yields to thrust and attitude once the rotors saturate
-    /// (its weight drops to [`IndiGains::given_up_yaw_weight`], module docs step 5).
+    /// or cannot meet every weighted axis (its weight drops to [`IndiGains::given_up_yaw_weight`],
+    /// module docs step 5).
     #[default]
     Auto,
     /// Always hold the yaw rate (with the weight `weights[3]`).

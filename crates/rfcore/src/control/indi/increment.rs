@@ -10,9 +10,10 @@ use crate::allocation::{AllocationProblem, MAX_ACTUATORS};
 /// row rank and no more rows than columns, the unconstrained optimum is the minimum-norm solution
 /// `G_w^T (G_w G_w^T)^-1 b_w` (four rows at most: a Cholesky of at most 4 x 4); inside the bounds it
 /// is also the bounded optimum (every KKT multiplier zero) and is returned as is. Otherwise (the
-/// rotors saturate), the active-set solver of [`crate::allocation`] (warm-started from `active`)
-/// decides with `saturated_weights` (the priorities once the rotors saturate: yaw after thrust
-/// and attitude, module docs step 5). NaN when the problem is not finite (the simulator then
+/// rotors saturate, or the weighted rows outnumber the rotors or are rank deficient, so the rotors
+/// cannot meet every weighted axis either), the active-set solver of [`crate::allocation`]
+/// (warm-started from `active`) decides with `saturated_weights` (the priorities once not every
+/// axis can be met: yaw after thrust and attitude, module docs step 5). NaN when the problem is not finite (the simulator then
 /// reports a non-finite command).
 pub(super) fn incremental_allocation(
     g: &[[f64; MAX_ACTUATORS]; 4],
