@@ -319,9 +319,10 @@ fn solutions_of(
 
 /// An upper bound on the thrust margin of any solution of the branch that idles `idle` (every
 /// thrust >= 0): the rotors that carry, `C` (some of the branch's free rotors, the rest at ~0),
-/// lift `n . sum a_i f_i = m g - n . F_idle >= m g - |F_idle|` with `n . a_i <= 1`, so
-/// `sum_C f_i >= m g - |F_idle|` (C empty only when the idle rotors carry it: not bounded); with `f_i <= f_max,i - t`, `t <= (sum_C f_max,i - m g +
-/// |F_idle|) / |C|`, the largest over the subsets `C` (the bounds check's slack added).
+/// lift `n . sum a_i f_i = m g - n . F_idle >= m g - |F_idle|` with `n . a_i <= |a_i| <= r`, so
+/// `sum_C f_i >= (m g - |F_idle|) / r` (C empty only when the idle rotors carry it: not bounded);
+/// with `f_i <= f_max,i - t`, `t <= (sum_C f_max,i - (m g - |F_idle|) / r) / |C|`, the largest
+/// over the subsets `C` (the bounds check's slack added).
 fn margin_bound(model: &Model, idle: &[usize]) -> f64 {
     let free: Vec<usize> = model
         .working
@@ -330,7 +331,9 @@ fn margin_bound(model: &Model, idle: &[usize]) -> f64 {
         .filter(|i| !idle.contains(i))
         .collect();
     let idle_force: V3 = idle.iter().map(|&i| model.axis[i] * model.lower[i]).sum();
-    let need = model.weight_n() - idle_force.norm();
+    // `n . a_i <= |a_i|`: the airframe check lets a thrust axis be 1e-6 longer than a unit vector.
+    let reach = free.iter().map(|&i| model.axis[i].norm()).fold(1.0, f64::max);
+    let need = (model.weight_n() - idle_force.norm()) / reach;
     let slack = BOUND_TOLERANCE * bound_scale(model) * (model.rotor_count() as f64 + 1.0);
     if need <= slack || free.len() > 20 {
         // The idle rotors alone could carry it (C empty), or too many subsets: search it.
