@@ -302,7 +302,7 @@ def test_the_campaigns_relaxed_hover_outer_loop_holds_a_total_loss_in_wind_the_d
     def window(outer: rf.control.RelaxedHoverOuterLoop) -> tuple[float, float]:
         monkeypatch.setattr(D, "RELAXED_HOVER_OUTER_LOOP", outer)
         trajectory, d = suite.refly(cell, 6)
-        assert (d.pattern, d.efficiency) == ((3,), 0.0)
+        assert (d.failed, d.efficiency) == ((3,), 0.0)
         assert not trajectory.events
         return D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
 
@@ -322,7 +322,7 @@ def test_the_campaigns_indi_gains_hold_two_opposing_rotors_lost_in_wind_suns_til
 
     def window() -> tuple[float, float]:
         trajectory, d = suite.refly(cell, 42)
-        assert d.efficiency == 0.0 and len(d.pattern) == 2 and math.hypot(*d.wind_m_s) > 4.0
+        assert d.efficiency == 0.0 and len(d.failed) == 2 and math.hypot(*d.wind_m_s) > 4.0
         assert not trajectory.events
         return D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
 
