@@ -137,8 +137,9 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
 @click.option("--force", is_flag=True, help="Replace an existing JSON file.")
 @click.option("--spinning", is_flag=True,
               help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors) and whether "
-                   "the spin can be entered from hover; --require then accepts a case that hovers statically or by a spin "
-                   "not excluded from hover.")
+                   "the spin can be entered from hover; --require then accepts a case that hovers statically with all axes "
+                   "or by a steady spin not excluded from hover (a spin at the search limit is steady only with "
+                   "--rotational-drag > 0).")
 @click.option("--rotational-drag", "rotational_drag", type=float, default=None,
               help="With --spinning: the vehicle's rotational damping k_r (N m s), which sets the spin rate (default 0).")
 @output_options
@@ -196,9 +197,7 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
             write_text(json_path, text)
     if failing:
         if spinning:
-            listed = "; ".join(rotor_labels(c.failed) + (" (spinning solution exists, not reachable from hover)"
-                                                         if c.relaxed_hover is not None and c.relaxed_hover.hover == "spinning" else "")
-                               for c in failing)
+            listed = "; ".join(rotor_labels(c.failed) + _spin_failure_reason(c.relaxed_hover) for c in failing)
             click.echo(f"certificate: FAILED: --require {required} --spinning: cannot hover nor enter a spin from hover with rotor(s) "
                        f"{listed} failed", err=True)
         else:
@@ -206,3 +205,12 @@ def certify(airframe: str, required: str, required_axes: str, json_path: str | N
             click.echo(f"certificate: FAILED: --require {required} --require-axes {','.join(axes)}: cannot hover with {named} kept "
                        f"with rotor(s) {listed} failed", err=True)
         sys.exit(EXIT_REQUIREMENT)
+
+
+def _spin_failure_reason(verdict: Any) -> str:
+    """Why a failing case's spinning solution does not count (certify's rule, ``survives``)."""
+    if verdict is None or verdict.hover != "spinning":
+        return ""
+    if not verdict.steady:
+        return " (spin at the search's rate limit without rotational damping: no steady spin)"
+    return " (spinning solution exists, not reachable from hover)"

@@ -124,8 +124,9 @@ class AgreementCase:
 
     @property
     def survivable(self) -> bool:
-        """Certify's answer: static hover, or a relaxed hover a linear feedback can hold that is
-        not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`)."""
+        """Certify's answer (:func:`rotorfault.studies.certify.survives`): static hover with all
+        four axes, or a steady relaxed hover a linear feedback can hold that is not excluded from
+        hover (:func:`rotorfault.analysis.entry_from_hover`)."""
         return survives(self.hover, self.spinning)
 
     @property

@@ -230,8 +230,10 @@ class Certificate(Tabular):
         return {"kind": "certificate", "airframe": self.airframe, "rotor_count": self.rotor_count, "fully_actuated": self.fully_actuated, "formula": FORMULA}
 
     def failing_spinning(self, required: str) -> list[CertificateCase]:
-        """The cases up to the ``required`` class that cannot hover statically nor by a spin
-        entered from hover (a spinning solution that is not reachable from hover fails;
+        """The cases up to the ``required`` class that certify does not call survivable
+        (:func:`survives`: neither a static hover with all four axes nor a steady spin entered from
+        hover; a spinning solution not reachable from hover, or at the search's spin-rate limit
+        without rotational damping, fails;
         ``ValueError`` if the certificate was made without ``spinning=True``)."""
         k = FAILURE_CLASSES[required]
         cases = [c for c in self.cases if len(c.failed) <= k]
@@ -338,8 +340,8 @@ def _relaxed_hover_verdict(
 
 #: How a vehicle as it is (its efficiencies: a failed rotor's drawn share of thrust) survives:
 #: ``static-hover`` (hovers at rest: with all four axes, or its best relaxed hover is static),
-#: ``spinning`` (a relaxed hover a linear feedback can hold, below the search's spin-rate limit, its
-#: entry from hover not excluded) or ``not-survivable`` (a static hover that only gives up yaw
+#: ``spinning`` (a steady relaxed hover a linear feedback can hold, its entry from hover not
+#: excluded; a spin at the search's limit is steady only with rotational damping) or ``not-survivable`` (a static hover that only gives up yaw
 #: included: :func:`survives` says why).
 Survival = Literal["static-hover", "spinning", "not-survivable"]
 
@@ -371,8 +373,8 @@ def certify_survival(
     rotor's efficiency; a total one: 0), not a list of failure combinations: static hover with
     all four axes (Du's ACAI facet margin > 0) is ``static-hover`` and ends there; otherwise the
     best relaxed hover (as :func:`certify` with ``spinning=True`` computes it, same ``settings``,
-    ``drag``, ``actuator``) decides: static, or spinning below the search's spin-rate limit and
-    not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`); failing both,
+    ``drag``, ``actuator``) decides: static, or a steady spin (with rotational damping, or below the
+    search's spin-rate limit without it) not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`); failing both,
     ``not-survivable``, also where a static hover gives up yaw (``hover`` says ``give-up-yaw``):
     the yaw moment left settles only in a steady spin, which the search finds where one exists.
     The survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
@@ -408,8 +410,8 @@ def certify_survival(
 def survives(hover: Hover | str, relaxed_hover: RelaxedHoverVerdict | None) -> bool:
     """Certify's one rule for "survivable": a static hover with all four axes (``hover ==
     "all-axes"``), or a relaxed hover a linear feedback can hold that is a steady state and whose
-    entry from hover is not excluded (:attr:`RelaxedHoverVerdict.survivable`: static, or a spin
-    below the search's spin-rate limit).
+    entry from hover is not excluded (:attr:`RelaxedHoverVerdict.survivable`: static, or a steady
+    spin: with rotational damping, or below the search's spin-rate limit without it).
 
     A static hover that only exists by giving up yaw (``"give-up-yaw"``) is not survivable by
     itself: it leaves a yaw moment ``tau_z`` that nothing balances at rest, so the yaw rate grows
