@@ -132,6 +132,17 @@ def test_the_old_names_of_the_one_draw_record_warn() -> None:
     with pytest.warns(DeprecationWarning, match=r"RunDraw\.pattern is deprecated.*RunDraw\.failed"):
         assert d.pattern == d.failed
     assert isinstance(campaign.Campaign(runs=2).sample(0), sampling.RunDraw)
+    # A RunSpec pickled before the one record had no duration: it loads with NaN, and its repr and
+    # == work (they raised AttributeError).
+    import math
+    import pickle
+
+    spec = campaign.Campaign(runs=2).sample(0)
+    assert pickle.loads(pickle.dumps(spec)) == spec
+    state = {k: v for k, v in vars(spec).items() if k != "duration_s"}
+    old = sampling.RunDraw.__new__(sampling.RunDraw)
+    old.__setstate__(state)
+    assert math.isnan(old.duration_s) and old != spec and "duration_s=nan" in repr(old)
 
 
 def test_the_lanzon_report_names_moved_to_its_report_module_warn() -> None:

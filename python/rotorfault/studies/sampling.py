@@ -90,6 +90,12 @@ class RunDraw:
 
     pattern = renamed_attribute("pattern", "failed")
 
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # A RunSpec pickled before the one draw record had no duration (the campaign's was not
+        # kept): NaN says so instead of an object whose repr and == raise.
+        state = {"duration_s": math.nan, "noise_seed": None, **state}
+        object.__setattr__(self, "__dict__", state)
+
     def faults(self, campaign: Any = None) -> list[RotorFault]:
         """The fault schedule: each failed rotor drops from its thrust factor to ``factor *
         efficiency`` at once, or over ``ramp_s`` in :data:`RAMP_STEPS` steps (``campaign`` is not
