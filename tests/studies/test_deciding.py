@@ -37,15 +37,26 @@ def test_hold_rule_on_constructed_trajectories(north_m: float, down_m: float, at
     north = np.where(np.isclose(t, fault_s + at_s), north_m, 0.1)
     down = np.where(np.isclose(t, fault_s + at_s), down_m, 0.0)
     altitude, horizontal = D.hold_errors(t, _track(t, north, down), fault_s)
-    verdict = D.holds(["holds-position"], [altitude], [horizontal])[0]
+    verdict = D.holds(["holds-position"], [altitude], [horizontal], [0.0], [0.0])[0]
     assert verdict == expected, (altitude, horizontal)
 
 
+@pytest.mark.parametrize("final_rad_s", [0.0, 3.0, 40.0, -66.0])
+def test_a_spin_growing_past_the_limit_does_not_hold(final_rad_s: float) -> None:
+    # The limit: 1 rad/s below 10 rad/s of final spin, 10 % of it above (|r|: the sign is the
+    # spin's direction). Growth just below holds, just above does not.
+    limit = max(D.SPIN_GROWTH_MIN_RAD_S, D.SPIN_GROWTH_SHARE * abs(final_rad_s))
+    assert D.spin_growth_limit_rad_s([final_rad_s])[0] == limit
+    below, above = D.holds(["holds-position"] * 2, [0.5] * 2, [1.0] * 2, [limit - 1e-6, limit + 1e-6], [final_rad_s] * 2)
+    assert below and not above
+
+
 def test_hold_rule_refuses_lost_runs_and_nan() -> None:
-    assert not D.holds(["crashed"], [0.0], [0.0])[0]  # ground contact ends a run as crashed
-    assert not D.holds(["tilt"], [0.0], [0.0])[0]
-    assert not D.holds(["holds-position"], [math.nan], [0.0])[0]
-    assert D.holds(["circling"], [0.5], [2.5])[0]  # the rule is the window's errors, not the verdict's 2 m
+    assert not D.holds(["crashed"], [0.0], [0.0], [0.0], [0.0])[0]  # ground contact ends a run as crashed
+    assert not D.holds(["tilt"], [0.0], [0.0], [0.0], [0.0])[0]
+    assert not D.holds(["holds-position"], [math.nan], [0.0], [0.0], [0.0])[0]
+    assert not D.holds(["holds-position"], [0.0], [0.0], [math.nan], [0.0])[0]  # growth not measured
+    assert D.holds(["circling"], [0.5], [2.5], [0.0], [0.0])[0]  # the rule is the window's errors, not the verdict's 2 m
     # A trajectory that ends before the hold window has no hold errors (NaN), so it never holds.
     assert all(math.isnan(v) for v in D.hold_errors([0.0, 1.0], [[0, 0, -10], [0, 0, -10]], 3.0))
 
@@ -331,3 +342,45 @@ def test_the_campaigns_indi_gains_hold_two_opposing_rotors_lost_in_wind_suns_til
     monkeypatch.setattr(D, "indi_gains", rf.control.IndiGains)
     altitude, horizontal = window()
     assert horizontal > D.HOLD_HORIZONTAL_M, (altitude, horizontal)
+
+
+# -- the spin-growth rule on flights ----------------------------------------------------------
+
+
+def test_a_spin_up_no_longer_holds_and_a_damped_spin_still_does() -> None:
+    """Two campaign draws (the full suite's rows, seed 0), about 1 s of flight each. x500 (k_r = 0)
+    with ke-robust, rotor lost in hover (run 3): inside the position band (measured 0.995 m, 0.07
+    m) while its yaw rate spins up to 119 rad/s (grew 26 rad/s in the last 5 s): no longer held.
+    Ke's quadcopter (damped) with ke-robust, rotor 1 totally lost (run 6): a steady 49 rad/s
+    spin, grown 0.5 rad/s: still held."""
+    suite = D.DecidingCampaign(certify=False)
+    index = {(c.vehicle, c.fault_class, c.controller): i for i, c in enumerate(suite.cells)}
+    x500 = index[("px4-x500", "one-rotor-hover", "ke-robust")] * suite.runs + 3
+    ke = index[("ke-quadcopter", "one-rotor-hover", "ke-robust")] * suite.runs + 6
+    up = D.run_rows(suite, x500, x500 + 1)
+    assert up["hold_altitude_error_m"][0] <= D.HOLD_ALTITUDE_M and up["hold_horizontal_error_m"][0] <= D.HOLD_HORIZONTAL_M
+    assert up["hold_final_spin_rad_s"][0] > 100.0 and up["hold_spin_growth_rad_s"][0] > 0.2 * up["hold_final_spin_rad_s"][0]
+    assert not up["holds"][0]
+    damped = D.run_rows(suite, ke, ke + 1)
+    assert damped["efficiency"][0] == 0.0 and damped["hold_final_spin_rad_s"][0] > 40.0
+    assert abs(damped["hold_spin_growth_rad_s"][0]) < 0.02 * damped["hold_final_spin_rad_s"][0]
+    assert damped["holds"][0]
+
+
+def test_a_dataset_flown_before_the_spin_growth_rule_reads_as_not_judged(tmp_path: Path) -> None:
+    """Reading a dataset without the growth columns keeps its holds as judged then, fills the
+    columns with NaN and says so (``spin_growth_judged``, the table's heading)."""
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "runs"
+    flown = D.run_deciding(D.DecidingCampaign(**X500, certify=False), out=out, progress=False)  # type: ignore[arg-type]
+    fresh = D.read_deciding(out, certify=False)
+    assert fresh.spin_growth_judged and "SPIN GROWTH NOT JUDGED" not in fresh.table()
+    np.testing.assert_array_equal(fresh.columns["hold_spin_growth_rad_s"], flown.columns["hold_spin_growth_rad_s"])
+    for chunk in out.glob("*.parquet"):
+        table = pq.read_table(chunk)
+        pq.write_table(table.drop(["hold_spin_growth_rad_s", "hold_final_spin_rad_s"]), chunk)
+    old = D.read_deciding(out, certify=False)
+    assert not old.spin_growth_judged and "SPIN GROWTH NOT JUDGED" in old.table()
+    assert np.isnan(old.columns["hold_spin_growth_rad_s"]).all() and np.isnan(old.columns["hold_final_spin_rad_s"]).all()
+    np.testing.assert_array_equal(old.columns["holds"], flown.columns["holds"])

@@ -27,18 +27,19 @@ pub struct PyVerdictCriteria {
 
 impl PyVerdictCriteria {
     const FIELDS: &'static [&'static str] =
-        &["window_s", "hold_horizontal_m", "hold_altitude_m", "hold_speed_m_s", "circling_turn_rad"];
+        &["window_s", "hold_horizontal_m", "hold_altitude_m", "hold_speed_m_s", "circling_turn_rad", "spin_growth_span_s"];
 }
 
 pickle_protocol!(PyVerdictCriteria, {
     #[new]
-    #[pyo3(signature = (*, window_s=None, hold_horizontal_m=None, hold_altitude_m=None, hold_speed_m_s=None, circling_turn_rad=None))]
+    #[pyo3(signature = (*, window_s=None, hold_horizontal_m=None, hold_altitude_m=None, hold_speed_m_s=None, circling_turn_rad=None, spin_growth_span_s=None))]
     fn new(
         window_s: Option<f64>,
         hold_horizontal_m: Option<f64>,
         hold_altitude_m: Option<f64>,
         hold_speed_m_s: Option<f64>,
         circling_turn_rad: Option<f64>,
+        spin_growth_span_s: Option<f64>,
     ) -> PyResult<Self> {
         let d = VerdictCriteria::default();
         let inner = VerdictCriteria {
@@ -47,6 +48,7 @@ pickle_protocol!(PyVerdictCriteria, {
             hold_altitude_m: hold_altitude_m.unwrap_or(d.hold_altitude_m),
             hold_speed_m_s: hold_speed_m_s.unwrap_or(d.hold_speed_m_s),
             circling_turn_rad: circling_turn_rad.unwrap_or(d.circling_turn_rad),
+            spin_growth_span_s: spin_growth_span_s.unwrap_or(d.spin_growth_span_s),
         };
         inner.check().map_err(to_py_err)?;
         Ok(PyVerdictCriteria { inner })
@@ -70,6 +72,10 @@ pickle_protocol!(PyVerdictCriteria, {
     #[getter]
     fn circling_turn_rad(&self) -> f64 {
         self.inner.circling_turn_rad
+    }
+    #[getter]
+    fn spin_growth_span_s(&self) -> f64 {
+        self.inner.spin_growth_span_s
     }
 });
 
@@ -127,6 +133,8 @@ column!(
     peak_tilt_rad,
     steady_spin_rad_s,
     steady_n3z,
+    window_spin_growth_rad_s,
+    window_final_spin_rad_s,
     peak_command,
     saturated_s,
     flown_s

@@ -3,7 +3,8 @@ of a perturbed vehicle in wind, each judged by one rule, *holds*:
 
     not lost (no divergence, no ground contact) and, from :data:`SETTLE_S` after the failure to the
     end, within :data:`HOLD_ALTITUDE_M` of the set point's altitude and :data:`HOLD_HORIZONTAL_M`
-    of it horizontally.
+    of it horizontally, with a yaw rate that is not growing at the end (:data:`SPIN_GROWTH_SHARE`,
+    :func:`holds`: a spin that keeps speeding up is a drift, lost after the window).
 
 How it is flown: every run flies :data:`AFTER_FAULT_S` past its (first) failure, and the core's
 summary window (:class:`rotorfault._rfcore.VerdictCriteria` ``window_s``) is the last
@@ -84,6 +85,18 @@ from .sampling import RunDraw, gust_profile
 HOLD_ALTITUDE_M = 1.0
 HOLD_HORIZONTAL_M = 3.0
 SETTLE_S = 5.0
+#: The spin-growth rule (:func:`holds`): a run whose body yaw-rate magnitude grew, from the hold
+#: window's second-to-last 5 s (the core's ``spin_growth_span_s``) to its last 5 s, by more than
+#: ``max(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * mean |r| of the last 5 s)`` is spinning up:
+#: a drift, lost after the window. Why these values: a damped spin settling to r_f with time
+#: constant tau = I_zz / k_r (first order, from the failure) grows between the spans 15-20 s and
+#: 20-25 s after the failure by r_f (tau / 5 s) (e^-3s - 2 e^-4s + e^-5s), s = 5 s / tau: 2.0 % of
+#: the last span's mean for tau = 5 s, 7.7 % for tau = 10 s (10 % is reached near tau = 13 s, a
+#: spin still far from settled 25 s after the failure); an undamped spin-up under a constant residual moment
+#: (r = a t) grows by 5 a, 22 % of the last span's mean 22.5 a. 10 % sits between, and 1 rad/s
+#: keeps a slow spin's wind- and noise-driven wander (a few tenths of a rad/s) from counting.
+SPIN_GROWTH_MIN_RAD_S = 1.0
+SPIN_GROWTH_SHARE = 0.10
 #: Each run flies this long past its first failure (the issue's 30 s runs, failure in [2, 5] s).
 AFTER_FAULT_S = 25.0
 #: Control period and RK4 substeps (the issue's 400 Hz).
@@ -480,13 +493,27 @@ def hold_criteria() -> Any:
     return _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S - SETTLE_S)
 
 
-def holds(outcome: Any, window_altitude_m: Any, window_horizontal_m: Any) -> np.ndarray[Any, np.dtype[np.bool_]]:
-    """The hold verdict: not lost and within both thresholds throughout the hold window (NaN
-    errors, a lost run's, never hold)."""
+def spin_growth_limit_rad_s(final_spin_rad_s: Any) -> np.ndarray[Any, np.dtype[np.float64]]:
+    """The largest spin growth that still holds, rad/s, given the mean |yaw rate| over the hold
+    window's last 5 s: ``max(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * final)`` (NaN stays NaN)."""
+    final = np.abs(np.asarray(final_spin_rad_s, dtype=np.float64))
+    return np.where(np.isnan(final), np.nan, np.maximum(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * final))
+
+
+def holds(
+    outcome: Any, window_altitude_m: Any, window_horizontal_m: Any, window_spin_growth_rad_s: Any, window_final_spin_rad_s: Any,
+) -> np.ndarray[Any, np.dtype[np.bool_]]:
+    """The hold verdict: not lost, within both thresholds throughout the hold window, and not
+    spinning up: the yaw-rate magnitude's growth over the window's last 5 s (rad/s, the core's
+    ``window_spin_growth_rad_s``) at most :func:`spin_growth_limit_rad_s` of the last 5 s mean
+    |yaw rate| (rad/s). NaN values (a lost run's, or a growth not measured) never hold."""
     alt = np.asarray(window_altitude_m, dtype=np.float64)
     hor = np.asarray(window_horizontal_m, dtype=np.float64)
+    growth = np.asarray(window_spin_growth_rad_s, dtype=np.float64)
+    limit = spin_growth_limit_rad_s(window_final_spin_rad_s)
     with np.errstate(invalid="ignore"):
-        return np.isin(np.asarray(outcome), FLYING) & (alt <= HOLD_ALTITUDE_M) & (hor <= HOLD_HORIZONTAL_M)
+        return (np.isin(np.asarray(outcome), FLYING) & (alt <= HOLD_ALTITUDE_M) & (hor <= HOLD_HORIZONTAL_M)
+                & (growth <= limit))
 
 
 def target_verdict(d: dict[str, Any]) -> str:
@@ -605,7 +632,9 @@ def certify_rows(
 
 def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: bool = False) -> DecidingResult:
     """A deciding campaign's Parquet dataset (``run_deciding(..., out=path)``) read back, its
-    suite from the manifest; ``certify``: rows without the verdict (flown with ``certify=False``
+    suite from the manifest (a dataset without the spin-growth columns, flown before that rule:
+    its ``holds`` kept as judged then, the columns NaN, ``spin_growth_judged`` False, the table
+    says so); ``certify``: rows without the verdict (flown with ``certify=False``
     or before it existed) certified after the fact (:func:`certify_rows`), timed in
     ``certify_seconds``."""
     import time
@@ -619,6 +648,11 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     suite = DecidingCampaign.from_dict(manifest["arguments"]["suite"])
     columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(path))))
     seconds = 0.0
+    # A dataset flown before the spin-growth rule: its holds are the old rule's (kept, and said so
+    # by ``spin_growth_judged``), the growth is not measured (NaN), never re-judged as held or not.
+    spin_growth_judged = all(name in columns for name, _ in _SPIN_GROWTH_COLUMNS)
+    if not spin_growth_judged:
+        columns = {**columns, **{name: np.full(len(columns["vehicle"]), math.nan) for name, _ in _SPIN_GROWTH_COLUMNS}}
     if "certified" not in columns or (certify and not suite.certify):
         if not certify:
             columns = {**columns, **{name: np.full(len(columns["vehicle"]), "" if kind == "string" else math.nan, dtype=object if kind == "string" else np.float64)
@@ -627,7 +661,7 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
             start = time.perf_counter()
             columns = certify_rows(suite, columns, progress=progress)
             seconds = time.perf_counter() - start
-    return DecidingResult(suite, columns, certify_seconds=seconds)
+    return DecidingResult(suite, columns, certify_seconds=seconds, spin_growth_judged=spin_growth_judged)
 
 
 # -- execution ----------------------------------------------------------------------------------
@@ -637,12 +671,14 @@ KIND = "rotorfault-deciding-campaign"
 _CERTIFY_COLUMNS: tuple[tuple[str, str], ...] = (
     ("certified", "string"), ("certified_static_hover", "string"), ("certified_spin_rad_s", "float64"), ("certify_note", "string"),
 )
+#: The spin-growth rule's measurements per run (rad/s; NaN: lost, or not measured).
+_SPIN_GROWTH_COLUMNS: tuple[tuple[str, str], ...] = (("hold_spin_growth_rad_s", "float64"), ("hold_final_spin_rad_s", "float64"))
 _COLUMNS: tuple[tuple[str, str], ...] = (
     ("vehicle", "string"), ("fault_class", "string"), ("controller", "string"), ("index", "int64"),
     ("failed_rotors", "string"), ("fault_time_s", "float64"), ("efficiency", "float64"), ("wind_speed_m_s", "float64"),
     ("gust_peak_m_s", "float64"), ("mass_scale", "float64"), ("applicable", "bool"), ("note", "string"), ("outcome", "string"),
     ("holds", "bool"), ("hold_altitude_error_m", "float64"), ("hold_horizontal_error_m", "float64"), ("lost_at_s", "float64"),
-    ("steady_spin_rad_s", "float64"), ("peak_tilt_rad", "float64"),
+    ("steady_spin_rad_s", "float64"), ("peak_tilt_rad", "float64"), *_SPIN_GROWTH_COLUMNS,
     *_CERTIFY_COLUMNS,
 )
 
@@ -707,12 +743,14 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         )
         outcome = list(batch.outcome)
         alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
-        held = holds(outcome, alt, hor)
+        growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
+        held = holds(outcome, alt, hor, growth, final_spin)
         for j, r in enumerate(runs):
             row = rows[r[0]]
             row.update(outcome=outcome[j], holds=bool(held[j]), hold_altitude_error_m=float(alt[j]), hold_horizontal_error_m=float(hor[j]),
                        lost_at_s=float(batch.lost_at_s[j]), steady_spin_rad_s=float(batch.steady_spin_rad_s[j]),
-                       peak_tilt_rad=float(batch.peak_tilt_rad[j]))
+                       peak_tilt_rad=float(batch.peak_tilt_rad[j]), hold_spin_growth_rad_s=float(growth[j]),
+                       hold_final_spin_rad_s=float(final_spin[j]))
     out: dict[str, np.ndarray[Any, Any]] = {}
     for name, kind in _COLUMNS:
         values = [row.get(name, math.nan) for row in rows]
@@ -772,6 +810,9 @@ class DecidingResult:
     seconds: float = 0.0
     #: Time to certify the rows after the fact (:func:`read_deciding`; 0 when flown with them).
     certify_seconds: float = 0.0
+    #: Whether the rows' ``holds`` include the spin-growth rule; False for a dataset flown before
+    #: it (:func:`read_deciding`: its ``holds`` are the old rule's, the growth columns NaN).
+    spin_growth_judged: bool = True
 
     def cell_rows(self) -> list[dict[str, Any]]:
         """One row per cell: hold share (with its 95 % Wilson interval), worst hold-window
@@ -907,7 +948,10 @@ class DecidingResult:
     def table(self) -> str:
         lines = [
             f"deciding campaign: {self.suite.runs} runs per cell, {len(self.suite.cells)} cells; holds = not lost and within "
-            f"{HOLD_ALTITUDE_M:g} m altitude, {HOLD_HORIZONTAL_M:g} m horizontal from {SETTLE_S:g} s after the failure",
+            f"{HOLD_ALTITUDE_M:g} m altitude, {HOLD_HORIZONTAL_M:g} m horizontal from {SETTLE_S:g} s after the failure"
+            + (f", yaw rate not growing (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
+               f"{SPIN_GROWTH_SHARE:.0%} of the last 5 s mean)" if self.spin_growth_judged
+               else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)"),
             "| vehicle | fault class | controller | holds (95 % CI) | lost | design refused | worst alt / horiz (m) | median spin (rad/s) |",
             "|---|---|---|---|---|---|---|---|",
         ]
@@ -943,7 +987,7 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SUITES", "VEHICLES", "CampaignVehicle",
+    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_GROWTH_SHARE", "SUITES", "VEHICLES", "CampaignVehicle",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
-    "certify_rows", "certify_run", "hold_errors", "holds", "read_deciding", "run_deciding", "run_rows",
+    "certify_rows", "certify_run", "hold_errors", "holds", "spin_growth_limit_rad_s", "read_deciding", "run_deciding", "run_rows",
 ]

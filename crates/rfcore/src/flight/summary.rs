@@ -51,6 +51,9 @@ pub struct VerdictCriteria {
     pub hold_altitude_m: f64,
     pub hold_speed_m_s: f64,
     pub circling_turn_rad: f64,
+    /// Length of each of the two spans the spin growth compares (the window's last span and
+    /// the one before it), s: the growth is measured only when the window holds both.
+    pub spin_growth_span_s: f64,
 }
 
 impl Default for VerdictCriteria {
@@ -61,6 +64,7 @@ impl Default for VerdictCriteria {
             hold_altitude_m: 1.0,
             hold_speed_m_s: 0.5,
             circling_turn_rad: std::f64::consts::FRAC_PI_2,
+            spin_growth_span_s: 5.0,
         }
     }
 }
@@ -73,6 +77,7 @@ impl VerdictCriteria {
             ("criteria.hold_altitude_m", self.hold_altitude_m),
             ("criteria.hold_speed_m_s", self.hold_speed_m_s),
             ("criteria.circling_turn_rad", self.circling_turn_rad),
+            ("criteria.spin_growth_span_s", self.spin_growth_span_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(RfError::invalid(
@@ -181,6 +186,13 @@ pub struct RunSummary {
     pub steady_spin_rad_s: f64,
     /// Mean n3z over the window when settled.
     pub steady_n3z: f64,
+    /// How much the body yaw-rate magnitude grew at the window's end: mean |r| over its last
+    /// `spin_growth_span_s` minus mean |r| over the span before, rad/s (a spin that keeps
+    /// speeding up is a drift; a damped spin settles to ~0). NaN for a lost run or a window
+    /// shorter than two spans.
+    pub window_spin_growth_rad_s: f64,
+    /// Mean |r| over the window's last `spin_growth_span_s` (NaN when the growth is), rad/s.
+    pub window_final_spin_rad_s: f64,
     /// Largest rotor command (finite ones), in the actuator's unit (N for fixed pitch).
     pub peak_command: f64,
     /// Time with any rotor commanded at or beyond its upper bound, s.
@@ -290,6 +302,8 @@ impl SummaryObserver {
             peak_tilt_rad: self.peak_n3z_tilt_rad,
             steady_spin_rad_s: nan,
             steady_n3z: nan,
+            window_spin_growth_rad_s: nan,
+            window_final_spin_rad_s: nan,
             peak_command: if self.peak_command.is_finite() {
                 self.peak_command
             } else {
@@ -332,6 +346,12 @@ impl SummaryObserver {
         };
         // Steady values: means over the window, then the settle test on the window and the row
         // before it (an earlier unsettled row settles no later than that row).
+        if let Some((growth, last)) =
+            spin_growth(&self.spin, end_s, c.window_s, c.spin_growth_span_s)
+        {
+            summary.window_spin_growth_rad_s = growth;
+            summary.window_final_spin_rad_s = last;
+        }
         let n = self.spin.len() as f64;
         let r = self.spin.iter().map(|s| s.1).sum::<f64>() / n;
         let n3z = self.spin.iter().map(|s| s.2).sum::<f64>() / n;
@@ -358,6 +378,39 @@ impl SummaryObserver {
         }
         summary
     }
+}
+
+/// (growth, last-span mean) of |yaw rate| over the window's samples `spin` (t, r, n3z) of a
+/// run that ended at `end_s`: mean |r| over (end - span, end] minus mean |r| over
+/// (end - 2 span, end - span]; `None` when the window is shorter than two spans or a span has no
+/// sample.
+fn spin_growth(
+    spin: &[(f64, f64, f64)],
+    end_s: f64,
+    window_s: f64,
+    span_s: f64,
+) -> Option<(f64, f64)> {
+    // The 1e-9 s tolerance accepts a window of exactly two spans built from a sampled grid.
+    if window_s + 1e-9 < 2.0 * span_s {
+        return None;
+    }
+    let split = end_s - span_s;
+    let start = end_s - 2.0 * span_s;
+    let (mut before, mut n_before, mut last, mut n_last) = (0.0, 0usize, 0.0, 0usize);
+    for &(t, r, _) in spin {
+        if t > split + 1e-9 {
+            last += r.abs();
+            n_last += 1;
+        } else if t > start + 1e-9 {
+            before += r.abs();
+            n_before += 1;
+        }
+    }
+    if n_before == 0 || n_last == 0 {
+        return None;
+    }
+    let last = last / n_last as f64;
+    Some((last - before / n_before as f64, last))
 }
 
 /// Times of the faults that changed a rotor's efficiency by `end_s` (`flight_metrics`'s
@@ -613,6 +666,55 @@ mod tests {
         assert!((s.final_altitude_error_m - 0.5 * g).abs() < 1e-9);
     }
 
+    /// The observer fed hovering rows at the setpoint every 0.01 s for 20 s, yaw rate `r(t)`,
+    /// judged over a 10 s window (two 5 s spans).
+    fn spin_summary(r: impl Fn(f64) -> f64) -> RunSummary {
+        let criteria = VerdictCriteria {
+            window_s: 10.0,
+            ..VerdictCriteria::default()
+        };
+        let dt_s = 0.01;
+        let mut observer = SummaryObserver::new(criteria, Vector3::zeros(), 20.0, vec![1.0; 4], dt_s);
+        for k in 0..=2000 {
+            let t = k as f64 * dt_s;
+            let mut state = RigidBodyState::at_rest();
+            state.omega_rad_s.z = r(t);
+            observer.step(t, &state, &[0.5; 4], &[1.0; 4]);
+        }
+        observer.finish(None, &[], &[1.0; 4], 20.0)
+    }
+
+    #[test]
+    fn a_constant_spin_does_not_grow() {
+        let s = spin_summary(|_| -7.0);
+        assert_eq!(s.outcome, Outcome::HoldsPosition);
+        assert!(s.window_spin_growth_rad_s.abs() < 1e-12, "{}", s.window_spin_growth_rad_s);
+        assert!((s.window_final_spin_rad_s - 7.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_linear_spin_up_grows_by_its_rate_times_the_span() {
+        // r = -(1 + a t): |r| means over two adjacent 5 s spans (500 samples each, the same
+        // grid shifted by 5 s) differ by exactly a * 5 s; the last span's mean is |r| at its
+        // middle sample spacing: 1 + a (17.5 + 0.005) s.
+        let a = 0.8;
+        let s = spin_summary(|t| -(1.0 + a * t));
+        assert!((s.window_spin_growth_rad_s - a * 5.0).abs() < 1e-9, "{}", s.window_spin_growth_rad_s);
+        assert!((s.window_final_spin_rad_s - (1.0 + a * 17.505)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn spin_growth_needs_two_spans_in_the_window() {
+        // The default 5 s window holds one span: not measured. A lost run: not measured.
+        let s = simulate_summary(free_fall(6.0), &VerdictCriteria::default(), &Cancel::never()).unwrap();
+        assert!(s.window_spin_growth_rad_s.is_nan());
+        assert!(s.window_final_spin_rad_s.is_nan());
+        let long = VerdictCriteria { window_s: 10.0, ..VerdictCriteria::default() };
+        let lost = simulate_summary(free_fall(10.0), &long, &Cancel::never()).unwrap();
+        assert!(matches!(lost.outcome, Outcome::Lost(_)));
+        assert!(lost.window_spin_growth_rad_s.is_nan());
+    }
+
     #[test]
     fn bad_criteria_are_named() {
         let criteria = VerdictCriteria {
@@ -623,5 +725,13 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.starts_with("criteria.window_s"), "{err}");
+        let criteria = VerdictCriteria {
+            spin_growth_span_s: f64::NAN,
+            ..VerdictCriteria::default()
+        };
+        let err = simulate_summary(free_fall(1.0), &criteria, &Cancel::never())
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("criteria.spin_growth_span_s"), "{err}");
     }
 }
