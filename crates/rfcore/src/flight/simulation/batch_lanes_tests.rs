@@ -142,8 +142,9 @@ fn both(
     (fly(BatchLanes::Auto), fly(BatchLanes::Scalar))
 }
 
-#[test]
-fn lanes_fly_the_scalar_hover_feedback_batch_bit_for_bit() {
+/// The quad-x with linear drag and 20 ms rotor lag both bit-for-bit batches fly, and its hover
+/// thrust per rotor (N).
+fn lagged_quad() -> (Airframe, Vehicle, Actuators, f64) {
     let airframe = crate::fixtures::preset("quad-x");
     let vehicle = Vehicle::new(
         &airframe,
@@ -159,6 +160,12 @@ fn lanes_fly_the_scalar_hover_feedback_batch_bit_for_bit() {
     };
     let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 0.0).unwrap());
     let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+    (airframe, vehicle, actuators, hover)
+}
+
+#[test]
+fn lanes_fly_the_scalar_hover_feedback_batch_bit_for_bit() {
+    let (airframe, vehicle, actuators, hover) = lagged_quad();
     let mut config = SimulationConfig::new(0.0025, 2, 2.5);
     config.record_every = 3;
     config.wind_m_s = Vector3::new(0.5, -0.2, 0.0);
@@ -352,21 +359,7 @@ fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
 fn lanes_fly_the_scalar_sensed_batch_bit_for_bit() {
     // On sensors and the estimator: lag, a fault between substeps (one lane loses a rotor and
     // diverges), a law that breaks, constant wind; each run's own sensor seed.
-    let airframe = crate::fixtures::preset("quad-x");
-    let vehicle = Vehicle::new(
-        &airframe,
-        Drag {
-            linear_drag_n_s_m: 0.2,
-            ..Drag::default()
-        },
-    )
-    .unwrap();
-    let lag = Lag {
-        time_constant_s: 0.02,
-        rate_limit_per_s: f64::INFINITY,
-    };
-    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, lag, 0.0).unwrap());
-    let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
+    let (airframe, vehicle, actuators, hover) = lagged_quad();
     let mut config = SimulationConfig::new(0.0025, 2, 1.5);
     config.record_every = 3;
     config.wind_m_s = Vector3::new(0.5, -0.2, 0.0);
