@@ -151,3 +151,35 @@ def test_giving_up_yaw_survives_only_by_a_steady_spin() -> None:
         assert at_limit.solution is not None
         torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(at_limit.solution.thrust_n)
         assert abs(float(np.asarray(at_limit.solution.spin_axis) @ torque)) < 1e-9 * float(np.max(np.abs(torque)))
+
+
+def test_an_undamped_spin_just_short_of_the_search_limit_is_not_steady(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The deciding campaign's x500 draw (seed 0, one rotor in hover, run 959): without rotational
+    damping the search's best spin stops at 198.22 rad/s of its 200 rad/s limit (the margin is flat
+    to 1e-4 N there; with a 400 rad/s limit the best spin is 400): within SPIN_RATE_LIMIT_MARGIN of
+    the limit, so not steady: not survivable (certify rule 2 called it spinning). Without the
+    margin (broken rule) it is spinning again. A damped hexacopter's spin as close to the limit
+    (hexa-ppnnpn, run 245, -197.4 rad/s) is pinned by k_r and stays survivable."""
+    import importlib
+
+    from rotorfault.studies import deciding as D
+
+    C = importlib.import_module("rotorfault.studies.certify")  # the module (the package exports the function by its name)
+
+    suite = D.DecidingCampaign(certify=False)
+    cells = {(c.vehicle, c.fault_class): c for c in suite.cells}
+
+    def verdict(vehicle: str, index: int) -> Any:
+        airframe, actuator, drag = suite.draw(cells[(vehicle, "one-rotor-hover")], index).failed_vehicle(D.vehicle(vehicle))
+        return certify_survival(airframe, drag=drag, actuator=actuator)
+
+    x500 = verdict("px4-x500", 959)
+    spin = x500.relaxed_hover
+    assert spin is not None and spin.hover == "spinning" and not spin.damped
+    assert 0.95 * 200.0 <= abs(spin.spin_rate_rad_s) < 199.0 and not spin.at_spin_rate_limit and spin.near_spin_rate_limit
+    assert not spin.steady and x500.survival == "not-survivable"
+    hexa = verdict("hexa-ppnnpn", 245)
+    assert hexa.relaxed_hover is not None and hexa.relaxed_hover.near_spin_rate_limit and hexa.relaxed_hover.damped
+    assert hexa.survival == "spinning"
+    monkeypatch.setattr(C, "SPIN_RATE_LIMIT_MARGIN", 0.0)
+    assert verdict("px4-x500", 959).survival == "spinning"
