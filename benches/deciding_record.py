@@ -10,6 +10,8 @@ Run (after the flight; the lead's idle machine):
     python benches/deciding_record.py DIR --out-json out.json --commit $(git rev-parse --short HEAD) \\
         --json python/rotorfault/papers/bench_results/deciding_full_run.json
 
+Each run's ``holds`` is judged again by the current hold rule (``deciding.rejudge_holds``: the
+stored window values and the seeded draws, no flying; ``holds_judged`` counts what changed).
 A dataset flown with certify's verdict per run is read as it is; one without it (flown before
 the verdict existed, or ``--no-certify``) is certified here, after the fact, per draw
 (``rotorfault.studies.deciding.certify_rows``). ``--certified FILE`` (JSON lines ``vehicle``,
@@ -140,6 +142,11 @@ def main() -> None:
     flown = args.flown or datetime.datetime.fromtimestamp(manifest_path.stat().st_mtime, datetime.timezone.utc).isoformat(timespec="seconds")
     suite = D.DecidingCampaign.from_dict(read_manifest(args.dataset)["arguments"]["suite"])
     columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
+    # The holds judged again by the current hold rule (the one place: rotorfault.studies.deciding_hold),
+    # from the stored window values and the seeded draws, without flying; the flight's verdicts kept.
+    columns = D.rejudge_holds(suite, columns)
+    flown_held, held = int(np.sum(columns["holds_as_flown"])), int(np.sum(columns["holds"]))
+    changed = columns["holds"] != columns["holds_as_flown"]
     full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
     cells = [{k: r[k] for k in RECORD_CELL_KEYS} for r in full.cell_rows()]
 
@@ -183,6 +190,11 @@ def main() -> None:
             "suite": suite.to_dict(), "cells": cells,
             "certified": {"how": note, "commit": args.certify_commit or args.commit, "indices": _ranges(indices),
                           "draws": len(indices) * len({k[:2] for k in keys}), "seconds": seconds, "draws_timed": timed},
+            "holds_judged": {"rule": f"deciding_hold: growth <= max({D.SPIN_GROWTH_MIN_RAD_S:g} rad/s, {1 + D.SPIN_SETTLE_MARGIN:g} x the "
+                                      "growth share of a first-order settle from the failure with the run's I_zz / k_r x final, "
+                                      f"{D.SPIN_SETTLED_SHARE:g} x (e^(5 s / tau) - 1) x final); k_r = 0: the minimum",
+                             "held_as_flown": flown_held, "held": held, "now_held": int(np.sum(changed & columns["holds"])),
+                             "no_longer_held": int(np.sum(changed & ~columns["holds"]))},
             "decision": decision, "contradictions": result.contradictions(), "contradictions_why": why.get("contradictions", ""),
             "misses": misses(rows, decision, why),
         }

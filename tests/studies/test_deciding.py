@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 
 import rotorfault as rf
 from rotorfault.studies import deciding as D
+from rotorfault.studies import deciding_hold as H
 
 
 def _track(t: np.ndarray, north: np.ndarray, down_offset: np.ndarray) -> np.ndarray:
@@ -37,26 +39,94 @@ def test_hold_rule_on_constructed_trajectories(north_m: float, down_m: float, at
     north = np.where(np.isclose(t, fault_s + at_s), north_m, 0.1)
     down = np.where(np.isclose(t, fault_s + at_s), down_m, 0.0)
     altitude, horizontal = D.hold_errors(t, _track(t, north, down), fault_s)
-    verdict = D.holds(["holds-position"], [altitude], [horizontal], [0.0], [0.0])[0]
+    verdict = D.judge_holds(["holds-position"], [altitude], [horizontal], [0.0], [0.0], [3.7])[0]
     assert verdict == expected, (altitude, horizontal)
 
 
-@pytest.mark.parametrize("final_rad_s", [0.0, 3.0, 40.0, -66.0])
-def test_a_spin_growing_past_the_limit_does_not_hold(final_rad_s: float) -> None:
-    # The limit: 1 rad/s below 10 rad/s of final spin, 10 % of it above (|r|: the sign is the
-    # spin's direction). Growth just below holds, just above does not.
-    limit = max(D.SPIN_GROWTH_MIN_RAD_S, D.SPIN_GROWTH_SHARE * abs(final_rad_s))
-    assert D.spin_growth_limit_rad_s([final_rad_s])[0] == limit
-    below, above = D.holds(["holds-position"] * 2, [0.5] * 2, [1.0] * 2, [limit - 1e-6, limit + 1e-6], [final_rad_s] * 2)
+@pytest.mark.parametrize(("final_rad_s", "tau_s"), [(0.0, 21.0), (3.0, 21.0), (40.0, 3.7), (-66.0, 21.0), (-66.0, 26.0), (40.0, math.inf)])
+def test_a_spin_growing_past_the_limit_does_not_hold(final_rad_s: float, tau_s: float) -> None:
+    # The limit: 1 rad/s, or 1.25 x the share a first-order settle with the run's tau still grows
+    # 15-20 s -> 20-25 s after the failure, or a growth G whose first-order end G / (e^(5/tau) - 1)
+    # lies within 5 % of the final spin (|r|: the sign is the spin's direction); undamped (inf):
+    # 1 rad/s. Growth just below holds, just above does not.
+    share = H.spin_settle_growth_share([tau_s], 15.0, 5.0)[0]
+    settled = D.SPIN_SETTLED_SHARE * math.expm1(5.0 / tau_s)
+    limit = max(D.SPIN_GROWTH_MIN_RAD_S, (1 + D.SPIN_SETTLE_MARGIN) * share * abs(final_rad_s), settled * abs(final_rad_s))
+    assert D.spin_growth_since_failure_s() == 15.0 and D.spin_growth_span_s() == 5.0
+    assert D.spin_growth_limit_rad_s([final_rad_s], [tau_s], 15.0, 5.0)[0] == pytest.approx(limit, rel=1e-14)
+    below, above = D.judge_holds(["holds-position"] * 2, [0.5] * 2, [1.0] * 2, [limit - 1e-6, limit + 1e-6], [final_rad_s] * 2, [tau_s] * 2)
     assert below and not above
 
 
+def _span_means(r: Callable[[np.ndarray], np.ndarray], since_failure_s: float = 15.0, span_s: float = 5.0) -> tuple[float, float]:
+    """(growth, last-span mean) of |r(t)| (t since the failure) as the core measures them: means of
+    400 Hz samples over two spans; an independent computation of the closed-form share."""
+    t = np.arange(0.0, since_failure_s + 2 * span_s + 1e-9, 1.0 / 400.0)
+    before = np.abs(r(t[(t > since_failure_s + 1e-9) & (t <= since_failure_s + span_s + 1e-9)])).mean()
+    last = np.abs(r(t[t > since_failure_s + span_s + 1e-9])).mean()
+    return float(last - before), float(last)
+
+
+@pytest.mark.parametrize("tau_s", [5.0, 10.0, 21.0, 26.0, 40.0])
+def test_the_settle_share_is_a_first_order_settles_growth(tau_s: float) -> None:
+    growth, last = _span_means(lambda t: 63.0 * (1 - np.exp(-t / tau_s)))
+    assert H.spin_settle_growth_share([tau_s], 15.0, 5.0)[0] == pytest.approx(growth / last, rel=2e-3)  # sampling: 1/400 s
+
+
+def test_a_settle_holds_and_a_spin_up_does_not() -> None:
+    """The hexacopter's slowest settle (tau = 26 s: +20 % inertia) to 63 rad/s holds; a linear
+    spin-up (constant moment, r = 3 t) on the same damped vehicle does not (it grows 22 % of its
+    last span, a settle 15.5 %); the same spin-up without damping (k_r = 0) does not; a spin-up
+    slow enough to stay within the 1 rad/s of wander holds anywhere."""
+    tau = H.spin_settle_time_constant_s(0.0599 * 1.2, 0.0028)
+    assert tau == pytest.approx(25.67, abs=0.01)
+    undamped = H.spin_settle_time_constant_s(0.04, 0.0)
+
+    def judged(r: Callable[[np.ndarray], np.ndarray], tau_s: float) -> bool:
+        growth, last = _span_means(r)
+        return bool(D.judge_holds(["holds-position"], [0.5], [1.0], [growth], [last], [tau_s])[0])
+
+    assert judged(lambda t: 63.0 * (1 - np.exp(-t / tau)), tau)
+    assert judged(lambda t: 63.0 * (1 - np.exp(-t / 26.0)), 26.0)
+    assert not judged(lambda t: 3.0 * t, tau)
+    assert not judged(lambda t: 3.0 * t, undamped)
+    assert not judged(lambda t: 63.0 * (1 - np.exp(-t / tau)), undamped)  # without damping a growing spin is a spin-up
+    assert judged(lambda t: 0.15 * t, undamped) and judged(lambda t: 0.15 * t, tau)
+    # Ke's quadcopter (tau = 3.7 s): its failure's settle is over by the window, but a later change
+    # of the yaw moment (here 3 rad/s more from 17 s after the failure) moves a 50 rad/s spin that
+    # follows within seconds: settled (predicted within 5 % of its last mean), held; a yaw rate
+    # still ramping at the end (3 rad/s per second through both spans) is not.
+    ke = H.spin_settle_time_constant_s(0.0104, 0.0028)
+    assert judged(lambda t: 50.0 + 3.0 * np.clip(1 - np.exp(-(t - 17.0) / ke), 0.0, None), ke)
+    assert not judged(lambda t: 50.0 + 3.0 * (t - 15.0), ke)
+
+
+def test_a_rule_that_ignores_damping_fails_the_settle(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Break the rule (no settle allowance: every run judged as undamped) and the hexacopter's
+    settle no longer holds: the test above measures the allowance."""
+    growth, last = _span_means(lambda t: 63.0 * (1 - np.exp(-t / 26.0)))
+    assert D.judge_holds(["holds-position"], [0.5], [1.0], [growth], [last], [26.0])[0]
+    monkeypatch.setattr(H, "spin_settle_growth_share", lambda tau, a, span: np.zeros(np.shape(tau)))
+    assert not D.judge_holds(["holds-position"], [0.5], [1.0], [growth], [last], [26.0])[0]
+
+
+def test_bad_settle_inputs_are_refused_by_field() -> None:
+    for bad, field in (((0.0, 15.0, 5.0), "time_constant_s"), (([math.nan], 15.0, 5.0), "time_constant_s"),
+                       (([21.0], -1.0, 5.0), "since_failure_s"), (([21.0], 15.0, 0.0), "span_s")):
+        with pytest.raises(ValueError, match=field):
+            H.spin_settle_growth_share(*bad)
+    with pytest.raises(ValueError, match="rotational_drag_n_m_s"):
+        H.spin_settle_time_constant_s(0.06, -1.0)
+    with pytest.raises(ValueError, match="inertia_zz_kg_m2"):
+        H.spin_settle_time_constant_s(0.0, 0.0028)
+
+
 def test_hold_rule_refuses_lost_runs_and_nan() -> None:
-    assert not D.holds(["crashed"], [0.0], [0.0], [0.0], [0.0])[0]  # ground contact ends a run as crashed
-    assert not D.holds(["tilt"], [0.0], [0.0], [0.0], [0.0])[0]
-    assert not D.holds(["holds-position"], [math.nan], [0.0], [0.0], [0.0])[0]
-    assert not D.holds(["holds-position"], [0.0], [0.0], [math.nan], [0.0])[0]  # growth not measured
-    assert D.holds(["circling"], [0.5], [2.5], [0.0], [0.0])[0]  # the rule is the window's errors, not the verdict's 2 m
+    assert not D.judge_holds(["crashed"], [0.0], [0.0], [0.0], [0.0], [3.7])[0]  # ground contact ends a run as crashed
+    assert not D.judge_holds(["tilt"], [0.0], [0.0], [0.0], [0.0], [3.7])[0]
+    assert not D.judge_holds(["holds-position"], [math.nan], [0.0], [0.0], [0.0], [3.7])[0]
+    assert not D.judge_holds(["holds-position"], [0.0], [0.0], [math.nan], [0.0], [3.7])[0]  # growth not measured
+    assert D.judge_holds(["circling"], [0.5], [2.5], [0.0], [0.0], [3.7])[0]  # the rule is the window's errors, not the verdict's 2 m
     # A trajectory that ends before the hold window has no hold errors (NaN), so it never holds.
     assert all(math.isnan(v) for v in D.hold_errors([0.0, 1.0], [[0, 0, -10], [0, 0, -10]], 3.0))
 
@@ -367,6 +437,23 @@ def test_a_spin_up_no_longer_holds_and_a_damped_spin_still_does() -> None:
     assert damped["holds"][0]
 
 
+def test_a_hexacopters_settling_spin_holds() -> None:
+    """hexa-ppnnpn with INDI, rotor 6 totally lost in hover (run 2 of the full suite, seed 0,
+    about 0.2 s of flight): in the position band (measured 0.006 m, 0.07 m) with a spin still
+    settling (45.9 rad/s, grown 6.9 rad/s: 15.0 % of it, more than the old rule's 10 %); its own
+    tau (I_zz x inertia factor / k_r, about 24 s) allows 1.25 x 14.6 %: held."""
+    suite = D.DecidingCampaign(certify=False)
+    index = {(c.vehicle, c.fault_class, c.controller): i for i, c in enumerate(suite.cells)}
+    cell = index[("hexa-ppnnpn", "one-rotor-hover", "indi-controller")]
+    row = D.run_rows(suite, cell * suite.runs + 2, cell * suite.runs + 3)
+    growth, final = row["hold_spin_growth_rad_s"][0], row["hold_final_spin_rad_s"][0]
+    assert row["efficiency"][0] == 0.0 and row["hold_horizontal_error_m"][0] <= D.HOLD_HORIZONTAL_M
+    assert growth == pytest.approx(6.880, abs=1e-3) and final == pytest.approx(45.857, abs=1e-3)
+    tau = D.run_settle_time_constant_s("hexa-ppnnpn", suite.draw(suite.cells[cell], 2))
+    assert 17.0 < tau < 26.0 and growth / final > 0.10
+    assert row["holds"][0]
+
+
 def test_a_dataset_flown_before_the_spin_growth_rule_reads_as_not_judged(tmp_path: Path) -> None:
     """Reading a dataset without the growth columns keeps its holds as judged then, fills the
     columns with NaN and says so (``spin_growth_judged``, the table's heading)."""
@@ -384,3 +471,40 @@ def test_a_dataset_flown_before_the_spin_growth_rule_reads_as_not_judged(tmp_pat
     assert not old.spin_growth_judged and "SPIN GROWTH NOT JUDGED" in old.table()
     assert np.isnan(old.columns["hold_spin_growth_rad_s"]).all() and np.isnan(old.columns["hold_final_spin_rad_s"]).all()
     np.testing.assert_array_equal(old.columns["holds"], flown.columns["holds"])
+
+
+def test_reading_rejudges_the_holds_by_the_current_rule(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``read_deciding`` judges ``holds`` again from the stored window values and the seeded draws
+    (the flight's verdict kept as ``holds_as_flown``): the same rule gives the same verdicts; a
+    changed rule (here: a horizontal band of 0 m) changes them without flying."""
+    out = tmp_path / "runs"
+    flown = D.run_deciding(D.DecidingCampaign(**X500, certify=False), out=out, progress=False)  # type: ignore[arg-type]
+    same = D.read_deciding(out, certify=False)
+    np.testing.assert_array_equal(same.columns["holds"], flown.columns["holds"])
+    np.testing.assert_array_equal(same.columns["holds_as_flown"], flown.columns["holds"])
+    assert flown.columns["holds"].any()
+    monkeypatch.setattr(H, "HOLD_HORIZONTAL_M", 0.0)
+    strict = D.read_deciding(out, certify=False)
+    assert not strict.columns["holds"].any() and strict.columns["holds_as_flown"].any()
+
+
+def test_stored_verdicts_of_an_older_certify_rule_are_warned_about(tmp_path: Path) -> None:
+    """A dataset flown with certify records the rule (manifest metadata ``certify_rule``); one
+    that does not say, or says an older rule, reads with a warning and the table says so."""
+    from rotorfault.studies.certify import SURVIVAL_RULE
+
+    out = tmp_path / "runs"
+    D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False)  # type: ignore[arg-type]
+    manifest = out / "_rotorfault.json"
+    data = json.loads(manifest.read_text(encoding="utf-8"))
+    assert data["metadata"]["certify_rule"] == SURVIVAL_RULE
+    fresh = D.read_deciding(out)
+    assert fresh.certify_rule == SURVIVAL_RULE and "CERTIFY VERDICTS FROM" not in fresh.table()
+    for stale in (None, SURVIVAL_RULE - 1):
+        data["metadata"].pop("certify_rule", None)
+        if stale is not None:
+            data["metadata"]["certify_rule"] = stale
+        manifest.write_text(json.dumps(data), encoding="utf-8")
+        with pytest.warns(D.StaleCertifyWarning, match="unrecorded certify rule" if stale is None else f"certify rule {stale}"):
+            old = D.read_deciding(out)
+        assert old.certify_rule == stale and "CERTIFY VERDICTS FROM" in old.table()

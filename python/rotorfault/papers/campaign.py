@@ -81,6 +81,10 @@ def _recorded_tables(section: ReportSection) -> None:
              f"({run['flown_on']}), {run['flight_seconds']:.1f} s; certify per run: {cert['how']} on commit {cert['commit']} "
              f"({cert['draws']:,} draws, {cert['seconds']:.0f} s of certify")
     label += f", {cert['seconds'] / cert['draws_timed']:.2f} s per draw)." if cert["draws_timed"] else ")."
+    judged = run.get("holds_judged")
+    if judged:
+        label += (f" Holds judged again without flying by the current rule ({judged['rule']}): {judged['held_as_flown']:,} held as flown, "
+                  f"{judged['held']:,} now ({judged['now_held']} newly held, {judged['no_longer_held']} no longer).")
     section.tables.append(ReportTable(
         f"{label} Hold share per cell over all runs (whatever certify says of them).",
         ("vehicle", "fault class", "controller", "held", "hold share", "lost", "design refused"),
@@ -149,7 +153,9 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
     section.tables.append(ReportTable(
         f"Hold share per cell, {runs} runs each (95 % Wilson interval). Holds: not lost, no ground contact, within "
         f"{D.HOLD_ALTITUDE_M:g} m altitude and {D.HOLD_HORIZONTAL_M:g} m horizontal from {D.SETTLE_S:g} s after the failure to the end "
-        f"({D.AFTER_FAULT_S:g} s after it). Worst deviation over the runs not lost; spin: median steady yaw rate of the settled runs.",
+        f"({D.AFTER_FAULT_S:g} s after it), yaw rate not spinning up (rotorfault.studies.deciding_hold: growth over the last 5 s at most "
+        f"{D.SPIN_GROWTH_MIN_RAD_S:g} rad/s or what the run's own damping, I_zz / k_r, explains). Worst deviation over the runs not lost; "
+        "spin: median steady yaw rate of the settled runs.",
         ("vehicle", "fault class", "controller", "held", "hold share", "lost", "design refused", "worst alt / horiz (m)", "spin (rad/s) / note"),
         tuple(rows),
     ))

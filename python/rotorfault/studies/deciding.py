@@ -3,8 +3,10 @@ of a perturbed vehicle in wind, each judged by one rule, *holds*:
 
     not lost (no divergence, no ground contact) and, from :data:`SETTLE_S` after the failure to the
     end, within :data:`HOLD_ALTITUDE_M` of the set point's altitude and :data:`HOLD_HORIZONTAL_M`
-    of it horizontally, with a yaw rate that is not growing at the end (:data:`SPIN_GROWTH_SHARE`,
-    :func:`holds`: a spin that keeps speeding up is a drift, lost after the window).
+    of it horizontally, with a yaw rate that is not spinning up at the end (its growth over the
+    window's last 5 s at most what a first-order settle with the run's own ``I_zz / k_r`` still
+    shows there, with a margin: :mod:`~rotorfault.studies.deciding_hold`, the one place the rule
+    lives; a spin that keeps speeding up is a drift, lost after the window).
 
 How it is flown: every run flies :data:`AFTER_FAULT_S` past its (first) failure, and the core's
 summary window (:class:`rotorfault._rfcore.VerdictCriteria` ``window_s``) is the last
@@ -79,24 +81,19 @@ from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sta
 from ..flight.outcomes import FLYING
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
+from .deciding_hold import (
+    HOLD_ALTITUDE_M,
+    HOLD_HORIZONTAL_M,
+    SETTLE_S,
+    SPIN_GROWTH_MIN_RAD_S,
+    SPIN_SETTLE_MARGIN,
+    SPIN_SETTLED_SHARE,
+    holds,
+    spin_growth_limit_rad_s,
+    spin_settle_time_constant_s,
+)
 from .sampling import RunDraw, gust_profile
 
-#: The hold thresholds of the issue, and when the judging starts after the failure.
-HOLD_ALTITUDE_M = 1.0
-HOLD_HORIZONTAL_M = 3.0
-SETTLE_S = 5.0
-#: The spin-growth rule (:func:`holds`): a run whose body yaw-rate magnitude grew, from the hold
-#: window's second-to-last 5 s (the core's ``spin_growth_span_s``) to its last 5 s, by more than
-#: ``max(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * mean |r| of the last 5 s)`` is spinning up:
-#: a drift, lost after the window. Why these values: a damped spin settling to r_f with time
-#: constant tau = I_zz / k_r (first order, from the failure) grows between the spans 15-20 s and
-#: 20-25 s after the failure by r_f (tau / 5 s) (e^-3s - 2 e^-4s + e^-5s), s = 5 s / tau: 2.0 % of
-#: the last span's mean for tau = 5 s, 7.7 % for tau = 10 s (10 % is reached near tau = 13 s, a
-#: spin still far from settled 25 s after the failure); an undamped spin-up under a constant residual moment
-#: (r = a t) grows by 5 a, 22 % of the last span's mean 22.5 a. 10 % sits between, and 1 rad/s
-#: keeps a slow spin's wind- and noise-driven wander (a few tenths of a rad/s) from counting.
-SPIN_GROWTH_MIN_RAD_S = 1.0
-SPIN_GROWTH_SHARE = 0.10
 #: Each run flies this long past its first failure (the issue's 30 s runs, failure in [2, 5] s).
 AFTER_FAULT_S = 25.0
 #: Control period and RK4 substeps (the issue's 400 Hz).
@@ -493,27 +490,34 @@ def hold_criteria() -> Any:
     return _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S - SETTLE_S)
 
 
-def spin_growth_limit_rad_s(final_spin_rad_s: Any) -> np.ndarray[Any, np.dtype[np.float64]]:
-    """The largest spin growth that still holds, rad/s, given the mean |yaw rate| over the hold
-    window's last 5 s: ``max(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * final)`` (NaN stays NaN)."""
-    final = np.abs(np.asarray(final_spin_rad_s, dtype=np.float64))
-    return np.where(np.isnan(final), np.nan, np.maximum(SPIN_GROWTH_MIN_RAD_S, SPIN_GROWTH_SHARE * final))
+def spin_growth_span_s() -> float:
+    """The length of each of the two spans the spin growth compares, s (the core's
+    ``VerdictCriteria.spin_growth_span_s``): the window's last and the one before it."""
+    return float(hold_criteria().spin_growth_span_s)
 
 
-def holds(
+def spin_growth_since_failure_s() -> float:
+    """When the earlier of the two spans starts after the (first) failure, s: every run flies
+    :data:`AFTER_FAULT_S` past it and the window ends with the run."""
+    return AFTER_FAULT_S - 2.0 * spin_growth_span_s()
+
+
+def run_settle_time_constant_s(vehicle_name: str, draw: RunDraw) -> float:
+    """The run's yaw settle time constant, s: its own ``I_zz`` (the nominal times the drawn
+    inertia factor) over the vehicle's rotational damping ``k_r`` (not perturbed); ``inf`` for
+    ``k_r = 0`` (:func:`~rotorfault.studies.deciding_hold.spin_settle_time_constant_s`)."""
+    v = vehicle(vehicle_name)
+    return spin_settle_time_constant_s(float(v.airframe.inertia_kg_m2[2]) * draw.inertia_scale[2], v.rotational_drag_n_m_s)
+
+
+def judge_holds(
     outcome: Any, window_altitude_m: Any, window_horizontal_m: Any, window_spin_growth_rad_s: Any, window_final_spin_rad_s: Any,
+    settle_time_constant_s: Any,
 ) -> np.ndarray[Any, np.dtype[np.bool_]]:
-    """The hold verdict: not lost, within both thresholds throughout the hold window, and not
-    spinning up: the yaw-rate magnitude's growth over the window's last 5 s (rad/s, the core's
-    ``window_spin_growth_rad_s``) at most :func:`spin_growth_limit_rad_s` of the last 5 s mean
-    |yaw rate| (rad/s). NaN values (a lost run's, or a growth not measured) never hold."""
-    alt = np.asarray(window_altitude_m, dtype=np.float64)
-    hor = np.asarray(window_horizontal_m, dtype=np.float64)
-    growth = np.asarray(window_spin_growth_rad_s, dtype=np.float64)
-    limit = spin_growth_limit_rad_s(window_final_spin_rad_s)
-    with np.errstate(invalid="ignore"):
-        return (np.isin(np.asarray(outcome), FLYING) & (alt <= HOLD_ALTITUDE_M) & (hor <= HOLD_HORIZONTAL_M)
-                & (growth <= limit))
+    """:func:`~rotorfault.studies.deciding_hold.holds` with the campaign's spans: what the
+    flights (:func:`run_rows`) and a stored dataset's re-judging (:func:`rejudge_holds`) both call."""
+    return holds(outcome, window_altitude_m, window_horizontal_m, window_spin_growth_rad_s, window_final_spin_rad_s,
+                 settle_time_constant_s, spin_growth_since_failure_s(), spin_growth_span_s())
 
 
 def target_verdict(d: dict[str, Any]) -> str:
@@ -584,6 +588,28 @@ def certify_run(suite: DecidingCampaign, cell: Cell, index: int) -> RunCertifica
     return _certificate(suite.seed, cell.draw_key, cell.vehicle, cell.fault_class, index)
 
 
+def _row_draws(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]]) -> tuple[list[tuple[str, str, int]], dict[tuple[str, str, int], tuple[Cell, RunDraw]]]:
+    """Each row's (vehicle, fault class, index) and, once per draw, its cell and draw drawn again
+    from the seed and the index, checked against the row (failed rotors, fault time, efficiency,
+    mass scale: a dataset of another suite or code is refused, naming the row)."""
+    cells = {(c.vehicle, c.fault_class): c for c in suite.cells}
+    keys = list(zip(columns["vehicle"].tolist(), columns["fault_class"].tolist(), columns["index"].tolist()))
+    drawn: dict[tuple[str, str, int], tuple[Cell, RunDraw]] = {}
+    for k, key in enumerate(keys):
+        if key in drawn:
+            continue
+        cell = cells.get(key[:2])
+        if cell is None:
+            raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}) is not a cell of the suite")
+        d = suite.draw(cell, int(key[2]))
+        recorded = (columns["failed_rotors"][k], float(columns["fault_time_s"][k]), float(columns["efficiency"][k]), float(columns["mass_scale"][k]))
+        if recorded != ("-".join(map(str, d.failed)), d.fault_time_s, d.efficiency, d.mass_scale):
+            raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
+                             f"recorded {recorded}, drawn {(d.failed, d.fault_time_s, d.efficiency, d.mass_scale)}")
+        drawn[key] = (cell, d)
+    return keys, drawn
+
+
 def certify_rows(
     suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]], *, progress: bool = False,
     verdict_of: Callable[[DecidingCampaign, Cell, int], RunCertificate] | None = None,
@@ -594,51 +620,63 @@ def certify_rows(
     another suite or code is refused, naming the row), then certified once per draw."""
     out = dict(columns)
     n = len(columns["vehicle"])
-    cells = {(c.vehicle, c.fault_class): c for c in suite.cells}
-    verdicts: list[RunCertificate] = []
-    keys = list(zip(columns["vehicle"].tolist(), columns["fault_class"].tolist(), columns["index"].tolist()))
-    drawn: dict[tuple[str, str, int], RunCertificate] = {}
+    keys, drawn = _row_draws(suite, columns)
+    verdicts: dict[tuple[str, str, int], RunCertificate] = {}
     bar = None
     if progress:
         from rich.progress import Progress
 
         bar = Progress(transient=True)
         bar.start()
-        task = bar.add_task("certify", total=len(set(keys)))
+        task = bar.add_task("certify", total=len(drawn))
     try:
-        for k, key in enumerate(keys):
-            if key not in drawn:
-                cell = cells.get(key[:2])
-                if cell is None:
-                    raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}) is not a cell of the suite")
-                d = suite.draw(cell, int(key[2]))
-                recorded = (columns["failed_rotors"][k], float(columns["fault_time_s"][k]), float(columns["efficiency"][k]), float(columns["mass_scale"][k]))
-                if recorded != ("-".join(map(str, d.failed)), d.fault_time_s, d.efficiency, d.mass_scale):
-                    raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
-                                     f"recorded {recorded}, drawn {(d.failed, d.fault_time_s, d.efficiency, d.mass_scale)}")
-                drawn[key] = (verdict_of or certify_run)(suite, cell, int(key[2]))
-                if bar is not None:
-                    bar.advance(task)
-            verdicts.append(drawn[key])
+        for key, (cell, _) in drawn.items():
+            verdicts[key] = (verdict_of or certify_run)(suite, cell, int(key[2]))
+            if bar is not None:
+                bar.advance(task)
     finally:
         if bar is not None:
             bar.stop()
-    out["certified"] = np.array([v.certified for v in verdicts], dtype=object)
-    out["certified_static_hover"] = np.array([v.static_hover for v in verdicts], dtype=object)
-    out["certified_spin_rad_s"] = np.array([v.spin_rate_rad_s for v in verdicts], dtype=np.float64).reshape(n)
-    out["certify_note"] = np.array([v.note for v in verdicts], dtype=object)
+    rows = [verdicts[key] for key in keys]
+    out["certified"] = np.array([v.certified for v in rows], dtype=object)
+    out["certified_static_hover"] = np.array([v.static_hover for v in rows], dtype=object)
+    out["certified_spin_rad_s"] = np.array([v.spin_rate_rad_s for v in rows], dtype=np.float64).reshape(n)
+    out["certify_note"] = np.array([v.note for v in rows], dtype=object)
+    return out
+
+
+def rejudge_holds(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]]) -> dict[str, np.ndarray[Any, Any]]:
+    """``columns`` (rows of ``suite`` with the spin-growth columns) with ``holds`` judged again by
+    the current rule (:func:`judge_holds`) from the stored window values and each run's settle time
+    constant (:func:`run_settle_time_constant_s`, from its draw drawn again and checked against the
+    row as :func:`certify_rows` does), without flying; the verdict the flight stored is kept as
+    ``holds_as_flown``."""
+    keys, drawn = _row_draws(suite, columns)
+    tau = np.array([run_settle_time_constant_s(key[0], drawn[key][1]) for key in keys], dtype=np.float64).reshape(len(keys))
+    out = dict(columns)
+    out["holds_as_flown"] = np.asarray(columns["holds"], dtype=bool)
+    out["holds"] = judge_holds(columns["outcome"], columns["hold_altitude_error_m"], columns["hold_horizontal_error_m"],
+                               columns["hold_spin_growth_rad_s"], columns["hold_final_spin_rad_s"], tau)
     return out
 
 
 def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: bool = False) -> DecidingResult:
     """A deciding campaign's Parquet dataset (``run_deciding(..., out=path)``) read back, its
-    suite from the manifest (a dataset without the spin-growth columns, flown before that rule:
-    its ``holds`` kept as judged then, the columns NaN, ``spin_growth_judged`` False, the table
-    says so); ``certify``: rows without the verdict (flown with ``certify=False``
-    or before it existed) certified after the fact (:func:`certify_rows`), timed in
-    ``certify_seconds``."""
+    suite from the manifest, its ``holds`` judged again by the current hold rule
+    (:func:`rejudge_holds`: from the stored window values and the seeded draws, without flying;
+    the flight's verdict kept as ``holds_as_flown``). A dataset without the spin-growth columns
+    (flown before that rule): its ``holds`` kept as judged then, the columns NaN,
+    ``spin_growth_judged`` False, the table says so. ``certify``: rows without the verdict
+    (flown with ``certify=False`` or before it existed) certified after the fact
+    (:func:`certify_rows`), timed in ``certify_seconds``. Verdicts stored by the flight carry the
+    certify rule that made them (the manifest's ``certify_rule``,
+    :data:`rotorfault.studies.certify.SURVIVAL_RULE`); verdicts from an older rule, or a dataset
+    that does not say, are kept but warned about (:class:`StaleCertifyWarning`) and marked
+    (``certify_rule``; the table says so): certify them again with :func:`certify_rows`."""
     import time
+    import warnings
 
+    from .certify import SURVIVAL_RULE
     from .storage import iter_tables, pyarrow_module, read_manifest
     from .summaries import numpy_columns
 
@@ -653,6 +691,9 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     spin_growth_judged = all(name in columns for name, _ in _SPIN_GROWTH_COLUMNS)
     if not spin_growth_judged:
         columns = {**columns, **{name: np.full(len(columns["vehicle"]), math.nan) for name, _ in _SPIN_GROWTH_COLUMNS}}
+    else:
+        columns = rejudge_holds(suite, columns)
+    certify_rule: int | None = SURVIVAL_RULE
     if "certified" not in columns or (certify and not suite.certify):
         if not certify:
             columns = {**columns, **{name: np.full(len(columns["vehicle"]), "" if kind == "string" else math.nan, dtype=object if kind == "string" else np.float64)
@@ -661,7 +702,22 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
             start = time.perf_counter()
             columns = certify_rows(suite, columns, progress=progress)
             seconds = time.perf_counter() - start
-    return DecidingResult(suite, columns, certify_seconds=seconds, spin_growth_judged=spin_growth_judged)
+    elif suite.certify:
+        stored = manifest.get("metadata", {}).get("certify_rule")
+        certify_rule = stored if isinstance(stored, int) and not isinstance(stored, bool) else None
+        if certify_rule != SURVIVAL_RULE:
+            warnings.warn(f"{path}: its certify verdicts were made by {_rule_text(certify_rule)}, not the current rule "
+                          f"{SURVIVAL_RULE}; the decision uses them as stored (certify_rows certifies again)", StaleCertifyWarning, stacklevel=2)
+    return DecidingResult(suite, columns, certify_seconds=seconds, spin_growth_judged=spin_growth_judged, certify_rule=certify_rule)
+
+
+class StaleCertifyWarning(UserWarning):
+    """A dataset's stored certify verdicts were made by an older certify rule, or it does not say
+    which (:func:`read_deciding`)."""
+
+
+def _rule_text(rule: int | None) -> str:
+    return "an unrecorded certify rule" if rule is None else f"certify rule {rule}"
 
 
 # -- execution ----------------------------------------------------------------------------------
@@ -695,7 +751,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
     """Rows ``[first, stop)`` of the suite (row ``k``: cell ``k // runs``, run ``k % runs``), flown
     in one Rust batch: the same rows however the suite is cut."""
     rows: list[dict[str, Any]] = []
-    runs: list[tuple[int, Any, Any, Any, Any, Any, list[Any]]] = []
+    runs: list[tuple[int, Any, Any, Any, Any, Any, list[Any], float]] = []
     limits = DivergenceLimits()
     controllers: dict[tuple[str, str], Any] = {}
     for k in range(first, stop):
@@ -735,7 +791,8 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
             wind_profile=gust_profile(d, GUST_DURATION_S),
         )
         runs.append((len(rows) - 1, airframe._core, actuator, drag, controller.core(DT_S),
-                     (x0._packed(), None if trim is None else [float(u) for u in trim], config), [f._packed() for f in faults]))
+                     (x0._packed(), None if trim is None else [float(u) for u in trim], config), [f._packed() for f in faults],
+                     run_settle_time_constant_s(cell.vehicle, d)))
     if runs:
         batch = _rfcore.simulate_summaries(
             [r[1] for r in runs], [r[2] for r in runs], [r[3] for r in runs], [r[4] for r in runs], [r[5][0] for r in runs],
@@ -744,7 +801,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         outcome = list(batch.outcome)
         alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
         growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
-        held = holds(outcome, alt, hor, growth, final_spin)
+        held = judge_holds(outcome, alt, hor, growth, final_spin, [r[7] for r in runs])
         for j, r in enumerate(runs):
             row = rows[r[0]]
             row.update(outcome=outcome[j], holds=bool(held[j]), hold_altitude_error_m=float(alt[j]), hold_horizontal_error_m=float(hor[j]),
@@ -756,6 +813,13 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         values = [row.get(name, math.nan) for row in rows]
         out[name] = np.array(values, dtype={"int64": np.int64, "float64": np.float64, "bool": bool, "string": object}[kind])
     return out
+
+
+def _metadata(suite: DecidingCampaign) -> dict[str, Any]:
+    """The dataset's metadata: the version, and the certify rule of the verdicts it stores."""
+    from .certify import SURVIVAL_RULE
+
+    return {"rotorfault_version": _rfcore.__version__, **({"certify_rule": SURVIVAL_RULE} if suite.certify else {})}
 
 
 @dataclass(frozen=True)
@@ -785,7 +849,7 @@ def run_deciding(
         raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
     result = run_chunks(
         _Task(suite), total_rows=suite.total_runs, chunk_rows=suite.chunk_size, schema=schema(), arguments={"suite": suite.to_dict()},
-        kind=KIND, out=out, metadata={"rotorfault_version": _rfcore.__version__}, resume=resume, force=force, backend=backend,
+        kind=KIND, out=out, metadata=_metadata(suite), resume=resume, force=force, backend=backend,
         dask=dask, progress=suite.total_runs >= 2000 if progress is None else progress,
         description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells", rows_field="suite",
     )
@@ -813,6 +877,9 @@ class DecidingResult:
     #: Whether the rows' ``holds`` include the spin-growth rule; False for a dataset flown before
     #: it (:func:`read_deciding`: its ``holds`` are the old rule's, the growth columns NaN).
     spin_growth_judged: bool = True
+    #: The certify rule (:data:`rotorfault.studies.certify.SURVIVAL_RULE`) that made the rows'
+    #: verdicts; ``None``: a dataset that does not say (:func:`read_deciding` warns).
+    certify_rule: int | None = field(default_factory=lambda: _current_certify_rule())
 
     def cell_rows(self) -> list[dict[str, Any]]:
         """One row per cell: hold share (with its 95 % Wilson interval), worst hold-window
@@ -949,8 +1016,10 @@ class DecidingResult:
         lines = [
             f"deciding campaign: {self.suite.runs} runs per cell, {len(self.suite.cells)} cells; holds = not lost and within "
             f"{HOLD_ALTITUDE_M:g} m altitude, {HOLD_HORIZONTAL_M:g} m horizontal from {SETTLE_S:g} s after the failure"
-            + (f", yaw rate not growing (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
-               f"{SPIN_GROWTH_SHARE:.0%} of the last 5 s mean)" if self.spin_growth_judged
+            + (f", yaw rate not spinning up (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
+               f"{1 + SPIN_SETTLE_MARGIN:g} x what a first-order settle from the failure with the run's I_zz / k_r grows there, "
+               f"or a spin predicted to settle within {SPIN_SETTLED_SHARE:.0%} of its last 5 s mean; k_r = 0: "
+               f"{SPIN_GROWTH_MIN_RAD_S:g} rad/s)" if self.spin_growth_judged
                else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)"),
             "| vehicle | fault class | controller | holds (95 % CI) | lost | design refused | worst alt / horiz (m) | median spin (rad/s) |",
             "|---|---|---|---|---|---|---|---|",
@@ -970,6 +1039,9 @@ class DecidingResult:
             miss = "met" if b["miss"] == 0 else f"{100 * b['miss']:.1f} points"
             lines.append(f"| {b['vehicle']} | {b['fault_class']} | {b['controller']} | {100 * b['share']:.1f} % | {miss} |")
         if self.certified:
+            if self.certify_rule != _current_certify_rule():
+                lines += ["", f"CERTIFY VERDICTS FROM {_rule_text(self.certify_rule).upper()} (current: rule {_current_certify_rule()}): "
+                          "the decision below uses them as stored"]
             lines += ["", self.decision_table()]
         return "\n".join(lines)
 
@@ -980,6 +1052,12 @@ class DecidingResult:
         return c is not None and not np.any(c == "")
 
 
+def _current_certify_rule() -> int:
+    from .certify import SURVIVAL_RULE
+
+    return SURVIVAL_RULE
+
+
 #: Named suites for ``rotorfault campaign --suite``.
 SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
     "deciding": lambda runs, seed: DecidingCampaign(runs=runs, seed=seed),
@@ -987,7 +1065,9 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_GROWTH_SHARE", "SUITES", "VEHICLES", "CampaignVehicle",
+    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
-    "certify_rows", "certify_run", "hold_errors", "holds", "spin_growth_limit_rad_s", "read_deciding", "run_deciding", "run_rows",
+    "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
+    "spin_growth_since_failure_s", "spin_growth_span_s",
+    "read_deciding", "run_deciding", "run_rows",
 ]
