@@ -399,18 +399,8 @@ fn fly_group_lanes<L: Lanes>(
             // them (the scalar driver's rule).
             let onboard = lane.onboard.as_ref().map(|(onboard, _)| onboard);
             let estimate = onboard.map(|o| o.estimate(t));
-            let measured = estimate.map_or(state, |e| e.state);
             let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard) {
-                if controller.reads_samples() {
-                    ControllerInput {
-                        state: &measured,
-                        gyro_rad_s: Some(estimate.gyro_rad_s),
-                        specific_force_m_s2: Some(estimate.accel_m_s2),
-                        rotor_thrust_n: onboard.rotor_thrust(),
-                    }
-                } else {
-                    ControllerInput::state_only(&measured)
-                }
+                onboard.controller_input(estimate, controller.reads_samples())
             } else if controller.reads_samples() {
                 truth_samples(
                     vehicle,

@@ -30,7 +30,7 @@ use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
 use crate::flight::simulation::sensing::Sensing;
 use crate::flight::simulation::tape::Tape;
 use crate::flight::vehicle::Vehicle;
-use crate::state::RigidBodyState;
+use crate::state::{ControllerInput, RigidBodyState};
 
 /// Rotor-speed feedback converted to thrust (module docs).
 #[derive(Debug, Clone)]
@@ -216,6 +216,27 @@ impl Onboard {
             e.time_s = t_s;
         }
         e
+    }
+
+    /// What the controller sees at a control step with `estimate`: the estimated state and, for a
+    /// controller that reads samples, the bias-corrected gyro and accelerometer samples the
+    /// estimate carries and the rotor thrusts from rotor-speed feedback (one rule for the scalar
+    /// driver and the lanes).
+    pub(crate) fn controller_input<'a>(
+        &'a self,
+        estimate: &'a Estimate,
+        reads_samples: bool,
+    ) -> ControllerInput<'a> {
+        if reads_samples {
+            ControllerInput {
+                state: &estimate.state,
+                gyro_rad_s: Some(estimate.gyro_rad_s),
+                specific_force_m_s2: Some(estimate.accel_m_s2),
+                rotor_thrust_n: self.rotor_thrust(),
+            }
+        } else {
+            ControllerInput::state_only(&estimate.state)
+        }
     }
 
     /// The rotor thrusts from the newest rotor-speed reading, N (`None` before the first or
