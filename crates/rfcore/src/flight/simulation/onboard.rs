@@ -131,6 +131,31 @@ impl Onboard {
         best.map(|(_, which)| which)
     }
 
+    /// `true` when a sensor takes a sample at a time in `[from_s, to_s)` (the span of a tape
+    /// node: a sample there reads that node, so a node whose span no sample falls in is read by
+    /// none and need not be written).
+    pub(crate) fn samples_in(&self, from_s: f64, to_s: f64) -> bool {
+        let s = &self.sensors;
+        s.imu.clock().has_sample_in(from_s, to_s)
+            || s.position.clock().has_sample_in(from_s, to_s)
+            || s.magnetometer
+                .as_ref()
+                .is_some_and(|m| m.clock().has_sample_in(from_s, to_s))
+            || (self.rotor.is_some() && s.rotor_speed.clock().has_sample_in(from_s, to_s))
+    }
+
+    /// `true` when a sensor takes a sample at or just after `t_s` that is due at `t_s` (it
+    /// reads the node at `t_s`, the last of a control period).
+    pub(crate) fn samples_due_at_or_after(&self, t_s: f64) -> bool {
+        let s = &self.sensors;
+        s.imu.clock().has_due_sample_at_or_after(t_s)
+            || s.position.clock().has_due_sample_at_or_after(t_s)
+            || s.magnetometer
+                .as_ref()
+                .is_some_and(|m| m.clock().has_due_sample_at_or_after(t_s))
+            || (self.rotor.is_some() && s.rotor_speed.clock().has_due_sample_at_or_after(t_s))
+    }
+
     /// Takes every sample due up to `t_end_s` from `tape` (module docs), checking `cancel` before
     /// each sample: a control period holds `dt_s x imu_rate_hz` IMU samples and filter steps
     /// (a 100 s period at 32 kHz is 3.2 million, about 5 s of work), so the driver's check once
