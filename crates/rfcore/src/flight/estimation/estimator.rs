@@ -62,6 +62,15 @@ struct Pending {
 /// A time within this of another counts as the same time, s.
 const TIME_EPS_S: f64 = 1e-9;
 
+/// One step of the output predictor's chain to a buffered sample: the state there, the step's
+/// linearisation and the inputs at its end (what `NominalState::propagate_from` returns).
+#[derive(Debug, Clone, Copy)]
+struct ChainStep {
+    state: NominalState,
+    step: Step,
+    end: Inputs,
+}
+
 #[derive(Debug, Clone)]
 pub struct Estimator {
     settings: EstimatorSettings,
@@ -85,6 +94,21 @@ pub struct Estimator {
     // Samples after the horizon, oldest first; measurements waiting for it, by validity time.
     buffer: VecDeque<ImuSample>,
     pending: VecDeque<Pending>,
+    /// The output predictor's steps to the buffered samples (`trail[i]` reaches `buffer[i]`),
+    /// kept while `trail_follows_horizon`: the output chain then starts from the horizon's own
+    /// state, inputs and sample, so the horizon's step to the next sample is the chain's first
+    /// step, the same function of the same values (bit for bit), and is taken from it instead of
+    /// being computed again. A step of the horizon that is not a whole interval (to a
+    /// measurement's time of validity) or a fused correction ends the following; a replay of the
+    /// output from the horizon starts it again.
+    trail: VecDeque<ChainStep>,
+    trail_follows_horizon: bool,
+    /// `false` only where a test checks that taking the horizon's steps from the trail changes
+    /// nothing.
+    reuse_trail: bool,
+    /// Horizon steps taken from the trail (for the test that they are taken).
+    #[cfg(test)]
+    pub(crate) chained_steps: u64,
     // The output predictor at the newest sample.
     output: NominalState,
     /// The output state's inputs at the newest sample (as `horizon_inputs`).
@@ -145,6 +169,11 @@ impl Estimator {
             accel_clamped: [false; 3],
             buffer: VecDeque::new(),
             pending: VecDeque::new(),
+            trail: VecDeque::new(),
+            trail_follows_horizon: true,
+            reuse_trail: true,
+            #[cfg(test)]
+            chained_steps: 0,
             output: start,
             output_inputs: None,
             newest: None,
@@ -187,7 +216,7 @@ impl Estimator {
         if corrected || self.buffer.is_empty() {
             self.replay_output();
         } else {
-            let (output, _, end) = self.output.propagate_from(
+            let (output, step, end) = self.output.propagate_from(
                 self.output_inputs.as_ref(),
                 &previous,
                 sample,
@@ -197,6 +226,13 @@ impl Estimator {
             );
             self.output = output;
             self.output_inputs = Some(end);
+            if self.trail_follows_horizon {
+                self.trail.push_back(ChainStep {
+                    state: output,
+                    step,
+                    end,
+                });
+            }
         }
         self.filter_gyro(sample, sample.time_s - previous.time_s);
         Ok(())
@@ -323,6 +359,23 @@ impl Estimator {
         self.gyro_filtered = sample.gyro_rad_s;
         self.output = self.horizon;
         self.output_inputs = None;
+        self.trail.clear();
+        self.trail_follows_horizon = self.reuse_trail;
+    }
+
+    /// An estimator that computes every step of its horizon (the reference of the test that
+    /// taking them from the output's trail changes nothing).
+    #[cfg(test)]
+    pub(crate) fn without_trail_reuse(mut self) -> Self {
+        self.reuse_trail = false;
+        self.trail_follows_horizon = false;
+        self
+    }
+
+    /// The horizon leaves the output chain's path (module docs of `trail`).
+    fn stop_following(&mut self) {
+        self.trail_follows_horizon = false;
+        self.trail.clear();
     }
 
     fn queue(&mut self, valid_at_s: f64, measurement: Measurement) {
@@ -349,6 +402,8 @@ impl Estimator {
                 break;
             }
             self.buffer.pop_front();
+            // The chain's step to `next` (the trail's front matches the buffer's).
+            let chained = self.trail.pop_front();
             while let Some(&p) = self.pending.front() {
                 if p.valid_at_s > next.time_s + TIME_EPS_S {
                     break;
@@ -361,7 +416,16 @@ impl Estimator {
                 self.propagate_horizon(&next, p.valid_at_s);
                 corrected |= self.fuse(&p.measurement);
             }
-            self.propagate_horizon(&next, next.time_s);
+            match chained {
+                Some(c) if self.trail_follows_horizon => {
+                    #[cfg(test)]
+                    {
+                        self.chained_steps += 1;
+                    }
+                    self.take_horizon_step(&next, c.state, &c.step, c.end)
+                }
+                _ => self.propagate_horizon(&next, next.time_s),
+            }
             self.horizon_sample = Some(next);
         }
         corrected
@@ -384,12 +448,25 @@ impl Estimator {
             t_s,
             &self.kinematics,
         );
+        self.stop_following();
+        self.take_horizon_step(next, state, &step, end);
+    }
+
+    /// The horizon moved by `step` to `state` (towards sample `next`), with the covariance's
+    /// block and the clamping it tracks.
+    fn take_horizon_step(
+        &mut self,
+        next: &ImuSample,
+        state: NominalState,
+        step: &Step,
+        end: Inputs,
+    ) {
         self.horizon = state;
         self.horizon_inputs = Some(end);
-        self.horizon_time_s = t_s;
+        self.horizon_time_s = end.time_s;
         match self.block.as_mut() {
-            Some(block) => block.extend(&step),
-            None => self.block = Some(Block::start(&step)),
+            Some(block) => block.extend(step),
+            None => self.block = Some(Block::start(step)),
         }
         if self
             .block
@@ -538,6 +615,7 @@ impl Estimator {
                 false
             }
             Fusion::Fused => {
+                self.stop_following();
                 self.horizon.inject(&dx);
                 self.horizon_inputs = None;
                 reset_covariance(&mut self.covariance, &dx.fixed_rows::<3>(ATT).into_owned());
@@ -551,11 +629,25 @@ impl Estimator {
     fn replay_output(&mut self) {
         let mut x = self.horizon;
         let mut inputs = self.horizon_inputs;
+        self.trail.clear();
+        // The chain starts from the horizon only when the horizon is at its sample (not at a
+        // measurement's time between samples).
+        self.trail_follows_horizon = self.reuse_trail
+            && self
+                .horizon_sample
+                .is_some_and(|a| a.time_s == self.horizon_time_s);
         if let Some(mut a) = self.horizon_sample {
             let mut t0 = self.horizon_time_s;
             for b in &self.buffer {
-                let (next, _, end) =
+                let (next, step, end) =
                     x.propagate_from(inputs.as_ref(), &a, b, t0, b.time_s, &self.kinematics);
+                if self.trail_follows_horizon {
+                    self.trail.push_back(ChainStep {
+                        state: next,
+                        step,
+                        end,
+                    });
+                }
                 x = next;
                 inputs = Some(end);
                 a = *b;

@@ -36,6 +36,9 @@ struct Flight {
     delivery: Delivery,
     /// Position measurements valid within this window never arrive.
     gap_s: Option<(f64, f64)>,
+    /// The horizon takes its steps from the output predictor's chain where it can (`false`:
+    /// computes every one).
+    reuse_trail: bool,
 }
 
 impl Flight {
@@ -49,6 +52,7 @@ impl Flight {
             settle_s: 5.0,
             delivery: Delivery::Compensated,
             gap_s: None,
+            reuse_trail: true,
         }
     }
 }
@@ -72,6 +76,8 @@ struct Outcome {
     final_covariance: Covariance,
     saturated_samples: u64,
     saw_saturation_flag: bool,
+    /// Horizon steps taken from the output predictor's chain.
+    chained_steps: u64,
 }
 
 fn fly(f: &Flight) -> Outcome {
@@ -85,6 +91,9 @@ fn fly(f: &Flight) -> Outcome {
     let mut sensors = SensorSuite::new(&suite, 4, f.seed).unwrap();
     let initial = f.motion.state_at(0.0);
     let mut estimator = Estimator::new(settings, &initial).unwrap();
+    if !f.reuse_trail {
+        estimator = estimator.without_trail_reuse();
+    }
     let mut out = Outcome::default();
     let (mut att, mut pos, mut vel, mut p_att, mut p_pos, mut scored) =
         (0.0, 0.0, 0.0, 0.0, 0.0, 0);
@@ -157,6 +166,7 @@ fn fly(f: &Flight) -> Outcome {
     out.counts = estimator.counts();
     out.final_covariance = *estimator.covariance_at_horizon();
     out.saturated_samples = estimator.saturated_samples();
+    out.chained_steps = estimator.chained_steps;
     out
 }
 
@@ -633,6 +643,76 @@ fn deterministic_by_seed() {
     assert_eq!(a.outputs, b.outputs);
     assert_eq!(a.horizons, b.horizons);
     assert_ne!(a.outputs, c.outputs);
+}
+
+#[test]
+fn horizon_steps_taken_from_the_output_chain_change_nothing() {
+    // Bit for bit against the estimator that computes every horizon step: fused and rejected
+    // fixes, a magnetometer, a clamped gyro, an outage and the replays after each correction.
+    let mut spin = Flight::new(
+        AnalyticMotion::spin(30.0, 0.3),
+        SensorSuiteProfile::mocap(),
+        3,
+    );
+    spin.duration_s = 3.0;
+    let mut gnss = Flight::new(
+        AnalyticMotion::spin(20.0, 0.2),
+        SensorSuiteProfile::gnss(),
+        5,
+    );
+    gnss.duration_s = 3.0;
+    gnss.gap_s = Some((1.0, 1.5));
+    let mut clamped = Flight::new(
+        AnalyticMotion::spin(36.0, 0.0),
+        SensorSuiteProfile::mocap(),
+        4,
+    );
+    clamped.duration_s = 2.0;
+    // A filter that refuses most of its fixes (a gate at chi^2 = 2).
+    let mut gated = Flight::new(
+        AnalyticMotion::spin(5.0, 0.1),
+        SensorSuiteProfile::mocap(),
+        6,
+    );
+    gated.duration_s = 2.0;
+    gated.settings.innovation_gate = 2.0;
+    for (name, mut flight) in [
+        ("spin", spin),
+        ("gnss", gnss),
+        ("clamped", clamped),
+        ("gated", gated),
+    ] {
+        flight.settle_s = 0.0;
+        let reused = fly(&flight);
+        flight.reuse_trail = false;
+        let computed = fly(&flight);
+        assert_eq!(reused.outputs, computed.outputs, "{name}");
+        assert_eq!(reused.horizons, computed.horizons, "{name}");
+        assert_eq!(reused.final_covariance, computed.final_covariance, "{name}");
+        assert_eq!(reused.counts, computed.counts, "{name}");
+        assert_eq!(reused.position_track, computed.position_track, "{name}");
+        println!(
+            "{name}: {:?}, {} saturated samples, {} of {} horizon steps chained",
+            reused.counts,
+            reused.saturated_samples,
+            reused.chained_steps,
+            reused.outputs.len()
+        );
+        assert_eq!(computed.chained_steps, 0, "{name}");
+        // Each case exercises what it is there for.
+        match name {
+            "gated" => assert!(reused.counts.rejected > 0),
+            "clamped" => assert!(reused.saturated_samples > 0),
+            "gnss" => assert!(reused.counts.fused > 0),
+            _ => {}
+        }
+        // A refused fix leaves the horizon off the output's chain until the next correction.
+        let share = if name == "gated" { 50 } else { 2 };
+        assert!(
+            reused.chained_steps * share > reused.outputs.len() as u64,
+            "{name}"
+        );
+    }
 }
 
 #[test]

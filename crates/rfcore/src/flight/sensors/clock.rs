@@ -52,6 +52,35 @@ impl SampleClock {
         self.next_time_s <= t_s + self.due_tolerance_s
     }
 
+    /// The time of the first sample from the next one on at or after `t_s` (finite, >= 0), s:
+    /// `k / rate_hz` as [`SampleClock::tick`] will give it.
+    pub fn first_at_or_after(&self, t_s: f64) -> f64 {
+        // From one sample below the estimate up: the product's rounding is then on the safe side.
+        let mut k = ((t_s * self.rate_hz).floor() as u64)
+            .saturating_sub(1)
+            .max(self.next_index);
+        loop {
+            let x = k as f64 / self.rate_hz;
+            if x >= t_s {
+                return x;
+            }
+            k += 1;
+        }
+    }
+
+    /// `true` when a sample from the next one on falls in `[from_s, to_s)`.
+    #[inline]
+    pub fn has_sample_in(&self, from_s: f64, to_s: f64) -> bool {
+        self.next_time_s < to_s && self.first_at_or_after(from_s) < to_s
+    }
+
+    /// `true` when a sample from the next one on at or after `t_s` counts as due at `t_s`
+    /// ([`SampleClock::is_due`]: within a millionth of a period after it).
+    #[inline]
+    pub fn has_due_sample_at_or_after(&self, t_s: f64) -> bool {
+        self.first_at_or_after(t_s) <= t_s + self.due_tolerance_s
+    }
+
     /// The time of the sample being taken now; the clock moves to the next one.
     pub fn tick(&mut self) -> f64 {
         let t = self.next_time_s;
@@ -84,5 +113,30 @@ mod tests {
         }
         // Samples at 0, 1/240, ..., 1 s: 241 of them in [0, 1].
         assert_eq!(taken, 241);
+    }
+
+    #[test]
+    fn sample_windows_agree_with_the_ticks() {
+        // Against the ticked times themselves, on 400 Hz control steps cut in 4 substeps.
+        for rate in [240.0, 500.0, 1000.0, 333.0] {
+            let mut clock = SampleClock::new(rate);
+            clock.tick();
+            let times: Vec<f64> = {
+                let mut c = clock;
+                (0..2000).map(|_| c.tick()).collect()
+            };
+            let h = 1.0 / 1600.0;
+            for k in 0..1000 {
+                let (a, b) = (k as f64 * h, (k + 1) as f64 * h);
+                let expected = times.iter().any(|&x| a <= x && x < b);
+                assert_eq!(clock.has_sample_in(a, b), expected, "{rate} {k}");
+                let due = times
+                    .iter()
+                    .any(|&x| x >= b && x <= b + PERIOD_TOLERANCE * (1.0 / rate));
+                assert_eq!(clock.has_due_sample_at_or_after(b), due, "{rate} {k}");
+                let first = times.iter().copied().find(|&x| x >= a).unwrap();
+                assert_eq!(clock.first_at_or_after(a), first);
+            }
+        }
     }
 }

@@ -410,6 +410,11 @@ impl Imu {
         &self.profile
     }
 
+    /// Its sample clock (when its samples fall).
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
+
     /// The time of the next sample; the simulator hands [`Imu::sample`] the truth there.
     pub fn next_sample_time_s(&self) -> f64 {
         self.clock.next_time_s()

@@ -98,6 +98,11 @@ impl Magnetometer {
         &self.profile
     }
 
+    /// Its sample clock (when its samples fall).
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
+
     pub fn next_sample_time_s(&self) -> f64 {
         self.clock.next_time_s()
     }

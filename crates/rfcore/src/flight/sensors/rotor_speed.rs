@@ -104,6 +104,11 @@ impl RotorSpeedSensor {
         })
     }
 
+    /// Its sample clock (when its samples fall).
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
+
     pub fn next_sample_time_s(&self) -> f64 {
         self.clock.next_time_s()
     }

@@ -16,7 +16,12 @@
 //! With sensing (`SimulationConfig::sensing`) only the truth flies in lanes: each run keeps its
 //! own sensors and estimator ([`Onboard`], scalar, like its controller), fed from its own tape
 //! of the period's nodes, which the group writes as the scalar integrator does (each RK4
-//! interval's start with the rotor totals the interval starts from, then the period's end).
+//! interval's start with the rotor totals the interval starts from, then the period's end),
+//! leaving out the nodes no sample reads: a sample reads the last node at or before its time,
+//! so the node of an interval `[a, b)` is read only when a sensor's clock has a sample in it
+//! (and the period's end node only by a sample due at the period's end); the sensors' clocks
+//! know their sample times in advance (`Onboard::samples_in`). At 400 Hz with 4 substeps and
+//! the IMU at 500 Hz and mocap at 240 Hz, fewer than half the nodes are read.
 //! The tape's nodes are the scalar ones bit for bit (the lanes' states and rotor sums are, and
 //! the rotor thrusts come from the scalar function on the lane's channels), so are the sensor
 //! samples, the estimates and the commands; the tape evaluates a node's wrench itself where the
@@ -399,18 +404,8 @@ fn fly_group_lanes<L: Lanes>(
             // them (the scalar driver's rule).
             let onboard = lane.onboard.as_ref().map(|(onboard, _)| onboard);
             let estimate = onboard.map(|o| o.estimate(t));
-            let measured = estimate.map_or(state, |e| e.state);
             let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard) {
-                if controller.reads_samples() {
-                    ControllerInput {
-                        state: &measured,
-                        gyro_rad_s: Some(estimate.gyro_rad_s),
-                        specific_force_m_s2: Some(estimate.accel_m_s2),
-                        rotor_thrust_n: onboard.rotor_thrust(),
-                    }
-                } else {
-                    ControllerInput::state_only(&measured)
-                }
+                onboard.controller_input(estimate, controller.reads_samples())
             } else if controller.reads_samples() {
                 truth_samples(
                     vehicle,
@@ -654,7 +649,7 @@ impl<L: Lanes> Period<L> {
                     totals[node] = self.totals(&self.nodes[node]);
                 }
                 if sensing {
-                    self.push_nodes(vehicle, config, a, body, &totals[0], group, active);
+                    self.push_nodes(vehicle, config, (a, end), body, &totals[0], group, active);
                 }
                 let next = model.rk4_step(body, len, &totals);
                 let (n3z, speed2, rate2) = next.limit_parts();
@@ -712,8 +707,11 @@ impl<L: Lanes> Period<L> {
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if active[i] {
                 self.load_channels(i, &mut lane.actuators);
-                // The period's end node (the scalar integrator's last).
-                if let Some((_, tape)) = lane.onboard.as_mut() {
+                // The period's end node (the scalar integrator's last), where a sample reads it.
+                if let Some((onboard, tape)) = lane.onboard.as_mut() {
+                    if !onboard.samples_due_at_or_after(t_next) {
+                        continue;
+                    }
                     push_node(
                         tape,
                         vehicle,
@@ -730,7 +728,8 @@ impl<L: Lanes> Period<L> {
         }
     }
 
-    /// Each active lane's tape node at the start `a_s` of an RK4 interval: the lane's state and
+    /// Each active lane's tape node at the start `a_s` of an RK4 interval `[a_s, end_s)` where a
+    /// sensor samples in it (module docs: a node no sample reads is not written): the lane's state and
     /// the channels the interval starts from (the targets for instant rotors, as the scalar
     /// integrator's `constant` case), with the interval's rotor totals there (`totals`: the
     /// scalar `rotor_totals` bit for bit; the net rotor spin left at zero, which the lanes'
@@ -741,7 +740,7 @@ impl<L: Lanes> Period<L> {
         &mut self,
         vehicle: &Vehicle,
         config: &SimulationConfig,
-        a_s: f64,
+        (a_s, end_s): (f64, f64),
         body: &BodyLanes<L>,
         totals: &TotalsLanes<L>,
         group: &mut [(usize, Lane)],
@@ -753,9 +752,12 @@ impl<L: Lanes> Period<L> {
             &self.target_lanes
         };
         for (i, (_, lane)) in group.iter_mut().enumerate() {
-            let (true, Some((_, tape))) = (active[i], lane.onboard.as_mut()) else {
+            let (true, Some((onboard, tape))) = (active[i], lane.onboard.as_mut()) else {
                 continue;
             };
+            if !onboard.samples_in(a_s, end_s) {
+                continue;
+            }
             for (x, c) in self.channel_buffer.iter_mut().zip(source) {
                 *x = c.lane(i);
             }

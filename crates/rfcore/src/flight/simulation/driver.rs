@@ -163,15 +163,8 @@ pub fn simulate_observed(
         };
         // Raw samples (truth, the noisy rates, or the sensors') only for a controller that
         // reads them.
-        let input = if let (true, Some(estimate), Some(onboard)) =
-            (reads_samples, &estimate, onboard.as_ref())
-        {
-            ControllerInput {
-                state: &measured,
-                gyro_rad_s: Some(estimate.gyro_rad_s),
-                specific_force_m_s2: Some(estimate.accel_m_s2),
-                rotor_thrust_n: onboard.rotor_thrust(),
-            }
+        let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard.as_ref()) {
+            onboard.controller_input(estimate, reads_samples)
         } else if reads_samples {
             truth_samples(
                 vehicle,

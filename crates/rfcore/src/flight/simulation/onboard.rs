@@ -30,7 +30,7 @@ use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
 use crate::flight::simulation::sensing::Sensing;
 use crate::flight::simulation::tape::Tape;
 use crate::flight::vehicle::Vehicle;
-use crate::state::RigidBodyState;
+use crate::state::{ControllerInput, RigidBodyState};
 
 /// Rotor-speed feedback converted to thrust (module docs).
 #[derive(Debug, Clone)]
@@ -131,6 +131,31 @@ impl Onboard {
         best.map(|(_, which)| which)
     }
 
+    /// `true` when a sensor takes a sample at a time in `[from_s, to_s)` (the span of a tape
+    /// node: a sample there reads that node, so a node whose span no sample falls in is read by
+    /// none and need not be written).
+    pub(crate) fn samples_in(&self, from_s: f64, to_s: f64) -> bool {
+        let s = &self.sensors;
+        s.imu.clock().has_sample_in(from_s, to_s)
+            || s.position.clock().has_sample_in(from_s, to_s)
+            || s.magnetometer
+                .as_ref()
+                .is_some_and(|m| m.clock().has_sample_in(from_s, to_s))
+            || (self.rotor.is_some() && s.rotor_speed.clock().has_sample_in(from_s, to_s))
+    }
+
+    /// `true` when a sensor takes a sample at or just after `t_s` that is due at `t_s` (it
+    /// reads the node at `t_s`, the last of a control period).
+    pub(crate) fn samples_due_at_or_after(&self, t_s: f64) -> bool {
+        let s = &self.sensors;
+        s.imu.clock().has_due_sample_at_or_after(t_s)
+            || s.position.clock().has_due_sample_at_or_after(t_s)
+            || s.magnetometer
+                .as_ref()
+                .is_some_and(|m| m.clock().has_due_sample_at_or_after(t_s))
+            || (self.rotor.is_some() && s.rotor_speed.clock().has_due_sample_at_or_after(t_s))
+    }
+
     /// Takes every sample due up to `t_end_s` from `tape` (module docs), checking `cancel` before
     /// each sample: a control period holds `dt_s x imu_rate_hz` IMU samples and filter steps
     /// (a 100 s period at 32 kHz is 3.2 million, about 5 s of work), so the driver's check once
@@ -216,6 +241,27 @@ impl Onboard {
             e.time_s = t_s;
         }
         e
+    }
+
+    /// What the controller sees at a control step with `estimate`: the estimated state and, for a
+    /// controller that reads samples, the bias-corrected gyro and accelerometer samples the
+    /// estimate carries and the rotor thrusts from rotor-speed feedback (one rule for the scalar
+    /// driver and the lanes).
+    pub(crate) fn controller_input<'a>(
+        &'a self,
+        estimate: &'a Estimate,
+        reads_samples: bool,
+    ) -> ControllerInput<'a> {
+        if reads_samples {
+            ControllerInput {
+                state: &estimate.state,
+                gyro_rad_s: Some(estimate.gyro_rad_s),
+                specific_force_m_s2: Some(estimate.accel_m_s2),
+                rotor_thrust_n: self.rotor_thrust(),
+            }
+        } else {
+            ControllerInput::state_only(&estimate.state)
+        }
     }
 
     /// The rotor thrusts from the newest rotor-speed reading, N (`None` before the first or
