@@ -101,6 +101,19 @@ def test_a_settle_holds_and_a_spin_up_does_not() -> None:
     assert not judged(lambda t: 50.0 + 3.0 * (t - 15.0), ke)
 
 
+@pytest.mark.parametrize("tau_s", [5.0, 21.0, 26.0])
+def test_a_settle_heading_past_the_body_rate_limit_does_not_hold(tau_s: float) -> None:
+    """A first-order settle's end, predicted from the two span means, is its true end (exact for
+    a first-order curve; 400 Hz sampling: 1e-3); a settle ending just below the simulator's body
+    rate limit (200 rad/s) holds, one ending just past it is lost after the window, not held."""
+    assert D.SPIN_END_LIMIT_RAD_S == 200.0
+    for end_rad_s in (60.0, 190.0, 210.0):
+        growth, last = _span_means(lambda t, e=end_rad_s: e * (1 - np.exp(-t / tau_s)))
+        assert H.predicted_spin_end_rad_s([growth], [last], [tau_s], 5.0)[0] == pytest.approx(end_rad_s, rel=1e-3)
+        held = D.judge_holds(["holds-position"], [0.5], [1.0], [growth], [last], [tau_s])[0]
+        assert held == (end_rad_s < 200.0), end_rad_s
+
+
 def test_a_rule_that_ignores_damping_fails_the_settle(monkeypatch: pytest.MonkeyPatch) -> None:
     """Break the rule (no settle allowance: every run judged as undamped) and the hexacopter's
     settle no longer holds: the test above measures the allowance."""

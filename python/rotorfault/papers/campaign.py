@@ -154,7 +154,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         f"Hold share per cell, {runs} runs each (95 % Wilson interval). Holds: not lost, no ground contact, within "
         f"{D.HOLD_ALTITUDE_M:g} m altitude and {D.HOLD_HORIZONTAL_M:g} m horizontal from {D.SETTLE_S:g} s after the failure to the end "
         f"({D.AFTER_FAULT_S:g} s after it), yaw rate not spinning up (rotorfault.studies.deciding_hold: growth over the last 5 s at most "
-        f"{D.SPIN_GROWTH_MIN_RAD_S:g} rad/s or what the run's own damping, I_zz / k_r, explains). Worst deviation over the runs not lost; "
+        f"{D.SPIN_GROWTH_MIN_RAD_S:g} rad/s or what the run's own damping, I_zz / k_r, explains; a settle ending below {D.SPIN_END_LIMIT_RAD_S:g} rad/s). Worst deviation over the runs not lost; "
         "spin: median steady yaw rate of the settled runs.",
         ("vehicle", "fault class", "controller", "held", "hold share", "lost", "design refused", "worst alt / horiz (m)", "spin (rad/s) / note"),
         tuple(rows),

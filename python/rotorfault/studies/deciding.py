@@ -85,6 +85,7 @@ from .deciding_hold import (
     HOLD_ALTITUDE_M,
     HOLD_HORIZONTAL_M,
     SETTLE_S,
+    SPIN_END_LIMIT_RAD_S,
     SPIN_GROWTH_MIN_RAD_S,
     SPIN_SETTLE_MARGIN,
     SPIN_SETTLED_SHARE,
@@ -1019,7 +1020,7 @@ class DecidingResult:
             + (f", yaw rate not spinning up (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
                f"{1 + SPIN_SETTLE_MARGIN:g} x what a first-order settle from the failure with the run's I_zz / k_r grows there, "
                f"or a spin predicted to settle within {SPIN_SETTLED_SHARE:.0%} of its last 5 s mean; k_r = 0: "
-               f"{SPIN_GROWTH_MIN_RAD_S:g} rad/s)" if self.spin_growth_judged
+               f"{SPIN_GROWTH_MIN_RAD_S:g} rad/s; a settle must end below {SPIN_END_LIMIT_RAD_S:g} rad/s)" if self.spin_growth_judged
                else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)"),
             "| vehicle | fault class | controller | holds (95 % CI) | lost | design refused | worst alt / horiz (m) | median spin (rad/s) |",
             "|---|---|---|---|---|---|---|---|",
@@ -1065,7 +1066,7 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
+    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
     "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
     "spin_growth_since_failure_s", "spin_growth_span_s",

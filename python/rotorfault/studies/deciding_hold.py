@@ -23,6 +23,13 @@ mean) may be at most :func:`spin_growth_limit_rad_s`, the largest of:
 Without damping (``k_r = 0``, the PX4 x500 model) nothing settles a spin and the yaw rate grows
 without bound under any moment left: both settle terms are 0 and only the minimum is allowed.
 
+A spin that settles must also settle inside the flight: the first-order end through the two span
+means, ``|final| + G / (e^(L/tau) - 1)`` (:func:`predicted_spin_end_rad_s`), must stay below the
+body rate at which the campaign's flights count a vehicle as lost (:data:`SPIN_END_LIMIT_RAD_S`,
+the simulator's default ``DivergenceLimits.max_rate_rad_s``); a spin heading past it is lost after
+the window, not held. (Measured on the full campaign flown on 50b54a6: 24 of the hexacopter runs
+the settle allowance admits head past 200 rad/s.)
+
 Why these numbers. Spans of 5 s starting 15 s after the failure (the campaign's window): the
 failure's settle share is 2.0 % for tau = 5 s, 7.7 % for 10 s, 14.1 % for 21 s (the hexacopters:
 0.0599 kg m^2 / 0.0028 N m s), 15.4 % for 26 s (+20 % inertia); a linear spin-up ``r = a t`` (a
@@ -43,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from ..flight import DivergenceLimits
 from ..flight.outcomes import FLYING
 
 #: The hold thresholds of the issue, and when the judging starts after the failure.
@@ -59,6 +67,9 @@ SPIN_SETTLE_MARGIN = 0.25
 #: A spin predicted (first order, its own tau, from the two spans) to end within this share of
 #: its last span's mean is settled (the core's settle band for ``steady_spin_rad_s``).
 SPIN_SETTLED_SHARE = 0.05
+#: The body rate at which the campaign's flights count a vehicle as lost (rad/s): a settling spin
+#: whose first-order end lies at or beyond it is lost after the window, not held.
+SPIN_END_LIMIT_RAD_S: float = DivergenceLimits().max_rate_rad_s
 
 
 def spin_settle_growth_share(time_constant_s: Any, since_failure_s: float, span_s: float) -> np.ndarray[Any, np.dtype[np.float64]]:
@@ -135,6 +146,28 @@ def spin_growth_limit_rad_s(
                     np.maximum(SPIN_GROWTH_MIN_RAD_S, np.maximum((1.0 + SPIN_SETTLE_MARGIN) * share, settled) * final))
 
 
+def predicted_spin_end_rad_s(
+    window_spin_growth_rad_s: Any, final_spin_rad_s: Any, settle_time_constant_s: Any, span_s: float,
+) -> np.ndarray[Any, np.dtype[np.float64]]:
+    """Where a first-order settle through the window's two span means ends, rad/s: ``|final| + G /
+    (e^(L/tau) - 1)`` (G: the growth between the spans, rad/s; final: the last span's mean |yaw
+    rate|, rad/s; tau: the run's settle time constant, s; L: ``span_s``). Undamped (tau inf) the
+    spin has no end; its growth is judged by the minimum alone, so the end is taken as ``|final|``.
+
+    Examples:
+
+        >>> from rotorfault.studies.deciding_hold import predicted_spin_end_rad_s
+        >>> [round(float(x), 1) for x in predicted_spin_end_rad_s([8.8, 8.8, 0.5], [63.0, 180.0, 40.0], [21.0, 21.0, float("inf")], 5.0)]
+        [95.7, 212.7, 40.0]
+    """
+    growth = np.asarray(window_spin_growth_rad_s, dtype=np.float64)
+    final = np.abs(np.asarray(final_spin_rad_s, dtype=np.float64))
+    tau = np.asarray(settle_time_constant_s, dtype=np.float64)
+    finite = np.isfinite(tau)
+    rest = np.where(finite, growth / np.expm1(span_s / np.where(finite, tau, 1.0)), 0.0)
+    return final + rest
+
+
 def holds(
     outcome: Any, window_altitude_m: Any, window_horizontal_m: Any, window_spin_growth_rad_s: Any, window_final_spin_rad_s: Any,
     settle_time_constant_s: Any, since_failure_s: float, span_s: float,
@@ -142,7 +175,8 @@ def holds(
     """The hold verdict per run: not lost, within both thresholds (m) throughout the hold window,
     and not spinning up: the yaw-rate magnitude's growth over the window's last span (rad/s, the
     core's ``window_spin_growth_rad_s``) at most :func:`spin_growth_limit_rad_s` of the last
-    span's mean |yaw rate| (rad/s) and the run's settle time constant (s). NaN values (a lost
+    span's mean |yaw rate| (rad/s) and the run's settle time constant (s), and a settle that ends
+    below :data:`SPIN_END_LIMIT_RAD_S` (:func:`predicted_spin_end_rad_s`). NaN values (a lost
     run's, or a growth not measured) never hold.
 
     Examples:
@@ -157,9 +191,10 @@ def holds(
     growth = np.asarray(window_spin_growth_rad_s, dtype=np.float64)
     limit = spin_growth_limit_rad_s(window_final_spin_rad_s, settle_time_constant_s, since_failure_s, span_s)
     with np.errstate(invalid="ignore"):
+        end = predicted_spin_end_rad_s(growth, window_final_spin_rad_s, settle_time_constant_s, span_s)
         return (np.isin(np.asarray(outcome), FLYING) & (alt <= HOLD_ALTITUDE_M) & (hor <= HOLD_HORIZONTAL_M)
-                & (growth <= limit))
+                & (growth <= limit) & (end < SPIN_END_LIMIT_RAD_S))
 
 
-__all__ = ["HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLED_SHARE", "SPIN_SETTLE_MARGIN", "holds",
-           "spin_growth_limit_rad_s", "spin_settle_growth_share", "spin_settle_time_constant_s"]
+__all__ = ["HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLED_SHARE", "SPIN_SETTLE_MARGIN", "holds",
+           "predicted_spin_end_rad_s", "spin_growth_limit_rad_s", "spin_settle_growth_share", "spin_settle_time_constant_s"]
