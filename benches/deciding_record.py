@@ -39,6 +39,7 @@ from _results import add_json_option, figure, write  # noqa: E402
 from rotorfault.analysis import RelaxedHoverSettings  # noqa: E402
 from rotorfault.papers.campaign import RECORD_CELL_KEYS  # noqa: E402  (the record's keys, checked there)
 from rotorfault.studies import deciding as D  # noqa: E402
+from rotorfault.studies.certify import SPIN_RATE_LIMIT_MARGIN  # noqa: E402
 from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
 from rotorfault.studies.summaries import numpy_columns  # noqa: E402
 
@@ -110,8 +111,9 @@ def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
             "vehicle": d["vehicle"], "fault_class": d["fault_class"], "controller": d["controller"], "missed": int(np.sum(missed)),
             "survivable": int(np.sum(best)), "outcomes": outcomes, "static_hover": static,
             "spinning": int(np.sum(missed & (c["certified"] == "spinning"))), "by_efficiency": bins,
-            # certify's spin at the search's limit (no rotational damping: the margin still grows there)
-            "spin_at_search_limit": int(np.sum(missed & (np.abs(c["certified_spin_rad_s"]) >= 0.99 * SPIN_LIMIT_RAD_S))),
+            # certify's spin at the search's limit (no rotational damping: the margin still grows there),
+            # with certify's own margin (studies.certify.SPIN_RATE_LIMIT_MARGIN)
+            "spin_at_search_limit": int(np.sum(missed & (np.abs(c["certified_spin_rad_s"]) >= (1.0 - SPIN_RATE_LIMIT_MARGIN) * SPIN_LIMIT_RAD_S))),
             "wind_median_m_s": float(np.median(wind[missed])) if missed.any() else None,
             "wind_median_all_m_s": float(np.median(wind[best])) if best.any() else None,
             "lost_after_failure_median_s": float(np.median(lost_after)) if len(lost_after) else None,
