@@ -37,12 +37,11 @@ from typing import Any
 
 import clarabel  # type: ignore[import-untyped]
 import numpy as np
-from scipy import sparse  # type: ignore[import-untyped]
 
 import rotorfault as rf
 from rotorfault.allocation import Allocator
 
-from _timing import time_per_solve
+from _timing import python_clarabel, time_per_solve
 
 WEIGHTS = [1.0, 20.0, 20.0, 0.01]
 TARGET_ALLOCATOR_S = 3e-6
@@ -59,18 +58,6 @@ def per_call(fn: Callable[[], Any], calls: int, runs: int = 7) -> float:
             fn()
         best = min(best, (time.perf_counter() - start) / calls)
     return best
-
-
-def python_clarabel(m: np.ndarray, w: np.ndarray, lower: np.ndarray, upper: np.ndarray, u_c: np.ndarray) -> np.ndarray:
-    k = m.shape[1]
-    h = sparse.csc_matrix(np.triu(m.T @ (w[:, None] * m)))
-    q = -m.T @ (w * u_c)
-    a = sparse.csc_matrix(np.vstack([np.eye(k), -np.eye(k)]))
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
-    solution = clarabel.DefaultSolver(h, q, a, np.r_[upper, -lower], [clarabel.NonnegativeConeT(2 * k)], settings).solve()
-    return np.clip(np.asarray(solution.x), lower, upper)
 
 
 def main() -> None:

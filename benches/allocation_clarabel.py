@@ -32,12 +32,11 @@ import time
 
 import clarabel  # type: ignore[import-untyped]
 import numpy as np
-from scipy import sparse  # type: ignore[import-untyped]
 
 import rotorfault as rf
 from rotorfault.allocation import Allocator
 
-from _timing import time_per_solve
+from _timing import python_clarabel, time_per_solve
 
 PRESETS = ("quad-x", "hexa-pnpnpn", "octo-x")
 WEIGHTS = np.array([1.0, 20.0, 20.0, 0.01])
@@ -51,18 +50,6 @@ def virtual_controls(frame: rf.Airframe, rng: np.random.Generator) -> np.ndarray
     inside = rng.uniform(frame.min_thrust_n, frame.max_thrust_n, size=(PROBLEMS, frame.rotor_count)) @ m.T
     beyond = 2.0 * inside[: PROBLEMS // 2] + rng.normal(size=(PROBLEMS // 2, 4)) * [5.0, 0.5, 0.5, 0.05]
     return np.vstack([inside[PROBLEMS // 2 :], beyond])
-
-
-def python_clarabel(m: np.ndarray, lower: np.ndarray, upper: np.ndarray, u_c: np.ndarray) -> np.ndarray:
-    k = m.shape[1]
-    h = sparse.csc_matrix(np.triu(m.T @ (WEIGHTS[:, None] * m)))
-    q = -m.T @ (WEIGHTS * u_c)
-    a = sparse.csc_matrix(np.vstack([np.eye(k), -np.eye(k)]))
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-10
-    solution = clarabel.DefaultSolver(h, q, a, np.r_[upper, -lower], [clarabel.NonnegativeConeT(2 * k)], settings).solve()
-    return np.clip(np.asarray(solution.x), lower, upper)
 
 
 def main() -> None:
@@ -85,7 +72,7 @@ def main() -> None:
 
         exact = allocator.allocate(controls)
         for u_c, commands in zip(controls, exact.commands):
-            reference = python_clarabel(m, lower, upper, u_c)
+            reference = python_clarabel(m, WEIGHTS, lower, upper, u_c)
             f_exact, _ = allocator.objective(u_c, commands)
             f_ref, _ = allocator.objective(u_c, reference)
             scale = max(f_ref, 0.5 * float(u_c @ (WEIGHTS * u_c)))
@@ -97,7 +84,7 @@ def main() -> None:
         for i, u_c in enumerate(controls):
             start = time.perf_counter()
             for _ in range(5):
-                python_clarabel(m, lower, upper, u_c)
+                python_clarabel(m, WEIGHTS, lower, upper, u_c)
             py_clarabel[i] = (time.perf_counter() - start) / 5
         saturated = float(np.mean(~exact.attained))
         rows.append((name, frame.rotor_count, saturated, active, rust_clarabel, py_clarabel))

@@ -385,6 +385,43 @@ def test_batch_results_hold_the_cores_result_and_read_through_it() -> None:
         rf.allocation.Allocation()
 
 
+def test_a_failure_row_holds_the_cores_reports_and_reads_through_them() -> None:
+    """A failure-table row keeps the core's row (the failed rotors and the core's reports: all
+    axes, giving up yaw, the full wrench) in its one slot and reads every field from those
+    reports (no copied fields), with the dataclass' repr, equality, hash and frozenness; it
+    pickles through the core's row, and a row pickled as the old dataclass is refused by name."""
+    phi = np.radians(np.arange(6) * 60.0)  # a hexacopter with its rotors tilted 20 degrees, alternately: fully actuated
+    side = np.array([-1.0, 1.0] * 3)[:, None]
+    tilted = rf.Airframe.from_rotors(
+        position_m=0.275 * np.stack([np.cos(phi), np.sin(phi), 0 * phi], axis=1), spin=["cw", "ccw"] * 3,
+        thrust_axis=np.cos(np.radians(20)) * np.array([0, 0, -1.0]) + np.sin(np.radians(20)) * side * np.stack([-np.sin(phi), np.cos(phi), 0 * phi], axis=1),
+        max_thrust_n=[6.125] * 6, mass_kg=1.535, inertia_kg_m2=[0.0411, 0.0478, 0.0599], drag_torque_ratio_m=0.1)
+    for frame, wrench in ((rf.Airframe.preset("hexa-ppnnpn"), False), (tilted, True)):
+        row = rf.failure_table(frame, max_failed=1, formula="facet-margin").case(2)
+        core = row._core
+        assert type(core) is _rfcore.FailureCase and not hasattr(row, "__dict__") and core.failed == row.failed == (2,)
+        assert core.all_axes.efficiency[1] == 0.0 and core.all_axes.axes == "thrust-roll-pitch-yaw" and core.give_up_yaw.give_up_yaw
+        assert (row.acai, row.hover, row.verdict) == (core.all_axes.acai, core.all_axes.hover, core.all_axes.verdict)
+        assert (row.acai_give_up_yaw, row.effectiveness_rank_give_up_yaw) == (core.give_up_yaw.acai, core.give_up_yaw.effectiveness_rank)
+        assert row.acai == rf.controllability(frame, core.all_axes.efficiency, formula="facet-margin").acai
+        assert (core.wrench is not None) == wrench and (row.acai_wrench is not None) == wrench
+        if wrench:
+            assert core.wrench.axes == "wrench" and (row.acai_wrench, row.hover_wrench) == (core.wrench.acai, core.wrench.hover)
+        assert repr(row).startswith(f"FailureCase(failed=(2,), controllability_rank={row.controllability_rank}, ")
+        back = pickle.loads(pickle.dumps(row))
+        assert type(back) is rf.FailureCase and back == row and hash(back) == hash(row) and back._core == core
+        with pytest.raises(AttributeError):
+            row.acai = 1.0  # type: ignore[misc]
+    with pytest.raises(TypeError, match="made by failure_table"):
+        rf.FailureCase()
+    # The old dataclass's pickle (class, then its fields as a dict, here only `failed`).
+    old = b"\x80\x04\x95\x00\x00\x00\x00\x00\x00\x00\x00\x8c#rotorfault.analysis.controllability\x94\x8c\x0bFailureCase\x94\x93\x94)\x81\x94}\x94\x8c\x06failed\x94K\x01\x85\x94sb."
+    with pytest.raises(TypeError, match="pickled before .* make it again with failure_table"):
+        pickle.loads(old)
+    with pytest.raises(ValueError, match=r"^failed\[0\]: rotors are numbered from 1, got 0"):
+        _rfcore._failure_case([0], core.all_axes, core.give_up_yaw, None)
+
+
 def test_an_acai_batch_is_checked_once_by_the_core() -> None:
     """Made from its fields (``dataclasses.replace``, old pickles), an ``AcaiBatch`` is checked by
     the core: one known hover code per value, a known formula."""

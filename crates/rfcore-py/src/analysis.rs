@@ -22,7 +22,10 @@ use rfcore::analysis::{
 use rfcore::Cancel;
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, kept, pickle_protocol, slice1, slice2, to_py_err, value_protocol};
+use crate::convert::{
+    detached, kept, pickle_protocol, rotor_indices, rotor_numbers, slice1, slice2, to_py_err,
+    value_protocol,
+};
 
 /// `axes`: "thrust-roll-pitch-yaw", "thrust-roll-pitch" (yaw given up) or "wrench" (n = 6).
 fn analysis(
@@ -464,38 +467,107 @@ pub(crate) fn controllability<'py>(
     Ok(report(airframe, result))
 }
 
-/// One failure-table row: failed rotors (indices from 0; Python numbers them from 1), the report
-/// with all axes, the report giving up yaw, the full-wrench report.
-type FailureRow = (
-    Vec<usize>,
-    PyControllabilityReport,
-    PyControllabilityReport,
-    Option<PyControllabilityReport>,
-);
+/// One failure-table row, the core's (`rfcore::analysis::FailureCase`) used directly from Python
+/// (`rotorfault.FailureCase` holds one and reads every field through it; no Python copy): `failed`
+/// the rotors at efficiency 0 (numbered from 1, as wherever a rotor is named), and the core's
+/// three reports for that efficiency: `all_axes` (thrust, roll, pitch, yaw), `give_up_yaw`
+/// (thrust, roll, pitch) and `wrench` (n = 6, for fully actuated airframes only, else `None`).
+/// Frozen, comparable, hashable, picklable.
+#[pyclass(name = "FailureCase", module = "rotorfault._rfcore", frozen)]
+pub struct PyFailureCase {
+    /// 0-based, as in the core.
+    failed: Vec<usize>,
+    all_axes: Py<PyControllabilityReport>,
+    give_up_yaw: Py<PyControllabilityReport>,
+    wrench: Option<Py<PyControllabilityReport>>,
+}
 
-/// Every combination of up to `max_failed` failed rotors.
+impl PyFailureCase {
+    /// The fields as a dataclass prints them (repr, equality, hash), in this order.
+    const FIELDS: &'static [&'static str] = &["failed", "all_axes", "give_up_yaw", "wrench"];
+}
+
+value_protocol!(PyFailureCase, {
+    /// The failed rotors, numbered from 1.
+    #[getter]
+    fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, rotor_numbers(&self.failed))
+    }
+    /// The report with all four axes (thrust, roll, pitch, yaw).
+    #[getter]
+    fn all_axes(&self, py: Python<'_>) -> Py<PyControllabilityReport> {
+        self.all_axes.clone_ref(py)
+    }
+    /// The report giving up yaw (thrust, roll and pitch only).
+    #[getter]
+    fn give_up_yaw(&self, py: Python<'_>) -> Py<PyControllabilityReport> {
+        self.give_up_yaw.clone_ref(py)
+    }
+    /// The full-wrench report (n = 6), for fully actuated airframes only (else `None`).
+    #[getter]
+    fn wrench(&self, py: Python<'_>) -> Option<Py<PyControllabilityReport>> {
+        self.wrench.as_ref().map(|w| w.clone_ref(py))
+    }
+    /// Pickled as its fields (the reports pickle themselves), read back by `_failure_case`.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let restore = py.import("rotorfault._rfcore")?.getattr("_failure_case")?;
+        let state = (
+            rotor_numbers(&self.failed),
+            self.all_axes(py),
+            self.give_up_yaw(py),
+            self.wrench(py),
+        )
+            .into_pyobject(py)?;
+        Ok((restore, state))
+    }
+});
+
+/// A row read back from its pickled fields (`FailureCase.__reduce__`): rotors numbered from 1.
+#[pyfunction]
+#[pyo3(signature = (failed, all_axes, give_up_yaw, wrench))]
+pub(crate) fn _failure_case(
+    failed: Vec<usize>,
+    all_axes: Py<PyControllabilityReport>,
+    give_up_yaw: Py<PyControllabilityReport>,
+    wrench: Option<Py<PyControllabilityReport>>,
+) -> PyResult<PyFailureCase> {
+    Ok(PyFailureCase {
+        failed: rotor_indices("failed", &failed)?,
+        all_axes,
+        give_up_yaw,
+        wrench,
+    })
+}
+
+/// Every combination of up to `max_failed` failed rotors, one [`PyFailureCase`] each.
 #[pyfunction]
 pub(crate) fn failure_table<'py>(
     py: Python<'py>,
     airframe: &PyAirframe,
     max_failed: usize,
     formula: &str,
-) -> PyResult<Vec<FailureRow>> {
+) -> PyResult<Vec<PyFailureCase>> {
     let formula = AcaiFormula::parse(formula).map_err(to_py_err)?;
     let cases = detached(py, |cancel| {
         core_failure_table(&airframe.inner, max_failed, formula, cancel)
     })?;
-    Ok(cases
+    cases
         .into_iter()
         .map(|case| {
-            (
-                case.failed,
-                report(airframe, case.all_axes),
-                report(airframe, case.give_up_yaw),
-                case.wrench.map(|wrench| report(airframe, wrench)),
-            )
+            Ok(PyFailureCase {
+                failed: case.failed,
+                all_axes: Py::new(py, report(airframe, case.all_axes))?,
+                give_up_yaw: Py::new(py, report(airframe, case.give_up_yaw))?,
+                wrench: case
+                    .wrench
+                    .map(|wrench| Py::new(py, report(airframe, wrench)))
+                    .transpose()?,
+            })
         })
-        .collect())
+        .collect()
 }
 
 /// The crate's one rank rule, free of units (`rfcore::analysis::acai::scale_free_rank`): rows

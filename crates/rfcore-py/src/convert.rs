@@ -151,6 +151,24 @@ pub(crate) fn matrix(field: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult
 
 // -- settings classes: one protocol for the named settings Python uses directly ----------------
 
+/// 0-based rotor indices as rotor numbers (from 1): wherever a rotor is named, it is numbered from 1.
+pub(crate) fn rotor_numbers(indices: &[usize]) -> Vec<usize> {
+    indices.iter().map(|k| k + 1).collect()
+}
+
+/// Rotor numbers (from 1) as the core's 0-based indices; `field[k]` names a 0.
+pub(crate) fn rotor_indices(field: &str, rotors: &[usize]) -> PyResult<Vec<usize>> {
+    rotors
+        .iter()
+        .enumerate()
+        .map(|(k, &rotor)| {
+            rotor.checked_sub(1).ok_or_else(|| {
+                PyValueError::new_err(format!("{field}[{k}]: rotors are numbered from 1, got 0"))
+            })
+        })
+        .collect()
+}
+
 /// A real number for field `field`, by Python's rule (`numbers.Real`, not a bool): anything else
 /// is a `TypeError` naming the field; the value rules are the core's `check`s.
 pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {

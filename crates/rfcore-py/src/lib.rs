@@ -23,6 +23,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     convert::prepare_threads(module.py())?;
     module.add_class::<airframe::PyAirframe>()?;
     module.add_class::<analysis::PyControllabilityReport>()?;
+    module.add_class::<analysis::PyFailureCase>()?;
     module.add_class::<analysis::PyAcaiResult>()?;
     module.add_class::<analysis::PyAcaiBatch>()?;
     module.add_class::<allocation::PyAllocationBatch>()?;
@@ -79,6 +80,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(analysis::controllability, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::failure_table, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::_controllability_report, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::_failure_case, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::format_acai, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::acai_label, module)?)?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSettings>()?;

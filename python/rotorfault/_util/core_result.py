@@ -19,6 +19,10 @@ class CoreResult:
     def _values(self) -> tuple[Any, ...]:
         return tuple(getattr(self, name) for name in self.FIELDS)
 
+    def _as_dict(self) -> dict[str, Any]:
+        """The fields by name, in order (what ``dataclasses.asdict`` gave the dataclass)."""
+        return {name: getattr(self, name) for name in self.FIELDS}
+
     def __repr__(self) -> str:
         fields = ", ".join(f"{name}={getattr(self, name)!r}" for name in self.FIELDS)
         return f"{type(self).__qualname__}({fields})"

@@ -51,7 +51,9 @@ class _DataclassFields:
         import dataclasses
 
         if obj is not None:
-            warn(f"dataclasses.replace / dataclasses.fields on a {cls.__name__}", f"{cls.__name__}.replace(...) and {cls.__name__}.FIELDS")
+            # A result made only by its function (no ``replace``) is pointed at its fields alone.
+            instead = f"{cls.__name__}.replace(...) and {cls.__name__}.FIELDS" if hasattr(cls, "replace") else f"{cls.__name__}.FIELDS"
+            warn(f"dataclasses.replace / dataclasses.fields on a {cls.__name__}", instead)
         out = {}
         for name in cls.FIELDS:  # type: ignore[attr-defined]
             f = dataclasses.field()

@@ -58,6 +58,30 @@ def _preset_dir() -> Path:
     return Path(str(resources.files("rotorfault") / "presets"))
 
 
+def _rotor_limits_and_body(
+    m: int,
+    max_thrust_n: npt.ArrayLike,
+    min_thrust_n: npt.ArrayLike | None,
+    efficiency: npt.ArrayLike | None,
+    mass_kg: float,
+    inertia_kg_m2: npt.ArrayLike,
+    drag_torque_ratio_m: float,
+    gravity_m_s2: float,
+) -> tuple[Any, ...]:
+    """The arguments both core constructors end with (checked here for types and shapes, in this
+    order, by the core for values): thrust limits and efficiencies of ``m`` rotors (defaults 0 N
+    and 1), mass, inertia, drag torque ratio and gravity."""
+    return (
+        float_array("max_thrust_n", max_thrust_n, 1),
+        np.zeros(m) if min_thrust_n is None else float_array("min_thrust_n", min_thrust_n, 1),
+        np.ones(m) if efficiency is None else float_array("efficiency", efficiency, 1),
+        real("mass_kg", mass_kg),
+        float_array("inertia_kg_m2", inertia_kg_m2, 1),
+        real("drag_torque_ratio_m", drag_torque_ratio_m),
+        real("gravity_m_s2", gravity_m_s2),
+    )
+
+
 class Airframe:
     """A multirotor: rotor geometry, thrust limits, rotor efficiencies and mass properties.
 
@@ -114,13 +138,7 @@ class Airframe:
             angles,
             float_array("arm_length_m", arm_length_m, 1),
             _spin_signs(spin),
-            float_array("max_thrust_n", max_thrust_n, 1),
-            np.zeros(m) if min_thrust_n is None else float_array("min_thrust_n", min_thrust_n, 1),
-            np.ones(m) if efficiency is None else float_array("efficiency", efficiency, 1),
-            real("mass_kg", mass_kg),
-            float_array("inertia_kg_m2", inertia_kg_m2, 1),
-            real("drag_torque_ratio_m", drag_torque_ratio_m),
-            real("gravity_m_s2", gravity_m_s2),
+            *_rotor_limits_and_body(m, max_thrust_n, min_thrust_n, efficiency, mass_kg, inertia_kg_m2, drag_torque_ratio_m, gravity_m_s2),
         )
 
     @classmethod
@@ -161,13 +179,7 @@ class Airframe:
                 np.ascontiguousarray(axis),
                 signs,
                 k,
-                float_array("max_thrust_n", max_thrust_n, 1),
-                np.zeros(m) if min_thrust_n is None else float_array("min_thrust_n", min_thrust_n, 1),
-                np.ones(m) if efficiency is None else float_array("efficiency", efficiency, 1),
-                real("mass_kg", mass_kg),
-                float_array("inertia_kg_m2", inertia_kg_m2, 1),
-                real("drag_torque_ratio_m", drag_torque_ratio_m),
-                real("gravity_m_s2", gravity_m_s2),
+                *_rotor_limits_and_body(m, max_thrust_n, min_thrust_n, efficiency, mass_kg, inertia_kg_m2, drag_torque_ratio_m, gravity_m_s2),
             )
         )
 

@@ -11,7 +11,6 @@ spins, as the controllers of Lanzon et al. and Ke et al. do?
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import asdict, dataclass
 from typing import Any, cast, overload
 
 import numpy as np
@@ -20,7 +19,8 @@ import numpy.typing as npt
 from .. import _rfcore
 from .._typing import AcaiFormula, ControlAxes, HoverPoint
 from .._util.convert import control_axes, count
-from .._util.deprecation import renamed_attribute
+from .._util.core_result import CoreResult
+from .._util.deprecation import dataclass_compat, renamed_attribute
 from .._util.tables import Column, Tabular
 from .acai import EQ13_ZERO_NOTE, GIVE_UP_YAW, HOVER_WRENCH_NOTE, _efficiency, _formula, acai_label, format_acai, hover_wrench_text
 from .airframe import Airframe, require_airframe, rotor_labels
@@ -59,10 +59,14 @@ def controllability(
     return _rfcore.controllability(airframe._core, eff, names, _formula(formula))
 
 
-@dataclass(frozen=True)
-class FailureCase:
+class FailureCase(CoreResult):
     """One row of a failure table: rotors (numbered from 1) at efficiency 0 and the verdicts
     with all four axes and giving up yaw (``..._give_up_yaw``: thrust, roll and pitch only).
+
+    It holds the core's row (``_rfcore.FailureCase``: the failed rotors and the core's
+    :class:`ControllabilityReport` for all axes, giving up yaw and, for fully actuated airframes,
+    the full wrench) and reads every field through it (issue 26: no copied fields). Frozen,
+    comparable, hashable, picklable; made by :func:`failure_table`.
 
     Examples:
 
@@ -72,23 +76,103 @@ class FailureCase:
         ((1,), False, True, 1.2882)
     """
 
-    failed: tuple[int, ...]
-    controllability_rank: int
-    effectiveness_rank: int
-    acai: float
-    controllable: bool
-    verdict: str
-    effectiveness_rank_give_up_yaw: int
-    acai_give_up_yaw: float
-    controllable_give_up_yaw: bool
-    verdict_give_up_yaw: str
-    #: Where the hover wrench lies, with all axes and giving up yaw (see :class:`AcaiValue`).
-    hover: HoverPoint = "inside"
-    hover_give_up_yaw: HoverPoint = "inside"
-    #: The full-wrench (n = 6) test, for fully actuated airframes only (else None).
-    acai_wrench: float | None = None
-    controllable_wrench: bool | None = None
-    hover_wrench: HoverPoint | None = None
+    __slots__ = ()
+    FIELDS = (
+        "failed", "controllability_rank", "effectiveness_rank", "acai", "controllable", "verdict",
+        "effectiveness_rank_give_up_yaw", "acai_give_up_yaw", "controllable_give_up_yaw", "verdict_give_up_yaw",
+        "hover", "hover_give_up_yaw", "acai_wrench", "controllable_wrench", "hover_wrench",
+    )
+    _core: _rfcore.FailureCase
+
+    def __init__(self) -> None:
+        raise TypeError("FailureCase: made by failure_table(), not constructed")
+
+    @property
+    def failed(self) -> tuple[int, ...]:
+        """The failed rotors (efficiency 0), numbered from 1."""
+        return self._core.failed
+
+    @property
+    def controllability_rank(self) -> int:
+        """rank C(A, B) with all four axes (of 8)."""
+        return self._core.all_axes.controllability_rank
+
+    @property
+    def effectiveness_rank(self) -> int:
+        """rank B_f with all four axes (of 4)."""
+        return self._core.all_axes.effectiveness_rank
+
+    @property
+    def acai(self) -> float:
+        """The ACAI with all four axes (N / N m; the table's formula)."""
+        return self._core.all_axes.acai
+
+    @property
+    def controllable(self) -> bool:
+        """Controllable with all four axes."""
+        return self._core.all_axes.controllable
+
+    @property
+    def verdict(self) -> str:
+        """``"controllable"`` or ``"uncontrollable: <reason>"`` with all four axes."""
+        return self._core.all_axes.verdict
+
+    @property
+    def effectiveness_rank_give_up_yaw(self) -> int:
+        """rank B_f giving up yaw (of 3)."""
+        return self._core.give_up_yaw.effectiveness_rank
+
+    @property
+    def acai_give_up_yaw(self) -> float:
+        """The ACAI giving up yaw (N / N m; the table's formula)."""
+        return self._core.give_up_yaw.acai
+
+    @property
+    def controllable_give_up_yaw(self) -> bool:
+        """Controllable giving up yaw (thrust, roll and pitch only)."""
+        return self._core.give_up_yaw.controllable
+
+    @property
+    def verdict_give_up_yaw(self) -> str:
+        """The verdict giving up yaw."""
+        return self._core.give_up_yaw.verdict
+
+    @property
+    def hover(self) -> HoverPoint:
+        """Where the hover wrench lies with all four axes (see :class:`AcaiValue`)."""
+        return self._core.all_axes.hover
+
+    @property
+    def hover_give_up_yaw(self) -> HoverPoint:
+        """Where the hover wrench lies giving up yaw."""
+        return self._core.give_up_yaw.hover
+
+    @property
+    def acai_wrench(self) -> float | None:
+        """The full-wrench (n = 6) ACAI, for fully actuated airframes only (else None)."""
+        wrench = self._core.wrench
+        return None if wrench is None else wrench.acai
+
+    @property
+    def controllable_wrench(self) -> bool | None:
+        """Controllable in the full wrench (n = 6), for fully actuated airframes only (else None)."""
+        wrench = self._core.wrench
+        return None if wrench is None else wrench.controllable
+
+    @property
+    def hover_wrench(self) -> HoverPoint | None:
+        """Where the hover wrench lies in the full wrench (n = 6), fully actuated airframes only (else None)."""
+        wrench = self._core.wrench
+        return None if wrench is None else wrench.hover
+
+    def __reduce__(self) -> tuple[Any, tuple[_rfcore.FailureCase]]:
+        return (FailureCase._from_core, (self._core,))
+
+    def __setstate__(self, state: Any) -> None:
+        # A row pickled as the dataclass it was (before issue 26) lacks what its reports hold
+        # (the airframe, the efficiencies): refused rather than rebuilt with guesses.
+        raise TypeError("FailureCase: a row pickled before rotorfault made rows from the core's reports "
+                        "cannot be read; make it again with failure_table()")
 
     # The names before issue 26 (one name per concept: "give up yaw"), for one release.
     effectiveness_rank_without_yaw = renamed_attribute("effectiveness_rank_without_yaw", "effectiveness_rank_give_up_yaw")
@@ -96,6 +180,9 @@ class FailureCase:
     controllable_without_yaw = renamed_attribute("controllable_without_yaw", "controllable_give_up_yaw")
     verdict_without_yaw = renamed_attribute("verdict_without_yaw", "verdict_give_up_yaw")
     hover_without_yaw = renamed_attribute("hover_without_yaw", "hover_give_up_yaw")
+
+
+dataclass_compat(FailureCase)
 
 
 _COLUMNS = (
@@ -154,7 +241,8 @@ class FailureTable(Sequence[FailureCase], Tabular):
         raise KeyError(f"no row for failed rotors {key} (max_failed={self.max_failed})")
 
     def to_dicts(self) -> list[dict[str, Any]]:
-        return [asdict(row) for row in self._cases]
+        """One dict per row: every field of :class:`FailureCase`, in its order."""
+        return [row._as_dict() for row in self._cases]
 
     def to_arrays(self) -> dict[str, npt.NDArray[Any]]:
         """Columns as numpy arrays; ``failed_mask`` is N x m (True where a rotor failed)."""
@@ -268,26 +356,7 @@ def failure_table(
     airframe = require_airframe(airframe)
     max_failed = count("max_failed", max_failed)
     formula_name = _formula(formula)
-    cases = [
-        FailureCase(
-            failed=tuple(k + 1 for k in failed),
-            controllability_rank=full.controllability_rank,
-            effectiveness_rank=full.effectiveness_rank,
-            acai=full.acai,
-            controllable=full.controllable,
-            verdict=full.verdict,
-            effectiveness_rank_give_up_yaw=yaw_given_up.effectiveness_rank,
-            acai_give_up_yaw=yaw_given_up.acai,
-            controllable_give_up_yaw=yaw_given_up.controllable,
-            verdict_give_up_yaw=yaw_given_up.verdict,
-            hover=full.hover,
-            hover_give_up_yaw=yaw_given_up.hover,
-            acai_wrench=None if wrench is None else wrench.acai,
-            controllable_wrench=None if wrench is None else wrench.controllable,
-            hover_wrench=None if wrench is None else wrench.hover,
-        )
-        for failed, full, yaw_given_up, wrench in _rfcore.failure_table(airframe._core, max_failed, formula_name)
-    ]
+    cases = [FailureCase._from_core(case) for case in _rfcore.failure_table(airframe._core, max_failed, formula_name)]
     return FailureTable(airframe, max_failed, cases, formula=cast(AcaiFormula, formula_name))
 
 

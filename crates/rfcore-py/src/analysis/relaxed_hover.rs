@@ -12,15 +12,11 @@ use rfcore::analysis::relaxed_hover::{
 };
 
 use crate::airframe::PyAirframe;
-use crate::convert::{detached, read_only, slice1};
+use crate::convert::{detached, read_only, rotor_numbers, slice1};
 
 fn array2<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
     numpy::ndarray::Array2::from_shape_fn((m.nrows(), m.ncols()), |(r, c)| m[(r, c)])
         .into_pyarray(py)
-}
-
-fn rotor_numbers(indices: &[usize]) -> Vec<usize> {
-    indices.iter().map(|i| i + 1).collect()
 }
 
 /// What the relaxed hover analysis needs beyond the airframe (defaults: the core's).

@@ -11,7 +11,7 @@ use rfcore::control::indi::{
 };
 
 use crate::airframe::PyAirframe;
-use crate::convert::{pickle_protocol, real, to_py_err};
+use crate::convert::{pickle_protocol, real, rotor_indices, rotor_numbers, to_py_err};
 
 /// INDI gains (`rotorfault.IndiGains`); defaults from the core's `Default` (Sun's printed values
 /// where he prints them), rules from its `check`.
@@ -121,24 +121,6 @@ impl PyIndiFailureMode {
     ];
 }
 
-/// 0-based rotor indices as rotor numbers (from 1).
-fn numbered<'py>(py: Python<'py>, rotors: &[usize]) -> PyResult<Bound<'py, PyTuple>> {
-    PyTuple::new(py, rotors.iter().map(|k| k + 1))
-}
-
-/// Rotor numbers (from 1) as the core's 0-based indices; `field[k]` names a 0.
-fn indices(field: &str, rotors: &[usize]) -> PyResult<Vec<usize>> {
-    rotors
-        .iter()
-        .enumerate()
-        .map(|(k, &rotor)| {
-            rotor.checked_sub(1).ok_or_else(|| {
-                PyValueError::new_err(format!("{field}[{k}]: rotors are numbered from 1, got 0"))
-            })
-        })
-        .collect()
-}
-
 /// `values` as finite floats, `field[k]` naming the first that is not.
 fn finite(field: &str, values: &[Bound<'_, PyAny>]) -> PyResult<Vec<f64>> {
     values
@@ -174,8 +156,8 @@ pickle_protocol!(PyIndiFailureMode, {
         zero_dynamics_damping: Option<Bound<'_, PyAny>>,
         hover_thrust_n: Vec<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let failed = indices("failed", &failed)?;
-        let healthy = indices("healthy", &healthy)?;
+        let failed = rotor_indices("failed", &failed)?;
+        let healthy = rotor_indices("healthy", &healthy)?;
         let rotors = failed.len() + healthy.len();
         let mut seen = vec![false; rotors];
         for &k in failed.iter().chain(&healthy) {
@@ -246,12 +228,12 @@ pickle_protocol!(PyIndiFailureMode, {
     /// The failed rotors, numbered from 1.
     #[getter]
     fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        numbered(py, &self.inner.failed)
+        PyTuple::new(py, rotor_numbers(&self.inner.failed))
     }
     /// The healthy rotors, numbered from 1.
     #[getter]
     fn healthy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        numbered(py, &self.inner.healthy)
+        PyTuple::new(py, rotor_numbers(&self.inner.healthy))
     }
     #[getter]
     fn yaw_controlled(&self) -> bool {

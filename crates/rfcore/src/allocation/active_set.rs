@@ -44,10 +44,11 @@ use crate::allocation::factorisation::{
     apply_q, apply_qt, back_substitute, householder_qr, FreeSetFactor,
 };
 use crate::allocation::problem::{
-    require_iteration_bound, AllocationProblem, AllocationStatus, SolvedBy, MAX_VIRTUAL,
+    require_iteration_bound, require_tolerance, AllocationProblem, AllocationStatus, SolvedBy,
+    MAX_VIRTUAL,
 };
 use crate::allocation::scaling::{ScaledLeastSquares, BIG_WORK, N, ROWS, SMALL_WORK};
-use crate::error::{Result, RfError};
+use crate::error::Result;
 
 /// Normalised multipliers below this are treated as zero by the release rule.
 const RELEASE_TOL: f64 = 1e-12;
@@ -100,12 +101,7 @@ pub struct ActiveSetSettings {
 impl ActiveSetSettings {
     /// The rules: `tolerance > 0` and finite, `max_iterations` in 1..=[`crate::allocation::MAX_ITERATIONS`] when given.
     pub fn check(&self) -> Result<()> {
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(RfError::invalid(
-                "tolerance",
-                format!("must be > 0 and finite, got {}", self.tolerance),
-            ));
-        }
+        require_tolerance(self.tolerance)?;
         if let Some(limit) = self.max_iterations {
             require_iteration_bound(limit)?;
         }

@@ -19,7 +19,9 @@ use clarabel::solver::{
 use nalgebra::DMatrix;
 
 use crate::airframe::Airframe;
-use crate::allocation::problem::{require_iteration_bound, AllocationProblem, AllocationStatus};
+use crate::allocation::problem::{
+    require_iteration_bound, require_tolerance, AllocationProblem, AllocationStatus,
+};
 use crate::analysis::controllability::ControlAxes;
 use crate::error::{require_all_finite, require_entries, Result, RfError};
 
@@ -50,12 +52,7 @@ impl ClarabelSettings {
     /// 1..=[`crate::allocation::MAX_ITERATIONS`]. The fields are public, so every solve checks
     /// them again before Clarabel sees them (two comparisons).
     pub fn check(&self) -> Result<()> {
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(RfError::invalid(
-                "tolerance",
-                format!("must be > 0 and finite, got {}", self.tolerance),
-            ));
-        }
+        require_tolerance(self.tolerance)?;
         require_iteration_bound(self.max_iterations as usize)
     }
     pub fn tolerance(mut self, tolerance: f64) -> Result<Self> {

@@ -39,6 +39,17 @@ pub fn require_iteration_bound(max_iterations: usize) -> Result<()> {
     ))
 }
 
+/// A solver's `tolerance`: > 0 and finite, named.
+pub fn require_tolerance(tolerance: f64) -> Result<()> {
+    if tolerance.is_finite() && tolerance > 0.0 {
+        return Ok(());
+    }
+    Err(RfError::invalid(
+        "tolerance",
+        format!("must be > 0 and finite, got {tolerance}"),
+    ))
+}
+
 /// Largest magnitude of a matrix entry, weight or regularisation: the solver scales them by
 /// powers of two and is tested exact from 1e-160 to 1e300 (see `crate::error`).
 pub const MAX_MAGNITUDE: f64 = 1e300;

@@ -22,7 +22,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Schur, Vector3};
 
-use super::{require_finite_matrix, Controller};
+use super::{require_shaped_finite, Controller};
 use crate::error::{
     require_all_finite, require_finite, require_non_negative, require_scale, Result, RfError,
 };
@@ -372,21 +372,12 @@ impl DiscreteController {
     /// `A_K`, `B_K`, `C_K` or `D_K`.
     pub fn check(&self) -> Result<()> {
         let n = self.a.nrows();
-        for (field, m, rows, cols) in [
+        require_shaped_finite([
             ("A_K", &self.a, n, n),
             ("B_K", &self.b, n, 3),
             ("C_K", &self.c, 3, n),
             ("D_K", &self.d, 3, 3),
-        ] {
-            if m.shape() != (rows, cols) {
-                return Err(RfError::shape(
-                    field,
-                    format!("{rows} x {cols}"),
-                    format!("{} x {}", m.nrows(), m.ncols()),
-                ));
-            }
-            require_finite_matrix(field, m)?;
-        }
+        ])?;
         if n > 0 {
             let radius = spectral_radius(&self.a, "A_K", schur_iteration_cap(n))?;
             if !(radius < 1.0) {

@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{require_finite_matrix, Controller};
+use super::{require_finite_matrix, require_shaped_finite, require_state_gain, Controller};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::{state_error, state_vector, RigidBodyState, STATE_DIM};
 
@@ -68,15 +68,7 @@ impl LinearFeedback {
     /// `gain` is command_count x 12.
     pub fn new(x_trim: &[f64], u_trim: &[f64], gain: DMatrix<f64>) -> Result<Self> {
         let x_trim = trim_state(x_trim)?;
-        require_all_finite("u_trim", u_trim)?;
-        require_finite_matrix("gain", &gain)?;
-        if gain.shape() != (u_trim.len(), STATE_DIM) {
-            return Err(RfError::shape(
-                "gain",
-                format!("{} x {STATE_DIM} (commands x states)", u_trim.len()),
-                format!("{} x {}", gain.nrows(), gain.ncols()),
-            ));
-        }
+        require_state_gain(u_trim, &gain)?;
         Ok(LinearFeedback {
             x_trim,
             u_trim: DVector::from_column_slice(u_trim),
@@ -136,21 +128,12 @@ impl Lti {
         let x_trim = trim_state(x_trim)?;
         require_all_finite("u_trim", u_trim)?;
         let (n, nu) = (a.nrows(), u_trim.len());
-        for (field, m, rows, cols) in [
+        require_shaped_finite([
             ("A_K", &a, n, n),
             ("B_K", &b, n, STATE_DIM),
             ("C_K", &c, nu, n),
             ("D_K", &d, nu, STATE_DIM),
-        ] {
-            if m.shape() != (rows, cols) {
-                return Err(RfError::shape(
-                    field,
-                    format!("{rows} x {cols}"),
-                    format!("{} x {}", m.nrows(), m.ncols()),
-                ));
-            }
-            require_finite_matrix(field, m)?;
-        }
+        ])?;
         Ok(Lti {
             xi: DVector::zeros(n),
             a,

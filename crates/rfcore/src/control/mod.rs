@@ -21,7 +21,7 @@ use nalgebra::DMatrix;
 
 use crate::cancel::Cancel;
 use crate::error::{require_all_finite, Result, RfError};
-use crate::state::{ControllerInput, RigidBodyState};
+use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
 
 pub mod allocated;
 pub mod filter;
@@ -46,6 +46,40 @@ pub(crate) fn require_finite_matrix(field: &str, m: &DMatrix<f64>) -> Result<()>
             format!("must be finite, got {}", m.as_slice()[i]),
         )),
     }
+}
+
+/// Each `(field, matrix, rows, cols)` in order: `rows x cols` (a shape error naming `field`),
+/// then finite (`field[row, col]`): the check of a controller's matrices (`Lti`, Lanzon's
+/// discrete controller).
+pub(crate) fn require_shaped_finite<const N: usize>(
+    matrices: [(&str, &DMatrix<f64>, usize, usize); N],
+) -> Result<()> {
+    for (field, m, rows, cols) in matrices {
+        if m.shape() != (rows, cols) {
+            return Err(RfError::shape(
+                field,
+                format!("{rows} x {cols}"),
+                format!("{} x {}", m.nrows(), m.ncols()),
+            ));
+        }
+        require_finite_matrix(field, m)?;
+    }
+    Ok(())
+}
+
+/// A static state feedback about a trim command: `u_trim` finite, `gain` finite and one row of
+/// [`STATE_DIM`] states per command (`LinearFeedback`, `TrackingFeedback`).
+pub(crate) fn require_state_gain(u_trim: &[f64], gain: &DMatrix<f64>) -> Result<()> {
+    require_all_finite("u_trim", u_trim)?;
+    require_finite_matrix("gain", gain)?;
+    if gain.shape() != (u_trim.len(), STATE_DIM) {
+        return Err(RfError::shape(
+            "gain",
+            format!("{} x {STATE_DIM} (commands x states)", u_trim.len()),
+            format!("{} x {}", gain.nrows(), gain.ncols()),
+        ));
+    }
+    Ok(())
 }
 
 /// A controller: from the measured state at time `t_s`, the actuator commands.

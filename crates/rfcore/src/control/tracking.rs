@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{require_finite_matrix, Controller};
+use super::{require_finite_matrix, require_state_gain, Controller};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::{state_error, state_vector, RigidBodyState, STATE_DIM};
 
@@ -34,15 +34,7 @@ impl TrackingFeedback {
         references: DMatrix<f64>,
         error_limit: &[f64],
     ) -> Result<Self> {
-        require_all_finite("u_trim", u_trim)?;
-        require_finite_matrix("gain", &gain)?;
-        if gain.shape() != (u_trim.len(), STATE_DIM) {
-            return Err(RfError::shape(
-                "gain",
-                format!("{} x {STATE_DIM} (commands x states)", u_trim.len()),
-                format!("{} x {}", gain.nrows(), gain.ncols()),
-            ));
-        }
+        require_state_gain(u_trim, &gain)?;
         if times_s.is_empty() || references.shape() != (times_s.len(), STATE_DIM) {
             return Err(RfError::shape(
                 "references",

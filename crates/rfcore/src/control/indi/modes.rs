@@ -74,6 +74,15 @@ fn columns_of(matrix: &DMatrix<f64>, columns: &[usize], rows: usize) -> DMatrix<
     DMatrix::from_fn(rows, columns.len(), |r, c| matrix[(r, columns[c])])
 }
 
+/// The thrust limits (N) of the rotors `columns`, in that order: lower, upper.
+fn thrust_bounds(airframe: &Airframe, columns: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let limits = |bound: &[f64]| columns.iter().map(|&i| bound[i]).collect();
+    (
+        limits(&airframe.min_thrust_n()),
+        limits(&airframe.max_thrust_n()),
+    )
+}
+
 /// The smaller of the largest positive and negative yaw torques the `columns` make while
 /// holding the weight with zero roll and pitch torque (0 when one side is out of reach).
 pub(super) fn yaw_authority(
@@ -82,14 +91,7 @@ pub(super) fn yaw_authority(
     columns: &[usize],
 ) -> Result<f64> {
     let m = columns_of(matrix, columns, 4);
-    let lower: Vec<f64> = columns
-        .iter()
-        .map(|&i| airframe.min_thrust_n()[i])
-        .collect();
-    let upper: Vec<f64> = columns
-        .iter()
-        .map(|&i| airframe.max_thrust_n()[i])
-        .collect();
+    let (lower, upper) = thrust_bounds(airframe, columns);
     let base = airframe.hover_wrench();
     let mut authority = f64::INFINITY;
     for sign in [1.0, -1.0] {
@@ -122,14 +124,7 @@ impl Mode {
         let matrix = airframe.nominal_effectiveness_matrix();
         let [jx, jy, jz] = airframe.inertia_kg_m2();
         let weight = airframe.hover_wrench()[0];
-        let lower: Vec<f64> = healthy
-            .iter()
-            .map(|&i| airframe.min_thrust_n()[i])
-            .collect();
-        let upper: Vec<f64> = healthy
-            .iter()
-            .map(|&i| airframe.max_thrust_n()[i])
-            .collect();
+        let (lower, upper) = thrust_bounds(airframe, &healthy);
 
         // Hover at all, spinning: the largest thrust with zero roll and pitch torque.
         let three = columns_of(&matrix, &healthy, 3);
