@@ -447,6 +447,9 @@ class RelaxedHoverFeedback:
         outer_loop: RelaxedHoverOuterLoop | None = None,
         before_failure: LinearFeedback | None = None,
         failure_time_s: float | None = None,
+        before_failure_integral_gain: _F64 | None = None,
+        before_failure_integral_limit_m_s: tuple[float, float, float] | None = None,
+        handover_altitude_ratio: float | None = None,
     ) -> RelaxedHoverFeedback: ...
     @property
     def failure_time_s(self) -> float | None: ...

@@ -521,3 +521,53 @@ def test_stored_verdicts_of_an_older_certify_rule_are_warned_about(tmp_path: Pat
         with pytest.warns(D.StaleCertifyWarning, match="unrecorded certify rule" if stale is None else f"certify rule {stale}"):
             old = D.read_deciding(out)
         assert old.certify_rule == stale and "CERTIFY VERDICTS FROM" in old.table()
+
+
+def test_a_heavy_draw_the_plain_hover_lqr_lost_holds_with_the_healthy_integral_and_hand_over() -> None:
+    """Issue 30, Lanzon quadrotor, one rotor in hover, run 22 of the full campaign (seed 0): 14 %
+    heavy, rotor 3 lost totally at 4.64 s in 2.1 m/s of wind. With the plain healthy hover LQR it sat
+    5.8 m below the set point at the failure, and the relaxed hover's integral, wound up while
+    climbing back, overshot to 1.24 m above it in the hold window (off station). With the LQI
+    before the failure and the integrals handed over it is 1.2 m low at the failure and holds."""
+    suite = D.DecidingCampaign(runs=1000, seed=0)
+    cell = next(c for c in suite.cells if (c.vehicle, c.fault_class, c.controller)
+                == ("lanzon-quadrotor", "one-rotor-hover", "relaxed-hover-feedback"))
+    trajectory, d = suite.refly(cell, 22)
+    assert d.mass_scale == pytest.approx(1.140398, abs=1e-6) and d.failed == (3,) and d.efficiency == 0.0
+    t, p = np.asarray(trajectory.t), np.asarray(trajectory.position)
+    below_at_failure_m = float(p[t < d.fault_time_s][-1, 2] - D.HOVER_M[2])
+    assert below_at_failure_m < 1.5  # the plain LQR: 5.79 m
+    assert trajectory.events == []
+    altitude, horizontal = D.hold_errors(t, p, d.fault_time_s)
+    assert altitude <= D.HOLD_ALTITUDE_M and horizontal <= D.HOLD_HORIZONTAL_M  # the plain LQR: 1.24 m altitude
+
+
+def test_the_hand_over_needs_the_integral_gain_and_its_limits_together() -> None:
+    solution, airframe = _lanzon_relaxed()
+    healthy = D.healthy_lqi("lanzon-quadrotor")
+    with pytest.raises(ValueError, match="before_failure_integral_gain, before_failure_integral_limit_m_s"):
+        rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
+                                before_failure_integral_gain=healthy.integral_gain)
+    with pytest.raises(ValueError, match="before_failure_integral_gain: needs before_failure"):
+        rf.RelaxedHoverFeedback(solution, airframe, before_failure_integral_gain=healthy.integral_gain,
+                                before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
+    with pytest.raises(ValueError, match="before_failure_integral_gain: expected 4 x 3"):
+        rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
+                                before_failure_integral_gain=healthy.integral_gain[:, :2],
+                                before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
+    feedback = rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
+                                       before_failure_integral_gain=healthy.integral_gain,
+                                       before_failure_integral_limit_m_s=healthy.integral_limit_m_s,
+                                       outer_loop=D.RELAXED_HOVER_OUTER_LOOP)
+    # Both loops' vertical accelerations per unit of integral are independent of the ratio's sign
+    # conventions: healthy (down) and relaxed (up) integrals have opposite signs for one weight.
+    assert feedback.handover_altitude_ratio < 0
+    with pytest.raises(ValueError, match="integral_limit_m_s"):
+        rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
+                                before_failure_integral_gain=healthy.integral_gain,
+                                before_failure_integral_limit_m_s=(1.0, 0.0, 1.0)).core(D.DT_S)
+
+
+def _lanzon_relaxed() -> tuple[object, rf.Airframe]:
+    airframe, best = D._relaxed_design("lanzon-quadrotor", (1.0, 1.0, 0.0, 1.0))
+    return best, airframe

@@ -13,6 +13,15 @@ by the healthy-vehicle design (a hover LQR, :func:`rotorfault.control.lqr_hover`
 airframe), from the first control step at or after ``failure_time_s`` by the relaxed hover LQR.
 This is passive fault-tolerant control with the failure (which rotors, how deep) and its time
 known in advance, as a perfect fault detection would report them: the switch is not a detector.
+
+Integral action before the failure and a bumpless hand-over (``before_failure_integral_gain=``,
+``before_failure_integral_limit_m_s=``): the healthy design also feeds back the integral of the
+position error (``u = u_lqr - K_I`` times the integral of ``p - p_set``, ``K_I`` from an LQR on the hover model
+augmented by the integral), so a vehicle heavier or weaker than its design does not sit metres
+below its set point when the failure comes; at the failure the relaxed hover's altitude integral
+starts where it gives the same vertical acceleration as the healthy loop's
+(:attr:`RelaxedHoverFeedback.handover_altitude_ratio`), its horizontal integral at the
+vehicle's tilt then (``rotorfault._rfcore`` ``hover_handover``).
 """
 
 from __future__ import annotations
@@ -63,6 +72,10 @@ class RelaxedHoverFeedback:
     :class:`~rotorfault.control.LinearFeedback`, the healthy vehicle's hover LQR) and
     ``failure_time_s`` (s, >= 0), given together: ``before_failure`` flies until the failure time, this
     LQR from then on (the module notes: the failure and its time are known).
+    ``before_failure_integral_gain`` (commands x 3, rotor command units per m s of the north,
+    east, down position error's integral) and ``before_failure_integral_limit_m_s`` (3 limits,
+    m s, > 0), given together and with ``before_failure``: integral action before the failure and
+    a bumpless hand-over of the integrals (module notes).
 
     Examples:
 
@@ -88,6 +101,8 @@ class RelaxedHoverFeedback:
         linear_drag_n_s_m: float = 0.0,
         before_failure: LinearFeedback | None = None,
         failure_time_s: float | None = None,
+        before_failure_integral_gain: npt.ArrayLike | None = None,
+        before_failure_integral_limit_m_s: npt.ArrayLike | None = None,
     ) -> None:
         if not isinstance(solution, RelaxedHoverSolution):
             raise TypeError(f"solution: expected rotorfault.RelaxedHoverSolution, got {type(solution).__name__}")
@@ -146,6 +161,39 @@ class RelaxedHoverFeedback:
         #: The actuators start at its trim (:func:`rotorfault.flight.simulator.trim_command`).
         self.before_failure = before_failure
         self.failure_time_s = failure_time_s
+        if (before_failure_integral_gain is None) != (before_failure_integral_limit_m_s is None):
+            raise ValueError("before_failure_integral_gain, before_failure_integral_limit_m_s: give both or neither")
+        if before_failure_integral_gain is not None and before_failure is None:
+            raise ValueError("before_failure_integral_gain: needs before_failure and failure_time_s (the design it adds to)")
+        #: ``K_I`` of the healthy design (commands x 3) and each axis's integral limit (m s); None: no integral.
+        self.before_failure_integral_gain = None if before_failure_integral_gain is None else float_array(
+            "before_failure_integral_gain", before_failure_integral_gain, 2)
+        self.before_failure_integral_limit_m_s = None if before_failure_integral_limit_m_s is None else float_array(
+            "before_failure_integral_limit_m_s", before_failure_integral_limit_m_s, 1)
+        if self.before_failure_integral_gain is not None:
+            if self.before_failure_integral_gain.shape != (self.u_trim.shape[0], 3):
+                raise ValueError(f"before_failure_integral_gain: expected {self.u_trim.shape[0]} x 3 (commands x north, east, down), "
+                                 f"got {self.before_failure_integral_gain.shape}")
+            if self.before_failure_integral_limit_m_s is None or self.before_failure_integral_limit_m_s.shape != (3,):
+                raise ValueError("before_failure_integral_limit_m_s: expected 3 entries (north, east, down; m s)")
+        #: The relaxed hover's altitude integral (m s, up) per the healthy design's altitude integral
+        #: (m s, down) at the hand-over: the ratio of the vertical accelerations the two loops give per
+        #: unit of integral (healthy: level, rotors at full efficiency; relaxed: its linear model), so
+        #: the weight the healthy integral carried is carried on. 0 without an altitude integral.
+        self.handover_altitude_ratio = self._handover_altitude_ratio()
+
+    def _handover_altitude_ratio(self) -> float:
+        k_z = self.outer_loop.altitude_integral_gain_s
+        if self.before_failure_integral_gain is None or k_z == 0.0:
+            return 0.0
+        axis = np.asarray(self.airframe.thrust_axis)
+        # Healthy, level: a command change du along the rotor axes, up component -axis_z, per kg.
+        healthy = float(np.sum(-self.before_failure_integral_gain[:, 2] * -axis[:, 2])) / float(self.airframe.mass_kg)
+        b = np.asarray(self.solution.linear_b)
+        relaxed = float(-(b[6] @ self.design.gain[:, 5]) * k_z)
+        if not (math.isfinite(healthy) and math.isfinite(relaxed) and relaxed != 0.0):
+            raise ValueError(f"before_failure_integral_gain: no hand-over ratio (healthy {healthy:g}, relaxed {relaxed:g} m/s^2 per m s)")
+        return healthy / relaxed
 
     def check_sampled(self, dt_s: float) -> float:
         """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
@@ -181,6 +229,11 @@ class RelaxedHoverFeedback:
             outer_loop=self.outer_loop,
             before_failure=None if self.before_failure is None else self.before_failure.core(dt_s),
             failure_time_s=self.failure_time_s,
+            before_failure_integral_gain=None if self.before_failure_integral_gain is None
+            else np.ascontiguousarray(self.before_failure_integral_gain),
+            before_failure_integral_limit_m_s=None if self.before_failure_integral_limit_m_s is None
+            else _triple(self.before_failure_integral_limit_m_s),
+            handover_altitude_ratio=None if self.before_failure_integral_gain is None else self.handover_altitude_ratio,
         )
 
 

@@ -39,9 +39,11 @@ Decisions (gaps of the issue, stated once):
   the same controller with the ``ke-robust`` gains, tuned over partial and total faults);
 - the relaxed hover LQR (``relaxed-hover-feedback``) is passive FTC with the failure known in
   advance: which rotors, their efficiency (nominal: not the run's thrust-coefficient error) and
-  the failure time. Until the failure the healthy vehicle's hover LQR flies it, from the failure
-  on the LQR about the best relaxed hover of the failed vehicle (the failure-time switch of
-  :class:`rotorfault.control.RelaxedHoverFeedback`), its outer loop :data:`RELAXED_HOVER_OUTER_LOOP`
+  the failure time. Until the failure the healthy vehicle's hover LQI flies it (:func:`healthy_lqi`:
+  the hover LQR with integral action on the position error; without it a heavy draw sat 2-6 m
+  low when the failure came), from the failure on the LQR about the best relaxed hover of the
+  failed vehicle (the failure-time hand-over of :class:`rotorfault.control.RelaxedHoverFeedback`,
+  its integrals started where the healthy loop left its own), its outer loop :data:`RELAXED_HOVER_OUTER_LOOP`
   (integral action on the circle's centre and on altitude: wind and a mass error are constant
   forces the default loop leaves as offsets). Partial losses are designed on a schedule:
   the efficiency rounded down to a multiple of :data:`EFFICIENCY_STEP` (the design assumes the
@@ -299,6 +301,68 @@ def _healthy_lqr(name: str) -> Any:
     return lqr_hover(sim, position=HOVER_M)
 
 
+#: The healthy hover LQI the relaxed hover LQR hands over from (:func:`healthy_lqi`): Bryson
+#: scales of the position error's integral (north, east, down), m s, beside the hover LQR's
+#: own (1 m, 1 m/s, 0.1 rad, 1 rad/s against 10 % of the hover thrust per rotor).
+HEALTHY_INTEGRAL_SCALE_M_S = (2.0, 2.0, 1.0)
+#: Each axis's integral limit in the healthy hover LQI: the integral whose feedback alone carries
+#: this share of the weight (down) or pushes this share of it sideways (north, east): a vehicle
+#: 20 % heavier with rotors 20 % weaker needs 50 %; more is a wind-up.
+HEALTHY_INTEGRAL_WEIGHT_SHARE = 0.6
+
+
+@dataclass(frozen=True)
+class HealthyHoverLqi:
+    """The healthy vehicle's hover LQI: ``feedback`` (the state feedback, a
+    :class:`~rotorfault.control.LinearFeedback` with its checked design on the augmented model in
+    ``design``), ``integral_gain`` (``K_I``: rotors x 3, N per m s of the north, east, down position
+    error's integral) and ``integral_limit_m_s`` (each axis's limit, m s)."""
+
+    feedback: Any
+    integral_gain: np.ndarray[Any, Any]
+    integral_limit_m_s: tuple[float, float, float]
+    design: Any
+
+
+@computed_once
+def healthy_lqi(name: str) -> HealthyHoverLqi:
+    """The hover LQI of vehicle ``name`` (the healthy vehicle's hover linearisation of
+    :func:`~rotorfault.control.lqr.lqr_hover`, augmented by the integral of the position error,
+    weighted by :data:`HEALTHY_INTEGRAL_SCALE_M_S`; designed and checked by
+    :func:`~rotorfault.control.riccati.design_lqr`, the sampled loop included) that flies the
+    relaxed hover LQR's runs until the failure (issue 30: without the integral a heavy draw sits
+    metres low when the failure comes)."""
+    from ..control.linear import STATE_NAMES, LinearFeedback
+    from ..control.lqr import hover_trim, linearize
+    from ..control.riccati import design_lqr
+    from ..flight import Simulator
+
+    v = vehicle(name)
+    sim = Simulator(v.airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=nominal_drag(v), actuator=nominal_actuator(v))
+    trim = hover_trim(sim, position=HOVER_M)
+    model = linearize(sim, trim)
+    a, b = np.asarray(model.A), np.asarray(model.B)
+    n, m = a.shape[0], b.shape[1]
+    a_aug = np.zeros((n + 3, n + 3))
+    a_aug[:n, :n] = a
+    a_aug[n:, :3] = np.eye(3)  # d/dt of the integral is the position error
+    b_aug = np.vstack([b, np.zeros((3, m))])
+    scale = np.array([1.0] * 3 + [1.0] * 3 + [0.1] * 3 + [1.0] * 3 + list(HEALTHY_INTEGRAL_SCALE_M_S))
+    per_rotor = 0.1 * v.airframe.hover_thrust_n / v.airframe.rotor_count
+    design = design_lqr((a_aug, b_aug), np.diag(1.0 / scale**2), np.eye(m) / per_rotor**2, dt_s=DT_S,
+                        state_names=(*STATE_NAMES, "int_x", "int_y", "int_z"), model=f"the hover linearisation of {name} with position integrals")
+    gain = np.asarray(design.gain)
+    integral_gain = gain[:, n:]
+    weight = float(v.airframe.mass_kg * v.airframe.gravity_m_s2)
+    # The rotors' summed thrust per m s of the altitude integral sizes every axis's limit (a
+    # sideways integral acts through the tilt it commands, of the same order).
+    vertical = abs(float(np.sum(integral_gain[:, 2])))
+    if not vertical > 0:
+        raise ValueError(f"healthy_lqi: {name}'s design gives its altitude integral no thrust (the augmented model's check)")
+    limits = (HEALTHY_INTEGRAL_WEIGHT_SHARE * weight / vertical,) * 3
+    return HealthyHoverLqi(LinearFeedback(gain[:, :n], trim.state, trim.command), integral_gain, limits, design)
+
+
 @computed_once  # the schedule bounds the keys: vehicles x patterns x efficiency steps
 def _relaxed_design(name: str, efficiency: tuple[float, ...]) -> Any:
     """The failed vehicle and its best relaxed hover (``None``: none a linear feedback holds; kept
@@ -320,8 +384,10 @@ def _relaxed_hover(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     if best is None:
         failed = [i + 1 for i, e in enumerate(efficiency) if e < 1.0]
         raise ValueError(f"relaxed hover: {v.name} with rotor(s) {failed} at efficiency {[efficiency[i - 1] for i in failed]} has none a linear feedback can hold")
+    healthy = healthy_lqi(v.name)
     return RelaxedHoverFeedback(best, airframe, position=HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m, outer_loop=RELAXED_HOVER_OUTER_LOOP,
-                                before_failure=_healthy_lqr(v.name), failure_time_s=min(f.time for f in faults))
+                                before_failure=healthy.feedback, failure_time_s=min(f.time for f in faults),
+                                before_failure_integral_gain=healthy.integral_gain, before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
 
 
 #: The controllers by name: a registry name (:mod:`rotorfault.control.registry`), or a named

@@ -3,6 +3,7 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
+use rfcore::control::hover_handover::{IntegralHover, RelaxedHoverHandover};
 use rfcore::control::relaxed_hover::{
     RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim,
 };
@@ -83,18 +84,23 @@ crate::convert::pickle_protocol!(PyRelaxedHoverOuterLoop, {
 });
 
 /// `u = u_trim - K x` about a relaxed hover, with the outer loop; with `before_failure` and
-/// `failure_time_s`, the healthy-vehicle design flies until the failure time (a failure-time switch).
+/// `failure_time_s`, the healthy-vehicle design flies until the failure time (a failure-time switch);
+/// with `before_failure_integral_gain` too, the healthy design has integral action on the position
+/// error and hands its integrals over (`rfcore::control::hover_handover`).
 #[pyclass(name = "RelaxedHoverFeedback", module = "rotorfault._rfcore", frozen)]
 pub struct PyRelaxedHoverFeedback {
     pub(crate) inner: RelaxedHoverFeedback,
     before_failure: Option<(LinearFeedback, f64)>,
+    handover: Option<RelaxedHoverHandover>,
 }
 
 #[pymethods]
 impl PyRelaxedHoverFeedback {
     #[new]
     #[pyo3(signature = (*, axis, e1, e2, body_rate_rad_s, circle_offset_m, circle_velocity_m_s, gravity_m_s2,
-                        u_trim, gain, position_m, outer_loop=None, before_failure=None, failure_time_s=None))]
+                        u_trim, gain, position_m, outer_loop=None, before_failure=None, failure_time_s=None,
+                        before_failure_integral_gain=None, before_failure_integral_limit_m_s=None,
+                        handover_altitude_ratio=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         axis: [f64; 3],
@@ -110,6 +116,9 @@ impl PyRelaxedHoverFeedback {
         outer_loop: Option<&PyRelaxedHoverOuterLoop>,
         before_failure: Option<PyRef<'_, PyLinearFeedback>>,
         failure_time_s: Option<f64>,
+        before_failure_integral_gain: Option<PyReadonlyArray2<'_, f64>>,
+        before_failure_integral_limit_m_s: Option<[f64; 3]>,
+        handover_altitude_ratio: Option<f64>,
     ) -> PyResult<Self> {
         let trim = RelaxedHoverTrim {
             axis,
@@ -144,9 +153,38 @@ impl PyRelaxedHoverFeedback {
                 )))
             }
         };
+        let handover = match (
+            &before_failure,
+            before_failure_integral_gain,
+            before_failure_integral_limit_m_s,
+            handover_altitude_ratio,
+        ) {
+            (_, None, None, None) => None,
+            (Some((h, t)), Some(gain), Some(limit), Some(ratio)) => {
+                let setpoint = h.trim_position_m();
+                let before = IntegralHover::new(
+                    h.clone(),
+                    matrix("before_failure_integral_gain", &gain)?,
+                    setpoint,
+                    limit,
+                )
+                .map_err(to_py_err)?;
+                Some(
+                    RelaxedHoverHandover::new(before, inner.clone(), *t, ratio)
+                        .map_err(to_py_err)?,
+                )
+            }
+            _ => {
+                return Err(to_py_err(rfcore::error::RfError::invalid(
+                    "before_failure_integral_gain, before_failure_integral_limit_m_s, handover_altitude_ratio",
+                    "give all three with before_failure and failure_time_s, or none",
+                )))
+            }
+        };
         Ok(PyRelaxedHoverFeedback {
             inner,
             before_failure,
+            handover,
         })
     }
     /// When the healthy-vehicle design hands over, s (`None`: no switch).
@@ -158,6 +196,9 @@ impl PyRelaxedHoverFeedback {
 
 impl crate::control::class::ControllerClass for PyRelaxedHoverFeedback {
     fn core(&self, _py: Python<'_>) -> PyResult<Box<dyn rfcore::control::Controller>> {
+        if let Some(handover) = &self.handover {
+            return Ok(Box::new(handover.clone()));
+        }
         let relaxed = Box::new(self.inner.clone());
         match &self.before_failure {
             None => Ok(relaxed),

@@ -75,6 +75,11 @@ impl LinearFeedback {
             gain,
         })
     }
+
+    /// The trim's position (world NED), m: the set point the feedback holds.
+    pub fn trim_position_m(&self) -> [f64; 3] {
+        [self.x_trim[0], self.x_trim[1], self.x_trim[2]]
+    }
 }
 
 fn trim_state(x_trim: &[f64]) -> Result<[f64; STATE_DIM]> {

@@ -16,6 +16,8 @@
 //!   H-infinity loop shaping, yaw-synchronised outer loop).
 //! - [`relaxed_hover`]: linear feedback about a relaxed hover (Mueller and D'Andrea's cascade).
 //! - [`switch`]: one controller before a known failure time, another after it.
+//! - [`hover_handover`]: a hover LQR with integral action, handing its integrals over to the
+//!   relaxed hover LQR at a known failure time.
 
 use nalgebra::DMatrix;
 
@@ -25,6 +27,7 @@ use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
 
 pub mod allocated;
 pub mod filter;
+pub mod hover_handover;
 pub mod indi;
 pub mod ke;
 pub mod lanzon;

@@ -1,0 +1,275 @@
+//! Integral action in the healthy hover and a bumpless hand-over to the relaxed hover LQR.
+//!
+//! [`IntegralHover`]: a hover state feedback (an LQR, [`LinearFeedback`]) with integral action on
+//! the position error, `u = u_lqr - K_I \int (p - p_set) dt` (`K_I` designed in Python with the
+//! feedback, an LQR on the model augmented by the integral: LQI). Without it a vehicle heavier or
+//! weaker than its design sits below its set point in proportion to the weight its trim does not
+//! carry (the Lanzon quadrotor 14 % heavier with 10 % weaker rotors: 5-6 m after 4 s), and a
+//! constant wind leaves it off station. Anti-windup: each axis's integral kept within its limit.
+//!
+//! [`RelaxedHoverHandover`]: [`IntegralHover`] until a known failure time, the relaxed hover LQR
+//! from the first control step at or after it, whose integrals are started where the healthy
+//! loop left its own (bumpless): the altitude integral at `altitude_ratio` times the healthy
+//! altitude integral (the ratio of the two loops' vertical accelerations per unit of integral,
+//! computed in Python from the two designs: the same weight the trims do not carry), the
+//! horizontal integral at the tilt the vehicle flies at the hand-over (the acceleration the
+//! healthy loop balances the wind with). Without it the relaxed hover starts from zero integrals
+//! and winds them up while climbing back, overshooting the set point.
+
+use nalgebra::{DMatrix, Vector3};
+
+use super::linear::LinearFeedback;
+use super::relaxed_hover::RelaxedHoverFeedback;
+use super::{require_finite_matrix, Controller};
+use crate::error::{require_all_finite, Result, RfError};
+use crate::state::RigidBodyState;
+
+/// A hover LQR with integral action on the position error (module docs).
+#[derive(Debug, Clone)]
+pub struct IntegralHover {
+    feedback: LinearFeedback,
+    /// `K_I`: commands x 3 (north, east, down), command units per m s.
+    integral_gain: DMatrix<f64>,
+    setpoint_m: Vector3<f64>,
+    /// Largest `|\int e dt|` per axis, m s.
+    limit_m_s: Vector3<f64>,
+    integral_m_s: Vector3<f64>,
+    integrated_to_s: Option<f64>,
+}
+
+impl IntegralHover {
+    /// `integral_gain`: commands x 3; `setpoint_m`: the feedback's trim position (world NED);
+    /// `limit_m_s`: each axis's integral limit (finite, > 0).
+    pub fn new(
+        feedback: LinearFeedback,
+        integral_gain: DMatrix<f64>,
+        setpoint_m: [f64; 3],
+        limit_m_s: [f64; 3],
+    ) -> Result<Self> {
+        require_finite_matrix("integral_gain", &integral_gain)?;
+        require_all_finite("setpoint_m", &setpoint_m)?;
+        if integral_gain.shape() != (feedback.command_count(), 3) {
+            return Err(RfError::shape(
+                "integral_gain",
+                format!(
+                    "{} x 3 (commands x north, east, down)",
+                    feedback.command_count()
+                ),
+                format!("{} x {}", integral_gain.nrows(), integral_gain.ncols()),
+            ));
+        }
+        if let Some(v) = limit_m_s.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(RfError::invalid(
+                "integral_limit_m_s",
+                format!("each must be finite and > 0, got {v}"),
+            ));
+        }
+        Ok(IntegralHover {
+            feedback,
+            integral_gain,
+            setpoint_m: Vector3::from(setpoint_m),
+            limit_m_s: Vector3::from(limit_m_s),
+            integral_m_s: Vector3::zeros(),
+            integrated_to_s: None,
+        })
+    }
+
+    /// `\int (p - p_set) dt` so far (world NED), m s.
+    pub fn integral_m_s(&self) -> Vector3<f64> {
+        self.integral_m_s
+    }
+
+    /// Advances the integral to `t_s` (rectangle rule over the time since the last call).
+    fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
+        let previous = self.integrated_to_s.replace(t_s);
+        let Some(previous) = previous else { return };
+        let dt = t_s - previous;
+        let error = measured.position_m - self.setpoint_m;
+        if dt.is_nan() || dt <= 0.0 || !error.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        self.integral_m_s += dt * error;
+        for k in 0..3 {
+            self.integral_m_s[k] =
+                self.integral_m_s[k].clamp(-self.limit_m_s[k], self.limit_m_s[k]);
+        }
+    }
+}
+
+impl Controller for IntegralHover {
+    fn command_count(&self) -> usize {
+        self.feedback.command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.integrate(t_s, measured);
+        self.feedback.command(t_s, measured, out)?;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o -= (0..3)
+                .map(|k| self.integral_gain[(i, k)] * self.integral_m_s[k])
+                .sum::<f64>();
+        }
+        Ok(())
+    }
+    fn reset(&mut self) {
+        self.integral_m_s = Vector3::zeros();
+        self.integrated_to_s = None;
+    }
+}
+
+/// [`IntegralHover`] until `failure_time_s`, then the relaxed hover LQR with its integrals started
+/// from the healthy loop's (module docs).
+#[derive(Debug, Clone)]
+pub struct RelaxedHoverHandover {
+    before: IntegralHover,
+    after: RelaxedHoverFeedback,
+    failure_time_s: f64,
+    /// The relaxed hover's altitude integral (m s, up) per healthy altitude integral (m s, down).
+    altitude_ratio: f64,
+    handed_over: bool,
+}
+
+impl RelaxedHoverHandover {
+    pub fn new(
+        before: IntegralHover,
+        after: RelaxedHoverFeedback,
+        failure_time_s: f64,
+        altitude_ratio: f64,
+    ) -> Result<Self> {
+        if !(failure_time_s.is_finite() && failure_time_s >= 0.0) {
+            return Err(RfError::invalid(
+                "failure_time_s",
+                format!("must be finite and >= 0, got {failure_time_s}"),
+            ));
+        }
+        if !altitude_ratio.is_finite() {
+            return Err(RfError::invalid(
+                "altitude_ratio",
+                format!("must be finite, got {altitude_ratio}"),
+            ));
+        }
+        if before.command_count() != after.command_count() {
+            return Err(RfError::invalid(
+                "before_failure",
+                format!(
+                    "writes {} commands, the relaxed hover {}",
+                    before.command_count(),
+                    after.command_count()
+                ),
+            ));
+        }
+        Ok(RelaxedHoverHandover {
+            before,
+            after,
+            failure_time_s,
+            altitude_ratio,
+            handed_over: false,
+        })
+    }
+}
+
+impl Controller for RelaxedHoverHandover {
+    fn command_count(&self) -> usize {
+        self.after.command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        if t_s < self.failure_time_s {
+            return self.before.command(t_s, measured, out);
+        }
+        if !self.handed_over {
+            self.handed_over = true;
+            let altitude = self.altitude_ratio * self.before.integral_m_s().z;
+            self.after.start_integrals(altitude, measured);
+        }
+        self.after.command(t_s, measured, out)
+    }
+    fn reset(&mut self) {
+        self.before.reset();
+        self.after.reset();
+        self.handed_over = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hover(gain_z: f64) -> IntegralHover {
+        let feedback = LinearFeedback::new(&[0.0; 12], &[1.0], DMatrix::zeros(1, 12)).unwrap();
+        let gain = DMatrix::from_row_slice(1, 3, &[0.0, 0.0, gain_z]);
+        IntegralHover::new(feedback, gain, [0.0; 3], [1.0, 1.0, 2.0]).unwrap()
+    }
+
+    #[test]
+    fn a_constant_error_integrates_into_the_command_up_to_the_limit() {
+        let mut c = hover(-0.5);
+        // 0.4 m below the set point (NED z = +0.4) for 1 s: integral 0.4 m s, u = 1 + 0.5 x 0.4.
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, 0.4),
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        for k in 0..=400 {
+            c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
+        }
+        assert!((out[0] - 1.2).abs() < 1e-12, "{}", out[0]);
+        for k in 401..=4000 {
+            c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
+        }
+        assert!((c.integral_m_s().z - 2.0).abs() < 1e-12);
+        c.reset();
+        c.command(20.0, &state, &mut out).unwrap();
+        assert_eq!(out[0], 1.0);
+    }
+
+    #[test]
+    fn the_relaxed_hover_starts_with_the_healthy_integral_times_the_ratio() {
+        use crate::control::relaxed_hover::{RelaxedHoverOuterLoop, RelaxedHoverTrim};
+        let trim = RelaxedHoverTrim {
+            axis: [0.0, 0.0, -1.0],
+            e1: [0.0, 1.0, 0.0],
+            e2: [1.0, 0.0, 0.0],
+            body_rate_rad_s: [0.0, 0.0, -15.0],
+            circle_offset_m: [0.0; 3],
+            circle_velocity_m_s: [0.0; 3],
+            gravity_m_s2: 9.81,
+        };
+        let mut gain = DMatrix::zeros(1, 7);
+        gain[(0, 5)] = 2.0;
+        let outer = RelaxedHoverOuterLoop {
+            altitude_integral_gain_s: 0.5,
+            integral_gain_s3: 0.3,
+            ..Default::default()
+        };
+        let after = RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap();
+        let mut c = RelaxedHoverHandover::new(hover(-0.5), after, 1.0, -0.25).unwrap();
+        // 0.4 m below for 1 s before the failure: healthy integral 0.4 m s (down).
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.0, 0.0, 0.4),
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        for k in 0..400 {
+            c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
+        }
+        assert!((c.before.integral_m_s().z - 0.399).abs() < 1e-12);
+        // At the failure, level: the relaxed altitude integral is -0.25 x 0.399 m s (up), so
+        // u = 3 - 2 (z + 0.5 I) = 3 - 2 (-0.4 - 0.5 x 0.0998) and no horizontal integral.
+        c.command(1.0, &state, &mut out).unwrap();
+        let want = 3.0 - 2.0 * (-0.4 + 0.5 * -0.25 * 0.399);
+        assert!((out[0] - want).abs() < 1e-12, "{} {want}", out[0]);
+        c.reset();
+        c.command(1.0, &state, &mut out).unwrap();
+        assert!((out[0] - (3.0 - 2.0 * -0.4)).abs() < 1e-12, "{}", out[0]);
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let feedback = LinearFeedback::new(&[0.0; 12], &[1.0], DMatrix::zeros(1, 12)).unwrap();
+        let err = IntegralHover::new(feedback.clone(), DMatrix::zeros(2, 3), [0.0; 3], [1.0; 3])
+            .unwrap_err();
+        assert!(err.to_string().starts_with("integral_gain"), "{err}");
+        let err = IntegralHover::new(feedback, DMatrix::zeros(1, 3), [0.0; 3], [1.0, 0.0, 1.0])
+            .unwrap_err();
+        assert!(err.to_string().starts_with("integral_limit_m_s"), "{err}");
+    }
+}
