@@ -16,7 +16,10 @@ its equations and decisions are documented in ``crates/rfcore/src/control/indi/m
   rather than sink; ``yaw="hold"`` keeps yaw's weight (the law before that rule).
 - With two opposing rotors of a quadrotor gone, only one attitude output can be controlled; Sun's
   output redefinition keeps the rest (the zero dynamics) stable when ``J_z > J_xy``
-  (:meth:`IndiController.failure_modes` reports their damping).
+  (:meth:`IndiController.failure_modes` reports their damping for the nominal inertia; in flight
+  the side of the output angle follows the inertia coupling measured from the gyro, since an
+  inertia error of 10-20 % can turn the sign of ``1 + a = (2 J_xy - J_z) / J_xy``, which is small
+  on a quadrotor).
 
 The simulator gives it the gyro, the specific force and the rotor thrusts each control step (truth,
 or the noisy body rates with sensor noise).

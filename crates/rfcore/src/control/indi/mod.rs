@@ -68,6 +68,21 @@
 //!   `eta'' = a r^2 eta - (1 + a) |r| cot(delta) eta'` : stable when `J_z > J_xy` (`a < 0`) and the
 //!   sign is chosen so; its damping ratio `(1 + a) cot(delta) / (2 sqrt(-a))` does not depend on the
 //!   spin rate. With `J_z < J_xy` no choice of `delta` is stable ([`FailureMode::zero_dynamics`]).
+//!   **The side of `delta` from the measured inertia**: `1 + a = (2 J_xy - J_z) / J_xy` is small
+//!   on a quadrotor (its mass near the rotor plane makes `J_z` close to `2 J_xy`: 0.14 for
+//!   ke-quadcopter, 0.15 for Sun's Bebop), so an inertia 10-20 % off the model's can turn its sign,
+//!   and the side chosen from the nominal inertia then makes the zero dynamics unstable: a nutation
+//!   that grows with the spin into bang-bang rotor commands (ke-quadcopter in the deciding campaign:
+//!   all 49 total losses it lost had `J_z / J_xy > 2.08`). The law estimates the roll and pitch
+//!   coupling coefficients `k_x = (J_y - J_z) / J_x`, `k_y = (J_z - J_x) / J_y` (`omega'_x = k_x q r
+//!   + ...`) by least squares of the filtered angular acceleration less the rotors' (the same
+//!   filter on both) against the filtered `q r` and `r p`, forgetting over
+//!   [`COUPLING_FORGETTING_S`], the nominal values a prior of [`COUPLING_PRIOR_RAD2_S2`]; it flies
+//!   the side of `1 + a = 1 + (k_x - k_y) / 2` (changing side when that lies beyond
+//!   [`OUTPUT_FLIP_MARGIN`] on the other), and takes the coupling of step 4 from the estimate. Near
+//!   `J_z = 2 J_xy` the second attitude output is barely controllable with one torque axis
+//!   (the linearised `Y'' + i (1 + a) r Y' - a r^2 Y = i e u`, `Y = Y_x + i Y_y`, loses the
+//!   component across `i e` at `a = -1`): only the drag damps it there.
 //!   Sun's `chi = 105 deg` on his Bebop 2 is `delta = 65.67 deg` here (a test derives it).
 //! - **No hover**: a failure set whose remaining rotors cannot hold the weight with zero roll and
 //!   pitch torque (the hover this law flies, spinning about the thrust axis) is refused at
@@ -122,6 +137,16 @@ use modes::{yaw_authority, Mode};
 pub const MIN_N3Z: f64 = 0.05;
 /// Largest rate of the filtered thrust direction the law feeds forward, 1/s (Sun's saturation).
 pub const MAX_REFERENCE_RATE: f64 = 0.5;
+/// Forgetting time constant of the inertia-coupling estimate with one torque axis left, s (module
+/// docs, "One torque axis left"): a few nutation periods at the slowest spins that need it.
+pub const COUPLING_FORGETTING_S: f64 = 2.0;
+/// The nominal inertia's coupling weighs in that estimate as a regressor of this rms, (rad/s)^2,
+/// over the forgetting time: at hover (no rates) the estimate is the nominal value, and a tilt
+/// oscillation of 0.1 rad/s at a 10 rad/s spin already outweighs it.
+pub const COUPLING_PRIOR_RAD2_S2: f64 = 0.1;
+/// The output direction changes side only when the estimated `1 + a` is at least this far on
+/// the other side of 0 (hysteresis: near 0 neither side damps the zero dynamics).
+pub const OUTPUT_FLIP_MARGIN: f64 = 0.05;
 
 /// A rotor the controller is told has failed, from `time_s` on (the detection time).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -169,6 +194,12 @@ struct Memory {
     /// Slow low-pass of (previous command - produced thrust) per rotor, N.
     mismatch: Vec<f64>,
     mode: usize,
+    /// The regressors `(q r, r p)` of the inertia-coupling estimate through the filter.
+    products: [[f64; 2]; 2],
+    /// Per roll/pitch axis, forgetting sums of (regressor^2, regressor x residual).
+    coupling_sums: [[f64; 2]; 2],
+    /// Single axis: flying the other sign of `delta` (`Mode::rotation_flipped`).
+    output_flipped: bool,
 }
 
 /// The INDI fault-tolerant controller (module docs). Rotor commands are thrusts, N.
@@ -367,14 +398,34 @@ impl IndiController {
 
     /// `gamma(omega) = -J^-1 (omega x J omega)`: the angular acceleration the inertia coupling
     /// gives (principal axes), rad/s^2.
-    fn coupling(&self, omega: &Vector3<f64>) -> Vector3<f64> {
+    /// With `estimated` (one torque axis left), its roll and pitch coefficients in place of the
+    /// nominal inertia's.
+    fn coupling(&self, omega: &Vector3<f64>, estimated: Option<[f64; 2]>) -> Vector3<f64> {
         let [jx, jy, jz] = self.inertia_kg_m2;
         let (p, q, r) = (omega.x, omega.y, omega.z);
-        Vector3::new(
-            (jy - jz) * q * r / jx,
-            (jz - jx) * r * p / jy,
-            (jx - jy) * p * q / jz,
-        )
+        let yaw = (jx - jy) * p * q / jz;
+        match estimated {
+            Some([kx, ky]) => Vector3::new(kx * q * r, ky * r * p, yaw),
+            None => Vector3::new((jy - jz) * q * r / jx, (jz - jx) * r * p / jy, yaw),
+        }
+    }
+
+    /// The coefficients `((J_y - J_z) / J_x, (J_z - J_x) / J_y)` of the roll and pitch coupling:
+    /// the nominal inertia's, or with one torque axis left their estimate from the measured
+    /// angular acceleration (module docs, "One torque axis left").
+    fn coupling_coefficients(&self, single_axis: bool) -> Option<[f64; 2]> {
+        single_axis.then(|| {
+            estimated_coefficients(
+                self.nominal_coefficients(),
+                &self.memory.coupling_sums,
+                self.dt_s,
+            )
+        })
+    }
+
+    fn nominal_coefficients(&self) -> [f64; 2] {
+        let [jx, jy, jz] = self.inertia_kg_m2;
+        [(jy - jz) / jx, (jz - jx) / jy]
     }
 
     /// Filters started at their inputs (a settled start).
@@ -400,6 +451,13 @@ impl IndiController {
         mem.mismatch = vec![0.0; thrust.len()];
         mem.vertical = SecondOrderLowPass::settled(vertical);
     }
+}
+
+/// The estimate of the roll and pitch coupling coefficients: least squares with the nominal
+/// values as a prior of [`COUPLING_PRIOR_RAD2_S2`] over [`COUPLING_FORGETTING_S`].
+fn estimated_coefficients(nominal: [f64; 2], sums: &[[f64; 2]; 2], dt_s: f64) -> [f64; 2] {
+    let prior = COUPLING_PRIOR_RAD2_S2.powi(2) * COUPLING_FORGETTING_S / dt_s;
+    [0, 1].map(|i| (prior * nominal[i] + sums[i][1]) / (prior + sums[i][0]))
 }
 
 /// What one step of the law computes besides the commands (for tests: the one-step prediction).
@@ -479,12 +537,16 @@ impl IndiController {
 
         // Vertical acceleration sample (NED): measured, or its model from the filtered thrusts.
         let measured_vertical = input.specific_force_m_s2.map(|f| (rot * f).z + g);
+        let single_axis = self.modes[mode_index].info.single_axis;
+        let products = [omega.y * omega.z, omega.z * omega.x];
         if !self.memory.started {
             let start_vertical = measured_vertical.unwrap_or(0.0);
-            let coupling = self.coupling(&omega);
+            let coupling = self.coupling(&omega, self.coupling_coefficients(single_axis));
             self.start(&omega, &coupling, thrust_sample, start_vertical, &z_des);
+            self.memory.products = products.map(SecondOrderLowPass::settled);
         }
-        let coupling = self.coupling(&omega);
+        let coupling = self.coupling(&omega, self.coupling_coefficients(single_axis));
+        let nominal_coefficients = self.nominal_coefficients();
         let filter = self.filter;
         let mem = &mut self.memory;
         // The inertia coupling is known: taken at the current rate, its filtered value removed
@@ -501,6 +563,9 @@ impl IndiController {
         }
         for (state, &t) in mem.thrust.iter_mut().zip(thrust_sample) {
             filter.step(state, t);
+        }
+        for (state, &v) in mem.products.iter_mut().zip(&products) {
+            filter.step(state, v);
         }
         let mut z_f = Vector3::zeros();
         let mut z_rate = Vector3::zeros();
@@ -521,6 +586,32 @@ impl IndiController {
             *d = keep * *d + (1.0 - keep) * (c - p);
         }
         let mode = &self.modes[mode_index];
+        if single_axis {
+            // The inertia coupling's estimate: the filtered angular acceleration less the rotors'
+            // (both through the same filter) against the filtered regressor, per axis.
+            let keep = (-self.dt_s / COUPLING_FORGETTING_S).exp();
+            for i in 0..2 {
+                let rotors: f64 = mode
+                    .info
+                    .healthy
+                    .iter()
+                    .zip(&mode.angular)
+                    .map(|(&r, a)| a[i] * mem.thrust[r][0])
+                    .sum();
+                let phi = mem.products[i][0];
+                let residual = mem.gyro[i][1] - rotors;
+                let sums = &mut mem.coupling_sums[i];
+                sums[0] = keep * sums[0] + phi * phi;
+                sums[1] = keep * sums[1] + phi * residual;
+            }
+            // `a = (J_xy - J_z) / J_xy`: half the difference of the two coefficients.
+            let [kx, ky] =
+                estimated_coefficients(nominal_coefficients, &mem.coupling_sums, self.dt_s);
+            let one_plus_a = 1.0 + 0.5 * (kx - ky);
+            if one_plus_a.abs() > OUTPUT_FLIP_MARGIN {
+                mem.output_flipped = one_plus_a * mode.one_plus_a < 0.0;
+            }
+        }
         let n3z = n3z_true.max(MIN_N3Z);
         let total_f: f64 = mode
             .info
@@ -554,7 +645,11 @@ impl IndiController {
 
         // Step 4-5: G dT = b over the healthy rotors.
         let k = mode.info.healthy.len();
-        let rows = mode.rotation;
+        let rows = if single_axis && mem.output_flipped {
+            mode.rotation_flipped
+        } else {
+            mode.rotation
+        };
         let mut g_rows = [[0.0; MAX_ACTUATORS]; 4];
         for (c, (a, &thrust_entry)) in mode.angular.iter().zip(&mode.thrust).enumerate() {
             let att = h.cross(a).xy();

@@ -50,6 +50,12 @@ pub(super) struct Mode {
     pub(super) saturated_weights: [f64; 4],
     /// Rows of the attitude outputs after the redefinition (identity, or `c` and `c_perp`).
     pub(super) rotation: [[f64; 2]; 2],
+    /// Single axis: the rows with the other sign of `delta`, flown when the measured inertia
+    /// coupling says `1 + a` has the other sign than the nominal inertia's (module docs, "One
+    /// torque axis left"); `rotation` otherwise.
+    pub(super) rotation_flipped: [[f64; 2]; 2],
+    /// Single axis: `1 + a` of the nominal inertia, `a = (J_xy - J_z) / J_xy`; 0 otherwise.
+    pub(super) one_plus_a: f64,
     pub(super) primary_axis: Vector3<f64>,
     /// Bounds of the healthy rotors, N.
     pub(super) lower: Vec<f64>,
@@ -193,7 +199,7 @@ impl Mode {
 
         let j_xy = 0.5 * (jx + jy);
         let a = (j_xy - jz) / j_xy;
-        let (rotation, output_direction, zero_dynamics) = if single_axis {
+        let (rotation, rotation_flipped, output_direction, zero_dynamics) = if single_axis {
             // Spin sign: the yaw torque the hover thrusts make.
             let yaw_torque: f64 = healthy
                 .iter()
@@ -213,11 +219,19 @@ impl Mode {
             let sign = yaw_torque.signum() * (1.0 + a).signum();
             let chi = beta + sign * gains.output_angle_rad;
             let c = [chi.cos(), chi.sin()];
+            let other = beta - sign * gains.output_angle_rad;
+            let f = [other.cos(), other.sin()];
             let zeta = (a < 0.0)
                 .then(|| (1.0 + a).abs() / gains.output_angle_rad.tan() / (2.0 * (-a).sqrt()));
-            ([c, [-c[1], c[0]]], Some(c), Some((a, zeta)))
+            (
+                [c, [-c[1], c[0]]],
+                [f, [-f[1], f[0]]],
+                Some(c),
+                Some((a, zeta)),
+            )
         } else {
-            ([[1.0, 0.0], [0.0, 1.0]], None, None)
+            let identity = [[1.0, 0.0], [0.0, 1.0]];
+            (identity, identity, None, None)
         };
 
         let mut primary_axis = Vector3::z();
@@ -264,6 +278,8 @@ impl Mode {
             weights,
             saturated_weights,
             rotation,
+            rotation_flipped,
+            one_plus_a: if single_axis { 1.0 + a } else { 0.0 },
             primary_axis,
             lower,
             upper,
