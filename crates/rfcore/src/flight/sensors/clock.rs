@@ -53,8 +53,13 @@ impl SampleClock {
     }
 
     /// The time of the first sample from the next one on at or after `t_s` (finite, >= 0), s:
-    /// `k / rate_hz` as [`SampleClock::tick`] will give it.
+    /// `k / rate_hz` as [`SampleClock::tick`] will give it; inf for a time that is not finite.
     pub fn first_at_or_after(&self, t_s: f64) -> f64 {
+        // No sample lies at or after a time that is not finite (NaN, inf): answer inf rather than
+        // count ticks forever.
+        if !t_s.is_finite() {
+            return f64::INFINITY;
+        }
         // From one sample below the estimate up: the product's rounding is then on the safe side.
         let mut k = ((t_s * self.rate_hz).floor() as u64)
             .saturating_sub(1)
@@ -113,6 +118,15 @@ mod tests {
         }
         // Samples at 0, 1/240, ..., 1 s: 241 of them in [0, 1].
         assert_eq!(taken, 241);
+    }
+
+    #[test]
+    fn a_time_that_is_not_finite_has_no_sample_after_it() {
+        let clock = SampleClock::new(240.0);
+        for t in [f64::NAN, f64::INFINITY] {
+            assert_eq!(clock.first_at_or_after(t), f64::INFINITY);
+        }
+        assert_eq!(clock.first_at_or_after(f64::NEG_INFINITY), f64::INFINITY);
     }
 
     #[test]
