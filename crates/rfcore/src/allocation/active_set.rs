@@ -291,7 +291,7 @@ impl ActiveSetSolver {
                 t[i] = self.scaled.preferred[i].clamp(self.scaled.lower[i], self.scaled.upper[i]);
             }
             let mut r = [0.0; ROWS];
-            self.scaled.residual(b, &t, &mut r);
+            self.scaled.residual_rows::<R>(b, &t, &mut r);
             let mut free = [0usize; N];
             for (i, f) in free.iter_mut().enumerate().take(m) {
                 *f = i;
@@ -539,9 +539,13 @@ impl ActiveSetSolver {
         let mut closest = at_minimiser.unwrap_or(false);
         let mut r = [0.0; ROWS];
         let mut r_valid = false;
+        // One factorisation's work arrays per solve, made when the first step needs them (a
+        // solve whose cold start lands inside the box never does): each step overwrites what it
+        // reads.
+        let mut factor: Option<FreeSetFactor<W>> = None;
         loop {
             if !r_valid {
-                self.scaled.residual(b, t, &mut r);
+                self.scaled.residual_rows::<R>(b, t, &mut r);
                 r_valid = true;
             }
             if !minimiser {
@@ -559,7 +563,11 @@ impl ActiveSetSolver {
                     }
                     iterations += 1;
                     let mut d = [0.0; N];
-                    let _ = self.scaled.lsq_step::<W, R>(&free[..k], &r, t, &mut d);
+                    let factor = factor.get_or_insert_with(FreeSetFactor::empty);
+                    self.scaled.factor_free_set::<W, R>(&free[..k], factor);
+                    let _ = self
+                        .scaled
+                        .factored_step::<W, R>(&free[..k], factor, &r, t, &mut d);
                     let (alpha, blocking) = self.ratio_test(&free[..k], &d, t);
                     match (blocking, last_released) {
                         (Some((j, _)), Some(released)) if alpha == 0.0 && j == released => {
@@ -578,7 +586,7 @@ impl ActiveSetSolver {
                             };
                             if t[j] != held {
                                 t[j] = held;
-                                self.scaled.residual(b, t, &mut r);
+                                self.scaled.residual_rows::<R>(b, t, &mut r);
                             }
                         }
                         _ => {
@@ -611,7 +619,7 @@ impl ActiveSetSolver {
             }
             minimiser = false;
             // A free-set minimiser: release the held variable with the worst multiplier.
-            self.scaled.gradient(&r, t, b_norm, g);
+            self.scaled.gradient_rows::<R>(&r, t, b_norm, g);
             let mut worst = (RELEASE_TOL, usize::MAX);
             for i in 0..m {
                 if states[i] == BoundState::Free

@@ -186,11 +186,26 @@ impl ScaledLeastSquares {
     // Indexed on purpose: the iterator forms cost 1-2 % more instructions (callgrind).
     #[allow(clippy::needless_range_loop)]
     pub(crate) fn residual(&self, b: &[f64; ROWS], t: &[f64; N], r: &mut [f64; ROWS]) {
-        r[..self.rows].copy_from_slice(&b[..self.rows]);
+        self.residual_rows::<0>(b, t, r);
+    }
+
+    /// [`Self::residual`] with the row count `R` known at compile time when `R > 0` (the
+    /// 4-axis instance of the active set: unrolled, the same operations in the same order).
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
+    pub(crate) fn residual_rows<const R: usize>(
+        &self,
+        b: &[f64; ROWS],
+        t: &[f64; N],
+        r: &mut [f64; ROWS],
+    ) {
+        debug_assert!(R == 0 || R == self.rows);
+        let rows = if R > 0 { R } else { self.rows };
+        r[..rows].copy_from_slice(&b[..rows]);
         for c in 0..self.m {
             let x = t[c];
             if x != 0.0 {
-                let col = &self.a[c * ROWS..c * ROWS + self.rows];
+                let col = &self.a[c * ROWS..c * ROWS + rows];
                 for (ri, a) in r.iter_mut().zip(col) {
                     *ri -= a * x;
                 }
