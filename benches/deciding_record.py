@@ -111,9 +111,11 @@ def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
             "vehicle": d["vehicle"], "fault_class": d["fault_class"], "controller": d["controller"], "missed": int(np.sum(missed)),
             "survivable": int(np.sum(best)), "outcomes": outcomes, "static_hover": static,
             "spinning": int(np.sum(missed & (c["certified"] == "spinning"))), "by_efficiency": bins,
-            # certify's spin at the search's limit (no rotational damping: the margin still grows there),
-            # with certify's own margin (studies.certify.SPIN_RATE_LIMIT_MARGIN)
-            "spin_at_search_limit": int(np.sum(missed & (np.abs(c["certified_spin_rad_s"]) >= (1.0 - SPIN_RATE_LIMIT_MARGIN) * SPIN_LIMIT_RAD_S))),
+            # certify's spin at the search's limit on an undamped vehicle (no rotational damping: the
+            # margin still grows there), with certify's own margin (studies.certify.SPIN_RATE_LIMIT_MARGIN);
+            # a damped spin near the limit is pinned by k_r, not counted
+            "spin_at_search_limit": int(np.sum(missed & (np.abs(c["certified_spin_rad_s"]) >= (1.0 - SPIN_RATE_LIMIT_MARGIN) * SPIN_LIMIT_RAD_S)))
+            if D.vehicle(d["vehicle"]).rotational_drag_n_m_s == 0.0 else 0,
             "wind_median_m_s": float(np.median(wind[missed])) if missed.any() else None,
             "wind_median_all_m_s": float(np.median(wind[best])) if best.any() else None,
             "lost_after_failure_median_s": float(np.median(lost_after)) if len(lost_after) else None,
@@ -194,7 +196,8 @@ def main() -> None:
                           "draws": len(indices) * len({k[:2] for k in keys}), "seconds": seconds, "draws_timed": timed},
             "holds_judged": {"rule": f"deciding_hold: growth <= max({D.SPIN_GROWTH_MIN_RAD_S:g} rad/s, {1 + D.SPIN_SETTLE_MARGIN:g} x the "
                                       "growth share of a first-order settle from the failure with the run's I_zz / k_r x final, "
-                                      f"{D.SPIN_SETTLED_SHARE:g} x (e^(5 s / tau) - 1) x final); k_r = 0: the minimum",
+                                      f"min({D.SPIN_SETTLED_SHARE:g} x (e^(5 s / tau) - 1), {D.SPIN_SETTLED_CAP_SHARE:g}) x final), and a first-order end below "
+                                      f"{D.SPIN_END_LIMIT_RAD_S:g} rad/s; k_r = 0: the minimum",
                              "held_as_flown": flown_held, "held": held, "now_held": int(np.sum(changed & columns["holds"])),
                              "no_longer_held": int(np.sum(changed & ~columns["holds"]))},
             "decision": decision, "contradictions": result.contradictions(), "contradictions_why": why.get("contradictions", ""),

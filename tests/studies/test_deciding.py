@@ -132,6 +132,24 @@ def test_bad_settle_inputs_are_refused_by_field() -> None:
         H.spin_settle_time_constant_s(0.06, -1.0)
     with pytest.raises(ValueError, match="inertia_zz_kg_m2"):
         H.spin_settle_time_constant_s(0.0, 0.0028)
+    for tau in (0.0, -3.0, math.nan):
+        with pytest.raises(ValueError, match="settle_time_constant_s"):
+            H.predicted_spin_end_rad_s([1.0], [50.0], [tau], 5.0)
+
+
+def test_a_spin_up_on_a_short_time_constant_does_not_hold() -> None:
+    """The Lanzon quadrotor (tau = I_zz / k_r = 0.00116 / 0.0028 = 0.41 s): a settle is over long
+    before the window, so a linear spin-up (22.2 % of its last mean) is a moment still changing and
+    must not hold; without the cap the settled term would allow e^(5/0.41) x 5 % of the final spin
+    (about 9,000 times it)."""
+    tau = H.spin_settle_time_constant_s(0.00116, 0.0028)
+    assert tau == pytest.approx(0.414, abs=1e-3)
+    growth, last = _span_means(lambda t: 3.0 * t)
+    assert growth / last == pytest.approx(5.0 / 22.5, rel=1e-3)
+    assert D.spin_growth_limit_rad_s([last], [tau], 15.0, 5.0)[0] == pytest.approx(D.SPIN_SETTLED_CAP_SHARE * last, rel=1e-12)
+    assert not D.judge_holds(["holds-position"], [0.5], [1.0], [growth], [last], [tau])[0]
+    settled_growth, settled_last = _span_means(lambda t: 50.0 * (1 - np.exp(-t / tau)))
+    assert D.judge_holds(["holds-position"], [0.5], [1.0], [settled_growth], [settled_last], [tau])[0]
 
 
 def test_hold_rule_refuses_lost_runs_and_nan() -> None:

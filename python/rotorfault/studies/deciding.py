@@ -90,6 +90,7 @@ from .deciding_hold import (
     SPIN_END_LIMIT_RAD_S,
     SPIN_GROWTH_MIN_RAD_S,
     SPIN_SETTLE_MARGIN,
+    SPIN_SETTLED_CAP_SHARE,
     SPIN_SETTLED_SHARE,
     holds,
     spin_growth_limit_rad_s,
@@ -763,6 +764,7 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     certify_rule: int | None = SURVIVAL_RULE
     if "certified" not in columns or (certify and not suite.certify):
         if not certify:
+            certify_rule = None  # no verdicts: no rule made them
             columns = {**columns, **{name: np.full(len(columns["vehicle"]), "" if kind == "string" else math.nan, dtype=object if kind == "string" else np.float64)
                                      for name, kind in _CERTIFY_COLUMNS}}
         else:
@@ -928,7 +930,7 @@ def run_deciding(
         table = pyarrow_module().concat_tables(list(iter_tables(result.out)))
     else:
         table = result.table
-    return DecidingResult(suite, numpy_columns(table), seconds=result.seconds)
+    return DecidingResult(suite, numpy_columns(table), seconds=result.seconds, certify_rule=_current_certify_rule() if suite.certify else None)
 
 
 # -- the table ---------------------------------------------------------------------------------
@@ -945,7 +947,8 @@ class DecidingResult:
     #: it (:func:`read_deciding`: its ``holds`` are the old rule's, the growth columns NaN).
     spin_growth_judged: bool = True
     #: The certify rule (:data:`rotorfault.studies.certify.SURVIVAL_RULE`) that made the rows'
-    #: verdicts; ``None``: a dataset that does not say (:func:`read_deciding` warns).
+    #: verdicts; ``None``: rows without verdicts, or a dataset that does not say which rule made
+    #: them (:func:`read_deciding` warns).
     certify_rule: int | None = field(default_factory=lambda: _current_certify_rule())
 
     def cell_rows(self) -> list[dict[str, Any]]:
@@ -1085,7 +1088,7 @@ class DecidingResult:
             f"{HOLD_ALTITUDE_M:g} m altitude, {HOLD_HORIZONTAL_M:g} m horizontal from {SETTLE_S:g} s after the failure"
             + (f", yaw rate not spinning up (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
                f"{1 + SPIN_SETTLE_MARGIN:g} x what a first-order settle from the failure with the run's I_zz / k_r grows there, "
-               f"or a spin predicted to settle within {SPIN_SETTLED_SHARE:.0%} of its last 5 s mean; k_r = 0: "
+               f"or a spin predicted to settle within {SPIN_SETTLED_SHARE:.0%} of its last 5 s mean (at most {SPIN_SETTLED_CAP_SHARE:.0%} of it); k_r = 0: "
                f"{SPIN_GROWTH_MIN_RAD_S:g} rad/s; a settle must end below {SPIN_END_LIMIT_RAD_S:g} rad/s)" if self.spin_growth_judged
                else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)"),
             "| vehicle | fault class | controller | holds (95 % CI) | lost | design refused | worst alt / horiz (m) | median spin (rad/s) |",
@@ -1132,7 +1135,7 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
+    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
     "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
     "spin_growth_since_failure_s", "spin_growth_span_s",

@@ -18,7 +18,10 @@ mean) may be at most :func:`spin_growth_limit_rad_s`, the largest of:
   span's mean; allowed with the margin :data:`SPIN_SETTLE_MARGIN`;
 - a later change of the yaw moment that has nearly settled: a first-order settle through the two
   span means ends ``G / (e^(L/tau) - 1)`` above the last (L: the span), whenever it started; a spin
-  predicted to end within :data:`SPIN_SETTLED_SHARE` of its last mean is settled.
+  predicted to end within :data:`SPIN_SETTLED_SHARE` of its last mean is settled (this allowance
+  at most :data:`SPIN_SETTLED_CAP_SHARE` of the last mean, below a linear spin-up's 22.2 %: with a
+  short tau, e.g. the Lanzon quadrotor's 0.41 s, a moment change has settled long before the
+  window, so growth there is a moment still changing).
 
 Without damping (``k_r = 0``, the PX4 x500 model) nothing settles a spin and the yaw rate grows
 without bound under any moment left: both settle terms are 0 and only the minimum is allowed.
@@ -67,9 +70,23 @@ SPIN_SETTLE_MARGIN = 0.25
 #: A spin predicted (first order, its own tau, from the two spans) to end within this share of
 #: its last span's mean is settled (the core's settle band for ``steady_spin_rad_s``).
 SPIN_SETTLED_SHARE = 0.05
+#: The most the settled term allows, as a share of the last span's mean: below a linear spin-up's
+#: 22.2 %. Why a cap: the term grows as e^(L/tau), and for a short tau (the Lanzon quadrotor's
+#: 0.41 s) a moment change long before the window has settled by then, so growth between the
+#: spans means the moment is still changing (a spin-up), not a settle.
+SPIN_SETTLED_CAP_SHARE = 0.20
 #: The body rate at which the campaign's flights count a vehicle as lost (rad/s): a settling spin
 #: whose first-order end lies at or beyond it is lost after the window, not held.
 SPIN_END_LIMIT_RAD_S: float = DivergenceLimits().max_rate_rad_s
+
+
+def _time_constants_s(value: Any, name: str) -> np.ndarray[Any, np.dtype[np.float64]]:
+    """Settle time constants (s) as float64, each > 0 (inf: no rotational damping), else a
+    ``ValueError`` naming ``name``."""
+    tau = np.asarray(value, dtype=np.float64)
+    if np.any(np.isnan(tau)) or np.any(tau <= 0.0):
+        raise ValueError(f"{name}: must be > 0 (inf: no rotational damping), got {tau[np.isnan(tau) | (tau <= 0)].ravel()[:3]}")
+    return tau
 
 
 def spin_settle_growth_share(time_constant_s: Any, since_failure_s: float, span_s: float) -> np.ndarray[Any, np.dtype[np.float64]]:
@@ -87,9 +104,7 @@ def spin_settle_growth_share(time_constant_s: Any, since_failure_s: float, span_
         >>> [round(float(s), 4) for s in spin_settle_growth_share([5.0, 21.0, 26.0, float("inf")], 15.0, 5.0)]
         [0.0201, 0.1406, 0.1545, 0.0]
     """
-    tau = np.asarray(time_constant_s, dtype=np.float64)
-    if np.any(np.isnan(tau)) or np.any(tau <= 0.0):
-        raise ValueError(f"time_constant_s: must be > 0 (inf: no rotational damping), got {tau[np.isnan(tau) | (tau <= 0)].ravel()[:3]}")
+    tau = _time_constants_s(time_constant_s, "time_constant_s")
     if not (math.isfinite(since_failure_s) and since_failure_s >= 0.0):
         raise ValueError(f"since_failure_s: must be finite and >= 0, got {since_failure_s}")
     if not (math.isfinite(span_s) and span_s > 0.0):
@@ -126,7 +141,8 @@ def spin_growth_limit_rad_s(
 ) -> np.ndarray[Any, np.dtype[np.float64]]:
     """The largest spin growth that still holds, rad/s, per run (module notes): ``max(
     SPIN_GROWTH_MIN_RAD_S, (1 + SPIN_SETTLE_MARGIN) x spin_settle_growth_share(tau) x |final|,
-    SPIN_SETTLED_SHARE x (e^(span/tau) - 1) x |final|)``, ``final_spin_rad_s`` the mean |yaw rate|
+    min(SPIN_SETTLED_SHARE x (e^(span/tau) - 1), SPIN_SETTLED_CAP_SHARE) x |final|)``,
+    ``final_spin_rad_s`` the mean |yaw rate|
     over the window's last span (rad/s), ``settle_time_constant_s`` the run's tau (s; inf:
     undamped, only the minimum), the spans as :func:`spin_settle_growth_share` takes them (NaN
     final stays NaN).
@@ -141,7 +157,7 @@ def spin_growth_limit_rad_s(
     tau = np.asarray(settle_time_constant_s, dtype=np.float64)
     share = spin_settle_growth_share(tau, since_failure_s, span_s)
     # G / (e^(L/tau) - 1) <= settled share x final, as a bound on G; 0 without damping (tau inf).
-    settled = SPIN_SETTLED_SHARE * np.expm1(span_s / tau)
+    settled = np.minimum(SPIN_SETTLED_SHARE * np.expm1(span_s / tau), SPIN_SETTLED_CAP_SHARE)
     return np.where(np.isnan(final), np.nan,
                     np.maximum(SPIN_GROWTH_MIN_RAD_S, np.maximum((1.0 + SPIN_SETTLE_MARGIN) * share, settled) * final))
 
@@ -162,7 +178,7 @@ def predicted_spin_end_rad_s(
     """
     growth = np.asarray(window_spin_growth_rad_s, dtype=np.float64)
     final = np.abs(np.asarray(final_spin_rad_s, dtype=np.float64))
-    tau = np.asarray(settle_time_constant_s, dtype=np.float64)
+    tau = _time_constants_s(settle_time_constant_s, "settle_time_constant_s")
     finite = np.isfinite(tau)
     rest = np.where(finite, growth / np.expm1(span_s / np.where(finite, tau, 1.0)), 0.0)
     return final + rest
@@ -196,5 +212,5 @@ def holds(
                 & (growth <= limit) & (end < SPIN_END_LIMIT_RAD_S))
 
 
-__all__ = ["HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLED_SHARE", "SPIN_SETTLE_MARGIN", "holds",
+__all__ = ["HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SPIN_SETTLE_MARGIN", "holds",
            "predicted_spin_end_rad_s", "spin_growth_limit_rad_s", "spin_settle_growth_share", "spin_settle_time_constant_s"]
