@@ -541,6 +541,19 @@ def test_stored_verdicts_of_an_older_certify_rule_are_warned_about(tmp_path: Pat
         assert old.certify_rule == stale and "CERTIFY VERDICTS FROM" in old.table()
 
 
+def test_a_resume_under_another_certify_rule_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The certify rule is part of a certified dataset's identity: resuming it after the rule
+    changed would label old verdicts with the new rule, so it is refused, naming the rule."""
+    from rotorfault.studies.certify import SURVIVAL_RULE
+
+    out = tmp_path / "runs"
+    D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False)  # type: ignore[arg-type]
+    D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False, resume=True)  # type: ignore[arg-type]
+    monkeypatch.setattr(D, "_current_certify_rule", lambda: SURVIVAL_RULE + 1)
+    with pytest.raises(ValueError, match="certify_rule"):
+        D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False, resume=True)  # type: ignore[arg-type]
+
+
 def test_a_heavy_draw_the_plain_hover_lqr_lost_holds_with_the_healthy_integral_and_hand_over() -> None:
     """Issue 30, Lanzon quadrotor, one rotor in hover, run 22 of the full campaign (seed 0): 14 %
     heavy, rotor 3 lost totally at 4.64 s in 2.1 m/s of wind. With the plain healthy hover LQR it sat

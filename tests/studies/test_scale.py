@@ -173,7 +173,7 @@ def test_mismatched_output_is_refused(tmp_path: Path, pnpnpn: rf.Airframe) -> No
     out = tmp_path / "scan.parquet"
     acai_scan(pnpnpn, _grid(), out=out, chunk_points=100)
     before = sorted((p.name, p.stat().st_mtime_ns) for p in out.iterdir())
-    with pytest.raises(ValueError, match=r"written with other arguments: arguments .*pass --force"):
+    with pytest.raises(ValueError, match=r"written with other arguments: arguments\.\S+ \(written .*pass --force"):
         acai_scan(pnpnpn, _grid((1, 2, 4)), out=out, chunk_points=100, resume=True)
     with pytest.raises(ValueError, match=r"other arguments: chunk_rows \(written 100, asked 50\)"):
         acai_scan(pnpnpn, _grid(), out=out, chunk_points=50, resume=True)

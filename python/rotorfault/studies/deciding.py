@@ -917,7 +917,10 @@ def run_deciding(
     if not isinstance(suite, DecidingCampaign):
         raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
     result = run_chunks(
-        _Task(suite), total_rows=suite.total_runs, chunk_rows=suite.chunk_size, schema=schema(), arguments={"suite": suite.to_dict()},
+        _Task(suite), total_rows=suite.total_runs, chunk_rows=suite.chunk_size, schema=schema(),
+            # The certify rule is part of the job's identity: a resume under another rule is refused
+            # (its chunks' verdicts would be labelled with a rule that did not make them).
+            arguments={"suite": suite.to_dict(), **({"certify_rule": _current_certify_rule()} if suite.certify else {})},
         kind=KIND, out=out, metadata=_metadata(suite), resume=resume, force=force, backend=backend,
         dask=dask, progress=suite.total_runs >= 2000 if progress is None else progress,
         description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells", rows_field="suite",

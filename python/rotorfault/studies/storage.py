@@ -106,15 +106,21 @@ def read_manifest(path: str | os.PathLike[str]) -> dict[str, Any]:
     return data
 
 
-def _describe_differences(old: Mapping[str, Any], new: Mapping[str, Any]) -> str:
+def _describe_differences(old: Mapping[str, Any], new: Mapping[str, Any], prefix: str = "") -> str:
+    """The fields that differ, by their dotted path (``arguments.certify_rule``), nested mappings
+    followed down to the field so a long identity names what changed."""
     keys = sorted(set(old) | set(new))
     parts = []
     for key in keys:
-        if old.get(key) != new.get(key):
-            a, b = json.dumps(old.get(key)), json.dumps(new.get(key))
+        a_value, b_value = old.get(key), new.get(key)
+        if a_value != b_value:
+            if isinstance(a_value, Mapping) and isinstance(b_value, Mapping):
+                parts.append(_describe_differences(a_value, b_value, f"{prefix}{key}."))
+                continue
+            a, b = json.dumps(a_value), json.dumps(b_value)
             a = a if len(a) <= 60 else a[:57] + "..."
             b = b if len(b) <= 60 else b[:57] + "..."
-            parts.append(f"{key} (written {a}, asked {b})")
+            parts.append(f"{prefix}{key} (written {a}, asked {b})")
     return "; ".join(parts)
 
 
