@@ -541,9 +541,10 @@ def test_stored_verdicts_of_an_older_certify_rule_are_warned_about(tmp_path: Pat
         assert old.certify_rule == stale and "CERTIFY VERDICTS FROM" in old.table()
 
 
-def test_a_resume_under_another_certify_rule_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The certify rule is part of a certified dataset's identity: resuming it after the rule
-    changed would label old verdicts with the new rule, so it is refused, naming the rule."""
+def test_a_resume_under_another_certify_rule_or_controllers_revision_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The certify rule and the controllers' revision are part of a dataset's identity: resuming
+    after either changed would mix chunks of two versions under one label, so it is refused,
+    naming the field."""
     from rotorfault.studies.certify import SURVIVAL_RULE
 
     out = tmp_path / "runs"
@@ -551,6 +552,10 @@ def test_a_resume_under_another_certify_rule_is_refused(tmp_path: Path, monkeypa
     D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False, resume=True)  # type: ignore[arg-type]
     monkeypatch.setattr(D, "_current_certify_rule", lambda: SURVIVAL_RULE + 1)
     with pytest.raises(ValueError, match="certify_rule"):
+        D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False, resume=True)  # type: ignore[arg-type]
+    monkeypatch.undo()
+    monkeypatch.setattr(D, "CONTROLLERS_REVISION", D.CONTROLLERS_REVISION + 1)
+    with pytest.raises(ValueError, match=r"arguments\.controllers_revision \(written \d+, asked \d+\)"):
         D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 1}), out=out, progress=False, resume=True)  # type: ignore[arg-type]
 
 
@@ -593,10 +598,16 @@ def test_the_hand_over_needs_the_integral_gain_and_its_limits_together() -> None
     # Both loops' vertical accelerations per unit of integral are independent of the ratio's sign
     # conventions: healthy (down) and relaxed (up) integrals have opposite signs for one weight.
     assert feedback.handover_altitude_ratio < 0
-    with pytest.raises(ValueError, match="integral_limit_m_s"):
+    # Refused at construction (before any run), naming the keyword.
+    for limits in ((1.0, 0.0, 1.0), (1.0, -2.0, 1.0), (1.0, math.nan, 1.0), (math.inf, 1.0, 1.0)):
+        with pytest.raises(ValueError, match="^before_failure_integral_limit_m_s: every entry must be finite and > 0"):
+            rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
+                                    before_failure_integral_gain=healthy.integral_gain, before_failure_integral_limit_m_s=limits)
+    bad_gain = np.array(healthy.integral_gain, dtype=float)
+    bad_gain[0, 0] = math.nan
+    with pytest.raises(ValueError, match="^before_failure_integral_gain: every entry must be finite"):
         rf.RelaxedHoverFeedback(solution, airframe, before_failure=healthy.feedback, failure_time_s=1.0,
-                                before_failure_integral_gain=healthy.integral_gain,
-                                before_failure_integral_limit_m_s=(1.0, 0.0, 1.0)).core(D.DT_S)
+                                before_failure_integral_gain=bad_gain, before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
 
 
 def _lanzon_relaxed() -> tuple[object, rf.Airframe]:

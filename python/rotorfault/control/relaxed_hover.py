@@ -176,6 +176,12 @@ class RelaxedHoverFeedback:
                                  f"got {self.before_failure_integral_gain.shape}")
             if self.before_failure_integral_limit_m_s is None or self.before_failure_integral_limit_m_s.shape != (3,):
                 raise ValueError("before_failure_integral_limit_m_s: expected 3 entries (north, east, down; m s)")
+            # Checked here, before any run: the core would refuse them only when a run starts.
+            if not np.all(np.isfinite(self.before_failure_integral_gain)):
+                raise ValueError("before_failure_integral_gain: every entry must be finite")
+            limits = self.before_failure_integral_limit_m_s
+            if not np.all(np.isfinite(limits) & (limits > 0)):
+                raise ValueError(f"before_failure_integral_limit_m_s: every entry must be finite and > 0 (m s), got {limits.tolist()}")
         #: The relaxed hover's altitude integral (m s, up) per the healthy design's altitude integral
         #: (m s, down) at the hand-over: the ratio of the vertical accelerations the two loops give per
         #: unit of integral (healthy: level, rotors at full efficiency; relaxed: its linear model), so

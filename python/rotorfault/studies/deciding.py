@@ -40,7 +40,7 @@ Decisions (gaps of the issue, stated once):
 - the relaxed hover LQR (``relaxed-hover-feedback``) is passive FTC with the failure known in
   advance: which rotors, their efficiency (nominal: not the run's thrust-coefficient error) and
   the failure time. Until the failure the healthy vehicle's hover LQI flies it (:func:`healthy_lqi`:
-  the hover LQR with integral action on the position error; without it a heavy draw sat 2-6 m
+  the hover LQR with integral action on the position error; without it a heavy draw sat 3.7-6.5 m
   low when the failure came), from the failure on the LQR about the best relaxed hover of the
   failed vehicle (the failure-time hand-over of :class:`rotorfault.control.RelaxedHoverFeedback`,
   its integrals started where the healthy loop left its own), its outer loop :data:`RELAXED_HOVER_OUTER_LOOP`
@@ -116,6 +116,12 @@ GUST_DURATION_S = 2.0
 TOTAL_SHARE = 0.25
 #: The issue's target: the best controller holds in at least this share of a cell's runs.
 TARGET_SHARE = 0.95
+#: The revision of the campaign's controllers (their builders, gains and the core laws they fly):
+#: part of a streamed dataset's identity, so a resume after a change that moves verdicts is
+#: refused rather than mixing chunks flown by two versions. Bump it with any such change.
+#: 1: before session h40; 2: the relaxed hover LQR's healthy LQI and hand-over, INDI's output side
+#: from the measured inertia coupling.
+CONTROLLERS_REVISION = 2
 #: The relaxed hover LQR's design schedule over a partial loss's efficiency (module notes).
 EFFICIENCY_STEP = 0.05
 #: The relaxed hover LQR's outer loop in the campaign. The default loop (0.5 rad/s, no integral,
@@ -292,23 +298,14 @@ def nominal_actuator(v: CampaignVehicle) -> FixedPitchActuator:
     return FixedPitchActuator(time_constant_s=v.rotor_time_constant_s)
 
 
-@computed_once
-def _healthy_lqr(name: str) -> Any:
-    from ..control.lqr import lqr_hover
-    from ..flight import Simulator
-
-    v = vehicle(name)
-    sim = Simulator(v.airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=nominal_drag(v), actuator=nominal_actuator(v))
-    return lqr_hover(sim, position=HOVER_M)
-
-
 #: The healthy hover LQI the relaxed hover LQR hands over from (:func:`healthy_lqi`): Bryson
 #: scales of the position error's integral (north, east, down), m s, beside the hover LQR's
 #: own (1 m, 1 m/s, 0.1 rad, 1 rad/s against 10 % of the hover thrust per rotor).
 HEALTHY_INTEGRAL_SCALE_M_S = (2.0, 2.0, 1.0)
 #: Each axis's integral limit in the healthy hover LQI: the integral whose feedback alone carries
-#: this share of the weight (down) or pushes this share of it sideways (north, east): a vehicle
-#: 20 % heavier with rotors 20 % weaker needs 50 %; more is a wind-up.
+#: this share of the weight (down; a vehicle 20 % heavier with rotors 20 % weaker needs 50 %, more
+#: is a wind-up). North and east take the same limit in m s, which through the tilt the closed
+#: loop commands pushes a smaller share sideways (0.46 g on the Lanzon quadrotor).
 HEALTHY_INTEGRAL_WEIGHT_SHARE = 0.6
 
 
@@ -334,13 +331,14 @@ def healthy_lqi(name: str) -> HealthyHoverLqi:
     relaxed hover LQR's runs until the failure (issue 30: without the integral a heavy draw sits
     metres low when the failure comes)."""
     from ..control.linear import STATE_NAMES, LinearFeedback
-    from ..control.lqr import hover_trim, linearize
+    from ..control.lqr import _bryson_weights, _require_holdable, hover_trim, linearize
     from ..control.riccati import design_lqr
     from ..flight import Simulator
 
     v = vehicle(name)
     sim = Simulator(v.airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=nominal_drag(v), actuator=nominal_actuator(v))
     trim = hover_trim(sim, position=HOVER_M)
+    _require_holdable(sim, trim)  # as lqr_hover: authority around hover, no rotor at a bound in the trim
     model = linearize(sim, trim)
     a, b = np.asarray(model.A), np.asarray(model.B)
     n, m = a.shape[0], b.shape[1]
@@ -348,9 +346,12 @@ def healthy_lqi(name: str) -> HealthyHoverLqi:
     a_aug[:n, :n] = a
     a_aug[n:, :3] = np.eye(3)  # d/dt of the integral is the position error
     b_aug = np.vstack([b, np.zeros((3, m))])
-    scale = np.array([1.0] * 3 + [1.0] * 3 + [0.1] * 3 + [1.0] * 3 + list(HEALTHY_INTEGRAL_SCALE_M_S))
-    per_rotor = 0.1 * v.airframe.hover_thrust_n / v.airframe.rotor_count
-    design = design_lqr((a_aug, b_aug), np.diag(1.0 / scale**2), np.eye(m) / per_rotor**2, dt_s=DT_S,
+    # The hover LQR's own Bryson weights (control.lqr), the integrals' beside them.
+    q, r = _bryson_weights(sim, None, None)
+    q_aug = np.zeros((n + 3, n + 3))
+    q_aug[:n, :n] = q
+    q_aug[n:, n:] = np.diag(1.0 / np.asarray(HEALTHY_INTEGRAL_SCALE_M_S) ** 2)
+    design = design_lqr((a_aug, b_aug), q_aug, r, dt_s=DT_S,
                         state_names=(*STATE_NAMES, "int_x", "int_y", "int_z"), model=f"the hover linearisation of {name} with position integrals")
     gain = np.asarray(design.gain)
     integral_gain = gain[:, n:]
@@ -918,9 +919,10 @@ def run_deciding(
         raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
     result = run_chunks(
         _Task(suite), total_rows=suite.total_runs, chunk_rows=suite.chunk_size, schema=schema(),
-            # The certify rule is part of the job's identity: a resume under another rule is refused
-            # (its chunks' verdicts would be labelled with a rule that did not make them).
-            arguments={"suite": suite.to_dict(), **({"certify_rule": _current_certify_rule()} if suite.certify else {})},
+            # The controllers' revision and the certify rule are part of the job's identity: a resume
+            # under another is refused (chunks flown or certified by two versions under one label).
+            arguments={"suite": suite.to_dict(), "controllers_revision": CONTROLLERS_REVISION,
+                       **({"certify_rule": _current_certify_rule()} if suite.certify else {})},
         kind=KIND, out=out, metadata=_metadata(suite), resume=resume, force=force, backend=backend,
         dask=dask, progress=suite.total_runs >= 2000 if progress is None else progress,
         description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells", rows_field="suite",
@@ -1138,7 +1140,7 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
+    "CONTROLLERS", "CONTROLLERS_REVISION", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
     "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
     "spin_growth_since_failure_s", "spin_growth_span_s",
