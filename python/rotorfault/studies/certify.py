@@ -31,6 +31,7 @@ from typing import Any, ClassVar, Literal, get_args
 
 from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
 from .._util.convert import count
+from .._util.core_result import FieldsResult
 from .._util.deprecation import renamed_attribute
 from .._util.tables import Column, Tabular
 from ..allocation.attainable import hover_distances, hover_thrust_margin
@@ -130,7 +131,7 @@ class RelaxedHoverVerdict:
 
 
 @dataclass(frozen=True, repr=False, eq=False)
-class CertificateCase:
+class CertificateCase(FieldsResult):
     """One row of a :class:`Certificate`: the 1-based ``failed`` rotors and whether the vehicle
     still hovers with them failed (``hover``: ``"all-axes"``, ``"give-up-yaw"`` or ``"no"``), with
     the margins that say so.
@@ -138,7 +139,8 @@ class CertificateCase:
     It holds the failure-table row it is derived from (``failure_case``:
     :class:`rotorfault.analysis.FailureCase`) and reads ``failed``, the ACAIs and where the hover
     wrench lies through it (issue 26: no copied fields); the rest is certify's own verdict. Its
-    repr, equality and hash are over :attr:`FIELDS`, the fields it had as a dataclass.
+    repr, equality and hash are over :attr:`FIELDS`, the fields it had as a dataclass
+    (:class:`~rotorfault._util.core_result.FieldsResult`).
 
     Examples:
 
@@ -199,25 +201,6 @@ class CertificateCase:
     def hover_wrench_give_up_yaw(self) -> HoverPoint:
         """Where the hover wrench lies giving up yaw."""
         return self.failure_case.hover_give_up_yaw
-
-    def _values(self) -> tuple[Any, ...]:
-        return tuple(getattr(self, name) for name in self.FIELDS)
-
-    def _as_dict(self) -> dict[str, Any]:
-        """The fields by name, in :attr:`FIELDS` order (what ``dataclasses.asdict`` gave)."""
-        return {name: getattr(self, name) for name in self.FIELDS}
-
-    def __repr__(self) -> str:
-        shown = ", ".join(f"{name}={getattr(self, name)!r}" for name in self.FIELDS)
-        return f"{type(self).__qualname__}({shown})"
-
-    def __eq__(self, other: object) -> bool:
-        if other.__class__ is self.__class__:
-            return self._values() == other._values()
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(self._values())
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # A case pickled before it held its row lacks what the row holds (the core's reports):
