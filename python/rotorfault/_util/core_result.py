@@ -1,20 +1,21 @@
 """A Python result that holds the core's result object in its one slot (``_core``) and reads
 every field through it (issue 26: types cross the boundary once; values are validated once, in
 Rust). :class:`CoreResult` gives such a class what the dataclass it replaced had: a repr, equality
-and a hash over its fields (``FIELDS``), and refuses new attributes (it was frozen)."""
+and a hash over its fields (``FIELDS``, from :class:`FieldsResult`, which a frozen dataclass that
+reads some fields through an object it holds uses too), and refuses new attributes (it was frozen)."""
 
 from __future__ import annotations
 
 from typing import Any, ClassVar
 
 
-class CoreResult:
-    """Base of a Python result over a core result (``_core``); subclasses name their ``FIELDS``
-    (in the order the repr shows them) and read each through ``_core``."""
+class FieldsResult:
+    """A result whose repr, equality and hash are over its ``FIELDS`` (in the order the repr
+    shows them), each read by name: what the dataclass it replaced had, also where some fields
+    are read through an object it holds."""
 
-    __slots__ = ("_core",)
+    __slots__ = ()
     FIELDS: ClassVar[tuple[str, ...]] = ()
-    _core: Any
 
     def _values(self) -> tuple[Any, ...]:
         return tuple(getattr(self, name) for name in self.FIELDS)
@@ -34,6 +35,14 @@ class CoreResult:
 
     def __hash__(self) -> int:
         return hash(self._values())
+
+
+class CoreResult(FieldsResult):
+    """Base of a Python result over a core result (``_core``); subclasses name their ``FIELDS``
+    (in the order the repr shows them) and read each through ``_core``."""
+
+    __slots__ = ("_core",)
+    _core: Any
 
     @classmethod
     def _from_core(cls, core: Any) -> Any:

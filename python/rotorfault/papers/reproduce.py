@@ -432,25 +432,21 @@ def write_reproduce(
     result = ReproduceResult(out / "index.html")
     shown_command = command or "rotorfault.papers.reproduce.write_reproduce"
 
+    def add_section(entry: Paper, chosen: SectionProvider | None, tmp: Path) -> None:
+        if progress is not None:
+            progress(f"{entry.key}: {'computing' if chosen is not None else 'not landed yet'}")
+        if chosen is None:
+            result.sections.append(not_landed(entry.key, entry.title, entry.module, entry.what))
+        else:
+            result.sections.append(chosen(tmp, quick=quick))
+
     def content(tmp: Path) -> list[TextFile]:
         for paper in PAPERS:
-            chosen = providers[paper.key] if providers is not None and paper.key in providers else provider(paper)
-            if progress is not None:
-                progress(f"{paper.key}: {'computing' if chosen is not None else 'not landed yet'}")
-            if chosen is None:
-                result.sections.append(not_landed(paper.key, paper.title, paper.module, paper.what))
-            else:
-                result.sections.append(chosen(tmp, quick=quick))
+            add_section(paper, providers[paper.key] if providers is not None and paper.key in providers else provider(paper), tmp)
         for study in STUDIES:
             if providers is not None and study.key not in providers:
                 continue
-            chosen = providers[study.key] if providers is not None else provider(study)
-            if progress is not None:
-                progress(f"{study.key}: {'computing' if chosen is not None else 'not landed yet'}")
-            if chosen is None:
-                result.sections.append(not_landed(study.key, study.title, study.module, study.what))
-            else:
-                result.sections.append(chosen(tmp, quick=quick))
+            add_section(study, providers[study.key] if providers is not None else provider(study), tmp)
         result.run_time_s = time.perf_counter() - start
         html = render(result.sections, decision_rows, benches, out=out, quick=quick, run_time_s=result.run_time_s,
                       command=shown_command, version=package_version(),

@@ -26,17 +26,18 @@ does not.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, fields, replace
-from typing import Any, Literal, get_args
+from dataclasses import asdict, dataclass, field, fields
+from typing import Any, ClassVar, Literal, get_args
 
 from .._typing import AcaiFormula, CertifiedAxis, HoverPoint
 from .._util.convert import count
+from .._util.core_result import FieldsResult
 from .._util.deprecation import renamed_attribute
 from .._util.tables import Column, Tabular
 from ..allocation.attainable import hover_distances, hover_thrust_margin
 from ..analysis.airframe import Airframe, require_airframe, rotor_labels
 from ..analysis.acai import GIVE_UP_YAW, acai_label, hover_wrench_text
-from ..analysis.controllability import failure_table
+from ..analysis.controllability import FailureCase, failure_table
 from ..analysis.relaxed_hover import RelaxedHoverSettings, RelaxedHoverSolution, relaxed_hover
 from ..analysis.relaxed_hover import _vehicle_settings as vehicle_settings
 from ..analysis.spin_entry import EntryFromHover, entry_from_hover
@@ -149,11 +150,17 @@ class RelaxedHoverVerdict:
         return self.steady and self.reachable_from_hover
 
 
-@dataclass(frozen=True)
-class CertificateCase:
+@dataclass(frozen=True, repr=False, eq=False)
+class CertificateCase(FieldsResult):
     """One row of a :class:`Certificate`: the 1-based ``failed`` rotors and whether the vehicle
     still hovers with them failed (``hover``: ``"all-axes"``, ``"give-up-yaw"`` or ``"no"``), with
     the margins that say so.
+
+    It holds the failure-table row it is derived from (``failure_case``:
+    :class:`rotorfault.analysis.FailureCase`) and reads ``failed``, the ACAIs and where the hover
+    wrench lies through it (issue 26: no copied fields); the rest is certify's own verdict. Its
+    repr, equality and hash are over :attr:`FIELDS`, the fields it had as a dataclass
+    (:class:`~rotorfault._util.core_result.FieldsResult`).
 
     Examples:
 
@@ -164,21 +171,14 @@ class CertificateCase:
         ((1,), 'all-axes', 0.7221, 'inside')
     """
 
-    failed: tuple[int, ...]
+    #: The failure-table row (failed rotors, ACAIs, hover points) this case is derived from.
+    failure_case: FailureCase
     hover: Hover
-    #: The ACAI (N / N m; the facet margin, negative where hover is infeasible) with all four axes
-    #: and giving up yaw (-inf: rank deficient).
-    acai: float
-    acai_give_up_yaw: float
     #: Largest balanced upward thrust over the weight with the axes kept (0 when it cannot hover).
     thrust_to_weight: float
     #: What an allocator must let go (``"lateral-force"`` only for fully actuated frames whose
     #: 6-D wrench is lost; ``None``: nothing helps).
     drop_axes: tuple[str, ...] | None
-    #: Where the hover wrench lies with all four axes and giving up yaw (``inside``,
-    #: ``boundary``: ACAI exactly 0, no margin; ``outside``; ``rank-deficient``).
-    hover_wrench: HoverPoint = "inside"
-    hover_wrench_give_up_yaw: HoverPoint = "inside"
     #: The distance of the hover wrench to the attainable set (N / N m, 0 when attained), with all
     #: four axes and giving up yaw (:func:`rotorfault.allocation.hover_wrench_distance`).
     distance: float = 0.0
@@ -186,8 +186,50 @@ class CertificateCase:
     #: Beside the static verdict: the best relaxed hover (``None``: not asked for).
     relaxed_hover: RelaxedHoverVerdict | None = None
 
+    #: What the repr, equality, hash and :meth:`Certificate.to_dict` show, in order.
+    FIELDS: ClassVar[tuple[str, ...]] = (
+        "failed", "hover", "acai", "acai_give_up_yaw", "thrust_to_weight", "drop_axes", "hover_wrench",
+        "hover_wrench_give_up_yaw", "distance", "distance_give_up_yaw", "relaxed_hover",
+    )
+
     #: The name before issue 26, for one release.
     acai_without_yaw = renamed_attribute("acai_without_yaw", "acai_give_up_yaw")
+
+    @property
+    def failed(self) -> tuple[int, ...]:
+        """The failed rotors, numbered from 1."""
+        return self.failure_case.failed
+
+    @property
+    def acai(self) -> float:
+        """The ACAI with all four axes (N / N m; the facet margin, negative where hover is
+        infeasible, -inf: rank deficient)."""
+        return self.failure_case.acai
+
+    @property
+    def acai_give_up_yaw(self) -> float:
+        """The ACAI giving up yaw (N / N m; the facet margin)."""
+        return self.failure_case.acai_give_up_yaw
+
+    @property
+    def hover_wrench(self) -> HoverPoint:
+        """Where the hover wrench lies with all four axes (``inside``, ``boundary``: ACAI exactly
+        0, no margin; ``outside``; ``rank-deficient``)."""
+        return self.failure_case.hover
+
+    @property
+    def hover_wrench_give_up_yaw(self) -> HoverPoint:
+        """Where the hover wrench lies giving up yaw."""
+        return self.failure_case.hover_give_up_yaw
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # A case pickled before it held its row lacks what the row holds (the core's reports):
+        # refused rather than rebuilt with guesses.
+        if "failure_case" not in state:
+            raise TypeError("CertificateCase: a case pickled before certify kept its failure-table row "
+                            "cannot be read; make it again with certify()")
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
 
     def keeps(self, axes: tuple[CertifiedAxis, ...] = ALL_AXES) -> bool:
         """Hovers at rest with ``axes`` controllable (with all four: ``hover == "all-axes"``;
@@ -263,8 +305,9 @@ class Certificate(Tabular):
 
     def to_dict(self) -> dict[str, Any]:
         # The solutions stay out (a Rust object, not data): their numbers are the verdict's.
-        out = asdict(replace(self, cases=tuple(replace(c, relaxed_hover=None) for c in self.cases)))
-        for case, given in zip(out["cases"], self.cases):
+        cases = tuple(given._as_dict() | {"relaxed_hover": None} for given in self.cases)
+        out = {"airframe": self.airframe, "rotor_count": self.rotor_count, "fully_actuated": self.fully_actuated, "cases": cases}
+        for case, given in zip(cases, self.cases):
             for key in ("acai", "acai_give_up_yaw", "thrust_to_weight"):
                 if math.isinf(case[key]):
                     case[key] = None  # JSON has no infinity: rank deficient / undefined
@@ -333,12 +376,11 @@ def certify(
         verdict = healthy
         if spinning and row.failed:
             verdict = _relaxed_hover_verdict(airframe.with_failed_rotors(row.failed), settings, drag, actuator)
-        cases.append(CertificateCase(row.failed, hover, row.acai, row.acai_give_up_yaw, ratio, drop, row.hover,
-                                     row.hover_give_up_yaw, distance, distance_give_up_yaw, verdict))
+        cases.append(CertificateCase(row, hover, ratio, drop, distance, distance_give_up_yaw, verdict))
     return Certificate(airframe.name, airframe.rotor_count, full, tuple(cases))
 
 
-def _static_class(row: Any) -> Hover:
+def _static_class(row: FailureCase) -> Hover:
     """A failure-table row's static hover class: with all four axes, only by giving up yaw, or not."""
     return "all-axes" if row.controllable else ("give-up-yaw" if row.controllable_give_up_yaw else "no")
 
