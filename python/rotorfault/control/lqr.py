@@ -481,6 +481,30 @@ def lqr_hover_allocated(
     return Allocated(LinearFeedback(design.gain, trim.state, v_trim, design=design), allocator)
 
 
+def _hover_lqi(simulator: Simulator, position: npt.ArrayLike, integral_scale_m_s: npt.ArrayLike, model: str) -> tuple[HoverTrim, LqrDesign]:
+    """The hover LQR of :func:`lqr_hover` (its trim, holdability check and Bryson weights) on the
+    model augmented by the integral of the position error (north, east, down; LQI), the integrals
+    weighted by ``integral_scale_m_s`` (m s, Bryson); designed and checked by
+    :func:`~rotorfault.control.riccati.design_lqr`, the sampled loop included. Returns the trim and
+    the design, whose gain is commands x (12 states + 3 integrals)."""
+    trim = hover_trim(simulator, position=position)
+    _require_holdable(simulator, trim)
+    linear = linearize(simulator, trim)
+    a, b = np.asarray(linear.A), np.asarray(linear.B)
+    n, m = a.shape[0], b.shape[1]
+    a_aug = np.zeros((n + 3, n + 3))
+    a_aug[:n, :n] = a
+    a_aug[n:, :3] = np.eye(3)  # d/dt of the integral is the position error
+    b_aug = np.vstack([b, np.zeros((3, m))])
+    q, r = _bryson_weights(simulator, None, None)
+    q_aug = np.zeros((n + 3, n + 3))
+    q_aug[:n, :n] = q
+    q_aug[n:, n:] = np.diag(1.0 / np.asarray(integral_scale_m_s, dtype=np.float64) ** 2)
+    design = design_lqr((a_aug, b_aug), q_aug, r, dt_s=simulator.dt_s,
+                        state_names=(*STATE_NAMES, "int_x", "int_y", "int_z"), model=model)
+    return trim, design
+
+
 def _require_holdable(simulator: Simulator, trim: HoverTrim) -> None:
     """``ValueError`` unless the airframe has control authority around hover (ACAI > 0) and the
     trim leaves every rotor off its bounds."""

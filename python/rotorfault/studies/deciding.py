@@ -330,30 +330,15 @@ def healthy_lqi(name: str) -> HealthyHoverLqi:
     :func:`~rotorfault.control.riccati.design_lqr`, the sampled loop included) that flies the
     relaxed hover LQR's runs until the failure (issue 30: without the integral a heavy draw sits
     metres low when the failure comes)."""
-    from ..control.linear import STATE_NAMES, LinearFeedback
-    from ..control.lqr import _bryson_weights, _require_holdable, hover_trim, linearize
-    from ..control.riccati import design_lqr
+    from ..control.linear import LinearFeedback
+    from ..control.lqr import _hover_lqi
     from ..flight import Simulator
 
     v = vehicle(name)
     sim = Simulator(v.airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=nominal_drag(v), actuator=nominal_actuator(v))
-    trim = hover_trim(sim, position=HOVER_M)
-    _require_holdable(sim, trim)  # as lqr_hover: authority around hover, no rotor at a bound in the trim
-    model = linearize(sim, trim)
-    a, b = np.asarray(model.A), np.asarray(model.B)
-    n, m = a.shape[0], b.shape[1]
-    a_aug = np.zeros((n + 3, n + 3))
-    a_aug[:n, :n] = a
-    a_aug[n:, :3] = np.eye(3)  # d/dt of the integral is the position error
-    b_aug = np.vstack([b, np.zeros((3, m))])
-    # The hover LQR's own Bryson weights (control.lqr), the integrals' beside them.
-    q, r = _bryson_weights(sim, None, None)
-    q_aug = np.zeros((n + 3, n + 3))
-    q_aug[:n, :n] = q
-    q_aug[n:, n:] = np.diag(1.0 / np.asarray(HEALTHY_INTEGRAL_SCALE_M_S) ** 2)
-    design = design_lqr((a_aug, b_aug), q_aug, r, dt_s=DT_S,
-                        state_names=(*STATE_NAMES, "int_x", "int_y", "int_z"), model=f"the hover linearisation of {name} with position integrals")
+    trim, design = _hover_lqi(sim, HOVER_M, HEALTHY_INTEGRAL_SCALE_M_S, f"the hover linearisation of {name} with position integrals")
     gain = np.asarray(design.gain)
+    n = gain.shape[1] - 3
     integral_gain = gain[:, n:]
     weight = float(v.airframe.mass_kg * v.airframe.gravity_m_s2)
     # The rotors' summed thrust per m s of the altitude integral sizes every axis's limit (a
