@@ -391,13 +391,9 @@ impl ActiveSetSolver {
             iterations += self.phase2::<W>(&mut t, &mut active.states, &g);
             // Phase 2 changes only the first m entries.
             if t[..m] != before[..m] {
-                let after = self.scaled.certificate_with_rows::<R>(
-                    b,
-                    b_norm,
-                    &t,
-                    &mut [0.0; N],
-                    tolerance,
-                );
+                let after =
+                    self.scaled
+                        .certificate_with_rows::<R>(b, b_norm, &t, &mut [0.0; N], tolerance);
                 if after.holds() {
                     certificate = after;
                 } else {
