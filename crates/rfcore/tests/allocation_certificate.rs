@@ -1,7 +1,9 @@
 //! The active set's certificate, read off the gradient its phase 1 ends with, is exactly the
 //! certificate computed afresh from the commands ([`ActiveSetSolver::certify`]: residual,
 //! gradient and bounds at the returned commands), on the preset airframes and on the
-//! ill-conditioned class (one column 1e-4..1e-12 of the others, weights 0.01..30).
+//! ill-conditioned class (one column 1e-4..1e-12 of the others, weights 0.01..30). After a phase 2
+//! that moved the commands the solver certifies them with the 4-axis instance (residual and
+//! gradient unrolled) where `certify` uses the generic row count: equal here bit for bit too.
 
 use rfcore::allocation::active_set::{ActiveSet, ActiveSetSolver};
 use rfcore::allocation::{AllocationProblem, SolvedBy};

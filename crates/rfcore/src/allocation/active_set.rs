@@ -384,15 +384,16 @@ impl ActiveSetSolver {
             self.scaled.certificate_from_gradient(&t, &g, tolerance)
         } else {
             self.scaled
-                .certificate_with(b, b_norm, &t, &mut g, tolerance)
+                .certificate_with_rows::<R>(b, b_norm, &t, &mut g, tolerance)
         };
         if converged && certificate.holds() && self.tie_rule_needed(closest, &active.states, &g) {
             let before = t;
             iterations += self.phase2::<W>(&mut t, &mut active.states, &g);
-            if t != before {
-                let after = self
-                    .scaled
-                    .certificate_with(b, b_norm, &t, &mut [0.0; N], tolerance);
+            // Phase 2 changes only the first m entries.
+            if t[..m] != before[..m] {
+                let after =
+                    self.scaled
+                        .certificate_with_rows::<R>(b, b_norm, &t, &mut [0.0; N], tolerance);
                 if after.holds() {
                     certificate = after;
                 } else {
