@@ -154,3 +154,32 @@ def test_the_lanzon_report_names_moved_to_its_report_module_warn() -> None:
     for name in ("write_report", "report_section", "report_rows", "three_way_table", "monte_carlo_table", "sensing_table"):
         with pytest.warns(DeprecationWarning, match=rf"papers\.lanzon\.{name} is deprecated.*papers\.lanzon_report\.{name}"):
             assert getattr(lanzon, name) is getattr(lanzon_report, name)
+
+
+def test_the_removed_five_argument_holds_is_refused_naming_the_new_signature() -> None:
+    """``deciding.holds(outcome, altitude, horizontal, growth, final spin)`` judged spin growth
+    with a fixed allowance that no longer exists: no deprecation path can keep its answers (the
+    rule now needs each run's settle time constant), so the old form is refused with a
+    ``TypeError`` naming the new signature and the campaign's call, not Python's bare "missing
+    arguments"; other calls that do not fit name the signature and Python's reason; an error
+    from inside the rule is not rewritten."""
+    import inspect
+
+    from rotorfault.studies import deciding, deciding_hold
+
+    assert deciding.holds is deciding_hold.holds
+    old = (["holds-position"], [0.4], [1.0], [8.8], [63.0])
+    told = (r"holds\(outcome, window_altitude_m, window_horizontal_m, window_spin_growth_rad_s, window_final_spin_rad_s\) "
+            r"was removed: .*settle time constant.*; call holds\(outcome, .*window_final_spin_rad_s, settle_time_constant_s, "
+            r"since_failure_s, span_s\) or rotorfault\.studies\.deciding\.judge_holds")
+    with pytest.raises(TypeError, match=told):
+        deciding.holds(*old)
+    with pytest.raises(TypeError, match=told):
+        deciding.holds(*old[:3], window_spin_growth_rad_s=old[3], window_final_spin_rad_s=old[4])
+    with pytest.raises(TypeError, match=r"^holds\(outcome, .*, span_s\): missing a required argument: 'span_s'$"):
+        deciding.holds(*old, [21.0], 15.0)
+    with pytest.raises(TypeError) as inside:
+        deciding.holds(*old, [21.0], 15.0, None)
+    assert "holds(" not in str(inside.value)
+    assert deciding.holds(*old, [21.0], 15.0, 5.0).tolist() == [True]
+    assert list(inspect.signature(deciding.holds).parameters)[5:] == ["settle_time_constant_s", "since_failure_s", "span_s"]

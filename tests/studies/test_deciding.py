@@ -613,3 +613,31 @@ def test_the_hand_over_needs_the_integral_gain_and_its_limits_together() -> None
 def _lanzon_relaxed() -> tuple[object, rf.Airframe]:
     airframe, best = D._relaxed_design("lanzon-quadrotor", (1.0, 1.0, 0.0, 1.0))
     return best, airframe
+
+
+def test_a_dataset_whose_draws_no_longer_reproduce_reads_its_holds_as_flown(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Certifying rows after the fact certifies each run's drawn vehicle and fault, so it needs
+    the draws to reproduce from the seed (a row that differs is refused, naming it). Re-judging
+    the holds needs each run's settle time constant, from its drawn inertia factor (not stored):
+    without reproducing draws the holds stay as flown (``holds_rejudged`` False, the table says
+    so) rather than refusing the dataset. Stored verdicts need no draws. Here the sampling code
+    changes after the flight (every mass scale drawn 1 % higher)."""
+    import dataclasses
+
+    bare, certified = tmp_path / "bare", tmp_path / "certified"
+    flown = D.run_deciding(D.DecidingCampaign(**X500, certify=False), out=bare, progress=False)  # type: ignore[arg-type]
+    D.run_deciding(D.DecidingCampaign(**{**X500, "runs": 2}), out=certified, progress=False)  # type: ignore[arg-type]
+    same = D.read_deciding(bare, certify=False)
+    assert same.holds_rejudged and "HOLDS AS FLOWN" not in same.table()
+    drawn = D.DecidingCampaign.draw_of
+    monkeypatch.setattr(D.DecidingCampaign, "draw_of",
+                        staticmethod(lambda seed, cell, index: dataclasses.replace(drawn(seed, cell, index),
+                                                                                   mass_scale=1.01 * drawn(seed, cell, index).mass_scale)))
+    old = D.read_deciding(bare, certify=False)
+    assert not old.holds_rejudged and old.spin_growth_judged and "HOLDS AS FLOWN, NOT RE-JUDGED" in old.table()
+    np.testing.assert_array_equal(old.columns["holds"], flown.columns["holds"])
+    np.testing.assert_array_equal(old.columns["holds_as_flown"], flown.columns["holds"])
+    with pytest.raises(ValueError, match="row 0 .* was not drawn by this suite"):
+        D.read_deciding(bare)
+    stored = D.read_deciding(certified)
+    assert not stored.holds_rejudged and stored.certified and set(stored.columns["certified"].tolist()) <= set(D.CERTIFIED)

@@ -1,18 +1,56 @@
 """The one way an old name keeps working for one release: it warns (``DeprecationWarning``,
 naming the new name) and then does what the new name does. Used for moved modules, renamed
-arguments, attributes and keys; ``tests/cross/test_deprecations.py`` checks every one."""
+arguments, attributes and keys; ``tests/cross/test_deprecations.py`` checks every one. An old
+call form whose answers cannot be kept (the rule behind it changed, so a warning followed by the
+new rule would answer something else under the old name) is refused instead, with a
+``TypeError`` naming the current signature (:func:`removed_call_form`)."""
 
 from __future__ import annotations
 
+import functools
 import importlib
+import inspect
 import sys
 import warnings
-from typing import Any
+from typing import Any, Callable, TypeVar
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 def warn(old: str, new: str, *, stacklevel: int = 3) -> None:
     """Warns that ``old`` is deprecated in favour of ``new`` (removed after one release)."""
     warnings.warn(f"{old} is deprecated and will be removed in the next release; use {new}", DeprecationWarning, stacklevel=stacklevel)
+
+
+def removed_call_form(old_parameters: int, why: str, instead: str) -> Callable[[_F], _F]:
+    """Refuses a call that does not fit the decorated function's signature with a ``TypeError``
+    naming the signature (in place of Python's bare "missing arguments"); a call that fits the
+    removed form (its first ``old_parameters`` parameters, and only those) is told ``why`` that
+    form was removed and what to call ``instead``. The signature seen by ``inspect`` and the docs
+    is the function's own."""
+
+    def decorate(function: _F) -> _F:
+        signature = inspect.signature(function)
+        old_names = list(signature.parameters)[:old_parameters]
+        name = function.__name__
+        # The parameters as a caller writes them (annotations left to the docs).
+        plain = signature.replace(parameters=[p.replace(annotation=inspect.Parameter.empty) for p in signature.parameters.values()],
+                                  return_annotation=inspect.Signature.empty)
+
+        @functools.wraps(function)
+        def checked(*args: Any, **kwargs: Any) -> Any:
+            try:
+                signature.bind(*args, **kwargs)
+            except TypeError as e:
+                old = len(args) + len(kwargs) == old_parameters and set(kwargs) <= set(old_names[len(args):])
+                told = (f"{name}({', '.join(old_names)}) was removed: {why}; call {name}{plain}" + (f" or {instead}" if instead else "")
+                        if old else f"{name}{plain}: {e}")
+                raise TypeError(told) from None
+            return function(*args, **kwargs)
+
+        return checked  # type: ignore[return-value]
+
+    return decorate
 
 
 def moved_module(old: str, new: str) -> None:

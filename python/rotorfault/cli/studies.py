@@ -341,7 +341,8 @@ def _suite_command(
                               progress=progress)
     fields: dict[str, Any] = {"mode": "suite", "suite": name, "runs_per_cell": suite.runs, "seed": suite.seed, "cell_count": len(suite.cells),
                               "runs": suite.total_runs, "seconds": result.seconds, "certify_seconds": result.certify_seconds,
-                              "certified": result.certified, "spin_growth_judged": result.spin_growth_judged, "certify_rule": result.certify_rule,
+                              "certified": result.certified, "spin_growth_judged": result.spin_growth_judged, "holds_rejudged": result.holds_rejudged,
+                              "certify_rule": result.certify_rule,
                               "out": out_path, "read": read_path}
     tables = [Rows("cells", result.cell_rows()), Rows("best", result.best())]
     if result.certified:

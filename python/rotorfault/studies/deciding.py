@@ -642,6 +642,10 @@ def certify_run(suite: DecidingCampaign, cell: Cell, index: int) -> RunCertifica
     return _certificate(suite.seed, cell.draw_key, cell.vehicle, cell.fault_class, index)
 
 
+class _DrawsDoNotReproduce(ValueError):
+    """A row's draw drawn again from the seed differs from the row (:func:`_row_draws`)."""
+
+
 def _row_draws(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, Any]]) -> tuple[list[tuple[str, str, int]], dict[tuple[str, str, int], tuple[Cell, RunDraw]]]:
     """Each row's (vehicle, fault class, index) and, once per draw, its cell and draw drawn again
     from the seed and the index, checked against the row (failed rotors, fault time, efficiency,
@@ -658,7 +662,7 @@ def _row_draws(suite: DecidingCampaign, columns: Mapping[str, np.ndarray[Any, An
         d = suite.draw(cell, int(key[2]))
         recorded = (columns["failed_rotors"][k], float(columns["fault_time_s"][k]), float(columns["efficiency"][k]), float(columns["mass_scale"][k]))
         if recorded != ("-".join(map(str, d.failed)), d.fault_time_s, d.efficiency, d.mass_scale):
-            raise ValueError(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
+            raise _DrawsDoNotReproduce(f"columns: row {k} ({key[0]}, {key[1]}, run {key[2]}) was not drawn by this suite and code: "
                              f"recorded {recorded}, drawn {(d.failed, d.fault_time_s, d.efficiency, d.mass_scale)}")
         drawn[key] = (cell, d)
     return keys, drawn
@@ -720,9 +724,13 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     (:func:`rejudge_holds`: from the stored window values and the seeded draws, without flying;
     the flight's verdict kept as ``holds_as_flown``). A dataset without the spin-growth columns
     (flown before that rule): its ``holds`` kept as judged then, the columns NaN,
-    ``spin_growth_judged`` False, the table says so. ``certify``: rows without the verdict
+    ``spin_growth_judged`` False, the table says so. Re-judging needs each run's settle time
+    constant, from its draw (the inertia factor is not stored): a dataset whose draws no longer
+    reproduce (another suite or sampling code) keeps its ``holds`` as flown, ``holds_rejudged``
+    False, the table says so. ``certify``: rows without the verdict
     (flown with ``certify=False`` or before it existed) certified after the fact
-    (:func:`certify_rows`), timed in ``certify_seconds``. Verdicts stored by the flight carry the
+    (:func:`certify_rows`, from the draws: a dataset whose draws no longer reproduce is refused,
+    naming the row), timed in ``certify_seconds``. Verdicts stored by the flight carry the
     certify rule that made them (the manifest's ``certify_rule``,
     :data:`rotorfault.studies.certify.SURVIVAL_RULE`); verdicts from an older rule, or a dataset
     that does not say, are kept but warned about (:class:`StaleCertifyWarning`) and marked
@@ -743,12 +751,23 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     # A dataset flown before the spin-growth rule: its holds are the old rule's (kept, and said so
     # by ``spin_growth_judged``), the growth is not measured (NaN), never re-judged as held or not.
     spin_growth_judged = all(name in columns for name, _ in _SPIN_GROWTH_COLUMNS)
+    recertify = "certified" not in columns or (certify and not suite.certify)
+    holds_rejudged = spin_growth_judged
     if not spin_growth_judged:
         columns = {**columns, **{name: np.full(len(columns["vehicle"]), math.nan) for name, _ in _SPIN_GROWTH_COLUMNS}}
     else:
-        columns = rejudge_holds(suite, columns)
+        try:
+            columns = rejudge_holds(suite, columns)
+        except _DrawsDoNotReproduce:
+            # Only certifying after the fact needs the draws themselves (it certifies the drawn
+            # vehicle and fault): refused below with the row named. The stored verdicts and
+            # holds stand on their own; what is lost is the re-judging, said by holds_rejudged.
+            if recertify and certify:
+                raise
+            holds_rejudged = False
+            columns = {**columns, "holds_as_flown": np.asarray(columns["holds"], dtype=bool)}
     certify_rule: int | None = SURVIVAL_RULE
-    if "certified" not in columns or (certify and not suite.certify):
+    if recertify:
         if not certify:
             certify_rule = None  # no verdicts: no rule made them
             columns = {**columns, **{name: np.full(len(columns["vehicle"]), "" if kind == "string" else math.nan, dtype=object if kind == "string" else np.float64)
@@ -763,7 +782,8 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
         if certify_rule != SURVIVAL_RULE:
             warnings.warn(f"{path}: its certify verdicts were made by {_rule_text(certify_rule)}, not the current rule "
                           f"{SURVIVAL_RULE}; the decision uses them as stored (certify_rows certifies again)", StaleCertifyWarning, stacklevel=2)
-    return DecidingResult(suite, columns, certify_seconds=seconds, spin_growth_judged=spin_growth_judged, certify_rule=certify_rule)
+    return DecidingResult(suite, columns, certify_seconds=seconds, spin_growth_judged=spin_growth_judged, certify_rule=certify_rule,
+                          holds_rejudged=holds_rejudged)
 
 
 class StaleCertifyWarning(UserWarning):
@@ -940,6 +960,10 @@ class DecidingResult:
     #: verdicts; ``None``: rows without verdicts, or a dataset that does not say which rule made
     #: them (:func:`read_deciding` warns).
     certify_rule: int | None = field(default_factory=lambda: _current_certify_rule())
+    #: Whether ``holds`` was judged again by the current rule when read (:func:`read_deciding`);
+    #: False: the flights' verdicts as flown (a dataset before the spin-growth rule, or one whose
+    #: draws no longer reproduce, so each run's settle time constant is unknown).
+    holds_rejudged: bool = True
 
     def cell_rows(self) -> list[dict[str, Any]]:
         """One row per cell: hold share (with its 95 % Wilson interval), worst hold-window
@@ -1080,7 +1104,9 @@ class DecidingResult:
                f"{1 + SPIN_SETTLE_MARGIN:g} x what a first-order settle from the failure with the run's I_zz / k_r grows there, "
                f"or a spin predicted to settle within {SPIN_SETTLED_SHARE:.0%} of its last 5 s mean (at most {SPIN_SETTLED_CAP_SHARE:.0%} of it); k_r = 0: "
                f"{SPIN_GROWTH_MIN_RAD_S:g} rad/s; a settle must end below {SPIN_END_LIMIT_RAD_S:g} rad/s)" if self.spin_growth_judged
-               else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)"),
+               else "; SPIN GROWTH NOT JUDGED: dataset flown before the rule (a spin that keeps growing may count as held)")
+            + ("; HOLDS AS FLOWN, NOT RE-JUDGED: the dataset's draws no longer reproduce (each run's settle time constant is unknown)"
+               if self.spin_growth_judged and not self.holds_rejudged else ""),
             "| vehicle | fault class | controller | holds (95 % CI) | lost | design refused | worst alt / horiz (m) | median spin (rad/s) |",
             "|---|---|---|---|---|---|---|---|",
         ]

@@ -53,6 +53,7 @@ from typing import Any
 
 import numpy as np
 
+from .._util.deprecation import removed_call_form
 from ..flight import DivergenceLimits
 from ..flight.outcomes import FLYING
 
@@ -184,6 +185,10 @@ def predicted_spin_end_rad_s(
     return final + rest
 
 
+@removed_call_form(
+    5, "its fixed spin allowance is gone, and the rule now needs each run's settle time constant and the window's spans",
+    "rotorfault.studies.deciding.judge_holds(..., settle_time_constant_s) (the campaign's spans; the time constant: "
+    "deciding.run_settle_time_constant_s or spin_settle_time_constant_s)")
 def holds(
     outcome: Any, window_altitude_m: Any, window_horizontal_m: Any, window_spin_growth_rad_s: Any, window_final_spin_rad_s: Any,
     settle_time_constant_s: Any, since_failure_s: float, span_s: float,

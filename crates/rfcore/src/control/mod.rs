@@ -18,6 +18,8 @@
 //! - [`switch`]: one controller before a known failure time, another after it.
 //! - [`hover_handover`]: a hover LQR with integral action, handing its integrals over to the
 //!   relaxed hover LQR at a known failure time.
+//! - [`integral`]: the clamped rectangle-rule position-error integral the outer loops with
+//!   integral action share.
 
 use nalgebra::DMatrix;
 
@@ -29,6 +31,7 @@ pub mod allocated;
 pub mod filter;
 pub mod hover_handover;
 pub mod indi;
+pub mod integral;
 pub mod ke;
 pub mod lanzon;
 pub mod linear;

@@ -24,6 +24,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
+use super::integral::PositionIntegral;
 use super::{require_finite_matrix, Controller};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::RigidBodyState;
@@ -124,11 +125,10 @@ pub struct RelaxedHoverFeedback {
     gain: DMatrix<f64>,
     position: Vector3<f64>,
     outer: RelaxedHoverOuterLoop,
-    /// `\int e dt` of the centre's horizontal error (m s) and when it was last advanced.
-    integral_m_s: nalgebra::Vector2<f64>,
+    /// `\int e dt` of the centre's horizontal error (world north, east), m s.
+    integral: PositionIntegral<2>,
     /// `\int z dt` of the altitude error (up), m s.
-    altitude_integral_m_s: f64,
-    integrated_to_s: Option<f64>,
+    altitude_integral: PositionIntegral<1>,
 }
 
 impl RelaxedHoverFeedback {
@@ -196,9 +196,8 @@ impl RelaxedHoverFeedback {
             gain,
             position: Vector3::from(position_m),
             outer,
-            integral_m_s: nalgebra::Vector2::zeros(),
-            altitude_integral_m_s: 0.0,
-            integrated_to_s: None,
+            integral: PositionIntegral::default(),
+            altitude_integral: PositionIntegral::default(),
         })
     }
 
@@ -219,7 +218,7 @@ impl RelaxedHoverFeedback {
         let o = &self.outer;
         let mut accel = -o.position_gain_s2 * centre.xy()
             - o.velocity_gain_s * velocity.xy()
-            - o.integral_gain_s3 * self.integral_m_s;
+            - o.integral_gain_s3 * nalgebra::Vector2::from(self.integral.sum_m_s());
         let limit = self.gravity * o.max_tilt_rad.tan();
         let saturated = accel.norm() > limit;
         if saturated {
@@ -233,28 +232,26 @@ impl RelaxedHoverFeedback {
     fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
         let k_i = self.outer.integral_gain_s3;
         let k_z = self.outer.altitude_integral_gain_s;
-        let previous = self.integrated_to_s.replace(t_s);
-        let (Some(previous), true) = (previous, k_i > 0.0 || k_z > 0.0) else {
+        // Both integrals share the time base; a frozen one still moves it.
+        let step = self.integral.advance(t_s);
+        self.altitude_integral.advance(t_s);
+        let (Some(dt), true) = (step, k_i > 0.0 || k_z > 0.0) else {
             return;
         };
-        let dt = t_s - previous;
         let (centre, velocity) = self.centre_error(measured);
-        if dt.is_nan() || dt <= 0.0 || !centre.iter().all(|v| v.is_finite()) {
+        if !centre.iter().all(|v| v.is_finite()) {
             return;
         }
         if k_z > 0.0 {
             let limit = ALTITUDE_INTEGRAL_LIMIT_M / k_z;
-            self.altitude_integral_m_s =
-                (self.altitude_integral_m_s - dt * centre.z).clamp(-limit, limit);
+            self.altitude_integral.add_clamped(dt, [-centre.z], [limit]);
         }
         if k_i == 0.0 || self.wanted_accel(&centre, &velocity).1 {
             return;
         }
-        self.integral_m_s += dt * centre.xy();
         let limit = self.gravity * self.outer.max_tilt_rad.tan() / k_i;
-        if self.integral_m_s.norm() > limit {
-            self.integral_m_s *= limit / self.integral_m_s.norm();
-        }
+        self.integral
+            .add_norm_limited(dt, [centre.x, centre.y], limit);
     }
 
     /// Starts the integrals where a healthy loop flying until now left them (a bumpless hand-over,
@@ -268,7 +265,8 @@ impl RelaxedHoverFeedback {
         let k_z = self.outer.altitude_integral_gain_s;
         if k_z > 0.0 && altitude_integral_m_s.is_finite() {
             let limit = ALTITUDE_INTEGRAL_LIMIT_M / k_z;
-            self.altitude_integral_m_s = altitude_integral_m_s.clamp(-limit, limit);
+            self.altitude_integral
+                .set_sum_m_s([altitude_integral_m_s.clamp(-limit, limit)]);
         }
         let k_i = self.outer.integral_gain_s3;
         let up = measured.attitude * Vector3::new(0.0, 0.0, -1.0);
@@ -279,7 +277,7 @@ impl RelaxedHoverFeedback {
             if integral.norm() > limit {
                 integral *= limit / integral.norm();
             }
-            self.integral_m_s = integral;
+            self.integral.set_sum_m_s([integral.x, integral.y]);
         }
     }
 
@@ -297,7 +295,7 @@ impl RelaxedHoverFeedback {
             rate.x,
             rate.y,
             rate.z,
-            -centre.z + self.outer.altitude_integral_gain_s * self.altitude_integral_m_s,
+            -centre.z + self.outer.altitude_integral_gain_s * self.altitude_integral.sum_m_s()[0],
             -velocity.z,
         ]
     }
@@ -317,9 +315,8 @@ impl Controller for RelaxedHoverFeedback {
         Ok(())
     }
     fn reset(&mut self) {
-        self.integral_m_s = nalgebra::Vector2::zeros();
-        self.altitude_integral_m_s = 0.0;
-        self.integrated_to_s = None;
+        self.integral.reset();
+        self.altitude_integral.reset();
     }
 }
 
@@ -409,6 +406,84 @@ mod tests {
         );
     }
 
+    /// The integrals are the rule they had before they moved onto [`PositionIntegral`] (that
+    /// code transcribed here), bit for bit, through irregular, repeated and backward times, the
+    /// horizontal one frozen at the tilt limit and scaled back to its length limit, and the
+    /// altitude one clamped: flights are unchanged.
+    #[test]
+    fn the_integrals_are_the_former_rule_bit_for_bit() {
+        let axis = Vector3::new(0.0, 0.0, -1.0);
+        let outer = RelaxedHoverOuterLoop {
+            integral_gain_s3: 1.0,
+            altitude_integral_gain_s: 2.0,
+            ..Default::default()
+        };
+        let mut c =
+            RelaxedHoverFeedback::new(&trim(axis), &[3.0], DMatrix::zeros(1, 7), [0.0; 3], outer)
+                .unwrap();
+        let (mut xy, mut z, mut last) = (nalgebra::Vector2::zeros(), 0.0f64, None::<f64>);
+        let (mut frozen, mut scaled, mut clamped) = (0, 0, 0);
+        let mut t = 0.0;
+        for k in 0..4000 {
+            t += [0.0025, 0.0, 0.004, -0.001, 0.0025][k % 5];
+            let w = k as f64;
+            let north = 10.0 * (w * 0.003).sin();
+            // Every other 500 steps the velocity cancels the position's share of the wanted
+            // acceleration: the integral then winds up to its length limit unsaturated.
+            let cancel = -c.outer.position_gain_s2 / c.outer.velocity_gain_s * north;
+            let state = RigidBodyState {
+                position_m: Vector3::new(north, 0.8 * (w * 0.021).cos(), 1.0 + (w * 0.004).sin()),
+                velocity_m_s: Vector3::new(
+                    if (k / 500) % 2 == 0 {
+                        cancel
+                    } else {
+                        (w * 0.03).cos()
+                    },
+                    0.0,
+                    0.1,
+                ),
+                omega_rad_s: axis * 15.0,
+                ..RigidBodyState::at_rest()
+            };
+            // The former rule, on the state before the step (the same integrals so far).
+            let previous = last.replace(t);
+            let (centre, velocity) = c.centre_error(&state);
+            if let Some(previous) = previous {
+                let dt = t - previous;
+                if !(dt.is_nan() || dt <= 0.0) {
+                    let limit = ALTITUDE_INTEGRAL_LIMIT_M / c.outer.altitude_integral_gain_s;
+                    let before = z - dt * centre.z;
+                    z = before.clamp(-limit, limit);
+                    clamped += usize::from(z != before);
+                    if c.wanted_accel(&centre, &velocity).1 {
+                        frozen += 1;
+                    } else {
+                        xy += dt * centre.xy();
+                        let limit =
+                            c.gravity * c.outer.max_tilt_rad.tan() / c.outer.integral_gain_s3;
+                        if xy.norm() > limit {
+                            xy *= limit / xy.norm();
+                            scaled += 1;
+                        }
+                    }
+                }
+            }
+            c.integrate(t, &state);
+            let now = c.integral.sum_m_s();
+            assert_eq!(
+                [now[0].to_bits(), now[1].to_bits()],
+                [xy.x.to_bits(), xy.y.to_bits()],
+                "step {k}"
+            );
+            let now = c.altitude_integral.sum_m_s()[0];
+            assert_eq!(now.to_bits(), z.to_bits(), "step {k}");
+        }
+        assert!(
+            frozen > 0 && scaled > 0 && clamped > 0,
+            "{frozen} {scaled} {clamped}"
+        );
+    }
+
     #[test]
     fn the_integral_of_a_constant_error_tilts_further_and_winds_no_further_than_the_limit() {
         let axis = Vector3::new(0.0, 0.0, -1.0);
@@ -443,13 +518,13 @@ mod tests {
             position_m: Vector3::new(0.0, 100.0, 0.0),
             ..state
         };
-        let before = c.integral_m_s;
+        let before = c.integral.sum_m_s();
         c.command(1.0025, &far, &mut out).unwrap();
-        assert_eq!(c.integral_m_s, before);
+        assert_eq!(c.integral.sum_m_s(), before);
         // reset: no integral, and the first call after it only sets the time base.
         c.reset();
         c.command(5.0, &state, &mut out).unwrap();
-        assert_eq!(c.integral_m_s, nalgebra::Vector2::zeros());
+        assert_eq!(c.integral.sum_m_s(), [0.0, 0.0]);
     }
 
     #[test]

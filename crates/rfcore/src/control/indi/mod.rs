@@ -349,6 +349,21 @@ impl IndiController {
         &self.gains
     }
 
+    /// The inertia-coupling estimate of the mode flown last, when it has one torque axis left
+    /// (module docs, "One torque axis left"); `None` before the first step and in other modes.
+    /// For tests and diagnostics: the law reads it itself.
+    pub fn coupling_estimate(&self) -> Option<CouplingEstimate> {
+        let mem = &self.memory;
+        (mem.started && self.modes[mem.mode].info.single_axis).then(|| CouplingEstimate {
+            coefficients: estimated_coefficients(
+                self.nominal_coefficients(),
+                &mem.coupling_sums,
+                self.dt_s,
+            ),
+            output_flipped: mem.output_flipped,
+        })
+    }
+
     /// The reference position and velocity at `t_s`.
     fn reference(&self, t_s: f64) -> (Vector3<f64>, Vector3<f64>) {
         let k = self
@@ -458,6 +473,22 @@ impl IndiController {
 fn estimated_coefficients(nominal: [f64; 2], sums: &[[f64; 2]; 2], dt_s: f64) -> [f64; 2] {
     let prior = COUPLING_PRIOR_RAD2_S2.powi(2) * COUPLING_FORGETTING_S / dt_s;
     [0, 1].map(|i| (prior * nominal[i] + sums[i][1]) / (prior + sums[i][0]))
+}
+
+/// [`IndiController::coupling_estimate`]: the estimated roll and pitch coupling coefficients
+/// `(k_x, k_y) = ((J_y - J_z) / J_x, (J_z - J_x) / J_y)` (1), and whether the output flies the
+/// other side of `delta` than the nominal inertia's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CouplingEstimate {
+    pub coefficients: [f64; 2],
+    pub output_flipped: bool,
+}
+
+impl CouplingEstimate {
+    /// `1 + a = 1 + (k_x - k_y) / 2` of the estimate (`a = (J_xy - J_z) / J_xy`).
+    pub fn one_plus_a(&self) -> f64 {
+        1.0 + 0.5 * (self.coefficients[0] - self.coefficients[1])
+    }
 }
 
 /// What one step of the law computes besides the commands (for tests: the one-step prediction).
