@@ -81,8 +81,11 @@ macro_rules! lanewise {
             type Output = F64xN<N>;
             #[inline(always)]
             fn $method(self, rhs: F64xN<N>) -> F64xN<N> {
-                let (a, b) = (self.0, rhs.0);
-                F64xN(std::array::from_fn(|i| a[i] $op b[i]))
+                let mut a = self.0;
+                for (x, y) in a.iter_mut().zip(rhs.0) {
+                    *x = *x $op y;
+                }
+                F64xN(a)
             }
         }
     };
@@ -96,8 +99,11 @@ impl<const N: usize> Neg for F64xN<N> {
     type Output = F64xN<N>;
     #[inline(always)]
     fn neg(self) -> F64xN<N> {
-        let a = self.0;
-        F64xN(std::array::from_fn(|i| -a[i]))
+        let mut a = self.0;
+        for x in a.iter_mut() {
+            *x = -*x;
+        }
+        F64xN(a)
     }
 }
 
@@ -117,8 +123,11 @@ impl<const N: usize> Lanes for F64xN<N> {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        let a = self.0;
-        F64xN(std::array::from_fn(|i| a[i].sqrt()))
+        let mut a = self.0;
+        for x in a.iter_mut() {
+            *x = x.sqrt();
+        }
+        F64xN(a)
     }
 }
 
@@ -251,9 +260,9 @@ impl<L: Lanes> VehicleLanes<L> {
         let sixth = L::splat(dt_s / 6.0);
         let two = L::splat(2.0);
         let combine = |x: &[L; 3], a: &[L; 3], b: &[L; 3], c: &[L; 3], d: &[L; 3]| {
-            std::array::from_fn(|i| x[i] + (a[i] + two * b[i] + two * c[i] + d[i]) * sixth)
+            each(|i| x[i] + (a[i] + two * b[i] + two * c[i] + d[i]) * sixth)
         };
-        let q: [L; 4] = std::array::from_fn(|i| {
+        let q: [L; 4] = each(|i| {
             s.attitude[i]
                 + (k1.attitude[i] + k2.attitude[i] * two + k3.attitude[i] * two + k4.attitude[i])
                     * sixth
@@ -276,7 +285,7 @@ impl<L: Lanes> VehicleLanes<L> {
                 &k3.velocity_m_s,
                 &k4.velocity_m_s,
             ),
-            attitude: std::array::from_fn(|i| q[i] / norm),
+            attitude: each(|i| q[i] / norm),
             omega_rad_s: combine(
                 &s.omega_rad_s,
                 &k1.omega_rad_s,
@@ -292,9 +301,8 @@ impl<L: Lanes> VehicleLanes<L> {
     fn derivative(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> BodyLanes<L> {
         let w = s.omega_rad_s;
         // Wrench: torque = rotors - c_rot omega; force = weight - c_lin air + R (0, 0, -T).
-        let torque: [L; 3] =
-            std::array::from_fn(|i| totals.torque_body_nm[i] - self.rotational_drag_n_m_s * w[i]);
-        let air: [L; 3] = std::array::from_fn(|i| s.velocity_m_s[i] - self.wind_m_s[i]);
+        let torque: [L; 3] = each(|i| totals.torque_body_nm[i] - self.rotational_drag_n_m_s * w[i]);
+        let air: [L; 3] = each(|i| s.velocity_m_s[i] - self.wind_m_s[i]);
         let zero = L::splat(0.0);
         let weight = [zero, zero, self.weight_n];
         let q = &s.attitude;
@@ -302,17 +310,16 @@ impl<L: Lanes> VehicleLanes<L> {
         let thrust = [zero, zero, -totals.thrust_n];
         let two = L::splat(2.0);
         let t0 = cross(&qv, &thrust);
-        let t: [L; 3] = std::array::from_fn(|i| t0[i] * two);
+        let t: [L; 3] = each(|i| t0[i] * two);
         let c = cross(&qv, &t);
-        let force: [L; 3] = std::array::from_fn(|i| {
+        let force: [L; 3] = each(|i| {
             weight[i] - self.linear_drag_n_s_m * air[i] + (t[i] * q[3] + c[i] + thrust[i])
         });
         // Newton-Euler.
         let j = &self.inertia;
-        let j_omega: [L; 3] =
-            std::array::from_fn(|r| j[r][0] * w[0] + j[r][1] * w[1] + j[r][2] * w[2]);
+        let j_omega: [L; 3] = each(|r| j[r][0] * w[0] + j[r][1] * w[1] + j[r][2] * w[2]);
         let gyro = cross(&w, &j_omega);
-        let net: [L; 3] = std::array::from_fn(|i| torque[i] - gyro[i]);
+        let net: [L; 3] = each(|i| torque[i] - gyro[i]);
         let ji = &self.inertia_inverse;
         let half = L::splat(0.5);
         // q * (0, omega) term by term as nalgebra writes it (rhs w = 0 kept: same signed zeros).
@@ -324,11 +331,9 @@ impl<L: Lanes> VehicleLanes<L> {
         ];
         BodyLanes {
             position_m: s.velocity_m_s,
-            velocity_m_s: std::array::from_fn(|i| force[i] * self.inverse_mass),
+            velocity_m_s: each(|i| force[i] * self.inverse_mass),
             attitude,
-            omega_rad_s: std::array::from_fn(|r| {
-                ji[r][0] * net[0] + ji[r][1] * net[1] + ji[r][2] * net[2]
-            }),
+            omega_rad_s: each(|r| ji[r][0] * net[0] + ji[r][1] * net[1] + ji[r][2] * net[2]),
         }
     }
 }
@@ -346,11 +351,23 @@ fn cross<L: Lanes>(a: &[L; 3], b: &[L; 3]) -> [L; 3] {
 #[inline(always)]
 fn advanced<L: Lanes>(s: &BodyLanes<L>, d: &BodyLanes<L>, h: L) -> BodyLanes<L> {
     BodyLanes {
-        position_m: std::array::from_fn(|i| s.position_m[i] + d.position_m[i] * h),
-        velocity_m_s: std::array::from_fn(|i| s.velocity_m_s[i] + d.velocity_m_s[i] * h),
-        attitude: std::array::from_fn(|i| s.attitude[i] + d.attitude[i] * h),
-        omega_rad_s: std::array::from_fn(|i| s.omega_rad_s[i] + d.omega_rad_s[i] * h),
+        position_m: each(|i| s.position_m[i] + d.position_m[i] * h),
+        velocity_m_s: each(|i| s.velocity_m_s[i] + d.velocity_m_s[i] * h),
+        attitude: each(|i| s.attitude[i] + d.attitude[i] * h),
+        omega_rad_s: each(|i| s.omega_rad_s[i] + d.omega_rad_s[i] * h),
     }
+}
+
+/// `[f(0), f(1), .., f(N - 1)]`, written out: `std::array::from_fn` over lane values was left
+/// out of line by LLVM and compiled for the baseline target (SSE2 pairs, outside the AVX2
+/// function; see benches/README.md, "Batches in SIMD lanes").
+#[inline(always)]
+fn each<L: Lanes, const N: usize>(f: impl Fn(usize) -> L) -> [L; N] {
+    let mut out = [L::splat(0.0); N];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = f(i);
+    }
+    out
 }
 
 #[cfg(test)]
