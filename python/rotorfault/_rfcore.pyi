@@ -1228,6 +1228,7 @@ class IndiGains:
         filter_damping: float | None = None,
         output_angle_rad: float | None = None,
         primary_axis_tilt: float | None = None,
+        given_up_yaw_axis_tilt: float | None = None,
         mismatch_time_constant_s: float | None = None,
         actuator_time_constant_s: float | None = None,
         given_up_yaw_weight: float | None = None,
@@ -1270,6 +1271,8 @@ class IndiGains:
     def output_angle_rad(self) -> float: ...
     @property
     def primary_axis_tilt(self) -> float: ...
+    @property
+    def given_up_yaw_axis_tilt(self) -> float: ...
     @property
     def mismatch_time_constant_s(self) -> float: ...
     @property

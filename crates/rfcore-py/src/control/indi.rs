@@ -94,6 +94,7 @@ indi_gains!(
     filter_damping,
     output_angle_rad,
     primary_axis_tilt,
+    given_up_yaw_axis_tilt,
     mismatch_time_constant_s,
     actuator_time_constant_s,
     given_up_yaw_weight,

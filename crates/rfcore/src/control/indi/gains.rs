@@ -87,6 +87,13 @@ pub struct IndiGains {
     /// `J_z > J_xy` (the gyroscopic torque of the tilted spin then lets the opposite rotor carry
     /// thrust), away from it otherwise.
     pub primary_axis_tilt: f64,
+    /// Tilt of the primary axis from body z when yaw is given up on a vehicle with spare rotors
+    /// (more than the thrust and attitude rows use: a hexa- or octocopter) and no yaw-free hover is
+    /// within their reach: `n_xy` of this length, toward the direction whose gyroscopic torque in
+    /// the tilted spin most relieves the yaw torque the hover cannot avoid (module docs, "When
+    /// rotors fail"). 0 (Sun's law: the vehicle spins about body z until the drag meets that yaw
+    /// torque). Must lie in [0, 1).
+    pub given_up_yaw_axis_tilt: f64,
     /// `W = diag(thrust, attitude 1, attitude 2, yaw)` of the incremental allocation (Sun: the
     /// unweighted pseudo-inverse, all 1).
     pub weights: [f64; 4],
@@ -134,6 +141,7 @@ impl Default for IndiGains {
             model_coupling: true,
             output_angle_rad: sun_output_angle_rad(),
             primary_axis_tilt: 0.0,
+            given_up_yaw_axis_tilt: 0.0,
             weights: [1.0; 4],
             mismatch_time_constant_s: 0.5,
             actuator_time_constant_s: 0.025,
@@ -206,15 +214,17 @@ impl IndiGains {
                 ));
             }
         }
-        require_finite("primary_axis_tilt", self.primary_axis_tilt)?;
-        if !(0.0..1.0).contains(&self.primary_axis_tilt) {
-            return Err(RfError::invalid(
-                "primary_axis_tilt",
-                format!(
-                    "must lie in [0, 1) (the x-y length of a unit axis), got {}",
-                    self.primary_axis_tilt
-                ),
-            ));
+        for (field, value) in [
+            ("primary_axis_tilt", self.primary_axis_tilt),
+            ("given_up_yaw_axis_tilt", self.given_up_yaw_axis_tilt),
+        ] {
+            require_finite(field, value)?;
+            if !(0.0..1.0).contains(&value) {
+                return Err(RfError::invalid(
+                    field,
+                    format!("must lie in [0, 1) (the x-y length of a unit axis), got {value}"),
+                ));
+            }
         }
         require_finite("min_yaw_authority", self.min_yaw_authority)?;
         if !(0.0..=1.0).contains(&self.min_yaw_authority) {
@@ -250,7 +260,7 @@ mod tests {
     fn the_defaults_pass_and_every_rule_names_its_gain() {
         IndiGains::default().check().unwrap();
         type Set = fn(&mut IndiGains, f64);
-        let cases: [(&str, Set, f64); 24] = [
+        let cases: [(&str, Set, f64); 26] = [
             ("k_p_xy", |g, v| g.k_p_xy = v, 0.0),
             ("k_v_xy", |g, v| g.k_v_xy = v, -1.0),
             ("k_i_xy", |g, v| g.k_i_xy = v, -0.1),
@@ -281,6 +291,16 @@ mod tests {
                 std::f64::consts::FRAC_PI_2,
             ),
             ("primary_axis_tilt", |g, v| g.primary_axis_tilt = v, 1.0),
+            (
+                "given_up_yaw_axis_tilt",
+                |g, v| g.given_up_yaw_axis_tilt = v,
+                -0.1,
+            ),
+            (
+                "given_up_yaw_axis_tilt",
+                |g, v| g.given_up_yaw_axis_tilt = v,
+                f64::NAN,
+            ),
             (
                 "mismatch_time_constant_s",
                 |g, v| g.mismatch_time_constant_s = v,

@@ -59,6 +59,20 @@
 //!   when the remaining rotors, at hover, can make less than [`IndiGains::min_yaw_authority`] of
 //!   the healthy vehicle's yaw torque in either direction (an attainable-set LP), e.g. any rotor of
 //!   a quadrotor or of the PNPNPN hexacopter. The vehicle then spins about `n`.
+//! - **The spin axis, yaw given up with spare rotors** ([`IndiGains::given_up_yaw_axis_tilt`]):
+//!   spinning about body z, the vehicle spins up until the drag meets the yaw torque the hover
+//!   cannot avoid (the least |yaw torque| holding the weight with zero roll and pitch torque, an
+//!   LP). On hexa-ppnnpn without rotor 5 or 6 that torque is 23 % of the healthy yaw authority,
+//!   and on a heavy vehicle (the rotor that must balance the lost one weak) the spin heads past
+//!   200 rad/s. Tilting the primary axis to `n = (alpha d, sqrt(1 - alpha^2))` makes the steady
+//!   spin `omega = r n` need the roll and pitch torque `omega x J omega = r^2 alpha (d_y (J_z -
+//!   J_y), d_x (J_x - J_z))` from the rotors, which then need not balance roll and pitch to zero
+//!   and can even out the yaw: the spin settles where that relief (growing as `r^2`) meets the
+//!   drag (Mueller and D'Andrea's relaxed hover in INDI's terms; the campaign's 0.2 settles
+//!   near 11 rad/s). `d` is chosen once, the best of 24 directions
+//!   by the least yaw torque left (an LP each), when the unavoidable torque is at least
+//!   `min_yaw_authority` of the healthy yaw authority (below it the vehicle barely spins and a
+//!   tilt would only tilt the thrust).
 //! - **One torque axis left** (two opposing rotors of a quadrotor): only one combination
 //!   `y = c . Y` of the two attitude outputs can be controlled. Sun's output redefinition: `c` at
 //!   the angle `beta + s delta` with `beta` the direction of the angular acceleration the remaining

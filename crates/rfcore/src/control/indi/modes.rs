@@ -114,6 +114,85 @@ pub(super) fn yaw_authority(
     Ok(authority)
 }
 
+/// Directions tried for the given-up-yaw axis tilt ([`relieving_tilt_direction`]): every 15 deg.
+const TILT_DIRECTIONS: usize = 24;
+
+/// The least |yaw torque| (N m) the `columns` make while holding the weight with roll and pitch
+/// torque `torque_xy` (N m): 0 when a yaw-free hover is within reach, infinity when no hover is.
+fn least_yaw_torque(
+    four: &DMatrix<f64>,
+    lower: &[f64],
+    upper: &[f64],
+    weight: f64,
+    torque_xy: [f64; 2],
+) -> Result<f64> {
+    let base = [weight, torque_xy[0], torque_xy[1], 0.0];
+    let mut reach = [f64::NEG_INFINITY; 2];
+    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+        let limit = max_along_direction(
+            four,
+            lower,
+            upper,
+            &[0.0, 0.0, 0.0, sign],
+            &base,
+            &ClarabelSettings::default(),
+        )?;
+        match limit {
+            Some(l) => reach[k] = l.scale,
+            None => return Ok(f64::INFINITY),
+        }
+    }
+    // The attainable yaw torques are [-reach[1], reach[0]].
+    let (low, high) = (-reach[1], reach[0]);
+    Ok(if low <= 0.0 && high >= 0.0 {
+        0.0
+    } else {
+        low.abs().min(high.abs())
+    })
+}
+
+/// Given up yaw with spare rotors: the body x-y direction `d` toward which tilting the primary
+/// axis most relieves the yaw torque the hover cannot avoid (module docs, "When rotors fail"),
+/// `None` when that torque is below `negligible_n_m` (the hover then barely spins, and a tilted
+/// axis would only tilt its thrust: hexa-pnpnpn, whose least yaw torque is 0 on the boundary) or
+/// no direction relieves it. Spinning at `r`
+/// about `n = (alpha d, sqrt(1 - alpha^2))`, the body is steady when the rotors make the
+/// gyroscopic torque `omega x J omega = r^2 alpha (d_y (J_z - J_y), d_x (J_x - J_z))` in roll and
+/// pitch: torque the rotors then need not balance to zero, freeing them to even out the yaw. The
+/// direction is the one whose torque, scaled to the unavoidable yaw torque itself, leaves the least
+/// yaw torque (an LP per direction, [`TILT_DIRECTIONS`] of them); the spin then settles where the
+/// relief (growing as `r^2`) meets the drag.
+fn relieving_tilt_direction(
+    airframe: &Airframe,
+    four: &DMatrix<f64>,
+    lower: &[f64],
+    upper: &[f64],
+    negligible_n_m: f64,
+) -> Result<Option<Vector2<f64>>> {
+    let weight = airframe.hover_wrench()[0];
+    let unavoidable = least_yaw_torque(four, lower, upper, weight, [0.0, 0.0])?;
+    if !(unavoidable > negligible_n_m && unavoidable > 0.0 && unavoidable.is_finite()) {
+        return Ok(None);
+    }
+    let [jx, jy, jz] = airframe.inertia_kg_m2();
+    let gyroscopic = |d: Vector2<f64>| Vector2::new(d.y * (jz - jy), d.x * (jx - jz));
+    let largest = (jz - jy).abs().max((jz - jx).abs());
+    if largest == 0.0 {
+        return Ok(None);
+    }
+    let mut best: Option<(f64, Vector2<f64>)> = None;
+    for k in 0..TILT_DIRECTIONS {
+        let angle = std::f64::consts::TAU * k as f64 / TILT_DIRECTIONS as f64;
+        let d = Vector2::new(angle.cos(), angle.sin());
+        let torque = gyroscopic(d) * (unavoidable / largest);
+        let left = least_yaw_torque(four, lower, upper, weight, [torque.x, torque.y])?;
+        if best.map_or(true, |(b, _)| left < b) {
+            best = Some((left, d));
+        }
+    }
+    Ok(best.and_then(|(left, d)| (left < unavoidable).then_some(d)))
+}
+
 impl Mode {
     pub(super) fn new(
         airframe: &Airframe,
@@ -234,8 +313,20 @@ impl Mode {
             (identity, identity, None, None)
         };
 
+        // Only rotors beyond those the thrust and attitude rows use have authority to spare.
+        let used = if single_axis { 2 } else { 3 };
+        let spare = healthy.len() > used;
         let mut primary_axis = Vector3::z();
-        if m == 4 && failed.len() == 1 && !single_axis && gains.primary_axis_tilt > 0.0 {
+        if !yaw_controlled && !single_axis && spare && gains.given_up_yaw_axis_tilt > 0.0 {
+            let four = columns_of(&matrix, &healthy, 4);
+            // A yaw torque below the share of the healthy one that counts as no yaw authority
+            // (`min_yaw_authority`) is negligible here too.
+            let negligible = gains.min_yaw_authority * healthy_authority;
+            if let Some(d) = relieving_tilt_direction(airframe, &four, &lower, &upper, negligible)? {
+                let xy = d * gains.given_up_yaw_axis_tilt;
+                primary_axis = Vector3::new(xy.x, xy.y, (1.0 - xy.norm_squared()).sqrt());
+            }
+        } else if m == 4 && failed.len() == 1 && !single_axis && gains.primary_axis_tilt > 0.0 {
             let [x, y, _] = airframe.rotors()[failed[0]].placement.position_m();
             let toward = Vector2::new(x, y);
             if toward.norm() > 0.0 {
@@ -248,9 +339,7 @@ impl Mode {
         if single_axis {
             weights[2] = 0.0;
         }
-        // Only rotors beyond those the thrust and attitude rows use have authority to spare.
-        let used = if single_axis { 2 } else { 3 };
-        let given_up_weight = if healthy.len() > used {
+        let given_up_weight = if spare {
             gains.given_up_yaw_weight
         } else {
             0.0
@@ -448,6 +537,63 @@ mod tests {
         let lanzon = mode("lanzon-quadrotor", &[1, 3]).unwrap();
         let (a, zeta) = lanzon.info.zero_dynamics.unwrap();
         assert!(a > 0.0 && zeta.is_none(), "{a}");
+    }
+
+    #[test]
+    fn given_up_yaw_tilts_the_axis_where_its_gyroscopic_torque_relieves_the_unavoidable_yaw() {
+        let gains = IndiGains {
+            given_up_yaw_axis_tilt: 0.05,
+            ..IndiGains::default()
+        };
+        for failed in [4, 5] {
+            let airframe = crate::fixtures::preset("hexa-ppnnpn");
+            let m = mode_with("hexa-ppnnpn", &[failed], &gains).unwrap();
+            assert!(!m.info.yaw_controlled);
+            let n = m.primary_axis;
+            assert!((n.xy().norm() - 0.05).abs() < 1e-12 && (n.norm() - 1.0).abs() < 1e-12);
+            // The independent check: the least yaw torque of a hover whose rotors make the
+            // gyroscopic torque of a spin about n, with the weight held, at a few rates, against
+            // the same at n = z (no relief) and at n tilted the other way (more yaw).
+            let matrix = airframe.nominal_effectiveness_matrix();
+            let four = columns_of(&matrix, &m.info.healthy, 4);
+            let (lower, upper) = thrust_bounds(&airframe, &m.info.healthy);
+            let weight = airframe.hover_wrench()[0];
+            let [jx, jy, jz] = airframe.inertia_kg_m2();
+            let least = |axis: Vector3<f64>, r: f64| {
+                let w = axis * r;
+                let jw = Vector3::new(jx * w.x, jy * w.y, jz * w.z);
+                let g = w.cross(&jw);
+                least_yaw_torque(&four, &lower, &upper, weight / axis.z, [g.x, g.y]).unwrap()
+            };
+            let level = least(Vector3::z(), 0.0);
+            assert!(level > 0.1, "rotor {}: {level}", failed + 1);
+            let back = Vector3::new(-n.x, -n.y, n.z);
+            for r in [10.0, 20.0] {
+                let relieved = least(n, r);
+                assert!(relieved < 0.8 * level, "rotor {} r {r}: {relieved} vs {level}", failed + 1);
+                assert!(least(back, r) > level, "rotor {} r {r}", failed + 1);
+            }
+        }
+        // Yaw held (rotor 1 of PPNNPN), a yaw-free hover on the boundary (any rotor of PNPNPN:
+        // least yaw torque 0), no spare rotor (a quadrotor), or the gain 0: body z.
+        for failed in 0..6 {
+            assert_eq!(
+                mode_with("hexa-pnpnpn", &[failed], &gains).unwrap().info.primary_axis,
+                [0.0, 0.0, 1.0]
+            );
+        }
+        assert_eq!(
+            mode_with("hexa-ppnnpn", &[0], &gains).unwrap().info.primary_axis,
+            [0.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            mode_with("ke-quadcopter", &[0], &gains).unwrap().info.primary_axis,
+            [0.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            mode("hexa-ppnnpn", &[5]).unwrap().info.primary_axis,
+            [0.0, 0.0, 1.0]
+        );
     }
 
     #[test]
