@@ -1233,6 +1233,8 @@ class IndiGains:
         actuator_time_constant_s: float | None = None,
         given_up_yaw_weight: float | None = None,
         min_yaw_authority: float | None = None,
+        k_spin: float | None = None,
+        spin_weight: float | None = None,
         weights: list[float] | None = None,
         model_coupling: bool | None = None,
         yaw: str | None = None,
@@ -1281,6 +1283,10 @@ class IndiGains:
     def given_up_yaw_weight(self) -> float: ...
     @property
     def min_yaw_authority(self) -> float: ...
+    @property
+    def k_spin(self) -> float: ...
+    @property
+    def spin_weight(self) -> float: ...
     @property
     def weights(self) -> list[float]: ...
     @property
@@ -1336,6 +1342,7 @@ class IndiController:
         failures: list[tuple[int, float]],
         setpoints: list[tuple[float, list[float], list[float]]],
         dt_s: float,
+        relaxed_spin: tuple[float, list[float], float] | None = None,
     ) -> IndiController: ...
     def failure_modes(self) -> list[IndiFailureMode]: ...
 

@@ -180,3 +180,45 @@ def test_a_failure_mode_made_from_its_fields_checks_them() -> None:
     ):
         with pytest.raises(ValueError, match=message):
             rf.control.indi.IndiFailureMode(**{**fields, **change})
+
+
+def test_a_tilted_spin_axis_settles_the_spin_of_a_vehicle_without_rotational_drag():
+    """PX4's x500 as the campaign imports it (no rotational drag, k_r = 0) with rotor 3 at 43 %,
+    not told: with yaw given up nothing balances the rotors' drag torque and the spin grows
+    linearly (measured 103 rad/s 15 s after the failure, 34 rad/s more over the last 5 s); with the
+    primary axis tilted 0.1 toward rotor 3 and the spin loop at its slowest (``spin_axis``,
+    ``spin_rate_rad_s=0``: a relaxed hover) it settles (measured 18.8 rad/s, 0.02 rad/s more) and
+    the vehicle holds its position (0.05 m altitude, 0.07 m horizontal) (crates/rfcore/src/control/indi/relaxed.rs)."""
+    from rotorfault.studies.deciding import indi_gains, nominal_actuator, vehicle
+
+    x500 = vehicle("px4-x500")
+    sim = rf.Simulator(x500.airframe, dt_s=1 / 400, substeps=2, actuator=nominal_actuator(x500))
+    faults = [rf.RotorFault(3, 1.0, efficiency=0.43)]
+    rotor = np.asarray(x500.airframe.position_m)[2, :2]
+    tilt = 0.1 * rotor / np.linalg.norm(rotor)  # J_z > J_xy: toward the failed rotor
+    measured = {}
+    for axis in (None, (tilt[0], tilt[1], math.sqrt(1 - 0.1**2))):
+        controller = rf.IndiController(x500.airframe, position=HOVER, gains=indi_gains(), spin_axis=axis, spin_axis_time_s=1.0)
+        run = sim.run(rf.State(position=HOVER), 16.0, controller=controller, faults=faults)
+        assert not run.events
+        spin = np.abs(run.omega[:, 2])
+        end, before = spin[-1], spin[np.searchsorted(run.t, run.t[-1] - 5.0)]
+        altitude, horizontal = _hold_verdict(run, 1.0, np.tile(HOVER, (run.t.size, 1)))
+        measured[axis is not None] = (float(end), float(end - before), altitude, horizontal)
+    assert measured[False][0] > 60.0 and measured[False][1] > 15.0, measured
+    assert measured[True][0] < 40.0 and abs(measured[True][1]) < 2.0, measured
+    assert measured[True][2] < 0.2 and measured[True][3] < 0.5, measured
+
+
+def test_a_spin_axis_is_checked_and_named():
+    quad = rf.Airframe.preset("ke-quadcopter")
+    for kwargs, error, message in [
+        (dict(spin_axis=(1.0, 0.0, 0.2)), ValueError, r"^spin_axis: must be a non-zero axis"),
+        (dict(spin_axis=(0.0, 0.0)), ValueError, r"^spin_axis: expected 3 entries"),
+        (dict(spin_axis=(0.0, 0.0, 1.0), spin_rate_rad_s=math.nan), ValueError, r"^spin_rate_rad_s"),
+        (dict(spin_axis=(0.0, 0.0, 1.0), spin_axis_time_s="soon"), TypeError, r"^spin_axis_time_s"),
+    ]:
+        with pytest.raises(error, match=message):
+            rf.IndiController(quad, **kwargs)
+    c = rf.IndiController(quad, spin_axis=(0.0, 0.1, -1.0), spin_axis_time_s=2.0)
+    assert (c.spin_axis, c.spin_axis_time_s, c.spin_rate_rad_s) == ((0.0, 0.1, -1.0), 2.0, 0.0)

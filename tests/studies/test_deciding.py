@@ -666,3 +666,19 @@ def test_a_dataset_whose_draws_no_longer_reproduce_reads_its_holds_as_flown(tmp_
         D.read_deciding(bare)
     stored = D.read_deciding(certified)
     assert not stored.holds_rejudged and stored.certified and set(stored.columns["certified"].tolist()) <= set(D.CERTIFIED)
+
+
+def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
+    """INDI's relaxed hover in the campaign (D.indi_spin_axis): on the x500 (k_r = 0) after
+    one rotor, its axis tilted INDI_SPIN_AXIS_TILT toward that rotor (J_z > J_xy), told at the
+    failure; none with rotational drag or for two opposing rotors."""
+    x500 = D.vehicle("px4-x500")
+    fault = rf.RotorFault(3, 2.5, efficiency=0.4)
+    axis = np.array(D.indi_spin_axis(x500, [fault]))
+    rotor = np.asarray(x500.airframe.position_m)[2, :2]
+    assert np.linalg.norm(axis) == pytest.approx(1.0) and axis[2] > 0
+    assert np.allclose(axis[:2], D.INDI_SPIN_AXIS_TILT * rotor / np.linalg.norm(rotor))
+    controller = D.CONTROLLERS["indi-controller"].build(x500, [fault])
+    assert controller.spin_axis == pytest.approx(tuple(axis)) and controller.spin_axis_time_s == 2.5 and controller.failures == ()
+    assert D.indi_spin_axis(D.vehicle("ke-quadcopter"), [fault]) is None
+    assert D.indi_spin_axis(x500, [rf.RotorFault(1, 2.5), rf.RotorFault(2, 2.5)]) is None

@@ -20,6 +20,8 @@ its equations and decisions are documented in ``crates/rfcore/src/control/indi/m
   the side of the output angle follows the inertia coupling measured from the gyro, since an
   inertia error of 10-20 % can turn the sign of ``1 + a = (2 J_xy - J_z) / J_xy``, which is small
   on a quadrotor).
+- A relaxed hover (``spin_axis``): a primary axis tilted from body z and a spin-rate loop about it,
+  for a vehicle without rotational drag whose spin otherwise grows without bound once yaw is given up.
 
 The simulator gives it the gyro, the specific force and the rotor thrusts each control step (truth,
 or the noisy body rates with sensor noise).
@@ -57,6 +59,13 @@ def _vector(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
     return (float(arr[0]), float(arr[1]), float(arr[2]))
 
 
+def _body_axis(field: str, value: npt.ArrayLike) -> tuple[float, float, float]:
+    arr = float_array(field, value, 1)
+    if arr.shape != (3,):
+        raise ValueError(f"{field}: expected 3 entries (body x, y, z), got {arr.shape[0]}")
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
 def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
     """``(rotor, time_s)`` with a 1-based rotor, or a :class:`rotorfault.RotorFault` of a complete
     loss: the (1-based) rotor and the time the controller is told."""
@@ -87,6 +96,12 @@ class IndiController:
     time). ``gains``: :class:`IndiGains`. The reference: ``setpoints`` ``[(time_s, position)]`` or
     ``[(time_s, position, velocity)]`` (NED; from each time on the position moves at the velocity),
     or one ``position`` (NED, m) and ``velocity`` (NED, m/s; ``velocity=(2, 0, 0)`` is forward flight at 2 m/s).
+    ``spin_axis``: a relaxed hover to fly from ``spin_axis_time_s`` (s) on: this axis (body FRD,
+    unit or not, within 60 degrees of body z either way) becomes the primary axis and a spin-rate
+    loop about it (``IndiGains.k_spin``, 1/s; weight ``spin_weight``, after thrust and attitude)
+    aims at ``spin_rate_rad_s`` (rad/s, its magnitude, in the direction the vehicle spins; 0: the
+    slowest spin the rotors allow). What a vehicle without rotational drag needs, whose spin
+    otherwise grows without bound once yaw is given up (``crates/rfcore/src/control/indi/relaxed.rs``).
 
     Examples:
 
@@ -108,6 +123,9 @@ class IndiController:
         position: npt.ArrayLike = (0.0, 0.0, 0.0),
         velocity: npt.ArrayLike = (0.0, 0.0, 0.0),
         setpoints: Sequence[Any] | None = None,
+        spin_axis: npt.ArrayLike | None = None,
+        spin_axis_time_s: float = 0.0,
+        spin_rate_rad_s: float = 0.0,
     ) -> None:
         self.airframe = require_airframe(airframe)
         if gains is None:
@@ -133,6 +151,10 @@ class IndiController:
                  _vector(f"setpoints[{k}].velocity", moving))
             )
         self.setpoints = tuple(parsed)
+        #: The relaxed hover's spin axis (body frame) flown from ``spin_axis_time_s`` on, or ``None``.
+        self.spin_axis = None if spin_axis is None else _body_axis("spin_axis", spin_axis)
+        self.spin_axis_time_s = real("spin_axis_time_s", spin_axis_time_s)
+        self.spin_rate_rad_s = real("spin_rate_rad_s", spin_rate_rad_s)
         # Validates everything now.
         self._modes = self.core(1.0 / 400.0).failure_modes()
 
@@ -143,6 +165,7 @@ class IndiController:
             failures=[(rotor - 1, time) for rotor, time in self.failures],
             setpoints=[(t, list(p), list(v)) for t, p, v in self.setpoints],
             dt_s=real("dt_s", dt_s),
+            relaxed_spin=None if self.spin_axis is None else (self.spin_axis_time_s, list(self.spin_axis), self.spin_rate_rad_s),
         )
 
     @property

@@ -37,6 +37,14 @@ Decisions (gaps of the issue, stated once):
   tilt limit and a velocity integral against the wind); Ke's passive
   controller is told nothing (``uniform-passive-ftc``: Table IV's ``ke-hil`` gains; ``ke-robust``:
   the same controller with the ``ke-robust`` gains, tuned over partial and total faults);
+- INDI on a quadrotor without rotational drag (PX4's x500 as imported, ``k_r = 0``) that loses one
+  rotor, totally or partly, is also told which rotor and when (not how much): it flies a relaxed
+  hover from then on, its primary axis tilted :data:`INDI_SPIN_AXIS_TILT` toward that rotor and its
+  spin loop at its slowest (:func:`indi_spin_axis`). With yaw given up and nothing damping the spin,
+  the spin otherwise grows without bound and the hold rule refuses it: measured on the campaign's own
+  draws of the x500, one rotor (the revision-2 campaign's runs certified survivable that no
+  controller held: hover 0 -> 37 of 40, forward 0 -> 38 of 40; INDI's held ones 40 of 40 in both,
+  held before and after);
 - the relaxed hover LQR (``relaxed-hover-feedback``) is passive FTC with the failure known in
   advance: which rotors, their efficiency (nominal: not the run's thrust-coefficient error) and
   the failure time. Until the failure the healthy vehicle's hover LQI flies it (:func:`healthy_lqi`:
@@ -287,11 +295,35 @@ def indi_gains() -> Any:
     return IndiGains(max_tilt_rad=math.radians(20.0), k_i_xy=0.5, given_up_yaw_axis_tilt=0.2)
 
 
+#: INDI's spin-axis tilt on a vehicle without rotational drag (:func:`indi_spin_axis`): the x-y
+#: length of the unit primary axis (Sun's ``axis_tilt``, 0 to 0.2).
+INDI_SPIN_AXIS_TILT = 0.1
+
+
+def indi_spin_axis(v: CampaignVehicle, faults: list[RotorFault]) -> tuple[float, float, float] | None:
+    """The relaxed hover's spin axis INDI flies after ``faults`` (body FRD, unit), or ``None``: on a
+    quadrotor without rotational drag (``k_r = 0``: nothing settles a spin, so with yaw given up it
+    grows without bound) that loses one rotor, the primary axis tilted by
+    :data:`INDI_SPIN_AXIS_TILT` toward the failed rotor (away from it when ``J_z < J_xy``: Sun's
+    ``axis_tilt`` rule), flown with the spin loop at its slowest (``spin_rate_rad_s=0``;
+    ``crates/rfcore/src/control/indi/relaxed.rs``). ``None`` with rotational drag (the given-up yaw
+    settles by itself, as flown before) and for two opposing rotors (one torque axis left, Sun's
+    output redefinition)."""
+    if v.rotational_drag_n_m_s > 0.0 or v.airframe.rotor_count != 4 or len(faults) != 1:
+        return None
+    position = np.asarray(v.airframe.position_m, dtype=np.float64)[faults[0].rotor - 1, :2]
+    j = np.asarray(v.airframe.inertia_kg_m2, dtype=np.float64)
+    xy = position / scaled_norm(position) * INDI_SPIN_AXIS_TILT * np.sign(j[2] - 0.5 * (j[0] + j[1]))
+    return (float(xy[0]), float(xy[1]), math.sqrt(1.0 - INDI_SPIN_AXIS_TILT**2))
+
+
 def _indi(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     from ..control import IndiController
 
-    # Told of total losses only (the controller's rule); a partial loss reaches it through the measurements.
-    return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M, gains=indi_gains())
+    # Told of total losses only (the controller's rule); a partial loss reaches it through the
+    # measurements, and which rotor it is only through the spin axis (indi_spin_axis).
+    return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M, gains=indi_gains(),
+                          spin_axis=indi_spin_axis(v, faults), spin_axis_time_s=min((f.time for f in faults), default=0.0))
 
 
 def _ke_robust(v: CampaignVehicle, faults: list[RotorFault]) -> Any:

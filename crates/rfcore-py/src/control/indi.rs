@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use rfcore::control::indi::{
-    DetectedFailure, FailureMode, IndiController, IndiGains, Setpoint, YawMode,
+    DetectedFailure, FailureMode, IndiController, IndiGains, RelaxedSpin, Setpoint, YawMode,
 };
 
 use crate::airframe::PyAirframe;
@@ -98,7 +98,9 @@ indi_gains!(
     mismatch_time_constant_s,
     actuator_time_constant_s,
     given_up_yaw_weight,
-    min_yaw_authority
+    min_yaw_authority,
+    k_spin,
+    spin_weight
 );
 
 /// How the controller flies one set of failed rotors (`rotorfault.control.indi.IndiFailureMode`:
@@ -274,7 +276,8 @@ pickle_protocol!(PyIndiFailureMode, {
 
 /// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`
-/// (NED), times strictly increasing.
+/// (NED), times strictly increasing; `relaxed_spin`: `(time_s, spin_axis, spin_rate_rad_s)`, a
+/// relaxed hover flown from `time_s` on (the core's `RelaxedSpin`).
 #[pyclass(name = "IndiController", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiController {
     pub(crate) inner: IndiController,
@@ -283,13 +286,14 @@ pub struct PyIndiController {
 #[pymethods]
 impl PyIndiController {
     #[new]
-    #[pyo3(signature = (airframe, *, gains, failures, setpoints, dt_s))]
+    #[pyo3(signature = (airframe, *, gains, failures, setpoints, dt_s, relaxed_spin=None))]
     fn new(
         airframe: &PyAirframe,
         gains: &PyIndiGains,
         failures: Vec<(usize, f64)>,
         setpoints: Vec<(f64, [f64; 3], [f64; 3])>,
         dt_s: f64,
+        relaxed_spin: Option<(f64, [f64; 3], f64)>,
     ) -> PyResult<Self> {
         let failures = failures
             .into_iter()
@@ -303,8 +307,12 @@ impl PyIndiController {
                 velocity_m_s,
             })
             .collect();
-        let inner = IndiController::new(&airframe.inner, gains.inner, failures, setpoints, dt_s)
+        let mut inner = IndiController::new(&airframe.inner, gains.inner, failures, setpoints, dt_s)
             .map_err(to_py_err)?;
+        if let Some((time_s, axis, rate)) = relaxed_spin {
+            let spin = RelaxedSpin::new(time_s, axis, rate).map_err(to_py_err)?;
+            inner = inner.with_relaxed_spin(spin);
+        }
         Ok(PyIndiController { inner })
     }
 

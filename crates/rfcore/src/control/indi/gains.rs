@@ -119,6 +119,16 @@ pub struct IndiGains {
     /// the healthy vehicle's yaw torque at hover, in both directions: 0.1 (ours; Sun's quadrotor
     /// cases give yaw up whatever the fraction).
     pub min_yaw_authority: f64,
+    /// Gain of the spin-rate loop while a relaxed hover is flown
+    /// ([`crate::control::indi::RelaxedSpin`]), 1/s: the spin acceleration about the spin axis
+    /// asked is `k_spin (r* - r)`. 1.0 (ours): a vehicle without rotational drag has only its
+    /// rotors' drag torque to spin up with, a few rad/s^2 on PX4's x500, so a faster loop only
+    /// saturates.
+    pub k_spin: f64,
+    /// Weight of that spin row in the incremental allocation, in place of the yaw row's: below
+    /// thrust and reduced attitude (weight 1), so the spin rate gives way when the rotors cannot
+    /// meet every row. 0.01 (ours).
+    pub spin_weight: f64,
 }
 
 impl Default for IndiGains {
@@ -148,6 +158,8 @@ impl Default for IndiGains {
             given_up_yaw_weight: 1e-4,
             yaw: YawMode::Auto,
             min_yaw_authority: 0.1,
+            k_spin: 1.0,
+            spin_weight: 0.01,
         }
     }
 }
@@ -189,6 +201,8 @@ impl IndiGains {
         for (field, value) in [
             ("k_i_xy", self.k_i_xy),
             ("k_r", self.k_r),
+            ("k_spin", self.k_spin),
+            ("spin_weight", self.spin_weight),
             ("given_up_yaw_weight", self.given_up_yaw_weight),
             ("actuator_time_constant_s", self.actuator_time_constant_s),
             ("integral_limit_m", self.integral_limit_m),
@@ -278,6 +292,8 @@ mod tests {
             ("k_att_p", |g, v| g.k_att_p = v, 0.0),
             ("k_att_d", |g, v| g.k_att_d = v, f64::INFINITY),
             ("k_r", |g, v| g.k_r = v, -5.0),
+            ("k_spin", |g, v| g.k_spin = v, -1.0),
+            ("spin_weight", |g, v| g.spin_weight = v, f64::NAN),
             (
                 "filter_frequency_rad_s",
                 |g, v| g.filter_frequency_rad_s = v,

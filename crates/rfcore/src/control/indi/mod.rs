@@ -102,6 +102,9 @@
 //!   pitch torque (the hover this law flies, spinning about the thrust axis) is refused at
 //!   construction, naming `failures`; a relaxed hover about a tilted spin axis (Mueller and
 //!   D'Andrea), which two adjacent or three lost rotors of a quadrotor need, is not attempted.
+//! - **A relaxed hover** ([`RelaxedSpin`], [`IndiController::with_relaxed_spin`]): told a spin
+//!   axis, from its time on the law holds that axis up and regulates the spin about it (what a
+//!   vehicle without rotational drag needs once yaw is given up; `relaxed.rs`).
 //!
 //! # Samples and their substitutes
 //! [`Controller::command_with`] reads the gyro, the specific force and the rotor thrusts actually
@@ -141,11 +144,13 @@ use crate::state::{ControllerInput, RigidBodyState};
 mod gains;
 mod increment;
 mod modes;
+mod relaxed;
 
 pub use gains::{sun_output_angle_rad, IndiGains, YawMode};
 use increment::incremental_allocation;
 pub use modes::FailureMode;
 use modes::{yaw_authority, Mode};
+pub use relaxed::RelaxedSpin;
 
 /// Floor on `n3z` in the thrust row of `G` (the tilt at which it binds: 87 degrees).
 pub const MIN_N3Z: f64 = 0.05;
@@ -214,6 +219,8 @@ struct Memory {
     coupling_sums: [[f64; 2]; 2],
     /// Single axis: flying the other sign of `delta` (`Mode::rotation_flipped`).
     output_flipped: bool,
+    /// The relaxed hover's spin sign once latched (`RelaxedSpin::target`), 0 before.
+    spin_sign: f64,
 }
 
 /// The INDI fault-tolerant controller (module docs). Rotor commands are thrusts, N.
@@ -235,6 +242,8 @@ pub struct IndiController {
     mode_counts: Vec<usize>,
     active: ActiveSet,
     memory: Memory,
+    /// A relaxed hover to fly from its time on ([`RelaxedSpin`]).
+    relaxed: Option<RelaxedSpin>,
 }
 
 impl IndiController {
@@ -350,7 +359,20 @@ impl IndiController {
             mode_counts,
             active: ActiveSet::cold(first),
             memory: Memory::default(),
+            relaxed: None,
         })
+    }
+
+    /// This controller flying `relaxed` from its time on ([`RelaxedSpin`]: its axis as the
+    /// primary axis, a spin-rate loop in place of the yaw row).
+    pub fn with_relaxed_spin(mut self, relaxed: RelaxedSpin) -> Self {
+        self.relaxed = Some(relaxed);
+        self
+    }
+
+    /// The relaxed hover this controller flies, if any.
+    pub fn relaxed_spin(&self) -> Option<RelaxedSpin> {
+        self.relaxed
     }
 
     /// How each failure set is flown: `[0]` the healthy vehicle, then one per detection time (the
@@ -678,14 +700,29 @@ impl IndiController {
         let h = rt * z_f;
         let lambda = rt * z_rate;
         let h_dot = lambda + h.cross(&omega);
-        let n = mode.primary_axis;
+        let relaxed = self.relaxed.filter(|r| t_s >= r.time_s);
+        let n = relaxed.map_or(mode.primary_axis, |r| r.axis());
         let y = Vector2::new(h.x - n.x, h.y - n.y);
         let y_dot = h_dot.xy();
         let kinematic = (h_dot.cross(&omega) + lambda.cross(&omega) + rt * z_acc).xy();
         let gains = &self.gains;
         let nu_y = -y * gains.k_att_p - y_dot * gains.k_att_d;
         let b_att = nu_y - kinematic - h.cross(&omega_dot_f).xy();
-        let b_yaw = -gains.k_r * omega.z - omega_dot_f.z;
+        let (b_yaw, weights, saturated_weights) = match relaxed {
+            // The spin-rate row on `n . omega'` (relaxed.rs), below thrust and attitude.
+            Some(r) => {
+                let spin = n.dot(&omega);
+                let target = r.target(spin, &mut mem.spin_sign);
+                let mut w = mode.weights;
+                w[3] = gains.spin_weight;
+                (gains.k_spin * (target - spin) - n.dot(&omega_dot_f), w, w)
+            }
+            None => (
+                -gains.k_r * omega.z - omega_dot_f.z,
+                mode.weights,
+                mode.saturated_weights,
+            ),
+        };
         let b_z = a_des.z - vertical_f;
 
         // Step 4-5: G dT = b over the healthy rotors.
@@ -701,7 +738,7 @@ impl IndiController {
             g_rows[0][c] = -n3z / self.mass_kg * thrust_entry;
             g_rows[1][c] = rows[0][0] * att.x + rows[0][1] * att.y;
             g_rows[2][c] = rows[1][0] * att.x + rows[1][1] * att.y;
-            g_rows[3][c] = a.z;
+            g_rows[3][c] = if relaxed.is_some() { n.dot(a) } else { a.z };
         }
         let b = [
             b_z,
@@ -719,8 +756,8 @@ impl IndiController {
         }
         let increment = incremental_allocation(
             &g_rows,
-            &mode.weights,
-            &mode.saturated_weights,
+            &weights,
+            &saturated_weights,
             &b,
             &lower[..k],
             &upper[..k],

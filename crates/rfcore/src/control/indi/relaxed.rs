@@ -1,0 +1,146 @@
+//! INDI flying a relaxed hover (Mueller and D'Andrea, IJRR 2016): after a failure that leaves no
+//! static hover, the vehicle spins at a constant rate about an axis `n` fixed in the body and
+//! tilted from body z, and `n` points up.
+//!
+//! **Why the law needs it.** With yaw given up the law holds the thrust axis (body z) up and lets
+//! the rotors' drag torque spin the vehicle; a vehicle with rotational damping (`k_r > 0`) settles
+//! at the spin where the damping balances that torque. Without it (PX4's x500 as imported: `k_r =
+//! 0`) nothing balances it: the spin grows linearly for as long as the vehicle flies (x500, rotor
+//! 3 at 43 %: 6.4 rad/s^2, 160 rad/s 25 s after the failure). A steady spin `omega = r n` needs
+//! the rotors' torque to equal the gyroscopic one, `tau = r^2 n x (J n)`, whose component along
+//! `n` is zero; for `n = z` it is zero altogether, a static hover the failure excludes. Tilted,
+//! `n x (J n) = (J_z - J_xy) n_z (n_y, -n_x, 0)` (principal `J`, `J_x = J_y`): the gyroscopic
+//! torque carries a roll/pitch torque perpendicular to the tilt that grows with `r^2`, so the
+//! rotors can hold the weight with the roll/pitch torque the failure forces on them and no yaw
+//! torque left over. Tilted toward the failed rotor of a quadrotor when `J_z > J_xy` (Sun's
+//! `axis_tilt` rule, [`crate::control::indi::IndiGains::primary_axis_tilt`]), that torque is the
+//! one the weak rotor's diagonal makes.
+//!
+//! **What the law does with it** (from [`RelaxedSpin::time_s`] on): the reduced attitude holds
+//! `n` (in place of the failure mode's primary axis) along the wanted thrust direction, and the
+//! yaw row becomes a spin-rate row on `n . omega'`, `nu = k_spin (r* - n . omega)`, weighted
+//! [`crate::control::indi::IndiGains::spin_weight`] (after thrust and reduced attitude). With
+//! `r* = 0` the row slows the spin until the rotors cannot slow it further without giving up
+//! thrust or attitude: the spin settles at the slowest relaxed hover the tilt allows (the
+//! failure spins the vehicle up to it, the row holds it from above), bounded whatever the
+//! vehicle's errors, which a relaxed hover designed on the nominal vehicle is not (x500, rotor 3
+//! at 43 %: the nominal design at 40 % spins at 200 rad/s with 0.1 degrees of tilt, the run's
+//! own vehicle at 37 rad/s with 4.4 degrees). With `r* > 0` the
+//! gyroscopic torque depends on `r^2`: both spin directions are relaxed hovers (the rotors'
+//! gyroscopic moment, small, breaks the tie), and the failure itself starts the vehicle spinning
+//! one way, so `r*` takes the sign of the measured spin, latched once it passes
+//! [`SPIN_LATCH_SHARE`] of `r*`: asking for the other direction would have the rotors stop and
+//! reverse the spin they cannot stop.
+
+use nalgebra::Vector3;
+
+use crate::error::{require_finite, Result, RfError};
+
+/// The measured spin's sign is latched as the target's once `|n . omega|` passes this share of
+/// `|r*|` (below it the target follows the measured sign, zero at zero).
+pub const SPIN_LATCH_SHARE: f64 = 0.25;
+/// Smallest `n_z` of the spin axis (oriented to body z): the thrust must lift along it.
+pub const MIN_SPIN_AXIS_Z: f64 = 0.5;
+
+/// A relaxed hover for the INDI law to fly from `time_s` on (module docs): `spin_axis` in the body
+/// frame (either orientation; normalised, oriented to positive z) and the spin rate about it, rad/s
+/// (its magnitude is the target, 0 the slowest spin the rotors allow; the sign comes from the
+/// flight).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelaxedSpin {
+    pub time_s: f64,
+    pub spin_axis: [f64; 3],
+    pub spin_rate_rad_s: f64,
+}
+
+impl RelaxedSpin {
+    /// Checked: finite values, a non-zero axis within `acos(MIN_SPIN_AXIS_Z)` of body z (either
+    /// way); the spin rate's sign is ignored.
+    pub fn new(time_s: f64, spin_axis: [f64; 3], spin_rate_rad_s: f64) -> Result<Self> {
+        require_finite("spin_axis_time_s", time_s)?;
+        for (i, v) in spin_axis.iter().enumerate() {
+            require_finite(&format!("spin_axis[{i}]"), *v)?;
+        }
+        require_finite("spin_rate_rad_s", spin_rate_rad_s)?;
+        let axis = Vector3::from(spin_axis);
+        let norm = axis.norm();
+        if !(norm > 0.0) || axis.z.abs() < MIN_SPIN_AXIS_Z * norm {
+            return Err(RfError::invalid(
+                "spin_axis",
+                format!(
+                    "must be a non-zero axis whose z component is at least {MIN_SPIN_AXIS_Z} of \
+                     its length (the thrust lifts along it), got {spin_axis:?}"
+                ),
+            ));
+        }
+        let unit = axis * (axis.z.signum() / norm);
+        Ok(RelaxedSpin {
+            time_s,
+            spin_axis: [unit.x, unit.y, unit.z],
+            spin_rate_rad_s: spin_rate_rad_s.abs(),
+        })
+    }
+
+    /// The spin axis, unit, positive z.
+    pub fn axis(&self) -> Vector3<f64> {
+        Vector3::from(self.spin_axis)
+    }
+
+    /// The target spin rate about the axis, rad/s, for the measured `spin_rad_s`; `latched` keeps
+    /// the chosen sign (0 until chosen).
+    pub(super) fn target(&self, spin_rad_s: f64, latched: &mut f64) -> f64 {
+        if *latched == 0.0
+            && self.spin_rate_rad_s > 0.0
+            && spin_rad_s.abs() >= SPIN_LATCH_SHARE * self.spin_rate_rad_s
+        {
+            *latched = spin_rad_s.signum();
+        }
+        let sign = if *latched != 0.0 {
+            *latched
+        } else if spin_rad_s == 0.0 {
+            0.0
+        } else {
+            spin_rad_s.signum()
+        };
+        sign * self.spin_rate_rad_s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_axis_is_normalised_to_positive_z_and_bad_values_name_their_field() {
+        let s = RelaxedSpin::new(1.0, [0.0, 0.6, -0.8], -30.0).unwrap();
+        assert!((s.axis() - Vector3::new(0.0, -0.6, 0.8)).norm() < 1e-15);
+        assert_eq!(s.spin_rate_rad_s, 30.0);
+        for (args, field) in [
+            ((f64::NAN, [0.0, 0.0, 1.0], 1.0), "spin_axis_time_s"),
+            ((0.0, [0.0, 0.0, 0.0], 1.0), "spin_axis"),
+            ((0.0, [1.0, 0.0, 0.4], 1.0), "spin_axis"),
+            ((0.0, [0.0, f64::INFINITY, 1.0], 1.0), "spin_axis[1]"),
+            ((0.0, [0.0, 0.0, 1.0], f64::NAN), "spin_rate_rad_s"),
+        ] {
+            let err = RelaxedSpin::new(args.0, args.1, args.2)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(field), "{err}");
+        }
+    }
+
+    #[test]
+    fn the_target_follows_the_measured_sign_until_latched() {
+        let s = RelaxedSpin::new(0.0, [0.0, 0.0, 1.0], 40.0).unwrap();
+        let mut latched = 0.0;
+        assert_eq!(s.target(0.0, &mut latched), 0.0);
+        assert_eq!(s.target(-1.0, &mut latched), -40.0);
+        assert_eq!(s.target(2.0, &mut latched), 40.0);
+        assert_eq!(latched, 0.0);
+        assert_eq!(s.target(-10.0, &mut latched), -40.0);
+        assert_eq!(latched, -1.0);
+        assert_eq!(s.target(5.0, &mut latched), -40.0);
+        let slowest = RelaxedSpin::new(0.0, [0.0, 0.0, 1.0], 0.0).unwrap();
+        assert_eq!(slowest.target(30.0, &mut latched), 0.0);
+    }
+}
