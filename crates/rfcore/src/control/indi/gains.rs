@@ -274,7 +274,7 @@ mod tests {
     fn the_defaults_pass_and_every_rule_names_its_gain() {
         IndiGains::default().check().unwrap();
         type Set = fn(&mut IndiGains, f64);
-        let cases: [(&str, Set, f64); 26] = [
+        let cases: [(&str, Set, f64); 28] = [
             ("k_p_xy", |g, v| g.k_p_xy = v, 0.0),
             ("k_v_xy", |g, v| g.k_v_xy = v, -1.0),
             ("k_i_xy", |g, v| g.k_i_xy = v, -0.1),

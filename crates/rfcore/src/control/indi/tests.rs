@@ -1,0 +1,220 @@
+//! Unit tests of the INDI law (split from `mod.rs` to keep it readable in one sitting).
+
+use super::*;
+use nalgebra::UnitQuaternion;
+
+const DT: f64 = 1.0 / 400.0;
+
+fn hover_state() -> RigidBodyState {
+    RigidBodyState {
+        position_m: Vector3::new(0.0, 0.0, -10.0),
+        ..RigidBodyState::at_rest()
+    }
+}
+
+fn controller(preset: &str, failures: Vec<DetectedFailure>) -> IndiController {
+    let airframe = crate::fixtures::preset(preset);
+    IndiController::new(
+        &airframe,
+        IndiGains::default(),
+        failures,
+        vec![Setpoint::hold(0.0, [0.0, 0.0, -10.0])],
+        DT,
+    )
+    .unwrap()
+}
+
+#[test]
+fn hover_at_the_setpoint_commands_the_hover_thrusts_with_and_without_samples() {
+    let airframe = crate::fixtures::preset("hexa-ppnnpn");
+    let mut c = controller("hexa-ppnnpn", vec![]);
+    let hover = c.failure_modes()[0].hover_thrust_n.clone();
+    let state = hover_state();
+    let force = Vector3::new(0.0, 0.0, -airframe.gravity_m_s2());
+    let with = ControllerInput {
+        state: &state,
+        gyro_rad_s: Some(Vector3::zeros()),
+        specific_force_m_s2: Some(force),
+        rotor_thrust_n: Some(&hover),
+    };
+    let mut out = [0.0; 6];
+    for k in 0..200 {
+        c.command_with(k as f64 * DT, &with, &mut out).unwrap();
+        for (t, h) in out.iter().zip(&hover) {
+            assert!((t - h).abs() < 1e-9, "{k}: {out:?} vs {hover:?}");
+        }
+    }
+    c.reset();
+    for k in 0..200 {
+        c.command(k as f64 * DT, &state, &mut out).unwrap();
+        for (t, h) in out.iter().zip(&hover) {
+            assert!((t - h).abs() < 1e-9, "{k}: {out:?} vs {hover:?}");
+        }
+    }
+}
+
+#[test]
+fn a_detected_failure_switches_the_allocation_at_its_time_and_commands_the_rotor_to_zero() {
+    let failure = DetectedFailure {
+        rotor: 0,
+        time_s: 0.5,
+    };
+    let mut c = controller("octo-x", vec![failure]);
+    let modes = c.failure_modes();
+    assert_eq!((modes.len(), modes[1].failed.clone()), (2, vec![0]));
+    let state = hover_state();
+    let mut out = [0.0; 8];
+    let mut before = [0.0; 8];
+    for k in 0..400 {
+        let t = k as f64 * DT;
+        c.command(t, &state, &mut out).unwrap();
+        if t < 0.5 {
+            assert!(out[0] > 1.0, "{t}: {out:?}");
+            before = out;
+        } else {
+            assert_eq!(out[0], 0.0, "{t}");
+        }
+    }
+    assert!(
+        before.iter().all(|t| (t - before[1]).abs() < 1e-9),
+        "{before:?}"
+    );
+}
+
+#[test]
+fn failures_told_at_once_are_flown_together_and_no_set_between_them_is_judged() {
+    // Rotors 1 and 2 of ke-quadcopter (adjacent) told at once: the set is refused as a whole;
+    // rotors 1 and 3 at once: the single failure of rotor 1 between them is never built.
+    let together = |a: usize, b: usize| {
+        let airframe = crate::fixtures::preset("ke-quadcopter");
+        let failures = vec![
+            DetectedFailure {
+                rotor: a,
+                time_s: 1.0,
+            },
+            DetectedFailure {
+                rotor: b,
+                time_s: 1.0,
+            },
+        ];
+        let hold = vec![Setpoint::hold(0.0, [0.0; 3])];
+        IndiController::new(&airframe, IndiGains::default(), failures, hold, DT)
+    };
+    assert!(together(0, 1)
+        .unwrap_err()
+        .to_string()
+        .contains("rotor(s) 1, 2 failed"));
+    let c = together(0, 2).unwrap();
+    let failed: Vec<Vec<usize>> = c.failure_modes().into_iter().map(|m| m.failed).collect();
+    assert_eq!(failed, vec![vec![], vec![0, 2]]);
+    assert_eq!((c.mode_at(0.99), c.mode_at(1.0)), (0, 1));
+}
+
+#[test]
+fn the_same_measurements_give_the_same_commands_after_a_reset() {
+    let mut c = controller(
+        "ke-quadcopter",
+        vec![DetectedFailure {
+            rotor: 1,
+            time_s: 0.1,
+        }],
+    );
+    let states: Vec<RigidBodyState> = (0..300)
+        .map(|k| {
+            let t = k as f64 * DT;
+            RigidBodyState {
+                position_m: Vector3::new(0.1 * t.sin(), -0.2 * t, -10.0 + 0.05 * t),
+                velocity_m_s: Vector3::new(0.1 * t.cos(), -0.2, 0.05),
+                attitude: UnitQuaternion::from_euler_angles(0.05 * t, -0.03, 2.0 * t),
+                omega_rad_s: Vector3::new(0.05, 0.0, 2.0 + t),
+            }
+        })
+        .collect();
+    let times: Vec<f64> = (0..300).map(|k| k as f64 * DT).collect();
+    let first = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+    let second = crate::control::replay(&mut c, &times, &states, &crate::Cancel::never()).unwrap();
+    assert_eq!(first, second);
+    assert!(first.iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn bad_measurements_and_arguments_are_named() {
+    let mut c = controller("ke-quadcopter", vec![]);
+    let mut state = hover_state();
+    let mut out = [0.0; 4];
+    c.command(0.0, &state, &mut out).unwrap();
+    state.velocity_m_s.y = f64::NAN;
+    let err = c.command(DT, &state, &mut out).unwrap_err().to_string();
+    assert!(err.starts_with("measured:"), "{err}");
+    let state = hover_state();
+    let short = [1.0; 3];
+    let input = ControllerInput {
+        rotor_thrust_n: Some(&short),
+        ..ControllerInput::state_only(&state)
+    };
+    let err = c
+        .command_with(DT, &input, &mut out)
+        .unwrap_err()
+        .to_string();
+    assert!(err.starts_with("rotor_thrust_n:"), "{err}");
+    let input = ControllerInput {
+        gyro_rad_s: Some(Vector3::new(0.0, f64::INFINITY, 0.0)),
+        ..ControllerInput::state_only(&state)
+    };
+    assert!(c
+        .command_with(DT, &input, &mut out)
+        .unwrap_err()
+        .to_string()
+        .starts_with("measured:"));
+
+    let airframe = crate::fixtures::preset("ke-quadcopter");
+    let hold = vec![Setpoint::hold(0.0, [0.0; 3])];
+    let new = |failures: Vec<DetectedFailure>, setpoints: Vec<Setpoint>, dt: f64| {
+        IndiController::new(&airframe, IndiGains::default(), failures, setpoints, dt)
+            .unwrap_err()
+            .to_string()
+    };
+    let failure = |rotor, time_s| DetectedFailure { rotor, time_s };
+    for (err, field) in [
+        (new(vec![], hold.clone(), 0.0), "dt_s:"),
+        (new(vec![], vec![], DT), "setpoints:"),
+        (
+            new(
+                vec![],
+                vec![Setpoint::hold(1.0, [0.0; 3]), Setpoint::hold(1.0, [1.0; 3])],
+                DT,
+            ),
+            "setpoints[1].time:",
+        ),
+        (
+            new(vec![], vec![Setpoint::hold(0.0, [0.0, f64::NAN, 0.0])], DT),
+            "setpoints[0].position:",
+        ),
+        (
+            new(vec![failure(4, 1.0)], hold.clone(), DT),
+            "failures[0].rotor:",
+        ),
+        (
+            new(vec![failure(1, 1.0), failure(1, 2.0)], hold.clone(), DT),
+            "failures[1].rotor:",
+        ),
+        (
+            new(vec![failure(1, f64::NAN)], hold.clone(), DT),
+            "failures[0].time:",
+        ),
+        (
+            new(vec![failure(0, 1.0), failure(1, 2.0)], hold.clone(), DT),
+            "failures:",
+        ),
+    ] {
+        assert!(err.starts_with(field), "{field}: {err}");
+    }
+    let gains = IndiGains {
+        k_att_p: -1.0,
+        ..IndiGains::default()
+    };
+    let err = IndiController::new(&airframe, gains, vec![], hold, DT)
+        .unwrap_err()
+        .to_string();
+    assert!(err.starts_with("k_att_p:"), "{err}");
+}
