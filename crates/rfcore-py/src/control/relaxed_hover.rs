@@ -3,7 +3,9 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::control::hover_handover::{IntegralHover, RelaxedHoverHandover};
+use rfcore::control::hover_handover::{
+    relaxed_hover_handover, IntegralHover, RelaxedHoverHandover,
+};
 use rfcore::control::relaxed_hover::{
     RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim,
 };
@@ -170,7 +172,7 @@ impl PyRelaxedHoverFeedback {
                 )
                 .map_err(to_py_err)?;
                 Some(
-                    RelaxedHoverHandover::new(before, inner.clone(), *t, ratio)
+                    relaxed_hover_handover(before, inner.clone(), *t, ratio)
                         .map_err(to_py_err)?,
                 )
             }

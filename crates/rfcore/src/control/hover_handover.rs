@@ -20,6 +20,7 @@ use nalgebra::{DMatrix, Vector3};
 
 use super::linear::LinearFeedback;
 use super::relaxed_hover::RelaxedHoverFeedback;
+use super::switch::{FailureTimeSwitch, HandOver};
 use super::{require_finite_matrix, Controller};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::RigidBodyState;
@@ -116,77 +117,51 @@ impl Controller for IntegralHover {
     }
 }
 
+/// The hand-over at the failure: the relaxed hover's integrals started from the healthy loop's
+/// (module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct IntegralHandOver {
+    /// The relaxed hover's altitude integral (m s, up) per healthy altitude integral (m s, down).
+    altitude_ratio: f64,
+}
+
+impl HandOver<IntegralHover, RelaxedHoverFeedback> for IntegralHandOver {
+    fn hand_over(
+        &mut self,
+        before: &IntegralHover,
+        after: &mut RelaxedHoverFeedback,
+        measured: &RigidBodyState,
+    ) {
+        let altitude = self.altitude_ratio * before.integral_m_s().z;
+        after.start_integrals(altitude, measured);
+    }
+}
+
 /// [`IntegralHover`] until `failure_time_s`, then the relaxed hover LQR with its integrals started
-/// from the healthy loop's (module docs).
-#[derive(Debug, Clone)]
-pub struct RelaxedHoverHandover {
+/// from the healthy loop's: the failure-time switch with [`IntegralHandOver`].
+pub type RelaxedHoverHandover =
+    FailureTimeSwitch<IntegralHover, RelaxedHoverFeedback, IntegralHandOver>;
+
+/// The [`RelaxedHoverHandover`] (the switch's own checks: `failure_time_s` finite and >= 0, the
+/// same command count; `altitude_ratio` finite).
+pub fn relaxed_hover_handover(
     before: IntegralHover,
     after: RelaxedHoverFeedback,
     failure_time_s: f64,
-    /// The relaxed hover's altitude integral (m s, up) per healthy altitude integral (m s, down).
     altitude_ratio: f64,
-    handed_over: bool,
-}
-
-impl RelaxedHoverHandover {
-    pub fn new(
-        before: IntegralHover,
-        after: RelaxedHoverFeedback,
-        failure_time_s: f64,
-        altitude_ratio: f64,
-    ) -> Result<Self> {
-        if !(failure_time_s.is_finite() && failure_time_s >= 0.0) {
-            return Err(RfError::invalid(
-                "failure_time_s",
-                format!("must be finite and >= 0, got {failure_time_s}"),
-            ));
-        }
-        if !altitude_ratio.is_finite() {
-            return Err(RfError::invalid(
-                "altitude_ratio",
-                format!("must be finite, got {altitude_ratio}"),
-            ));
-        }
-        if before.command_count() != after.command_count() {
-            return Err(RfError::invalid(
-                "before_failure",
-                format!(
-                    "writes {} commands, the relaxed hover {}",
-                    before.command_count(),
-                    after.command_count()
-                ),
-            ));
-        }
-        Ok(RelaxedHoverHandover {
-            before,
-            after,
-            failure_time_s,
-            altitude_ratio,
-            handed_over: false,
-        })
+) -> Result<RelaxedHoverHandover> {
+    if !altitude_ratio.is_finite() {
+        return Err(RfError::invalid(
+            "altitude_ratio",
+            format!("must be finite, got {altitude_ratio}"),
+        ));
     }
-}
-
-impl Controller for RelaxedHoverHandover {
-    fn command_count(&self) -> usize {
-        self.after.command_count()
-    }
-    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
-        if t_s < self.failure_time_s {
-            return self.before.command(t_s, measured, out);
-        }
-        if !self.handed_over {
-            self.handed_over = true;
-            let altitude = self.altitude_ratio * self.before.integral_m_s().z;
-            self.after.start_integrals(altitude, measured);
-        }
-        self.after.command(t_s, measured, out)
-    }
-    fn reset(&mut self) {
-        self.before.reset();
-        self.after.reset();
-        self.handed_over = false;
-    }
+    FailureTimeSwitch::with_hand_over(
+        before,
+        after,
+        failure_time_s,
+        IntegralHandOver { altitude_ratio },
+    )
 }
 
 #[cfg(test)]
@@ -241,7 +216,7 @@ mod tests {
             ..Default::default()
         };
         let after = RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap();
-        let mut c = RelaxedHoverHandover::new(hover(-0.5), after, 1.0, -0.25).unwrap();
+        let mut c = relaxed_hover_handover(hover(-0.5), after, 1.0, -0.25).unwrap();
         // 0.4 m below for 1 s before the failure: healthy integral 0.4 m s (down).
         let state = RigidBodyState {
             position_m: Vector3::new(0.0, 0.0, 0.4),
@@ -251,7 +226,7 @@ mod tests {
         for k in 0..400 {
             c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
         }
-        assert!((c.before.integral_m_s().z - 0.399).abs() < 1e-12);
+        assert!((c.before().integral_m_s().z - 0.399).abs() < 1e-12);
         // At the failure, level: the relaxed altitude integral is -0.25 x 0.399 m s (up), so
         // u = 3 - 2 (z + 0.5 I) = 3 - 2 (-0.4 - 0.5 x 0.0998) and no horizontal integral.
         c.command(1.0, &state, &mut out).unwrap();
