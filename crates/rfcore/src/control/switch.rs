@@ -10,9 +10,9 @@ use crate::state::{ControllerInput, RigidBodyState};
 
 /// What the switch does once, at the first control step at or after the failure time, before
 /// `after` commands: carry state over from `before` (a bumpless hand-over of integrals,
-/// [`super::hover_handover`]). `measured` is that step's state.
+/// [`super::hover_handover`]).
 pub trait HandOver<B, A>: Send {
-    fn hand_over(&mut self, before: &B, after: &mut A, measured: &RigidBodyState);
+    fn hand_over(&mut self, before: &B, after: &mut A);
 }
 
 /// No hand-over: `after` starts from its own initial state.
@@ -20,7 +20,7 @@ pub trait HandOver<B, A>: Send {
 pub struct NoHandOver;
 
 impl<B, A> HandOver<B, A> for NoHandOver {
-    fn hand_over(&mut self, _before: &B, _after: &mut A, _measured: &RigidBodyState) {}
+    fn hand_over(&mut self, _before: &B, _after: &mut A) {}
 }
 
 /// `before` commands while `t < failure_time_s`, `after` from the first control step at or after
@@ -74,20 +74,23 @@ impl<B: Controller, A: Controller, H: HandOver<B, A>> FailureTimeSwitch<B, A, H>
     }
 
     /// The controller flying at `t_s` (handing over first at the switch).
-    fn active(&mut self, t_s: f64, measured: &RigidBodyState) -> &mut dyn Controller {
+    fn active(&mut self, t_s: f64) -> &mut dyn Controller {
         if t_s < self.failure_time_s {
             return &mut self.before;
         }
         if !self.handed_over {
             self.handed_over = true;
-            self.hand_over
-                .hand_over(&self.before, &mut self.after, measured);
+            self.hand_over.hand_over(&self.before, &mut self.after);
         }
         &mut self.after
     }
 
     pub fn before(&self) -> &B {
         &self.before
+    }
+
+    pub fn after(&self) -> &A {
+        &self.after
     }
 }
 
@@ -96,7 +99,7 @@ impl<B: Controller, A: Controller, H: HandOver<B, A>> Controller for FailureTime
         self.after.command_count()
     }
     fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
-        self.active(t_s, measured).command(t_s, measured, out)
+        self.active(t_s).command(t_s, measured, out)
     }
     fn command_with(
         &mut self,
@@ -104,7 +107,7 @@ impl<B: Controller, A: Controller, H: HandOver<B, A>> Controller for FailureTime
         input: &ControllerInput<'_>,
         out: &mut [f64],
     ) -> Result<()> {
-        self.active(t_s, input.state).command_with(t_s, input, out)
+        self.active(t_s).command_with(t_s, input, out)
     }
     fn reads_samples(&self) -> bool {
         self.before.reads_samples() || self.after.reads_samples()
@@ -141,12 +144,7 @@ mod tests {
     /// Counts its hand-overs.
     struct Counting(usize);
     impl HandOver<OpenLoop, OpenLoop> for Counting {
-        fn hand_over(
-            &mut self,
-            _before: &OpenLoop,
-            _after: &mut OpenLoop,
-            _measured: &RigidBodyState,
-        ) {
+        fn hand_over(&mut self, _before: &OpenLoop, _after: &mut OpenLoop) {
             self.0 += 1;
         }
     }
