@@ -238,7 +238,7 @@ class RelaxedHoverFeedback:
         if not np.all(np.isfinite(ratio)):
             raise ValueError("before_failure_integral_gain: no horizontal hand-over ratio (the healthy loop holds no steady "
                              "integral against a horizontal force)")
-        return ratio
+        return np.asarray(ratio, dtype=np.float64)
 
     def check_sampled(self, dt_s: float) -> float:
         """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
