@@ -5,7 +5,10 @@ pub(crate) mod relaxed_hover;
 
 use std::sync::OnceLock;
 
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -338,9 +341,7 @@ pickle_protocol!(PyAcaiBatch, {
     }
     #[getter]
     fn acai<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        kept(py, &self.acai_array, || {
-            Ok(PyArray1::from_slice(py, &self.inner.acai))
-        })
+        kept(py, &self.acai_array, || Ok(PyArray1::from_slice(py, &self.inner.acai)))
     }
     #[getter]
     fn hover_code<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i8>>> {

@@ -114,9 +114,7 @@ where
                     }
                 }
                 // The work panicked (its sender dropped): the scope re-raises the panic.
-                Err(RecvTimeoutError::Disconnected) => {
-                    return (Err(RfError::Interrupted), interrupt)
-                }
+                Err(RecvTimeoutError::Disconnected) => return (Err(RfError::Interrupted), interrupt),
             }
         }
     })
@@ -183,9 +181,7 @@ pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
         )));
     }
     value.extract::<f64>().map_err(|_| {
-        PyValueError::new_err(format!(
-            "{field}: must be finite, got a number too large for a float"
-        ))
+        PyValueError::new_err(format!("{field}: must be finite, got a number too large for a float"))
     })
 }
 
@@ -194,21 +190,13 @@ pub(crate) fn real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
 pub(crate) fn count(field: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
     use pyo3::types::{PyBool, PyInt};
     if value.is_instance_of::<PyBool>() || !value.is_instance_of::<PyInt>() {
-        return Err(PyTypeError::new_err(format!(
-            "{field}: expected an int, got {}",
-            value.get_type().name()?
-        )));
+        return Err(PyTypeError::new_err(format!("{field}: expected an int, got {}", value.get_type().name()?)));
     }
-    let wide: i128 = value.extract().map_err(|_| {
-        PyValueError::new_err(format!(
-            "{field}: must be a count >= 0 that fits in 64 bits"
-        ))
-    })?;
-    usize::try_from(wide).map_err(|_| {
-        PyValueError::new_err(format!(
-            "{field}: must be a count in [0, 2**64), got {wide}"
-        ))
-    })
+    let wide: i128 = value
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{field}: must be a count >= 0 that fits in 64 bits")))?;
+    usize::try_from(wide)
+        .map_err(|_| PyValueError::new_err(format!("{field}: must be a count in [0, 2**64), got {wide}")))
 }
 
 /// The field values of a settings object, by name.
@@ -226,11 +214,7 @@ pub(crate) fn settings_repr(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult
 }
 
 /// Equal type and equal fields (NaN fields compare unequal, as floats do).
-pub(crate) fn settings_eq(
-    a: &Bound<'_, PyAny>,
-    b: &Bound<'_, PyAny>,
-    fields: &[&str],
-) -> PyResult<bool> {
+pub(crate) fn settings_eq(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult<bool> {
     if !b.get_type().is(&a.get_type()) {
         return Ok(false);
     }
@@ -248,10 +232,7 @@ pub(crate) fn settings_hash(obj: &Bound<'_, PyAny>, fields: &[&str]) -> PyResult
 }
 
 /// Every field as a keyword argument (the constructor takes them back: copies and pickling).
-pub(crate) fn settings_kwargs<'py>(
-    obj: &Bound<'py, PyAny>,
-    fields: &[&str],
-) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn settings_kwargs<'py>(obj: &Bound<'py, PyAny>, fields: &[&str]) -> PyResult<Bound<'py, PyDict>> {
     let kwargs = PyDict::new(obj.py());
     for f in fields {
         kwargs.set_item(*f, obj.getattr(*f)?)?;
@@ -405,37 +386,16 @@ pub(crate) use settings_protocol;
 /// `N` real numbers for field `field` (`names` says what they are, e.g. `"w_f, w_p, w_q, w_r"`):
 /// a sequence of exactly `N`, each a real number (`<field>[k]: expected a real number`); the value
 /// rules are the core's.
-pub(crate) fn fixed_reals<const N: usize>(
-    field: &str,
-    names: &str,
-    value: &Bound<'_, PyAny>,
-) -> PyResult<[f64; N]> {
+pub(crate) fn fixed_reals<const N: usize>(field: &str, names: &str, value: &Bound<'_, PyAny>) -> PyResult<[f64; N]> {
     use pyo3::types::PyString;
-    let kind = || {
-        value
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_default()
-    };
-    let not_numbers = || {
-        PyTypeError::new_err(format!(
-            "{field}: expected {N} numbers ({names}), got {}",
-            kind()
-        ))
-    };
+    let kind = || value.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+    let not_numbers = || PyTypeError::new_err(format!("{field}: expected {N} numbers ({names}), got {}", kind()));
     if value.is_instance_of::<PyString>() {
         return Err(not_numbers());
     }
-    let items: Vec<Bound<'_, PyAny>> = value
-        .try_iter()
-        .map_err(|_| not_numbers())?
-        .collect::<PyResult<_>>()?;
+    let items: Vec<Bound<'_, PyAny>> = value.try_iter().map_err(|_| not_numbers())?.collect::<PyResult<_>>()?;
     if items.len() != N {
-        return Err(PyValueError::new_err(format!(
-            "{field}: expected {N} entries ({names}), got {}",
-            items.len()
-        )));
+        return Err(PyValueError::new_err(format!("{field}: expected {N} entries ({names}), got {}", items.len())));
     }
     let mut out = [0.0; N];
     for (k, item) in items.iter().enumerate() {
@@ -448,14 +408,8 @@ pub(crate) fn fixed_reals<const N: usize>(
 /// `rotorfault._util.deprecation.warn` (removed after one release).
 pub(crate) fn deprecated(py: Python<'_>, old: &str, new: &str) -> PyResult<()> {
     let message = format!("{old} is deprecated and will be removed in the next release; use {new}");
-    let message =
-        std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    PyErr::warn(
-        py,
-        &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(),
-        &message,
-        1,
-    )
+    let message = std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &message, 1)
 }
 
 /// The positional form of a class that was a Python dataclass (its fields in `fields` order),
@@ -483,20 +437,11 @@ pub(crate) fn deprecated_positional<'py>(
         "{class}(positional arguments) is deprecated and will be removed in the next release; use {class}({}=...)",
         fields[..args.len()].join("=..., ")
     );
-    let message =
-        std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    PyErr::warn(
-        py,
-        &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(),
-        &message,
-        2,
-    )?;
+    let message = std::ffi::CString::new(message).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyDeprecationWarning>(), &message, 2)?;
     for (k, value) in args.iter().enumerate() {
         if given[k].is_some() {
-            return Err(PyTypeError::new_err(format!(
-                "{class}: {} given by position and by keyword",
-                fields[k]
-            )));
+            return Err(PyTypeError::new_err(format!("{class}: {} given by position and by keyword", fields[k])));
         }
         given[k] = Some(value);
     }

@@ -8,23 +8,23 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use rfcore::flight::actuator::{Actuators, FixedPitch, Lag, VariablePitch, VariablePitchLags};
+use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::flight::model::state_vector_derivative;
 use rfcore::flight::simulation::{
-    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun,
-    DivergenceLimits, RotorFault, SensorNoise, SimulationConfig,
+    simulate_batch as core_batch, simulate_cancellable as core_simulate, BatchRun, DivergenceLimits,
+    RotorFault, SensorNoise, SimulationConfig,
 };
 use rfcore::flight::vehicle::{Drag, Vehicle};
-use rfcore::flight::vpp_preset::VariablePitchPreset;
 use rfcore::state::{RigidBodyState, STATE_DIM};
 
 use crate::airframe::PyAirframe;
 use crate::control::{boxed, CallableController, ControllerArg};
-use crate::convert::{
-    count, deprecated_positional, detached, fixed_reals, real, settings_class, settings_protocol,
-    slice1, to_py_err,
-};
-use crate::sensing::PySensing;
 use crate::trajectory::PyTrajectory;
+use crate::sensing::PySensing;
+use crate::convert::{
+    count, deprecated_positional, detached, fixed_reals, real, settings_class, settings_protocol, slice1,
+    to_py_err,
+};
 
 /// A real number for `field`, or `default` when not given.
 fn real_or(field: &str, value: Option<Bound<'_, PyAny>>, default: f64) -> PyResult<f64> {
@@ -52,11 +52,7 @@ pub struct PyFixedPitch {
 }
 
 impl PyFixedPitch {
-    const FIELDS: &'static [&'static str] = &[
-        "time_constant_s",
-        "rate_limit_n_s",
-        "thrust_coefficient_n_s2",
-    ];
+    const FIELDS: &'static [&'static str] = &["time_constant_s", "rate_limit_n_s", "thrust_coefficient_n_s2"];
 }
 
 settings_protocol!(PyFixedPitch, {
@@ -73,27 +69,12 @@ settings_protocol!(PyFixedPitch, {
         let [time_constant_s, rate_limit_n_s, thrust_coefficient_n_s2] = given;
         let d = Lag::none();
         let lag = Lag {
-            time_constant_s: real_or(
-                "actuator.time_constant_s",
-                time_constant_s,
-                d.time_constant_s,
-            )?,
-            rate_limit_per_s: real_or(
-                "actuator.rate_limit_n_s",
-                rate_limit_n_s,
-                d.rate_limit_per_s,
-            )?,
+            time_constant_s: real_or("actuator.time_constant_s", time_constant_s, d.time_constant_s)?,
+            rate_limit_per_s: real_or("actuator.rate_limit_n_s", rate_limit_n_s, d.rate_limit_per_s)?,
         };
-        let thrust_coefficient_n_s2 = real_or(
-            "actuator.thrust_coefficient_n_s2",
-            thrust_coefficient_n_s2,
-            0.0,
-        )?;
+        let thrust_coefficient_n_s2 = real_or("actuator.thrust_coefficient_n_s2", thrust_coefficient_n_s2, 0.0)?;
         FixedPitch::check_parameters(&lag, thrust_coefficient_n_s2).map_err(to_py_err)?;
-        Ok(PyFixedPitch {
-            lag,
-            thrust_coefficient_n_s2,
-        })
+        Ok(PyFixedPitch { lag, thrust_coefficient_n_s2 })
     }
     /// First-order lag of the thrust, s (0: none; Ke Table III: 0.025).
     #[getter]
@@ -149,9 +130,7 @@ impl PyVariablePitch {
 }
 
 fn required<'py>(field: &str, value: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
-    value.ok_or_else(|| {
-        pyo3::exceptions::PyTypeError::new_err(format!("{field}: required (no default)"))
-    })
+    value.ok_or_else(|| pyo3::exceptions::PyTypeError::new_err(format!("{field}: required (no default)")))
 }
 
 fn bounds(field: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<(f64, f64)> {
@@ -185,48 +164,24 @@ settings_protocol!(PyVariablePitch, {
             pitch_rate_limit_rad_s,
         ];
         deprecated_positional("VariablePitchActuator", Self::FIELDS, args, &mut given)?;
-        let [k, speed_bounds, pitch_bounds, speed_to_rad_s, speed_tau, speed_rate, pitch_tau, pitch_rate] =
-            given;
-        let coefficients =
-            fixed_reals::<4>("actuator.k", "k1, k2, k3, k4", &required("actuator.k", k)?)?;
+        let [k, speed_bounds, pitch_bounds, speed_to_rad_s, speed_tau, speed_rate, pitch_tau, pitch_rate] = given;
+        let coefficients = fixed_reals::<4>("actuator.k", "k1, k2, k3, k4", &required("actuator.k", k)?)?;
         let speed_bounds = bounds("actuator.speed_bounds", speed_bounds)?;
         let pitch_bounds = bounds("actuator.pitch_bounds", pitch_bounds)?;
         let speed_to_rad_s = real_or("actuator.speed_to_rad_s", speed_to_rad_s, 0.0)?;
         let d = VariablePitchLags::default();
         let lags = VariablePitchLags {
             speed: Lag {
-                time_constant_s: real_or(
-                    "actuator.speed_time_constant_s",
-                    speed_tau,
-                    d.speed.time_constant_s,
-                )?,
-                rate_limit_per_s: real_or(
-                    "actuator.speed_rate_limit_per_s",
-                    speed_rate,
-                    d.speed.rate_limit_per_s,
-                )?,
+                time_constant_s: real_or("actuator.speed_time_constant_s", speed_tau, d.speed.time_constant_s)?,
+                rate_limit_per_s: real_or("actuator.speed_rate_limit_per_s", speed_rate, d.speed.rate_limit_per_s)?,
             },
             pitch: Lag {
-                time_constant_s: real_or(
-                    "actuator.pitch_time_constant_s",
-                    pitch_tau,
-                    d.pitch.time_constant_s,
-                )?,
-                rate_limit_per_s: real_or(
-                    "actuator.pitch_rate_limit_rad_s",
-                    pitch_rate,
-                    d.pitch.rate_limit_per_s,
-                )?,
+                time_constant_s: real_or("actuator.pitch_time_constant_s", pitch_tau, d.pitch.time_constant_s)?,
+                rate_limit_per_s: real_or("actuator.pitch_rate_limit_rad_s", pitch_rate, d.pitch.rate_limit_per_s)?,
             },
         };
-        VariablePitch::check_parameters(
-            coefficients,
-            speed_bounds,
-            pitch_bounds,
-            speed_to_rad_s,
-            lags,
-        )
-        .map_err(to_py_err)?;
+        VariablePitch::check_parameters(coefficients, speed_bounds, pitch_bounds, speed_to_rad_s, lags)
+            .map_err(to_py_err)?;
         Ok(PyVariablePitch {
             coefficients,
             speed_bounds,
@@ -350,14 +305,8 @@ impl PyVariablePitchPreset {
     #[getter]
     fn actuator(&self) -> PyResult<PyVariablePitch> {
         let p = &self.inner;
-        VariablePitch::check_parameters(
-            p.coefficients,
-            p.speed_bounds,
-            p.pitch_bounds,
-            p.speed_to_rad_s,
-            p.lags(),
-        )
-        .map_err(to_py_err)?;
+        VariablePitch::check_parameters(p.coefficients, p.speed_bounds, p.pitch_bounds, p.speed_to_rad_s, p.lags())
+            .map_err(to_py_err)?;
         Ok(PyVariablePitch {
             coefficients: p.coefficients,
             speed_bounds: p.speed_bounds,
@@ -450,11 +399,7 @@ impl PySensorNoise {
 crate::convert::pickle_protocol!(PySensorNoise, {
     #[new]
     #[pyo3(signature = (*, relative_std, absolute_std, seed))]
-    fn new(
-        relative_std: f64,
-        absolute_std: [f64; STATE_DIM],
-        seed: &Bound<'_, PyAny>,
-    ) -> PyResult<Self> {
+    fn new(relative_std: f64, absolute_std: [f64; STATE_DIM], seed: &Bound<'_, PyAny>) -> PyResult<Self> {
         let seed = count("noise.seed", seed)? as u64;
         Ok(PySensorNoise {
             inner: SensorNoise {
@@ -488,17 +433,8 @@ pub struct PySimulationConfig {
 
 impl PySimulationConfig {
     const FIELDS: &'static [&'static str] = &[
-        "dt_s",
-        "substeps",
-        "duration_s",
-        "limits",
-        "ground_z_m",
-        "ground",
-        "wind_m_s",
-        "wind_profile",
-        "noise",
-        "sensing",
-        "record_every",
+        "dt_s", "substeps", "duration_s", "limits", "ground_z_m", "ground", "wind_m_s", "wind_profile", "noise",
+        "sensing", "record_every",
     ];
 }
 
@@ -600,11 +536,7 @@ crate::convert::pickle_protocol!(PySimulationConfig, {
     /// The wind's time profile: `(time_s, wind_m_s)` points (NED, m/s).
     #[getter]
     fn wind_profile(&self) -> Vec<(f64, [f64; 3])> {
-        self.inner
-            .wind_profile
-            .iter()
-            .map(|(t, w)| (*t, (*w).into()))
-            .collect()
+        self.inner.wind_profile.iter().map(|(t, w)| (*t, (*w).into())).collect()
     }
     /// The sensor noise (`None`: the truth, or `sensing`).
     #[getter]
@@ -780,24 +712,13 @@ pub fn simulate_batch<'py>(
     settles: Vec<Option<Vec<f64>>>,
     config: PyRef<'py, PySimulationConfig>,
 ) -> PyResult<Vec<Bound<'py, PyAny>>> {
-    let (vehicle, actuators, efficiency, runs) = batch_runs(
-        airframe,
-        &actuator,
-        &drag,
-        &controllers,
-        &x0s,
-        &fault_lists,
-        settles,
-        &efficiency,
-    )?;
+    let (vehicle, actuators, efficiency, runs) =
+        batch_runs(airframe, &actuator, &drag, &controllers, &x0s, &fault_lists, settles, &efficiency)?;
     let config = &config.inner;
     let results = detached(py, |cancel| {
         core_batch(&vehicle, &actuators, &efficiency, runs, config, cancel)
     })?;
-    results
-        .into_iter()
-        .map(|run| PyTrajectory::from_run(py, run, None, None))
-        .collect()
+    results.into_iter().map(|run| PyTrajectory::from_run(py, run, None, None)).collect()
 }
 
 /// d/dt of the 12-element state vector with the actuators settled at `command` (no lag): the

@@ -58,10 +58,7 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     for (_, class) in &controllers {
         module.add(class.name()?, class)?;
     }
-    module.add(
-        "CONTROLLERS",
-        pyo3::types::PyTuple::new(module.py(), controllers)?,
-    )?;
+    module.add("CONTROLLERS", pyo3::types::PyTuple::new(module.py(), controllers)?)?;
     module.add_function(wrap_pyfunction!(control::replay, module)?)?;
     module.add_function(wrap_pyfunction!(allocation::allocate, module)?)?;
     module.add_function(wrap_pyfunction!(analysis::scale_free_rank, module)?)?;
@@ -89,19 +86,16 @@ fn _rfcore(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSettings>()?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverSolution>()?;
     module.add_class::<analysis::relaxed_hover::PyRelaxedHoverAnalysis>()?;
-    module.add_function(wrap_pyfunction!(
-        analysis::relaxed_hover::relaxed_hover,
-        module
-    )?)?;
-    module.add_function(wrap_pyfunction!(
-        analysis::relaxed_hover::relaxed_hover_residual,
-        module
-    )?)?;
+    module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover, module)?)?;
+    module.add_function(wrap_pyfunction!(analysis::relaxed_hover::relaxed_hover_residual, module)?)?;
     module.add_class::<control::relaxed_hover::PyRelaxedHoverOuterLoop>()?;
     module.add("RANK_RTOL", rfcore::analysis::RANK_RTOL)?;
     module.add("ZERO_RTOL", rfcore::analysis::ZERO_RTOL)?;
     module.add("DEFAULT_GRAVITY_M_S2", rfcore::DEFAULT_GRAVITY_M_S2)?;
-    module.add("MAX_RATE_STEP", rfcore::flight::simulation::MAX_RATE_STEP)?;
+    module.add(
+        "MAX_RATE_STEP",
+        rfcore::flight::simulation::MAX_RATE_STEP,
+    )?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

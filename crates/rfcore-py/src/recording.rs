@@ -7,9 +7,7 @@ use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use rfcore::flight::simulation::{
-    simulate_batch_columns as core_columns, BatchColumns, BatchLanes, Column, Sample,
-};
+use rfcore::flight::simulation::{simulate_batch_columns as core_columns, BatchColumns, BatchLanes, Column, Sample};
 
 use crate::airframe::PyAirframe;
 use crate::control::ControllerArg;
@@ -66,42 +64,21 @@ impl PyBatchColumns {
     /// Deprecated name of `recorded_measurements`.
     #[getter]
     fn measured(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        deprecated(
-            py,
-            "BatchColumns.measured",
-            "BatchColumns.recorded_measurements",
-        )?;
+        deprecated(py, "BatchColumns.measured", "BatchColumns.recorded_measurements")?;
         Ok(self.recorded_measurements.clone_ref(py))
     }
 }
 
-fn block<T: Sample + numpy::Element>(
-    py: Python<'_>,
-    column: Column<T>,
-    runs: usize,
-    slot_rows: usize,
-) -> PyResult<Py<PyAny>> {
-    Ok(column
-        .values
-        .into_pyarray(py)
-        .reshape([runs, slot_rows, column.width])?
-        .into_any()
-        .unbind())
+fn block<T: Sample + numpy::Element>(py: Python<'_>, column: Column<T>, runs: usize, slot_rows: usize) -> PyResult<Py<PyAny>> {
+    Ok(column.values.into_pyarray(py).reshape([runs, slot_rows, column.width])?.into_any().unbind())
 }
 
 fn flags(py: Python<'_>, values: Vec<bool>, runs: usize, slot_rows: usize) -> PyResult<Py<PyAny>> {
     let slot = if values.is_empty() { 0 } else { slot_rows };
-    Ok(values
-        .into_pyarray(py)
-        .reshape([runs, slot])?
-        .into_any()
-        .unbind())
+    Ok(values.into_pyarray(py).reshape([runs, slot])?.into_any().unbind())
 }
 
-fn to_python<T: Sample + numpy::Element>(
-    py: Python<'_>,
-    c: BatchColumns<T>,
-) -> PyResult<PyBatchColumns> {
+fn to_python<T: Sample + numpy::Element>(py: Python<'_>, c: BatchColumns<T>) -> PyResult<PyBatchColumns> {
     let (n, slot) = (c.runs, c.grid_rows + 1);
     let rows: Vec<i64> = c.records.iter().map(|r| r.grid_rows as i64).collect();
     let off: Vec<bool> = c.records.iter().map(|r| r.off_grid_row).collect();
@@ -127,21 +104,12 @@ fn to_python<T: Sample + numpy::Element>(
         divergences: c
             .records
             .iter()
-            .map(|r| {
-                r.divergence
-                    .map(|d| Py::new(py, PyDivergence::from(d)))
-                    .transpose()
-            })
+            .map(|r| r.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose())
             .collect::<PyResult<_>>()?,
         sensing_counts: c
             .records
             .iter()
-            .map(|r| {
-                r.sensing
-                    .as_ref()
-                    .map(|s| Py::new(py, PySensingCounts::from(s)))
-                    .transpose()
-            })
+            .map(|r| r.sensing.as_ref().map(|s| Py::new(py, PySensingCounts::from(s))).transpose())
             .collect::<PyResult<_>>()?,
         sensed: c.records.iter().map(|r| r.sensed).collect(),
     })
@@ -179,42 +147,15 @@ pub fn simulate_batch_columns<'py>(
             )))
         }
     };
-    let (vehicle, actuators, efficiency, runs) = batch_runs(
-        airframe,
-        &actuator,
-        &drag,
-        &controllers,
-        &x0s,
-        &fault_lists,
-        settles,
-        &efficiency,
-    )?;
+    let (vehicle, actuators, efficiency, runs) =
+        batch_runs(airframe, &actuator, &drag, &controllers, &x0s, &fault_lists, settles, &efficiency)?;
     let config = &config.inner;
     if dtype == "float32" {
-        let columns = detached(py, |cancel| {
-            core_columns::<f32>(
-                &vehicle,
-                &actuators,
-                &efficiency,
-                runs,
-                config,
-                cancel,
-                lanes,
-            )
-        })?;
+        let columns = detached(py, |cancel| core_columns::<f32>(&vehicle, &actuators, &efficiency, runs, config, cancel, lanes))?;
         to_python(py, columns)
     } else {
-        let columns = detached(py, |cancel| {
-            core_columns::<f64>(
-                &vehicle,
-                &actuators,
-                &efficiency,
-                runs,
-                config,
-                cancel,
-                lanes,
-            )
-        })?;
+        let columns = detached(py, |cancel| core_columns::<f64>(&vehicle, &actuators, &efficiency, runs, config, cancel, lanes))?;
         to_python(py, columns)
     }
 }
+

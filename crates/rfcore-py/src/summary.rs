@@ -26,14 +26,8 @@ pub struct PyVerdictCriteria {
 }
 
 impl PyVerdictCriteria {
-    const FIELDS: &'static [&'static str] = &[
-        "window_s",
-        "hold_horizontal_m",
-        "hold_altitude_m",
-        "hold_speed_m_s",
-        "circling_turn_rad",
-        "spin_growth_span_s",
-    ];
+    const FIELDS: &'static [&'static str] =
+        &["window_s", "hold_horizontal_m", "hold_altitude_m", "hold_speed_m_s", "circling_turn_rad", "spin_growth_span_s"];
 }
 
 pickle_protocol!(PyVerdictCriteria, {

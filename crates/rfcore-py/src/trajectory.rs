@@ -7,9 +7,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PySlice, PyType};
 
-use rfcore::flight::simulation::{
-    Divergence, DivergenceKind, EstimateRow, SensingRecord, Trajectory,
-};
+use rfcore::flight::simulation::{Divergence, DivergenceKind, EstimateRow, SensingRecord, Trajectory};
 use rfcore::state::{state_from_vector, state_vector, RigidBodyState, STATE_DIM};
 
 use crate::convert::{deprecated, fixed_reals, pickle_protocol, read_only, real};
@@ -39,9 +37,7 @@ pub struct PyDivergence {
 fn finite_real(field: &str, value: &Bound<'_, PyAny>) -> PyResult<f64> {
     let x = real(field, value)?;
     if !x.is_finite() {
-        return Err(PyValueError::new_err(format!(
-            "{field}: must be finite, got {x}"
-        )));
+        return Err(PyValueError::new_err(format!("{field}: must be finite, got {x}")));
     }
     Ok(x)
 }
@@ -56,38 +52,21 @@ impl PyDivergence {
 
     /// The core's divergence (the state from its vector): what the derived fields read.
     fn core(&self) -> Divergence {
-        Divergence {
-            time_s: self.time_s,
-            kind: self.kind,
-            state: state_from_vector(&self.state),
-        }
+        Divergence { time_s: self.time_s, kind: self.kind, state: state_from_vector(&self.state) }
     }
 
     /// The kind named `name`, or a `ValueError` listing the kinds.
     fn kind_named(field: &str, name: &str) -> PyResult<DivergenceKind> {
         DivergenceKind::from_name(name).ok_or_else(|| {
             let kinds: Vec<&str> = DivergenceKind::ALL.iter().map(|k| k.name()).collect();
-            PyValueError::new_err(format!(
-                "{field}: expected one of {}, got {name:?}",
-                kinds.join(", ")
-            ))
+            PyValueError::new_err(format!("{field}: expected one of {}, got {name:?}", kinds.join(", ")))
         })
     }
 
     /// A deprecated argument that is now derived: it must say what the derivation says.
-    fn agrees(
-        &self,
-        py: Python<'_>,
-        field: &str,
-        given: Option<Bound<'_, PyAny>>,
-        derived: Option<f64>,
-    ) -> PyResult<()> {
+    fn agrees(&self, py: Python<'_>, field: &str, given: Option<Bound<'_, PyAny>>, derived: Option<f64>) -> PyResult<()> {
         let Some(given) = given else { return Ok(()) };
-        deprecated(
-            py,
-            &format!("Divergence({field}=...)"),
-            &format!("Divergence.{field}, derived from kind and state"),
-        )?;
+        deprecated(py, &format!("Divergence({field}=...)"), &format!("Divergence.{field}, derived from kind and state"))?;
         let value = finite_real(field, &given)?;
         match derived {
             None => Err(PyValueError::new_err(format!(
@@ -119,45 +98,25 @@ pickle_protocol!(PyDivergence, {
         reason: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let (field, kind) = match (kind, reason) {
-            (Some(_), Some(_)) => {
-                return Err(PyTypeError::new_err(
-                    "Divergence: give kind or the deprecated reason, not both",
-                ))
-            }
-            (None, None) => {
-                return Err(PyTypeError::new_err(
-                    "kind: required (the kind of divergence: crashed, tilt, ...)",
-                ))
-            }
+            (Some(_), Some(_)) => return Err(PyTypeError::new_err("Divergence: give kind or the deprecated reason, not both")),
+            (None, None) => return Err(PyTypeError::new_err("kind: required (the kind of divergence: crashed, tilt, ...)")),
             (Some(kind), None) => ("kind", kind),
             (None, Some(reason)) => {
                 deprecated(py, "Divergence(reason=...)", "Divergence(kind=...)")?;
                 ("reason", reason)
             }
         };
-        let name: String = kind.extract().map_err(|_| {
-            PyTypeError::new_err(format!(
-                "{field}: expected a string, got {}",
-                kind.get_type()
-                    .name()
-                    .map(|n| n.to_string())
-                    .unwrap_or_default()
-            ))
-        })?;
+        let name: String = kind
+            .extract()
+            .map_err(|_| PyTypeError::new_err(format!("{field}: expected a string, got {}", kind.get_type().name().map(|n| n.to_string()).unwrap_or_default())))?;
         let this = PyDivergence {
             time_s: finite_real("time_s", &time_s)?,
             kind: Self::kind_named(field, &name)?,
             state: fixed_reals::<STATE_DIM>("state", "the 12-element state vector", &state)?,
         };
         if let Some(description) = description {
-            deprecated(
-                py,
-                "Divergence(description=...)",
-                "Divergence.description, derived from kind",
-            )?;
-            let text: String = description
-                .extract()
-                .map_err(|_| PyTypeError::new_err("description: expected a string"))?;
+            deprecated(py, "Divergence(description=...)", "Divergence.description, derived from kind")?;
+            let text: String = description.extract().map_err(|_| PyTypeError::new_err("description: expected a string"))?;
             if text != this.kind.describe() {
                 return Err(PyValueError::new_err(format!(
                     "description: derived from kind {:?} as {:?}, got {text:?}",
@@ -167,24 +126,9 @@ pickle_protocol!(PyDivergence, {
             }
         }
         let impact = this.core().impact();
-        this.agrees(
-            py,
-            "impact_speed_m_s",
-            impact_speed_m_s,
-            impact.map(|i| i.speed_m_s),
-        )?;
-        this.agrees(
-            py,
-            "impact_vertical_speed_m_s",
-            impact_vertical_speed_m_s,
-            impact.map(|i| i.vertical_speed_m_s),
-        )?;
-        this.agrees(
-            py,
-            "impact_tilt_rad",
-            impact_tilt_rad,
-            impact.map(|i| i.tilt_rad),
-        )?;
+        this.agrees(py, "impact_speed_m_s", impact_speed_m_s, impact.map(|i| i.speed_m_s))?;
+        this.agrees(py, "impact_vertical_speed_m_s", impact_vertical_speed_m_s, impact.map(|i| i.vertical_speed_m_s))?;
+        this.agrees(py, "impact_tilt_rad", impact_tilt_rad, impact.map(|i| i.tilt_rad))?;
         Ok(this)
     }
     /// When the run ended, s.
@@ -236,12 +180,7 @@ pickle_protocol!(PyDivergence, {
     }
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
         let this = slf.get();
-        Ok(format!(
-            "{}(time_s={:?}, kind='{}')",
-            slf.get_type().name()?,
-            this.time_s,
-            this.kind.name()
-        ))
+        Ok(format!("{}(time_s={:?}, kind='{}')", slf.get_type().name()?, this.time_s, this.kind.name()))
     }
     /// `crashed at t = <s> s: hit the ground at <speed> m/s (<down> m/s down), tilted <deg> deg`,
     /// or `diverged at t = <s> s: <description>`.
@@ -255,22 +194,14 @@ pickle_protocol!(PyDivergence, {
                 i.vertical_speed_m_s,
                 i.tilt_rad.to_degrees()
             ),
-            None => format!(
-                "diverged at t = {:.4} s: {}",
-                self.time_s,
-                self.kind.describe()
-            ),
+            None => format!("diverged at t = {:.4} s: {}", self.time_s, self.kind.describe()),
         }
     }
 });
 
 impl From<Divergence> for PyDivergence {
     fn from(d: Divergence) -> Self {
-        PyDivergence {
-            time_s: d.time_s,
-            kind: d.kind,
-            state: state_vector(&d.state),
-        }
+        PyDivergence { time_s: d.time_s, kind: d.kind, state: state_vector(&d.state) }
     }
 }
 
@@ -364,15 +295,7 @@ fn columns<'py>(table: &Bound<'py, PyAny>, from: isize, to: isize) -> PyResult<B
 
 impl PyEstimates {
     const FIELDS: &'static [&'static str] = &[
-        "position",
-        "velocity",
-        "quaternion",
-        "euler",
-        "omega",
-        "std",
-        "gyro_saturated",
-        "accel_saturated",
-        "counts",
+        "position", "velocity", "quaternion", "euler", "omega", "std", "gyro_saturated", "accel_saturated", "counts",
     ];
 }
 
@@ -405,10 +328,7 @@ pickle_protocol!(PyEstimates, {
         ] {
             shaped(field, value, ndim, rows, &[width])?;
         }
-        let packed = py
-            .import("numpy")?
-            .getattr("hstack")?
-            .call1(([position, velocity, quaternion, omega],))?;
+        let packed = py.import("numpy")?.getattr("hstack")?.call1(([position, velocity, quaternion, omega],))?;
         Ok(PyEstimates {
             state: packed.unbind(),
             euler: euler.unbind(),
@@ -484,12 +404,7 @@ pickle_protocol!(PyEstimates, {
     /// The 12-element state vector per row (position, velocity, Euler angles, body rates).
     #[getter]
     fn vector<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let parts = [
-            self.position(py)?,
-            self.velocity(py)?,
-            self.euler.bind(py).clone(),
-            self.omega(py)?,
-        ];
+        let parts = [self.position(py)?, self.velocity(py)?, self.euler.bind(py).clone(), self.omega(py)?];
         py.import("numpy")?.getattr("hstack")?.call1((parts,))
     }
 });
@@ -499,13 +414,7 @@ pickle_protocol!(PyEstimates, {
 /// NumPy arrays with one row per recorded step, made once: by the simulator from the core's
 /// record, or given keyword-only (a batch's views, a constructed run), their shapes checked
 /// here. Frozen; picklable.
-#[pyclass(
-    name = "Trajectory",
-    module = "rotorfault._rfcore",
-    frozen,
-    subclass,
-    get_all
-)]
+#[pyclass(name = "Trajectory", module = "rotorfault._rfcore", frozen, subclass, get_all)]
 pub struct PyTrajectory {
     /// Time of each row, s.
     t: Py<PyAny>,
@@ -550,39 +459,17 @@ pub struct PyTrajectory {
 }
 
 /// The estimate fields, present together (a run with sensing) or not at all.
-const ESTIMATE_FIELDS: [&str; 6] = [
-    "estimate_state",
-    "estimate_euler",
-    "estimate_std",
-    "gyro_saturated",
-    "accel_saturated",
-    "sensing_counts",
-];
+const ESTIMATE_FIELDS: [&str; 6] = ["estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated", "sensing_counts"];
 
 /// An array `field` of `ndim` dimensions with `rows` rows and, for a table, a width in `widths`
 /// (any width when empty); returns its width.
-fn shaped(
-    field: &str,
-    value: &Bound<'_, PyAny>,
-    ndim: usize,
-    rows: Option<usize>,
-    widths: &[usize],
-) -> PyResult<usize> {
+fn shaped(field: &str, value: &Bound<'_, PyAny>, ndim: usize, rows: Option<usize>, widths: &[usize]) -> PyResult<usize> {
     let array = value.cast::<PyUntypedArray>().map_err(|_| {
-        PyTypeError::new_err(format!(
-            "{field}: expected a NumPy array, got {}",
-            value
-                .get_type()
-                .name()
-                .map(|n| n.to_string())
-                .unwrap_or_default()
-        ))
+        PyTypeError::new_err(format!("{field}: expected a NumPy array, got {}", value.get_type().name().map(|n| n.to_string()).unwrap_or_default()))
     })?;
     let shape = array.shape();
     if shape.len() != ndim {
-        return Err(PyValueError::new_err(format!(
-            "{field}: expected {ndim} dimensions, got shape {shape:?}"
-        )));
+        return Err(PyValueError::new_err(format!("{field}: expected {ndim} dimensions, got shape {shape:?}")));
     }
     if let Some(rows) = rows {
         if shape[0] != rows {
@@ -604,24 +491,9 @@ fn shaped(
 
 impl PyTrajectory {
     const FIELDS: &'static [&'static str] = &[
-        "t",
-        "position",
-        "velocity",
-        "quaternion",
-        "euler",
-        "omega",
-        "primary_axis",
-        "rotor_command",
-        "rotor_thrust",
-        "efficiency",
-        "recorded_measurements",
-        "sensed",
-        "divergence",
-        "estimate_state",
-        "estimate_euler",
-        "estimate_std",
-        "gyro_saturated",
-        "accel_saturated",
+        "t", "position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command",
+        "rotor_thrust", "efficiency", "recorded_measurements", "sensed", "divergence",
+        "estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated",
         "sensing_counts",
     ];
 
@@ -631,11 +503,7 @@ impl PyTrajectory {
         let n = run.t_s.len();
         let table = |values: Vec<f64>| -> PyResult<Py<PyAny>> {
             let cols = values.len().checked_div(n).unwrap_or(0);
-            Ok(values
-                .into_pyarray(py)
-                .reshape([n, cols])?
-                .into_any()
-                .unbind())
+            Ok(values.into_pyarray(py).reshape([n, cols])?.into_any().unbind())
         };
         let states = &run.states;
         let per_state = |f: fn(&RigidBodyState) -> [f64; 3]| table(rows(states, f));
@@ -654,17 +522,9 @@ impl PyTrajectory {
         kwargs.set_item("omega", per_state(|s| s.omega_rad_s.into())?)?;
         kwargs.set_item("primary_axis", per_state(|s| s.primary_axis().into())?)?;
         if let Some(r) = run.sensing.as_ref() {
-            let flags = |f: fn(&EstimateRow) -> bool| {
-                r.rows.iter().map(f).collect::<Vec<bool>>().into_pyarray(py)
-            };
-            kwargs.set_item(
-                "estimate_state",
-                table(rows(&r.rows, |row| row.state.to_packed()))?,
-            )?;
-            kwargs.set_item(
-                "estimate_euler",
-                table(rows(&r.rows, |row| row.state.euler_rad()))?,
-            )?;
+            let flags = |f: fn(&EstimateRow) -> bool| r.rows.iter().map(f).collect::<Vec<bool>>().into_pyarray(py);
+            kwargs.set_item("estimate_state", table(rows(&r.rows, |row| row.state.to_packed()))?)?;
+            kwargs.set_item("estimate_euler", table(rows(&r.rows, |row| row.state.euler_rad()))?)?;
             kwargs.set_item("estimate_std", table(rows(&r.rows, |row| row.std))?)?;
             kwargs.set_item("gyro_saturated", flags(|row| row.gyro_saturated))?;
             kwargs.set_item("accel_saturated", flags(|row| row.accel_saturated))?;
@@ -674,12 +534,7 @@ impl PyTrajectory {
         kwargs.set_item("rotor_thrust", table(run.rotor_thrust_n)?)?;
         kwargs.set_item("efficiency", table(run.efficiency)?)?;
         kwargs.set_item("recorded_measurements", table(run.recorded_measurements)?)?;
-        kwargs.set_item(
-            "divergence",
-            run.divergence
-                .map(|d| Py::new(py, PyDivergence::from(d)))
-                .transpose()?,
-        )?;
+        kwargs.set_item("divergence", run.divergence.map(|d| Py::new(py, PyDivergence::from(d))).transpose()?)?;
         kwargs.set_item("t", run.t_s.into_pyarray(py))?;
         Ok(kwargs)
     }
@@ -777,30 +632,12 @@ pickle_protocol!(PyTrajectory, {
         }
         let rotors = shaped("efficiency", &efficiency, 2, rows, &[])?;
         shaped("rotor_thrust", &rotor_thrust, 2, rows, &[rotors])?;
-        shaped(
-            "rotor_command",
-            &rotor_command,
-            2,
-            rows,
-            &[rotors, 2 * rotors],
-        )?;
-        shaped(
-            "recorded_measurements",
-            &recorded_measurements,
-            2,
-            rows,
-            &[0, STATE_DIM],
-        )?;
-        let given = [
-            &estimate_state,
-            &estimate_euler,
-            &estimate_std,
-            &gyro_saturated,
-            &accel_saturated,
-        ]
-        .iter()
-        .filter(|v| v.is_some())
-        .count()
+        shaped("rotor_command", &rotor_command, 2, rows, &[rotors, 2 * rotors])?;
+        shaped("recorded_measurements", &recorded_measurements, 2, rows, &[0, STATE_DIM])?;
+        let given = [&estimate_state, &estimate_euler, &estimate_std, &gyro_saturated, &accel_saturated]
+            .iter()
+            .filter(|v| v.is_some())
+            .count()
             + usize::from(sensing_counts.is_some());
         if given != 0 && given != ESTIMATE_FIELDS.len() {
             return Err(PyValueError::new_err(format!(
@@ -877,11 +714,7 @@ pickle_protocol!(PyTrajectory, {
         let py = slf.py();
         let t = this.t.bind(py);
         let rows = t.len()?;
-        let end = if rows == 0 {
-            "no rows".to_string()
-        } else {
-            format!("{rows} rows to {} s", t.get_item(rows - 1)?.str()?)
-        };
+        let end = if rows == 0 { "no rows".to_string() } else { format!("{rows} rows to {} s", t.get_item(rows - 1)?.str()?) };
         let ended = match &this.divergence {
             None => "no divergence".to_string(),
             Some(d) => {
@@ -889,10 +722,6 @@ pickle_protocol!(PyTrajectory, {
                 format!("{} at {} s", d.kind.name(), d.time_s)
             }
         };
-        Ok(format!(
-            "{}({end}, {ended}, sensed={:?})",
-            slf.get_type().name()?,
-            this.sensed
-        ))
+        Ok(format!("{}({end}, {ended}, sensed={:?})", slf.get_type().name()?, this.sensed))
     }
 });

@@ -62,12 +62,7 @@ fn lqr_case() -> Case {
     let hover = airframe.mass_kg() * airframe.gravity_m_s2() / 4.0;
     let mut x_trim = [0.0; STATE_DIM];
     x_trim[2] = -10.0;
-    let law = LinearFeedback::new(
-        &x_trim,
-        &[hover; 4],
-        rfcore::fixtures::hover_gain(&airframe),
-    )
-    .expect("gain");
+    let law = LinearFeedback::new(&x_trim, &[hover; 4], rfcore::fixtures::hover_gain(&airframe)).expect("gain");
     Case {
         name: "lqr",
         vehicle: Vehicle::new(&airframe, Drag::default()).expect("vehicle"),

@@ -100,8 +100,7 @@ fn bench_simulation(c: &mut Criterion) {
     // -- closed loop: LinearFeedback ------------------------------------------------------------
     let mut x_trim = [0.0; STATE_DIM];
     x_trim[2] = target.z;
-    let feedback = LinearFeedback::new(&x_trim, &u_trim, rfcore::fixtures::hover_gain(&airframe))
-        .expect("gain");
+    let feedback = LinearFeedback::new(&x_trim, &u_trim, rfcore::fixtures::hover_gain(&airframe)).expect("gain");
     // A perturbed start about the hover point: 0.5 m/s north, 0.3 m/s up, 3 deg roll, 5 deg yaw.
     let perturbed = RigidBodyState {
         velocity_m_s: Vector3::new(0.5, 0.0, -0.3),

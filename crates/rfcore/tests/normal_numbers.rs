@@ -244,15 +244,10 @@ fn an_airframe_matrix_has_no_subnormal_entry() {
     let tilted = text.replacen("arm_angle_deg = 45", "arm_angle_deg = -6.4e-308", 1);
     let frame = Airframe::from_toml_str(&tilted, "quad-x").unwrap();
     let healthy = Airframe::from_toml_str(&text, "quad-x").unwrap();
-    let faint = healthy
-        .with_efficiency(&[SUBNORMAL, 1.0, 1.0, 1.0])
-        .unwrap();
+    let faint = healthy.with_efficiency(&[SUBNORMAL, 1.0, 1.0, 1.0]).unwrap();
     for (name, b) in [
         ("effectiveness", frame.effectiveness_matrix()),
-        (
-            "nominal effectiveness",
-            frame.nominal_effectiveness_matrix(),
-        ),
+        ("nominal effectiveness", frame.nominal_effectiveness_matrix()),
         ("wrench", frame.wrench_matrix()),
         ("faint effectiveness", faint.effectiveness_matrix()),
         ("faint wrench", faint.wrench_matrix()),
@@ -262,15 +257,7 @@ fn an_airframe_matrix_has_no_subnormal_entry() {
     // The arm angle of -1.1e-309 rad: roll arm 0 (was -0.275 x sin(angle), subnormal), pitch arm 0.275.
     let b = frame.effectiveness_matrix();
     assert_eq!((b[(1, 0)], b[(2, 0)]), (0.0, 0.275));
-    assert_eq!(
-        faint
-            .effectiveness_matrix()
-            .column(0)
-            .iter()
-            .filter(|x| **x != 0.0)
-            .count(),
-        0
-    );
+    assert_eq!(faint.effectiveness_matrix().column(0).iter().filter(|x| **x != 0.0).count(), 0);
     // Normal entries unchanged, bit for bit.
     let columns = 1..4;
     for c in columns {
@@ -293,9 +280,7 @@ fn an_airframe_matrix_has_no_subnormal_entry() {
     let general = Airframe::from_general_columns(
         "general",
         &[s, s, 0.0, -s, s, 0.0, -s, -s, 0.0, s, -s, 0.0],
-        &[
-            SUBNORMAL, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0,
-        ],
+        &[SUBNORMAL, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0, 0.0, 0.0, -1.0],
         &[1.0, -1.0, 1.0, -1.0],
         None,
         &[8.0; 4],

@@ -265,11 +265,7 @@ fn estimator_beats_the_raw_fixes_and_knows_its_error_in_hover_and_after_rotor_lo
         let slots = (DURATION_S / 0.01).round() as u64;
         let taken = r.fusion.fused + r.fusion.rejected + r.fusion.late;
         assert_eq!(taken % 2, 0, "{name}: {:?}", r.fusion);
-        assert!(
-            taken / 2 <= slots + 1 && taken / 2 >= slots - 1,
-            "{name}: {:?}",
-            r.fusion
-        );
+        assert!(taken / 2 <= slots + 1 && taken / 2 >= slots - 1, "{name}: {:?}", r.fusion);
         assert_eq!(r.fusion.thinned % 2, 0, "{name}: {:?}", r.fusion);
         assert!((taken + r.fusion.thinned) / 2 <= fixes + 1);
         assert!((taken + r.fusion.thinned) / 2 >= fixes - 1);

@@ -34,15 +34,7 @@ pub struct PyRelaxedHoverSettings {
 }
 
 impl PyRelaxedHoverSettings {
-    const FIELDS: &'static [&'static str] = &[
-        "rotational_drag_n_m_s",
-        "rotor_inertia_kg_m2",
-        "thrust_coefficient_n_s2",
-        "max_spin_rate_rad_s",
-        "max_circle_radius_m",
-        "max_idle_rotors",
-        "grid_points",
-    ];
+    const FIELDS: &'static [&'static str] = &["rotational_drag_n_m_s", "rotor_inertia_kg_m2", "thrust_coefficient_n_s2", "max_spin_rate_rad_s", "max_circle_radius_m", "max_idle_rotors", "grid_points"];
 }
 
 crate::convert::pickle_protocol!(PyRelaxedHoverSettings, {
@@ -59,10 +51,9 @@ crate::convert::pickle_protocol!(PyRelaxedHoverSettings, {
         max_idle_rotors: Option<Bound<'_, PyAny>>,
         grid_points: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let counted =
-            |field: &str, v: Option<Bound<'_, PyAny>>, default: usize| -> PyResult<usize> {
-                v.map_or(Ok(default), |v| crate::convert::count(field, &v))
-            };
+        let counted = |field: &str, v: Option<Bound<'_, PyAny>>, default: usize| -> PyResult<usize> {
+            v.map_or(Ok(default), |v| crate::convert::count(field, &v))
+        };
         let d = RelaxedHoverSettings::default();
         let inner = RelaxedHoverSettings {
             rotational_drag_n_m_s: rotational_drag_n_m_s.unwrap_or(d.rotational_drag_n_m_s),

@@ -116,15 +116,8 @@ pub struct PyIndiFailureMode {
 
 impl PyIndiFailureMode {
     const FIELDS: &'static [&'static str] = &[
-        "failed",
-        "healthy",
-        "yaw_controlled",
-        "single_axis",
-        "output_direction",
-        "primary_axis",
-        "zero_dynamics_a",
-        "zero_dynamics_damping",
-        "hover_thrust_n",
+        "failed", "healthy", "yaw_controlled", "single_axis", "output_direction", "primary_axis",
+        "zero_dynamics_a", "zero_dynamics_damping", "hover_thrust_n",
     ];
 }
 
@@ -138,88 +131,79 @@ fn finite(field: &str, values: &[Bound<'_, PyAny>]) -> PyResult<Vec<f64>> {
             if x.is_finite() {
                 Ok(x)
             } else {
-                Err(PyValueError::new_err(format!(
-                    "{field}[{k}]: must be finite, got {x}"
-                )))
+                Err(PyValueError::new_err(format!("{field}[{k}]: must be finite, got {x}")))
             }
         })
         .collect()
 }
 
-pickle_protocol!(
-    PyIndiFailureMode,
-    {
-        /// A failure mode from its fields (what pickling gives back; `IndiController.failure_modes`
-        /// makes them): rotors numbered from 1, each rotor failed or healthy once, one hover thrust
-        /// per rotor, finite numbers; `zero_dynamics_damping` only with `zero_dynamics_a`.
-        #[new]
-        #[pyo3(signature = (*, failed, healthy, yaw_controlled, single_axis, output_direction, primary_axis,
+pickle_protocol!(PyIndiFailureMode, {
+    /// A failure mode from its fields (what pickling gives back; `IndiController.failure_modes`
+    /// makes them): rotors numbered from 1, each rotor failed or healthy once, one hover thrust
+    /// per rotor, finite numbers; `zero_dynamics_damping` only with `zero_dynamics_a`.
+    #[new]
+    #[pyo3(signature = (*, failed, healthy, yaw_controlled, single_axis, output_direction, primary_axis,
         zero_dynamics_a, zero_dynamics_damping, hover_thrust_n))]
-        #[allow(clippy::too_many_arguments)]
-        fn new(
-            failed: Vec<usize>,
-            healthy: Vec<usize>,
-            yaw_controlled: bool,
-            single_axis: bool,
-            output_direction: Option<Vec<Bound<'_, PyAny>>>,
-            primary_axis: Vec<Bound<'_, PyAny>>,
-            zero_dynamics_a: Option<Bound<'_, PyAny>>,
-            zero_dynamics_damping: Option<Bound<'_, PyAny>>,
-            hover_thrust_n: Vec<Bound<'_, PyAny>>,
-        ) -> PyResult<Self> {
-            let failed = rotor_indices("failed", &failed)?;
-            let healthy = rotor_indices("healthy", &healthy)?;
-            let rotors = failed.len() + healthy.len();
-            let mut seen = vec![false; rotors];
-            for &k in failed.iter().chain(&healthy) {
-                match seen.get_mut(k) {
-                    Some(s) if !*s => *s = true,
-                    _ => {
-                        return Err(PyValueError::new_err(format!(
-                            "failed, healthy: each of rotors 1..={rotors} once, got rotor {} {}",
-                            k + 1,
-                            if k < rotors { "twice" } else { "out of range" }
-                        )))
-                    }
-                }
-            }
-            let hover_thrust_n = finite("hover_thrust_n", &hover_thrust_n)?;
-            if hover_thrust_n.len() != rotors {
-                return Err(PyValueError::new_err(format!(
-                    "hover_thrust_n: one per rotor ({rotors}), got {}",
-                    hover_thrust_n.len()
-                )));
-            }
-            let pair = |field: &str, values: &[f64], n: usize| -> PyResult<()> {
-                if values.len() == n {
-                    Ok(())
-                } else {
-                    Err(PyValueError::new_err(format!(
-                        "{field}: expected {n} entries, got {}",
-                        values.len()
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        failed: Vec<usize>,
+        healthy: Vec<usize>,
+        yaw_controlled: bool,
+        single_axis: bool,
+        output_direction: Option<Vec<Bound<'_, PyAny>>>,
+        primary_axis: Vec<Bound<'_, PyAny>>,
+        zero_dynamics_a: Option<Bound<'_, PyAny>>,
+        zero_dynamics_damping: Option<Bound<'_, PyAny>>,
+        hover_thrust_n: Vec<Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let failed = rotor_indices("failed", &failed)?;
+        let healthy = rotor_indices("healthy", &healthy)?;
+        let rotors = failed.len() + healthy.len();
+        let mut seen = vec![false; rotors];
+        for &k in failed.iter().chain(&healthy) {
+            match seen.get_mut(k) {
+                Some(s) if !*s => *s = true,
+                _ => {
+                    return Err(PyValueError::new_err(format!(
+                        "failed, healthy: each of rotors 1..={rotors} once, got rotor {} {}",
+                        k + 1,
+                        if k < rotors { "twice" } else { "out of range" }
                     )))
                 }
-            };
-            let axis = finite("primary_axis", &primary_axis)?;
-            pair("primary_axis", &axis, 3)?;
-            let output_direction = match output_direction {
-                Some(d) => {
-                    let d = finite("output_direction", &d)?;
-                    pair("output_direction", &d, 2)?;
-                    Some([d[0], d[1]])
-                }
-                None => None,
-            };
-            let scalar = |field: &str, v: Option<Bound<'_, PyAny>>| -> PyResult<Option<f64>> {
-                v.map(|v| match real(field, &v)? {
-                    x if x.is_finite() => Ok(x),
-                    x => Err(PyValueError::new_err(format!(
-                        "{field}: must be finite, got {x}"
-                    ))),
-                })
-                .transpose()
-            };
-            let zero_dynamics = match (scalar("zero_dynamics_a", zero_dynamics_a)?, scalar("zero_dynamics_damping", zero_dynamics_damping)?) {
+            }
+        }
+        let hover_thrust_n = finite("hover_thrust_n", &hover_thrust_n)?;
+        if hover_thrust_n.len() != rotors {
+            return Err(PyValueError::new_err(format!(
+                "hover_thrust_n: one per rotor ({rotors}), got {}",
+                hover_thrust_n.len()
+            )));
+        }
+        let pair = |field: &str, values: &[f64], n: usize| -> PyResult<()> {
+            if values.len() == n {
+                Ok(())
+            } else {
+                Err(PyValueError::new_err(format!("{field}: expected {n} entries, got {}", values.len())))
+            }
+        };
+        let axis = finite("primary_axis", &primary_axis)?;
+        pair("primary_axis", &axis, 3)?;
+        let output_direction = match output_direction {
+            Some(d) => {
+                let d = finite("output_direction", &d)?;
+                pair("output_direction", &d, 2)?;
+                Some([d[0], d[1]])
+            }
+            None => None,
+        };
+        let scalar = |field: &str, v: Option<Bound<'_, PyAny>>| -> PyResult<Option<f64>> {
+            v.map(|v| match real(field, &v)? {
+                x if x.is_finite() => Ok(x),
+                x => Err(PyValueError::new_err(format!("{field}: must be finite, got {x}"))),
+            })
+            .transpose()
+        };
+        let zero_dynamics = match (scalar("zero_dynamics_a", zero_dynamics_a)?, scalar("zero_dynamics_damping", zero_dynamics_damping)?) {
             (Some(a), zeta) => Some((a, zeta)),
             (None, None) => None,
             (None, Some(_)) => {
@@ -228,66 +212,64 @@ pickle_protocol!(
                 ))
             }
         };
-            Ok(PyIndiFailureMode {
-                inner: FailureMode {
-                    failed,
-                    healthy,
-                    yaw_controlled,
-                    single_axis,
-                    output_direction,
-                    primary_axis: [axis[0], axis[1], axis[2]],
-                    zero_dynamics,
-                    hover_thrust_n,
-                },
-            })
-        }
-        /// The failed rotors, numbered from 1.
-        #[getter]
-        fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-            PyTuple::new(py, rotor_numbers(&self.inner.failed))
-        }
-        /// The healthy rotors, numbered from 1.
-        #[getter]
-        fn healthy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-            PyTuple::new(py, rotor_numbers(&self.inner.healthy))
-        }
-        #[getter]
-        fn yaw_controlled(&self) -> bool {
-            self.inner.yaw_controlled
-        }
-        #[getter]
-        fn single_axis(&self) -> bool {
-            self.inner.single_axis
-        }
-        /// The controlled output direction (single axis only), body x-y plane.
-        #[getter]
-        fn output_direction(&self) -> Option<(f64, f64)> {
-            self.inner.output_direction.map(|[x, y]| (x, y))
-        }
-        /// The primary axis in the body frame.
-        #[getter]
-        fn primary_axis(&self) -> (f64, f64, f64) {
-            let [x, y, z] = self.inner.primary_axis;
-            (x, y, z)
-        }
-        /// `a` of the zero dynamics (one torque axis left only).
-        #[getter]
-        fn zero_dynamics_a(&self) -> Option<f64> {
-            self.inner.zero_dynamics.map(|(a, _)| a)
-        }
-        /// Their damping ratio (`None` when unstable or not applicable).
-        #[getter]
-        fn zero_dynamics_damping(&self) -> Option<f64> {
-            self.inner.zero_dynamics.and_then(|(_, zeta)| zeta)
-        }
-        /// Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
-        #[getter]
-        fn hover_thrust_n<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-            PyTuple::new(py, &self.inner.hover_thrust_n)
-        }
-    },
-    then = value_protocol
-);
+        Ok(PyIndiFailureMode {
+            inner: FailureMode {
+                failed,
+                healthy,
+                yaw_controlled,
+                single_axis,
+                output_direction,
+                primary_axis: [axis[0], axis[1], axis[2]],
+                zero_dynamics,
+                hover_thrust_n,
+            },
+        })
+    }
+    /// The failed rotors, numbered from 1.
+    #[getter]
+    fn failed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, rotor_numbers(&self.inner.failed))
+    }
+    /// The healthy rotors, numbered from 1.
+    #[getter]
+    fn healthy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, rotor_numbers(&self.inner.healthy))
+    }
+    #[getter]
+    fn yaw_controlled(&self) -> bool {
+        self.inner.yaw_controlled
+    }
+    #[getter]
+    fn single_axis(&self) -> bool {
+        self.inner.single_axis
+    }
+    /// The controlled output direction (single axis only), body x-y plane.
+    #[getter]
+    fn output_direction(&self) -> Option<(f64, f64)> {
+        self.inner.output_direction.map(|[x, y]| (x, y))
+    }
+    /// The primary axis in the body frame.
+    #[getter]
+    fn primary_axis(&self) -> (f64, f64, f64) {
+        let [x, y, z] = self.inner.primary_axis;
+        (x, y, z)
+    }
+    /// `a` of the zero dynamics (one torque axis left only).
+    #[getter]
+    fn zero_dynamics_a(&self) -> Option<f64> {
+        self.inner.zero_dynamics.map(|(a, _)| a)
+    }
+    /// Their damping ratio (`None` when unstable or not applicable).
+    #[getter]
+    fn zero_dynamics_damping(&self) -> Option<f64> {
+        self.inner.zero_dynamics.and_then(|(_, zeta)| zeta)
+    }
+    /// Thrusts holding the weight with zero roll and pitch torque, N, one per rotor.
+    #[getter]
+    fn hover_thrust_n<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, &self.inner.hover_thrust_n)
+    }
+}, then = value_protocol);
 
 /// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`

@@ -149,14 +149,8 @@ settings_protocol!(PyFtcPreset, {
             airframe: airframe_name,
             gains: gains.inner,
             vehicle: FtcVehicle {
-                rotor_time_constant_s: real(
-                    "vehicle.rotor_time_constant_s",
-                    &rotor_time_constant_s,
-                )?,
-                rotational_drag_n_m_s: real(
-                    "vehicle.rotational_drag_n_m_s",
-                    &rotational_drag_n_m_s,
-                )?,
+                rotor_time_constant_s: real("vehicle.rotor_time_constant_s", &rotor_time_constant_s)?,
+                rotational_drag_n_m_s: real("vehicle.rotational_drag_n_m_s", &rotational_drag_n_m_s)?,
                 linear_drag_n_s_m: real("vehicle.linear_drag_n_s_m", &linear_drag_n_s_m)?,
             },
         };
@@ -165,17 +159,8 @@ settings_protocol!(PyFtcPreset, {
     }
     /// Parses a preset file's `text` (`origin` prefixes error messages) into this class.
     #[classmethod]
-    fn from_toml_str<'py>(
-        cls: &Bound<'py, PyType>,
-        text: &str,
-        origin: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let parsed = Bound::new(
-            cls.py(),
-            PyFtcPreset {
-                inner: FtcPreset::from_toml_str(text, origin).map_err(to_py_err)?,
-            },
-        )?;
+    fn from_toml_str<'py>(cls: &Bound<'py, PyType>, text: &str, origin: &str) -> PyResult<Bound<'py, PyAny>> {
+        let parsed = Bound::new(cls.py(), PyFtcPreset { inner: FtcPreset::from_toml_str(text, origin).map_err(to_py_err)? })?;
         cls.call((), Some(&settings_kwargs(parsed.as_any(), Self::FIELDS)?))
     }
     #[getter]

@@ -75,11 +75,7 @@ impl PyLinearFeedback {
         )
         .map_err(to_py_err)?;
         let py = gain.py();
-        let args = PyTuple::new(
-            py,
-            [copy1(py, &x_trim), copy1(py, &u_trim), copy2(py, &gain)],
-        )?
-        .unbind();
+        let args = PyTuple::new(py, [copy1(py, &x_trim), copy1(py, &u_trim), copy2(py, &gain)])?.unbind();
         Ok(PyLinearFeedback { inner, args })
     }
     /// Pickled as the arrays it was made from.
@@ -119,14 +115,7 @@ impl PyLti {
         let py = a.py();
         let args = PyTuple::new(
             py,
-            [
-                copy2(py, &a),
-                copy2(py, &b),
-                copy2(py, &c),
-                copy2(py, &d),
-                copy1(py, &x_trim),
-                copy1(py, &u_trim),
-            ],
+            [copy2(py, &a), copy2(py, &b), copy2(py, &c), copy2(py, &d), copy1(py, &x_trim), copy1(py, &u_trim)],
         )?
         .unbind();
         Ok(PyLti { inner, args })

@@ -17,7 +17,9 @@ use pyo3::types::PyType;
 
 use rfcore::allocation::active_set::ActiveSetSolver;
 use rfcore::control::{replay as core_replay, Allocated, Controller, ZeroCommand};
-use rfcore::state::{state_vector, states_from_vector_rows, RigidBodyState, PACKED_DIM, STATE_DIM};
+use rfcore::state::{
+    state_vector, states_from_vector_rows, RigidBodyState, PACKED_DIM, STATE_DIM,
+};
 use rfcore::RfError;
 
 use crate::allocation::PyAllocationProblem;
@@ -72,8 +74,7 @@ impl Controller for CallableController {
             )),
             Err(err) => {
                 // A wrong return type is the controller's contract, not its own exception.
-                let wrong_type =
-                    Python::attach(|py| err.is_instance_of::<pyo3::exceptions::PyTypeError>(py));
+                let wrong_type = Python::attach(|py| err.is_instance_of::<pyo3::exceptions::PyTypeError>(py));
                 self.error = Some(if wrong_type {
                     let error = pyo3::exceptions::PyTypeError::new_err(format!(
                         "controller: must return a sequence of {} numbers at t = {t_s}",
@@ -84,14 +85,12 @@ impl Controller for CallableController {
                 } else {
                     err
                 });
-                Err(RfError::invalid(
-                    "controller",
-                    "the Python controller failed",
-                ))
+                Err(RfError::invalid("controller", "the Python controller failed"))
             }
         }
     }
 }
+
 
 /// The one registry of the Rust controllers the simulator runs (in a loop or a batch): each line
 /// `Variant(PyClass) = "kebab-name"` (the name is the class name in kebab case) makes the

@@ -515,43 +515,22 @@ mod tests {
             ..ActiveSetSettings::default()
         };
         let err = ActiveSetSolver::with_settings(&p, zero).unwrap_err();
-        assert!(
-            err.to_string()
-                .starts_with("max_iterations: must be in 1..="),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("max_iterations: must be in 1..="), "{err}");
         let nan = ActiveSetSettings {
             tolerance: f64::NAN,
             ..ActiveSetSettings::default()
         };
         let err = ActiveSetSolver::with_settings(&p, nan).unwrap_err();
-        assert!(
-            err.to_string()
-                .starts_with("tolerance: must be > 0 and finite"),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("tolerance: must be > 0 and finite"), "{err}");
         let u = [7.0, 0.0, 0.0, 0.0];
         for (settings, field) in [
-            (
-                ClarabelSettings {
-                    tolerance: -1.0,
-                    max_iterations: 200,
-                },
-                "tolerance: must be > 0",
-            ),
-            (
-                ClarabelSettings {
-                    tolerance: 1e-10,
-                    max_iterations: 0,
-                },
-                "max_iterations: must be in 1..=",
-            ),
+            (ClarabelSettings { tolerance: -1.0, max_iterations: 200 }, "tolerance: must be > 0"),
+            (ClarabelSettings { tolerance: 1e-10, max_iterations: 0 }, "max_iterations: must be in 1..="),
         ] {
             assert!(settings.check().unwrap_err().to_string().starts_with(field));
             let err = allocate_clarabel(&p, &u, &settings).unwrap_err();
             assert!(err.to_string().starts_with(field), "{err}");
-            let err = Method::parse("clarabel", None, ActiveSetSettings::default(), settings)
-                .unwrap_err();
+            let err = Method::parse("clarabel", None, ActiveSetSettings::default(), settings).unwrap_err();
             assert!(err.to_string().starts_with(field), "{err}");
             let method = Method::Clarabel(settings);
             let err = allocate_many(&p, &method, &u, &Cancel::never()).unwrap_err();

@@ -612,12 +612,7 @@ mod tests {
     #[test]
     fn a_fall_to_the_ground_is_counted_crashed() {
         // 10 m of free fall reach the ground at sqrt(20 / g) s, before the 20 m limit.
-        let s = simulate_summary(
-            free_fall_from(10.0, 10.0),
-            &VerdictCriteria::default(),
-            &crate::Cancel::never(),
-        )
-        .unwrap();
+        let s = simulate_summary(free_fall_from(10.0, 10.0), &VerdictCriteria::default(), &crate::Cancel::never()).unwrap();
         let g = crate::fixtures::preset("quad-x").gravity_m_s2();
         assert_eq!(s.outcome, Outcome::Lost(DivergenceKind::Crashed));
         assert_eq!(s.outcome.name(), "crashed");
@@ -679,8 +674,7 @@ mod tests {
             ..VerdictCriteria::default()
         };
         let dt_s = 0.01;
-        let mut observer =
-            SummaryObserver::new(criteria, Vector3::zeros(), 20.0, vec![1.0; 4], dt_s);
+        let mut observer = SummaryObserver::new(criteria, Vector3::zeros(), 20.0, vec![1.0; 4], dt_s);
         for k in 0..=2000 {
             let t = k as f64 * dt_s;
             let mut state = RigidBodyState::at_rest();
@@ -694,11 +688,7 @@ mod tests {
     fn a_constant_spin_does_not_grow() {
         let s = spin_summary(|_| -7.0);
         assert_eq!(s.outcome, Outcome::HoldsPosition);
-        assert!(
-            s.window_spin_growth_rad_s.abs() < 1e-12,
-            "{}",
-            s.window_spin_growth_rad_s
-        );
+        assert!(s.window_spin_growth_rad_s.abs() < 1e-12, "{}", s.window_spin_growth_rad_s);
         assert!((s.window_final_spin_rad_s - 7.0).abs() < 1e-12);
     }
 
@@ -709,29 +699,17 @@ mod tests {
         // middle sample spacing: 1 + a (17.5 + 0.005) s.
         let a = 0.8;
         let s = spin_summary(|t| -(1.0 + a * t));
-        assert!(
-            (s.window_spin_growth_rad_s - a * 5.0).abs() < 1e-9,
-            "{}",
-            s.window_spin_growth_rad_s
-        );
+        assert!((s.window_spin_growth_rad_s - a * 5.0).abs() < 1e-9, "{}", s.window_spin_growth_rad_s);
         assert!((s.window_final_spin_rad_s - (1.0 + a * 17.505)).abs() < 1e-9);
     }
 
     #[test]
     fn spin_growth_needs_two_spans_in_the_window() {
         // The default 5 s window holds one span: not measured. A lost run: not measured.
-        let s = simulate_summary(
-            free_fall(6.0),
-            &VerdictCriteria::default(),
-            &Cancel::never(),
-        )
-        .unwrap();
+        let s = simulate_summary(free_fall(6.0), &VerdictCriteria::default(), &Cancel::never()).unwrap();
         assert!(s.window_spin_growth_rad_s.is_nan());
         assert!(s.window_final_spin_rad_s.is_nan());
-        let long = VerdictCriteria {
-            window_s: 10.0,
-            ..VerdictCriteria::default()
-        };
+        let long = VerdictCriteria { window_s: 10.0, ..VerdictCriteria::default() };
         let lost = simulate_summary(free_fall(10.0), &long, &Cancel::never()).unwrap();
         assert!(matches!(lost.outcome, Outcome::Lost(_)));
         assert!(lost.window_spin_growth_rad_s.is_nan());

@@ -85,9 +85,9 @@ use crate::cancel::Cancel;
 use crate::error::{require_all_finite, Result, RfError};
 
 pub use linear::LINEAR_STATES;
+pub use settings::RelaxedHoverSettings;
 use model::{Model, V3};
 use search::{Branch, Candidate, BOUND_TOLERANCE, SPIN_FLOOR_FRACTION};
-pub use settings::RelaxedHoverSettings;
 use static_hover::static_hover;
 
 /// Largest scaled equation residual a returned solution may have.
@@ -332,10 +332,7 @@ fn margin_bound(model: &Model, idle: &[usize]) -> f64 {
         .collect();
     let idle_force: V3 = idle.iter().map(|&i| model.axis[i] * model.lower[i]).sum();
     // `n . a_i <= |a_i|`: the airframe check lets a thrust axis be 1e-6 longer than a unit vector.
-    let reach = free
-        .iter()
-        .map(|&i| model.axis[i].norm())
-        .fold(1.0, f64::max);
+    let reach = free.iter().map(|&i| model.axis[i].norm()).fold(1.0, f64::max);
     let need = (model.weight_n() - idle_force.norm()) / reach;
     let slack = BOUND_TOLERANCE * bound_scale(model) * (model.rotor_count() as f64 + 1.0);
     if need <= slack || free.len() > 20 {
@@ -345,8 +342,7 @@ fn margin_bound(model: &Model, idle: &[usize]) -> f64 {
     let mut bound = f64::NEG_INFINITY;
     for mask in 1u64..(1u64 << free.len()) {
         let members = (0..free.len()).filter(|b| mask & (1 << b) != 0);
-        let (sum, count) =
-            members.fold((0.0, 0usize), |(s, c), b| (s + model.upper[free[b]], c + 1));
+        let (sum, count) = members.fold((0.0, 0usize), |(s, c), b| (s + model.upper[free[b]], c + 1));
         bound = bound.max((sum - need) / count as f64);
     }
     bound + slack

@@ -295,11 +295,7 @@ where
         let mut sum = 0.0;
         for k in 0..n {
             let l = eigenvalues[k];
-            let inverse = if largest > 0.0 && l > rtol * largest {
-                1.0 / l
-            } else {
-                0.0
-            };
+            let inverse = if largest > 0.0 && l > rtol * largest { 1.0 / l } else { 0.0 };
             sum += eigenvectors[(r, k)] * inverse * eigenvectors[(c, k)];
         }
         sum

@@ -407,8 +407,7 @@ impl<'a> Branch<'a> {
         let (n, s, f) = found?;
         // The last momentum update can move the optimum above a rotor's bound (the margin
         // checked at the start of the step was the previous momentum's): no relaxed hover.
-        self.within_bounds(&f)
-            .then(|| (self.candidate(n, s, &f), (point[0], point[1])))
+        self.within_bounds(&f).then(|| (self.candidate(n, s, &f), (point[0], point[1])))
     }
 
     /// Nelder-Mead stops near, not on, a kinked optimum, where several carrying rotors share the
@@ -526,9 +525,7 @@ impl<'a> Branch<'a> {
                     };
                     let h_new = self.momentum(&f);
                     // Within the bounds only (as in the volume search: the momentum moved).
-                    result = self
-                        .within_bounds(&f)
-                        .then(|| (self.candidate(n, s, &f), (point[0], point[1])));
+                    result = self.within_bounds(&f).then(|| (self.candidate(n, s, &f), (point[0], point[1])));
                     let size = h.norm().max(h_new.norm());
                     if self.k() == self.rank || size == 0.0 || (h_new - h).norm() <= 1e-13 * size {
                         break;

@@ -46,11 +46,7 @@ impl RelaxedHoverSettings {
         // Divided by (k_r in the spin rate, k_f in the rotor speed): zero or a scale (error.rs).
         require_scale_or_zero("rotational_drag_n_m_s", self.rotational_drag_n_m_s, "N m s")?;
         require_scale_or_zero("rotor_inertia_kg_m2", self.rotor_inertia_kg_m2, "kg m^2")?;
-        require_scale_or_zero(
-            "thrust_coefficient_n_s2",
-            self.thrust_coefficient_n_s2,
-            "N s^2",
-        )?;
+        require_scale_or_zero("thrust_coefficient_n_s2", self.thrust_coefficient_n_s2, "N s^2")?;
         if self.rotor_inertia_kg_m2 > 0.0 && self.thrust_coefficient_n_s2 == 0.0 {
             return Err(RfError::invalid(
                 "thrust_coefficient_n_s2",

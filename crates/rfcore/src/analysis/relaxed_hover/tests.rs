@@ -453,8 +453,5 @@ fn best_only_search_returns_the_full_analysis_best() {
         assert_eq!(full.best(), best.best(), "{name} {efficiency:?}");
         pruned_somewhere |= best.solutions.len() < full.solutions.len();
     }
-    assert!(
-        pruned_somewhere,
-        "the bound never pruned: the test does not exercise it"
-    );
+    assert!(pruned_somewhere, "the bound never pruned: the test does not exercise it");
 }

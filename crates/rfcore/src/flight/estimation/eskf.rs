@@ -49,7 +49,8 @@ pub(crate) fn exp_quaternion(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
         1.0 / 725_760.0,
     ];
     let x2 = 0.25 * angle2;
-    let cos = COS[0] + x2 * (COS[1] + x2 * (COS[2] + x2 * (COS[3] + x2 * (COS[4] + x2 * COS[5]))));
+    let cos =
+        COS[0] + x2 * (COS[1] + x2 * (COS[2] + x2 * (COS[3] + x2 * (COS[4] + x2 * COS[5]))));
     let sinc = SINC[0] + x2 * (SINC[1] + x2 * (SINC[2] + x2 * (SINC[3] + x2 * SINC[4])));
     let v = phi * sinc;
     UnitQuaternion::new_unchecked(Quaternion::new(cos, v.x, v.y, v.z))

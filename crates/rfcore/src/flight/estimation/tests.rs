@@ -812,9 +812,7 @@ fn every_setting_rule_names_its_field() {
         ("estimator.saturation_excess", |s| {
             s.saturation_excess = -0.5
         }),
-        ("estimator.saturation_walk", |s| {
-            s.saturation_walk = f64::NAN
-        }),
+        ("estimator.saturation_walk", |s| s.saturation_walk = f64::NAN),
         ("estimator.initial_position_std_m", |s| {
             s.initial_position_std_m = -1.0
         }),

@@ -17,14 +17,14 @@ use rayon::prelude::*;
 use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 use crate::flight::actuator::Actuators;
-use crate::flight::estimation::ERROR_DIM;
-use crate::flight::simulation::batch_lanes::{plan, BatchLanes};
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::Divergence;
+use crate::flight::simulation::batch_lanes::{plan, BatchLanes};
 use crate::flight::simulation::driver::{check_batch, BatchRun};
 use crate::flight::simulation::recording::{SensingRecord, Trajectory};
 use crate::flight::vehicle::Vehicle;
 use crate::state::{state_vector, STATE_DIM};
+use crate::flight::estimation::ERROR_DIM;
 
 /// A value a column stores: `f64`, or `f32` (half the memory; rounded to nearest).
 pub trait Sample: Copy + Send + Sync + 'static {
@@ -183,26 +183,11 @@ fn fill<T: Sample>(
         put(slot.euler_rad, 3, at, s.euler_rad());
         put(slot.omega_rad_s, 3, at, s.omega_rad_s.into());
         put(slot.primary_axis, 3, at, s.primary_axis().into());
-        put_slice(
-            slot.rotor_command,
-            count,
-            at,
-            &run.rotor_command[j * count..(j + 1) * count],
-        );
-        put_slice(
-            slot.rotor_thrust_n,
-            m,
-            at,
-            &run.rotor_thrust_n[j * m..(j + 1) * m],
-        );
+        put_slice(slot.rotor_command, count, at, &run.rotor_command[j * count..(j + 1) * count]);
+        put_slice(slot.rotor_thrust_n, m, at, &run.rotor_thrust_n[j * m..(j + 1) * m]);
         put_slice(slot.efficiency, m, at, &run.efficiency[j * m..(j + 1) * m]);
         if !run.recorded_measurements.is_empty() {
-            put_slice(
-                slot.recorded_measurements,
-                STATE_DIM,
-                at,
-                &run.recorded_measurements[j * STATE_DIM..(j + 1) * STATE_DIM],
-            );
+            put_slice(slot.recorded_measurements, STATE_DIM, at, &run.recorded_measurements[j * STATE_DIM..(j + 1) * STATE_DIM]);
         }
         if let Some(row) = sensing_rows.as_ref().and_then(|r| r.get(j)) {
             put(slot.estimate_packed, 13, at, row.state.to_packed());
@@ -241,11 +226,7 @@ pub fn simulate_batch_columns<T: Sample>(
     let slot_rows = grid.len() + 1;
     let noise = if config.noise.is_some() { STATE_DIM } else { 0 };
     let sensed = config.sensing.is_some();
-    let (packed, euler, std) = if sensed {
-        (13, 3, ERROR_DIM)
-    } else {
-        (0, 0, 0)
-    };
+    let (packed, euler, std) = if sensed { (13, 3, ERROR_DIM) } else { (0, 0, 0) };
     let flags = if sensed { slot_rows } else { 0 };
     let mut out = BatchColumns {
         runs: n,
@@ -269,19 +250,10 @@ pub fn simulate_batch_columns<T: Sample>(
     };
     let w = |c: &Column<T>| slot_rows * c.width;
     let lens = [
-        w(&out.position_m),
-        w(&out.velocity_m_s),
-        w(&out.quaternion),
-        w(&out.euler_rad),
-        w(&out.omega_rad_s),
-        w(&out.primary_axis),
-        w(&out.rotor_command),
-        w(&out.rotor_thrust_n),
-        w(&out.efficiency),
-        w(&out.recorded_measurements),
-        w(&out.estimate_packed),
-        w(&out.estimate_euler_rad),
-        w(&out.estimate_std),
+        w(&out.position_m), w(&out.velocity_m_s), w(&out.quaternion), w(&out.euler_rad),
+        w(&out.omega_rad_s), w(&out.primary_axis), w(&out.rotor_command), w(&out.rotor_thrust_n),
+        w(&out.efficiency), w(&out.recorded_measurements), w(&out.estimate_packed),
+        w(&out.estimate_euler_rad), w(&out.estimate_std),
     ];
     let mut position = slots(&mut out.position_m.values, n, lens[0]).into_iter();
     let mut velocity = slots(&mut out.velocity_m_s.values, n, lens[1]).into_iter();
@@ -301,79 +273,25 @@ pub fn simulate_batch_columns<T: Sample>(
     let mut run_slots = Vec::with_capacity(n);
     for _ in 0..n {
         // Every column has exactly `n` slots (or `n` empty ones), so each `next` is `Some`.
-        let (
-            Some(position_m),
-            Some(velocity_m_s),
-            Some(quaternion),
-            Some(euler_rad),
-            Some(omega_rad_s),
-        ) = (
-            position.next(),
-            velocity.next(),
-            quaternion.next(),
-            euler_rad.next(),
-            omega.next(),
-        )
+        let (Some(position_m), Some(velocity_m_s), Some(quaternion), Some(euler_rad), Some(omega_rad_s)) =
+            (position.next(), velocity.next(), quaternion.next(), euler_rad.next(), omega.next())
         else {
-            return Err(RfError::invalid(
-                "runs",
-                "internal: a column has too few slots",
-            ));
+            return Err(RfError::invalid("runs", "internal: a column has too few slots"));
         };
-        let (
-            Some(primary_axis),
-            Some(rotor_command),
-            Some(rotor_thrust_n),
-            Some(efficiency),
-            Some(recorded_measurements),
-        ) = (
-            axis.next(),
-            command.next(),
-            thrust.next(),
-            efficiency.next(),
-            measured.next(),
-        )
+        let (Some(primary_axis), Some(rotor_command), Some(rotor_thrust_n), Some(efficiency), Some(recorded_measurements)) =
+            (axis.next(), command.next(), thrust.next(), efficiency.next(), measured.next())
         else {
-            return Err(RfError::invalid(
-                "runs",
-                "internal: a column has too few slots",
-            ));
+            return Err(RfError::invalid("runs", "internal: a column has too few slots"));
         };
-        let (
-            Some(estimate_packed),
-            Some(estimate_euler_rad),
-            Some(estimate_std),
-            Some(gyro_saturated),
-            Some(accel_saturated),
-        ) = (
-            est_packed.next(),
-            est_euler.next(),
-            est_std.next(),
-            gyro.next(),
-            accel.next(),
-        )
+        let (Some(estimate_packed), Some(estimate_euler_rad), Some(estimate_std), Some(gyro_saturated), Some(accel_saturated)) =
+            (est_packed.next(), est_euler.next(), est_std.next(), gyro.next(), accel.next())
         else {
-            return Err(RfError::invalid(
-                "runs",
-                "internal: a column has too few slots",
-            ));
+            return Err(RfError::invalid("runs", "internal: a column has too few slots"));
         };
         run_slots.push(Slot {
-            position_m,
-            velocity_m_s,
-            quaternion,
-            euler_rad,
-            omega_rad_s,
-            primary_axis,
-            rotor_command,
-            rotor_thrust_n,
-            efficiency,
-            recorded_measurements,
-            estimate_packed,
-            estimate_euler_rad,
-            estimate_std,
-            gyro_saturated,
-            accel_saturated,
+            position_m, velocity_m_s, quaternion, euler_rad, omega_rad_s, primary_axis, rotor_command,
+            rotor_thrust_n, efficiency, recorded_measurements, estimate_packed, estimate_euler_rad, estimate_std,
+            gyro_saturated, accel_saturated,
         });
     }
     // Each plan (one run, or a group of four in SIMD lanes) takes its runs' slots.
@@ -384,10 +302,7 @@ pub fn simulate_batch_columns<T: Sample>(
         let mut slots = Vec::new();
         for i in plan.indices() {
             let Some(slot) = run_slots.get_mut(i).and_then(Option::take) else {
-                return Err(RfError::invalid(
-                    "runs",
-                    "internal: a run's slot was taken twice",
-                ));
+                return Err(RfError::invalid("runs", "internal: a run's slot was taken twice"));
             };
             slots.push(slot);
         }
@@ -400,9 +315,7 @@ pub fn simulate_batch_columns<T: Sample>(
             trajectories
                 .into_iter()
                 .zip(slots)
-                .map(|((i, trajectory), mut slot)| {
-                    Ok((i, fill(trajectory, &mut slot, &grid, (count, m))?))
-                })
+                .map(|((i, trajectory), mut slot)| Ok((i, fill(trajectory, &mut slot, &grid, (count, m))?)))
                 .collect::<Result<Vec<_>>>()
         })
         .collect::<Result<Vec<_>>>()?;
@@ -432,10 +345,7 @@ mod tests {
             .map(|&h| BatchRun {
                 controller: Box::new(ZeroCommand { count: 4 }),
                 initial_command: None,
-                x0: RigidBodyState {
-                    position_m: Vector3::new(0.0, 0.0, -h),
-                    ..RigidBodyState::at_rest()
-                },
+                x0: RigidBodyState { position_m: Vector3::new(0.0, 0.0, -h), ..RigidBodyState::at_rest() },
                 faults: vec![],
             })
             .collect()
@@ -445,33 +355,13 @@ mod tests {
     fn columns_hold_the_per_run_rows_and_f32_rounds_them() {
         let airframe = crate::fixtures::preset("quad-x");
         let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
-        let actuators =
-            Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
+        let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
         let mut config = SimulationConfig::new(0.0025, 2, 0.6);
         config.record_every = 7;
         let never = Cancel::never();
-        let per_run =
-            simulate_batch(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
-        let wide = simulate_batch_columns::<f64>(
-            &vehicle,
-            &actuators,
-            &[1.0; 4],
-            runs(),
-            &config,
-            &never,
-            BatchLanes::Auto,
-        )
-        .unwrap();
-        let narrow = simulate_batch_columns::<f32>(
-            &vehicle,
-            &actuators,
-            &[1.0; 4],
-            runs(),
-            &config,
-            &never,
-            BatchLanes::Auto,
-        )
-        .unwrap();
+        let per_run = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never).unwrap();
+        let wide = simulate_batch_columns::<f64>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never, BatchLanes::Auto).unwrap();
+        let narrow = simulate_batch_columns::<f32>(&vehicle, &actuators, &[1.0; 4], runs(), &config, &never, BatchLanes::Auto).unwrap();
         let slot = wide.grid_rows + 1;
         assert!(wide.records[0].off_grid_row);
         assert_eq!(wide.records[1].grid_rows, wide.grid_rows);
@@ -479,14 +369,8 @@ mod tests {
             let record = &wide.records[i];
             assert_eq!(record.divergence, run.divergence);
             for (j, state) in run.states.iter().enumerate() {
-                let at = if j < record.grid_rows {
-                    j
-                } else {
-                    wide.grid_rows
-                };
-                let row = |c: &Column<f64>| {
-                    c.values[(i * slot + at) * c.width..(i * slot + at + 1) * c.width].to_vec()
-                };
+                let at = if j < record.grid_rows { j } else { wide.grid_rows };
+                let row = |c: &Column<f64>| c.values[(i * slot + at) * c.width..(i * slot + at + 1) * c.width].to_vec();
                 assert_eq!(row(&wide.position_m), state.position_m.as_slice());
                 assert_eq!(row(&wide.omega_rad_s), state.omega_rad_s.as_slice());
                 assert_eq!(row(&wide.efficiency), &run.efficiency[j * 4..(j + 1) * 4]);

@@ -187,13 +187,7 @@ impl Limits {
     /// attitude), the position and the squared norms of velocity and body rate (nalgebra's
     /// `(x^2 + y^2) + z^2`); the SIMD lanes compute these four at once.
     #[inline]
-    pub(crate) fn within_parts(
-        &self,
-        n3z: f64,
-        position_m: [f64; 3],
-        speed2: f64,
-        rate2: f64,
-    ) -> bool {
+    pub(crate) fn within_parts(&self, n3z: f64, position_m: [f64; 3], speed2: f64, rate2: f64) -> bool {
         n3z >= self.min_n3z
             && position_m[2] <= self.ground_z_m
             && self.start_altitude_m + position_m[2] <= self.limits.max_altitude_loss_m

@@ -184,15 +184,7 @@ fn a_batch_crashes_exactly_like_single_runs() {
             faults: vec![],
         })
         .collect();
-    let batch = simulate_batch(
-        &vehicle,
-        &actuators,
-        &[1.0; 4],
-        runs,
-        &config,
-        &crate::Cancel::never(),
-    )
-    .unwrap();
+    let batch = simulate_batch(&vehicle, &actuators, &[1.0; 4], runs, &config, &crate::Cancel::never()).unwrap();
     for (x0, run) in starts.iter().zip(&batch) {
         let single = fall(*x0, &config).unwrap();
         assert_eq!((&run.t_s, &run.states), (&single.t_s, &single.states));

@@ -66,7 +66,7 @@ pub use columns::{simulate_batch_columns, BatchColumns, Column, RunRecord, Sampl
 pub use config::{
     SimulationConfig, DEFAULT_GROUND_Z_M, MAX_CONTROL_STEPS, MAX_RK4_STEPS, MAX_SUBSTEPS,
 };
-pub use divergence::{Divergence, DivergenceKind, DivergenceLimits, Impact, MAX_RATE_STEP};
+pub use divergence::{Divergence, DivergenceLimits, DivergenceKind, Impact, MAX_RATE_STEP};
 pub use driver::{simulate, simulate_cancellable, simulate_observed, BatchRun};
 pub use noise::SensorNoise;
 pub use recording::{EstimateRow, SensingRecord, StepObserver, Trajectory};
