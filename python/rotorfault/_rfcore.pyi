@@ -450,6 +450,7 @@ class RelaxedHoverFeedback:
         before_failure_integral_gain: _F64 | None = None,
         before_failure_integral_limit_m_s: tuple[float, float, float] | None = None,
         handover_altitude_ratio: float | None = None,
+        handover_horizontal_ratio: _F64 | None = None,
     ) -> RelaxedHoverFeedback: ...
     @property
     def failure_time_s(self) -> float | None: ...

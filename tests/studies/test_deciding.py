@@ -682,3 +682,30 @@ def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
     assert controller.spin_axis == pytest.approx(tuple(axis)) and controller.spin_axis_time_s == 2.5 and controller.failures == ()
     assert D.indi_spin_axis(D.vehicle("ke-quadcopter"), [fault]) is None
     assert D.indi_spin_axis(x500, [rf.RotorFault(1, 2.5), rf.RotorFault(2, 2.5)]) is None
+
+
+def test_the_horizontal_hand_over_ratio_carries_the_wind_the_healthy_integral_holds() -> None:
+    # Independent of the ratio's linearisation: the healthy LQI flown (no failure inside the run) in
+    # a constant wind settles on its set point with its integral I_h holding the drag,
+    # c w / m; its I_h, recovered from the commands it flies (K_I I_h = u_trim - K (x - x_trim) - u),
+    # mapped by the ratio, must ask the relaxed hover's outer loop for the acceleration against
+    # that drag: -k_i H I_h = -c w / m (1 %: the loop settles within e^-9 in 26 s, and the ratio is
+    # the linear model's, so the wind is light: at 3.6 m/s the tilt's nonlinearity gives 1-2 %).
+    solution, airframe = _lanzon_relaxed()
+    v = D.vehicle("lanzon-quadrotor")
+    healthy = D.healthy_lqi("lanzon-quadrotor")
+    feedback = rf.RelaxedHoverFeedback(solution, airframe, position=D.HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
+                                       outer_loop=D.RELAXED_HOVER_OUTER_LOOP, before_failure=healthy.feedback,
+                                       failure_time_s=100.0, before_failure_integral_gain=healthy.integral_gain,
+                                       before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
+    wind = np.array([0.6, -0.4])
+    sim = rf.Simulator(v.airframe, dt_s=D.DT_S, substeps=D.SUBSTEPS, drag=D.nominal_drag(v), actuator=D.nominal_actuator(v),
+                       wind=(*wind, 0.0))
+    trajectory = sim.run(rf.State(position=D.HOVER_M), 26.0, controller=feedback)
+    x = np.concatenate([trajectory.position[-1], trajectory.velocity[-1], trajectory.euler[-1], trajectory.omega[-1]])
+    assert np.abs(x[:6] - healthy.feedback.x_trim[:6]).max() < 1e-4  # settled on the set point
+    held = healthy.feedback.u_trim - healthy.feedback.gain @ (x - healthy.feedback.x_trim) - trajectory.rotor_command[-1]
+    integral, *_ = np.linalg.lstsq(healthy.integral_gain, held, rcond=None)
+    wanted = -D.RELAXED_HOVER_OUTER_LOOP.integral_gain_s3 * feedback.handover_horizontal_ratio @ integral[:2]
+    against_drag = -v.linear_drag_n_s_m * wind / v.airframe.mass_kg
+    assert wanted == pytest.approx(against_drag, rel=0.01)

@@ -20,8 +20,11 @@ position error (``u = u_lqr - K_I`` times the integral of ``p - p_set``, ``K_I``
 augmented by the integral), so a vehicle heavier or weaker than its design does not sit metres
 below its set point when the failure comes; at the failure the relaxed hover's altitude integral
 starts where it gives the same vertical acceleration as the healthy loop's
-(:attr:`RelaxedHoverFeedback.handover_altitude_ratio`), its horizontal integral at the
-vehicle's tilt then (``rotorfault._rfcore`` ``hover_handover``).
+(:attr:`RelaxedHoverFeedback.handover_altitude_ratio`), its horizontal integral where it gives
+the steady acceleration the healthy loop's horizontal integral gave
+(:attr:`RelaxedHoverFeedback.handover_horizontal_ratio`): what the integrals learnt (weight, wind)
+is carried on, not a transient such as the braking tilt of a failure in forward flight
+(``rotorfault._rfcore`` ``hover_handover``).
 """
 
 from __future__ import annotations
@@ -187,6 +190,13 @@ class RelaxedHoverFeedback:
         #: unit of integral (healthy: level, rotors at full efficiency; relaxed: its linear model), so
         #: the weight the healthy integral carried is carried on. 0 without an altitude integral.
         self.handover_altitude_ratio = self._handover_altitude_ratio()
+        #: The relaxed hover's horizontal integral (m s, north and east) per the healthy design's
+        #: (2 x 2) at the hand-over: both give the same steady horizontal acceleration (healthy: the
+        #: integral its closed loop holds against a constant horizontal force, from the healthy
+        #: airframe's hover linearisation; relaxed: ``-k_i`` times its integral), so the wind the
+        #: healthy integral learnt is carried on, and a transient (braking from forward flight) is
+        #: not. Zeros without a horizontal integral.
+        self.handover_horizontal_ratio = self._handover_horizontal_ratio()
 
     def _handover_altitude_ratio(self) -> float:
         k_z = self.outer_loop.altitude_integral_gain_s
@@ -200,6 +210,35 @@ class RelaxedHoverFeedback:
         if not (math.isfinite(healthy) and math.isfinite(relaxed) and relaxed != 0.0):
             raise ValueError(f"before_failure_integral_gain: no hand-over ratio (healthy {healthy:g}, relaxed {relaxed:g} m/s^2 per m s)")
         return healthy / relaxed
+
+    def _handover_horizontal_ratio(self) -> FloatArray:
+        k_i = self.outer_loop.integral_gain_s3
+        if self.before_failure is None or self.before_failure_integral_gain is None or k_i == 0.0:
+            return np.zeros((2, 2))
+        from ..flight import Simulator
+        from .lqr import linearize
+
+        healthy = self.airframe.with_efficiency(np.ones(self.airframe.rotor_count))
+        model = linearize(Simulator(healthy), (self.before_failure.x_trim, self.before_failure.u_trim))
+        a, b = np.asarray(model.A), np.asarray(model.B)
+        n = a.shape[0]
+        # The healthy loop with integral action, d/dt [x; I] = closed [x; I] + E d, in steady state
+        # under a constant horizontal acceleration d: position error 0, the integral holding d.
+        closed = np.zeros((n + 3, n + 3))
+        closed[:n, :n] = a - b @ np.asarray(self.before_failure.gain)
+        closed[:n, n:] = -b @ self.before_failure_integral_gain
+        closed[n:, :3] = np.eye(3)
+        force = np.zeros((n + 3, 2))
+        force[3, 0] = force[4, 1] = 1.0  # north and east velocity rows
+        try:
+            integral_per_accel = np.linalg.solve(closed, -force)[n:n + 2]
+            ratio = np.linalg.inv(integral_per_accel) / k_i
+        except np.linalg.LinAlgError:
+            ratio = np.full((2, 2), np.nan)
+        if not np.all(np.isfinite(ratio)):
+            raise ValueError("before_failure_integral_gain: no horizontal hand-over ratio (the healthy loop holds no steady "
+                             "integral against a horizontal force)")
+        return np.asarray(ratio, dtype=np.float64)
 
     def check_sampled(self, dt_s: float) -> float:
         """The spectral radius of the loop sampled at ``dt_s`` (zero-order hold,
@@ -240,6 +279,8 @@ class RelaxedHoverFeedback:
             before_failure_integral_limit_m_s=None if self.before_failure_integral_limit_m_s is None
             else _triple(self.before_failure_integral_limit_m_s),
             handover_altitude_ratio=None if self.before_failure_integral_gain is None else self.handover_altitude_ratio,
+            handover_horizontal_ratio=None if self.before_failure_integral_gain is None
+            else np.ascontiguousarray(self.handover_horizontal_ratio),
         )
 
 

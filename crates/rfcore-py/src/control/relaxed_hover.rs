@@ -3,7 +3,9 @@
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use rfcore::control::hover_handover::{IntegralHover, RelaxedHoverHandover};
+use rfcore::control::hover_handover::{
+    relaxed_hover_handover, IntegralHover, RelaxedHoverHandover,
+};
 use rfcore::control::relaxed_hover::{
     RelaxedHoverFeedback, RelaxedHoverOuterLoop, RelaxedHoverTrim,
 };
@@ -100,7 +102,7 @@ impl PyRelaxedHoverFeedback {
     #[pyo3(signature = (*, axis, e1, e2, body_rate_rad_s, circle_offset_m, circle_velocity_m_s, gravity_m_s2,
                         u_trim, gain, position_m, outer_loop=None, before_failure=None, failure_time_s=None,
                         before_failure_integral_gain=None, before_failure_integral_limit_m_s=None,
-                        handover_altitude_ratio=None))]
+                        handover_altitude_ratio=None, handover_horizontal_ratio=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         axis: [f64; 3],
@@ -119,6 +121,7 @@ impl PyRelaxedHoverFeedback {
         before_failure_integral_gain: Option<PyReadonlyArray2<'_, f64>>,
         before_failure_integral_limit_m_s: Option<[f64; 3]>,
         handover_altitude_ratio: Option<f64>,
+        handover_horizontal_ratio: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
         let trim = RelaxedHoverTrim {
             axis,
@@ -158,9 +161,22 @@ impl PyRelaxedHoverFeedback {
             before_failure_integral_gain,
             before_failure_integral_limit_m_s,
             handover_altitude_ratio,
+            handover_horizontal_ratio,
         ) {
-            (_, None, None, None) => None,
-            (Some((h, t)), Some(gain), Some(limit), Some(ratio)) => {
+            (_, None, None, None, None) => None,
+            (Some((h, t)), Some(gain), Some(limit), Some(ratio), Some(horizontal)) => {
+                let horizontal = matrix("handover_horizontal_ratio", &horizontal)?;
+                if horizontal.shape() != (2, 2) {
+                    return Err(to_py_err(rfcore::error::RfError::shape(
+                        "handover_horizontal_ratio",
+                        "2 x 2 (north, east)",
+                        format!("{} x {}", horizontal.nrows(), horizontal.ncols()),
+                    )));
+                }
+                let horizontal = [
+                    [horizontal[(0, 0)], horizontal[(0, 1)]],
+                    [horizontal[(1, 0)], horizontal[(1, 1)]],
+                ];
                 let setpoint = h.trim_position_m();
                 let before = IntegralHover::new(
                     h.clone(),
@@ -170,14 +186,14 @@ impl PyRelaxedHoverFeedback {
                 )
                 .map_err(to_py_err)?;
                 Some(
-                    RelaxedHoverHandover::new(before, inner.clone(), *t, ratio)
+                    relaxed_hover_handover(before, inner.clone(), *t, ratio, horizontal)
                         .map_err(to_py_err)?,
                 )
             }
             _ => {
                 return Err(to_py_err(rfcore::error::RfError::invalid(
-                    "before_failure_integral_gain, before_failure_integral_limit_m_s, handover_altitude_ratio",
-                    "give all three with before_failure and failure_time_s, or none",
+                    "before_failure_integral_gain, before_failure_integral_limit_m_s, handover_altitude_ratio, handover_horizontal_ratio",
+                    "give all four with before_failure and failure_time_s, or none",
                 )))
             }
         };

@@ -12,14 +12,20 @@
 //! loop left its own (bumpless): the altitude integral at `altitude_ratio` times the healthy
 //! altitude integral (the ratio of the two loops' vertical accelerations per unit of integral,
 //! computed in Python from the two designs: the same weight the trims do not carry), the
-//! horizontal integral at the tilt the vehicle flies at the hand-over (the acceleration the
-//! healthy loop balances the wind with). Without it the relaxed hover starts from zero integrals
-//! and winds them up while climbing back, overshooting the set point.
+//! horizontal integral at `horizontal_ratio` times the healthy horizontal integral (2 x 2, from
+//! Python: the relaxed hover's integral giving the steady acceleration the healthy loop's integral
+//! holds against a constant horizontal force: the wind it learnt). Without it the relaxed hover
+//! starts from zero integrals and winds them up while climbing back, overshooting the set point.
+//! Only what the integrals learnt is carried over, not the vehicle's tilt: at a failure in
+//! forward flight the tilt is the healthy loop braking (1.2-2.6 m/s^2 on the Lanzon quadrotor at
+//! 2 m/s), and started from it the relaxed hover kept braking after it stopped and ended 3-3.7 m
+//! off station (issue 30, 14 runs of the deciding campaign).
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, Matrix2, Vector3};
 
 use super::linear::LinearFeedback;
 use super::relaxed_hover::RelaxedHoverFeedback;
+use super::switch::{FailureTimeSwitch, HandOver};
 use super::{require_finite_matrix, Controller};
 use crate::error::{require_all_finite, Result, RfError};
 use crate::state::RigidBodyState;
@@ -116,77 +122,57 @@ impl Controller for IntegralHover {
     }
 }
 
+/// The hand-over at the failure: the relaxed hover's integrals started from the healthy loop's
+/// (module docs).
+#[derive(Debug, Clone, Copy)]
+pub struct IntegralHandOver {
+    /// The relaxed hover's altitude integral (m s, up) per healthy altitude integral (m s, down).
+    altitude_ratio: f64,
+    /// The relaxed hover's horizontal integral (m s, north and east) per healthy one (m s).
+    horizontal_ratio: Matrix2<f64>,
+}
+
+impl HandOver<IntegralHover, RelaxedHoverFeedback> for IntegralHandOver {
+    fn hand_over(&mut self, before: &IntegralHover, after: &mut RelaxedHoverFeedback) {
+        let integral = before.integral_m_s();
+        after.start_integrals(
+            self.altitude_ratio * integral.z,
+            self.horizontal_ratio * integral.xy(),
+        );
+    }
+}
+
 /// [`IntegralHover`] until `failure_time_s`, then the relaxed hover LQR with its integrals started
-/// from the healthy loop's (module docs).
-#[derive(Debug, Clone)]
-pub struct RelaxedHoverHandover {
+/// from the healthy loop's: the failure-time switch with [`IntegralHandOver`].
+pub type RelaxedHoverHandover =
+    FailureTimeSwitch<IntegralHover, RelaxedHoverFeedback, IntegralHandOver>;
+
+/// The [`RelaxedHoverHandover`] (the switch's own checks: `failure_time_s` finite and >= 0, the
+/// same command count; `altitude_ratio` and `horizontal_ratio` (rows north, east) finite).
+pub fn relaxed_hover_handover(
     before: IntegralHover,
     after: RelaxedHoverFeedback,
     failure_time_s: f64,
-    /// The relaxed hover's altitude integral (m s, up) per healthy altitude integral (m s, down).
     altitude_ratio: f64,
-    handed_over: bool,
-}
-
-impl RelaxedHoverHandover {
-    pub fn new(
-        before: IntegralHover,
-        after: RelaxedHoverFeedback,
-        failure_time_s: f64,
-        altitude_ratio: f64,
-    ) -> Result<Self> {
-        if !(failure_time_s.is_finite() && failure_time_s >= 0.0) {
-            return Err(RfError::invalid(
-                "failure_time_s",
-                format!("must be finite and >= 0, got {failure_time_s}"),
-            ));
-        }
-        if !altitude_ratio.is_finite() {
-            return Err(RfError::invalid(
-                "altitude_ratio",
-                format!("must be finite, got {altitude_ratio}"),
-            ));
-        }
-        if before.command_count() != after.command_count() {
-            return Err(RfError::invalid(
-                "before_failure",
-                format!(
-                    "writes {} commands, the relaxed hover {}",
-                    before.command_count(),
-                    after.command_count()
-                ),
-            ));
-        }
-        Ok(RelaxedHoverHandover {
-            before,
-            after,
-            failure_time_s,
+    horizontal_ratio: [[f64; 2]; 2],
+) -> Result<RelaxedHoverHandover> {
+    if !altitude_ratio.is_finite() {
+        return Err(RfError::invalid(
+            "altitude_ratio",
+            format!("must be finite, got {altitude_ratio}"),
+        ));
+    }
+    require_all_finite("horizontal_ratio", horizontal_ratio.as_flattened())?;
+    let [[nn, ne], [en, ee]] = horizontal_ratio;
+    FailureTimeSwitch::with_hand_over(
+        before,
+        after,
+        failure_time_s,
+        IntegralHandOver {
             altitude_ratio,
-            handed_over: false,
-        })
-    }
-}
-
-impl Controller for RelaxedHoverHandover {
-    fn command_count(&self) -> usize {
-        self.after.command_count()
-    }
-    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
-        if t_s < self.failure_time_s {
-            return self.before.command(t_s, measured, out);
-        }
-        if !self.handed_over {
-            self.handed_over = true;
-            let altitude = self.altitude_ratio * self.before.integral_m_s().z;
-            self.after.start_integrals(altitude, measured);
-        }
-        self.after.command(t_s, measured, out)
-    }
-    fn reset(&mut self) {
-        self.before.reset();
-        self.after.reset();
-        self.handed_over = false;
-    }
+            horizontal_ratio: Matrix2::new(nn, ne, en, ee),
+        },
+    )
 }
 
 #[cfg(test)]
@@ -241,7 +227,7 @@ mod tests {
             ..Default::default()
         };
         let after = RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap();
-        let mut c = RelaxedHoverHandover::new(hover(-0.5), after, 1.0, -0.25).unwrap();
+        let mut c = relaxed_hover_handover(hover(-0.5), after, 1.0, -0.25, [[0.0; 2]; 2]).unwrap();
         // 0.4 m below for 1 s before the failure: healthy integral 0.4 m s (down).
         let state = RigidBodyState {
             position_m: Vector3::new(0.0, 0.0, 0.4),
@@ -251,7 +237,7 @@ mod tests {
         for k in 0..400 {
             c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
         }
-        assert!((c.before.integral_m_s().z - 0.399).abs() < 1e-12);
+        assert!((c.before().integral_m_s().z - 0.399).abs() < 1e-12);
         // At the failure, level: the relaxed altitude integral is -0.25 x 0.399 m s (up), so
         // u = 3 - 2 (z + 0.5 I) = 3 - 2 (-0.4 - 0.5 x 0.0998) and no horizontal integral.
         c.command(1.0, &state, &mut out).unwrap();
@@ -260,6 +246,81 @@ mod tests {
         c.reset();
         c.command(1.0, &state, &mut out).unwrap();
         assert!((out[0] - (3.0 - 2.0 * -0.4)).abs() < 1e-12, "{}", out[0]);
+    }
+
+    /// A relaxed hover (spin about body -z, up at rest) with an altitude gain only, its outer loop
+    /// the default with a horizontal integral.
+    fn relaxed() -> RelaxedHoverFeedback {
+        use crate::control::relaxed_hover::{RelaxedHoverOuterLoop, RelaxedHoverTrim};
+        let trim = RelaxedHoverTrim {
+            axis: [0.0, 0.0, -1.0],
+            e1: [0.0, 1.0, 0.0],
+            e2: [1.0, 0.0, 0.0],
+            body_rate_rad_s: [0.0, 0.0, -15.0],
+            circle_offset_m: [0.0; 3],
+            circle_velocity_m_s: [0.0; 3],
+            gravity_m_s2: 9.81,
+        };
+        let mut gain = DMatrix::zeros(1, 7);
+        gain[(0, 5)] = 2.0;
+        let outer = RelaxedHoverOuterLoop {
+            integral_gain_s3: 0.3,
+            ..Default::default()
+        };
+        RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap()
+    }
+
+    #[test]
+    fn the_horizontal_integral_starts_at_the_ratio_times_the_healthy_one_and_pushes_back() {
+        // 0.5 m north and 0.2 m east of the set point for 1 s before the failure, level: healthy
+        // integral (0.49875, 0.1995) m s (399 steps of 2.5 ms after the first sets the time base).
+        let ratio = [[1.2, 0.1], [-0.05, 1.3]];
+        let mut c = relaxed_hover_handover(hover(0.0), relaxed(), 1.0, 0.0, ratio).unwrap();
+        let state = RigidBodyState {
+            position_m: Vector3::new(0.5, 0.2, 0.0),
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        for k in 0..=400 {
+            c.command(k as f64 * 0.0025, &state, &mut out).unwrap();
+        }
+        let healthy = c.before().integral_m_s();
+        assert!((healthy.x - 0.49875).abs() < 1e-12 && (healthy.y - 0.1995).abs() < 1e-12);
+        let started = c.after().horizontal_integral_m_s();
+        let want = (1.2 * 0.49875 + 0.1 * 0.1995, -0.05 * 0.49875 + 1.3 * 0.1995);
+        assert!((started.x - want.0).abs() < 1e-12, "{started}");
+        assert!((started.y - want.1).abs() < 1e-12, "{started}");
+        // Its sign: north and east of the set point with positive integrals, the relaxed hover
+        // wants to accelerate south and west, the integral's share adding to the position's:
+        // a = -k_p e - k_i I (k_p 0.25 /s^2, k_i 0.3 /s^3), seen from the body as the up axis
+        // tilted by (a_e, a_n) / |(a_n, a_e, -g)| along (e1, e2).
+        let (a_n, a_e) = (-0.25 * 0.5 - 0.3 * want.0, -0.25 * 0.2 - 0.3 * want.1);
+        let norm = (a_n * a_n + a_e * a_e + 9.81 * 9.81).sqrt();
+        let x = c.after().reduced_state(&state);
+        assert!(a_n < -0.25 * 0.5 && a_e < -0.25 * 0.2);
+        assert!((x[0] - a_e / norm).abs() < 1e-12, "{x:?}");
+        assert!((x[1] - a_n / norm).abs() < 1e-12, "{x:?}");
+    }
+
+    #[test]
+    fn a_braking_tilt_at_the_hand_over_does_not_enter_the_horizontal_integral() {
+        // A failure at the start of forward flight: 2 m/s north, pitched up 0.2 rad by the healthy
+        // loop braking, its integrals still 0. The relaxed hover's integral must start at 0, not at
+        // the braking acceleration (issue 30: it kept braking once stopped, 3-3.7 m off station).
+        let mut c =
+            relaxed_hover_handover(hover(0.0), relaxed(), 0.0, 0.0, [[1.2, 0.0], [0.0, 1.2]])
+                .unwrap();
+        let state = RigidBodyState {
+            velocity_m_s: Vector3::new(2.0, 0.0, 0.0),
+            attitude: nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.2, 0.0),
+            ..RigidBodyState::at_rest()
+        };
+        let mut out = [0.0];
+        c.command(0.0, &state, &mut out).unwrap();
+        assert_eq!(
+            c.after().horizontal_integral_m_s(),
+            nalgebra::Vector2::zeros()
+        );
     }
 
     #[test]
@@ -271,5 +332,8 @@ mod tests {
         let err = IntegralHover::new(feedback, DMatrix::zeros(1, 3), [0.0; 3], [1.0, 0.0, 1.0])
             .unwrap_err();
         assert!(err.to_string().starts_with("integral_limit_m_s"), "{err}");
+        let nan = [[f64::NAN, 0.0], [0.0, 1.0]];
+        let err = relaxed_hover_handover(hover(0.0), relaxed(), 1.0, 0.0, nan).unwrap_err();
+        assert!(err.to_string().starts_with("horizontal_ratio"), "{err}");
     }
 }

@@ -116,6 +116,31 @@ pub trait Controller: Send {
     fn reset(&mut self) {}
 }
 
+/// A boxed controller is a controller (so a [`switch::FailureTimeSwitch`] holds boxed or concrete
+/// ones alike).
+impl<C: Controller + ?Sized> Controller for Box<C> {
+    fn command_count(&self) -> usize {
+        (**self).command_count()
+    }
+    fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        (**self).command(t_s, measured, out)
+    }
+    fn command_with(
+        &mut self,
+        t_s: f64,
+        input: &ControllerInput<'_>,
+        out: &mut [f64],
+    ) -> Result<()> {
+        (**self).command_with(t_s, input, out)
+    }
+    fn reads_samples(&self) -> bool {
+        (**self).reads_samples()
+    }
+    fn reset(&mut self) {
+        (**self).reset()
+    }
+}
+
 /// Every rotor commanded to zero (`controller=None` in Python).
 #[derive(Debug, Clone)]
 pub struct ZeroCommand {

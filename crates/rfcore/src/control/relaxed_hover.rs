@@ -255,12 +255,17 @@ impl RelaxedHoverFeedback {
     }
 
     /// Starts the integrals where a healthy loop flying until now left them (a bumpless hand-over,
-    /// [`super::hover_handover`]): the altitude integral at `altitude_integral_m_s` (m s, up;
-    /// its share kept within [`ALTITUDE_INTEGRAL_LIMIT_M`]), the horizontal one at the
-    /// acceleration the vehicle's thrust along its body z axis gives now (`g` times the tilt's
-    /// tangent: what the healthy loop balanced the wind with; kept within the tilt limit). An
-    /// integral whose gain is 0 stays 0. The next call only sets the integrals' time base.
-    pub fn start_integrals(&mut self, altitude_integral_m_s: f64, measured: &RigidBodyState) {
+    /// [`super::hover_handover`]): the altitude integral at `altitude_integral_m_s` (m s, up; its
+    /// share kept within [`ALTITUDE_INTEGRAL_LIMIT_M`]), the horizontal one at
+    /// `horizontal_integral_m_s` (m s, north and east: the circle centre's error integral, whose
+    /// share `-k_i \int e dt` of the wanted acceleration is kept within the tilt limit). An
+    /// integral whose gain is 0, or a non-finite start, stays 0. The next call only sets the
+    /// integrals' time base.
+    pub fn start_integrals(
+        &mut self,
+        altitude_integral_m_s: f64,
+        horizontal_integral_m_s: nalgebra::Vector2<f64>,
+    ) {
         self.reset();
         let k_z = self.outer.altitude_integral_gain_s;
         if k_z > 0.0 && altitude_integral_m_s.is_finite() {
@@ -269,16 +274,19 @@ impl RelaxedHoverFeedback {
                 .set_sum_m_s([altitude_integral_m_s.clamp(-limit, limit)]);
         }
         let k_i = self.outer.integral_gain_s3;
-        let up = measured.attitude * Vector3::new(0.0, 0.0, -1.0);
-        if k_i > 0.0 && up.z < 0.0 && up.iter().all(|v| v.is_finite()) {
-            let accel = self.gravity * up.xy() / -up.z;
-            let mut integral = -accel / k_i;
+        if k_i > 0.0 && horizontal_integral_m_s.iter().all(|v| v.is_finite()) {
+            let mut integral = horizontal_integral_m_s;
             let limit = self.gravity * self.outer.max_tilt_rad.tan() / k_i;
             if integral.norm() > limit {
                 integral *= limit / integral.norm();
             }
             self.integral.set_sum_m_s([integral.x, integral.y]);
         }
+    }
+
+    /// The circle centre's horizontal error integral, m s (north, east).
+    pub fn horizontal_integral_m_s(&self) -> nalgebra::Vector2<f64> {
+        self.integral_m_s
     }
 
     /// The reduced state `[a, b, dp, dq, dr, z, w]` the gain acts on (module docs).

@@ -8,11 +8,30 @@ use super::Controller;
 use crate::error::{Result, RfError};
 use crate::state::{ControllerInput, RigidBodyState};
 
-/// `before` commands while `t < failure_time_s`, `after` from the first control step at or after it.
-pub struct FailureTimeSwitch {
-    before: Box<dyn Controller>,
-    after: Box<dyn Controller>,
+/// What the switch does once, at the first control step at or after the failure time, before
+/// `after` commands: carry state over from `before` (a bumpless hand-over of integrals,
+/// [`super::hover_handover`]).
+pub trait HandOver<B, A>: Send {
+    fn hand_over(&mut self, before: &B, after: &mut A);
+}
+
+/// No hand-over: `after` starts from its own initial state.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoHandOver;
+
+impl<B, A> HandOver<B, A> for NoHandOver {
+    fn hand_over(&mut self, _before: &B, _after: &mut A) {}
+}
+
+/// `before` commands while `t < failure_time_s`, `after` from the first control step at or after
+/// it, `hand_over` run once between them.
+#[derive(Debug, Clone)]
+pub struct FailureTimeSwitch<B = Box<dyn Controller>, A = Box<dyn Controller>, H = NoHandOver> {
+    before: B,
+    after: A,
+    hand_over: H,
     failure_time_s: f64,
+    handed_over: bool,
 }
 
 impl FailureTimeSwitch {
@@ -22,6 +41,13 @@ impl FailureTimeSwitch {
         after: Box<dyn Controller>,
         failure_time_s: f64,
     ) -> Result<Self> {
+        Self::with_hand_over(before, after, failure_time_s, NoHandOver)
+    }
+}
+
+impl<B: Controller, A: Controller, H: HandOver<B, A>> FailureTimeSwitch<B, A, H> {
+    /// [`FailureTimeSwitch::new`] with `hand_over` run at the switch.
+    pub fn with_hand_over(before: B, after: A, failure_time_s: f64, hand_over: H) -> Result<Self> {
         if !(failure_time_s.is_finite() && failure_time_s >= 0.0) {
             return Err(RfError::invalid(
                 "failure_time_s",
@@ -41,20 +67,34 @@ impl FailureTimeSwitch {
         Ok(FailureTimeSwitch {
             before,
             after,
+            hand_over,
             failure_time_s,
+            handed_over: false,
         })
     }
 
+    /// The controller flying at `t_s` (handing over first at the switch).
     fn active(&mut self, t_s: f64) -> &mut dyn Controller {
         if t_s < self.failure_time_s {
-            self.before.as_mut()
-        } else {
-            self.after.as_mut()
+            return &mut self.before;
         }
+        if !self.handed_over {
+            self.handed_over = true;
+            self.hand_over.hand_over(&self.before, &mut self.after);
+        }
+        &mut self.after
+    }
+
+    pub fn before(&self) -> &B {
+        &self.before
+    }
+
+    pub fn after(&self) -> &A {
+        &self.after
     }
 }
 
-impl Controller for FailureTimeSwitch {
+impl<B: Controller, A: Controller, H: HandOver<B, A>> Controller for FailureTimeSwitch<B, A, H> {
     fn command_count(&self) -> usize {
         self.after.command_count()
     }
@@ -75,6 +115,7 @@ impl Controller for FailureTimeSwitch {
     fn reset(&mut self) {
         self.before.reset();
         self.after.reset();
+        self.handed_over = false;
     }
 }
 
@@ -90,13 +131,42 @@ mod tests {
 
     #[test]
     fn switches_at_the_failure_time() {
-        let mut c = FailureTimeSwitch::new(constant(&[1.0, 2.0]), constant(&[3.0, 4.0]), 0.5).unwrap();
+        let mut c =
+            FailureTimeSwitch::new(constant(&[1.0, 2.0]), constant(&[3.0, 4.0]), 0.5).unwrap();
         let state = RigidBodyState::at_rest();
         let mut out = [0.0; 2];
         c.command(0.4999, &state, &mut out).unwrap();
         assert_eq!(out, [1.0, 2.0]);
         c.command(0.5, &state, &mut out).unwrap();
         assert_eq!(out, [3.0, 4.0]);
+    }
+
+    /// Counts its hand-overs.
+    struct Counting(usize);
+    impl HandOver<OpenLoop, OpenLoop> for Counting {
+        fn hand_over(&mut self, _before: &OpenLoop, _after: &mut OpenLoop) {
+            self.0 += 1;
+        }
+    }
+
+    #[test]
+    fn hands_over_once_at_the_switch_and_again_after_a_reset() {
+        let open = |v: f64| {
+            OpenLoop::new(vec![0.0], nalgebra::DMatrix::from_row_slice(1, 1, &[v])).unwrap()
+        };
+        let mut c =
+            FailureTimeSwitch::with_hand_over(open(1.0), open(3.0), 0.5, Counting(0)).unwrap();
+        let state = RigidBodyState::at_rest();
+        let mut out = [0.0];
+        c.command(0.4999, &state, &mut out).unwrap();
+        assert_eq!((out, c.hand_over.0), ([1.0], 0));
+        for t in [0.5, 0.5025, 0.505] {
+            c.command(t, &state, &mut out).unwrap();
+        }
+        assert_eq!((out, c.hand_over.0), ([3.0], 1));
+        c.reset();
+        c.command(0.6, &state, &mut out).unwrap();
+        assert_eq!(c.hand_over.0, 2);
     }
 
     #[test]
