@@ -128,8 +128,9 @@ TARGET_SHARE = 0.95
 #: part of a streamed dataset's identity, so a resume after a change that moves verdicts is
 #: refused rather than mixing chunks flown by two versions. Bump it with any such change.
 #: 1: before session h40; 2: the relaxed hover LQR's healthy LQI and hand-over, INDI's output side
-#: from the measured inertia coupling.
-CONTROLLERS_REVISION = 2
+#: from the measured inertia coupling; 3: INDI's tilted spin axis (given up yaw with spare rotors,
+#: and the relaxed spin where nothing damps it), the hand-over's horizontal integral ratio.
+CONTROLLERS_REVISION = 3
 #: The relaxed hover LQR's design schedule over a partial loss's efficiency (module notes).
 EFFICIENCY_STEP = 0.05
 #: The relaxed hover LQR's outer loop in the campaign. The default loop (0.5 rad/s, no integral,

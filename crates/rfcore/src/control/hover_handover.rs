@@ -23,6 +23,7 @@
 
 use nalgebra::{DMatrix, Matrix2, Vector3};
 
+use super::integral::PositionIntegral;
 use super::linear::LinearFeedback;
 use super::relaxed_hover::RelaxedHoverFeedback;
 use super::switch::{FailureTimeSwitch, HandOver};
@@ -38,9 +39,8 @@ pub struct IntegralHover {
     integral_gain: DMatrix<f64>,
     setpoint_m: Vector3<f64>,
     /// Largest `|\int e dt|` per axis, m s.
-    limit_m_s: Vector3<f64>,
-    integral_m_s: Vector3<f64>,
-    integrated_to_s: Option<f64>,
+    limit_m_s: [f64; 3],
+    integral: PositionIntegral<3>,
 }
 
 impl IntegralHover {
@@ -74,30 +74,21 @@ impl IntegralHover {
             feedback,
             integral_gain,
             setpoint_m: Vector3::from(setpoint_m),
-            limit_m_s: Vector3::from(limit_m_s),
-            integral_m_s: Vector3::zeros(),
-            integrated_to_s: None,
+            limit_m_s,
+            integral: PositionIntegral::default(),
         })
     }
 
     /// `\int (p - p_set) dt` so far (world NED), m s.
     pub fn integral_m_s(&self) -> Vector3<f64> {
-        self.integral_m_s
+        Vector3::from(self.integral.sum_m_s())
     }
 
-    /// Advances the integral to `t_s` (rectangle rule over the time since the last call).
+    /// Advances the integral to `t_s` (the shared rule of `control::integral`).
     fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
-        let previous = self.integrated_to_s.replace(t_s);
-        let Some(previous) = previous else { return };
-        let dt = t_s - previous;
-        let error = measured.position_m - self.setpoint_m;
-        if dt.is_nan() || dt <= 0.0 || !error.iter().all(|v| v.is_finite()) {
-            return;
-        }
-        self.integral_m_s += dt * error;
-        for k in 0..3 {
-            self.integral_m_s[k] =
-                self.integral_m_s[k].clamp(-self.limit_m_s[k], self.limit_m_s[k]);
+        if let Some(dt_s) = self.integral.advance(t_s) {
+            let error = measured.position_m - self.setpoint_m;
+            self.integral.add_clamped(dt_s, error.into(), self.limit_m_s);
         }
     }
 }
@@ -110,15 +101,15 @@ impl Controller for IntegralHover {
         self.integrate(t_s, measured);
         self.feedback.command(t_s, measured, out)?;
         for (i, o) in out.iter_mut().enumerate() {
+            let integral_m_s = self.integral.sum_m_s();
             *o -= (0..3)
-                .map(|k| self.integral_gain[(i, k)] * self.integral_m_s[k])
+                .map(|k| self.integral_gain[(i, k)] * integral_m_s[k])
                 .sum::<f64>();
         }
         Ok(())
     }
     fn reset(&mut self) {
-        self.integral_m_s = Vector3::zeros();
-        self.integrated_to_s = None;
+        self.integral.reset();
     }
 }
 

@@ -286,7 +286,7 @@ impl RelaxedHoverFeedback {
 
     /// The circle centre's horizontal error integral, m s (north, east).
     pub fn horizontal_integral_m_s(&self) -> nalgebra::Vector2<f64> {
-        self.integral_m_s
+        nalgebra::Vector2::from(self.integral.sum_m_s())
     }
 
     /// The reduced state `[a, b, dp, dq, dr, z, w]` the gain acts on (module docs).
