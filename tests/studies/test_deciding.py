@@ -658,13 +658,15 @@ def test_a_dataset_whose_draws_no_longer_reproduce_reads_its_holds_as_flown(tmp_
     monkeypatch.setattr(D.DecidingCampaign, "draw_of",
                         staticmethod(lambda seed, cell, index: dataclasses.replace(drawn(seed, cell, index),
                                                                                    mass_scale=1.01 * drawn(seed, cell, index).mass_scale)))
-    old = D.read_deciding(bare, certify=False)
+    with pytest.warns(UserWarning, match="holds are read as flown, not judged again by the current rule .*row 0"):
+        old = D.read_deciding(bare, certify=False)
     assert not old.holds_rejudged and old.spin_growth_judged and "HOLDS AS FLOWN, NOT RE-JUDGED" in old.table()
     np.testing.assert_array_equal(old.columns["holds"], flown.columns["holds"])
     np.testing.assert_array_equal(old.columns["holds_as_flown"], flown.columns["holds"])
     with pytest.raises(ValueError, match="row 0 .* was not drawn by this suite"):
         D.read_deciding(bare)
-    stored = D.read_deciding(certified)
+    with pytest.warns(UserWarning, match="holds are read as flown"):
+        stored = D.read_deciding(certified)
     assert not stored.holds_rejudged and stored.certified and set(stored.columns["certified"].tolist()) <= set(D.CERTIFIED)
 
 

@@ -802,13 +802,16 @@ def read_deciding(path: str | PathLike[str], *, certify: bool = True, progress: 
     else:
         try:
             columns = rejudge_holds(suite, columns)
-        except _DrawsDoNotReproduce:
+        except _DrawsDoNotReproduce as error:
             # Only certifying after the fact needs the draws themselves (it certifies the drawn
             # vehicle and fault): refused below with the row named. The stored verdicts and
-            # holds stand on their own; what is lost is the re-judging, said by holds_rejudged.
+            # holds stand on their own; what is lost is the re-judging, said by holds_rejudged
+            # and by a warning (the CLI's CSV carries neither field nor table heading).
             if recertify and certify:
                 raise
             holds_rejudged = False
+            warnings.warn(f"{path}: its holds are read as flown, not judged again by the current rule ({error})",
+                          UserWarning, stacklevel=2)
             columns = {**columns, "holds_as_flown": np.asarray(columns["holds"], dtype=bool)}
     certify_rule: int | None = SURVIVAL_RULE
     if recertify:
@@ -1004,8 +1007,9 @@ class DecidingResult:
     #: verdicts; ``None``: rows without verdicts, or a dataset that does not say which rule made
     #: them (:func:`read_deciding` warns).
     certify_rule: int | None = field(default_factory=lambda: _current_certify_rule())
-    #: Whether ``holds`` was judged again by the current rule when read (:func:`read_deciding`);
-    #: False: the flights' verdicts as flown (a dataset before the spin-growth rule, or one whose
+    #: Whether ``holds`` is the current rule's verdict: True for a suite just flown (its flights
+    #: judged by it) and for a dataset read and judged again (:func:`read_deciding`); False: the
+    #: verdicts as flown by an earlier rule (a dataset before the spin-growth rule, or one whose
     #: draws no longer reproduce, so each run's settle time constant is unknown).
     holds_rejudged: bool = True
 

@@ -107,8 +107,8 @@ impl ScaledLeastSquares {
     /// [`Self::certificate_with`] with the row count `R` known at compile time when `R > 0`:
     /// the active set's 4-axis instance certifies a phase-2 answer with the residual and the
     /// gradient unrolled as phase 1's are (the same operations in the same order, so the same
-    /// certificate bit for bit). With the generic row count this fresh certificate cost the
-    /// certified solve up to 1.24x the uncertified one (issue 32).
+    /// certificate bit for bit), for consistency with phase 1: on the bench's problems phase 2
+    /// almost never moves the commands, so this has no measured effect on speed (issue 32).
     #[inline(always)]
     pub(crate) fn certificate_with_rows<const R: usize>(
         &self,
