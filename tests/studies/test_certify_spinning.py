@@ -124,18 +124,23 @@ def _x500_rotor_1_at(efficiency: float, rotational_drag_n_m_s: float, max_spin_r
     return v.airframe, certify_survival(airframe, settings=settings)
 
 
-def test_giving_up_yaw_survives_only_by_a_steady_spin() -> None:
+def test_giving_up_yaw_survives_by_a_steady_spin() -> None:
     """The PX4 x500 with rotor 1 at 40 %: Du's static hover exists only by giving up yaw. Damped
     (k_r = 0.01 N m s), the yaw moment left settles the vehicle in a steady spin: the relaxed hover
     about the thrust axis, its yaw balance n . tau(f) = k_r s checked here from the airframe's own
     effectiveness matrix (independent of the search), survivable. Undamped (the imported model,
-    k_r = 0), n . tau(f) = 0 for every spin rate and the margin still grows with the spin: the best
-    spin is the search's limit, wherever the limit is put (200 or 400 rad/s), so no spin rate is a
-    steady state the vehicle settles in: not survivable, where before it counted as a static hover."""
+    k_r = 0), n . tau(f) = 0 for every spin rate and the margin still grows with the spin: the full
+    search's best spin is its limit, wherever the limit is put (200 or 400 rad/s). Rule 4: the rate
+    is free, so the search is repeated with the limit at FREE_SPIN_RATE_LIMIT_SHARE of it and the
+    member found there (50 or 100 rad/s, its yaw balance n . tau = 0 checked) is a steady spin a
+    spin-rate loop holds: survivable (rule 3 called it not steady: refuted by the deciding
+    campaign's flights)."""
+    from rotorfault.studies.certify import FREE_SPIN_RATE_LIMIT_SHARE
+
     nominal, damped = _x500_rotor_1_at(0.4, 1e-2)
     assert damped.hover == "give-up-yaw" and damped.survival == "spinning"
     spin = damped.relaxed_hover
-    assert spin is not None and spin.steady and spin.survivable and not spin.at_spin_rate_limit
+    assert spin is not None and spin.steady and spin.survivable and not spin.at_spin_rate_limit and not spin.spin_rate_free
     assert spin.solution is not None
     torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(spin.solution.thrust_n)
     yaw_about_axis = float(np.asarray(spin.solution.spin_axis) @ torque)
@@ -143,23 +148,26 @@ def test_giving_up_yaw_survives_only_by_a_steady_spin() -> None:
     assert survives("give-up-yaw", spin)
     for limit in (200.0, 400.0):
         _, undamped = _x500_rotor_1_at(0.4, 0.0, limit)
-        assert undamped.hover == "give-up-yaw" and undamped.survival == "not-survivable"
-        at_limit = undamped.relaxed_hover
-        assert at_limit is not None and at_limit.hover == "spinning" and at_limit.at_spin_rate_limit
-        assert abs(at_limit.spin_rate_rad_s) == pytest.approx(limit, rel=1e-6)
-        assert not at_limit.steady and not survives("give-up-yaw", at_limit)
-        assert at_limit.solution is not None
-        torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(at_limit.solution.thrust_n)
-        assert abs(float(np.asarray(at_limit.solution.spin_axis) @ torque)) < 1e-9 * float(np.max(np.abs(torque)))
+        assert undamped.hover == "give-up-yaw" and undamped.survival == "spinning"
+        free = undamped.relaxed_hover
+        assert free is not None and free.hover == "spinning" and free.spin_rate_free and not free.damped
+        assert abs(free.spin_rate_rad_s) == pytest.approx(FREE_SPIN_RATE_LIMIT_SHARE * limit, rel=1e-6)
+        assert free.steady and free.reachable_from_hover and survives("give-up-yaw", free)
+        assert free.solution is not None
+        torque = np.asarray(nominal.effectiveness_matrix())[1:4] @ np.asarray(free.solution.thrust_n)
+        assert abs(float(np.asarray(free.solution.spin_axis) @ torque)) < 1e-9 * float(np.max(np.abs(torque)))
 
 
-def test_an_undamped_spin_just_short_of_the_search_limit_is_not_steady(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The deciding campaign's x500 draw (seed 0, one rotor in hover, run 959): without rotational
-    damping the search's best spin stops at 198.22 rad/s of its 200 rad/s limit (the margin is flat
-    to 1e-4 N there; with a 400 rad/s limit the best spin is 400): within SPIN_RATE_LIMIT_MARGIN of
-    the limit, so not steady: not survivable (certify rule 2 called it spinning). Without the
-    margin (broken rule) it is spinning again. A damped hexacopter's spin as close to the limit
-    (hexa-ppnnpn, run 245, -197.4 rad/s) is pinned by k_r and stays survivable."""
+def test_an_undamped_spin_at_the_search_limit_is_taken_from_below(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rule 4 on the deciding campaign's x500 draws (seed 0, one rotor in hover). Run 959: without
+    rotational damping the full search's best spin stops at 198.22 rad/s of its 200 rad/s limit
+    (within SPIN_RATE_LIMIT_MARGIN: rule 3 called it not steady, not survivable); run 281: static
+    hover only by giving up yaw, best spin 199.99999997 rad/s (rule 3: not survivable). INDI holds
+    such draws at 4-43 rad/s (median 19, the campaign's 101 contradictions). Now the search is
+    repeated at a quarter of the limit (50 rad/s) and finds a spinning member there: spinning,
+    steady, ``spin_rate_free``. Where the lower search finds nothing, rule 3's answer stands
+    (simulated: not survivable). A damped hexacopter's spin as close to the limit (hexa-ppnnpn,
+    run 245, -197.4 rad/s) is pinned by k_r: no second search, the same verdict."""
     import importlib
 
     from rotorfault.studies import deciding as D
@@ -173,13 +181,42 @@ def test_an_undamped_spin_just_short_of_the_search_limit_is_not_steady(monkeypat
         airframe, actuator, drag = suite.draw(cells[(vehicle, "one-rotor-hover")], index).failed_vehicle(D.vehicle(vehicle))
         return certify_survival(airframe, drag=drag, actuator=actuator)
 
-    x500 = verdict("px4-x500", 959)
-    spin = x500.relaxed_hover
-    assert spin is not None and spin.hover == "spinning" and not spin.damped
-    assert 0.95 * 200.0 <= abs(spin.spin_rate_rad_s) < 199.0 and not spin.at_spin_rate_limit and spin.near_spin_rate_limit
-    assert not spin.steady and x500.survival == "not-survivable"
+    lower = C.FREE_SPIN_RATE_LIMIT_SHARE * rf.RelaxedHoverSettings().max_spin_rate_rad_s
+    assert lower == 50.0
+    for index in (959, 281):
+        x500 = verdict("px4-x500", index)
+        spin = x500.relaxed_hover
+        assert spin is not None and spin.hover == "spinning" and not spin.damped and spin.spin_rate_free
+        assert 0.0 < abs(spin.spin_rate_rad_s) <= lower * (1 + 1e-9) and spin.thrust_margin_n > 0.0
+        assert spin.entry_from_hover is not None and spin.entry_from_hover.reachable
+        assert spin.steady and x500.survival == "spinning" and x500.hover == "give-up-yaw"
+    # Where the lower search finds no spinning solution, rule 3's answer stands.
+    monkeypatch.setattr(C, "_free_spin_verdict", lambda airframe, resolved: None)
+    rule3 = verdict("px4-x500", 281)
+    assert rule3.relaxed_hover is not None and not rule3.relaxed_hover.spin_rate_free
+    assert abs(rule3.relaxed_hover.spin_rate_rad_s) > 0.95 * 200.0 and not rule3.relaxed_hover.steady
+    assert rule3.survival == "not-survivable"
+    monkeypatch.undo()
+    # A damped vehicle: one search, the verdict rule 3 gave.
+    calls = []
+    search = C.relaxed_hover
+    monkeypatch.setattr(C, "relaxed_hover", lambda *a, **k: calls.append(1) or search(*a, **k))
     hexa = verdict("hexa-ppnnpn", 245)
-    assert hexa.relaxed_hover is not None and hexa.relaxed_hover.near_spin_rate_limit and hexa.relaxed_hover.damped
-    assert hexa.survival == "spinning"
-    monkeypatch.setattr(C, "SPIN_RATE_LIMIT_MARGIN", 0.0)
-    assert verdict("px4-x500", 959).survival == "spinning"
+    assert len(calls) == 1
+    spin = hexa.relaxed_hover
+    assert spin is not None and spin.near_spin_rate_limit and spin.damped and not spin.spin_rate_free
+    assert spin.spin_rate_rad_s == pytest.approx(-197.38993195638747, rel=1e-6) and hexa.survival == "spinning"
+
+
+def test_certify_run_calls_an_undamped_x500_draw_held_by_indi_spinning() -> None:
+    """The deciding campaign (1000 runs, seed 0), px4-x500 one rotor in hover, draw 281: certified
+    not survivable under rule 3 (static hover only by giving up yaw, best spin 199.99999997 rad/s
+    at the search limit) and held by INDI. Rule 4: spinning, at no more than the lowered limit."""
+    from rotorfault.studies import deciding as D
+    from rotorfault.studies.certify import FREE_SPIN_RATE_LIMIT_SHARE
+
+    suite = D.DecidingCampaign(runs=1000, seed=0)
+    cell = next(c for c in suite.cells if (c.vehicle, c.fault_class) == ("px4-x500", "one-rotor-hover"))
+    v = D.certify_run(suite, cell, 281)
+    assert v.certified == "spinning" and v.static_hover == "give-up-yaw"
+    assert 0.0 < abs(v.spin_rate_rad_s) <= FREE_SPIN_RATE_LIMIT_SHARE * 200.0 * (1 + 1e-9)

@@ -138,8 +138,8 @@ def failures(airframe: str, max_failed: int, formula: AcaiFormula, output: Outpu
 @click.option("--spinning", is_flag=True,
               help="Also the best relaxed hover (survivable by spinning: margin, spin rate, carrying rotors) and whether "
                    "the spin can be entered from hover; --require then accepts a case that hovers statically with all axes "
-                   "or by a steady spin not excluded from hover (a spin at the search limit is steady only with "
-                   "--rotational-drag > 0).")
+                   "or by a steady spin not excluded from hover (without --rotational-drag the spin rate is free: a best "
+                   "spin at the search limit is searched again below it, at a quarter of it, and that slower spin certified).")
 @click.option("--rotational-drag", "rotational_drag", type=float, default=None,
               help="With --spinning: the vehicle's rotational damping k_r (N m s), which sets the spin rate (default 0).")
 @output_options

@@ -78,8 +78,14 @@ def parse_axes(field: str, value: str | tuple[str, ...] | list[str]) -> tuple[Ce
 #: deciding campaign's dataset: :func:`rotorfault.studies.deciding.read_deciding` warns about
 #: verdicts of another rule). 1: a spinning relaxed hover a linear feedback holds, entered from
 #: hover; 2: only a steady one (without rotational damping, not at the search's spin-rate limit);
-#: 3: without rotational damping, not within :data:`SPIN_RATE_LIMIT_MARGIN` of that limit either.
-SURVIVAL_RULE = 3
+#: 3: without rotational damping, not within :data:`SPIN_RATE_LIMIT_MARGIN` of that limit either;
+#: 4: without rotational damping a best spin at (or within :data:`SPIN_RATE_LIMIT_MARGIN` of) the
+#: limit is searched again with the limit lowered to :data:`FREE_SPIN_RATE_LIMIT_SHARE` of it, and a
+#: spinning solution found there is the verdict (steady: ``spin_rate_free``); rule 3's premise (a
+#: best spin at the limit is no equilibrium) was refuted by the deciding campaign (101 PX4 x500
+#: draws certified not survivable under rule 3, best spins 192.96-200 rad/s, held by INDI at 4-43
+#: rad/s, median 19).
+SURVIVAL_RULE = 4
 #: Without rotational damping a spin within this share of the search's spin-rate limit counts as
 #: at the limit (not steady). Why: there the thrust margin still grows with the rate but is flat
 #: to 1e-4 N over the last percent, so the search's optimum over the spin axis stops short of the
@@ -88,6 +94,15 @@ SURVIVAL_RULE = 3
 #: was repeated with 400 and 800 rad/s; the interior spins found (150-172 rad/s) stayed. 5 %
 #: covers the 3.5 % shortfall measured.
 SPIN_RATE_LIMIT_MARGIN = 0.05
+#: Rule 4: without rotational damping (``k_r = 0``) the yaw balance of a relaxed hover is ``n .
+#: tau(f) = 0`` at any rate, so its solutions form a family parameterised by the spin rate whose
+#: thrust margin grows with the rate; the search returns the member at its limit, but the slower
+#: members are equilibria too, which a spin-rate loop holds. When the best spin is at (or near) the
+#: limit, the search is repeated with the limit lowered to this share of it (a quarter: 50 rad/s of
+#: the default 200 rad/s, above the 4-43 rad/s INDI flew the PX4 x500's one-rotor draws at and far
+#: below the simulator's 200 rad/s body-rate limit), and a spinning solution found there is the
+#: verdict: a member of the family taken from below the limit.
+FREE_SPIN_RATE_LIMIT_SHARE = 0.25
 
 
 #: ``static``: the best relaxed hover is static hover; ``spinning``: a constant spin about a
@@ -122,6 +137,12 @@ class RelaxedHoverVerdict:
     #: The spin is within :data:`SPIN_RATE_LIMIT_MARGIN` of the search's spin-rate limit (where
     #: the search's optimum stops short of a limit it is heading for).
     near_spin_rate_limit: bool = False
+    #: Rule 4: no rotational damping, so the spin rate is free (``n . tau(f) = 0`` at any rate);
+    #: the best spin of the full search was at (or near) its limit and this verdict is the best
+    #: spin of the search repeated with the limit lowered to :data:`FREE_SPIN_RATE_LIMIT_SHARE` of
+    #: it (its spin, margin, carrying rotors, entry from hover and linear feedback check): a
+    #: member of the family taken from below the limit, an equilibrium a spin-rate loop holds.
+    spin_rate_free: bool = False
 
     @property
     def reachable_from_hover(self) -> bool:
@@ -139,7 +160,11 @@ class RelaxedHoverVerdict:
         0`` whatever the rate, and a best spin at the limit (``at_spin_rate_limit``, or within
         :data:`SPIN_RATE_LIMIT_MARGIN` of it: ``near_spin_rate_limit``) is the search's bound, not
         an equilibrium: its margin still grows with the rate and nothing holds the rate (the yaw
-        rate runs up to the limit, also the simulator's body-rate limit); not steady."""
+        rate runs up to the limit, also the simulator's body-rate limit); not steady. A spin taken
+        from below the limit by the lowered search (:attr:`spin_rate_free`, rule 4) is steady:
+        without damping every member of the family is an equilibrium, held by a spin-rate loop."""
+        if self.spin_rate_free:
+            return self.hover == "spinning"
         at_limit = self.at_spin_rate_limit or self.near_spin_rate_limit
         return self.hover == "static" or (self.hover == "spinning" and not (at_limit and not self.damped))
 
@@ -294,8 +319,9 @@ class Certificate(Tabular):
     def failing_spinning(self, required: str) -> list[CertificateCase]:
         """The cases up to the ``required`` class that certify does not call survivable
         (:func:`survives`: neither a static hover with all four axes nor a steady spin entered from
-        hover; a spinning solution not reachable from hover, or at the search's spin-rate limit
-        without rotational damping, fails;
+        hover; a spinning solution not reachable from hover fails, and so does one at the search's
+        spin-rate limit without rotational damping when the search repeated below
+        :data:`FREE_SPIN_RATE_LIMIT_SHARE` of the limit finds no spin;
         ``ValueError`` if the certificate was made without ``spinning=True``)."""
         k = FAILURE_CLASSES[required]
         cases = [c for c in self.cases if len(c.failed) <= k]
@@ -337,7 +363,8 @@ def certify(
     also the best relaxed hover of each case (:class:`RelaxedHoverVerdict`), computed with
     ``settings``, ``drag`` and ``actuator`` as :func:`rotorfault.analysis.relaxed_hover` takes
     them (the vehicle's rotational damping decides the spin rate: without it the best spin is the
-    search limit), and for a spinning one whether it is reachable from hover
+    search limit, and rule 4 certifies the best spin below :data:`FREE_SPIN_RATE_LIMIT_SHARE` of
+    it instead), and for a spinning one whether it is reachable from hover
     (:func:`rotorfault.analysis.entry_from_hover`, with the same rotor parameters). Checked before
     any work.
 
@@ -396,16 +423,40 @@ def _relaxed_hover_verdict(
     resolved = vehicle_settings(settings, drag, actuator)
     damped = resolved.rotational_drag_n_m_s > 0.0
     near = kind == "spinning" and abs(float(best.spin_rate_rad_s)) >= (1.0 - SPIN_RATE_LIMIT_MARGIN) * resolved.max_spin_rate_rad_s
+    if not damped and (near or bool(best.at_spin_rate_limit)) and kind == "spinning":
+        # Rule 4: the rate is free without damping; take the family's member from below the limit.
+        free = _free_spin_verdict(airframe, resolved)
+        if free is not None:
+            return free
     return RelaxedHoverVerdict(
         kind, float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry,
         damped, near,
     )
 
 
+def _free_spin_verdict(airframe: Airframe, resolved: RelaxedHoverSettings) -> RelaxedHoverVerdict | None:
+    """Rule 4 (:data:`FREE_SPIN_RATE_LIMIT_SHARE`): the best spinning relaxed hover of an undamped
+    vehicle searched with the spin-rate limit lowered to that share of ``resolved``'s (the vehicle's
+    settings, its rotor parameters filled in), as a steady verdict (``spin_rate_free``); ``None``
+    where that search finds no spinning solution (rule 3's answer stands)."""
+    values = {name: getattr(resolved, name) for name in RelaxedHoverSettings.FIELDS}
+    values["max_spin_rate_rad_s"] = FREE_SPIN_RATE_LIMIT_SHARE * resolved.max_spin_rate_rad_s
+    lower = RelaxedHoverSettings(**values)
+    best = relaxed_hover(airframe, lower, best_only=True).best
+    if best is None or best.kind != "spinning":
+        return None
+    entry = entry_from_hover(airframe, best, lower)
+    near = abs(float(best.spin_rate_rad_s)) >= (1.0 - SPIN_RATE_LIMIT_MARGIN) * lower.max_spin_rate_rad_s
+    return RelaxedHoverVerdict(
+        "spinning", float(best.spin_rate_rad_s), float(best.thrust_margin_n), tuple(best.carrying), bool(best.at_spin_rate_limit), best, entry,
+        False, near, True,
+    )
+
+
 #: How a vehicle as it is (its efficiencies: a failed rotor's drawn share of thrust) survives:
 #: ``static-hover`` (hovers at rest: with all four axes, or its best relaxed hover is static),
 #: ``spinning`` (a steady relaxed hover a linear feedback can hold, its entry from hover not
-#: excluded; a spin at the search's limit, or within :data:`SPIN_RATE_LIMIT_MARGIN` of it, is steady only with rotational damping) or ``not-survivable`` (a static hover that only gives up yaw
+#: excluded; without rotational damping a spin at the search's limit, or within :data:`SPIN_RATE_LIMIT_MARGIN` of it, is replaced by the best spin below :data:`FREE_SPIN_RATE_LIMIT_SHARE` of the limit, rule 4) or ``not-survivable`` (a static hover that only gives up yaw
 #: included: :func:`survives` says why).
 Survival = Literal["static-hover", "spinning", "not-survivable"]
 
@@ -437,8 +488,9 @@ def certify_survival(
     rotor's efficiency; a total one: 0), not a list of failure combinations: static hover with
     all four axes (Du's ACAI facet margin > 0) is ``static-hover`` and ends there; otherwise the
     best relaxed hover (as :func:`certify` with ``spinning=True`` computes it, same ``settings``,
-    ``drag``, ``actuator``) decides: static, or a steady spin (with rotational damping, or below the
-    search's spin-rate limit without it) not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`); failing both,
+    ``drag``, ``actuator``) decides: static, or a steady spin (with rotational damping; without it,
+    below the search's spin-rate limit, or the best spin of the search repeated below
+    :data:`FREE_SPIN_RATE_LIMIT_SHARE` of it: rule 4) not excluded from hover (:func:`rotorfault.analysis.entry_from_hover`); failing both,
     ``not-survivable``, also where a static hover gives up yaw (``hover`` says ``give-up-yaw``):
     the yaw moment left settles only in a steady spin, which the search finds where one exists.
     The survivable set is certify's one rule, the one :meth:`Certificate.failing_spinning` and
@@ -475,14 +527,18 @@ def survives(hover: Hover | str, relaxed_hover: RelaxedHoverVerdict | None) -> b
     """Certify's one rule for "survivable": a static hover with all four axes (``hover ==
     "all-axes"``), or a relaxed hover a linear feedback can hold that is a steady state and whose
     entry from hover is not excluded (:attr:`RelaxedHoverVerdict.survivable`: static, or a steady
-    spin: with rotational damping, or below the search's spin-rate limit without it).
+    spin: with rotational damping; without it, below the search's spin-rate limit, or the best spin
+    of the search repeated below :data:`FREE_SPIN_RATE_LIMIT_SHARE` of it, rule 4).
 
     A static hover that only exists by giving up yaw (``"give-up-yaw"``) is not survivable by
     itself: it leaves a yaw moment ``tau_z`` that nothing balances at rest, so the yaw rate grows
     until the rotational damping balances it (``k_r r = tau_z``): that steady spin is a relaxed
     hover (about the thrust axis, with the same thrusts), which the search finds on a damped
     vehicle; without damping (``k_r = 0``, e.g. a model imported without it) the yaw rate grows
-    without bound and the case survives only if the search finds another steady relaxed hover."""
+    without bound unless a controller holds a spin rate, and the case survives only if the search
+    finds another steady relaxed hover (rule 4: without damping the spin rate is free, and a spin
+    at the search's limit is replaced by the best one below :data:`FREE_SPIN_RATE_LIMIT_SHARE` of
+    it, which a spin-rate loop holds)."""
     return hover == "all-axes" or (relaxed_hover is not None and relaxed_hover.survivable)
 
 
@@ -527,5 +583,5 @@ def rows_for_display(cert: Certificate) -> tuple[list[str], list[list[str]]]:
     return headers, rows
 
 
-__all__ = ["ALL_AXES", "FAILURE_CLASSES", "FORMULA", "GIVE_UP_YAW_AXES", "SPIN_RATE_LIMIT_MARGIN", "SURVIVAL_RULE", "Certificate", "CertificateCase", "Hover", "certify",
+__all__ = ["ALL_AXES", "FAILURE_CLASSES", "FORMULA", "FREE_SPIN_RATE_LIMIT_SHARE", "GIVE_UP_YAW_AXES", "SPIN_RATE_LIMIT_MARGIN", "SURVIVAL_RULE", "Certificate", "CertificateCase", "Hover", "certify",
            "parse_axes", "rows_for_display"]
