@@ -198,7 +198,8 @@ def test_a_tilted_spin_axis_settles_the_spin_of_a_vehicle_without_rotational_dra
     tilt = 0.1 * rotor / np.linalg.norm(rotor)  # J_z > J_xy: toward the failed rotor
     measured = {}
     for axis in (None, (tilt[0], tilt[1], math.sqrt(1 - 0.1**2))):
-        controller = rf.IndiController(x500.airframe, position=HOVER, gains=indi_gains(), spin_axis=axis, spin_axis_time_s=1.0)
+        controller = rf.IndiController(x500.airframe, position=HOVER, gains=indi_gains(), spin_axis=axis,
+                                      spin_axis_time_s=0.0 if axis is None else 1.0)
         run = sim.run(rf.State(position=HOVER), 16.0, controller=controller, faults=faults)
         assert not run.events
         spin = np.abs(run.omega[:, 2])
@@ -222,3 +223,32 @@ def test_a_spin_axis_is_checked_and_named():
             rf.IndiController(quad, **kwargs)
     c = rf.IndiController(quad, spin_axis=(0.0, 0.1, -1.0), spin_axis_time_s=2.0)
     assert (c.spin_axis, c.spin_axis_time_s, c.spin_rate_rad_s) == ((0.0, 0.1, -1.0), 2.0, 0.0)
+
+
+def test_a_spin_time_or_rate_without_a_spin_axis_is_refused_and_the_defaults_are_not():
+    quad = rf.Airframe.preset("ke-quadcopter")
+    for field, value in [("spin_axis_time_s", 2.0), ("spin_rate_rad_s", 30.0), ("spin_rate_rad_s", -1.0)]:
+        with pytest.raises(ValueError, match=rf"^{field}: given .* without spin_axis"):
+            rf.IndiController(quad, **{field: value})
+    assert rf.IndiController(quad, spin_axis_time_s=0.0, spin_rate_rad_s=-0.0).spin_axis is None
+
+
+def test_a_spin_axis_is_refused_where_one_torque_axis_is_left():
+    """Two opposing rotors of a quadrotor leave one torque axis, where the spin about body z is
+    what keeps the vehicle stable: a relaxed spin whose time is before, at or after their failure
+    is refused naming spin_axis (every failure set flown from the spin's time on is read)."""
+    quad = rf.Airframe.preset("ke-quadcopter")
+    pairs = []
+    for i in range(1, 5):
+        for j in range(i + 1, 5):
+            try:
+                modes = rf.IndiController(quad, failures=[(i, 1.0), (j, 1.0)]).failure_modes()
+            except ValueError:
+                continue  # adjacent rotors: no hover at all
+            if modes[1].single_axis:
+                pairs.append((i, j))
+    assert pairs, "a quadrotor has opposing rotors"
+    failures = [(pairs[0][0], 1.0), (pairs[0][1], 1.0)]
+    for time_s in (0.0, 1.0, 5.0):
+        with pytest.raises(ValueError, match=r"^spin_axis: .*one torque axis"):
+            rf.IndiController(quad, failures=failures, spin_axis=(0.0, 0.0, 1.0), spin_axis_time_s=time_s)

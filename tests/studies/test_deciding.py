@@ -684,6 +684,40 @@ def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
     assert controller.spin_axis == pytest.approx(tuple(axis)) and controller.spin_axis_time_s == 2.5 and controller.failures == ()
     assert D.indi_spin_axis(D.vehicle("ke-quadcopter"), [fault]) is None
     assert D.indi_spin_axis(x500, [rf.RotorFault(1, 2.5), rf.RotorFault(2, 2.5)]) is None
+    # No spin time is passed without the axis it times (IndiController refuses that).
+    assert D.CONTROLLERS["indi-controller"].build(D.vehicle("ke-quadcopter"), [fault]).spin_axis_time_s == 0.0
+
+
+def test_indi_spin_axis_keeps_the_core_tilt_rule_at_its_edges() -> None:
+    """The Python copy of the core's ``primary_axis_tilt`` rule (modes.rs) at the edges where
+    numpy and Rust differ: ``J_z = J_xy`` tilts toward the rotor (Rust's signum(+0.0) = 1, numpy's
+    sign(0) = 0 would give an axis of length 0.995), and a rotor at the centre gives no direction
+    (body z, where the division would give NaN); on the x500 the four axes are the former
+    formula's, bit for bit."""
+    import dataclasses
+
+    from rotorfault._util.numeric import scaled_norm
+
+    x500 = D.vehicle("px4-x500")
+    p = np.asarray(x500.airframe.position_m, dtype=np.float64)
+    j = np.asarray(x500.airframe.inertia_kg_m2, dtype=np.float64)
+    for rotor in range(1, 5):
+        xy = p[rotor - 1, :2] / scaled_norm(p[rotor - 1, :2]) * D.INDI_SPIN_AXIS_TILT * np.sign(j[2] - 0.5 * (j[0] + j[1]))
+        former = (float(xy[0]), float(xy[1]), math.sqrt(1.0 - D.INDI_SPIN_AXIS_TILT**2))
+        assert D.indi_spin_axis(x500, [rf.RotorFault(rotor, 2.5)]) == former
+
+    class Frame:
+        def __init__(self, position_m: np.ndarray, inertia_kg_m2: np.ndarray) -> None:
+            self.position_m, self.inertia_kg_m2, self.rotor_count = position_m, inertia_kg_m2, 4
+
+    balanced = dataclasses.replace(x500, airframe=Frame(p, np.array([j[0], j[0], j[0]])))
+    axis = D.indi_spin_axis(balanced, [rf.RotorFault(1, 2.5)])
+    assert axis is not None
+    assert math.hypot(*axis) == pytest.approx(1.0, abs=1e-15)
+    assert np.dot(axis[:2], p[0, :2]) > 0
+    centred = p.copy()
+    centred[0, :2] = 0.0
+    assert D.indi_spin_axis(dataclasses.replace(x500, airframe=Frame(centred, j)), [rf.RotorFault(1, 2.5)]) == (0.0, 0.0, 1.0)
 
 
 def test_the_horizontal_hand_over_ratio_carries_the_wind_the_healthy_integral_holds() -> None:
@@ -711,3 +745,26 @@ def test_the_horizontal_hand_over_ratio_carries_the_wind_the_healthy_integral_ho
     wanted = -D.RELAXED_HOVER_OUTER_LOOP.integral_gain_s3 * feedback.handover_horizontal_ratio @ integral[:2]
     against_drag = -v.linear_drag_n_s_m * wind / v.airframe.mass_kg
     assert wanted == pytest.approx(against_drag, rel=0.01)
+
+
+def test_an_altitude_only_healthy_integral_hands_over_no_horizontal_integral() -> None:
+    # A healthy LQI without horizontal integral columns learnt no wind: the ratio is zeros (its
+    # steady-state matrices are singular there, which must not refuse the design), while the
+    # altitude ratio is still carried (non-zero, the same as with the horizontal columns).
+    solution, airframe = _lanzon_relaxed()
+    v = D.vehicle("lanzon-quadrotor")
+    healthy = D.healthy_lqi("lanzon-quadrotor")
+    altitude_only = np.array(healthy.integral_gain, dtype=np.float64)
+    altitude_only[:, :2] = 0.0
+    assert np.any(altitude_only[:, 2])
+
+    def build(gain: np.ndarray) -> rf.RelaxedHoverFeedback:
+        return rf.RelaxedHoverFeedback(solution, airframe, position=D.HOVER_M, linear_drag_n_s_m=v.linear_drag_n_s_m,
+                                       outer_loop=D.RELAXED_HOVER_OUTER_LOOP, before_failure=healthy.feedback,
+                                       failure_time_s=100.0, before_failure_integral_gain=gain,
+                                       before_failure_integral_limit_m_s=healthy.integral_limit_m_s)
+
+    feedback = build(altitude_only)
+    assert np.array_equal(feedback.handover_horizontal_ratio, np.zeros((2, 2)))
+    assert feedback.handover_altitude_ratio != 0.0
+    assert feedback.handover_altitude_ratio == build(np.asarray(healthy.integral_gain)).handover_altitude_ratio

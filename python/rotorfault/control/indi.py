@@ -102,6 +102,10 @@ class IndiController:
     aims at ``spin_rate_rad_s`` (rad/s, its magnitude, in the direction the vehicle spins; 0: the
     slowest spin the rotors allow). What a vehicle without rotational drag needs, whose spin
     otherwise grows without bound once yaw is given up (``crates/rfcore/src/control/indi/relaxed.rs``).
+    The given axis takes precedence over ``IndiGains.given_up_yaw_axis_tilt``; refused (``ValueError``
+    naming ``spin_axis``) when a failure set flown from its time on leaves one torque axis (the spin
+    about body z keeps that vehicle stable), and ``spin_axis_time_s`` / ``spin_rate_rad_s`` other than
+    0 without ``spin_axis`` are refused naming the field.
 
     Examples:
 
@@ -155,6 +159,12 @@ class IndiController:
         self.spin_axis = None if spin_axis is None else _body_axis("spin_axis", spin_axis)
         self.spin_axis_time_s = real("spin_axis_time_s", spin_axis_time_s)
         self.spin_rate_rad_s = real("spin_rate_rad_s", spin_rate_rad_s)
+        if self.spin_axis is None:
+            # Without a spin axis no relaxed hover is flown: a time or rate for it would be ignored.
+            for field, value in (("spin_axis_time_s", self.spin_axis_time_s), ("spin_rate_rad_s", self.spin_rate_rad_s)):
+                if value != 0.0:
+                    raise ValueError(f"{field}: given ({value}) without spin_axis, the relaxed hover it belongs to; "
+                                     "give spin_axis too or leave it at its default 0")
         # Validates everything now.
         self._modes = self.core(1.0 / 400.0).failure_modes()
 

@@ -215,6 +215,10 @@ class RelaxedHoverFeedback:
         k_i = self.outer_loop.integral_gain_s3
         if self.before_failure is None or self.before_failure_integral_gain is None or k_i == 0.0:
             return np.zeros((2, 2))
+        if not np.any(np.asarray(self.before_failure_integral_gain)[:, :2]):
+            # An altitude-only healthy integral learnt no wind: nothing to carry (and the steady
+            # state below would be singular).
+            return np.zeros((2, 2))
         from ..flight import Simulator
         from .lqr import linearize
 

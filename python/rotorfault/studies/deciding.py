@@ -314,7 +314,13 @@ def indi_spin_axis(v: CampaignVehicle, faults: list[RotorFault]) -> tuple[float,
         return None
     position = np.asarray(v.airframe.position_m, dtype=np.float64)[faults[0].rotor - 1, :2]
     j = np.asarray(v.airframe.inertia_kg_m2, dtype=np.float64)
-    xy = position / scaled_norm(position) * INDI_SPIN_AXIS_TILT * np.sign(j[2] - 0.5 * (j[0] + j[1]))
+    # The edge cases as the core's rule has them (`IndiGains::primary_axis_tilt`, modes.rs): a
+    # rotor at the centre gives no direction, so no tilt; `J_z = J_xy` tilts toward the rotor
+    # (Rust's `signum(+0.0)` is 1, numpy's sign(0) is 0).
+    length = scaled_norm(position)
+    if not length > 0.0:
+        return (0.0, 0.0, 1.0)
+    xy = position / length * INDI_SPIN_AXIS_TILT * math.copysign(1.0, float(j[2] - 0.5 * (j[0] + j[1])))
     return (float(xy[0]), float(xy[1]), math.sqrt(1.0 - INDI_SPIN_AXIS_TILT**2))
 
 
@@ -323,8 +329,11 @@ def _indi(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
 
     # Told of total losses only (the controller's rule); a partial loss reaches it through the
     # measurements, and which rotor it is only through the spin axis (indi_spin_axis).
+    spin_axis = indi_spin_axis(v, faults)
+    # The time only with an axis (IndiController refuses a spin time without the spin it times).
+    spin_axis_time_s = 0.0 if spin_axis is None else min((f.time for f in faults), default=0.0)
     return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M, gains=indi_gains(),
-                          spin_axis=indi_spin_axis(v, faults), spin_axis_time_s=min((f.time for f in faults), default=0.0))
+                          spin_axis=spin_axis, spin_axis_time_s=spin_axis_time_s)
 
 
 def _ke_robust(v: CampaignVehicle, faults: list[RotorFault]) -> Any:

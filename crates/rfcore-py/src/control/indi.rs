@@ -307,11 +307,16 @@ impl PyIndiController {
                 velocity_m_s,
             })
             .collect();
+        // The relaxed spin's own values are checked before the controller's work (its failure
+        // modes' LPs); whether it suits those modes only after.
+        let spin = relaxed_spin
+            .map(|(time_s, axis, rate)| RelaxedSpin::new(time_s, axis, rate))
+            .transpose()
+            .map_err(to_py_err)?;
         let mut inner = IndiController::new(&airframe.inner, gains.inner, failures, setpoints, dt_s)
             .map_err(to_py_err)?;
-        if let Some((time_s, axis, rate)) = relaxed_spin {
-            let spin = RelaxedSpin::new(time_s, axis, rate).map_err(to_py_err)?;
-            inner = inner.with_relaxed_spin(spin);
+        if let Some(spin) = spin {
+            inner = inner.with_relaxed_spin(spin).map_err(to_py_err)?;
         }
         Ok(PyIndiController { inner })
     }

@@ -139,7 +139,8 @@ pub type RelaxedHoverHandover =
     FailureTimeSwitch<IntegralHover, RelaxedHoverFeedback, IntegralHandOver>;
 
 /// The [`RelaxedHoverHandover`] (the switch's own checks: `failure_time_s` finite and >= 0, the
-/// same command count; `altitude_ratio` and `horizontal_ratio` (rows north, east) finite).
+/// same command count; `altitude_ratio` and `horizontal_ratio` (rows north, east) finite, named
+/// `handover_altitude_ratio` / `handover_horizontal_ratio`, the keywords that give them).
 pub fn relaxed_hover_handover(
     before: IntegralHover,
     after: RelaxedHoverFeedback,
@@ -149,11 +150,11 @@ pub fn relaxed_hover_handover(
 ) -> Result<RelaxedHoverHandover> {
     if !altitude_ratio.is_finite() {
         return Err(RfError::invalid(
-            "altitude_ratio",
+            "handover_altitude_ratio",
             format!("must be finite, got {altitude_ratio}"),
         ));
     }
-    require_all_finite("horizontal_ratio", horizontal_ratio.as_flattened())?;
+    require_all_finite("handover_horizontal_ratio", horizontal_ratio.as_flattened())?;
     let [[nn, ne], [en, ee]] = horizontal_ratio;
     FailureTimeSwitch::with_hand_over(
         before,
@@ -325,6 +326,68 @@ mod tests {
         assert!(err.to_string().starts_with("integral_limit_m_s"), "{err}");
         let nan = [[f64::NAN, 0.0], [0.0, 1.0]];
         let err = relaxed_hover_handover(hover(0.0), relaxed(), 1.0, 0.0, nan).unwrap_err();
-        assert!(err.to_string().starts_with("horizontal_ratio"), "{err}");
+        assert!(err.to_string().starts_with("handover_horizontal_ratio"), "{err}");
+        let err =
+            relaxed_hover_handover(hover(0.0), relaxed(), 1.0, f64::NAN, [[0.0; 2]; 2]).unwrap_err();
+        assert!(err.to_string().starts_with("handover_altitude_ratio"), "{err}");
+    }
+
+    /// The integral is the rule it had before it moved onto [`PositionIntegral`] (that code
+    /// transcribed here), bit for bit, through irregular, repeated and backward times, a
+    /// non-finite position skipped and each axis clamped at its limit, and so is the command it
+    /// makes: flights are unchanged.
+    #[test]
+    fn the_integral_is_the_former_rule_bit_for_bit() {
+        let feedback = LinearFeedback::new(&[0.0; 12], &[1.0], DMatrix::zeros(1, 12)).unwrap();
+        let gain = DMatrix::from_row_slice(1, 3, &[0.3, -0.7, -0.5]);
+        let setpoint = Vector3::new(0.5, -0.2, -1.0);
+        let limit = Vector3::new(0.4, 0.1, 0.5);
+        let mut c = IntegralHover::new(feedback, gain.clone(), setpoint.into(), limit.into())
+            .unwrap();
+        let (mut integral, mut integrated_to_s) = (Vector3::<f64>::zeros(), None::<f64>);
+        let mut clamped = [0usize; 3];
+        let (mut t, mut out) = (0.0, [0.0]);
+        for k in 0..3000 {
+            t += [0.0025, 0.0, 0.004, -0.001, 0.0025, 0.0031][k % 6];
+            let w = k as f64;
+            let mut position = Vector3::new(
+                0.5 + 2.0 * (w * 0.004).sin(),
+                -0.2 + 0.9 * (w * 0.011).cos(),
+                -1.0 + 1.5 * (w * 0.002).sin(),
+            );
+            if k % 97 == 0 {
+                position.y = f64::NAN;
+            }
+            let state = RigidBodyState {
+                position_m: position,
+                ..RigidBodyState::at_rest()
+            };
+            // The former rule.
+            if let Some(previous) = integrated_to_s.replace(t) {
+                let dt = t - previous;
+                let error = position - setpoint;
+                if !(dt.is_nan() || dt <= 0.0 || !error.iter().all(|v| v.is_finite())) {
+                    integral += dt * error;
+                    for a in 0..3 {
+                        let before = integral[a];
+                        integral[a] = before.clamp(-limit[a], limit[a]);
+                        clamped[a] += usize::from(integral[a] != before);
+                    }
+                }
+            }
+            c.command(t, &state, &mut out).unwrap();
+            let now = c.integral_m_s();
+            for a in 0..3 {
+                assert_eq!(now[a].to_bits(), integral[a].to_bits(), "step {k} axis {a}");
+            }
+            if k % 97 != 0 {
+                // (The zero feedback of a NaN position is NaN: only the integral is compared.)
+                let former = 1.0 - (0..3).map(|a| gain[(0, a)] * integral[a]).sum::<f64>();
+                assert_eq!(out[0].to_bits(), former.to_bits(), "step {k}");
+            }
+        }
+        assert!(clamped.iter().all(|&n| n > 0), "every axis reached its limit: {clamped:?}");
+        c.reset();
+        assert_eq!(c.integral_m_s(), Vector3::zeros());
     }
 }

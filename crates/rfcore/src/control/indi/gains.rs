@@ -92,7 +92,9 @@ pub struct IndiGains {
     /// within their reach: `n_xy` of this length, toward the direction whose gyroscopic torque in
     /// the tilted spin most relieves the yaw torque the hover cannot avoid (module docs, "When
     /// rotors fail"). 0 (Sun's law: the vehicle spins about body z until the drag meets that yaw
-    /// torque). Must lie in [0, 1).
+    /// torque). Must lie in [0, 1). A relaxed spin's given axis
+    /// ([`crate::control::indi::IndiController::with_relaxed_spin`]) takes precedence over this
+    /// tilt from its time on.
     pub given_up_yaw_axis_tilt: f64,
     /// `W = diag(thrust, attitude 1, attitude 2, yaw)` of the incremental allocation (Sun: the
     /// unweighted pseudo-inverse, all 1).

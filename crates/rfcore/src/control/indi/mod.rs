@@ -64,9 +64,9 @@
 //!   cannot avoid (the least |yaw torque| holding the weight with zero roll and pitch torque, an
 //!   LP). On hexa-ppnnpn without rotor 5 or 6 that torque is 23 % of the healthy yaw authority,
 //!   and on a heavy vehicle (the rotor that must balance the lost one weak) the spin heads past
-//!   200 rad/s. Tilting the primary axis to `n = (alpha d, sqrt(1 - alpha^2))` makes the steady
-//!   spin `omega = r n` need the roll and pitch torque `omega x J omega = r^2 alpha (d_y (J_z -
-//!   J_y), d_x (J_x - J_z))` from the rotors, which then need not balance roll and pitch to zero
+//!   200 rad/s. Tilting the primary axis to `n = (alpha d, n_z)`, `n_z = sqrt(1 - alpha^2)`, makes
+//!   the steady spin `omega = r n` need the roll and pitch torque `omega x J omega = r^2 alpha n_z
+//!   (d_y (J_z - J_y), d_x (J_x - J_z))` from the rotors, which then need not balance roll and pitch to zero
 //!   and can even out the yaw: the spin settles where that relief (growing as `r^2`) meets the
 //!   drag (Mueller and D'Andrea's relaxed hover in INDI's terms; the campaign's 0.2 settles
 //!   near 11 rad/s). `d` is chosen once, the best of 24 directions
@@ -99,12 +99,15 @@
 //!   component across `i e` at `a = -1`): only the drag damps it there.
 //!   Sun's `chi = 105 deg` on his Bebop 2 is `delta = 65.67 deg` here (a test derives it).
 //! - **No hover**: a failure set whose remaining rotors cannot hold the weight with zero roll and
-//!   pitch torque (the hover this law flies, spinning about the thrust axis) is refused at
-//!   construction, naming `failures`; a relaxed hover about a tilted spin axis (Mueller and
-//!   D'Andrea), which two adjacent or three lost rotors of a quadrotor need, is not attempted.
+//!   pitch torque (the hover this law builds its failure modes on, spinning about the thrust
+//!   axis) is refused at construction, naming `failures`: the relaxed hover below does not lift
+//!   that check, so the relaxed hovers that two adjacent or three lost rotors of a quadrotor need
+//!   (Mueller and D'Andrea) are not flown.
 //! - **A relaxed hover** ([`RelaxedSpin`], [`IndiController::with_relaxed_spin`]): told a spin
 //!   axis, from its time on the law holds that axis up and regulates the spin about it (what a
-//!   vehicle without rotational drag needs once yaw is given up; `relaxed.rs`).
+//!   vehicle without rotational drag needs once yaw is given up; `relaxed.rs`). The given axis
+//!   takes precedence over the tilt of [`IndiGains::given_up_yaw_axis_tilt`]; refused with one
+//!   torque axis left, where the spin itself keeps the vehicle stable.
 //!
 //! # Samples and their substitutes
 //! [`Controller::command_with`] reads the gyro, the specific force and the rotor thrusts actually
@@ -364,10 +367,28 @@ impl IndiController {
     }
 
     /// This controller flying `relaxed` from its time on ([`RelaxedSpin`]: its axis as the
-    /// primary axis, a spin-rate loop in place of the yaw row).
-    pub fn with_relaxed_spin(mut self, relaxed: RelaxedSpin) -> Self {
+    /// primary axis, a spin-rate loop in place of the yaw row). The given spin axis takes
+    /// precedence over every failure mode's own primary axis, the tilt of
+    /// [`IndiGains::given_up_yaw_axis_tilt`] and [`IndiGains::primary_axis_tilt`] included.
+    /// Refused, naming `spin_axis`, when a failure set flown at or after its time leaves one
+    /// torque axis (Sun's output redefinition: there the spin about body z is what keeps the
+    /// other axis stable, and no yaw row is left to regulate it).
+    pub fn with_relaxed_spin(mut self, relaxed: RelaxedSpin) -> Result<Self> {
+        let first = self.mode_at(relaxed.time_s());
+        if let Some(mode) = self.modes[first..].iter().find(|m| m.info.single_axis) {
+            return Err(RfError::invalid(
+                "spin_axis",
+                format!(
+                    "a relaxed spin from {} s is flown with rotor(s) {:?} failed, which leave one \
+                     torque axis: the spin about body z keeps the vehicle stable there (Sun's \
+                     output redefinition), so no spin axis may be given",
+                    relaxed.time_s(),
+                    mode.info.failed
+                ),
+            ));
+        }
         self.relaxed = Some(relaxed);
-        self
+        Ok(self)
     }
 
     /// The relaxed hover this controller flies, if any.
@@ -700,7 +721,7 @@ impl IndiController {
         let h = rt * z_f;
         let lambda = rt * z_rate;
         let h_dot = lambda + h.cross(&omega);
-        let relaxed = self.relaxed.filter(|r| t_s >= r.time_s);
+        let relaxed = self.relaxed.filter(|r| t_s >= r.time_s());
         let n = relaxed.map_or(mode.primary_axis, |r| r.axis());
         let y = Vector2::new(h.x - n.x, h.y - n.y);
         let y_dot = h_dot.xy();

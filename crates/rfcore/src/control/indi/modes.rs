@@ -156,8 +156,8 @@ fn least_yaw_torque(
 /// `None` when that torque is below `negligible_n_m` (the hover then barely spins, and a tilted
 /// axis would only tilt its thrust: hexa-pnpnpn, whose least yaw torque is 0 on the boundary) or
 /// no direction relieves it. Spinning at `r`
-/// about `n = (alpha d, sqrt(1 - alpha^2))`, the body is steady when the rotors make the
-/// gyroscopic torque `omega x J omega = r^2 alpha (d_y (J_z - J_y), d_x (J_x - J_z))` in roll and
+/// about `n = (alpha d, n_z)`, `n_z = sqrt(1 - alpha^2)`, the body is steady when the rotors make
+/// the gyroscopic torque `omega x J omega = r^2 alpha n_z (d_y (J_z - J_y), d_x (J_x - J_z))` in roll and
 /// pitch: torque the rotors then need not balance to zero, freeing them to even out the yaw. The
 /// direction is the one whose torque, scaled to the unavoidable yaw torque itself, leaves the least
 /// yaw torque (an LP per direction, [`TILT_DIRECTIONS`] of them); the spin then settles where the

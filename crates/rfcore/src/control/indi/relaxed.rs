@@ -48,21 +48,35 @@ pub const MIN_SPIN_AXIS_Z: f64 = 0.5;
 /// flight).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RelaxedSpin {
-    pub time_s: f64,
-    pub spin_axis: [f64; 3],
-    pub spin_rate_rad_s: f64,
+    time_s: f64,
+    spin_axis: [f64; 3],
+    spin_rate_rad_s: f64,
 }
 
 impl RelaxedSpin {
     /// Checked: finite values, a non-zero axis within `acos(MIN_SPIN_AXIS_Z)` of body z (either
-    /// way); the spin rate's sign is ignored.
+    /// way; any finite scale, from subnormal to near `f64::MAX`); the spin rate's sign is ignored.
     pub fn new(time_s: f64, spin_axis: [f64; 3], spin_rate_rad_s: f64) -> Result<Self> {
         require_finite("spin_axis_time_s", time_s)?;
         for (i, v) in spin_axis.iter().enumerate() {
             require_finite(&format!("spin_axis[{i}]"), *v)?;
         }
         require_finite("spin_rate_rad_s", spin_rate_rad_s)?;
-        let axis = Vector3::from(spin_axis);
+        // Scaled by its largest |component| when the squared norm leaves the normal range: that of
+        // (0, 0, 1e300) overflows and that of (0, 0, 1e-200) underflows, though both are body z.
+        // In range the axis is used as given (a unit-scale axis normalised exactly as before).
+        let raw = Vector3::from(spin_axis);
+        let squared = raw.norm_squared();
+        let axis = if squared.is_finite() && squared >= f64::MIN_POSITIVE {
+            raw
+        } else {
+            let largest = spin_axis.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            if largest > 0.0 {
+                raw / largest
+            } else {
+                raw
+            }
+        };
         let norm = axis.norm();
         if !(norm > 0.0) || axis.z.abs() < MIN_SPIN_AXIS_Z * norm {
             return Err(RfError::invalid(
@@ -84,6 +98,21 @@ impl RelaxedSpin {
     /// The spin axis, unit, positive z.
     pub fn axis(&self) -> Vector3<f64> {
         Vector3::from(self.spin_axis)
+    }
+
+    /// From when the relaxed hover is flown, s.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// The spin axis as given to [`RelaxedSpin::new`], normalised to unit length and positive z.
+    pub fn spin_axis(&self) -> [f64; 3] {
+        self.spin_axis
+    }
+
+    /// The target spin rate's magnitude, rad/s (0: the slowest spin the rotors allow).
+    pub fn spin_rate_rad_s(&self) -> f64 {
+        self.spin_rate_rad_s
     }
 
     /// The target spin rate about the axis, rad/s, for the measured `spin_rad_s`; `latched` keeps
@@ -114,10 +143,19 @@ mod tests {
     fn the_axis_is_normalised_to_positive_z_and_bad_values_name_their_field() {
         let s = RelaxedSpin::new(1.0, [0.0, 0.6, -0.8], -30.0).unwrap();
         assert!((s.axis() - Vector3::new(0.0, -0.6, 0.8)).norm() < 1e-15);
-        assert_eq!(s.spin_rate_rad_s, 30.0);
+        assert_eq!(s.spin_rate_rad_s(), 30.0);
+        assert_eq!(s.time_s(), 1.0);
+        // Far from unit length either way (the plain norm overflows or underflows): body z.
+        for z in [1e300, -1e300, 1e-200, f64::MAX, 5e-324] {
+            let s = RelaxedSpin::new(0.0, [0.0, 0.0, z], 1.0).unwrap();
+            assert_eq!(s.spin_axis(), [0.0, 0.0, 1.0], "{z}");
+        }
+        let big = RelaxedSpin::new(0.0, [3e300, 0.0, 4e300], 1.0).unwrap();
+        assert!((big.axis() - Vector3::new(0.6, 0.0, 0.8)).norm() < 1e-15);
         for (args, field) in [
             ((f64::NAN, [0.0, 0.0, 1.0], 1.0), "spin_axis_time_s"),
             ((0.0, [0.0, 0.0, 0.0], 1.0), "spin_axis"),
+            ((0.0, [1e300, 0.0, 1e299], 1.0), "spin_axis"),
             ((0.0, [1.0, 0.0, 0.4], 1.0), "spin_axis"),
             ((0.0, [0.0, f64::INFINITY, 1.0], 1.0), "spin_axis[1]"),
             ((0.0, [0.0, 0.0, 1.0], f64::NAN), "spin_rate_rad_s"),
