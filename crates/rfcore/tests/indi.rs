@@ -364,33 +364,21 @@ fn the_output_side_follows_the_measured_inertia_when_j_z_exceeds_twice_j_xy() {
     // Started 0.6 m off the set point: the tilt it takes excites the zero dynamics (a perfectly
     // symmetric start never does).
     let offset = [0.5, 0.3, 0.0];
-    let o = fly_full(
-        &case,
-        heavy_model,
-        &nominal,
-        IndiGains::default(),
-        |c| Box::new(c),
-        offset,
-    );
-    assert!(
-        o.holds() && o.window_horizontal_m < 0.1,
-        "{}",
-        describe(&case, &o)
-    );
-
-    let o = fly_full(
-        &case,
-        model("ke-quadcopter"),
-        &nominal,
-        IndiGains::default(),
-        |c| Box::new(c),
-        offset,
-    );
-    assert!(
-        o.holds() && o.window_horizontal_m < 0.1,
-        "{}",
-        describe(&case, &o)
-    );
+    for truth in [heavy_model, model("ke-quadcopter")] {
+        let o = fly_full(
+            &case,
+            truth,
+            &nominal,
+            IndiGains::default(),
+            |c| Box::new(c),
+            offset,
+        );
+        assert!(
+            o.holds() && o.window_horizontal_m < 0.1,
+            "{}",
+            describe(&case, &o)
+        );
+    }
 }
 
 /// The incremental base (module docs): rotor 1 of ke-quadcopter at 40 %, the controller not told.

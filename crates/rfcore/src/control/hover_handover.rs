@@ -201,24 +201,11 @@ mod tests {
 
     #[test]
     fn the_relaxed_hover_starts_with_the_healthy_integral_times_the_ratio() {
-        use crate::control::relaxed_hover::{RelaxedHoverOuterLoop, RelaxedHoverTrim};
-        let trim = RelaxedHoverTrim {
-            axis: [0.0, 0.0, -1.0],
-            e1: [0.0, 1.0, 0.0],
-            e2: [1.0, 0.0, 0.0],
-            body_rate_rad_s: [0.0, 0.0, -15.0],
-            circle_offset_m: [0.0; 3],
-            circle_velocity_m_s: [0.0; 3],
-            gravity_m_s2: 9.81,
-        };
-        let mut gain = DMatrix::zeros(1, 7);
-        gain[(0, 5)] = 2.0;
-        let outer = RelaxedHoverOuterLoop {
+        let after = relaxed_with(crate::control::relaxed_hover::RelaxedHoverOuterLoop {
             altitude_integral_gain_s: 0.5,
             integral_gain_s3: 0.3,
             ..Default::default()
-        };
-        let after = RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap();
+        });
         let mut c = relaxed_hover_handover(hover(-0.5), after, 1.0, -0.25, [[0.0; 2]; 2]).unwrap();
         // 0.4 m below for 1 s before the failure: healthy integral 0.4 m s (down).
         let state = RigidBodyState {
@@ -243,7 +230,17 @@ mod tests {
     /// A relaxed hover (spin about body -z, up at rest) with an altitude gain only, its outer loop
     /// the default with a horizontal integral.
     fn relaxed() -> RelaxedHoverFeedback {
-        use crate::control::relaxed_hover::{RelaxedHoverOuterLoop, RelaxedHoverTrim};
+        relaxed_with(crate::control::relaxed_hover::RelaxedHoverOuterLoop {
+            integral_gain_s3: 0.3,
+            ..Default::default()
+        })
+    }
+
+    /// [`relaxed`] with the outer loop `outer`.
+    fn relaxed_with(
+        outer: crate::control::relaxed_hover::RelaxedHoverOuterLoop,
+    ) -> RelaxedHoverFeedback {
+        use crate::control::relaxed_hover::RelaxedHoverTrim;
         let trim = RelaxedHoverTrim {
             axis: [0.0, 0.0, -1.0],
             e1: [0.0, 1.0, 0.0],
@@ -255,10 +252,6 @@ mod tests {
         };
         let mut gain = DMatrix::zeros(1, 7);
         gain[(0, 5)] = 2.0;
-        let outer = RelaxedHoverOuterLoop {
-            integral_gain_s3: 0.3,
-            ..Default::default()
-        };
         RelaxedHoverFeedback::new(&trim, &[3.0], gain, [0.0; 3], outer).unwrap()
     }
 
