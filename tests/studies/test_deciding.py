@@ -673,7 +673,9 @@ def test_a_dataset_whose_draws_no_longer_reproduce_reads_its_holds_as_flown(tmp_
 def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
     """INDI's relaxed hover in the campaign (D.indi_spin_axis): on the x500 (k_r = 0) after
     one rotor, its axis tilted INDI_SPIN_AXIS_TILT toward that rotor (J_z > J_xy), told at the
-    failure; none with rotational drag or for two opposing rotors."""
+    failure; after two opposing rotors both partly lost, the same on the side of the weaker as
+    measured (D.indi_spin_axis_weaker_of); none with rotational drag or for two opposing rotors of
+    which one is lost completely."""
     x500 = D.vehicle("px4-x500")
     fault = rf.RotorFault(3, 2.5, efficiency=0.4)
     axis = np.array(D.indi_spin_axis(x500, [fault]))
@@ -683,7 +685,19 @@ def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
     controller = D.CONTROLLERS["indi-controller"].build(x500, [fault])
     assert controller.spin_axis == pytest.approx(tuple(axis)) and controller.spin_axis_time_s == 2.5 and controller.failures == ()
     assert D.indi_spin_axis(D.vehicle("ke-quadcopter"), [fault]) is None
+    # Two opposing rotors lost completely: one torque axis left (Sun's output redefinition).
     assert D.indi_spin_axis(x500, [rf.RotorFault(1, 2.5), rf.RotorFault(2, 2.5)]) is None
+    assert D.indi_spin_axis_weaker_of(x500, [rf.RotorFault(1, 2.5), rf.RotorFault(2, 2.5, efficiency=0.6)]) is None
+    # Both partly: the axis of the first, flown on the side of the weaker as INDI measures them.
+    pair = [rf.RotorFault(2, 2.5, efficiency=0.6), rf.RotorFault(1, 2.5, efficiency=0.6)]
+    assert D.indi_spin_axis_weaker_of(x500, pair) == (2, 1)
+    assert D.indi_spin_axis(x500, pair) == D.indi_spin_axis(x500, [pair[0]])
+    built = D.CONTROLLERS["indi-controller"].build(x500, pair)
+    assert built.spin_axis_weaker_of == (2, 1) and built.spin_axis_time_s == 2.5 and built.failures == ()
+    # Not for adjacent rotors, nor with rotational drag, nor one rotor.
+    assert D.indi_spin_axis_weaker_of(x500, [rf.RotorFault(1, 2.5, efficiency=0.6), rf.RotorFault(3, 2.5, efficiency=0.6)]) is None
+    assert D.indi_spin_axis_weaker_of(D.vehicle("ke-quadcopter"), pair) is None
+    assert D.indi_spin_axis_weaker_of(x500, [fault]) is None and controller.spin_axis_weaker_of is None
     # No spin time is passed without the axis it times (IndiController refuses that).
     assert D.CONTROLLERS["indi-controller"].build(D.vehicle("ke-quadcopter"), [fault]).spin_axis_time_s == 0.0
 

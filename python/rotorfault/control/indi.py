@@ -88,6 +88,22 @@ def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
     return int(rotor), real(f"failures[{k}].time", time)
 
 
+def _weaker_of(value: Any, rotor_count: int) -> tuple[int, int]:
+    """``spin_axis_weaker_of`` checked: two different 1-based rotor numbers."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise TypeError(f"spin_axis_weaker_of: expected two rotor numbers (1-based), got {value!r}")
+    rotors = []
+    for k, rotor in enumerate(value):
+        if isinstance(rotor, bool) or not isinstance(rotor, (int, np.integer)):
+            raise TypeError(f"spin_axis_weaker_of[{k}]: expected a 1-based rotor number, got {rotor!r}")
+        if not 1 <= int(rotor) <= rotor_count:
+            raise ValueError(f"spin_axis_weaker_of[{k}]: rotor numbers run from 1 to {rotor_count}, got {rotor}")
+        rotors.append(int(rotor))
+    if rotors[0] == rotors[1]:
+        raise ValueError(f"spin_axis_weaker_of: must name two different rotors, got {rotors[0]} twice")
+    return rotors[0], rotors[1]
+
+
 class IndiController:
     """INDI fault-tolerant control (Sun et al.), run in Rust at the simulator's control rate.
 
@@ -106,6 +122,12 @@ class IndiController:
     naming ``spin_axis``) when a failure set flown from its time on leaves one torque axis (the spin
     about body z keeps that vehicle stable), and ``spin_axis_time_s`` / ``spin_rate_rad_s`` other than
     0 without ``spin_axis`` are refused naming the field.
+    ``spin_axis_weaker_of``: two rotors (1-based) that both lost thrust by amounts not told, e.g. two
+    opposing rotors of a quadrotor: ``spin_axis`` is the axis for the first being the weaker and its
+    mirror ``(-x, -y, z)`` the one for the second; for ``SPIN_AXIS_CHOICE_S`` (0.25 s) from
+    ``spin_axis_time_s`` the law flies as without a spin axis and measures each one's produced over
+    commanded thrust (from the rotor thrust samples), then flies the axis of the weaker and keeps
+    that choice: a relaxed hover exists only on the weaker's side (``relaxed.rs``, module docs).
 
     Examples:
 
@@ -130,6 +152,7 @@ class IndiController:
         spin_axis: npt.ArrayLike | None = None,
         spin_axis_time_s: float = 0.0,
         spin_rate_rad_s: float = 0.0,
+        spin_axis_weaker_of: Sequence[int] | None = None,
     ) -> None:
         self.airframe = require_airframe(airframe)
         if gains is None:
@@ -165,6 +188,10 @@ class IndiController:
                 if value != 0.0:
                     raise ValueError(f"{field}: given ({value}) without spin_axis, the relaxed hover it belongs to; "
                                      "give spin_axis too or leave it at its default 0")
+        #: The two rotors (1-based) whose weaker, as measured, the spin axis tilts toward, or ``None``.
+        self.spin_axis_weaker_of = None if spin_axis_weaker_of is None else _weaker_of(spin_axis_weaker_of, airframe.rotor_count)
+        if self.spin_axis_weaker_of is not None and self.spin_axis is None:
+            raise ValueError("spin_axis_weaker_of: given without spin_axis, the spin whose side it chooses")
         # Validates everything now.
         self._modes = self.core(1.0 / 400.0).failure_modes()
 
@@ -176,6 +203,7 @@ class IndiController:
             setpoints=[(t, list(p), list(v)) for t, p, v in self.setpoints],
             dt_s=real("dt_s", dt_s),
             relaxed_spin=None if self.spin_axis is None else (self.spin_axis_time_s, list(self.spin_axis), self.spin_rate_rad_s),
+            spin_axis_weaker_of=None if self.spin_axis_weaker_of is None else [r - 1 for r in self.spin_axis_weaker_of],
         )
 
     @property

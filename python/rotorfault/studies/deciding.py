@@ -130,7 +130,8 @@ TARGET_SHARE = 0.95
 #: 1: before session h40; 2: the relaxed hover LQR's healthy LQI and hand-over, INDI's output side
 #: from the measured inertia coupling; 3: INDI's tilted spin axis (given up yaw with spare rotors,
 #: and the relaxed spin where nothing damps it), the hand-over's horizontal integral ratio; 4: the
-#: relaxed spin's tilt 0.1 -> 0.06 (:data:`INDI_SPIN_AXIS_TILT`).
+#: relaxed spin's tilt 0.1 -> 0.06 (:data:`INDI_SPIN_AXIS_TILT`) and the relaxed spin after two
+#: opposing rotors partly lost, on the side of the weaker as measured (:func:`indi_spin_axis_weaker_of`).
 CONTROLLERS_REVISION = 4
 #: The relaxed hover LQR's design schedule over a partial loss's efficiency (module notes).
 EFFICIENCY_STEP = 0.05
@@ -317,10 +318,14 @@ def indi_spin_axis(v: CampaignVehicle, faults: list[RotorFault]) -> tuple[float,
     grows without bound) that loses one rotor, the primary axis tilted by
     :data:`INDI_SPIN_AXIS_TILT` toward the failed rotor (away from it when ``J_z < J_xy``: Sun's
     ``axis_tilt`` rule), flown with the spin loop at its slowest (``spin_rate_rad_s=0``;
-    ``crates/rfcore/src/control/indi/relaxed.rs``). ``None`` with rotational drag (the given-up yaw
-    settles by itself, as flown before) and for two opposing rotors (one torque axis left, Sun's
-    output redefinition)."""
-    if v.rotational_drag_n_m_s > 0.0 or v.airframe.rotor_count != 4 or len(faults) != 1:
+    ``crates/rfcore/src/control/indi/relaxed.rs``); after two opposing rotors both partly lost, the
+    same tilt toward the first of them, flown on the side of the weaker as INDI measures them
+    (:func:`indi_spin_axis_weaker_of`). ``None`` with rotational drag (the given-up yaw settles by
+    itself, as flown before) and for two opposing rotors of which one is lost completely (one torque
+    axis left, Sun's output redefinition: the spin about body z keeps the vehicle stable)."""
+    if v.rotational_drag_n_m_s > 0.0 or v.airframe.rotor_count != 4 or len(faults) not in (1, 2):
+        return None
+    if len(faults) == 2 and indi_spin_axis_weaker_of(v, faults) is None:
         return None
     position = np.asarray(v.airframe.position_m, dtype=np.float64)[faults[0].rotor - 1, :2]
     j = np.asarray(v.airframe.inertia_kg_m2, dtype=np.float64)
@@ -334,16 +339,34 @@ def indi_spin_axis(v: CampaignVehicle, faults: list[RotorFault]) -> tuple[float,
     return (float(xy[0]), float(xy[1]), math.sqrt(1.0 - INDI_SPIN_AXIS_TILT**2))
 
 
+def indi_spin_axis_weaker_of(v: CampaignVehicle, faults: list[RotorFault]) -> tuple[int, int] | None:
+    """The two rotors (1-based) whose weaker INDI's spin axis tilts toward, or ``None``: on a
+    quadrotor without rotational drag, two opposing rotors both partly lost (INDI is told which and
+    when, not how much; ``IndiController.spin_axis_weaker_of``). A relaxed hover there exists only
+    on the weaker's side (the stronger carries more, the difference's roll/pitch torque is the
+    gyroscopic one): of the x500's 16 such draws certify calls survivable by spinning (seed 0), 16
+    are not survivable with the two rotors' thrust factors set equal at the weaker's."""
+    if v.rotational_drag_n_m_s > 0.0 or v.airframe.rotor_count != 4 or len(faults) != 2:
+        return None
+    if any(f.efficiency == 0.0 for f in faults):
+        return None
+    pair = (faults[0].rotor, faults[1].rotor)
+    if tuple(sorted(pair)) not in v.opposing_pairs():
+        return None
+    return pair
+
+
 def _indi(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     from ..control import IndiController
 
     # Told of total losses only (the controller's rule); a partial loss reaches it through the
-    # measurements, and which rotor it is only through the spin axis (indi_spin_axis).
+    # measurements, and which rotor(s) it is only through the spin axis (indi_spin_axis).
     spin_axis = indi_spin_axis(v, faults)
     # The time only with an axis (IndiController refuses a spin time without the spin it times).
     spin_axis_time_s = 0.0 if spin_axis is None else min((f.time for f in faults), default=0.0)
     return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M, gains=indi_gains(),
-                          spin_axis=spin_axis, spin_axis_time_s=spin_axis_time_s)
+                          spin_axis=spin_axis, spin_axis_time_s=spin_axis_time_s,
+                          spin_axis_weaker_of=None if spin_axis is None else indi_spin_axis_weaker_of(v, faults))
 
 
 def _ke_robust(v: CampaignVehicle, faults: list[RotorFault]) -> Any:

@@ -9,6 +9,7 @@ use pyo3::types::PyTuple;
 use rfcore::control::indi::{
     DetectedFailure, FailureMode, IndiController, IndiGains, RelaxedSpin, Setpoint, YawMode,
 };
+use rfcore::RfError;
 
 use crate::airframe::PyAirframe;
 use crate::convert::{pickle_protocol, real, rotor_indices, rotor_numbers, to_py_err};
@@ -277,7 +278,8 @@ pickle_protocol!(PyIndiFailureMode, {
 /// The INDI fault-tolerant controller. `failures`: `(rotor, time_s)`, 0-based rotors the
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`
 /// (NED), times strictly increasing; `relaxed_spin`: `(time_s, spin_axis, spin_rate_rad_s)`, a
-/// relaxed hover flown from `time_s` on (the core's `RelaxedSpin`).
+/// relaxed hover flown from `time_s` on (the core's `RelaxedSpin`); `spin_axis_weaker_of`: two
+/// 0-based rotors, the spin tilted toward the weaker as measured (`RelaxedSpin::choosing_the_weaker_of`).
 #[pyclass(name = "IndiController", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiController {
     pub(crate) inner: IndiController,
@@ -286,7 +288,7 @@ pub struct PyIndiController {
 #[pymethods]
 impl PyIndiController {
     #[new]
-    #[pyo3(signature = (airframe, *, gains, failures, setpoints, dt_s, relaxed_spin=None))]
+    #[pyo3(signature = (airframe, *, gains, failures, setpoints, dt_s, relaxed_spin=None, spin_axis_weaker_of=None))]
     fn new(
         airframe: &PyAirframe,
         gains: &PyIndiGains,
@@ -294,6 +296,7 @@ impl PyIndiController {
         setpoints: Vec<(f64, [f64; 3], [f64; 3])>,
         dt_s: f64,
         relaxed_spin: Option<(f64, [f64; 3], f64)>,
+        spin_axis_weaker_of: Option<[usize; 2]>,
     ) -> PyResult<Self> {
         let failures = failures
             .into_iter()
@@ -309,8 +312,20 @@ impl PyIndiController {
             .collect();
         // The relaxed spin's own values are checked before the controller's work (its failure
         // modes' LPs); whether it suits those modes only after.
+        if spin_axis_weaker_of.is_some() && relaxed_spin.is_none() {
+            return Err(to_py_err(RfError::invalid(
+                "spin_axis_weaker_of",
+                "given without relaxed_spin, the spin whose side it chooses",
+            )));
+        }
         let spin = relaxed_spin
-            .map(|(time_s, axis, rate)| RelaxedSpin::new(time_s, axis, rate))
+            .map(|(time_s, axis, rate)| {
+                let spin = RelaxedSpin::new(time_s, axis, rate)?;
+                match spin_axis_weaker_of {
+                    Some(rotors) => spin.choosing_the_weaker_of(rotors),
+                    None => Ok(spin),
+                }
+            })
             .transpose()
             .map_err(to_py_err)?;
         let mut inner = IndiController::new(&airframe.inner, gains.inner, failures, setpoints, dt_s)

@@ -153,8 +153,12 @@ pub use gains::{sun_output_angle_rad, IndiGains, YawMode};
 use increment::incremental_allocation;
 pub use modes::FailureMode;
 use modes::{yaw_authority, Mode};
-pub use relaxed::RelaxedSpin;
+pub use relaxed::{RelaxedSpin, SPIN_AXIS_CHOICE_S};
 
+/// Two weak rotors' produced / commanded ratios closer than this (relative) are equal: the spin
+/// axis is kept as given (`RelaxedSpin::choosing_the_weaker_of`: the sums' rounding is near
+/// 1e-16; the x500 draws that needed the choice differ by 0.4 % and more).
+const SPIN_CHOICE_RTOL: f64 = 1e-9;
 /// Floor on `n3z` in the thrust row of `G` (the tilt at which it binds: 87 degrees).
 pub const MIN_N3Z: f64 = 0.05;
 /// Largest rate of the filtered thrust direction the law feeds forward, 1/s (Sun's saturation).
@@ -224,6 +228,11 @@ struct Memory {
     output_flipped: bool,
     /// The relaxed hover's spin sign once latched (`RelaxedSpin::target`), 0 before.
     spin_sign: f64,
+    /// Choosing between two weak rotors (`RelaxedSpin::choosing_the_weaker_of`): per rotor, the
+    /// sums of produced and commanded thrust since the spin's time, N.
+    spin_choice_sums: [[f64; 2]; 2],
+    /// The choice once made: `Some(true)` flies the mirrored axis.
+    spin_axis_mirrored: Option<bool>,
 }
 
 /// The INDI fault-tolerant controller (module docs). Rotor commands are thrusts, N.
@@ -374,6 +383,18 @@ impl IndiController {
     /// torque axis (Sun's output redefinition: there the spin about body z is what keeps the
     /// other axis stable, and no yaw row is left to regulate it).
     pub fn with_relaxed_spin(mut self, relaxed: RelaxedSpin) -> Result<Self> {
+        if let Some(rotors) = relaxed.weaker_of() {
+            if let Some(&r) = rotors.iter().find(|&&r| r >= self.rotor_count) {
+                return Err(RfError::invalid(
+                    "spin_axis_weaker_of",
+                    format!(
+                        "rotor numbers run from 1 to {}, got {}",
+                        self.rotor_count,
+                        r + 1
+                    ),
+                ));
+            }
+        }
         let first = self.mode_at(relaxed.time_s());
         if let Some(mode) = self.modes[first..].iter().find(|m| m.info.single_axis) {
             return Err(RfError::invalid(
@@ -721,8 +742,35 @@ impl IndiController {
         let h = rt * z_f;
         let lambda = rt * z_rate;
         let h_dot = lambda + h.cross(&omega);
-        let relaxed = self.relaxed.filter(|r| t_s >= r.time_s());
-        let n = relaxed.map_or(mode.primary_axis, |r| r.axis());
+        if let Some([a, b]) = self
+            .relaxed
+            .and_then(|r| r.weaker_of().filter(|_| t_s >= r.time_s()))
+        {
+            if mem.spin_axis_mirrored.is_none() {
+                if t_s < self.relaxed.map_or(t_s, |r| r.flown_from_s()) {
+                    for (sums, rotor) in mem.spin_choice_sums.iter_mut().zip([a, b]) {
+                        sums[0] += thrust_sample[rotor];
+                        sums[1] += mem.previous[rotor];
+                    }
+                } else {
+                    // The lower produced / commanded ratio is the weaker rotor; ratios equal to
+                    // within rounding (no rotor samples, no steps yet) keep the axis as given.
+                    let [pa, ca] = mem.spin_choice_sums[0];
+                    let [pb, cb] = mem.spin_choice_sums[1];
+                    mem.spin_axis_mirrored = Some(
+                        ca > 0.0 && cb > 0.0 && pb * ca < pa * cb * (1.0 - SPIN_CHOICE_RTOL),
+                    );
+                }
+            }
+        }
+        let relaxed = self.relaxed.filter(|r| t_s >= r.flown_from_s());
+        let n = relaxed.map_or(mode.primary_axis, |r| {
+            if mem.spin_axis_mirrored == Some(true) {
+                r.mirrored_axis()
+            } else {
+                r.axis()
+            }
+        });
         let y = Vector2::new(h.x - n.x, h.y - n.y);
         let y_dot = h_dot.xy();
         let kinematic = (h_dot.cross(&omega) + lambda.cross(&omega) + rt * z_acc).xy();

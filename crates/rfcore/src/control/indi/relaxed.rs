@@ -31,6 +31,21 @@
 //! one way, so `r*` takes the sign of the measured spin, latched once it passes
 //! [`SPIN_LATCH_SHARE`] of `r*`: asking for the other direction would have the rotors stop and
 //! reverse the spin they cannot stop.
+//!
+//! **Which side to tilt when two rotors are weak** ([`RelaxedSpin::choosing_the_weaker_of`]). Two
+//! opposing rotors of a quadrotor that both lost thrust (partly, by amounts the law is not told)
+//! leave a relaxed hover only when the weaker of them is the one tilted toward (`J_z > J_xy`): the
+//! stronger then carries more than the weaker, the difference's roll/pitch torque is the
+//! gyroscopic one, and the two pairs' drag torques even out. Tilted toward the stronger, the
+//! rotors would need the weaker to carry more, which it cannot: the spin runs away (x500, rotors
+//! 1 and 2 at 54-77 % with thrust factors 0.8-1.0: every one of 6 draws held within 0.07 m and a
+//! spin of 7-11 rad/s tilted toward the weaker, none tilted toward the stronger, 41-61 rad/s of
+//! spin growth in 5 s). The law is told both rotors and the time; for
+//! [`SPIN_AXIS_CHOICE_S`] from it, it flies the failure mode as without a spin axis and sums each
+//! rotor's produced and commanded thrust; then it tilts toward the one whose produced / commanded
+//! ratio is the lower (the given axis is the first's, its mirror `(-n_x, -n_y, n_z)` the
+//! second's) and latches the choice. Without rotor thrust samples the produced thrust is
+//! the law's own actuator model, the ratios are equal and the given axis is kept.
 
 use nalgebra::Vector3;
 
@@ -41,6 +56,11 @@ use crate::error::{require_finite, Result, RfError};
 pub const SPIN_LATCH_SHARE: f64 = 0.25;
 /// Smallest `n_z` of the spin axis (oriented to body z): the thrust must lift along it.
 pub const MIN_SPIN_AXIS_Z: f64 = 0.5;
+/// How long the law measures two weak rotors before choosing which to tilt toward, s (module
+/// docs): ten rotor time constants of the x500 (0.025 s), so the produced thrusts have followed
+/// their commands, and short enough that the spin it gains meanwhile stays small (x500, two
+/// opposing rotors at 54-77 %: 1-2 rad/s).
+pub const SPIN_AXIS_CHOICE_S: f64 = 0.25;
 
 /// A relaxed hover for the INDI law to fly from `time_s` on (module docs): `spin_axis` in the body
 /// frame (either orientation; normalised, oriented to positive z) and the spin rate about it, rad/s
@@ -51,6 +71,9 @@ pub struct RelaxedSpin {
     time_s: f64,
     spin_axis: [f64; 3],
     spin_rate_rad_s: f64,
+    /// Two rotors (0-based): fly the axis of the weaker as measured (module docs); the axis as
+    /// given is the first's, its mirror the second's.
+    weaker_of: Option<[usize; 2]>,
 }
 
 impl RelaxedSpin {
@@ -92,7 +115,49 @@ impl RelaxedSpin {
             time_s,
             spin_axis: [unit.x, unit.y, unit.z],
             spin_rate_rad_s: spin_rate_rad_s.abs(),
+            weaker_of: None,
         })
+    }
+
+    /// This spin flown on the side of whichever of `rotors` (0-based, distinct) measures the
+    /// weaker over [`SPIN_AXIS_CHOICE_S`] from its time (module docs): the axis as given when the
+    /// first, its mirror `(-n_x, -n_y, n_z)` when the second. The rotor count is checked by the
+    /// controller that flies it.
+    pub fn choosing_the_weaker_of(mut self, rotors: [usize; 2]) -> Result<Self> {
+        if rotors[0] == rotors[1] {
+            return Err(RfError::invalid(
+                "spin_axis_weaker_of",
+                format!("must name two different rotors, got {} twice", rotors[0] + 1),
+            ));
+        }
+        if self.spin_axis[0] == 0.0 && self.spin_axis[1] == 0.0 {
+            return Err(RfError::invalid(
+                "spin_axis_weaker_of",
+                "needs a spin axis tilted from body z (its mirror is the other choice), got body z",
+            ));
+        }
+        self.weaker_of = Some(rotors);
+        Ok(self)
+    }
+
+    /// The two rotors whose weaker the spin tilts toward, if chosen so (0-based).
+    pub fn weaker_of(&self) -> Option<[usize; 2]> {
+        self.weaker_of
+    }
+
+    /// From when the law flies the spin, s: its time, plus [`SPIN_AXIS_CHOICE_S`] when it
+    /// chooses between two rotors first.
+    pub fn flown_from_s(&self) -> f64 {
+        match self.weaker_of {
+            Some(_) => self.time_s + SPIN_AXIS_CHOICE_S,
+            None => self.time_s,
+        }
+    }
+
+    /// The second rotor's axis of [`RelaxedSpin::weaker_of`]: the mirror `(-n_x, -n_y, n_z)`.
+    pub fn mirrored_axis(&self) -> Vector3<f64> {
+        let [x, y, z] = self.spin_axis;
+        Vector3::new(-x, -y, z)
     }
 
     /// The spin axis, unit, positive z.

@@ -276,3 +276,100 @@ fn the_relaxed_spin_row_drives_the_spin_toward_its_target_and_reset_clears_its_s
     // sign to -20 rad/s.
     assert!(latched[39] > -6.0 && fresh[39] < -6.0, "{latched:?} {fresh:?}");
 }
+
+/// Steps a level, still hover at the set point with rotors `a` and `b` producing `eff_a` and
+/// `eff_b` of their previous commands (the others all of theirs; `samples` false: no rotor
+/// samples), from `t0` for `steps`; returns the commands of each step.
+fn fly_weak_pair(
+    c: &mut IndiController,
+    [a, b]: [usize; 2],
+    [eff_a, eff_b]: [f64; 2],
+    samples: bool,
+    steps: usize,
+) -> Vec<Vec<f64>> {
+    let state = hover_state();
+    let mut produced = c.failure_modes()[0].hover_thrust_n.clone();
+    let mut out = vec![0.0; produced.len()];
+    let mut all = Vec::with_capacity(steps);
+    for k in 0..steps {
+        let input = ControllerInput {
+            state: &state,
+            gyro_rad_s: Some(state.omega_rad_s),
+            specific_force_m_s2: None,
+            rotor_thrust_n: samples.then_some(&produced[..]),
+        };
+        c.step(k as f64 * DT, &input, &mut out).unwrap();
+        produced.clone_from(&out);
+        produced[a] *= eff_a;
+        produced[b] *= eff_b;
+        all.push(out.clone());
+    }
+    all
+}
+
+/// Two weak rotors of a quadrotor (an opposing pair, 1 and 3 of ke-quadcopter): the law flies as
+/// without a spin axis for `SPIN_AXIS_CHOICE_S` (bit for bit), then the axis of the rotor whose
+/// produced / commanded thrust measured the lower (the given axis when the first, its mirror when
+/// the second) and keeps it; equal ratios and no rotor samples keep the given axis.
+#[test]
+fn the_spin_axis_is_flown_on_the_side_of_the_weaker_of_two_rotors() {
+    let axis = [0.06, 0.0, (1.0_f64 - 0.06 * 0.06).sqrt()];
+    let pair = [0, 2];
+    let spin = RelaxedSpin::new(0.1, axis, 0.0)
+        .unwrap()
+        .choosing_the_weaker_of(pair)
+        .unwrap();
+    assert_eq!(spin.flown_from_s(), 0.1 + SPIN_AXIS_CHOICE_S);
+    assert_eq!(spin.mirrored_axis(), Vector3::new(-axis[0], -axis[1], axis[2]));
+    let make = || {
+        controller("ke-quadcopter", vec![])
+            .with_relaxed_spin(spin)
+            .unwrap()
+    };
+    let choice_steps = ((0.1 + SPIN_AXIS_CHOICE_S) / DT) as usize;
+    for (effs, samples, mirrored) in [
+        ([0.60, 0.66], true, false),
+        ([0.66, 0.60], true, true),
+        ([0.70, 0.70], true, false),
+        ([0.60, 0.66], false, false),
+        ([0.66, 0.60], false, false),
+    ] {
+        let mut c = make();
+        let commands = fly_weak_pair(&mut c, pair, effs, samples, choice_steps + 40);
+        assert_eq!(c.memory.spin_axis_mirrored, Some(mirrored), "{effs:?} {samples}");
+        // Until the choice, the commands of the law without a spin axis, bit for bit.
+        let mut plain = controller("ke-quadcopter", vec![]);
+        let before = fly_weak_pair(&mut plain, pair, effs, samples, choice_steps);
+        assert_eq!(commands[..choice_steps], before[..], "{effs:?} {samples}");
+        // Latched: the other rotor weaker later does not move it; reset clears it.
+        let later = fly_weak_pair(&mut c, pair, [effs[1], effs[0]], samples, 40);
+        assert_eq!(later.len(), 40);
+        assert_eq!(c.memory.spin_axis_mirrored, Some(mirrored));
+        c.reset();
+        assert_eq!(c.memory.spin_axis_mirrored, None);
+        assert_eq!(c.memory.spin_choice_sums, [[0.0; 2]; 2]);
+    }
+}
+
+#[test]
+fn a_choice_of_two_rotors_is_checked() {
+    let tilted = RelaxedSpin::new(0.0, [0.1, 0.0, 1.0], 0.0).unwrap();
+    for (spin, field, words) in [
+        (tilted.choosing_the_weaker_of([1, 1]), "spin_axis_weaker_of", "2 twice"),
+        (
+            RelaxedSpin::new(0.0, [0.0, 0.0, 1.0], 0.0)
+                .unwrap()
+                .choosing_the_weaker_of([0, 2]),
+            "spin_axis_weaker_of",
+            "body z",
+        ),
+    ] {
+        let err = spin.unwrap_err().to_string();
+        assert!(err.contains(field) && err.contains(words), "{err}");
+    }
+    let err = controller("ke-quadcopter", vec![])
+        .with_relaxed_spin(tilted.choosing_the_weaker_of([0, 4]).unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("spin_axis_weaker_of") && err.contains("1 to 4, got 5"), "{err}");
+}
