@@ -782,3 +782,34 @@ def test_an_altitude_only_healthy_integral_hands_over_no_horizontal_integral() -
     assert np.array_equal(feedback.handover_horizontal_ratio, np.zeros((2, 2)))
     assert feedback.handover_altitude_ratio != 0.0
     assert feedback.handover_altitude_ratio == build(np.asarray(healthy.integral_gain)).handover_altitude_ratio
+
+
+def test_flying_longer_keeps_the_campaigns_rows_and_catches_a_spin_that_creeps() -> None:
+    """``fly_longer`` with 0 s more gives the campaign's own rows (run_rows), value for value; 60 s
+    more judges the same rule over the longer window. Suite seed 1, x500, two opposing rotors, run
+    15 (rotors 3 and 4 at 70 %, certify: not survivable): INDI's relaxed spin creeps up slower than
+    the rule's 1 rad/s per 5 s over the campaign's window (15.4 -> 16.0 rad/s) and holds there;
+    flown 60 s longer it spins up (42 rad/s 30 s later) and crashes."""
+    # Every fault class: a cell's draws depend on its index among them (its draw key).
+    suite = D.DecidingCampaign(seed=1, controllers=("indi-controller",))
+    cell = next(c for c in suite.cells if (c.vehicle, c.fault_class) == ("px4-x500", "two-opposing-hover"))
+    first = suite.cells.index(cell) * suite.runs
+    rows = D.run_rows(suite, first + 15, first + 17)
+    same = D.fly_longer(suite, cell, [15, 16], 0.0)
+    for name, values in same.items():
+        np.testing.assert_array_equal(np.asarray(values), rows[name], err_msg=name)
+    assert rows["holds"][0] and rows["hold_spin_growth_rad_s"][0] < 1.0
+    longer = D.fly_longer(suite, cell, [15], 60.0)
+    assert not longer["holds"][0] and longer["outcome"][0] == "crashed", longer
+    for args, error, message in [
+        ((cell, [15], -1.0), ValueError, r"^extend_s: must be >= 0"),
+        ((cell, [15], math.nan), ValueError, r"^extend_s"),
+        ((cell, [1000], 1.0), ValueError, r"^indices\[0\]: expected a run index in \[0, 1000\)"),
+        ((cell, [True], 1.0), ValueError, r"^indices\[0\]"),
+        ((cell, [16, 14], 1.0), ValueError, r"^indices\[1\]: the design refuses run 14"),
+        ((D.Cell("px4-x500", "two-opposing-hover", "ke-robust", 0), [1], 1.0), ValueError, r"^cell: .* is not a cell"),
+    ]:
+        with pytest.raises(error, match=message):
+            D.fly_longer(suite, *args)
+    with pytest.raises(TypeError, match=r"^suite: expected"):
+        D.fly_longer("suite", cell, [15], 1.0)  # type: ignore[arg-type]

@@ -44,7 +44,10 @@ Decisions (gaps of the issue, stated once):
   the spin otherwise grows without bound and the hold rule refuses it: measured on the campaign's own
   draws of the x500, one rotor (the revision-2 campaign's runs certified survivable that no
   controller held: hover 0 -> 37 of 40, forward 0 -> 38 of 40; INDI's held ones 40 of 40 in both,
-  held before and after);
+  held before and after); after two opposing rotors both partly lost it is told the two and when
+  (not how much) and flies the same tilt on the side of the weaker as it measures them
+  (:func:`indi_spin_axis_weaker_of`: x500 two opposing rotors, INDI held 262 -> 277 of the 278
+  draws certified survivable, seed 0; 264 of 267 and 255 of 259 on seeds 1 and 2);
 - the relaxed hover LQR (``relaxed-hover-feedback``) is passive FTC with the failure known in
   advance: which rotors, their efficiency (nominal: not the run's thrust-coefficient error) and
   the failure time. Until the failure the healthy vehicle's hover LQI flies it (:func:`healthy_lqi`:
@@ -75,7 +78,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from importlib import resources
 from os import PathLike
@@ -84,6 +87,7 @@ from typing import Any
 import numpy as np
 
 from .. import _rfcore
+from .._util.convert import real
 from .._util.memo import computed_once
 from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe
@@ -915,8 +919,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
     """Rows ``[first, stop)`` of the suite (row ``k``: cell ``k // runs``, run ``k % runs``), flown
     in one Rust batch: the same rows however the suite is cut."""
     rows: list[dict[str, Any]] = []
-    runs: list[tuple[int, Any, Any, Any, Any, Any, list[Any], float]] = []
-    limits = DivergenceLimits()
+    runs: list[tuple[int, Cell, RunDraw, Any]] = []
     controllers: dict[tuple[str, str], Any] = {}
     for k in range(first, stop):
         cell = suite.cells[k // suite.runs]
@@ -936,7 +939,6 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
         rows.append(row)
         if note is not None:
             continue
-        faults = d.faults()
         key = (cell.vehicle, cell.controller)
         try:
             if entry.told or key not in controllers:
@@ -946,37 +948,76 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
             # that does not hold, with the reason.
             row.update(outcome="design-refused", note=str(exc).split(":", 1)[-1].strip()[:200])
             continue
-        controller = controllers[key]
-        airframe, actuator, drag = d.vehicle_parts(v)
-        x0 = _start(cell)
-        trim = trim_command(controller)
-        config = _rfcore.SimulationConfig(
-            dt_s=DT_S, substeps=SUBSTEPS, duration_s=d.duration_s, limits=limits, wind_m_s=(*d.wind_m_s, 0.0),
-            wind_profile=gust_profile(d, GUST_DURATION_S),
-        )
-        runs.append((len(rows) - 1, airframe._core, actuator, drag, controller.core(DT_S),
-                     (x0._packed(), None if trim is None else [float(u) for u in trim], config), [f._packed() for f in faults],
-                     run_settle_time_constant_s(cell.vehicle, d)))
+        runs.append((len(rows) - 1, cell, d, controllers[key]))
     if runs:
-        batch = _rfcore.simulate_summaries(
-            [r[1] for r in runs], [r[2] for r in runs], [r[3] for r in runs], [r[4] for r in runs], [r[5][0] for r in runs],
-            [r[6] for r in runs], [r[5][1] for r in runs], [r[5][2] for r in runs], [HOVER_M] * len(runs), hold_criteria(),
-        )
-        outcome = list(batch.outcome)
-        alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
-        growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
-        held = judge_holds(outcome, alt, hor, growth, final_spin, [r[7] for r in runs])
+        flown = _fly_batch([(cell, d, controller) for _, cell, d, controller in runs])
         for j, r in enumerate(runs):
-            row = rows[r[0]]
-            row.update(outcome=outcome[j], holds=bool(held[j]), hold_altitude_error_m=float(alt[j]), hold_horizontal_error_m=float(hor[j]),
-                       lost_at_s=float(batch.lost_at_s[j]), steady_spin_rad_s=float(batch.steady_spin_rad_s[j]),
-                       peak_tilt_rad=float(batch.peak_tilt_rad[j]), hold_spin_growth_rad_s=float(growth[j]),
-                       hold_final_spin_rad_s=float(final_spin[j]))
+            rows[r[0]].update({name: values[j] for name, values in flown.items()})
     out: dict[str, np.ndarray[Any, Any]] = {}
     for name, kind in _COLUMNS:
         values = [row.get(name, math.nan) for row in rows]
         out[name] = np.array(values, dtype={"int64": np.int64, "float64": np.float64, "bool": bool, "string": object}[kind])
     return out
+
+
+def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) -> dict[str, list[Any]]:
+    """Each ``(cell, draw, controller)`` flown in one Rust batch and judged by the hold rule:
+    the row values :func:`run_rows` stores (``outcome``, ``holds``, the window's errors and spin).
+    ``extend_s`` flies each run that much longer and judges the same rule over the longer window
+    (from ``SETTLE_S`` after the failure to the new end; :func:`fly_longer`)."""
+    limits = DivergenceLimits()
+    criteria = _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S + extend_s - SETTLE_S)
+    runs = []
+    for cell, d, controller in items:
+        airframe, actuator, drag = d.vehicle_parts(vehicle(cell.vehicle))
+        trim = trim_command(controller)
+        config = _rfcore.SimulationConfig(
+            dt_s=DT_S, substeps=SUBSTEPS, duration_s=d.duration_s + extend_s, limits=limits, wind_m_s=(*d.wind_m_s, 0.0),
+            wind_profile=gust_profile(d, GUST_DURATION_S),
+        )
+        runs.append((airframe._core, actuator, drag, controller.core(DT_S), _start(cell)._packed(), [f._packed() for f in d.faults()],
+                     None if trim is None else [float(u) for u in trim], config))
+    airframes, actuators, drags, cores, starts, faults, trims, configs = (list(column) for column in zip(*runs))
+    batch = _rfcore.simulate_summaries(airframes, actuators, drags, cores, starts, faults, trims, configs, [HOVER_M] * len(runs), criteria)
+    outcome = list(batch.outcome)
+    alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
+    growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
+    tau = [run_settle_time_constant_s(cell.vehicle, d) for cell, d, _ in items]
+    span = spin_growth_span_s()
+    held = holds(outcome, alt, hor, growth, final_spin, tau, spin_growth_since_failure_s() + extend_s, span)
+    return {"outcome": outcome, "holds": [bool(h) for h in held], "hold_altitude_error_m": alt.tolist(),
+            "hold_horizontal_error_m": hor.tolist(), "lost_at_s": np.asarray(batch.lost_at_s, dtype=np.float64).tolist(),
+            "steady_spin_rad_s": np.asarray(batch.steady_spin_rad_s, dtype=np.float64).tolist(),
+            "peak_tilt_rad": np.asarray(batch.peak_tilt_rad, dtype=np.float64).tolist(), "hold_spin_growth_rad_s": growth.tolist(),
+            "hold_final_spin_rad_s": final_spin.tolist()}
+
+
+def fly_longer(suite: DecidingCampaign, cell: Cell, indices: Sequence[int], extend_s: float) -> dict[str, list[Any]]:
+    """Runs ``indices`` of ``cell`` flown ``extend_s`` (s, >= 0) longer than the campaign flies them
+    and judged by the same hold rule over the longer window (:func:`_fly_batch`'s values per run):
+    whether a run held in the campaign's window still holds once the flight goes on (a spin that
+    creeps up slower than the rule's allowance over the window shows later). The same draws and
+    controllers as the campaign; ``extend_s`` 0 gives the campaign's own rows."""
+    if not isinstance(suite, DecidingCampaign):
+        raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
+    if cell not in suite.cells:
+        raise ValueError(f"cell: {cell!r} is not a cell of this suite")
+    extend = real("extend_s", extend_s)
+    if not extend >= 0.0:
+        raise ValueError(f"extend_s: must be >= 0, got {extend_s}")
+    entry, v = CONTROLLERS[cell.controller], vehicle(cell.vehicle)
+    items = []
+    for k, index in enumerate(indices):
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= int(index) < suite.runs:
+            raise ValueError(f"indices[{k}]: expected a run index in [0, {suite.runs}), got {index!r}")
+        d = suite.draw(cell, int(index))
+        if entry.applies(v, d.failed) is not None:
+            raise ValueError(f"indices[{k}]: run {index} of {cell.controller} is not applicable ({entry.applies(v, d.failed)})")
+        try:
+            items.append((cell, d, entry.build(v, d.told_faults())))
+        except ValueError as exc:
+            raise ValueError(f"indices[{k}]: the design refuses run {index} ({exc}); it was never flown") from exc
+    return _fly_batch(items, extend) if items else {}
 
 
 def _metadata(suite: DecidingCampaign) -> dict[str, Any]:

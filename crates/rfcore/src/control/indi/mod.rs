@@ -107,7 +107,9 @@
 //!   axis, from its time on the law holds that axis up and regulates the spin about it (what a
 //!   vehicle without rotational drag needs once yaw is given up; `relaxed.rs`). The given axis
 //!   takes precedence over the tilt of [`IndiGains::given_up_yaw_axis_tilt`]; refused with one
-//!   torque axis left, where the spin itself keeps the vehicle stable.
+//!   torque axis left, where the spin itself keeps the vehicle stable. Told two rotors that both
+//!   lost thrust by amounts it is not told ([`RelaxedSpin::choosing_the_weaker_of`]), the law
+//!   measures them for [`SPIN_AXIS_CHOICE_S`] and flies the axis on the weaker's side.
 //!
 //! # Samples and their substitutes
 //! [`Controller::command_with`] reads the gyro, the specific force and the rotor thrusts actually
