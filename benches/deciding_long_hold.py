@@ -60,8 +60,16 @@ def main() -> None:
     add_json_option(parser)
     args = parser.parse_args()
     started = time.perf_counter()
+    arguments = read_manifest(args.dataset)["arguments"]
+    # Held runs flown again by other controllers than flew them would measure nothing: refused.
+    if arguments.get("controllers_revision") != D.CONTROLLERS_REVISION:
+        sys.exit(f"{args.dataset} was flown by controllers revision {arguments.get('controllers_revision')}, "
+                 f"these are revision {D.CONTROLLERS_REVISION}: fly it again")
+    record = json.loads(args.record.read_text())["campaign"]
+    if record["suite"] != arguments["suite"]:
+        sys.exit(f"{args.record} is the record of another suite than {args.dataset}'s")
     columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
-    decision = json.loads(args.record.read_text())["campaign"]["decision"]
+    decision = record["decision"]
     jobs = []
     for d in decision:
         held = ((columns["vehicle"] == d["vehicle"]) & (columns["fault_class"] == d["fault_class"])

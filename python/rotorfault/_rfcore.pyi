@@ -1344,7 +1344,7 @@ class IndiController:
         setpoints: list[tuple[float, list[float], list[float]]],
         dt_s: float,
         relaxed_spin: tuple[float, list[float], float] | None = None,
-        spin_axis_weaker_of: list[int] | None = None,
+        spin_axis_weaker_of: tuple[int, int] | None = None,
     ) -> IndiController: ...
     def failure_modes(self) -> list[IndiFailureMode]: ...
 

@@ -265,6 +265,9 @@ def test_the_two_rotors_of_a_choice_are_checked_and_named():
         (dict(spin_axis=tilted, spin_axis_weaker_of=(True, 3)), TypeError, r"^spin_axis_weaker_of\[0\]: expected a 1-based rotor number"),
         (dict(spin_axis_weaker_of=(1, 3)), ValueError, r"^spin_axis_weaker_of: given without spin_axis"),
         (dict(spin_axis=(0.0, 0.0, 1.0), spin_axis_weaker_of=(1, 3)), ValueError, r"^spin_axis_weaker_of: needs a spin axis tilted"),
+        (dict(spin_axis=tilted, spin_axis_weaker_of=(1, 2)), ValueError, r"^spin_axis_weaker_of: rotors 1 and 2 are not mounted opposite"),
+        (dict(spin_axis=tilted, spin_axis_weaker_of=(1, 3), failures=[(3, 0.1)]), ValueError,
+         r"^spin_axis_weaker_of: rotor 3 is told failed at 0.1 s"),
     ]:
         with pytest.raises(error, match=message):
             rf.IndiController(quad, **kwargs)

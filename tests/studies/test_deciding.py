@@ -799,13 +799,24 @@ def test_flying_longer_keeps_the_campaigns_rows_and_catches_a_spin_that_creeps()
     for name, values in same.items():
         np.testing.assert_array_equal(np.asarray(values), rows[name], err_msg=name)
     assert rows["holds"][0] and rows["hold_spin_growth_rad_s"][0] < 1.0
-    longer = D.fly_longer(suite, cell, [15], 60.0)
+    longer = D.fly_longer(suite, cell, [15, 6], 60.0)
     assert not longer["holds"][0] and longer["outcome"][0] == "crashed", longer
+    assert longer["holds"][1], longer
+    # The window's errors of a run flown longer, from its full trajectory (the NumPy path).
+    run, d = suite.refly(cell, 6, extend_s=60.0)
+    assert run.t[-1] == pytest.approx(d.fault_time_s + D.AFTER_FAULT_S + 60.0)
+    altitude, horizontal = D.hold_errors(run.t, run.position, d.fault_time_s)
+    assert longer["hold_altitude_error_m"][1] == pytest.approx(altitude, rel=1e-12)
+    assert longer["hold_horizontal_error_m"][1] == pytest.approx(horizontal, rel=1e-12)
+    assert D.fly_longer(suite, cell, [], 1.0) == {name: [] for name in same}
     for args, error, message in [
-        ((cell, [15], -1.0), ValueError, r"^extend_s: must be >= 0"),
+        ((cell, [15], -1.0), ValueError, r"^extend_s: must lie in \[0, 3600\] s, got -1.0"),
         ((cell, [15], math.nan), ValueError, r"^extend_s"),
+        ((cell, [15], math.inf), ValueError, r"^extend_s: must lie in \[0, 3600\]"),
+        ((cell, 15, 1.0), TypeError, r"^indices: expected a sequence"),
+        ((cell, [15.0], 1.0), TypeError, r"^indices\[0\]: expected an integer"),
         ((cell, [1000], 1.0), ValueError, r"^indices\[0\]: expected a run index in \[0, 1000\)"),
-        ((cell, [True], 1.0), ValueError, r"^indices\[0\]"),
+        ((cell, [True], 1.0), TypeError, r"^indices\[0\]"),
         ((cell, [16, 14], 1.0), ValueError, r"^indices\[1\]: the design refuses run 14"),
         ((D.Cell("px4-x500", "two-opposing-hover", "ke-robust", 0), [1], 1.0), ValueError, r"^cell: .* is not a cell"),
     ]:

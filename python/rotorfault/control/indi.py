@@ -122,12 +122,15 @@ class IndiController:
     naming ``spin_axis``) when a failure set flown from its time on leaves one torque axis (the spin
     about body z keeps that vehicle stable), and ``spin_axis_time_s`` / ``spin_rate_rad_s`` other than
     0 without ``spin_axis`` are refused naming the field.
-    ``spin_axis_weaker_of``: two rotors (1-based) that both lost thrust by amounts not told, e.g. two
-    opposing rotors of a quadrotor: ``spin_axis`` is the axis for the first being the weaker and its
-    mirror ``(-x, -y, z)`` the one for the second; for ``SPIN_AXIS_CHOICE_S`` (0.25 s) from
+    ``spin_axis_weaker_of``: two rotors (1-based) mounted opposite each other that both lost thrust
+    by amounts not told (two opposing rotors of a quadrotor): ``spin_axis`` is the axis for the first
+    being the weaker and its mirror ``(-x, -y, z)`` the one for the second; for 0.25 s from
     ``spin_axis_time_s`` the law flies as without a spin axis and measures each one's produced over
-    commanded thrust (from the rotor thrust samples), then flies the axis of the weaker and keeps
-    that choice: a relaxed hover exists only on the weaker's side (``relaxed.rs``, module docs).
+    commanded thrust (from the rotor thrust samples; without them at any step of the 0.25 s it keeps
+    the given axis), then flies the axis of the weaker and keeps that choice: on the x500 a relaxed
+    hover after two opposing rotors partly lost exists only on the weaker's side (``relaxed.rs``,
+    module docs). Refused naming the field: rotors not opposite each other, one told failed by the
+    end of the 0.25 s, or a control period of 0.25 s or more.
 
     Examples:
 
@@ -203,7 +206,7 @@ class IndiController:
             setpoints=[(t, list(p), list(v)) for t, p, v in self.setpoints],
             dt_s=real("dt_s", dt_s),
             relaxed_spin=None if self.spin_axis is None else (self.spin_axis_time_s, list(self.spin_axis), self.spin_rate_rad_s),
-            spin_axis_weaker_of=None if self.spin_axis_weaker_of is None else [r - 1 for r in self.spin_axis_weaker_of],
+            spin_axis_weaker_of=None if self.spin_axis_weaker_of is None else (self.spin_axis_weaker_of[0] - 1, self.spin_axis_weaker_of[1] - 1),
         )
 
     @property

@@ -79,7 +79,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from os import PathLike
 from typing import Any
@@ -364,10 +364,12 @@ def _indi(v: CampaignVehicle, faults: list[RotorFault]) -> Any:
     from ..control import IndiController
 
     # Told of total losses only (the controller's rule); a partial loss reaches it through the
-    # measurements, and which rotor(s) it is only through the spin axis (indi_spin_axis).
+    # measurements, and which rotor(s) it is only through the spin axis (indi_spin_axis) and, for
+    # two, the pair its side is chosen between (indi_spin_axis_weaker_of).
     spin_axis = indi_spin_axis(v, faults)
-    # The time only with an axis (IndiController refuses a spin time without the spin it times).
-    spin_axis_time_s = 0.0 if spin_axis is None else min((f.time for f in faults), default=0.0)
+    # The time only with an axis (IndiController refuses a spin time without the spin it times);
+    # the last failure's, so that a choice between two rotors measures them both failed.
+    spin_axis_time_s = 0.0 if spin_axis is None else max((f.time for f in faults), default=0.0)
     return IndiController(v.airframe, failures=[f for f in faults if f.efficiency == 0.0], position=HOVER_M, gains=indi_gains(),
                           spin_axis=spin_axis, spin_axis_time_s=spin_axis_time_s,
                           spin_axis_weaker_of=None if spin_axis is None else indi_spin_axis_weaker_of(v, faults))
@@ -560,11 +562,14 @@ class DecidingCampaign:
             raise ValueError(f"suite: unknown field(s) {', '.join(unknown)}")
         return cls(**{"certify": False, **data})
 
-    def refly(self, cell: Cell, index: int) -> tuple[Any, RunDraw]:
-        """Run ``index`` of ``cell`` flown again in full (every control step recorded) and its
-        draws: :func:`hold_errors` of it equals its row's hold errors."""
+    def refly(self, cell: Cell, index: int, extend_s: float = 0.0) -> tuple[Any, RunDraw]:
+        """Run ``index`` of ``cell`` flown again in full (every control step recorded; ``extend_s``
+        longer, as :func:`fly_longer`) and its draws: :func:`hold_errors` of it equals its row's
+        hold errors."""
         v = vehicle(cell.vehicle)
         d = self.draw(cell, index)
+        if extend_s:
+            d = replace(d, duration_s=d.duration_s + real("extend_s", extend_s))
         airframe, actuator, drag = d.vehicle_parts(v)
         from ..flight import Simulator
 
@@ -628,10 +633,11 @@ def hold_errors(t_s: Any, position_m: Any, fault_time_s: float, setpoint_m: Any 
     return float(np.max(np.abs(e[:, 2]))), float(np.max(np.hypot(e[:, 0], e[:, 1])))
 
 
-def hold_criteria() -> Any:
+def hold_criteria(extend_s: float = 0.0) -> Any:
     """The core's verdict criteria whose window is the hold window (from ``SETTLE_S`` after the
-    failure to the end of a run of ``AFTER_FAULT_S`` past it)."""
-    return _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S - SETTLE_S)
+    failure to the end of a run of ``AFTER_FAULT_S`` past it; ``extend_s`` longer for a run flown
+    that much longer, :func:`fly_longer`)."""
+    return _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S + extend_s - SETTLE_S)
 
 
 def spin_growth_span_s() -> float:
@@ -640,10 +646,11 @@ def spin_growth_span_s() -> float:
     return float(hold_criteria().spin_growth_span_s)
 
 
-def spin_growth_since_failure_s() -> float:
+def spin_growth_since_failure_s(extend_s: float = 0.0) -> float:
     """When the earlier of the two spans starts after the (first) failure, s: every run flies
-    :data:`AFTER_FAULT_S` past it and the window ends with the run."""
-    return AFTER_FAULT_S - 2.0 * spin_growth_span_s()
+    :data:`AFTER_FAULT_S` past it (``extend_s`` more, :func:`fly_longer`) and the window ends with
+    the run."""
+    return AFTER_FAULT_S + extend_s - 2.0 * spin_growth_span_s()
 
 
 def run_settle_time_constant_s(vehicle_name: str, draw: RunDraw) -> float:
@@ -656,12 +663,13 @@ def run_settle_time_constant_s(vehicle_name: str, draw: RunDraw) -> float:
 
 def judge_holds(
     outcome: Any, window_altitude_m: Any, window_horizontal_m: Any, window_spin_growth_rad_s: Any, window_final_spin_rad_s: Any,
-    settle_time_constant_s: Any,
+    settle_time_constant_s: Any, extend_s: float = 0.0,
 ) -> np.ndarray[Any, np.dtype[np.bool_]]:
-    """:func:`~rotorfault.studies.deciding_hold.holds` with the campaign's spans: what the
-    flights (:func:`run_rows`) and a stored dataset's re-judging (:func:`rejudge_holds`) both call."""
+    """:func:`~rotorfault.studies.deciding_hold.holds` with the campaign's spans (of runs flown
+    ``extend_s`` longer, :func:`fly_longer`): what the flights (:func:`run_rows`) and a stored
+    dataset's re-judging (:func:`rejudge_holds`) both call."""
     return holds(outcome, window_altitude_m, window_horizontal_m, window_spin_growth_rad_s, window_final_spin_rad_s,
-                 settle_time_constant_s, spin_growth_since_failure_s(), spin_growth_span_s())
+                 settle_time_constant_s, spin_growth_since_failure_s(extend_s), spin_growth_span_s())
 
 
 def target_verdict(d: dict[str, Any]) -> str:
@@ -960,13 +968,17 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
     return out
 
 
+#: The values of a flown run (:func:`_fly_batch`), columns of :func:`run_rows`.
+_FLOWN_COLUMNS = ("outcome", "holds", "hold_altitude_error_m", "hold_horizontal_error_m", "lost_at_s", "steady_spin_rad_s",
+                  "peak_tilt_rad", "hold_spin_growth_rad_s", "hold_final_spin_rad_s")
+
+
 def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) -> dict[str, list[Any]]:
     """Each ``(cell, draw, controller)`` flown in one Rust batch and judged by the hold rule:
     the row values :func:`run_rows` stores (``outcome``, ``holds``, the window's errors and spin).
     ``extend_s`` flies each run that much longer and judges the same rule over the longer window
     (from ``SETTLE_S`` after the failure to the new end; :func:`fly_longer`)."""
     limits = DivergenceLimits()
-    criteria = _rfcore.VerdictCriteria(window_s=AFTER_FAULT_S + extend_s - SETTLE_S)
     runs = []
     for cell, d, controller in items:
         airframe, actuator, drag = d.vehicle_parts(vehicle(cell.vehicle))
@@ -978,13 +990,13 @@ def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) ->
         runs.append((airframe._core, actuator, drag, controller.core(DT_S), _start(cell)._packed(), [f._packed() for f in d.faults()],
                      None if trim is None else [float(u) for u in trim], config))
     airframes, actuators, drags, cores, starts, faults, trims, configs = (list(column) for column in zip(*runs))
-    batch = _rfcore.simulate_summaries(airframes, actuators, drags, cores, starts, faults, trims, configs, [HOVER_M] * len(runs), criteria)
+    batch = _rfcore.simulate_summaries(airframes, actuators, drags, cores, starts, faults, trims, configs, [HOVER_M] * len(runs),
+                                       hold_criteria(extend_s))
     outcome = list(batch.outcome)
     alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
     growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
     tau = [run_settle_time_constant_s(cell.vehicle, d) for cell, d, _ in items]
-    span = spin_growth_span_s()
-    held = holds(outcome, alt, hor, growth, final_spin, tau, spin_growth_since_failure_s() + extend_s, span)
+    held = judge_holds(outcome, alt, hor, growth, final_spin, tau, extend_s)
     return {"outcome": outcome, "holds": [bool(h) for h in held], "hold_altitude_error_m": alt.tolist(),
             "hold_horizontal_error_m": hor.tolist(), "lost_at_s": np.asarray(batch.lost_at_s, dtype=np.float64).tolist(),
             "steady_spin_rad_s": np.asarray(batch.steady_spin_rad_s, dtype=np.float64).tolist(),
@@ -992,32 +1004,47 @@ def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) ->
             "hold_final_spin_rad_s": final_spin.tolist()}
 
 
+#: The longest extension :func:`fly_longer` flies, s: an hour past the campaign's flight.
+MAX_EXTEND_S = 3600.0
+
+
 def fly_longer(suite: DecidingCampaign, cell: Cell, indices: Sequence[int], extend_s: float) -> dict[str, list[Any]]:
-    """Runs ``indices`` of ``cell`` flown ``extend_s`` (s, >= 0) longer than the campaign flies them
-    and judged by the same hold rule over the longer window (:func:`_fly_batch`'s values per run):
-    whether a run held in the campaign's window still holds once the flight goes on (a spin that
-    creeps up slower than the rule's allowance over the window shows later). The same draws and
-    controllers as the campaign; ``extend_s`` 0 gives the campaign's own rows."""
+    """Runs ``indices`` of ``cell`` flown ``extend_s`` (s, 0 to :data:`MAX_EXTEND_S`) longer than the
+    campaign flies them and judged by the same hold rule over the longer window (:func:`_fly_batch`'s
+    values per run): whether a run held in the campaign's window still holds once the flight goes
+    on (a spin that creeps up slower than the rule's allowance over the window shows later). The
+    same draws and controllers as the campaign; ``extend_s`` 0 gives the campaign's own rows. A run
+    whose design is refused (``design-refused`` in the campaign) is refused here, naming its index;
+    every argument is checked before anything is built or flown."""
     if not isinstance(suite, DecidingCampaign):
         raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
     if cell not in suite.cells:
         raise ValueError(f"cell: {cell!r} is not a cell of this suite")
     extend = real("extend_s", extend_s)
-    if not extend >= 0.0:
-        raise ValueError(f"extend_s: must be >= 0, got {extend_s}")
-    entry, v = CONTROLLERS[cell.controller], vehicle(cell.vehicle)
-    items = []
+    if not 0.0 <= extend <= MAX_EXTEND_S:
+        raise ValueError(f"extend_s: must lie in [0, {MAX_EXTEND_S:g}] s, got {extend_s}")
+    if isinstance(indices, (str, bytes)) or not isinstance(indices, Sequence):
+        raise TypeError(f"indices: expected a sequence of run indices, got {type(indices).__name__}")
     for k, index in enumerate(indices):
-        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= int(index) < suite.runs:
-            raise ValueError(f"indices[{k}]: expected a run index in [0, {suite.runs}), got {index!r}")
-        d = suite.draw(cell, int(index))
-        if entry.applies(v, d.failed) is not None:
-            raise ValueError(f"indices[{k}]: run {index} of {cell.controller} is not applicable ({entry.applies(v, d.failed)})")
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+            raise TypeError(f"indices[{k}]: expected an integer run index, got {index!r}")
+        if not 0 <= int(index) < suite.runs:
+            raise ValueError(f"indices[{k}]: expected a run index in [0, {suite.runs}), got {index}")
+    entry, v = CONTROLLERS[cell.controller], vehicle(cell.vehicle)
+    draws = [suite.draw(cell, int(index)) for index in indices]
+    for k, d in enumerate(draws):
+        note = entry.applies(v, d.failed)
+        if note is not None:
+            raise ValueError(f"indices[{k}]: run {indices[k]} of {cell.controller} is not applicable ({note})")
+    items = []
+    for k, d in enumerate(draws):
         try:
             items.append((cell, d, entry.build(v, d.told_faults())))
         except ValueError as exc:
-            raise ValueError(f"indices[{k}]: the design refuses run {index} ({exc}); it was never flown") from exc
-    return _fly_batch(items, extend) if items else {}
+            raise ValueError(f"indices[{k}]: the design refuses run {indices[k]} ({exc}); it was never flown") from exc
+    if not items:
+        return {name: [] for name in _FLOWN_COLUMNS}
+    return _fly_batch(items, extend)
 
 
 def _metadata(suite: DecidingCampaign) -> dict[str, Any]:
@@ -1286,5 +1313,6 @@ __all__ = [
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
     "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
     "spin_growth_since_failure_s", "spin_growth_span_s",
-    "read_deciding", "run_deciding", "run_rows",
+    "read_deciding", "run_deciding", "run_rows", "fly_longer", "MAX_EXTEND_S", "INDI_SPIN_AXIS_TILT", "indi_spin_axis",
+    "indi_spin_axis_weaker_of",
 ]

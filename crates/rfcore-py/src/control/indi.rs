@@ -279,7 +279,8 @@ pickle_protocol!(PyIndiFailureMode, {
 /// controller is told have failed from `time_s` on; `setpoints`: `(time_s, position, velocity)`
 /// (NED), times strictly increasing; `relaxed_spin`: `(time_s, spin_axis, spin_rate_rad_s)`, a
 /// relaxed hover flown from `time_s` on (the core's `RelaxedSpin`); `spin_axis_weaker_of`: two
-/// 0-based rotors, the spin tilted toward the weaker as measured (`RelaxedSpin::choosing_the_weaker_of`).
+/// 0-based rotors, measured from `time_s` and the spin flown on the weaker's side from
+/// `RelaxedSpin::flown_from_s` (`RelaxedSpin::choosing_the_weaker_of`).
 #[pyclass(name = "IndiController", module = "rotorfault._rfcore", frozen)]
 pub struct PyIndiController {
     pub(crate) inner: IndiController,

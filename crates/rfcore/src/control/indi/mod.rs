@@ -160,7 +160,10 @@ pub use relaxed::{RelaxedSpin, SPIN_AXIS_CHOICE_S};
 /// Two weak rotors' produced / commanded ratios closer than this (relative) are equal: the spin
 /// axis is kept as given (`RelaxedSpin::choosing_the_weaker_of`: the sums' rounding is near
 /// 1e-16; the x500 draws that needed the choice differ by 0.4 % and more).
-const SPIN_CHOICE_RTOL: f64 = 1e-9;
+const SPIN_AXIS_CHOICE_RTOL: f64 = 1e-9;
+/// Two rotors are mounted opposite each other when their x-y positions sum to within this share
+/// of the farther one's distance from the centre.
+const OPPOSITE_RTOL: f64 = 1e-9;
 /// Floor on `n3z` in the thrust row of `G` (the tilt at which it binds: 87 degrees).
 pub const MIN_N3Z: f64 = 0.05;
 /// Largest rate of the filtered thrust direction the law feeds forward, 1/s (Sun's saturation).
@@ -233,6 +236,8 @@ struct Memory {
     /// Choosing between two weak rotors (`RelaxedSpin::choosing_the_weaker_of`): per rotor, the
     /// sums of produced and commanded thrust since the spin's time, N.
     spin_choice_sums: [[f64; 2]; 2],
+    /// A step of the choice's measurement had no rotor thrust samples.
+    spin_choice_unmeasured: bool,
     /// The choice once made: `Some(true)` flies the mirrored axis.
     spin_axis_mirrored: Option<bool>,
 }
@@ -258,6 +263,8 @@ pub struct IndiController {
     memory: Memory,
     /// A relaxed hover to fly from its time on ([`RelaxedSpin`]).
     relaxed: Option<RelaxedSpin>,
+    /// Rotor positions in the body x-y plane, m (a spin's two weak rotors must be opposite).
+    rotor_xy_m: Vec<[f64; 2]>,
 }
 
 impl IndiController {
@@ -374,28 +381,31 @@ impl IndiController {
             active: ActiveSet::cold(first),
             memory: Memory::default(),
             relaxed: None,
+            rotor_xy_m: airframe
+                .rotors()
+                .iter()
+                .map(|r| {
+                    let [x, y, _] = r.placement.position_m();
+                    [x, y]
+                })
+                .collect(),
         })
     }
 
-    /// This controller flying `relaxed` from its time on ([`RelaxedSpin`]: its axis as the
-    /// primary axis, a spin-rate loop in place of the yaw row). The given spin axis takes
-    /// precedence over every failure mode's own primary axis, the tilt of
+    /// This controller flying `relaxed` from [`RelaxedSpin::flown_from_s`] on ([`RelaxedSpin`]:
+    /// its axis as the primary axis, a spin-rate loop in place of the yaw row). The given spin
+    /// axis takes precedence over every failure mode's own primary axis, the tilt of
     /// [`IndiGains::given_up_yaw_axis_tilt`] and [`IndiGains::primary_axis_tilt`] included.
     /// Refused, naming `spin_axis`, when a failure set flown at or after its time leaves one
     /// torque axis (Sun's output redefinition: there the spin about body z is what keeps the
-    /// other axis stable, and no yaw row is left to regulate it).
+    /// other axis stable, and no yaw row is left to regulate it); with a choice between two
+    /// rotors ([`RelaxedSpin::choosing_the_weaker_of`]), refused naming `spin_axis_weaker_of`
+    /// unless both are rotors of this vehicle, mounted opposite each other (the mirrored axis is
+    /// the second's only then), neither told failed by the end of the choice (its command is 0:
+    /// nothing to measure), and the control period shorter than the choice's measurement.
     pub fn with_relaxed_spin(mut self, relaxed: RelaxedSpin) -> Result<Self> {
-        if let Some(rotors) = relaxed.weaker_of() {
-            if let Some(&r) = rotors.iter().find(|&&r| r >= self.rotor_count) {
-                return Err(RfError::invalid(
-                    "spin_axis_weaker_of",
-                    format!(
-                        "rotor numbers run from 1 to {}, got {}",
-                        self.rotor_count,
-                        r + 1
-                    ),
-                ));
-            }
+        if let Some(rotors) = relaxed.spin_axis_weaker_of() {
+            self.check_weaker_of(rotors, relaxed.flown_from_s())?;
         }
         let first = self.mode_at(relaxed.time_s());
         if let Some(mode) = self.modes[first..].iter().find(|m| m.info.single_axis) {
@@ -417,6 +427,47 @@ impl IndiController {
     /// The relaxed hover this controller flies, if any.
     pub fn relaxed_spin(&self) -> Option<RelaxedSpin> {
         self.relaxed
+    }
+
+    /// The rules of a choice between two rotors (`with_relaxed_spin`).
+    fn check_weaker_of(&self, rotors: [usize; 2], chosen_at_s: f64) -> Result<()> {
+        let invalid = |rule: String| Err(RfError::invalid("spin_axis_weaker_of", rule));
+        if let Some(&r) = rotors.iter().find(|&&r| r >= self.rotor_count) {
+            return invalid(format!(
+                "rotor numbers run from 1 to {}, got {}",
+                self.rotor_count,
+                r as u128 + 1
+            ));
+        }
+        let [a, b] = rotors.map(|r| self.rotor_xy_m[r]);
+        let scale = a[0].hypot(a[1]).max(b[0].hypot(b[1]));
+        if !(scale > 0.0) || (a[0] + b[0]).hypot(a[1] + b[1]) > OPPOSITE_RTOL * scale {
+            return invalid(format!(
+                "rotors {} and {} are not mounted opposite each other (positions {a:?} and {b:?} m), \
+                 so the mirrored axis is not the second's",
+                rotors[0] + 1,
+                rotors[1] + 1
+            ));
+        }
+        if let Some(f) = self
+            .failures
+            .iter()
+            .find(|f| rotors.contains(&f.rotor) && f.time_s <= chosen_at_s)
+        {
+            return invalid(format!(
+                "rotor {} is told failed at {} s, by the end of the choice at {chosen_at_s} s: \
+                 its command is 0, nothing to measure",
+                f.rotor + 1,
+                f.time_s
+            ));
+        }
+        if self.dt_s >= SPIN_AXIS_CHOICE_S {
+            return invalid(format!(
+                "the control period {} s must be shorter than the choice's measurement, {} s",
+                self.dt_s, SPIN_AXIS_CHOICE_S
+            ));
+        }
+        Ok(())
     }
 
     /// How each failure set is flown: `[0]` the healthy vehicle, then one per detection time (the
@@ -744,23 +795,26 @@ impl IndiController {
         let h = rt * z_f;
         let lambda = rt * z_rate;
         let h_dot = lambda + h.cross(&omega);
-        if let Some([a, b]) = self
-            .relaxed
-            .and_then(|r| r.weaker_of().filter(|_| t_s >= r.time_s()))
-        {
-            if mem.spin_axis_mirrored.is_none() {
-                if t_s < self.relaxed.map_or(t_s, |r| r.flown_from_s()) {
+        if let Some(r) = self.relaxed.filter(|r| t_s >= r.time_s()) {
+            if let (Some([a, b]), None) = (r.spin_axis_weaker_of(), mem.spin_axis_mirrored) {
+                if t_s < r.flown_from_s() {
+                    // Only measured thrusts tell a weak rotor: the actuator model's are the
+                    // commands' own lag.
+                    mem.spin_choice_unmeasured |= input.rotor_thrust_n.is_none();
                     for (sums, rotor) in mem.spin_choice_sums.iter_mut().zip([a, b]) {
                         sums[0] += thrust_sample[rotor];
                         sums[1] += mem.previous[rotor];
                     }
                 } else {
                     // The lower produced / commanded ratio is the weaker rotor; ratios equal to
-                    // within rounding (no rotor samples, no steps yet) keep the axis as given.
+                    // within rounding, or a step without rotor samples, keep the axis as given.
                     let [pa, ca] = mem.spin_choice_sums[0];
                     let [pb, cb] = mem.spin_choice_sums[1];
                     mem.spin_axis_mirrored = Some(
-                        ca > 0.0 && cb > 0.0 && pb * ca < pa * cb * (1.0 - SPIN_CHOICE_RTOL),
+                        !mem.spin_choice_unmeasured
+                            && ca > 0.0
+                            && cb > 0.0
+                            && pb * ca < pa * cb * (1.0 - SPIN_AXIS_CHOICE_RTOL),
                     );
                 }
             }

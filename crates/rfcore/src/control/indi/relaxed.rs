@@ -37,15 +37,18 @@
 //! leave a relaxed hover only when the weaker of them is the one tilted toward (`J_z > J_xy`): the
 //! stronger then carries more than the weaker, the difference's roll/pitch torque is the
 //! gyroscopic one, and the two pairs' drag torques even out. Tilted toward the stronger, the
-//! rotors would need the weaker to carry more, which it cannot: the spin runs away (x500, rotors
-//! 1 and 2 at 54-77 % with thrust factors 0.8-1.0: every one of 6 draws held within 0.07 m and a
-//! spin of 7-11 rad/s tilted toward the weaker, none tilted toward the stronger, 41-61 rad/s of
-//! spin growth in 5 s). The law is told both rotors and the time; for
+//! rotors would need the weaker to carry more, which it cannot: the spin runs away (x500, two
+//! opposing rotors at 54-77 % with thrust factors 0.8-1.0, the deciding campaign's draws: 6 of 6
+//! held within 0.07 m and a spin of 7-11 rad/s tilted 0.06 toward the weaker, none tilted toward
+//! the stronger, 41-61 rad/s of spin growth in 5 s). The law is told both rotors and the time; for
 //! [`SPIN_AXIS_CHOICE_S`] from it, it flies the failure mode as without a spin axis and sums each
 //! rotor's produced and commanded thrust; then it tilts toward the one whose produced / commanded
 //! ratio is the lower (the given axis is the first's, its mirror `(-n_x, -n_y, n_z)` the
-//! second's) and latches the choice. Without rotor thrust samples the produced thrust is
-//! the law's own actuator model, the ratios are equal and the given axis is kept.
+//! second's) and latches the choice. Without rotor thrust samples at any step of the
+//! measurement the given axis is kept: the law's actuator model is the commands' own lag and
+//! tells no weak rotor. The choice rests on the measured thrusts: the x500 draws that needed it
+//! differ by 0.4 % and more, measured exactly in the campaign (its flights pass the true rotor
+//! thrusts); a rotor-speed sensor's noise averaged over the 0.25 s must stay below that.
 
 use nalgebra::Vector3;
 
@@ -57,12 +60,12 @@ pub const SPIN_LATCH_SHARE: f64 = 0.25;
 /// Smallest `n_z` of the spin axis (oriented to body z): the thrust must lift along it.
 pub const MIN_SPIN_AXIS_Z: f64 = 0.5;
 /// How long the law measures two weak rotors before choosing which to tilt toward, s (module
-/// docs): ten rotor time constants of the x500 (0.025 s), so the produced thrusts have followed
-/// their commands, and short enough that the spin it gains meanwhile stays small (x500, two
-/// opposing rotors at 54-77 %: 1-2 rad/s).
+/// docs): twenty rotor time constants of the x500 (0.0125 s), so the produced thrusts have
+/// followed their commands, and short enough that the spin gained meanwhile stays small.
 pub const SPIN_AXIS_CHOICE_S: f64 = 0.25;
 
-/// A relaxed hover for the INDI law to fly from `time_s` on (module docs): `spin_axis` in the body
+/// A relaxed hover for the INDI law to fly from `time_s` on (module docs; with a choice between two
+/// rotors, measured from `time_s` and flown from [`RelaxedSpin::flown_from_s`]): `spin_axis` in the body
 /// frame (either orientation; normalised, oriented to positive z) and the spin rate about it, rad/s
 /// (its magnitude is the target, 0 the slowest spin the rotors allow; the sign comes from the
 /// flight).
@@ -121,13 +124,16 @@ impl RelaxedSpin {
 
     /// This spin flown on the side of whichever of `rotors` (0-based, distinct) measures the
     /// weaker over [`SPIN_AXIS_CHOICE_S`] from its time (module docs): the axis as given when the
-    /// first, its mirror `(-n_x, -n_y, n_z)` when the second. The rotor count is checked by the
-    /// controller that flies it.
+    /// first, its mirror `(-n_x, -n_y, n_z)` when the second. The rotors' count, placement
+    /// (opposite each other) and failures are checked by the controller that flies it.
     pub fn choosing_the_weaker_of(mut self, rotors: [usize; 2]) -> Result<Self> {
         if rotors[0] == rotors[1] {
             return Err(RfError::invalid(
                 "spin_axis_weaker_of",
-                format!("must name two different rotors, got {} twice", rotors[0] + 1),
+                format!(
+                    "must name two different rotors, got {} twice",
+                    rotors[0] as u128 + 1
+                ),
             ));
         }
         if self.spin_axis[0] == 0.0 && self.spin_axis[1] == 0.0 {
@@ -140,8 +146,8 @@ impl RelaxedSpin {
         Ok(self)
     }
 
-    /// The two rotors whose weaker the spin tilts toward, if chosen so (0-based).
-    pub fn weaker_of(&self) -> Option<[usize; 2]> {
+    /// The two rotors the spin's side is chosen between (0-based), if it is.
+    pub fn spin_axis_weaker_of(&self) -> Option<[usize; 2]> {
         self.weaker_of
     }
 
@@ -165,7 +171,8 @@ impl RelaxedSpin {
         Vector3::from(self.spin_axis)
     }
 
-    /// From when the relaxed hover is flown, s.
+    /// From when the relaxed hover applies, s: flown from then, or, with a choice between two
+    /// rotors, measured from then ([`RelaxedSpin::flown_from_s`]).
     pub fn time_s(&self) -> f64 {
         self.time_s
     }

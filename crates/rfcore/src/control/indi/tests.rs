@@ -278,17 +278,18 @@ fn the_relaxed_spin_row_drives_the_spin_toward_its_target_and_reset_clears_its_s
 }
 
 /// Steps a level, still hover at the set point with rotors `a` and `b` producing `eff_a` and
-/// `eff_b` of their previous commands (the others all of theirs; `samples` false: no rotor
-/// samples), from `t0` for `steps`; returns the commands of each step.
+/// `eff_b` of their previous commands (the others all of theirs), at `t0 + k DT` for `steps`,
+/// with rotor samples from step `sampled_from` on (`usize::MAX`: none); `produced` carries the
+/// rotors' thrusts from call to call. Returns the commands of each step.
 fn fly_weak_pair(
     c: &mut IndiController,
+    produced: &mut Vec<f64>,
     [a, b]: [usize; 2],
     [eff_a, eff_b]: [f64; 2],
-    samples: bool,
+    (t0, sampled_from): (f64, usize),
     steps: usize,
 ) -> Vec<Vec<f64>> {
     let state = hover_state();
-    let mut produced = c.failure_modes()[0].hover_thrust_n.clone();
     let mut out = vec![0.0; produced.len()];
     let mut all = Vec::with_capacity(steps);
     for k in 0..steps {
@@ -296,9 +297,9 @@ fn fly_weak_pair(
             state: &state,
             gyro_rad_s: Some(state.omega_rad_s),
             specific_force_m_s2: None,
-            rotor_thrust_n: samples.then_some(&produced[..]),
+            rotor_thrust_n: (k >= sampled_from).then_some(&produced[..]),
         };
-        c.step(k as f64 * DT, &input, &mut out).unwrap();
+        c.step(t0 + k as f64 * DT, &input, &mut out).unwrap();
         produced.clone_from(&out);
         produced[a] *= eff_a;
         produced[b] *= eff_b;
@@ -310,66 +311,186 @@ fn fly_weak_pair(
 /// Two weak rotors of a quadrotor (an opposing pair, 1 and 3 of ke-quadcopter): the law flies as
 /// without a spin axis for `SPIN_AXIS_CHOICE_S` (bit for bit), then the axis of the rotor whose
 /// produced / commanded thrust measured the lower (the given axis when the first, its mirror when
-/// the second) and keeps it; equal ratios and no rotor samples keep the given axis.
+/// the second) and keeps it after the other turns weaker; the pair named the other way round with
+/// the mirrored axis flies the same (to rounding: the axis is normalised again); ratios equal to within rounding, no rotor
+/// samples, or samples for part of the measurement only, keep the given axis; reset clears it.
 #[test]
 fn the_spin_axis_is_flown_on_the_side_of_the_weaker_of_two_rotors() {
-    let axis = [0.06, 0.0, (1.0_f64 - 0.06 * 0.06).sqrt()];
-    let pair = [0, 2];
-    let spin = RelaxedSpin::new(0.1, axis, 0.0)
-        .unwrap()
-        .choosing_the_weaker_of(pair)
-        .unwrap();
-    assert_eq!(spin.flown_from_s(), 0.1 + SPIN_AXIS_CHOICE_S);
-    assert_eq!(spin.mirrored_axis(), Vector3::new(-axis[0], -axis[1], axis[2]));
-    let make = || {
-        controller("ke-quadcopter", vec![])
-            .with_relaxed_spin(spin)
+    let axis = [0.06, 0.06, (1.0_f64 - 2.0 * 0.06 * 0.06).sqrt()];
+    let choosing = |axis: [f64; 3], pair: [usize; 2]| {
+        RelaxedSpin::new(0.1, axis, 0.0)
+            .unwrap()
+            .choosing_the_weaker_of(pair)
             .unwrap()
     };
-    let choice_steps = ((0.1 + SPIN_AXIS_CHOICE_S) / DT) as usize;
-    for (effs, samples, mirrored) in [
-        ([0.60, 0.66], true, false),
-        ([0.66, 0.60], true, true),
-        ([0.70, 0.70], true, false),
-        ([0.60, 0.66], false, false),
-        ([0.66, 0.60], false, false),
+    let spin = choosing(axis, [0, 2]);
+    assert_eq!(spin.flown_from_s(), 0.1 + SPIN_AXIS_CHOICE_S);
+    let [x, y, z] = spin.spin_axis();
+    let mirrored = [-x, -y, z];
+    assert_eq!(spin.mirrored_axis(), Vector3::from(mirrored));
+    let make = |spin: RelaxedSpin| {
+        let c = controller("ke-quadcopter", vec![])
+            .with_relaxed_spin(spin)
+            .unwrap();
+        let produced = c.failure_modes()[0].hover_thrust_n.clone();
+        (c, produced)
+    };
+    let choice_steps = ((0.1 + SPIN_AXIS_CHOICE_S) / DT) as usize + 1;
+    let after_s = choice_steps as f64 * DT;
+    let mut flown = Vec::new();
+    for (effs, sampled_from, chosen_mirrored) in [
+        ([0.60, 0.66], 0, false),
+        ([0.66, 0.60], 0, true),
+        ([0.70, 0.70], 0, false),
+        ([0.66, 0.60], usize::MAX, false),
+        ([0.66, 0.60], 60, false),
     ] {
-        let mut c = make();
-        let commands = fly_weak_pair(&mut c, pair, effs, samples, choice_steps + 40);
-        assert_eq!(c.memory.spin_axis_mirrored, Some(mirrored), "{effs:?} {samples}");
+        let (mut c, mut produced) = make(spin);
+        let commands = fly_weak_pair(
+            &mut c,
+            &mut produced,
+            [0, 2],
+            effs,
+            (0.0, sampled_from),
+            choice_steps,
+        );
+        assert_eq!(
+            c.memory.spin_axis_mirrored,
+            Some(chosen_mirrored),
+            "{effs:?} {sampled_from}"
+        );
         // Until the choice, the commands of the law without a spin axis, bit for bit.
         let mut plain = controller("ke-quadcopter", vec![]);
-        let before = fly_weak_pair(&mut plain, pair, effs, samples, choice_steps);
-        assert_eq!(commands[..choice_steps], before[..], "{effs:?} {samples}");
-        // Latched: the other rotor weaker later does not move it; reset clears it.
-        let later = fly_weak_pair(&mut c, pair, [effs[1], effs[0]], samples, 40);
-        assert_eq!(later.len(), 40);
-        assert_eq!(c.memory.spin_axis_mirrored, Some(mirrored));
+        let mut plain_produced = plain.failure_modes()[0].hover_thrust_n.clone();
+        let before = fly_weak_pair(
+            &mut plain,
+            &mut plain_produced,
+            [0, 2],
+            effs,
+            (0.0, sampled_from),
+            choice_steps,
+        );
+        assert_eq!(
+            commands[..choice_steps - 1],
+            before[..choice_steps - 1],
+            "{effs:?}"
+        );
+        // Kept when the other rotor turns the weaker later.
+        let later = fly_weak_pair(
+            &mut c,
+            &mut produced,
+            [0, 2],
+            [effs[1], effs[0]],
+            (after_s, 0),
+            80,
+        );
+        assert_eq!(c.memory.spin_axis_mirrored, Some(chosen_mirrored));
+        if sampled_from == 0 && effs[0] != effs[1] {
+            flown.push((chosen_mirrored, later));
+        }
         c.reset();
         assert_eq!(c.memory.spin_axis_mirrored, None);
         assert_eq!(c.memory.spin_choice_sums, [[0.0; 2]; 2]);
+        assert!(!c.memory.spin_choice_unmeasured);
+    }
+    // The two sides are flown differently after the choice.
+    assert_ne!(flown[0].1, flown[1].1);
+    // Rotor 3 the weaker: the pair named (3, 1) with the mirrored axis flies the same, bit for bit.
+    let (mut c, mut produced) = make(choosing(mirrored, [2, 0]));
+    fly_weak_pair(
+        &mut c,
+        &mut produced,
+        [0, 2],
+        [0.66, 0.60],
+        (0.0, 0),
+        choice_steps,
+    );
+    assert_eq!(c.memory.spin_axis_mirrored, Some(false));
+    let later = fly_weak_pair(
+        &mut c,
+        &mut produced,
+        [0, 2],
+        [0.60, 0.66],
+        (after_s, 0),
+        80,
+    );
+    for (u, v) in later.iter().flatten().zip(flown[1].1.iter().flatten()) {
+        // The mirrored axis normalised again: equal to rounding.
+        assert!((u - v).abs() <= 1e-12 * v.abs().max(1.0), "{u} {v}");
     }
 }
 
 #[test]
 fn a_choice_of_two_rotors_is_checked() {
     let tilted = RelaxedSpin::new(0.0, [0.1, 0.0, 1.0], 0.0).unwrap();
-    for (spin, field, words) in [
-        (tilted.choosing_the_weaker_of([1, 1]), "spin_axis_weaker_of", "2 twice"),
+    for (spin, words) in [
+        (tilted.choosing_the_weaker_of([1, 1]), "2 twice"),
+        (
+            tilted.choosing_the_weaker_of([usize::MAX, usize::MAX]),
+            "18446744073709551616 twice",
+        ),
         (
             RelaxedSpin::new(0.0, [0.0, 0.0, 1.0], 0.0)
                 .unwrap()
                 .choosing_the_weaker_of([0, 2]),
-            "spin_axis_weaker_of",
             "body z",
         ),
     ] {
         let err = spin.unwrap_err().to_string();
-        assert!(err.contains(field) && err.contains(words), "{err}");
+        assert!(
+            err.contains("spin_axis_weaker_of") && err.contains(words),
+            "{err}"
+        );
     }
-    let err = controller("ke-quadcopter", vec![])
-        .with_relaxed_spin(tilted.choosing_the_weaker_of([0, 4]).unwrap())
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("spin_axis_weaker_of") && err.contains("1 to 4, got 5"), "{err}");
+    let failed = vec![DetectedFailure {
+        rotor: 2,
+        time_s: 0.2,
+    }];
+    for (c, pair, words) in [
+        (controller("ke-quadcopter", vec![]), [0, 4], "1 to 4, got 5"),
+        (
+            controller("ke-quadcopter", vec![]),
+            [0, usize::MAX],
+            "got 18446744073709551616",
+        ),
+        (
+            controller("ke-quadcopter", vec![]),
+            [0, 1],
+            "not mounted opposite",
+        ),
+        (
+            controller("ke-quadcopter", failed),
+            [0, 2],
+            "rotor 3 is told failed at 0.2 s",
+        ),
+        (
+            IndiController::new(
+                &crate::fixtures::preset("ke-quadcopter"),
+                IndiGains::default(),
+                vec![],
+                vec![Setpoint::hold(0.0, [0.0, 0.0, -10.0])],
+                SPIN_AXIS_CHOICE_S,
+            )
+            .unwrap(),
+            [0, 2],
+            "control period",
+        ),
+    ] {
+        let err = c
+            .with_relaxed_spin(tilted.choosing_the_weaker_of(pair).unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("spin_axis_weaker_of") && err.contains(words),
+            "{err}"
+        );
+    }
+    // A failure told after the choice is flown: measured before it.
+    let late = vec![DetectedFailure {
+        rotor: 2,
+        time_s: 5.0,
+    }];
+    assert!(controller("ke-quadcopter", late)
+        .with_relaxed_spin(tilted.choosing_the_weaker_of([0, 2]).unwrap())
+        .is_ok());
 }
