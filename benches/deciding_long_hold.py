@@ -65,8 +65,8 @@ def main() -> None:
     if arguments.get("controllers_revision") != D.CONTROLLERS_REVISION:
         sys.exit(f"{args.dataset} was flown by controllers revision {arguments.get('controllers_revision')}, "
                  f"these are revision {D.CONTROLLERS_REVISION}: fly it again")
-    record = json.loads(args.record.read_text())["campaign"]
-    if record["suite"] != arguments["suite"]:
+    record = json.loads(args.record.read_text()).get("campaign", {})
+    if record.get("suite") != arguments["suite"]:
         sys.exit(f"{args.record} is the record of another suite than {args.dataset}'s")
     columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
     decision = record["decision"]

@@ -694,6 +694,9 @@ def test_indi_flies_a_tilted_spin_axis_only_where_nothing_damps_the_spin():
     assert D.indi_spin_axis(x500, pair) == D.indi_spin_axis(x500, [pair[0]])
     built = D.CONTROLLERS["indi-controller"].build(x500, pair)
     assert built.spin_axis_weaker_of == (2, 1) and built.spin_axis_time_s == 2.5 and built.failures == ()
+    # Measured from the later of two failure times: both rotors failed by then.
+    staggered = [rf.RotorFault(2, 2.0, efficiency=0.6), rf.RotorFault(1, 3.0, efficiency=0.6)]
+    assert D.CONTROLLERS["indi-controller"].build(x500, staggered).spin_axis_time_s == 3.0
     # Not for adjacent rotors, nor with rotational drag, nor one rotor.
     assert D.indi_spin_axis_weaker_of(x500, [rf.RotorFault(1, 2.5, efficiency=0.6), rf.RotorFault(3, 2.5, efficiency=0.6)]) is None
     assert D.indi_spin_axis_weaker_of(D.vehicle("ke-quadcopter"), pair) is None
@@ -809,6 +812,13 @@ def test_flying_longer_keeps_the_campaigns_rows_and_catches_a_spin_that_creeps()
     assert longer["hold_altitude_error_m"][1] == pytest.approx(altitude, rel=1e-12)
     assert longer["hold_horizontal_error_m"][1] == pytest.approx(horizontal, rel=1e-12)
     assert D.fly_longer(suite, cell, [], 1.0) == {name: [] for name in same}
+    # A dataset's column of indices (an integer array) is taken as it is.
+    from_array = D.fly_longer(suite, cell, np.array([15, 16]), 0.0)
+    for name, values in same.items():
+        np.testing.assert_array_equal(np.asarray(from_array[name]), np.asarray(values), err_msg=name)
+    for bad in (-1.0, math.nan, math.inf):
+        with pytest.raises(ValueError, match=r"^extend_s"):
+            suite.refly(cell, 6, extend_s=bad)
     for args, error, message in [
         ((cell, [15], -1.0), ValueError, r"^extend_s: must lie in \[0, 3600\] s, got -1.0"),
         ((cell, [15], math.nan), ValueError, r"^extend_s"),

@@ -566,10 +566,11 @@ class DecidingCampaign:
         """Run ``index`` of ``cell`` flown again in full (every control step recorded; ``extend_s``
         longer, as :func:`fly_longer`) and its draws: :func:`hold_errors` of it equals its row's
         hold errors."""
+        extend = _extend_s(extend_s)
         v = vehicle(cell.vehicle)
         d = self.draw(cell, index)
-        if extend_s:
-            d = replace(d, duration_s=d.duration_s + real("extend_s", extend_s))
+        if extend:
+            d = replace(d, duration_s=d.duration_s + extend)
         airframe, actuator, drag = d.vehicle_parts(v)
         from ..flight import Simulator
 
@@ -997,15 +998,24 @@ def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) ->
     growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
     tau = [run_settle_time_constant_s(cell.vehicle, d) for cell, d, _ in items]
     held = judge_holds(outcome, alt, hor, growth, final_spin, tau, extend_s)
-    return {"outcome": outcome, "holds": [bool(h) for h in held], "hold_altitude_error_m": alt.tolist(),
-            "hold_horizontal_error_m": hor.tolist(), "lost_at_s": np.asarray(batch.lost_at_s, dtype=np.float64).tolist(),
-            "steady_spin_rad_s": np.asarray(batch.steady_spin_rad_s, dtype=np.float64).tolist(),
-            "peak_tilt_rad": np.asarray(batch.peak_tilt_rad, dtype=np.float64).tolist(), "hold_spin_growth_rad_s": growth.tolist(),
-            "hold_final_spin_rad_s": final_spin.tolist()}
+    values = {"outcome": outcome, "holds": [bool(h) for h in held], "hold_altitude_error_m": alt.tolist(),
+              "hold_horizontal_error_m": hor.tolist(), "lost_at_s": np.asarray(batch.lost_at_s, dtype=np.float64).tolist(),
+              "steady_spin_rad_s": np.asarray(batch.steady_spin_rad_s, dtype=np.float64).tolist(),
+              "peak_tilt_rad": np.asarray(batch.peak_tilt_rad, dtype=np.float64).tolist(), "hold_spin_growth_rad_s": growth.tolist(),
+              "hold_final_spin_rad_s": final_spin.tolist()}
+    return {name: values[name] for name in _FLOWN_COLUMNS}
 
 
 #: The longest extension :func:`fly_longer` flies, s: an hour past the campaign's flight.
 MAX_EXTEND_S = 3600.0
+
+
+def _extend_s(value: Any) -> float:
+    """``extend_s`` checked: a real number of seconds in ``[0, MAX_EXTEND_S]``."""
+    extend = real("extend_s", value)
+    if not 0.0 <= extend <= MAX_EXTEND_S:
+        raise ValueError(f"extend_s: must lie in [0, {MAX_EXTEND_S:g}] s, got {value}")
+    return extend
 
 
 def fly_longer(suite: DecidingCampaign, cell: Cell, indices: Sequence[int], extend_s: float) -> dict[str, list[Any]]:
@@ -1015,14 +1025,15 @@ def fly_longer(suite: DecidingCampaign, cell: Cell, indices: Sequence[int], exte
     on (a spin that creeps up slower than the rule's allowance over the window shows later). The
     same draws and controllers as the campaign; ``extend_s`` 0 gives the campaign's own rows. A run
     whose design is refused (``design-refused`` in the campaign) is refused here, naming its index;
-    every argument is checked before anything is built or flown."""
+    every argument is checked before anything is flown. ``indices``: a sequence of run indices, or a
+    1-D integer array (a dataset's column)."""
     if not isinstance(suite, DecidingCampaign):
         raise TypeError(f"suite: expected rotorfault.studies.deciding.DecidingCampaign, got {type(suite).__name__}")
     if cell not in suite.cells:
         raise ValueError(f"cell: {cell!r} is not a cell of this suite")
-    extend = real("extend_s", extend_s)
-    if not 0.0 <= extend <= MAX_EXTEND_S:
-        raise ValueError(f"extend_s: must lie in [0, {MAX_EXTEND_S:g}] s, got {extend_s}")
+    extend = _extend_s(extend_s)
+    if isinstance(indices, np.ndarray) and indices.ndim == 1 and indices.dtype.kind in "iu":
+        indices = indices.tolist()  # a dataset's column of run indices
     if isinstance(indices, (str, bytes)) or not isinstance(indices, Sequence):
         raise TypeError(f"indices: expected a sequence of run indices, got {type(indices).__name__}")
     for k, index in enumerate(indices):

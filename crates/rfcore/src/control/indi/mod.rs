@@ -159,7 +159,7 @@ pub use relaxed::{RelaxedSpin, SPIN_AXIS_CHOICE_S};
 
 /// Two weak rotors' produced / commanded ratios closer than this (relative) are equal: the spin
 /// axis is kept as given (`RelaxedSpin::choosing_the_weaker_of`: the sums' rounding is near
-/// 1e-16; the x500 draws that needed the choice differ by 0.4 % and more).
+/// 1e-16; the x500 draws that needed the choice differ by 5.3 % and more).
 const SPIN_AXIS_CHOICE_RTOL: f64 = 1e-9;
 /// Two rotors are mounted opposite each other when their x-y positions sum to within this share
 /// of the farther one's distance from the centre.
