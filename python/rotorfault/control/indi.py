@@ -89,7 +89,7 @@ def _failure(k: int, item: Any, rotor_count: int) -> tuple[int, float]:
 
 
 def _weaker_of(value: Any, rotor_count: int) -> tuple[int, int]:
-    """``spin_axis_weaker_of`` checked: two different 1-based rotor numbers."""
+    """``spin_axis_weaker_of`` checked: two 1-based rotor numbers of this vehicle."""
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
         raise TypeError(f"spin_axis_weaker_of: expected two rotor numbers (1-based), got {value!r}")
     rotors = []
@@ -99,8 +99,7 @@ def _weaker_of(value: Any, rotor_count: int) -> tuple[int, int]:
         if not 1 <= int(rotor) <= rotor_count:
             raise ValueError(f"spin_axis_weaker_of[{k}]: rotor numbers run from 1 to {rotor_count}, got {rotor}")
         rotors.append(int(rotor))
-    if rotors[0] == rotors[1]:
-        raise ValueError(f"spin_axis_weaker_of: must name two different rotors, got {rotors[0]} twice")
+    # Two different rotors, and the rest of the choice's rules: the core's (RelaxedSpin, with_relaxed_spin).
     return rotors[0], rotors[1]
 
 

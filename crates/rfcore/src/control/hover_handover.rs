@@ -86,10 +86,9 @@ impl IntegralHover {
 
     /// Advances the integral to `t_s` (the shared rule of `control::integral`).
     fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
-        if let Some(dt_s) = self.integral.advance(t_s) {
-            let error = measured.position_m - self.setpoint_m;
-            self.integral.add_clamped(dt_s, error.into(), self.limit_m_s);
-        }
+        let error = measured.position_m - self.setpoint_m;
+        self.integral
+            .integrate_clamped(t_s, error.into(), self.limit_m_s);
     }
 }
 
@@ -100,8 +99,8 @@ impl Controller for IntegralHover {
     fn command(&mut self, t_s: f64, measured: &RigidBodyState, out: &mut [f64]) -> Result<()> {
         self.integrate(t_s, measured);
         self.feedback.command(t_s, measured, out)?;
+        let integral_m_s = self.integral.sum_m_s();
         for (i, o) in out.iter_mut().enumerate() {
-            let integral_m_s = self.integral.sum_m_s();
             *o -= (0..3)
                 .map(|k| self.integral_gain[(i, k)] * integral_m_s[k])
                 .sum::<f64>();

@@ -127,7 +127,7 @@ pub struct RelaxedHoverFeedback {
     outer: RelaxedHoverOuterLoop,
     /// `\int e dt` of the centre's horizontal error (world north, east), m s.
     integral: PositionIntegral<2>,
-    /// `\int z dt` of the altitude error (up), m s.
+    /// `\int z dt` of the altitude error (up), m s, stepped on `integral`'s time base.
     altitude_integral: PositionIntegral<1>,
 }
 
@@ -232,9 +232,8 @@ impl RelaxedHoverFeedback {
     fn integrate(&mut self, t_s: f64, measured: &RigidBodyState) {
         let k_i = self.outer.integral_gain_s3;
         let k_z = self.outer.altitude_integral_gain_s;
-        // Both integrals share the time base; a frozen one still moves it.
+        // One time base for both integrals (the horizontal one's); a frozen integral still moves it.
         let step = self.integral.advance(t_s);
-        self.altitude_integral.advance(t_s);
         let (Some(dt), true) = (step, k_i > 0.0 || k_z > 0.0) else {
             return;
         };

@@ -89,6 +89,34 @@ fn thrust_bounds(airframe: &Airframe, columns: &[usize]) -> (Vec<f64>, Vec<f64>)
     )
 }
 
+/// The largest yaw torque the `four`-row `columns` reach from `base` (thrust, roll, pitch, yaw)
+/// within their bounds in either direction, `[positive, negative]` (N m, an attainable-set LP
+/// each; a negative reach means that direction is not reached at all); `None` when `base`
+/// itself is out of reach.
+fn yaw_reach(
+    four: &DMatrix<f64>,
+    lower: &[f64],
+    upper: &[f64],
+    base: &[f64; 4],
+) -> Result<Option<[f64; 2]>> {
+    let mut reach = [0.0; 2];
+    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+        let limit = max_along_direction(
+            four,
+            lower,
+            upper,
+            &[0.0, 0.0, 0.0, sign],
+            base,
+            &ClarabelSettings::default(),
+        )?;
+        match limit {
+            Some(l) => reach[k] = l.scale,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(reach))
+}
+
 /// The smaller of the largest positive and negative yaw torques the `columns` make while
 /// holding the weight with zero roll and pitch torque (0 when one side is out of reach).
 pub(super) fn yaw_authority(
@@ -96,22 +124,14 @@ pub(super) fn yaw_authority(
     matrix: &DMatrix<f64>,
     columns: &[usize],
 ) -> Result<f64> {
-    let m = columns_of(matrix, columns, 4);
     let (lower, upper) = thrust_bounds(airframe, columns);
-    let base = airframe.hover_wrench();
-    let mut authority = f64::INFINITY;
-    for sign in [1.0, -1.0] {
-        let limit = max_along_direction(
-            &m,
-            &lower,
-            &upper,
-            &[0.0, 0.0, 0.0, sign],
-            &base,
-            &ClarabelSettings::default(),
-        )?;
-        authority = authority.min(limit.map_or(0.0, |l| l.scale.max(0.0)));
-    }
-    Ok(authority)
+    let reach = yaw_reach(
+        &columns_of(matrix, columns, 4),
+        &lower,
+        &upper,
+        &airframe.hover_wrench(),
+    )?;
+    Ok(reach.map_or(0.0, |[up, down]| up.max(0.0).min(down.max(0.0))))
 }
 
 /// Directions tried for the given-up-yaw axis tilt ([`relieving_tilt_direction`]): every 15 deg.
@@ -127,21 +147,9 @@ fn least_yaw_torque(
     torque_xy: [f64; 2],
 ) -> Result<f64> {
     let base = [weight, torque_xy[0], torque_xy[1], 0.0];
-    let mut reach = [f64::NEG_INFINITY; 2];
-    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
-        let limit = max_along_direction(
-            four,
-            lower,
-            upper,
-            &[0.0, 0.0, 0.0, sign],
-            &base,
-            &ClarabelSettings::default(),
-        )?;
-        match limit {
-            Some(l) => reach[k] = l.scale,
-            None => return Ok(f64::INFINITY),
-        }
-    }
+    let Some(reach) = yaw_reach(four, lower, upper, &base)? else {
+        return Ok(f64::INFINITY);
+    };
     // The attainable yaw torques are [-reach[1], reach[0]].
     let (low, high) = (-reach[1], reach[0]);
     Ok(if low <= 0.0 && high >= 0.0 {
@@ -186,7 +194,7 @@ fn relieving_tilt_direction(
         let d = Vector2::new(angle.cos(), angle.sin());
         let torque = gyroscopic(d) * (unavoidable / largest);
         let left = least_yaw_torque(four, lower, upper, weight, [torque.x, torque.y])?;
-        if best.map_or(true, |(b, _)| left < b) {
+        if best.is_none_or(|(b, _)| left < b) {
             best = Some((left, d));
         }
     }
