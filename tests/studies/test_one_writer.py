@@ -10,13 +10,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from signal_after_chunks import run_signalled
 
 import rotorfault as rf
 from rotorfault._util.lock import OutputInUse, lock_file, output_lock
@@ -87,26 +87,15 @@ def test_report_commands_are_refused_before_any_work(tmp_path: Path) -> None:
         _kill(holder)
 
 
-def _wait_for(predicate: Any, timeout_s: float = 120.0) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError("timed out waiting for the writer")
-        time.sleep(0.05)
-
-
 def _chunks(out: Path) -> list[Path]:
     return sorted(out.glob("chunk-*.parquet")) if out.is_dir() else []
 
 
 def _kill_after_chunks(args: list[str], out: Path, chunks: int) -> None:
-    """Runs the CLI in a process and SIGKILLs it once ``chunks`` chunk files are in place."""
-    proc = subprocess.Popen([sys.executable, "-m", "rotorfault", *args], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        _wait_for(lambda: len(_chunks(out)) >= chunks or proc.poll() is not None)
-    finally:
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
+    """Runs the CLI in a process that is SIGKILLed right after its ``chunks``-th chunk file is written."""
+    proc = run_signalled(args, after_chunks=chunks, signum=signal.SIGKILL)
+    assert proc.returncode == -signal.SIGKILL, f"the writer was not killed (exit {proc.returncode}): {proc.stderr}"
+    assert len(_chunks(out)) == chunks
 
 
 def _rows(out: Path) -> dict[str, np.ndarray[Any, Any]]:
