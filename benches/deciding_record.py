@@ -18,6 +18,12 @@ the verdict existed, or ``--no-certify``) is certified here, after the fact, per
 ``fault_class``, ``index``, ``certified``, ``static_hover``, ``spin``, ``note``, ``seconds``) takes
 verdicts computed earlier (the same ``certify_run``) and restricts the decision to the run
 indices certified for every vehicle and fault class: the record then says it is a sample.
+
+A suite flown on sensors (``--sensing mocap``) is recorded to its own file
+(``deciding_full_run_mocap.json``); ``--against TRUTH_DIR``, the same suite flown on the truth,
+adds the paired comparison: per cell, the runs held on both, on the truth only, on the sensors only
+and on neither (the same draws, the same controller), and per missed cell how many of its missed
+runs the same controller holds on the truth (what the sensing costs it).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ import math
 import os
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -72,10 +79,13 @@ SPIN_LIMIT_RAD_S = RelaxedHoverSettings().max_spin_rate_rad_s  # certify's searc
 EFFICIENCY_BINS = ((0.0, 0.0), (0.0, 0.25), (0.25, 0.5), (0.5, 0.75), (0.75, 1.0))
 
 
-def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
+def misses(c: dict, decision: list[dict], why: dict[str, str], truth: dict | None = None) -> list[dict]:
     """For every cell that misses the target: the survivable runs its best controller does not
     hold, by outcome, by efficiency (a total loss apart), by wind, when lost and how far tilted,
-    and which other controller holds them."""
+    which other controller holds them, and (``truth``: the same suite flown on the truth, row for
+    row) how many of them the same controller holds on the truth."""
+    if truth is not None:
+        _same_rows(c, truth)
     out = []
     for d in decision:
         if not d["survivable"] or D.target_verdict(d) == "met":
@@ -124,7 +134,28 @@ def misses(c: dict, decision: list[dict], why: dict[str, str]) -> list[dict]:
             "not_lost_altitude_error_median_m": float(np.median(c["hold_altitude_error_m"][alive])) if alive.any() else None,
             "not_lost_horizontal_error_median_m": float(np.median(c["hold_horizontal_error_m"][alive])) if alive.any() else None,
             "held_by_another": others, "why": why.get(f"{d['vehicle']}/{d['fault_class']}", ""),
+            **({} if truth is None else {"held_on_truth": int(np.sum(missed & truth["holds"].astype(bool)))}),
         })
+    return out
+
+
+def _same_rows(sensed: dict, truth: dict) -> None:
+    """Refuses a truth dataset whose rows are not ``sensed``'s, row for row."""
+    if any(len(sensed[k]) != len(truth[k]) or not np.array_equal(sensed[k], truth[k]) for k in ("vehicle", "fault_class", "controller", "index")):
+        raise SystemExit("--against: the truth dataset's rows are not the sensed suite's (vehicle, fault class, controller, index)")
+
+
+def paired(sensed: dict, truth: dict) -> list[dict]:
+    """Per cell of ``sensed`` (rows of a suite flown on sensors), its runs held on both, on the truth
+    only, on the sensors only and on neither, against ``truth`` (the same suite on the truth: the same
+    draws, row for row)."""
+    _same_rows(sensed, truth)
+    out = []
+    for cell in dict.fromkeys(zip(sensed["vehicle"].tolist(), sensed["fault_class"].tolist(), sensed["controller"].tolist())):
+        rows = (sensed["vehicle"] == cell[0]) & (sensed["fault_class"] == cell[1]) & (sensed["controller"] == cell[2]) & sensed["applicable"]
+        s, t = sensed["holds"].astype(bool)[rows], truth["holds"].astype(bool)[rows]
+        out.append({"vehicle": cell[0], "fault_class": cell[1], "controller": cell[2], "runs": int(rows.sum()), "both": int(np.sum(s & t)),
+                    "truth_only": int(np.sum(t & ~s)), "sensed_only": int(np.sum(s & ~t)), "neither": int(np.sum(~s & ~t))})
     return out
 
 
@@ -138,6 +169,7 @@ def main() -> None:
     parser.add_argument("--certified", nargs="*", default=[], help="JSON lines of verdicts computed earlier (module notes)")
     parser.add_argument("--why", default=None, help="JSON: {\"vehicle/fault_class\": reason} for the cells that miss the target")
     parser.add_argument("--certify-commit", default=None, help="the commit that certified the runs (default: --commit)")
+    parser.add_argument("--against", default=None, help="a suite flown on sensors: the same suite's dataset flown on the truth (paired comparison)")
     add_json_option(parser)
     args = parser.parse_args()
 
@@ -151,6 +183,15 @@ def main() -> None:
     columns = D.rejudge_holds(suite, columns)
     flown_held, held = int(np.sum(columns["holds_as_flown"])), int(np.sum(columns["holds"]))
     changed = columns["holds"] != columns["holds_as_flown"]
+    comparison = None
+    if args.against is not None:
+        if suite.sensing is None:
+            raise SystemExit("--against: the dataset was flown on the truth; --against compares a suite flown on sensors with it")
+        truth_suite = D.DecidingCampaign.from_dict(read_manifest(args.against)["arguments"]["suite"])
+        if truth_suite.sensing is not None or replace(suite, sensing=None, certify=truth_suite.certify) != truth_suite:
+            raise SystemExit("--against: not the same suite flown on the truth (runs, seed, vehicles, fault classes, controllers)")
+        truth_columns = D.rejudge_holds(truth_suite, numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.against)))))
+        comparison = paired(columns, truth_columns)
     full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
     cells = [{k: r[k] for k in RECORD_CELL_KEYS} for r in full.cell_rows()]
 
@@ -189,7 +230,8 @@ def main() -> None:
         figures.append(figure("certify per run after the fact: time per draw", per_draw, "s"))
     record_extra = {
         "campaign": {
-            "command": f"rotorfault campaign --suite deciding --runs {suite.runs} --out DIR --format json",
+            "command": f"rotorfault campaign --suite deciding --runs {suite.runs}"
+                       + ("" if suite.sensing is None else f" --sensing {suite.sensing.suite}") + " --out DIR --format json",
             "commit": args.commit, "flown": flown, "flown_on": args.flown_on, "flight_seconds": float(flight["seconds"]),
             "suite": suite.to_dict(), "cells": cells,
             "certified": {"how": note, "commit": args.certify_commit or args.commit, "indices": _ranges(indices),
@@ -201,9 +243,11 @@ def main() -> None:
                              "held_as_flown": flown_held, "held": held, "now_held": int(np.sum(changed & columns["holds"])),
                              "no_longer_held": int(np.sum(changed & ~columns["holds"]))},
             "decision": decision, "contradictions": result.contradictions(), "contradictions_why": why.get("contradictions", ""),
-            "misses": misses(rows, decision, why),
+            "misses": misses(rows, decision, why, truth_columns if comparison is not None else None),
         }
     }
+    if comparison is not None:
+        record_extra["campaign"]["against_truth"] = comparison
     print(result.decision_table())
     if args.json_path:
         write(args.json_path, "deciding_full_run", "The full deciding campaign (issue 30): per-cell counts and the decision", figures,

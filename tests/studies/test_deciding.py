@@ -834,3 +834,82 @@ def test_flying_longer_keeps_the_campaigns_rows_and_catches_a_spin_that_creeps()
             D.fly_longer(suite, *args)
     with pytest.raises(TypeError, match=r"^suite: expected"):
         D.fly_longer("suite", cell, [15], 1.0)  # type: ignore[arg-type]
+
+
+def test_a_suite_on_sensors_flies_the_same_draws_with_sensor_noise_of_its_own_per_draw() -> None:
+    """``sensing``: the runs' draws are those of the suite on the truth (the sensor seed comes from
+    a generator of its own), every controller of a vehicle and fault class gets the same sensor
+    seed (common random numbers), runs and suites of other seeds get others; the flights differ
+    from the truth's (the controllers see an estimate), and a row equals its run flown again in
+    full on the same sensors (the batch seeds each run as the single flight does)."""
+    truth = D.DecidingCampaign(**SMALL)  # type: ignore[arg-type]
+    mocap = D.DecidingCampaign(**SMALL, sensing=rf.Sensing())  # type: ignore[arg-type]
+    assert all(truth.run_sensing(c, i) is None for c in truth.cells for i in range(truth.runs))
+    seeds = {}
+    for cell in mocap.cells:
+        for i in range(mocap.runs):
+            assert mocap.draw(cell, i) == truth.draw(cell, i)
+            sensing = mocap.run_sensing(cell, i)
+            assert sensing is not None and sensing.replace(seed=0) == rf.Sensing()
+            seeds.setdefault((cell.draw_key, i), set()).add(sensing.seed)
+    assert all(len(s) == 1 for s in seeds.values())  # one seed per draw, whatever the controller
+    assert len({next(iter(s)) for s in seeds.values()}) == len(seeds)  # and another per draw
+    cell = mocap.cells[0]
+    shifted = D.DecidingCampaign(**SMALL, sensing=rf.Sensing(seed=5))  # type: ignore[arg-type]
+    assert shifted.run_sensing(cell, 0).seed == (mocap.run_sensing(cell, 0).seed + 5) % 2**64  # type: ignore[union-attr]
+    other = D.DecidingCampaign(**{**SMALL, "seed": 1}, sensing=rf.Sensing())  # type: ignore[arg-type]
+    assert other.run_sensing(cell, 0) != mocap.run_sensing(cell, 0)
+
+    rows_truth = D.run_rows(truth, 0, truth.total_runs)
+    rows = D.run_rows(mocap, 0, mocap.total_runs)
+    flown = np.isfinite(rows_truth["hold_horizontal_error_m"]) & np.isfinite(rows["hold_horizontal_error_m"])
+    assert flown.sum() >= 6
+    assert not np.any(rows["hold_horizontal_error_m"][flown] == rows_truth["hold_horizontal_error_m"][flown])
+    checked = 0
+    for k, cell in enumerate(mocap.cells):
+        for i in range(mocap.runs):
+            j = k * mocap.runs + i
+            if not math.isfinite(rows["hold_horizontal_error_m"][j]) or checked == 3:
+                continue
+            trajectory, d = mocap.refly(cell, i)
+            assert trajectory.sensed == "mocap"
+            altitude, horizontal = D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
+            assert rows["hold_altitude_error_m"][j] == pytest.approx(altitude, rel=1e-12, abs=1e-12)
+            assert rows["hold_horizontal_error_m"][j] == pytest.approx(horizontal, rel=1e-12, abs=1e-12)
+            checked += 1
+    assert checked == 3
+
+
+def test_a_suites_sensing_round_trips_and_bad_sensing_is_refused() -> None:
+    mocap = D.DecidingCampaign(runs=2, sensing=rf.Sensing(suite="gnss", imu_rate_hz=1000.0, seed=3))
+    data = mocap.to_dict()
+    assert data["sensing"] == {"suite": "gnss", "imu": "icm-42688-p", "imu_rate_hz": 1000.0, "seed": 3}
+    assert D.DecidingCampaign.from_dict(json.loads(json.dumps(data))) == mocap
+    truth = D.DecidingCampaign(runs=2)
+    assert "sensing" not in truth.to_dict()  # a suite on the truth writes what one flown before sensing wrote
+    assert D.DecidingCampaign.from_dict(truth.to_dict()).sensing is None
+    with pytest.raises(TypeError, match="sensing"):
+        D.DecidingCampaign(sensing="mocap")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="sensing"):
+        D.DecidingCampaign.from_dict({**truth.to_dict(), "sensing": "mocap"})
+    with pytest.raises(ValueError, match="imu_rate_hz"):
+        D.DecidingCampaign.from_dict({**truth.to_dict(), "sensing": {"imu_rate_hz": -1.0}})
+
+
+def test_the_cli_flies_a_suite_on_sensors_and_refuses_sensing_elsewhere(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from rotorfault.cli import cli
+
+    base = ["campaign", "--suite", "deciding", "--runs", "1", "--no-certify", "--format", "json", "--no-progress"]
+    out = tmp_path / "mocap"
+    done = CliRunner().invoke(cli, [*base, "--sensing", "mocap", "--out", str(out)])
+    assert done.exit_code == 0, done.output
+    assert json.loads(done.output)["sensing"] == "mocap"
+    assert json.loads((out / "_rotorfault.json").read_text())["arguments"]["suite"]["sensing"]["suite"] == "mocap"
+    read = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--read", str(out), "--no-certify", "--format", "json", "--no-progress"])
+    assert read.exit_code == 0, read.output
+    assert json.loads(read.output)["sensing"] == "mocap"  # what the dataset flew on, from its manifest
+    for args in (["campaign", "--sensing", "mocap"], [*base, "--read", str(out), "--sensing", "mocap"]):
+        bad = CliRunner().invoke(cli, args)
+        assert bad.exit_code != 0 and "sensing" in bad.output, bad.output

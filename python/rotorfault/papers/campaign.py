@@ -19,65 +19,90 @@ FULL_RUNS = 1000
 QUICK_RUNS = 6
 #: The recorded full run (``benches/deciding_record.py``): shown beside the live table, labelled.
 RECORD = "deciding_full_run.json"
+#: The same suite flown on the motion-capture sensors and the estimator (``--sensing mocap``), with
+#: its paired comparison against :data:`RECORD` (the same draws flown on the truth).
+SENSED_RECORD = "deciding_full_run_mocap.json"
+PAIRED_KEYS = ("vehicle", "fault_class", "controller", "runs", "both", "truth_only", "sensed_only", "neither")
 RECORD_CELL_KEYS = ("vehicle", "fault_class", "controller", "runs", "not_applicable", "held", "share", "refused", "lost")
 RECORD_DECISION_KEYS = ("vehicle", "fault_class", "runs", "survivable", "static_hover", "spinning", "not_survivable", "check_failed",
                         "controller", "held", "share", "low", "high", "miss", "all_fail", "not_survivable_held")
 
 
-def recorded_full_run() -> dict[str, Any]:
-    """The committed record of the full campaign (``bench_results/deciding_full_run.json``), checked
-    against the code: its cells are the suite's cells (same vehicles, fault classes, controllers,
-    in order, the suite's runs each), its decision rows the suite's (vehicle, fault class) pairs
-    with counts that add up; a mismatch is a ``ValueError`` naming the field (a stale record)."""
-    path = resources.files("rotorfault.papers").joinpath("bench_results", RECORD)
-    return check_record(json.loads(path.read_text(encoding="utf-8")))
+def recorded_full_run(name: str = RECORD) -> dict[str, Any]:
+    """The committed record of the full campaign (``bench_results/deciding_full_run.json``; ``name``
+    :data:`SENSED_RECORD`: flown on sensors), checked against the code: its cells are the suite's
+    cells (same vehicles, fault classes, controllers, in order, the suite's runs each), its decision
+    rows the suite's (vehicle, fault class) pairs with counts that add up, a record on sensors
+    carries its paired comparison with the truth, cell for cell, adding up; a mismatch is a
+    ``ValueError`` naming the field (a stale record)."""
+    if name not in (RECORD, SENSED_RECORD):
+        raise ValueError(f"name: expected {RECORD!r} or {SENSED_RECORD!r}, got {name!r}")
+    path = resources.files("rotorfault.papers").joinpath("bench_results", name)
+    return check_record(json.loads(path.read_text(encoding="utf-8")), name)
 
 
-def check_record(data: dict[str, Any]) -> dict[str, Any]:
-    """:func:`recorded_full_run`'s checks on a record already read (``data``, returned as is)."""
+def check_record(data: dict[str, Any], name: str = RECORD) -> dict[str, Any]:
+    """:func:`recorded_full_run`'s checks on a record already read (``data``, returned as is);
+    ``name`` says what it must be (:data:`RECORD` on the truth, :data:`SENSED_RECORD` on sensors)."""
     from ..studies import deciding as D
 
     run = data.get("campaign")
     if not isinstance(run, dict):
-        raise ValueError(f"{RECORD}: campaign is missing")
+        raise ValueError(f"{name}: campaign is missing")
     for key in ("command", "commit", "flown", "flown_on", "flight_seconds", "suite", "cells", "certified", "decision", "contradictions"):
         if key not in run:
-            raise ValueError(f"{RECORD}: campaign.{key} is missing")
+            raise ValueError(f"{name}: campaign.{key} is missing")
     suite = D.DecidingCampaign.from_dict(run["suite"])
     cells = run["cells"]
     if [(c["vehicle"], c["fault_class"], c["controller"]) for c in cells] != [(c.vehicle, c.fault_class, c.controller) for c in suite.cells]:
-        raise ValueError(f"{RECORD}: campaign.cells are not the suite's cells (vehicles, fault classes, controllers, order)")
+        raise ValueError(f"{name}: campaign.cells are not the suite's cells (vehicles, fault classes, controllers, order)")
     for k, c in enumerate(cells):
         if set(c) != set(RECORD_CELL_KEYS):
-            raise ValueError(f"{RECORD}: campaign.cells[{k}] has fields {sorted(c)}, expected {sorted(RECORD_CELL_KEYS)}")
+            raise ValueError(f"{name}: campaign.cells[{k}] has fields {sorted(c)}, expected {sorted(RECORD_CELL_KEYS)}")
         if c["runs"] + c["not_applicable"] != suite.runs or not 0 <= c["held"] <= c["runs"] or c["lost"] + c["refused"] > c["runs"]:
-            raise ValueError(f"{RECORD}: campaign.cells[{k}] counts do not add up to {suite.runs} runs")
+            raise ValueError(f"{name}: campaign.cells[{k}] counts do not add up to {suite.runs} runs")
     pairs = list(dict.fromkeys((c.vehicle, c.fault_class) for c in suite.cells))
     decision = run["decision"]
     if [(d["vehicle"], d["fault_class"]) for d in decision] != pairs:
-        raise ValueError(f"{RECORD}: campaign.decision rows are not the suite's vehicle and fault class pairs")
+        raise ValueError(f"{name}: campaign.decision rows are not the suite's vehicle and fault class pairs")
     held = {(c["vehicle"], c["fault_class"], c["controller"]): c["held"] for c in cells}
     for k, d in enumerate(decision):
         if set(d) != set(RECORD_DECISION_KEYS):
-            raise ValueError(f"{RECORD}: campaign.decision[{k}] has fields {sorted(d)}, expected {sorted(RECORD_DECISION_KEYS)}")
+            raise ValueError(f"{name}: campaign.decision[{k}] has fields {sorted(d)}, expected {sorted(RECORD_DECISION_KEYS)}")
         if (d["static_hover"] + d["spinning"] != d["survivable"] or d["survivable"] + d["not_survivable"] + d["check_failed"] != d["runs"]
                 or d["runs"] > suite.runs or not 0 <= d["held"] <= d["survivable"] or d["all_fail"] > d["survivable"] - d["held"]
                 or d["held"] > held[(d["vehicle"], d["fault_class"], d["controller"])]):
-            raise ValueError(f"{RECORD}: campaign.decision[{k}] counts do not add up")
+            raise ValueError(f"{name}: campaign.decision[{k}] counts do not add up")
         if d["survivable"] and not math.isclose(d["share"], d["held"] / d["survivable"], rel_tol=1e-12):
-            raise ValueError(f"{RECORD}: campaign.decision[{k}].share is not held / survivable")
+            raise ValueError(f"{name}: campaign.decision[{k}].share is not held / survivable")
+    sensed = name == SENSED_RECORD
+    if (suite.sensing is not None) != sensed:
+        raise ValueError(f"{name}: campaign.suite.sensing must be {'a sensor suite' if sensed else 'absent (the truth)'}")
+    if sensed:
+        pairs_of = run.get("against_truth")
+        if not isinstance(pairs_of, list) or len(pairs_of) != len(cells):
+            raise ValueError(f"{name}: campaign.against_truth must have one row per cell")
+        for k, (c, r) in enumerate(zip(cells, pairs_of)):
+            if set(r) != set(PAIRED_KEYS) or (r["vehicle"], r["fault_class"], r["controller"]) != (c["vehicle"], c["fault_class"], c["controller"]):
+                raise ValueError(f"{name}: campaign.against_truth[{k}] is not cell {k}'s comparison")
+            if (r["both"] + r["truth_only"] + r["sensed_only"] + r["neither"] != r["runs"] or r["runs"] != c["runs"]
+                    or r["both"] + r["sensed_only"] != c["held"]):
+                raise ValueError(f"{name}: campaign.against_truth[{k}] counts do not add up")
     return data
 
 
-def _recorded_tables(section: ReportSection) -> None:
-    """The recorded full run beside the live table, labelled with what was run, when, on which commit."""
+def _recorded_tables(section: ReportSection, name: str = RECORD) -> None:
+    """The recorded full run beside the live table, labelled with what was run, when, on which commit,
+    and what the controllers flew on."""
     from ..analysis import RelaxedHoverSettings
     from ..studies import deciding as D
 
-    data = recorded_full_run()
+    data = recorded_full_run(name)
     run = data["campaign"]
     cert = run["certified"]
-    label = (f"Recorded full run (not flown by this report): `{run['command']}` on commit {run['commit']}, flown {run['flown']} "
+    sensing = run["suite"].get("sensing")
+    on = "on the truth" if sensing is None else f"on {sensing['suite']} sensors and the estimator"
+    label = (f"Recorded full run {on} (not flown by this report): `{run['command']}` on commit {run['commit']}, flown {run['flown']} "
              f"({run['flown_on']}), {run['flight_seconds']:.1f} s; certify per run: {cert['how']} on commit {cert['commit']} "
              f"({cert['draws']:,} draws, {cert['seconds']:.0f} s of certify")
     label += f", {cert['seconds'] / cert['draws_timed']:.2f} s per draw)." if cert["draws_timed"] else ")."
@@ -120,7 +145,8 @@ def _recorded_tables(section: ReportSection) -> None:
         lost = m["lost_after_failure_median_s"]
         tilt = m["peak_tilt_median_deg"]
         others = ", ".join(f"{k} {n}" for k, n in m["held_by_another"].items() if n) or "none"
-        rows.append((f"{d['vehicle']} {d['fault_class']}", f"{d['controller']} ({d['held']}/{d['survivable']}): {D.target_verdict(d)}", f"{m['missed']} not held: {outcomes}; by efficiency (not held / survivable) {bins}; "
+        on_truth = f"; of them held on the truth (the same draws): {m['held_on_truth']}" if "held_on_truth" in m else ""
+        rows.append((f"{d['vehicle']} {d['fault_class']}", f"{d['controller']} ({d['held']}/{d['survivable']}): {D.target_verdict(d)}", f"{m['missed']} not held{on_truth}: {outcomes}; by efficiency (not held / survivable) {bins}; "
                      f"wind median {m['wind_median_m_s']:.1f} m/s (all {m['wind_median_all_m_s']:.1f}); lost "
                      f"{'-' if lost is None else f'{lost:.1f} s'} after the failure (median), peak tilt {'-' if tilt is None else f'{tilt:.0f} deg'}; "
                      f"held instead by {others}; certify's spin at its search limit ({RelaxedHoverSettings().max_spin_rate_rad_s:g} rad/s) in {m.get('spin_at_search_limit', 0)}",
@@ -130,6 +156,16 @@ def _recorded_tables(section: ReportSection) -> None:
             f"{label} Where the target is missed after the certify split: which cell, by how much, the measurement (the survivable runs "
             "the best controller does not hold) and why.",
             ("cell", "best controller, miss", "measurement", "why"), tuple(rows),
+        ))
+    if "against_truth" in run:
+        section.tables.append(ReportTable(
+            f"{label} Sensors against the truth, run for run: each cell's runs (the same draws and controller) held on both, on the "
+            f"truth only, on the sensors only, on neither. {run.get('against_truth_why', '')}",
+            ("vehicle", "fault class", "controller", "runs", "held on truth", f"held on {sensing['suite']}", "both", "truth only",
+             f"{sensing['suite']} only", "neither"),
+            tuple((r["vehicle"], r["fault_class"], r["controller"], str(r["runs"]), str(r["both"] + r["truth_only"]),
+                   str(r["both"] + r["sensed_only"]), str(r["both"]), str(r["truth_only"]), str(r["sensed_only"]), str(r["neither"]))
+                  for r in run["against_truth"] if r["runs"]),
         ))
 
 
@@ -174,6 +210,7 @@ def report_section(out: Path, *, quick: bool = False) -> ReportSection:
         tuple(D.decision_cells(d) for d in result.decision()),
     ))
     _recorded_tables(section)
+    _recorded_tables(section, SENSED_RECORD)
     section.notes.append(
         f"{suite.total_runs:,} rows ({len(suite.cells)} cells x {runs}) in {result.seconds:.1f} s. Each controller is designed on the "
         "nominal vehicle; every run flies a vehicle with mass, inertia, thrust and drag-torque coefficients and motor time constant "
@@ -216,4 +253,4 @@ def _certify_against_flights(section: ReportSection, *, quick: bool) -> None:
     ))
 
 
-__all__ = ["FULL_RUNS", "QUICK_RUNS", "RECORD", "check_record", "recorded_full_run", "report_section"]
+__all__ = ["FULL_RUNS", "QUICK_RUNS", "RECORD", "SENSED_RECORD", "check_record", "recorded_full_run", "report_section"]

@@ -71,7 +71,13 @@ Decisions (gaps of the issue, stated once):
   certified survivable; :func:`read_deciding` certifies an existing dataset without flying;
 - Lanzon's controller is designed for rotor 2 already lost (it commands rotor 2 to zero from the
   start; no pre-failure mode) and for plus quadrotors only: its cells are those of the Lanzon
-  quadrotor with rotor 2 failing, the rest are marked "not applicable" with the reason.
+  quadrotor with rotor 2 failing, the rest are marked "not applicable" with the reason;
+- what the controllers see: the truth by default (the record the report's decision rests on), or
+  with :attr:`DecidingCampaign.sensing` a sensor suite and the estimator (``rotorfault campaign
+  --suite deciding --sensing mocap``: the motion-capture suite, the IMU at 500 Hz); each run's
+  sensor noise is seeded from its draw (:meth:`DecidingCampaign.run_sensing`), so every controller
+  of a vehicle and fault class flies the same noise and the truth's draws, and the two campaigns
+  compare run for run. The hold rule judges the true position either way.
 """
 
 from __future__ import annotations
@@ -91,7 +97,7 @@ from .._util.convert import real
 from .._util.memo import computed_once
 from .._util.numeric import scaled_norm
 from ..analysis.airframe import Airframe
-from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, State
+from ..flight import DivergenceLimits, Drag, FixedPitchActuator, RotorFault, Sensing, State
 from ..flight.outcomes import FLYING
 from ..flight.scenarios import HOVER_M
 from ..flight.simulator import trim_command
@@ -507,6 +513,12 @@ class DecidingCampaign:
     #: Certify each run's own vehicle and fault while flying (:func:`certify_run`; the column
     #: ``certified``); without it the column is empty and :func:`certify_rows` adds it afterwards.
     certify: bool = True
+    #: What the controllers fly on: ``None`` the truth, or sensors and the estimator (a
+    #: :class:`rotorfault.Sensing`, e.g. ``Sensing()``: the motion-capture suite). Run ``i`` of a
+    #: cell seeds its sensors from the suite's seed, the cell's draw key and ``i`` (:meth:`run_sensing`):
+    #: every controller of a vehicle and fault class flies the same sensor noise, as it flies the
+    #: same draws.
+    sensing: Sensing | None = None
     _cells: tuple[Cell, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -516,6 +528,8 @@ class DecidingCampaign:
                 raise TypeError(f"{name}: expected an integer, got {v!r}")
         if not isinstance(self.certify, bool):
             raise TypeError(f"certify: expected True or False, got {self.certify!r}")
+        if self.sensing is not None and not isinstance(self.sensing, Sensing):
+            raise TypeError(f"sensing: expected rotorfault.Sensing or None (the truth), got {type(self.sensing).__name__}")
         if self.runs < 1:
             raise ValueError(f"runs: must be >= 1, got {self.runs}")
         if self.chunk_size < 1:
@@ -549,8 +563,11 @@ class DecidingCampaign:
         return len(self._cells) * self.runs
 
     def to_dict(self) -> dict[str, Any]:
-        return {"runs": self.runs, "seed": self.seed, "vehicles": list(self.vehicles), "fault_classes": list(self.fault_classes),
-                "controllers": list(self.controllers), "chunk_size": self.chunk_size, "certify": self.certify}
+        out = {"runs": self.runs, "seed": self.seed, "vehicles": list(self.vehicles), "fault_classes": list(self.fault_classes),
+               "controllers": list(self.controllers), "chunk_size": self.chunk_size, "certify": self.certify}
+        if self.sensing is not None:  # left out on the truth: a suite flown before sensing reads the same
+            out["sensing"] = {k: v for k in Sensing.FIELDS if (v := getattr(self.sensing, k)) is not None}
+        return out
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> DecidingCampaign:
@@ -560,7 +577,23 @@ class DecidingCampaign:
         unknown = sorted(set(data) - known)
         if unknown:
             raise ValueError(f"suite: unknown field(s) {', '.join(unknown)}")
-        return cls(**{"certify": False, **data})
+        values = {"certify": False, **data}
+        sensing = values.get("sensing")
+        if sensing is not None:
+            if not isinstance(sensing, Mapping):
+                raise TypeError("sensing: expected a table of rotorfault.Sensing fields")
+            values["sensing"] = Sensing(**sensing)
+        return cls(**values)
+
+    def run_sensing(self, cell: Cell, index: int) -> Sensing | None:
+        """What run ``index`` of ``cell`` flies on: ``None`` (the truth), or the suite's sensing with
+        its seed plus a seed drawn from ``default_rng((seed, draw_key, index, 1))`` (mod 2**64): a
+        generator of its own, so the run's other draws are those of a suite on the truth, and the
+        same for every controller of the cell's vehicle and fault class."""
+        if self.sensing is None:
+            return None
+        drawn = int(np.random.default_rng((self.seed, cell.draw_key, index, 1)).integers(0, 2**63))
+        return self.sensing.replace(seed=(self.sensing.seed + drawn) % 2**64)
 
     def refly(self, cell: Cell, index: int, extend_s: float = 0.0) -> tuple[Any, RunDraw]:
         """Run ``index`` of ``cell`` flown again in full (every control step recorded; ``extend_s``
@@ -576,7 +609,7 @@ class DecidingCampaign:
 
         sim = Simulator(airframe, dt_s=DT_S, substeps=SUBSTEPS, drag=drag, wind=(*d.wind_m_s, 0.0),
                         wind_profile=gust_profile(d, GUST_DURATION_S),
-                        actuator=actuator)
+                        actuator=actuator, sensing=self.run_sensing(cell, index))
         controller = CONTROLLERS[cell.controller].build(v, d.told_faults())
         return sim.run(_start(cell), d.duration_s, controller=controller, faults=d.faults()), d
 
@@ -959,7 +992,7 @@ def run_rows(suite: DecidingCampaign, first: int, stop: int) -> dict[str, np.nda
             continue
         runs.append((len(rows) - 1, cell, d, controllers[key]))
     if runs:
-        flown = _fly_batch([(cell, d, controller) for _, cell, d, controller in runs])
+        flown = _fly_batch([(cell, d, controller, suite.run_sensing(cell, d.index)) for _, cell, d, controller in runs])
         for j, r in enumerate(runs):
             rows[r[0]].update({name: values[j] for name, values in flown.items()})
     out: dict[str, np.ndarray[Any, Any]] = {}
@@ -974,19 +1007,20 @@ _FLOWN_COLUMNS = ("outcome", "holds", "hold_altitude_error_m", "hold_horizontal_
                   "peak_tilt_rad", "hold_spin_growth_rad_s", "hold_final_spin_rad_s")
 
 
-def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) -> dict[str, list[Any]]:
-    """Each ``(cell, draw, controller)`` flown in one Rust batch and judged by the hold rule:
+def _fly_batch(items: list[tuple[Cell, RunDraw, Any, Sensing | None]], extend_s: float = 0.0) -> dict[str, list[Any]]:
+    """Each ``(cell, draw, controller, sensing)`` flown in one Rust batch (on the truth where
+    ``sensing`` is ``None``) and judged by the hold rule:
     the row values :func:`run_rows` stores (``outcome``, ``holds``, the window's errors and spin).
     ``extend_s`` flies each run that much longer and judges the same rule over the longer window
     (from ``SETTLE_S`` after the failure to the new end; :func:`fly_longer`)."""
     limits = DivergenceLimits()
     runs = []
-    for cell, d, controller in items:
+    for cell, d, controller, sensing in items:
         airframe, actuator, drag = d.vehicle_parts(vehicle(cell.vehicle))
         trim = trim_command(controller)
         config = _rfcore.SimulationConfig(
             dt_s=DT_S, substeps=SUBSTEPS, duration_s=d.duration_s + extend_s, limits=limits, wind_m_s=(*d.wind_m_s, 0.0),
-            wind_profile=gust_profile(d, GUST_DURATION_S),
+            wind_profile=gust_profile(d, GUST_DURATION_S), sensing=sensing,
         )
         runs.append((airframe._core, actuator, drag, controller.core(DT_S), _start(cell)._packed(), [f._packed() for f in d.faults()],
                      None if trim is None else [float(u) for u in trim], config))
@@ -996,7 +1030,7 @@ def _fly_batch(items: list[tuple[Cell, RunDraw, Any]], extend_s: float = 0.0) ->
     outcome = list(batch.outcome)
     alt, hor = np.asarray(batch.window_altitude_error_m), np.asarray(batch.window_horizontal_error_m)
     growth, final_spin = np.asarray(batch.window_spin_growth_rad_s), np.asarray(batch.window_final_spin_rad_s)
-    tau = [run_settle_time_constant_s(cell.vehicle, d) for cell, d, _ in items]
+    tau = [run_settle_time_constant_s(cell.vehicle, d) for cell, d, _, _ in items]
     held = judge_holds(outcome, alt, hor, growth, final_spin, tau, extend_s)
     values = {"outcome": outcome, "holds": [bool(h) for h in held], "hold_altitude_error_m": alt.tolist(),
               "hold_horizontal_error_m": hor.tolist(), "lost_at_s": np.asarray(batch.lost_at_s, dtype=np.float64).tolist(),
@@ -1050,7 +1084,7 @@ def fly_longer(suite: DecidingCampaign, cell: Cell, indices: Sequence[int], exte
     items = []
     for k, d in enumerate(draws):
         try:
-            items.append((cell, d, entry.build(v, d.told_faults())))
+            items.append((cell, d, entry.build(v, d.told_faults()), suite.run_sensing(cell, d.index)))
         except ValueError as exc:
             raise ValueError(f"indices[{k}]: the design refuses run {indices[k]} ({exc}); it was never flown") from exc
     if not items:
@@ -1267,7 +1301,8 @@ class DecidingResult:
 
     def table(self) -> str:
         lines = [
-            f"deciding campaign: {self.suite.runs} runs per cell, {len(self.suite.cells)} cells; holds = not lost and within "
+            f"deciding campaign: {self.suite.runs} runs per cell, {len(self.suite.cells)} cells, flown on "
+            f"{'the truth' if self.suite.sensing is None else f'{self.suite.sensing.suite} sensors and the estimator'}; holds = not lost and within "
             f"{HOLD_ALTITUDE_M:g} m altitude, {HOLD_HORIZONTAL_M:g} m horizontal from {SETTLE_S:g} s after the failure"
             + (f", yaw rate not spinning up (last 5 s over the 5 s before: at most {SPIN_GROWTH_MIN_RAD_S:g} rad/s or "
                f"{1 + SPIN_SETTLE_MARGIN:g} x what a first-order settle from the failure with the run's I_zz / k_r grows there, "
