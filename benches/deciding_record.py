@@ -248,6 +248,7 @@ def main() -> None:
     }
     if comparison is not None:
         record_extra["campaign"]["against_truth"] = comparison
+        record_extra["campaign"]["against_truth_why"] = why.get("against_truth", "")
     print(result.decision_table())
     if args.json_path:
         write(args.json_path, "deciding_full_run", "The full deciding campaign (issue 30): per-cell counts and the decision", figures,
