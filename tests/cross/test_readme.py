@@ -176,6 +176,7 @@ RUN_ELSEWHERE = {
     "rotorfault campaign campaign.toml --out runs/ --dask tcp://host:8786": "needs a running cluster: the same code path as --dask local:2 above",
     "rotorfault campaign --suite deciding --runs N [--out DIR] [--dask ...]": "tests/studies/test_deciding.py (a one-run-per-cell campaign through the CLI)",
     "rotorfault campaign --suite deciding --runs 1000 --out DIR": "about 10 minutes: benches/deciding_campaign.py; the CLI path is tests/studies/test_deciding.py's",
+    "rotorfault campaign --suite deciding --sensing mocap": "about 7 minutes at 1,000 runs per cell: the CLI path on sensors is tests/studies/test_deciding.py's (one run per cell, --sensing mocap)",
     "rotorfault campaign --tune [--quick]": "about a minute even with --quick: tests/studies/test_campaign.py runs tune() on a small campaign",
 }
 #: A small campaign file for the README's `rotorfault campaign campaign.toml` lines.

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast, get_args
 
 import click
 import numpy as np
 from rich.markup import escape
 
-from .._typing import AcaiFormula
+from .._typing import AcaiFormula, SensorSuiteName
 from .._util.output import check_output_file
 from .._util.numeric import scaled_norm
 from ..analysis import Airframe, acai_label
@@ -239,7 +239,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
 @click.option("--suite", type=click.Choice(["deciding"]), help="A named suite instead of a file: deciding = issue 30's grid (vehicle x fault class x controller), --runs per cell (default 1000).")
 @click.option("--seed", type=int, default=0, show_default=True, help="With --suite: the suite's seed.")
 @click.option("--certify/--no-certify", "certify_runs", default=True, show_default=True, help="With --suite: certify each run's own vehicle and fault (static hover, spinning, not survivable) and decide the target over the runs certified survivable.")
-@click.option("--sensing", type=click.Choice(["truth", "mocap", "gnss", "rtk"]), default="truth", show_default=True, help="With --suite: what the controllers fly on: the truth, or a sensor suite (rotorfault.Sensing: the IMU at 500 Hz) with the estimator; each run's sensor noise seeded from its draw.")
+@click.option("--sensing", type=click.Choice(["truth", *get_args(SensorSuiteName)]), default="truth", show_default=True, help="With --suite: what the controllers fly on: the truth, or a sensor suite (rotorfault.Sensing: the IMU at 500 Hz) with the estimator; each run's sensor noise seeded from its draw.")
 @click.option("--read", "read_path", type=click.Path(file_okay=False), help="With --suite: read a suite's --out dataset instead of flying; rows without certify's verdict are certified after the fact (no flight).")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
 @click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
@@ -342,7 +342,7 @@ def _suite_command(
         result = read_deciding(read_path, certify=certify, progress=progress)
         suite = result.suite
     else:
-        suite = replace(SUITES[name](runs, seed), certify=certify, sensing=None if sensing == "truth" else Sensing(suite=sensing))
+        suite = replace(SUITES[name](runs, seed), certify=certify, sensing=None if sensing == "truth" else Sensing(suite=cast(SensorSuiteName, sensing)))
         result = run_deciding(suite, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address,
                               progress=progress)
     fields: dict[str, Any] = {"mode": "suite", "suite": name, "runs_per_cell": suite.runs, "seed": suite.seed,
