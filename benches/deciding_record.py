@@ -20,9 +20,10 @@ verdicts computed earlier (the same ``certify_run``) and restricts the decision 
 indices certified for every vehicle and fault class: the record then says it is a sample.
 
 A suite flown on sensors (``--sensing mocap``) is recorded to its own file
-(``deciding_full_run_mocap.json``); ``--against TRUTH_DIR``, the same suite flown on the truth,
-adds the paired comparison: per cell, the runs held on both, on the truth only, on the sensors only
-and on neither (the same draws, the same controller), and per missed cell how many of its missed
+(``deciding_full_run_mocap.json``); ``--against-truth TRUTH_DIR``, the same suite flown on the
+truth, adds the run-for-run comparison: per cell, the runs held on both, on the truth only, on the
+sensors only and on neither (the same draws, the same controller), how many of those held on the
+truth only and on both spin past the gyro's range there, and per missed cell how many of its missed
 runs the same controller holds on the truth (what the sensing costs it).
 """
 
@@ -43,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import numpy as np  # noqa: E402
 from _results import add_json_option, figure, write  # noqa: E402
 
+import rotorfault as rf  # noqa: E402
 from rotorfault.analysis import RelaxedHoverSettings  # noqa: E402
 from rotorfault.papers.campaign import RECORD_CELL_KEYS  # noqa: E402  (the record's keys, checked there)
 from rotorfault.studies import deciding as D  # noqa: E402
@@ -139,23 +141,36 @@ def misses(c: dict, decision: list[dict], why: dict[str, str], truth: dict | Non
     return out
 
 
+def _command(suite: D.DecidingCampaign) -> str:
+    """The command that flies ``suite``; a sensing the command line cannot give is written out."""
+    sensing = ""
+    if suite.sensing is not None:
+        sensing = f" --sensing {suite.sensing.suite}"
+        if suite.sensing != rf.Sensing(suite=suite.sensing.suite):
+            sensing += f" (in Python: DecidingCampaign(sensing={suite.sensing!r}))"
+    return f"rotorfault campaign --suite deciding --runs {suite.runs}{sensing} --out DIR --format json"
+
+
 def _same_rows(sensed: dict, truth: dict) -> None:
     """Refuses a truth dataset whose rows are not ``sensed``'s, row for row."""
     if any(len(sensed[k]) != len(truth[k]) or not np.array_equal(sensed[k], truth[k]) for k in ("vehicle", "fault_class", "controller", "index")):
-        raise SystemExit("--against: the truth dataset's rows are not the sensed suite's (vehicle, fault class, controller, index)")
+        raise SystemExit("--against-truth: the truth dataset's rows are not the sensed suite's (vehicle, fault class, controller, index)")
 
 
-def paired(sensed: dict, truth: dict) -> list[dict]:
+def against_truth(sensed: dict, truth: dict, gyro_range_rad_s: float) -> list[dict]:
     """Per cell of ``sensed`` (rows of a suite flown on sensors), its runs held on both, on the truth
     only, on the sensors only and on neither, against ``truth`` (the same suite on the truth: the same
-    draws, row for row)."""
+    draws, row for row); and of those held on the truth only and on both, how many spin past the
+    gyro's range (``gyro_range_rad_s``) on the truth (the window's last 5 s mean yaw rate)."""
     _same_rows(sensed, truth)
+    past = np.abs(truth["hold_final_spin_rad_s"]) > gyro_range_rad_s  # NaN (lost) compares False
     out = []
     for cell in dict.fromkeys(zip(sensed["vehicle"].tolist(), sensed["fault_class"].tolist(), sensed["controller"].tolist())):
         rows = (sensed["vehicle"] == cell[0]) & (sensed["fault_class"] == cell[1]) & (sensed["controller"] == cell[2]) & sensed["applicable"]
-        s, t = sensed["holds"].astype(bool)[rows], truth["holds"].astype(bool)[rows]
+        s, t, fast = sensed["holds"].astype(bool)[rows], truth["holds"].astype(bool)[rows], past[rows]
         out.append({"vehicle": cell[0], "fault_class": cell[1], "controller": cell[2], "runs": int(rows.sum()), "both": int(np.sum(s & t)),
-                    "truth_only": int(np.sum(t & ~s)), "sensed_only": int(np.sum(s & ~t)), "neither": int(np.sum(~s & ~t))})
+                    "truth_only": int(np.sum(t & ~s)), "sensed_only": int(np.sum(s & ~t)), "neither": int(np.sum(~s & ~t)),
+                    "truth_only_past_gyro_range": int(np.sum(t & ~s & fast)), "both_past_gyro_range": int(np.sum(s & t & fast))})
     return out
 
 
@@ -169,7 +184,7 @@ def main() -> None:
     parser.add_argument("--certified", nargs="*", default=[], help="JSON lines of verdicts computed earlier (module notes)")
     parser.add_argument("--why", default=None, help="JSON: {\"vehicle/fault_class\": reason} for the cells that miss the target")
     parser.add_argument("--certify-commit", default=None, help="the commit that certified the runs (default: --commit)")
-    parser.add_argument("--against", default=None, help="a suite flown on sensors: the same suite's dataset flown on the truth (paired comparison)")
+    parser.add_argument("--against-truth", default=None, help="a suite flown on sensors: the same suite's dataset flown on the truth (the run-for-run comparison)")
     add_json_option(parser)
     args = parser.parse_args()
 
@@ -183,15 +198,21 @@ def main() -> None:
     columns = D.rejudge_holds(suite, columns)
     flown_held, held = int(np.sum(columns["holds_as_flown"])), int(np.sum(columns["holds"]))
     changed = columns["holds"] != columns["holds_as_flown"]
-    comparison = None
-    if args.against is not None:
+    comparison = truth_columns = None
+    if args.against_truth is not None:
         if suite.sensing is None:
-            raise SystemExit("--against: the dataset was flown on the truth; --against compares a suite flown on sensors with it")
-        truth_suite = D.DecidingCampaign.from_dict(read_manifest(args.against)["arguments"]["suite"])
-        if truth_suite.sensing is not None or replace(suite, sensing=None, certify=truth_suite.certify) != truth_suite:
-            raise SystemExit("--against: not the same suite flown on the truth (runs, seed, vehicles, fault classes, controllers)")
-        truth_columns = D.rejudge_holds(truth_suite, numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.against)))))
-        comparison = paired(columns, truth_columns)
+            raise SystemExit("--against-truth: the dataset was flown on the truth; it compares a suite flown on sensors with it")
+        truth_manifest = read_manifest(args.against_truth)["arguments"]
+        truth_suite = D.DecidingCampaign.from_dict(truth_manifest["suite"])
+        # The rows do not depend on the chunking or on certify's column; everything else must match,
+        # the controllers' revision included (a truth flown by other controllers is no pair).
+        if truth_suite.sensing is not None or replace(suite, sensing=None, certify=truth_suite.certify, chunk_size=truth_suite.chunk_size) != truth_suite:
+            raise SystemExit("--against-truth: not the same suite flown on the truth (runs, seed, vehicles, fault classes, controllers)")
+        revision = read_manifest(args.dataset)["arguments"].get("controllers_revision")
+        if truth_manifest.get("controllers_revision") != revision:
+            raise SystemExit(f"--against-truth: flown by controllers revision {truth_manifest.get('controllers_revision')}, the dataset by {revision}")
+        truth_columns = D.rejudge_holds(truth_suite, numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.against_truth)))))
+        comparison = against_truth(columns, truth_columns, suite.sensing.gyro_range_in_effect_rad_s)
     full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
     cells = [{k: r[k] for k in RECORD_CELL_KEYS} for r in full.cell_rows()]
 
@@ -209,6 +230,8 @@ def main() -> None:
         indices = sorted(set.intersection(*({i for (v, f, i) in cached if (v, f) == p} for p in pairs))) if cached else list(range(suite.runs))
         mask = np.isin(columns["index"], indices)
         subset = {k: v[mask] for k, v in columns.items()}
+        if truth_columns is not None:  # the misses pair the certified rows with the truth's same rows
+            truth_columns = {k: v[mask] for k, v in truth_columns.items()}
         def from_cache(s: D.DecidingCampaign, cell: D.Cell, index: int) -> D.RunCertificate:
             r = cached[(cell.vehicle, cell.fault_class, index)]
             return D.RunCertificate(r["certified"], r["static_hover"], math.nan if r["spin"] is None else float(r["spin"]), r["note"])
@@ -230,8 +253,7 @@ def main() -> None:
         figures.append(figure("certify per run after the fact: time per draw", per_draw, "s"))
     record_extra = {
         "campaign": {
-            "command": f"rotorfault campaign --suite deciding --runs {suite.runs}"
-                       + ("" if suite.sensing is None else f" --sensing {suite.sensing.suite}") + " --out DIR --format json",
+            "command": _command(suite),
             "commit": args.commit, "flown": flown, "flown_on": args.flown_on, "flight_seconds": float(flight["seconds"]),
             "suite": suite.to_dict(), "cells": cells,
             "certified": {"how": note, "commit": args.certify_commit or args.commit, "indices": _ranges(indices),
@@ -243,7 +265,7 @@ def main() -> None:
                              "held_as_flown": flown_held, "held": held, "now_held": int(np.sum(changed & columns["holds"])),
                              "no_longer_held": int(np.sum(changed & ~columns["holds"]))},
             "decision": decision, "contradictions": result.contradictions(), "contradictions_why": why.get("contradictions", ""),
-            "misses": misses(rows, decision, why, truth_columns if comparison is not None else None),
+            "misses": misses(rows, decision, why, truth_columns),
         }
     }
     if comparison is not None:
@@ -251,7 +273,9 @@ def main() -> None:
         record_extra["campaign"]["against_truth_why"] = why.get("against_truth", "")
     print(result.decision_table())
     if args.json_path:
-        write(args.json_path, "deciding_full_run", "The full deciding campaign (issue 30): per-cell counts and the decision", figures,
+        on = "" if suite.sensing is None else f" on {suite.sensing.suite} sensors"
+        write(args.json_path, "deciding_full_run" + ("" if suite.sensing is None else f"_{suite.sensing.suite}"),
+              f"The full deciding campaign (issue 30){on}: per-cell counts and the decision", figures,
               reduced=None if len(indices) == suite.runs else f"the decision over a sample of certified runs ({len(indices)} of {suite.runs} per cell)")
         path = Path(args.json_path)
         data = json.loads(path.read_text(encoding="utf-8"))

@@ -18,7 +18,11 @@ import subprocess
 import sys
 
 _SCRIPT = """
-import os, sys
+import os, signal, sys
+# Python's own Ctrl-C handler even when the test runner was started with SIGINT ignored (a
+# background job of a non-interactive shell): the child inherits the ignore, installs none, and
+# would finish the job instead of stopping.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from rotorfault.studies import engine
 from rotorfault.cli import cli
 

@@ -526,6 +526,7 @@ class Sensing:
         imu: ImuPart | None = None,
         imu_rate_hz: float | None = None,
         position_rate_hz: float | None = None,
+        gyro_range_rad_s: float | None = None,
         seed: int | None = None,
     ) -> Sensing: ...
     @property
@@ -537,9 +538,13 @@ class Sensing:
     @property
     def position_rate_hz(self) -> float | None: ...
     @property
+    def gyro_range_rad_s(self) -> float | None: ...
+    @property
     def seed(self) -> int: ...
     @property
     def position_rate_in_effect_hz(self) -> float: ...
+    @property
+    def gyro_range_in_effect_rad_s(self) -> float: ...
     SUITES: ClassVar[list[SensorSuiteName]]
     IMUS: ClassVar[list[ImuPart]]
     FIELDS: ClassVar[list[str]]

@@ -32,6 +32,8 @@ def test_defaults_come_from_the_core_and_fields_are_checked() -> None:
     assert s.replace(seed=3) == rf.Sensing(seed=3) != s
     assert pickle.loads(pickle.dumps(rf.Sensing(suite="gnss", seed=5))) == rf.Sensing(suite="gnss", seed=5)
     assert rf.Sensing(suite="gnss").position_rate_in_effect_hz == 5.0
+    assert s.gyro_range_rad_s is None and s.gyro_range_in_effect_rad_s == pytest.approx(np.radians(2000.0), rel=1e-15)
+    assert rf.Sensing(gyro_range_rad_s=70.0).gyro_range_in_effect_rad_s == 70.0
     for kwargs, error, message in [
         ({"suite": "vicon"}, ValueError, "^sensing.suite: expected one of mocap, gnss, rtk"),
         ({"suite": 1}, TypeError, "^sensing.suite: expected a string"),
@@ -41,6 +43,10 @@ def test_defaults_come_from_the_core_and_fields_are_checked() -> None:
         ({"position_rate_hz": 1e5}, ValueError, "^sensing.position_rate_hz"),
         ({"seed": -1}, ValueError, r"^sensing.seed: must lie in \[0, 2\*\*64\)"),
         ({"seed": True}, TypeError, "^sensing.seed: expected an integer"),
+        ({"gyro_range_rad_s": 0.0}, ValueError, "^sensing.gyro_range_rad_s: must be > 0"),
+        ({"gyro_range_rad_s": float("inf")}, ValueError, "^sensing.gyro_range_rad_s"),
+        ({"gyro_range_rad_s": 1001.0}, ValueError, "^sensing.gyro_range_rad_s: must be > 0 and at most 1000 rad/s"),
+        ({"gyro_range_rad_s": "wide"}, TypeError, "^sensing.gyro_range_rad_s: expected a real number"),
     ]:
         with pytest.raises(error, match=message):
             rf.Sensing(**kwargs)
@@ -147,3 +153,26 @@ def test_counts_pickled_before_thinning_existed_load_with_none_thinned() -> None
     with pytest.raises(TypeError, match="late_measurements"):
         type(counts)(imu_samples=1, gyro_saturated_samples=0, accel_saturated_samples=0, fused_measurements=0,
                      rejected_measurements=0)  # the fields every release had stay required
+
+
+def test_a_wider_gyro_range_stops_the_clamp_of_a_spin_past_the_parts_range() -> None:
+    """INDI on the ke-quadcopter after two opposing rotors are lost spins at about 40 rad/s, past
+    the ICM-42688-P's +-2000 deg/s (34.9 rad/s): the gyro clamps; with ``gyro_range_rad_s`` 70 it
+    reads the spin, nothing else of the sensors changes (before the spin the two flights are the
+    same, bit for bit), and the clamp's flags and counts say which flight clamped."""
+    from rotorfault.control import ke
+
+    pre = ke.preset("ke-hil")
+    faults = [rf.RotorFault(1, 1.0), rf.RotorFault(3, 1.0)]
+    law = rf.IndiController(pre.airframe, failures=faults, position=(0.0, 0.0, -10.0))
+    start = rf.State(position=(0.0, 0.0, -10.0))
+    runs = {}
+    for name, sensing in (("part", rf.Sensing(seed=4)), ("wide", rf.Sensing(seed=4, gyro_range_rad_s=70.0))):
+        runs[name] = pre.simulator(sensing=sensing).run(start, 16.0, controller=law, faults=faults)
+    part, wide = runs["part"], runs["wide"]
+    spin = np.abs(np.asarray(wide.omega)[np.asarray(wide.t) > 13.0, 2])
+    assert spin.min() > 36.0 and spin.max() < 70.0, (spin.min(), spin.max())  # past the part's range, inside the wide one
+    assert part.estimate.counts.gyro_saturated_samples > 1000 and np.asarray(part.estimate.gyro_saturated).any()
+    assert wide.estimate.counts.gyro_saturated_samples == 0 and not np.asarray(wide.estimate.gyro_saturated).any()
+    before = np.asarray(part.t) < 1.0
+    np.testing.assert_array_equal(np.asarray(part.position)[before], np.asarray(wide.position)[before])

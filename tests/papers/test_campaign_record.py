@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
 import pytest
 
 import rotorfault as rf
@@ -52,7 +53,35 @@ def test_the_sensed_records_comparison_is_the_truth_records_held_runs_cell_for_c
     truth = {(c["vehicle"], c["fault_class"], c["controller"]): c for c in C.recorded_full_run()["campaign"]["cells"]}
     sensed = C.recorded_full_run(C.SENSED_RECORD)["campaign"]
     for r in sensed["against_truth"]:
-        assert r["both"] + r["truth_only"] == truth[(r["vehicle"], r["fault_class"], r["controller"])]["held"]
+        t = truth[(r["vehicle"], r["fault_class"], r["controller"])]
+        assert r["both"] + r["truth_only"] == t["held"] and r["runs"] == t["runs"]
+    # A missed run the best controller holds on the truth is one of its runs held on the truth only.
+    by_cell = {(r["vehicle"], r["fault_class"], r["controller"]): r for r in sensed["against_truth"]}
+    for m in sensed["misses"]:
+        assert 0 <= m["held_on_truth"] <= min(m["missed"], by_cell[(m["vehicle"], m["fault_class"], m["controller"])]["truth_only"])
+
+
+def test_the_run_for_run_comparison_counts_by_hand_and_refuses_rows_that_do_not_pair() -> None:
+    """``benches/deciding_record.py``'s comparison on four hand-made rows of one cell: one held on
+    both, one on each side only, one on neither; the spin past the gyro's range counted on the
+    truth's rows only (a lost run's NaN spin is not past it); rows out of order are refused."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benches"))
+    import deciding_record as R
+
+    key = {"vehicle": np.array(["v"] * 4), "fault_class": np.array(["f"] * 4), "controller": np.array(["c"] * 4), "index": np.arange(4),
+           "applicable": np.ones(4, dtype=bool)}
+    sensed = {**key, "holds": np.array([True, False, True, False]), "hold_final_spin_rad_s": np.array([50.0, 50.0, 50.0, 50.0])}
+    truth = {**key, "holds": np.array([True, True, False, False]), "hold_final_spin_rad_s": np.array([40.0, 36.0, np.nan, 50.0])}
+    (row,) = R.against_truth(sensed, truth, 35.0)
+    assert row == {"vehicle": "v", "fault_class": "f", "controller": "c", "runs": 4, "both": 1, "truth_only": 1, "sensed_only": 1,
+                   "neither": 1, "truth_only_past_gyro_range": 1, "both_past_gyro_range": 1}
+    (row,) = R.against_truth(sensed, truth, 38.0)
+    assert (row["truth_only_past_gyro_range"], row["both_past_gyro_range"]) == (0, 1)
+    with pytest.raises(SystemExit, match="not the sensed suite's"):
+        R.against_truth(sensed, {**truth, "index": np.array([1, 0, 2, 3])}, 35.0)
 
 
 @pytest.mark.parametrize(
@@ -61,6 +90,7 @@ def test_the_sensed_records_comparison_is_the_truth_records_held_runs_cell_for_c
         (lambda r: r["against_truth"].pop(), "one row per cell"),
         (lambda r: r["against_truth"][3].update(both=r["against_truth"][3]["both"] + 1), "counts do not add up"),
         (lambda r: r["against_truth"][3].update(controller="other"), "comparison"),
+        (lambda r: r["against_truth"][3].update(truth_only_past_gyro_range=r["against_truth"][3]["truth_only"] + 1), "counts do not add up"),
         (lambda r: r["suite"].pop("sensing"), "sensing"),
     ],
 )
@@ -69,5 +99,12 @@ def test_a_sensed_record_that_does_not_match_is_refused(break_it: object, messag
     break_it(data["campaign"])  # type: ignore[operator]
     with pytest.raises(ValueError, match=message):
         C.check_record(data, C.SENSED_RECORD)
+
+
+def test_each_record_is_refused_under_the_others_name() -> None:
     with pytest.raises(ValueError, match="sensing"):
         C.check_record(copy.deepcopy(C.recorded_full_run(C.SENSED_RECORD)), C.RECORD)
+    with pytest.raises(ValueError, match="sensing"):
+        C.check_record(copy.deepcopy(C.recorded_full_run()), C.SENSED_RECORD)
+    with pytest.raises(ValueError, match="name"):
+        C.recorded_full_run("other.json")

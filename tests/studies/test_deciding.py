@@ -862,6 +862,8 @@ def test_a_suite_on_sensors_flies_the_same_draws_with_sensor_noise_of_its_own_pe
 
     rows_truth = D.run_rows(truth, 0, truth.total_runs)
     rows = D.run_rows(mocap, 0, mocap.total_runs)
+    cut = [D.run_rows(mocap, a, min(a + 7, mocap.total_runs)) for a in range(0, mocap.total_runs, 7)]
+    np.testing.assert_array_equal(np.concatenate([c["hold_horizontal_error_m"] for c in cut]), rows["hold_horizontal_error_m"])
     flown = np.isfinite(rows_truth["hold_horizontal_error_m"]) & np.isfinite(rows["hold_horizontal_error_m"])
     assert flown.sum() >= 6
     assert not np.any(rows["hold_horizontal_error_m"][flown] == rows_truth["hold_horizontal_error_m"][flown])
@@ -894,6 +896,10 @@ def test_a_suites_sensing_round_trips_and_bad_sensing_is_refused() -> None:
         D.DecidingCampaign.from_dict({**truth.to_dict(), "sensing": "mocap"})
     with pytest.raises(ValueError, match="imu_rate_hz"):
         D.DecidingCampaign.from_dict({**truth.to_dict(), "sensing": {"imu_rate_hz": -1.0}})
+    with pytest.raises(ValueError, match="^sensing.gyro: unknown Sensing field"):
+        D.DecidingCampaign.from_dict({**truth.to_dict(), "sensing": {"gyro": 1.0}})
+    wide = D.DecidingCampaign(runs=2, sensing=rf.Sensing(gyro_range_rad_s=70.0))
+    assert D.DecidingCampaign.from_dict(wide.to_dict()) == wide
 
 
 def test_the_cli_flies_a_suite_on_sensors_and_refuses_sensing_elsewhere(tmp_path: Path) -> None:
@@ -910,6 +916,9 @@ def test_the_cli_flies_a_suite_on_sensors_and_refuses_sensing_elsewhere(tmp_path
     read = CliRunner().invoke(cli, ["campaign", "--suite", "deciding", "--read", str(out), "--no-certify", "--format", "json", "--no-progress"])
     assert read.exit_code == 0, read.output
     assert json.loads(read.output)["sensing"] == "mocap"  # what the dataset flew on, from its manifest
-    for args in (["campaign", "--sensing", "mocap"], [*base, "--read", str(out), "--sensing", "mocap"]):
+    for args in (["campaign", "--sensing", "mocap"], ["campaign", "--tune", "--sensing", "mocap"], [*base, "--read", str(out), "--sensing", "truth"]):
         bad = CliRunner().invoke(cli, args)
         assert bad.exit_code != 0 and "sensing" in bad.output, bad.output
+    # A resume on the truth of a dataset flown on sensors is another job: refused, naming what differs.
+    resumed = CliRunner().invoke(cli, [*base, "--out", str(out), "--resume"])
+    assert resumed.exit_code != 0 and "sensing" in resumed.output, resumed.output

@@ -12,8 +12,9 @@ use crate::convert::{real, settings_protocol, to_py_err};
 
 /// What the controller flies on with sensors: the sensor suite (`"mocap"`, `"gnss"`, `"rtk"`),
 /// the IMU part (`"icm-42688-p"`, `"mpu-6000"`) and its output data rate, the position source's
-/// rate (`None`: the suite's), and the seed of the sensors' random streams (run ``i`` of a batch
-/// uses ``seed + i``). The estimator is matched to the sensors.
+/// rate (`None`: the suite's), the gyroscope's range in rad/s (`None`: the part's +/-2000 deg/s;
+/// a what-if for spins past it), and the seed of the sensors' random streams (run ``i`` of a
+/// batch uses ``seed + i``). The estimator is matched to the sensors.
 ///
 /// Examples:
 ///
@@ -28,8 +29,14 @@ pub struct PySensing {
 }
 
 impl PySensing {
-    const FIELDS: &'static [&'static str] =
-        &["suite", "imu", "imu_rate_hz", "position_rate_hz", "seed"];
+    const FIELDS: &'static [&'static str] = &[
+        "suite",
+        "imu",
+        "imu_rate_hz",
+        "position_rate_hz",
+        "gyro_range_rad_s",
+        "seed",
+    ];
 }
 
 fn name<'py>(field: &str, value: &Bound<'py, PyAny>) -> PyResult<String> {
@@ -59,12 +66,13 @@ fn seed(value: &Bound<'_, PyAny>) -> PyResult<u64> {
 
 settings_protocol!(PySensing, {
     #[new]
-    #[pyo3(signature = (*, suite=None, imu=None, imu_rate_hz=None, position_rate_hz=None, seed=None))]
+    #[pyo3(signature = (*, suite=None, imu=None, imu_rate_hz=None, position_rate_hz=None, gyro_range_rad_s=None, seed=None))]
     fn new(
         suite: Option<Bound<'_, PyAny>>,
         imu: Option<Bound<'_, PyAny>>,
         imu_rate_hz: Option<Bound<'_, PyAny>>,
         position_rate_hz: Option<Bound<'_, PyAny>>,
+        gyro_range_rad_s: Option<Bound<'_, PyAny>>,
         seed: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let d = Sensing::default();
@@ -86,6 +94,10 @@ settings_protocol!(PySensing, {
             position_rate_hz: match position_rate_hz {
                 Some(v) if !v.is_none() => Some(real("sensing.position_rate_hz", &v)?),
                 _ => d.position_rate_hz,
+            },
+            gyro_range_rad_s: match gyro_range_rad_s {
+                Some(v) if !v.is_none() => Some(real("sensing.gyro_range_rad_s", &v)?),
+                _ => d.gyro_range_rad_s,
             },
             seed: match seed {
                 Some(v) => self::seed(&v)?,
@@ -112,8 +124,17 @@ settings_protocol!(PySensing, {
         self.inner.position_rate_hz
     }
     #[getter]
+    fn gyro_range_rad_s(&self) -> Option<f64> {
+        self.inner.gyro_range_rad_s
+    }
+    #[getter]
     fn seed(&self) -> u64 {
         self.inner.seed
+    }
+    /// The gyroscope's range in effect, rad/s (the part's when `gyro_range_rad_s` is None).
+    #[getter]
+    fn gyro_range_in_effect_rad_s(&self) -> f64 {
+        self.inner.profile().imu.gyro.range_rad_s
     }
     /// The position source's rate in effect, Hz (the suite's when `position_rate_hz` is None).
     #[getter]

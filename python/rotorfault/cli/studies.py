@@ -239,7 +239,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
 @click.option("--suite", type=click.Choice(["deciding"]), help="A named suite instead of a file: deciding = issue 30's grid (vehicle x fault class x controller), --runs per cell (default 1000).")
 @click.option("--seed", type=int, default=0, show_default=True, help="With --suite: the suite's seed.")
 @click.option("--certify/--no-certify", "certify_runs", default=True, show_default=True, help="With --suite: certify each run's own vehicle and fault (static hover, spinning, not survivable) and decide the target over the runs certified survivable.")
-@click.option("--sensing", type=click.Choice(["truth", *get_args(SensorSuiteName)]), default="truth", show_default=True, help="With --suite: what the controllers fly on: the truth, or a sensor suite (rotorfault.Sensing: the IMU at 500 Hz) with the estimator; each run's sensor noise seeded from its draw.")
+@click.option("--sensing", type=click.Choice(["truth", *get_args(SensorSuiteName)]), default=None, help="With --suite: what the controllers fly on: the truth (default), or a sensor suite (rotorfault.Sensing: the IMU at 500 Hz) with the estimator; each run's sensor noise seeded from its draw.")
 @click.option("--read", "read_path", type=click.Path(file_okay=False), help="With --suite: read a suite's --out dataset instead of flying; rows without certify's verdict are certified after the fact (no flight).")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Write histograms and the envelope plot (.png, .pdf or .svg).")
 @click.option("--tune", "tune_gains", is_flag=True, help="Robust tuning of Ke's gains on the single and double failure campaign instead.")
@@ -252,7 +252,7 @@ def simulate(scenario_file: str, plot_path: str | None, force: bool, output: Out
 @output_options
 @_user_errors
 def campaign_command(
-    campaign_file: str | None, runs: int | None, suite: str | None, seed: int, certify_runs: bool, sensing: str, read_path: str | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
+    campaign_file: str | None, runs: int | None, suite: str | None, seed: int, certify_runs: bool, sensing: str | None, read_path: str | None, plot_path: str | None, tune_gains: bool, quick: bool, out_path: str | None,
     resume: bool, dask_address: str | None, force: bool, progress: bool, output: Output,
 ) -> None:
     """Fly a fault campaign (a TOML file of rotorfault.studies.Campaign fields; default: every
@@ -267,6 +267,8 @@ def campaign_command(
         check_output_file("plot", plot_path, force=force)
     if out_path is None and (resume or dask_address):
         raise ValueError("out: --resume and --dask need --out (a Parquet output)")
+    if sensing is not None and suite is None:
+        raise ValueError("sensing: --sensing chooses a --suite's sensing (a campaign file has its own [sensing] table)")
     if tune_gains:
         if out_path is not None:
             raise ValueError("out: --tune writes no Parquet output")
@@ -285,8 +287,6 @@ def campaign_command(
         _suite_command(suite, 1000 if runs is None else runs, seed, out_path, resume, force, dask_address, progress, output,
                        certify=certify_runs, read_path=read_path, sensing=sensing)
         return
-    if sensing != "truth":
-        raise ValueError("sensing: --sensing chooses a --suite's sensing (a campaign file has its own [sensing] table)")
     if read_path is not None:
         raise ValueError("read: --read reads a --suite dataset; give --suite")
     campaign = Campaign() if campaign_file is None else Campaign.from_toml(campaign_file)
@@ -325,7 +325,7 @@ def campaign_command(
 
 def _suite_command(
     name: str, runs: int, seed: int, out_path: str | None, resume: bool, force: bool, dask_address: str | None, progress: bool, output: Output,
-    *, certify: bool, read_path: str | None, sensing: str = "truth",
+    *, certify: bool, read_path: str | None, sensing: str | None = None,
 ) -> None:
     """``rotorfault campaign --suite NAME``: a named suite (:data:`rotorfault.studies.deciding.SUITES`),
     flown, or read back (``--read``) and certified after the fact."""
@@ -337,12 +337,12 @@ def _suite_command(
     if read_path is not None:
         if out_path is not None or resume or dask_address:
             raise ValueError("read: --read flies nothing; it takes no --out, --resume or --dask")
-        if sensing != "truth":
+        if sensing is not None:
             raise ValueError("sensing: --read reads what the dataset flew on (its manifest); give no --sensing")
         result = read_deciding(read_path, certify=certify, progress=progress)
         suite = result.suite
     else:
-        suite = replace(SUITES[name](runs, seed), certify=certify, sensing=None if sensing == "truth" else Sensing(suite=cast(SensorSuiteName, sensing)))
+        suite = replace(SUITES[name](runs, seed), certify=certify, sensing=None if sensing in (None, "truth") else Sensing(suite=cast(SensorSuiteName, sensing)))
         result = run_deciding(suite, out=out_path, resume=resume, force=force, backend="dask" if dask_address else "local", dask=dask_address,
                               progress=progress)
     fields: dict[str, Any] = {"mode": "suite", "suite": name, "runs_per_cell": suite.runs, "seed": suite.seed,

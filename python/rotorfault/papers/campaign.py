@@ -22,7 +22,8 @@ RECORD = "deciding_full_run.json"
 #: The same suite flown on the motion-capture sensors and the estimator (``--sensing mocap``), with
 #: its paired comparison against :data:`RECORD` (the same draws flown on the truth).
 SENSED_RECORD = "deciding_full_run_mocap.json"
-PAIRED_KEYS = ("vehicle", "fault_class", "controller", "runs", "both", "truth_only", "sensed_only", "neither")
+AGAINST_TRUTH_KEYS = ("vehicle", "fault_class", "controller", "runs", "both", "truth_only", "sensed_only", "neither",
+                      "truth_only_past_gyro_range", "both_past_gyro_range")
 RECORD_CELL_KEYS = ("vehicle", "fault_class", "controller", "runs", "not_applicable", "held", "share", "refused", "lost")
 RECORD_DECISION_KEYS = ("vehicle", "fault_class", "runs", "survivable", "static_hover", "spinning", "not_survivable", "check_failed",
                         "controller", "held", "share", "low", "high", "miss", "all_fail", "not_survivable_held")
@@ -79,14 +80,15 @@ def check_record(data: dict[str, Any], name: str = RECORD) -> dict[str, Any]:
     if (suite.sensing is not None) != sensed:
         raise ValueError(f"{name}: campaign.suite.sensing must be {'a sensor suite' if sensed else 'absent (the truth)'}")
     if sensed:
-        pairs_of = run.get("against_truth")
-        if not isinstance(pairs_of, list) or len(pairs_of) != len(cells):
+        rows = run.get("against_truth")
+        if not isinstance(rows, list) or len(rows) != len(cells):
             raise ValueError(f"{name}: campaign.against_truth must have one row per cell")
-        for k, (c, r) in enumerate(zip(cells, pairs_of)):
-            if set(r) != set(PAIRED_KEYS) or (r["vehicle"], r["fault_class"], r["controller"]) != (c["vehicle"], c["fault_class"], c["controller"]):
+        for k, (c, r) in enumerate(zip(cells, rows)):
+            if set(r) != set(AGAINST_TRUTH_KEYS) or (r["vehicle"], r["fault_class"], r["controller"]) != (c["vehicle"], c["fault_class"], c["controller"]):
                 raise ValueError(f"{name}: campaign.against_truth[{k}] is not cell {k}'s comparison")
             if (r["both"] + r["truth_only"] + r["sensed_only"] + r["neither"] != r["runs"] or r["runs"] != c["runs"]
-                    or r["both"] + r["sensed_only"] != c["held"]):
+                    or r["both"] + r["sensed_only"] != c["held"] or not 0 <= r["truth_only_past_gyro_range"] <= r["truth_only"]
+                    or not 0 <= r["both_past_gyro_range"] <= r["both"]):
                 raise ValueError(f"{name}: campaign.against_truth[{k}] counts do not add up")
     return data
 
@@ -160,11 +162,13 @@ def _recorded_tables(section: ReportSection, name: str = RECORD) -> None:
     if "against_truth" in run:
         section.tables.append(ReportTable(
             f"{label} Sensors against the truth, run for run: each cell's runs (the same draws and controller) held on both, on the "
-            f"truth only, on the sensors only, on neither. {run.get('against_truth_why', '')}",
+            f"truth only, on the sensors only, on neither; and of those held on the truth only and on both, how many spin past the gyro's range "
+            f"on the truth (the last 5 s mean yaw rate). {run.get('against_truth_why', '')}",
             ("vehicle", "fault class", "controller", "runs", "held on truth", f"held on {sensing['suite']}", "both", "truth only",
-             f"{sensing['suite']} only", "neither"),
+             f"{sensing['suite']} only", "neither", "spinning past the gyro's range on the truth: truth only / both"),
             tuple((r["vehicle"], r["fault_class"], r["controller"], str(r["runs"]), str(r["both"] + r["truth_only"]),
-                   str(r["both"] + r["sensed_only"]), str(r["both"]), str(r["truth_only"]), str(r["sensed_only"]), str(r["neither"]))
+                   str(r["both"] + r["sensed_only"]), str(r["both"]), str(r["truth_only"]), str(r["sensed_only"]), str(r["neither"]),
+                   f"{r['truth_only_past_gyro_range']} / {r['both_past_gyro_range']}")
                   for r in run["against_truth"] if r["runs"]),
         ))
 

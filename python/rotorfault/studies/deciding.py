@@ -114,7 +114,7 @@ from .deciding_hold import (
     spin_growth_limit_rad_s,
     spin_settle_time_constant_s,
 )
-from .sampling import RunDraw, gust_profile
+from .sampling import RunDraw, gust_profile, seeded_sensing
 
 #: Each run flies this long past its first failure (the issue's 30 s runs, failure in [2, 5] s).
 AFTER_FAULT_S = 25.0
@@ -143,6 +143,11 @@ TARGET_SHARE = 0.95
 #: relaxed spin's tilt 0.1 -> 0.06 (:data:`INDI_SPIN_AXIS_TILT`) and the relaxed spin after two
 #: opposing rotors partly lost, on the side of the weaker as measured (:func:`indi_spin_axis_weaker_of`).
 CONTROLLERS_REVISION = 4
+#: Revision of what a run flown on sensors measures and estimates (the sensor models and the
+#: estimator, ``rotorfault.Sensing``): part of a sensed suite's identity, as
+#: :data:`CONTROLLERS_REVISION` is of every suite's, so a resume across a change is refused. Left
+#: out of a suite on the truth (its identity is what it was before sensing existed).
+SENSING_REVISION = 1
 #: The relaxed hover LQR's design schedule over a partial loss's efficiency (module notes).
 EFFICIENCY_STEP = 0.05
 #: The relaxed hover LQR's outer loop in the campaign. The default loop (0.5 rad/s, no integral,
@@ -582,6 +587,9 @@ class DecidingCampaign:
         if sensing is not None:
             if not isinstance(sensing, Mapping):
                 raise TypeError("sensing: expected a table of rotorfault.Sensing fields")
+            bad = sorted(set(sensing) - set(Sensing.FIELDS))
+            if bad:
+                raise ValueError(f"sensing.{bad[0]}: unknown Sensing field; known: {', '.join(Sensing.FIELDS)}")
             values["sensing"] = Sensing(**sensing)
         return cls(**values)
 
@@ -592,8 +600,10 @@ class DecidingCampaign:
         same for every controller of the cell's vehicle and fault class."""
         if self.sensing is None:
             return None
+        # The trailing 1 keys a generator of its own: numpy seeds (s, k, i) and (s, k, i, 0) alike,
+        # so a 0 would replay the draw's own generator.
         drawn = int(np.random.default_rng((self.seed, cell.draw_key, index, 1)).integers(0, 2**63))
-        return self.sensing.replace(seed=(self.sensing.seed + drawn) % 2**64)
+        return seeded_sensing(self.sensing, drawn)
 
     def refly(self, cell: Cell, index: int, extend_s: float = 0.0) -> tuple[Any, RunDraw]:
         """Run ``index`` of ``cell`` flown again in full (every control step recorded; ``extend_s``
@@ -1129,7 +1139,8 @@ def run_deciding(
             # The controllers' revision and the certify rule are part of the job's identity: a resume
             # under another is refused (chunks flown or certified by two versions under one label).
             arguments={"suite": suite.to_dict(), "controllers_revision": CONTROLLERS_REVISION,
-                       **({"certify_rule": _current_certify_rule()} if suite.certify else {})},
+                       **({"certify_rule": _current_certify_rule()} if suite.certify else {}),
+                       **({"sensing_revision": SENSING_REVISION} if suite.sensing is not None else {})},
         kind=KIND, out=out, metadata=_metadata(suite), resume=resume, force=force, backend=backend,
         dask=dask, progress=suite.total_runs >= 2000 if progress is None else progress,
         description=f"{suite.total_runs:,} runs in {len(suite.cells)} cells", rows_field="suite",
@@ -1355,7 +1366,7 @@ SUITES: dict[str, Callable[[int, int], DecidingCampaign]] = {
 
 
 __all__ = [
-    "CONTROLLERS", "CONTROLLERS_REVISION", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
+    "CONTROLLERS", "CONTROLLERS_REVISION", "SENSING_REVISION", "FAULT_CLASSES", "HOLD_ALTITUDE_M", "HOLD_HORIZONTAL_M", "SETTLE_S", "SPIN_END_LIMIT_RAD_S", "SPIN_GROWTH_MIN_RAD_S", "SPIN_SETTLE_MARGIN", "SPIN_SETTLED_CAP_SHARE", "SPIN_SETTLED_SHARE", "SUITES", "VEHICLES", "CampaignVehicle", "StaleCertifyWarning",
     "CERTIFIED", "Cell", "ControllerEntry", "DecidingCampaign", "DecidingResult", "FaultClass", "RunCertificate", "RunDraw", "SURVIVABLE",
     "certify_rows", "certify_run", "hold_errors", "holds", "judge_holds", "rejudge_holds", "run_settle_time_constant_s", "spin_growth_limit_rad_s",
     "spin_growth_since_failure_s", "spin_growth_span_s",

@@ -234,7 +234,12 @@ def sensor_noise(noise_std: tuple[float, float, float, float] | None, spec: RunD
 def run_sensing(sensing: Sensing | None, spec: RunDraw) -> Sensing | None:
     """The run's sensing: the campaign's with its seed plus the run's drawn seed (mod 2**64), or
     None without sensing."""
-    return None if sensing is None else sensing.replace(seed=(sensing.seed + _noise_seed(spec)) % 2**64)
+    return None if sensing is None else seeded_sensing(sensing, _noise_seed(spec))
+
+
+def seeded_sensing(sensing: Sensing, drawn_seed: int) -> Sensing:
+    """``sensing`` with its seed plus a run's drawn seed, mod 2**64 (the one rule of every study)."""
+    return sensing.replace(seed=(sensing.seed + drawn_seed) % 2**64)
 
 
 def _noise_seed(spec: RunDraw) -> int:
@@ -244,4 +249,4 @@ def _noise_seed(spec: RunDraw) -> int:
 
 
 __all__ = ["GUST_POINTS", "RAMP_STEPS", "FailureSet", "RunDraw", "draw", "gust_profile", "perturbed_vehicle",
-           "rotor_count", "run_sensing", "scaled_parts", "sensor_noise"]
+           "rotor_count", "run_sensing", "scaled_parts", "seeded_sensing", "sensor_noise"]

@@ -93,6 +93,9 @@ fn unknown(field: &str, name: &str, names: &[&str]) -> RfError {
 pub const MAX_IMU_RATE_HZ: f64 = 32_000.0;
 /// The highest position-source rate accepted, Hz (motion-capture systems reach 1 kHz).
 pub const MAX_POSITION_RATE_HZ: f64 = 1_000.0;
+/// The largest gyroscope range accepted, rad/s: five times the simulator's default body-rate
+/// limit (200 rad/s, where a run counts as lost), so any larger range never clamps.
+pub const MAX_GYRO_RANGE_RAD_S: f64 = 1_000.0;
 
 /// Sensors and the estimator for one run (module docs). Run `i` of a batch uses `seed + i`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,6 +106,10 @@ pub struct Sensing {
     pub imu_rate_hz: f64,
     /// The position source's rate, Hz; `None`: the suite's (mocap 240, NEO-M8N 5, ZED-F9P 10).
     pub position_rate_hz: Option<f64>,
+    /// The gyroscope's range (full scale, +/-), rad/s; `None`: the part's (both parts' largest,
+    /// +/-2000 deg/s = 34.9 rad/s). A what-if for a vehicle that spins faster than its gyro reads
+    /// (parts with +/-4000 deg/s exist); the part's noise and errors are kept.
+    pub gyro_range_rad_s: Option<f64>,
     /// Seeds every sensor's random stream (its own stream per sensor: `flight::random`).
     pub seed: u64,
 }
@@ -118,6 +125,7 @@ impl Default for Sensing {
             imu: ImuPart::Icm42688P,
             imu_rate_hz: 500.0,
             position_rate_hz: None,
+            gyro_range_rad_s: None,
             seed: 0,
         }
     }
@@ -135,6 +143,9 @@ impl Sensing {
         if let Some(rate) = self.position_rate_hz {
             profile.position.rate_hz = rate;
         }
+        if let Some(range) = self.gyro_range_rad_s {
+            profile.imu.gyro.range_rad_s = range;
+        }
         profile
     }
 
@@ -148,6 +159,15 @@ impl Sensing {
         rate("sensing.imu_rate_hz", self.imu_rate_hz, MAX_IMU_RATE_HZ)?;
         if let Some(r) = self.position_rate_hz {
             rate("sensing.position_rate_hz", r, MAX_POSITION_RATE_HZ)?;
+        }
+        if let Some(r) = self.gyro_range_rad_s {
+            require_scale("sensing.gyro_range_rad_s", r, "rad/s")?;
+            if !(r > 0.0 && r <= MAX_GYRO_RANGE_RAD_S) {
+                return Err(RfError::invalid(
+                    "sensing.gyro_range_rad_s",
+                    format!("must be > 0 and at most {MAX_GYRO_RANGE_RAD_S} rad/s, got {r}"),
+                ));
+            }
         }
         self.profile().check()?;
         self.estimator().check()
@@ -218,6 +238,27 @@ mod tests {
                     ..Sensing::default()
                 },
             ),
+            (
+                "sensing.gyro_range_rad_s",
+                Sensing {
+                    gyro_range_rad_s: Some(0.0),
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.gyro_range_rad_s",
+                Sensing {
+                    gyro_range_rad_s: Some(f64::INFINITY),
+                    ..Sensing::default()
+                },
+            ),
+            (
+                "sensing.gyro_range_rad_s",
+                Sensing {
+                    gyro_range_rad_s: Some(2_000.0),
+                    ..Sensing::default()
+                },
+            ),
             // Subnormal rates: an infinite sample period (the simulator never got built).
             (
                 "sensing.position_rate_hz",
@@ -246,6 +287,7 @@ mod tests {
             imu: ImuPart::Mpu6000,
             imu_rate_hz: 1000.0,
             position_rate_hz: Some(10.0),
+            gyro_range_rad_s: None,
             seed: 3,
         };
         let p = s.profile();
@@ -253,6 +295,19 @@ mod tests {
         assert_eq!(p.imu.gyro, ImuProfile::mpu_6000().gyro);
         assert_eq!(p.position.rate_hz, 10.0);
         assert!(p.magnetometer.is_some());
+        // A range given replaces the part's and nothing else; the estimator is told it.
+        let wide = Sensing {
+            gyro_range_rad_s: Some(70.0),
+            ..s
+        };
+        let q = wide.profile();
+        assert_eq!(q.imu.gyro.range_rad_s, 70.0);
+        assert_eq!(
+            q.imu.gyro.noise_density_rad_s_rt_hz,
+            p.imu.gyro.noise_density_rad_s_rt_hz
+        );
+        assert_eq!(q.imu.accel, p.imu.accel);
+        assert_eq!(wide.estimator().gyro_range_rad_s, 70.0);
         assert_eq!(s.estimator().fusion_delay_s, p.position.latency_s);
     }
 }
