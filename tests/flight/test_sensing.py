@@ -33,7 +33,9 @@ def test_defaults_come_from_the_core_and_fields_are_checked() -> None:
     assert pickle.loads(pickle.dumps(rf.Sensing(suite="gnss", seed=5))) == rf.Sensing(suite="gnss", seed=5)
     assert rf.Sensing(suite="gnss").position_rate_in_effect_hz == 5.0
     assert s.gyro_range_rad_s is None and s.gyro_range_in_effect_rad_s == pytest.approx(np.radians(2000.0), rel=1e-15)
-    assert rf.Sensing(gyro_range_rad_s=70.0).gyro_range_in_effect_rad_s == 70.0
+    wide = rf.Sensing(gyro_range_rad_s=70.0, seed=2)
+    assert wide.gyro_range_in_effect_rad_s == 70.0
+    assert pickle.loads(pickle.dumps(wide)) == wide and wide.replace(gyro_range_rad_s=None) == rf.Sensing(seed=2)
     for kwargs, error, message in [
         ({"suite": "vicon"}, ValueError, "^sensing.suite: expected one of mocap, gnss, rtk"),
         ({"suite": 1}, TypeError, "^sensing.suite: expected a string"),

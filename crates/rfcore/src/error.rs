@@ -19,6 +19,7 @@
 //!   | `thrust_coefficient_n_s2` (0: speed not modelled) | `sqrt(f / k_f)` (rotor spin) | 1e-9 to 1e-3 N s^2 | 1e-5 |
 //!   | Lanzon's `arm_length_m`, `drag_torque_ratio_m`, `rotational_drag_n_m_s` | eq. (9)'s `tq / l`, `tr / d`, `r0 = m g d / k_r` | 1e-3 to 10 | 0.255, 2.4e-3, 4.4e-3 |
 //!   | `sensing.imu_rate_hz`, `sensing.position_rate_hz` (at most 32 kHz, 1 kHz) | the sample period `1 / rate` (a subnormal rate's is infinite: building the simulator never returned and grew without bound) | 1 to 32,000 Hz | 5 to 1,000 Hz |
+//!   | `sensing.gyro_range_rad_s` (at most 1,000 rad/s) | the clamp and the estimator's saturation walk `(s range)^2` | 4 to 70 rad/s (+-250 to +-4000 deg/s) | 34.9 to 1,000 rad/s |
 //!
 //!   Every real value sits at least four decades inside; every value the tests and the papers
 //!   use is accepted; and any product or quotient of up to twenty such scales is a normal,

@@ -31,7 +31,8 @@ dataclass_compat(Drag)
 #: ``IMUS``): ``suite`` (``"mocap"``: ICM-42688-P + OptiTrack PrimeX 13 + DShot rotor speeds;
 #: ``"gnss"``: u-blox NEO-M8N + ST LIS3MDL instead of mocap; ``"rtk"``: the ZED-F9P), ``imu``
 #: (``"icm-42688-p"``, ``"mpu-6000"``), ``imu_rate_hz`` (default 500, an ICM-42688-P output data
-#: rate), ``position_rate_hz`` (``None``: the suite's 240 / 5 / 10 Hz) and ``seed`` (run ``i`` of a
+#: rate), ``position_rate_hz`` (``None``: the suite's 240 / 5 / 10 Hz), ``gyro_range_rad_s``
+#: (``None``: the part's +-2000 deg/s; a what-if for spins past it) and ``seed`` (run ``i`` of a
 #: batch uses ``seed + i``). The estimator (an error-state Kalman filter with latency
 #: compensation, ``crates/rfcore/src/flight/estimation``) is matched to the sensors; the profiles
 #: and their datasheet sources are in ``crates/rfcore/src/flight/sensors/README.md``.

@@ -58,6 +58,7 @@ flies each and compares the verdict with the paper module's). Schema (every tabl
     suite = "mocap"              # "mocap", "gnss" or "rtk" (not with [noise])
     imu = "icm-42688-p"          # or "mpu-6000"
     imu_rate_hz = 500.0
+    # gyro_range_rad_s = 70.0    # optional: replaces the part's +-2000 deg/s (34.9 rad/s)
     seed = 0
 
     [[fault]]                    # any number

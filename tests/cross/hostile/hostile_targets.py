@@ -656,6 +656,7 @@ def _newer_targets(t: dict[str, Target]) -> None:
     t["Sensing"] = Target(calls(rf.Sensing, suite=hostile(st.sampled_from(("mocap", "gnss", "rtk")), "lidar", ""),
                                 imu=hostile(st.sampled_from(("icm-42688-p", "mpu-6000")), "x"),
                                 imu_rate_hz=hostile(positive(100, 2000)), position_rate_hz=hostile(positive(10, 240)),
+                                gyro_range_rad_s=hostile(positive(10, 1000)),
                                 seed=hostile(st.integers(0, 100), *EDGE_INTS)), check_by_simulator("sensing"))
     t["RelaxedHoverSettings"] = Target(calls(rf.RelaxedHoverSettings, rotational_drag_n_m_s=hostile(positive(1e-4, 1e-2)),
                                              max_spin_rate_rad_s=hostile(positive(10, 200)), grid_points=hostile(st.sampled_from((11, 13, 21)), *EDGE_INTS),
