@@ -34,8 +34,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _results import add_json_option, figure, write  # noqa: E402
 
 from rotorfault.studies import deciding as D  # noqa: E402
-from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
-from rotorfault.studies.summaries import numpy_columns  # noqa: E402
+from rotorfault.studies.storage import read_manifest  # noqa: E402
 
 CHUNK = 50
 
@@ -68,7 +67,7 @@ def main() -> None:
     record = json.loads(args.record.read_text()).get("campaign", {})
     if record.get("suite") != arguments["suite"]:
         sys.exit(f"{args.record} is the record of another suite than {args.dataset}'s")
-    columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.dataset))))
+    columns = D.read_deciding(args.dataset, certify=False).columns  # holds judged by the current rule
     decision = record["decision"]
     jobs = []
     for d in decision:

@@ -203,7 +203,8 @@ def main() -> None:
         if suite.sensing is None:
             raise SystemExit("--against-truth: the dataset was flown on the truth; it compares a suite flown on sensors with it")
         truth_manifest = read_manifest(args.against_truth)["arguments"]
-        truth_suite = D.DecidingCampaign.from_dict(truth_manifest["suite"])
+        truth = D.read_deciding(args.against_truth, certify=False)  # holds judged by the current rule
+        truth_suite = truth.suite
         # The rows do not depend on the chunking or on certify's column; everything else must match,
         # the controllers' revision included (a truth flown by other controllers is no pair).
         if truth_suite.sensing is not None or replace(suite, sensing=None, certify=truth_suite.certify, chunk_size=truth_suite.chunk_size) != truth_suite:
@@ -211,7 +212,7 @@ def main() -> None:
         revision = read_manifest(args.dataset)["arguments"].get("controllers_revision")
         if truth_manifest.get("controllers_revision") != revision:
             raise SystemExit(f"--against-truth: flown by controllers revision {truth_manifest.get('controllers_revision')}, the dataset by {revision}")
-        truth_columns = D.rejudge_holds(truth_suite, numpy_columns(pyarrow_module().concat_tables(list(iter_tables(args.against_truth)))))
+        truth_columns = dict(truth.columns)
         comparison = against_truth(columns, truth_columns, suite.sensing.gyro_range_in_effect_rad_s)
     full = D.DecidingResult(suite, columns, seconds=float(flight["seconds"]))
     cells = [{k: r[k] for k in RECORD_CELL_KEYS} for r in full.cell_rows()]

@@ -41,8 +41,7 @@ from _results import add_json_option, figure, write  # noqa: E402
 
 import rotorfault as rf  # noqa: E402
 from rotorfault.studies import deciding as D  # noqa: E402
-from rotorfault.studies.storage import iter_tables, pyarrow_module, read_manifest  # noqa: E402
-from rotorfault.studies.summaries import numpy_columns  # noqa: E402
+from rotorfault.studies.storage import read_manifest  # noqa: E402
 
 #: (vehicle, fault class, controller): where sensing cost INDI or the relaxed hover LQR more than 3
 #: runs in the campaign of seed 0 (the record's against_truth).
@@ -57,11 +56,10 @@ NOISE_OFFSETS = (0, 1, 2)
 NO_CLAMP_RAD_S = 1000.0
 
 
-def _load(path: str) -> tuple[D.DecidingCampaign, dict[str, Any], dict[str, Any]]:
-    arguments = read_manifest(path)["arguments"]
-    suite = D.DecidingCampaign.from_dict(arguments["suite"])
-    columns = numpy_columns(pyarrow_module().concat_tables(list(iter_tables(path))))
-    return suite, D.rejudge_holds(suite, columns), arguments
+def _load(path: str) -> tuple[D.DecidingCampaign, Any, dict[str, Any]]:
+    """The dataset's suite, its rows (holds judged by the current rule) and its job's arguments."""
+    result = D.read_deciding(path, certify=False)
+    return result.suite, result.columns, read_manifest(path)["arguments"]
 
 
 def settings(sensing: rf.Sensing) -> dict[str, rf.Sensing]:

@@ -7,6 +7,7 @@ import json
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -220,6 +221,15 @@ def test_rows_are_deterministic_by_seed_and_independent_of_the_cut() -> None:
     assert all(np.array_equal(v, first) for v in by.values())
 
 
+def _window_errors_are_the_flights(rows: dict[str, Any], j: int, trajectory: Any, d: D.RunDraw) -> tuple[float, float]:
+    """Row ``j``'s window errors against :func:`deciding.hold_errors` of its run flown again in
+    full (``trajectory``, draws ``d``); returns those errors."""
+    altitude, horizontal = D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
+    assert rows["hold_altitude_error_m"][j] == pytest.approx(altitude, rel=1e-12, abs=1e-12)
+    assert rows["hold_horizontal_error_m"][j] == pytest.approx(horizontal, rel=1e-12, abs=1e-12)
+    return altitude, horizontal
+
+
 def test_core_hold_window_equals_the_full_trajectory() -> None:
     suite = D.DecidingCampaign(**SMALL)  # type: ignore[arg-type]
     rows = D.run_rows(suite, 0, suite.total_runs)
@@ -230,12 +240,10 @@ def test_core_hold_window_equals_the_full_trajectory() -> None:
             if rows["outcome"][j] in ("not-flown", "design-refused"):
                 continue
             trajectory, d = suite.refly(cell, i)
-            altitude, horizontal = D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
             if trajectory.events:  # lost: the row carries no window values
                 assert not rows["holds"][j] and math.isnan(rows["hold_horizontal_error_m"][j])
             else:
-                assert rows["hold_altitude_error_m"][j] == pytest.approx(altitude, rel=1e-12, abs=1e-12)
-                assert rows["hold_horizontal_error_m"][j] == pytest.approx(horizontal, rel=1e-12, abs=1e-12)
+                altitude, horizontal = _window_errors_are_the_flights(rows, j, trajectory, d)
                 assert rows["holds"][j] == (altitude <= D.HOLD_ALTITUDE_M and horizontal <= D.HOLD_HORIZONTAL_M)
             checked += 1
     assert checked >= 6
@@ -875,9 +883,7 @@ def test_a_suite_on_sensors_flies_the_same_draws_with_sensor_noise_of_its_own_pe
                 continue
             trajectory, d = mocap.refly(cell, i)
             assert trajectory.sensed == "mocap"
-            altitude, horizontal = D.hold_errors(trajectory.t, trajectory.position, d.fault_time_s)
-            assert rows["hold_altitude_error_m"][j] == pytest.approx(altitude, rel=1e-12, abs=1e-12)
-            assert rows["hold_horizontal_error_m"][j] == pytest.approx(horizontal, rel=1e-12, abs=1e-12)
+            _window_errors_are_the_flights(rows, j, trajectory, d)
             checked += 1
     assert checked == 3
 

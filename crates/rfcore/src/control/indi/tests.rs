@@ -308,6 +308,19 @@ fn fly_weak_pair(
     all
 }
 
+/// `fly_weak_pair` through the choice (`choice_steps` from 0 s, rotor samples throughout), then
+/// 80 steps from `after_s` with the two rotors' weakness swapped (the other rotor now the
+/// weaker). Returns the commands of the second leg.
+fn fly_choice_then_swap(
+    c: &mut IndiController,
+    produced: &mut Vec<f64>,
+    effs: [f64; 2],
+    (choice_steps, after_s): (usize, f64),
+) -> Vec<Vec<f64>> {
+    fly_weak_pair(c, produced, [0, 2], effs, (0.0, 0), choice_steps);
+    fly_weak_pair(c, produced, [0, 2], [effs[1], effs[0]], (after_s, 0), 80)
+}
+
 /// Two weak rotors of a quadrotor (an opposing pair, 1 and 3 of ke-quadcopter): the law flies as
 /// without a spin axis for `SPIN_AXIS_CHOICE_S` (bit for bit), then the axis of the rotor whose
 /// produced / commanded thrust measured the lower (the given axis when the first, its mirror when
@@ -406,15 +419,7 @@ fn the_spin_axis_is_flown_on_the_side_of_the_weaker_of_two_rotors() {
         let direct = |axis: [f64; 3]| {
             let spin = RelaxedSpin::new(0.1 + SPIN_AXIS_CHOICE_S, axis, 0.0).unwrap();
             let (mut c, mut produced) = make(spin);
-            fly_weak_pair(&mut c, &mut produced, [0, 2], *effs, (0.0, 0), choice_steps);
-            fly_weak_pair(
-                &mut c,
-                &mut produced,
-                [0, 2],
-                [effs[1], effs[0]],
-                (after_s, 0),
-                80,
-            )
+            fly_choice_then_swap(&mut c, &mut produced, *effs, (choice_steps, after_s))
         };
         let (chosen, other) = if *chosen_mirrored {
             (mirrored, spin.spin_axis())
@@ -426,23 +431,8 @@ fn the_spin_axis_is_flown_on_the_side_of_the_weaker_of_two_rotors() {
     }
     // Rotor 3 the weaker: the pair named (3, 1) with the mirrored axis flies the same (to rounding).
     let (mut c, mut produced) = make(choosing(mirrored, [2, 0]));
-    fly_weak_pair(
-        &mut c,
-        &mut produced,
-        [0, 2],
-        [0.66, 0.60],
-        (0.0, 0),
-        choice_steps,
-    );
+    let later = fly_choice_then_swap(&mut c, &mut produced, [0.66, 0.60], (choice_steps, after_s));
     assert_eq!(c.memory.spin_axis_mirrored, Some(false));
-    let later = fly_weak_pair(
-        &mut c,
-        &mut produced,
-        [0, 2],
-        [0.60, 0.66],
-        (after_s, 0),
-        80,
-    );
     assert!(close(&later, &flown[1].2, 1e-12));
 }
 
