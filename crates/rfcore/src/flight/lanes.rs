@@ -249,8 +249,21 @@ impl<L: Lanes> VehicleLanes<L> {
         dt_s: f64,
         totals: &[TotalsLanes<L>; 3],
     ) -> BodyLanes<L> {
+        self.rk4_step_from(s, &self.derivative(s, &totals[0]), dt_s, totals)
+    }
+
+    /// [`VehicleLanes::rk4_step`] with its first stage `k1`, the derivative at `s` under
+    /// `totals[0]` ([`VehicleLanes::derivative`]), computed by the caller (who also reads it).
+    #[inline(always)]
+    pub fn rk4_step_from(
+        &self,
+        s: &BodyLanes<L>,
+        k1: &BodyLanes<L>,
+        dt_s: f64,
+        totals: &[TotalsLanes<L>; 3],
+    ) -> BodyLanes<L> {
         let half = L::splat(0.5 * dt_s);
-        let k1 = self.derivative(s, &totals[0]);
+        let k1 = *k1;
         let s2 = advanced(s, &k1, half);
         let k2 = self.derivative(&s2, &totals[1]);
         let s3 = advanced(s, &k2, half);
@@ -298,7 +311,7 @@ impl<L: Lanes> VehicleLanes<L> {
 
     /// Newton-Euler under the vehicle wrench ([`Vehicle::wrench_from`] with constant wind).
     #[inline(always)]
-    fn derivative(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> BodyLanes<L> {
+    pub fn derivative(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> BodyLanes<L> {
         let w = s.omega_rad_s;
         // Wrench: torque = rotors - c_rot omega; force = weight - c_lin air + R (0, 0, -T).
         let torque: [L; 3] = each(|i| totals.torque_body_nm[i] - self.rotational_drag_n_m_s * w[i]);

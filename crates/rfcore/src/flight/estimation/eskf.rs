@@ -214,7 +214,7 @@ pub(crate) fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// The right Jacobian of SO(3) at `phi`.
-fn right_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn right_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     let angle = phi.norm();
     let k = skew(phi);
     if angle < 1e-6 {

@@ -62,6 +62,7 @@
 //! is reported at the horizon (see [`Estimator::horizon_time_s`]).
 
 pub mod eskf;
+pub(crate) mod lanes;
 mod estimator;
 mod settings;
 

@@ -13,8 +13,11 @@
 //! with it.
 //!
 //! # Sensing in lanes
-//! With sensing (`SimulationConfig::sensing`) only the truth flies in lanes: each run keeps its
-//! own sensors and estimator ([`Onboard`], scalar, like its controller), fed from its own tape
+//! With sensing (`SimulationConfig::sensing`) the truth flies in lanes and so do the runs'
+//! estimators where their sensors share one schedule ([`OnboardLanes`]: every suite whose
+//! position fixes do not drop out at random, i.e. motion capture and RTK; GNSS runs keep their
+//! own estimators). Each run keeps its own sensors ([`Onboard`], scalar, like its controller),
+//! fed from its own tape
 //! of the period's nodes, which the group writes as the scalar integrator does (each RK4
 //! interval's start with the rotor totals the interval starts from, then the period's end),
 //! leaving out the nodes no sample reads: a sample reads the last node at or before its time,
@@ -48,6 +51,7 @@ use crate::flight::simulation::driver::{
     check_batch, check_run, empty_trajectory, end_with, fly_batch_run, truth_samples, BatchRun,
 };
 use crate::flight::simulation::onboard::Onboard;
+use crate::flight::simulation::onboard_lanes::OnboardLanes;
 use crate::flight::simulation::recording::{records, NoObserver, Trajectory};
 use crate::flight::simulation::step::{located_divergence, push_node};
 use crate::flight::simulation::tape::Tape;
@@ -368,7 +372,7 @@ fn fly_group_lanes<L: Lanes>(
         body.set(i, &lane.run.x0);
         lane.run.controller.reset();
         // The scalar driver's start: the tape's first node, the sensors' samples at 0.
-        if let Some((onboard, tape)) = lane.onboard.as_mut() {
+        if let Some((_, tape)) = lane.onboard.as_mut() {
             tape.clear();
             let x0 = lane.run.x0;
             let channels = lane.actuators.state();
@@ -383,9 +387,17 @@ fn fly_group_lanes<L: Lanes>(
                 &lane.efficiency,
                 None,
             );
-            onboard.catch_up(tape, vehicle, 0.0, cancel)?;
         }
     }
+    let mut estimators = estimators_in_lanes::<L>(&group);
+    catch_up(
+        &mut group,
+        estimators.as_mut(),
+        &[true; WIDTH],
+        vehicle,
+        0.0,
+        cancel,
+    )?;
     let mut active = [true; WIDTH];
     let mut commands = vec![0.0; count * WIDTH];
     let mut rotor_thrust = vec![0.0; m];
@@ -393,6 +405,9 @@ fn fly_group_lanes<L: Lanes>(
     for k in 0..=steps {
         cancel.check()?;
         let t = config.step_time(k);
+        if let Some(lanes) = estimators.as_mut() {
+            lanes.estimate_at(t);
+        }
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if !active[i] {
                 continue;
@@ -403,7 +418,10 @@ fn fly_group_lanes<L: Lanes>(
             // With sensing: the estimate, and the sensors' samples for a controller that reads
             // them (the scalar driver's rule).
             let onboard = lane.onboard.as_ref().map(|(onboard, _)| onboard);
-            let estimate = onboard.map(|o| o.estimate(t));
+            let estimate = match &estimators {
+                Some(lanes) => onboard.map(|_| lanes.estimate(i)),
+                None => onboard.map(|o| o.estimate(t)),
+            };
             let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard) {
                 onboard.controller_input(estimate, controller.reads_samples())
             } else if controller.reads_samples() {
@@ -428,7 +446,10 @@ fn fly_group_lanes<L: Lanes>(
                 if let (Some(record), Some(onboard), Some(estimate)) =
                     (trajectory.sensing.as_mut(), onboard, &estimate)
                 {
-                    record.rows.push(onboard.row(estimate));
+                    record.rows.push(match &estimators {
+                        Some(lanes) => lanes.row(i, estimate),
+                        None => onboard.row(estimate),
+                    });
                 }
             }
             if !finite {
@@ -454,24 +475,79 @@ fn fly_group_lanes<L: Lanes>(
             &mut group,
             &mut active,
         );
-        for (i, (_, lane)) in group.iter_mut().enumerate() {
-            if let (true, Some((onboard, tape))) = (active[i], lane.onboard.as_mut()) {
-                onboard.catch_up(tape, vehicle, t_next, cancel)?;
-            }
-        }
+        catch_up(
+            &mut group,
+            estimators.as_mut(),
+            &active,
+            vehicle,
+            t_next,
+            cancel,
+        )?;
     }
     Ok(group
         .into_iter()
-        .map(|(i, mut lane)| {
-            // The run's counts (a run that diverged has them already, unchanged since).
+        .enumerate()
+        .map(|(k, (i, mut lane))| {
+            // The run's counts (a run that diverged has them already, unchanged since: its lane
+            // stopped counting when it stopped).
             if let (Some(record), Some((onboard, _))) =
                 (lane.trajectory.sensing.as_mut(), lane.onboard.as_ref())
             {
-                onboard.finish(record);
+                match &estimators {
+                    Some(lanes) => lanes.finish(k, onboard, record),
+                    None => onboard.finish(record),
+                }
             }
             (i, lane.trajectory)
         })
         .collect())
+}
+
+/// The group's estimators in lanes when its runs fly on sensors that share one schedule
+/// ([`OnboardLanes::new`]); `None` without sensing or when they do not (each run's own
+/// estimator then).
+fn estimators_in_lanes<L: Lanes>(group: &[(usize, Lane)]) -> Option<OnboardLanes<L>> {
+    let onboards: Vec<&Onboard> = group
+        .iter()
+        .filter_map(|(_, lane)| lane.onboard.as_ref().map(|(onboard, _)| onboard))
+        .collect();
+    let starts: Vec<_> = group.iter().map(|(_, lane)| lane.run.x0).collect();
+    OnboardLanes::new(&onboards, &starts)
+}
+
+/// Every active run's sensors take their samples up to `t_s`, and its estimator reads them: in
+/// lanes (`estimators`) or each run's own.
+#[inline(always)]
+fn catch_up<L: Lanes>(
+    group: &mut [(usize, Lane)],
+    estimators: Option<&mut OnboardLanes<L>>,
+    active: &[bool; WIDTH],
+    vehicle: &Vehicle,
+    t_s: f64,
+    cancel: &Cancel,
+) -> Result<()> {
+    match estimators {
+        Some(lanes) => {
+            let live = (0..WIDTH)
+                .filter(|&i| active[i])
+                .fold(0, |m, i| m | (1 << i));
+            let mut runs = group.iter_mut();
+            let mut onboards: [Option<(&mut Onboard, &mut Tape)>; WIDTH] =
+                std::array::from_fn(|_| {
+                    runs.next()
+                        .and_then(|(_, lane)| lane.onboard.as_mut().map(|(o, t)| (o, t)))
+                });
+            lanes.catch_up(&mut onboards, live, vehicle, t_s, cancel)
+        }
+        None => {
+            for (i, (_, lane)) in group.iter_mut().enumerate() {
+                if let (true, Some((onboard, tape))) = (active[i], lane.onboard.as_mut()) {
+                    onboard.catch_up(tape, vehicle, t_s, cancel)?;
+                }
+            }
+            Ok(())
+        }
+    }
 }
 
 /// One control period of a group ([`crate::flight::simulation::step`]'s `Integrator::period`
@@ -648,10 +724,22 @@ impl<L: Lanes> Period<L> {
                     self.respond(node, elapsed, decay);
                     totals[node] = self.totals(&self.nodes[node]);
                 }
-                if sensing {
-                    self.push_nodes(vehicle, config, (a, end), body, &totals[0], group, active);
-                }
-                let next = model.rk4_step(body, len, &totals);
+                let next = if sensing {
+                    // The first RK4 stage is the dynamics the tape extends a node with.
+                    let k1 = model.derivative(body, &totals[0]);
+                    self.push_nodes(
+                        vehicle,
+                        config,
+                        (a, end),
+                        body,
+                        (&totals[0], &k1),
+                        group,
+                        active,
+                    );
+                    model.rk4_step_from(body, &k1, len, &totals)
+                } else {
+                    model.rk4_step(body, len, &totals)
+                };
                 let (n3z, speed2, rate2) = next.limit_parts();
                 for (i, (_, lane)) in group.iter_mut().enumerate() {
                     if !active[i] {
@@ -733,7 +821,8 @@ impl<L: Lanes> Period<L> {
     /// the channels the interval starts from (the targets for instant rotors, as the scalar
     /// integrator's `constant` case), with the interval's rotor totals there (`totals`: the
     /// scalar `rotor_totals` bit for bit; the net rotor spin left at zero, which the lanes'
-    /// vehicles, without rotor inertia, never read) and the constant wind.
+    /// vehicles, without rotor inertia, never read), the constant wind, and the dynamics there,
+    /// the interval's first RK4 stage `k1` (as the scalar integrator shares its wrench).
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn push_nodes(
@@ -742,7 +831,7 @@ impl<L: Lanes> Period<L> {
         config: &SimulationConfig,
         (a_s, end_s): (f64, f64),
         body: &BodyLanes<L>,
-        totals: &TotalsLanes<L>,
+        (totals, k1): (&TotalsLanes<L>, &BodyLanes<L>),
         group: &mut [(usize, Lane)],
         active: &[bool; WIDTH],
     ) {
@@ -778,6 +867,8 @@ impl<L: Lanes> Period<L> {
                 &lane.efficiency,
                 Some((&totals, &config.wind_m_s)),
             );
+            let lane_of = |v: &[L; 3]| Vector3::from_fn(|k, _| v[k].lane(i));
+            tape.share_rates(lane_of(&k1.velocity_m_s), lane_of(&k1.omega_rad_s));
         }
     }
 }

@@ -12,7 +12,7 @@ use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use crate::control::{Controller, LinearFeedback};
 use crate::flight::actuator::{Actuators, FixedPitch, Lag};
 use crate::flight::fault_schedule::RotorFault;
-use crate::flight::simulation::sensing::Sensing;
+use crate::flight::simulation::sensing::{Sensing, SuiteName};
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
 
@@ -459,4 +459,67 @@ fn scalar_setting_and_unsupported_batches_fly_every_run_scalar() {
         "a rate limit is not in the lanes"
     );
     assert_eq!(BatchLanes::Scalar.name(), "scalar");
+}
+
+#[test]
+fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
+    // RTK (position, velocity, the magnetometer; no dropouts) and motion capture: the group's
+    // estimators in lanes; GNSS (fixes drop out at random per run): each run's own. All bit for
+    // bit the scalar batch, with one run losing a rotor at 0.3 s and diverging (its lane stops,
+    // its counts with it). The estimators' per-lane cases (a fix refused, a gyro clamping in
+    // one lane) are checked against the scalar estimator in `estimation::lanes`.
+    let (airframe, vehicle, actuators, hover) = lagged_quad();
+    let mut config = SimulationConfig::new(0.0025, 2, 2.0);
+    config.record_every = 2;
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| BatchRun {
+                controller: Box::new(hover_feedback(&airframe, 10.0)),
+                initial_command: Some(vec![hover; 4]),
+                x0: start(k),
+                faults: vec![RotorFault {
+                    rotor: 1,
+                    time_s: 0.3,
+                    efficiency: if k == 1 { 0.0 } else { 1.0 },
+                }],
+            })
+            .collect()
+    };
+    for (suite, in_lanes) in [
+        (SuiteName::Rtk, true),
+        (SuiteName::Gnss, false),
+        (SuiteName::Mocap, true),
+    ] {
+        config.sensing = Some(Sensing {
+            suite,
+            seed: 5,
+            ..Sensing::default()
+        });
+        let plans = plan(
+            &vehicle,
+            &actuators,
+            &[1.0; 4],
+            runs(),
+            &config,
+            BatchLanes::Auto,
+        );
+        let [Plan::Group(group)] = &plans[..] else {
+            panic!("one group of four");
+        };
+        assert_eq!(
+            estimators_in_lanes::<F64x4>(group).is_some(),
+            in_lanes,
+            "{}",
+            suite.name()
+        );
+        let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+        assert_same(&lanes, &scalar);
+        assert!(
+            lanes[0].sensing.as_ref().unwrap().fusion.fused > 0,
+            "{}",
+            suite.name()
+        );
+        let diverged: Vec<bool> = lanes.iter().map(|t| t.divergence.is_some()).collect();
+        assert_eq!(diverged, [false, true, false, false], "{}", suite.name());
+    }
 }

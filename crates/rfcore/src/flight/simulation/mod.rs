@@ -53,6 +53,7 @@ pub mod driver;
 mod ground_tests;
 pub mod noise;
 mod onboard;
+mod onboard_lanes;
 pub mod recording;
 pub mod sensing;
 pub mod step;

@@ -23,9 +23,8 @@ use nalgebra::Vector3;
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::flight::actuator::Actuators;
-use crate::flight::estimation::eskf::exp_quaternion;
-use crate::flight::estimation::{Estimate, Estimator, ERROR_DIM};
-use crate::flight::sensors::SensorSuite;
+use crate::flight::estimation::{Estimate, Estimator, EstimatorSettings, FusionCounts, ERROR_DIM};
+use crate::flight::sensors::{ImuSample, MagnetometerSample, PositionSample, SensorSuite};
 use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
 use crate::flight::simulation::sensing::Sensing;
 use crate::flight::simulation::tape::Tape;
@@ -51,6 +50,20 @@ enum Next {
     RotorSpeed,
 }
 
+/// What the estimator reads from the sensors, in the order it reads it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Reading {
+    Imu(ImuSample),
+    Position(PositionSample),
+    Magnetometer(MagnetometerSample),
+}
+
+/// Readings taken before they are fed (bounds the buffer of a long control period).
+pub(crate) const READINGS_PER_CHUNK: usize = 64;
+
+/// One run's sensors and its estimator. In a group flown in lanes with the estimator in lanes
+/// ([`crate::flight::simulation::onboard_lanes`]) the run's sensors are read from here and its
+/// own estimator is not used.
 pub(crate) struct Onboard {
     name: &'static str,
     sensors: SensorSuite,
@@ -59,6 +72,7 @@ pub(crate) struct Onboard {
     imu_samples: u64,
     gyro_saturated_samples: u64,
     accel_saturated_samples: u64,
+    readings: Vec<Reading>,
 }
 
 impl Onboard {
@@ -94,6 +108,7 @@ impl Onboard {
             imu_samples: 0,
             gyro_saturated_samples: 0,
             accel_saturated_samples: 0,
+            readings: Vec::with_capacity(READINGS_PER_CHUNK + 8),
         };
         Ok((onboard, tape))
     }
@@ -156,11 +171,9 @@ impl Onboard {
             || (self.rotor.is_some() && s.rotor_speed.clock().has_due_sample_at_or_after(t_s))
     }
 
-    /// Takes every sample due up to `t_end_s` from `tape` (module docs), checking `cancel` before
-    /// each sample: a control period holds `dt_s x imu_rate_hz` IMU samples and filter steps
-    /// (a 100 s period at 32 kHz is 3.2 million, about 5 s of work), so the driver's check once
-    /// per period alone did not bound the time to stop. A check is one atomic load beside the
-    /// microseconds of a filter step.
+    /// Takes every sample due up to `t_end_s` from `tape` (module docs) and feeds the estimator
+    /// with them in time order: the readings are taken in chunks ([`Onboard::take_samples`]),
+    /// each fed before the next is taken.
     pub(crate) fn catch_up(
         &mut self,
         tape: &mut Tape,
@@ -168,7 +181,45 @@ impl Onboard {
         t_end_s: f64,
         cancel: &Cancel,
     ) -> Result<()> {
+        let mut readings = std::mem::take(&mut self.readings);
+        loop {
+            readings.clear();
+            let done = self.take_samples(tape, vehicle, t_end_s, cancel, &mut readings)?;
+            for reading in &readings {
+                match reading {
+                    Reading::Imu(sample) => self.estimator.push_imu(sample)?,
+                    Reading::Position(fix) => self.estimator.push_position(fix),
+                    Reading::Magnetometer(sample) => self.estimator.push_magnetometer(sample),
+                }
+            }
+            if done {
+                break;
+            }
+        }
+        self.readings = readings;
+        Ok(())
+    }
+
+    /// Takes the samples due up to `t_end_s` from `tape`, in time order, each at its own time on
+    /// its own clock, appending what the estimator reads to `readings` (a position fix when it
+    /// arrives, the magnetometer, the IMU), at most [`READINGS_PER_CHUNK`] of them; `true` when
+    /// every sample up to `t_end_s` is taken (then the rotor-speed reading due by then is in
+    /// place too). `cancel` is checked before each sample: a control period holds
+    /// `dt_s x imu_rate_hz` IMU samples (a 100 s period at 32 kHz is 3.2 million, about 5 s of
+    /// filter steps), so the driver's check once per period alone did not bound the time to
+    /// stop. A check is one atomic load beside the microseconds of a filter step.
+    pub(crate) fn take_samples(
+        &mut self,
+        tape: &mut Tape,
+        vehicle: &Vehicle,
+        t_end_s: f64,
+        cancel: &Cancel,
+        readings: &mut Vec<Reading>,
+    ) -> Result<bool> {
         while let Some(which) = self.next_due(t_end_s) {
+            if readings.len() >= READINGS_PER_CHUNK {
+                return Ok(false);
+            }
             cancel.check()?;
             let s = &mut self.sensors;
             match which {
@@ -179,8 +230,7 @@ impl Onboard {
                 Next::Magnetometer => {
                     if let Some(m) = s.magnetometer.as_mut() {
                         let t = m.next_sample_time_s();
-                        let sample = m.sample(&tape.state_at(vehicle, t));
-                        self.estimator.push_magnetometer(&sample);
+                        readings.push(Reading::Magnetometer(m.sample(&tape.state_at(vehicle, t))));
                     }
                 }
                 Next::RotorSpeed => {
@@ -195,18 +245,18 @@ impl Onboard {
                 Next::Imu => {
                     let t = s.imu.next_sample_time_s();
                     while let Some(fix) = s.position.poll(t) {
-                        self.estimator.push_position(&fix);
+                        readings.push(Reading::Position(fix));
                     }
                     let sample = s.imu.sample(&tape.imu_truth_at(vehicle, t));
                     self.imu_samples += 1;
                     self.gyro_saturated_samples += u64::from(sample.gyro_saturated);
                     self.accel_saturated_samples += u64::from(sample.accel_saturated);
-                    self.estimator.push_imu(&sample)?;
+                    readings.push(Reading::Imu(sample));
                 }
             }
         }
         while let Some(fix) = self.sensors.position.poll(t_end_s) {
-            self.estimator.push_position(&fix);
+            readings.push(Reading::Position(fix));
         }
         if let Some(rotor) = self.rotor.as_mut() {
             if self.sensors.rotor_speed.poll(t_end_s) {
@@ -220,27 +270,15 @@ impl Onboard {
                 }
             }
         }
-        Ok(())
+        Ok(true)
     }
 
-    /// The estimate carried from the newest IMU sample to the control step at `t_s` with that
-    /// sample held (the output predictor's own step: rotation by the bias-corrected rate,
-    /// velocity and position by the specific force plus gravity): at 30 rad/s and 500 Hz the
-    /// sample is up to 2 ms, 3.4 degrees of yaw, old.
+    /// The estimate carried from the newest IMU sample to the control step at `t_s`
+    /// ([`Estimate::carried`]).
     pub(crate) fn estimate(&self, t_s: f64) -> Estimate {
-        let mut e = self.estimator.estimate();
-        let dt = t_s - e.time_s;
-        if dt > 0.0 {
-            let s = &mut e.state;
-            let gravity = Vector3::new(0.0, 0.0, self.estimator.settings().gravity_m_s2);
-            let acceleration = s.attitude * e.accel_m_s2 + gravity;
-            s.position_m += (s.velocity_m_s + acceleration * (0.5 * dt)) * dt;
-            s.velocity_m_s += acceleration * dt;
-            s.attitude *= exp_quaternion(&(s.omega_rad_s * dt));
-            s.attitude.renormalize_fast();
-            e.time_s = t_s;
-        }
-        e
+        self.estimator
+            .estimate()
+            .carried(self.estimator.settings().gravity_m_s2, t_s)
     }
 
     /// What the controller sees at a control step with `estimate`: the estimated state and, for a
@@ -276,12 +314,7 @@ impl Onboard {
     /// The recorded row of `estimate` (the covariance's sigmas at the fusion horizon).
     pub(crate) fn row(&self, estimate: &Estimate) -> EstimateRow {
         let p = self.estimator.covariance();
-        EstimateRow {
-            state: estimate.state,
-            std: std::array::from_fn(|i| p[(i, i)].max(0.0).sqrt()),
-            gyro_saturated: estimate.gyro_saturated,
-            accel_saturated: estimate.accel_saturated,
-        }
+        row(estimate, &std::array::from_fn(|i| p[(i, i)]))
     }
 
     /// The record a run starts with (rows to come).
@@ -298,10 +331,36 @@ impl Onboard {
 
     /// The run's counts into `record`.
     pub(crate) fn finish(&self, record: &mut SensingRecord) {
+        self.finish_with(record, self.estimator.counts());
+    }
+
+    /// The run's sample counts and the estimator's `fusion` counts into `record`.
+    pub(crate) fn finish_with(&self, record: &mut SensingRecord, fusion: FusionCounts) {
         record.imu_samples = self.imu_samples;
         record.gyro_saturated_samples = self.gyro_saturated_samples;
         record.accel_saturated_samples = self.accel_saturated_samples;
-        record.fusion = self.estimator.counts();
+        record.fusion = fusion;
+    }
+
+    /// The estimator settings of the run's sensors.
+    pub(crate) fn estimator_settings(&self) -> &EstimatorSettings {
+        self.estimator.settings()
+    }
+
+    /// `true` when the run's position source may drop fixes at random (its schedule is then
+    /// its own, not its group's).
+    pub(crate) fn drops_fixes(&self) -> bool {
+        self.sensors.position.profile().dropouts.is_some()
+    }
+}
+
+/// The recorded row of `estimate` with the covariance's diagonal `variances`.
+pub(crate) fn row(estimate: &Estimate, variances: &[f64; ERROR_DIM]) -> EstimateRow {
+    EstimateRow {
+        state: estimate.state,
+        std: variances.map(|v| v.max(0.0).sqrt()),
+        gyro_saturated: estimate.gyro_saturated,
+        accel_saturated: estimate.accel_saturated,
     }
 }
 

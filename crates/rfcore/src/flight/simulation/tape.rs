@@ -104,6 +104,22 @@ impl Tape {
         }
     }
 
+    /// The dynamics at the newest node, world acceleration and body angular acceleration, as
+    /// the integrator evaluated them for its first RK4 stage (the lanes' first stage: the same
+    /// function of the same inputs as the tape's own `derivative` of `wrench_from`).
+    pub(crate) fn share_rates(
+        &mut self,
+        acceleration: Vector3<f64>,
+        angular_acceleration: Vector3<f64>,
+    ) {
+        if let Some(node) = self.nodes.last_mut() {
+            node.rates = Some(Rates {
+                acceleration,
+                angular_acceleration,
+            });
+        }
+    }
+
     /// The index of the last node at or before `t_s` (the first node for an earlier time).
     fn locate(&mut self, t_s: f64) -> usize {
         if self.cursor >= self.nodes.len() || self.nodes[self.cursor].t_s > t_s {

@@ -1,0 +1,238 @@
+//! Four estimators in lanes against four scalar estimators fed the same samples: every estimate,
+//! covariance and count equal bit for bit, through hover, spins, a gyro clamping in one lane
+//! only, a fix the gate refuses in one lane only, the magnetometer, and a lane that stops.
+
+use super::*;
+use crate::flight::estimation::Estimator;
+use crate::flight::lanes::F64x4;
+use crate::flight::sensors::reference::AnalyticMotion;
+use crate::flight::sensors::{SensorSuite, SensorSuiteProfile};
+
+type L = F64x4;
+const W: usize = 4;
+
+struct Case {
+    suite: SensorSuiteProfile,
+    motions: [AnalyticMotion; W],
+    /// Lane 1's fixes valid in this window are moved 5 m (the gate refuses them there only).
+    outlier_s: (f64, f64),
+    /// Lane 3 stops at this time (its run ended): its counts must stop with it.
+    stop_s: f64,
+    duration_s: f64,
+}
+
+fn same(a: f64, b: f64, what: &str, t: f64, lane: usize) {
+    assert_eq!(
+        a.to_bits(),
+        b.to_bits(),
+        "{what} at {t} s, lane {lane}: {a:e} (lanes) against {b:e} (scalar)"
+    );
+}
+
+fn check(case: &Case) -> [FusionCounts; W] {
+    let settings = EstimatorSettings::for_sensors(&case.suite);
+    let mut sensors: Vec<SensorSuite> = (0..W)
+        .map(|i| SensorSuite::new(&case.suite, 4, 40 + i as u64).unwrap())
+        .collect();
+    let starts: Vec<_> = case.motions.iter().map(|m| m.state_at(0.0)).collect();
+    let mut scalar: Vec<Estimator> = starts
+        .iter()
+        .map(|x| Estimator::new(settings, x).unwrap())
+        .collect();
+    let mut lanes = EstimatorLanes::<L>::new(settings, &starts).unwrap();
+    let mut stopped: Option<[FusionCounts; W]> = None;
+    loop {
+        let t = sensors[0].imu.next_sample_time_s();
+        if t > case.duration_s {
+            break;
+        }
+        if t >= case.stop_s && stopped.is_none() {
+            lanes.set_live(0b0111);
+            stopped = Some(std::array::from_fn(|i| scalar[i].counts()));
+        }
+        let zero = [L::splat(0.0); 3];
+        // The magnetometer's readings (on its clock), then the position fixes due by now.
+        loop {
+            let due: Vec<bool> = sensors
+                .iter()
+                .map(|s| s.magnetometer.as_ref().is_some_and(|m| m.is_due(t)))
+                .collect();
+            if !due[0] {
+                break;
+            }
+            let mut field = zero;
+            let mut time = 0.0;
+            for (i, s) in sensors.iter_mut().enumerate() {
+                let m = s.magnetometer.as_mut().unwrap();
+                let at = m.next_sample_time_s();
+                let sample = m.sample(&case.motions[i].state_at(at));
+                scalar[i].push_magnetometer(&sample);
+                set3(&mut field, i, &sample.field_ut);
+                time = sample.time_s;
+            }
+            lanes.push_magnetometer(time, &field);
+        }
+        for (i, s) in sensors.iter_mut().enumerate() {
+            while s.position.is_due(t) {
+                let at = s.position.next_sample_time_s();
+                s.position.sample(&case.motions[i].state_at(at));
+            }
+        }
+        loop {
+            let fixes: Vec<_> = sensors.iter_mut().map(|s| s.position.poll(t)).collect();
+            let Some(first) = fixes[0] else {
+                assert!(fixes.iter().all(|f| f.is_none()));
+                break;
+            };
+            let mut fix = PositionLanes {
+                valid_at_s: first.valid_at_s,
+                position_m: zero,
+                velocity_m_s: first.velocity_m_s.map(|_| zero),
+                attitude: first.attitude.map(|_| [L::splat(0.0); 4]),
+            };
+            for (i, f) in fixes.into_iter().enumerate() {
+                let mut f = f.unwrap();
+                if i == 1 && (case.outlier_s.0..case.outlier_s.1).contains(&f.valid_at_s) {
+                    f.position_m.x += 5.0;
+                }
+                scalar[i].push_position(&f);
+                set3(&mut fix.position_m, i, &f.position_m);
+                if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
+                    set3(lv, i, &v);
+                }
+                if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
+                    set_quat(lq, i, &q);
+                }
+            }
+            lanes.push_position(&fix);
+        }
+        let mut imu = ImuLanes {
+            time_s: t,
+            gyro_rad_s: zero,
+            accel_m_s2: zero,
+            gyro_saturated: 0,
+            accel_saturated: 0,
+        };
+        for (i, s) in sensors.iter_mut().enumerate() {
+            let sample = s.imu.sample(&case.motions[i].imu_truth_at(t));
+            set3(&mut imu.gyro_rad_s, i, &sample.gyro_rad_s);
+            set3(&mut imu.accel_m_s2, i, &sample.accel_m_s2);
+            imu.gyro_saturated |= u32::from(sample.gyro_saturated) << i;
+            imu.accel_saturated |= u32::from(sample.accel_saturated) << i;
+            if stopped.is_none() || i != 3 {
+                scalar[i].push_imu(&sample).unwrap();
+            }
+        }
+        lanes.push_imu(&imu).unwrap();
+        let live = if stopped.is_some() { 3 } else { W };
+        // The estimates carried to a control step 1.3 ms on, in lanes, against the scalar carry.
+        let mut carried = Vec::new();
+        lanes.estimates_at(t + 1.3e-3, &mut carried);
+        for (i, e) in scalar.iter().enumerate().take(live) {
+            let b = e.estimate().carried(settings.gravity_m_s2, t + 1.3e-3);
+            let a = carried[i];
+            same(a.time_s, b.time_s, "carried time", t, i);
+            for k in 0..3 {
+                same(
+                    a.state.position_m[k],
+                    b.state.position_m[k],
+                    "carried position",
+                    t,
+                    i,
+                );
+                same(
+                    a.state.velocity_m_s[k],
+                    b.state.velocity_m_s[k],
+                    "carried velocity",
+                    t,
+                    i,
+                );
+                same(a.accel_m_s2[k], b.accel_m_s2[k], "carried accel", t, i);
+            }
+            for k in 0..4 {
+                let (qa, qb) = (a.state.attitude.coords, b.state.attitude.coords);
+                same(qa[k], qb[k], "carried attitude", t, i);
+            }
+        }
+        for (i, e) in scalar.iter().enumerate().take(live) {
+            let (a, b) = (lanes.estimate(i), e.estimate());
+            same(a.time_s, b.time_s, "time", t, i);
+            for k in 0..3 {
+                same(
+                    a.state.position_m[k],
+                    b.state.position_m[k],
+                    "position",
+                    t,
+                    i,
+                );
+                same(
+                    a.state.velocity_m_s[k],
+                    b.state.velocity_m_s[k],
+                    "velocity",
+                    t,
+                    i,
+                );
+                same(a.state.omega_rad_s[k], b.state.omega_rad_s[k], "rate", t, i);
+                same(a.gyro_rad_s[k], b.gyro_rad_s[k], "gyro", t, i);
+                same(a.accel_m_s2[k], b.accel_m_s2[k], "accel", t, i);
+            }
+            for k in 0..4 {
+                let (qa, qb) = (a.state.attitude.coords, b.state.attitude.coords);
+                same(qa[k], qb[k], "attitude", t, i);
+            }
+            assert_eq!(a.gyro_saturated, b.gyro_saturated);
+            let (pa, pb) = (lanes.covariance(i), e.covariance());
+            for k in 0..ERROR_DIM * ERROR_DIM {
+                same(pa.as_slice()[k], pb.as_slice()[k], "covariance", t, i);
+            }
+            assert_eq!(lanes.counts(i), e.counts(), "counts at {t} s, lane {i}");
+            assert_eq!(lanes.saturated_samples(i), e.saturated_samples());
+        }
+    }
+    let stopped = stopped.expect("lane 3 stops within the flight");
+    assert_eq!(lanes.counts(3), stopped[3], "a stopped lane's counts stop");
+    // The spin past the gyro's range clamps in lane 2 only (its estimator alone flushes early).
+    let clamped: Vec<bool> = (0..W).map(|i| lanes.saturated_samples(i) > 0).collect();
+    assert_eq!(clamped, [false, false, true, false]);
+    std::array::from_fn(|i| lanes.counts(i))
+}
+
+#[test]
+fn lanes_equal_four_scalar_estimators_with_motion_capture() {
+    let case = Case {
+        suite: SensorSuiteProfile::mocap(),
+        // Hover, a 30 rad/s spin, a spin past the ICM-42688-P's 34.9 rad/s range (lane 2
+        // clamps, the others never do) and a slower tilted one.
+        motions: [
+            AnalyticMotion::hover(),
+            AnalyticMotion::spin(30.0, 15f64.to_radians()),
+            AnalyticMotion::spin(40.0, 0.0),
+            AnalyticMotion::spin(8.0, 0.3),
+        ],
+        outlier_s: (1.0, 1.2),
+        stop_s: 2.5,
+        duration_s: 3.0,
+    };
+    let counts = check(&case);
+    // The cases the lanes must carry per lane did happen: fixes refused in lane 1 only.
+    assert!(counts[1].rejected > 10, "{counts:?}");
+    assert_eq!(counts[0].rejected, 0, "{counts:?}");
+}
+
+#[test]
+fn lanes_equal_four_scalar_estimators_with_rtk_and_the_magnetometer() {
+    let case = Case {
+        suite: SensorSuiteProfile::rtk(),
+        motions: [
+            AnalyticMotion::spin(20.0, 0.2),
+            AnalyticMotion::hover(),
+            AnalyticMotion::spin(36.0, 0.05),
+            AnalyticMotion::spin(30.0, 15f64.to_radians()),
+        ],
+        outlier_s: (1.5, 2.0),
+        stop_s: 2.0,
+        duration_s: 3.0,
+    };
+    let counts = check(&case);
+    assert!(counts[1].rejected > 0, "{counts:?}");
+}
