@@ -21,8 +21,9 @@ estimator (the sensing the project's reports fly it with): its own vehicle and s
   10 s; ``rf.Sensing()``.
 
 Both batches fly the default way (``lanes='auto'``: four runs per AVX2 register where the batch
-allows, issue 32; on sensors the truth flies in the lanes and each run's sensors and estimator
-beside it, per run, bit for bit the scalar results); the truth flown one run at a time
+allows, issue 32; on sensors the truth flies in the lanes and so do the runs' estimators where
+their sensors share one schedule, as motion capture's do, each run's sensors beside them, bit for
+bit the scalar results); the truth flown one run at a time
 (``lanes='scalar'``) is timed beside them and its ratio printed and recorded for reference (the
 target is on the default truth batch), and so is the sensed batch flown one run at a time (the
 path every sensed run took before session h39).

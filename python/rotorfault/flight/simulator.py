@@ -365,9 +365,9 @@ def simulate_batch(
     :func:`rotorfault.studies.record_batch`. ``lanes``: ``"auto"`` (default) flies groups of four
     runs in one AVX2 register where the batch allows it (Rust controllers, no sensor noise,
     constant wind, fixed-pitch rotors without a rate limit, no quadratic drag or rotor inertia;
-    runs grouped by equal fault times; on sensors the truth flies in the lanes and each run's
-    sensors and estimator per run), with results equal bit for bit to ``"scalar"``, one run at
-    a time.
+    runs grouped by equal fault times; on sensors the truth flies in the lanes, so do the runs'
+    estimators on motion capture and RTK, and each run's sensors per run), with results equal
+    bit for bit to ``"scalar"``, one run at a time.
 
     Examples:
 

@@ -27,8 +27,9 @@
 //! the IMU at 500 Hz and mocap at 240 Hz, fewer than half the nodes are read.
 //! The tape's nodes are the scalar ones bit for bit (the lanes' states and rotor sums are, and
 //! the rotor thrusts come from the scalar function on the lane's channels), so are the sensor
-//! samples, the estimates and the commands; the tape evaluates a node's wrench itself where the
-//! scalar integrator shares its first RK4 stage's (the same function of the same inputs).
+//! samples, the estimates and the commands; the tape takes a node's dynamics from the lanes' first
+//! RK4 stage where the scalar integrator shares its first stage's wrench (the same function of
+//! the same inputs).
 //!
 //! # Why the results are the scalar ones
 //! Lane `i` computes what the scalar period ([`crate::flight::simulation::step`]) computes, in
@@ -389,10 +390,10 @@ fn fly_group_lanes<L: Lanes>(
             );
         }
     }
-    let mut estimators = estimators_in_lanes::<L>(&group);
+    let mut onboard_lanes = estimators_in_lanes::<L>(&group);
     catch_up(
         &mut group,
-        estimators.as_mut(),
+        onboard_lanes.as_mut(),
         &[true; WIDTH],
         vehicle,
         0.0,
@@ -405,8 +406,8 @@ fn fly_group_lanes<L: Lanes>(
     for k in 0..=steps {
         cancel.check()?;
         let t = config.step_time(k);
-        if let Some(lanes) = estimators.as_mut() {
-            lanes.estimate_at(t);
+        if let Some(onboard_lanes) = onboard_lanes.as_mut() {
+            onboard_lanes.estimates_at(t);
         }
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if !active[i] {
@@ -418,8 +419,8 @@ fn fly_group_lanes<L: Lanes>(
             // With sensing: the estimate, and the sensors' samples for a controller that reads
             // them (the scalar driver's rule).
             let onboard = lane.onboard.as_ref().map(|(onboard, _)| onboard);
-            let estimate = match &estimators {
-                Some(lanes) => onboard.map(|_| lanes.estimate(i)),
+            let estimate = match &onboard_lanes {
+                Some(onboard_lanes) => onboard.map(|_| onboard_lanes.estimate(i)),
                 None => onboard.map(|o| o.estimate(t)),
             };
             let input = if let (Some(estimate), Some(onboard)) = (&estimate, onboard) {
@@ -446,8 +447,8 @@ fn fly_group_lanes<L: Lanes>(
                 if let (Some(record), Some(onboard), Some(estimate)) =
                     (trajectory.sensing.as_mut(), onboard, &estimate)
                 {
-                    record.rows.push(match &estimators {
-                        Some(lanes) => lanes.row(i, estimate),
+                    record.rows.push(match &onboard_lanes {
+                        Some(onboard_lanes) => onboard_lanes.row(i, estimate),
                         None => onboard.row(estimate),
                     });
                 }
@@ -477,7 +478,7 @@ fn fly_group_lanes<L: Lanes>(
         );
         catch_up(
             &mut group,
-            estimators.as_mut(),
+            onboard_lanes.as_mut(),
             &active,
             vehicle,
             t_next,
@@ -493,8 +494,8 @@ fn fly_group_lanes<L: Lanes>(
             if let (Some(record), Some((onboard, _))) =
                 (lane.trajectory.sensing.as_mut(), lane.onboard.as_ref())
             {
-                match &estimators {
-                    Some(lanes) => lanes.finish(k, onboard, record),
+                match &onboard_lanes {
+                    Some(onboard_lanes) => onboard_lanes.finish(k, onboard, record),
                     None => onboard.finish(record),
                 }
             }
@@ -516,19 +517,19 @@ fn estimators_in_lanes<L: Lanes>(group: &[(usize, Lane)]) -> Option<OnboardLanes
 }
 
 /// Every active run's sensors take their samples up to `t_s`, and its estimator reads them: in
-/// lanes (`estimators`) or each run's own.
+/// lanes (`onboard_lanes`) or each run's own.
 #[inline(always)]
 fn catch_up<L: Lanes>(
     group: &mut [(usize, Lane)],
-    estimators: Option<&mut OnboardLanes<L>>,
+    onboard_lanes: Option<&mut OnboardLanes<L>>,
     active: &[bool; WIDTH],
     vehicle: &Vehicle,
     t_s: f64,
     cancel: &Cancel,
 ) -> Result<()> {
-    match estimators {
-        Some(lanes) => {
-            let live = (0..WIDTH)
+    match onboard_lanes {
+        Some(onboard_lanes) => {
+            let active_lanes = (0..WIDTH)
                 .filter(|&i| active[i])
                 .fold(0, |m, i| m | (1 << i));
             let mut runs = group.iter_mut();
@@ -537,7 +538,13 @@ fn catch_up<L: Lanes>(
                     runs.next()
                         .and_then(|(_, lane)| lane.onboard.as_mut().map(|(o, t)| (o, t)))
                 });
-            lanes.catch_up(&mut onboards, live, vehicle, t_s, cancel)
+            onboard_lanes.catch_up(
+                &mut onboards,
+                active_lanes,
+                vehicle,
+                t_s,
+                cancel,
+            )
         }
         None => {
             for (i, (_, lane)) in group.iter_mut().enumerate() {

@@ -286,35 +286,33 @@ fn lanes_fly_the_scalar_ke_ftc_batch_bit_for_bit() {
     );
 }
 
+/// A hover law that also reads the samples a controller may read (the gyro, the specific force,
+/// the rotor thrusts), so that they reach its commands.
+struct Sampler(LinearFeedback);
+impl Controller for Sampler {
+    fn command_count(&self) -> usize {
+        4
+    }
+    fn command(&mut self, t: f64, s: &RigidBodyState, out: &mut [f64]) -> Result<()> {
+        self.0.command(t, s, out)
+    }
+    fn command_with(&mut self, t: f64, input: &ControllerInput<'_>, out: &mut [f64]) -> Result<()> {
+        self.0.command(t, input.state, out)?;
+        let f = input.specific_force_m_s2.unwrap();
+        let gyro = input.gyro_rad_s.unwrap();
+        // On sensors no rotor-speed reading has arrived before the sensor's latency.
+        let thrust = input.rotor_thrust_n.map_or(0.0, |r| r[3]);
+        out[0] += 1e-3 * f.z + 1e-3 * thrust + 1e-3 * gyro.x;
+        Ok(())
+    }
+    fn reads_samples(&self) -> bool {
+        true
+    }
+}
+
 #[test]
 fn a_controller_that_reads_samples_gets_the_scalar_samples_in_a_lane() {
     // Through `truth_samples`, the one function both paths use.
-    struct Sampler(LinearFeedback);
-    impl Controller for Sampler {
-        fn command_count(&self) -> usize {
-            4
-        }
-        fn command(&mut self, t: f64, s: &RigidBodyState, out: &mut [f64]) -> Result<()> {
-            self.0.command(t, s, out)
-        }
-        fn command_with(
-            &mut self,
-            t: f64,
-            input: &ControllerInput<'_>,
-            out: &mut [f64],
-        ) -> Result<()> {
-            self.0.command(t, input.state, out)?;
-            let f = input.specific_force_m_s2.unwrap();
-            let gyro = input.gyro_rad_s.unwrap();
-            // On sensors no rotor-speed reading has arrived before the sensor's latency.
-            let thrust = input.rotor_thrust_n.map_or(0.0, |r| r[3]);
-            out[0] += 1e-3 * f.z + 1e-3 * thrust + 1e-3 * gyro.x;
-            Ok(())
-        }
-        fn reads_samples(&self) -> bool {
-            true
-        }
-    }
     let airframe = crate::fixtures::preset("quad-x");
     let vehicle = Vehicle::new(&airframe, Drag::default()).unwrap();
     let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, Lag::none(), 0.0).unwrap());
@@ -522,4 +520,52 @@ fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
         let diverged: Vec<bool> = lanes.iter().map(|t| t.divergence.is_some()).collect();
         assert_eq!(diverged, [false, true, false, false], "{}", suite.name());
     }
+}
+
+#[test]
+fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
+    // About 64 IMU samples per control period (31.9 kHz at 500 Hz: a chunk of readings ends
+    // within a period): two runs whose laws read the rotor-speed feedback take rotor-speed
+    // samples the other two do not, and every chunk still ends at the same reading in every
+    // lane (a chunk that ended before a rotor-speed sample put the lanes out of step).
+    let (airframe, vehicle, actuators, hover) = lagged_quad();
+    let mut config = SimulationConfig::new(0.002, 2, 0.2);
+    config.sensing = Some(Sensing {
+        seed: 2,
+        imu_rate_hz: 31_900.0,
+        ..Sensing::default()
+    });
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| {
+                let law = hover_feedback(&airframe, 10.0);
+                let controller: Box<dyn Controller> = if k < 2 {
+                    Box::new(Sampler(law))
+                } else {
+                    Box::new(law)
+                };
+                BatchRun {
+                    controller,
+                    initial_command: Some(vec![hover; 4]),
+                    x0: start(k),
+                    faults: vec![],
+                }
+            })
+            .collect()
+    };
+    let plans = plan(
+        &vehicle,
+        &actuators,
+        &[1.0; 4],
+        runs(),
+        &config,
+        BatchLanes::Auto,
+    );
+    let [Plan::Group(group)] = &plans[..] else {
+        panic!("one group of four");
+    };
+    assert!(estimators_in_lanes::<F64x4>(group).is_some());
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    assert!(lanes[0].sensing.as_ref().unwrap().imu_samples > 6_000);
 }

@@ -47,27 +47,27 @@ impl<L: Lanes> OnboardLanes<L> {
         })
     }
 
-    /// [`Onboard::catch_up`] for the lanes of `live` (the runs still flying): each run takes its
+    /// [`Onboard::catch_up`] for the lanes of `active` (the runs still flying): each run takes its
     /// samples up to `t_end_s` from its tape, a chunk at a time, and the estimators read the
-    /// chunk's readings in lanes. A lane not in `live` reads lane `first live`'s values and
+    /// chunk's readings in lanes. A lane not in `active` reads lane `first active`'s values and
     /// counts nothing.
     pub(crate) fn catch_up(
         &mut self,
         runs: &mut [Option<(&mut Onboard, &mut Tape)>],
-        live: Mask,
+        active: Mask,
         vehicle: &Vehicle,
         t_end_s: f64,
         cancel: &Cancel,
     ) -> Result<()> {
-        let Some(first) = (0..L::WIDTH).find(|&i| live & (1 << i) != 0) else {
+        let Some(first) = (0..L::WIDTH).find(|&i| active & (1 << i) != 0) else {
             return Ok(());
         };
-        self.estimator.set_live(live);
+        self.estimator.set_active(active);
         loop {
             let mut done = None;
             for (i, run) in runs.iter_mut().enumerate() {
                 self.readings[i].clear();
-                if live & (1 << i) == 0 {
+                if active & (1 << i) == 0 {
                     continue;
                 }
                 let Some((onboard, tape)) = run.as_mut() else {
@@ -80,11 +80,11 @@ impl<L: Lanes> OnboardLanes<L> {
                 }
             }
             let count = self.readings[first].len();
-            if (0..L::WIDTH).any(|i| live & (1 << i) != 0 && self.readings[i].len() != count) {
+            if (0..L::WIDTH).any(|i| active & (1 << i) != 0 && self.readings[i].len() != count) {
                 return Err(out_of_step());
             }
             for k in 0..count {
-                self.feed(k, first, live)?;
+                self.feed(k, first, active)?;
             }
             if done != Some(false) {
                 return Ok(());
@@ -92,9 +92,9 @@ impl<L: Lanes> OnboardLanes<L> {
         }
     }
 
-    /// The `k`-th reading of every live lane, in lanes (the others take lane `first`'s).
-    fn feed(&mut self, k: usize, first: usize, live: Mask) -> Result<()> {
-        let lane = |i: usize| if live & (1 << i) != 0 { i } else { first };
+    /// The `k`-th reading of every active lane, in lanes (the others take lane `first`'s).
+    fn feed(&mut self, k: usize, first: usize, active: Mask) -> Result<()> {
+        let lane = |i: usize| if active & (1 << i) != 0 { i } else { first };
         let zero = [L::splat(0.0); 3];
         let template = self.readings[first][k];
         for i in 0..L::WIDTH {
@@ -168,11 +168,11 @@ impl<L: Lanes> OnboardLanes<L> {
 
     /// Every lane's estimate carried to the control step at `t_s` ([`Onboard::estimate`] per
     /// lane), read by [`OnboardLanes::estimate`].
-    pub(crate) fn estimate_at(&mut self, t_s: f64) {
+    pub(crate) fn estimates_at(&mut self, t_s: f64) {
         self.estimator.estimates_at(t_s, &mut self.estimates);
     }
 
-    /// Lane `i`'s estimate of the last [`OnboardLanes::estimate_at`].
+    /// Lane `i`'s estimate of the last [`OnboardLanes::estimates_at`].
     pub(crate) fn estimate(&self, i: usize) -> Estimate {
         self.estimates[i]
     }

@@ -18,8 +18,9 @@
 //! lag), which the node's totals hold: at most `tau / time_constant` of a step change (2.5 % for
 //! Ke's 25 ms lag). Rotor thrusts (for the rotor-speed sensor) are held from the node.
 //!
-//! The dynamics at a node are those of the integrator's first RK4 stage there: the integrator
-//! hands its wrench over ([`Tape::share_wrench`]) instead of the tape evaluating it again.
+//! The dynamics at a node are those of the integrator's first RK4 stage there: the scalar
+//! integrator hands its wrench over ([`Tape::share_wrench`]) and the batch lanes the stage itself
+//! ([`Tape::share_rates`]) instead of the tape evaluating them again.
 
 use nalgebra::Vector3;
 

@@ -9,8 +9,8 @@ use nalgebra::Vector3;
 
 use crate::flight::estimation::eskf::{ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::lanes::math::{
-    add, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul, renormalize_fast,
-    rotate, rotation_matrix, scale, select, set_mat, sub, Mask, M3, Q, V3,
+    add, all, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul,
+    renormalize_fast, rotate, rotation_matrix, scale, select, set_mat, sub, Mask, M3, Q, V3,
 };
 use crate::flight::lanes::Lanes;
 
@@ -163,7 +163,7 @@ impl<L: Lanes> NominalLanes<L> {
     /// `next` in the lanes of `mask`, `self` elsewhere.
     #[inline(always)]
     pub(crate) fn select(&self, mask: Mask, next: &NominalLanes<L>) -> NominalLanes<L> {
-        use crate::flight::estimation::lanes::math::{all, select_n};
+        use crate::flight::estimation::lanes::math::select_n;
         if mask == all::<L>() {
             return *next;
         }
@@ -341,7 +341,7 @@ fn propagate_covariance_body<L: Lanes>(
 #[inline(always)]
 fn cholesky_inverse<L: Lanes>(m: &M3<L>) -> (Mask, M3<L>) {
     let mut l = *m;
-    let mut factored = crate::flight::estimation::lanes::math::all::<L>();
+    let mut factored = all::<L>();
     for j in 0..3 {
         for k in 0..j {
             let factor = -l[j][k];
@@ -398,7 +398,7 @@ fn update_block_body<L: Lanes>(
     r: &V3<L>,
     noise_var: &Vector3<f64>,
     gate: f64,
-    lanes: Mask,
+    tried: Mask,
 ) -> (Mask, [L; ERROR_DIM]) {
     let zero = L::splat(0.0);
     // P H^T: the block's three columns, times H^T (nalgebra's gemm: column j of the product is
@@ -428,7 +428,7 @@ fn update_block_body<L: Lanes>(
     // Refused where there is no factor or the gate is exceeded (NaN passes, as in the scalar).
     let fused = (0..L::WIDTH)
         .filter(|&i| nis.lane(i) > gate)
-        .fold(lanes & factored, |m, i| m & !(1 << i));
+        .fold(tried & factored, |m, i| m & !(1 << i));
     if fused == 0 {
         return (0, [zero; ERROR_DIM]);
     }
@@ -436,7 +436,7 @@ fn update_block_body<L: Lanes>(
     let k: [[L; 3]; ERROR_DIM] = each3(|i| {
         each(|j| pht[i][0] * s_inv[0][j] + pht[i][1] * s_inv[1][j] + pht[i][2] * s_inv[2][j])
     });
-    let full = fused == crate::flight::estimation::lanes::math::all::<L>();
+    let full = fused == all::<L>();
     for j in 0..ERROR_DIM {
         let (a, b, c) = (pht[j][0], pht[j][1], pht[j][2]);
         for i in j..ERROR_DIM {
@@ -457,7 +457,7 @@ fn update_block_body<L: Lanes>(
 
 #[inline(always)]
 fn mirror_lower<L: Lanes>(p: &mut CovarianceLanes<L>, lanes: Mask) {
-    let full = lanes == crate::flight::estimation::lanes::math::all::<L>();
+    let full = lanes == all::<L>();
     for j in 1..ERROR_DIM {
         for i in 0..j {
             let lower = p[i * ERROR_DIM + j];
@@ -484,7 +484,7 @@ fn reset_covariance_body<L: Lanes>(p: &mut CovarianceLanes<L>, dtheta: &V3<L>, m
         [zero - -v[1], zero - v[0], one - zero],
     ];
     // In the lanes outside `mask` every entry is written back as it was.
-    let full = mask == crate::flight::estimation::lanes::math::all::<L>();
+    let full = mask == all::<L>();
     let pick = |new: L, old: L| if full { new } else { select(mask, new, old) };
     for column in p.chunks_exact_mut(ERROR_DIM) {
         let x = [column[ATT], column[ATT + 1], column[ATT + 2]];
@@ -552,7 +552,7 @@ avx2_or_baseline! {
 }
 
 avx2_or_baseline! {
-    /// `eskf::update_block` for every lane of `lanes`: lanes whose innovation has no Cholesky
+    /// `eskf::update_block` for every lane of `tried`: lanes whose innovation has no Cholesky
     /// factor or whose normalised innovation squared exceeds `gate` are left unchanged. Returns
     /// the lanes fused and `dx` (zero in the others).
     fn update_block(
@@ -562,7 +562,7 @@ avx2_or_baseline! {
         r: &V3<L>,
         noise_var: &Vector3<f64>,
         gate: f64,
-        lanes: Mask
+        tried: Mask
     ) -> (Mask, [L; ERROR_DIM]) = update_block_body;
 }
 

@@ -213,6 +213,14 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
         }
         let var = Vector3::new(0.3, 0.3, 0.5);
         let gate = 100.0;
+        // Every third round lane 3's block is negative definite: no Cholesky factor there.
+        if round % 3 == 2 {
+            for k in 0..3 {
+                let at = (block + k) * ERROR_DIM + block + k;
+                p[3].as_mut_slice()[at] = -1.0;
+                pl[at].set_lane(3, -1.0);
+            }
+        }
         let (fused, dx) = update_block(&mut pl, block, h.as_ref(), &r, &var, gate, 0b1111);
         for i in 0..W {
             let (fusion, dxs) =
@@ -224,6 +232,9 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
             }
         }
         assert_eq!(fused & 0b0100, 0, "lane 2's residual is outside the gate");
+        if round % 3 == 2 {
+            assert_eq!(fused & 0b1000, 0, "lane 3 has no factor");
+        }
         // The reset and the injection in the fused lanes.
         let dtheta: V3<L> = [dx[ATT], dx[ATT + 1], dx[ATT + 2]];
         reset_covariance(&mut pl, &dtheta, fused);

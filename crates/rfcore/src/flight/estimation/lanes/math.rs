@@ -104,9 +104,13 @@ pub(crate) fn norm_squared<L: Lanes>(a: &V3<L>) -> L {
     L::splat(0.0) + ((a[0] * a[0] + a[1] * a[1]) + a[2] * a[2])
 }
 
-/// `a.lerp(b, t)`: nalgebra's `t b + (1 - t) a` (its `axpy`).
+/// `a.lerp(b, t)`: nalgebra's `t b + (1 - t) a` (its `axpy`), which at `t = 1` (a zero `1 - t`)
+/// is `b` itself, not `b + 0 a` (they differ in a zero's sign or for an `a` not finite).
 #[inline(always)]
 pub(crate) fn lerp<L: Lanes>(a: &V3<L>, b: &V3<L>, t: f64) -> V3<L> {
+    if t == 1.0 {
+        return *b;
+    }
     let (t, u) = (L::splat(t), L::splat(1.0 - t));
     [
         t * b[0] + u * a[0],
@@ -309,10 +313,31 @@ mod tests {
                 &cross(&a, &b),
                 &std::array::from_fn(|i| av[i].cross(&bv[i])),
             );
-            same3(
-                &lerp(&a, &b, 0.37),
-                &std::array::from_fn(|i| av[i].lerp(&bv[i], 0.37)),
-            );
+            // Inside, at the ends (nalgebra takes `b` itself at 1), and with a signed zero and an
+            // infinity where the ends' arithmetic would show them.
+            for t in [0.37, 0.0, 1.0] {
+                same3(
+                    &lerp(&a, &b, t),
+                    &std::array::from_fn(|i| av[i].lerp(&bv[i], t)),
+                );
+            }
+            let (mut odd_a, mut odd_b) = (a, b);
+            odd_a[0].set_lane(1, f64::INFINITY);
+            odd_b[1].set_lane(2, -0.0);
+            for t in [0.0, 1.0] {
+                let expected: [Vector3<f64>; 4] =
+                    std::array::from_fn(|i| lane3(&odd_a, i).lerp(&lane3(&odd_b, i), t));
+                for (i, x) in expected.iter().enumerate() {
+                    for k in 0..3 {
+                        let got = lerp(&odd_a, &odd_b, t)[k].lane(i);
+                        assert!(
+                            got.to_bits() == x[k].to_bits() || (got.is_nan() && x[k].is_nan()),
+                            "t {t} lane {i}: {got} against {}",
+                            x[k]
+                        );
+                    }
+                }
+            }
             same3(&rotate(&q, &a), &std::array::from_fn(|i| qv[i] * av[i]));
             let n = norm_squared(&a);
             for i in 0..4 {

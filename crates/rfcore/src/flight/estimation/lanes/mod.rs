@@ -96,10 +96,16 @@ pub(crate) struct EstimatorLanes<L> {
     newest: Option<ImuLanes<L>>,
     gyro_filtered: V3<L>,
     counts: Vec<FusionCounts>,
+    /// Samples clamped per lane (the scalar estimator's count; a run's own comes from its IMU).
+    #[cfg(test)]
     saturated_samples: Vec<u64>,
     fix_slot: f64,
     /// The lanes whose runs still fly: only they count (a run's counts stop when it ends).
-    live: Mask,
+    active: Mask,
+    /// Flushes of some lanes' blocks while other lanes held one (for the tests: the per-lane
+    /// flush is exercised).
+    #[cfg(test)]
+    pub(crate) partial_flushes: u64,
 }
 
 impl<L: Lanes> EstimatorLanes<L> {
@@ -161,20 +167,23 @@ impl<L: Lanes> EstimatorLanes<L> {
             newest: None,
             gyro_filtered: zero,
             counts: vec![FusionCounts::default(); L::WIDTH],
+            #[cfg(test)]
             saturated_samples: vec![0; L::WIDTH],
             fix_slot: f64::NAN,
-            live: all::<L>(),
+            active: all::<L>(),
+            #[cfg(test)]
+            partial_flushes: 0,
         })
     }
 
-    /// From now on only the lanes of `live` count (the others' runs have ended).
-    pub(crate) fn set_live(&mut self, live: Mask) {
-        self.live = live;
+    /// From now on only the lanes of `active` count (the others' runs have ended).
+    pub(crate) fn set_active(&mut self, active: Mask) {
+        self.active = active;
     }
 
     fn count(&mut self, lanes: Mask, add: impl Fn(&mut FusionCounts)) {
         for (i, c) in self.counts.iter_mut().enumerate() {
-            if lanes & self.live & (1 << i) != 0 {
+            if lanes & self.active & (1 << i) != 0 {
                 add(c);
             }
         }
@@ -193,9 +202,12 @@ impl<L: Lanes> EstimatorLanes<L> {
                 ));
             }
         }
-        let saturated = (sample.gyro_saturated | sample.accel_saturated) & self.live;
-        for (i, n) in self.saturated_samples.iter_mut().enumerate() {
-            *n += u64::from(saturated & (1 << i) != 0);
+        #[cfg(test)]
+        {
+            let saturated = (sample.gyro_saturated | sample.accel_saturated) & self.active;
+            for (i, n) in self.saturated_samples.iter_mut().enumerate() {
+                *n += u64::from(saturated & (1 << i) != 0);
+            }
         }
         let Some(previous) = self.newest else {
             self.start(sample);
@@ -469,6 +481,10 @@ impl<L: Lanes> EstimatorLanes<L> {
         };
         if lanes == 0 {
             return;
+        }
+        #[cfg(test)]
+        {
+            self.partial_flushes += u64::from(self.block_lanes & !lanes != 0);
         }
         let noise = self.process_noise(&block.step, lanes);
         if lanes == all::<L>() {

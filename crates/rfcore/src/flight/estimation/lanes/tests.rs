@@ -18,6 +18,9 @@ struct Case {
     outlier_s: (f64, f64),
     /// Lane 3 stops at this time (its run ended): its counts must stop with it.
     stop_s: f64,
+    /// Each lane's body rate scaled by `1 + wobble sin(2 pi 0.7 t)` (a rate that crosses the
+    /// gyro's range and back: the clamping switches, and that lane alone flushes its block).
+    wobble: [f64; W],
     duration_s: f64,
 }
 
@@ -29,7 +32,9 @@ fn same(a: f64, b: f64, what: &str, t: f64, lane: usize) {
     );
 }
 
-fn check(case: &Case) -> [FusionCounts; W] {
+/// Flies `case` in lanes and in four scalar estimators, checking them equal after every IMU
+/// sample; the lanes' counts and the lanes' estimator.
+fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
     let settings = EstimatorSettings::for_sensors(&case.suite);
     let mut sensors: Vec<SensorSuite> = (0..W)
         .map(|i| SensorSuite::new(&case.suite, 4, 40 + i as u64).unwrap())
@@ -47,7 +52,7 @@ fn check(case: &Case) -> [FusionCounts; W] {
             break;
         }
         if t >= case.stop_s && stopped.is_none() {
-            lanes.set_live(0b0111);
+            lanes.set_active(0b0111);
             stopped = Some(std::array::from_fn(|i| scalar[i].counts()));
         }
         let zero = [L::splat(0.0); 3];
@@ -114,7 +119,10 @@ fn check(case: &Case) -> [FusionCounts; W] {
             accel_saturated: 0,
         };
         for (i, s) in sensors.iter_mut().enumerate() {
-            let sample = s.imu.sample(&case.motions[i].imu_truth_at(t));
+            let mut truth = case.motions[i].imu_truth_at(t);
+            truth.omega_rad_s *=
+                1.0 + case.wobble[i] * (2.0 * std::f64::consts::PI * 0.7 * t).sin();
+            let sample = s.imu.sample(&truth);
             set3(&mut imu.gyro_rad_s, i, &sample.gyro_rad_s);
             set3(&mut imu.accel_m_s2, i, &sample.accel_m_s2);
             imu.gyro_saturated |= u32::from(sample.gyro_saturated) << i;
@@ -191,10 +199,11 @@ fn check(case: &Case) -> [FusionCounts; W] {
     }
     let stopped = stopped.expect("lane 3 stops within the flight");
     assert_eq!(lanes.counts(3), stopped[3], "a stopped lane's counts stop");
-    // The spin past the gyro's range clamps in lane 2 only (its estimator alone flushes early).
-    let clamped: Vec<bool> = (0..W).map(|i| lanes.saturated_samples(i) > 0).collect();
-    assert_eq!(clamped, [false, false, true, false]);
-    std::array::from_fn(|i| lanes.counts(i))
+    (std::array::from_fn(|i| lanes.counts(i)), lanes)
+}
+
+fn clamped(lanes: &EstimatorLanes<L>) -> Vec<bool> {
+    (0..W).map(|i| lanes.saturated_samples(i) > 0).collect()
 }
 
 #[test]
@@ -202,21 +211,26 @@ fn lanes_equal_four_scalar_estimators_with_motion_capture() {
     let case = Case {
         suite: SensorSuiteProfile::mocap(),
         // Hover, a 30 rad/s spin, a spin past the ICM-42688-P's 34.9 rad/s range (lane 2
-        // clamps, the others never do) and a slower tilted one.
+        // clamps throughout) and one whose rate crosses it twice a cycle (lane 3: its clamping
+        // switches, so its covariance block is flushed when the others' are not).
         motions: [
             AnalyticMotion::hover(),
             AnalyticMotion::spin(30.0, 15f64.to_radians()),
             AnalyticMotion::spin(40.0, 0.0),
-            AnalyticMotion::spin(8.0, 0.3),
+            AnalyticMotion::spin(34.0, 0.1),
         ],
         outlier_s: (1.0, 1.2),
         stop_s: 2.5,
         duration_s: 3.0,
+        wobble: [0.0, 0.0, 0.0, 0.06],
     };
-    let counts = check(&case);
-    // The cases the lanes must carry per lane did happen: fixes refused in lane 1 only.
+    let (counts, lanes) = check(&case);
+    // The cases the lanes must carry per lane did happen: fixes refused in lane 1 only, the gyro
+    // clamping in lanes 2 and 3 only, lane 3's blocks flushed apart from the others'.
     assert!(counts[1].rejected > 10, "{counts:?}");
     assert_eq!(counts[0].rejected, 0, "{counts:?}");
+    assert_eq!(clamped(&lanes), [false, false, true, true]);
+    assert!(lanes.partial_flushes >= 4, "{}", lanes.partial_flushes);
 }
 
 #[test]
@@ -232,7 +246,9 @@ fn lanes_equal_four_scalar_estimators_with_rtk_and_the_magnetometer() {
         outlier_s: (1.5, 2.0),
         stop_s: 2.0,
         duration_s: 3.0,
+        wobble: [0.0; W],
     };
-    let counts = check(&case);
+    let (counts, lanes) = check(&case);
     assert!(counts[1].rejected > 0, "{counts:?}");
+    assert_eq!(clamped(&lanes), [false, false, true, false]);
 }
