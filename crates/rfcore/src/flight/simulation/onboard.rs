@@ -203,12 +203,12 @@ impl Onboard {
     /// Takes the samples due up to `t_end_s` from `tape`, in time order, each at its own time on
     /// its own clock, appending what the estimator reads to `readings` (a position fix when it
     /// arrives, the magnetometer, the IMU), stopping before the next reading once there are
-    /// [`READINGS_PER_CHUNK`]; `true` when
-    /// every sample up to `t_end_s` is taken (then the rotor-speed reading due by then is in
-    /// place too). `cancel` is checked before each sample: a control period holds
-    /// `dt_s x imu_rate_hz` IMU samples (a 100 s period at 32 kHz is 3.2 million, about 5 s of
-    /// filter steps), so the driver's check once per period alone did not bound the time to
-    /// stop. A check is one atomic load beside the microseconds of a filter step.
+    /// [`READINGS_PER_CHUNK`]; `true` when every sample up to `t_end_s` is taken (then the
+    /// rotor-speed reading due by then is in place too). `cancel` is checked before each sample:
+    /// a control period holds `dt_s x imu_rate_hz` IMU samples (a 100 s period at 32 kHz is 3.2
+    /// million, about 5 s of filter steps), so the driver's check once per period alone did not
+    /// bound the time to stop. A check is one atomic load beside the microseconds of a filter
+    /// step.
     pub(crate) fn take_samples(
         &mut self,
         tape: &mut Tape,
@@ -221,7 +221,8 @@ impl Onboard {
             // A chunk ends only before a sample that makes a reading, so that runs whose readings
             // are the same end their chunks at the same place whatever else they sample (a run
             // whose controller reads rotor speeds has samples the others have not).
-            if readings.len() >= READINGS_PER_CHUNK && matches!(which, Next::Imu | Next::Magnetometer)
+            if readings.len() >= READINGS_PER_CHUNK
+                && matches!(which, Next::Imu | Next::Magnetometer)
             {
                 return Ok(false);
             }
