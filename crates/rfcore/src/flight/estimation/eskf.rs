@@ -20,6 +20,27 @@ pub const ATT: usize = 6;
 pub const GYRO_BIAS: usize = 9;
 pub const ACCEL_BIAS: usize = 12;
 
+/// The exponential's series below its threshold (`exp_quaternion`; the lanes' too): with
+/// `x = angle / 2`, `cos x = sum (-1)^k x^2k / (2k)!` and `sin x / angle = sum (-1)^k x^2k /
+/// (2 (2k+1)!)`.
+pub(crate) const EXP_COS_SERIES: [f64; 6] = [
+    1.0,
+    -1.0 / 2.0,
+    1.0 / 24.0,
+    -1.0 / 720.0,
+    1.0 / 40_320.0,
+    -1.0 / 3_628_800.0,
+];
+pub(crate) const EXP_SINC_SERIES: [f64; 5] = [
+    1.0 / 2.0,
+    -1.0 / 12.0,
+    1.0 / 240.0,
+    -1.0 / 10_080.0,
+    1.0 / 725_760.0,
+];
+/// The squared angle from which `exp_quaternion` calls the library (0.2 rad).
+pub(crate) const EXP_SERIES_LIMIT_RAD2: f64 = 0.04;
+
 /// `Exp(phi)` as a unit quaternion. Below 0.2 rad the half-angle sine and cosine come from
 /// their Taylor series to the 9th and 10th power, whose truncation (< 3e-18 at 0.1 rad
 /// half-angle) is below double rounding: exact to rounding, without the library's sincos (a
@@ -29,25 +50,11 @@ pub const ACCEL_BIAS: usize = 12;
 /// 10 s flight).
 pub(crate) fn exp_quaternion(phi: &Vector3<f64>) -> UnitQuaternion<f64> {
     let angle2 = phi.norm_squared();
-    if angle2 >= 0.04 {
+    if angle2 >= EXP_SERIES_LIMIT_RAD2 {
         return UnitQuaternion::from_scaled_axis(*phi);
     }
-    // x = angle / 2; cos x = sum (-1)^k x^2k / (2k)!, sin x / angle = sum (-1)^k x^2k / (2 (2k+1)!).
-    const COS: [f64; 6] = [
-        1.0,
-        -1.0 / 2.0,
-        1.0 / 24.0,
-        -1.0 / 720.0,
-        1.0 / 40_320.0,
-        -1.0 / 3_628_800.0,
-    ];
-    const SINC: [f64; 5] = [
-        1.0 / 2.0,
-        -1.0 / 12.0,
-        1.0 / 240.0,
-        -1.0 / 10_080.0,
-        1.0 / 725_760.0,
-    ];
+    const COS: [f64; 6] = EXP_COS_SERIES;
+    const SINC: [f64; 5] = EXP_SINC_SERIES;
     let x2 = 0.25 * angle2;
     let cos =
         COS[0] + x2 * (COS[1] + x2 * (COS[2] + x2 * (COS[3] + x2 * (COS[4] + x2 * COS[5]))));

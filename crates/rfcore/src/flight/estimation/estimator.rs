@@ -75,14 +75,32 @@ enum Measurement {
     Magnetometer(Vector3<f64>),
 }
 
+/// A measurement waiting for the fusion horizon to reach its time of validity (`M`: the
+/// scalar estimator's measurement, or the lanes' of every lane).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Pending {
-    valid_at_s: f64,
-    measurement: Measurement,
+pub(crate) struct Pending<M> {
+    pub valid_at_s: f64,
+    pub measurement: M,
+}
+
+/// Queues `measurement` in `pending`, kept in order of validity (after those valid at the same
+/// time: they are fused in the order they came).
+pub(crate) fn queue<M>(pending: &mut VecDeque<Pending<M>>, valid_at_s: f64, measurement: M) {
+    let at = pending
+        .iter()
+        .rposition(|p| p.valid_at_s <= valid_at_s)
+        .map_or(0, |i| i + 1);
+    pending.insert(
+        at,
+        Pending {
+            valid_at_s,
+            measurement,
+        },
+    );
 }
 
 /// A time within this of another counts as the same time, s.
-const TIME_EPS_S: f64 = 1e-9;
+pub(crate) const TIME_EPS_S: f64 = 1e-9;
 
 /// One step of the output predictor's chain to a buffered sample: the state there, the step's
 /// linearisation and the inputs at its end (what `NominalState::propagate_from` returns).
@@ -115,7 +133,7 @@ pub struct Estimator {
     accel_clamped: [bool; 3],
     // Samples after the horizon, oldest first; measurements waiting for it, by validity time.
     buffer: VecDeque<ImuSample>,
-    pending: VecDeque<Pending>,
+    pending: VecDeque<Pending<Measurement>>,
     /// The output predictor's steps to the buffered samples (`trail[i]` reaches `buffer[i]`),
     /// kept while `trail_follows_horizon`: the output chain then starts from the horizon's own
     /// state, inputs and sample, so the horizon's step to the next sample is the chain's first
@@ -266,10 +284,7 @@ impl Estimator {
     pub fn push_position(&mut self, sample: &PositionSample) {
         let period = self.settings.position_fusion_period_s;
         if period > 0.0 {
-            // A fix on a slot boundary (k / rate_hz) can divide to just under the whole number
-            // (0.29 / 0.01 = 28.999999999999996): a millionth of a period of tolerance, as the
-            // sensors' clocks use, keeps it in its own slot (else 1 fix in 8 at 100 Hz thinned).
-            let slot = (sample.valid_at_s / period + PERIOD_TOLERANCE).floor();
+            let slot = fusion_slot(sample.valid_at_s, period);
             if slot == self.fix_slot {
                 // Counted per measurement, as `fused`, `rejected` and `late` are.
                 self.counts.thinned += 1
@@ -401,18 +416,7 @@ impl Estimator {
     }
 
     fn queue(&mut self, valid_at_s: f64, measurement: Measurement) {
-        let at = self
-            .pending
-            .iter()
-            .rposition(|p| p.valid_at_s <= valid_at_s)
-            .map_or(0, |i| i + 1);
-        self.pending.insert(
-            at,
-            Pending {
-                valid_at_s,
-                measurement,
-            },
-        );
+        queue(&mut self.pending, valid_at_s, measurement);
     }
 
     /// Moves the horizon through the buffered samples up to `target_s`; `true` if a
@@ -690,6 +694,14 @@ impl Estimator {
             }
         };
     }
+}
+
+/// The fusion slot (`position_fusion_period_s` = `period_s`) of a fix valid at `valid_at_s`. A
+/// fix on a slot boundary (k / rate_hz) can divide to just under the whole number (0.29 / 0.01 =
+/// 28.999999999999996): a millionth of a period of tolerance, as the sensors' clocks use, keeps
+/// it in its own slot (else 1 fix in 8 at 100 Hz thinned).
+pub(crate) fn fusion_slot(valid_at_s: f64, period_s: f64) -> f64 {
+    (valid_at_s / period_s + PERIOD_TOLERANCE).floor()
 }
 
 /// Per-axis variance of the error `(S + E) u` for scale errors `scale` and cross-axis terms

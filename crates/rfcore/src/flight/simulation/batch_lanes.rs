@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::flight::actuator::Actuators;
+use crate::flight::estimation::lanes::math::lane3;
 use crate::flight::fault_schedule::FaultSchedule;
 use crate::flight::lanes::{BodyLanes, F64x4, Lanes, TotalsLanes, VehicleLanes};
 use crate::flight::simulation::config::SimulationConfig;
@@ -538,13 +539,7 @@ fn catch_up<L: Lanes>(
                     runs.next()
                         .and_then(|(_, lane)| lane.onboard.as_mut().map(|(o, t)| (o, t)))
                 });
-            onboard_lanes.catch_up(
-                &mut onboards,
-                active_lanes,
-                vehicle,
-                t_s,
-                cancel,
-            )
+            onboard_lanes.catch_up(&mut onboards, active_lanes, vehicle, t_s, cancel)
         }
         None => {
             for (i, (_, lane)) in group.iter_mut().enumerate() {
@@ -874,8 +869,7 @@ impl<L: Lanes> Period<L> {
                 &lane.efficiency,
                 Some((&totals, &config.wind_m_s)),
             );
-            let lane_of = |v: &[L; 3]| Vector3::from_fn(|k, _| v[k].lane(i));
-            tape.share_rates(lane_of(&k1.velocity_m_s), lane_of(&k1.omega_rad_s));
+            tape.share_rates(lane3(&k1.velocity_m_s, i), lane3(&k1.omega_rad_s, i));
         }
     }
 }

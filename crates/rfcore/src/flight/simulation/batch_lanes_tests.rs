@@ -459,6 +459,27 @@ fn scalar_setting_and_unsupported_batches_fly_every_run_scalar() {
     assert_eq!(BatchLanes::Scalar.name(), "scalar");
 }
 
+/// `true` when `runs`, planned as one group of four, fly their estimators in lanes.
+fn estimators_fly_in_lanes(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    runs: Vec<BatchRun>,
+    config: &SimulationConfig,
+) -> bool {
+    let plans = plan(
+        vehicle,
+        actuators,
+        &[1.0; 4],
+        runs,
+        config,
+        BatchLanes::Auto,
+    );
+    let [Plan::Group(group)] = &plans[..] else {
+        panic!("one group of four");
+    };
+    estimators_in_lanes::<F64x4>(group).is_some()
+}
+
 #[test]
 fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
     // RTK (position, velocity, the magnetometer; no dropouts) and motion capture: the group's
@@ -493,19 +514,8 @@ fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
             seed: 5,
             ..Sensing::default()
         });
-        let plans = plan(
-            &vehicle,
-            &actuators,
-            &[1.0; 4],
-            runs(),
-            &config,
-            BatchLanes::Auto,
-        );
-        let [Plan::Group(group)] = &plans[..] else {
-            panic!("one group of four");
-        };
         assert_eq!(
-            estimators_in_lanes::<F64x4>(group).is_some(),
+            estimators_fly_in_lanes(&vehicle, &actuators, runs(), &config),
             in_lanes,
             "{}",
             suite.name()
@@ -553,18 +563,12 @@ fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
             })
             .collect()
     };
-    let plans = plan(
+    assert!(estimators_fly_in_lanes(
         &vehicle,
         &actuators,
-        &[1.0; 4],
         runs(),
-        &config,
-        BatchLanes::Auto,
-    );
-    let [Plan::Group(group)] = &plans[..] else {
-        panic!("one group of four");
-    };
-    assert!(estimators_in_lanes::<F64x4>(group).is_some());
+        &config
+    ));
     let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
     assert_same(&lanes, &scalar);
     assert!(lanes[0].sensing.as_ref().unwrap().imu_samples > 6_000);

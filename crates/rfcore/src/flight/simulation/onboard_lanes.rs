@@ -92,28 +92,16 @@ impl<L: Lanes> OnboardLanes<L> {
         }
     }
 
-    /// The `k`-th reading of every active lane, in lanes (the others take lane `first`'s).
+    /// The `k`-th reading of every active lane, in lanes (the others take lane `first`'s): the
+    /// same kind at the same time in every lane, or the lanes are out of step.
     fn feed(&mut self, k: usize, first: usize, active: Mask) -> Result<()> {
-        let lane = |i: usize| if active & (1 << i) != 0 { i } else { first };
+        let readings = &self.readings;
+        let reading = |i: usize| -> Result<Reading> {
+            let lane = if active & (1 << i) != 0 { i } else { first };
+            readings[lane].get(k).copied().ok_or_else(out_of_step)
+        };
         let zero = [L::splat(0.0); 3];
-        let template = self.readings[first][k];
-        for i in 0..L::WIDTH {
-            let r = self.readings[lane(i)].get(k);
-            let same_kind = match (r, &template) {
-                (Some(Reading::Imu(a)), Reading::Imu(b)) => a.time_s == b.time_s,
-                (Some(Reading::Position(a)), Reading::Position(b)) => {
-                    a.valid_at_s == b.valid_at_s
-                        && a.velocity_m_s.is_some() == b.velocity_m_s.is_some()
-                        && a.attitude.is_some() == b.attitude.is_some()
-                }
-                (Some(Reading::Magnetometer(a)), Reading::Magnetometer(b)) => a.time_s == b.time_s,
-                _ => false,
-            };
-            if !same_kind {
-                return Err(out_of_step());
-            }
-        }
-        match template {
+        match reading(first)? {
             Reading::Imu(b) => {
                 let mut imu = ImuLanes {
                     time_s: b.time_s,
@@ -123,12 +111,16 @@ impl<L: Lanes> OnboardLanes<L> {
                     accel_saturated: 0,
                 };
                 for i in 0..L::WIDTH {
-                    if let Some(Reading::Imu(s)) = self.readings[lane(i)].get(k) {
-                        set3(&mut imu.gyro_rad_s, i, &s.gyro_rad_s);
-                        set3(&mut imu.accel_m_s2, i, &s.accel_m_s2);
-                        imu.gyro_saturated |= u32::from(s.gyro_saturated) << i;
-                        imu.accel_saturated |= u32::from(s.accel_saturated) << i;
+                    let Reading::Imu(s) = reading(i)? else {
+                        return Err(out_of_step());
+                    };
+                    if s.time_s != b.time_s {
+                        return Err(out_of_step());
                     }
+                    set3(&mut imu.gyro_rad_s, i, &s.gyro_rad_s);
+                    set3(&mut imu.accel_m_s2, i, &s.accel_m_s2);
+                    imu.gyro_saturated |= u32::from(s.gyro_saturated) << i;
+                    imu.accel_saturated |= u32::from(s.accel_saturated) << i;
                 }
                 self.estimator.push_imu(&imu)
             }
@@ -140,14 +132,21 @@ impl<L: Lanes> OnboardLanes<L> {
                     attitude: b.attitude.map(|_| [L::splat(0.0); 4]),
                 };
                 for i in 0..L::WIDTH {
-                    if let Some(Reading::Position(f)) = self.readings[lane(i)].get(k) {
-                        set3(&mut fix.position_m, i, &f.position_m);
-                        if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
-                            set3(lv, i, &v);
-                        }
-                        if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
-                            set_quat(lq, i, &q);
-                        }
+                    let Reading::Position(f) = reading(i)? else {
+                        return Err(out_of_step());
+                    };
+                    if f.valid_at_s != b.valid_at_s
+                        || f.velocity_m_s.is_some() != b.velocity_m_s.is_some()
+                        || f.attitude.is_some() != b.attitude.is_some()
+                    {
+                        return Err(out_of_step());
+                    }
+                    set3(&mut fix.position_m, i, &f.position_m);
+                    if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
+                        set3(lv, i, &v);
+                    }
+                    if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
+                        set_quat(lq, i, &q);
                     }
                 }
                 self.estimator.push_position(&fix);
@@ -156,9 +155,13 @@ impl<L: Lanes> OnboardLanes<L> {
             Reading::Magnetometer(b) => {
                 let mut field = zero;
                 for i in 0..L::WIDTH {
-                    if let Some(Reading::Magnetometer(m)) = self.readings[lane(i)].get(k) {
-                        set3(&mut field, i, &m.field_ut);
+                    let Reading::Magnetometer(m) = reading(i)? else {
+                        return Err(out_of_step());
+                    };
+                    if m.time_s != b.time_s {
+                        return Err(out_of_step());
                     }
+                    set3(&mut field, i, &m.field_ut);
                 }
                 self.estimator.push_magnetometer(b.time_s, &field);
                 Ok(())

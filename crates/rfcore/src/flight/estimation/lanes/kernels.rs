@@ -10,7 +10,8 @@ use nalgebra::Vector3;
 use crate::flight::estimation::eskf::{ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::lanes::math::{
     add, all, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul,
-    renormalize_fast, rotate, rotation_matrix, scale, select, set_mat, sub, Mask, M3, Q, V3,
+    renormalize_fast, rotate, rotation_matrix, scale, select, select_n, set_mat, sub, Mask, M3, Q,
+    V3,
 };
 use crate::flight::lanes::Lanes;
 
@@ -163,7 +164,6 @@ impl<L: Lanes> NominalLanes<L> {
     /// `next` in the lanes of `mask`, `self` elsewhere.
     #[inline(always)]
     pub(crate) fn select(&self, mask: Mask, next: &NominalLanes<L>) -> NominalLanes<L> {
-        use crate::flight::estimation::lanes::math::select_n;
         if mask == all::<L>() {
             return *next;
         }
@@ -217,7 +217,6 @@ impl<L: Lanes> BlockLanes<L> {
     /// `next` in the lanes of `mask`, `self` elsewhere.
     #[inline(always)]
     pub(crate) fn select(&self, mask: Mask, next: &BlockLanes<L>) -> BlockLanes<L> {
-        use crate::flight::estimation::lanes::math::select_n;
         let (a, b) = (&next.step, &self.step);
         BlockLanes {
             step: StepLanes {

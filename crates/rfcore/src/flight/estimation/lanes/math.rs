@@ -7,6 +7,7 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
+use crate::flight::estimation::eskf::{EXP_COS_SERIES, EXP_SERIES_LIMIT_RAD2, EXP_SINC_SERIES};
 use crate::flight::lanes::Lanes;
 
 /// A 3-vector per lane.
@@ -181,7 +182,7 @@ pub(crate) fn rotation_matrix<L: Lanes>(q: &Q<L>) -> M3<L> {
 #[inline(always)]
 pub(crate) fn exp_quaternion<L: Lanes>(phi: &V3<L>) -> Q<L> {
     let angle2 = norm_squared(phi);
-    if (0..L::WIDTH).any(|i| angle2.lane(i) >= 0.04) {
+    if (0..L::WIDTH).any(|i| angle2.lane(i) >= EXP_SERIES_LIMIT_RAD2) {
         let mut out = [L::splat(0.0); 4];
         for i in 0..L::WIDTH {
             let q = crate::flight::estimation::eskf::exp_quaternion(&lane3(phi, i));
@@ -189,23 +190,8 @@ pub(crate) fn exp_quaternion<L: Lanes>(phi: &V3<L>) -> Q<L> {
         }
         return out;
     }
-    const COS: [f64; 6] = [
-        1.0,
-        -1.0 / 2.0,
-        1.0 / 24.0,
-        -1.0 / 720.0,
-        1.0 / 40_320.0,
-        -1.0 / 3_628_800.0,
-    ];
-    const SINC: [f64; 5] = [
-        1.0 / 2.0,
-        -1.0 / 12.0,
-        1.0 / 240.0,
-        -1.0 / 10_080.0,
-        1.0 / 725_760.0,
-    ];
-    let c = |k: usize| L::splat(COS[k]);
-    let s = |k: usize| L::splat(SINC[k]);
+    let c = |k: usize| L::splat(EXP_COS_SERIES[k]);
+    let s = |k: usize| L::splat(EXP_SINC_SERIES[k]);
     let x2 = L::splat(0.25) * angle2;
     let cos = c(0) + x2 * (c(1) + x2 * (c(2) + x2 * (c(3) + x2 * (c(4) + x2 * c(5)))));
     let sinc = s(0) + x2 * (s(1) + x2 * (s(2) + x2 * (s(3) + x2 * s(4))));

@@ -33,9 +33,9 @@ use nalgebra::{UnitQuaternion, Vector3};
 
 use crate::error::{Result, RfError};
 use crate::flight::estimation::eskf::{skew, ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
+use crate::flight::estimation::estimator::{fusion_slot, queue, Pending, TIME_EPS_S};
 use crate::flight::estimation::{Estimate, EstimatorSettings, FusionCounts};
 use crate::flight::lanes::Lanes;
-use crate::flight::sensors::clock::PERIOD_TOLERANCE;
 use crate::state::RigidBodyState;
 
 use kernels::{
@@ -46,9 +46,6 @@ use math::{
     add, all, cross, exp_quaternion, lane3, lane_quat, norm_squared, quat_mul, renormalize_fast,
     rotate, scale, select, select_n, set3, set_mat, set_quat, splat3, sub, Mask, Q, V3,
 };
-
-/// A time within this of another counts as the same time, s (the scalar estimator's).
-const TIME_EPS_S: f64 = 1e-9;
 
 /// A position source's fix in every lane (one time of validity).
 #[derive(Debug, Clone, Copy)]
@@ -65,12 +62,6 @@ enum Measurement<L> {
     Velocity(V3<L>),
     Attitude(Q<L>),
     Magnetometer(V3<L>),
-}
-
-#[derive(Debug, Clone, Copy)]
-struct Pending<L> {
-    valid_at_s: f64,
-    measurement: Measurement<L>,
 }
 
 /// `L::WIDTH` estimators in lanes (module docs).
@@ -91,7 +82,7 @@ pub(crate) struct EstimatorLanes<L> {
     gyro_clamped: [Mask; 3],
     accel_clamped: [Mask; 3],
     buffer: VecDeque<ImuLanes<L>>,
-    pending: VecDeque<Pending<L>>,
+    pending: VecDeque<Pending<Measurement<L>>>,
     output: NominalLanes<L>,
     newest: Option<ImuLanes<L>>,
     gyro_filtered: V3<L>,
@@ -216,8 +207,10 @@ impl<L: Lanes> EstimatorLanes<L> {
         self.newest = Some(*sample);
         self.buffer.push_back(*sample);
         let corrected = self.advance_horizon(sample.time_s - self.settings.fusion_delay_s);
-        if self.buffer.is_empty() {
-            self.output = self.replayed();
+        // Replayed where a fusion corrected the horizon (or nothing is buffered), advanced one
+        // sample elsewhere (the scalar rule per lane).
+        self.output = if self.buffer.is_empty() || corrected == all::<L>() {
+            self.replayed()
         } else {
             let (advanced, _) = self.output.propagate(
                 &previous,
@@ -226,12 +219,12 @@ impl<L: Lanes> EstimatorLanes<L> {
                 sample.time_s,
                 &self.kinematics,
             );
-            self.output = if corrected == 0 {
+            if corrected == 0 {
                 advanced
             } else {
                 advanced.select(corrected, &self.replayed())
-            };
-        }
+            }
+        };
         self.filter_gyro(sample, sample.time_s - previous.time_s);
         Ok(())
     }
@@ -240,7 +233,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     pub(crate) fn push_position(&mut self, fix: &PositionLanes<L>) {
         let period = self.settings.position_fusion_period_s;
         if period > 0.0 {
-            let slot = (fix.valid_at_s / period + PERIOD_TOLERANCE).floor();
+            let slot = fusion_slot(fix.valid_at_s, period);
             if slot == self.fix_slot {
                 let n =
                     1 + u64::from(fix.velocity_m_s.is_some()) + u64::from(fix.attitude.is_some());
@@ -391,18 +384,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     }
 
     fn queue(&mut self, valid_at_s: f64, measurement: Measurement<L>) {
-        let at = self
-            .pending
-            .iter()
-            .rposition(|p| p.valid_at_s <= valid_at_s)
-            .map_or(0, |i| i + 1);
-        self.pending.insert(
-            at,
-            Pending {
-                valid_at_s,
-                measurement,
-            },
-        );
+        queue(&mut self.pending, valid_at_s, measurement);
     }
 
     /// `Estimator::advance_horizon`: the lanes where a measurement was fused on the way.
@@ -458,17 +440,12 @@ impl<L: Lanes> EstimatorLanes<L> {
 
     /// Every lane's block extended by `step` (a lane without one starts it).
     fn add_to_block(&mut self, step: &StepLanes<L>) {
-        let started = BlockLanes::start(step);
         self.block = Some(match &self.block {
+            Some(block) if self.block_lanes == all::<L>() => block.extended(step),
             Some(block) if self.block_lanes != 0 => {
-                let extended = block.extended(step);
-                if self.block_lanes == all::<L>() {
-                    extended
-                } else {
-                    started.select(self.block_lanes, &extended)
-                }
+                BlockLanes::start(step).select(self.block_lanes, &block.extended(step))
             }
-            _ => started,
+            _ => BlockLanes::start(step),
         });
         self.block_lanes = all::<L>();
     }

@@ -32,6 +32,31 @@ fn same(a: f64, b: f64, what: &str, t: f64, lane: usize) {
     );
 }
 
+/// Every field of two estimates equal bit for bit.
+fn same_estimate(a: &Estimate, b: &Estimate, what: &str, t: f64, lane: usize) {
+    same(a.time_s, b.time_s, &format!("{what} time"), t, lane);
+    let vectors = [
+        (a.state.position_m, b.state.position_m, "position"),
+        (a.state.velocity_m_s, b.state.velocity_m_s, "velocity"),
+        (a.state.omega_rad_s, b.state.omega_rad_s, "rate"),
+        (a.gyro_rad_s, b.gyro_rad_s, "gyro"),
+        (a.accel_m_s2, b.accel_m_s2, "accel"),
+    ];
+    for (x, y, name) in vectors {
+        for k in 0..3 {
+            same(x[k], y[k], &format!("{what} {name}"), t, lane);
+        }
+    }
+    for k in 0..4 {
+        let (qa, qb) = (a.state.attitude.coords, b.state.attitude.coords);
+        same(qa[k], qb[k], &format!("{what} attitude"), t, lane);
+    }
+    assert_eq!(
+        a.gyro_saturated, b.gyro_saturated,
+        "{what} at {t} s, lane {lane}"
+    );
+}
+
 /// Flies `case` in lanes and in four scalar estimators, checking them equal after every IMU
 /// sample; the lanes' counts and the lanes' estimator.
 fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
@@ -138,57 +163,10 @@ fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
         lanes.estimates_at(t + 1.3e-3, &mut carried);
         for (i, e) in scalar.iter().enumerate().take(live) {
             let b = e.estimate().carried(settings.gravity_m_s2, t + 1.3e-3);
-            let a = carried[i];
-            same(a.time_s, b.time_s, "carried time", t, i);
-            for k in 0..3 {
-                same(
-                    a.state.position_m[k],
-                    b.state.position_m[k],
-                    "carried position",
-                    t,
-                    i,
-                );
-                same(
-                    a.state.velocity_m_s[k],
-                    b.state.velocity_m_s[k],
-                    "carried velocity",
-                    t,
-                    i,
-                );
-                same(a.accel_m_s2[k], b.accel_m_s2[k], "carried accel", t, i);
-            }
-            for k in 0..4 {
-                let (qa, qb) = (a.state.attitude.coords, b.state.attitude.coords);
-                same(qa[k], qb[k], "carried attitude", t, i);
-            }
+            same_estimate(&carried[i], &b, "carried", t, i);
         }
         for (i, e) in scalar.iter().enumerate().take(live) {
-            let (a, b) = (lanes.estimate(i), e.estimate());
-            same(a.time_s, b.time_s, "time", t, i);
-            for k in 0..3 {
-                same(
-                    a.state.position_m[k],
-                    b.state.position_m[k],
-                    "position",
-                    t,
-                    i,
-                );
-                same(
-                    a.state.velocity_m_s[k],
-                    b.state.velocity_m_s[k],
-                    "velocity",
-                    t,
-                    i,
-                );
-                same(a.state.omega_rad_s[k], b.state.omega_rad_s[k], "rate", t, i);
-                same(a.gyro_rad_s[k], b.gyro_rad_s[k], "gyro", t, i);
-                same(a.accel_m_s2[k], b.accel_m_s2[k], "accel", t, i);
-            }
-            for k in 0..4 {
-                let (qa, qb) = (a.state.attitude.coords, b.state.attitude.coords);
-                same(qa[k], qb[k], "attitude", t, i);
-            }
-            assert_eq!(a.gyro_saturated, b.gyro_saturated);
+            same_estimate(&lanes.estimate(i), &e.estimate(), "estimate", t, i);
             let (pa, pb) = (lanes.covariance(i), e.covariance());
             for k in 0..ERROR_DIM * ERROR_DIM {
                 same(pa.as_slice()[k], pb.as_slice()[k], "covariance", t, i);
