@@ -211,6 +211,7 @@ pub struct VehicleLanes<L> {
     inertia: [[L; 3]; 3],
     inertia_inverse: [[L; 3]; 3],
     inverse_mass: L,
+    mass_kg: L,
     weight_n: L,
     linear_drag_n_s_m: L,
     rotational_drag_n_m_s: L,
@@ -233,6 +234,7 @@ impl<L: Lanes> VehicleLanes<L> {
             inertia: m(body.inertia_kg_m2()),
             inertia_inverse: m(body.inertia_inverse()),
             inverse_mass: L::splat(body.inverse_mass()),
+            mass_kg: L::splat(body.mass_kg()),
             weight_n: L::splat(body.mass_kg() * vehicle.gravity_m_s2()),
             linear_drag_n_s_m: L::splat(aero.linear_drag_n_s_m),
             rotational_drag_n_m_s: L::splat(aero.rotational_drag_n_m_s),
@@ -309,12 +311,10 @@ impl<L: Lanes> VehicleLanes<L> {
         }
     }
 
-    /// Newton-Euler under the vehicle wrench ([`Vehicle::wrench_from`] with constant wind).
+    /// The world force of [`Vehicle::wrench_from`] with constant wind: `weight - c_lin air +
+    /// R (0, 0, -T)` (the rotation as nalgebra's `UnitQuaternion * Vector3` writes it).
     #[inline(always)]
-    pub fn derivative(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> BodyLanes<L> {
-        let w = s.omega_rad_s;
-        // Wrench: torque = rotors - c_rot omega; force = weight - c_lin air + R (0, 0, -T).
-        let torque: [L; 3] = each(|i| totals.torque_body_nm[i] - self.rotational_drag_n_m_s * w[i]);
+    pub fn force_world_n(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> [L; 3] {
         let air: [L; 3] = each(|i| s.velocity_m_s[i] - self.wind_m_s[i]);
         let zero = L::splat(0.0);
         let weight = [zero, zero, self.weight_n];
@@ -325,9 +325,36 @@ impl<L: Lanes> VehicleLanes<L> {
         let t0 = cross(&qv, &thrust);
         let t: [L; 3] = each(|i| t0[i] * two);
         let c = cross(&qv, &t);
-        let force: [L; 3] = each(|i| {
-            weight[i] - self.linear_drag_n_s_m * air[i] + (t[i] * q[3] + c[i] + thrust[i])
-        });
+        each(|i| weight[i] - self.linear_drag_n_s_m * air[i] + (t[i] * q[3] + c[i] + thrust[i]))
+    }
+
+    /// What an accelerometer at the centre of mass measures, body FRD ([`Vehicle::specific_force`]
+    /// in its order of operations: `R^T ((force - weight) / mass)`).
+    #[inline(always)]
+    pub fn specific_force(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> [L; 3] {
+        let force = self.force_world_n(s, totals);
+        let zero = L::splat(0.0);
+        let weight = [zero, zero, self.weight_n];
+        let f: [L; 3] = each(|i| (force[i] - weight[i]) / self.mass_kg);
+        // The inverse (conjugate) rotation, as nalgebra's `UnitQuaternion * Vector3`.
+        let q = &s.attitude;
+        let qv = [-q[0], -q[1], -q[2]];
+        let two = L::splat(2.0);
+        let t0 = cross(&qv, &f);
+        let t: [L; 3] = each(|i| t0[i] * two);
+        let c = cross(&qv, &t);
+        each(|i| t[i] * q[3] + c[i] + f[i])
+    }
+
+    /// Newton-Euler under the vehicle wrench ([`Vehicle::wrench_from`] with constant wind).
+    #[inline(always)]
+    pub fn derivative(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> BodyLanes<L> {
+        let w = s.omega_rad_s;
+        // Wrench: torque = rotors - c_rot omega; force = weight - c_lin air + R (0, 0, -T).
+        let torque: [L; 3] = each(|i| totals.torque_body_nm[i] - self.rotational_drag_n_m_s * w[i]);
+        let zero = L::splat(0.0);
+        let q = &s.attitude;
+        let force = self.force_world_n(s, totals);
         // Newton-Euler.
         let j = &self.inertia;
         let j_omega: [L; 3] = each(|r| j[r][0] * w[0] + j[r][1] * w[1] + j[r][2] * w[2]);

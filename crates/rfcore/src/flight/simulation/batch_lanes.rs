@@ -57,6 +57,7 @@ use crate::flight::simulation::onboard_lanes::OnboardLanes;
 use crate::flight::simulation::recording::{records, NoObserver, Trajectory};
 use crate::flight::simulation::step::{located_divergence, push_node};
 use crate::flight::simulation::tape::Tape;
+use crate::flight::simulation::tape_lanes::TapeLanes;
 use crate::flight::vehicle::{RotorTotals, Vehicle};
 use crate::state::ControllerInput;
 
@@ -373,37 +374,48 @@ fn fly_group_lanes<L: Lanes>(
     for (i, (_, lane)) in group.iter_mut().enumerate() {
         body.set(i, &lane.run.x0);
         lane.run.controller.reset();
-        // The scalar driver's start: the tape's first node, the sensors' samples at 0.
-        if let Some((_, tape)) = lane.onboard.as_mut() {
+    }
+    let mut onboard_lanes = onboard_in_lanes::<L>(&group, m);
+    let mut period = Period::<L>::new(vehicle, actuators, &group);
+    // The scalar driver's start: the tape's first node, the sensors' samples at 0.
+    match onboard_lanes.as_mut() {
+        Some(onboard_lanes) => {
+            let tape = onboard_lanes.tape_mut();
             tape.clear();
-            let x0 = lane.run.x0;
-            let channels = lane.actuators.state();
-            push_node(
-                tape,
-                vehicle,
-                config,
-                0.0,
-                &x0,
-                &lane.actuators,
-                channels,
-                &lane.efficiency,
-                None,
-            );
+            period.push_end_node(tape, &model, 0.0, &body);
+        }
+        None => {
+            for (_, lane) in group.iter_mut() {
+                if let Some((_, tape)) = lane.onboard.as_mut() {
+                    tape.clear();
+                    let x0 = lane.run.x0;
+                    let channels = lane.actuators.state();
+                    push_node(
+                        tape,
+                        vehicle,
+                        config,
+                        0.0,
+                        &x0,
+                        &lane.actuators,
+                        channels,
+                        &lane.efficiency,
+                        None,
+                    );
+                }
+            }
         }
     }
-    let mut onboard_lanes = estimators_in_lanes::<L>(&group);
     catch_up(
         &mut group,
         onboard_lanes.as_mut(),
         &[true; WIDTH],
-        vehicle,
+        (vehicle, &model),
         0.0,
         cancel,
     )?;
     let mut active = [true; WIDTH];
     let mut commands = vec![0.0; count * WIDTH];
     let mut rotor_thrust = vec![0.0; m];
-    let mut period = Period::<L>::new(vehicle, actuators, &group);
     for k in 0..=steps {
         cancel.check()?;
         let t = config.step_time(k);
@@ -475,13 +487,14 @@ fn fly_group_lanes<L: Lanes>(
             &commands,
             &mut body,
             &mut group,
+            onboard_lanes.as_mut().map(|o| o.tape_mut()),
             &mut active,
         );
         catch_up(
             &mut group,
             onboard_lanes.as_mut(),
             &active,
-            vehicle,
+            (vehicle, &model),
             t_next,
             cancel,
         )?;
@@ -505,26 +518,26 @@ fn fly_group_lanes<L: Lanes>(
         .collect())
 }
 
-/// The group's estimators in lanes when its runs fly on sensors that share one schedule
-/// ([`OnboardLanes::new`]); `None` without sensing or when they do not (each run's own
-/// estimator then).
-fn estimators_in_lanes<L: Lanes>(group: &[(usize, Lane)]) -> Option<OnboardLanes<L>> {
+/// The group's sensors and estimators in lanes when its runs fly on sensors that share one
+/// schedule ([`OnboardLanes::new`], its tape with the `rotors` thrusts); `None` without sensing or
+/// when they do not (each run's own estimator and tape then).
+fn onboard_in_lanes<L: Lanes>(group: &[(usize, Lane)], rotors: usize) -> Option<OnboardLanes<L>> {
     let onboards: Vec<&Onboard> = group
         .iter()
         .filter_map(|(_, lane)| lane.onboard.as_ref().map(|(onboard, _)| onboard))
         .collect();
     let starts: Vec<_> = group.iter().map(|(_, lane)| lane.run.x0).collect();
-    OnboardLanes::new(&onboards, &starts)
+    OnboardLanes::new(&onboards, &starts, rotors)
 }
 
 /// Every active run's sensors take their samples up to `t_s`, and its estimator reads them: in
-/// lanes (`onboard_lanes`) or each run's own.
+/// lanes (`onboard_lanes`, from the group's tape) or each run's own (from its own tape).
 #[inline(always)]
 fn catch_up<L: Lanes>(
     group: &mut [(usize, Lane)],
     onboard_lanes: Option<&mut OnboardLanes<L>>,
     active: &[bool; WIDTH],
-    vehicle: &Vehicle,
+    (vehicle, model): (&Vehicle, &VehicleLanes<L>),
     t_s: f64,
     cancel: &Cancel,
 ) -> Result<()> {
@@ -534,12 +547,11 @@ fn catch_up<L: Lanes>(
                 .filter(|&i| active[i])
                 .fold(0, |m, i| m | (1 << i));
             let mut runs = group.iter_mut();
-            let mut onboards: [Option<(&mut Onboard, &mut Tape)>; WIDTH] =
-                std::array::from_fn(|_| {
-                    runs.next()
-                        .and_then(|(_, lane)| lane.onboard.as_mut().map(|(o, t)| (o, t)))
-                });
-            onboard_lanes.catch_up(&mut onboards, active_lanes, vehicle, t_s, cancel)
+            let mut onboards: [Option<&mut Onboard>; WIDTH] = std::array::from_fn(|_| {
+                runs.next()
+                    .and_then(|(_, lane)| lane.onboard.as_mut().map(|(o, _)| o))
+            });
+            onboard_lanes.catch_up(&mut onboards, active_lanes, model, t_s, cancel)
         }
         None => {
             for (i, (_, lane)) in group.iter_mut().enumerate() {
@@ -675,8 +687,10 @@ impl<L: Lanes> Period<L> {
         commands: &[f64],
         body: &mut BodyLanes<L>,
         group: &mut [(usize, Lane)],
+        mut tape_lanes: Option<&mut TapeLanes<L>>,
         active: &mut [bool; WIDTH],
     ) {
+        let tape_lanes_used = tape_lanes.is_some();
         let m = self.target_lanes.len();
         for (i, (_, lane)) in group.iter().enumerate() {
             lane.actuators
@@ -691,7 +705,9 @@ impl<L: Lanes> Period<L> {
         let decays = [1.0, half_decay, half_decay * half_decay];
         let mut start_totals: Option<TotalsLanes<L>> = None;
         let sensing = config.sensing.is_some();
-        if sensing {
+        if let Some(tape) = tape_lanes.as_mut() {
+            tape.clear();
+        } else if sensing {
             for (_, lane) in group.iter_mut() {
                 if let Some((_, tape)) = lane.onboard.as_mut() {
                     tape.clear();
@@ -729,15 +745,18 @@ impl<L: Lanes> Period<L> {
                 let next = if sensing {
                     // The first RK4 stage is the dynamics the tape extends a node with.
                     let k1 = model.derivative(body, &totals[0]);
-                    self.push_nodes(
-                        vehicle,
-                        config,
-                        (a, end),
-                        body,
-                        (&totals[0], &k1),
-                        group,
-                        active,
-                    );
+                    match tape_lanes.as_mut() {
+                        Some(tape) => self.push_start_node(tape, a, body, &totals[0], &k1),
+                        None => self.push_nodes(
+                            vehicle,
+                            config,
+                            (a, end),
+                            body,
+                            (&totals[0], &k1),
+                            group,
+                            active,
+                        ),
+                    }
                     model.rk4_step_from(body, &k1, len, &totals)
                 } else {
                     model.rk4_step(body, len, &totals)
@@ -794,11 +813,14 @@ impl<L: Lanes> Period<L> {
                 }
             }
         }
+        if let Some(tape) = tape_lanes {
+            self.push_end_node(tape, model, t_next, body);
+        }
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if active[i] {
                 self.load_channels(i, &mut lane.actuators);
                 // The period's end node (the scalar integrator's last), where a sample reads it.
-                if let Some((onboard, tape)) = lane.onboard.as_mut() {
+                if let (false, Some((onboard, tape))) = (tape_lanes_used, lane.onboard.as_mut()) {
                     if !onboard.samples_due_at_or_after(t_next) {
                         continue;
                     }
@@ -816,6 +838,44 @@ impl<L: Lanes> Period<L> {
                 }
             }
         }
+    }
+
+    /// The group's tape node at the start `a_s` of an RK4 interval (the lanes' `push_nodes`):
+    /// the lanes' state, the channels the interval starts from (the targets for instant rotors)
+    /// with the interval's rotor `totals` there and its first RK4 stage `k1`.
+    #[inline(always)]
+    fn push_start_node(
+        &self,
+        tape: &mut TapeLanes<L>,
+        a_s: f64,
+        body: &BodyLanes<L>,
+        totals: &TotalsLanes<L>,
+        k1: &BodyLanes<L>,
+    ) {
+        let channels = if self.time_constant_s > 0.0 {
+            &self.channel_lanes
+        } else {
+            &self.target_lanes
+        };
+        let efficiency = &self.efficiency_lanes;
+        tape.push(a_s, body, totals, k1, |r| efficiency[r] * channels[r]);
+    }
+
+    /// The group's tape node at `t_s` where the lanes are at `body` with the channels where they
+    /// are (the start of a flight, the end of a period: the scalar `push_node` computing the
+    /// totals and the dynamics there).
+    #[inline(always)]
+    fn push_end_node(
+        &self,
+        tape: &mut TapeLanes<L>,
+        model: &VehicleLanes<L>,
+        t_s: f64,
+        body: &BodyLanes<L>,
+    ) {
+        let totals = self.totals(&self.channel_lanes);
+        let k1 = model.derivative(body, &totals);
+        let (channels, efficiency) = (&self.channel_lanes, &self.efficiency_lanes);
+        tape.push(t_s, body, &totals, &k1, |r| efficiency[r] * channels[r]);
     }
 
     /// Each active lane's tape node at the start `a_s` of an RK4 interval `[a_s, end_s)` where a

@@ -477,7 +477,7 @@ fn estimators_fly_in_lanes(
     let [Plan::Group(group)] = &plans[..] else {
         panic!("one group of four");
     };
-    estimators_in_lanes::<F64x4>(group).is_some()
+    onboard_in_lanes::<F64x4>(group, 4).is_some()
 }
 
 #[test]
@@ -572,4 +572,52 @@ fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
     let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
     assert_same(&lanes, &scalar);
     assert!(lanes[0].sensing.as_ref().unwrap().imu_samples > 6_000);
+}
+
+#[test]
+fn the_group_schedule_passes_on_when_its_first_run_ends() {
+    // The group's sensor schedule is read from its first flying run and the rotor-speed clock
+    // from its first run that reads rotor speeds: here run 0 (which does not) loses a rotor and
+    // diverges, so the schedule passes to run 1, which reads rotor speeds as run 3 does; the
+    // lanes still fly every run as the scalar driver does.
+    let (airframe, vehicle, actuators, hover) = lagged_quad();
+    let mut config = SimulationConfig::new(0.0025, 2, 1.5);
+    config.sensing = Some(Sensing {
+        seed: 5,
+        ..Sensing::default()
+    });
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| {
+                let law = hover_feedback(&airframe, 10.0);
+                let controller: Box<dyn Controller> = if k % 2 == 1 {
+                    Box::new(Sampler(law))
+                } else {
+                    Box::new(law)
+                };
+                BatchRun {
+                    controller,
+                    initial_command: Some(vec![hover; 4]),
+                    x0: start(k),
+                    faults: vec![RotorFault {
+                        rotor: 0,
+                        time_s: 0.30013,
+                        efficiency: if k == 0 { 0.0 } else { 1.0 },
+                    }],
+                }
+            })
+            .collect()
+    };
+    assert!(estimators_fly_in_lanes(
+        &vehicle,
+        &actuators,
+        runs(),
+        &config
+    ));
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    assert!(lanes[0].divergence.is_some(), "a dead rotor diverges");
+    assert!(lanes[1..].iter().all(|t| t.divergence.is_none()));
+    let imu = |t: &Trajectory| t.sensing.as_ref().unwrap().imu_samples;
+    assert!(imu(&lanes[0]) < imu(&lanes[1]), "run 0 stopped sampling");
 }

@@ -58,6 +58,7 @@ pub mod recording;
 pub mod sensing;
 pub mod step;
 mod tape;
+mod tape_lanes;
 #[cfg(test)]
 mod tests;
 

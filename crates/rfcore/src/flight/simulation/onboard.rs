@@ -24,7 +24,9 @@ use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::flight::actuator::Actuators;
 use crate::flight::estimation::{Estimate, Estimator, EstimatorSettings, FusionCounts, ERROR_DIM};
-use crate::flight::sensors::{ImuSample, MagnetometerSample, PositionSample, SensorSuite};
+use crate::flight::sensors::{
+    ImuSample, ImuTruth, MagnetometerSample, PositionSample, SensorSuite, SensorSuiteProfile,
+};
 use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
 use crate::flight::simulation::sensing::Sensing;
 use crate::flight::simulation::tape::Tape;
@@ -43,7 +45,7 @@ struct RotorFeedback {
 
 /// Which sensor takes the next sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Next {
+pub(crate) enum Next {
     Imu,
     Position,
     Magnetometer,
@@ -66,6 +68,8 @@ pub(crate) const READINGS_PER_CHUNK: usize = 64;
 /// own estimator is not used.
 pub(crate) struct Onboard {
     name: &'static str,
+    /// The profile the sensors were built from (the runs of a group in lanes share it).
+    profile: SensorSuiteProfile,
     sensors: SensorSuite,
     estimator: Estimator,
     rotor: Option<RotorFeedback>,
@@ -102,6 +106,7 @@ impl Onboard {
         let tape = Tape::new(if rotor_feedback { rotors } else { 0 });
         let onboard = Onboard {
             name: sensing.name(),
+            profile,
             sensors,
             estimator,
             rotor,
@@ -114,8 +119,10 @@ impl Onboard {
     }
 
     /// The sensor due first at or before `t_end_s` (ties: the one listed first here; the order
-    /// of equal times does not matter to the estimator, which fuses by time of validity).
-    fn next_due(&self, t_end_s: f64) -> Option<Next> {
+    /// of equal times does not matter to the estimator, which fuses by time of validity), with
+    /// the rotor-speed sensor of `rotor` (this run's when it has rotor feedback; a group flown
+    /// in lanes passes its first run with rotor feedback, whose clock every such run shares).
+    pub(crate) fn next_due(&self, rotor: Option<&Onboard>, t_end_s: f64) -> Option<Next> {
         let s = &self.sensors;
         let mut best: Option<(f64, Next)> = None;
         let mut consider = |due: bool, time: f64, which: Next| {
@@ -135,15 +142,89 @@ impl Onboard {
                 Next::Magnetometer,
             );
         }
-        if self.rotor.is_some() {
-            consider(
-                s.rotor_speed.is_due(t_end_s),
-                s.rotor_speed.next_sample_time_s(),
-                Next::RotorSpeed,
-            );
+        if let Some(r) = rotor {
+            let r = &r.sensors.rotor_speed;
+            consider(r.is_due(t_end_s), r.next_sample_time_s(), Next::RotorSpeed);
         }
         consider(s.imu.is_due(t_end_s), s.imu.next_sample_time_s(), Next::Imu);
         best.map(|(_, which)| which)
+    }
+
+    /// The time of the next sample of `which`.
+    pub(crate) fn next_sample_time_s(&self, which: Next) -> f64 {
+        let s = &self.sensors;
+        match which {
+            Next::Imu => s.imu.next_sample_time_s(),
+            Next::Position => s.position.next_sample_time_s(),
+            Next::Magnetometer => s
+                .magnetometer
+                .as_ref()
+                .map_or(f64::INFINITY, |m| m.next_sample_time_s()),
+            Next::RotorSpeed => s.rotor_speed.next_sample_time_s(),
+        }
+    }
+
+    /// `true` when the run's controller reads rotor speeds (it has rotor feedback).
+    pub(crate) fn reads_rotor_speeds(&self) -> bool {
+        self.rotor.is_some()
+    }
+
+    /// The position source measures `truth` at its next sample time.
+    pub(crate) fn sample_position(&mut self, truth: &RigidBodyState) {
+        self.sensors.position.sample(truth);
+    }
+
+    /// The magnetometer's reading of `truth` at its next sample time (`None` without one).
+    pub(crate) fn sample_magnetometer(
+        &mut self,
+        truth: &RigidBodyState,
+    ) -> Option<MagnetometerSample> {
+        self.sensors.magnetometer.as_mut().map(|m| m.sample(truth))
+    }
+
+    /// The rotor-speed sensor measures the speeds of the rotor thrusts `thrust_n` at its next
+    /// sample time (module docs; nothing without rotor feedback).
+    pub(crate) fn sample_rotor_speeds(
+        &mut self,
+        thrust_n: impl IntoIterator<Item = f64>,
+    ) -> Result<()> {
+        let Some(rotor) = self.rotor.as_mut() else {
+            return Ok(());
+        };
+        for (w, f) in rotor.speeds.iter_mut().zip(thrust_n) {
+            *w = (f.abs() / rotor.coefficient).sqrt().copysign(f);
+        }
+        self.sensors.rotor_speed.sample(&rotor.speeds)
+    }
+
+    /// The IMU's sample of `truth` at its next sample time, counted.
+    pub(crate) fn sample_imu(&mut self, truth: &ImuTruth) -> ImuSample {
+        let sample = self.sensors.imu.sample(truth);
+        self.imu_samples += 1;
+        self.gyro_saturated_samples += u64::from(sample.gyro_saturated);
+        self.accel_saturated_samples += u64::from(sample.accel_saturated);
+        sample
+    }
+
+    /// The oldest position fix that has arrived by `t_s` (call until `None`).
+    pub(crate) fn poll_position(&mut self, t_s: f64) -> Option<PositionSample> {
+        self.sensors.position.poll(t_s)
+    }
+
+    /// The rotor thrusts of the newest rotor-speed reading arrived by `t_s`, for the controller.
+    pub(crate) fn take_rotor_reading(&mut self, t_s: f64) {
+        if let Some(rotor) = self.rotor.as_mut() {
+            if self.sensors.rotor_speed.poll(t_s) {
+                rotor.arrived = true;
+                for (f, &w) in rotor
+                    .thrust_n
+                    .iter_mut()
+                    .zip(self.sensors.rotor_speed.latest())
+                {
+                    *f = rotor.coefficient * w * w.abs();
+                }
+            }
+        }
     }
 
     /// `true` when a sensor takes a sample at a time in `[from_s, to_s)` (the span of a tape
@@ -217,7 +298,8 @@ impl Onboard {
         cancel: &Cancel,
         readings: &mut Vec<Reading>,
     ) -> Result<bool> {
-        while let Some(which) = self.next_due(t_end_s) {
+        let rotor = self.reads_rotor_speeds();
+        while let Some(which) = self.next_due(rotor.then_some(&*self), t_end_s) {
             // A chunk ends only before a sample that makes a reading, so that runs whose readings
             // are the same end their chunks at the same place whatever else they sample (a run
             // whose controller reads rotor speeds has samples the others have not).
@@ -227,55 +309,29 @@ impl Onboard {
                 return Ok(false);
             }
             cancel.check()?;
-            let s = &mut self.sensors;
+            let t = self.next_sample_time_s(which);
             match which {
-                Next::Position => {
-                    let t = s.position.next_sample_time_s();
-                    s.position.sample(&tape.state_at(vehicle, t));
-                }
+                Next::Position => self.sample_position(&tape.state_at(vehicle, t)),
                 Next::Magnetometer => {
-                    if let Some(m) = s.magnetometer.as_mut() {
-                        let t = m.next_sample_time_s();
-                        readings.push(Reading::Magnetometer(m.sample(&tape.state_at(vehicle, t))));
+                    if let Some(m) = self.sample_magnetometer(&tape.state_at(vehicle, t)) {
+                        readings.push(Reading::Magnetometer(m));
                     }
                 }
-                Next::RotorSpeed => {
-                    if let Some(rotor) = self.rotor.as_mut() {
-                        let t = s.rotor_speed.next_sample_time_s();
-                        for (w, &f) in rotor.speeds.iter_mut().zip(tape.thrust_at(t)) {
-                            *w = (f.abs() / rotor.coefficient).sqrt().copysign(f);
-                        }
-                        s.rotor_speed.sample(&rotor.speeds)?;
-                    }
-                }
+                Next::RotorSpeed => self.sample_rotor_speeds(tape.thrust_at(t).iter().copied())?,
                 Next::Imu => {
-                    let t = s.imu.next_sample_time_s();
-                    while let Some(fix) = s.position.poll(t) {
+                    while let Some(fix) = self.poll_position(t) {
                         readings.push(Reading::Position(fix));
                     }
-                    let sample = s.imu.sample(&tape.imu_truth_at(vehicle, t));
-                    self.imu_samples += 1;
-                    self.gyro_saturated_samples += u64::from(sample.gyro_saturated);
-                    self.accel_saturated_samples += u64::from(sample.accel_saturated);
-                    readings.push(Reading::Imu(sample));
+                    readings.push(Reading::Imu(
+                        self.sample_imu(&tape.imu_truth_at(vehicle, t)),
+                    ));
                 }
             }
         }
-        while let Some(fix) = self.sensors.position.poll(t_end_s) {
+        while let Some(fix) = self.poll_position(t_end_s) {
             readings.push(Reading::Position(fix));
         }
-        if let Some(rotor) = self.rotor.as_mut() {
-            if self.sensors.rotor_speed.poll(t_end_s) {
-                rotor.arrived = true;
-                for (f, &w) in rotor
-                    .thrust_n
-                    .iter_mut()
-                    .zip(self.sensors.rotor_speed.latest())
-                {
-                    *f = rotor.coefficient * w * w.abs();
-                }
-            }
-        }
+        self.take_rotor_reading(t_end_s);
         Ok(true)
     }
 
@@ -351,6 +407,11 @@ impl Onboard {
     /// The estimator settings of the run's sensors.
     pub(crate) fn estimator_settings(&self) -> &EstimatorSettings {
         self.estimator.settings()
+    }
+
+    /// The profile of the run's sensors.
+    pub(crate) fn profile(&self) -> &SensorSuiteProfile {
+        &self.profile
     }
 
     /// `true` when the run's position source may drop fixes at random (its schedule is then

@@ -1,172 +1,215 @@
-//! The estimators of a group flown in lanes, in lanes ([`EstimatorLanes`]): each run's sensors
-//! stay its own ([`Onboard`], read from its own tape), and the group's estimators take the
-//! runs' readings together, one lane per run. The runs of a group fly one sensor suite, so their
-//! readings come at the same times in the same order (the module docs of
+//! The sensors and estimators of a group flown in lanes ([`OnboardLanes`]): each run's sensors
+//! stay its own ([`Onboard`]: its own noise streams, biases and delays), read on one schedule
+//! from the group's tape in lanes ([`TapeLanes`]), and the group's estimators take the runs'
+//! readings together in lanes ([`EstimatorLanes`]), one lane per run. The runs of a group fly one
+//! sensor suite, so their samples come at the same times in the same order (the module docs of
 //! [`crate::flight::estimation::lanes`]); a suite whose position fixes drop out at random does
-//! not, and its runs keep their scalar estimators ([`OnboardLanes::new`] declines).
+//! not, and its runs keep their scalar estimators and tapes ([`OnboardLanes::new`] declines).
+
+use nalgebra::Vector3;
 
 use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 use crate::flight::estimation::lanes::kernels::ImuLanes;
-use crate::flight::estimation::lanes::math::{set3, set_quat, Mask};
+use crate::flight::estimation::lanes::math::{all, set3, set_quat, splat3, Mask, V3};
 use crate::flight::estimation::lanes::{EstimatorLanes, PositionLanes};
 use crate::flight::estimation::Estimate;
-use crate::flight::lanes::Lanes;
-use crate::flight::simulation::onboard::{row, Onboard, Reading};
+use crate::flight::lanes::{Lanes, VehicleLanes};
+use crate::flight::simulation::onboard::{row, Next, Onboard};
 use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
-use crate::flight::simulation::tape::Tape;
-use crate::flight::vehicle::Vehicle;
+use crate::flight::simulation::tape_lanes::TapeLanes;
 use crate::state::RigidBodyState;
 
 pub(crate) struct OnboardLanes<L> {
     estimator: EstimatorLanes<L>,
-    /// Each lane's readings of the current chunk.
-    readings: Vec<Vec<Reading>>,
+    /// The group's truth between nodes, for every run's sensors.
+    tape: TapeLanes<L>,
     /// Each lane's estimate at the current control step.
     estimates: Vec<Estimate>,
 }
 
 impl<L: Lanes> OnboardLanes<L> {
     /// The group's estimators in lanes, lane `i` starting from `starts[i]` with the settings of
-    /// `onboards[i]`; `None` when the lanes cannot share one schedule (a position source that
-    /// drops fixes, or settings that differ) or there is not one run per lane.
-    pub(crate) fn new(onboards: &[&Onboard], starts: &[RigidBodyState]) -> Option<Self> {
+    /// `onboards[i]`, and its tape (with `rotors` thrusts per node when a run reads rotor
+    /// speeds); `None` when the lanes cannot share one schedule (a position source that drops
+    /// fixes, or sensor profiles or estimator settings that differ) or there is not one run per
+    /// lane.
+    pub(crate) fn new(
+        onboards: &[&Onboard],
+        starts: &[RigidBodyState],
+        rotors: usize,
+    ) -> Option<Self> {
         let first = onboards.first()?;
         if onboards.len() != L::WIDTH
-            || onboards
-                .iter()
-                .any(|o| o.drops_fixes() || o.estimator_settings() != first.estimator_settings())
+            || onboards.iter().any(|o| {
+                o.drops_fixes()
+                    || o.profile() != first.profile()
+                    || o.estimator_settings() != first.estimator_settings()
+            })
         {
             return None;
         }
         let estimator = EstimatorLanes::new(*first.estimator_settings(), starts).ok()?;
+        let feedback = onboards.iter().any(|o| o.reads_rotor_speeds());
         Some(OnboardLanes {
             estimator,
-            readings: vec![Vec::new(); L::WIDTH],
+            tape: TapeLanes::new(if feedback { rotors } else { 0 }),
             estimates: Vec::with_capacity(L::WIDTH),
         })
     }
 
-    /// [`Onboard::catch_up`] for the lanes of `active` (the runs still flying): each run takes its
-    /// samples up to `t_end_s` from its tape, a chunk at a time, and the estimators read the
-    /// chunk's readings in lanes. A lane not in `active` reads lane `first active`'s values and
-    /// counts nothing.
+    /// The group's tape (the runs' truth between nodes, in lanes), which the integrator writes.
+    pub(crate) fn tape_mut(&mut self) -> &mut TapeLanes<L> {
+        &mut self.tape
+    }
+
+    /// [`Onboard::catch_up`] for the lanes of `active` (the runs still flying), each run's
+    /// sensors `runs[i]` in lane `i`: the runs share their sensors' clocks, so one schedule
+    /// (the first active run's, with the rotor-speed clock of the first run that reads rotor
+    /// speeds) takes every sample due up to `t_end_s` in time order, the truth there in every
+    /// lane at once from the group's tape, each run's sensor its own sample; the estimators read
+    /// the readings in lanes as they come, in the order the scalar estimator reads them. A lane
+    /// not in `active` reads lane `first active`'s values and counts nothing. Inlined into the
+    /// group's flight, compiled for AVX2 where the CPU has it, as the tape's lanes are.
+    #[inline(always)]
     pub(crate) fn catch_up(
         &mut self,
-        runs: &mut [Option<(&mut Onboard, &mut Tape)>],
+        runs: &mut [Option<&mut Onboard>],
         active: Mask,
-        vehicle: &Vehicle,
+        model: &VehicleLanes<L>,
         t_end_s: f64,
         cancel: &Cancel,
     ) -> Result<()> {
-        let Some(first) = (0..L::WIDTH).find(|&i| active & (1 << i) != 0) else {
+        let flying = |i: usize| active & (1 << i) != 0 && runs[i].is_some();
+        let lanes: Vec<usize> = (0..L::WIDTH).filter(|&i| flying(i)).collect();
+        let Some(&first) = lanes.first() else {
             return Ok(());
         };
+        let rotor = lanes
+            .iter()
+            .copied()
+            .find(|&i| run(runs, i).reads_rotor_speeds());
+        let active = lanes.iter().fold(0, |m, &i| m | (1 << i));
         self.estimator.set_active(active);
         loop {
-            let mut done = None;
-            for (i, run) in runs.iter_mut().enumerate() {
-                self.readings[i].clear();
-                if active & (1 << i) == 0 {
-                    continue;
+            let leader = run(runs, first);
+            let rotor_leader = rotor.map(|i| run(runs, i));
+            let Some(which) = leader.next_due(rotor_leader, t_end_s) else {
+                break;
+            };
+            let t = match (which, rotor_leader) {
+                (Next::RotorSpeed, Some(r)) => r.next_sample_time_s(which),
+                _ => leader.next_sample_time_s(which),
+            };
+            cancel.check()?;
+            match which {
+                Next::Position => {
+                    let truth = self.tape.state_at(t);
+                    for &i in &lanes {
+                        run_mut(runs, i).sample_position(&truth.get(i));
+                    }
                 }
-                let Some((onboard, tape)) = run.as_mut() else {
-                    continue;
-                };
-                let finished =
-                    onboard.take_samples(tape, vehicle, t_end_s, cancel, &mut self.readings[i])?;
-                if *done.get_or_insert(finished) != finished {
-                    return Err(out_of_step());
+                Next::Magnetometer => {
+                    let truth = self.tape.state_at(t);
+                    let mut field = [L::splat(0.0); 3];
+                    for &i in &lanes {
+                        let m = run_mut(runs, i)
+                            .sample_magnetometer(&truth.get(i))
+                            .filter(|m| m.time_s == t)
+                            .ok_or_else(out_of_step)?;
+                        set_lanes(&mut field, i, first, &m.field_ut);
+                    }
+                    self.estimator.push_magnetometer(t, &field);
                 }
-            }
-            let count = self.readings[first].len();
-            if (0..L::WIDTH).any(|i| active & (1 << i) != 0 && self.readings[i].len() != count) {
-                return Err(out_of_step());
-            }
-            for k in 0..count {
-                self.feed(k, first, active)?;
-            }
-            if done != Some(false) {
-                return Ok(());
+                Next::RotorSpeed => {
+                    for &i in &lanes {
+                        let onboard = run_mut(runs, i);
+                        if onboard.reads_rotor_speeds() {
+                            onboard.sample_rotor_speeds(self.tape.thrust_at(t, i))?;
+                        }
+                    }
+                }
+                Next::Imu => {
+                    self.fuse_arrived(runs, &lanes, t)?;
+                    let truth = self.tape.imu_truth_at(model, t);
+                    let zero = [L::splat(0.0); 3];
+                    let mut imu = ImuLanes {
+                        time_s: t,
+                        gyro_rad_s: zero,
+                        accel_m_s2: zero,
+                        gyro_saturated: 0,
+                        accel_saturated: 0,
+                    };
+                    for &i in &lanes {
+                        let s = run_mut(runs, i).sample_imu(&truth.lane(i));
+                        if s.time_s != t {
+                            return Err(out_of_step());
+                        }
+                        set_lanes(&mut imu.gyro_rad_s, i, first, &s.gyro_rad_s);
+                        set_lanes(&mut imu.accel_m_s2, i, first, &s.accel_m_s2);
+                        imu.gyro_saturated |= flag_lanes::<L>(i, first, active, s.gyro_saturated);
+                        imu.accel_saturated |= flag_lanes::<L>(i, first, active, s.accel_saturated);
+                    }
+                    self.estimator.push_imu(&imu)?;
+                }
             }
         }
+        self.fuse_arrived(runs, &lanes, t_end_s)?;
+        for &i in &lanes {
+            run_mut(runs, i).take_rotor_reading(t_end_s);
+        }
+        Ok(())
     }
 
-    /// The `k`-th reading of every active lane, in lanes (the others take lane `first`'s): the
-    /// same kind at the same time in every lane, or the lanes are out of step.
-    fn feed(&mut self, k: usize, first: usize, active: Mask) -> Result<()> {
-        let readings = &self.readings;
-        let reading = |i: usize| -> Result<Reading> {
-            let lane = if active & (1 << i) != 0 { i } else { first };
-            readings[lane].get(k).copied().ok_or_else(out_of_step)
-        };
-        let zero = [L::splat(0.0); 3];
-        match reading(first)? {
-            Reading::Imu(b) => {
-                let mut imu = ImuLanes {
-                    time_s: b.time_s,
-                    gyro_rad_s: zero,
-                    accel_m_s2: zero,
-                    gyro_saturated: 0,
-                    accel_saturated: 0,
-                };
-                for i in 0..L::WIDTH {
-                    let Reading::Imu(s) = reading(i)? else {
-                        return Err(out_of_step());
-                    };
-                    if s.time_s != b.time_s {
-                        return Err(out_of_step());
-                    }
-                    set3(&mut imu.gyro_rad_s, i, &s.gyro_rad_s);
-                    set3(&mut imu.accel_m_s2, i, &s.accel_m_s2);
-                    imu.gyro_saturated |= u32::from(s.gyro_saturated) << i;
-                    imu.accel_saturated |= u32::from(s.accel_saturated) << i;
+    /// Every position fix arrived by `t_s` in the flying `lanes` (the others read the first
+    /// flying lane's), in lanes: the same fixes at the same times of validity in every lane, or
+    /// the lanes are out of step.
+    fn fuse_arrived(
+        &mut self,
+        runs: &mut [Option<&mut Onboard>],
+        lanes: &[usize],
+        t_s: f64,
+    ) -> Result<()> {
+        let first = lanes[0];
+        while let Some(b) = run_mut(runs, first).poll_position(t_s) {
+            let mut fix = PositionLanes {
+                valid_at_s: b.valid_at_s,
+                position_m: splat3(&b.position_m),
+                velocity_m_s: b.velocity_m_s.map(|v| splat3(&v)),
+                attitude: b.attitude.map(|_| [L::splat(0.0); 4]),
+            };
+            if let (Some(q), Some(lq)) = (b.attitude, fix.attitude.as_mut()) {
+                for k in 0..L::WIDTH {
+                    set_quat(lq, k, &q);
                 }
-                self.estimator.push_imu(&imu)
             }
-            Reading::Position(b) => {
-                let mut fix = PositionLanes {
-                    valid_at_s: b.valid_at_s,
-                    position_m: zero,
-                    velocity_m_s: b.velocity_m_s.map(|_| zero),
-                    attitude: b.attitude.map(|_| [L::splat(0.0); 4]),
-                };
-                for i in 0..L::WIDTH {
-                    let Reading::Position(f) = reading(i)? else {
-                        return Err(out_of_step());
-                    };
-                    if f.valid_at_s != b.valid_at_s
-                        || f.velocity_m_s.is_some() != b.velocity_m_s.is_some()
-                        || f.attitude.is_some() != b.attitude.is_some()
-                    {
-                        return Err(out_of_step());
-                    }
-                    set3(&mut fix.position_m, i, &f.position_m);
-                    if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
-                        set3(lv, i, &v);
-                    }
-                    if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
-                        set_quat(lq, i, &q);
-                    }
+            for &i in &lanes[1..] {
+                let f = run_mut(runs, i)
+                    .poll_position(t_s)
+                    .ok_or_else(out_of_step)?;
+                if f.valid_at_s != b.valid_at_s
+                    || f.velocity_m_s.is_some() != b.velocity_m_s.is_some()
+                    || f.attitude.is_some() != b.attitude.is_some()
+                {
+                    return Err(out_of_step());
                 }
-                self.estimator.push_position(&fix);
-                Ok(())
-            }
-            Reading::Magnetometer(b) => {
-                let mut field = zero;
-                for i in 0..L::WIDTH {
-                    let Reading::Magnetometer(m) = reading(i)? else {
-                        return Err(out_of_step());
-                    };
-                    if m.time_s != b.time_s {
-                        return Err(out_of_step());
-                    }
-                    set3(&mut field, i, &m.field_ut);
+                set3(&mut fix.position_m, i, &f.position_m);
+                if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
+                    set3(lv, i, &v);
                 }
-                self.estimator.push_magnetometer(b.time_s, &field);
-                Ok(())
+                if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
+                    set_quat(lq, i, &q);
+                }
             }
+            self.estimator.push_position(&fix);
         }
+        if lanes[1..]
+            .iter()
+            .any(|&i| run_mut(runs, i).poll_position(t_s).is_some())
+        {
+            return Err(out_of_step());
+        }
+        Ok(())
     }
 
     /// Every lane's estimate carried to the control step at `t_s` ([`Onboard::estimate`] per
@@ -188,6 +231,41 @@ impl<L: Lanes> OnboardLanes<L> {
     /// Lane `i`'s counts into `record` (its run's sample counts from `onboard`).
     pub(crate) fn finish(&self, i: usize, onboard: &Onboard, record: &mut SensingRecord) {
         onboard.finish_with(record, self.estimator.counts(i));
+    }
+}
+
+/// Run `i` of a group's lanes (a lane the caller found flying: it has its run's sensors).
+fn run<'a>(runs: &'a [Option<&mut Onboard>], i: usize) -> &'a Onboard {
+    runs[i]
+        .as_deref()
+        .expect("a flying lane has its run's sensors")
+}
+
+fn run_mut<'a>(runs: &'a mut [Option<&mut Onboard>], i: usize) -> &'a mut Onboard {
+    runs[i]
+        .as_deref_mut()
+        .expect("a flying lane has its run's sensors")
+}
+
+/// Sets lane `i` of `v` to `x`; the first flying lane `first` (set before the others) sets
+/// every lane, so that the lanes no longer flying read its values.
+#[inline(always)]
+fn set_lanes<L: Lanes>(v: &mut V3<L>, i: usize, first: usize, x: &Vector3<f64>) {
+    if i == first {
+        *v = splat3(x);
+    } else {
+        set3(v, i, x);
+    }
+}
+
+/// The mask bits a flag of lane `i` sets: lane `i`'s and, for the first flying lane `first`,
+/// those of the lanes not in `active` (which read its values).
+#[inline(always)]
+fn flag_lanes<L: Lanes>(i: usize, first: usize, active: Mask, flag: bool) -> Mask {
+    match (flag, i == first) {
+        (false, _) => 0,
+        (true, true) => (1 << i) | (all::<L>() & !active),
+        (true, false) => 1 << i,
     }
 }
 
