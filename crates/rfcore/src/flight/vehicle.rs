@@ -159,17 +159,28 @@ impl Vehicle {
                 a.rotor_inertia_kg_m2 * rotors.spin_rad_s,
             ));
         }
+        Wrench {
+            force_world_n: self.force_world_n(state, rotors, wind_m_s),
+            torque_body_nm: torque,
+        }
+    }
+
+    /// The force of [`Vehicle::wrench_from`], world NED, N: weight, drag and rotor thrust.
+    #[inline]
+    pub fn force_world_n(
+        &self,
+        state: &RigidBodyState,
+        rotors: &RotorTotals,
+        wind_m_s: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let a = &self.aero;
         let air = state.velocity_m_s - wind_m_s;
         let mut drag_coefficient = a.linear_drag_n_s_m;
         if a.quadratic_drag_n_s2_m2 != 0.0 {
             drag_coefficient += a.quadratic_drag_n_s2_m2 * air.norm();
         }
         let weight = Vector3::new(0.0, 0.0, self.body.mass_kg() * self.gravity_m_s2);
-        Wrench {
-            force_world_n: weight - drag_coefficient * air
-                + state.attitude * Vector3::new(0.0, 0.0, -rotors.thrust_n),
-            torque_body_nm: torque,
-        }
+        weight - drag_coefficient * air + state.attitude * Vector3::new(0.0, 0.0, -rotors.thrust_n)
     }
 }
 
@@ -183,7 +194,7 @@ impl Vehicle {
         wind_m_s: &Vector3<f64>,
     ) -> Vector3<f64> {
         let mass = self.body.mass_kg();
-        let force = self.wrench_from(state, rotors, wind_m_s).force_world_n;
+        let force = self.force_world_n(state, rotors, wind_m_s);
         let weight = Vector3::new(0.0, 0.0, mass * self.gravity_m_s2);
         state.attitude.inverse() * ((force - weight) / mass)
     }

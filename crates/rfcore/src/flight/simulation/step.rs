@@ -294,6 +294,9 @@ impl<'a> Integrator<'a> {
             }
         }
         if let Some(tape) = self.tape.as_mut() {
+            // The totals at the end are the last interval's end totals (the same function of the
+            // same channels and efficiency) unless a fault changed the efficiency there.
+            let wind = config.wind_at(t_next);
             push_node(
                 tape,
                 vehicle,
@@ -303,7 +306,7 @@ impl<'a> Integrator<'a> {
                 actuators,
                 actuators.state(),
                 efficiency,
-                None,
+                start_totals.as_ref().map(|totals| (totals, &wind)),
             );
         }
         None
