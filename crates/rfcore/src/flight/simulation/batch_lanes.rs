@@ -13,23 +13,24 @@
 //! with it.
 //!
 //! # Sensing in lanes
-//! With sensing (`SimulationConfig::sensing`) the truth flies in lanes and so do the runs'
-//! estimators where their sensors share one schedule ([`OnboardLanes`]: every suite whose
-//! position fixes do not drop out at random, i.e. motion capture and RTK; GNSS runs keep their
-//! own estimators). Each run keeps its own sensors ([`Onboard`], scalar, like its controller),
-//! fed from its own tape
-//! of the period's nodes, which the group writes as the scalar integrator does (each RK4
-//! interval's start with the rotor totals the interval starts from, then the period's end),
-//! leaving out the nodes no sample reads: a sample reads the last node at or before its time,
-//! so the node of an interval `[a, b)` is read only when a sensor's clock has a sample in it
-//! (and the period's end node only by a sample due at the period's end); the sensors' clocks
-//! know their sample times in advance (`Onboard::samples_in`). At 400 Hz with 4 substeps and
-//! the IMU at 500 Hz and mocap at 240 Hz, fewer than half the nodes are read.
-//! The tape's nodes are the scalar ones bit for bit (the lanes' states and rotor sums are, and
-//! the rotor thrusts come from the scalar function on the lane's channels), so are the sensor
-//! samples, the estimates and the commands; the tape takes a node's dynamics from the lanes' first
-//! RK4 stage where the scalar integrator shares its first stage's wrench (the same function of
-//! the same inputs).
+//! With sensing (`SimulationConfig::sensing`) the truth flies in lanes. Where the runs' sensors
+//! share one schedule (every suite whose position fixes do not drop out at random, i.e. motion
+//! capture and RTK) so do their truth between nodes, their sensor schedule and their estimators
+//! ([`OnboardLanes`]): the group writes one tape in lanes
+//! ([`crate::flight::simulation::tape_lanes`]: a node at each RK4 interval's start with the
+//! rotor totals the interval starts from and its first RK4 stage, and one at the period's end),
+//! the first flying run's clocks give the sample times, every lane's truth at a sample time is
+//! extended at once, each run's sensor draws its own sample from its own noise streams, and the
+//! estimators read the readings in lanes. Otherwise (GNSS: each run's fixes drop out at random)
+//! each run keeps its own sensors, estimator and tape ([`Onboard`]), which the group writes as
+//! the scalar integrator does, leaving out the nodes no sample reads (a sample reads the last
+//! node at or before its time, so the node of an interval `[a, b)` is read only when a sensor's
+//! clock has a sample in it, and the period's end node only by a sample due at the period's
+//! end: `Onboard::samples_in`). Either tape's nodes are the scalar ones bit for bit (the lanes'
+//! states and rotor sums are, and the rotor thrusts are the scalar products of the lane's
+//! efficiencies and channels), so are the sensor samples, the estimates and the commands; a node's
+//! dynamics are the lanes' first RK4 stage where the scalar integrator shares its first stage's
+//! wrench (the same function of the same inputs).
 //!
 //! # Why the results are the scalar ones
 //! Lane `i` computes what the scalar period ([`crate::flight::simulation::step`]) computes, in

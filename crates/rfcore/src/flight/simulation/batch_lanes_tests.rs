@@ -534,10 +534,10 @@ fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
 
 #[test]
 fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
-    // About 64 IMU samples per control period (31.9 kHz at 500 Hz: a chunk of readings ends
-    // within a period): two runs whose laws read the rotor-speed feedback take rotor-speed
-    // samples the other two do not, and every chunk still ends at the same reading in every
-    // lane (a chunk that ended before a rotor-speed sample put the lanes out of step).
+    // About 64 IMU samples per control period (31.9 kHz at 500 Hz): two runs whose laws read
+    // the rotor-speed feedback take rotor-speed samples the other two do not, on the group's one
+    // schedule (the first version, which took each run's readings in chunks of 64, put the
+    // lanes out of step when a chunk ended before a rotor-speed sample).
     let (airframe, vehicle, actuators, hover) = lagged_quad();
     let mut config = SimulationConfig::new(0.002, 2, 0.2);
     config.sensing = Some(Sensing {

@@ -54,18 +54,19 @@ pub(crate) enum Next {
 
 /// What the estimator reads from the sensors, in the order it reads it.
 #[derive(Debug, Clone, Copy)]
-pub(crate) enum Reading {
+enum Reading {
     Imu(ImuSample),
     Position(PositionSample),
     Magnetometer(MagnetometerSample),
 }
 
 /// Readings taken before they are fed (bounds the buffer of a long control period).
-pub(crate) const READINGS_PER_CHUNK: usize = 64;
+const READINGS_PER_CHUNK: usize = 64;
 
-/// One run's sensors and its estimator. In a group flown in lanes with the estimator in lanes
-/// ([`crate::flight::simulation::onboard_lanes`]) the run's sensors are read from here and its
-/// own estimator is not used.
+/// One run's sensors and its estimator. In a group whose sensors and estimators fly in lanes
+/// ([`crate::flight::simulation::onboard_lanes`]) the run's sensors sample here, one method per
+/// sensor, on the group's schedule and from the group's tape; its own estimator and tape are not
+/// used.
 pub(crate) struct Onboard {
     name: &'static str,
     /// The profile the sensors were built from (the runs of a group in lanes share it).
@@ -283,14 +284,14 @@ impl Onboard {
 
     /// Takes the samples due up to `t_end_s` from `tape`, in time order, each at its own time on
     /// its own clock, appending what the estimator reads to `readings` (a position fix when it
-    /// arrives, the magnetometer, the IMU), stopping before the next reading once there are
+    /// arrives, the magnetometer, the IMU), stopping before the next sample once there are
     /// [`READINGS_PER_CHUNK`]; `true` when every sample up to `t_end_s` is taken (then the
     /// rotor-speed reading due by then is in place too). `cancel` is checked before each sample:
     /// a control period holds `dt_s x imu_rate_hz` IMU samples (a 100 s period at 32 kHz is 3.2
     /// million, about 5 s of filter steps), so the driver's check once per period alone did not
     /// bound the time to stop. A check is one atomic load beside the microseconds of a filter
     /// step.
-    pub(crate) fn take_samples(
+    fn take_samples(
         &mut self,
         tape: &mut Tape,
         vehicle: &Vehicle,
@@ -300,12 +301,7 @@ impl Onboard {
     ) -> Result<bool> {
         let rotor = self.reads_rotor_speeds();
         while let Some(which) = self.next_due(rotor.then_some(&*self), t_end_s) {
-            // A chunk ends only before a sample that makes a reading, so that runs whose readings
-            // are the same end their chunks at the same place whatever else they sample (a run
-            // whose controller reads rotor speeds has samples the others have not).
-            if readings.len() >= READINGS_PER_CHUNK
-                && matches!(which, Next::Imu | Next::Magnetometer)
-            {
+            if readings.len() >= READINGS_PER_CHUNK {
                 return Ok(false);
             }
             cancel.check()?;
