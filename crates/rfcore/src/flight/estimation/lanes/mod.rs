@@ -182,6 +182,27 @@ impl<L: Lanes> EstimatorLanes<L> {
 
     /// `Estimator::push_imu` in every lane.
     pub(crate) fn push_imu(&mut self, sample: &ImuLanes<L>) -> Result<()> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has the features `push_imu_avx2` is compiled for.
+            return unsafe { self.push_imu_avx2(sample) };
+        }
+        self.push_imu_body(sample)
+    }
+
+    /// [`EstimatorLanes::push_imu`] compiled for AVX2 and FMA with the per-sample steps it
+    /// inlines (the horizon, the covariance block, the clamping flags, the output predictor):
+    /// their lane operations outside the kernels otherwise took two SSE2 instructions each (the
+    /// kernels' reason, `kernels::avx2_or_baseline`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn push_imu_avx2(&mut self, sample: &ImuLanes<L>) -> Result<()> {
+        self.push_imu_body(sample)
+    }
+
+    #[inline(always)]
+    fn push_imu_body(&mut self, sample: &ImuLanes<L>) -> Result<()> {
         if let Some(newest) = &self.newest {
             if sample.time_s.is_nan() || sample.time_s <= newest.time_s {
                 return Err(RfError::invalid(
@@ -294,6 +315,24 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// Every lane's estimate carried to the control step at `t_s` into `out` (lane `i`'s is
     /// `self.estimate(i).carried(gravity, t_s)`), computed in lanes.
     pub(crate) fn estimates_at(&self, t_s: f64, out: &mut Vec<Estimate>) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has the features `estimates_at_avx2` is compiled for.
+            return unsafe { self.estimates_at_avx2(t_s, out) };
+        }
+        self.estimates_at_body(t_s, out)
+    }
+
+    /// [`EstimatorLanes::estimates_at`] compiled for AVX2 and FMA (as `push_imu_avx2`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn estimates_at_avx2(&self, t_s: f64, out: &mut Vec<Estimate>) {
+        self.estimates_at_body(t_s, out)
+    }
+
+    #[inline(always)]
+    fn estimates_at_body(&self, t_s: f64, out: &mut Vec<Estimate>) {
         let x = &self.output;
         let (time_s, rate, accel, gyro_saturated, accel_saturated) = match &self.newest {
             Some(s) => {
@@ -326,19 +365,23 @@ impl<L: Lanes> EstimatorLanes<L> {
             attitude = renormalize_fast(&quat_mul(&attitude, &exp_quaternion(&scale(&omega, dtl))));
         }
         out.clear();
-        out.extend((0..L::WIDTH).map(|i| Estimate {
-            time_s: if carried { t_s } else { time_s },
-            state: RigidBodyState {
-                position_m: lane3(&position, i),
-                velocity_m_s: lane3(&velocity, i),
-                attitude: lane_quat(&attitude, i),
-                omega_rad_s: lane3(&omega, i),
-            },
-            gyro_rad_s: lane3(&rate, i),
-            accel_m_s2: lane3(&accel, i),
-            gyro_saturated: gyro_saturated & (1 << i) != 0,
-            accel_saturated: accel_saturated & (1 << i) != 0,
-        }));
+        // A loop of pushes rather than `extend` over a closure, which LLVM left out of line
+        // (compiled for the baseline, outside this AVX2 function).
+        for i in 0..L::WIDTH {
+            out.push(Estimate {
+                time_s: if carried { t_s } else { time_s },
+                state: RigidBodyState {
+                    position_m: lane3(&position, i),
+                    velocity_m_s: lane3(&velocity, i),
+                    attitude: lane_quat(&attitude, i),
+                    omega_rad_s: lane3(&omega, i),
+                },
+                gyro_rad_s: lane3(&rate, i),
+                accel_m_s2: lane3(&accel, i),
+                gyro_saturated: gyro_saturated & (1 << i) != 0,
+                accel_saturated: accel_saturated & (1 << i) != 0,
+            });
+        }
     }
 
     /// Lane `i`'s covariance diagonal (`Estimator::covariance`'s).
@@ -361,6 +404,7 @@ impl<L: Lanes> EstimatorLanes<L> {
         self.saturated_samples[i]
     }
 
+    #[inline(always)]
     fn start(&mut self, sample: &ImuLanes<L>) {
         self.newest = Some(*sample);
         self.horizon_sample = Some(*sample);
@@ -388,6 +432,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     }
 
     /// `Estimator::advance_horizon`: the lanes where a measurement was fused on the way.
+    #[inline(always)]
     fn advance_horizon(&mut self, target_s: f64) -> Mask {
         let mut corrected = 0;
         while let Some(&next) = self.buffer.front() {
@@ -413,6 +458,7 @@ impl<L: Lanes> EstimatorLanes<L> {
         corrected
     }
 
+    #[inline(always)]
     fn propagate_horizon(&mut self, next: &ImuLanes<L>, t_s: f64) {
         let Some(a) = self.horizon_sample else {
             return;
@@ -439,6 +485,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     }
 
     /// Every lane's block extended by `step` (a lane without one starts it).
+    #[inline(always)]
     fn add_to_block(&mut self, step: &StepLanes<L>) {
         self.block = Some(match &self.block {
             Some(block) if self.block_lanes == all::<L>() => block.extended(step),
@@ -530,6 +577,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     }
 
     /// `Estimator::track_clamping` per lane.
+    #[inline(always)]
     fn track_clamping(&mut self, sample: &ImuLanes<L>) {
         let s = &self.settings;
         // (lane, covariance index, sigma) of each switch.
@@ -636,6 +684,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     }
 
     /// The output predictor recomputed from the horizon through every buffered sample.
+    #[inline(always)]
     fn replayed(&self) -> NominalLanes<L> {
         let mut x = self.horizon;
         if let Some(mut a) = self.horizon_sample {
@@ -649,6 +698,7 @@ impl<L: Lanes> EstimatorLanes<L> {
         x
     }
 
+    #[inline(always)]
     fn filter_gyro(&mut self, sample: &ImuLanes<L>, dt_s: f64) {
         let corrected = sub(&sample.gyro_rad_s, &self.output.gyro_bias_rad_s);
         self.gyro_filtered = match self.settings.gyro_cutoff_hz {
