@@ -20,6 +20,9 @@ use crate::flight::simulation::recording::{EstimateRow, SensingRecord};
 use crate::flight::simulation::tape_lanes::TapeLanes;
 use crate::state::RigidBodyState;
 
+/// The most lanes a group has (an AVX2 register of `f64`).
+const MAX_LANES: usize = 4;
+
 pub(crate) struct OnboardLanes<L> {
     estimator: EstimatorLanes<L>,
     /// The group's truth between nodes, for every run's sensors.
@@ -41,6 +44,7 @@ impl<L: Lanes> OnboardLanes<L> {
     ) -> Option<Self> {
         let first = onboards.first()?;
         if onboards.len() != L::WIDTH
+            || L::WIDTH > MAX_LANES
             || onboards.iter().any(|o| {
                 o.drops_fixes()
                     || o.profile() != first.profile()
@@ -81,7 +85,14 @@ impl<L: Lanes> OnboardLanes<L> {
         cancel: &Cancel,
     ) -> Result<()> {
         let flying = |i: usize| active & (1 << i) != 0 && runs[i].is_some();
-        let lanes: Vec<usize> = (0..L::WIDTH).filter(|&i| flying(i)).collect();
+        // The flying lanes' indices, without an allocation per control period.
+        let mut indices = [0; MAX_LANES];
+        let mut count = 0;
+        for i in (0..L::WIDTH).filter(|&i| flying(i)) {
+            indices[count] = i;
+            count += 1;
+        }
+        let lanes = &indices[..count];
         let Some(&first) = lanes.first() else {
             return Ok(());
         };
@@ -105,14 +116,14 @@ impl<L: Lanes> OnboardLanes<L> {
             match which {
                 Next::Position => {
                     let truth = self.tape.state_at(t);
-                    for &i in &lanes {
+                    for &i in lanes {
                         run_mut(runs, i).sample_position(&truth.get(i));
                     }
                 }
                 Next::Magnetometer => {
                     let truth = self.tape.state_at(t);
                     let mut field = [L::splat(0.0); 3];
-                    for &i in &lanes {
+                    for &i in lanes {
                         let m = run_mut(runs, i)
                             .sample_magnetometer(&truth.get(i))
                             .filter(|m| m.time_s == t)
@@ -122,7 +133,7 @@ impl<L: Lanes> OnboardLanes<L> {
                     self.estimator.push_magnetometer(t, &field);
                 }
                 Next::RotorSpeed => {
-                    for &i in &lanes {
+                    for &i in lanes {
                         let onboard = run_mut(runs, i);
                         if onboard.reads_rotor_speeds() {
                             onboard.sample_rotor_speeds(self.tape.thrust_at(t, i))?;
@@ -130,7 +141,7 @@ impl<L: Lanes> OnboardLanes<L> {
                     }
                 }
                 Next::Imu => {
-                    self.fuse_arrived(runs, &lanes, t)?;
+                    self.fuse_arrived(runs, lanes, t)?;
                     let truth = self.tape.imu_truth_at(model, t);
                     let zero = [L::splat(0.0); 3];
                     let mut imu = ImuLanes {
@@ -140,7 +151,7 @@ impl<L: Lanes> OnboardLanes<L> {
                         gyro_saturated: 0,
                         accel_saturated: 0,
                     };
-                    for &i in &lanes {
+                    for &i in lanes {
                         let s = run_mut(runs, i).sample_imu(&truth.lane(i));
                         if s.time_s != t {
                             return Err(out_of_step());
@@ -154,8 +165,8 @@ impl<L: Lanes> OnboardLanes<L> {
                 }
             }
         }
-        self.fuse_arrived(runs, &lanes, t_end_s)?;
-        for &i in &lanes {
+        self.fuse_arrived(runs, lanes, t_end_s)?;
+        for &i in lanes {
             run_mut(runs, i).take_rotor_reading(t_end_s);
         }
         Ok(())
