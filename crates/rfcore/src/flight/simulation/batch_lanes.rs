@@ -863,8 +863,9 @@ impl<L: Lanes> Period<L> {
     }
 
     /// The group's tape node at `t_s` where the lanes are at `body` with the channels where they
-    /// are (the start of a flight, the end of a period: the scalar `push_node` computing the
-    /// totals and the dynamics there).
+    /// are (the start of a flight, the end of a period): the rotor totals and the dynamics
+    /// computed there from the lanes' channels and efficiencies (the values of the scalar
+    /// integrator's node there, which at a period's end reuses its last interval's totals).
     #[inline(always)]
     fn push_end_node(
         &self,

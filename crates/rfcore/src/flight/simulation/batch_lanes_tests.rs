@@ -577,9 +577,9 @@ fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
 #[test]
 fn the_group_schedule_passes_on_when_its_first_run_ends() {
     // The group's sensor schedule is read from its first flying run and the rotor-speed clock
-    // from its first run that reads rotor speeds: here run 0 (which does not) loses a rotor and
-    // diverges, so the schedule passes to run 1, which reads rotor speeds as run 3 does; the
-    // lanes still fly every run as the scalar driver does.
+    // from its first run that reads rotor speeds: here run 0, which reads them, loses a rotor
+    // and diverges, so the schedule passes to run 1 (which does not read them) and the
+    // rotor-speed clock to run 2; the lanes still fly every run as the scalar driver does.
     let (airframe, vehicle, actuators, hover) = lagged_quad();
     let mut config = SimulationConfig::new(0.0025, 2, 1.5);
     config.sensing = Some(Sensing {
@@ -590,7 +590,7 @@ fn the_group_schedule_passes_on_when_its_first_run_ends() {
         (0..4)
             .map(|k| {
                 let law = hover_feedback(&airframe, 10.0);
-                let controller: Box<dyn Controller> = if k % 2 == 1 {
+                let controller: Box<dyn Controller> = if k % 2 == 0 {
                     Box::new(Sampler(law))
                 } else {
                     Box::new(law)
@@ -620,4 +620,55 @@ fn the_group_schedule_passes_on_when_its_first_run_ends() {
     assert!(lanes[1..].iter().all(|t| t.divergence.is_none()));
     let imu = |t: &Trajectory| t.sensing.as_ref().unwrap().imu_samples;
     assert!(imu(&lanes[0]) < imu(&lanes[1]), "run 0 stopped sampling");
+}
+
+#[test]
+fn lanes_fly_the_scalar_sensed_batch_with_instant_rotors_bit_for_bit() {
+    // Rotors without lag: the group's tape nodes take the saturated commands as the channels
+    // (the scalar integrator's constant case), and the period's end node the same totals; a
+    // law that reads the rotor speeds beside three that do not, a fault within a period. One
+    // RK4 interval per period, so that every rotor-speed reading the law gets was taken from
+    // an interval's start node (with four, the 1 kHz readings it gets fall in later intervals).
+    let (airframe, vehicle, _, hover) = lagged_quad();
+    let instant = Lag {
+        time_constant_s: 0.0,
+        rate_limit_per_s: f64::INFINITY,
+    };
+    let actuators = Actuators::FixedPitch(FixedPitch::new(&airframe, instant, 0.0).unwrap());
+    let mut config = SimulationConfig::new(0.0025, 1, 1.0);
+    config.sensing = Some(Sensing {
+        seed: 8,
+        ..Sensing::default()
+    });
+    let runs = || -> Vec<BatchRun> {
+        (0..4)
+            .map(|k| {
+                let law = hover_feedback(&airframe, 10.0);
+                let controller: Box<dyn Controller> = if k == 3 {
+                    Box::new(Sampler(law))
+                } else {
+                    Box::new(law)
+                };
+                BatchRun {
+                    controller,
+                    initial_command: Some(vec![hover; 4]),
+                    x0: start(k),
+                    faults: vec![RotorFault {
+                        rotor: k,
+                        time_s: 0.40021,
+                        efficiency: 0.7,
+                    }],
+                }
+            })
+            .collect()
+    };
+    assert!(estimators_fly_in_lanes(
+        &vehicle,
+        &actuators,
+        runs(),
+        &config
+    ));
+    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
+    assert_same(&lanes, &scalar);
+    assert!(lanes.iter().all(|t| t.divergence.is_none()));
 }

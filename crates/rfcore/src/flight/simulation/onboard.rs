@@ -119,11 +119,12 @@ impl Onboard {
         Ok((onboard, tape))
     }
 
-    /// The sensor due first at or before `t_end_s` (ties: the one listed first here; the order
-    /// of equal times does not matter to the estimator, which fuses by time of validity), with
-    /// the rotor-speed sensor of `rotor` (this run's when it has rotor feedback; a group flown
-    /// in lanes passes its first run with rotor feedback, whose clock every such run shares).
-    pub(crate) fn next_due(&self, rotor: Option<&Onboard>, t_end_s: f64) -> Option<Next> {
+    /// The sensor due first at or before `t_end_s` and the time of its sample (ties: the one
+    /// listed first here; the order of equal times does not matter to the estimator, which fuses
+    /// by time of validity), with the rotor-speed sensor of `rotor` (this run's when it has rotor
+    /// feedback; a group flown in lanes passes its first run with rotor feedback, whose clock
+    /// every such run shares).
+    pub(crate) fn next_due(&self, rotor: Option<&Onboard>, t_end_s: f64) -> Option<(Next, f64)> {
         let s = &self.sensors;
         let mut best: Option<(f64, Next)> = None;
         let mut consider = |due: bool, time: f64, which: Next| {
@@ -148,7 +149,7 @@ impl Onboard {
             consider(r.is_due(t_end_s), r.next_sample_time_s(), Next::RotorSpeed);
         }
         consider(s.imu.is_due(t_end_s), s.imu.next_sample_time_s(), Next::Imu);
-        best.map(|(_, which)| which)
+        best.map(|(t, which)| (which, t))
     }
 
     /// The time of the next sample of `which`.
@@ -300,12 +301,13 @@ impl Onboard {
         readings: &mut Vec<Reading>,
     ) -> Result<bool> {
         let rotor = self.reads_rotor_speeds();
-        while let Some(which) = self.next_due(rotor.then_some(&*self), t_end_s) {
+        // The group's schedule in lanes takes the same samples in the same order
+        // (`OnboardLanes::catch_up`): a change here is a change there.
+        while let Some((which, t)) = self.next_due(rotor.then_some(&*self), t_end_s) {
             if readings.len() >= READINGS_PER_CHUNK {
                 return Ok(false);
             }
             cancel.check()?;
-            let t = self.next_sample_time_s(which);
             match which {
                 Next::Position => self.sample_position(&tape.state_at(vehicle, t)),
                 Next::Magnetometer => {

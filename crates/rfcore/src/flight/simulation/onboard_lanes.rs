@@ -73,7 +73,9 @@ impl<L: Lanes> OnboardLanes<L> {
     /// speeds) takes every sample due up to `t_end_s` in time order, the truth there in every
     /// lane at once from the group's tape, each run's sensor its own sample; the estimators read
     /// the readings in lanes as they come, in the order the scalar estimator reads them. A lane
-    /// not in `active` reads lane `first active`'s values and counts nothing. Inlined into the
+    /// not in `active` reads lane `first active`'s values and counts nothing. The samples and
+    /// their order are those of the scalar `Onboard::take_samples` (a change there is a change
+    /// here). Inlined into the
     /// group's flight, compiled for AVX2 where the CPU has it, as the tape's lanes are.
     #[inline(always)]
     pub(crate) fn catch_up(
@@ -105,19 +107,17 @@ impl<L: Lanes> OnboardLanes<L> {
         loop {
             let leader = run(runs, first);
             let rotor_leader = rotor.map(|i| run(runs, i));
-            let Some(which) = leader.next_due(rotor_leader, t_end_s) else {
+            let Some((which, t)) = leader.next_due(rotor_leader, t_end_s) else {
                 break;
-            };
-            let t = match (which, rotor_leader) {
-                (Next::RotorSpeed, Some(r)) => r.next_sample_time_s(which),
-                _ => leader.next_sample_time_s(which),
             };
             cancel.check()?;
             match which {
                 Next::Position => {
                     let truth = self.tape.state_at(t);
                     for &i in lanes {
-                        run_mut(runs, i).sample_position(&truth.get(i));
+                        let onboard = run_mut(runs, i);
+                        in_step(onboard, which, t)?;
+                        onboard.sample_position(&truth.get(i));
                     }
                 }
                 Next::Magnetometer => {
@@ -136,6 +136,7 @@ impl<L: Lanes> OnboardLanes<L> {
                     for &i in lanes {
                         let onboard = run_mut(runs, i);
                         if onboard.reads_rotor_speeds() {
+                            in_step(onboard, which, t)?;
                             onboard.sample_rotor_speeds(self.tape.thrust_at(t, i))?;
                         }
                     }
@@ -277,6 +278,16 @@ fn flag_lanes<L: Lanes>(i: usize, first: usize, active: Mask, flag: bool) -> Mas
         (false, _) => 0,
         (true, true) => (1 << i) | (all::<L>() & !active),
         (true, false) => 1 << i,
+    }
+}
+
+/// `Ok` when the run's next sample of `which` is at `t_s` (the group's schedule), else the lanes
+/// are out of step.
+fn in_step(onboard: &Onboard, which: Next, t_s: f64) -> Result<()> {
+    if onboard.next_sample_time_s(which) == t_s {
+        Ok(())
+    } else {
+        Err(out_of_step())
     }
 }
 

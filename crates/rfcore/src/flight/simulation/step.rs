@@ -296,7 +296,14 @@ impl<'a> Integrator<'a> {
         if let Some(tape) = self.tape.as_mut() {
             // The totals at the end are the last interval's end totals (the same function of the
             // same channels and efficiency) unless a fault changed the efficiency there.
-            let wind = config.wind_at(t_next);
+            let wind;
+            let known = match &start_totals {
+                Some(totals) => {
+                    wind = config.wind_at(t_next);
+                    Some((totals, &wind))
+                }
+                None => None,
+            };
             push_node(
                 tape,
                 vehicle,
@@ -306,7 +313,7 @@ impl<'a> Integrator<'a> {
                 actuators,
                 actuators.state(),
                 efficiency,
-                start_totals.as_ref().map(|totals| (totals, &wind)),
+                known,
             );
         }
         None

@@ -123,13 +123,12 @@ impl Tape {
 
     /// The index of the last node at or before `t_s` (the first node for an earlier time).
     fn locate(&mut self, t_s: f64) -> usize {
-        if self.cursor >= self.nodes.len() || self.nodes[self.cursor].t_s > t_s {
-            self.cursor = 0;
-        }
-        while self.cursor + 1 < self.nodes.len() && self.nodes[self.cursor + 1].t_s <= t_s {
-            self.cursor += 1;
-        }
-        self.cursor
+        locate(
+            &mut self.cursor,
+            self.nodes.len(),
+            |i| self.nodes[i].t_s,
+            t_s,
+        )
     }
 
     /// The true state at `t_s` (module docs) and the node it extends. The tape must hold a node.
@@ -182,6 +181,25 @@ impl Tape {
         let i = self.locate(t_s);
         &self.thrust_n[i * self.rotors..(i + 1) * self.rotors]
     }
+}
+
+/// The index of the last of `len` nodes (times `time_of(i)`, increasing) at or before `t_s` (the
+/// first node for an earlier time), searched from `cursor` on, which it leaves there: a tape's
+/// samples come in time order.
+#[inline(always)]
+pub(super) fn locate(
+    cursor: &mut usize,
+    len: usize,
+    time_of: impl Fn(usize) -> f64,
+    t_s: f64,
+) -> usize {
+    if *cursor >= len || time_of(*cursor) > t_s {
+        *cursor = 0;
+    }
+    while *cursor + 1 < len && time_of(*cursor + 1) <= t_s {
+        *cursor += 1;
+    }
+    *cursor
 }
 
 #[cfg(test)]

@@ -5,16 +5,16 @@
 //! module docs of `tape` for the Taylor extension, in the same order of operations lane by lane
 //! (checked bit for bit against the scalar tape by the tests).
 //!
-//! Unlike the scalar tape, which writes a node only where one of its run's samples reads it, the
-//! lanes write every node: a node costs one copy of the lanes' state, and a node no sample reads
-//! changes no sample (each reads the last node at or before its time, which the scalar tape
-//! holds too).
+//! The lanes write every node, as the scalar integrator does for a run flown alone (the per-run
+//! tapes of a group whose sensors do not fly in lanes leave out the nodes no sample reads: a
+//! sample reads the last node at or before its time, so such a node changes no sample).
 
 use crate::flight::estimation::lanes::math::{
     each, exp_quaternion, lane3, quat_mul, renormalize_fast, V3,
 };
 use crate::flight::lanes::{BodyLanes, Lanes, TotalsLanes, VehicleLanes};
 use crate::flight::sensors::ImuTruth;
+use crate::flight::simulation::tape::locate;
 
 /// One node of every lane: the state, the rotor totals, and the dynamics there (the first RK4
 /// stage's world acceleration and body angular acceleration).
@@ -100,13 +100,12 @@ impl<L: Lanes> TapeLanes<L> {
     /// The index of the last node at or before `t_s` (the first node for an earlier time).
     #[inline(always)]
     fn locate(&mut self, t_s: f64) -> usize {
-        if self.cursor >= self.nodes.len() || self.nodes[self.cursor].t_s > t_s {
-            self.cursor = 0;
-        }
-        while self.cursor + 1 < self.nodes.len() && self.nodes[self.cursor + 1].t_s <= t_s {
-            self.cursor += 1;
-        }
-        self.cursor
+        locate(
+            &mut self.cursor,
+            self.nodes.len(),
+            |i| self.nodes[i].t_s,
+            t_s,
+        )
     }
 
     /// Every lane's true state at `t_s` and the node it extends (the scalar `Tape::extend`). The
@@ -169,8 +168,10 @@ mod tests {
 
     #[test]
     fn every_lane_reads_the_scalar_tape_bit_for_bit() {
-        // Four tumbling, thrusting, drifting vehicles in wind (one spinning at 40 rad/s, beyond
-        // the exponential's series), two nodes each; samples before, at and between the nodes.
+        // Four tumbling, thrusting, drifting vehicles in wind (one spinning at 500 rad/s, whose
+        // rotation over a sample's offset is beyond the exponential's series: the group takes the
+        // scalar exponential lane by lane there), two nodes each; samples before, at, between
+        // and after the nodes.
         let airframe = crate::fixtures::preset("quad-x");
         let vehicle = Vehicle::new(
             &airframe,
@@ -185,9 +186,9 @@ mod tests {
         let model = VehicleLanes::<F64x4>::new(&vehicle, &wind).unwrap();
         let state = |k: usize, node: usize| RigidBodyState {
             position_m: Vector3::new(1.0 + k as f64, 2.0, -10.0 + node as f64 * 1e-3),
-            velocity_m_s: Vector3::new(2.0, -1.0 * k as f64, 0.5),
+            velocity_m_s: Vector3::new(2.0, -(k as f64), 0.5),
             attitude: UnitQuaternion::from_euler_angles(0.3 * k as f64, -0.2, 1.0 + node as f64),
-            omega_rad_s: Vector3::new(3.0, -2.0, [30.0, 0.0, 40.0, -5.0][k]),
+            omega_rad_s: Vector3::new(3.0, -2.0, [30.0, 0.0, 500.0, -5.0][k]),
         };
         let totals = |k: usize, node: usize| RotorTotals {
             thrust_n: 14.0 + k as f64 + node as f64,
@@ -222,7 +223,9 @@ mod tests {
                 f
             });
         }
-        for t in [0.0, 1e-4, 6.2e-4, 6.25e-4, 1.1e-3] {
+        let series_limit_rad = crate::flight::estimation::eskf::EXP_SERIES_LIMIT_RAD2.sqrt();
+        assert!(500.0 * 4.75e-4 > series_limit_rad && 40.0 * 6.2e-4 < series_limit_rad);
+        for t in [-1e-4, 0.0, 1e-4, 6.2e-4, 6.25e-4, 1.1e-3] {
             let imu = lanes.imu_truth_at(&model, t);
             let states = lanes.state_at(t);
             for (k, tape) in scalar.iter_mut().enumerate() {
