@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 use crate::flight::estimation::lanes::kernels::ImuLanes;
-use crate::flight::estimation::lanes::math::{all, set3, set_quat, splat3, Mask, V3};
+use crate::flight::estimation::lanes::math::{set3, splat3, Mask, V3};
 use crate::flight::estimation::lanes::{EstimatorLanes, PositionLanes};
 use crate::flight::estimation::Estimate;
 use crate::flight::lanes::{Lanes, VehicleLanes};
@@ -144,25 +144,20 @@ impl<L: Lanes> OnboardLanes<L> {
                 Next::Imu => {
                     self.fuse_arrived(runs, lanes, t)?;
                     let truth = self.tape.imu_truth_at(model, t);
-                    let zero = [L::splat(0.0); 3];
-                    let mut imu = ImuLanes {
-                        time_s: t,
-                        gyro_rad_s: zero,
-                        accel_m_s2: zero,
-                        gyro_saturated: 0,
-                        accel_saturated: 0,
-                    };
+                    // Every lane starts as the first flying lane's sample (the lanes no longer
+                    // flying read it); each other flying lane then takes its own.
+                    let mut imu = None;
                     for &i in lanes {
                         let s = run_mut(runs, i).sample_imu(&truth.lane(i));
                         if s.time_s != t {
                             return Err(out_of_step());
                         }
-                        set_lanes(&mut imu.gyro_rad_s, i, first, &s.gyro_rad_s);
-                        set_lanes(&mut imu.accel_m_s2, i, first, &s.accel_m_s2);
-                        imu.gyro_saturated |= flag_lanes::<L>(i, first, active, s.gyro_saturated);
-                        imu.accel_saturated |= flag_lanes::<L>(i, first, active, s.accel_saturated);
+                        imu.get_or_insert_with(|| ImuLanes::splat(&s))
+                            .set_lane(i, &s);
                     }
-                    self.estimator.push_imu(&imu)?;
+                    if let Some(imu) = imu {
+                        self.estimator.push_imu(&imu)?;
+                    }
                 }
             }
         }
@@ -184,34 +179,15 @@ impl<L: Lanes> OnboardLanes<L> {
     ) -> Result<()> {
         let first = lanes[0];
         while let Some(b) = run_mut(runs, first).poll_position(t_s) {
-            let mut fix = PositionLanes {
-                valid_at_s: b.valid_at_s,
-                position_m: splat3(&b.position_m),
-                velocity_m_s: b.velocity_m_s.map(|v| splat3(&v)),
-                attitude: b.attitude.map(|_| [L::splat(0.0); 4]),
-            };
-            if let (Some(q), Some(lq)) = (b.attitude, fix.attitude.as_mut()) {
-                for k in 0..L::WIDTH {
-                    set_quat(lq, k, &q);
-                }
-            }
+            // Every lane starts as the first flying lane's fix (the lanes no longer flying read
+            // it); each other flying lane then takes its own.
+            let mut fix = PositionLanes::splat(&b);
             for &i in &lanes[1..] {
                 let f = run_mut(runs, i)
                     .poll_position(t_s)
+                    .filter(|f| fix.matches(f))
                     .ok_or_else(out_of_step)?;
-                if f.valid_at_s != b.valid_at_s
-                    || f.velocity_m_s.is_some() != b.velocity_m_s.is_some()
-                    || f.attitude.is_some() != b.attitude.is_some()
-                {
-                    return Err(out_of_step());
-                }
-                set3(&mut fix.position_m, i, &f.position_m);
-                if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
-                    set3(lv, i, &v);
-                }
-                if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
-                    set_quat(lq, i, &q);
-                }
+                fix.set_lane(i, &f);
             }
             self.estimator.push_position(&fix);
         }
@@ -267,17 +243,6 @@ fn set_lanes<L: Lanes>(v: &mut V3<L>, i: usize, first: usize, x: &Vector3<f64>) 
         *v = splat3(x);
     } else {
         set3(v, i, x);
-    }
-}
-
-/// The mask bits a flag of lane `i` sets: lane `i`'s and, for the first flying lane `first`,
-/// those of the lanes not in `active` (which read its values).
-#[inline(always)]
-fn flag_lanes<L: Lanes>(i: usize, first: usize, active: Mask, flag: bool) -> Mask {
-    match (flag, i == first) {
-        (false, _) => 0,
-        (true, true) => (1 << i) | (all::<L>() & !active),
-        (true, false) => 1 << i,
     }
 }
 

@@ -10,10 +10,12 @@ use nalgebra::Vector3;
 use crate::flight::estimation::eskf::{ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::lanes::math::{
     add, all, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul,
-    renormalize_fast, rotate, rotation_matrix, scale, select, select_n, set_mat, sub, Mask, M3, Q,
+    renormalize_fast, rotate, rotation_matrix, scale, select, select_n, set3, set_mat, splat3, sub,
+    Mask, M3, Q,
     V3,
 };
 use crate::flight::lanes::Lanes;
+use crate::flight::sensors::ImuSample;
 
 /// Entries of a covariance.
 pub(crate) const ENTRIES: usize = ERROR_DIM * ERROR_DIM;
@@ -29,6 +31,32 @@ pub(crate) struct ImuLanes<L> {
     pub accel_m_s2: V3<L>,
     pub gyro_saturated: Mask,
     pub accel_saturated: Mask,
+}
+
+impl<L: Lanes> ImuLanes<L> {
+    /// `sample` in every lane (lanes are then set one by one, [`ImuLanes::set_lane`]; a lane
+    /// left as it is reads this sample).
+    #[inline(always)]
+    pub(crate) fn splat(sample: &ImuSample) -> Self {
+        let mask = |flag: bool| if flag { all::<L>() } else { 0 };
+        ImuLanes {
+            time_s: sample.time_s,
+            gyro_rad_s: splat3(&sample.gyro_rad_s),
+            accel_m_s2: splat3(&sample.accel_m_s2),
+            gyro_saturated: mask(sample.gyro_saturated),
+            accel_saturated: mask(sample.accel_saturated),
+        }
+    }
+
+    /// Lane `i` set to `sample` (a sample of the same time).
+    #[inline(always)]
+    pub(crate) fn set_lane(&mut self, i: usize, sample: &ImuSample) {
+        set3(&mut self.gyro_rad_s, i, &sample.gyro_rad_s);
+        set3(&mut self.accel_m_s2, i, &sample.accel_m_s2);
+        let bit = |mask: Mask, flag: bool| (mask & !(1 << i)) | (u32::from(flag) << i);
+        self.gyro_saturated = bit(self.gyro_saturated, sample.gyro_saturated);
+        self.accel_saturated = bit(self.accel_saturated, sample.accel_saturated);
+    }
 }
 
 /// [`crate::flight::estimation::NominalState`] per lane.

@@ -26,16 +26,9 @@ fn samples(g: &mut Gaussian, time_s: f64) -> ([ImuSample; W], ImuLanes<L>) {
         gyro_saturated: false,
         accel_saturated: false,
     });
-    let mut lanes = ImuLanes {
-        time_s,
-        gyro_rad_s: [L::splat(0.0); 3],
-        accel_m_s2: [L::splat(0.0); 3],
-        gyro_saturated: 0,
-        accel_saturated: 0,
-    };
+    let mut lanes = ImuLanes::splat(&s[0]);
     for (i, x) in s.iter().enumerate() {
-        set3(&mut lanes.gyro_rad_s, i, &x.gyro_rad_s);
-        set3(&mut lanes.accel_m_s2, i, &x.accel_m_s2);
+        lanes.set_lane(i, x);
     }
     (s, lanes)
 }

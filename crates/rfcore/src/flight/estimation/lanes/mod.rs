@@ -36,6 +36,7 @@ use crate::flight::estimation::eskf::{skew, ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIA
 use crate::flight::estimation::estimator::{fusion_slot, queue, Pending, TIME_EPS_S};
 use crate::flight::estimation::{Estimate, EstimatorSettings, FusionCounts};
 use crate::flight::lanes::Lanes;
+use crate::flight::sensors::PositionSample;
 use crate::state::RigidBodyState;
 
 use kernels::{
@@ -54,6 +55,43 @@ pub(crate) struct PositionLanes<L> {
     pub position_m: V3<L>,
     pub velocity_m_s: Option<V3<L>>,
     pub attitude: Option<Q<L>>,
+}
+
+impl<L: Lanes> PositionLanes<L> {
+    /// `fix` in every lane (lanes are then set one by one, [`PositionLanes::set_lane`]; a lane
+    /// left as it is reads this fix).
+    pub(crate) fn splat(fix: &PositionSample) -> Self {
+        PositionLanes {
+            valid_at_s: fix.valid_at_s,
+            position_m: splat3(&fix.position_m),
+            velocity_m_s: fix.velocity_m_s.map(|v| splat3(&v)),
+            attitude: fix.attitude.map(|q| {
+                let mut lanes = [L::splat(0.0); 4];
+                for i in 0..L::WIDTH {
+                    set_quat(&mut lanes, i, &q);
+                }
+                lanes
+            }),
+        }
+    }
+
+    /// `true` when `fix` has this fix's time of validity and parts (it can share its lanes).
+    pub(crate) fn matches(&self, fix: &PositionSample) -> bool {
+        fix.valid_at_s == self.valid_at_s
+            && fix.velocity_m_s.is_some() == self.velocity_m_s.is_some()
+            && fix.attitude.is_some() == self.attitude.is_some()
+    }
+
+    /// Lane `i` set to `fix` (one that [`PositionLanes::matches`]).
+    pub(crate) fn set_lane(&mut self, i: usize, fix: &PositionSample) {
+        set3(&mut self.position_m, i, &fix.position_m);
+        if let (Some(v), Some(lanes)) = (fix.velocity_m_s, self.velocity_m_s.as_mut()) {
+            set3(lanes, i, &v);
+        }
+        if let (Some(q), Some(lanes)) = (fix.attitude, self.attitude.as_mut()) {
+            set_quat(lanes, i, &q);
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]

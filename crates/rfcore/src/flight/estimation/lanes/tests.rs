@@ -114,49 +114,30 @@ fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
                 assert!(fixes.iter().all(|f| f.is_none()));
                 break;
             };
-            let mut fix = PositionLanes {
-                valid_at_s: first.valid_at_s,
-                position_m: zero,
-                velocity_m_s: first.velocity_m_s.map(|_| zero),
-                attitude: first.attitude.map(|_| [L::splat(0.0); 4]),
-            };
+            let mut fix = PositionLanes::splat(&first);
             for (i, f) in fixes.into_iter().enumerate() {
                 let mut f = f.unwrap();
                 if i == 1 && (case.outlier_s.0..case.outlier_s.1).contains(&f.valid_at_s) {
                     f.position_m.x += 5.0;
                 }
                 scalar[i].push_position(&f);
-                set3(&mut fix.position_m, i, &f.position_m);
-                if let (Some(v), Some(lv)) = (f.velocity_m_s, fix.velocity_m_s.as_mut()) {
-                    set3(lv, i, &v);
-                }
-                if let (Some(q), Some(lq)) = (f.attitude, fix.attitude.as_mut()) {
-                    set_quat(lq, i, &q);
-                }
+                fix.set_lane(i, &f);
             }
             lanes.push_position(&fix);
         }
-        let mut imu = ImuLanes {
-            time_s: t,
-            gyro_rad_s: zero,
-            accel_m_s2: zero,
-            gyro_saturated: 0,
-            accel_saturated: 0,
-        };
+        let mut imu: Option<ImuLanes<L>> = None;
         for (i, s) in sensors.iter_mut().enumerate() {
             let mut truth = case.motions[i].imu_truth_at(t);
             truth.omega_rad_s *=
                 1.0 + case.wobble[i] * (2.0 * std::f64::consts::PI * 0.7 * t).sin();
             let sample = s.imu.sample(&truth);
-            set3(&mut imu.gyro_rad_s, i, &sample.gyro_rad_s);
-            set3(&mut imu.accel_m_s2, i, &sample.accel_m_s2);
-            imu.gyro_saturated |= u32::from(sample.gyro_saturated) << i;
-            imu.accel_saturated |= u32::from(sample.accel_saturated) << i;
+            imu.get_or_insert_with(|| ImuLanes::splat(&sample))
+                .set_lane(i, &sample);
             if stopped.is_none() || i != 3 {
                 scalar[i].push_imu(&sample).unwrap();
             }
         }
-        lanes.push_imu(&imu).unwrap();
+        lanes.push_imu(&imu.unwrap()).unwrap();
         let live = if stopped.is_some() { 3 } else { W };
         // The estimates carried to a control step 1.3 ms on, in lanes, against the scalar carry.
         let mut carried = Vec::new();
