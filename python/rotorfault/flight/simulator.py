@@ -365,9 +365,10 @@ def simulate_batch(
     :func:`rotorfault.studies.record_batch`. ``lanes``: ``"auto"`` (default) flies groups of four
     runs in one AVX2 register where the batch allows it (Rust controllers, no sensor noise,
     constant wind, fixed-pitch rotors without a rate limit, no quadratic drag or rotor inertia;
-    runs grouped by equal fault times; on sensors the truth flies in the lanes, so do the runs'
-    estimators on motion capture and RTK, and each run's sensors per run), with results equal
-    bit for bit to ``"scalar"``, one run at a time.
+    runs grouped by equal fault times; on sensors the truth flies in the lanes and, on motion
+    capture and RTK, so do the truth the sensors read, their schedule and the runs' estimators,
+    each run's sensors drawing their own noise), with results equal bit for bit to
+    ``"scalar"``, one run at a time.
 
     Examples:
 
