@@ -312,38 +312,27 @@ impl<L: Lanes> VehicleLanes<L> {
     }
 
     /// The world force of [`Vehicle::wrench_from`] with constant wind: `weight - c_lin air +
-    /// R (0, 0, -T)` (the rotation as nalgebra's `UnitQuaternion * Vector3` writes it).
+    /// R (0, 0, -T)`.
     #[inline(always)]
     pub fn force_world_n(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> [L; 3] {
         let air: [L; 3] = each(|i| s.velocity_m_s[i] - self.wind_m_s[i]);
         let zero = L::splat(0.0);
         let weight = [zero, zero, self.weight_n];
-        let q = &s.attitude;
-        let qv = [q[0], q[1], q[2]];
-        let thrust = [zero, zero, -totals.thrust_n];
-        let two = L::splat(2.0);
-        let t0 = cross(&qv, &thrust);
-        let t: [L; 3] = each(|i| t0[i] * two);
-        let c = cross(&qv, &t);
-        each(|i| weight[i] - self.linear_drag_n_s_m * air[i] + (t[i] * q[3] + c[i] + thrust[i]))
+        let thrust = rotate(&s.attitude, &[zero, zero, -totals.thrust_n]);
+        each(|i| weight[i] - self.linear_drag_n_s_m * air[i] + thrust[i])
     }
 
     /// What an accelerometer at the centre of mass measures, body FRD ([`Vehicle::specific_force`]
-    /// in its order of operations: `R^T ((force - weight) / mass)`).
+    /// in its order of operations: `R^T ((force - weight) / mass)`, `R^T` the conjugate's
+    /// rotation).
     #[inline(always)]
     pub fn specific_force(&self, s: &BodyLanes<L>, totals: &TotalsLanes<L>) -> [L; 3] {
         let force = self.force_world_n(s, totals);
         let zero = L::splat(0.0);
         let weight = [zero, zero, self.weight_n];
         let f: [L; 3] = each(|i| (force[i] - weight[i]) / self.mass_kg);
-        // The inverse (conjugate) rotation, as nalgebra's `UnitQuaternion * Vector3`.
         let q = &s.attitude;
-        let qv = [-q[0], -q[1], -q[2]];
-        let two = L::splat(2.0);
-        let t0 = cross(&qv, &f);
-        let t: [L; 3] = each(|i| t0[i] * two);
-        let c = cross(&qv, &t);
-        each(|i| t[i] * q[3] + c[i] + f[i])
+        rotate(&[-q[0], -q[1], -q[2], q[3]], &f)
     }
 
     /// Newton-Euler under the vehicle wrench ([`Vehicle::wrench_from`] with constant wind).
@@ -378,13 +367,26 @@ impl<L: Lanes> VehicleLanes<L> {
     }
 }
 
+/// `a x b` per lane.
 #[inline(always)]
-fn cross<L: Lanes>(a: &[L; 3], b: &[L; 3]) -> [L; 3] {
+pub(crate) fn cross<L: Lanes>(a: &[L; 3], b: &[L; 3]) -> [L; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
+}
+
+/// `q v` for a unit quaternion `q` (`[x, y, z, w]`), as nalgebra's `UnitQuaternion * Vector3`
+/// writes it: `(t w + q_v x t) + v` with `t = (q_v x v) 2`.
+#[inline(always)]
+pub(crate) fn rotate<L: Lanes>(q: &[L; 4], v: &[L; 3]) -> [L; 3] {
+    let qv = [q[0], q[1], q[2]];
+    let two = L::splat(2.0);
+    let t0 = cross(&qv, v);
+    let t: [L; 3] = each(|i| t0[i] * two);
+    let c = cross(&qv, &t);
+    each(|i| t[i] * q[3] + c[i] + v[i])
 }
 
 /// `s + h d` (RK4's intermediate states; the quaternion not renormalised).
@@ -402,7 +404,7 @@ fn advanced<L: Lanes>(s: &BodyLanes<L>, d: &BodyLanes<L>, h: L) -> BodyLanes<L> 
 /// out of line by LLVM and compiled for the baseline target (SSE2 pairs, outside the AVX2
 /// function; see benches/README.md, "Batches in SIMD lanes").
 #[inline(always)]
-fn each<L: Lanes, const N: usize>(f: impl Fn(usize) -> L) -> [L; N] {
+pub(crate) fn each<L: Lanes, const N: usize>(f: impl Fn(usize) -> L) -> [L; N] {
     let mut out = [L::splat(0.0); N];
     for (i, o) in out.iter_mut().enumerate() {
         *o = f(i);

@@ -9,6 +9,8 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use crate::flight::estimation::eskf::{EXP_COS_SERIES, EXP_SERIES_LIMIT_RAD2, EXP_SINC_SERIES};
 use crate::flight::lanes::Lanes;
+// Shared with the batch lanes' rigid body (`each`: the written-out array constructor).
+pub(crate) use crate::flight::lanes::{cross, each, rotate};
 
 /// A 3-vector per lane.
 pub(crate) type V3<L> = [L; 3];
@@ -19,18 +21,6 @@ pub(crate) type M3<L> = [[L; 3]; 3];
 
 /// Lanes selected by a bit mask (bit `i`: lane `i`).
 pub(crate) type Mask = u32;
-
-/// `[f(0), f(1), .., f(N - 1)]`, written out: `std::array::from_fn` over lane values is left
-/// out of line by LLVM, compiled for the baseline target outside the kernels' AVX2 bodies (as
-/// `crate::flight::lanes` found).
-#[inline(always)]
-pub(crate) fn each<L: Lanes, const N: usize>(f: impl Fn(usize) -> L) -> [L; N] {
-    let mut out = [L::splat(0.0); N];
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = f(i);
-    }
-    out
-}
 
 /// [`each`] for rows of three.
 #[inline(always)]
@@ -90,15 +80,6 @@ pub(crate) fn scale<L: Lanes>(a: &V3<L>, s: L) -> V3<L> {
     [a[0] * s, a[1] * s, a[2] * s]
 }
 
-#[inline(always)]
-pub(crate) fn cross<L: Lanes>(a: &V3<L>, b: &V3<L>) -> V3<L> {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 /// nalgebra's `norm_squared` of a 3-vector.
 #[inline(always)]
 pub(crate) fn norm_squared<L: Lanes>(a: &V3<L>) -> L {
@@ -134,19 +115,6 @@ pub(crate) fn quat_mul<L: Lanes>(a: &Q<L>, b: &Q<L>) -> Q<L> {
         a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
         a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
         a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
-    ]
-}
-
-/// `q v` for a unit quaternion.
-#[inline(always)]
-pub(crate) fn rotate<L: Lanes>(q: &Q<L>, v: &V3<L>) -> V3<L> {
-    let qv = [q[0], q[1], q[2]];
-    let t = scale(&cross(&qv, v), L::splat(2.0));
-    let c = cross(&qv, &t);
-    [
-        t[0] * q[3] + c[0] + v[0],
-        t[1] * q[3] + c[1] + v[1],
-        t[2] * q[3] + c[2] + v[2],
     ]
 }
 
