@@ -66,8 +66,10 @@ CircleTurn: TypeAlias = Literal["clockwise", "counterclockwise"]
 #: precision, or single (half the memory; each value rounded to nearest).
 RecordingDtype: TypeAlias = Literal["float64", "float32"]
 #: How :func:`rotorfault.simulate_batch` steps its runs: ``"auto"`` four runs per SIMD register
-#: where the batch allows it (same results bit for bit), ``"scalar"`` one run at a time.
-BatchLanes: TypeAlias = Literal["auto", "scalar"]
+#: where the batch allows it (same results bit for bit), ``"portable"`` the same groups in the
+#: build a CPU without AVX2 runs (same results: a check that they do not depend on the machine),
+#: ``"scalar"`` one run at a time.
+BatchLanes: TypeAlias = Literal["auto", "portable", "scalar"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.
 ScanBackend: TypeAlias = Literal["local", "dask"]
 #: A named sensor suite (:class:`rotorfault.Sensing` ``suite``): motion capture, GNSS with a

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import rotorfault as rf
+from rotorfault._typing import BatchLanes
 
 G = 9.80  # the Du presets' gravity
 
@@ -324,11 +325,13 @@ def test_a_controller_producing_nan_ends_the_run_with_an_event(sim: rf.Simulator
     assert tr.diverged and tr.events[0].kind == "non-finite-command"
 
 
+@pytest.mark.parametrize("lanes", ["auto", "portable"])
 @pytest.mark.parametrize("sensing", [None, rf.Sensing(seed=5)], ids=["truth", "mocap"])
 def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: rf.LinearFeedback,
-                                                       sensing: rf.Sensing | None) -> None:
-    """``lanes="auto"`` (four runs per AVX2 register, issue 32) records exactly what
-    ``lanes="scalar"`` records, in every column: lagged rotors, a fault between substeps in one
+                                                       sensing: rf.Sensing | None, lanes: BatchLanes) -> None:
+    """``lanes="auto"`` (four runs per AVX2 register, issue 32) and ``lanes="portable"`` (the same
+    groups in the build a CPU without AVX2 runs) record exactly what ``lanes="scalar"`` records,
+    in every column: lagged rotors, a fault between substeps in one
     group (a dead rotor: that lane leaves its register when it diverges), a group without
     faults and a run left over; on the truth and on sensors with the estimator (the truth in
     the lanes, each run's sensors and estimator per run: every estimate column and count too);
@@ -339,8 +342,8 @@ def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: r
               for i in range(9)]
     faults = [[rf.RotorFault(rotor=1 + i % 4, time=0.30013, efficiency=0.0 if i == 1 else 0.5)] if i < 4 else []
               for i in range(9)]
-    auto, scalar = (rf.simulate_batch(sim, starts, 1.5, controllers=lqr, faults=faults, record_every=2, lanes=lanes)
-                    for lanes in ("auto", "scalar"))
+    auto, scalar = (rf.simulate_batch(sim, starts, 1.5, controllers=lqr, faults=faults, record_every=2, lanes=way)
+                    for way in (lanes, "scalar"))
     for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
                  "efficiency", "rows_on_grid", "off_grid_row"):
         np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)

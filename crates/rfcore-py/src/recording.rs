@@ -140,10 +140,11 @@ pub fn simulate_batch_columns<'py>(
     }
     let lanes = match lanes {
         "auto" => BatchLanes::Auto,
+        "portable" => BatchLanes::Portable,
         "scalar" => BatchLanes::Scalar,
         other => {
             return Err(PyValueError::new_err(format!(
-                "lanes: must be 'auto' or 'scalar', got {other:?}"
+                "lanes: must be 'auto', 'portable' or 'scalar', got {other:?}"
             )))
         }
     };

@@ -300,9 +300,9 @@ def check_dtype(dtype: Any) -> RecordingDtype:
 def check_lanes(lanes: Any) -> BatchLanes:
     """``lanes`` checked: one of :data:`rotorfault._typing.BatchLanes`."""
     if not isinstance(lanes, str):
-        raise TypeError(f"lanes: expected a string ('auto' or 'scalar'), got {type(lanes).__name__}")
+        raise TypeError(f"lanes: expected a string ('auto', 'portable' or 'scalar'), got {type(lanes).__name__}")
     if lanes not in get_args(BatchLanes):
-        raise ValueError(f"lanes: must be 'auto' or 'scalar', got {lanes!r}")
+        raise ValueError(f"lanes: must be 'auto', 'portable' or 'scalar', got {lanes!r}")
     return cast(BatchLanes, lanes)
 
 
@@ -368,7 +368,9 @@ def simulate_batch(
     runs grouped by equal fault times; on sensors the truth flies in the lanes and, on motion
     capture and RTK, so do the truth the sensors read, their schedule and the runs' estimators,
     each run's sensors drawing their own noise), with results equal bit for bit to
-    ``"scalar"``, one run at a time.
+    ``"scalar"``, one run at a time; ``"portable"`` flies the same groups in the build a CPU
+    without AVX2 runs (the same results again: to check on one machine that they do not depend
+    on the machine).
 
     Examples:
 

@@ -17,12 +17,59 @@
 //! instruction each when the caller is compiled for AVX2. The batch driver compiles its group
 //! stepper twice, once inside a `#[target_feature(enable = "avx2,fma")]` function chosen when
 //! the CPU reports both features, once for the baseline target (SSE2 pairs): same results,
-//! different speed.
+//! different speed. The estimator's laned kernels are compiled and chosen the same way. Every
+//! such choice asks [`avx2_fma`], so a group flown inside [`portable`] (the batch setting
+//! `BatchLanes::Portable`) runs the baseline form throughout, as a CPU without AVX2 does: the
+//! tests fly both forms on this machine and compare them bit for bit.
 
+use std::cell::Cell;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use crate::flight::vehicle::Vehicle;
 use crate::state::RigidBodyState;
+
+thread_local! {
+    /// Set while a group flies in its portable form on this thread ([`portable`]).
+    static PORTABLE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Times the laned code took its baseline form because [`portable`] asked for it (the tests
+/// check that the setting reaches the choices).
+#[cfg(test)]
+pub(crate) static PORTABLE_CHOICES: std::sync::atomic::AtomicU64 =
+    std::sync::atomic::AtomicU64::new(0);
+
+/// Whether the laned code runs its AVX2 and FMA form here: the CPU has both and no portable
+/// flight ([`portable`]) is under way on this thread.
+#[inline]
+pub(crate) fn avx2_fma() -> bool {
+    if PORTABLE.with(Cell::get) {
+        #[cfg(test)]
+        PORTABLE_CHOICES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// `f()` with every laned choice on this thread ([`avx2_fma`]) taking the baseline form, the
+/// one a CPU without AVX2 runs (restored afterwards, also when `f` panics).
+pub(crate) fn portable<T>(f: impl FnOnce() -> T) -> T {
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            PORTABLE.with(|p| p.set(self.0));
+        }
+    }
+    let _restore = Restore(PORTABLE.with(|p| p.replace(true)));
+    f()
+}
 
 /// A number type stepped elementwise: `f64` (one vehicle) or [`F64x4`] (four).
 pub trait Lanes:
@@ -428,6 +475,23 @@ mod tests {
             attitude: UnitQuaternion::from_euler_angles(0.6 * x(7), 0.5 * x(8), 3.0 * x(9)),
             omega_rad_s: Vector3::new(3.0 * x(10), x(11), 2.0 * x(12)),
         }
+    }
+
+    #[test]
+    fn a_portable_scope_takes_the_baseline_form_and_ends_with_its_call() {
+        let detected = avx2_fma();
+        assert!(!portable(avx2_fma));
+        let after_inner = portable(|| {
+            portable(|| ());
+            avx2_fma()
+        });
+        assert!(!after_inner, "an inner scope leaves the outer one portable");
+        assert_eq!(avx2_fma(), detected);
+        let unwound = std::panic::catch_unwind(|| portable(|| panic!("inside")));
+        assert!(unwound.is_err());
+        assert_eq!(avx2_fma(), detected, "restored when the call panics");
+        // Another thread has its own choice.
+        assert!(portable(|| std::thread::spawn(avx2_fma).join().unwrap()) == detected);
     }
 
     fn totals(k: usize, node: usize) -> RotorTotals {

@@ -63,11 +63,14 @@ use crate::flight::vehicle::{RotorTotals, Vehicle};
 use crate::state::ControllerInput;
 
 /// How a batch steps its runs: `Auto` flies groups of four in SIMD lanes where it can (AVX2
-/// when the CPU has it, the portable build otherwise; same results), `Scalar` one run at a time.
+/// when the CPU has it, the portable build otherwise; same results), `Portable` the same groups
+/// in the portable build whatever the CPU (the form a CPU without AVX2 runs: to check on one
+/// machine that a result does not depend on the machine), `Scalar` one run at a time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BatchLanes {
     #[default]
     Auto,
+    Portable,
     Scalar,
 }
 
@@ -76,6 +79,7 @@ impl BatchLanes {
     pub fn name(self) -> &'static str {
         match self {
             BatchLanes::Auto => "auto",
+            BatchLanes::Portable => "portable",
             BatchLanes::Scalar => "scalar",
         }
     }
@@ -128,8 +132,8 @@ pub fn simulate_batch(
 }
 
 /// [`simulate_batch`] with the lane setting `lanes`: `Auto` flies groups of four runs in SIMD
-/// lanes where it can (same results, [`crate::flight::simulation::batch_lanes`]), `Scalar` one
-/// run at a time.
+/// lanes where it can (same results, [`crate::flight::simulation::batch_lanes`]), `Portable` the
+/// same groups in the baseline build, `Scalar` one run at a time ([`BatchLanes`]).
 pub fn simulate_batch_lanes(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -144,7 +148,16 @@ pub fn simulate_batch_lanes(
     let plans = plan(vehicle, actuators, initial_efficiency, runs, config, lanes);
     let flown: Vec<Vec<(usize, Trajectory)>> = plans
         .into_par_iter()
-        .map(|plan| plan.fly(vehicle, actuators, initial_efficiency, config, cancel))
+        .map(|plan| {
+            plan.fly(
+                vehicle,
+                actuators,
+                initial_efficiency,
+                config,
+                cancel,
+                lanes,
+            )
+        })
         .collect::<Result<_>>()?;
     let mut out: Vec<Option<Trajectory>> = (0..count).map(|_| None).collect();
     for (i, trajectory) in flown.into_iter().flatten() {
@@ -163,7 +176,7 @@ impl Plan {
     }
 
     /// Flies the plan's runs: one with the scalar simulator (the batch's rule,
-    /// [`fly_batch_run`]) or a group in lanes.
+    /// [`fly_batch_run`]) or a group in lanes (in the portable build with `lanes` `Portable`).
     pub(super) fn fly(
         self,
         vehicle: &Vehicle,
@@ -171,6 +184,7 @@ impl Plan {
         initial_efficiency: &[f64],
         config: &SimulationConfig,
         cancel: &Cancel,
+        lanes: BatchLanes,
     ) -> Result<Vec<(usize, Trajectory)>> {
         match self {
             Plan::Scalar(i, run) => {
@@ -185,6 +199,11 @@ impl Plan {
                 )?;
                 Ok(vec![(i, trajectory)])
             }
+            Plan::Group(group) if lanes == BatchLanes::Portable => {
+                crate::flight::lanes::portable(|| {
+                    fly_group(vehicle, actuators, group, config, cancel)
+                })
+            }
             Plan::Group(group) => fly_group(vehicle, actuators, group, config, cancel),
         }
     }
@@ -197,7 +216,7 @@ fn lanes_possible(
     config: &SimulationConfig,
     lanes: BatchLanes,
 ) -> bool {
-    lanes == BatchLanes::Auto
+    lanes != BatchLanes::Scalar
         && config.noise.is_none()
         && config.wind_profile.is_empty()
         && matches!(actuators, Actuators::FixedPitch(_))
@@ -322,8 +341,8 @@ fn ready(
     })
 }
 
-/// Flies a group of four lanes, AVX2 when the CPU has it (module docs of
-/// [`crate::flight::lanes`]).
+/// Flies a group of four lanes, AVX2 when the CPU has it and no portable flight is asked for
+/// (`crate::flight::lanes::avx2_fma`, module docs of [`crate::flight::lanes`]).
 fn fly_group(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -332,12 +351,9 @@ fn fly_group(
     cancel: &Cancel,
 ) -> Result<Vec<(usize, Trajectory)>> {
     #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU has the features the function is compiled for.
-            return unsafe { fly_group_avx2(vehicle, actuators, group, config, cancel) };
-        }
+    if crate::flight::lanes::avx2_fma() {
+        // SAFETY: the CPU has the features the function is compiled for.
+        return unsafe { fly_group_avx2(vehicle, actuators, group, config, cancel) };
     }
     fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel)
 }

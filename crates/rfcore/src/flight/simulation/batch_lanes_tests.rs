@@ -12,6 +12,7 @@ use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use crate::control::{Controller, LinearFeedback};
 use crate::flight::actuator::{Actuators, FixedPitch, Lag};
 use crate::flight::fault_schedule::RotorFault;
+use crate::flight::lanes::PORTABLE_CHOICES;
 use crate::flight::simulation::sensing::{Sensing, SuiteName};
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
@@ -121,6 +122,9 @@ fn start(k: usize) -> RigidBodyState {
     }
 }
 
+/// The batch flown in lanes and one run at a time; flown in the lanes' portable build too, which
+/// must fly what the lanes fly (AVX2 on this machine) bit for bit, taking the baseline form at
+/// every laned choice (`PORTABLE_CHOICES`: the setting reaches them).
 fn both(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -139,7 +143,18 @@ fn both(
         )
         .unwrap()
     };
-    (fly(BatchLanes::Auto), fly(BatchLanes::Scalar))
+    let lanes = fly(BatchLanes::Auto);
+    let choices = || PORTABLE_CHOICES.load(std::sync::atomic::Ordering::Relaxed);
+    let before = choices();
+    let portable = fly(BatchLanes::Portable);
+    assert!(choices() > before, "the portable flight chose its forms");
+    for (i, (a, b)) in portable.iter().zip(&lanes).enumerate() {
+        assert!(
+            bits(a) == bits(b),
+            "run {i}: the portable build and the lanes differ"
+        );
+    }
+    (lanes, fly(BatchLanes::Scalar))
 }
 
 /// The quad-x with linear drag and 20 ms rotor lag both bit-for-bit batches fly, and its hover
@@ -451,12 +466,14 @@ fn scalar_setting_and_unsupported_batches_fly_every_run_scalar() {
             .all(|p| matches!(p, Plan::Scalar(..)))
     };
     assert!(!scalar_only(&lagged(f64::INFINITY), BatchLanes::Auto));
+    assert!(!scalar_only(&lagged(f64::INFINITY), BatchLanes::Portable));
     assert!(scalar_only(&lagged(f64::INFINITY), BatchLanes::Scalar));
     assert!(
         scalar_only(&lagged(50.0), BatchLanes::Auto),
         "a rate limit is not in the lanes"
     );
     assert_eq!(BatchLanes::Scalar.name(), "scalar");
+    assert_eq!(BatchLanes::Portable.name(), "portable");
 }
 
 /// `true` when `runs`, planned as one group of four, fly their estimators in lanes.

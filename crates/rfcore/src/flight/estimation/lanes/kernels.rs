@@ -544,9 +544,7 @@ macro_rules! avx2_or_baseline {
                 unsafe fn avx2<L: Lanes>($($arg: $ty),*) $(-> $ret)? {
                     $body($($arg),*)
                 }
-                if std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-                {
+                if crate::flight::lanes::avx2_fma() {
                     // SAFETY: the CPU has the features `avx2` is compiled for.
                     return unsafe { avx2($($arg),*) };
                 }

@@ -221,8 +221,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `Estimator::push_imu` in every lane.
     pub(crate) fn push_imu(&mut self, sample: &ImuLanes<L>) -> Result<()> {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::flight::lanes::avx2_fma() {
             // SAFETY: the CPU has the features `push_imu_avx2` is compiled for.
             return unsafe { self.push_imu_avx2(sample) };
         }
@@ -354,8 +353,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `self.estimate(i).carried(gravity, t_s)`), computed in lanes.
     pub(crate) fn estimates_at(&self, t_s: f64, out: &mut Vec<Estimate>) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::flight::lanes::avx2_fma() {
             // SAFETY: the CPU has the features `estimates_at_avx2` is compiled for.
             return unsafe { self.estimates_at_avx2(t_s, out) };
         }
