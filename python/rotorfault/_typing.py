@@ -67,7 +67,7 @@ CircleTurn: TypeAlias = Literal["clockwise", "counterclockwise"]
 RecordingDtype: TypeAlias = Literal["float64", "float32"]
 #: How :func:`rotorfault.simulate_batch` steps its runs: ``"auto"`` four runs per SIMD register
 #: where the batch allows it (same results bit for bit), ``"portable"`` the same groups in the
-#: build a CPU without AVX2 runs (same results: a check that they do not depend on the machine),
+#: build a CPU without AVX2 runs (same results: a check that they do not depend on AVX2),
 #: ``"scalar"`` one run at a time.
 BatchLanes: TypeAlias = Literal["auto", "portable", "scalar"]
 #: Where the chunks of a scan run: threads on this machine, or a ``dask.distributed`` cluster.

@@ -370,7 +370,7 @@ def simulate_batch(
     each run's sensors drawing their own noise), with results equal bit for bit to
     ``"scalar"``, one run at a time; ``"portable"`` flies the same groups in the build a CPU
     without AVX2 runs (the same results again: to check on one machine that they do not depend
-    on the machine).
+    on AVX2).
 
     Examples:
 

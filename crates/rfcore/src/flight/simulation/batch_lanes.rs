@@ -65,7 +65,7 @@ use crate::state::ControllerInput;
 /// How a batch steps its runs: `Auto` flies groups of four in SIMD lanes where it can (AVX2
 /// when the CPU has it, the portable build otherwise; same results), `Portable` the same groups
 /// in the portable build whatever the CPU (the form a CPU without AVX2 runs: to check on one
-/// machine that a result does not depend on the machine), `Scalar` one run at a time.
+/// machine that a result does not depend on AVX2), `Scalar` one run at a time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BatchLanes {
     #[default]
