@@ -17,58 +17,46 @@
 //! instruction each when the caller is compiled for AVX2. The batch driver compiles its group
 //! stepper twice, once inside a `#[target_feature(enable = "avx2,fma")]` function chosen when
 //! the CPU reports both features, once for the baseline target (SSE2 pairs): same results,
-//! different speed. The estimator's laned kernels are compiled and chosen the same way. Every
-//! such choice asks [`avx2_fma`], so a group flown inside [`portable`] (the batch setting
-//! `BatchLanes::Portable`) runs the baseline form throughout, as a CPU without AVX2 does: the
-//! tests fly both forms on this machine and compare them bit for bit.
+//! different speed. The estimator's laned kernels are compiled and chosen the same way. A group
+//! picks its [`LanePath`] once ([`detected_path`], or `Portable` when the batch asks for it:
+//! `BatchLanes::Portable`) and every laned choice it makes follows it ([`runs_avx2`]), so a
+//! portable group runs the baseline form throughout, as a CPU without AVX2 does: the tests fly
+//! both forms on this machine and compare them bit for bit.
 
-use std::cell::Cell;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
+use crate::analysis::LanePath;
 use crate::flight::vehicle::Vehicle;
 use crate::state::RigidBodyState;
 
-thread_local! {
-    /// Set while a group flies in its portable form on this thread ([`portable`]).
-    static PORTABLE: Cell<bool> = const { Cell::new(false) };
-}
-
-/// Times the laned code took its baseline form because [`portable`] asked for it (the tests
+/// Times a laned choice took the portable form because its group was flown portable (the tests
 /// check that the setting reaches the choices).
 #[cfg(test)]
 pub(crate) static PORTABLE_CHOICES: std::sync::atomic::AtomicU64 =
     std::sync::atomic::AtomicU64::new(0);
 
-/// Whether the laned code runs its AVX2 and FMA form here: the CPU has both and no portable
-/// flight ([`portable`]) is under way on this thread.
-#[inline]
-pub(crate) fn avx2_fma() -> bool {
-    if PORTABLE.with(Cell::get) {
-        #[cfg(test)]
-        PORTABLE_CHOICES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        return false;
-    }
+/// The form the laned code runs on this CPU: [`LanePath::Avx2`] (compiled for AVX2 and FMA)
+/// where it has both, [`LanePath::Portable`] otherwise.
+pub(crate) fn detected_path() -> LanePath {
     #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        return LanePath::Avx2;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    LanePath::Portable
 }
 
-/// `f()` with every laned choice on this thread ([`avx2_fma`]) taking the baseline form, the
-/// one a CPU without AVX2 runs (restored afterwards, also when `f` panics).
-pub(crate) fn portable<T>(f: impl FnOnce() -> T) -> T {
-    struct Restore(bool);
-    impl Drop for Restore {
-        fn drop(&mut self) {
-            PORTABLE.with(|p| p.set(self.0));
+/// Whether a laned choice on `path` runs the AVX2 and FMA form: `path` asks for it and the CPU
+/// has both (so the form is never run where it cannot be).
+#[inline]
+pub(crate) fn runs_avx2(path: LanePath) -> bool {
+    match path {
+        LanePath::Avx2 => detected_path() == LanePath::Avx2,
+        LanePath::Portable => {
+            #[cfg(test)]
+            PORTABLE_CHOICES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            false
         }
     }
-    let _restore = Restore(PORTABLE.with(|p| p.replace(true)));
-    f()
 }
 
 /// A number type stepped elementwise: `f64` (one vehicle) or [`F64x4`] (four).
@@ -478,20 +466,11 @@ mod tests {
     }
 
     #[test]
-    fn a_portable_scope_takes_the_baseline_form_and_ends_with_its_call() {
-        let detected = avx2_fma();
-        assert!(!portable(avx2_fma));
-        let after_inner = portable(|| {
-            portable(|| ());
-            avx2_fma()
-        });
-        assert!(!after_inner, "an inner scope leaves the outer one portable");
-        assert_eq!(avx2_fma(), detected);
-        let unwound = std::panic::catch_unwind(|| portable(|| panic!("inside")));
-        assert!(unwound.is_err());
-        assert_eq!(avx2_fma(), detected, "restored when the call panics");
-        // Another thread has its own choice.
-        assert!(portable(|| std::thread::spawn(avx2_fma).join().unwrap()) == detected);
+    fn a_portable_path_never_runs_the_avx2_form_and_the_detected_one_can() {
+        assert!(!runs_avx2(LanePath::Portable));
+        let detected = detected_path();
+        assert_eq!(runs_avx2(detected), detected == LanePath::Avx2);
+        assert_eq!(runs_avx2(LanePath::Avx2), detected == LanePath::Avx2);
     }
 
     fn totals(k: usize, node: usize) -> RotorTotals {

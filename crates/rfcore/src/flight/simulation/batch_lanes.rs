@@ -42,12 +42,15 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::analysis::LanePath;
 use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::flight::actuator::Actuators;
 use crate::flight::estimation::lanes::math::lane3;
 use crate::flight::fault_schedule::FaultSchedule;
-use crate::flight::lanes::{BodyLanes, F64x4, Lanes, TotalsLanes, VehicleLanes};
+use crate::flight::lanes::{
+    detected_path, runs_avx2, BodyLanes, F64x4, Lanes, TotalsLanes, VehicleLanes,
+};
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, DivergenceKind, Limits};
 use crate::flight::simulation::driver::{
@@ -199,12 +202,13 @@ impl Plan {
                 )?;
                 Ok(vec![(i, trajectory)])
             }
-            Plan::Group(group) if lanes == BatchLanes::Portable => {
-                crate::flight::lanes::portable(|| {
-                    fly_group(vehicle, actuators, group, config, cancel)
-                })
+            Plan::Group(group) => {
+                let path = match lanes {
+                    BatchLanes::Portable => LanePath::Portable,
+                    _ => detected_path(),
+                };
+                fly_group(vehicle, actuators, group, config, cancel, path)
             }
-            Plan::Group(group) => fly_group(vehicle, actuators, group, config, cancel),
         }
     }
 }
@@ -341,21 +345,22 @@ fn ready(
     })
 }
 
-/// Flies a group of four lanes, AVX2 when the CPU has it and no portable flight is asked for
-/// (`crate::flight::lanes::avx2_fma`, module docs of [`crate::flight::lanes`]).
+/// Flies a group of four lanes in the compiled form `path` (AVX2 only where the CPU has it:
+/// module docs of [`crate::flight::lanes`]).
 fn fly_group(
     vehicle: &Vehicle,
     actuators: &Actuators,
     group: Vec<(usize, Lane)>,
     config: &SimulationConfig,
     cancel: &Cancel,
+    path: LanePath,
 ) -> Result<Vec<(usize, Trajectory)>> {
     #[cfg(target_arch = "x86_64")]
-    if crate::flight::lanes::avx2_fma() {
+    if runs_avx2(path) {
         // SAFETY: the CPU has the features the function is compiled for.
         return unsafe { fly_group_avx2(vehicle, actuators, group, config, cancel) };
     }
-    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel)
+    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel, path)
 }
 
 /// [`fly_group_lanes`] compiled for AVX2 and FMA (Rust contracts no `a * b + c`, so FMA
@@ -369,7 +374,7 @@ unsafe fn fly_group_avx2(
     config: &SimulationConfig,
     cancel: &Cancel,
 ) -> Result<Vec<(usize, Trajectory)>> {
-    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel)
+    fly_group_lanes::<Group>(vehicle, actuators, group, config, cancel, LanePath::Avx2)
 }
 
 /// The control loop of [`crate::flight::simulation::simulate_observed`] for `L::WIDTH` runs.
@@ -380,6 +385,7 @@ fn fly_group_lanes<L: Lanes>(
     mut group: Vec<(usize, Lane)>,
     config: &SimulationConfig,
     cancel: &Cancel,
+    path: LanePath,
 ) -> Result<Vec<(usize, Trajectory)>> {
     let Some(model) = VehicleLanes::<L>::new(vehicle, &config.wind_m_s) else {
         unreachable!("lanes_possible checked the vehicle");
@@ -392,7 +398,7 @@ fn fly_group_lanes<L: Lanes>(
         body.set(i, &lane.run.x0);
         lane.run.controller.reset();
     }
-    let mut onboard_lanes = onboard_in_lanes::<L>(&group, m);
+    let mut onboard_lanes = onboard_in_lanes::<L>(&group, m, path);
     let mut period = Period::<L>::new(vehicle, actuators, &group);
     // The scalar driver's start: the tape's first node, the sensors' samples at 0.
     match onboard_lanes.as_mut() {
@@ -536,15 +542,20 @@ fn fly_group_lanes<L: Lanes>(
 }
 
 /// The group's sensors and estimators in lanes when its runs fly on sensors that share one
-/// schedule ([`OnboardLanes::new`], its tape with the `rotors` thrusts); `None` without sensing or
-/// when they do not (each run's own estimator and tape then).
-fn onboard_in_lanes<L: Lanes>(group: &[(usize, Lane)], rotors: usize) -> Option<OnboardLanes<L>> {
+/// schedule ([`OnboardLanes::new`], its tape with the `rotors` thrusts; its estimators in the
+/// compiled form `path`); `None` without sensing or when they do not (each run's own estimator
+/// and tape then).
+fn onboard_in_lanes<L: Lanes>(
+    group: &[(usize, Lane)],
+    rotors: usize,
+    path: LanePath,
+) -> Option<OnboardLanes<L>> {
     let onboards: Vec<&Onboard> = group
         .iter()
         .filter_map(|(_, lane)| lane.onboard.as_ref().map(|(onboard, _)| onboard))
         .collect();
     let starts: Vec<_> = group.iter().map(|(_, lane)| lane.run.x0).collect();
-    OnboardLanes::new(&onboards, &starts, rotors)
+    OnboardLanes::new(&onboards, &starts, rotors, path)
 }
 
 /// Every active run's sensors take their samples up to `t_s`, and its estimator reads them: in

@@ -12,7 +12,7 @@ use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use crate::control::{Controller, LinearFeedback};
 use crate::flight::actuator::{Actuators, FixedPitch, Lag};
 use crate::flight::fault_schedule::RotorFault;
-use crate::flight::lanes::PORTABLE_CHOICES;
+use crate::flight::lanes::{detected_path, PORTABLE_CHOICES};
 use crate::flight::simulation::sensing::{Sensing, SuiteName};
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
@@ -494,7 +494,7 @@ fn estimators_fly_in_lanes(
     let [Plan::Group(group)] = &plans[..] else {
         panic!("one group of four");
     };
-    onboard_in_lanes::<F64x4>(group, 4).is_some()
+    onboard_in_lanes::<F64x4>(group, 4, detected_path()).is_some()
 }
 
 #[test]

@@ -8,6 +8,7 @@
 
 use nalgebra::Vector3;
 
+use crate::analysis::LanePath;
 use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
 use crate::flight::estimation::lanes::kernels::ImuLanes;
@@ -36,11 +37,12 @@ impl<L: Lanes> OnboardLanes<L> {
     /// `onboards[i]`, and its tape (with `rotors` thrusts per node when a run reads rotor
     /// speeds); `None` when the lanes cannot share one schedule (a position source that drops
     /// fixes, or sensor profiles or estimator settings that differ) or there is not one run per
-    /// lane.
+    /// lane. The estimators run in the compiled form `path`.
     pub(crate) fn new(
         onboards: &[&Onboard],
         starts: &[RigidBodyState],
         rotors: usize,
+        path: LanePath,
     ) -> Option<Self> {
         let first = onboards.first()?;
         if onboards.len() != L::WIDTH
@@ -53,7 +55,7 @@ impl<L: Lanes> OnboardLanes<L> {
         {
             return None;
         }
-        let estimator = EstimatorLanes::new(*first.estimator_settings(), starts).ok()?;
+        let estimator = EstimatorLanes::new(*first.estimator_settings(), starts, path).ok()?;
         let feedback = onboards.iter().any(|o| o.reads_rotor_speeds());
         Some(OnboardLanes {
             estimator,

@@ -7,6 +7,7 @@
 
 use nalgebra::Vector3;
 
+use crate::analysis::LanePath;
 use crate::flight::estimation::eskf::{ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::lanes::math::{
     add, all, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul,
@@ -122,16 +123,16 @@ impl<L: Lanes> NominalLanes<L> {
 
     /// `NominalState::propagate_from` without the caller's start inputs (the scalar filter's
     /// cached inputs are these values: its docs), returning the state at `t1`, the step and the
-    /// corrected rate and force at `t1`.
+    /// corrected rate and force at `t1`; in the form `path` asks for.
     pub(crate) fn propagate(
         &self,
         a: &ImuLanes<L>,
         b: &ImuLanes<L>,
-        t0: f64,
-        t1: f64,
+        (t0, t1): (f64, f64),
         kin: &KinematicsLanes<L>,
+        path: LanePath,
     ) -> (NominalLanes<L>, StepLanes<L>) {
-        propagate_nominal(self, a, b, t0, t1, kin)
+        propagate_nominal(path, self, a, b, t0, t1, kin)
     }
 
     #[inline(always)]
@@ -529,26 +530,28 @@ fn reset_covariance_body<L: Lanes>(p: &mut CovarianceLanes<L>, dtheta: &V3<L>, m
     }
 }
 
-/// `pub(crate) fn $name` calling `$body` compiled for AVX2 and FMA where the CPU has them, for
-/// the baseline target otherwise (same results: Rust contracts no `a * b + c` into a fused
-/// multiply-add; the batch driver's lanes do the same, [`crate::flight::lanes`]). The laned
+/// `pub(crate) fn $name(path, ...)` calling `$body` compiled for AVX2 and FMA where `path` asks
+/// for it and the CPU has them, for the baseline target otherwise (same results: Rust contracts
+/// no `a * b + c` into a fused multiply-add; the batch driver's lanes do the same,
+/// [`crate::flight::lanes`]). The laned
 /// kernels are called from the estimator's control flow, which is not compiled for AVX2: without
 /// this a lane operation on four `f64` took two SSE2 instructions.
 macro_rules! avx2_or_baseline {
     ($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? = $body:expr;) => {
         $(#[$doc])*
-        pub(crate) fn $name<L: Lanes>($($arg: $ty),*) $(-> $ret)? {
+        pub(crate) fn $name<L: Lanes>(path: LanePath, $($arg: $ty),*) $(-> $ret)? {
             #[cfg(target_arch = "x86_64")]
             {
                 #[target_feature(enable = "avx2,fma")]
                 unsafe fn avx2<L: Lanes>($($arg: $ty),*) $(-> $ret)? {
                     $body($($arg),*)
                 }
-                if crate::flight::lanes::avx2_fma() {
+                if crate::flight::lanes::runs_avx2(path) {
                     // SAFETY: the CPU has the features `avx2` is compiled for.
                     return unsafe { avx2($($arg),*) };
                 }
             }
+            let _ = path;
             $body($($arg),*)
         }
     };

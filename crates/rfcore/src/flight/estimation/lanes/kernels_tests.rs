@@ -7,7 +7,7 @@ use crate::flight::estimation::eskf::{
     self, Block, Covariance, Fusion, Inputs, Kinematics, NominalState, ProcessNoise, Step,
 };
 use crate::flight::estimation::lanes::math::{set3, set_mat, set_quat};
-use crate::flight::lanes::F64x4;
+use crate::flight::lanes::{detected_path, F64x4};
 use crate::flight::random::Gaussian;
 use crate::flight::sensors::ImuSample;
 
@@ -129,6 +129,12 @@ fn kinematics() -> KinematicsLanes<L> {
     }
 }
 
+/// Both compiled forms of the kernels (the portable one and this CPU's), taken in turn by the
+/// rounds of each test: each equals the scalar filter.
+fn paths() -> [LanePath; 2] {
+    [LanePath::Portable, detected_path()]
+}
+
 #[test]
 fn propagation_and_blocks_equal_the_scalar_filter() {
     let mut g = Gaussian::new(21);
@@ -140,9 +146,10 @@ fn propagation_and_blocks_equal_the_scalar_filter() {
         // A whole interval, its first part (to a measurement's time) and the rest.
         let spans = [(0.1, 0.102), (0.1, 0.1013), (0.1013, 0.102)];
         let (t0, t1) = spans[round % 3];
-        let (next, step) = xl.propagate(&al, &bl, t0, t1, &kin);
+        let path = paths()[round % 2];
+        let (next, step) = xl.propagate(&al, &bl, (t0, t1), &kin, path);
         let mut block = BlockLanes::start(&step);
-        let (after, step2) = next.propagate(&al, &bl, t1, 0.102_f64.max(t1 + 1e-4), &kin);
+        let (after, step2) = next.propagate(&al, &bl, (t1, 0.102_f64.max(t1 + 1e-4)), &kin, path);
         block = block.extended(&step2);
         for i in 0..W {
             let (n, s, end): (NominalState, Step, Inputs) =
@@ -168,7 +175,8 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
         let (a, al) = samples(&mut g, 0.0);
         let (b, bl) = samples(&mut g, 0.002);
         let (x, xl) = states(&mut g);
-        let (_, step) = xl.propagate(&al, &bl, 0.0, 0.002, &kin);
+        let path = paths()[round % 2];
+        let (_, step) = xl.propagate(&al, &bl, (0.0, 0.002), &kin, path);
         let (mut p, mut pl) = covariances(&mut g);
         let noise = NoiseLanes {
             gyro_psd: L::splat(1e-6),
@@ -178,7 +186,7 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
             })); 3],
             accel_bias_psd: [L::splat(1e-6); 3],
         };
-        propagate_covariance(&mut pl, &step, &noise);
+        propagate_covariance(path, &mut pl, &step, &noise);
         for i in 0..W {
             let (_, s, _) = x[i].propagate_from(None, &a[i], &b[i], 0.0, 0.002, &KIN);
             let scalar_noise = ProcessNoise {
@@ -214,7 +222,7 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
                 pl[at].set_lane(3, -1.0);
             }
         }
-        let (fused, dx) = update_block(&mut pl, block, h.as_ref(), &r, &var, gate, 0b1111);
+        let (fused, dx) = update_block(path, &mut pl, block, h.as_ref(), &r, &var, gate, 0b1111);
         for i in 0..W {
             let (fusion, dxs) =
                 eskf::update_block(&mut p[i], block, hs.as_ref(), &residuals[i], &var, gate);
@@ -230,7 +238,7 @@ fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
         }
         // The reset and the injection in the fused lanes.
         let dtheta: V3<L> = [dx[ATT], dx[ATT + 1], dx[ATT + 2]];
-        reset_covariance(&mut pl, &dtheta, fused);
+        reset_covariance(path, &mut pl, &dtheta, fused);
         let mut injected = xl;
         injected.inject(&dx, fused);
         for i in 0..W {

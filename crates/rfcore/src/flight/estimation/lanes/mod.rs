@@ -31,11 +31,12 @@ use std::collections::VecDeque;
 
 use nalgebra::{UnitQuaternion, Vector3};
 
+use crate::analysis::LanePath;
 use crate::error::{Result, RfError};
 use crate::flight::estimation::eskf::{skew, ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::estimator::{fusion_slot, queue, Pending, TIME_EPS_S};
 use crate::flight::estimation::{Estimate, EstimatorSettings, FusionCounts};
-use crate::flight::lanes::Lanes;
+use crate::flight::lanes::{runs_avx2, Lanes};
 use crate::flight::sensors::PositionSample;
 use crate::state::RigidBodyState;
 
@@ -131,6 +132,8 @@ pub(crate) struct EstimatorLanes<L> {
     fix_slot: f64,
     /// The lanes whose runs still fly: only they count (a run's counts stop when it ends).
     active: Mask,
+    /// The compiled form the lanes run (their group's, [`crate::flight::lanes`]).
+    path: LanePath,
     /// Flushes of some lanes' blocks while other lanes held one (for the tests: the per-lane
     /// flush is exercised).
     #[cfg(test)]
@@ -139,8 +142,12 @@ pub(crate) struct EstimatorLanes<L> {
 
 impl<L: Lanes> EstimatorLanes<L> {
     /// Estimators with `settings` starting from `initial[i]` in lane `i` (the scalar
-    /// `Estimator::new` per lane).
-    pub(crate) fn new(settings: EstimatorSettings, initial: &[RigidBodyState]) -> Result<Self> {
+    /// `Estimator::new` per lane), run in the compiled form `path`.
+    pub(crate) fn new(
+        settings: EstimatorSettings,
+        initial: &[RigidBodyState],
+        path: LanePath,
+    ) -> Result<Self> {
         settings.check()?;
         if initial.len() != L::WIDTH || initial.iter().any(|x| !x.is_finite()) {
             return Err(RfError::invalid(
@@ -200,6 +207,7 @@ impl<L: Lanes> EstimatorLanes<L> {
             saturated_samples: vec![0; L::WIDTH],
             fix_slot: f64::NAN,
             active: all::<L>(),
+            path,
             #[cfg(test)]
             partial_flushes: 0,
         })
@@ -221,7 +229,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `Estimator::push_imu` in every lane.
     pub(crate) fn push_imu(&mut self, sample: &ImuLanes<L>) -> Result<()> {
         #[cfg(target_arch = "x86_64")]
-        if crate::flight::lanes::avx2_fma() {
+        if runs_avx2(self.path) {
             // SAFETY: the CPU has the features `push_imu_avx2` is compiled for.
             return unsafe { self.push_imu_avx2(sample) };
         }
@@ -273,9 +281,9 @@ impl<L: Lanes> EstimatorLanes<L> {
             let (advanced, _) = self.output.propagate(
                 &previous,
                 sample,
-                previous.time_s,
-                sample.time_s,
+                (previous.time_s, sample.time_s),
                 &self.kinematics,
+                self.path,
             );
             if corrected == 0 {
                 advanced
@@ -353,7 +361,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `self.estimate(i).carried(gravity, t_s)`), computed in lanes.
     pub(crate) fn estimates_at(&self, t_s: f64, out: &mut Vec<Estimate>) {
         #[cfg(target_arch = "x86_64")]
-        if crate::flight::lanes::avx2_fma() {
+        if runs_avx2(self.path) {
             // SAFETY: the CPU has the features `estimates_at_avx2` is compiled for.
             return unsafe { self.estimates_at_avx2(t_s, out) };
         }
@@ -503,7 +511,9 @@ impl<L: Lanes> EstimatorLanes<L> {
         if t_s <= t0 {
             return;
         }
-        let (state, step) = self.horizon.propagate(&a, next, t0, t_s, &self.kinematics);
+        let (state, step) =
+            self.horizon
+                .propagate(&a, next, (t0, t_s), &self.kinematics, self.path);
         self.horizon = state;
         self.horizon_time_s = t_s;
         self.add_to_block(&step);
@@ -548,10 +558,10 @@ impl<L: Lanes> EstimatorLanes<L> {
         }
         let noise = self.process_noise(&block.step, lanes);
         if lanes == all::<L>() {
-            propagate_covariance(&mut self.covariance, &block.step, &noise);
+            propagate_covariance(self.path, &mut self.covariance, &block.step, &noise);
         } else {
             let mut p = self.covariance.clone();
-            propagate_covariance(&mut p, &block.step, &noise);
+            propagate_covariance(self.path, &mut p, &block.step, &noise);
             for (e, n) in self.covariance.iter_mut().zip(p.iter()) {
                 *e = select(lanes, *n, *e);
             }
@@ -698,6 +708,7 @@ impl<L: Lanes> EstimatorLanes<L> {
             return 0;
         }
         let (fused, dx) = update_block(
+            self.path,
             &mut self.covariance,
             block,
             h.as_ref(),
@@ -710,6 +721,7 @@ impl<L: Lanes> EstimatorLanes<L> {
         if fused != 0 {
             self.horizon.inject(&dx, fused);
             reset_covariance(
+                self.path,
                 &mut self.covariance,
                 &[dx[ATT], dx[ATT + 1], dx[ATT + 2]],
                 fused,
@@ -726,7 +738,9 @@ impl<L: Lanes> EstimatorLanes<L> {
         if let Some(mut a) = self.horizon_sample {
             let mut t0 = self.horizon_time_s;
             for b in &self.buffer {
-                x = x.propagate(&a, b, t0, b.time_s, &self.kinematics).0;
+                x = x
+                    .propagate(&a, b, (t0, b.time_s), &self.kinematics, self.path)
+                    .0;
                 a = *b;
                 t0 = b.time_s;
             }

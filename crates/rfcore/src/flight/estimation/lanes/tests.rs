@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::flight::estimation::Estimator;
-use crate::flight::lanes::F64x4;
+use crate::flight::lanes::{detected_path, F64x4};
 use crate::flight::sensors::reference::AnalyticMotion;
 use crate::flight::sensors::{SensorSuite, SensorSuiteProfile};
 
@@ -57,9 +57,16 @@ fn same_estimate(a: &Estimate, b: &Estimate, what: &str, t: f64, lane: usize) {
     );
 }
 
-/// Flies `case` in lanes and in four scalar estimators, checking them equal after every IMU
-/// sample; the lanes' counts and the lanes' estimator.
+/// Flies `case` in lanes (in both compiled forms, the portable one and this CPU's) and in four
+/// scalar estimators, checking them equal after every IMU sample; the lanes' counts and the
+/// lanes' estimator (this CPU's form).
 fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
+    let _ = check_on(case, LanePath::Portable);
+    check_on(case, detected_path())
+}
+
+/// [`check`] in the compiled form `path`.
+fn check_on(case: &Case, path: LanePath) -> ([FusionCounts; W], EstimatorLanes<L>) {
     let settings = EstimatorSettings::for_sensors(&case.suite);
     let mut sensors: Vec<SensorSuite> = (0..W)
         .map(|i| SensorSuite::new(&case.suite, 4, 40 + i as u64).unwrap())
@@ -69,7 +76,7 @@ fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
         .iter()
         .map(|x| Estimator::new(settings, x).unwrap())
         .collect();
-    let mut lanes = EstimatorLanes::<L>::new(settings, &starts).unwrap();
+    let mut lanes = EstimatorLanes::<L>::new(settings, &starts, path).unwrap();
     let mut stopped: Option<[FusionCounts; W]> = None;
     loop {
         let t = sensors[0].imu.next_sample_time_s();
