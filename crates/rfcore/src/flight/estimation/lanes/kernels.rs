@@ -539,6 +539,8 @@ fn reset_covariance_body<L: Lanes>(p: &mut CovarianceLanes<L>, dtheta: &V3<L>, m
 macro_rules! avx2_or_baseline {
     ($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? = $body:expr;) => {
         $(#[$doc])*
+        // The form to run, then the kernel's own arguments (update_block's seven).
+        #[allow(clippy::too_many_arguments)]
         pub(crate) fn $name<L: Lanes>(path: LanePath, $($arg: $ty),*) $(-> $ret)? {
             #[cfg(target_arch = "x86_64")]
             {
