@@ -330,8 +330,8 @@ def test_a_controller_producing_nan_ends_the_run_with_an_event(sim: rf.Simulator
 def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: rf.LinearFeedback,
                                                        sensing: rf.Sensing | None, lanes: BatchLanes) -> None:
     """``lanes="auto"`` (four runs per AVX2 register, issue 32) and ``lanes="portable"`` (the same
-    groups in the build a CPU without AVX2 runs) record exactly what ``lanes="scalar"`` records,
-    in every column: lagged rotors, a fault between substeps in one
+    groups in the build a CPU without AVX2 runs; the Rust tests check that it reaches every place
+    that chooses) record exactly what ``lanes="scalar"`` records, in every column: lagged rotors, a fault between substeps in one
     group (a dead rotor: that lane leaves its register when it diverges), a group without
     faults and a run left over; on the truth and on sensors with the estimator (the truth in
     the lanes, each run's sensors and estimator per run: every estimate column and count too);
@@ -342,21 +342,21 @@ def test_batch_lanes_equal_the_scalar_path_bit_for_bit(quad: rf.Airframe, lqr: r
               for i in range(9)]
     faults = [[rf.RotorFault(rotor=1 + i % 4, time=0.30013, efficiency=0.0 if i == 1 else 0.5)] if i < 4 else []
               for i in range(9)]
-    auto, scalar = (rf.simulate_batch(sim, starts, 1.5, controllers=lqr, faults=faults, record_every=2, lanes=way)
-                    for way in (lanes, "scalar"))
+    laned, scalar = (rf.simulate_batch(sim, starts, 1.5, controllers=lqr, faults=faults, record_every=2, lanes=way)
+                     for way in (lanes, "scalar"))
     for name in ("position", "velocity", "quaternion", "euler", "omega", "primary_axis", "rotor_command", "rotor_thrust",
                  "efficiency", "rows_on_grid", "off_grid_row"):
-        np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)
+        np.testing.assert_array_equal(getattr(laned.columns, name), getattr(scalar.columns, name), err_msg=name)
     if sensing is not None:
         for name in ("estimate_state", "estimate_euler", "estimate_std", "gyro_saturated", "accel_saturated"):
-            np.testing.assert_array_equal(getattr(auto.columns, name), getattr(scalar.columns, name), err_msg=name)
-        counts = [[c.__getnewargs_ex__() for c in b.columns.sensing_counts if c] for b in (auto, scalar)]
+            np.testing.assert_array_equal(getattr(laned.columns, name), getattr(scalar.columns, name), err_msg=name)
+        counts = [[c.__getnewargs_ex__() for c in b.columns.sensing_counts if c] for b in (laned, scalar)]
         assert counts[0] == counts[1] and len(counts[0]) == 9
-        assert all(c.imu_samples > 0 for c in auto.columns.sensing_counts if c)
-    np.testing.assert_array_equal(auto.divergence_time, scalar.divergence_time)
-    assert auto.diverged.tolist() == scalar.diverged.tolist()
-    assert auto.efficiency[1, -1, 1] == 0.0 or auto.diverged[1]  # the faults acted
-    assert auto.efficiency[0, -1, 0] == 0.5
+        assert all(c.imu_samples > 0 for c in laned.columns.sensing_counts if c)
+    np.testing.assert_array_equal(laned.divergence_time, scalar.divergence_time)
+    assert laned.diverged.tolist() == scalar.diverged.tolist()
+    assert laned.efficiency[1, -1, 1] == 0.0 or laned.diverged[1]  # the faults acted
+    assert laned.efficiency[0, -1, 0] == 0.5
     with pytest.raises(ValueError, match="^lanes"):
         rf.simulate_batch(sim, starts[:1], 0.1, lanes="simd")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="^lanes"):

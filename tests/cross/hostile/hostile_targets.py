@@ -480,7 +480,7 @@ def _simulate(draw: st.DrawFn, frame: rf.Airframe) -> Call:
     if draw(st.booleans()):
         kwargs["dtype"] = draw(hostile(st.sampled_from(("float64", "float32")), "float16", "", "FLOAT32"))
     if draw(st.booleans()):
-        kwargs["lanes"] = draw(hostile(st.sampled_from(("auto", "scalar")), "simd", "", "AUTO", 4))
+        kwargs["lanes"] = draw(hostile(st.sampled_from(("auto", "portable", "scalar")), "simd", "", "AUTO", 4))
         # Four runs or more make a group of SIMD lanes (equal fault times: one list for all).
         x0s = x0s + draw(st.lists(valid_states(), min_size=3, max_size=4))
         if "faults" in kwargs:

@@ -46,7 +46,9 @@ pub enum LanePath {
     /// The same kernel compiled for the target's baseline registers (SSE2 on x86-64): runs
     /// everywhere.
     Portable,
-    /// Compiled for AVX2 (4 f64 per register); only chosen when the CPU has it.
+    /// Compiled for AVX2 (4 f64 per register; the flight room's laned code for AVX2 and FMA,
+    /// which changes no result: Rust contracts no `a * b + c`); only chosen when the CPU has
+    /// what it is compiled for.
     Avx2,
 }
 

@@ -29,11 +29,47 @@ use crate::analysis::LanePath;
 use crate::flight::vehicle::Vehicle;
 use crate::state::RigidBodyState;
 
-/// Times a laned choice took the portable form because its group was flown portable (the tests
-/// check that the setting reaches the choices).
+/// The places where laned code chooses its compiled form ([`runs_avx2`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Choice {
+    /// The group stepper (`batch_lanes::fly_group`).
+    Group,
+    /// The estimators' IMU sample (`EstimatorLanes::push_imu`).
+    PushImu,
+    /// The estimates handed to the controllers (`EstimatorLanes::estimates_at`).
+    EstimatesAt,
+    /// The estimator's kernels (propagation, covariance, update, reset).
+    Kernel,
+}
+
+/// The portable choices made at each [`Choice`] (the tests check that a portable batch reaches
+/// every place), and the lock that keeps one test's counts its own under `cargo test`'s threads.
 #[cfg(test)]
-pub(crate) static PORTABLE_CHOICES: std::sync::atomic::AtomicU64 =
-    std::sync::atomic::AtomicU64::new(0);
+pub(crate) mod portable_choices {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::{Mutex, MutexGuard};
+
+    use super::Choice;
+
+    static COUNTS: [AtomicU64; 4] = [const { AtomicU64::new(0) }; 4];
+    static SERIAL: Mutex<()> = Mutex::new(());
+
+    pub(crate) fn count(choice: Choice) {
+        COUNTS[choice as usize].fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// The counts, in the order of [`Choice`].
+    pub(crate) fn snapshot() -> [u64; 4] {
+        std::array::from_fn(|i| COUNTS[i].load(Ordering::Relaxed))
+    }
+
+    /// Held by every test that makes portable choices while it does.
+    pub(crate) fn serial() -> MutexGuard<'static, ()> {
+        SERIAL
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
 
 /// The form the laned code runs on this CPU: [`LanePath::Avx2`] (compiled for AVX2 and FMA)
 /// where it has both, [`LanePath::Portable`] otherwise.
@@ -45,15 +81,16 @@ pub(crate) fn detected_path() -> LanePath {
     LanePath::Portable
 }
 
-/// Whether a laned choice on `path` runs the AVX2 and FMA form: `path` asks for it and the CPU
-/// has both (so the form is never run where it cannot be).
+/// Whether the laned code at `choice` runs its AVX2 and FMA form on `path`: `path` asks for it
+/// and the CPU has both (so the form is never run where it cannot be).
 #[inline]
-pub(crate) fn runs_avx2(path: LanePath) -> bool {
+pub(crate) fn runs_avx2(path: LanePath, choice: Choice) -> bool {
     match path {
         LanePath::Avx2 => detected_path() == LanePath::Avx2,
         LanePath::Portable => {
             #[cfg(test)]
-            PORTABLE_CHOICES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            portable_choices::count(choice);
+            let _ = choice;
             false
         }
     }
@@ -467,10 +504,22 @@ mod tests {
 
     #[test]
     fn a_portable_path_never_runs_the_avx2_form_and_the_detected_one_can() {
-        assert!(!runs_avx2(LanePath::Portable));
+        let _serial = portable_choices::serial();
+        let before = portable_choices::snapshot();
+        assert!(!runs_avx2(LanePath::Portable, Choice::Kernel));
+        assert_eq!(
+            portable_choices::snapshot()[Choice::Kernel as usize],
+            before[3] + 1
+        );
         let detected = detected_path();
-        assert_eq!(runs_avx2(detected), detected == LanePath::Avx2);
-        assert_eq!(runs_avx2(LanePath::Avx2), detected == LanePath::Avx2);
+        assert_eq!(
+            runs_avx2(detected, Choice::Group),
+            detected == LanePath::Avx2
+        );
+        assert_eq!(
+            runs_avx2(LanePath::Avx2, Choice::Group),
+            detected == LanePath::Avx2
+        );
     }
 
     fn totals(k: usize, node: usize) -> RotorTotals {

@@ -49,7 +49,7 @@ use crate::flight::actuator::Actuators;
 use crate::flight::estimation::lanes::math::lane3;
 use crate::flight::fault_schedule::FaultSchedule;
 use crate::flight::lanes::{
-    detected_path, runs_avx2, BodyLanes, F64x4, Lanes, TotalsLanes, VehicleLanes,
+    detected_path, runs_avx2, BodyLanes, Choice, F64x4, Lanes, TotalsLanes, VehicleLanes,
 };
 use crate::flight::simulation::config::SimulationConfig;
 use crate::flight::simulation::divergence::{Divergence, DivergenceKind, Limits};
@@ -205,7 +205,8 @@ impl Plan {
             Plan::Group(group) => {
                 let path = match lanes {
                     BatchLanes::Portable => LanePath::Portable,
-                    _ => detected_path(),
+                    // `Scalar` plans no group.
+                    BatchLanes::Auto | BatchLanes::Scalar => detected_path(),
                 };
                 fly_group(vehicle, actuators, group, config, cancel, path)
             }
@@ -356,7 +357,7 @@ fn fly_group(
     path: LanePath,
 ) -> Result<Vec<(usize, Trajectory)>> {
     #[cfg(target_arch = "x86_64")]
-    if runs_avx2(path) {
+    if runs_avx2(path, Choice::Group) {
         // SAFETY: the CPU has the features the function is compiled for.
         return unsafe { fly_group_avx2(vehicle, actuators, group, config, cancel) };
     }

@@ -12,7 +12,7 @@ use crate::control::ke::{CommandLaw, KeGains, UniformPassiveFtc};
 use crate::control::{Controller, LinearFeedback};
 use crate::flight::actuator::{Actuators, FixedPitch, Lag};
 use crate::flight::fault_schedule::RotorFault;
-use crate::flight::lanes::{detected_path, PORTABLE_CHOICES};
+use crate::flight::lanes::{detected_path, portable_choices, Choice};
 use crate::flight::simulation::sensing::{Sensing, SuiteName};
 use crate::flight::vehicle::{Drag, Vehicle};
 use crate::state::{ControllerInput, RigidBodyState, STATE_DIM};
@@ -123,8 +123,10 @@ fn start(k: usize) -> RigidBodyState {
 }
 
 /// The batch flown in lanes and one run at a time; flown in the lanes' portable build too, which
-/// must fly what the lanes fly (AVX2 on this machine) bit for bit, taking the baseline form at
-/// every laned choice (`PORTABLE_CHOICES`: the setting reaches them).
+/// must fly what the lanes fly (the AVX2 form where this CPU has AVX2 and FMA) bit for bit,
+/// taking the baseline form at every place that chooses (counted per place: the group stepper,
+/// and on sensors whose estimators fly in lanes, the estimators' IMU sample, estimates and
+/// kernels).
 fn both(
     vehicle: &Vehicle,
     actuators: &Actuators,
@@ -144,10 +146,29 @@ fn both(
         .unwrap()
     };
     let lanes = fly(BatchLanes::Auto);
-    let choices = || PORTABLE_CHOICES.load(std::sync::atomic::Ordering::Relaxed);
-    let before = choices();
-    let portable = fly(BatchLanes::Portable);
-    assert!(choices() > before, "the portable flight chose its forms");
+    let portable = {
+        let _serial = portable_choices::serial();
+        let before = portable_choices::snapshot();
+        let portable = fly(BatchLanes::Portable);
+        let after = portable_choices::snapshot();
+        // Elsewhere the choices are compiled out: there is only the portable form.
+        if cfg!(target_arch = "x86_64") {
+            let estimators_in_lanes = config
+                .sensing
+                .as_ref()
+                .is_some_and(|s| s.suite != SuiteName::Gnss);
+            let mut places = vec![Choice::Group];
+            if estimators_in_lanes {
+                places.extend([Choice::PushImu, Choice::EstimatesAt, Choice::Kernel]);
+            }
+            for place in places {
+                let i = place as usize;
+                assert!(after[i] > before[i], "{place:?} took the portable form");
+            }
+        }
+        portable
+    };
+    assert_eq!(portable.len(), lanes.len());
     for (i, (a, b)) in portable.iter().zip(&lanes).enumerate() {
         assert!(
             bits(a) == bits(b),

@@ -311,7 +311,14 @@ pub fn simulate_batch_columns<T: Sample>(
     let flown = work
         .into_par_iter()
         .map(|(plan, slots)| {
-            let trajectories = plan.fly(vehicle, actuators, initial_efficiency, config, cancel, lanes)?;
+            let trajectories = plan.fly(
+                vehicle,
+                actuators,
+                initial_efficiency,
+                config,
+                cancel,
+                lanes,
+            )?;
             trajectories
                 .into_iter()
                 .zip(slots)

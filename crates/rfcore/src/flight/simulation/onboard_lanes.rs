@@ -77,8 +77,8 @@ impl<L: Lanes> OnboardLanes<L> {
     /// the readings in lanes as they come, in the order the scalar estimator reads them. A lane
     /// not in `active` reads lane `first active`'s values and counts nothing. The samples and
     /// their order are those of the scalar `Onboard::take_samples` (a change there is a change
-    /// here). Inlined into the
-    /// group's flight, compiled for AVX2 where the CPU has it, as the tape's lanes are.
+    /// here). Inlined into the group's flight, compiled for AVX2 where the group's `LanePath`
+    /// asks for it and the CPU has it, as the tape's lanes are.
     #[inline(always)]
     pub(crate) fn catch_up(
         &mut self,

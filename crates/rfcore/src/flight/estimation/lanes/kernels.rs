@@ -570,9 +570,9 @@ fn reset_covariance_body<L: Lanes>(p: &mut CovarianceLanes<L>, dtheta: &V3<L>, m
 /// `pub(crate) fn $name(path, ...)` calling `$body` compiled for AVX2 and FMA where `path` asks
 /// for it and the CPU has them, for the baseline target otherwise (same results: Rust contracts
 /// no `a * b + c` into a fused multiply-add; the batch driver's lanes do the same,
-/// [`crate::flight::lanes`]). The laned
-/// kernels are called from the estimator's control flow, which is not compiled for AVX2: without
-/// this a lane operation on four `f64` took two SSE2 instructions.
+/// [`crate::flight::lanes`]). The laned kernels are called from the estimator's control flow,
+/// which is not compiled for AVX2: without this a lane operation on four `f64` took two SSE2
+/// instructions.
 macro_rules! avx2_or_baseline {
     ($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)? = $body:expr;) => {
         $(#[$doc])*
@@ -585,7 +585,7 @@ macro_rules! avx2_or_baseline {
                 unsafe fn avx2<L: Lanes>($($arg: $ty),*) $(-> $ret)? {
                     $body($($arg),*)
                 }
-                if crate::flight::lanes::runs_avx2(path) {
+                if crate::flight::lanes::runs_avx2(path, crate::flight::lanes::Choice::Kernel) {
                     // SAFETY: the CPU has the features `avx2` is compiled for.
                     return unsafe { avx2($($arg),*) };
                 }

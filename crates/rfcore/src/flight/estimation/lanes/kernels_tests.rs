@@ -7,7 +7,7 @@ use crate::flight::estimation::eskf::{
     self, Block, Covariance, Fusion, Inputs, Kinematics, NominalState, ProcessNoise, Step,
 };
 use crate::flight::estimation::lanes::math::{set3, set_mat, set_quat};
-use crate::flight::lanes::{detected_path, F64x4};
+use crate::flight::lanes::{detected_path, portable_choices, F64x4};
 use crate::flight::random::Gaussian;
 use crate::flight::sensors::ImuSample;
 
@@ -137,6 +137,7 @@ fn paths() -> [LanePath; 2] {
 
 #[test]
 fn propagation_and_blocks_equal_the_scalar_filter() {
+    let _serial = portable_choices::serial();
     let mut g = Gaussian::new(21);
     let kin = kinematics();
     for round in 0..50 {
@@ -178,6 +179,7 @@ fn propagation_and_blocks_equal_the_scalar_filter() {
 
 #[test]
 fn covariance_propagation_update_and_reset_equal_the_scalar_filter() {
+    let _serial = portable_choices::serial();
     let mut g = Gaussian::new(8);
     let kin = kinematics();
     for round in 0..30 {

@@ -37,7 +37,7 @@ use crate::error::{Result, RfError};
 use crate::flight::estimation::eskf::{skew, ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS, VEL};
 use crate::flight::estimation::estimator::{fusion_slot, queue, Pending, TIME_EPS_S};
 use crate::flight::estimation::{Estimate, EstimatorSettings, FusionCounts};
-use crate::flight::lanes::{runs_avx2, Lanes};
+use crate::flight::lanes::{runs_avx2, Choice, Lanes};
 use crate::flight::sensors::PositionSample;
 use crate::state::RigidBodyState;
 
@@ -238,7 +238,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `Estimator::push_imu` in every lane.
     pub(crate) fn push_imu(&mut self, sample: &ImuLanes<L>) -> Result<()> {
         #[cfg(target_arch = "x86_64")]
-        if runs_avx2(self.path) {
+        if runs_avx2(self.path, Choice::PushImu) {
             // SAFETY: the CPU has the features `push_imu_avx2` is compiled for.
             return unsafe { self.push_imu_avx2(sample) };
         }
@@ -376,7 +376,7 @@ impl<L: Lanes> EstimatorLanes<L> {
     /// `self.estimate(i).carried(gravity, t_s)`), computed in lanes.
     pub(crate) fn estimates_at(&self, t_s: f64, out: &mut Vec<Estimate>) {
         #[cfg(target_arch = "x86_64")]
-        if runs_avx2(self.path) {
+        if runs_avx2(self.path, Choice::EstimatesAt) {
             // SAFETY: the CPU has the features `estimates_at_avx2` is compiled for.
             return unsafe { self.estimates_at_avx2(t_s, out) };
         }

@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::flight::estimation::Estimator;
-use crate::flight::lanes::{detected_path, F64x4};
+use crate::flight::lanes::{detected_path, portable_choices, F64x4};
 use crate::flight::sensors::reference::AnalyticMotion;
 use crate::flight::sensors::{SensorSuite, SensorSuiteProfile};
 
@@ -61,7 +61,9 @@ fn same_estimate(a: &Estimate, b: &Estimate, what: &str, t: f64, lane: usize) {
 /// scalar estimators, checking them equal after every IMU sample; the lanes' counts and the
 /// lanes' estimator (this CPU's form).
 fn check(case: &Case) -> ([FusionCounts; W], EstimatorLanes<L>) {
+    let serial = portable_choices::serial();
     let _ = check_on(case, LanePath::Portable);
+    drop(serial);
     check_on(case, detected_path())
 }
 
