@@ -81,29 +81,6 @@ pub(crate) struct StepLanes<L> {
     pub force_end: V3<L>,
 }
 
-/// [`crate::flight::estimation::eskf::Inputs`] per lane: a state's corrected rate and specific
-/// force and its world-frame acceleration at `time_s` (every lane's).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct InputsLanes<L> {
-    pub time_s: f64,
-    pub rate: V3<L>,
-    pub force: V3<L>,
-    pub acceleration: V3<L>,
-}
-
-impl<L: Lanes> InputsLanes<L> {
-    /// `next` in the lanes of `mask`, `self` elsewhere (both of one time).
-    #[inline(always)]
-    pub(crate) fn select(&self, mask: Mask, next: &InputsLanes<L>) -> InputsLanes<L> {
-        InputsLanes {
-            time_s: self.time_s,
-            rate: select_n(mask, &next.rate, &self.rate),
-            force: select_n(mask, &next.force, &self.force),
-            acceleration: select_n(mask, &next.acceleration, &self.acceleration),
-        }
-    }
-}
-
 /// The gravity and the IMU's lever arm, splatted.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct KinematicsLanes<L> {
@@ -144,40 +121,32 @@ impl<L: Lanes> NominalLanes<L> {
         (rate, force)
     }
 
-    /// `NominalState::propagate_from` in every lane, in the form `path` asks for: the state at
-    /// `t1`, the step and the new state's inputs at `t1`, from this state's inputs at `t0` when
-    /// the caller has them (`start`, used when its time is `t0`).
+    /// `NominalState::propagate_from` without the caller's start inputs (the scalar filter's
+    /// cached inputs are these values: its docs), returning the state at `t1`, the step and the
+    /// corrected rate and force at `t1`; in the form `path` asks for.
     pub(crate) fn propagate(
         &self,
-        start: Option<&InputsLanes<L>>,
         a: &ImuLanes<L>,
         b: &ImuLanes<L>,
         (t0, t1): (f64, f64),
         kin: &KinematicsLanes<L>,
         path: LanePath,
-    ) -> (NominalLanes<L>, StepLanes<L>, InputsLanes<L>) {
-        propagate_nominal(path, self, start, a, b, t0, t1, kin)
+    ) -> (NominalLanes<L>, StepLanes<L>) {
+        propagate_nominal(path, self, a, b, t0, t1, kin)
     }
 
     #[inline(always)]
     fn propagate_body(
         &self,
-        start: Option<&InputsLanes<L>>,
         a: &ImuLanes<L>,
         b: &ImuLanes<L>,
         t0: f64,
         t1: f64,
         kin: &KinematicsLanes<L>,
-    ) -> (NominalLanes<L>, StepLanes<L>, InputsLanes<L>) {
+    ) -> (NominalLanes<L>, StepLanes<L>) {
         let dt = t1 - t0;
-        let (rate0, force0, acc0) = match start {
-            Some(s) if s.time_s == t0 => (s.rate, s.force, s.acceleration),
-            _ => {
-                let (rate, force) = self.inputs(a, b, t0, kin);
-                let acceleration = add(&rotate(&self.attitude, &force), &kin.gravity_m_s2);
-                (rate, force, acceleration)
-            }
-        };
+        let (rate0, force0) = self.inputs(a, b, t0, kin);
+        let acc0 = add(&rotate(&self.attitude, &force0), &kin.gravity_m_s2);
         let (rate1, force1) = self.inputs(a, b, t1, kin);
         let increment = exp_quaternion(&scale(&add(&rate0, &rate1), L::splat(0.5 * dt)));
         let attitude = renormalize_fast(&quat_mul(&self.attitude, &increment));
@@ -203,13 +172,7 @@ impl<L: Lanes> NominalLanes<L> {
             rate_end: rate1,
             force_end: force1,
         };
-        let end = InputsLanes {
-            time_s: t1,
-            rate: rate1,
-            force: force1,
-            acceleration: acc1,
-        };
-        (next, step, end)
+        (next, step)
     }
 
     /// `NominalState::inject` in the lanes of `mask` (the others unchanged).
@@ -600,13 +563,12 @@ avx2_or_baseline! {
     /// [`NominalLanes::propagate`].
     fn propagate_nominal(
         x: &NominalLanes<L>,
-        start: Option<&InputsLanes<L>>,
         a: &ImuLanes<L>,
         b: &ImuLanes<L>,
         t0: f64,
         t1: f64,
         kin: &KinematicsLanes<L>
-    ) -> (NominalLanes<L>, StepLanes<L>, InputsLanes<L>) = NominalLanes::propagate_body;
+    ) -> (NominalLanes<L>, StepLanes<L>) = NominalLanes::propagate_body;
 }
 
 avx2_or_baseline! {

@@ -16,11 +16,10 @@
 //!
 //! # Why a lane equals the scalar estimator
 //! The kernels ([`kernels`]) are the scalar ones written over lanes in nalgebra's order of
-//! operations (checked bit for bit, [`math`]). Both reuse a step's end inputs as the next step's
-//! start inputs (the same function of the same values), dropped where a fusion changed the state
-//! (in the lanes, in every lane when it changed one). The scalar estimator also takes the
-//! horizon's steps from the output predictor's trail, which the lanes recompute instead (the
-//! scalar tests check that taking them changes nothing). Where a lane's output predictor
+//! operations (checked bit for bit, [`math`]). The scalar estimator reuses two results that the
+//! lanes recompute instead: the inputs at a step's start (the previous step's end inputs, the same
+//! function of the same values) and the horizon's steps taken from the output predictor's trail
+//! (the scalar tests check that taking them changes nothing). Where a lane's output predictor
 //! was corrected by a fusion it is replayed from the horizon; elsewhere it advances one sample,
 //! as in the scalar estimator. The group tests compare every lane's estimates, covariance and
 //! counts with the scalar estimator's.
@@ -43,7 +42,7 @@ use crate::state::RigidBodyState;
 
 use kernels::{
     propagate_covariance, reset_covariance, update_block, BlockLanes, CovarianceLanes, ImuLanes,
-    InputsLanes, KinematicsLanes, NoiseLanes, NominalLanes, StepLanes, ENTRIES,
+    KinematicsLanes, NoiseLanes, NominalLanes, StepLanes, ENTRIES,
 };
 use math::{
     add, all, cross, exp_quaternion, lane3, lane_quat, norm_squared, quat_mul, renormalize_fast,
@@ -113,10 +112,6 @@ pub(crate) struct EstimatorLanes<L> {
     covariance: Box<CovarianceLanes<L>>,
     horizon_time_s: f64,
     horizon_sample: Option<ImuLanes<L>>,
-    /// The horizon state's inputs at the horizon time, from the step that reached it (`None`
-    /// after a fusion changed the state in some lane): the next step starts from them, as the
-    /// scalar estimator's.
-    horizon_inputs: Option<InputsLanes<L>>,
     /// Steps since each lane's last covariance flush (`block_lanes`: the lanes holding one).
     block: Option<BlockLanes<L>>,
     block_lanes: Mask,
@@ -128,8 +123,6 @@ pub(crate) struct EstimatorLanes<L> {
     buffer: VecDeque<ImuLanes<L>>,
     pending: VecDeque<Pending<Measurement<L>>>,
     output: NominalLanes<L>,
-    /// The output state's inputs at the newest sample (as `horizon_inputs`).
-    output_inputs: Option<InputsLanes<L>>,
     newest: Option<ImuLanes<L>>,
     gyro_filtered: V3<L>,
     counts: Vec<FusionCounts>,
@@ -198,7 +191,6 @@ impl<L: Lanes> EstimatorLanes<L> {
             covariance,
             horizon_time_s: f64::NAN,
             horizon_sample: None,
-            horizon_inputs: None,
             block: None,
             block_lanes: 0,
             rate_mean: zero,
@@ -208,7 +200,6 @@ impl<L: Lanes> EstimatorLanes<L> {
             buffer: VecDeque::new(),
             pending: VecDeque::new(),
             output: start,
-            output_inputs: None,
             newest: None,
             gyro_filtered: zero,
             counts: vec![FusionCounts::default(); L::WIDTH],
@@ -284,11 +275,10 @@ impl<L: Lanes> EstimatorLanes<L> {
         let corrected = self.advance_horizon(sample.time_s - self.settings.fusion_delay_s);
         // Replayed where a fusion corrected the horizon (or nothing is buffered), advanced one
         // sample elsewhere (the scalar rule per lane).
-        (self.output, self.output_inputs) = if self.buffer.is_empty() || corrected == all::<L>() {
+        self.output = if self.buffer.is_empty() || corrected == all::<L>() {
             self.replayed()
         } else {
-            let (advanced, _, end) = self.output.propagate(
-                self.output_inputs.as_ref(),
+            let (advanced, _) = self.output.propagate(
                 &previous,
                 sample,
                 (previous.time_s, sample.time_s),
@@ -296,14 +286,9 @@ impl<L: Lanes> EstimatorLanes<L> {
                 self.path,
             );
             if corrected == 0 {
-                (advanced, Some(end))
+                advanced
             } else {
-                // Both at the newest sample (the buffer is not empty).
-                let (replayed, inputs) = self.replayed();
-                (
-                    advanced.select(corrected, &replayed),
-                    inputs.map(|r| end.select(corrected, &r)),
-                )
+                advanced.select(corrected, &self.replayed())
             }
         };
         self.filter_gyro(sample, sample.time_s - previous.time_s);
@@ -526,16 +511,10 @@ impl<L: Lanes> EstimatorLanes<L> {
         if t_s <= t0 {
             return;
         }
-        let (state, step, end) = self.horizon.propagate(
-            self.horizon_inputs.as_ref(),
-            &a,
-            next,
-            (t0, t_s),
-            &self.kinematics,
-            self.path,
-        );
+        let (state, step) =
+            self.horizon
+                .propagate(&a, next, (t0, t_s), &self.kinematics, self.path);
         self.horizon = state;
-        self.horizon_inputs = Some(end);
         self.horizon_time_s = t_s;
         self.add_to_block(&step);
         let period = self.settings.covariance_period_s - TIME_EPS_S;
@@ -741,7 +720,6 @@ impl<L: Lanes> EstimatorLanes<L> {
         self.count(all::<L>() & !fused, |c| c.rejected += 1);
         if fused != 0 {
             self.horizon.inject(&dx, fused);
-            self.horizon_inputs = None;
             reset_covariance(
                 self.path,
                 &mut self.covariance,
@@ -753,30 +731,21 @@ impl<L: Lanes> EstimatorLanes<L> {
         fused
     }
 
-    /// The output predictor recomputed from the horizon through every buffered sample, with its
-    /// inputs there.
+    /// The output predictor recomputed from the horizon through every buffered sample.
     #[inline(always)]
-    fn replayed(&self) -> (NominalLanes<L>, Option<InputsLanes<L>>) {
+    fn replayed(&self) -> NominalLanes<L> {
         let mut x = self.horizon;
-        let mut inputs = self.horizon_inputs;
         if let Some(mut a) = self.horizon_sample {
             let mut t0 = self.horizon_time_s;
             for b in &self.buffer {
-                let (next, _, end) = x.propagate(
-                    inputs.as_ref(),
-                    &a,
-                    b,
-                    (t0, b.time_s),
-                    &self.kinematics,
-                    self.path,
-                );
-                x = next;
-                inputs = Some(end);
+                x = x
+                    .propagate(&a, b, (t0, b.time_s), &self.kinematics, self.path)
+                    .0;
                 a = *b;
                 t0 = b.time_s;
             }
         }
-        (x, inputs)
+        x
     }
 
     #[inline(always)]
