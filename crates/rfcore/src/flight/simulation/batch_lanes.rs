@@ -406,7 +406,7 @@ fn fly_group_lanes<L: Lanes>(
         Some(onboard_lanes) => {
             let tape = onboard_lanes.tape_mut();
             tape.clear();
-            period.push_end_node(tape, &model, 0.0, &body);
+            period.push_end_node(tape, &model, 0.0, &body, None);
         }
         None => {
             for (_, lane) in group.iter_mut() {
@@ -843,7 +843,7 @@ impl<L: Lanes> Period<L> {
             }
         }
         if let Some(tape) = tape_lanes {
-            self.push_end_node(tape, model, t_next, body);
+            self.push_end_node(tape, model, t_next, body, start_totals.as_ref());
         }
         for (i, (_, lane)) in group.iter_mut().enumerate() {
             if active[i] {
@@ -891,9 +891,10 @@ impl<L: Lanes> Period<L> {
     }
 
     /// The group's tape node at `t_s` where the lanes are at `body` with the channels where they
-    /// are (the start of a flight, the end of a period): the rotor totals and the dynamics
-    /// computed there from the lanes' channels and efficiencies (the values of the scalar
-    /// integrator's node there, which at a period's end reuses its last interval's totals).
+    /// are (the start of a flight, the end of a period): the rotor totals there (`known`: the
+    /// last interval's end totals, the same function of the same channels and efficiencies,
+    /// unless a fault changed an efficiency there; the scalar integrator's end node reuses them
+    /// too) and the dynamics computed there.
     #[inline(always)]
     fn push_end_node(
         &self,
@@ -901,8 +902,11 @@ impl<L: Lanes> Period<L> {
         model: &VehicleLanes<L>,
         t_s: f64,
         body: &BodyLanes<L>,
+        known: Option<&TotalsLanes<L>>,
     ) {
-        let totals = self.totals(&self.channel_lanes);
+        let totals = known
+            .copied()
+            .unwrap_or_else(|| self.totals(&self.channel_lanes));
         let k1 = model.derivative(body, &totals);
         let (channels, efficiency) = (&self.channel_lanes, &self.efficiency_lanes);
         tape.push(t_s, body, &totals, &k1, |r| efficiency[r] * channels[r]);

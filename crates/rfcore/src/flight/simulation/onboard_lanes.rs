@@ -6,8 +6,6 @@
 //! [`crate::flight::estimation::lanes`]); a suite whose position fixes drop out at random does
 //! not, and its runs keep their scalar estimators and tapes ([`OnboardLanes::new`] declines).
 
-use nalgebra::Vector3;
-
 use crate::analysis::LanePath;
 use crate::cancel::Cancel;
 use crate::error::{Result, RfError};
@@ -124,15 +122,22 @@ impl<L: Lanes> OnboardLanes<L> {
                 }
                 Next::Magnetometer => {
                     let truth = self.tape.state_at(t);
-                    let mut field = [L::splat(0.0); 3];
+                    // As the IMU's: every lane starts as the first flying lane's reading.
+                    let mut field: Option<V3<L>> = None;
                     for &i in lanes {
                         let m = run_mut(runs, i)
                             .sample_magnetometer(&truth.get(i))
                             .filter(|m| m.time_s == t)
                             .ok_or_else(out_of_step)?;
-                        set_lanes(&mut field, i, first, &m.field_ut);
+                        set3(
+                            field.get_or_insert_with(|| splat3(&m.field_ut)),
+                            i,
+                            &m.field_ut,
+                        );
                     }
-                    self.estimator.push_magnetometer(t, &field);
+                    if let Some(field) = field {
+                        self.estimator.push_magnetometer(t, &field);
+                    }
                 }
                 Next::RotorSpeed => {
                     for &i in lanes {
@@ -235,17 +240,6 @@ fn run_mut<'a>(runs: &'a mut [Option<&mut Onboard>], i: usize) -> &'a mut Onboar
     runs[i]
         .as_deref_mut()
         .expect("a flying lane has its run's sensors")
-}
-
-/// Sets lane `i` of `v` to `x`; the first flying lane `first` (set before the others) sets
-/// every lane, so that the lanes no longer flying read its values.
-#[inline(always)]
-fn set_lanes<L: Lanes>(v: &mut V3<L>, i: usize, first: usize, x: &Vector3<f64>) {
-    if i == first {
-        *v = splat3(x);
-    } else {
-        set3(v, i, x);
-    }
 }
 
 /// `Ok` when the run's next sample of `which` is at `t_s` (the group's schedule), else the lanes

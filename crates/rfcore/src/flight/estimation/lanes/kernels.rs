@@ -12,8 +12,7 @@ use crate::flight::estimation::eskf::{ACCEL_BIAS, ATT, ERROR_DIM, GYRO_BIAS, POS
 use crate::flight::estimation::lanes::math::{
     add, all, cross, each, each3, exp_quaternion, lane_quat, lerp, mat_vec, quat_mul,
     renormalize_fast, rotate, rotation_matrix, scale, select, select_n, set3, set_mat, splat3, sub,
-    Mask, M3, Q,
-    V3,
+    Mask, M3, Q, V3,
 };
 use crate::flight::lanes::Lanes;
 use crate::flight::sensors::ImuSample;
