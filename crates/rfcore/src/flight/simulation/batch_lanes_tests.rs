@@ -497,6 +497,32 @@ fn scalar_setting_and_unsupported_batches_fly_every_run_scalar() {
     assert_eq!(BatchLanes::Portable.name(), "portable");
 }
 
+/// Four runs of the hover law from `start(k)`, settled at `hover` N per rotor: run `k`'s law
+/// reads the samples ([`Sampler`]) where `reads(k)`, and loses its rotors as `faults(k)` says.
+fn four_hover_runs(
+    airframe: &Airframe,
+    hover: f64,
+    reads: impl Fn(usize) -> bool,
+    faults: impl Fn(usize) -> Vec<RotorFault>,
+) -> Vec<BatchRun> {
+    (0..4)
+        .map(|k| {
+            let law = hover_feedback(airframe, 10.0);
+            let controller: Box<dyn Controller> = if reads(k) {
+                Box::new(Sampler(law))
+            } else {
+                Box::new(law)
+            };
+            BatchRun {
+                controller,
+                initial_command: Some(vec![hover; 4]),
+                x0: start(k),
+                faults: faults(k),
+            }
+        })
+        .collect()
+}
+
 /// `true` when `runs`, planned as one group of four, fly their estimators in lanes.
 fn estimators_fly_in_lanes(
     vehicle: &Vehicle,
@@ -528,19 +554,19 @@ fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
     let (airframe, vehicle, actuators, hover) = lagged_quad();
     let mut config = SimulationConfig::new(0.0025, 2, 2.0);
     config.record_every = 2;
-    let runs = || -> Vec<BatchRun> {
-        (0..4)
-            .map(|k| BatchRun {
-                controller: Box::new(hover_feedback(&airframe, 10.0)),
-                initial_command: Some(vec![hover; 4]),
-                x0: start(k),
-                faults: vec![RotorFault {
+    let runs = || {
+        four_hover_runs(
+            &airframe,
+            hover,
+            |_| false,
+            |k| {
+                vec![RotorFault {
                     rotor: 1,
                     time_s: 0.3,
                     efficiency: if k == 1 { 0.0 } else { 1.0 },
-                }],
-            })
-            .collect()
+                }]
+            },
+        )
     };
     for (suite, in_lanes) in [
         (SuiteName::Rtk, true),
@@ -583,24 +609,7 @@ fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
         imu_rate_hz: 31_900.0,
         ..Sensing::default()
     });
-    let runs = || -> Vec<BatchRun> {
-        (0..4)
-            .map(|k| {
-                let law = hover_feedback(&airframe, 10.0);
-                let controller: Box<dyn Controller> = if k < 2 {
-                    Box::new(Sampler(law))
-                } else {
-                    Box::new(law)
-                };
-                BatchRun {
-                    controller,
-                    initial_command: Some(vec![hover; 4]),
-                    x0: start(k),
-                    faults: vec![],
-                }
-            })
-            .collect()
-    };
+    let runs = || four_hover_runs(&airframe, hover, |k| k < 2, |_| vec![]);
     assert!(estimators_fly_in_lanes(
         &vehicle,
         &actuators,
@@ -624,27 +633,19 @@ fn the_group_schedule_passes_on_when_its_first_run_ends() {
         seed: 5,
         ..Sensing::default()
     });
-    let runs = || -> Vec<BatchRun> {
-        (0..4)
-            .map(|k| {
-                let law = hover_feedback(&airframe, 10.0);
-                let controller: Box<dyn Controller> = if k % 2 == 0 {
-                    Box::new(Sampler(law))
-                } else {
-                    Box::new(law)
-                };
-                BatchRun {
-                    controller,
-                    initial_command: Some(vec![hover; 4]),
-                    x0: start(k),
-                    faults: vec![RotorFault {
-                        rotor: 0,
-                        time_s: 0.30013,
-                        efficiency: if k == 0 { 0.0 } else { 1.0 },
-                    }],
-                }
-            })
-            .collect()
+    let runs = || {
+        four_hover_runs(
+            &airframe,
+            hover,
+            |k| k % 2 == 0,
+            |k| {
+                vec![RotorFault {
+                    rotor: 0,
+                    time_s: 0.30013,
+                    efficiency: if k == 0 { 0.0 } else { 1.0 },
+                }]
+            },
+        )
     };
     assert!(estimators_fly_in_lanes(
         &vehicle,
@@ -678,27 +679,19 @@ fn lanes_fly_the_scalar_sensed_batch_with_instant_rotors_bit_for_bit() {
         seed: 8,
         ..Sensing::default()
     });
-    let runs = || -> Vec<BatchRun> {
-        (0..4)
-            .map(|k| {
-                let law = hover_feedback(&airframe, 10.0);
-                let controller: Box<dyn Controller> = if k == 3 {
-                    Box::new(Sampler(law))
-                } else {
-                    Box::new(law)
-                };
-                BatchRun {
-                    controller,
-                    initial_command: Some(vec![hover; 4]),
-                    x0: start(k),
-                    faults: vec![RotorFault {
-                        rotor: k,
-                        time_s: 0.40021,
-                        efficiency: 0.7,
-                    }],
-                }
-            })
-            .collect()
+    let runs = || {
+        four_hover_runs(
+            &airframe,
+            hover,
+            |k| k == 3,
+            |k| {
+                vec![RotorFault {
+                    rotor: k,
+                    time_s: 0.40021,
+                    efficiency: 0.7,
+                }]
+            },
+        )
     };
     assert!(estimators_fly_in_lanes(
         &vehicle,
