@@ -300,9 +300,9 @@ def check_dtype(dtype: Any) -> RecordingDtype:
 def check_lanes(lanes: Any) -> BatchLanes:
     """``lanes`` checked: one of :data:`rotorfault._typing.BatchLanes`."""
     if not isinstance(lanes, str):
-        raise TypeError(f"lanes: expected a string ('auto', 'portable' or 'scalar'), got {type(lanes).__name__}")
+        raise TypeError(f"lanes: expected a string (one of {', '.join(get_args(BatchLanes))}), got {type(lanes).__name__}")
     if lanes not in get_args(BatchLanes):
-        raise ValueError(f"lanes: must be 'auto', 'portable' or 'scalar', got {lanes!r}")
+        raise ValueError(f"lanes: must be one of {', '.join(get_args(BatchLanes))}, got {lanes!r}")
     return cast(BatchLanes, lanes)
 
 
