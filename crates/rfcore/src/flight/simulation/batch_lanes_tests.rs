@@ -544,6 +544,20 @@ fn estimators_fly_in_lanes(
     onboard_in_lanes::<F64x4>(group, 4, detected_path()).is_some()
 }
 
+/// `runs` (a group of four on sensors that share a schedule) flown with their estimators in
+/// lanes, equal bit for bit to the scalar batch: the lanes' trajectories.
+fn sensed_group_in_lanes(
+    vehicle: &Vehicle,
+    actuators: &Actuators,
+    runs: impl Fn() -> Vec<BatchRun>,
+    config: &SimulationConfig,
+) -> Vec<Trajectory> {
+    assert!(estimators_fly_in_lanes(vehicle, actuators, runs(), config));
+    let (lanes, scalar) = both(vehicle, actuators, runs, config);
+    assert_same(&lanes, &scalar);
+    lanes
+}
+
 #[test]
 fn estimators_fly_in_lanes_where_the_sensors_share_a_schedule() {
     // RTK (position, velocity, the magnetometer; no dropouts) and motion capture: the group's
@@ -610,14 +624,7 @@ fn runs_that_read_rotor_speeds_share_a_group_with_runs_that_do_not() {
         ..Sensing::default()
     });
     let runs = || four_hover_runs(&airframe, hover, |k| k < 2, |_| vec![]);
-    assert!(estimators_fly_in_lanes(
-        &vehicle,
-        &actuators,
-        runs(),
-        &config
-    ));
-    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
-    assert_same(&lanes, &scalar);
+    let lanes = sensed_group_in_lanes(&vehicle, &actuators, runs, &config);
     assert!(lanes[0].sensing.as_ref().unwrap().imu_samples > 6_000);
 }
 
@@ -647,14 +654,7 @@ fn the_group_schedule_passes_on_when_its_first_run_ends() {
             },
         )
     };
-    assert!(estimators_fly_in_lanes(
-        &vehicle,
-        &actuators,
-        runs(),
-        &config
-    ));
-    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
-    assert_same(&lanes, &scalar);
+    let lanes = sensed_group_in_lanes(&vehicle, &actuators, runs, &config);
     assert!(lanes[0].divergence.is_some(), "a dead rotor diverges");
     assert!(lanes[1..].iter().all(|t| t.divergence.is_none()));
     let imu = |t: &Trajectory| t.sensing.as_ref().unwrap().imu_samples;
@@ -693,13 +693,6 @@ fn lanes_fly_the_scalar_sensed_batch_with_instant_rotors_bit_for_bit() {
             },
         )
     };
-    assert!(estimators_fly_in_lanes(
-        &vehicle,
-        &actuators,
-        runs(),
-        &config
-    ));
-    let (lanes, scalar) = both(&vehicle, &actuators, runs, &config);
-    assert_same(&lanes, &scalar);
+    let lanes = sensed_group_in_lanes(&vehicle, &actuators, runs, &config);
     assert!(lanes.iter().all(|t| t.divergence.is_none()));
 }
